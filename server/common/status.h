@@ -1,0 +1,36 @@
+// Errors as values: every fallible function returns absl::Status or
+// absl::StatusOr<T> (`Result<T>`). The codes are gRPC's, so the service layer
+// maps them one to one onto grpc::Status at the boundary.
+#pragma once
+
+#include <utility>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/str_cat.h"
+
+namespace vpm {
+
+using Status = absl::Status;
+template <typename T>
+using Result = absl::StatusOr<T>;
+
+}  // namespace vpm
+
+#define VPM_CONCAT_INNER_(a, b) a##b
+#define VPM_CONCAT_(a, b) VPM_CONCAT_INNER_(a, b)
+
+// Returns from the enclosing function when `expr` (a Status) is not OK.
+#define RETURN_IF_ERROR(expr)                    \
+  do {                                           \
+    ::absl::Status vpm_status_ = (expr);         \
+    if (!vpm_status_.ok()) return vpm_status_;   \
+  } while (0)
+
+// `ASSIGN_OR_RETURN(auto x, MakeX());` unwraps a Result or returns its error.
+#define ASSIGN_OR_RETURN(lhs, expr) \
+  ASSIGN_OR_RETURN_IMPL_(VPM_CONCAT_(vpm_result_, __LINE__), lhs, expr)
+#define ASSIGN_OR_RETURN_IMPL_(tmp, lhs, expr) \
+  auto tmp = (expr);                           \
+  if (!tmp.ok()) return std::move(tmp).status(); \
+  lhs = std::move(tmp).value()

@@ -1,0 +1,100 @@
+#include "server/volume/volume.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace vpm {
+
+Status ValidateGeometry(const VolumeGeometry& g, const VolumeLimits& limits) {
+  static constexpr const char* kAxis[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a) {
+    if (g.dims[a] <= 0) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("dimension ", kAxis[a], " is ", g.dims[a], "; it must be positive"));
+    }
+    if (g.dims[a] > limits.max_voxels) {
+      return absl::ResourceExhaustedError(absl::StrCat("dimension ", kAxis[a], " is ", g.dims[a],
+                                                       ", over the cap of ", limits.max_voxels,
+                                                       " voxels"));
+    }
+    const double s = g.spacing_mm[a];
+    if (!std::isfinite(s) || s <= 0.0) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "spacing ", kAxis[a], " is ", s, " mm; it must be a positive finite number"));
+    }
+    if (!std::isfinite(g.origin_mm[a])) {
+      return absl::InvalidArgumentError(absl::StrCat("origin ", kAxis[a], " is not finite"));
+    }
+  }
+  // Overflow-safe product check against the voxel cap.
+  if (g.dims[0] > limits.max_voxels / g.dims[1] ||
+      g.dims[0] * g.dims[1] > limits.max_voxels / g.dims[2]) {
+    return absl::ResourceExhaustedError(
+        absl::StrCat("volume of ", g.dims[0], "x", g.dims[1], "x", g.dims[2],
+                     " voxels is over the cap of ", limits.max_voxels, " voxels"));
+  }
+  if (g.voxel_count() * int64_t{sizeof(float)} > limits.max_bytes) {
+    return absl::ResourceExhaustedError(absl::StrCat("volume needs ", g.voxel_count() * 4,
+                                                     " bytes, over the cap of ",
+                                                     limits.max_bytes, " bytes"));
+  }
+  // Direction: columns must be unit length and mutually orthogonal (1e-3
+  // tolerance absorbs the rounding of headers that store 6 decimals).
+  const glm::dmat3 gram = glm::transpose(g.direction) * g.direction;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      const double expected = r == c ? 1.0 : 0.0;
+      if (!std::isfinite(gram[c][r]) || std::abs(gram[c][r] - expected) > 1e-3) {
+        return absl::InvalidArgumentError(
+            "direction matrix is not orthonormal (axes must be unit and perpendicular)");
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
+Volume::Volume(VolumeGeometry geometry, std::vector<float> values)
+    : geometry_(geometry), values_(std::move(values)) {}
+
+Result<Volume> Volume::Create(VolumeGeometry geometry, std::vector<float> values,
+                              const VolumeLimits& limits) {
+  RETURN_IF_ERROR(ValidateGeometry(geometry, limits));
+  if (static_cast<int64_t>(values.size()) != geometry.voxel_count()) {
+    return absl::InvalidArgumentError(absl::StrCat("volume has ", values.size(),
+                                                   " values, expected ", geometry.voxel_count()));
+  }
+  Volume volume(geometry, std::move(values));
+  float lo = std::numeric_limits<float>::infinity();
+  float hi = -std::numeric_limits<float>::infinity();
+  int64_t non_finite = 0;
+  for (float v : volume.values_) {
+    if (!std::isfinite(v)) {
+      ++non_finite;
+      continue;
+    }
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  if (non_finite == static_cast<int64_t>(volume.values_.size())) lo = hi = 0.0f;
+  // NaN or infinite voxels would poison every mean and gradient downstream;
+  // they become the smallest finite value (the background) and are counted.
+  if (non_finite > 0) {
+    for (float& v : volume.values_) {
+      if (!std::isfinite(v)) v = lo;
+    }
+  }
+  volume.min_value_ = lo;
+  volume.max_value_ = hi;
+  volume.non_finite_count_ = non_finite;
+  return volume;
+}
+
+float Volume::AtClamped(int64_t i, int64_t j, int64_t k) const {
+  i = std::clamp<int64_t>(i, 0, geometry_.dims[0] - 1);
+  j = std::clamp<int64_t>(j, 0, geometry_.dims[1] - 1);
+  k = std::clamp<int64_t>(k, 0, geometry_.dims[2] - 1);
+  return values_[LinearIndex(i, j, k)];
+}
+
+}  // namespace vpm

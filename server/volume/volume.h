@@ -1,0 +1,107 @@
+// The volume model: a scalar image on a regular grid, with its geometry.
+//
+// Coordinates (ALGORITHM.md section 0):
+//  - index space: continuous, voxel centres at integer indices (i, j, k);
+//  - physical voxel space (mm): index * spacing_mm, what the algorithm uses;
+//  - world space (mm, LPS): origin_mm + direction * (index * spacing_mm), used
+//    only when talking to the outside world (files, clients).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "server/common/status.h"
+
+namespace vpm {
+
+struct VolumeGeometry {
+  std::array<int64_t, 3> dims{0, 0, 0};      // voxels (nx, ny, nz)
+  glm::dvec3 spacing_mm{1.0, 1.0, 1.0};      // voxel size along i, j, k
+  glm::dvec3 origin_mm{0.0, 0.0, 0.0};       // world (LPS) position of voxel (0,0,0)
+  glm::dmat3 direction{1.0};                 // column c: world (LPS) unit vector of axis c
+
+  int64_t voxel_count() const { return dims[0] * dims[1] * dims[2]; }
+  // Physical voxel space (mm) <-> continuous index.
+  glm::dvec3 IndexToPhysical(const glm::dvec3& index) const { return index * spacing_mm; }
+  glm::dvec3 PhysicalToIndex(const glm::dvec3& p_mm) const { return p_mm / spacing_mm; }
+  // World (LPS, mm) <-> physical voxel space (mm). Exact inverse of each other
+  // up to floating point, since direction is orthonormal (checked on creation).
+  glm::dvec3 PhysicalToWorld(const glm::dvec3& p_mm) const {
+    return origin_mm + direction * p_mm;
+  }
+  glm::dvec3 WorldToPhysical(const glm::dvec3& w_mm) const {
+    return glm::transpose(direction) * (w_mm - origin_mm);
+  }
+  // Extent of the image box in physical voxel space: (n - 1) * spacing (mm).
+  glm::dvec3 extent_mm() const {
+    return glm::dvec3(dims[0] - 1, dims[1] - 1, dims[2] - 1) * spacing_mm;
+  }
+};
+
+// A named point of interest, in physical voxel space (mm).
+struct Landmark {
+  std::string name;
+  glm::dvec3 position_mm{0.0};
+  std::string description;
+};
+
+// Caps that protect the process from absurd inputs. Readers check them before
+// allocating.
+struct VolumeLimits {
+  int64_t max_voxels = int64_t{512} * 512 * 512;
+  int64_t max_bytes = int64_t{4} << 30;  // bytes read or inflated from a source
+};
+
+// Checks dims, spacing, direction and the voxel cap; the message names what is wrong.
+Status ValidateGeometry(const VolumeGeometry& geometry, const VolumeLimits& limits);
+
+class Volume {
+ public:
+  // `values` has geometry.voxel_count() floats, x fastest: index i + nx*(j + ny*k).
+  static Result<Volume> Create(VolumeGeometry geometry, std::vector<float> values,
+                               const VolumeLimits& limits = {});
+
+  const VolumeGeometry& geometry() const { return geometry_; }
+  const std::array<int64_t, 3>& dims() const { return geometry_.dims; }
+  const glm::dvec3& spacing_mm() const { return geometry_.spacing_mm; }
+  std::span<const float> values() const { return values_; }
+  std::span<float> mutable_values() { return values_; }
+
+  int64_t LinearIndex(int64_t i, int64_t j, int64_t k) const {
+    return i + geometry_.dims[0] * (j + geometry_.dims[1] * k);
+  }
+  // I[i,j,k] with indices clamped to the volume (section 0).
+  float AtClamped(int64_t i, int64_t j, int64_t k) const;
+  float At(int64_t i, int64_t j, int64_t k) const { return values_[LinearIndex(i, j, k)]; }
+
+  // Smallest and largest finite value; computed on creation.
+  float min_value() const { return min_value_; }
+  float max_value() const { return max_value_; }
+  // Count of NaN or infinite voxels found on creation; they were replaced by
+  // min_value() (the background), so that no NaN reaches the algorithm.
+  int64_t non_finite_count() const { return non_finite_count_; }
+
+  const std::vector<Landmark>& landmarks() const { return landmarks_; }
+  void set_landmarks(std::vector<Landmark> landmarks) { landmarks_ = std::move(landmarks); }
+  // Where the volume came from (file path or phantom:NAME), for messages.
+  const std::string& source() const { return source_; }
+  void set_source(std::string source) { source_ = std::move(source); }
+
+ private:
+  Volume(VolumeGeometry geometry, std::vector<float> values);
+
+  VolumeGeometry geometry_;
+  std::vector<float> values_;
+  float min_value_ = 0.0f;
+  float max_value_ = 0.0f;
+  int64_t non_finite_count_ = 0;
+  std::vector<Landmark> landmarks_;
+  std::string source_;
+};
+
+}  // namespace vpm
