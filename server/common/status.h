@@ -3,6 +3,8 @@
 // maps them one to one onto grpc::Status at the boundary.
 #pragma once
 
+#include <sstream>
+#include <string>
 #include <utility>
 
 #include "absl/status/status.h"
@@ -14,6 +16,16 @@ namespace vpm {
 using Status = absl::Status;
 template <typename T>
 using Result = absl::StatusOr<T>;
+
+// Concatenates anything streamable into a message. Debian's abseil is built
+// with its own string_view type, so absl::StrCat rejects std::string_view;
+// this one takes both.
+template <typename... Args>
+std::string StrCat(const Args&... args) {
+  std::ostringstream out;
+  (out << ... << args);
+  return out.str();
+}
 
 }  // namespace vpm
 

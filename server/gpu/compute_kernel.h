@@ -1,0 +1,51 @@
+// A compute pipeline built from embedded SPIR-V, with its descriptor-set
+// layout (one set, binding i of type bindings[i]) and push-constant range.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <vulkan/vulkan_raii.hpp>
+
+#include "server/common/status.h"
+#include "server/gpu/gpu_context.h"
+
+namespace vpm::gpu {
+
+struct KernelSpec {
+  std::string name;                          // for messages and timings
+  std::span<const uint32_t> spirv;           // the embedded k<Name>Spv array
+  std::vector<vk::DescriptorType> bindings;  // set 0, binding i
+  uint32_t push_constant_bytes = 0;          // sizeof the mirrored push struct
+  std::array<uint32_t, 3> local_size{1, 1, 1};  // must equal the shader's local_size
+};
+
+class ComputeKernel {
+ public:
+  static Result<ComputeKernel> Create(const GpuContext& context, KernelSpec spec);
+
+  ComputeKernel(ComputeKernel&&) = default;
+  ComputeKernel& operator=(ComputeKernel&&) = default;
+
+  const KernelSpec& spec() const { return spec_; }
+  vk::Pipeline pipeline() const { return *pipeline_; }
+  vk::PipelineLayout layout() const { return *layout_; }
+  vk::DescriptorSetLayout set_layout() const { return *set_layout_; }
+
+  // Workgroups needed to cover `threads` invocations (ceil division per axis).
+  std::array<uint32_t, 3> GroupsFor(std::array<uint32_t, 3> threads) const;
+
+ private:
+  ComputeKernel() = default;
+
+  KernelSpec spec_;
+  vk::raii::DescriptorSetLayout set_layout_{nullptr};
+  vk::raii::PipelineLayout layout_{nullptr};
+  vk::raii::ShaderModule module_{nullptr};
+  vk::raii::Pipeline pipeline_{nullptr};
+};
+
+}  // namespace vpm::gpu

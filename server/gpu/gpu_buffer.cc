@@ -1,0 +1,86 @@
+#include "server/gpu/gpu_buffer.h"
+
+#include <cstring>
+#include <optional>
+
+namespace vpm::gpu {
+
+using MemFlag = vk::MemoryPropertyFlagBits;
+
+Result<GpuBuffer> GpuBuffer::Create(const GpuContext& context, vk::DeviceSize size_bytes,
+                                    vk::BufferUsageFlags usage) {
+  return Allocate(context, size_bytes,
+                  usage | vk::BufferUsageFlagBits::eTransferSrc |
+                      vk::BufferUsageFlagBits::eTransferDst,
+                  MemFlag::eDeviceLocal, MemFlag::eHostVisible | MemFlag::eHostCoherent);
+}
+
+Result<GpuBuffer> GpuBuffer::CreateStaging(const GpuContext& context, vk::DeviceSize size_bytes) {
+  return Allocate(context, size_bytes,
+                  vk::BufferUsageFlagBits::eTransferSrc | vk::BufferUsageFlagBits::eTransferDst,
+                  MemFlag::eHostVisible | MemFlag::eHostCoherent, MemFlag::eHostCached);
+}
+
+Result<GpuBuffer> GpuBuffer::Allocate(const GpuContext& context, vk::DeviceSize size_bytes,
+                                      vk::BufferUsageFlags usage,
+                                      vk::MemoryPropertyFlags required,
+                                      vk::MemoryPropertyFlags preferred) {
+  if (size_bytes == 0) return absl::InvalidArgumentError("GPU buffer of 0 bytes");
+  GpuBuffer b;
+  b.context_ = &context;
+  b.size_bytes_ = size_bytes;
+  b.usage_ = usage;
+  RETURN_IF_ERROR(CatchVulkan("creating a GPU buffer", [&] {
+    b.buffer_ = vk::raii::Buffer(context.device(), vk::BufferCreateInfo({}, size_bytes, usage));
+  }));
+  const vk::MemoryRequirements req = b.buffer_.getMemoryRequirements();
+  ASSIGN_OR_RETURN(const uint32_t type,
+                   context.FindMemoryType(req.memoryTypeBits, required, preferred));
+  const auto flags = context.memory_flags(type);
+  RETURN_IF_ERROR(CatchVulkan("allocating GPU buffer memory", [&] {
+    b.memory_ = vk::raii::DeviceMemory(context.device(), vk::MemoryAllocateInfo(req.size, type));
+    b.buffer_.bindMemory(*b.memory_, 0);
+    if ((flags & MemFlag::eHostVisible) && (flags & MemFlag::eHostCoherent)) {
+      b.mapped_ = b.memory_.mapMemory(0, size_bytes);
+    }
+  }));
+  return b;
+}
+
+Status GpuBuffer::CheckRange(size_t bytes, vk::DeviceSize offset) const {
+  if (offset > size_bytes_ || bytes > size_bytes_ - offset) {
+    return absl::OutOfRangeError(absl::StrCat("GPU buffer access of ", bytes, " bytes at ",
+                                              offset, " exceeds its ", size_bytes_, " bytes"));
+  }
+  return absl::OkStatus();
+}
+
+Status GpuBuffer::Upload(std::span<const std::byte> data, vk::DeviceSize offset_bytes) {
+  RETURN_IF_ERROR(CheckRange(data.size(), offset_bytes));
+  if (data.empty()) return absl::OkStatus();
+  if (mapped_ != nullptr) {
+    std::memcpy(static_cast<std::byte*>(mapped_) + offset_bytes, data.data(), data.size());
+    return absl::OkStatus();
+  }
+  ASSIGN_OR_RETURN(GpuBuffer staging, CreateStaging(*context_, data.size()));
+  RETURN_IF_ERROR(staging.Upload(data));
+  return context_->RunCommands([&](const vk::raii::CommandBuffer& cmd) {
+    cmd.copyBuffer(staging.handle(), *buffer_, vk::BufferCopy(0, offset_bytes, data.size()));
+  });
+}
+
+Status GpuBuffer::Download(std::span<std::byte> out, vk::DeviceSize offset_bytes) const {
+  RETURN_IF_ERROR(CheckRange(out.size(), offset_bytes));
+  if (out.empty()) return absl::OkStatus();
+  if (mapped_ != nullptr) {
+    std::memcpy(out.data(), static_cast<const std::byte*>(mapped_) + offset_bytes, out.size());
+    return absl::OkStatus();
+  }
+  ASSIGN_OR_RETURN(GpuBuffer staging, CreateStaging(*context_, out.size()));
+  RETURN_IF_ERROR(context_->RunCommands([&](const vk::raii::CommandBuffer& cmd) {
+    cmd.copyBuffer(*buffer_, staging.handle(), vk::BufferCopy(offset_bytes, 0, out.size()));
+  }));
+  return staging.Download(out);
+}
+
+}  // namespace vpm::gpu

@@ -1,0 +1,162 @@
+// The Vulkan compute core: buffers and 3D images round-trip, and a dispatch
+// refuses to record when its invariants do not hold.
+#include <numeric>
+#include <optional>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "server/gpu/compute_batch.h"
+#include "server/gpu/gpu_buffer.h"
+#include "server/gpu/gpu_image3d.h"
+#include "server/gpu/shader_interface.h"
+#include "shaders/gradient_magnitude.spv.h"
+#include "tests/gpu/gpu_test_context.h"
+
+namespace vpm {
+namespace {
+
+using testing::GpuTest;
+
+TEST_F(GpuTest, GpuBuffer_RoundTripsBytesAtAnOffset) {
+  auto buffer = gpu::GpuBuffer::Create(context(), 4096, vk::BufferUsageFlagBits::eStorageBuffer);
+  ASSERT_TRUE(buffer.ok()) << buffer.status();
+  std::vector<uint32_t> in(256);
+  std::iota(in.begin(), in.end(), 7u);
+  ASSERT_TRUE(buffer->UploadSpan(std::span<const uint32_t>(in)).ok());
+  std::vector<uint32_t> out(256);
+  ASSERT_TRUE(buffer->DownloadSpan(std::span<uint32_t>(out)).ok());
+  EXPECT_EQ(in, out);
+  const std::vector<std::byte> tail(16, std::byte{0xAB});
+  ASSERT_TRUE(buffer->Upload(tail, 4080).ok());
+  std::vector<std::byte> back(16);
+  ASSERT_TRUE(buffer->Download(back, 4080).ok());
+  EXPECT_EQ(back, tail);
+}
+
+TEST_F(GpuTest, GpuBuffer_RejectsOutOfRangeAccess) {
+  auto buffer = gpu::GpuBuffer::Create(context(), 64, vk::BufferUsageFlagBits::eStorageBuffer);
+  ASSERT_TRUE(buffer.ok());
+  std::vector<std::byte> data(32);
+  EXPECT_EQ(buffer->Upload(data, 40).code(), absl::StatusCode::kOutOfRange);
+  EXPECT_EQ(buffer->Download(data, 65).code(), absl::StatusCode::kOutOfRange);
+  EXPECT_EQ(gpu::GpuBuffer::Create(context(), 0, vk::BufferUsageFlagBits::eStorageBuffer)
+                .status()
+                .code(),
+            absl::StatusCode::kInvalidArgument);
+}
+
+TEST_F(GpuTest, GpuImage3D_RoundTripsTexels) {
+  auto image = gpu::GpuImage3D::Create(context(), {13, 7, 5}, vk::Format::eR32Sfloat);
+  ASSERT_TRUE(image.ok()) << image.status();
+  std::vector<float> in(13 * 7 * 5);
+  for (size_t n = 0; n < in.size(); ++n) in[n] = static_cast<float>(n) * 0.25f - 30.0f;
+  ASSERT_TRUE(image->Upload(std::as_bytes(std::span(in))).ok());
+  std::vector<float> out(in.size());
+  ASSERT_TRUE(image->Download(std::as_writable_bytes(std::span(out))).ok());
+  EXPECT_EQ(in, out);
+  EXPECT_EQ(image->Upload(std::as_bytes(std::span(in).subspan(1))).code(),
+            absl::StatusCode::kInvalidArgument);
+}
+
+TEST_F(GpuTest, GpuImage3D_RejectsAbsurdExtent) {
+  EXPECT_EQ(gpu::GpuImage3D::Create(context(), {0, 4, 4}, vk::Format::eR32Sfloat).status().code(),
+            absl::StatusCode::kResourceExhausted);
+  EXPECT_EQ(
+      gpu::GpuImage3D::Create(context(), {1u << 20, 4, 4}, vk::Format::eR32Sfloat).status().code(),
+      absl::StatusCode::kResourceExhausted);
+}
+
+class ComputeBatchTest : public GpuTest {
+ protected:
+  void SetUp() override {
+    GpuTest::SetUp();
+    auto kernel = gpu::ComputeKernel::Create(
+        context(), {.name = "gradient_magnitude",
+                    .spirv = kGradientMagnitudeSpv,
+                    .bindings = {vk::DescriptorType::eCombinedImageSampler,
+                                 vk::DescriptorType::eStorageBuffer},
+                    .push_constant_bytes = sizeof(gpu::GradientPush),
+                    .local_size = {64, 1, 1}});
+    ASSERT_TRUE(kernel.ok()) << kernel.status();
+    kernel_.emplace(std::move(*kernel));
+    auto image = gpu::GpuImage3D::Create(context(), {8, 8, 8}, vk::Format::eR32Sfloat);
+    auto out = gpu::GpuBuffer::Create(context(), 8 * 8 * 8 * 4,
+                                      vk::BufferUsageFlagBits::eStorageBuffer);
+    auto ubo = gpu::GpuBuffer::Create(context(), 256, vk::BufferUsageFlagBits::eUniformBuffer);
+    ASSERT_TRUE(image.ok() && out.ok() && ubo.ok());
+    image_.emplace(std::move(*image));
+    out_.emplace(std::move(*out));
+    ubo_.emplace(std::move(*ubo));
+  }
+  std::optional<gpu::ComputeKernel> kernel_;
+  std::optional<gpu::GpuImage3D> image_;
+  std::optional<gpu::GpuBuffer> out_, ubo_;
+  gpu::GradientPush push_{.dims = glm::ivec4(8, 8, 8, 0), .inv_two_spacing = glm::vec4(0.5f)};
+};
+
+TEST_F(ComputeBatchTest, ComputeKernel_RejectsMissingSpirvAndBadLocalSize) {
+  EXPECT_EQ(gpu::ComputeKernel::Create(context(), {.name = "empty"}).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(gpu::ComputeKernel::Create(context(), {.name = "huge",
+                                                   .spirv = kGradientMagnitudeSpv,
+                                                   .local_size = {1u << 20, 1, 1}})
+                .status()
+                .code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(gpu::ComputeKernel::Create(context(), {.name = "odd push",
+                                                   .spirv = kGradientMagnitudeSpv,
+                                                   .push_constant_bytes = 6})
+                .status()
+                .code(),
+            absl::StatusCode::kInvalidArgument);
+}
+
+TEST_F(ComputeBatchTest, Dispatch_RejectsWrongBindingCountAndKinds) {
+  auto batch = gpu::ComputeBatch::Begin(context(), 4);
+  ASSERT_TRUE(batch.ok());
+  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_}, push_, {1, 8, 8}).code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(batch->Dispatch(*kernel_, {&*out_, &*out_}, push_, {1, 8, 8}).code(),
+            absl::StatusCode::kInvalidArgument);
+  // A uniform buffer where the kernel writes a storage buffer.
+  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_, &*ubo_}, push_, {1, 8, 8}).code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_TRUE(batch->SubmitAndWait().ok());
+}
+
+TEST_F(ComputeBatchTest, Dispatch_RejectsWrongPushSizeAndGroupCounts) {
+  auto batch = gpu::ComputeBatch::Begin(context(), 4);
+  ASSERT_TRUE(batch.ok());
+  const gpu::VoxelMapPush short_push{};
+  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_, &*out_}, short_push, {1, 8, 8}).code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_, &*out_}, push_, {0, 8, 8}).code(),
+            absl::StatusCode::kInvalidArgument);
+  const uint32_t too_many = context().limits().maxComputeWorkGroupCount[1] + 1;
+  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_, &*out_}, push_, {1, too_many, 1}).code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_TRUE(batch->SubmitAndWait().ok());
+}
+
+TEST_F(ComputeBatchTest, Batch_CapsDispatchesAndSubmitsOnce) {
+  auto batch = gpu::ComputeBatch::Begin(context(), 2);
+  ASSERT_TRUE(batch.ok());
+  EXPECT_TRUE(batch->Dispatch(*kernel_, {&*image_, &*out_}, push_, {1, 8, 8}, "a").ok());
+  EXPECT_TRUE(batch->Dispatch(*kernel_, {&*image_, &*out_}, push_, {1, 8, 8}, "b").ok());
+  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_, &*out_}, push_, {1, 8, 8}).code(),
+            absl::StatusCode::kResourceExhausted);
+  auto timings = batch->SubmitAndWait();
+  ASSERT_TRUE(timings.ok()) << timings.status();
+  ASSERT_EQ(timings->size(), 2u);
+  EXPECT_EQ((*timings)[0].label, "a");
+  if (context().timestamp_period_ns() > 0) {
+    EXPECT_GE((*timings)[1].gpu_ms, 0.0);
+  }
+  EXPECT_EQ(batch->SubmitAndWait().status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_, &*out_}, push_, {1, 8, 8}).code(),
+            absl::StatusCode::kFailedPrecondition);
+}
+
+}  // namespace
+}  // namespace vpm
