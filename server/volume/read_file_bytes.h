@@ -1,0 +1,34 @@
+// Whole-file reads with the caps applied before allocating, and the rule for
+// detached data files named inside headers (.nhdr, .mhd).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "server/common/status.h"
+#include "server/volume/volume.h"
+
+namespace vpm {
+
+// The bytes of the file at `path`. NotFound when it does not exist,
+// InvalidArgument when it is not a regular file, ResourceExhausted when it is
+// larger than limits.max_bytes. Messages start with the path.
+Result<std::vector<uint8_t>> ReadFileBytes(const std::filesystem::path& path,
+                                           const VolumeLimits& limits);
+
+// Loads the data file that a header names (NRRD "data file", MetaImage
+// "ElementDataFile"); readers of in-memory headers may pass none.
+using DataFileLoader = std::function<Result<std::vector<uint8_t>>(std::string_view name)>;
+
+// A loader that reads `name` next to `header_path`. Only plain relative names
+// that stay inside the header's folder are allowed (no absolute paths, no
+// ".."): a header handed to a server must not be able to make it read an
+// arbitrary file.
+DataFileLoader SiblingFileLoader(const std::filesystem::path& header_path,
+                                 const VolumeLimits& limits);
+
+}  // namespace vpm
