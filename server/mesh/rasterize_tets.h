@@ -43,8 +43,9 @@ struct RasterizeTetsOptions {
 //   vertex_values  #V, the values interpolated linearly inside each tet
 //   visit          called for each run, concurrently from options.threads
 //                  threads; all runs of one slice k come from one thread,
-//                  in increasing tet order, so per-slice accumulation is
-//                  race-free and deterministic whatever the thread count.
+//                  row by row (j ascending, then tet ascending), so
+//                  per-slice accumulation is race-free and deterministic
+//                  whatever the thread count, and memory is walked in order.
 // Output: the number of voxels visited; fails on bad indices or sizes.
 Result<int64_t> RasterizeTets(const VolumeGeometry& geometry,
                               const std::vector<glm::dvec3>& positions,
