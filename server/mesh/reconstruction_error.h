@@ -34,7 +34,10 @@ struct ReconstructionErrorOptions {
 //   tf      the transfer function selecting the TF > 0 voxels
 // Output: the two RMSEs and their voxel counts. Deterministic: sums are
 // accumulated per z slice and added in slice order, whatever the threads.
-// 256^3 voxels and ~1000 tets take about 0.1 s on 2 threads.
+// Cost: one pass over the voxels plus one barycentric row interval per
+// (tet, row) pair; 256^3 voxels take about 0.13 / 0.2 / 0.42 s of CPU with
+// 250 / 1000 / 8000 random vertices (1.3k / 6.4k / 53k tets), split over
+// options.threads threads.
 Result<ReconstructionError> MeasureReconstructionError(const Volume& volume, const ProxyMesh& mesh,
                                                        const TransferFunction& tf,
                                                        const ReconstructionErrorOptions& options);

@@ -58,6 +58,24 @@ TEST(ReconstructionError, IsZeroForALinearVolumeOnAnyMesh) {
   EXPECT_LT(MeasureReconstructionError(volume, lattice, SphereTf())->rmse_all, 1e-6);
 }
 
+TEST(ReconstructionError, CoversEveryVoxelWhenFacesPassThroughVoxelCentres) {
+  // 41^3 voxels, G = 5: lattice planes at voxel indices 4, 12, ..., 36, so
+  // many voxel centres lie exactly on shared faces, edges and vertices.
+  for (double scale : {1e-6, 1.0, 1e6}) {
+    SCOPED_TRACE(scale);
+    const Volume volume =
+        MakeVolume({41, 41, 41}, glm::dvec3(scale), [](int64_t i, int64_t j, int64_t k) {
+          return static_cast<float>(1.0 + 0.5 * i - 0.25 * j + 0.125 * k);
+        });
+    const ProxyMesh mesh = MeshOver(volume, LatticeMesh(5, volume.geometry().extent_mm()));
+    auto error = MeasureReconstructionError(volume, mesh, SphereTf());
+    ASSERT_TRUE(error.ok());
+    EXPECT_EQ(error->voxels_all, volume.geometry().voxel_count());
+    EXPECT_EQ(error->voxels_outside_mesh, 0);
+    EXPECT_LT(error->rmse_all, 1e-6);
+  }
+}
+
 TEST(ReconstructionError, IsPositiveForASphereAndMatchesTheInterpolatedVolume) {
   const Volume volume = SphereVolume({40, 36, 32});
   const ProxyMesh mesh = MeshOver(volume, LatticeMesh(5, volume.geometry().extent_mm()));
