@@ -1,0 +1,1 @@
+vpm_add_test(NAME phantom_test SOURCES phantom_test.cc LIBS vpm_phantom)
