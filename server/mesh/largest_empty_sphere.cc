@@ -90,6 +90,30 @@ bool Circumcentre(const glm::dvec3& p0, const glm::dvec3& p1, const glm::dvec3& 
   return true;
 }
 
+// Every stride-th voxel centre per axis (the last index too) with TF > 0.
+void AddVoxelSamples(const Volume& volume, const TfPositiveSet& tf_positive,
+                     const NearestVertexGrid& nearest, int64_t stride, EmptySphere& best) {
+  const auto& dims = volume.dims();
+  auto next = [stride](int64_t i, int64_t n) {
+    return i + 1 == n ? n : std::min(i + stride, n - 1);
+  };
+  for (int64_t k = 0; k < dims[2]; k = next(k, dims[2])) {
+    for (int64_t j = 0; j < dims[1]; j = next(j, dims[1])) {
+      for (int64_t i = 0; i < dims[0]; i = next(i, dims[0])) {
+        if (!tf_positive.Contains(volume.At(i, j, k))) continue;
+        ++best.samples_in_body;
+        const glm::dvec3 x = volume.geometry().IndexToPhysical(glm::dvec3(i, j, k));
+        const double radius = nearest.Distance(x);
+        if (radius > best.radius_mm) {
+          best.radius_mm = radius;
+          best.centre_mm = x;
+          best.centre_is_sample = true;
+        }
+      }
+    }
+  }
+}
+
 }  // namespace
 
 Result<EmptySphere> LargestEmptySphere(const ProxyMesh& mesh, const Volume& volume,
@@ -142,24 +166,7 @@ Result<EmptySphere> LargestEmptySphere(const ProxyMesh& mesh, const Volume& volu
     }
   }
   if (options.voxel_stride > 0) {
-    const auto& dims = volume.dims();
-    const int64_t s = options.voxel_stride;
-    auto next = [s](int64_t i, int64_t n) { return i + 1 == n ? n : std::min(i + s, n - 1); };
-    for (int64_t k = 0; k < dims[2]; k = next(k, dims[2])) {
-      for (int64_t j = 0; j < dims[1]; j = next(j, dims[1])) {
-        for (int64_t i = 0; i < dims[0]; i = next(i, dims[0])) {
-          if (!tf_positive.Contains(volume.At(i, j, k))) continue;
-          ++best.samples_in_body;
-          const glm::dvec3 x = volume.geometry().IndexToPhysical(glm::dvec3(i, j, k));
-          const double radius = nearest.Distance(x);
-          if (radius > best.radius_mm) {
-            best.radius_mm = radius;
-            best.centre_mm = x;
-            best.centre_is_sample = true;
-          }
-        }
-      }
-    }
+    AddVoxelSamples(volume, tf_positive, nearest, options.voxel_stride, best);
   }
   return best;
 }

@@ -6,9 +6,11 @@
 
 namespace vpm {
 
-Result<TetLocator> TetLocator::Create(std::vector<glm::dvec3> positions,
-                                      std::vector<std::array<int32_t, 4>> tets,
-                                      const Options& options) {
+namespace {
+
+Status CheckInput(const std::vector<glm::dvec3>& positions,
+                  const std::vector<std::array<int32_t, 4>>& tets,
+                  const TetLocator::Options& options) {
   for (size_t v = 0; v < positions.size(); ++v) {
     const glm::dvec3& p = positions[v];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
@@ -27,82 +29,95 @@ Result<TetLocator> TetLocator::Create(std::vector<glm::dvec3> positions,
   if (!(options.eps >= 0.0) || !(options.tets_per_bucket > 0.0)) {
     return absl::InvalidArgumentError("TetLocator: eps must be >= 0 and tets_per_bucket > 0");
   }
+  return absl::OkStatus();
+}
 
+}  // namespace
+
+Result<TetLocator> TetLocator::Create(std::vector<glm::dvec3> positions,
+                                      std::vector<std::array<int32_t, 4>> tets,
+                                      const Options& options) {
+  RETURN_IF_ERROR(CheckInput(positions, tets, options));
   TetLocator locator;
   locator.options_ = options;
   locator.positions_ = std::move(positions);
   locator.tets_ = std::move(tets);
-  const auto& P = locator.positions_;
-  const auto& T = locator.tets_;
+  locator.PrepareTets();
+  locator.SizeGrid();
+  locator.FillBuckets();
+  return locator;
+}
 
-  locator.inverse_.resize(T.size());
-  locator.flat_.assign(T.size(), 0);
+void TetLocator::PrepareTets() {
+  const auto& P = positions_;
+  inverse_.resize(tets_.size());
+  flat_.assign(tets_.size(), 0);
   glm::dvec3 lo(std::numeric_limits<double>::infinity());
   glm::dvec3 hi(-std::numeric_limits<double>::infinity());
-  for (size_t t = 0; t < T.size(); ++t) {
-    const glm::dmat3 m(P[T[t][1]] - P[T[t][0]], P[T[t][2]] - P[T[t][0]], P[T[t][3]] - P[T[t][0]]);
+  for (size_t t = 0; t < tets_.size(); ++t) {
+    const auto& q = tets_[t];
+    const glm::dmat3 m(P[q[1]] - P[q[0]], P[q[2]] - P[q[0]], P[q[3]] - P[q[0]]);
     const double det = glm::determinant(m);
     if (det == 0.0 || !std::isfinite(det)) {
-      locator.flat_[t] = 1;
+      flat_[t] = 1;
     } else {
-      locator.inverse_[t] = glm::inverse(m);
+      inverse_[t] = glm::inverse(m);
     }
-    for (int32_t v : T[t]) {
+    for (int32_t v : q) {
       lo = glm::min(lo, P[v]);
       hi = glm::max(hi, P[v]);
     }
   }
-  if (T.empty()) lo = hi = glm::dvec3(0.0);
+  if (tets_.empty()) lo = hi = glm::dvec3(0.0);
+  lo_mm_ = lo;
+  hi_mm_ = hi;
+}
 
-  // Buckets of about tets_per_bucket tets each, cubes of edge bucket_mm_.
-  const glm::dvec3 size = hi - lo;
-  const double diagonal = glm::length(size);
-  const double margin = 4.0 * (options.eps + 1e-12) * diagonal;
-  lo -= margin;
-  hi += margin;
+void TetLocator::SizeGrid() {
+  // Widened so that points found with weights >= -eps still fall inside.
+  const glm::dvec3 size = hi_mm_ - lo_mm_;
+  margin_mm_ = 4.0 * (options_.eps + 1e-12) * glm::length(size);
+  lo_mm_ -= margin_mm_;
+  hi_mm_ += margin_mm_;
+  // Cubic buckets, about tets_per_bucket tets each.
   const double largest = std::max({size.x, size.y, size.z, 1e-300});
-  const double bucket_count =
-      std::clamp(static_cast<double>(T.size()) / options.tets_per_bucket, 1.0, 16.0 * 1024 * 1024);
-  const glm::dvec3 span = glm::max(hi - lo, glm::dvec3(largest * 1e-6));
-  double edge = std::cbrt(span.x * span.y * span.z / bucket_count);
+  const double bucket_count = std::clamp(
+      static_cast<double>(tets_.size()) / options_.tets_per_bucket, 1.0, 16.0 * 1024 * 1024);
+  const glm::dvec3 span = glm::max(hi_mm_ - lo_mm_, glm::dvec3(largest * 1e-6));
+  const double edge = std::cbrt(span.x * span.y * span.z / bucket_count);
   for (int a = 0; a < 3; ++a) {
-    locator.buckets_[a] =
-        std::clamp<int64_t>(static_cast<int64_t>(std::ceil(span[a] / edge)), 1, 512);
+    buckets_[a] = std::clamp<int64_t>(static_cast<int64_t>(std::ceil(span[a] / edge)), 1, 512);
   }
-  edge = std::max(
-      {span.x / locator.buckets_[0], span.y / locator.buckets_[1], span.z / locator.buckets_[2]});
-  locator.lo_mm_ = lo;
-  locator.hi_mm_ = hi;
-  locator.bucket_mm_ = edge;
+  bucket_mm_ = std::max({span.x / buckets_[0], span.y / buckets_[1], span.z / buckets_[2]});
+}
 
+void TetLocator::FillBuckets() {
   // Two passes over the tets' bounding boxes: count, then fill (CSR), tets
   // in ascending order so the first hit of a query is the smallest index.
-  const auto& nb = locator.buckets_;
   auto bucket_range = [&](size_t t, std::array<int64_t, 3>& b0, std::array<int64_t, 3>& b1) {
-    glm::dvec3 tlo = P[T[t][0]], thi = P[T[t][0]];
-    for (int32_t v : T[t]) {
-      tlo = glm::min(tlo, P[v]);
-      thi = glm::max(thi, P[v]);
+    glm::dvec3 lo = positions_[tets_[t][0]], hi = lo;
+    for (int32_t v : tets_[t]) {
+      lo = glm::min(lo, positions_[v]);
+      hi = glm::max(hi, positions_[v]);
     }
     for (int a = 0; a < 3; ++a) {
-      b0[a] = std::clamp<int64_t>(
-          static_cast<int64_t>(std::floor((tlo[a] - margin - lo[a]) / edge)), 0, nb[a] - 1);
-      b1[a] = std::clamp<int64_t>(
-          static_cast<int64_t>(std::floor((thi[a] + margin - lo[a]) / edge)), 0, nb[a] - 1);
+      const double b_lo = std::floor((lo[a] - margin_mm_ - lo_mm_[a]) / bucket_mm_);
+      const double b_hi = std::floor((hi[a] + margin_mm_ - lo_mm_[a]) / bucket_mm_);
+      b0[a] = std::clamp<int64_t>(static_cast<int64_t>(b_lo), 0, buckets_[a] - 1);
+      b1[a] = std::clamp<int64_t>(static_cast<int64_t>(b_hi), 0, buckets_[a] - 1);
     }
   };
-  locator.bucket_begin_.assign(nb[0] * nb[1] * nb[2] + 1, 0);
+  const auto& nb = buckets_;
+  bucket_begin_.assign(nb[0] * nb[1] * nb[2] + 1, 0);
+  std::vector<int64_t> cursor;
   for (int pass = 0; pass < 2; ++pass) {
-    std::vector<int64_t> cursor;
     if (pass == 1) {
-      for (size_t b = 1; b < locator.bucket_begin_.size(); ++b) {
-        locator.bucket_begin_[b] += locator.bucket_begin_[b - 1];
-      }
-      locator.bucket_tets_.resize(locator.bucket_begin_.back());
-      cursor.assign(locator.bucket_begin_.begin(), locator.bucket_begin_.end() - 1);
+      for (size_t b = 1; b < bucket_begin_.size(); ++b) bucket_begin_[b] += bucket_begin_[b - 1];
+      bucket_tets_.resize(bucket_begin_.back());
+      cursor.assign(bucket_begin_.begin(), bucket_begin_.end() - 1);
     }
-    for (size_t t = 0; t < T.size(); ++t) {
-      if (locator.flat_[t]) continue;
+    for (size_t t = 0; t < tets_.size(); ++t) {
+      if (flat_[t]) continue;
       std::array<int64_t, 3> b0, b1;
       bucket_range(t, b0, b1);
       for (int64_t k = b0[2]; k <= b1[2]; ++k) {
@@ -110,16 +125,15 @@ Result<TetLocator> TetLocator::Create(std::vector<glm::dvec3> positions,
           for (int64_t i = b0[0]; i <= b1[0]; ++i) {
             const int64_t b = i + nb[0] * (j + nb[1] * k);
             if (pass == 0) {
-              ++locator.bucket_begin_[b + 1];
+              ++bucket_begin_[b + 1];
             } else {
-              locator.bucket_tets_[cursor[b]++] = static_cast<int32_t>(t);
+              bucket_tets_[cursor[b]++] = static_cast<int32_t>(t);
             }
           }
         }
       }
     }
   }
-  return locator;
 }
 
 int64_t TetLocator::BucketOf(const glm::dvec3& p_mm) const {

@@ -54,6 +54,9 @@ class TetLocator {
 
  private:
   TetLocator() = default;
+  void PrepareTets();  // inverse_, flat_, and the tets' bounding box
+  void SizeGrid();     // margin, buckets_, bucket_mm_
+  void FillBuckets();  // bucket_begin_, bucket_tets_
   int64_t BucketOf(const glm::dvec3& p_mm) const;
 
   Options options_;
@@ -63,6 +66,7 @@ class TetLocator {
   std::vector<uint8_t> flat_;        // per tet: 1 if the matrix is singular
   glm::dvec3 lo_mm_{0.0};            // grid corner (mm)
   glm::dvec3 hi_mm_{0.0};
+  double margin_mm_ = 0.0;  // tet boxes widened by this (mm)
   double bucket_mm_ = 1.0;  // bucket edge (mm)
   std::array<int64_t, 3> buckets_{1, 1, 1};
   std::vector<int64_t> bucket_begin_;  // CSR offsets, #buckets + 1
