@@ -13,4 +13,10 @@ struct VoxelMapPush {
   ivec4 dims;  // (nx, ny, nz, 0) voxels
 };
 
+struct LatticeCostsPush {
+  ivec4 dims;             // (nx, ny, nz, 0) voxels
+  ivec4 grid;             // (Gx, Gy, Gz, 0) lattice vertices
+  vec4 inv_two_spacing;   // (1/(2 sx), 1/(2 sy), 1/(2 sz), 0) 1/mm
+};
+
 #endif

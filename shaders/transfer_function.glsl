@@ -1,21 +1,26 @@
 // TF(value) of ALGORITHM.md section 1: piecewise linear through sorted
 // control points, clamped outside. Expects the uniform block
 // `TransferFunctionBlock { vec4 points[VPM_MAX_TF_POINTS]; ivec4 count; } u_tf`.
+//
+// Branch-free: the first cost plus, for each segment, its slope times the
+// part of [x_i, x_i+1] below the value. Every invocation runs the same
+// uniform loop, which keeps lavapipe's SIMD lanes together.
 #ifndef VPM_TRANSFER_FUNCTION_GLSL
 #define VPM_TRANSFER_FUNCTION_GLSL
 
 float transfer_cost(float value) {
   int n = u_tf.count.x;
-  if (value <= u_tf.points[0].x) return u_tf.points[0].y;
-  if (value >= u_tf.points[n - 1].x) return u_tf.points[n - 1].y;
+  float cost = u_tf.points[0].y;
   for (int i = 1; i < n; ++i) {
+    vec2 lo = u_tf.points[i - 1].xy;
     vec2 hi = u_tf.points[i].xy;
-    if (value < hi.x) {
-      vec2 lo = u_tf.points[i - 1].xy;
-      return lo.y + (value - lo.x) / (hi.x - lo.x) * (hi.y - lo.y);
-    }
+    float width = hi.x - lo.x;
+    // A zero-width segment is a step, taken at value >= x (right-continuous,
+    // as TransferFunction::Evaluate).
+    cost += width > 0.0 ? (clamp(value, lo.x, hi.x) - lo.x) * ((hi.y - lo.y) / width)
+                        : (value >= hi.x ? hi.y - lo.y : 0.0);
   }
-  return u_tf.points[n - 1].y;
+  return cost;
 }
 
 #endif

@@ -23,6 +23,14 @@ struct VoxelMapPush {
 };
 static_assert(sizeof(VoxelMapPush) == 16);
 
+// lattice_costs.comp: one workgroup per lattice vertex (cell).
+struct LatticeCostsPush {
+  glm::ivec4 dims;             // (nx, ny, nz, 0) voxels
+  glm::ivec4 grid;             // (Gx, Gy, Gz, 0) lattice vertices
+  glm::vec4 inv_two_spacing;   // (1/(2 sx), 1/(2 sy), 1/(2 sz), 0) 1/mm
+};
+static_assert(sizeof(LatticeCostsPush) == 48);
+
 // Uniform block TransferFunctionBlock (std140): control points (value, cost)
 // sorted by value in points[i].xy, count in count.x.
 inline constexpr int kMaxTfPoints = 32;

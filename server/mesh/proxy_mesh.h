@@ -23,6 +23,7 @@ struct MeshVertex {
   glm::dvec3 position_mm{0.0};  // physical voxel space
   int64_t lattice_id = -1;      // a + Gx*(b + Gy*c) for lattice vertices, -1 otherwise
   VertexKind kind = VertexKind::kLattice;
+  std::array<int64_t, 3> voxel{0, 0, 0};  // voxel(v): nearest voxel (round half up, clamped)
   bool hard = false;            // non-deformable (step 3)
   // Lattice: Ctotal when decimation stopped; refined: its Ci*Cg score;
   // anchor: 0.

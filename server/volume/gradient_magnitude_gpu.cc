@@ -10,7 +10,7 @@ Result<GradientMagnitudeGpu> GradientMagnitudeGpu::Create(const gpu::GpuContext&
                    gpu::ComputeKernel::Create(
                        context, {.name = "gradient_magnitude",
                                  .spirv = kGradientMagnitudeSpv,
-                                 .bindings = {vk::DescriptorType::eCombinedImageSampler,
+                                 .bindings = {vk::DescriptorType::eUniformTexelBuffer,
                                               vk::DescriptorType::eStorageBuffer},
                                  .push_constant_bytes = sizeof(gpu::GradientPush),
                                  .local_size = {64, 1, 1}}));
@@ -30,7 +30,7 @@ Status GradientMagnitudeGpu::Record(gpu::ComputeBatch& batch, const GpuVolume& v
       .dims = glm::ivec4(e[0], e[1], e[2], 0),
       .inv_two_spacing = glm::vec4(float(1.0 / (2.0 * s.x)), float(1.0 / (2.0 * s.y)),
                                    float(1.0 / (2.0 * s.z)), 0.0f)};
-  return batch.Dispatch(kernel_, {&volume.image(), &out}, push, kernel_.GroupsFor(e),
+  return batch.Dispatch(kernel_, {volume.texel_view(), &out}, push, kernel_.GroupsFor(e),
                         "gradient_magnitude");
 }
 

@@ -106,7 +106,9 @@ Result<TransferFunction> TransferFunction::FromSpec(std::string_view spec, const
 }
 
 double TransferFunction::Evaluate(double value) const {
-  if (value <= points_.front().value) return points_.front().cost;
+  // Right-continuous at repeated values (steps): a value equal to a step's
+  // position takes the cost after the step.
+  if (value < points_.front().value) return points_.front().cost;
   if (value >= points_.back().value) return points_.back().cost;
   // First point with a value greater than `value`; its predecessor is <=.
   auto hi = std::upper_bound(points_.begin(), points_.end(), value,

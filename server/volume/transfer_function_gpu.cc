@@ -24,7 +24,7 @@ Result<TransferFunctionGpu> TransferFunctionGpu::Create(const gpu::GpuContext& c
                    gpu::ComputeKernel::Create(
                        context, {.name = "transfer_function",
                                  .spirv = kTransferFunctionSpv,
-                                 .bindings = {vk::DescriptorType::eCombinedImageSampler,
+                                 .bindings = {vk::DescriptorType::eUniformTexelBuffer,
                                               vk::DescriptorType::eUniformBuffer,
                                               vk::DescriptorType::eStorageBuffer},
                                  .push_constant_bytes = sizeof(gpu::VoxelMapPush),
@@ -41,7 +41,7 @@ Status TransferFunctionGpu::Record(gpu::ComputeBatch& batch, const GpuVolume& vo
     return absl::InvalidArgumentError("transfer function buffers too small for the volume");
   }
   gpu::VoxelMapPush push{.dims = glm::ivec4(e[0], e[1], e[2], 0)};
-  return batch.Dispatch(kernel_, {&volume.image(), &tf_block, &out}, push, kernel_.GroupsFor(e),
+  return batch.Dispatch(kernel_, {volume.texel_view(), &tf_block, &out}, push, kernel_.GroupsFor(e),
                         "transfer_function");
 }
 

@@ -74,24 +74,30 @@ class ComputeBatchTest : public GpuTest {
     auto kernel = gpu::ComputeKernel::Create(
         context(), {.name = "gradient_magnitude",
                     .spirv = kGradientMagnitudeSpv,
-                    .bindings = {vk::DescriptorType::eCombinedImageSampler,
+                    .bindings = {vk::DescriptorType::eUniformTexelBuffer,
                                  vk::DescriptorType::eStorageBuffer},
                     .push_constant_bytes = sizeof(gpu::GradientPush),
                     .local_size = {64, 1, 1}});
     ASSERT_TRUE(kernel.ok()) << kernel.status();
     kernel_.emplace(std::move(*kernel));
-    auto image = gpu::GpuImage3D::Create(context(), {8, 8, 8}, vk::Format::eR32Sfloat);
+    auto volume = gpu::GpuBuffer::Create(context(), 8 * 8 * 8 * 4,
+                                         vk::BufferUsageFlagBits::eUniformTexelBuffer);
     auto out = gpu::GpuBuffer::Create(context(), 8 * 8 * 8 * 4,
                                       vk::BufferUsageFlagBits::eStorageBuffer);
     auto ubo = gpu::GpuBuffer::Create(context(), 256, vk::BufferUsageFlagBits::eUniformBuffer);
-    ASSERT_TRUE(image.ok() && out.ok() && ubo.ok());
-    image_.emplace(std::move(*image));
+    ASSERT_TRUE(volume.ok() && out.ok() && ubo.ok());
+    volume_.emplace(std::move(*volume));
     out_.emplace(std::move(*out));
     ubo_.emplace(std::move(*ubo));
+    view_ = vk::raii::BufferView(context().device(),
+                                 vk::BufferViewCreateInfo({}, volume_->handle(),
+                                                          vk::Format::eR32Sfloat, 0, VK_WHOLE_SIZE));
+    texels_ = *view_;
   }
   std::optional<gpu::ComputeKernel> kernel_;
-  std::optional<gpu::GpuImage3D> image_;
-  std::optional<gpu::GpuBuffer> out_, ubo_;
+  std::optional<gpu::GpuBuffer> volume_, out_, ubo_;
+  vk::raii::BufferView view_{nullptr};
+  vk::BufferView texels_;
   gpu::GradientPush push_{.dims = glm::ivec4(8, 8, 8, 0), .inv_two_spacing = glm::vec4(0.5f)};
 };
 
@@ -115,12 +121,12 @@ TEST_F(ComputeBatchTest, ComputeKernel_RejectsMissingSpirvAndBadLocalSize) {
 TEST_F(ComputeBatchTest, Dispatch_RejectsWrongBindingCountAndKinds) {
   auto batch = gpu::ComputeBatch::Begin(context(), 4);
   ASSERT_TRUE(batch.ok());
-  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_}, push_, {1, 8, 8}).code(),
+  EXPECT_EQ(batch->Dispatch(*kernel_, {texels_}, push_, {1, 8, 8}).code(),
             absl::StatusCode::kInvalidArgument);
   EXPECT_EQ(batch->Dispatch(*kernel_, {&*out_, &*out_}, push_, {1, 8, 8}).code(),
             absl::StatusCode::kInvalidArgument);
   // A uniform buffer where the kernel writes a storage buffer.
-  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_, &*ubo_}, push_, {1, 8, 8}).code(),
+  EXPECT_EQ(batch->Dispatch(*kernel_, {texels_, &*ubo_}, push_, {1, 8, 8}).code(),
             absl::StatusCode::kInvalidArgument);
   EXPECT_TRUE(batch->SubmitAndWait().ok());
 }
@@ -129,12 +135,12 @@ TEST_F(ComputeBatchTest, Dispatch_RejectsWrongPushSizeAndGroupCounts) {
   auto batch = gpu::ComputeBatch::Begin(context(), 4);
   ASSERT_TRUE(batch.ok());
   const gpu::VoxelMapPush short_push{};
-  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_, &*out_}, short_push, {1, 8, 8}).code(),
+  EXPECT_EQ(batch->Dispatch(*kernel_, {texels_, &*out_}, short_push, {1, 8, 8}).code(),
             absl::StatusCode::kInvalidArgument);
-  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_, &*out_}, push_, {0, 8, 8}).code(),
+  EXPECT_EQ(batch->Dispatch(*kernel_, {texels_, &*out_}, push_, {0, 8, 8}).code(),
             absl::StatusCode::kInvalidArgument);
   const uint32_t too_many = context().limits().maxComputeWorkGroupCount[1] + 1;
-  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_, &*out_}, push_, {1, too_many, 1}).code(),
+  EXPECT_EQ(batch->Dispatch(*kernel_, {texels_, &*out_}, push_, {1, too_many, 1}).code(),
             absl::StatusCode::kInvalidArgument);
   EXPECT_TRUE(batch->SubmitAndWait().ok());
 }
@@ -142,9 +148,9 @@ TEST_F(ComputeBatchTest, Dispatch_RejectsWrongPushSizeAndGroupCounts) {
 TEST_F(ComputeBatchTest, Batch_CapsDispatchesAndSubmitsOnce) {
   auto batch = gpu::ComputeBatch::Begin(context(), 2);
   ASSERT_TRUE(batch.ok());
-  EXPECT_TRUE(batch->Dispatch(*kernel_, {&*image_, &*out_}, push_, {1, 8, 8}, "a").ok());
-  EXPECT_TRUE(batch->Dispatch(*kernel_, {&*image_, &*out_}, push_, {1, 8, 8}, "b").ok());
-  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_, &*out_}, push_, {1, 8, 8}).code(),
+  EXPECT_TRUE(batch->Dispatch(*kernel_, {texels_, &*out_}, push_, {1, 8, 8}, "a").ok());
+  EXPECT_TRUE(batch->Dispatch(*kernel_, {texels_, &*out_}, push_, {1, 8, 8}, "b").ok());
+  EXPECT_EQ(batch->Dispatch(*kernel_, {texels_, &*out_}, push_, {1, 8, 8}).code(),
             absl::StatusCode::kResourceExhausted);
   auto timings = batch->SubmitAndWait();
   ASSERT_TRUE(timings.ok()) << timings.status();
@@ -154,7 +160,7 @@ TEST_F(ComputeBatchTest, Batch_CapsDispatchesAndSubmitsOnce) {
     EXPECT_GE((*timings)[1].gpu_ms, 0.0);
   }
   EXPECT_EQ(batch->SubmitAndWait().status().code(), absl::StatusCode::kFailedPrecondition);
-  EXPECT_EQ(batch->Dispatch(*kernel_, {&*image_, &*out_}, push_, {1, 8, 8}).code(),
+  EXPECT_EQ(batch->Dispatch(*kernel_, {texels_, &*out_}, push_, {1, 8, 8}).code(),
             absl::StatusCode::kFailedPrecondition);
 }
 

@@ -1,0 +1,122 @@
+#include "server/mesh/build_proxy_mesh.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "server/mesh/refine_at_point.h"
+#include "server/mesh/tetrahedralize.h"
+
+namespace vpm {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double MsSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+Status CheckParams(const MeshParams& p) {
+  for (double v : {p.wg, p.wd, p.radius_factor, p.roi_radius_factor}) {
+    if (!std::isfinite(v) || v < 0.0) {
+      return absl::InvalidArgumentError("wg, wd, radius factor and roi factor must be finite, >= 0");
+    }
+  }
+  if (!(p.radius_factor > 0.0)) return absl::InvalidArgumentError("radius factor must be > 0");
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+std::vector<MeshVertex> MakeAnchors(const VolumeGeometry& geometry) {
+  std::vector<MeshVertex> anchors;
+  const glm::dvec3 extent = geometry.extent_mm();
+  for (int c = 0; c < 8; ++c) {
+    const std::array<bool, 3> hi{(c & 1) != 0, (c & 2) != 0, (c & 4) != 0};
+    MeshVertex v{.lattice_id = -1, .kind = VertexKind::kAnchor};
+    for (int a = 0; a < 3; ++a) {
+      v.position_mm[a] = hi[a] ? extent[a] : 0.0;
+      v.voxel[a] = hi[a] ? geometry.dims[a] - 1 : 0;
+    }
+    anchors.push_back(v);
+  }
+  return anchors;
+}
+
+Result<DecimatedLattice> DecimateLattice(const Volume& volume, const MeshParams& params,
+                                         const MeshGpu& gpu) {
+  RETURN_IF_ERROR(CheckParams(params));
+  ASSIGN_OR_RETURN(Lattice lattice, Lattice::Create(volume.geometry(), params.grid));
+  ASSIGN_OR_RETURN(TransferFunction tf, TransferFunction::FromSpec(params.tf, volume));
+  auto t0 = Clock::now();
+  LatticeCosts costs;
+  if (gpu.volume != nullptr && gpu.lattice_costs != nullptr) {
+    ASSIGN_OR_RETURN(costs, gpu.lattice_costs->Evaluate(*gpu.volume, lattice, tf));
+  } else {
+    costs = EvaluateLatticeCostsCpu(volume, lattice, tf);
+  }
+  MeshStats stats;
+  stats.evaluate_ms = MsSince(t0);
+  t0 = Clock::now();
+  const auto& g = costs.g(params.footprint);
+  DecimationInput input{.ci = costs.ci(params.footprint), .cg = NormalizeGradientCost(g)};
+  input.positions.resize(lattice.size());
+  for (int64_t id = 0; id < lattice.size(); ++id) input.positions[id] = lattice.Position(id);
+  const double h = lattice.h_mm();
+  const DecimationParams dp{.target = params.target,
+                            .wg = params.wg,
+                            .wd = params.wd,
+                            .radius_mm = params.radius_factor * h,
+                            .density_mode = params.density_mode};
+  ASSIGN_OR_RETURN(DecimationResult kept, DecimateFast(input, dp));
+  std::vector<MeshVertex> vertices = MakeAnchors(volume.geometry());
+  for (size_t n = 0; n < kept.kept.size(); ++n) {
+    const int64_t id = kept.kept[n];
+    vertices.push_back({.position_mm = input.positions[id],
+                        .lattice_id = id,
+                        .kind = VertexKind::kLattice,
+                        .voxel = lattice.Voxel(id),
+                        .cost = kept.kept_cost[n]});
+  }
+  stats.decimate_ms = MsSince(t0);
+  stats.grid = {int32_t(params.grid[0]), int32_t(params.grid[1]), int32_t(params.grid[2])};
+  stats.lattice_vertices = lattice.size();
+  stats.kept_lattice = static_cast<int64_t>(kept.kept.size());
+  stats.anchors = kAnchorCount;
+  stats.h_mm = h;
+  stats.R_mm = dp.radius_mm;
+  const double g_max = g.empty() ? 0.0 : *std::max_element(g.begin(), g.end());
+  return DecimatedLattice{std::move(lattice), std::move(tf), std::move(costs), g_max,
+                          std::move(vertices), stats};
+}
+
+Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& base,
+                                  const MeshParams& params) {
+  ProxyMesh mesh;
+  mesh.stats = base.stats;
+  mesh.vertices = base.vertices;
+  auto t0 = Clock::now();
+  if (params.refine_at_mm) {
+    const RefineParams rp{.point_mm = *params.refine_at_mm,
+                          .roi_radius_mm = params.roi_radius_factor * base.stats.h_mm,
+                          .refine_count = params.refine_count,
+                          .footprint = params.footprint};
+    ASSIGN_OR_RETURN(auto refined,
+                     RefineAtPoint(volume, base.lattice, base.tf, base.g_max, mesh.vertices, rp));
+    mesh.stats.refined = static_cast<int64_t>(refined.size());
+    mesh.vertices.insert(mesh.vertices.end(), refined.begin(), refined.end());
+  }
+  mesh.stats.refine_ms = MsSince(t0);
+  t0 = Clock::now();
+  RETURN_IF_ERROR(ClassifyHardness(volume, base.stats.R_mm, params.classify, mesh.vertices));
+  mesh.stats.hard = std::count_if(mesh.vertices.begin(), mesh.vertices.end(),
+                                  [](const MeshVertex& v) { return v.hard; });
+  mesh.stats.classify_ms = MsSince(t0);
+  t0 = Clock::now();
+  RETURN_IF_ERROR(Tetrahedralize(mesh, volume.geometry().extent_mm()));
+  mesh.stats.tetrahedralize_ms = MsSince(t0);
+  mesh.stats.tets = static_cast<int64_t>(mesh.tets.size());
+  mesh.stats.total_ms = mesh.stats.evaluate_ms + mesh.stats.decimate_ms + mesh.stats.refine_ms +
+                        mesh.stats.classify_ms + mesh.stats.tetrahedralize_ms;
+  return mesh;
+}
+
+}  // namespace vpm

@@ -1,0 +1,51 @@
+// A uniform grid of buckets over a fixed point set, for "all points within R
+// of p" queries (ALGORITHM.md step 2 asks for cell size R). Buckets hold point
+// ids in increasing order.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace vpm {
+
+class PointGrid {
+ public:
+  // points: #P positions (mm); cell_mm > 0.
+  PointGrid(const std::vector<glm::dvec3>& points, double cell_mm);
+
+  // Calls fn(id) for every point in the buckets that a ball of radius
+  // <= cell_mm around p can touch (a superset: callers test the distance).
+  template <typename Fn>
+  void ForEachCandidate(const glm::dvec3& p, Fn&& fn) const {
+    const auto c = CellOf(p);
+    for (int64_t z = std::max<int64_t>(c[2] - 1, 0); z <= std::min(c[2] + 1, dims_[2] - 1); ++z)
+      for (int64_t y = std::max<int64_t>(c[1] - 1, 0); y <= std::min(c[1] + 1, dims_[1] - 1); ++y)
+        for (int64_t x = std::max<int64_t>(c[0] - 1, 0); x <= std::min(c[0] + 1, dims_[0] - 1);
+             ++x) {
+          const int64_t cell = x + dims_[0] * (y + dims_[1] * z);
+          for (int64_t n = start_[cell]; n < start_[cell + 1]; ++n) fn(items_[n]);
+        }
+  }
+
+ private:
+  std::array<int64_t, 3> CellOf(const glm::dvec3& p) const;
+
+  glm::dvec3 origin_;
+  double cell_mm_;
+  std::array<int64_t, 3> dims_;
+  std::vector<int64_t> start_;  // CSR: bucket b holds items_[start_[b] .. start_[b+1])
+  std::vector<int64_t> items_;
+};
+
+// |a - b| computed in one fixed order, so that every caller gets the same bits.
+inline double PointDistance(const glm::dvec3& a, const glm::dvec3& b) {
+  const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+}  // namespace vpm

@@ -1,0 +1,129 @@
+#include "server/mesh/decimate.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "server/mesh/indexed_min_heap.h"
+#include "server/mesh/lattice.h"
+#include "server/mesh/lattice_costs.h"
+#include "tests/mesh/mesh_test_volumes.h"
+
+namespace vpm {
+namespace {
+
+DecimationInput LatticeInput(std::array<int64_t, 3> g, double step, uint32_t seed) {
+  DecimationInput in;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int64_t c = 0; c < g[2]; ++c)
+    for (int64_t b = 0; b < g[1]; ++b)
+      for (int64_t a = 0; a < g[0]; ++a) {
+        in.positions.emplace_back(a * step, b * step * 1.1, c * step * 0.9);
+        // A quarter of the vertices in "air" (Ci = 0) makes exact ties common.
+        in.ci.push_back(u(rng) < 0.25 ? 0.0 : u(rng));
+        in.cg.push_back(u(rng));
+      }
+  return in;
+}
+
+TEST(IndexedMinHeap, PopsInCostThenIdOrderUnderUpdates) {
+  IndexedMinHeap heap({3.0, 1.0, 2.0, 1.0, 5.0});
+  heap.Update(4, 0.5);
+  heap.Update(1, 4.0);
+  std::vector<int64_t> order;
+  while (!heap.empty()) order.push_back(heap.Pop());
+  EXPECT_EQ(order, (std::vector<int64_t>{4, 3, 2, 0, 1}));
+}
+
+class DecimateModes : public ::testing::TestWithParam<DensityMode> {};
+
+TEST_P(DecimateModes, FastAndNaiveKeepTheSameVertices) {
+  const DecimationInput in = LatticeInput({14, 12, 10}, 5.0, 7);
+  const DecimationParams p{.target = 120, .radius_mm = 2.0 * 5.0 * 1.1, .density_mode = GetParam()};
+  auto fast = DecimateFast(in, p);
+  auto naive = DecimateNaive(in, p);
+  ASSERT_TRUE(fast.ok() && naive.ok());
+  EXPECT_EQ(fast->kept.size(), 112u);  // target counts the 8 anchors
+  EXPECT_EQ(fast->kept, naive->kept);
+  EXPECT_EQ(fast->removal_order, naive->removal_order);
+  EXPECT_EQ(fast->kept_cost, naive->kept_cost);
+  EXPECT_EQ(fast->d0, naive->d0);
+}
+
+INSTANTIATE_TEST_SUITE_P(BothModes, DecimateModes,
+                         ::testing::Values(DensityMode::kSpread, DensityMode::kPaper));
+
+TEST(Decimate, TiesGoToTheSmallerId) {
+  DecimationInput in = LatticeInput({6, 6, 6}, 1.0, 3);
+  std::fill(in.ci.begin(), in.ci.end(), 0.0);  // every cost 0
+  auto r = DecimateFast(in, {.target = 8 + 200, .radius_mm = 2.0});
+  ASSERT_TRUE(r.ok());
+  for (int64_t n = 0; n < 16; ++n) EXPECT_EQ(r->removal_order[n], n);
+}
+
+TEST(Decimate, SpreadModeRemovesFromCrowdsAndPaperModeFromTheEdges) {
+  // Uniform image terms: only the spreading term decides. In a finite lattice
+  // the border vertices have fewer neighbours (lower density).
+  DecimationInput in = LatticeInput({10, 10, 10}, 1.0, 1);
+  std::fill(in.ci.begin(), in.ci.end(), 1.0);
+  std::fill(in.cg.begin(), in.cg.end(), 0.0);
+  auto spread = DecimateFast(in, {.target = 8 + 990, .radius_mm = 2.0,
+                                  .density_mode = DensityMode::kSpread});
+  auto paper = DecimateFast(in, {.target = 8 + 990, .radius_mm = 2.0,
+                                 .density_mode = DensityMode::kPaper});
+  ASSERT_TRUE(spread.ok() && paper.ok());
+  // Steps are 1, 1.1 and 0.9 mm with R = 2: a full neighbourhood reaches one
+  // step along x and y and two along z.
+  auto is_interior = [](int64_t id) {
+    const int64_t a = id % 10, b = (id / 10) % 10, c = id / 100;
+    return a >= 1 && a <= 8 && b >= 1 && b <= 8 && c >= 2 && c <= 7;
+  };
+  EXPECT_TRUE(is_interior(spread->removal_order.front()));   // crowded goes first
+  EXPECT_EQ(paper->removal_order.front(), 0);                 // a corner: least dense
+}
+
+TEST(Decimate, DensityMatchesTheDefinition) {
+  const DecimationInput in = LatticeInput({4, 4, 4}, 1.0, 9);
+  auto r = DecimateNaive(in, {.target = 8 + 64, .radius_mm = 1.5});
+  ASSERT_TRUE(r.ok());
+  // Interior vertex: 6 at distance 1, 12 at sqrt(2)*... with y scaled 1.1 and z 0.9.
+  double expected_max = 0.0;
+  for (size_t v = 0; v < in.positions.size(); ++v) {
+    double dens = 0;
+    for (size_t u = 0; u < in.positions.size(); ++u) {
+      const double d = glm::distance(in.positions[u], in.positions[v]);
+      if (u != v && d < 1.5) dens += 1.0 / d;
+    }
+    expected_max = std::max(expected_max, dens);
+  }
+  EXPECT_NEAR(r->d0, expected_max, 1e-12);
+}
+
+TEST(Decimate, RejectsBadParameters) {
+  const DecimationInput in = LatticeInput({4, 4, 4}, 1.0, 9);
+  EXPECT_FALSE(DecimateFast(in, {.target = 7, .radius_mm = 2}).ok());
+  EXPECT_FALSE(DecimateFast(in, {.target = 8 + 65, .radius_mm = 2}).ok());
+  EXPECT_FALSE(DecimateFast(in, {.target = 20, .radius_mm = 0}).ok());
+  EXPECT_FALSE(DecimateFast(in, {.target = 20, .wg = -1, .radius_mm = 2}).ok());
+  DecimationInput bad = in;
+  bad.ci[5] = std::nan("");
+  EXPECT_FALSE(DecimateFast(bad, {.target = 20, .radius_mm = 2}).ok());
+}
+
+TEST(Decimate, FastMatchesNaiveOnRealImageCosts) {
+  const Volume v = testing::MakeBodyVolume();
+  auto lattice = Lattice::Create(v.geometry(), {12, 10, 8});
+  ASSERT_TRUE(lattice.ok());
+  const LatticeCosts costs = EvaluateLatticeCostsCpu(v, *lattice, TransferFunction::CtSoftTissue());
+  DecimationInput in{.ci = costs.ci_cell, .cg = NormalizeGradientCost(costs.g_cell)};
+  for (int64_t id = 0; id < lattice->size(); ++id) in.positions.push_back(lattice->Position(id));
+  const DecimationParams p{.target = 100, .radius_mm = 2.0 * lattice->h_mm()};
+  auto fast = DecimateFast(in, p);
+  auto naive = DecimateNaive(in, p);
+  ASSERT_TRUE(fast.ok() && naive.ok());
+  EXPECT_EQ(fast->kept, naive->kept);
+}
+
+}  // namespace
+}  // namespace vpm

@@ -1,0 +1,6 @@
+vpm_add_test(NAME mesh_test
+  SOURCES lattice_test.cc decimate_test.cc classify_refine_test.cc
+  LIBS vpm_mesh)
+vpm_add_test(NAME mesh_gpu_test
+  SOURCES lattice_costs_gpu_test.cc
+  LIBS vpm_mesh vpm_gpu_testing)
