@@ -35,7 +35,12 @@ PointGrid::PointGrid(const std::vector<glm::dvec3>& points, double cell_mm) : ce
   for (int64_t b = 0; b < buckets; ++b) start_[b + 1] += start_[b];
   items_.resize(points.size());
   std::vector<int64_t> fill(start_.begin(), start_.end() - 1);
-  for (size_t i = 0; i < points.size(); ++i) items_[fill[bucket_of[i]]++] = static_cast<int64_t>(i);
+  positions_.resize(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const int64_t slot = fill[bucket_of[i]]++;
+    items_[slot] = static_cast<int64_t>(i);
+    positions_[slot] = points[i];
+  }
 }
 
 std::array<int64_t, 3> PointGrid::CellOf(const glm::dvec3& p) const {

@@ -18,8 +18,10 @@ class PointGrid {
   // points: #P positions (mm); cell_mm > 0.
   PointGrid(const std::vector<glm::dvec3>& points, double cell_mm);
 
-  // Calls fn(id) for every point in the buckets that a ball of radius
-  // <= cell_mm around p can touch (a superset: callers test the distance).
+  // Calls fn(id, position) for every point in the buckets that a ball of
+  // radius <= cell_mm around p can touch (a superset: callers test the
+  // distance). Positions are stored in bucket order, so the scan is
+  // contiguous in memory.
   template <typename Fn>
   void ForEachCandidate(const glm::dvec3& p, Fn&& fn) const {
     const auto c = CellOf(p);
@@ -28,7 +30,7 @@ class PointGrid {
         for (int64_t x = std::max<int64_t>(c[0] - 1, 0); x <= std::min(c[0] + 1, dims_[0] - 1);
              ++x) {
           const int64_t cell = x + dims_[0] * (y + dims_[1] * z);
-          for (int64_t n = start_[cell]; n < start_[cell + 1]; ++n) fn(items_[n]);
+          for (int64_t n = start_[cell]; n < start_[cell + 1]; ++n) fn(items_[n], positions_[n]);
         }
   }
 
@@ -40,6 +42,7 @@ class PointGrid {
   std::array<int64_t, 3> dims_;
   std::vector<int64_t> start_;  // CSR: bucket b holds items_[start_[b] .. start_[b+1])
   std::vector<int64_t> items_;
+  std::vector<glm::dvec3> positions_;  // positions_[n] is the position of items_[n]
 };
 
 // |a - b| computed in one fixed order, so that every caller gets the same bits.
