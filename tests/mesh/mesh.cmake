@@ -4,3 +4,6 @@ vpm_add_test(NAME mesh_test
 vpm_add_test(NAME mesh_gpu_test
   SOURCES lattice_costs_gpu_test.cc
   LIBS vpm_mesh vpm_gpu_testing)
+vpm_add_test(NAME compare_meshes_test
+  SOURCES compare_meshes_test.cc
+  LIBS vpm_mesh vpm_phantom)

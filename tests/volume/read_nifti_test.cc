@@ -1,5 +1,6 @@
 #include "server/volume/read_nifti.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -36,9 +37,11 @@ nifti_1_header Header1(int nx, int ny, int nz, short datatype, short bitpix) {
 }
 
 std::vector<uint8_t> File1(const nifti_1_header& h, const std::vector<uint8_t>& data) {
-  std::vector<uint8_t> out(352, 0);
+  // Sized once: GCC 12 at -O2 misreads an insert after 352 bytes as an
+  // out-of-bounds copy (-Warray-bounds).
+  std::vector<uint8_t> out(352 + data.size(), 0);
   std::memcpy(out.data(), &h, sizeof(h));
-  out.insert(out.end(), data.begin(), data.end());
+  std::copy(data.begin(), data.end(), out.begin() + 352);
   return out;
 }
 
@@ -323,19 +326,18 @@ TEST(NiftiReader, RejectsZeroAndNegativeDims) {
               "dim[3] is -4");
   h = Header1(2, 2, 2, DT_UINT8, 8);
   h.dim[0] = 9;
-  ExpectError(ReadBytes(File1(h, {}), "rank.nii"), absl::StatusCode::kInvalidArgument,
-              "dim[0]");
+  ExpectError(ReadBytes(File1(h, {}), "rank.nii"), absl::StatusCode::kInvalidArgument, "dim[0]");
 }
 
 TEST(NiftiReader, RejectsAbsurdDimsBeforeAllocating) {
   nifti_1_header h = Header1(32767, 32767, 32767, DT_FLOAT64, 64);
-  ExpectError(ReadBytes(File1(h, {1, 2, 3}), "huge.nii"),
-              absl::StatusCode::kResourceExhausted, "over the cap");
+  ExpectError(ReadBytes(File1(h, {1, 2, 3}), "huge.nii"), absl::StatusCode::kResourceExhausted,
+              "over the cap");
   h = Header1(600, 600, 600, DT_UINT8, 8);
   VolumeLimits small;
   small.max_voxels = 1000;
-  ExpectError(ReadBytes(File1(h, {1}), "capped.nii", small),
-              absl::StatusCode::kResourceExhausted, "cap");
+  ExpectError(ReadBytes(File1(h, {1}), "capped.nii", small), absl::StatusCode::kResourceExhausted,
+              "cap");
 }
 
 TEST(NiftiReader, Rejects4DAsUnimplemented) {
@@ -363,8 +365,8 @@ TEST(NiftiReader, RejectsUnknownAndUnsupportedDatatypes) {
   ExpectError(ReadBytes(File1(h, std::vector<uint8_t>(16, 0)), "complex.nii"),
               absl::StatusCode::kUnimplemented, "datatype 32");
   h = Header1(2, 1, 1, DT_INT16, 8);
-  ExpectError(ReadBytes(File1(h, {0, 0, 0, 0}), "bitpix.nii"),
-              absl::StatusCode::kInvalidArgument, "bitpix is 8");
+  ExpectError(ReadBytes(File1(h, {0, 0, 0, 0}), "bitpix.nii"), absl::StatusCode::kInvalidArgument,
+              "bitpix is 8");
 }
 
 TEST(NiftiReader, RejectsDegenerateSform) {
