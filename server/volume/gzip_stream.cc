@@ -73,8 +73,7 @@ Result<InflateOutcome> InflateBounded(std::span<const uint8_t> in, int64_t bound
     if (rc == Z_STREAM_END) {
       // Another gzip member may follow (concatenated .gz); trailing bytes that
       // are not a gzip member are ignored, as gzip(1) does.
-      if (LooksLikeGzip(in.subspan(static_cast<size_t>(consumed))) &&
-          inflateReset(&z) == Z_OK) {
+      if (LooksLikeGzip(in.subspan(static_cast<size_t>(consumed))) && inflateReset(&z) == Z_OK) {
         continue;
       }
       break;
@@ -83,13 +82,12 @@ Result<InflateOutcome> InflateBounded(std::span<const uint8_t> in, int64_t bound
     if ((rc == Z_OK || rc == Z_BUF_ERROR) && progress) continue;
     if ((rc == Z_OK || rc == Z_BUF_ERROR) && consumed == in_size) {
       if (stop_quietly) break;
-      return absl::InvalidArgumentError(absl::StrCat(
-          "compressed stream is truncated (ends after ", produced, " inflated bytes)"));
+      return absl::InvalidArgumentError(absl::StrCat("compressed stream is truncated (ends after ",
+                                                     produced, " inflated bytes)"));
     }
     if (stop_quietly && produced > 0) break;
-    return absl::InvalidArgumentError(absl::StrCat("compressed data is corrupt (zlib: ",
-                                                   z.msg != nullptr ? z.msg : "no progress",
-                                                   ")"));
+    return absl::InvalidArgumentError(absl::StrCat(
+        "compressed data is corrupt (zlib: ", z.msg != nullptr ? z.msg : "no progress", ")"));
   }
   out.bytes.resize(static_cast<size_t>(produced));
   return out;
@@ -108,18 +106,19 @@ Result<std::vector<uint8_t>> InflateExactly(std::span<const uint8_t> compressed,
   }
   if (declared_bytes > limits.max_bytes) {
     return absl::ResourceExhaustedError(absl::StrCat("declared data of ", declared_bytes,
-                                                     " bytes is over the cap of ",
-                                                     limits.max_bytes, " bytes"));
+                                                     " bytes is over the cap of ", limits.max_bytes,
+                                                     " bytes"));
   }
   ASSIGN_OR_RETURN(InflateOutcome out, InflateBounded(compressed, declared_bytes, false));
   if (out.more_output) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("gzip inflates past the declared size of ", declared_bytes, " bytes"));
+    return absl::InvalidArgumentError(absl::StrCat(LooksLikeGzip(compressed) ? "gzip" : "zlib data",
+                                                   " inflates past the declared size of ",
+                                                   declared_bytes, " bytes"));
   }
   if (static_cast<int64_t>(out.bytes.size()) < declared_bytes) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("compressed data ends after ", out.bytes.size(), " of the declared ",
-                     declared_bytes, " bytes (truncated)"));
+    return absl::InvalidArgumentError(absl::StrCat("compressed data ends after ", out.bytes.size(),
+                                                   " of the declared ", declared_bytes,
+                                                   " bytes (truncated)"));
   }
   return std::move(out.bytes);
 }

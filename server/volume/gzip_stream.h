@@ -23,7 +23,8 @@ bool LooksLikeGzip(std::span<const uint8_t> bytes);
 // zlib stream; auto-detected) that must hold exactly `declared_bytes` bytes.
 // Errors (messages without a file name; callers add it):
 //  - ResourceExhausted when declared_bytes > limits.max_bytes;
-//  - InvalidArgument "gzip inflates past the declared size of N bytes";
+//  - InvalidArgument "gzip inflates past the declared size of N bytes"
+//    ("zlib data inflates ..." for a zlib stream);
 //  - InvalidArgument "... ends after N of the declared M bytes (truncated)";
 //  - InvalidArgument for corrupt data.
 Result<std::vector<uint8_t>> InflateExactly(std::span<const uint8_t> compressed,

@@ -3,13 +3,6 @@
 // that the extern "C" block below does not wrap libstdc++'s templates.
 #pragma once
 
-#include <cctype>
-#include <cinttypes>
-#include <climits>
-#include <cmath>
-#include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <ctype.h>
 #include <inttypes.h>
 #include <limits.h>
@@ -18,6 +11,13 @@
 #include <stdlib.h>
 #include <string.h>
 #include <zlib.h>
+#include <cctype>
+#include <cinttypes>
+#include <climits>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 
 extern "C" {
 #include <nifti2_io.h>

@@ -139,8 +139,7 @@ NiftiOrientation GeometryToNiftiOrientation(const VolumeGeometry& g) {
   affine.m[3][3] = 1.0;
   double dx = 0, dy = 0, dz = 0, qfac = 0;
   nifti_dmat44_to_quatern(affine, &out.quatern[0], &out.quatern[1], &out.quatern[2],
-                          &out.qoffset[0], &out.qoffset[1], &out.qoffset[2], &dx, &dy, &dz,
-                          &qfac);
+                          &out.qoffset[0], &out.qoffset[1], &out.qoffset[2], &dx, &dy, &dz, &qfac);
   out.pixdim = {qfac, g.spacing_mm.x, g.spacing_mm.y, g.spacing_mm.z};
   return out;
 }

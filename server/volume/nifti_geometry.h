@@ -28,9 +28,9 @@ Result<VolumeGeometry> NiftiHeaderGeometry(const NiftiHeader& header);
 
 // The orientation fields a writer stores for `geometry`, in RAS.
 struct NiftiOrientation {
-  std::array<double, 4> pixdim{};    // qfac, dx, dy, dz
-  std::array<double, 3> quatern{};   // b, c, d
-  std::array<double, 3> qoffset{};   // x, y, z
+  std::array<double, 4> pixdim{};   // qfac, dx, dy, dz
+  std::array<double, 3> quatern{};  // b, c, d
+  std::array<double, 3> qoffset{};  // x, y, z
   std::array<std::array<double, 4>, 3> srow{};
 };
 NiftiOrientation GeometryToNiftiOrientation(const VolumeGeometry& geometry);

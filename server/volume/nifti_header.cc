@@ -11,17 +11,28 @@ namespace {
 // NIFTI_TYPE_* codes (nifti1.h), and those we do not decode.
 std::optional<VoxelType> NiftiVoxelType(int datatype) {
   switch (datatype) {
-    case 2: return VoxelType::kUint8;
-    case 4: return VoxelType::kInt16;
-    case 8: return VoxelType::kInt32;
-    case 16: return VoxelType::kFloat32;
-    case 64: return VoxelType::kFloat64;
-    case 256: return VoxelType::kInt8;
-    case 512: return VoxelType::kUint16;
-    case 768: return VoxelType::kUint32;
-    case 1024: return VoxelType::kInt64;
-    case 1280: return VoxelType::kUint64;
-    default: return std::nullopt;
+    case 2:
+      return VoxelType::kUint8;
+    case 4:
+      return VoxelType::kInt16;
+    case 8:
+      return VoxelType::kInt32;
+    case 16:
+      return VoxelType::kFloat32;
+    case 64:
+      return VoxelType::kFloat64;
+    case 256:
+      return VoxelType::kInt8;
+    case 512:
+      return VoxelType::kUint16;
+    case 768:
+      return VoxelType::kUint32;
+    case 1024:
+      return VoxelType::kInt64;
+    case 1280:
+      return VoxelType::kUint64;
+    default:
+      return std::nullopt;
   }
 }
 
@@ -49,17 +60,17 @@ Status CheckMagic(std::span<const uint8_t> bytes, int version) {
   const char* got = reinterpret_cast<const char*>(bytes.data() + (version == 1 ? 344 : 4));
   const int length = version == 1 ? 4 : 8;
   const std::string_view magic(got, length);
-  const std::string_view single = version == 1 ? std::string_view("n+1\0", 4)
-                                               : std::string_view("n+2\0\r\n\032\n", 8);
-  const std::string_view pair = version == 1 ? std::string_view("ni1\0", 4)
-                                             : std::string_view("ni2\0\r\n\032\n", 8);
+  const std::string_view single =
+      version == 1 ? std::string_view("n+1\0", 4) : std::string_view("n+2\0\r\n\032\n", 8);
+  const std::string_view pair =
+      version == 1 ? std::string_view("ni1\0", 4) : std::string_view("ni2\0\r\n\032\n", 8);
   if (magic == single) return absl::OkStatus();
   if (magic == pair) {
     return absl::UnimplementedError(
         "magic says a two-file .hdr/.img pair; only single-file .nii is supported");
   }
-  return absl::InvalidArgumentError(absl::StrCat("wrong magic for NIfTI-", version,
-                                                 " (expected \"n+", version, "\")"));
+  return absl::InvalidArgumentError(
+      absl::StrCat("wrong magic for NIfTI-", version, " (expected \"n+", version, "\")"));
 }
 
 void ReadFields1(const FieldReader& f, NiftiHeader& h) {
@@ -103,9 +114,10 @@ Status CheckDims(const NiftiHeader& h) {
           absl::StrCat("dim[", n, "] is ", h.dim[n], "; it must be positive"));
     }
     if (n >= 4 && h.dim[n] != 1) {
-      return absl::UnimplementedError(absl::StrCat(
-          "dim[", n, "] is ", h.dim[n], "; only 3D scalar volumes are supported (no time series "
-          "or vector components)"));
+      return absl::UnimplementedError(
+          absl::StrCat("dim[", n, "] is ", h.dim[n],
+                       "; only 3D scalar volumes are supported (no time series "
+                       "or vector components)"));
     }
   }
   return absl::OkStatus();
@@ -123,8 +135,8 @@ Status CheckDatatype(NiftiHeader& h, int bitpix) {
   h.voxel_type = *type;
   if (bitpix != VoxelTypeSize(*type) * 8) {
     return absl::InvalidArgumentError(absl::StrCat("bitpix is ", bitpix, " but datatype ",
-                                                   h.datatype, " (", VoxelTypeName(*type),
-                                                   ") has ", VoxelTypeSize(*type) * 8, " bits"));
+                                                   h.datatype, " (", VoxelTypeName(*type), ") has ",
+                                                   VoxelTypeSize(*type) * 8, " bits"));
   }
   return absl::OkStatus();
 }
@@ -140,15 +152,14 @@ Status ReadVoxOffset(const FieldReader& f, NiftiHeader& h) {
     }
     offset = static_cast<double>(offset2);
   }
-  if (!std::isfinite(offset) || offset != std::floor(offset) || offset > 1e15) {
+  if (!std::isfinite(offset) || offset < 0.0 || offset != std::floor(offset) || offset > 1e15) {
     return absl::InvalidArgumentError(
         absl::StrCat("vox_offset ", offset, " is not a whole number of bytes"));
   }
   h.vox_offset = static_cast<int64_t>(offset);
   if (h.vox_offset < h.header_bytes) {
-    return absl::InvalidArgumentError(absl::StrCat("vox_offset ", h.vox_offset,
-                                                   " points inside the ", h.header_bytes,
-                                                   "-byte header"));
+    return absl::InvalidArgumentError(absl::StrCat(
+        "vox_offset ", h.vox_offset, " points inside the ", h.header_bytes, "-byte header"));
   }
   return absl::OkStatus();
 }
@@ -171,8 +182,8 @@ Result<NiftiHeader> ParseNiftiHeader(std::span<const uint8_t> bytes) {
     h.version = 2;
     h.endian = sizeof_le == 540 ? Endian::kLittle : Endian::kBig;
   } else {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "not a NIfTI file: sizeof_hdr is ", sizeof_le, " (NIfTI-1 has 348, NIfTI-2 540)"));
+    return absl::InvalidArgumentError(absl::StrCat("not a NIfTI file: sizeof_hdr is ", sizeof_le,
+                                                   " (NIfTI-1 has 348, NIfTI-2 540)"));
   }
   h.header_bytes = h.version == 1 ? kNifti1HeaderBytes : kNifti2HeaderBytes;
   if (static_cast<int64_t>(bytes.size()) < h.header_bytes) {

@@ -26,20 +26,20 @@ inline constexpr int64_t kNifti1HeaderBytes = 348;
 inline constexpr int64_t kNifti2HeaderBytes = 540;
 
 struct NiftiHeader {
-  int version = 1;                   // 1 or 2
-  Endian endian = Endian::kLittle;   // of the header and the data
+  int version = 1;                  // 1 or 2
+  Endian endian = Endian::kLittle;  // of the header and the data
   int64_t header_bytes = kNifti1HeaderBytes;
-  std::array<int64_t, 8> dim{};      // dim[0] = rank (1..7); dim[1..3] > 0
-  std::array<double, 8> pixdim{};    // pixdim[0] = qfac; pixdim[1..3] in mm
-  int64_t vox_offset = 0;            // byte offset of the data in the .nii
-  int datatype = 0;                  // NIFTI_TYPE_* code
+  std::array<int64_t, 8> dim{};    // dim[0] = rank (1..7); dim[1..3] > 0
+  std::array<double, 8> pixdim{};  // pixdim[0] = qfac; pixdim[1..3] in mm
+  int64_t vox_offset = 0;          // byte offset of the data in the .nii
+  int datatype = 0;                // NIFTI_TYPE_* code
   VoxelType voxel_type = VoxelType::kUint8;
   double scl_slope = 0.0;
   double scl_inter = 0.0;
   int qform_code = 0;
   int sform_code = 0;
-  std::array<double, 3> quatern{};   // b, c, d
-  std::array<double, 3> qoffset{};   // x, y, z (RAS, mm)
+  std::array<double, 3> quatern{};              // b, c, d
+  std::array<double, 3> qoffset{};              // x, y, z (RAS, mm)
   std::array<std::array<double, 4>, 3> srow{};  // RAS affine rows (mm)
 };
 

@@ -44,8 +44,8 @@ DataFileLoader SiblingFileLoader(const std::filesystem::path& header_path,
     }
     for (const auto& part : relative) {
       if (part == "..") {
-        return absl::InvalidArgumentError(
-            absl::StrCat("data file \"", std::string(name), "\" must not leave the header's folder (..)"));
+        return absl::InvalidArgumentError(absl::StrCat(
+            "data file \"", std::string(name), "\" must not leave the header's folder (..)"));
       }
     }
     return ReadFileBytes(folder / relative, limits);

@@ -26,8 +26,9 @@ Result<Volume> DecodeNifti(std::span<const uint8_t> bytes, std::string_view name
   RETURN_IF_ERROR(ValidateGeometry(geometry, limits));
   const int64_t voxels = geometry.voxel_count();
   const int64_t data_bytes = voxels * VoxelTypeSize(header.voxel_type);
-  const std::string described = absl::StrCat("header says ", DescribeVoxelData(geometry.dims, header.voxel_type),
-                                             " at offset ", header.vox_offset);
+  const std::string described =
+      absl::StrCat("header says ", DescribeVoxelData(geometry.dims, header.voxel_type),
+                   " at offset ", header.vox_offset);
   if (data_bytes > limits.max_bytes || header.vox_offset > limits.max_bytes - data_bytes) {
     return absl::ResourceExhaustedError(
         absl::StrCat(described, ", over the cap of ", limits.max_bytes, " bytes"));
@@ -39,14 +40,14 @@ Result<Volume> DecodeNifti(std::span<const uint8_t> bytes, std::string_view name
     inflated = std::move(*all);
     bytes = inflated;
   } else if (static_cast<int64_t>(bytes.size()) < needed) {
-    return absl::InvalidArgumentError(absl::StrCat(described, " but the file holds ",
-                                                   bytes.size(), " bytes (truncated)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(described, " but the file holds ", bytes.size(), " bytes (truncated)"));
   }
   const auto [slope, intercept] = NiftiScaling(header);
-  ASSIGN_OR_RETURN(std::vector<float> values,
-                   ConvertVoxelsToFloat(bytes.subspan(static_cast<size_t>(header.vox_offset)),
-                                        header.voxel_type, header.endian, voxels, slope,
-                                        intercept));
+  ASSIGN_OR_RETURN(
+      std::vector<float> values,
+      ConvertVoxelsToFloat(bytes.subspan(static_cast<size_t>(header.vox_offset)), header.voxel_type,
+                           header.endian, voxels, slope, intercept));
   inflated = {};
   ASSIGN_OR_RETURN(Volume volume, Volume::Create(geometry, std::move(values), limits));
   volume.set_source(std::string(name));

@@ -31,15 +31,6 @@ const TypeInfo& Info(VoxelType type) {
   return kTypes[0];  // unreachable: every enumerator is in the table
 }
 
-// double -> float without the undefined behaviour of converting a value
-// outside float's range: such values become +-infinity (which Volume::Create
-// later counts and replaces).
-float ToFloat(double value) {
-  if (value > std::numeric_limits<float>::max()) return std::numeric_limits<float>::infinity();
-  if (value < -std::numeric_limits<float>::max()) return -std::numeric_limits<float>::infinity();
-  return static_cast<float>(value);
-}
-
 template <typename T>
 void Convert(const uint8_t* bytes, Endian endian, int64_t count, double slope, double intercept,
              float* out) {
@@ -47,11 +38,19 @@ void Convert(const uint8_t* bytes, Endian endian, int64_t count, double slope, d
   for (int64_t n = 0; n < count; ++n) {
     const T raw = LoadScalar<T>(bytes + n * int64_t{sizeof(T)}, endian);
     const double value = static_cast<double>(raw);
-    out[n] = ToFloat(identity ? value : value * slope + intercept);
+    out[n] = DoubleToFloat(identity ? value : value * slope + intercept);
   }
 }
 
 }  // namespace
+
+// Values outside float's range become +-infinity, which Volume::Create then
+// counts and replaces like NaN.
+float DoubleToFloat(double value) {
+  if (value > std::numeric_limits<float>::max()) return std::numeric_limits<float>::infinity();
+  if (value < -std::numeric_limits<float>::max()) return -std::numeric_limits<float>::infinity();
+  return static_cast<float>(value);
+}
 
 int64_t VoxelTypeSize(VoxelType type) { return Info(type).size; }
 
@@ -85,16 +84,36 @@ Result<std::vector<float>> ConvertVoxelsToFloat(std::span<const uint8_t> bytes, 
   const uint8_t* p = bytes.data();
   float* o = out.data();
   switch (type) {
-    case VoxelType::kUint8: Convert<uint8_t>(p, endian, count, slope, intercept, o); break;
-    case VoxelType::kInt8: Convert<int8_t>(p, endian, count, slope, intercept, o); break;
-    case VoxelType::kUint16: Convert<uint16_t>(p, endian, count, slope, intercept, o); break;
-    case VoxelType::kInt16: Convert<int16_t>(p, endian, count, slope, intercept, o); break;
-    case VoxelType::kUint32: Convert<uint32_t>(p, endian, count, slope, intercept, o); break;
-    case VoxelType::kInt32: Convert<int32_t>(p, endian, count, slope, intercept, o); break;
-    case VoxelType::kUint64: Convert<uint64_t>(p, endian, count, slope, intercept, o); break;
-    case VoxelType::kInt64: Convert<int64_t>(p, endian, count, slope, intercept, o); break;
-    case VoxelType::kFloat32: Convert<float>(p, endian, count, slope, intercept, o); break;
-    case VoxelType::kFloat64: Convert<double>(p, endian, count, slope, intercept, o); break;
+    case VoxelType::kUint8:
+      Convert<uint8_t>(p, endian, count, slope, intercept, o);
+      break;
+    case VoxelType::kInt8:
+      Convert<int8_t>(p, endian, count, slope, intercept, o);
+      break;
+    case VoxelType::kUint16:
+      Convert<uint16_t>(p, endian, count, slope, intercept, o);
+      break;
+    case VoxelType::kInt16:
+      Convert<int16_t>(p, endian, count, slope, intercept, o);
+      break;
+    case VoxelType::kUint32:
+      Convert<uint32_t>(p, endian, count, slope, intercept, o);
+      break;
+    case VoxelType::kInt32:
+      Convert<int32_t>(p, endian, count, slope, intercept, o);
+      break;
+    case VoxelType::kUint64:
+      Convert<uint64_t>(p, endian, count, slope, intercept, o);
+      break;
+    case VoxelType::kInt64:
+      Convert<int64_t>(p, endian, count, slope, intercept, o);
+      break;
+    case VoxelType::kFloat32:
+      Convert<float>(p, endian, count, slope, intercept, o);
+      break;
+    case VoxelType::kFloat64:
+      Convert<double>(p, endian, count, slope, intercept, o);
+      break;
   }
   return out;
 }

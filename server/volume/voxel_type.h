@@ -14,7 +14,18 @@
 
 namespace vpm {
 
-enum class VoxelType { kUint8, kInt8, kUint16, kInt16, kUint32, kInt32, kUint64, kInt64, kFloat32, kFloat64 };
+enum class VoxelType {
+  kUint8,
+  kInt8,
+  kUint16,
+  kInt16,
+  kUint32,
+  kInt32,
+  kUint64,
+  kInt64,
+  kFloat32,
+  kFloat64
+};
 
 // Bytes per voxel: 1, 2, 4 or 8.
 int64_t VoxelTypeSize(VoxelType type);
@@ -27,12 +38,16 @@ std::optional<VoxelType> VoxelTypeFromName(std::string_view name);
 // already passed ValidateGeometry (no overflow).
 std::string DescribeVoxelData(const std::array<int64_t, 3>& dims, VoxelType type);
 
+// double -> float that saturates to +-infinity outside float's range (a
+// plain cast is undefined behaviour there); NaN stays NaN.
+float DoubleToFloat(double value);
+
 // Converts `count` voxels stored back to back in `bytes` (type `type`, byte
 // order `endian`) to float, in storage order. Each value becomes
 // float(value * slope + intercept), computed in double. Fails when `bytes`
 // holds fewer than count * VoxelTypeSize(type) bytes; extra bytes are ignored.
 Result<std::vector<float>> ConvertVoxelsToFloat(std::span<const uint8_t> bytes, VoxelType type,
-                                                Endian endian, int64_t count,
-                                                double slope = 1.0, double intercept = 0.0);
+                                                Endian endian, int64_t count, double slope = 1.0,
+                                                double intercept = 0.0);
 
 }  // namespace vpm

@@ -41,16 +41,22 @@ Result<std::vector<uint8_t>> EncodeNifti(const Volume& volume) {
   const VolumeGeometry& g = volume.geometry();
   for (int a = 0; a < 3; ++a) {
     if (g.dims[a] > 32767) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "dimension ", a, " is ", g.dims[a], "; NIfTI-1 holds at most 32767 per axis"));
+      return absl::InvalidArgumentError(absl::StrCat("dimension ", a, " is ", g.dims[a],
+                                                     "; NIfTI-1 holds at most 32767 per axis"));
     }
   }
   const int64_t voxels = g.voxel_count();
   std::vector<uint8_t> out(static_cast<size_t>(kVoxOffset + 4 * voxels), 0);
   Put<int32_t>(out, 0, static_cast<int32_t>(kNifti1HeaderBytes));
   out[38] = 'r';  // "regular", as nifti_clib writes
-  const int16_t dim[8] = {3, static_cast<int16_t>(g.dims[0]), static_cast<int16_t>(g.dims[1]),
-                          static_cast<int16_t>(g.dims[2]), 1, 1, 1, 1};
+  const int16_t dim[8] = {3,
+                          static_cast<int16_t>(g.dims[0]),
+                          static_cast<int16_t>(g.dims[1]),
+                          static_cast<int16_t>(g.dims[2]),
+                          1,
+                          1,
+                          1,
+                          1};
   for (int n = 0; n < 8; ++n) Put<int16_t>(out, 40 + 2 * n, dim[n]);
   Put<int16_t>(out, 70, kDatatypeFloat32);
   Put<int16_t>(out, 72, 32);
@@ -72,7 +78,8 @@ Result<std::vector<uint8_t>> EncodeNifti(const Volume& volume) {
 Status WriteNifti(const Volume& volume, const std::filesystem::path& path) {
   const std::string name = path.string();
   Result<std::vector<uint8_t>> bytes = EncodeNifti(volume);
-  if (!bytes.ok()) return Status(bytes.status().code(), absl::StrCat(name, ": ", bytes.status().message()));
+  if (!bytes.ok())
+    return Status(bytes.status().code(), absl::StrCat(name, ": ", bytes.status().message()));
   if (name.size() >= 3 && name.compare(name.size() - 3, 3, ".gz") == 0) {
     ASSIGN_OR_RETURN(bytes, GzipCompress(*bytes));
   }

@@ -28,7 +28,8 @@ inline std::filesystem::path MakeTempDir() {
 
 inline void WriteBytes(const std::filesystem::path& path, std::span<const uint8_t> bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
 }
 
 inline void WriteText(const std::filesystem::path& path, const std::string& text) {
@@ -73,7 +74,8 @@ inline void ExpectGeometryNear(const VolumeGeometry& a, const VolumeGeometry& b,
     EXPECT_NEAR(a.spacing_mm[c], b.spacing_mm[c], tol) << "spacing " << c;
     EXPECT_NEAR(a.origin_mm[c], b.origin_mm[c], tol) << "origin " << c;
     for (int r = 0; r < 3; ++r) {
-      EXPECT_NEAR(a.direction[c][r], b.direction[c][r], tol) << "direction col " << c << " row " << r;
+      EXPECT_NEAR(a.direction[c][r], b.direction[c][r], tol)
+          << "direction col " << c << " row " << r;
     }
   }
 }

@@ -1,0 +1,26 @@
+// libFuzzer target: one DICOM file's bytes -> ParseDicomSlice (the per-file
+// path of the series reader, DCMTK's parser and decoders included).
+#include <cstddef>
+#include <cstdint>
+
+#include <dcmtk/config/osconfig.h>
+#include <dcmtk/oflog/oflog.h>
+
+#include "fuzz/fuzz_limits.h"
+#include "server/volume/read_dicom_slice.h"
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  // DCMTK logs every parse problem; hostile input makes that a flood.
+  OFLog::configure(OFLogger::FATAL_LOG_LEVEL);
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const vpm::VolumeLimits limits = vpm::fuzz::FuzzLimits();
+  const vpm::Result<vpm::DicomSlice> slice = vpm::ParseDicomSlice({data, size}, limits);
+  if (slice.ok() && slice->is_image &&
+      static_cast<int64_t>(slice->values.size()) != slice->rows * slice->columns) {
+    __builtin_trap();
+  }
+  return 0;
+}

@@ -1,0 +1,50 @@
+// One DICOM file: its slice geometry and pixel values (DCMTK does the parse).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "server/common/status.h"
+#include "server/volume/volume.h"
+
+namespace vpm {
+
+struct DicomSlice {
+  // False for a DICOM file without pixel data (DICOMDIR, report, ...): the
+  // fields below are then unset and a series reader skips the file.
+  bool is_image = false;
+  std::string series_uid;  // SeriesInstanceUID ("" if absent)
+  int64_t rows = 0;        // j extent
+  int64_t columns = 0;     // i extent
+  // PixelSpacing as stored: [0] between rows (along j), [1] between columns
+  // (along i), mm.
+  std::array<double, 2> pixel_spacing_mm{0.0, 0.0};
+  // ImageOrientationPatient: [0..2] the row direction (i axis), [3..5] the
+  // column direction (j axis), LPS unit vectors.
+  std::array<double, 6> orientation{};
+  glm::dvec3 position_mm{0.0};      // ImagePositionPatient (LPS) of voxel (0,0)
+  double slice_thickness_mm = 0.0;  // SliceThickness, 0 if absent
+  std::vector<float> values;        // rows * columns, i fastest, after rescale
+};
+
+// True when `bytes` has the DICOM Part 10 preamble and "DICM" prefix.
+bool LooksLikeDicom(std::span<const uint8_t> bytes);
+
+// Parses one DICOM Part 10 file. Values are stored * RescaleSlope +
+// RescaleIntercept (Hounsfield units for CT). Handles BitsAllocated 8 and 16,
+// signed and unsigned (PixelRepresentation), BitsStored / HighBit masking,
+// uncompressed transfer syntaxes, and the RLE, JPEG and JPEG-LS ones through
+// DCMTK's decoders. Errors (messages without the file name): InvalidArgument
+// for malformed or truncated files or missing geometry attributes,
+// ResourceExhausted for slices over `limits`, Unimplemented for valid files
+// we do not read (colour, multi-frame, 32-bit, a compressed transfer syntax
+// without a decoder, deflate; the message names the syntax).
+Result<DicomSlice> ParseDicomSlice(std::span<const uint8_t> bytes, const VolumeLimits& limits);
+
+}  // namespace vpm
