@@ -19,6 +19,8 @@ packages=(
   # utilities and tests
   nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   python3
+  # a real MRI volume (Colin27 T1) for the mesh tests on MRI
+  mricron-data
 )
 
 missing=()

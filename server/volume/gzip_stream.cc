@@ -59,7 +59,9 @@ Result<InflateOutcome> InflateBounded(std::span<const uint8_t> in, int64_t bound
     z.next_in = const_cast<Bytef*>(in.data() + consumed);
     z.avail_in = static_cast<uInt>(std::min(in_size - consumed, kMaxChunk));
     z.next_out = probing ? &probe : out.bytes.data() + produced;
-    z.avail_out = probing ? 1u : static_cast<uInt>(std::min(bound - produced, kMaxChunk));
+    // Room left in the buffer, which grows geometrically up to `bound`.
+    const int64_t room = static_cast<int64_t>(out.bytes.size()) - produced;
+    z.avail_out = probing ? 1u : static_cast<uInt>(std::min(room, kMaxChunk));
     const uInt avail_in_before = z.avail_in;
     const uInt avail_out_before = z.avail_out;
     const int rc = inflate(&z, Z_NO_FLUSH);

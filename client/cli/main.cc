@@ -1,0 +1,17 @@
+// vpm: the command-line client. Offline commands run the pipeline locally.
+#include <CLI/CLI.hpp>
+
+#include "client/cli/compare_meshes_command.h"
+#include "client/cli/mesh_command.h"
+#include "client/cli/volume_commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"vpm: volume proxy meshes for interactive deformation of CT/MRI volumes"};
+  app.require_subcommand(1);
+  int exit_code = 0;
+  vpm::cli::AddVolumeCommands(app, &exit_code);
+  vpm::cli::AddMeshCommand(app, &exit_code);
+  vpm::cli::AddCompareMeshesCommand(app, &exit_code);
+  CLI11_PARSE(app, argc, argv);
+  return exit_code;
+}

@@ -1,0 +1,108 @@
+#include "client/cli/volume_commands.h"
+
+#include <chrono>
+#include <iomanip>
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "client/cli/command_status.h"
+#include "server/volume/read_volume.h"
+#include "server/volume/write_nifti.h"
+
+namespace vpm::cli {
+namespace {
+
+nlohmann::json Vec(const glm::dvec3& v) { return {v.x, v.y, v.z}; }
+
+nlohmann::json VolumeInfoJson(const Volume& v) {
+  const VolumeGeometry& g = v.geometry();
+  nlohmann::json landmarks = nlohmann::json::array();
+  for (const Landmark& l : v.landmarks()) {
+    landmarks.push_back({{"name", l.name},
+                         {"position_mm", Vec(l.position_mm)},
+                         {"world_lps_mm", Vec(g.PhysicalToWorld(l.position_mm))},
+                         {"description", l.description}});
+  }
+  return {{"source", v.source()},
+          {"dims", {g.dims[0], g.dims[1], g.dims[2]}},
+          {"spacing_mm", Vec(g.spacing_mm)},
+          {"origin_lps_mm", Vec(g.origin_mm)},
+          {"direction_columns_lps", {Vec(g.direction[0]), Vec(g.direction[1]), Vec(g.direction[2])}},
+          {"extent_mm", Vec(g.extent_mm())},
+          {"value_range", {v.min_value(), v.max_value()}},
+          {"non_finite_voxels_replaced", v.non_finite_count()},
+          {"landmarks", landmarks}};
+}
+
+void PrintInfo(const Volume& v) {
+  const VolumeGeometry& g = v.geometry();
+  std::cout << std::fixed << std::setprecision(4);
+  std::cout << "source      " << v.source() << "\n"
+            << "dims        " << g.dims[0] << " x " << g.dims[1] << " x " << g.dims[2] << " ("
+            << g.voxel_count() << " voxels)\n"
+            << "spacing     " << g.spacing_mm.x << " " << g.spacing_mm.y << " " << g.spacing_mm.z
+            << " mm\n"
+            << "origin      " << g.origin_mm.x << " " << g.origin_mm.y << " " << g.origin_mm.z
+            << " mm (world, LPS)\n";
+  for (int c = 0; c < 3; ++c) {
+    std::cout << (c == 0 ? "direction   " : "            ") << g.direction[c].x << " "
+              << g.direction[c].y << " " << g.direction[c].z << "  (axis " << "ijk"[c] << ")\n";
+  }
+  std::cout << std::setprecision(1) << "values      " << v.min_value() << " .. " << v.max_value()
+            << "\n";
+  if (v.non_finite_count() > 0) {
+    std::cout << "warning     " << v.non_finite_count()
+              << " NaN/infinite voxels were replaced by the minimum\n";
+  }
+  for (const Landmark& l : v.landmarks()) {
+    std::cout << "landmark    " << std::left << std::setw(22) << l.name << std::right
+              << std::setprecision(2) << l.position_mm.x << " " << l.position_mm.y << " "
+              << l.position_mm.z << " mm  " << l.description << "\n";
+  }
+}
+
+}  // namespace
+
+void AddVolumeCommands(CLI::App& app, int* exit_code) {
+  CLI::App* volume = app.add_subcommand("volume", "Inspect and convert volumes");
+  volume->require_subcommand(1);
+
+  struct InfoArgs { std::string source; bool json = false; };
+  auto info_args = std::make_shared<InfoArgs>();
+  CLI::App* info = volume->add_subcommand("info", "Print geometry, value range and landmarks");
+  info->add_option("source", info_args->source,
+                   "a file (.nii .nii.gz .nrrd .nhdr .mha .mhd), a DICOM folder, "
+                   "phantom:NAME or raw:PATH?dims=..&type=..&spacing=..")
+      ->required();
+  info->add_flag("--json", info_args->json, "print JSON instead of text");
+  info->callback([info_args, exit_code] {
+    auto v = ReadVolume(info_args->source, VolumeLimits{});
+    if (!v.ok()) {
+      *exit_code = ExitWith(v.status());
+      return;
+    }
+    if (info_args->json) {
+      std::cout << VolumeInfoJson(*v).dump(2) << "\n";
+    } else {
+      PrintInfo(*v);
+    }
+  });
+
+  struct ExportArgs { std::string source, out; };
+  auto export_args = std::make_shared<ExportArgs>();
+  CLI::App* exp = volume->add_subcommand("export", "Write any readable source as NIfTI");
+  exp->add_option("source", export_args->source, "as for `vpm volume info`")->required();
+  exp->add_option("out", export_args->out, "output .nii or .nii.gz")->required();
+  exp->callback([export_args, exit_code] {
+    auto v = ReadVolume(export_args->source, VolumeLimits{});
+    if (!v.ok()) {
+      *exit_code = ExitWith(v.status());
+      return;
+    }
+    *exit_code = ExitWith(WriteNifti(*v, export_args->out));
+    if (*exit_code == 0) std::cout << "wrote " << export_args->out << "\n";
+  });
+}
+
+}  // namespace vpm::cli

@@ -1,0 +1,107 @@
+// The `vpm` command line as a user runs it: exit codes, messages, outputs.
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+struct CliRun {
+  int exit_code;
+  std::string output;  // stdout and stderr
+};
+
+CliRun Vpm(const std::string& args) {
+  const std::string command = std::string(VPM_CLI) + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buffer;
+  while (size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) output.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+std::string TempPath(const std::string& name) {
+  return (std::filesystem::path(::testing::TempDir()) / name).string();
+}
+
+nlohmann::json ReadJson(const std::string& path) {
+  std::ifstream file(path);
+  return nlohmann::json::parse(file);
+}
+
+TEST(VpmCli, VolumeInfoPrintsGeometryAndLandmarks) {
+  const CliRun run = Vpm("volume info 'phantom:abdomen?size=48' --json");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto info = nlohmann::json::parse(run.output.substr(run.output.find('{')));
+  EXPECT_EQ(info["dims"], nlohmann::json({48, 48, 48}));
+  bool has_artery = false;
+  for (const auto& l : info["landmarks"]) has_artery |= l["name"] == "left_renal_artery";
+  EXPECT_TRUE(has_artery);
+}
+
+TEST(VpmCli, ExportWritesNiftiThatReadsBackWithTheSameGeometry) {
+  const std::string out = TempPath("exported.nii.gz");
+  ASSERT_EQ(Vpm("volume export 'phantom:abdomen?dims=40,32,24' " + out).exit_code, 0);
+  const CliRun run = Vpm("volume info " + out + " --json");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto info = nlohmann::json::parse(run.output.substr(run.output.find('{')));
+  EXPECT_EQ(info["dims"], nlohmann::json({40, 32, 24}));
+  EXPECT_NEAR(info["spacing_mm"][0].get<double>(), 380.0 / 40, 1e-4);
+}
+
+TEST(VpmCli, BadSourceExitsNonZeroNamingTheFile) {
+  const CliRun run = Vpm("volume info /no/such/scan.nii.gz");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.output.find("/no/such/scan.nii.gz"), std::string::npos) << run.output;
+  EXPECT_NE(Vpm("mesh --volume phantom:nothing").exit_code, 0);
+  const CliRun outside = Vpm("mesh --volume 'phantom:abdomen?size=48' --grid 8 8 8 --target 60 "
+                          "--refine-at -5 0 0 --backend cpu");
+  EXPECT_NE(outside.exit_code, 0);
+  EXPECT_NE(outside.output.find("OUT_OF_RANGE"), std::string::npos) << outside.output;
+}
+
+TEST(VpmCli, MeshWritesJsonWithTheDocumentedFields) {
+  const std::string json = TempPath("mesh.json"), vtu = TempPath("mesh.vtu");
+  const CliRun run = Vpm("mesh --volume 'phantom:abdomen?size=64' --grid 12 12 12 --target 120 "
+                      "--refine-at-landmark left_renal_artery --json " + json + " --vtu " + vtu);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto mesh = ReadJson(json);
+  const auto& stats = mesh["stats"];
+  for (const char* key : {"evaluate_ms", "decimate_ms", "classify_ms", "refine_ms",
+                          "tetrahedralize_ms", "h_mm", "R_mm"}) {
+    EXPECT_TRUE(stats.contains(key)) << key;
+  }
+  int anchors = 0, refined = 0;
+  for (const auto& v : mesh["vertices"]) {
+    anchors += v["kind"] == "anchor";
+    refined += v["kind"] == "refined";
+    if (v["kind"] != "lattice") {
+      EXPECT_EQ(v["lattice_id"], -1);
+    }
+  }
+  EXPECT_EQ(anchors, 8);
+  EXPECT_GT(refined, 0);
+  EXPECT_EQ(mesh["vertices"].size(), 120u + refined);
+  EXPECT_GT(mesh["tets"].size(), 120u);
+  EXPECT_TRUE(std::filesystem::file_size(vtu) > 1000);
+}
+
+// Debian's mricron-data (installed by scripts/install-deps.sh) ships the
+// Colin27 T1 template: a real MRI in NIfTI with a RAS sform.
+TEST(VpmCli, MeshWorksOnARealMriWithTheMriPreset) {
+  const std::string colin = "/usr/share/mricron/templates/ch2.nii.gz";
+  ASSERT_TRUE(std::filesystem::exists(colin)) << "install mricron-data (scripts/install-deps.sh)";
+  const std::string json = TempPath("colin.json");
+  const CliRun run = Vpm("mesh --volume " + colin + " --tf mri-t1 --json " + json);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto mesh = ReadJson(json);
+  EXPECT_EQ(mesh["vertices"].size(), 250u);
+  EXPECT_GT(mesh["tets"].size(), 250u);
+}
+
+}  // namespace
