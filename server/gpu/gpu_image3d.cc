@@ -12,6 +12,7 @@ size_t TexelBytes(vk::Format format) {
     case vk::Format::eR16Sfloat: return 2;
     case vk::Format::eR8Unorm: return 1;
     case vk::Format::eR8G8B8A8Unorm: return 4;
+    case vk::Format::eR32G32B32A32Sfloat: return 16;
     default: return 0;
   }
 }

@@ -17,7 +17,7 @@ namespace vpm::gpu {
 class GpuImage3D {
  public:
   // extent: (width, height, depth) texels. Supported formats: R32Sfloat,
-  // R16Unorm, R16Sfloat, R8Unorm, R8G8B8A8Unorm.
+  // R16Unorm, R16Sfloat, R8Unorm, R8G8B8A8Unorm, R32G32B32A32Sfloat.
   static Result<GpuImage3D> Create(const GpuContext& context, std::array<uint32_t, 3> extent,
                                    vk::Format format);
 

@@ -1,0 +1,135 @@
+// The backward map of ALGORITHM.md section 7 on the GPU (docs/WARP.md): for
+// a grid of M points over the image box, the rest position of each point
+// found through the deformed tet that contains it, kept in an RGBA32F 3D
+// image that the warp and the ray caster sample (shaders/backward_map.glsl).
+// Kernel: shaders/backward_map.comp. CPU reference: BackwardMapCpu.
+//
+// Updates are incremental: only the tets that moved since the previous
+// update, and the tets whose boxes meet theirs, are rasterized again, with
+// the result of a full rebuild (tests/render/backward_map_test.cc).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "server/common/status.h"
+#include "server/gpu/compute_kernel.h"
+#include "server/gpu/gpu_buffer.h"
+#include "server/gpu/gpu_context.h"
+#include "server/gpu/gpu_image3d.h"
+#include "server/gpu/shader_interface.h"
+#include "server/render/backward_map_values.h"
+#include "server/render/tet_grid_boxes.h"
+#include "server/volume/volume.h"
+
+namespace vpm {
+
+class BackwardMap {
+ public:
+  struct Options {
+    // M grid points per axis, each >= 2; 0 on every axis: the default,
+    // DefaultBackwardMapDims (ceil(n / 4)); the volume's dims: the exact map
+    // (one point per voxel centre).
+    std::array<int64_t, 3> map_dims{0, 0, 0};
+    double eps = kBackwardMapEps;  // barycentric tolerance
+  };
+
+  struct UpdateStats {
+    bool full_rebuild = false;
+    int64_t moved_tets = 0;      // tets whose corners changed (or listed by the caller)
+    int64_t processed_tets = 0;  // rasterized: the moved ones and those whose boxes meet theirs
+    double gpu_ms = 0.0;         // GPU time of the passes (timestamps; -1 without)
+  };
+
+  // `geometry`: the volume the map belongs to (at least 2 voxels per axis).
+  // The new map is the identity (every point outside, displacement 0).
+  // Errors: InvalidArgument for bad dims; FailedPrecondition when the device
+  // cannot store to or linearly filter RGBA32F 3D images; ResourceExhausted
+  // when the grid exceeds the device's image or storage-buffer limits.
+  static Result<BackwardMap> Create(const gpu::GpuContext& context, const VolumeGeometry& geometry,
+                                    const Options& options);
+  static Result<BackwardMap> Create(const gpu::GpuContext& context,
+                                    const VolumeGeometry& geometry) {
+    return Create(context, geometry, Options{});
+  }
+
+  // Rasterizes the map for the mesh in its deformed state.
+  //   rest_mm      #V by 3, rest positions (mm, physical voxel space)
+  //   deformed_mm  #V by 3, deformed positions (mm)
+  //   tets         #T by 4 vertex indices
+  // Update redoes the tets with a vertex whose rest or deformed position
+  // differs from the previous update (everything the first time, or when
+  // the tets or the vertex count changed). UpdateListed trusts the caller's
+  // `moved_tets` (indices into tets) instead: tets not listed must not have
+  // moved. Rebuild redoes every tet.
+  // Errors (InvalidArgument: sizes, indices out of range, non-finite
+  // positions) are returned before anything is uploaded or dispatched; the
+  // map then keeps its previous content.
+  Result<UpdateStats> Update(std::span<const glm::dvec3> rest_mm,
+                             std::span<const glm::dvec3> deformed_mm,
+                             std::span<const std::array<int32_t, 4>> tets);
+  Result<UpdateStats> UpdateListed(std::span<const glm::dvec3> rest_mm,
+                                   std::span<const glm::dvec3> deformed_mm,
+                                   std::span<const std::array<int32_t, 4>> tets,
+                                   std::span<const int32_t> moved_tets);
+  Result<UpdateStats> Rebuild(std::span<const glm::dvec3> rest_mm,
+                              std::span<const glm::dvec3> deformed_mm,
+                              std::span<const std::array<int32_t, 4>> tets);
+
+  // The map: RGBA32F, M texels, (X(p) - p mm, inside); sample it with its
+  // linear_sampler() through backward_map.glsl.
+  const gpu::GpuImage3D& image() const { return image_; }
+  const std::array<int64_t, 3>& dims() const { return dims_; }
+  glm::dvec3 extent_mm() const { return geometry_.extent_mm(); }
+  const VolumeGeometry& geometry() const { return geometry_; }
+  // One grid point per voxel: the warp reads the map without interpolation.
+  bool exact() const { return dims_ == geometry_.dims; }
+
+  Result<BackwardMapValues> Download() const;
+
+ private:
+  enum class Scope { kChanged, kListed, kAll };
+  // What the host last sent, to find what changed; valid=false forces a rebuild.
+  struct HostState {
+    bool valid = false;
+    std::vector<glm::dvec3> rest_mm, deformed_mm;
+    std::vector<std::array<int32_t, 4>> tets;
+    std::vector<GridBox> boxes;  // per tet, the box it was last rasterized in
+  };
+
+  BackwardMap(const gpu::GpuContext& context, const VolumeGeometry& geometry,
+              std::array<int64_t, 3> dims, double eps, gpu::ComputeKernel kernel,
+              gpu::GpuImage3D image, gpu::GpuBuffer owner)
+      : context_(&context), geometry_(geometry), dims_(dims), eps_(eps),
+        kernel_(std::move(kernel)), image_(std::move(image)), owner_(std::move(owner)) {}
+
+  Result<UpdateStats> Apply(std::span<const glm::dvec3> rest_mm,
+                            std::span<const glm::dvec3> deformed_mm,
+                            std::span<const std::array<int32_t, 4>> tets, Scope scope,
+                            std::span<const int32_t> moved_tets);
+  std::vector<int32_t> ChangedTets(std::span<const glm::dvec3> rest_mm,
+                                   std::span<const glm::dvec3> deformed_mm,
+                                   std::span<const std::array<int32_t, 4>> tets) const;
+  Status Upload(std::span<const glm::dvec3> rest_mm, std::span<const glm::dvec3> deformed_mm,
+                std::span<const std::array<int32_t, 4>> tets, bool upload_tets,
+                std::span<const gpu::BackwardMapTetWork> work);
+  Result<double> Run(bool full, uint32_t listed);
+
+  const gpu::GpuContext* context_;
+  VolumeGeometry geometry_;
+  std::array<int64_t, 3> dims_;
+  double eps_;
+  gpu::ComputeKernel kernel_;
+  gpu::GpuImage3D image_;
+  gpu::GpuBuffer owner_;  // per grid point: the owning tet, or 0xFFFFFFFF
+  // Grown on demand; created (1 element) with the map so every binding is valid.
+  std::optional<gpu::GpuBuffer> tets_buffer_, deformed_buffer_, rest_offset_buffer_, work_buffer_;
+  HostState state_;
+};
+
+}  // namespace vpm
