@@ -19,6 +19,48 @@ struct LatticeCostsPush {
   vec4 inv_two_spacing;   // (1/(2 sx), 1/(2 sy), 1/(2 sz), 0) 1/mm
 };
 
+// Ray casting (server/render).
+#define VPM_RENDER_LUT_ENTRIES 1024
+#define VPM_RAYCAST_SHADING 1
+#define VPM_RAYCAST_SKIPPING 2
+#define VPM_RAYCAST_EARLY_TERMINATION 4
+#define VPM_RAYCAST_HAS_MAP 8
+#define VPM_RAYCAST_COUNT_SAMPLES 16
+
+struct BrickMinMaxPush {
+  ivec4 dims;    // (nx, ny, nz, 0) voxels
+  ivec4 bricks;  // (bx, by, bz, brick_voxels)
+};
+
+struct BrickOccupancyPush {
+  ivec4 dims;        // (nx, ny, nz, 0) voxels
+  ivec4 bricks;      // (bx, by, bz, brick_voxels)
+  vec4 spacing_mm;   // (sx, sy, sz, 0)
+  vec4 lut;          // (value_lo, entries per value unit, entry count, 0)
+  ivec4 flags;       // (mode: 0 DVR / 1 MIP, has_map, 0, 0)
+  vec4 map_dims;     // (Mx, My, Mz, 0) backward-map grid points
+};
+
+struct RaycastParams {
+  vec4 eye_mm;      // xyz eye (physical mm); w: step_mm
+  vec4 forward;     // xyz unit view direction
+  vec4 right;       // xyz camera right * tan(fov/2) * width / shorter side
+  vec4 up;          // xyz camera up * tan(fov/2) * height / shorter side
+  ivec4 dims;       // (nx, ny, nz, mode: 0 DVR / 1 MIP) voxels
+  vec4 spacing_mm;  // (sx, sy, sz, 0)
+  ivec4 image;      // (width, height, flags, 0) pixels
+  ivec4 bricks;     // (bx, by, bz, brick_voxels)
+  vec4 lut;         // (value_lo, entries per value unit, entry count, 0)
+  vec4 window;      // MIP (value of black, 1 / window width, 0, 0)
+  vec4 background;  // rgb in [0, 1]
+  vec4 shading;     // (ambient, diffuse, specular, shininess)
+  vec4 map_dims;    // (Mx, My, Mz, 0) backward-map grid points
+};
+
+struct UpscalePush {
+  ivec4 size;  // (source width, source height, target width, target height)
+};
+
 struct BackwardMapPush {
   ivec4 map_dims;  // (mx, my, mz, pass) grid points
   vec4 step_mm;    // (hx, hy, hz, eps): grid step extent/(M-1) mm; barycentric tolerance

@@ -40,6 +40,65 @@ struct TransferFunctionBlock {
 };
 static_assert(sizeof(TransferFunctionBlock) == 528);
 
+// Ray casting (server/render). brick_minmax.comp: one invocation per brick
+// of brick_voxels^3 cells (bricks share their boundary voxel layer).
+struct BrickMinMaxPush {
+  glm::ivec4 dims;    // (nx, ny, nz, 0) voxels
+  glm::ivec4 bricks;  // (bx, by, bz, brick_voxels)
+};
+static_assert(sizeof(BrickMinMaxPush) == 32);
+
+// brick_occupancy.comp: per brick of the deformed space, whether (DVR) or up
+// to what value (MIP) the source region it samples can contribute.
+struct BrickOccupancyPush {
+  glm::ivec4 dims;        // (nx, ny, nz, 0) voxels
+  glm::ivec4 bricks;      // (bx, by, bz, brick_voxels)
+  glm::vec4 spacing_mm;   // (sx, sy, sz, 0)
+  glm::vec4 lut;          // (value_lo, entries per value unit, entry count, 0)
+  glm::ivec4 flags;       // (mode: 0 DVR / 1 MIP, has_map, 0, 0)
+  glm::vec4 map_dims;     // (Mx, My, Mz, 0) backward-map grid points
+};
+static_assert(sizeof(BrickOccupancyPush) == 96);
+
+// raycast.comp, raycast_sampled.comp: uniform block RaycastParams (std140).
+// Ray of pixel (px, py): eye + t * normalize(forward + ndc.x * right + ndc.y * up),
+// ndc = (2 (px + 0.5) / width - 1, 1 - 2 (py + 0.5) / height).
+inline constexpr int kRaycastShading = 1;           // image.z flag bits
+inline constexpr int kRaycastSkipping = 2;
+inline constexpr int kRaycastEarlyTermination = 4;
+inline constexpr int kRaycastHasMap = 8;
+inline constexpr int kRaycastCountSamples = 16;
+struct RaycastParams {
+  glm::vec4 eye_mm;      // xyz eye (physical mm); w: step_mm
+  glm::vec4 forward;     // xyz unit view direction
+  glm::vec4 right;       // xyz camera right * tan(fov/2) * width / shorter side
+  glm::vec4 up;          // xyz camera up * tan(fov/2) * height / shorter side
+  glm::ivec4 dims;       // (nx, ny, nz, mode: 0 DVR / 1 MIP) voxels
+  glm::vec4 spacing_mm;  // (sx, sy, sz, 0)
+  glm::ivec4 image;      // (width, height, flags, 0) pixels
+  glm::ivec4 bricks;     // (bx, by, bz, brick_voxels)
+  glm::vec4 lut;         // (value_lo, entries per value unit, entry count, 0)
+  glm::vec4 window;      // MIP (value of black, 1 / window width, 0, 0)
+  glm::vec4 background;  // rgb in [0, 1]
+  glm::vec4 shading;     // (ambient, diffuse, specular, shininess)
+  glm::vec4 map_dims;    // (Mx, My, Mz, 0) backward-map grid points
+};
+static_assert(sizeof(RaycastParams) == 208);
+
+// Uniform block RenderLutBlock (std140): colour (rgb) and opacity for the
+// frame's step (a) at value_lo + i / (entries per value unit).
+inline constexpr int kRenderLutEntries = 1024;
+struct RenderLutBlock {
+  glm::vec4 entries[kRenderLutEntries];
+};
+static_assert(sizeof(RenderLutBlock) == 16384);
+
+// upscale.comp: bilinear RGBA8 resize.
+struct UpscalePush {
+  glm::ivec4 size;  // (source width, source height, target width, target height)
+};
+static_assert(sizeof(UpscalePush) == 16);
+
 // backward_map.comp: rasterizes the backward map tet by tet. pass (in
 // map_dims.w): 0 reset every grid point (one invocation per point), 1 clear
 // the old coverage of the listed tets, 2 claim (atomicMin of the tet index),

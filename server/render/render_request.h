@@ -1,0 +1,120 @@
+// What one frame asks for (RenderRequest) and what comes back (Frame), plus
+// the translation of a request into the ray caster's parameter block, shared
+// by the GPU renderer and the CPU reference so that both cast the same rays.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "server/common/status.h"
+#include "server/gpu/gpu_image3d.h"
+#include "server/gpu/shader_interface.h"
+#include "server/render/camera.h"
+#include "server/render/overlay.h"
+#include "server/render/render_presets.h"
+#include "server/volume/gpu_volume.h"
+#include "server/volume/volume.h"
+
+namespace vpm {
+
+enum class RenderMode { kDvr, kMip };
+
+// kStill: full resolution, step 0.5 x the smallest spacing.
+// kInteractive: half resolution in each direction (bilinear upscale on the
+// GPU), step 1.0 x the smallest spacing: about 8x fewer samples.
+enum class RenderQuality { kStill, kInteractive };
+
+inline constexpr int kMaxFrameSide = 4096;
+inline constexpr int kBrickVoxels = 8;  // empty-space-skipping brick: 8^3 cells
+inline constexpr double kStillStepFactor = 0.5;
+inline constexpr double kInteractiveStepFactor = 1.0;
+// Longest ray, in samples, a request may ask for (the box diagonal / step):
+// bounds a frame's work on any device (a GPU watchdog kills long dispatches).
+inline constexpr double kMaxSamplesPerRay = 32768;
+
+struct RaycastSettings {
+  bool empty_space_skipping = true;
+  bool early_termination = true;  // stop when accumulated opacity > 0.99
+  bool shading = true;            // DVR gradient shading (Blinn-Phong headlight)
+  double step_mm = 0.0;           // 0: the quality's default
+  glm::dvec3 background{0.0};     // rgb in [0, 1]
+  double ambient = 0.35;
+  double diffuse = 0.65;
+  double specular = 0.25;
+  double shininess = 24.0;
+  // Count the samples taken (GPU: one atomic add per pixel), for tests.
+  bool count_samples = false;
+};
+
+struct RenderRequest {
+  Camera camera;
+  RenderMode mode = RenderMode::kDvr;
+  RenderPreset preset;                   // MakeRenderPreset(name, volume)
+  std::optional<MipWindow> mip_window;   // default: preset.mip_window
+  RenderQuality quality = RenderQuality::kStill;
+  int width = 512;                       // output pixels, 1..kMaxFrameSide
+  int height = 512;
+  const GpuVolume* volume = nullptr;     // the source (rest) volume
+  // The source volume as a 3D image (GpuVolume::Image); only read when the
+  // renderer samples through a sampler3D (VolumeAccess::kSampler3D).
+  const gpu::GpuImage3D* volume_image = nullptr;
+  // Backward map, R32G32B32A32Sfloat, M grid points corner to corner of the
+  // image box, texel = (X(p) - p in mm, inside); null: undeformed.
+  const gpu::GpuImage3D* backward_map = nullptr;
+  RaycastSettings settings;
+  OverlayData overlay;
+};
+
+struct FrameTimings {
+  double occupancy_ms = 0.0;  // GPU: per-frame brick occupancy kernel
+  double raycast_ms = 0.0;    // GPU: ray casting kernel
+  double upscale_ms = 0.0;    // GPU: interactive upscale
+  double render_ms = 0.0;     // sum of the kernels above (GPU timestamps)
+  double readback_ms = 0.0;   // wall
+  double overlay_ms = 0.0;    // wall
+  double wall_ms = 0.0;       // the whole Render call
+};
+
+struct Frame {
+  std::vector<uint8_t> rgba;  // width * height * 4, row 0 at the top
+  int width = 0;
+  int height = 0;
+  int render_width = 0;       // ray-cast resolution (interactive: about half)
+  int render_height = 0;
+  double step_mm = 0.0;
+  int64_t samples = -1;       // samples taken, when settings.count_samples
+  int64_t occupied_bricks = -1;  // bricks the occupancy pass kept (skipping on)
+  int64_t total_bricks = 0;
+  FrameTimings timings;
+};
+
+// Brick grid of a volume: ceil((n - 1) / kBrickVoxels) bricks per axis (at
+// least 1); brick b spans voxels [8 b, min(8 b + 8, n - 1)].
+std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims);
+
+struct RaycastSetup {
+  gpu::RaycastParams params{};
+  int render_width = 0;
+  int render_height = 0;
+  double step_mm = 0.0;
+};
+
+// Checks the request against `geometry` (size, camera, preset, window,
+// step, settings; GPU handles are the renderer's business) and fills the
+// parameter block but for params.lut (LutParams, once the table for
+// setup.step_mm is baked). map_dims: the backward map's grid points,
+// {0, 0, 0} for none. Errors: InvalidArgument naming what is wrong.
+Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGeometry& geometry,
+                                    const std::array<int, 3>& map_dims);
+
+// params.lut for `lut`: (value_lo, entries per value unit, entry count, 0).
+glm::vec4 LutParams(const RenderLut& lut);
+
+// The step a request will use (validated by PrepareRaycast).
+double RequestStepMm(const RenderRequest& request, const VolumeGeometry& geometry);
+
+}  // namespace vpm

@@ -1,0 +1,274 @@
+#include "server/render/volume_renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+
+#include "server/gpu/compute_batch.h"
+#include "server/gpu/shader_interface.h"
+#include "shaders/brick_minmax.spv.h"
+#include "shaders/brick_occupancy.spv.h"
+#include "shaders/raycast.spv.h"
+#include "shaders/raycast_sampled.spv.h"
+#include "shaders/upscale.spv.h"
+
+namespace vpm {
+namespace {
+
+using DT = vk::DescriptorType;
+using BU = vk::BufferUsageFlagBits;
+
+constexpr size_t kMaxCachedVolumes = 4;
+
+double MsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+uint32_t GroupCount(int threads, int local) { return uint32_t((threads + local - 1) / local); }
+
+}  // namespace
+
+Result<std::unique_ptr<VolumeRenderer>> VolumeRenderer::Create(const gpu::GpuContext& context,
+                                                               const Options& options) {
+  std::unique_ptr<VolumeRenderer> renderer(new VolumeRenderer(context, options));
+  RETURN_IF_ERROR(renderer->Init());
+  return renderer;
+}
+
+Status VolumeRenderer::Init() {
+  const bool sampled = options_.volume_access == VolumeAccess::kSampler3D;
+  ASSIGN_OR_RETURN(auto minmax,
+                   gpu::ComputeKernel::Create(
+                       *context_, {.name = "brick_minmax",
+                                   .spirv = kBrickMinmaxSpv,
+                                   .bindings = {DT::eUniformTexelBuffer, DT::eStorageBuffer},
+                                   .push_constant_bytes = sizeof(gpu::BrickMinMaxPush),
+                                   .local_size = {64, 1, 1}}));
+  ASSIGN_OR_RETURN(auto occupancy,
+                   gpu::ComputeKernel::Create(
+                       *context_, {.name = "brick_occupancy",
+                                   .spirv = kBrickOccupancySpv,
+                                   .bindings = {DT::eStorageBuffer, DT::eCombinedImageSampler,
+                                                DT::eStorageBuffer, DT::eStorageBuffer},
+                                   .push_constant_bytes = sizeof(gpu::BrickOccupancyPush),
+                                   .local_size = {64, 1, 1}}));
+  ASSIGN_OR_RETURN(
+      auto raycast,
+      gpu::ComputeKernel::Create(
+          *context_,
+          {.name = sampled ? "raycast_sampled" : "raycast",
+           .spirv = sampled ? std::span<const uint32_t>(kRaycastSampledSpv)
+                            : std::span<const uint32_t>(kRaycastSpv),
+           .bindings = {sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
+                        DT::eCombinedImageSampler, DT::eUniformBuffer, DT::eUniformBuffer,
+                        DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
+           .push_constant_bytes = 0,
+           .local_size = {8, 8, 1}}));
+  ASSIGN_OR_RETURN(auto upscale,
+                   gpu::ComputeKernel::Create(
+                       *context_, {.name = "upscale",
+                                   .spirv = kUpscaleSpv,
+                                   .bindings = {DT::eStorageBuffer, DT::eStorageBuffer},
+                                   .push_constant_bytes = sizeof(gpu::UpscalePush),
+                                   .local_size = {8, 8, 1}}));
+  minmax_kernel_.emplace(std::move(minmax));
+  occupancy_kernel_.emplace(std::move(occupancy));
+  raycast_kernel_.emplace(std::move(raycast));
+  upscale_kernel_.emplace(std::move(upscale));
+
+  ASSIGN_OR_RETURN(auto identity, gpu::GpuImage3D::Create(*context_, {2, 2, 2},
+                                                          vk::Format::eR32G32B32A32Sfloat));
+  const std::vector<glm::vec4> zeros(8, glm::vec4(0.0f));
+  RETURN_IF_ERROR(identity.Upload(std::as_bytes(std::span<const glm::vec4>(zeros))));
+  identity_map_.emplace(std::move(identity));
+  RETURN_IF_ERROR(EnsureBuffer(params_, sizeof(gpu::RaycastParams), BU::eUniformBuffer));
+  RETURN_IF_ERROR(EnsureBuffer(lut_, sizeof(gpu::RenderLutBlock), BU::eUniformBuffer));
+  RETURN_IF_ERROR(EnsureBuffer(nonzero_prefix_, (gpu::kRenderLutEntries + 1) * sizeof(int32_t),
+                               BU::eStorageBuffer));
+  RETURN_IF_ERROR(EnsureBuffer(stats_, 16, BU::eStorageBuffer));
+  return absl::OkStatus();
+}
+
+Status VolumeRenderer::EnsureBuffer(std::optional<gpu::GpuBuffer>& buffer, vk::DeviceSize bytes,
+                                    vk::BufferUsageFlags usage) {
+  if (buffer && buffer->size_bytes() >= bytes) return absl::OkStatus();
+  buffer.reset();
+  ASSIGN_OR_RETURN(auto created, gpu::GpuBuffer::Create(*context_, bytes, usage));
+  buffer.emplace(std::move(created));
+  return absl::OkStatus();
+}
+
+void VolumeRenderer::ForgetVolume(const GpuVolume* volume) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::erase_if(brick_grids_, [&](const BrickGrid& g) { return g.volume == volume; });
+}
+
+Result<const gpu::GpuBuffer*> VolumeRenderer::BrickMinMax(const GpuVolume& volume) {
+  const vk::Buffer handle = volume.buffer().handle();
+  for (auto it = brick_grids_.begin(); it != brick_grids_.end(); ++it) {
+    if (it->volume == &volume) {
+      if (it->buffer == handle && it->extent == volume.extent()) return &it->minmax;
+      brick_grids_.erase(it);
+      break;
+    }
+  }
+  const auto& g = volume.geometry();
+  const auto nb = BrickGridDims(g.dims);
+  const int bricks = nb[0] * nb[1] * nb[2];
+  ASSIGN_OR_RETURN(auto minmax, gpu::GpuBuffer::Create(*context_, bricks * sizeof(glm::vec2),
+                                                       BU::eStorageBuffer));
+  ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 1));
+  const gpu::BrickMinMaxPush push{
+      .dims = glm::ivec4(int(g.dims[0]), int(g.dims[1]), int(g.dims[2]), 0),
+      .bricks = glm::ivec4(nb[0], nb[1], nb[2], kBrickVoxels)};
+  RETURN_IF_ERROR(batch.Dispatch(*minmax_kernel_, {volume.texel_view(), &minmax}, push,
+                                 {GroupCount(bricks, 64), 1, 1}, "brick_minmax"));
+  RETURN_IF_ERROR(batch.SubmitAndWait().status());
+  if (brick_grids_.size() >= kMaxCachedVolumes) brick_grids_.erase(brick_grids_.begin());
+  brick_grids_.push_back({&volume, handle, volume.extent(), std::move(minmax)});
+  return &brick_grids_.back().minmax;
+}
+
+Status VolumeRenderer::PrepareLut(const RenderPreset& preset, double step_mm) {
+  if (lut_preset_ && *lut_preset_ == preset && lut_step_mm_ == step_mm) return absl::OkStatus();
+  const RenderLut lut = BakeRenderLut(preset, step_mm);
+  RETURN_IF_ERROR(lut_->Upload(std::as_bytes(std::span<const glm::vec4>(lut.entries))));
+  RETURN_IF_ERROR(
+      nonzero_prefix_->Upload(std::as_bytes(std::span<const int32_t>(lut.nonzero_prefix))));
+  lut_preset_ = preset;
+  lut_step_mm_ = step_mm;
+  lut_params_ = LutParams(lut);
+  return absl::OkStatus();
+}
+
+Status VolumeRenderer::CheckGpuInputs(const RenderRequest& request) const {
+  if (request.volume == nullptr) {
+    return absl::InvalidArgumentError("render request has no volume");
+  }
+  if (options_.volume_access == VolumeAccess::kSampler3D) {
+    const gpu::GpuImage3D* image = request.volume_image;
+    if (image == nullptr || image->extent() != request.volume->extent()) {
+      return absl::InvalidArgumentError(
+          "this renderer samples a 3D image: the request needs volume_image "
+          "(GpuVolume::Image) of the volume's extent");
+    }
+  }
+  if (const gpu::GpuImage3D* map = request.backward_map) {
+    const auto& e = map->extent();
+    if (map->format() != vk::Format::eR32G32B32A32Sfloat || e[0] < 2 || e[1] < 2 || e[2] < 2) {
+      return absl::InvalidArgumentError(
+          "backward map must be an R32G32B32A32Sfloat 3D image of at least 2^3 points");
+    }
+  }
+  return absl::OkStatus();
+}
+
+Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
+                                   const RaycastSetup& setup, const gpu::GpuBuffer& minmax,
+                                   bool upscale) {
+  const gpu::RaycastParams& p = setup.params;
+  const gpu::GpuImage3D* map = request.backward_map ? request.backward_map : &*identity_map_;
+  const int bricks = p.bricks.x * p.bricks.y * p.bricks.z;
+  if (request.settings.count_samples) RETURN_IF_ERROR(batch.Fill(*stats_, 0));
+  if (request.settings.empty_space_skipping) {
+    const gpu::BrickOccupancyPush push{
+        .dims = glm::ivec4(glm::ivec3(p.dims), 0),
+        .bricks = p.bricks,
+        .spacing_mm = p.spacing_mm,
+        .lut = p.lut,
+        .flags = glm::ivec4(p.dims.w, request.backward_map ? 1 : 0, 0, 0),
+        .map_dims = glm::vec4(glm::vec3(map->extent()[0], map->extent()[1], map->extent()[2]),
+                              0.0f)};
+    RETURN_IF_ERROR(batch.Dispatch(*occupancy_kernel_,
+                                   {&minmax, map, &*nonzero_prefix_, &*occupancy_}, push,
+                                   {GroupCount(bricks, 64), 1, 1}, "occupancy"));
+  }
+  const gpu::KernelArg volume_arg =
+      options_.volume_access == VolumeAccess::kSampler3D
+          ? gpu::KernelArg(request.volume_image)
+          : gpu::KernelArg(request.volume->texel_view());
+  const std::array<gpu::KernelArg, 7> args{
+      volume_arg, map, &*params_, &*lut_, &*occupancy_, &*pixels_, &*stats_};
+  RETURN_IF_ERROR(batch.Dispatch(
+      *raycast_kernel_, args, {},
+      {GroupCount(setup.render_width, 8), GroupCount(setup.render_height, 8), 1}, "raycast"));
+  if (upscale) {
+    const gpu::UpscalePush push{
+        .size = glm::ivec4(setup.render_width, setup.render_height, request.width,
+                           request.height)};
+    RETURN_IF_ERROR(batch.Dispatch(*upscale_kernel_, {&*pixels_, &*upscaled_}, push,
+                                   {GroupCount(request.width, 8), GroupCount(request.height, 8),
+                                    1},
+                                   "upscale"));
+  }
+  return absl::OkStatus();
+}
+
+Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto t_start = std::chrono::steady_clock::now();
+  RETURN_IF_ERROR(CheckGpuInputs(request));
+  std::array<int, 3> map_dims{0, 0, 0};
+  if (request.backward_map) {
+    const auto& e = request.backward_map->extent();
+    map_dims = {int(e[0]), int(e[1]), int(e[2])};
+  }
+  ASSIGN_OR_RETURN(RaycastSetup setup,
+                   PrepareRaycast(request, request.volume->geometry(), map_dims));
+  RETURN_IF_ERROR(PrepareLut(request.preset, setup.step_mm));
+  setup.params.lut = lut_params_;
+  ASSIGN_OR_RETURN(const gpu::GpuBuffer* minmax, BrickMinMax(*request.volume));
+
+  const gpu::RaycastParams& p = setup.params;
+  const size_t bricks = size_t(p.bricks.x) * p.bricks.y * p.bricks.z;
+  const size_t render_pixels = size_t(setup.render_width) * setup.render_height;
+  const size_t out_pixels = size_t(request.width) * request.height;
+  const bool upscale = render_pixels != out_pixels;
+  RETURN_IF_ERROR(EnsureBuffer(occupancy_, bricks * sizeof(float), BU::eStorageBuffer));
+  RETURN_IF_ERROR(EnsureBuffer(pixels_, render_pixels * 4, BU::eStorageBuffer));
+  if (upscale) RETURN_IF_ERROR(EnsureBuffer(upscaled_, out_pixels * 4, BU::eStorageBuffer));
+  RETURN_IF_ERROR(params_->Upload(std::as_bytes(std::span<const gpu::RaycastParams>(&p, 1))));
+
+  ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 4));
+  RETURN_IF_ERROR(RecordFrame(batch, request, setup, *minmax, upscale));
+  ASSIGN_OR_RETURN(const auto timings, batch.SubmitAndWait());
+
+  Frame frame;
+  frame.width = request.width;
+  frame.height = request.height;
+  frame.render_width = setup.render_width;
+  frame.render_height = setup.render_height;
+  frame.step_mm = setup.step_mm;
+  frame.total_bricks = int64_t(bricks);
+  for (const auto& t : timings) {
+    if (t.label == "occupancy") frame.timings.occupancy_ms = t.gpu_ms;
+    if (t.label == "raycast") frame.timings.raycast_ms = t.gpu_ms;
+    if (t.label == "upscale") frame.timings.upscale_ms = t.gpu_ms;
+    frame.timings.render_ms += std::max(0.0, t.gpu_ms);
+  }
+  auto t0 = std::chrono::steady_clock::now();
+  frame.rgba.resize(out_pixels * 4);
+  RETURN_IF_ERROR((upscale ? *upscaled_ : *pixels_).Download(std::as_writable_bytes(
+      std::span<uint8_t>(frame.rgba))));
+  frame.timings.readback_ms = MsSince(t0);
+  if (request.settings.count_samples) {
+    uint32_t samples = 0;
+    RETURN_IF_ERROR(stats_->Download(std::as_writable_bytes(std::span<uint32_t>(&samples, 1))));
+    frame.samples = samples;
+    if (request.settings.empty_space_skipping) {
+      std::vector<float> occupancy(bricks);
+      RETURN_IF_ERROR(occupancy_->DownloadSpan(std::span<float>(occupancy)));
+      const bool mip = request.mode == RenderMode::kMip;
+      frame.occupied_bricks = std::count_if(occupancy.begin(), occupancy.end(), [&](float o) {
+        return mip ? o > p.window.x : o > 0.0f;
+      });
+    }
+  }
+  t0 = std::chrono::steady_clock::now();
+  DrawOverlay(request.overlay, request.camera, frame.width, frame.height, frame.rgba);
+  frame.timings.overlay_ms = MsSince(t0);
+  frame.timings.wall_ms = MsSince(t_start);
+  return frame;
+}
+
+}  // namespace vpm

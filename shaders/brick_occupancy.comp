@@ -1,0 +1,67 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// Per brick of the DEFORMED space: which source values its samples can see.
+// A sample at x reads I at X(x) = x + d(x), d trilinear in the backward map,
+// so over the brick d lies within the per-axis min and max of d at the map
+// grid points of the cells the brick overlaps. The source region reachable
+// is the brick dilated by that range; the value range is the union of the
+// source bricks' min-max over it. DVR writes 1 when the lookup table has any
+// non-zero opacity over that range, else 0; MIP writes the range's max.
+// Without a map the dilation is 0 and each brick sees only itself.
+#include "shader_interface.glsl"
+
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+layout(std430, binding = 0) readonly buffer MinMax { vec2 minmax[]; };
+layout(binding = 1) uniform sampler3D u_map;
+layout(std430, binding = 2) readonly buffer Prefix { int nonzero_prefix[]; };
+layout(std430, binding = 3) writeonly buffer Occupancy { float occupancy[]; };
+layout(push_constant) uniform Push { BrickOccupancyPush pc; };
+
+void main() {
+  ivec3 nb = pc.bricks.xyz;
+  int index = int(gl_GlobalInvocationID.x);
+  if (index >= nb.x * nb.y * nb.z) return;
+  ivec3 b = ivec3(index % nb.x, (index / nb.x) % nb.y, index / (nb.x * nb.y));
+  ivec3 n = pc.dims.xyz;
+  vec3 s = pc.spacing_mm.xyz;
+  vec3 lo_mm = vec3(b * pc.bricks.w) * s;
+  vec3 hi_mm = vec3(min((b + 1) * pc.bricks.w, n - 1)) * s;
+  vec3 dmin = vec3(0.0), dmax = vec3(0.0);
+  if (pc.flags.y != 0) {
+    ivec3 m = ivec3(pc.map_dims.xyz);
+    vec3 to_grid = vec3(m - 1) / (vec3(n - 1) * s);
+    ivec3 g_lo = clamp(ivec3(floor(lo_mm * to_grid)), ivec3(0), m - 1);
+    ivec3 g_hi = clamp(ivec3(floor(hi_mm * to_grid)) + 1, ivec3(0), m - 1);
+    dmin = vec3(3.0e38);
+    dmax = vec3(-3.0e38);
+    for (int z = g_lo.z; z <= g_hi.z; ++z)
+      for (int y = g_lo.y; y <= g_hi.y; ++y)
+        for (int x = g_lo.x; x <= g_hi.x; ++x) {
+          vec3 d = texelFetch(u_map, ivec3(x, y, z), 0).xyz;
+          dmin = min(dmin, d);
+          dmax = max(dmax, d);
+        }
+  }
+  vec3 u_lo = clamp((lo_mm + dmin) / s, vec3(0.0), vec3(n - 1));
+  vec3 u_hi = clamp((hi_mm + dmax) / s, vec3(0.0), vec3(n - 1));
+  ivec3 s_lo = clamp(ivec3(floor(u_lo / float(pc.bricks.w))), ivec3(0), nb - 1);
+  ivec3 s_hi = clamp(ivec3(floor(u_hi / float(pc.bricks.w))), ivec3(0), nb - 1);
+  float vmin = 3.0e38, vmax = -3.0e38;
+  for (int z = s_lo.z; z <= s_hi.z; ++z)
+    for (int y = s_lo.y; y <= s_hi.y; ++y)
+      for (int x = s_lo.x; x <= s_hi.x; ++x) {
+        vec2 r = minmax[x + nb.x * (y + nb.y * z)];
+        vmin = min(vmin, r.x);
+        vmax = max(vmax, r.y);
+      }
+  if (pc.flags.x == 1) {
+    occupancy[index] = vmax;
+    return;
+  }
+  int entries = int(pc.lut.z);
+  float f_lo = clamp((vmin - pc.lut.x) * pc.lut.y, 0.0, float(entries - 1));
+  float f_hi = clamp((vmax - pc.lut.x) * pc.lut.y, 0.0, float(entries - 1));
+  int e_lo = min(int(f_lo), entries - 2);
+  int e_hi = min(int(f_hi) + 1, entries - 1);
+  occupancy[index] = nonzero_prefix[e_hi + 1] - nonzero_prefix[e_lo] > 0 ? 1.0 : 0.0;
+}
