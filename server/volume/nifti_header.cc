@@ -154,7 +154,7 @@ Status ReadVoxOffset(const FieldReader& f, NiftiHeader& h) {
   }
   if (!std::isfinite(offset) || offset < 0.0 || offset != std::floor(offset) || offset > 1e15) {
     return absl::InvalidArgumentError(
-        absl::StrCat("vox_offset ", offset, " is not a whole number of bytes"));
+        absl::StrCat("vox_offset ", offset, " is not a valid byte offset"));
   }
   h.vox_offset = static_cast<int64_t>(offset);
   if (h.vox_offset < h.header_bytes) {

@@ -47,12 +47,20 @@ Result<std::vector<NamedSlice>> ParseAll(const std::filesystem::path& folder,
   int64_t bytes_read = 0;
   int64_t voxels = 0;
   for (const std::filesystem::path& path : files) {
+    // A look at the prefix first, so that large non-DICOM files in the
+    // folder (a PDF report, a video) are neither read nor counted.
+    ASSIGN_OR_RETURN(const std::vector<uint8_t> prefix, ReadFilePrefix(path, 132));
+    if (!LooksLikeDicom(prefix)) continue;
     VolumeLimits remaining = limits;
     remaining.max_bytes = limits.max_bytes - bytes_read;
-    ASSIGN_OR_RETURN(const std::vector<uint8_t> bytes, ReadFileBytes(path, remaining));
-    bytes_read += static_cast<int64_t>(bytes.size());
-    if (!LooksLikeDicom(bytes)) continue;
-    Result<DicomSlice> slice = ParseDicomSlice(bytes, limits);
+    Result<std::vector<uint8_t>> bytes = ReadFileBytes(path, remaining);
+    if (bytes.status().code() == absl::StatusCode::kResourceExhausted) {
+      return absl::ResourceExhaustedError(absl::StrCat(
+          folder.string(), ": the DICOM files hold over ", limits.max_bytes, " bytes (the cap)"));
+    }
+    if (!bytes.ok()) return bytes.status();
+    bytes_read += static_cast<int64_t>(bytes->size());
+    Result<DicomSlice> slice = ParseDicomSlice(*bytes, limits);
     if (!slice.ok()) return PrefixStatus(slice.status(), path.string());
     if (!slice->is_image) continue;
     voxels += slice->rows * slice->columns;

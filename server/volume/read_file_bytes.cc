@@ -1,5 +1,6 @@
 #include "server/volume/read_file_bytes.h"
 
+#include <algorithm>
 #include <fstream>
 #include <system_error>
 
@@ -30,6 +31,15 @@ Result<std::vector<uint8_t>> ReadFileBytes(const std::filesystem::path& path,
     return absl::InvalidArgumentError(
         absl::StrCat(name, ": read ", in.gcount(), " of ", size, " bytes (file changed?)"));
   }
+  return bytes;
+}
+
+Result<std::vector<uint8_t>> ReadFilePrefix(const std::filesystem::path& path, int64_t count) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return absl::NotFoundError(absl::StrCat(path.string(), ": cannot open"));
+  std::vector<uint8_t> bytes(static_cast<size_t>(std::max<int64_t>(count, 0)));
+  in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  bytes.resize(static_cast<size_t>(in.gcount()));
   return bytes;
 }
 

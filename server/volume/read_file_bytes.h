@@ -20,6 +20,10 @@ namespace vpm {
 Result<std::vector<uint8_t>> ReadFileBytes(const std::filesystem::path& path,
                                            const VolumeLimits& limits);
 
+// Up to the first `count` bytes of the file at `path` (fewer when it is
+// shorter): a cheap look at a magic number. NotFound when it cannot be opened.
+Result<std::vector<uint8_t>> ReadFilePrefix(const std::filesystem::path& path, int64_t count);
+
 // Loads the data file that a header names (NRRD "data file", MetaImage
 // "ElementDataFile"); readers of in-memory headers may pass none.
 using DataFileLoader = std::function<Result<std::vector<uint8_t>>(std::string_view name)>;

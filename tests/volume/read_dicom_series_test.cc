@@ -113,7 +113,11 @@ TEST(DicomSeriesReader, SkipsNonDicomAndNonImageFiles) {
   DicomSliceSpec report;
   report.with_pixel_data = false;
   ASSERT_TRUE(WriteDicomSlice(dir / "DICOMDIR", report));
-  auto v = ReadDicomSeries(dir, {});
+  // A large non-DICOM file is skipped unread: it does not count to the cap.
+  testing::WriteBytes(dir / "report.pdf", std::vector<uint8_t>(20000, 0x25));
+  VolumeLimits limits;
+  limits.max_bytes = 10000;
+  auto v = ReadDicomSeries(dir, limits);
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_EQ(v->dims()[2], 2);
 }

@@ -383,6 +383,16 @@ TEST(NiftiReader, RejectsDegenerateSform) {
               absl::StatusCode::kInvalidArgument, "too sheared");
 }
 
+TEST(NiftiReader, RejectsNegativeOrHugeVoxOffset) {
+  // Found by fuzz_nifti: converting -2.7e21 to int64 was undefined behaviour.
+  for (float offset : {-2.7e21f, -352.0f, 1e30f, 352.5f}) {
+    nifti_1_header h = Header1(2, 1, 1, DT_UINT8, 8);
+    h.vox_offset = offset;
+    ExpectError(ReadBytes(File1(h, {0, 0}), "offset.nii"), absl::StatusCode::kInvalidArgument,
+                "vox_offset");
+  }
+}
+
 TEST(NiftiReader, RejectsVoxOffsetInsideHeader) {
   nifti_1_header h = Header1(2, 1, 1, DT_UINT8, 8);
   h.vox_offset = 100.0f;
