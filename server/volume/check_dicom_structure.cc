@@ -2,10 +2,12 @@
 
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <string_view>
 
 #include <dcmtk/config/osconfig.h>  // must come first among DCMTK headers
 #include <dcmtk/dcmdata/dctag.h>
+#include <dcmtk/dcmdata/dcvr.h>
 #include <dcmtk/dcmdata/dcxfer.h>
 
 #include "server/volume/byte_order.h"
@@ -33,18 +35,13 @@ struct Header {
   size_t value_start = 0;
 };
 
-bool IsStandardVr(std::string_view vr) {
-  static constexpr std::string_view kVrs =
-      "AE AS AT CS DA DS DT FD FL IS LO LT OB OD OF OL OV OW PN SH SL SQ SS ST SV TM UC UI UL UN "
-      "UR US UT UV";
-  return vr.size() == 2 && vr[0] >= 'A' && vr[0] <= 'Z' &&
-         kVrs.find(vr) != std::string_view::npos && kVrs.find(vr) % 3 == 0;
+// VRs as DCMTK classifies them, so that both agree on every length field.
+bool IsStandardVr(const char* vr) {
+  const DcmVR dcm_vr(vr);
+  return dcm_vr.getEVR() != EVR_UNKNOWN && dcm_vr.isStandard();
 }
 
-bool HasLongLength(std::string_view vr) {
-  static constexpr std::string_view kLong = "OB OD OF OL OV OW SQ SV UC UN UR UT UV";
-  return kLong.find(vr) != std::string_view::npos && kLong.find(vr) % 3 == 0;
-}
+bool HasLongLength(const char* vr) { return DcmVR(vr).usesExtendedLengthEncoding(); }
 
 std::string TagName(uint16_t group, uint16_t element) {
   char buffer[16];
@@ -118,6 +115,11 @@ Status Walker::WalkValue(const Header& h, size_t end, const Encoding& enc, int d
   // Implicit VR: the data dictionary says which tags are sequences.
   const bool sequence =
       vr == "SQ" || (!enc.explicit_vr && DcmTag(h.group, h.element).getEVR() == EVR_SQ);
+  // DCMTK decides by the VR whether (7FE0,0010) is pixel data or a sequence;
+  // only the standard's VRs are accepted, so that it cannot be both.
+  if (pixel_data && enc.explicit_vr && vr != "OB" && vr != "OW") {
+    return absl::InvalidArgumentError(absl::StrCat("PixelData has VR ", h.vr, ", not OB or OW"));
+  }
   if (h.length != kUndefinedLength) {
     *next = h.value_start + h.length;
     if (!sequence) return absl::OkStatus();
@@ -200,6 +202,9 @@ Status Walker::WalkItems(size_t pos, size_t end, const Encoding& enc, int depth,
 // encoding from the data, and its guess could differ from ours.
 Result<Encoding> DatasetEncoding(const std::string& uid) {
   if (uid.empty()) return absl::InvalidArgumentError("file meta group has no TransferSyntaxUID");
+  if (uid.size() > 64 || uid.find_first_not_of("0123456789.") != std::string::npos) {
+    return absl::InvalidArgumentError("TransferSyntaxUID is not a UID (digits and dots)");
+  }
   const DcmXfer xfer(uid.c_str());
   if (xfer.getXfer() == EXS_Unknown) {
     return absl::InvalidArgumentError(
@@ -213,6 +218,55 @@ Result<Encoding> DatasetEncoding(const std::string& uid) {
                   xfer.isBigEndian() ? Endian::kBig : Endian::kLittle};
 }
 
+// Walks the file meta group from kMetaStart; returns the position after it.
+// The group always uses explicit VR little endian and ends where the group
+// number changes. DCMTK instead trusts (0002,0000), the group length, when
+// present; a file where the two disagree would be parsed differently by
+// DCMTK than walked here, so it is refused (fuzz_dicom found such files
+// making DCMTK misparse the dataset and allocate gigabytes).
+Result<size_t> WalkMetaGroup(std::span<const uint8_t> bytes, Walker& walker) {
+  const Encoding meta{true, Endian::kLittle};
+  size_t pos = kMetaStart;
+  std::optional<uint32_t> group_length;
+  size_t after_group_length = pos;
+  int32_t previous_element = -1;
+  while (pos + 2 <= bytes.size() &&
+         LoadScalar<uint16_t>(bytes.data() + pos, Endian::kLittle) == 2) {
+    ASSIGN_OR_RETURN(const Header h, walker.ReadHeader(pos, bytes.size(), meta));
+    // Ascending tags: no duplicates (which of two transfer syntaxes would
+    // DCMTK use?), and a group length can only come first.
+    if (h.element <= previous_element) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "file meta element ", TagName(h.group, h.element), " is out of order or repeated"));
+    }
+    previous_element = h.element;
+    if (h.length == kUndefinedLength) {
+      return absl::InvalidArgumentError("file meta element has an undefined length");
+    }
+    if (h.element == 0x0000 && h.length != 4) {
+      return absl::InvalidArgumentError("file meta group length (0002,0000) is not 4 bytes long");
+    }
+    if (h.element == 0x0000) {
+      group_length = LoadScalar<uint32_t>(bytes.data() + h.value_start, Endian::kLittle);
+      after_group_length = h.value_start + 4;
+    }
+    if (h.element == 0x0010) {
+      if (std::string_view(h.vr) != "UI") {
+        return absl::InvalidArgumentError("TransferSyntaxUID (0002,0010) is not a UI element");
+      }
+      walker.transfer_syntax.assign(reinterpret_cast<const char*>(bytes.data() + h.value_start),
+                                    h.length);
+    }
+    pos = h.value_start + h.length;
+  }
+  if (group_length.has_value() && *group_length != pos - after_group_length) {
+    return absl::InvalidArgumentError(absl::StrCat("file meta group length (0002,0000) says ",
+                                                   *group_length, " bytes but the group holds ",
+                                                   pos - after_group_length));
+  }
+  return pos;
+}
+
 }  // namespace
 
 Result<std::string> CheckDicomStructure(std::span<const uint8_t> bytes) {
@@ -220,27 +274,12 @@ Result<std::string> CheckDicomStructure(std::span<const uint8_t> bytes) {
     return absl::InvalidArgumentError("not a DICOM file (no \"DICM\" prefix at byte 128)");
   }
   Walker walker(bytes);
-  // The meta group (0002,xxxx) is always explicit VR little endian; it ends
-  // where the group number changes.
-  const Encoding meta{true, Endian::kLittle};
-  size_t pos = kMetaStart;
-  while (pos + 2 <= bytes.size() &&
-         LoadScalar<uint16_t>(bytes.data() + pos, Endian::kLittle) == 2) {
-    ASSIGN_OR_RETURN(const Header h, walker.ReadHeader(pos, bytes.size(), meta));
-    if (h.length == kUndefinedLength) {
-      return absl::InvalidArgumentError("file meta element has an undefined length");
-    }
-    if (h.element == 0x0010) {
-      walker.transfer_syntax.assign(reinterpret_cast<const char*>(bytes.data() + h.value_start),
-                                    h.length);
-    }
-    pos = h.value_start + h.length;
-  }
+  ASSIGN_OR_RETURN(const size_t dataset_start, WalkMetaGroup(bytes, walker));
   std::string uid = walker.transfer_syntax;
   while (!uid.empty() && (uid.back() == '\0' || uid.back() == ' ')) uid.pop_back();
   ASSIGN_OR_RETURN(const Encoding encoding, DatasetEncoding(uid));
   size_t end = 0;
-  RETURN_IF_ERROR(walker.WalkElements(pos, bytes.size(), encoding, 0, false, &end));
+  RETURN_IF_ERROR(walker.WalkElements(dataset_start, bytes.size(), encoding, 0, false, &end));
   return uid;
 }
 

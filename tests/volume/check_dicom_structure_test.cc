@@ -82,6 +82,17 @@ TEST(DicomStructure, RejectsInvalidVrAndUnknownSyntax) {
                "unknown transfer syntax");
 }
 
+TEST(DicomStructure, RejectsMetaGroupLengthThatDisagrees) {
+  // DCMTK trusts (0002,0000) where the walk follows the group number; a
+  // fuzzer input where they differed made DCMTK misparse and allocate 1.3 GB.
+  std::vector<uint8_t> bytes = SliceBytes({});
+  ASSERT_EQ(bytes[132], 0x02);  // (0002,0000) UL, value at byte 140
+  ASSERT_EQ(bytes[133], 0x00);
+  bytes[140] = static_cast<uint8_t>(bytes[140] - 3);
+  ExpectStatus(CheckDicomStructure(bytes).status(), absl::StatusCode::kInvalidArgument,
+               "group length");
+}
+
 TEST(DicomStructure, RejectsDeflatedSyntaxAsUnimplemented) {
   DicomSliceSpec spec;
   spec.transfer_syntax = EXS_DeflatedLittleEndianExplicit;

@@ -20,13 +20,15 @@ namespace {
 namespace fs = std::filesystem;
 
 // Seeds named regress_* reproduce fixed bugs and are expected to fail cleanly.
-std::vector<fs::path> Seeds(const std::string& name) {
+std::vector<fs::path> Seeds(const std::string& name, bool regressions = false) {
   const char* root = std::getenv("VPM_SOURCE_DIR");
   const fs::path dir = fs::path(root != nullptr ? root : ".") / "fuzz" / "corpus" / name;
   std::vector<fs::path> seeds;
   if (!fs::is_directory(dir)) return seeds;
   for (const auto& entry : fs::directory_iterator(dir)) {
-    if (!entry.path().filename().string().starts_with("regress_")) seeds.push_back(entry.path());
+    if (entry.path().filename().string().starts_with("regress_") == regressions) {
+      seeds.push_back(entry.path());
+    }
   }
   return seeds;
 }
@@ -73,6 +75,18 @@ TEST(FuzzSeeds, AreValidFiles) {
     ++count;
   }
   EXPECT_GE(count, 20) << "seed corpus missing? VPM_SOURCE_DIR=" << std::getenv("VPM_SOURCE_DIR");
+}
+
+TEST(FuzzSeeds, RegressionInputsAreRejected) {
+  // Inputs on which DCMTK allocated gigabytes or looped forever before the
+  // structure walk and the JPEG marker check; now plain errors.
+  const std::vector<fs::path> seeds = Seeds("dicom", true);
+  EXPECT_GE(seeds.size(), 5u);
+  for (const fs::path& p : seeds) {
+    const Result<DicomSlice> slice = ParseDicomSlice(Bytes(p), {});
+    EXPECT_EQ(slice.status().code(), absl::StatusCode::kInvalidArgument)
+        << p << ": " << slice.status();
+  }
 }
 
 }  // namespace
