@@ -259,6 +259,11 @@ Result<size_t> WalkMetaGroup(std::span<const uint8_t> bytes, Walker& walker) {
     }
     pos = h.value_start + h.length;
   }
+  // DCMTK also takes bytes 00 02 (group 0x0200 little endian) for a meta
+  // tag; a dataset starting so would be read as meta by it, not by us.
+  if (pos + 2 <= bytes.size() && bytes[pos] == 0x00 && bytes[pos + 1] == 0x02) {
+    return absl::InvalidArgumentError("the end of the file meta group is ambiguous");
+  }
   if (group_length.has_value() && *group_length != pos - after_group_length) {
     return absl::InvalidArgumentError(absl::StrCat("file meta group length (0002,0000) says ",
                                                    *group_length, " bytes but the group holds ",
