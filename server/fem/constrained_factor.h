@@ -1,0 +1,66 @@
+// The rest stiffness factored once per topology, usable as an exact inverse
+// for any extra set of prescribed DOFs (the grab handles) without
+// refactoring.
+//
+// The factor covers the base free set B (all DOFs not in `fixed`). For extra
+// constrained DOFs H inside B, the inverse on S = B \ H follows from the
+// base factor by a capacitance (Schur complement) correction:
+//   y = K_BB^-1 [r_S; 0],  W = K_BB^-1 E_H,  C = E_H^T W = (K_BB^-1)_HH,
+//   z = y - W C^-1 y_H   (then z_H = 0 and K_SS z_S = r_S).
+// Setting H costs |H| solves with the factor; each application one solve
+// plus a #B by |H| product.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include "server/common/status.h"
+
+namespace vpm {
+
+class ConstrainedFactor {
+ public:
+  // Factors the free block of `stiffness` with SimplicialLDLT (AMD order).
+  //   stiffness  n by n symmetric (both triangles or the lower one), N/mm
+  //   fixed      n flags, 1 = constrained
+  // Fails with FailedPrecondition when the free block is not positive
+  // definite (constraints leave a rigid motion free), InvalidArgument on a
+  // size mismatch.
+  static Result<ConstrainedFactor> Create(const Eigen::SparseMatrix<double>& stiffness,
+                                          const std::vector<uint8_t>& fixed);
+
+  // Replaces the extra constrained DOFs H (indices into the n DOFs, each
+  // free in `fixed`, no repeats); empty clears them. Fails (InvalidArgument)
+  // on a bad index, leaving the previous set.
+  Status SetExtraFixed(const std::vector<int32_t>& dofs);
+
+  // z = K_SS^-1 r_S on S = free DOFs minus (with_extra ? H : none), 0 on
+  // every other DOF. r, z: n (z resized). Entries of r outside S are ignored.
+  void Apply(const Eigen::VectorXd& r, bool with_extra, Eigen::VectorXd& z) const;
+
+  // An empty factor (size 0); use Create.
+  ConstrainedFactor() = default;
+
+  int64_t size() const { return static_cast<int64_t>(compact_.size()); }
+  int64_t free_count() const { return static_cast<int64_t>(free_dofs_.size()); }
+  int64_t factor_nonzeros() const { return factor_nonzeros_; }
+
+ private:
+  using Ldlt = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>;
+
+  std::vector<int32_t> free_dofs_;  // compact index -> DOF
+  std::vector<int32_t> compact_;    // DOF -> compact index, -1 if fixed
+  std::unique_ptr<Ldlt> ldlt_;
+  int64_t factor_nonzeros_ = 0;
+  std::vector<int32_t> extra_compact_;   // H as compact indices
+  Eigen::MatrixXd w_;                    // #B by |H|
+  Eigen::MatrixXd capacitance_inverse_;  // C^-1, |H| by |H|
+  mutable Eigen::VectorXd rc_, yc_;      // scratch, #B
+};
+
+}  // namespace vpm

@@ -1,0 +1,130 @@
+#include "server/fem/corotated_forces.h"
+
+#include <algorithm>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+#include "server/fem/polar_rotation.h"
+
+namespace vpm {
+namespace {
+
+Eigen::Matrix<double, 3, 4> Gather(const TetElement& element, const Eigen::VectorXd& v) {
+  Eigen::Matrix<double, 3, 4> corners;
+  for (int a = 0; a < 4; ++a) corners.col(a) = v.segment<3>(3 * element.vertices[a]);
+  return corners;
+}
+
+void ScatterAdd(const TetElement& element, const Eigen::Matrix<double, 3, 4>& f,
+                Eigen::VectorXd& out) {
+  for (int a = 0; a < 4; ++a) out.segment<3>(3 * element.vertices[a]) += f.col(a);
+}
+
+// R^T F - I with F = I + G, computed without forming F so that small
+// displacements keep their relative precision.
+Eigen::Matrix3d CorotatedStrainSource(const Eigen::Matrix3d& r, const Eigen::Matrix3d& g) {
+  return r.transpose() * g + (r.transpose() - Eigen::Matrix3d::Identity());
+}
+
+Eigen::Matrix3d Cross(const Eigen::Vector3d& b) {
+  Eigen::Matrix3d m;
+  m << 0.0, -b.z(), b.y(), b.z(), 0.0, -b.x(), -b.y(), b.x(), 0.0;
+  return m;
+}
+
+// True when the symmetric 3x3 matrix minus eps I is positive definite
+// (Sylvester's criterion on the leading minors).
+bool PositiveDefinite(Eigen::Matrix3d m, double eps) {
+  m.diagonal().array() -= eps;
+  return m(0, 0) > 0.0 && m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0) > 0.0 && m.determinant() > 0.0;
+}
+
+// Q of the header, eigenvalues clamped at 0. s_minus_i = sym(R^T F - I).
+// Most elements need no clamping; they skip the eigen-decomposition.
+Eigen::Matrix3d TwistStiffness(const TetElement& element, const Eigen::Matrix3d& s_minus_i) {
+  constexpr double kMinPairSum = 1e-6;  // s_j + s_k below this: no twist stiffness
+  const double mu = element.mu_n_per_mm2;
+  const double c = element.lambda_n_per_mm2 * s_minus_i.trace() - 2.0 * mu;
+  const Eigen::Matrix3d m = (s_minus_i.trace() + 3.0) * Eigen::Matrix3d::Identity() - s_minus_i -
+                            Eigen::Matrix3d::Identity();  // tr(S) I - S
+  if (PositiveDefinite(m, kMinPairSum)) {
+    const Eigen::Matrix3d q = mu * Eigen::Matrix3d::Identity() + c * m.inverse();
+    if (PositiveDefinite(q, 0.0)) return q;
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(s_minus_i);
+  const Eigen::Vector3d s = eigen.eigenvalues().array() + 1.0;  // eigenvalues of S
+  Eigen::Vector3d q;
+  for (int i = 0; i < 3; ++i) {
+    const double pair = s.sum() - s[i];  // eigenvalue of tr(S) I - S: s_j + s_k
+    q[i] = pair > kMinPairSum ? std::max(0.0, mu + c / pair) : 0.0;
+  }
+  return eigen.eigenvectors() * q.asDiagonal() * eigen.eigenvectors().transpose();
+}
+
+}  // namespace
+
+void CorotatedForces(const std::vector<TetElement>& elements, const Eigen::VectorXd& u_mm,
+                     FemMethod method, CorotatedFrames& frames, Eigen::VectorXd& forces_n) {
+  frames.rotations.resize(elements.size());
+  if (method == FemMethod::kCorotationalConsistent) {
+    frames.twist.resize(elements.size());
+  } else {
+    frames.twist.clear();
+  }
+  forces_n.setZero(u_mm.size());
+  for (size_t t = 0; t < elements.size(); ++t) {
+    const TetElement& element = elements[t];
+    const Eigen::Matrix3d g = DisplacementGradient(element, Gather(element, u_mm));
+    const Eigen::Matrix3d r = method == FemMethod::kLinear
+                                  ? Eigen::Matrix3d::Identity()
+                                  : PolarRotation(Eigen::Matrix3d::Identity() + g);
+    frames.rotations[t] = r;
+    const Eigen::Matrix3d h = CorotatedStrainSource(r, g);
+    if (!frames.twist.empty()) frames.twist[t] = TwistStiffness(element, 0.5 * (h + h.transpose()));
+    ScatterAdd(element, r * StressNodalForces(element, LinearStress(element, h)), forces_n);
+  }
+}
+
+Eigen::Matrix<double, 3, 4> ApplyElementTangent(const TetElement& element,
+                                                const Eigen::Matrix3d& rotation,
+                                                const Eigen::Matrix3d* twist,
+                                                const Eigen::Matrix<double, 3, 4>& v_mm) {
+  const Eigen::Matrix3d g = rotation.transpose() * DisplacementGradient(element, v_mm);
+  Eigen::Matrix3d p = LinearStress(element, g);
+  if (twist != nullptr) {
+    const Eigen::Vector3d a(g(2, 1) - g(1, 2), g(0, 2) - g(2, 0), g(1, 0) - g(0, 1));
+    p += Cross(*twist * a);
+  }
+  return rotation * StressNodalForces(element, p);
+}
+
+void ApplyCorotatedStiffness(const std::vector<TetElement>& elements, const CorotatedFrames& frames,
+                             const Eigen::VectorXd& v_mm, Eigen::VectorXd& y_n) {
+  y_n.setZero(v_mm.size());
+  const bool twist = !frames.twist.empty();
+  for (size_t t = 0; t < elements.size(); ++t) {
+    const TetElement& element = elements[t];
+    ScatterAdd(element,
+               ApplyElementTangent(element, frames.rotations[t], twist ? &frames.twist[t] : nullptr,
+                                   Gather(element, v_mm)),
+               y_n);
+  }
+}
+
+double CorotatedEnergy(const std::vector<TetElement>& elements,
+                       const std::vector<Eigen::Matrix3d>& rotations, const Eigen::VectorXd& u_mm) {
+  double energy = 0.0;
+  for (size_t t = 0; t < elements.size(); ++t) {
+    const TetElement& element = elements[t];
+    const Eigen::Matrix3d g = DisplacementGradient(element, Gather(element, u_mm));
+    const Eigen::Matrix3d h = CorotatedStrainSource(rotations[t], g);
+    const Eigen::Matrix3d eps = 0.5 * (h + h.transpose());
+    energy += element.volume_mm3 * (element.mu_n_per_mm2 * eps.squaredNorm() +
+                                    0.5 * element.lambda_n_per_mm2 * eps.trace() * eps.trace());
+  }
+  return energy;
+}
+
+}  // namespace vpm

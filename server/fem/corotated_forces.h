@@ -1,0 +1,71 @@
+// The corotated element operator: per-element rotations, elastic forces and
+// the tangent stiffness applied to a vector, matrix-free.
+//
+// For element e with rest corners X, current corners x = X + u, rotation R
+// (PolarRotation of F = I + sum_a u_a grad_a^T, F = R S), rest stiffness K0:
+//   forces   f_e = R K0 (R^T x - X) = V R sigma(S - I) grad
+//            (exactly the gradient of the energy V (mu |S-I|^2 + lambda/2 tr(S-I)^2))
+//   tangent  K_e = R K0 R^T + K_twist
+// R K0 R^T is the classic corotational stiffness (rotation frozen). K_twist
+// is the part of the exact energy Hessian that comes from the rotation's own
+// derivative, clamped to be positive semi-definite: with G = R^T dF and
+// a = axial(G - G^T) (the element's infinitesimal twist),
+//   dP_twist = R [Q a]_x,  Q = mu I + (lambda tr(S-I) - 2 mu) (tr(S) I - S)^-1,
+// Q's eigenvalues clamped at 0 (they turn negative in compression). Q = 0 at
+// rest. Without it, the fixed-point iteration on R K0 R^T alone over-corrects
+// the soft rotation modes of a stressed body and diverges, e.g. on a slender
+// bar stretched by 10% (tests/fem/uniaxial_bar_test.cc).
+// All vectors are 3 * #V long, vertex v's axis i at 3v + i.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "server/fem/tet_element.h"
+
+namespace vpm {
+
+enum class FemMethod {
+  kLinear,                  // R = I: plain linear FEM
+  kCorotational,            // tangent R K0 R^T (rotations frozen per iteration)
+  kCorotationalConsistent,  // tangent R K0 R^T + K_twist (projected Newton)
+};
+
+// Per-element state of the tangent: rotation R and twist stiffness Q
+// (N/mm^2, symmetric positive semi-definite; zero unless consistent).
+struct CorotatedFrames {
+  std::vector<Eigen::Matrix3d> rotations;  // #T
+  std::vector<Eigen::Matrix3d> twist;      // #T, or empty for none
+};
+
+// Rotations and elastic forces at displacement u.
+//   elements  #T
+//   u_mm      3*#V displacements, mm
+//   method    which tangent the frames describe
+// Outputs:
+//   frames    #T rotations (identity for kLinear) and, for the consistent
+//             method, #T twist matrices (resized)
+//   forces_n  3*#V elastic (internal) forces, N (resized, overwritten)
+void CorotatedForces(const std::vector<TetElement>& elements, const Eigen::VectorXd& u_mm,
+                     FemMethod method, CorotatedFrames& frames, Eigen::VectorXd& forces_n);
+
+// Tangent of one element applied to its corner vectors v (3 by 4, mm):
+// (R K0 R^T + K_twist) v as 3 by 4 nodal forces, N. twist may be null.
+Eigen::Matrix<double, 3, 4> ApplyElementTangent(const TetElement& element,
+                                                const Eigen::Matrix3d& rotation,
+                                                const Eigen::Matrix3d* twist,
+                                                const Eigen::Matrix<double, 3, 4>& v_mm);
+
+// y = K v = sum_e K_e v_e with the frames from CorotatedForces.
+//   v_mm  3*#V
+// Output: y_n, 3*#V, N (resized, overwritten).
+void ApplyCorotatedStiffness(const std::vector<TetElement>& elements, const CorotatedFrames& frames,
+                             const Eigen::VectorXd& v_mm, Eigen::VectorXd& y_n);
+
+// Elastic energy sum_e V (mu eps:eps + lambda/2 tr(eps)^2) with
+// eps = sym(R^T F - I), N*mm; rotations as from CorotatedForces at u_mm.
+double CorotatedEnergy(const std::vector<TetElement>& elements,
+                       const std::vector<Eigen::Matrix3d>& rotations, const Eigen::VectorXd& u_mm);
+
+}  // namespace vpm

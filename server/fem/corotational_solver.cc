@@ -1,0 +1,185 @@
+#include "server/fem/corotational_solver.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "server/fem/assemble_stiffness.h"
+#include "server/fem/projected_pcg.h"
+
+namespace vpm {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// Below this relative residual the state is in equilibrium to round-off.
+constexpr double kRoundOffResidual = 1e-13;
+
+}  // namespace
+
+Result<CorotationalSolver> CorotationalSolver::Create(
+    const std::vector<glm::dvec3>& rest_mm, const std::vector<std::array<int32_t, 4>>& tets,
+    const std::vector<double>& young_n_per_mm2, double poisson,
+    const std::vector<uint8_t>& fixed_dofs, const SolverOptions& options) {
+  if (fixed_dofs.size() != 3 * rest_mm.size()) {
+    return absl::InvalidArgumentError(StrCat("got ", fixed_dofs.size(), " DOF flags for ",
+                                             rest_mm.size(), " vertices (need 3 per vertex)"));
+  }
+  if (!(poisson > -1.0 && poisson < 0.5)) {
+    return absl::InvalidArgumentError(StrCat("poisson must lie in (-1, 0.5), got ", poisson));
+  }
+  if (options.max_newton_iterations < 1 || options.max_cg_iterations < 1 ||
+      !(options.update_tolerance > 0.0) || !(options.cg_tolerance > 0.0)) {
+    return absl::InvalidArgumentError("solver iteration limits and tolerances must be > 0");
+  }
+  CorotationalSolver solver;
+  solver.options_ = options;
+  const auto t0 = Clock::now();
+  ASSIGN_OR_RETURN(solver.elements_, MakeTetElements(rest_mm, tets, young_n_per_mm2, poisson));
+  const Eigen::SparseMatrix<double> rest_stiffness =
+      AssembleStiffness(solver.elements_, CorotatedFrames{}, static_cast<int64_t>(rest_mm.size()));
+  solver.setup_assembly_ms_ = MsSince(t0);
+  const auto t1 = Clock::now();
+  ASSIGN_OR_RETURN(solver.factor_, ConstrainedFactor::Create(rest_stiffness, fixed_dofs));
+  solver.setup_factor_ms_ = MsSince(t1);
+  solver.fixed_ = fixed_dofs;
+  for (size_t d = 0; d < fixed_dofs.size(); ++d) {
+    if (fixed_dofs[d]) solver.fixed_list_.push_back(static_cast<int32_t>(d));
+  }
+  solver.displacement_.setZero(3 * static_cast<int64_t>(rest_mm.size()));
+  solver.Reset();
+  return solver;
+}
+
+Status CorotationalSolver::SetHandles(const std::vector<int32_t>& handle_dofs) {
+  RETURN_IF_ERROR(factor_.SetExtraFixed(handle_dofs));
+  handles_ = handle_dofs;
+  linearized_ = false;
+  return absl::OkStatus();
+}
+
+void CorotationalSolver::Reset() {
+  displacement_.setZero();
+  frames_.rotations.assign(elements_.size(), Eigen::Matrix3d::Identity());
+  frames_.twist.clear();
+  linearized_ = false;
+}
+
+Status CorotationalSolver::CheckLoad(const Eigen::VectorXd& prescribed_mm,
+                                     const Eigen::VectorXd& force_n) const {
+  if (prescribed_mm.size() != displacement_.size() || force_n.size() != displacement_.size()) {
+    return absl::InvalidArgumentError(
+        StrCat("prescribed (", prescribed_mm.size(), ") and force (", force_n.size(),
+               ") vectors must have 3*#V = ", displacement_.size(), " entries"));
+  }
+  if (!prescribed_mm.allFinite() || !force_n.allFinite()) {
+    return absl::InvalidArgumentError("prescribed displacements and forces must be finite");
+  }
+  return absl::OkStatus();
+}
+
+double CorotationalSolver::MaxVertexNorm(const Eigen::VectorXd& v) const {
+  double largest = 0.0;
+  for (int64_t i = 0; i < v.size(); i += 3) largest = std::max(largest, v.segment<3>(i).norm());
+  return largest;
+}
+
+double CorotationalSolver::Evaluate(const Eigen::VectorXd& force_n,
+                                    const std::vector<int32_t>& constrained) {
+  CorotatedForces(elements_, displacement_, options_.method, frames_, forces_);
+  residual_ = force_n - forces_;
+  Eigen::VectorXd applied = force_n;
+  for (int32_t d : constrained) {
+    residual_[d] = 0.0;
+    applied[d] = 0.0;
+  }
+  const double reference = forces_.norm() + applied.norm();
+  const double r = residual_.norm();
+  if (!std::isfinite(r) || !std::isfinite(reference))
+    return std::numeric_limits<double>::quiet_NaN();
+  return reference > 0.0 ? r / reference : 0.0;
+}
+
+double CorotationalSolver::NewtonUpdate(const Eigen::VectorXd& rhs,
+                                        const std::vector<int32_t>& constrained, bool with_handles,
+                                        SolveStats& stats) {
+  const auto t0 = Clock::now();
+  const LinearMap apply_k = [this](const Eigen::VectorXd& v, Eigen::VectorXd& y) {
+    ApplyCorotatedStiffness(elements_, frames_, v, y);
+  };
+  const LinearMap precondition = [this, with_handles](const Eigen::VectorXd& r,
+                                                      Eigen::VectorXd& z) {
+    factor_.Apply(r, with_handles, z);
+  };
+  Eigen::VectorXd update;
+  const PcgStats pcg = ProjectedPcg(apply_k, precondition, constrained, rhs, options_.cg_tolerance,
+                                    options_.max_cg_iterations, update, &linear_residual_);
+  displacement_ += update;
+  stats.solve_ms += MsSince(t0);
+  ++stats.newton_iterations;
+  stats.cg_iterations += pcg.iterations;
+  return MaxVertexNorm(update);
+}
+
+Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_mm,
+                                             const Eigen::VectorXd& force_n, HandleMode mode) {
+  RETURN_IF_ERROR(CheckLoad(prescribed_mm, force_n));
+  const bool with_handles = mode == HandleMode::kPrescribed;
+  std::vector<int32_t> constrained = fixed_list_;
+  if (with_handles) constrained.insert(constrained.end(), handles_.begin(), handles_.end());
+  const Eigen::VectorXd start = displacement_;
+  Eigen::VectorXd jump = Eigen::VectorXd::Zero(displacement_.size());
+  for (int32_t d : constrained) jump[d] = prescribed_mm[d] - displacement_[d];
+  displacement_ += jump;
+  double step_scale = MaxVertexNorm(jump);
+  SolveStats stats;
+  if (linearized_ && linearized_mode_ == mode) {
+    // First iteration without evaluating: the residual at the new state
+    // linearised with the previous tangent, r_last + df_ext - K jump.
+    const auto t0 = Clock::now();
+    Eigen::VectorXd rhs = linear_residual_ + (force_n - linearized_force_);
+    Eigen::VectorXd k_jump;
+    ApplyCorotatedStiffness(elements_, frames_, jump, k_jump);
+    rhs -= k_jump;
+    for (int32_t d : constrained) rhs[d] = 0.0;
+    stats.assembly_ms += MsSince(t0);
+    NewtonUpdate(rhs, constrained, with_handles, stats);
+    step_scale = std::max(step_scale, MaxVertexNorm(displacement_ - start));
+  }
+  linearized_ = false;
+  for (;;) {
+    const auto t0 = Clock::now();
+    stats.residual = Evaluate(force_n, constrained);
+    stats.assembly_ms += MsSince(t0);
+    if (!std::isfinite(stats.residual)) {
+      displacement_ = start;
+      return absl::InternalError("the FEM state became non-finite; displacement restored");
+    }
+    linear_residual_ = residual_;
+    if (stats.residual <= kRoundOffResidual) {
+      stats.converged = true;
+      break;
+    }
+    if (stats.newton_iterations >= options_.max_newton_iterations) break;
+    const double moved = NewtonUpdate(residual_, constrained, with_handles, stats);
+    step_scale = std::max(step_scale, MaxVertexNorm(displacement_ - start));
+    // Stopping here, without evaluating the new state, saves one force
+    // evaluation per step; the residual reported is the one before the update.
+    if (moved <= options_.update_tolerance * step_scale) {
+      stats.converged = true;
+      break;
+    }
+  }
+  linearized_ = true;
+  linearized_mode_ = mode;
+  linearized_force_ = force_n;
+  stats.max_displacement_mm = MaxVertexNorm(displacement_);
+  return stats;
+}
+
+}  // namespace vpm

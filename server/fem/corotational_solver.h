@@ -1,0 +1,142 @@
+// Quasi-static corotational FEM on a tet mesh with Dirichlet constraints
+// (ALGORITHM.md section 5); units in fem_units.h.
+//
+// Each Solve finds u with f_int(u) = f_ext on the unconstrained DOFs and u =
+// the prescribed values on the constrained ones, by Newton-like iterations
+// on the corotated tangent (corotated_forces.h; by default R K0 R^T plus the
+// clamped rotation-derivative term, i.e. projected Newton; rotations
+// refreshed between iterations), each solved inexactly by PCG. The
+// preconditioner is the rest stiffness (R = I), factored once at Create with
+// SimplicialLDLT; extra prescribed DOFs (handles) reuse that factor through a
+// capacitance correction (ConstrainedFactor), so nothing is refactored per
+// grab or per step. Solves warm-start from the previous displacement; when
+// the previous solve had the same handles and mode, the first iteration uses
+// its tangent and residual linearised to the new load instead of a fresh
+// force evaluation.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+#include <glm/glm.hpp>
+
+#include "server/common/status.h"
+#include "server/fem/constrained_factor.h"
+#include "server/fem/corotated_forces.h"
+#include "server/fem/tet_element.h"
+
+namespace vpm {
+
+struct SolverOptions {
+  FemMethod method = FemMethod::kCorotationalConsistent;
+  int max_newton_iterations = 30;
+  // Converged when the last Newton update moved no vertex by more than
+  // update_tolerance * (largest vertex motion of this solve), dimensionless.
+  // The default suits interaction: the next step starts from this state and
+  // goes on converging; tests and reference solutions use 1e-8 or less.
+  double update_tolerance = 1e-2;
+  // Relative residual each inner PCG solve stops at (inexact Newton).
+  double cg_tolerance = 1e-2;
+  int max_cg_iterations = 1000;
+};
+
+// Handles: prescribed displacement (drag) or free with forces (pull).
+enum class HandleMode { kPrescribed, kFree };
+
+struct SolveStats {
+  double assembly_ms = 0.0;  // rotations and elastic forces, all evaluations
+  double solve_ms = 0.0;     // PCG (preconditioner and matrix-free products)
+  int newton_iterations = 0;
+  int cg_iterations = 0;  // summed over Newton iterations
+  // |f_ext - f_int| on the free DOFs / (|f_int| + |f_ext|) over all DOFs,
+  // dimensionless, at the state the last Newton update started from (the
+  // solve stops after an update without evaluating again; that update
+  // reduces it further).
+  double residual = 0.0;
+  double max_displacement_mm = 0.0;  // largest vertex displacement
+  bool converged = false;
+  double total_ms() const { return assembly_ms + solve_ms; }
+};
+
+class CorotationalSolver {
+ public:
+  // Builds elements, assembles the rest stiffness and factors its free block.
+  //   rest_mm          #V by 3, mm
+  //   tets             #T by 4 indices, positive orientation
+  //   young_n_per_mm2  #T Young's moduli, N/mm^2
+  //   poisson          in (-1, 0.5)
+  //   fixed_dofs       3*#V flags, 1 = always prescribed (vertex v axis i at 3v+i)
+  // Fails: InvalidArgument for bad inputs, FailedPrecondition when the
+  // constraints leave a rigid motion free.
+  static Result<CorotationalSolver> Create(const std::vector<glm::dvec3>& rest_mm,
+                                           const std::vector<std::array<int32_t, 4>>& tets,
+                                           const std::vector<double>& young_n_per_mm2,
+                                           double poisson, const std::vector<uint8_t>& fixed_dofs,
+                                           const SolverOptions& options = {});
+
+  // An empty solver (no vertices); use Create.
+  CorotationalSolver() = default;
+
+  // Sets the handle DOFs (each not in fixed_dofs, no repeats; empty: none).
+  // Costs one factor solve per DOF. InvalidArgument on a bad DOF.
+  Status SetHandles(const std::vector<int32_t>& handle_dofs);
+
+  // Solves for equilibrium, warm-started from the current displacement.
+  //   prescribed_mm  3*#V; read on fixed DOFs and, in kPrescribed mode, on
+  //                  handle DOFs, mm
+  //   force_n        3*#V external nodal forces, read on the free DOFs, N
+  // Not converging within the iteration limits is not an error (see
+  // stats.converged); non-finite inputs are InvalidArgument, a non-finite
+  // state is Internal and restores the previous displacement.
+  Result<SolveStats> Solve(const Eigen::VectorXd& prescribed_mm, const Eigen::VectorXd& force_n,
+                           HandleMode mode);
+
+  // Back to rest: every displacement exactly 0.
+  void Reset();
+
+  int64_t vertex_count() const { return static_cast<int64_t>(displacement_.size() / 3); }
+  const Eigen::VectorXd& displacement_mm() const { return displacement_; }  // 3*#V, mm
+  const std::vector<TetElement>& elements() const { return elements_; }
+  // Element rotations (#T) and twist terms at the last evaluated state.
+  const CorotatedFrames& frames() const { return frames_; }
+  const std::vector<uint8_t>& fixed_dofs() const { return fixed_; }
+  const std::vector<int32_t>& handle_dofs() const { return handles_; }
+  const SolverOptions& options() const { return options_; }
+  double setup_assembly_ms() const { return setup_assembly_ms_; }  // elements + rest K
+  double setup_factor_ms() const { return setup_factor_ms_; }
+  const ConstrainedFactor& factor() const { return factor_; }
+
+ private:
+  Status CheckLoad(const Eigen::VectorXd& prescribed_mm, const Eigen::VectorXd& force_n) const;
+  // Rotations and forces at displacement_; returns the residual on the free
+  // DOFs into residual_ and its relative size.
+  double Evaluate(const Eigen::VectorXd& force_n, const std::vector<int32_t>& constrained);
+  double MaxVertexNorm(const Eigen::VectorXd& v) const;
+  // One Newton iteration: PCG on K(frames_) du = rhs, displacement_ += du;
+  // keeps the PCG residual in linear_residual_. Returns max vertex |du|, mm.
+  double NewtonUpdate(const Eigen::VectorXd& rhs, const std::vector<int32_t>& constrained,
+                      bool with_handles, SolveStats& stats);
+
+  SolverOptions options_;
+  std::vector<TetElement> elements_;
+  std::vector<uint8_t> fixed_;
+  std::vector<int32_t> fixed_list_;
+  std::vector<int32_t> handles_;
+  ConstrainedFactor factor_;
+  Eigen::VectorXd displacement_;
+  CorotatedFrames frames_;
+  Eigen::VectorXd forces_;    // elastic forces at the last evaluation
+  Eigen::VectorXd residual_;  // f_ext - f_int, 0 on constrained DOFs
+  // The residual at displacement_ linearised from the last evaluation (valid
+  // when linearized_), with the mode and external force it was built for.
+  Eigen::VectorXd linear_residual_;
+  bool linearized_ = false;
+  HandleMode linearized_mode_ = HandleMode::kPrescribed;
+  Eigen::VectorXd linearized_force_;
+  double setup_assembly_ms_ = 0.0;
+  double setup_factor_ms_ = 0.0;
+};
+
+}  // namespace vpm

@@ -1,0 +1,133 @@
+#include "server/fem/fem_model.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "server/fem/fixed_dofs.h"
+#include "server/fem/flat_tets.h"
+#include "server/mesh/tet_quality.h"
+
+namespace vpm {
+namespace {
+
+bool Finite(const glm::dvec3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+}  // namespace
+
+Result<FemModel> FemModel::Create(const ProxyMesh& mesh, const glm::dvec3& box_extent_mm,
+                                  const FemOptions& options) {
+  ASSIGN_OR_RETURN(std::vector<uint8_t> fixed, FixedDofs(mesh, box_extent_mm));
+  ASSIGN_OR_RETURN(const std::vector<double> all_young, TetYoungModuli(mesh, options.material));
+  FemModel model;
+  model.box_extent_mm_ = box_extent_mm;
+  for (const MeshVertex& v : mesh.vertices) model.rest_mm_.push_back(v.position_mm);
+  std::vector<double> young;
+  for (int32_t t : NonFlatTets(model.rest_mm_, mesh.tets)) {
+    model.tets_.push_back(mesh.tets[t]);
+    young.push_back(all_young[t]);
+  }
+  model.setup_.flat_tets = static_cast<int64_t>(mesh.tets.size() - model.tets_.size());
+  // A vertex in no (non-flat) tet has no stiffness: it stays where it is.
+  std::vector<uint8_t> used(mesh.vertices.size(), 0);
+  for (const auto& tet : model.tets_) {
+    for (int32_t v : tet) used[v] = 1;
+  }
+  for (size_t v = 0; v < used.size(); ++v) {
+    if (!used[v]) fixed[3 * v] = fixed[3 * v + 1] = fixed[3 * v + 2] = 1;
+  }
+  ASSIGN_OR_RETURN(model.solver_,
+                   CorotationalSolver::Create(model.rest_mm_, model.tets_, young,
+                                              options.material.poisson, fixed, options.solver));
+  model.deformable_.assign(mesh.vertices.size(), 0);
+  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const bool any_free = !fixed[3 * v] || !fixed[3 * v + 1] || !fixed[3 * v + 2];
+    model.deformable_[v] =
+        !mesh.vertices[v].hard && mesh.vertices[v].kind != VertexKind::kAnchor && any_free;
+  }
+  const double soft = young.empty() ? 0.0 : *std::min_element(young.begin(), young.end());
+  for (double e : young) model.setup_.hard_tets += e > soft;
+  model.setup_.assembly_ms = model.solver_.setup_assembly_ms();
+  model.setup_.factor_ms = model.solver_.setup_factor_ms();
+  model.setup_.free_dofs = model.solver_.factor().free_count();
+  model.setup_.factor_nonzeros = model.solver_.factor().factor_nonzeros();
+  return model;
+}
+
+Result<GrabInfo> FemModel::Grab(const glm::dvec3& point_mm, double radius_mm) {
+  ASSIGN_OR_RETURN(GrabInfo info,
+                   FindHandles(Positions(), deformable_, box_extent_mm_, point_mm, radius_mm));
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<int32_t> dofs;
+  for (int32_t v : info.handles) {
+    for (int i = 0; i < 3; ++i) {
+      if (!solver_.fixed_dofs()[3 * v + i]) dofs.push_back(3 * v + i);
+    }
+  }
+  RETURN_IF_ERROR(solver_.SetHandles(dofs));
+  info.setup_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  handle_dofs_ = std::move(dofs);
+  displacement_at_grab_ = solver_.displacement_mm();
+  grab_ = info;
+  grabbed_ = true;
+  return info;
+}
+
+Status FemModel::CheckGrabbed(const char* action) const {
+  if (!grabbed_) {
+    return absl::FailedPreconditionError(StrCat(action, " needs a grab first (no handles held)"));
+  }
+  return absl::OkStatus();
+}
+
+Result<SolveStats> FemModel::Drag(const glm::dvec3& offset_mm) {
+  RETURN_IF_ERROR(CheckGrabbed("drag"));
+  if (!Finite(offset_mm)) return absl::InvalidArgumentError("drag offset must be finite");
+  // Fixed DOFs are 0 in every state, so the grab-time state prescribes them.
+  Eigen::VectorXd prescribed = displacement_at_grab_;
+  for (int32_t d : handle_dofs_) prescribed[d] = displacement_at_grab_[d] + offset_mm[d % 3];
+  return solver_.Solve(prescribed, Eigen::VectorXd::Zero(prescribed.size()),
+                       HandleMode::kPrescribed);
+}
+
+Result<SolveStats> FemModel::Pull(const glm::dvec3& force_n) {
+  RETURN_IF_ERROR(CheckGrabbed("pull"));
+  if (!Finite(force_n)) return absl::InvalidArgumentError("pull force must be finite");
+  const Eigen::VectorXd prescribed = Eigen::VectorXd::Zero(3 * vertex_count());
+  Eigen::VectorXd force = Eigen::VectorXd::Zero(3 * vertex_count());
+  const double share = 1.0 / static_cast<double>(grab_.handles.size());
+  for (int32_t v : grab_.handles) {
+    for (int i = 0; i < 3; ++i) force[3 * v + i] = force_n[i] * share;
+  }
+  return solver_.Solve(prescribed, force, HandleMode::kFree);
+}
+
+void FemModel::Release() {
+  solver_.Reset();
+  grabbed_ = false;
+  grab_ = GrabInfo{};
+  handle_dofs_.clear();
+  displacement_at_grab_.setZero(3 * vertex_count());
+  // The handles' capacitance is dropped too; clearing cannot fail.
+  (void)solver_.SetHandles({});
+}
+
+std::vector<glm::dvec3> FemModel::Displacements() const {
+  const Eigen::VectorXd& u = solver_.displacement_mm();
+  std::vector<glm::dvec3> out(rest_mm_.size());
+  for (size_t v = 0; v < out.size(); ++v) out[v] = glm::dvec3(u[3 * v], u[3 * v + 1], u[3 * v + 2]);
+  return out;
+}
+
+std::vector<glm::dvec3> FemModel::Positions() const {
+  std::vector<glm::dvec3> out = Displacements();
+  for (size_t v = 0; v < out.size(); ++v) out[v] += rest_mm_[v];
+  return out;
+}
+
+int64_t FemModel::CountInvertedTets() const { return vpm::CountInvertedTets(Positions(), tets_); }
+
+}  // namespace vpm

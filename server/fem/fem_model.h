@@ -1,0 +1,100 @@
+// FEM on a volume proxy mesh with manipulation (ALGORITHM.md section 5):
+// grab vertices near a point, drag them (prescribed displacement) or pull
+// them (force), release back to rest. Units: mm, N, E in kPa at the API
+// (fem_units.h).
+//
+// Constraints: hard vertices and anchors fixed, box-face vertices fixed along
+// their face normal (FixedDofs). Material: E_soft everywhere, E_hard in every
+// tet touching a hard vertex (TetYoungModuli). Tets that are flat to
+// round-off are left out of the FEM (flat_tets.h); a vertex left in no tet
+// is fixed.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "server/common/status.h"
+#include "server/fem/corotational_solver.h"
+#include "server/fem/fem_material.h"
+#include "server/fem/find_handles.h"
+#include "server/mesh/proxy_mesh.h"
+
+namespace vpm {
+
+struct FemOptions {
+  FemMaterial material;
+  SolverOptions solver;
+};
+
+struct FemSetupStats {
+  double assembly_ms = 0.0;  // elements and the rest stiffness
+  double factor_ms = 0.0;    // SimplicialLDLT of its free block
+  int64_t free_dofs = 0;
+  int64_t hard_tets = 0;
+  int64_t flat_tets = 0;  // left out (flat_tets.h)
+  int64_t factor_nonzeros = 0;
+};
+
+class FemModel {
+ public:
+  // mesh: #V vertices (mm) and #T positively oriented tets;
+  // box_extent_mm: 3, the image box [0, extent] (mm).
+  // Fails: InvalidArgument (bad material, extent, tets), FailedPrecondition
+  // (nothing can move, or a rigid motion is left free).
+  static Result<FemModel> Create(const ProxyMesh& mesh, const glm::dvec3& box_extent_mm,
+                                 const FemOptions& options = {});
+
+  // Takes the handles for point_mm (3, mm) and radius_mm (> 0) among the
+  // current positions (FindHandles); replaces any earlier grab and keeps the
+  // current deformation, to which later drags are relative.
+  Result<GrabInfo> Grab(const glm::dvec3& point_mm, double radius_mm);
+
+  // Moves the handles to (their displacement at grab time) + offset_mm (3,
+  // mm), each along its free directions only (a handle on a box face keeps
+  // sliding on it), and solves. FailedPrecondition before a Grab.
+  Result<SolveStats> Drag(const glm::dvec3& offset_mm);
+
+  // Frees the handles and applies force_n (3, N) in total, force_n / #handles
+  // on each, and solves. FailedPrecondition before a Grab.
+  Result<SolveStats> Pull(const glm::dvec3& force_n);
+
+  // Back to rest (every displacement exactly 0); drops the handles.
+  void Release();
+
+  bool grabbed() const { return grabbed_; }
+  const GrabInfo& grab() const { return grab_; }
+  int64_t vertex_count() const { return static_cast<int64_t>(rest_mm_.size()); }
+  const std::vector<glm::dvec3>& rest_positions_mm() const { return rest_mm_; }
+  // The tets the FEM uses: the mesh's, flat ones left out.
+  const std::vector<std::array<int32_t, 4>>& tets() const { return tets_; }
+  // #V by 3: current positions and displacements, mm.
+  std::vector<glm::dvec3> Positions() const;
+  std::vector<glm::dvec3> Displacements() const;
+  // tets() with signed volume <= 0 at the current positions (section 6
+  // validity).
+  int64_t CountInvertedTets() const;
+  // #V flags: may be a handle.
+  const std::vector<uint8_t>& deformable() const { return deformable_; }
+  const FemSetupStats& setup() const { return setup_; }
+  const CorotationalSolver& solver() const { return solver_; }
+
+ private:
+  FemModel() = default;
+  Status CheckGrabbed(const char* action) const;
+
+  std::vector<glm::dvec3> rest_mm_;
+  std::vector<std::array<int32_t, 4>> tets_;
+  glm::dvec3 box_extent_mm_{0.0};
+  std::vector<uint8_t> deformable_;
+  CorotationalSolver solver_;
+  FemSetupStats setup_;
+  bool grabbed_ = false;
+  GrabInfo grab_;
+  std::vector<int32_t> handle_dofs_;      // free DOFs of the handles
+  Eigen::VectorXd displacement_at_grab_;  // 3*#V, mm
+};
+
+}  // namespace vpm

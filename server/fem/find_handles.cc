@@ -1,0 +1,77 @@
+#include "server/fem/find_handles.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace vpm {
+namespace {
+
+constexpr double kInBoxRelative = 1e-6;
+
+Status CheckGrab(const glm::dvec3& box_extent_mm, const glm::dvec3& point_mm, double radius_mm) {
+  if (!std::isfinite(point_mm.x) || !std::isfinite(point_mm.y) || !std::isfinite(point_mm.z)) {
+    return absl::InvalidArgumentError("grab point must be finite");
+  }
+  if (!std::isfinite(radius_mm) || !(radius_mm > 0.0)) {
+    return absl::InvalidArgumentError(
+        StrCat("grab radius must be finite and > 0 mm, got ", radius_mm));
+  }
+  for (int i = 0; i < 3; ++i) {
+    const double slack = kInBoxRelative * box_extent_mm[i];
+    if (point_mm[i] < -slack || point_mm[i] > box_extent_mm[i] + slack) {
+      return absl::OutOfRangeError(StrCat("grab point (", point_mm.x, ", ", point_mm.y, ", ",
+                                          point_mm.z, ") mm is outside the image box [0, (",
+                                          box_extent_mm.x, ", ", box_extent_mm.y, ", ",
+                                          box_extent_mm.z, ")] mm"));
+    }
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+Result<GrabInfo> FindHandles(const std::vector<glm::dvec3>& positions_mm,
+                             const std::vector<uint8_t>& deformable,
+                             const glm::dvec3& box_extent_mm, const glm::dvec3& point_mm,
+                             double radius_mm) {
+  RETURN_IF_ERROR(CheckGrab(box_extent_mm, point_mm, radius_mm));
+  if (deformable.size() != positions_mm.size()) {
+    return absl::InvalidArgumentError("one deformable flag per vertex needed");
+  }
+  GrabInfo info;
+  int64_t fixed_within = 0;
+  std::vector<std::pair<double, int32_t>> candidates;  // (distance, vertex), deformable only
+  for (size_t v = 0; v < positions_mm.size(); ++v) {
+    const double distance = glm::distance(positions_mm[v], point_mm);
+    if (deformable[v]) {
+      candidates.emplace_back(distance, static_cast<int32_t>(v));
+      if (distance <= radius_mm) info.handles.push_back(static_cast<int32_t>(v));
+    } else if (distance <= radius_mm) {
+      ++fixed_within;
+    }
+  }
+  if (!info.handles.empty()) {
+    info.message = StrCat("grabbed ", info.handles.size(), " vertices within ", radius_mm, " mm");
+    return info;
+  }
+  if (fixed_within > 0) {
+    return absl::FailedPreconditionError(
+        StrCat("all ", fixed_within, " vertices within ", radius_mm,
+               " mm of the grab point are fixed (hard tissue or box corners); grab deformable "
+               "tissue or enlarge the radius"));
+  }
+  if (candidates.empty()) {
+    return absl::FailedPreconditionError("the mesh has no deformable vertex to grab");
+  }
+  const size_t count = std::min<size_t>(kNearestHandleCount, candidates.size());
+  std::partial_sort(candidates.begin(), candidates.begin() + count, candidates.end());
+  for (size_t i = 0; i < count; ++i) info.handles.push_back(candidates[i].second);
+  std::sort(info.handles.begin(), info.handles.end());
+  info.used_nearest = true;
+  info.message =
+      StrCat("no vertex within ", radius_mm, " mm; grabbed the ", count,
+             " nearest deformable vertices (up to ", candidates[count - 1].first, " mm away)");
+  return info;
+}
+
+}  // namespace vpm
