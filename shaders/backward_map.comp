@@ -4,39 +4,65 @@
 // by tet. Grid point g at p = g * step_mm belongs to the smallest-index tet
 // whose barycentric weights at p, computed from its deformed positions, are
 // all >= -eps; its value is (sum_i w_i (rest_i - deformed_i), 1) = (X(p) - p,
-// 1), and (0, 0, 0, 0) when no tet contains p.
+// 1), and (0, 0, 0, 0) when no tet contains p. Values go to storage buffers
+// (x fastest; up to 4 slabs of whole z slices, since one storage binding
+// spans at most 128 MiB on lavapipe) that the host copies into the map
+// image: on lavapipe an imageStore costs several times a buffer store.
 //
 // Passes (map_dims.w), one dispatch each, in this order:
-//   0 reset  every grid point: owner none, value 0 (one invocation per point);
-//   1 clear  per listed tet, its box from the previous update: the points it
-//            owned get owner none and value 0;
-//   2 claim  per listed tet, its box now: atomicMin(owner, tet) at every
+//   0 clear  per moved tet, at its previous positions: the points it owned
+//            get owner none and value 0;
+//   1 claim  per listed tet, its box now: atomicMin(owner, tet) at every
 //            point it contains (no float atomics needed);
-//   3 write  per listed tet: the value at every point it owns.
-// A full rebuild is 0, 2, 3 over all tets; an update is 1, 2, 3 over the
-// tets that moved plus every tet whose box meets their old or new boxes
-// (listed by the host), which gives the full rebuild's result exactly.
+//   2 write  per listed tet: the value at every point it owns.
+// A full rebuild fills owner with none and values with 0 (vkCmdFillBuffer),
+// then runs 1, 2 over all tets. An update runs 0 over the tets that moved
+// (listed first, work.y of them) and 1, 2 over those plus every unmoved tet
+// whose box meets a moved tet's previous box (work.x in all): a point a
+// moved tet owned may now belong to such a tet, any other point keeps its
+// owner unless a moved tet now claims it with a smaller index, so the owners
+// come out as in a full rebuild (docs/WARP.md has the argument).
 //
 // One workgroup of 64 per listed tet; its invocations take the rows (y, z)
 // of the tet's box in turn, and each row only the x range where the four
 // weights, linear in x along the row, can be >= -eps (widened by one point;
-// the per-point test decides).
+// the per-point test decides). The clear pass walks the same ranges from the
+// previous positions, so it visits every point the tet claimed then.
 #include "shader_interface.glsl"
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 layout(std430, binding = 0) readonly buffer Tets { uvec4 tets[]; };
 layout(std430, binding = 1) readonly buffer Deformed { vec4 deformed[]; };      // mm
-layout(std430, binding = 2) readonly buffer RestOffset { vec4 rest_offset[]; };  // rest - deformed, mm
+// rest - deformed, mm
+layout(std430, binding = 2) readonly buffer RestOffset { vec4 rest_offset[]; };
 layout(std430, binding = 3) readonly buffer Work { BackwardMapTetWork work[]; };
 layout(std430, binding = 4) buffer Owner { uint owner[]; };
-layout(binding = 5, rgba32f) uniform writeonly image3D u_map;
+// The deformed positions of the previous update, mm.
+layout(std430, binding = 5) readonly buffer Previous { vec4 previous[]; };
+// The map values, x fastest, work.z points per slab.
+layout(std430, binding = 6) writeonly buffer Values0 { vec4 values0[]; };
+layout(std430, binding = 7) writeonly buffer Values1 { vec4 values1[]; };
+layout(std430, binding = 8) writeonly buffer Values2 { vec4 values2[]; };
+layout(std430, binding = 9) writeonly buffer Values3 { vec4 values3[]; };
 layout(push_constant) uniform Push { BackwardMapPush pc; };
 
 const uint kNone = 0xFFFFFFFFu;
-const int kReset = 0;
-const int kClear = 1;
-const int kClaim = 2;
-const int kWrite = 3;
+const int kClear = 0;
+const int kClaim = 1;
+const int kWrite = 2;
+
+void store_value(uint n, vec4 value) {
+  uint slab = pc.work.z;
+  if (n < slab) {
+    values0[n] = value;
+  } else if (n < 2u * slab) {
+    values1[n - slab] = value;
+  } else if (n < 3u * slab) {
+    values2[n - 2u * slab] = value;
+  } else {
+    values3[n - 3u * slab] = value;
+  }
+}
 
 uint grid_index(ivec3 g) {
   return uint(g.x) + uint(pc.map_dims.x) * (uint(g.y) + uint(pc.map_dims.y) * uint(g.z));
@@ -49,10 +75,13 @@ struct TetFrame {
   bool usable;  // false for a flat tet (zero or non-finite determinant)
 };
 
-TetFrame tet_frame(uvec4 q) {
+vec3 corner(uint v, bool at_previous) { return at_previous ? previous[v].xyz : deformed[v].xyz; }
+
+TetFrame tet_frame(uvec4 q, bool at_previous) {
   TetFrame f;
-  f.d0 = deformed[q.x].xyz;
-  mat3 m = mat3(deformed[q.y].xyz - f.d0, deformed[q.z].xyz - f.d0, deformed[q.w].xyz - f.d0);
+  f.d0 = corner(q.x, at_previous);
+  mat3 m = mat3(corner(q.y, at_previous) - f.d0, corner(q.z, at_previous) - f.d0,
+                corner(q.w, at_previous) - f.d0);
   float det = determinant(m);
   f.usable = det != 0.0 && !isnan(det) && !isinf(det);
   f.inv = f.usable ? inverse(m) : mat3(0.0);
@@ -91,70 +120,62 @@ ivec2 row_range(TetFrame f, int y, int z, int lo_x, int hi_x) {
   return ivec2(max(int(ceil(lower)) - 1, lo_x), min(int(floor(upper)) + 1, hi_x));
 }
 
-void reset_point() {
-  ivec3 g = ivec3(gl_GlobalInvocationID);
-  if (any(greaterThanEqual(g, pc.map_dims.xyz))) return;
-  owner[grid_index(g)] = kNone;
-  imageStore(u_map, g, vec4(0.0));
-}
-
-void clear_row(uint t, int y, int z, int lo_x, int hi_x) {
-  for (int x = lo_x; x <= hi_x; ++x) {
-    ivec3 g = ivec3(x, y, z);
-    uint n = grid_index(g);
+void clear_row(uint t, int y, int z, ivec2 range) {
+  for (int x = range.x; x <= range.y; ++x) {
+    uint n = grid_index(ivec3(x, y, z));
     if (owner[n] == t) {
       owner[n] = kNone;
-      imageStore(u_map, g, vec4(0.0));
+      store_value(n, vec4(0.0));
     }
   }
 }
 
-void claim_or_write_row(int pass, uint t, uvec4 q, TetFrame f, int y, int z, ivec2 range) {
+// offsets: rest_offset of the tet's 4 corners, as columns. The weights are
+// linear along the row: evaluated at its first point, then stepped, which
+// costs 4 multiply-adds per point and stays within float round-off of the
+// direct formula (the steps are short, the weights of order 1).
+void claim_or_write_row(int pass, uint t, mat4x3 offsets, TetFrame f, int y, int z, ivec2 range) {
   float eps = pc.step_mm.w;
-  for (int x = range.x; x <= range.y; ++x) {
-    ivec3 g = ivec3(x, y, z);
-    uint n = grid_index(g);
-    vec3 p = vec3(g) * pc.step_mm.xyz;
+  vec4 w0 = weights_at(f, vec3(range.x, y, z) * pc.step_mm.xyz);
+  vec3 dw = f.inv[0] * pc.step_mm.x;
+  vec4 step_w = vec4(-dw.x - dw.y - dw.z, dw);
+  uint n0 = grid_index(ivec3(range.x, y, z));
+  for (int i = 0; i <= range.y - range.x; ++i) {
+    uint n = n0 + uint(i);
+    vec4 w = w0 + float(i) * step_w;
     if (pass == kClaim) {
-      vec4 w = weights_at(f, p);
       if (all(greaterThanEqual(w, vec4(-eps)))) atomicMin(owner[n], t);
     } else if (owner[n] == t) {
-      vec4 w = weights_at(f, p);
-      vec3 d = w.x * rest_offset[q.x].xyz + w.y * rest_offset[q.y].xyz +
-               w.z * rest_offset[q.z].xyz + w.w * rest_offset[q.w].xyz;
-      imageStore(u_map, g, vec4(d, 1.0));
+      store_value(n, vec4(offsets * w, 1.0));
     }
   }
 }
 
 void main() {
   int pass = pc.map_dims.w;
-  if (pass == kReset) {
-    reset_point();
-    return;
-  }
   uint slot = gl_WorkGroupID.x + gl_NumWorkGroups.x * gl_WorkGroupID.y;
-  if (slot >= pc.work.x) return;
+  if (slot >= (pass == kClear ? pc.work.y : pc.work.x)) return;
   BackwardMapTetWork job = work[slot];
   uint t = uint(job.old_lo.w);
   ivec3 lo = pass == kClear ? job.old_lo.xyz : job.new_lo.xyz;
   ivec3 hi = pass == kClear ? job.old_hi.xyz : job.new_hi.xyz;
   if (any(greaterThan(lo, hi))) return;
   uvec4 q = tets[t];
-  TetFrame f;
-  if (pass != kClear) {
-    f = tet_frame(q);
-    if (!f.usable) return;
-  }
+  // A tet that was flat when claimed owns nothing to clear.
+  TetFrame f = tet_frame(q, pass == kClear);
+  if (!f.usable) return;
+  mat4x3 offsets = mat4x3(rest_offset[q.x].xyz, rest_offset[q.y].xyz, rest_offset[q.z].xyz,
+                          rest_offset[q.w].xyz);
   uint rows_y = uint(hi.y - lo.y + 1);
   uint rows = rows_y * uint(hi.z - lo.z + 1);
   for (uint r = gl_LocalInvocationID.x; r < rows; r += gl_WorkGroupSize.x) {
     int y = lo.y + int(r % rows_y);
     int z = lo.z + int(r / rows_y);
+    ivec2 range = row_range(f, y, z, lo.x, hi.x);
     if (pass == kClear) {
-      clear_row(t, y, z, lo.x, hi.x);
+      clear_row(t, y, z, range);
     } else {
-      claim_or_write_row(pass, t, q, f, y, z, row_range(f, y, z, lo.x, hi.x));
+      claim_or_write_row(pass, t, offsets, f, y, z, range);
     }
   }
 }

@@ -64,7 +64,8 @@ struct UpscalePush {
 struct BackwardMapPush {
   ivec4 map_dims;  // (mx, my, mz, pass) grid points
   vec4 step_mm;    // (hx, hy, hz, eps): grid step extent/(M-1) mm; barycentric tolerance
-  uvec4 work;      // (listed tets, 0, 0, 0)
+  // (listed tets, moved tets (listed first, cleared), points per values slab, 0)
+  uvec4 work;
 };
 
 struct BackwardMapTetWork {

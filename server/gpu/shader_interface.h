@@ -99,20 +99,21 @@ struct UpscalePush {
 };
 static_assert(sizeof(UpscalePush) == 16);
 
-// backward_map.comp: rasterizes the backward map tet by tet. pass (in
-// map_dims.w): 0 reset every grid point (one invocation per point), 1 clear
-// the old coverage of the listed tets, 2 claim (atomicMin of the tet index),
-// 3 write the value of the winning tet (one workgroup per listed tet).
+// backward_map.comp: rasterizes the backward map tet by tet, one workgroup
+// per listed tet. pass (in map_dims.w): 0 clear the previous coverage of the
+// moved tets, 1 claim (atomicMin of the tet index), 2 write the value of the
+// winning tet.
 struct BackwardMapPush {
   glm::ivec4 map_dims;  // (mx, my, mz, pass) grid points
   glm::vec4 step_mm;    // (hx, hy, hz, eps): grid step extent/(M-1) mm; barycentric tolerance
-  glm::uvec4 work;      // (listed tets, 0, 0, 0)
+  // (listed tets, moved tets (listed first, cleared), points per values slab, 0)
+  glm::uvec4 work;
 };
 static_assert(sizeof(BackwardMapPush) == 48);
 
 // One listed tet of backward_map.comp (std430 storage buffer element): its
-// grid-point box from the previous update (cleared in pass 1) and now
-// (claimed and written in passes 2, 3); inclusive, empty when lo > hi.
+// grid-point box at the previous update (pass 0, moved tets only) and now
+// (passes 1, 2); inclusive, empty when lo > hi.
 struct BackwardMapTetWork {
   glm::ivec4 old_lo;  // (x, y, z, tet index)
   glm::ivec4 old_hi;  // (x, y, z, 0)

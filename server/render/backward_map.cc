@@ -1,9 +1,9 @@
 #include "server/render/backward_map.h"
 
 #include <algorithm>
+#include <chrono>
 #include <numeric>
 
-#include "server/gpu/compute_batch.h"
 #include "server/render/check_map_inputs.h"
 #include "shaders/backward_map.spv.h"
 
@@ -12,11 +12,13 @@ namespace {
 
 using gpu::BackwardMapTetWork;
 
-constexpr int kPassReset = 0;
-constexpr int kPassClear = 1;
-constexpr int kPassClaim = 2;
-constexpr int kPassWrite = 3;
+constexpr int kPassClear = 0;
+constexpr int kPassClaim = 1;
+constexpr int kPassWrite = 2;
 constexpr uint32_t kLocalSize = 64;
+constexpr uint32_t kNoOwner = 0xFFFFFFFFu;
+constexpr vk::Format kMapFormat = vk::Format::eR32G32B32A32Sfloat;
+constexpr int64_t kMaxValueSlabs = 4;  // values0..3 in backward_map.comp
 
 Status EnsureCapacity(const gpu::GpuContext& context, std::optional<gpu::GpuBuffer>& buffer,
                       size_t bytes) {
@@ -30,64 +32,92 @@ Status EnsureCapacity(const gpu::GpuContext& context, std::optional<gpu::GpuBuff
 
 glm::ivec4 WithW(const glm::ivec3& v, int w) { return glm::ivec4(v, w); }
 
+GridBox Union(const GridBox& a, const GridBox& b) {
+  if (a.empty()) return b;
+  if (b.empty()) return a;
+  return {glm::min(a.lo, b.lo), glm::max(a.hi, b.hi)};
+}
+
+// The points per values slab (whole z slices, within one storage binding),
+// after checking what the device must offer for a map of `dims` points.
+Result<uint32_t> SlabPoints(const gpu::GpuContext& context, const std::array<int64_t, 3>& dims,
+                            int64_t max_slab_bytes) {
+  const vk::FormatProperties props = context.physical_device().getFormatProperties(kMapFormat);
+  if (!(props.optimalTilingFeatures & vk::FormatFeatureFlagBits::eSampledImageFilterLinear)) {
+    return absl::FailedPreconditionError(
+        "backward map: this device cannot filter RGBA32F 3D images linearly");
+  }
+  const int64_t range = context.limits().maxStorageBufferRange;
+  const int64_t slab_bytes = max_slab_bytes > 0 ? std::min(max_slab_bytes, range) : range;
+  const int64_t slice = dims[0] * dims[1];
+  const int64_t slices_per_slab = std::min<int64_t>(slab_bytes / (slice * 16), dims[2]);
+  const int64_t points = slice * dims[2];
+  if (points * 4 > range || slices_per_slab == 0 ||
+      (dims[2] + slices_per_slab - 1) / slices_per_slab > kMaxValueSlabs) {
+    return absl::ResourceExhaustedError(StrCat(
+        "backward map of ", dims[0], "x", dims[1], "x", dims[2], " points: needs ", points * 4,
+        " bytes of owners and ", points * 16, " of values; this device binds at most ", range,
+        " bytes per storage buffer (owners in one, values in up to ", kMaxValueSlabs,
+        " of whole z slices, ", slab_bytes, " bytes each)"));
+  }
+  return static_cast<uint32_t>(slices_per_slab * slice);
+}
+
 }  // namespace
 
 Result<BackwardMap> BackwardMap::Create(const gpu::GpuContext& context,
                                         const VolumeGeometry& geometry, const Options& options) {
   std::array<int64_t, 3> dims = options.map_dims;
   if (dims == std::array<int64_t, 3>{0, 0, 0}) dims = DefaultBackwardMapDims(geometry.dims);
-  RETURN_IF_ERROR(CheckMapGrid(geometry.extent_mm(), dims,
-                               context.limits().maxImageDimension3D));
+  RETURN_IF_ERROR(CheckMapGrid(geometry.extent_mm(), dims, context.limits().maxImageDimension3D));
   if (!(options.eps >= 0.0 && options.eps < 1.0)) {
-    return absl::InvalidArgumentError(StrCat("backward map: eps ", options.eps,
-                                             " must be in [0, 1)"));
+    return absl::InvalidArgumentError(
+        StrCat("backward map: eps ", options.eps, " must be in [0, 1)"));
   }
-  constexpr vk::Format kFormat = vk::Format::eR32G32B32A32Sfloat;
-  const auto features = context.physical_device().getFormatProperties(kFormat).optimalTilingFeatures;
-  const auto needed = vk::FormatFeatureFlagBits::eStorageImage |
-                      vk::FormatFeatureFlagBits::eSampledImageFilterLinear;
-  if ((features & needed) != needed) {
-    return absl::FailedPreconditionError(
-        "backward map: this device cannot store to or linearly filter RGBA32F 3D images");
-  }
+  ASSIGN_OR_RETURN(const uint32_t slab_points, SlabPoints(context, dims, options.max_slab_bytes));
+  using DT = vk::DescriptorType;
+  ASSIGN_OR_RETURN(
+      gpu::ComputeKernel kernel,
+      gpu::ComputeKernel::Create(
+          context, {.name = "backward_map",
+                    .spirv = kBackwardMapSpv,
+                    .bindings = {DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer,
+                                 DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer,
+                                 DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer,
+                                 DT::eStorageBuffer},
+                    .push_constant_bytes = sizeof(gpu::BackwardMapPush),
+                    .local_size = {kLocalSize, 1, 1}}));
+  ASSIGN_OR_RETURN(
+      gpu::GpuImage3D image,
+      gpu::GpuImage3D::Create(context, {uint32_t(dims[0]), uint32_t(dims[1]), uint32_t(dims[2])},
+                              kMapFormat));
   const uint64_t points = uint64_t(dims[0]) * uint64_t(dims[1]) * uint64_t(dims[2]);
-  if (points * sizeof(uint32_t) > context.limits().maxStorageBufferRange) {
-    return absl::ResourceExhaustedError(StrCat(
-        "backward map of ", dims[0], "x", dims[1], "x", dims[2], " points: its owner buffer of ",
-        points * sizeof(uint32_t), " bytes exceeds the device's storage-buffer range of ",
-        context.limits().maxStorageBufferRange));
-  }
-  ASSIGN_OR_RETURN(gpu::ComputeKernel kernel,
-                   gpu::ComputeKernel::Create(
-                       context, {.name = "backward_map",
-                                 .spirv = kBackwardMapSpv,
-                                 .bindings = {vk::DescriptorType::eStorageBuffer,
-                                              vk::DescriptorType::eStorageBuffer,
-                                              vk::DescriptorType::eStorageBuffer,
-                                              vk::DescriptorType::eStorageBuffer,
-                                              vk::DescriptorType::eStorageBuffer,
-                                              vk::DescriptorType::eStorageImage},
-                                 .push_constant_bytes = sizeof(gpu::BackwardMapPush),
-                                 .local_size = {kLocalSize, 1, 1}}));
-  ASSIGN_OR_RETURN(gpu::GpuImage3D image,
-                   gpu::GpuImage3D::Create(
-                       context, {uint32_t(dims[0]), uint32_t(dims[1]), uint32_t(dims[2])}, kFormat));
   ASSIGN_OR_RETURN(gpu::GpuBuffer owner,
                    gpu::GpuBuffer::Create(context, points * sizeof(uint32_t),
                                           vk::BufferUsageFlagBits::eStorageBuffer));
-  BackwardMap map(context, geometry, dims, options.eps, std::move(kernel), std::move(image),
-                  std::move(owner));
-  RETURN_IF_ERROR(EnsureCapacity(context, map.tets_buffer_, 0));
-  RETURN_IF_ERROR(EnsureCapacity(context, map.deformed_buffer_, 0));
-  RETURN_IF_ERROR(EnsureCapacity(context, map.rest_offset_buffer_, 0));
-  RETURN_IF_ERROR(EnsureCapacity(context, map.work_buffer_, 0));
-  RETURN_IF_ERROR(map.Run(/*full=*/true, 0).status());
+  std::vector<gpu::GpuBuffer> values;
+  for (uint64_t first = 0; first < points; first += slab_points) {
+    ASSIGN_OR_RETURN(
+        gpu::GpuBuffer slab,
+        gpu::GpuBuffer::Create(context, std::min<uint64_t>(slab_points, points - first) * 16,
+                               vk::BufferUsageFlagBits::eStorageBuffer));
+    values.push_back(std::move(slab));
+  }
+  BackwardMap map(context, geometry, dims, options.eps,
+                  Device{std::move(kernel), std::move(image), std::move(owner), std::move(values),
+                         slab_points});
+  for (auto* buffer : {&map.tets_buffer_, &map.deformed_buffer_, &map.previous_buffer_,
+                       &map.rest_offset_buffer_, &map.work_buffer_}) {
+    RETURN_IF_ERROR(EnsureCapacity(context, *buffer, 0));
+  }
+  const GridBox all{glm::ivec3(0), glm::ivec3(dims[0] - 1, dims[1] - 1, dims[2] - 1)};
+  RETURN_IF_ERROR(map.Run(/*full=*/true, 0, 0, all).status());
   return map;
 }
 
-Result<BackwardMap::UpdateStats> BackwardMap::Update(
-    std::span<const glm::dvec3> rest_mm, std::span<const glm::dvec3> deformed_mm,
-    std::span<const std::array<int32_t, 4>> tets) {
+Result<BackwardMap::UpdateStats> BackwardMap::Update(std::span<const glm::dvec3> rest_mm,
+                                                     std::span<const glm::dvec3> deformed_mm,
+                                                     std::span<const std::array<int32_t, 4>> tets) {
   return Apply(rest_mm, deformed_mm, tets, Scope::kChanged, {});
 }
 
@@ -120,6 +150,43 @@ std::vector<int32_t> BackwardMap::ChangedTets(std::span<const glm::dvec3> rest_m
   return moved;
 }
 
+BackwardMap::Plan BackwardMap::PlanWork(std::span<const glm::dvec3> deformed_mm,
+                                        std::span<const std::array<int32_t, 4>> tets, bool full,
+                                        std::vector<int32_t> moved) const {
+  Plan plan;
+  const glm::dvec3 step = extent_mm() / glm::dvec3(dims_[0] - 1, dims_[1] - 1, dims_[2] - 1);
+  plan.boxes = full ? std::vector<GridBox>(tets.size()) : state_.boxes;
+  for (int32_t t : moved) {
+    const auto& q = tets[t];
+    plan.boxes[t] =
+        TetGridBox({deformed_mm[q[0]], deformed_mm[q[1]], deformed_mm[q[2]], deformed_mm[q[3]]},
+                   step, dims_, eps_);
+  }
+  // Moved tets first (the clear pass takes those), then the unmoved tets
+  // that may own a point a moved tet owned before.
+  std::vector<int32_t> listed = moved;
+  if (!full) {
+    std::vector<GridBox> region;
+    for (int32_t t : moved) region.push_back(state_.boxes[t]);
+    for (int32_t t : TetsMeetingBoxes(plan.boxes, region)) {
+      if (!std::binary_search(moved.begin(), moved.end(), t)) listed.push_back(t);
+    }
+  }
+  plan.cleared = full ? 0 : static_cast<uint32_t>(moved.size());
+  if (full) {
+    plan.changed = {glm::ivec3(0), glm::ivec3(dims_[0] - 1, dims_[1] - 1, dims_[2] - 1)};
+  }
+  for (size_t n = 0; n < listed.size(); ++n) {
+    const int32_t t = listed[n];
+    const GridBox old_box = n < plan.cleared ? state_.boxes[t] : GridBox{};
+    const GridBox& new_box = plan.boxes[t];
+    plan.changed = Union(plan.changed, Union(old_box, new_box));
+    plan.work.push_back(
+        {WithW(old_box.lo, t), WithW(old_box.hi, 0), WithW(new_box.lo, 0), WithW(new_box.hi, 0)});
+  }
+  return plan;
+}
+
 Result<BackwardMap::UpdateStats> BackwardMap::Apply(std::span<const glm::dvec3> rest_mm,
                                                     std::span<const glm::dvec3> deformed_mm,
                                                     std::span<const std::array<int32_t, 4>> tets,
@@ -129,15 +196,14 @@ Result<BackwardMap::UpdateStats> BackwardMap::Apply(std::span<const glm::dvec3> 
   const int64_t tet_count = static_cast<int64_t>(tets.size());
   for (int32_t t : moved_tets) {
     if (t < 0 || t >= tet_count) {
-      return absl::InvalidArgumentError(StrCat("backward map: moved tet ", t, " outside [0, ",
-                                               tet_count, ")"));
+      return absl::InvalidArgumentError(
+          StrCat("backward map: moved tet ", t, " outside [0, ", tet_count, ")"));
     }
   }
   UpdateStats stats;
-  stats.full_rebuild = scope == Scope::kAll || !state_.valid ||
-                       rest_mm.size() != state_.rest_mm.size() ||
-                       !std::equal(tets.begin(), tets.end(), state_.tets.begin(),
-                                   state_.tets.end());
+  stats.full_rebuild =
+      scope == Scope::kAll || !state_.valid || rest_mm.size() != state_.rest_mm.size() ||
+      !std::equal(tets.begin(), tets.end(), state_.tets.begin(), state_.tets.end());
   std::vector<int32_t> moved;
   if (stats.full_rebuild) {
     moved.resize(tets.size());
@@ -150,49 +216,28 @@ Result<BackwardMap::UpdateStats> BackwardMap::Apply(std::span<const glm::dvec3> 
     moved = ChangedTets(rest_mm, deformed_mm, tets);
   }
   stats.moved_tets = static_cast<int64_t>(moved.size());
-
-  const glm::dvec3 step = extent_mm() / glm::dvec3(dims_[0] - 1, dims_[1] - 1, dims_[2] - 1);
-  std::vector<GridBox> boxes = stats.full_rebuild ? std::vector<GridBox>(tets.size())
-                                                  : state_.boxes;
-  for (int32_t t : moved) {
-    const auto& q = tets[t];
-    boxes[t] = TetGridBox({deformed_mm[q[0]], deformed_mm[q[1]], deformed_mm[q[2]],
-                           deformed_mm[q[3]]},
-                          step, dims_, eps_);
-  }
-  std::vector<int32_t> listed = moved;
-  if (!stats.full_rebuild) {
-    // Every point a moved tet covered or covers is redone by every tet that
-    // may contain it, so the owners come out as in a full rebuild.
-    std::vector<GridBox> region;
-    for (int32_t t : moved) {
-      region.push_back(state_.boxes[t]);
-      region.push_back(boxes[t]);
-    }
-    std::vector<int32_t> meeting = TetsMeetingBoxes(boxes, region, dims_);
-    std::vector<int32_t> merged;
-    std::set_union(moved.begin(), moved.end(), meeting.begin(), meeting.end(),
-                   std::back_inserter(merged));
-    listed = std::move(merged);
-  }
-  stats.processed_tets = static_cast<int64_t>(listed.size());
-  std::vector<BackwardMapTetWork> work;
-  work.reserve(listed.size());
-  for (int32_t t : listed) {
-    const GridBox old_box = stats.full_rebuild ? GridBox{} : state_.boxes[t];
-    work.push_back({WithW(old_box.lo, t), WithW(old_box.hi, 0), WithW(boxes[t].lo, 0),
-                    WithW(boxes[t].hi, 0)});
-  }
+  Plan plan = PlanWork(deformed_mm, tets, stats.full_rebuild, std::move(moved));
+  stats.processed_tets = static_cast<int64_t>(plan.work.size());
 
   state_.valid = false;  // until the GPU holds what the host state says
-  if (stats.full_rebuild || !work.empty()) {
-    RETURN_IF_ERROR(Upload(rest_mm, deformed_mm, tets, stats.full_rebuild, work));
-    ASSIGN_OR_RETURN(stats.gpu_ms, Run(stats.full_rebuild, static_cast<uint32_t>(work.size())));
+  if (stats.full_rebuild || !plan.work.empty()) {
+    RETURN_IF_ERROR(Upload(rest_mm, deformed_mm, tets, stats.full_rebuild, plan.work));
+    const auto t0 = std::chrono::steady_clock::now();
+    ASSIGN_OR_RETURN(stats.passes, Run(stats.full_rebuild, uint32_t(plan.work.size()), plan.cleared,
+                                       plan.changed));
+    double copy_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    for (const auto& pass : stats.passes) {
+      copy_ms -= std::max(pass.gpu_ms, 0.0);
+      stats.gpu_ms = pass.gpu_ms < 0 || stats.gpu_ms < 0 ? -1.0 : stats.gpu_ms + pass.gpu_ms;
+    }
+    stats.copy_ms = std::max(copy_ms, 0.0);
+    std::swap(deformed_buffer_, previous_buffer_);
   }
   state_.rest_mm.assign(rest_mm.begin(), rest_mm.end());
   state_.deformed_mm.assign(deformed_mm.begin(), deformed_mm.end());
   if (stats.full_rebuild) state_.tets.assign(tets.begin(), tets.end());
-  state_.boxes = std::move(boxes);
+  state_.boxes = std::move(plan.boxes);
   state_.valid = true;
   return stats;
 }
@@ -223,42 +268,86 @@ Status BackwardMap::Upload(std::span<const glm::dvec3> rest_mm,
   return absl::OkStatus();
 }
 
-Result<double> BackwardMap::Run(bool full, uint32_t listed) {
+Result<std::vector<gpu::DispatchTiming>> BackwardMap::Run(bool full, uint32_t listed,
+                                                          uint32_t moved, const GridBox& changed) {
   ASSIGN_OR_RETURN(gpu::ComputeBatch batch, gpu::ComputeBatch::Begin(*context_, 3));
   gpu::BackwardMapPush push{
-      .map_dims = glm::ivec4(dims_[0], dims_[1], dims_[2], kPassReset),
-      .step_mm = glm::vec4(glm::vec3(extent_mm() / glm::dvec3(dims_[0] - 1, dims_[1] - 1,
-                                                              dims_[2] - 1)),
-                           float(eps_)),
-      .work = glm::uvec4(listed, 0, 0, 0)};
-  auto dispatch = [&](int pass, std::array<uint32_t, 3> groups, const char* label) {
+      .map_dims = glm::ivec4(dims_[0], dims_[1], dims_[2], 0),
+      .step_mm =
+          glm::vec4(glm::vec3(extent_mm() / glm::dvec3(dims_[0] - 1, dims_[1] - 1, dims_[2] - 1)),
+                    float(eps_)),
+      .work = glm::uvec4(listed, moved, device_.slab_points, 0)};
+  auto dispatch = [&](int pass, uint32_t tets, const char* label) {
     push.map_dims.w = pass;
-    return batch.Dispatch(kernel_,
-                          {&*tets_buffer_, &*deformed_buffer_, &*rest_offset_buffer_,
-                           &*work_buffer_, &owner_, &image_},
-                          push, groups, label);
+    // One workgroup per tet, folded into 2D past the x limit.
+    const uint32_t gx = std::min(tets, context_->limits().maxComputeWorkGroupCount[0]);
+    const auto& v = device_.values;
+    auto slab = [&](size_t s) { return &v[std::min(s, v.size() - 1)]; };
+    return batch.Dispatch(
+        kernel(),
+        {&*tets_buffer_, &*deformed_buffer_, &*rest_offset_buffer_, &*work_buffer_, &device_.owner,
+         &*previous_buffer_, slab(0), slab(1), slab(2), slab(3)},
+        push, {gx, (tets + gx - 1) / gx, 1}, label);
   };
   if (full) {
-    RETURN_IF_ERROR(dispatch(kPassReset,
-                             {uint32_t((dims_[0] + kLocalSize - 1) / kLocalSize),
-                              uint32_t(dims_[1]), uint32_t(dims_[2])},
-                             "backward_map reset"));
+    RETURN_IF_ERROR(batch.Fill(device_.owner, kNoOwner));
+    for (const gpu::GpuBuffer& slab : device_.values) RETURN_IF_ERROR(batch.Fill(slab, 0));
   }
+  if (moved > 0) RETURN_IF_ERROR(dispatch(kPassClear, moved, "backward_map clear"));
   if (listed > 0) {
-    // One workgroup per listed tet, folded into 2D past the x limit.
-    const uint32_t gx = std::min(listed, context_->limits().maxComputeWorkGroupCount[0]);
-    const std::array<uint32_t, 3> groups{gx, (listed + gx - 1) / gx, 1};
-    if (!full) RETURN_IF_ERROR(dispatch(kPassClear, groups, "backward_map clear"));
-    RETURN_IF_ERROR(dispatch(kPassClaim, groups, "backward_map claim"));
-    RETURN_IF_ERROR(dispatch(kPassWrite, groups, "backward_map write"));
+    RETURN_IF_ERROR(dispatch(kPassClaim, listed, "backward_map claim"));
+    RETURN_IF_ERROR(dispatch(kPassWrite, listed, "backward_map write"));
   }
-  ASSIGN_OR_RETURN(const auto timings, batch.SubmitAndWait());
-  double ms = 0.0;
-  for (const auto& t : timings) {
-    if (t.gpu_ms < 0) return -1.0;
-    ms += t.gpu_ms;
+  ASSIGN_OR_RETURN(auto timings, batch.SubmitAndWait());
+  RETURN_IF_ERROR(CopyToImage(changed));
+  return timings;
+}
+
+Status BackwardMap::CopyToImage(const GridBox& box) {
+  if (box.empty()) return absl::OkStatus();
+  // One region per values slab the box meets.
+  const int64_t slice = dims_[0] * dims_[1];
+  const int64_t slab_slices = device_.slab_points / slice;
+  std::vector<std::pair<vk::Buffer, vk::BufferImageCopy>> regions;
+  for (size_t s = 0; s < device_.values.size(); ++s) {
+    const int64_t z0 = std::max<int64_t>(box.lo.z, int64_t(s) * slab_slices);
+    const int64_t z1 = std::min<int64_t>(box.hi.z, int64_t(s + 1) * slab_slices - 1);
+    if (z0 > z1) continue;
+    const int64_t first = box.lo.x + dims_[0] * box.lo.y + slice * (z0 - int64_t(s) * slab_slices);
+    regions.emplace_back(
+        device_.values[s].handle(),
+        vk::BufferImageCopy(
+            vk::DeviceSize(first) * sizeof(glm::vec4), uint32_t(dims_[0]), uint32_t(dims_[1]),
+            vk::ImageSubresourceLayers(vk::ImageAspectFlagBits::eColor, 0, 0, 1),
+            vk::Offset3D(box.lo.x, box.lo.y, int32_t(z0)),
+            vk::Extent3D(uint32_t(box.hi.x - box.lo.x + 1), uint32_t(box.hi.y - box.lo.y + 1),
+                         uint32_t(z1 - z0 + 1))));
   }
-  return ms;
+  return context_->RunCommands([&](const vk::raii::CommandBuffer& cmd) {
+    // GpuImage3D keeps its image in GENERAL layout; the copy wants
+    // TRANSFER_DST_OPTIMAL, the region outside the box is preserved.
+    const vk::ImageSubresourceRange range(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1);
+    constexpr auto kDst = vk::ImageLayout::eTransferDstOptimal;
+    const vk::ImageMemoryBarrier to_copy(
+        vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eTransferRead,
+        vk::AccessFlagBits::eTransferWrite, vk::ImageLayout::eGeneral, kDst,
+        VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, device_.image.image(), range);
+    cmd.pipelineBarrier(
+        vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,
+        vk::PipelineStageFlagBits::eTransfer, {}, {}, {}, to_copy);
+    for (const auto& [buffer, region] : regions) {
+      cmd.copyBufferToImage(buffer, device_.image.image(), kDst, region);
+    }
+    const vk::ImageMemoryBarrier to_readers(
+        vk::AccessFlagBits::eTransferWrite,
+        vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eTransferRead, kDst,
+        vk::ImageLayout::eGeneral, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED,
+        device_.image.image(), range);
+    cmd.pipelineBarrier(
+        vk::PipelineStageFlagBits::eTransfer,
+        vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer, {}, {},
+        {}, to_readers);
+  });
 }
 
 Result<BackwardMapValues> BackwardMap::Download() const {
@@ -266,7 +355,7 @@ Result<BackwardMapValues> BackwardMap::Download() const {
   map.dims = dims_;
   map.extent_mm = extent_mm();
   map.values.resize(static_cast<size_t>(dims_[0] * dims_[1] * dims_[2]));
-  RETURN_IF_ERROR(image_.Download(std::as_writable_bytes(std::span<glm::vec4>(map.values))));
+  RETURN_IF_ERROR(device_.image.Download(std::as_writable_bytes(std::span<glm::vec4>(map.values))));
   return map;
 }
 

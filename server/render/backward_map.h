@@ -18,6 +18,7 @@
 #include <glm/glm.hpp>
 
 #include "server/common/status.h"
+#include "server/gpu/compute_batch.h"
 #include "server/gpu/compute_kernel.h"
 #include "server/gpu/gpu_buffer.h"
 #include "server/gpu/gpu_context.h"
@@ -37,6 +38,9 @@ class BackwardMap {
     // (one point per voxel centre).
     std::array<int64_t, 3> map_dims{0, 0, 0};
     double eps = kBackwardMapEps;  // barycentric tolerance
+    // Bytes per values slab; 0: the device's storage-buffer range (128 MiB
+    // on lavapipe). Smaller values force more slabs (for tests).
+    int64_t max_slab_bytes = 0;
   };
 
   struct UpdateStats {
@@ -44,6 +48,8 @@ class BackwardMap {
     int64_t moved_tets = 0;      // tets whose corners changed (or listed by the caller)
     int64_t processed_tets = 0;  // rasterized: the moved ones and those whose boxes meet theirs
     double gpu_ms = 0.0;         // GPU time of the passes (timestamps; -1 without)
+    std::vector<gpu::DispatchTiming> passes;  // clear (updates only), claim, write
+    double copy_ms = 0.0;  // wall time of the copy of the changed box into the image
   };
 
   // `geometry`: the volume the map belongs to (at least 2 voxels per axis).
@@ -64,9 +70,11 @@ class BackwardMap {
   //   tets         #T by 4 vertex indices
   // Update redoes the tets with a vertex whose rest or deformed position
   // differs from the previous update (everything the first time, or when
-  // the tets or the vertex count changed). UpdateListed trusts the caller's
-  // `moved_tets` (indices into tets) instead: tets not listed must not have
-  // moved. Rebuild redoes every tet.
+  // the tets or the vertex count changed), plus the unmoved tets whose
+  // boxes meet their previous boxes. UpdateListed trusts the caller's
+  // `moved_tets` (indices into tets) instead: a tet not listed must have
+  // the rest and deformed positions of the previous update. Rebuild redoes
+  // every tet. All three give the same map.
   // Errors (InvalidArgument: sizes, indices out of range, non-finite
   // positions) are returned before anything is uploaded or dispatched; the
   // map then keeps its previous content.
@@ -83,7 +91,7 @@ class BackwardMap {
 
   // The map: RGBA32F, M texels, (X(p) - p mm, inside); sample it with its
   // linear_sampler() through backward_map.glsl.
-  const gpu::GpuImage3D& image() const { return image_; }
+  const gpu::GpuImage3D& image() const { return device_.image; }
   const std::array<int64_t, 3>& dims() const { return dims_; }
   glm::dvec3 extent_mm() const { return geometry_.extent_mm(); }
   const VolumeGeometry& geometry() const { return geometry_; }
@@ -102,33 +110,64 @@ class BackwardMap {
     std::vector<GridBox> boxes;  // per tet, the box it was last rasterized in
   };
 
+  // The map's GPU objects, in dependency order.
+  struct Device {
+    gpu::ComputeKernel kernel;
+    gpu::GpuImage3D image;
+    gpu::GpuBuffer owner;  // per grid point: the owning tet, or 0xFFFFFFFF
+    // Per grid point the value (vec4, x fastest), in slabs of whole z slices
+    // of slab_points points each (a storage binding spans 128 MiB at most).
+    std::vector<gpu::GpuBuffer> values;
+    uint32_t slab_points = 0;
+  };
+
   BackwardMap(const gpu::GpuContext& context, const VolumeGeometry& geometry,
-              std::array<int64_t, 3> dims, double eps, gpu::ComputeKernel kernel,
-              gpu::GpuImage3D image, gpu::GpuBuffer owner)
-      : context_(&context), geometry_(geometry), dims_(dims), eps_(eps),
-        kernel_(std::move(kernel)), image_(std::move(image)), owner_(std::move(owner)) {}
+              std::array<int64_t, 3> dims, double eps, Device device)
+      : context_(&context),
+        geometry_(geometry),
+        dims_(dims),
+        eps_(eps),
+        device_(std::move(device)) {}
 
   Result<UpdateStats> Apply(std::span<const glm::dvec3> rest_mm,
                             std::span<const glm::dvec3> deformed_mm,
                             std::span<const std::array<int32_t, 4>> tets, Scope scope,
                             std::span<const int32_t> moved_tets);
+  // The passes of one update: per tet its box now, the work list (moved
+  // tets first, `cleared` of them), and the grid box whose values change.
+  struct Plan {
+    std::vector<GridBox> boxes;
+    std::vector<gpu::BackwardMapTetWork> work;
+    uint32_t cleared = 0;
+    GridBox changed;
+  };
+
+  Plan PlanWork(std::span<const glm::dvec3> deformed_mm,
+                std::span<const std::array<int32_t, 4>> tets, bool full,
+                std::vector<int32_t> moved) const;
+  const gpu::ComputeKernel& kernel() const { return device_.kernel; }
   std::vector<int32_t> ChangedTets(std::span<const glm::dvec3> rest_mm,
                                    std::span<const glm::dvec3> deformed_mm,
                                    std::span<const std::array<int32_t, 4>> tets) const;
   Status Upload(std::span<const glm::dvec3> rest_mm, std::span<const glm::dvec3> deformed_mm,
                 std::span<const std::array<int32_t, 4>> tets, bool upload_tets,
                 std::span<const gpu::BackwardMapTetWork> work);
-  Result<double> Run(bool full, uint32_t listed);
+  // Records the passes (full: fills instead of the clear pass), submits, and
+  // copies the values in `changed` into the image.
+  Result<std::vector<gpu::DispatchTiming>> Run(bool full, uint32_t listed, uint32_t moved,
+                                               const GridBox& changed);
+  Status CopyToImage(const GridBox& box);
 
   const gpu::GpuContext* context_;
   VolumeGeometry geometry_;
   std::array<int64_t, 3> dims_;
   double eps_;
-  gpu::ComputeKernel kernel_;
-  gpu::GpuImage3D image_;
-  gpu::GpuBuffer owner_;  // per grid point: the owning tet, or 0xFFFFFFFF
-  // Grown on demand; created (1 element) with the map so every binding is valid.
-  std::optional<gpu::GpuBuffer> tets_buffer_, deformed_buffer_, rest_offset_buffer_, work_buffer_;
+  Device device_;
+  // Grown on demand; created (1 element) with the map so every binding is
+  // valid. previous_buffer_ holds the deformed positions of the last update
+  // (the clear pass walks the moved tets there); the two swap per update.
+  std::optional<gpu::GpuBuffer> tets_buffer_, deformed_buffer_, previous_buffer_,
+      rest_offset_buffer_, work_buffer_;
   HostState state_;
 };
 

@@ -6,7 +6,9 @@
 namespace vpm {
 namespace {
 
-constexpr int kBinShift = 3;  // bins of 8 grid points per axis
+bool Meet(const GridBox& a, const GridBox& b) {
+  return glm::all(glm::lessThanEqual(a.lo, b.hi)) && glm::all(glm::lessThanEqual(b.lo, a.hi));
+}
 
 }  // namespace
 
@@ -32,35 +34,29 @@ GridBox TetGridBox(const std::array<glm::dvec3, 4>& corners, const glm::dvec3& s
 }
 
 std::vector<int32_t> TetsMeetingBoxes(std::span<const GridBox> tet_boxes,
-                                      std::span<const GridBox> region,
-                                      const std::array<int64_t, 3>& map_dims) {
-  const glm::ivec3 bins(static_cast<int>((map_dims[0] >> kBinShift) + 1),
-                        static_cast<int>((map_dims[1] >> kBinShift) + 1),
-                        static_cast<int>((map_dims[2] >> kBinShift) + 1));
-  std::vector<uint8_t> marked(static_cast<size_t>(bins.x) * bins.y * bins.z, 0);
-  auto for_bins = [&](const GridBox& box, auto&& fn) {
-    const glm::ivec3 b0 = box.lo >> kBinShift, b1 = box.hi >> kBinShift;
-    for (int z = b0.z; z <= b1.z; ++z) {
-      for (int y = b0.y; y <= b1.y; ++y) {
-        for (int x = b0.x; x <= b1.x; ++x) {
-          if (fn(static_cast<size_t>(x) + bins.x * (static_cast<size_t>(y) + bins.y * z))) return;
-        }
-      }
-    }
-  };
+                                      std::span<const GridBox> region) {
+  std::vector<GridBox> boxes;
+  GridBox bound;
   for (const GridBox& box : region) {
     if (box.empty()) continue;
-    for_bins(box, [&](size_t b) {
-      marked[b] = 1;
-      return false;
-    });
+    boxes.push_back(box);
+    bound = bound.empty() ? box : GridBox{glm::min(bound.lo, box.lo), glm::max(bound.hi, box.hi)};
   }
+  // Sorted by lo.x, so the scan for one tet stops at the first box that
+  // starts beyond it.
+  std::sort(boxes.begin(), boxes.end(),
+            [](const GridBox& a, const GridBox& b) { return a.lo.x < b.lo.x; });
   std::vector<int32_t> tets;
   for (size_t t = 0; t < tet_boxes.size(); ++t) {
-    if (tet_boxes[t].empty()) continue;
-    bool meets = false;
-    for_bins(tet_boxes[t], [&](size_t b) { return meets = marked[b] != 0; });
-    if (meets) tets.push_back(static_cast<int32_t>(t));
+    const GridBox& box = tet_boxes[t];
+    if (box.empty() || !Meet(box, bound)) continue;
+    for (const GridBox& other : boxes) {
+      if (other.lo.x > box.hi.x) break;
+      if (Meet(box, other)) {
+        tets.push_back(static_cast<int32_t>(t));
+        break;
+      }
+    }
   }
   return tets;
 }

@@ -30,12 +30,9 @@ struct GridBox {
 GridBox TetGridBox(const std::array<glm::dvec3, 4>& corners, const glm::dvec3& step_mm,
                    const std::array<int64_t, 3>& map_dims, double eps);
 
-// The tets (ascending indices) whose box in `tet_boxes` (#T) meets at least
-// one box of `region`, on a map of `map_dims` points. Conservative: tested
-// on bins of 8^3 grid points, so it may list a tet whose box only comes
-// within 8 points of the region; never misses one.
+// The tets (ascending indices) whose non-empty box in `tet_boxes` (#T)
+// shares at least one grid point with a box of `region`.
 std::vector<int32_t> TetsMeetingBoxes(std::span<const GridBox> tet_boxes,
-                                      std::span<const GridBox> region,
-                                      const std::array<int64_t, 3>& map_dims);
+                                      std::span<const GridBox> region);
 
 }  // namespace vpm

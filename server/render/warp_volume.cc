@@ -13,18 +13,17 @@ constexpr uint32_t kLocalSize = 64;
 
 Result<VolumeWarper> VolumeWarper::Create(const gpu::GpuContext& context, const Options& options) {
   const bool sampler = options.source_read == SourceRead::kSampler;
-  const auto source_binding = sampler ? vk::DescriptorType::eCombinedImageSampler
-                                      : vk::DescriptorType::eUniformTexelBuffer;
-  ASSIGN_OR_RETURN(
-      gpu::ComputeKernel kernel,
-      gpu::ComputeKernel::Create(
-          context, {.name = sampler ? "warp_volume" : "warp_volume_texel",
-                    .spirv = sampler ? std::span<const uint32_t>(kWarpVolumeSpv)
-                                     : std::span<const uint32_t>(kWarpVolumeTexelSpv),
-                    .bindings = {vk::DescriptorType::eCombinedImageSampler, source_binding,
-                                 vk::DescriptorType::eStorageBuffer},
-                    .push_constant_bytes = sizeof(gpu::WarpVolumePush),
-                    .local_size = {kLocalSize, 1, 1}}));
+  const auto source_binding =
+      sampler ? vk::DescriptorType::eCombinedImageSampler : vk::DescriptorType::eUniformTexelBuffer;
+  ASSIGN_OR_RETURN(gpu::ComputeKernel kernel,
+                   gpu::ComputeKernel::Create(
+                       context, {.name = sampler ? "warp_volume" : "warp_volume_texel",
+                                 .spirv = sampler ? std::span<const uint32_t>(kWarpVolumeSpv)
+                                                  : std::span<const uint32_t>(kWarpVolumeTexelSpv),
+                                 .bindings = {vk::DescriptorType::eCombinedImageSampler,
+                                              source_binding, vk::DescriptorType::eStorageBuffer},
+                                 .push_constant_bytes = sizeof(gpu::WarpVolumePush),
+                                 .local_size = {kLocalSize, 1, 1}}));
   return VolumeWarper(context, options, std::move(kernel));
 }
 
@@ -33,14 +32,15 @@ Status VolumeWarper::Record(gpu::ComputeBatch& batch, const GpuVolume& volume,
                             const gpu::GpuBuffer& out) const {
   const VolumeGeometry& g = volume.geometry();
   if (map.geometry().dims != g.dims || map.geometry().spacing_mm != g.spacing_mm) {
-    return absl::InvalidArgumentError("warp: the backward map belongs to a volume of other "
-                                      "dims or spacing");
+    return absl::InvalidArgumentError(
+        "warp: the backward map belongs to a volume of other "
+        "dims or spacing");
   }
   const auto e = volume.extent();
   const uint64_t bytes = uint64_t{e[0]} * e[1] * e[2] * sizeof(float);
   if (out.size_bytes() < bytes) {
-    return absl::InvalidArgumentError(StrCat("warp: output buffer holds ", out.size_bytes(),
-                                             " bytes, needs ", bytes));
+    return absl::InvalidArgumentError(
+        StrCat("warp: output buffer holds ", out.size_bytes(), " bytes, needs ", bytes));
   }
   const bool sampler = options_.source_read == SourceRead::kSampler;
   if (sampler && (source_image == nullptr || source_image->extent() != e ||
@@ -55,8 +55,8 @@ Status VolumeWarper::Record(gpu::ComputeBatch& batch, const GpuVolume& volume,
       .spacing_mm = glm::vec4(glm::vec3(s), 0.0f),
       .extent_mm = glm::vec4(glm::vec3(g.extent_mm()), 0.0f),
       .map_dims = glm::vec4(float(m[0]), float(m[1]), float(m[2]), 0.0f)};
-  const gpu::KernelArg source = sampler ? gpu::KernelArg(source_image)
-                                        : gpu::KernelArg(volume.texel_view());
+  const gpu::KernelArg source =
+      sampler ? gpu::KernelArg(source_image) : gpu::KernelArg(volume.texel_view());
   return batch.Dispatch(kernel_, {&map.image(), source, &out}, push, kernel_.GroupsFor(e),
                         kernel_.spec().name);
 }

@@ -167,11 +167,9 @@ TEST_F(GpuTest, BackwardMap_MovedTetsUpdateEqualsFullRebuild) {
   const glm::dvec3 e = g.extent_mm();
   const WarpMesh mesh = RandomWarpMesh(150, e, 7);
   const std::vector<std::vector<glm::dvec3>> steps = {
-      mesh.rest_mm,
-      Dragged(mesh, e * 0.3, 0.25 * e.x, {2.0, -1.0, 1.5}),
+      mesh.rest_mm, Dragged(mesh, e * 0.3, 0.25 * e.x, {2.0, -1.0, 1.5}),
       Dragged(mesh, e * 0.3, 0.25 * e.x, {3.0, -1.5, 2.0}),
-      Dragged(mesh, e * 0.7, 0.2 * e.x, {-2.0, 1.0, 0.5}),
-      mesh.rest_mm};
+      Dragged(mesh, e * 0.7, 0.2 * e.x, {-2.0, 1.0, 0.5}), mesh.rest_mm};
   for (std::array<int64_t, 3> dims : {std::array<int64_t, 3>{0, 0, 0}, g.dims}) {
     BackwardMap incremental = MakeMap(context(), g, dims);
     BackwardMap listed = MakeMap(context(), g, dims);
@@ -204,6 +202,31 @@ TEST_F(GpuTest, BackwardMap_MovedTetsUpdateEqualsFullRebuild) {
       EXPECT_TRUE(BitwiseEqual(Download(listed), expected));
     }
   }
+}
+
+// Values split over 3 slabs of whole z slices (as maps over 8M points are
+// on lavapipe) give the single-buffer map bit for bit, also incrementally;
+// too many slabs are refused.
+TEST_F(GpuTest, BackwardMap_ValueSlabsGiveTheSameMap) {
+  const VolumeGeometry g = Geometry({30, 26, 22}, {1.0, 1.1, 1.3});
+  const WarpMesh mesh = RandomWarpMesh(60, g.extent_mm(), 12);
+  const glm::dvec3 e = g.extent_mm();
+  const std::array<int64_t, 3> dims{17, 13, 11};
+  auto one = BackwardMap::Create(context(), g, {.map_dims = dims});
+  auto three =
+      BackwardMap::Create(context(), g, {.map_dims = dims, .max_slab_bytes = 4 * 17 * 13 * 16});
+  ASSERT_TRUE(one.ok() && three.ok());
+  for (const auto& deformed :
+       {RandomlyMoved(mesh, 1.0, 13), Dragged(mesh, e * 0.5, 8.0, {1, 2, 1})}) {
+    ASSERT_TRUE(one->Update(mesh.rest_mm, deformed, mesh.tets).ok());
+    ASSERT_TRUE(three->Update(mesh.rest_mm, deformed, mesh.tets).ok());
+    EXPECT_TRUE(BitwiseEqual(Download(*one), Download(*three)));
+  }
+  EXPECT_EQ(
+      BackwardMap::Create(context(), g, {.map_dims = dims, .max_slab_bytes = 2 * 17 * 13 * 16})
+          .status()
+          .code(),
+      absl::StatusCode::kResourceExhausted);
 }
 
 // A mesh over part of the box only: the points it does not cover are outside
@@ -276,7 +299,8 @@ TEST_F(GpuTest, BackwardMap_RejectsBadInputsAndKeepsItsContent) {
   EXPECT_TRUE(BitwiseEqual(Download(map), before));
   // The CPU reference rejects the same inputs.
   EXPECT_FALSE(BackwardMapCpu(g.extent_mm(), map.dims(), mesh.rest_mm, deformed, bad_index).ok());
-  EXPECT_FALSE(BackwardMapCpu(g.extent_mm(), map.dims(), mesh.rest_mm, nan_deformed, mesh.tets).ok());
+  EXPECT_FALSE(
+      BackwardMapCpu(g.extent_mm(), map.dims(), mesh.rest_mm, nan_deformed, mesh.tets).ok());
   EXPECT_FALSE(
       BackwardMapCpu(g.extent_mm(), map.dims(), mesh.rest_mm, short_deformed, mesh.tets).ok());
   // After the errors an update still works and is incremental.

@@ -53,7 +53,8 @@ Volume GpuWarp(gpu::GpuContext& context, const Volume& source, const WarpMesh& m
 // that is up to 3 * 1100 * 2^-bits HU per lookup, allowed for on such devices.
 double FilterTolerance(const gpu::GpuContext& context, double lavapipe_hu) {
   if (context.is_cpu_device()) return lavapipe_hu;
-  return lavapipe_hu + 2.0 * 3.0 * 1100.0 * std::ldexp(1.0, -int(context.limits().subTexelPrecisionBits));
+  return lavapipe_hu +
+         2.0 * 3.0 * 1100.0 * std::ldexp(1.0, -int(context.limits().subTexelPrecisionBits));
 }
 
 double MaxAbsDiff(const Volume& a, const Volume& b) {
@@ -125,8 +126,8 @@ TEST_F(GpuTest, VolumeWarper_AffineDeformationMatchesAnalyticAndCpu) {
             bool inside = glm::all(glm::greaterThanEqual(rest, glm::dvec3(0.0))) &&
                           glm::all(glm::lessThanEqual(rest, extent));
             for (int c = 0; c < 8 && inside; ++c) {
-              const glm::dvec3 corner = glm::floor(x / h) * h +
-                                        glm::dvec3(c & 1, (c >> 1) & 1, (c >> 2) & 1) * h;
+              const glm::dvec3 corner =
+                  glm::floor(x / h) * h + glm::dvec3(c & 1, (c >> 1) & 1, (c >> 2) & 1) * h;
               inside = map.Sample(glm::min(corner, extent)).w == 1.0;
             }
             if (!inside) continue;
@@ -191,9 +192,8 @@ TEST_F(GpuTest, VolumeWarper_KeepsTheSourceGeometryForExport) {
   source = *Volume::Create(g, std::vector<float>(source.values().begin(), source.values().end()));
   source.set_source("phantom:test");
   const WarpMesh mesh = RandomWarpMesh(10, g.extent_mm(), 2);
-  const Volume warped =
-      GpuWarp(context(), source, mesh, RandomlyMoved(mesh, 1.0, 3), {0, 0, 0},
-              SourceRead::kSampler);
+  const Volume warped = GpuWarp(context(), source, mesh, RandomlyMoved(mesh, 1.0, 3), {0, 0, 0},
+                                SourceRead::kSampler);
   EXPECT_EQ(warped.geometry().dims, g.dims);
   EXPECT_EQ(warped.geometry().spacing_mm, g.spacing_mm);
   EXPECT_EQ(warped.geometry().origin_mm, g.origin_mm);
