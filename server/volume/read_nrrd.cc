@@ -101,7 +101,8 @@ Result<VolumeGeometry> NrrdGeometry(const NrrdHeader& h) {
     }
     for (int a = 0; a < h.dimension; ++a) g.spacing_mm[a] = h.spacings[a];
   }
-  g.direction = to_lps * g.direction;
+  // Without space directions the axes have no stated orientation: identity.
+  if (!h.space_directions.empty()) g.direction = to_lps * g.direction;
   if (h.space_origin.has_value()) g.origin_mm = to_lps * *h.space_origin;
   return g;
 }
