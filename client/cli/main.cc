@@ -3,6 +3,7 @@
 
 #include "client/cli/compare_meshes_command.h"
 #include "client/cli/mesh_command.h"
+#include "client/cli/render_command.h"
 #include "client/cli/volume_commands.h"
 
 int main(int argc, char** argv) {
@@ -12,6 +13,7 @@ int main(int argc, char** argv) {
   vpm::cli::AddVolumeCommands(app, &exit_code);
   vpm::cli::AddMeshCommand(app, &exit_code);
   vpm::cli::AddCompareMeshesCommand(app, &exit_code);
+  vpm::cli::AddRenderCommand(app, &exit_code);
   CLI11_PARSE(app, argc, argv);
   return exit_code;
 }

@@ -1,0 +1,13 @@
+// `vpm render --volume SRC [--mesh-json M.json | mesh flags] [--camera AZ EL DIST]
+//   [--mode dvr|mip] [--preset NAME] [--grab X Y Z | --grab-landmark NAME
+//   --drag DX DY DZ | --pull FX FY FZ] [--size W H] [--overlay] --out frame.png|jpg`:
+// one frame of the (optionally deformed) volume, offline.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace vpm::cli {
+
+void AddRenderCommand(CLI::App& app, int* exit_code);
+
+}  // namespace vpm::cli

@@ -1,0 +1,111 @@
+#include "server/render/deformable_scene.h"
+
+#include <chrono>
+
+#include "server/render/overlay.h"
+#include "server/render/warp_volume.h"
+
+namespace vpm {
+namespace {
+
+double MsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+Result<std::unique_ptr<DeformableScene>> DeformableScene::Create(
+    const gpu::GpuContext& context, const Volume& volume, GpuVolume& gpu_volume,
+    VolumeRenderer& renderer, const ProxyMesh& mesh, const Options& options) {
+  std::unique_ptr<DeformableScene> scene(new DeformableScene());
+  scene->context_ = &context;
+  scene->volume_ = &volume;
+  scene->gpu_volume_ = &gpu_volume;
+  scene->renderer_ = &renderer;
+  scene->mesh_ = mesh;
+  ASSIGN_OR_RETURN(FemModel fem,
+                   FemModel::Create(mesh, volume.geometry().extent_mm(), options.fem));
+  scene->fem_.emplace(std::move(fem));
+  ASSIGN_OR_RETURN(BackwardMap map, BackwardMap::Create(context, volume.geometry(), options.map));
+  scene->map_.emplace(std::move(map));
+  return scene;
+}
+
+Result<GrabInfo> DeformableScene::Grab(const glm::dvec3& point_mm, double radius_mm) {
+  ASSIGN_OR_RETURN(GrabInfo info, fem_->Grab(point_mm, radius_mm));
+  grab_point_mm_ = point_mm;
+  drag_offset_mm_ = glm::dvec3(0.0);
+  return info;
+}
+
+Result<SceneStepTimings> DeformableScene::UpdateMap(SceneStepTimings timings) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<glm::dvec3> deformed = fem_->Positions();
+  ASSIGN_OR_RETURN(BackwardMap::UpdateStats stats,
+                   map_->Update(fem_->rest_positions_mm(), deformed, fem_->tets()));
+  timings.warp_ms = MsSince(t0);
+  timings.moved_tets = stats.moved_tets;
+  timings.inverted_tets = fem_->CountInvertedTets();
+  return timings;
+}
+
+Result<SceneStepTimings> DeformableScene::Drag(const glm::dvec3& offset_mm) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(SolveStats solve, fem_->Drag(offset_mm));
+  SceneStepTimings timings{.fem_ms = MsSince(t0),
+                           .max_displacement_mm = solve.max_displacement_mm,
+                           .converged = solve.converged};
+  drag_offset_mm_ = offset_mm;
+  return UpdateMap(timings);
+}
+
+Result<SceneStepTimings> DeformableScene::Pull(const glm::dvec3& force_n) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(SolveStats solve, fem_->Pull(force_n));
+  SceneStepTimings timings{.fem_ms = MsSince(t0),
+                           .max_displacement_mm = solve.max_displacement_mm,
+                           .converged = solve.converged};
+  // The arrow follows the mean handle displacement.
+  glm::dvec3 mean(0.0);
+  const auto u = fem_->Displacements();
+  for (int32_t h : fem_->grab().handles) mean += u[h];
+  if (!fem_->grab().handles.empty()) mean /= double(fem_->grab().handles.size());
+  drag_offset_mm_ = mean;
+  return UpdateMap(timings);
+}
+
+Result<SceneStepTimings> DeformableScene::Release() {
+  const auto t0 = std::chrono::steady_clock::now();
+  fem_->Release();
+  grab_point_mm_.reset();
+  drag_offset_mm_ = glm::dvec3(0.0);
+  return UpdateMap({.fem_ms = MsSince(t0)});
+}
+
+Result<Frame> DeformableScene::Render(const SceneView& view) {
+  RenderRequest request;
+  request.camera = view.camera;
+  request.mode = view.mode;
+  request.preset = view.preset;
+  request.quality = view.quality;
+  request.width = view.width;
+  request.height = view.height;
+  request.volume = gpu_volume_;
+  request.backward_map = &map_->image();
+  if (view.overlay) {
+    const std::vector<glm::dvec3> positions = fem_->Positions();
+    const auto& handles = fem_->grabbed() ? fem_->grab().handles : std::vector<int32_t>{};
+    request.overlay = MakeMeshOverlay(mesh_, positions, handles);
+    if (grab_point_mm_) {
+      request.overlay.drag = DragArrow{*grab_point_mm_, *grab_point_mm_ + drag_offset_mm_};
+    }
+  }
+  return renderer_->Render(request);
+}
+
+Result<Volume> DeformableScene::WarpedVolume() {
+  ASSIGN_OR_RETURN(VolumeWarper warper, VolumeWarper::Create(*context_));
+  return warper.Warp(*gpu_volume_, *volume_, *map_);
+}
+
+}  // namespace vpm

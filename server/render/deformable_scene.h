@@ -1,0 +1,95 @@
+// One deformable case: a volume on the GPU, its proxy mesh under FEM, the
+// backward map of the current deformation, and frames of it. The offline
+// `vpm render`, the demo, the drag-loop benchmark and the server's sessions
+// all drive this.
+//
+// Per drag step: FEM solve (CPU), backward-map update of the tets that moved
+// (GPU), then any number of frames sampled through the map (GPU): the volume
+// itself is never warped per frame (docs/LAVAPIPE.md: ~130 ms per 256^3 warp).
+#pragma once
+
+#include <memory>
+#include <optional>
+
+#include "server/common/status.h"
+#include "server/fem/fem_model.h"
+#include "server/gpu/gpu_context.h"
+#include "server/mesh/proxy_mesh.h"
+#include "server/render/backward_map.h"
+#include "server/render/camera.h"
+#include "server/render/render_presets.h"
+#include "server/render/volume_renderer.h"
+#include "server/volume/gpu_volume.h"
+#include "server/volume/volume.h"
+
+namespace vpm {
+
+struct SceneStepTimings {
+  double fem_ms = 0.0;   // wall: FEM solve (or release)
+  double warp_ms = 0.0;  // wall: backward-map upload, update and wait
+  int64_t moved_tets = 0;
+  double max_displacement_mm = 0.0;
+  int64_t inverted_tets = 0;
+  bool converged = true;
+};
+
+struct SceneView {
+  Camera camera;
+  RenderMode mode = RenderMode::kDvr;
+  RenderPreset preset;
+  RenderQuality quality = RenderQuality::kStill;
+  int width = 512;
+  int height = 512;
+  bool overlay = false;  // mesh vertices (deformable yellow, hard blue), handles, drag
+};
+
+class DeformableScene {
+ public:
+  struct Options {
+    BackwardMap::Options map;
+    FemOptions fem;
+  };
+
+  // `volume`, `gpu_volume` and `renderer` must outlive the scene (the scene
+  // may add the volume's 3D image to `gpu_volume` for export); the mesh
+  // is copied.
+  static Result<std::unique_ptr<DeformableScene>> Create(const gpu::GpuContext& context,
+                                                         const Volume& volume,
+                                                         GpuVolume& gpu_volume,
+                                                         VolumeRenderer& renderer,
+                                                         const ProxyMesh& mesh,
+                                                         const Options& options);
+
+  // Handles for the next Drag/Pull (FemModel::Grab rules).
+  Result<GrabInfo> Grab(const glm::dvec3& point_mm, double radius_mm);
+  // Prescribed handle displacement from the grab (mm), or a total force (N).
+  Result<SceneStepTimings> Drag(const glm::dvec3& offset_mm);
+  Result<SceneStepTimings> Pull(const glm::dvec3& force_n);
+  // Back to rest; the map becomes the identity again.
+  Result<SceneStepTimings> Release();
+
+  Result<Frame> Render(const SceneView& view);
+  // The deformed volume at full resolution on the source grid (for export).
+  Result<Volume> WarpedVolume();
+
+  const ProxyMesh& mesh() const { return mesh_; }
+  const FemModel& fem() const { return *fem_; }
+  std::vector<glm::dvec3> Positions() const { return fem_->Positions(); }
+  const BackwardMap& backward_map() const { return *map_; }
+
+ private:
+  DeformableScene() = default;
+  Result<SceneStepTimings> UpdateMap(SceneStepTimings timings);
+
+  const gpu::GpuContext* context_ = nullptr;
+  const Volume* volume_ = nullptr;
+  GpuVolume* gpu_volume_ = nullptr;
+  VolumeRenderer* renderer_ = nullptr;
+  ProxyMesh mesh_;
+  std::optional<FemModel> fem_;
+  std::optional<BackwardMap> map_;
+  std::optional<glm::dvec3> grab_point_mm_;
+  glm::dvec3 drag_offset_mm_{0.0};
+};
+
+}  // namespace vpm
