@@ -100,7 +100,8 @@ Result<BackwardMap> BackwardMap::Create(const gpu::GpuContext& context,
     ASSIGN_OR_RETURN(
         gpu::GpuBuffer slab,
         gpu::GpuBuffer::Create(context, std::min<uint64_t>(slab_points, points - first) * 16,
-                               vk::BufferUsageFlagBits::eStorageBuffer));
+                               vk::BufferUsageFlagBits::eStorageBuffer |
+                                   vk::BufferUsageFlagBits::eUniformTexelBuffer));
     values.push_back(std::move(slab));
   }
   BackwardMap map(context, geometry, dims, options.eps,

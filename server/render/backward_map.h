@@ -92,6 +92,12 @@ class BackwardMap {
   // The map: RGBA32F, M texels, (X(p) - p mm, inside); sample it with its
   // linear_sampler() through backward_map.glsl.
   const gpu::GpuImage3D& image() const { return device_.image; }
+  // The same values, vec4 per grid point, x fastest, in one buffer usable as
+  // a storage or uniform texel buffer (RGBA32F), when the map fits one
+  // storage binding (128 MiB on lavapipe); nullptr when it is split in slabs.
+  const gpu::GpuBuffer* values_buffer() const {
+    return device_.values.size() == 1 ? &device_.values.front() : nullptr;
+  }
   const std::array<int64_t, 3>& dims() const { return dims_; }
   glm::dvec3 extent_mm() const { return geometry_.extent_mm(); }
   const VolumeGeometry& geometry() const { return geometry_; }

@@ -221,7 +221,13 @@ TEST_F(GpuTest, BackwardMap_ValueSlabsGiveTheSameMap) {
     ASSERT_TRUE(one->Update(mesh.rest_mm, deformed, mesh.tets).ok());
     ASSERT_TRUE(three->Update(mesh.rest_mm, deformed, mesh.tets).ok());
     EXPECT_TRUE(BitwiseEqual(Download(*one), Download(*three)));
+    // The single-buffer map exposes its values buffer, equal to the image.
+    ASSERT_NE(one->values_buffer(), nullptr);
+    BackwardMapValues buffer = Download(*one);
+    ASSERT_TRUE(one->values_buffer()->DownloadSpan(std::span<glm::vec4>(buffer.values)).ok());
+    EXPECT_TRUE(BitwiseEqual(buffer, Download(*one)));
   }
+  EXPECT_EQ(three->values_buffer(), nullptr);
   EXPECT_EQ(
       BackwardMap::Create(context(), g, {.map_dims = dims, .max_slab_bytes = 2 * 17 * 13 * 16})
           .status()

@@ -206,7 +206,7 @@ TEST_F(GpuTest, VolumeWarper_RejectsAMapOfAnotherVolumeAndShortOutput) {
   const Volume other = MakeBodyVolume({16, 14, 12}, {1.0, 1.0, 1.0});
   auto gpu_volume = GpuVolume::Upload(context(), source);
   auto map = BackwardMap::Create(context(), other.geometry());
-  auto warper = VolumeWarper::Create(context(), {.source_read = SourceRead::kTexelBuffer});
+  auto warper = VolumeWarper::Create(context());  // the texel buffer by default
   ASSERT_TRUE(gpu_volume.ok() && map.ok() && warper.ok());
   EXPECT_EQ(warper->Warp(*gpu_volume, source, *map).status().code(),
             absl::StatusCode::kInvalidArgument);
@@ -216,7 +216,7 @@ TEST_F(GpuTest, VolumeWarper_RejectsAMapOfAnotherVolumeAndShortOutput) {
   ASSERT_TRUE(own_map.ok() && small.ok() && batch.ok());
   EXPECT_EQ(warper->Record(*batch, *gpu_volume, nullptr, *own_map, *small).code(),
             absl::StatusCode::kInvalidArgument);
-  auto sampler = VolumeWarper::Create(context());
+  auto sampler = VolumeWarper::Create(context(), {.source_read = SourceRead::kSampler});
   auto big = gpu::GpuBuffer::Create(context(), source.values().size() * 4,
                                     vk::BufferUsageFlagBits::eStorageBuffer);
   ASSERT_TRUE(sampler.ok() && big.ok());
