@@ -5,8 +5,9 @@
 // Kernel: shaders/backward_map.comp. CPU reference: BackwardMapCpu.
 //
 // Updates are incremental: only the tets that moved since the previous
-// update, and the tets whose boxes meet theirs, are rasterized again, with
-// the result of a full rebuild (tests/render/backward_map_test.cc).
+// update, and the unmoved tets whose boxes meet the moved ones' previous
+// boxes, are rasterized again, with the result of a full rebuild bit for bit
+// (tests/render/backward_map_test.cc).
 #pragma once
 
 #include <array>
@@ -54,9 +55,10 @@ class BackwardMap {
 
   // `geometry`: the volume the map belongs to (at least 2 voxels per axis).
   // The new map is the identity (every point outside, displacement 0).
-  // Errors: InvalidArgument for bad dims; FailedPrecondition when the device
-  // cannot store to or linearly filter RGBA32F 3D images; ResourceExhausted
-  // when the grid exceeds the device's image or storage-buffer limits.
+  // Errors: InvalidArgument for bad dims or eps; FailedPrecondition when the
+  // device cannot filter RGBA32F 3D images linearly; ResourceExhausted when
+  // the grid exceeds the device's image or storage-buffer limits (owners in
+  // one binding, values in up to 4).
   static Result<BackwardMap> Create(const gpu::GpuContext& context, const VolumeGeometry& geometry,
                                     const Options& options);
   static Result<BackwardMap> Create(const gpu::GpuContext& context,
