@@ -1,10 +1,17 @@
-// FEM on proxy meshes of the phantom: setup (assembly + factor), grab, and
-// a 12 mm drag of the left_renal_artery landmark in 10 steps (radius 1 h),
-// for meshes of ~250 (+150 refined), 1,000 and 5,000 vertices; per step the
-// solve time, Newton and CG iterations, and the inverted tets after the
-// drag. Then the cost of the per-iteration kernels on each mesh.
+// FEM on proxy meshes of the phantom, for meshes of ~250 (+150 refined at
+// the landmark), 1,000 and 5,000 vertices:
+//   - setup: elements + rest stiffness assembly, SimplicialLDLT factor;
+//   - grab of the left_renal_artery landmark with radius 1 h (h = lattice
+//     step), then a 12 mm drag in 10 steps: per-step wall and thread-CPU ms,
+//     Newton and CG iterations, residual, inverted tets after the drag, and
+//     the distance of the final displacement from a tightly converged one;
+//   - the per-iteration kernels (forces, K v, factor solve);
+//   - validity: inverted tets after drags of 0.5, 1 and 1.5 h.
+// Times are the best of --reps runs (the machine is shared).
 //
 //   fem_bench [SOURCE] [--reps N]    SOURCE defaults to phantom:abdomen
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -25,8 +32,10 @@ using namespace vpm;
 
 namespace {
 
-double MsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+double CpuMs() {
+  timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
 }
 
 double MinMs(int reps, const std::function<void()>& fn) {
@@ -34,7 +43,9 @@ double MinMs(int reps, const std::function<void()>& fn) {
   for (int r = 0; r < reps; ++r) {
     const auto t0 = std::chrono::steady_clock::now();
     fn();
-    best = std::min(best, MsSince(t0));
+    best = std::min(
+        best,
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
   return best;
 }
@@ -49,6 +60,112 @@ T Check(Result<T> result, const char* what) {
   return *std::move(result);
 }
 
+constexpr double kDragMm = 12.0;
+constexpr int kSteps = 10;
+const glm::dvec3 kDirection(0.0, 0.0, 1.0);
+
+struct DragResult {
+  double step_ms = 0.0;      // wall, assembly + solve, mean over the steps
+  double max_step_ms = 0.0;  // wall, slowest step
+  double step_cpu_ms = 0.0;  // this thread's CPU time per step, mean
+  double newton = 0.0;       // per step, mean
+  double cg = 0.0;
+  double max_residual = 0.0;
+  int unconverged = 0;
+  int64_t inverted = 0;  // after the last step
+  double grab_ms = 0.0;
+  size_t handles = 0;
+  std::vector<glm::dvec3> displacement;  // after the last step
+};
+
+DragResult Drag(FemModel& model, const glm::dvec3& point, double radius_mm) {
+  DragResult r;
+  const GrabInfo grab = Check(model.Grab(point, radius_mm), "grab");
+  r.grab_ms = grab.setup_ms;
+  r.handles = grab.handles.size();
+  for (int s = 1; s <= kSteps; ++s) {
+    const double cpu0 = CpuMs();
+    const SolveStats st = Check(model.Drag(kDirection * (kDragMm * s / kSteps)), "drag");
+    r.step_cpu_ms += (CpuMs() - cpu0) / kSteps;
+    r.step_ms += st.total_ms() / kSteps;
+    r.max_step_ms = std::max(r.max_step_ms, st.total_ms());
+    r.newton += static_cast<double>(st.newton_iterations) / kSteps;
+    r.cg += static_cast<double>(st.cg_iterations) / kSteps;
+    r.max_residual = std::max(r.max_residual, st.residual);
+    r.unconverged += !st.converged;
+  }
+  r.inverted = model.CountInvertedTets();
+  r.displacement = model.Displacements();
+  model.Release();
+  return r;
+}
+
+// The best (least wall time) of `reps` drags.
+DragResult BestDrag(FemModel& model, const glm::dvec3& point, double radius_mm, int reps) {
+  DragResult best;
+  best.step_ms = std::numeric_limits<double>::infinity();
+  for (int r = 0; r < reps; ++r) {
+    DragResult run = Drag(model, point, radius_mm);
+    if (run.step_ms < best.step_ms) best = std::move(run);
+  }
+  return best;
+}
+
+double MaxDistance(const std::vector<glm::dvec3>& a, const std::vector<glm::dvec3>& b) {
+  double d = 0.0;
+  for (size_t v = 0; v < a.size(); ++v) d = std::max(d, glm::distance(a[v], b[v]));
+  return d;
+}
+
+void KernelCosts(const FemModel& model, int reps) {
+  const CorotationalSolver& solver = model.solver();
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(3 * model.vertex_count());
+  for (int64_t i = 0; i < u.size(); ++i) u[i] = 0.01 * std::sin(0.1 * static_cast<double>(i));
+  CorotatedFrames frames;
+  Eigen::VectorXd forces, y, z;
+  const auto& elements = solver.elements();
+  const double forces_ms =
+      MinMs(reps, [&] { CorotatedForces(elements, u, FemMethod::kCorotational, frames, forces); });
+  const double twist_ms = MinMs(reps, [&] {
+    CorotatedForces(elements, u, FemMethod::kCorotationalConsistent, frames, forces);
+  });
+  const double matvec_ms = MinMs(reps, [&] { ApplyCorotatedStiffness(elements, frames, u, y); });
+  const double matvec2_ms =
+      MinMs(reps, [&] { ApplyCorotatedStiffness(elements, frames, u, y, 2); });
+  const double precond_ms = MinMs(reps, [&] { solver.factor().Apply(u, false, z); });
+  std::printf(
+      "  kernels: rotations+forces %.3f ms, with twist %.3f ms, K v %.3f ms "
+      "(2 threads %.3f), factor solve %.3f ms (L nnz %lld)\n",
+      forces_ms, twist_ms, matvec_ms, matvec2_ms, precond_ms,
+      static_cast<long long>(solver.factor().factor_nonzeros()));
+}
+
+void PrintRow(const char* mesh_name, const char* variant, const ProxyMesh& mesh,
+              const FemModel& model, const DragResult& r, double h, double error_mm) {
+  std::printf(
+      "%-8s %-14s %6zu %6zu %4zu %7.1f %8.1f %7.1f %5.1f %7.2f %7.2f %7.2f %5.1f %5.1f "
+      "%7.1e %4lld %8.1e%s\n",
+      mesh_name, variant, mesh.vertices.size(), model.tets().size(), r.handles,
+      model.setup().assembly_ms, model.setup().factor_ms, r.grab_ms, h, r.step_ms, r.step_cpu_ms,
+      r.max_step_ms, r.newton, r.cg, r.max_residual, static_cast<long long>(r.inverted), error_mm,
+      r.unconverged ? "  (some steps hit the iteration limit)" : "");
+}
+
+// Inverted tets after drags of 0.5, 1 and 1.5 h (15 steps of 0.1 h).
+void Validity(const ProxyMesh& mesh, const Volume& volume, const glm::dvec3& point, double h,
+              double radius_h) {
+  FemModel model = Check(FemModel::Create(mesh, volume.geometry().extent_mm()), "setup");
+  const size_t handles = Check(model.Grab(point, radius_h * h), "grab").handles.size();
+  std::printf("  validity, radius %.1f h (%zu handles): inverted tets after", radius_h, handles);
+  for (int s = 1; s <= 15; ++s) {
+    Check(model.Drag(kDirection * (0.1 * h * s)), "drag");
+    if (s % 5 == 0) {
+      std::printf(" %.1f h: %lld%s", 0.1 * s, static_cast<long long>(model.CountInvertedTets()),
+                  s < 15 ? "," : "\n");
+    }
+  }
+}
+
 struct MeshCase {
   const char* name;
   int64_t grid;
@@ -56,63 +173,40 @@ struct MeshCase {
   bool refine;
 };
 
-struct DragResult {
-  double mean_step_ms = 0.0;  // assembly + solve per step, mean over the 10 steps
-  double max_step_ms = 0.0;
-  double mean_newton = 0.0;
-  double mean_cg = 0.0;
-  double max_residual = 0.0;
-  int unconverged = 0;
-  int64_t inverted = 0;  // after the last step
-  double max_displacement_mm = 0.0;
-};
-
-constexpr double kDragMm = 12.0;
-constexpr int kSteps = 10;
-const glm::dvec3 kDirection(0.0, 0.0, 1.0);
-
-DragResult Drag(FemModel& model, const glm::dvec3& point, double radius_mm, double& grab_ms,
-                size_t& handles) {
-  const GrabInfo grab = Check(model.Grab(point, radius_mm), "grab");
-  grab_ms = grab.setup_ms;
-  handles = grab.handles.size();
-  DragResult r;
-  for (int s = 1; s <= kSteps; ++s) {
-    const SolveStats st = Check(model.Drag(kDirection * (kDragMm * s / kSteps)), "drag");
-    r.mean_step_ms += st.total_ms() / kSteps;
-    r.max_step_ms = std::max(r.max_step_ms, st.total_ms());
-    r.mean_newton += static_cast<double>(st.newton_iterations) / kSteps;
-    r.mean_cg += static_cast<double>(st.cg_iterations) / kSteps;
-    r.max_residual = std::max(r.max_residual, st.residual);
-    r.unconverged += !st.converged;
-    r.max_displacement_mm = st.max_displacement_mm;
+void RunCase(const MeshCase& c, const Volume& volume, const glm::dvec3& landmark, int reps) {
+  MeshParams params;
+  params.grid = {c.grid, c.grid, c.grid};
+  params.target = c.target;
+  if (c.refine) params.refine_at_mm = landmark;
+  const ProxyMesh mesh = Check(BuildProxyMesh(volume, params), "mesh build");
+  const double h = mesh.stats.h_mm;
+  const glm::dvec3 extent = volume.geometry().extent_mm();
+  FemOptions tight;
+  tight.solver.update_tolerance = 1e-7;
+  tight.solver.cg_tolerance = 1e-7;
+  tight.solver.max_newton_iterations = 300;
+  FemModel reference_model = Check(FemModel::Create(mesh, extent, tight), "reference setup");
+  const DragResult reference = Drag(reference_model, landmark, h);
+  struct Variant {
+    const char* name;
+    FemMethod method;
+    int threads;
+  };
+  for (const Variant& v : {Variant{"corot+twist", FemMethod::kCorotationalConsistent, 1},
+                           Variant{"corot+twist 2T", FemMethod::kCorotationalConsistent, 2},
+                           Variant{"corot RK0R^T", FemMethod::kCorotational, 1}}) {
+    FemOptions options;
+    options.solver.method = v.method;
+    options.solver.threads = v.threads;
+    FemModel model = Check(FemModel::Create(mesh, extent, options), "FEM setup");
+    const DragResult r = BestDrag(model, landmark, h, reps);
+    PrintRow(c.name, v.name, mesh, model, r, h,
+             MaxDistance(r.displacement, reference.displacement));
+    if (v.threads == 1 && v.method == FemMethod::kCorotationalConsistent) {
+      KernelCosts(model, 5 * reps);
+    }
   }
-  r.inverted = model.CountInvertedTets();
-  model.Release();
-  return r;
-}
-
-// Costs of the kernels one Newton iteration and one CG iteration run.
-void KernelCosts(const FemModel& model, int reps) {
-  const CorotationalSolver& solver = model.solver();
-  Eigen::VectorXd u = Eigen::VectorXd::Zero(3 * model.vertex_count());
-  for (int64_t i = 0; i < u.size(); ++i) u[i] = 0.01 * std::sin(0.1 * i);
-  CorotatedFrames frames;
-  Eigen::VectorXd forces, y, z;
-  const double forces_ms = MinMs(reps, [&] {
-    CorotatedForces(solver.elements(), u, FemMethod::kCorotational, frames, forces);
-  });
-  const double forces_twist_ms = MinMs(reps, [&] {
-    CorotatedForces(solver.elements(), u, FemMethod::kCorotationalConsistent, frames, forces);
-  });
-  const double matvec_ms =
-      MinMs(reps, [&] { ApplyCorotatedStiffness(solver.elements(), frames, u, y); });
-  const double precond_ms = MinMs(reps, [&] { solver.factor().Apply(u, false, z); });
-  std::printf(
-      "  kernels: forces+rotations %.3f ms (+twist %.3f ms), K*v %.3f ms, "
-      "factor solve %.3f ms (factor nnz %lld)\n",
-      forces_ms, forces_twist_ms, matvec_ms, precond_ms,
-      static_cast<long long>(solver.factor().factor_nonzeros()));
+  for (double radius_h : {1.0, 2.0}) Validity(mesh, volume, landmark, h, radius_h);
 }
 
 }  // namespace
@@ -128,54 +222,24 @@ int main(int argc, char** argv) {
     }
   }
   const Volume volume = Check(ReadVolume(source, {}), "reading the volume");
-  glm::dvec3 landmark(-1.0);
+  glm::dvec3 landmark = volume.geometry().extent_mm() * 0.5;
   for (const Landmark& l : volume.landmarks()) {
     if (l.name == "left_renal_artery") landmark = l.position_mm;
   }
-  if (landmark.x < 0.0) landmark = volume.geometry().extent_mm() * 0.5;
   std::printf(
-      "FEM drag bench: %s, drag %.0f mm along (%g, %g, %g) in %d steps at "
-      "left_renal_artery (%.1f, %.1f, %.1f) mm, radius 1 h, min of %d runs\n",
+      "FEM drag bench: %s, %.0f mm along (%g, %g, %g) in %d steps at left_renal_artery "
+      "(%.1f, %.1f, %.1f) mm, radius 1 h; best of %d runs\n",
       volume.source().c_str(), kDragMm, kDirection.x, kDirection.y, kDirection.z, kSteps,
       landmark.x, landmark.y, landmark.z, reps);
+  std::printf("%-8s %-14s %6s %6s %4s %7s %8s %7s %5s %7s %7s %7s %5s %5s %7s %4s %8s\n", "mesh",
+              "solver", "verts", "tets", "hdl", "asm ms", "fact ms", "grab ms", "h mm", "step ms",
+              "cpu ms", "max ms", "newt", "cg", "resid", "inv", "err mm");
   const MeshCase cases[] = {
       {"250+150", 20, 250, true}, {"1000", 20, 1000, false}, {"5000", 30, 5000, false}};
-  std::printf("%-8s %-12s %6s %6s %5s %8s %8s %7s %7s %9s %9s %6s %6s %8s %4s %6s\n", "mesh",
-              "method", "verts", "tets", "hdl", "asm ms", "fact ms", "grab ms", "h mm", "step ms",
-              "max ms", "newton", "cg", "resid", "inv", "max mm");
-  for (const MeshCase& c : cases) {
-    MeshParams params;
-    params.grid = {c.grid, c.grid, c.grid};
-    params.target = c.target;
-    if (c.refine) params.refine_at_mm = landmark;
-    const ProxyMesh mesh = Check(BuildProxyMesh(volume, params), "mesh build");
-    const double h = mesh.stats.h_mm;
-    for (FemMethod method : {FemMethod::kCorotationalConsistent, FemMethod::kCorotational}) {
-      FemOptions options;
-      options.solver.method = method;
-      FemModel model =
-          Check(FemModel::Create(mesh, volume.geometry().extent_mm(), options), "FEM setup");
-      DragResult best;
-      best.mean_step_ms = std::numeric_limits<double>::infinity();
-      double grab_ms = std::numeric_limits<double>::infinity();
-      size_t handles = 0;
-      for (int r = 0; r < reps; ++r) {
-        double g = 0.0;
-        const DragResult run = Drag(model, landmark, h, g, handles);
-        grab_ms = std::min(grab_ms, g);
-        if (run.mean_step_ms < best.mean_step_ms) best = run;
-      }
-      std::printf(
-          "%-8s %-12s %6zu %6zu %5zu %8.2f %8.2f %7.2f %7.2f %9.2f %9.2f %6.1f %6.1f "
-          "%8.1e %4lld %6.2f%s\n",
-          c.name, method == FemMethod::kCorotational ? "RK0R^T" : "RK0R^T+twist",
-          mesh.vertices.size(), model.tets().size(), handles, model.setup().assembly_ms,
-          model.setup().factor_ms, grab_ms, h, best.mean_step_ms, best.max_step_ms,
-          best.mean_newton, best.mean_cg, best.max_residual, static_cast<long long>(best.inverted),
-          best.max_displacement_mm,
-          best.unconverged ? " (some steps hit the iteration limit)" : "");
-      if (method == FemMethod::kCorotationalConsistent) KernelCosts(model, 5 * reps);
-    }
-  }
+  for (const MeshCase& c : cases) RunCase(c, volume, landmark, reps);
+  std::printf(
+      "step ms / cpu ms: wall / this thread's CPU time per drag step (mean of %d); "
+      "err mm: largest vertex distance from a solve converged to 1e-7\n",
+      kSteps);
   return 0;
 }

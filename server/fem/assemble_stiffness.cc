@@ -7,7 +7,7 @@ namespace {
 Eigen::Matrix<double, 12, 12> ElementTangent(const TetElement& element,
                                              const CorotatedFrames& frames, size_t t) {
   if (frames.rotations.empty()) return ElementStiffness(element);
-  const Eigen::Matrix3d* twist = frames.twist.empty() ? nullptr : &frames.twist[t];
+  const Eigen::Matrix3d* twist = frames.Twist(t);
   Eigen::Matrix<double, 12, 12> k;
   for (int col = 0; col < 12; ++col) {
     Eigen::Matrix<double, 3, 4> unit = Eigen::Matrix<double, 3, 4>::Zero();

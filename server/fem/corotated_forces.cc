@@ -5,6 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
+#include "server/fem/parallel_chunks.h"
 #include "server/fem/polar_rotation.h"
 
 namespace vpm {
@@ -63,28 +64,51 @@ Eigen::Matrix3d TwistStiffness(const TetElement& element, const Eigen::Matrix3d&
   return eigen.eigenvectors() * q.asDiagonal() * eigen.eigenvectors().transpose();
 }
 
+// out = the sum of the parts that were filled (the first part always is).
+void SumParts(std::vector<Eigen::VectorXd>& parts, Eigen::VectorXd& out) {
+  out = std::move(parts[0]);
+  for (size_t p = 1; p < parts.size(); ++p) {
+    if (parts[p].size() == out.size()) out += parts[p];
+  }
+}
+
 }  // namespace
 
 void CorotatedForces(const std::vector<TetElement>& elements, const Eigen::VectorXd& u_mm,
-                     FemMethod method, CorotatedFrames& frames, Eigen::VectorXd& forces_n) {
+                     FemMethod method, CorotatedFrames& frames, Eigen::VectorXd& forces_n,
+                     int threads) {
   frames.rotations.resize(elements.size());
   if (method == FemMethod::kCorotationalConsistent) {
     frames.twist.resize(elements.size());
+    frames.twisted.assign(elements.size(), 0);
   } else {
     frames.twist.clear();
+    frames.twisted.clear();
   }
-  forces_n.setZero(u_mm.size());
-  for (size_t t = 0; t < elements.size(); ++t) {
-    const TetElement& element = elements[t];
-    const Eigen::Matrix3d g = DisplacementGradient(element, Gather(element, u_mm));
-    const Eigen::Matrix3d r = method == FemMethod::kLinear
-                                  ? Eigen::Matrix3d::Identity()
-                                  : PolarRotation(Eigen::Matrix3d::Identity() + g);
-    frames.rotations[t] = r;
-    const Eigen::Matrix3d h = CorotatedStrainSource(r, g);
-    if (!frames.twist.empty()) frames.twist[t] = TwistStiffness(element, 0.5 * (h + h.transpose()));
-    ScatterAdd(element, r * StressNodalForces(element, LinearStress(element, h)), forces_n);
-  }
+  std::vector<Eigen::VectorXd> partial(std::max(1, threads));
+  ParallelChunks(
+      threads, static_cast<int64_t>(elements.size()), [&](int64_t begin, int64_t end, int part) {
+        Eigen::VectorXd& out = partial[part];
+        out.setZero(u_mm.size());
+        for (int64_t t = begin; t < end; ++t) {
+          const TetElement& element = elements[t];
+          const Eigen::Matrix3d g = DisplacementGradient(element, Gather(element, u_mm));
+          const Eigen::Matrix3d r = method == FemMethod::kLinear
+                                        ? Eigen::Matrix3d::Identity()
+                                        : PolarRotation(Eigen::Matrix3d::Identity() + g);
+          frames.rotations[t] = r;
+          const Eigen::Matrix3d h = CorotatedStrainSource(r, g);
+          if (!frames.twist.empty()) {
+            const Eigen::Matrix3d strain = 0.5 * (h + h.transpose());
+            if (strain.squaredNorm() >= kTwistMinStrain * kTwistMinStrain) {
+              frames.twist[t] = TwistStiffness(element, strain);
+              frames.twisted[t] = 1;
+            }
+          }
+          ScatterAdd(element, r * StressNodalForces(element, LinearStress(element, h)), out);
+        }
+      });
+  SumParts(partial, forces_n);
 }
 
 Eigen::Matrix<double, 3, 4> ApplyElementTangent(const TetElement& element,
@@ -101,16 +125,21 @@ Eigen::Matrix<double, 3, 4> ApplyElementTangent(const TetElement& element,
 }
 
 void ApplyCorotatedStiffness(const std::vector<TetElement>& elements, const CorotatedFrames& frames,
-                             const Eigen::VectorXd& v_mm, Eigen::VectorXd& y_n) {
-  y_n.setZero(v_mm.size());
-  const bool twist = !frames.twist.empty();
-  for (size_t t = 0; t < elements.size(); ++t) {
-    const TetElement& element = elements[t];
-    ScatterAdd(element,
-               ApplyElementTangent(element, frames.rotations[t], twist ? &frames.twist[t] : nullptr,
-                                   Gather(element, v_mm)),
-               y_n);
-  }
+                             const Eigen::VectorXd& v_mm, Eigen::VectorXd& y_n, int threads) {
+  std::vector<Eigen::VectorXd> partial(std::max(1, threads));
+  ParallelChunks(threads, static_cast<int64_t>(elements.size()),
+                 [&](int64_t begin, int64_t end, int part) {
+                   Eigen::VectorXd& out = partial[part];
+                   out.setZero(v_mm.size());
+                   for (int64_t t = begin; t < end; ++t) {
+                     const TetElement& element = elements[t];
+                     ScatterAdd(element,
+                                ApplyElementTangent(element, frames.rotations[t], frames.Twist(t),
+                                                    Gather(element, v_mm)),
+                                out);
+                   }
+                 });
+  SumParts(partial, y_n);
 }
 
 double CorotatedEnergy(const std::vector<TetElement>& elements,

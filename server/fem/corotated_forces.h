@@ -18,6 +18,7 @@
 // All vectors are 3 * #V long, vertex v's axis i at 3v + i.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -32,23 +33,37 @@ enum class FemMethod {
   kCorotationalConsistent,  // tangent R K0 R^T + K_twist (projected Newton)
 };
 
+// Q is O(strain); below this strain (Frobenius norm of sym(R^T F - I),
+// dimensionless) it is taken as 0. The tangent only steers the iterations
+// (the forces stay exact), and 1e-3 of K0 changes their course by nothing
+// measurable while most elements away from the handles skip the term.
+inline constexpr double kTwistMinStrain = 1e-3;
+
 // Per-element state of the tangent: rotation R and twist stiffness Q
 // (N/mm^2, symmetric positive semi-definite; zero unless consistent).
 struct CorotatedFrames {
   std::vector<Eigen::Matrix3d> rotations;  // #T
   std::vector<Eigen::Matrix3d> twist;      // #T, or empty for none
+  std::vector<uint8_t> twisted;            // #T (with twist): 1 where Q != 0
+
+  // Q of element t, or null where it is 0 or absent.
+  const Eigen::Matrix3d* Twist(size_t t) const {
+    return !twist.empty() && twisted[t] ? &twist[t] : nullptr;
+  }
 };
 
 // Rotations and elastic forces at displacement u.
 //   elements  #T
 //   u_mm      3*#V displacements, mm
 //   method    which tangent the frames describe
+//   threads   threads to split the elements between (ParallelChunks)
 // Outputs:
 //   frames    #T rotations (identity for kLinear) and, for the consistent
 //             method, #T twist matrices (resized)
 //   forces_n  3*#V elastic (internal) forces, N (resized, overwritten)
 void CorotatedForces(const std::vector<TetElement>& elements, const Eigen::VectorXd& u_mm,
-                     FemMethod method, CorotatedFrames& frames, Eigen::VectorXd& forces_n);
+                     FemMethod method, CorotatedFrames& frames, Eigen::VectorXd& forces_n,
+                     int threads = 1);
 
 // Tangent of one element applied to its corner vectors v (3 by 4, mm):
 // (R K0 R^T + K_twist) v as 3 by 4 nodal forces, N. twist may be null.
@@ -61,7 +76,7 @@ Eigen::Matrix<double, 3, 4> ApplyElementTangent(const TetElement& element,
 //   v_mm  3*#V
 // Output: y_n, 3*#V, N (resized, overwritten).
 void ApplyCorotatedStiffness(const std::vector<TetElement>& elements, const CorotatedFrames& frames,
-                             const Eigen::VectorXd& v_mm, Eigen::VectorXd& y_n);
+                             const Eigen::VectorXd& v_mm, Eigen::VectorXd& y_n, int threads = 1);
 
 // Elastic energy sum_e V (mu eps:eps + lambda/2 tr(eps)^2) with
 // eps = sym(R^T F - I), N*mm; rotations as from CorotatedForces at u_mm.

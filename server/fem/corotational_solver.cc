@@ -33,7 +33,7 @@ Result<CorotationalSolver> CorotationalSolver::Create(
   if (!(poisson > -1.0 && poisson < 0.5)) {
     return absl::InvalidArgumentError(StrCat("poisson must lie in (-1, 0.5), got ", poisson));
   }
-  if (options.max_newton_iterations < 1 || options.max_cg_iterations < 1 ||
+  if (options.max_newton_iterations < 1 || options.max_cg_iterations < 1 || options.threads < 1 ||
       !(options.update_tolerance > 0.0) || !(options.cg_tolerance > 0.0)) {
     return absl::InvalidArgumentError("solver iteration limits and tolerances must be > 0");
   }
@@ -67,6 +67,7 @@ void CorotationalSolver::Reset() {
   displacement_.setZero();
   frames_.rotations.assign(elements_.size(), Eigen::Matrix3d::Identity());
   frames_.twist.clear();
+  frames_.twisted.clear();
   linearized_ = false;
 }
 
@@ -89,9 +90,13 @@ double CorotationalSolver::MaxVertexNorm(const Eigen::VectorXd& v) const {
   return largest;
 }
 
+int CorotationalSolver::ElementThreads() const {
+  return static_cast<int64_t>(elements_.size()) >= kMinTetsToSplit ? options_.threads : 1;
+}
+
 double CorotationalSolver::Evaluate(const Eigen::VectorXd& force_n,
                                     const std::vector<int32_t>& constrained) {
-  CorotatedForces(elements_, displacement_, options_.method, frames_, forces_);
+  CorotatedForces(elements_, displacement_, options_.method, frames_, forces_, ElementThreads());
   residual_ = force_n - forces_;
   Eigen::VectorXd applied = force_n;
   for (int32_t d : constrained) {
@@ -110,7 +115,7 @@ double CorotationalSolver::NewtonUpdate(const Eigen::VectorXd& rhs,
                                         SolveStats& stats) {
   const auto t0 = Clock::now();
   const LinearMap apply_k = [this](const Eigen::VectorXd& v, Eigen::VectorXd& y) {
-    ApplyCorotatedStiffness(elements_, frames_, v, y);
+    ApplyCorotatedStiffness(elements_, frames_, v, y, ElementThreads());
   };
   const LinearMap precondition = [this, with_handles](const Eigen::VectorXd& r,
                                                       Eigen::VectorXd& z) {
@@ -144,7 +149,7 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
     const auto t0 = Clock::now();
     Eigen::VectorXd rhs = linear_residual_ + (force_n - linearized_force_);
     Eigen::VectorXd k_jump;
-    ApplyCorotatedStiffness(elements_, frames_, jump, k_jump);
+    ApplyCorotatedStiffness(elements_, frames_, jump, k_jump, ElementThreads());
     rhs -= k_jump;
     for (int32_t d : constrained) rhs[d] = 0.0;
     stats.assembly_ms += MsSince(t0);

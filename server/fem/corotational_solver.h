@@ -35,12 +35,22 @@ struct SolverOptions {
   // Converged when the last Newton update moved no vertex by more than
   // update_tolerance * (largest vertex motion of this solve), dimensionless.
   // The default suits interaction: the next step starts from this state and
-  // goes on converging; tests and reference solutions use 1e-8 or less.
-  double update_tolerance = 1e-2;
+  // goes on converging (fem_bench: after a 12 mm drag in 10 steps the
+  // displacement is within ~0.005 mm of the converged one); tests and
+  // reference solutions use 1e-8 or less.
+  double update_tolerance = 5e-2;
   // Relative residual each inner PCG solve stops at (inexact Newton).
-  double cg_tolerance = 1e-2;
+  double cg_tolerance = 2e-1;
   int max_cg_iterations = 1000;
+  // Threads for the element loops (forces, K v) of meshes of at least
+  // kMinTetsToSplit tets; the factor solves stay on one thread. 1 by
+  // default: on a shared 2-core machine a second thread mostly waits.
+  int threads = 1;
 };
+
+// Below this many tets the element loops run on one thread (a split costs
+// thread start-ups of ~20-50 us against loops of < 1 ms).
+inline constexpr int64_t kMinTetsToSplit = 4000;
 
 // Handles: prescribed displacement (drag) or free with forces (pull).
 enum class HandleMode { kPrescribed, kFree };
@@ -114,6 +124,7 @@ class CorotationalSolver {
   // DOFs into residual_ and its relative size.
   double Evaluate(const Eigen::VectorXd& force_n, const std::vector<int32_t>& constrained);
   double MaxVertexNorm(const Eigen::VectorXd& v) const;
+  int ElementThreads() const;
   // One Newton iteration: PCG on K(frames_) du = rhs, displacement_ += du;
   // keeps the PCG residual in linear_residual_. Returns max vertex |du|, mm.
   double NewtonUpdate(const Eigen::VectorXd& rhs, const std::vector<int32_t>& constrained,

@@ -39,7 +39,6 @@ Result<GrabInfo> FindHandles(const std::vector<glm::dvec3>& positions_mm,
     return absl::InvalidArgumentError("one deformable flag per vertex needed");
   }
   GrabInfo info;
-  int64_t fixed_within = 0;
   std::vector<std::pair<double, int32_t>> candidates;  // (distance, vertex), deformable only
   for (size_t v = 0; v < positions_mm.size(); ++v) {
     const double distance = glm::distance(positions_mm[v], point_mm);
@@ -47,16 +46,21 @@ Result<GrabInfo> FindHandles(const std::vector<glm::dvec3>& positions_mm,
       candidates.emplace_back(distance, static_cast<int32_t>(v));
       if (distance <= radius_mm) info.handles.push_back(static_cast<int32_t>(v));
     } else if (distance <= radius_mm) {
-      ++fixed_within;
+      ++info.fixed_within;
     }
   }
   if (!info.handles.empty()) {
     info.message = StrCat("grabbed ", info.handles.size(), " vertices within ", radius_mm, " mm");
+    if (info.fixed_within > 0) {
+      info.message += StrCat("; ", info.fixed_within,
+                             " fixed (hard) vertices within the radius stay in place, so the "
+                             "tissue between them and the handles is strained hardest");
+    }
     return info;
   }
-  if (fixed_within > 0) {
+  if (info.fixed_within > 0) {
     return absl::FailedPreconditionError(
-        StrCat("all ", fixed_within, " vertices within ", radius_mm,
+        StrCat("all ", info.fixed_within, " vertices within ", radius_mm,
                " mm of the grab point are fixed (hard tissue or box corners); grab deformable "
                "tissue or enlarge the radius"));
   }

@@ -19,6 +19,7 @@ inline constexpr int kNearestHandleCount = 4;
 struct GrabInfo {
   std::vector<int32_t> handles;  // vertex indices, ascending
   bool used_nearest = false;     // the radius held no deformable vertex
+  int64_t fixed_within = 0;      // fixed vertices (hard, anchors) within the radius: they stay
   std::string message;           // what happened, for the user
   double setup_ms = 0.0;         // preparing the solver for these handles
 };

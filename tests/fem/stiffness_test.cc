@@ -148,6 +148,13 @@ TEST(Stiffness, MatrixFreeProductMatchesTheAssembledMatrix) {
     EXPECT_LT((dense - dense.transpose()).norm(), 1e-13 * dense.norm());
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(dense);
     EXPECT_GT(eig.eigenvalues().minCoeff(), -1e-12 * eig.eigenvalues().maxCoeff());
+    // Split over threads: the same up to the order of the sums.
+    CorotatedFrames frames2;
+    Eigen::VectorXd forces2, product2;
+    CorotatedForces(elements, u, method, frames2, forces2, /*threads=*/3);
+    ApplyCorotatedStiffness(elements, frames2, v, product2, /*threads=*/2);
+    EXPECT_LT((forces2 - forces).norm(), 1e-14 * forces.norm());
+    EXPECT_LT((product2 - product).norm(), 1e-14 * product.norm());
   }
 }
 
