@@ -12,7 +12,7 @@
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 layout(std430, binding = 0) readonly buffer MinMax { vec2 minmax[]; };
-layout(binding = 1) uniform sampler3D u_map;
+layout(binding = 1) uniform samplerBuffer u_map;  // RGBA32F grid points, x fastest
 layout(std430, binding = 2) readonly buffer Prefix { int nonzero_prefix[]; };
 layout(std430, binding = 3) writeonly buffer Occupancy { float occupancy[]; };
 layout(push_constant) uniform Push { BrickOccupancyPush pc; };
@@ -37,7 +37,7 @@ void main() {
     for (int z = g_lo.z; z <= g_hi.z; ++z)
       for (int y = g_lo.y; y <= g_hi.y; ++y)
         for (int x = g_lo.x; x <= g_hi.x; ++x) {
-          vec3 d = texelFetch(u_map, ivec3(x, y, z), 0).xyz;
+          vec3 d = texelFetch(u_map, x + m.x * (y + m.y * z)).xyz;
           dmin = min(dmin, d);
           dmax = max(dmax, d);
         }

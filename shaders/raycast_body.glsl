@@ -1,27 +1,44 @@
-// The ray caster shared by raycast.comp (volume read from a uniform texel
-// buffer, manual trilinear) and raycast_sampled.comp (volume read through a
-// sampler3D with hardware trilinear filtering). One invocation per pixel.
-// The CPU reference, server/render/raycast_cpu.cc, mirrors every step.
+// The ray caster: one invocation per pixel, 8x8 per workgroup. Compiled in
+// eight variants, one small raycast_*.comp each, chosen by defines:
+//   VPM_RAYCAST_MIP      MIP (else DVR)
+//   VPM_RAYCAST_MAP      sample through the backward map (else identity)
+//   VPM_RAYCAST_SAMPLED  volume and map from sampler3Ds with hardware
+//                        trilinear filtering (the map through
+//                        backward_map.glsl's rest_position); else both from
+//                        uniform texel buffers with manual trilinear (the map
+//                        copied by map_to_texels.comp): faster on lavapipe,
+//                        docs/RENDERING.md
+// Mode and map are compile-time because lavapipe runs both sides of every
+// branch under a lane mask: a runtime `if (mip)` or `if (has_map)` costs the
+// untaken side too. For the same reason the loop body reads the volume at
+// exactly one place: a sample that needs shading spends the next six
+// iterations on its six gradient taps (a small state machine) instead of
+// making six more reads that every other iteration would pay for as well.
 //
 // Per ray: intersect the image box [0, extent_mm]; samples at
-// t_k = t_near + k * step; each sample reads the deformed volume
-// J(x) = I(X(x)), X from the backward map. Bricks of 8^3 cells that the
-// occupancy pass marked empty (DVR: zero opacity over every value the brick
-// can show; MIP: nothing above the running maximum or the window's black)
-// are jumped over to the first sample grid point past them, so skipping
-// never moves a sample. DVR composites front to back with opacities from
-// the step-corrected table, shaded by a Blinn-Phong headlight on the
-// gradient of J (central differences, 6 extra samples of J), and stops at
-// accumulated opacity > 0.99.
-//
-// The including shader declares `float source_at(vec3 u)` (I at continuous
-// index u, already clamped to [0, n - 1]) before including this file.
+// t_k = t_near + k * step; each reads the deformed volume J(x) = I(X(x)), X
+// from the backward map. Bricks of 8^3 cells that the occupancy pass marked
+// empty (DVR: zero opacity over every value the brick can show; MIP: nothing
+// above the running maximum or the window's black) are jumped over to the
+// first sample grid point past them, so skipping never moves a sample. DVR
+// composites front to back with opacities from the step-corrected table,
+// shaded by a Blinn-Phong headlight on the gradient of J (central
+// differences, one spacing, 6 taps of J), and stops at opacity > 0.99.
+// The CPU reference, server/render/raycast_cpu.cc, mirrors every step.
 #ifndef VPM_RAYCAST_BODY_GLSL
 #define VPM_RAYCAST_BODY_GLSL
 
+#include "shader_interface.glsl"
 #include "backward_map.glsl"
 
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#ifdef VPM_RAYCAST_SAMPLED
+layout(binding = 0) uniform sampler3D u_volume;
 layout(binding = 1) uniform sampler3D u_map;
+#else
+layout(binding = 0) uniform samplerBuffer u_volume;
+layout(binding = 1) uniform samplerBuffer u_map;  // RGBA32F, grid points x fastest
+#endif
 layout(std140, binding = 2) uniform Params { RaycastParams p; };
 layout(std140, binding = 3) uniform Lut { vec4 entries[VPM_RENDER_LUT_ENTRIES]; } u_lut;
 layout(std430, binding = 4) readonly buffer Occupancy { float occupancy[]; };
@@ -29,20 +46,109 @@ layout(std430, binding = 5) writeonly buffer Pixels { uint pixels[]; };
 layout(std430, binding = 6) buffer Stats { uint samples_taken; };
 
 const float kOpaque = 0.99;
-const float kShadeMinAlpha = 1.0 / 512.0;  // lighter samples are not worth 6 reads
+const float kShadeMinAlpha = 1.0 / 512.0;  // lighter samples are not worth 6 taps
 const float kNoValue = -3.0e38;
 
 bool has_flag(int f) { return (p.image.z & f) != 0; }
 
+// Reciprocals set once per invocation: a multiply per sample, not a divide.
+vec3 g_inv_spacing;  // 1/mm
+vec3 g_inv_brick;    // 1 / brick size (mm)
+
 vec3 extent_mm() { return vec3(p.dims.xyz - 1) * p.spacing_mm.xyz; }
+
+// I at continuous index u in [0, n - 1].
+float source_at(vec3 u) {
+#ifdef VPM_RAYCAST_SAMPLED
+  return textureLod(u_volume, (u + 0.5) / vec3(p.dims.xyz), 0.0).r;
+#else
+  // Lerps in the order x, y, z, each a + (b - a) * f, as the CPU reference.
+  ivec3 n = p.dims.xyz;
+  ivec3 i0 = min(ivec3(floor(u)), n - 2);
+  vec3 f = u - vec3(i0);
+  int sy = n.x, sz = n.x * n.y;
+  int base = i0.x + sy * i0.y + sz * i0.z;
+  float c000 = texelFetch(u_volume, base).r;
+  float c100 = texelFetch(u_volume, base + 1).r;
+  float c010 = texelFetch(u_volume, base + sy).r;
+  float c110 = texelFetch(u_volume, base + sy + 1).r;
+  float c001 = texelFetch(u_volume, base + sz).r;
+  float c101 = texelFetch(u_volume, base + sz + 1).r;
+  float c011 = texelFetch(u_volume, base + sz + sy).r;
+  float c111 = texelFetch(u_volume, base + sz + sy + 1).r;
+  float c00 = c000 + (c100 - c000) * f.x;
+  float c10 = c010 + (c110 - c010) * f.x;
+  float c01 = c001 + (c101 - c001) * f.x;
+  float c11 = c011 + (c111 - c011) * f.x;
+  float c0 = c00 + (c10 - c00) * f.y;
+  float c1 = c01 + (c11 - c01) * f.y;
+  return c0 + (c1 - c0) * f.z;
+#endif
+}
+
+#if defined(VPM_RAYCAST_MAP) && !defined(VPM_RAYCAST_SAMPLED)
+// X(x) from the map's texel copy: what rest_position() computes through
+// the sampler (grid point a at a * extent / (M - 1), clamped to the edge),
+// with exact weights; lerps in the order x, y, z as the CPU reference.
+vec3 rest_from_texels(vec3 x) {
+  vec3 m = p.map_dims.xyz;
+  vec3 gc = clamp(x / extent_mm() * (m - 1.0), vec3(0.0), m - 1.0);
+  ivec3 mi = ivec3(m);
+  ivec3 i0 = min(ivec3(floor(gc)), mi - 2);
+  vec3 f = gc - vec3(i0);
+  int sy = mi.x, sz = mi.x * mi.y;
+  int base = i0.x + sy * i0.y + sz * i0.z;
+  vec3 c000 = texelFetch(u_map, base).xyz;
+  vec3 c100 = texelFetch(u_map, base + 1).xyz;
+  vec3 c010 = texelFetch(u_map, base + sy).xyz;
+  vec3 c110 = texelFetch(u_map, base + sy + 1).xyz;
+  vec3 c001 = texelFetch(u_map, base + sz).xyz;
+  vec3 c101 = texelFetch(u_map, base + sz + 1).xyz;
+  vec3 c011 = texelFetch(u_map, base + sz + sy).xyz;
+  vec3 c111 = texelFetch(u_map, base + sz + sy + 1).xyz;
+  vec3 c00 = c000 + (c100 - c000) * f.x;
+  vec3 c10 = c010 + (c110 - c010) * f.x;
+  vec3 c01 = c001 + (c101 - c001) * f.x;
+  vec3 c11 = c011 + (c111 - c011) * f.x;
+  vec3 c0 = c00 + (c10 - c00) * f.y;
+  vec3 c1 = c01 + (c11 - c01) * f.y;
+  return x + (c0 + (c1 - c0) * f.z);
+}
+#endif
 
 // J(x): the source at the rest position of x (mm), clamped to the box.
 float deformed_value(vec3 x) {
-  vec3 rest = has_flag(VPM_RAYCAST_HAS_MAP)
-                  ? rest_position(u_map, x, extent_mm(), p.map_dims.xyz)
-                  : x;
-  vec3 u = clamp(rest / p.spacing_mm.xyz, vec3(0.0), vec3(p.dims.xyz - 1));
-  return source_at(u);
+#if defined(VPM_RAYCAST_MAP) && defined(VPM_RAYCAST_SAMPLED)
+  vec3 rest = rest_position(u_map, x, extent_mm(), p.map_dims.xyz);
+#elif defined(VPM_RAYCAST_MAP)
+  vec3 rest = rest_from_texels(x);
+#else
+  vec3 rest = x;
+#endif
+  return source_at(clamp(rest * g_inv_spacing, vec3(0.0), vec3(p.dims.xyz - 1)));
+}
+
+ivec3 brick_of(vec3 x) { return clamp(ivec3(floor(x * g_inv_brick)), ivec3(0), p.bricks.xyz - 1); }
+
+int brick_index(vec3 x) {
+  ivec3 b = brick_of(x);
+  return b.x + p.bricks.x * (b.y + p.bricks.y * b.z);
+}
+
+// Ray parameter where the ray leaves the brick holding x.
+float brick_exit(vec3 x, vec3 eye, vec3 inv_dir) {
+  vec3 size = p.spacing_mm.xyz * float(p.bricks.w);
+  ivec3 b = brick_of(x);
+  vec3 lo = vec3(b) * size;
+  vec3 hi = min(vec3(b + 1) * size, extent_mm());
+  vec3 bound = mix(lo, hi, greaterThan(inv_dir, vec3(0.0)));
+  vec3 t = (bound - eye) * inv_dir;
+  return min(t.x, min(t.y, t.z));
+}
+
+// First sample index past t_exit (at least k + 1).
+int next_sample(float t_exit, float t_near, float step, int k) {
+  return max(k + 1, int(floor((t_exit - t_near) / step)) + 1);
 }
 
 vec4 lut_at(float v) {
@@ -56,39 +162,21 @@ vec4 lut_at(float v) {
 }
 
 // Blinn-Phong with the light at the eye: the half vector is the view
-// vector, so specular is |n.l|^shininess; two-sided (|n.l|).
-vec3 shade(vec3 rgb, vec3 x, vec3 dir) {
-  vec3 h = p.spacing_mm.xyz;
-  vec3 g = vec3(deformed_value(x + vec3(h.x, 0.0, 0.0)) - deformed_value(x - vec3(h.x, 0.0, 0.0)),
-                deformed_value(x + vec3(0.0, h.y, 0.0)) - deformed_value(x - vec3(0.0, h.y, 0.0)),
-                deformed_value(x + vec3(0.0, 0.0, h.z)) - deformed_value(x - vec3(0.0, 0.0, h.z)));
-  g = g / (2.0 * h);
+// vector, so specular is |n.l|^shininess, here by Schlick's rational
+// approximation x / (n - n x + x) (one division; lavapipe pays for this
+// function on every iteration, see above); two-sided (|n.l|). g: the
+// gradient (value/mm). Shading is weighted by s = |g| / (|g| + g_half), so
+// that inside homogeneous tissue, where the gradient is noise, the colour
+// stays as lit head-on instead of speckling.
+vec3 shade(vec3 rgb, vec3 g, vec3 dir) {
   float len = length(g);
   float ndl = len > 0.0 ? abs(dot(g, dir)) / len : 1.0;
-  vec3 lit = rgb * (p.shading.x + p.shading.y * ndl) + vec3(p.shading.z * pow(ndl, p.shading.w));
+  float s = len / (len + p.gradient.x);
+  float n = p.shading.w;
+  float spec = ndl / (n - n * ndl + ndl);
+  float diffuse = 1.0 + (ndl - 1.0) * s;
+  vec3 lit = rgb * (p.shading.x + p.shading.y * diffuse) + vec3(p.shading.z * spec * s);
   return min(lit, vec3(1.0));
-}
-
-int brick_index(vec3 x) {
-  ivec3 b = ivec3(floor(x / (p.spacing_mm.xyz * float(p.bricks.w))));
-  b = clamp(b, ivec3(0), p.bricks.xyz - 1);
-  return b.x + p.bricks.x * (b.y + p.bricks.y * b.z);
-}
-
-// Ray parameter where the ray leaves the brick holding x.
-float brick_exit(vec3 x, vec3 eye, vec3 inv_dir) {
-  vec3 size = p.spacing_mm.xyz * float(p.bricks.w);
-  ivec3 b = clamp(ivec3(floor(x / size)), ivec3(0), p.bricks.xyz - 1);
-  vec3 lo = vec3(b) * size;
-  vec3 hi = min(vec3(b + 1) * size, extent_mm());
-  vec3 bound = mix(lo, hi, greaterThan(inv_dir, vec3(0.0)));
-  vec3 t = (bound - eye) * inv_dir;
-  return min(t.x, min(t.y, t.z));
-}
-
-// First sample index past t_exit.
-int next_sample(float t_exit, float t_near, float step, int k) {
-  return max(k + 1, int(floor((t_exit - t_near) / step)) + 1);
 }
 
 uint pack_rgba(vec3 rgb) {
@@ -96,7 +184,7 @@ uint pack_rgba(vec3 rgb) {
   return c.r | (c.g << 8) | (c.b << 16) | (255u << 24);
 }
 
-void raycast_pixel() {
+void main() {
   ivec2 px = ivec2(gl_GlobalInvocationID.xy);
   if (px.x >= p.image.x || px.y >= p.image.y) return;
   vec2 ndc = vec2(2.0 * (float(px.x) + 0.5) / float(p.image.x) - 1.0,
@@ -113,50 +201,93 @@ void raycast_pixel() {
   float t_near = max(max(max(tmin.x, tmin.y), tmin.z), 0.0);
   float t_far = min(min(tmax.x, tmax.y), tmax.z);
   uint out_index = uint(px.y) * uint(p.image.x) + uint(px.x);
-  vec3 background = p.background.rgb;
   if (t_near > t_far) {
-    pixels[out_index] = pack_rgba(background);
+    pixels[out_index] = pack_rgba(p.background.rgb);
     return;
   }
+  g_inv_spacing = 1.0 / p.spacing_mm.xyz;
+  g_inv_brick = 1.0 / (p.spacing_mm.xyz * float(p.bricks.w));
   float step = p.eye_mm.w;
-  bool mip = p.dims.w == 1;
   bool skipping = has_flag(VPM_RAYCAST_SKIPPING);
-  bool shading = has_flag(VPM_RAYCAST_SHADING);
-  bool early = has_flag(VPM_RAYCAST_EARLY_TERMINATION);
-  float ray_max = kNoValue;
-  vec4 acc = vec4(0.0);
   uint taken = 0u;
   int k = 0;
+#ifdef VPM_RAYCAST_MIP
+  float ray_max = kNoValue;
   for (;;) {
     float t = t_near + float(k) * step;
-    if (t > t_far) break;
     vec3 x = eye + t * dir;
-    if (skipping) {
-      float occ = occupancy[brick_index(x)];
-      bool empty = mip ? occ <= max(ray_max, p.window.x) : occ <= 0.0;
-      if (empty) {
-        k = next_sample(brick_exit(x, eye, inv_dir), t_near, step, k);
-        continue;
-      }
+    // Jump over empty bricks in a loop of its own, which costs no sample.
+    while (skipping && t <= t_far && occupancy[brick_index(x)] <= max(ray_max, p.window.x)) {
+      k = next_sample(brick_exit(x, eye, inv_dir), t_near, step, k);
+      t = t_near + float(k) * step;
+      x = eye + t * dir;
     }
+    if (t > t_far) break;
     ++taken;
-    float v = deformed_value(x);
-    if (mip) {
-      ray_max = max(ray_max, v);
-    } else {
-      vec4 c = lut_at(v);
-      if (c.a > 0.0) {
-        vec3 rgb = (shading && c.a > kShadeMinAlpha) ? shade(c.rgb, x, dir) : c.rgb;
-        float w = (1.0 - acc.a) * c.a;
-        acc.rgb += w * rgb;
-        acc.a += w;
-        if (early && acc.a > kOpaque) break;
-      }
-    }
+    ray_max = max(ray_max, deformed_value(x));
     ++k;
   }
-  vec3 rgb = mip ? vec3(clamp((ray_max - p.window.x) * p.window.y, 0.0, 1.0))
-                 : acc.rgb + (1.0 - acc.a) * background;
+  vec3 rgb = vec3(clamp((ray_max - p.window.x) * p.window.y, 0.0, 1.0));
+#else
+  bool shading = has_flag(VPM_RAYCAST_SHADING);
+  bool early = has_flag(VPM_RAYCAST_EARLY_TERMINATION);
+  vec4 acc = vec4(0.0);
+  int phase = 0;       // 0: the next sample; 1..6: gradient taps around x_shade
+  vec3 x_shade = eye;  // the sample being shaded, its colour, its gradient so far
+  vec4 c_shade = vec4(0.0);
+  vec3 g = vec3(0.0);
+  vec3 h = p.spacing_mm.xyz;
+  for (;;) {
+    float t = t_near + float(k) * step;
+    vec3 x = eye + t * dir;
+    if (phase == 0) {
+      // Jump over empty bricks in a loop of its own, which costs no sample.
+      while (skipping && t <= t_far && occupancy[brick_index(x)] <= 0.0) {
+        k = next_sample(brick_exit(x, eye, inv_dir), t_near, step, k);
+        t = t_near + float(k) * step;
+        x = eye + t * dir;
+      }
+      if (t > t_far) break;
+      ++taken;
+    }
+    // Tap 1..6: +x, -x, +y, -y, +z, -z, one spacing away.
+    int axis = (phase - 1) >> 1;
+    vec3 along = vec3(equal(ivec3(axis), ivec3(0, 1, 2)));
+    float sign = (phase & 1) == 1 ? 1.0 : -1.0;
+    float v = deformed_value(phase == 0 ? x : x_shade + sign * h * along);
+    vec4 c = c_shade;
+    bool composite = false;
+    if (phase == 0) {
+      c = lut_at(v);
+      if (shading && c.a > kShadeMinAlpha) {
+        phase = 1;
+        x_shade = x;
+        c_shade = c;
+        g = vec3(0.0);
+      } else {
+        composite = c.a > 0.0;
+        ++k;
+      }
+    } else {
+      g += sign * v * along;
+      if (phase == 6) {
+        c.rgb = shade(c.rgb, g / (2.0 * h), dir);
+        composite = true;
+        phase = 0;
+        ++k;
+      } else {
+        ++phase;
+      }
+    }
+    if (composite) {
+      float w = (1.0 - acc.a) * c.a;
+      acc.rgb += w * c.rgb;
+      acc.a += w;
+      if (early && acc.a > kOpaque) break;
+    }
+  }
+  vec3 rgb = acc.rgb + (1.0 - acc.a) * p.background.rgb;
+#endif
   pixels[out_index] = pack_rgba(rgb);
   if (has_flag(VPM_RAYCAST_COUNT_SAMPLES)) atomicAdd(samples_taken, taken);
 }

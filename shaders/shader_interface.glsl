@@ -55,10 +55,15 @@ struct RaycastParams {
   vec4 background;  // rgb in [0, 1]
   vec4 shading;     // (ambient, diffuse, specular, shininess)
   vec4 map_dims;    // (Mx, My, Mz, 0) backward-map grid points
+  vec4 gradient;    // (|grad| at which shading is half on, value/mm; 0, 0, 0)
 };
 
 struct UpscalePush {
   ivec4 size;  // (source width, source height, target width, target height)
+};
+
+struct MapToTexelsPush {
+  ivec4 map_dims;  // (Mx, My, Mz, 0) grid points
 };
 
 struct BackwardMapPush {

@@ -82,8 +82,9 @@ struct RaycastParams {
   glm::vec4 background;  // rgb in [0, 1]
   glm::vec4 shading;     // (ambient, diffuse, specular, shininess)
   glm::vec4 map_dims;    // (Mx, My, Mz, 0) backward-map grid points
+  glm::vec4 gradient;    // (|grad| at which shading is half on, value/mm; 0, 0, 0)
 };
-static_assert(sizeof(RaycastParams) == 208);
+static_assert(sizeof(RaycastParams) == 224);
 
 // Uniform block RenderLutBlock (std140): colour (rgb) and opacity for the
 // frame's step (a) at value_lo + i / (entries per value unit).
@@ -98,6 +99,12 @@ struct UpscalePush {
   glm::ivec4 size;  // (source width, source height, target width, target height)
 };
 static_assert(sizeof(UpscalePush) == 16);
+
+// map_to_texels.comp: the backward map image copied to a texel buffer.
+struct MapToTexelsPush {
+  glm::ivec4 map_dims;  // (Mx, My, Mz, 0) grid points
+};
+static_assert(sizeof(MapToTexelsPush) == 16);
 
 // backward_map.comp: rasterizes the backward map tet by tet, one workgroup
 // per listed tet. pass (in map_dims.w): 0 clear the previous coverage of the

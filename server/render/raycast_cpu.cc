@@ -48,21 +48,20 @@ void ForRows(int rows, int threads, Fn fn) {
   for (auto& th : pool) th.join();
 }
 
-// The map as the sampler reads it: linear, clamp to edge, texel centres at
-// grid points.
-vec3 MapDisplacement(const HostBackwardMap& map, vec3 p, vec3 extent, vec3 map_dims) {
-  const vec3 uvw = (p / extent * (map_dims - 1.0f) + 0.5f) / map_dims;
-  const vec3 c = uvw * map_dims - 0.5f;
-  const vec3 fl = glm::floor(c);
-  const vec3 f = c - fl;
-  const ivec3 m(map.dims[0], map.dims[1], map.dims[2]);
-  const ivec3 i0 = glm::clamp(ivec3(fl), ivec3(0), m - 1);
-  const ivec3 i1 = glm::clamp(ivec3(fl) + 1, ivec3(0), m - 1);
-  auto at = [&](int x, int y, int z) { return vec3(map.texels[x + m.x * (y + m.y * z)]); };
-  const vec3 c00 = at(i0.x, i0.y, i0.z) + (at(i1.x, i0.y, i0.z) - at(i0.x, i0.y, i0.z)) * f.x;
-  const vec3 c10 = at(i0.x, i1.y, i0.z) + (at(i1.x, i1.y, i0.z) - at(i0.x, i1.y, i0.z)) * f.x;
-  const vec3 c01 = at(i0.x, i0.y, i1.z) + (at(i1.x, i0.y, i1.z) - at(i0.x, i0.y, i1.z)) * f.x;
-  const vec3 c11 = at(i0.x, i1.y, i1.z) + (at(i1.x, i1.y, i1.z) - at(i0.x, i1.y, i1.z)) * f.x;
+// X(x) - x from the map: rest_from_texels() of raycast_body.glsl (the
+// sampler's linear, clamp-to-edge filtering with exact weights).
+vec3 MapDisplacement(const HostBackwardMap& map, vec3 x, vec3 extent, vec3 m) {
+  const vec3 gc = glm::clamp(x / extent * (m - 1.0f), vec3(0.0f), m - 1.0f);
+  const ivec3 mi(map.dims[0], map.dims[1], map.dims[2]);
+  const ivec3 i0 = glm::min(ivec3(glm::floor(gc)), mi - 2);
+  const vec3 f = gc - vec3(i0);
+  auto at = [&](int dx, int dy, int dz) {
+    return vec3(map.texels[(i0.x + dx) + size_t(mi.x) * ((i0.y + dy) + size_t(mi.y) * (i0.z + dz))]);
+  };
+  const vec3 c00 = at(0, 0, 0) + (at(1, 0, 0) - at(0, 0, 0)) * f.x;
+  const vec3 c10 = at(0, 1, 0) + (at(1, 1, 0) - at(0, 1, 0)) * f.x;
+  const vec3 c01 = at(0, 0, 1) + (at(1, 0, 1) - at(0, 0, 1)) * f.x;
+  const vec3 c11 = at(0, 1, 1) + (at(1, 1, 1) - at(0, 1, 1)) * f.x;
   const vec3 c0 = c00 + (c10 - c00) * f.y;
   const vec3 c1 = c01 + (c11 - c01) * f.y;
   return c0 + (c1 - c0) * f.z;
@@ -79,6 +78,8 @@ class Caster {
     flags_ = p.image.z;
     nb_ = ivec3(p.bricks);
     brick_size_ = spacing_ * float(p.bricks.w);
+    inv_spacing_ = 1.0f / spacing_;
+    inv_brick_ = 1.0f / brick_size_;
   }
 
   uint32_t Pixel(int px, int py, int64_t& taken) const;
@@ -104,7 +105,7 @@ class Caster {
     const vec3 rest = Flag(gpu::kRaycastHasMap)
                           ? x + MapDisplacement(*in_.map, x, extent_, vec3(p_.map_dims))
                           : x;
-    return SourceAt(glm::clamp(rest / spacing_, vec3(0.0f), vec3(n_ - 1)));
+    return SourceAt(glm::clamp(rest * inv_spacing_, vec3(0.0f), vec3(n_ - 1)));
   }
 
   vec4 LutAt(float v) const {
@@ -124,13 +125,17 @@ class Caster {
     g = g / (2.0f * h);
     const float len = glm::length(g);
     const float ndl = len > 0.0f ? std::abs(glm::dot(g, dir)) / len : 1.0f;
-    const vec3 lit = rgb * (p_.shading.x + p_.shading.y * ndl) +
-                     vec3(p_.shading.z * std::pow(ndl, p_.shading.w));
+    const float s = len / (len + p_.gradient.x);
+    const float n = p_.shading.w;
+    const float spec = ndl / (n - n * ndl + ndl);  // Schlick's ndl^n
+    const float diffuse = 1.0f + (ndl - 1.0f) * s;
+    const vec3 lit =
+        rgb * (p_.shading.x + p_.shading.y * diffuse) + vec3(p_.shading.z * spec * s);
     return glm::min(lit, vec3(1.0f));
   }
 
   ivec3 BrickOf(vec3 x) const {
-    return glm::clamp(ivec3(glm::floor(x / brick_size_)), ivec3(0), nb_ - 1);
+    return glm::clamp(ivec3(glm::floor(x * inv_brick_)), ivec3(0), nb_ - 1);
   }
 
   float BrickExit(vec3 x, vec3 eye, vec3 inv_dir) const {
@@ -146,7 +151,7 @@ class Caster {
   const RaycastCpuInputs& in_;
   const float* values_;
   ivec3 n_, nb_;
-  vec3 spacing_, extent_, brick_size_;
+  vec3 spacing_, extent_, brick_size_, inv_spacing_, inv_brick_;
   int flags_ = 0;
 };
 

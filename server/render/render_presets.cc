@@ -10,20 +10,22 @@ namespace {
 
 using glm::dvec4;
 
-// CT soft tissue: fat faintly yellow, muscle and organs red-brown and
-// semi-transparent, bone ivory and nearly opaque.
+// CT soft tissue: fat almost clear, skin, muscle and organs red-brown and
+// fairly opaque (a ray stops within some 30 mm of tissue: the skin surface,
+// the muscle wall and organs where fat lies between), bone ivory.
 RenderPreset CtSoftTissue() {
   return {"ct-soft-tissue",
           {{-1000, dvec4(0.0, 0.0, 0.0, 0.0)},
-           {-200, dvec4(0.85, 0.70, 0.45, 0.0)},
-           {-100, dvec4(0.90, 0.75, 0.50, 0.004)},
-           {-40, dvec4(0.90, 0.70, 0.50, 0.004)},
-           {20, dvec4(0.80, 0.35, 0.28, 0.012)},
-           {60, dvec4(0.85, 0.38, 0.30, 0.03)},
-           {120, dvec4(0.95, 0.45, 0.35, 0.05)},
-           {250, dvec4(0.95, 0.88, 0.75, 0.25)},
-           {700, dvec4(1.0, 0.97, 0.90, 0.8)},
-           {3000, dvec4(1.0, 0.97, 0.90, 0.8)}},
+           {-300, dvec4(0.85, 0.70, 0.45, 0.0)},
+           {-100, dvec4(0.90, 0.75, 0.50, 0.002)},
+           {-50, dvec4(0.90, 0.72, 0.50, 0.002)},
+           {10, dvec4(0.80, 0.40, 0.30, 0.04)},
+           {40, dvec4(0.85, 0.42, 0.33, 0.12)},
+           {80, dvec4(0.90, 0.45, 0.35, 0.14)},
+           {150, dvec4(0.95, 0.55, 0.45, 0.18)},
+           {250, dvec4(0.95, 0.90, 0.80, 0.4)},
+           {700, dvec4(1.0, 0.97, 0.90, 0.9)},
+           {3000, dvec4(1.0, 0.97, 0.90, 0.9)}},
           {40.0, 400.0}};
 }
 
@@ -79,7 +81,7 @@ RenderPreset MriT1(const Volume& volume) {
                             {60.0, dvec4(0.65, 0.62, 0.58, 0.02)},
                             {90.0, dvec4(0.95, 0.90, 0.85, 0.08)},
                             {99.5, dvec4(1.0, 1.0, 1.0, 0.15)}};
-  RenderPreset preset{"mri-t1", {}, {}};
+  RenderPreset preset{"mri-t1", {}, {}, 30.0};
   double last = -INFINITY;
   for (const Anchor& a : anchors) {
     // Strictly increasing, so that flat images still give a valid preset.
@@ -91,6 +93,8 @@ RenderPreset MriT1(const Volume& volume) {
   const double p1 = Percentile(sample, 1.0);
   const double p995 = std::max(Percentile(sample, 99.5), p1 + 1e-3);
   preset.mip_window = {0.5 * (p1 + p995), p995 - p1};
+  // CT's 30 HU/mm is about 1/50 of the soft tissue to bone range per mm.
+  preset.shading_gradient = std::max(1e-6, (p995 - p1) / 50.0);
   return preset;
 }
 
@@ -138,6 +142,10 @@ Status ValidateRenderPreset(const RenderPreset& preset) {
       return absl::InvalidArgumentError(
           StrCat("render preset '", preset.name, "': values must be sorted ascending"));
     }
+  }
+  if (!std::isfinite(preset.shading_gradient) || !(preset.shading_gradient > 0.0)) {
+    return absl::InvalidArgumentError(
+        StrCat("render preset '", preset.name, "': shading_gradient must be > 0"));
   }
   const MipWindow& w = preset.mip_window;
   if (!std::isfinite(w.level) || !std::isfinite(w.width) || !(w.width > 0.0)) {

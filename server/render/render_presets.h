@@ -41,6 +41,9 @@ struct RenderPreset {
   std::string name;
   std::vector<ColorPoint> points;  // at least 2, sorted by value
   MipWindow mip_window;            // the default MIP window for this preset
+  // Gradient magnitude (value/mm) at which DVR shading is half on: weaker
+  // gradients (noise inside homogeneous tissue) shade less. > 0.
+  double shading_gradient = 30.0;
   bool operator==(const RenderPreset&) const = default;
 };
 

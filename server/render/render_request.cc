@@ -107,6 +107,7 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   p.shading = glm::vec4(float(s.ambient), float(s.diffuse), float(s.specular),
                         float(s.shininess));
   p.map_dims = glm::vec4(float(map_dims[0]), float(map_dims[1]), float(map_dims[2]), 0.0f);
+  p.gradient = glm::vec4(float(request.preset.shading_gradient), 0.0f, 0.0f, 0.0f);
   return setup;
 }
 

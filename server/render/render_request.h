@@ -29,7 +29,7 @@ enum class RenderMode { kDvr, kMip };
 enum class RenderQuality { kStill, kInteractive };
 
 inline constexpr int kMaxFrameSide = 4096;
-inline constexpr int kBrickVoxels = 8;  // empty-space-skipping brick: 8^3 cells
+inline constexpr int kBrickVoxels = 4;  // empty-space-skipping brick: 8^3 cells
 inline constexpr double kStillStepFactor = 0.5;
 inline constexpr double kInteractiveStepFactor = 1.0;
 // Longest ray, in samples, a request may ask for (the box diagonal / step):
@@ -65,11 +65,16 @@ struct RenderRequest {
   // Backward map, R32G32B32A32Sfloat, M grid points corner to corner of the
   // image box, texel = (X(p) - p in mm, inside); null: undeformed.
   const gpu::GpuImage3D* backward_map = nullptr;
+  // Nonzero: the map's content is unchanged for as long as this number is
+  // (bump it with every update), so the renderer may reuse its per-frame
+  // brick occupancy. 0: unknown, recomputed every frame.
+  uint64_t backward_map_version = 0;
   RaycastSettings settings;
   OverlayData overlay;
 };
 
 struct FrameTimings {
+  double map_copy_ms = 0.0;   // GPU: backward map to texel buffer
   double occupancy_ms = 0.0;  // GPU: per-frame brick occupancy kernel
   double raycast_ms = 0.0;    // GPU: ray casting kernel
   double upscale_ms = 0.0;    // GPU: interactive upscale
@@ -89,6 +94,7 @@ struct Frame {
   int64_t samples = -1;       // samples taken, when settings.count_samples
   int64_t occupied_bricks = -1;  // bricks the occupancy pass kept (skipping on)
   int64_t total_bricks = 0;
+  bool occupancy_reused = false;  // the occupancy of an earlier frame still held
   FrameTimings timings;
 };
 

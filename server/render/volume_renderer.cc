@@ -8,8 +8,15 @@
 #include "server/gpu/shader_interface.h"
 #include "shaders/brick_minmax.spv.h"
 #include "shaders/brick_occupancy.spv.h"
-#include "shaders/raycast.spv.h"
-#include "shaders/raycast_sampled.spv.h"
+#include "shaders/map_to_texels.spv.h"
+#include "shaders/raycast_dvr.spv.h"
+#include "shaders/raycast_dvr_map.spv.h"
+#include "shaders/raycast_dvr_map_sampled.spv.h"
+#include "shaders/raycast_dvr_sampled.spv.h"
+#include "shaders/raycast_mip.spv.h"
+#include "shaders/raycast_mip_map.spv.h"
+#include "shaders/raycast_mip_map_sampled.spv.h"
+#include "shaders/raycast_mip_sampled.spv.h"
 #include "shaders/upscale.spv.h"
 
 namespace vpm {
@@ -25,6 +32,16 @@ double MsSince(std::chrono::steady_clock::time_point t0) {
 }
 
 uint32_t GroupCount(int threads, int local) { return uint32_t((threads + local - 1) / local); }
+
+// The ray-casting variant for (access, mode, map): shaders/raycast_body.glsl.
+std::span<const uint32_t> RaycastSpirv(bool sampled, bool mip, bool map) {
+  if (sampled) {
+    if (mip) return map ? std::span<const uint32_t>(kRaycastMipMapSampledSpv) : kRaycastMipSampledSpv;
+    return map ? std::span<const uint32_t>(kRaycastDvrMapSampledSpv) : kRaycastDvrSampledSpv;
+  }
+  if (mip) return map ? std::span<const uint32_t>(kRaycastMipMapSpv) : kRaycastMipSpv;
+  return map ? std::span<const uint32_t>(kRaycastDvrMapSpv) : kRaycastDvrSpv;
+}
 
 }  // namespace
 
@@ -48,22 +65,28 @@ Status VolumeRenderer::Init() {
                    gpu::ComputeKernel::Create(
                        *context_, {.name = "brick_occupancy",
                                    .spirv = kBrickOccupancySpv,
-                                   .bindings = {DT::eStorageBuffer, DT::eCombinedImageSampler,
+                                   .bindings = {DT::eStorageBuffer, DT::eUniformTexelBuffer,
                                                 DT::eStorageBuffer, DT::eStorageBuffer},
                                    .push_constant_bytes = sizeof(gpu::BrickOccupancyPush),
                                    .local_size = {64, 1, 1}}));
-  ASSIGN_OR_RETURN(
-      auto raycast,
-      gpu::ComputeKernel::Create(
-          *context_,
-          {.name = sampled ? "raycast_sampled" : "raycast",
-           .spirv = sampled ? std::span<const uint32_t>(kRaycastSampledSpv)
-                            : std::span<const uint32_t>(kRaycastSpv),
-           .bindings = {sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
-                        DT::eCombinedImageSampler, DT::eUniformBuffer, DT::eUniformBuffer,
-                        DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
-           .push_constant_bytes = 0,
-           .local_size = {8, 8, 1}}));
+  for (int mip = 0; mip < 2; ++mip) {
+    for (int map = 0; map < 2; ++map) {
+      ASSIGN_OR_RETURN(
+          auto raycast,
+          gpu::ComputeKernel::Create(
+              *context_,
+              {.name = StrCat("raycast_", mip ? "mip" : "dvr", map ? "_map" : "",
+                              sampled ? "_sampled" : ""),
+               .spirv = RaycastSpirv(sampled, mip, map),
+               .bindings = {sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
+                            sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
+                            DT::eUniformBuffer, DT::eUniformBuffer,
+                            DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
+               .push_constant_bytes = 0,
+               .local_size = {8, 8, 1}}));
+      raycast_kernels_[mip][map].emplace(std::move(raycast));
+    }
+  }
   ASSIGN_OR_RETURN(auto upscale,
                    gpu::ComputeKernel::Create(
                        *context_, {.name = "upscale",
@@ -71,9 +94,16 @@ Status VolumeRenderer::Init() {
                                    .bindings = {DT::eStorageBuffer, DT::eStorageBuffer},
                                    .push_constant_bytes = sizeof(gpu::UpscalePush),
                                    .local_size = {8, 8, 1}}));
+  ASSIGN_OR_RETURN(auto map_to_texels,
+                   gpu::ComputeKernel::Create(
+                       *context_, {.name = "map_to_texels",
+                                   .spirv = kMapToTexelsSpv,
+                                   .bindings = {DT::eCombinedImageSampler, DT::eStorageBuffer},
+                                   .push_constant_bytes = sizeof(gpu::MapToTexelsPush),
+                                   .local_size = {64, 1, 1}}));
+  map_to_texels_kernel_.emplace(std::move(map_to_texels));
   minmax_kernel_.emplace(std::move(minmax));
   occupancy_kernel_.emplace(std::move(occupancy));
-  raycast_kernel_.emplace(std::move(raycast));
   upscale_kernel_.emplace(std::move(upscale));
 
   ASSIGN_OR_RETURN(auto identity, gpu::GpuImage3D::Create(*context_, {2, 2, 2},
@@ -86,7 +116,30 @@ Status VolumeRenderer::Init() {
   RETURN_IF_ERROR(EnsureBuffer(nonzero_prefix_, (gpu::kRenderLutEntries + 1) * sizeof(int32_t),
                                BU::eStorageBuffer));
   RETURN_IF_ERROR(EnsureBuffer(stats_, 16, BU::eStorageBuffer));
-  return absl::OkStatus();
+  return EnsureMapTexels(8);
+}
+
+Status VolumeRenderer::EnsureMapTexels(size_t points) {
+  if (map_texels_ && map_texels_->size_bytes() >= points * sizeof(glm::vec4)) {
+    return absl::OkStatus();
+  }
+  if (points > context_->limits().maxTexelBufferElements) {
+    return absl::ResourceExhaustedError(
+        StrCat("backward map of ", points, " points exceeds this device's texel-buffer limit of ",
+               context_->limits().maxTexelBufferElements, "; use VolumeAccess::kSampler3D"));
+  }
+  map_texels_view_ = nullptr;
+  map_texels_.reset();
+  ASSIGN_OR_RETURN(auto buffer, gpu::GpuBuffer::Create(*context_, points * sizeof(glm::vec4),
+                                                       BU::eStorageBuffer |
+                                                           BU::eUniformTexelBuffer));
+  map_texels_.emplace(std::move(buffer));
+  return gpu::CatchVulkan("creating the backward map's texel view", [&] {
+    map_texels_view_ = vk::raii::BufferView(
+        context_->device(), vk::BufferViewCreateInfo({}, map_texels_->handle(),
+                                                     vk::Format::eR32G32B32A32Sfloat, 0,
+                                                     VK_WHOLE_SIZE));
+  });
 }
 
 Status VolumeRenderer::EnsureBuffer(std::optional<gpu::GpuBuffer>& buffer, vk::DeviceSize bytes,
@@ -101,6 +154,7 @@ Status VolumeRenderer::EnsureBuffer(std::optional<gpu::GpuBuffer>& buffer, vk::D
 void VolumeRenderer::ForgetVolume(const GpuVolume* volume) {
   std::lock_guard<std::mutex> lock(mutex_);
   std::erase_if(brick_grids_, [&](const BrickGrid& g) { return g.volume == volume; });
+  if (occupancy_key_ && occupancy_key_->volume == volume) occupancy_key_.reset();
 }
 
 Result<const gpu::GpuBuffer*> VolumeRenderer::BrickMinMax(const GpuVolume& volume) {
@@ -137,6 +191,7 @@ Status VolumeRenderer::PrepareLut(const RenderPreset& preset, double step_mm) {
       nonzero_prefix_->Upload(std::as_bytes(std::span<const int32_t>(lut.nonzero_prefix))));
   lut_preset_ = preset;
   lut_step_mm_ = step_mm;
+  ++lut_generation_;
   lut_params_ = LutParams(lut);
   return absl::OkStatus();
 }
@@ -165,32 +220,45 @@ Status VolumeRenderer::CheckGpuInputs(const RenderRequest& request) const {
 
 Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
                                    const RaycastSetup& setup, const gpu::GpuBuffer& minmax,
-                                   bool upscale) {
+                                   bool upscale, bool occupancy_current) {
   const gpu::RaycastParams& p = setup.params;
   const gpu::GpuImage3D* map = request.backward_map ? request.backward_map : &*identity_map_;
-  const int bricks = p.bricks.x * p.bricks.y * p.bricks.z;
+  const bool sampled = options_.volume_access == VolumeAccess::kSampler3D;
+  const bool mip = request.mode == RenderMode::kMip;
+  const bool has_map = request.backward_map != nullptr;
+  const bool occupancy = request.settings.empty_space_skipping && !occupancy_current;
   if (request.settings.count_samples) RETURN_IF_ERROR(batch.Fill(*stats_, 0));
-  if (request.settings.empty_space_skipping) {
+  // The map's texel copy serves the occupancy pass and the texel-buffer ray
+  // casters.
+  if (has_map && (occupancy || !sampled)) {
+    const auto& e = map->extent();
+    const int points = int(e[0] * e[1] * e[2]);
+    const gpu::MapToTexelsPush push{.map_dims = glm::ivec4(e[0], e[1], e[2], 0)};
+    RETURN_IF_ERROR(batch.Dispatch(*map_to_texels_kernel_, {map, &*map_texels_}, push,
+                                   {GroupCount(points, 64), 1, 1}, "map_to_texels"));
+  }
+  if (occupancy) {
+    const int bricks = p.bricks.x * p.bricks.y * p.bricks.z;
     const gpu::BrickOccupancyPush push{
         .dims = glm::ivec4(glm::ivec3(p.dims), 0),
         .bricks = p.bricks,
         .spacing_mm = p.spacing_mm,
         .lut = p.lut,
-        .flags = glm::ivec4(p.dims.w, request.backward_map ? 1 : 0, 0, 0),
+        .flags = glm::ivec4(p.dims.w, has_map ? 1 : 0, 0, 0),
         .map_dims = glm::vec4(glm::vec3(map->extent()[0], map->extent()[1], map->extent()[2]),
                               0.0f)};
     RETURN_IF_ERROR(batch.Dispatch(*occupancy_kernel_,
-                                   {&minmax, map, &*nonzero_prefix_, &*occupancy_}, push,
-                                   {GroupCount(bricks, 64), 1, 1}, "occupancy"));
+                                   {&minmax, *map_texels_view_, &*nonzero_prefix_, &*occupancy_},
+                                   push, {GroupCount(bricks, 64), 1, 1}, "occupancy"));
   }
-  const gpu::KernelArg volume_arg =
-      options_.volume_access == VolumeAccess::kSampler3D
-          ? gpu::KernelArg(request.volume_image)
-          : gpu::KernelArg(request.volume->texel_view());
+  const gpu::KernelArg volume_arg = sampled ? gpu::KernelArg(request.volume_image)
+                                            : gpu::KernelArg(request.volume->texel_view());
+  const gpu::KernelArg map_arg =
+      sampled ? gpu::KernelArg(map) : gpu::KernelArg(*map_texels_view_);
   const std::array<gpu::KernelArg, 7> args{
-      volume_arg, map, &*params_, &*lut_, &*occupancy_, &*pixels_, &*stats_};
+      volume_arg, map_arg, &*params_, &*lut_, &*occupancy_, &*pixels_, &*stats_};
   RETURN_IF_ERROR(batch.Dispatch(
-      *raycast_kernel_, args, {},
+      *raycast_kernels_[mip][has_map], args, {},
       {GroupCount(setup.render_width, 8), GroupCount(setup.render_height, 8), 1}, "raycast"));
   if (upscale) {
     const gpu::UpscalePush push{
@@ -224,14 +292,27 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   const size_t render_pixels = size_t(setup.render_width) * setup.render_height;
   const size_t out_pixels = size_t(request.width) * request.height;
   const bool upscale = render_pixels != out_pixels;
+  if (!occupancy_ || occupancy_->size_bytes() < bricks * sizeof(float)) occupancy_key_.reset();
   RETURN_IF_ERROR(EnsureBuffer(occupancy_, bricks * sizeof(float), BU::eStorageBuffer));
   RETURN_IF_ERROR(EnsureBuffer(pixels_, render_pixels * 4, BU::eStorageBuffer));
+  if (request.backward_map) {
+    RETURN_IF_ERROR(EnsureMapTexels(size_t(map_dims[0]) * map_dims[1] * map_dims[2]));
+  }
+  // The occupancy depends on the volume, the table, the mode and the map; a
+  // map's content is known unchanged only through backward_map_version.
+  const OccupancyKey key{request.volume,  request.volume->buffer().handle(),
+                         request.mode,    lut_generation_,
+                         request.backward_map, request.backward_map_version};
+  const bool cacheable = request.backward_map == nullptr || request.backward_map_version != 0;
+  const bool occupancy_current = cacheable && occupancy_key_ == key;
+  occupancy_key_.reset();  // until this frame's pass has run
   if (upscale) RETURN_IF_ERROR(EnsureBuffer(upscaled_, out_pixels * 4, BU::eStorageBuffer));
   RETURN_IF_ERROR(params_->Upload(std::as_bytes(std::span<const gpu::RaycastParams>(&p, 1))));
 
-  ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 4));
-  RETURN_IF_ERROR(RecordFrame(batch, request, setup, *minmax, upscale));
+  ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 5));
+  RETURN_IF_ERROR(RecordFrame(batch, request, setup, *minmax, upscale, occupancy_current));
   ASSIGN_OR_RETURN(const auto timings, batch.SubmitAndWait());
+  if (request.settings.empty_space_skipping && cacheable) occupancy_key_ = key;
 
   Frame frame;
   frame.width = request.width;
@@ -240,8 +321,10 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   frame.render_height = setup.render_height;
   frame.step_mm = setup.step_mm;
   frame.total_bricks = int64_t(bricks);
+  frame.occupancy_reused = request.settings.empty_space_skipping && occupancy_current;
   for (const auto& t : timings) {
     if (t.label == "occupancy") frame.timings.occupancy_ms = t.gpu_ms;
+    if (t.label == "map_to_texels") frame.timings.map_copy_ms = t.gpu_ms;
     if (t.label == "raycast") frame.timings.raycast_ms = t.gpu_ms;
     if (t.label == "upscale") frame.timings.upscale_ms = t.gpu_ms;
     frame.timings.render_ms += std::max(0.0, t.gpu_ms);

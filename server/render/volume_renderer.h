@@ -53,6 +53,17 @@ class VolumeRenderer {
   VolumeAccess volume_access() const { return options_.volume_access; }
 
  private:
+  // What the occupancy buffer was computed for.
+  struct OccupancyKey {
+    const GpuVolume* volume;
+    vk::Buffer volume_buffer;
+    RenderMode mode;
+    uint64_t lut_generation;
+    const gpu::GpuImage3D* map;
+    uint64_t map_version;
+    bool operator==(const OccupancyKey&) const = default;
+  };
+
   struct BrickGrid {
     const GpuVolume* volume;
     vk::Buffer buffer;                // the volume's texel buffer, to detect reuse
@@ -68,17 +79,23 @@ class VolumeRenderer {
   Status PrepareLut(const RenderPreset& preset, double step_mm);
   Status EnsureBuffer(std::optional<gpu::GpuBuffer>& buffer, vk::DeviceSize bytes,
                       vk::BufferUsageFlags usage);
+  Status EnsureMapTexels(size_t points);
   Status RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
-                     const RaycastSetup& setup, const gpu::GpuBuffer& minmax, bool upscale);
+                     const RaycastSetup& setup, const gpu::GpuBuffer& minmax, bool upscale,
+                     bool occupancy_current);
 
   const gpu::GpuContext* context_;
   Options options_;
   std::mutex mutex_;
   std::optional<gpu::ComputeKernel> minmax_kernel_;
   std::optional<gpu::ComputeKernel> occupancy_kernel_;
-  std::optional<gpu::ComputeKernel> raycast_kernel_;
+  std::optional<gpu::ComputeKernel> raycast_kernels_[2][2];  // [mip][backward map]
   std::optional<gpu::ComputeKernel> upscale_kernel_;
+  std::optional<gpu::ComputeKernel> map_to_texels_kernel_;
   std::optional<gpu::GpuImage3D> identity_map_;  // 2^3 zeros, bound when there is no map
+  // The backward map copied per frame for the texel-buffer variants (RGBA32F).
+  std::optional<gpu::GpuBuffer> map_texels_;
+  vk::raii::BufferView map_texels_view_{nullptr};  // after the buffer it views
   std::optional<gpu::GpuBuffer> params_;          // RaycastParams, uniform
   std::optional<gpu::GpuBuffer> lut_;             // RenderLutBlock, uniform
   std::optional<gpu::GpuBuffer> nonzero_prefix_;  // int per entry + 1, storage
@@ -90,6 +107,8 @@ class VolumeRenderer {
   std::optional<RenderPreset> lut_preset_;
   double lut_step_mm_ = 0.0;
   glm::vec4 lut_params_{0.0f};
+  uint64_t lut_generation_ = 0;  // bumped at every bake
+  std::optional<OccupancyKey> occupancy_key_;
 };
 
 }  // namespace vpm

@@ -162,6 +162,31 @@ TEST_F(RaycastTest, DeformingMap_GpuMatchesCpuAndSkippingStaysExact) {
   }
 }
 
+TEST_F(RaycastTest, Occupancy_ReusedOnlyWhileMapVersionAndPresetHold) {
+  HostBackwardMap host;
+  auto map = MakeMap(9, 6.0, &host);
+  ASSERT_TRUE(map.ok()) << map.status();
+  RenderRequest r = Request(RenderMode::kDvr);
+  r.backward_map = &*map;
+  EXPECT_FALSE(RenderGpu(r).occupancy_reused);
+  EXPECT_FALSE(RenderGpu(r).occupancy_reused);  // version 0: the content may have changed
+  r.backward_map_version = 7;
+  const Frame first = RenderGpu(r);
+  const Frame again = RenderGpu(r);
+  EXPECT_FALSE(first.occupancy_reused);
+  EXPECT_TRUE(again.occupancy_reused);
+  EXPECT_EQ(again.rgba, first.rgba);
+  r.backward_map_version = 8;
+  EXPECT_FALSE(RenderGpu(r).occupancy_reused);
+  r.preset = *MakeRenderPreset("ct-bone", *volume_);
+  EXPECT_FALSE(RenderGpu(r).occupancy_reused);
+  r.mode = RenderMode::kMip;
+  EXPECT_FALSE(RenderGpu(r).occupancy_reused);
+  r.backward_map = nullptr;
+  EXPECT_FALSE(RenderGpu(r).occupancy_reused);
+  EXPECT_TRUE(RenderGpu(r).occupancy_reused);  // no map: nothing can change behind our back
+}
+
 TEST_F(RaycastTest, EmptySpaceSkipping_SameImageFewerSamples) {
   for (RenderMode mode : {RenderMode::kDvr, RenderMode::kMip}) {
     SCOPED_TRACE(mode == RenderMode::kDvr ? "DVR" : "MIP");

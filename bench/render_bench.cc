@@ -1,0 +1,248 @@
+// Ray casting of the 256^3 phantom (or argv[1]) through an identity backward
+// map: GPU kernel time against the CPU reference (2 threads) on the same
+// frame in one run (runs alternate, minimum of 5 each), with empty-space skipping on and off, still 512x512 and
+// interactive (512x512 shown, 256x256 cast), texel-buffer and sampler3D
+// volume reads; then JPEG (quality 85) and PNG encoding of the still frame.
+// Usage: render_bench [SOURCE] [PNG_DIR] [FILTER] [SIZE]
+//   PNG_DIR: where to write the frames ("" for nowhere); FILTER: only the
+//   rows whose name contains it; SIZE: frame side (default 512).
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <fstream>
+#include <optional>
+#include <string>
+
+#include "bench/bench_util.h"
+#include "server/render/frame_encoder.h"
+#include "server/render/raycast_cpu.h"
+#include "server/render/volume_renderer.h"
+#include "server/volume/read_volume.h"
+
+using namespace vpm;
+
+namespace {
+
+struct Case {
+  std::string name;
+  RenderMode mode;
+  const char* preset;
+  RenderQuality quality;
+  bool skipping;
+  bool shading = true;
+  bool map = true;
+  VolumeAccess access = VolumeAccess::kTexelBuffer;
+};
+
+struct Measured {
+  double gpu_raycast_ms = 1e300;  // timestamps, min over reps
+  double gpu_total_ms = 1e300;    // every kernel of the frame
+  double wall_ms = 1e300;         // Render() incl. readback
+  double cpu_ms = 1e300;          // reference, occupancy + ray cast + upscale
+  // Process CPU time / 2 cores: what the wall time would be on an idle
+  // 2-core machine, measurable while other processes load it.
+  double gpu_cpu_time_ms = 1e300;
+  double cpu_cpu_time_ms = 1e300;
+  double mean_err = 0, max_err = 0;
+  Frame frame;
+};
+
+double ProcessCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+void WritePng(const std::string& dir, const std::string& name, const Frame& f) {
+  if (dir.empty()) return;
+  auto png = bench::Check(EncodePng(f.rgba, f.width, f.height), "png");
+  std::ofstream(dir + "/" + name + ".png", std::ios::binary)
+      .write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
+}
+
+// Oblique views of every preset, and the anterior ct-vessels view with a
+// mesh-like overlay (a 10 x 10 x 8 point lattice, bone points hard, one
+// handle near the left kidney dragged 30 mm to the left), for looking at.
+void WriteViews(const std::string& dir, const Volume& volume, const GpuVolume& gpu_volume,
+                VolumeRenderer& renderer) {
+  for (const char* preset : {"ct-soft-tissue", "ct-bone", "ct-vessels", "mri-t1"}) {
+    for (RenderMode mode : {RenderMode::kDvr, RenderMode::kMip}) {
+      RenderRequest r;
+      r.camera = Camera::ForVolume(volume.geometry());
+      r.camera.Orbit(35.0, 20.0);
+      r.mode = mode;
+      r.preset = bench::Check(MakeRenderPreset(preset, volume), "preset");
+      r.volume = &gpu_volume;
+      const Frame f = bench::Check(renderer.Render(r), "render");
+      WritePng(dir, std::string("oblique_") + preset + (mode == RenderMode::kMip ? "_mip" : ""), f);
+    }
+  }
+  RenderRequest r;
+  r.camera = Camera::ForVolume(volume.geometry());
+  r.preset = bench::Check(MakeRenderPreset("ct-vessels", volume), "preset");
+  r.volume = &gpu_volume;
+  const glm::dvec3 extent = volume.geometry().extent_mm();
+  glm::dvec3 kidney = 0.5 * extent;
+  for (const Landmark& l : volume.landmarks()) {
+    if (l.name == "left_kidney_center") kidney = l.position_mm;
+  }
+  double best = 1e300;
+  for (int c = 0; c < 8; ++c)
+    for (int b = 0; b < 10; ++b)
+      for (int a = 0; a < 10; ++a) {
+        const glm::dvec3 pos = glm::dvec3(a / 9.0, b / 9.0, c / 7.0) * extent;
+        const glm::dvec3 index = glm::round(volume.geometry().PhysicalToIndex(pos));
+        const bool hard = volume.At(int64_t(index.x), int64_t(index.y), int64_t(index.z)) > 250;
+        r.overlay.points.push_back({pos, hard, VertexKind::kLattice, false});
+        const double d = glm::length(pos - kidney);
+        if (d < best) best = d;
+      }
+  for (auto& p : r.overlay.points) p.handle = glm::length(p.position_mm - kidney) == best;
+  r.overlay.points.push_back({kidney, false, VertexKind::kRefined, false});
+  r.overlay.drag = DragArrow{kidney, kidney + glm::dvec3(30.0, 0.0, 0.0)};
+  WritePng(dir, "overlay_ct_vessels", bench::Check(renderer.Render(r), "render"));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string source = argc > 1 ? argv[1] : "phantom:abdomen";
+  const std::string png_dir = argc > 2 ? argv[2] : "";
+  const std::string filter = argc > 3 ? argv[3] : "";
+  const int size = argc > 4 ? std::atoi(argv[4]) : 512;
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows appear as they are measured
+  const int reps = 5;
+  auto volume = bench::Check(ReadVolume(source, {}), "reading the volume");
+  auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
+  auto gpu_volume = bench::Check(GpuVolume::Upload(*context, volume), "upload");
+  const gpu::GpuImage3D* volume_image = bench::Check(gpu_volume.Image(*context, volume), "image");
+
+  // Identity backward map, 33^3 points (the warp's default grid size class).
+  const uint32_t m = 33;
+  auto map = bench::Check(
+      gpu::GpuImage3D::Create(*context, {m, m, m}, vk::Format::eR32G32B32A32Sfloat), "map");
+  HostBackwardMap host_map{{int(m), int(m), int(m)},
+                           std::vector<glm::vec4>(size_t(m) * m * m, glm::vec4(0, 0, 0, 1))};
+  if (!map.Upload(std::as_bytes(std::span<const glm::vec4>(host_map.texels))).ok()) return 1;
+
+  auto t0 = std::chrono::steady_clock::now();
+  auto texel_renderer = bench::Check(VolumeRenderer::Create(*context, {}), "renderer");
+  const double create_ms = bench::MsSince(t0);
+  auto sampled_renderer = bench::Check(
+      VolumeRenderer::Create(*context, {.volume_access = VolumeAccess::kSampler3D}), "renderer");
+  const auto minmax = BrickMinMaxCpu(volume);
+
+  std::vector<Case> cases;
+  for (bool skip : {true, false}) {
+    const char* s = skip ? "" : ", no skip";
+    cases.push_back({std::string("still DVR ct-vessels") + s, RenderMode::kDvr, "ct-vessels",
+                     RenderQuality::kStill, skip});
+    cases.push_back({std::string("still DVR ct-soft-tissue") + s, RenderMode::kDvr,
+                     "ct-soft-tissue", RenderQuality::kStill, skip});
+    if (skip) {
+      cases.push_back({"still DVR ct-bone", RenderMode::kDvr, "ct-bone", RenderQuality::kStill,
+                       true});
+    }
+    cases.push_back({std::string("still MIP") + s, RenderMode::kMip, "ct-vessels",
+                     RenderQuality::kStill, skip});
+    cases.push_back({std::string("interactive DVR ct-vessels") + s, RenderMode::kDvr,
+                     "ct-vessels", RenderQuality::kInteractive, skip});
+    cases.push_back({std::string("interactive MIP") + s, RenderMode::kMip, "ct-vessels",
+                     RenderQuality::kInteractive, skip});
+  }
+  cases.push_back({"still DVR ct-vessels, no shading", RenderMode::kDvr, "ct-vessels",
+                   RenderQuality::kStill, true, false});
+  cases.push_back({"still DVR ct-vessels, map unchanged", RenderMode::kDvr, "ct-vessels",
+                   RenderQuality::kStill, true});
+  cases.push_back({"still DVR ct-vessels, no map", RenderMode::kDvr, "ct-vessels",
+                   RenderQuality::kStill, true, true, false});
+  cases.push_back({"still MIP, no map", RenderMode::kMip, "ct-vessels", RenderQuality::kStill,
+                   true, true, false});
+  cases.push_back({"still MIP, no skip, no map", RenderMode::kMip, "ct-vessels",
+                   RenderQuality::kStill, false, true, false});
+  cases.push_back({"still DVR ct-vessels, sampler3D", RenderMode::kDvr, "ct-vessels",
+                   RenderQuality::kStill, true, true, true, VolumeAccess::kSampler3D});
+  cases.push_back({"still MIP, sampler3D", RenderMode::kMip, "ct-vessels",
+                   RenderQuality::kStill, true, true, true, VolumeAccess::kSampler3D});
+
+  std::printf("ray casting %s (%lldx%lldx%lld), device '%s'; min of %d, GPU and CPU (2 threads) "
+              "alternating; identity map %ux%ux%u; renderer created in %.1f ms\n",
+              source.c_str(), (long long)volume.dims()[0], (long long)volume.dims()[1],
+              (long long)volume.dims()[2], context->device_name().c_str(), reps,
+              m, m, m, create_ms);
+  std::printf("%-36s %9s %7s %7s %7s %7s %7s | %7s %7s %7s | %8s %7s\n", "frame (as shown)",
+              "cast", "GPU ms", "GPU all", "wall", "CPU ms", "CPU/GPU", "GPU t/2", "CPU t/2",
+              "CPU/GPU", "err mean", "max/255");
+  std::optional<Frame> still_frame;
+  for (const Case& c : cases) {
+    if (c.name.find(filter) == std::string::npos) continue;
+    RenderRequest r;
+    r.camera = Camera::ForVolume(volume.geometry());
+    r.mode = c.mode;
+    r.preset = bench::Check(MakeRenderPreset(c.preset, volume), "preset");
+    r.quality = c.quality;
+    r.width = r.height = size;
+    r.volume = &gpu_volume;
+    r.volume_image = volume_image;
+    r.backward_map = c.map ? &map : nullptr;
+    // 0: the occupancy is recomputed every frame, as while dragging.
+    r.backward_map_version = c.name.find("map unchanged") != std::string::npos ? 1 : 0;
+    r.settings.empty_space_skipping = c.skipping;
+    r.settings.shading = c.shading;
+    VolumeRenderer& renderer =
+        c.access == VolumeAccess::kTexelBuffer ? *texel_renderer : *sampled_renderer;
+    Measured best;
+    bench::Check(renderer.Render(r), "warm-up render");
+    // GPU and CPU runs alternate, so that both see the same machine load.
+    Frame cpu;
+    for (int rep = 0; rep < reps; ++rep) {
+      double c0 = ProcessCpuMs();
+      Frame f = bench::Check(renderer.Render(r), "render");
+      best.gpu_cpu_time_ms = std::min(best.gpu_cpu_time_ms, (ProcessCpuMs() - c0) / 2.0);
+      best.gpu_raycast_ms = std::min(best.gpu_raycast_ms, f.timings.raycast_ms);
+      best.gpu_total_ms = std::min(best.gpu_total_ms, f.timings.render_ms);
+      best.wall_ms = std::min(best.wall_ms, f.timings.wall_ms);
+      best.frame = std::move(f);
+      c0 = ProcessCpuMs();
+      cpu = bench::Check(RenderReference(r, volume, c.map ? &host_map : nullptr, 2, &minmax),
+                         "reference");
+      best.cpu_cpu_time_ms = std::min(best.cpu_cpu_time_ms, (ProcessCpuMs() - c0) / 2.0);
+      best.cpu_ms = std::min(best.cpu_ms, cpu.timings.occupancy_ms + cpu.timings.raycast_ms +
+                                              cpu.timings.upscale_ms);
+    }
+    for (size_t i = 0; i < cpu.rgba.size(); ++i) {
+      if (i % 4 == 3) continue;
+      const double d = std::abs(double(cpu.rgba[i]) - double(best.frame.rgba[i]));
+      best.mean_err += d / (cpu.rgba.size() * 0.75);
+      best.max_err = std::max(best.max_err, d);
+    }
+    std::printf(
+        "%-36s %4dx%-4d %7.1f %7.1f %7.1f %7.1f %7.2f | %7.1f %7.1f %7.2f | %8.3f %7.0f\n",
+        c.name.c_str(), best.frame.render_width, best.frame.render_height, best.gpu_raycast_ms,
+        best.gpu_total_ms, best.wall_ms, best.cpu_ms, best.cpu_ms / best.gpu_total_ms,
+        best.gpu_cpu_time_ms, best.cpu_cpu_time_ms, best.cpu_cpu_time_ms / best.gpu_cpu_time_ms,
+        best.mean_err, best.max_err);
+    std::string file = c.name;
+    for (char& ch : file) ch = std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
+    WritePng(png_dir, file, best.frame);
+    if (c.name == "still DVR ct-vessels") still_frame = best.frame;
+  }
+
+  if (!png_dir.empty()) WriteViews(png_dir, volume, gpu_volume, *texel_renderer);
+  if (!still_frame) return 0;
+  // Encoding the still DVR frame.
+  const Frame& f = *still_frame;
+  std::vector<uint8_t> jpeg, png;
+  const double jpeg_ms = bench::MinMs(reps, [&] {
+    jpeg = bench::Check(EncodeJpeg(f.rgba, f.width, f.height, 85), "jpeg");
+  });
+  const double png_ms =
+      bench::MinMs(reps, [&] { png = bench::Check(EncodePng(f.rgba, f.width, f.height), "png"); });
+  std::printf("\nencoding the still DVR frame (%dx%d): JPEG q85 %.2f ms, %zu bytes; "
+              "PNG %.2f ms, %zu bytes\n",
+              f.width, f.height, jpeg_ms, jpeg.size(), png_ms, png.size());
+  return 0;
+}

@@ -1,0 +1,7 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// Ray casting: DVR, through the backward map, volume from a sampler3D.
+// The body and the list of variants: raycast_body.glsl.
+#define VPM_RAYCAST_MAP
+#define VPM_RAYCAST_SAMPLED
+#include "raycast_body.glsl"

@@ -1,0 +1,6 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// Ray casting: MIP, no backward map (identity), volume from a uniform texel buffer.
+// The body and the list of variants: raycast_body.glsl.
+#define VPM_RAYCAST_MIP
+#include "raycast_body.glsl"

@@ -1,0 +1,7 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// Ray casting: MIP, through the backward map, volume from a uniform texel buffer.
+// The body and the list of variants: raycast_body.glsl.
+#define VPM_RAYCAST_MIP
+#define VPM_RAYCAST_MAP
+#include "raycast_body.glsl"
