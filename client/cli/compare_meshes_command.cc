@@ -1,5 +1,6 @@
 #include "client/cli/compare_meshes_command.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 
@@ -9,6 +10,7 @@
 #include "client/cli/gpu_backend.h"
 #include "client/cli/mesh_flags.h"
 #include "server/mesh/compare_meshes.h"
+#include "server/mesh/deformation_measures.h"
 #include "server/volume/read_volume.h"
 
 namespace vpm::cli {
@@ -18,7 +20,28 @@ struct CompareArgs {
   std::string source;
   MeshFlags mesh;
   std::string backend = "auto", json_out;
+  bool deformation = true;
+  std::string drag_landmark = StandardDrag{}.landmark;
+  std::vector<double> drag{0.0, 0.0, 12.0};
 };
+
+void PrintDeformation(const std::vector<DeformationMeasure>& rows, const StandardDrag& drag) {
+  std::printf("\ndeformation: grab '%s' (radius h), drag (%.1f, %.1f, %.1f) mm; error vs the "
+              "dense-lattice reference over body voxels (every 4th per axis)\n",
+              drag.landmark.c_str(), drag.offset_mm.x, drag.offset_mm.y, drag.offset_mm.z);
+  std::printf("%-10s %6s %8s %10s %10s %12s %11s %12s %9s  %s\n", "mesh", "verts", "handles",
+              "RMS mm", "max mm", "bone max %", "inverted", "inv @1.5h", "FEM ms",
+              "worst bone voxel (mm)");
+  for (const auto& r : rows) {
+    std::printf("%-10s %6lld %8lld %10.3f %10.3f %12.2f %11lld %12lld %9.1f  (%.0f, %.0f, %.0f)%s\n",
+                r.name.c_str(),
+                static_cast<long long>(r.vertices), static_cast<long long>(r.handles),
+                r.rms_error_mm, r.max_error_mm, 100.0 * r.bone_max_fraction,
+                static_cast<long long>(r.inverted_at_drag),
+                static_cast<long long>(r.inverted_at_1_5h), r.solve_ms, r.bone_worst_mm.x,
+                r.bone_worst_mm.y, r.bone_worst_mm.z, r.converged ? "" : " (not converged)");
+  }
+}
 
 void PrintTable(const std::vector<MeshComparisonRow>& rows) {
   std::printf("%-14s %6s %6s %12s %14s %12s %10s %10s\n", "mesh", "verts", "tets",
@@ -60,6 +83,19 @@ Status Run(const CompareArgs& args) {
   ASSIGN_OR_RETURN(auto rows, CompareMeshes(volume, params, gpu ? gpu->mesh_gpu() : MeshGpu{}));
   PrintTable(rows);
   if (!args.json_out.empty()) RETURN_IF_ERROR(WriteJson(rows, args.json_out));
+  if (!args.deformation) return absl::OkStatus();
+  const bool has_landmark =
+      std::any_of(volume.landmarks().begin(), volume.landmarks().end(),
+                  [&](const Landmark& l) { return l.name == args.drag_landmark; });
+  if (!has_landmark) {
+    std::printf("\ndeformation measures skipped: %s has no landmark '%s' (--drag-landmark)\n",
+                volume.source().c_str(), args.drag_landmark.c_str());
+    return absl::OkStatus();
+  }
+  const StandardDrag drag{.landmark = args.drag_landmark,
+                          .offset_mm = glm::dvec3(args.drag[0], args.drag[1], args.drag[2])};
+  ASSIGN_OR_RETURN(auto deformation, CompareDeformation(volume, params, drag));
+  PrintDeformation(deformation, drag);
   return absl::OkStatus();
 }
 
@@ -72,6 +108,12 @@ void AddCompareMeshesCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--volume", args->source, "a file, a DICOM folder or phantom:NAME")->required();
   AddMeshFlags(cmd, &args->mesh);
   cmd->add_option("--json", args->json_out, "also write the table as JSON");
+  cmd->add_flag("!--no-deformation", args->deformation,
+                "skip the deformation measures (FEM on each mesh and on the dense reference)");
+  cmd->add_option("--drag-landmark", args->drag_landmark, "the standard drag's grab point")
+      ->capture_default_str();
+  cmd->add_option("--drag", args->drag, "the standard drag, DX DY DZ mm")->expected(3)
+      ->capture_default_str();
   AddBackendFlag(cmd, &args->backend);
   cmd->callback([args, exit_code] { *exit_code = ExitWith(Run(*args)); });
 }

@@ -10,5 +10,6 @@ add_library(vpm_mesh
   ${CMAKE_CURRENT_LIST_DIR}/refine_at_point.cc
   ${CMAKE_CURRENT_LIST_DIR}/build_proxy_mesh.cc
   ${CMAKE_CURRENT_LIST_DIR}/compare_meshes.cc
+  ${CMAKE_CURRENT_LIST_DIR}/deformation_measures.cc
 )
-target_link_libraries(vpm_mesh PUBLIC vpm_volume vpm_volume_gpu vpm_tetmesh)
+target_link_libraries(vpm_mesh PUBLIC vpm_volume vpm_volume_gpu vpm_tetmesh vpm_fem)

@@ -7,3 +7,6 @@ vpm_add_test(NAME mesh_gpu_test
 vpm_add_test(NAME compare_meshes_test
   SOURCES compare_meshes_test.cc
   LIBS vpm_mesh vpm_phantom)
+vpm_add_test(NAME deformation_measures_test
+  SOURCES deformation_measures_test.cc
+  LIBS vpm_mesh vpm_phantom)

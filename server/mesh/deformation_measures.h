@@ -1,0 +1,60 @@
+// The deformation measures of ALGORITHM.md section 6, for meshes of one
+// vertex budget under one standard drag:
+//  - deformation error: RMS (and max) over the body voxels (TF > 0) of the
+//    displacement interpolated on the mesh minus the displacement of a
+//    reference solved on the full dense lattice (all G vertices kept);
+//  - rigidity: the largest displacement of any bone voxel (value above the
+//    bone threshold) as a fraction of the drag;
+//  - validity: inverted tets after the standard drag and after a drag of
+//    1.5 h in the same direction.
+// Voxels are sampled every `voxel_stride` voxels per axis (default 4: 1/64
+// of the voxels), which is documented with the figures.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "server/common/status.h"
+#include "server/fem/fem_model.h"
+#include "server/mesh/build_proxy_mesh.h"
+
+namespace vpm {
+
+// The standard drag (docs/MESH.md): grab the phantom's left renal artery with
+// a radius of one lattice step h and drag it 12 mm cranially (+z), across the
+// vessel's course.
+struct StandardDrag {
+  std::string landmark = "left_renal_artery";
+  glm::dvec3 offset_mm{0.0, 0.0, 12.0};
+  double grab_radius_factor = 1.0;  // x h of the G lattice
+};
+
+struct DeformationMeasure {
+  std::string name;                 // "regular", "step 2", "step 4", "reference"
+  int64_t vertices = 0;
+  int64_t handles = 0;
+  double rms_error_mm = 0.0;        // vs the reference, over sampled body voxels
+  double max_error_mm = 0.0;
+  double bone_max_fraction = 0.0;   // max bone-voxel displacement / |drag|
+  glm::dvec3 bone_worst_mm{0.0};    // where that bone voxel is (physical mm)
+  int64_t inverted_at_drag = 0;     // inverted tets after the standard drag
+  int64_t inverted_at_1_5h = 0;     // after a drag of 1.5 h
+  double solve_ms = 0.0;            // FEM for the standard drag
+  bool converged = false;
+};
+
+struct DeformationOptions {
+  int voxel_stride = 4;
+  FemOptions fem;
+};
+
+// Rows: reference (the dense lattice), regular, step 2, step 4. The budget is
+// params.target + the number of refinement vertices step 4 accepted.
+Result<std::vector<DeformationMeasure>> CompareDeformation(const Volume& volume,
+                                                           const MeshParams& params,
+                                                           const StandardDrag& drag,
+                                                           const DeformationOptions& options = {});
+
+}  // namespace vpm

@@ -1,0 +1,63 @@
+// Section 6 deformation measures on the phantom (ALGORITHM.md): error of the
+// standard drag against the dense-lattice reference, rigidity of bone, and
+// validity of the mesh after drags up to 1.5 h.
+#include "server/mesh/deformation_measures.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "server/volume/phantom.h"
+
+namespace vpm {
+namespace {
+
+class DeformationOnPhantom : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    // 128^3 keeps the voxel sampling quick; the mesh and FEM do not depend on it.
+    auto volume = MakePhantom("abdomen?size=128", VolumeLimits{});
+    ASSERT_TRUE(volume.ok()) << volume.status();
+    auto rows = CompareDeformation(*volume, MeshParams{}, StandardDrag{});
+    ASSERT_TRUE(rows.ok()) << rows.status();
+    rows_ = new std::vector<DeformationMeasure>(std::move(*rows));
+    for (const auto& r : *rows_) {
+      std::printf("%-9s verts %5lld handles %3lld RMS %.3f mm max %.3f mm bone %.2f%% at "
+                  "(%.0f, %.0f, %.0f) mm, inverted %lld / %lld at 1.5h\n",
+                  r.name.c_str(), (long long)r.vertices, (long long)r.handles, r.rms_error_mm,
+                  r.max_error_mm, 100 * r.bone_max_fraction, r.bone_worst_mm.x,
+                  r.bone_worst_mm.y, r.bone_worst_mm.z, (long long)r.inverted_at_drag,
+                  (long long)r.inverted_at_1_5h);
+    }
+  }
+  static void TearDownTestSuite() { delete rows_; }
+  static const DeformationMeasure& Row(const std::string& name) {
+    for (const auto& r : *rows_) {
+      if (r.name == name) return r;
+    }
+    ADD_FAILURE() << name;
+    return rows_->front();
+  }
+  static std::vector<DeformationMeasure>* rows_;
+};
+std::vector<DeformationMeasure>* DeformationOnPhantom::rows_ = nullptr;
+
+// What holds on the phantom. Measured and NOT holding (docs/MESH.md, "Open
+// findings"): step 2 beats the regular lattice; bone moves under 5% of the
+// drag; no inverted tet after a 1.5 h drag of the refined meshes.
+// One test (one process under ctest): the dense reference solve dominates.
+TEST_F(DeformationOnPhantom, Step4BeatsStep2AndRegularAndTheReferenceStaysValid) {
+  EXPECT_LT(Row("step 4").rms_error_mm, Row("step 2").rms_error_mm);
+  EXPECT_LT(Row("step 4").rms_error_mm, Row("regular").rms_error_mm);
+  EXPECT_EQ(Row("reference").inverted_at_drag, 0);
+  EXPECT_EQ(Row("regular").inverted_at_drag, 0);
+  EXPECT_EQ(Row("regular").inverted_at_1_5h, 0);
+  for (const auto& r : *rows_) {
+    EXPECT_TRUE(r.converged) << r.name;
+    EXPECT_GT(r.handles, 0) << r.name;
+    EXPECT_TRUE(std::isfinite(r.rms_error_mm)) << r.name;
+  }
+}
+
+}  // namespace
+}  // namespace vpm
