@@ -34,7 +34,8 @@ Result<CorotationalSolver> CorotationalSolver::Create(
     return absl::InvalidArgumentError(StrCat("poisson must lie in (-1, 0.5), got ", poisson));
   }
   if (options.max_newton_iterations < 1 || options.max_cg_iterations < 1 || options.threads < 1 ||
-      !(options.update_tolerance > 0.0) || !(options.cg_tolerance > 0.0)) {
+      options.adaptive_twist_after < 0 || !(options.update_tolerance > 0.0) ||
+      !(options.cg_tolerance > 0.0)) {
     return absl::InvalidArgumentError("solver iteration limits and tolerances must be > 0");
   }
   CorotationalSolver solver;
@@ -95,8 +96,8 @@ int CorotationalSolver::ElementThreads() const {
 }
 
 double CorotationalSolver::Evaluate(const Eigen::VectorXd& force_n,
-                                    const std::vector<int32_t>& constrained) {
-  CorotatedForces(elements_, displacement_, options_.method, frames_, forces_, ElementThreads());
+                                    const std::vector<int32_t>& constrained, FemMethod method) {
+  CorotatedForces(elements_, displacement_, method, frames_, forces_, ElementThreads());
   residual_ = force_n - forces_;
   Eigen::VectorXd applied = force_n;
   for (int32_t d : constrained) {
@@ -159,7 +160,10 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
   linearized_ = false;
   for (;;) {
     const auto t0 = Clock::now();
-    stats.residual = Evaluate(force_n, constrained);
+    const bool plain_first = options_.method == FemMethod::kCorotationalConsistent &&
+                             stats.newton_iterations < options_.adaptive_twist_after;
+    stats.residual =
+        Evaluate(force_n, constrained, plain_first ? FemMethod::kCorotational : options_.method);
     stats.assembly_ms += MsSince(t0);
     if (!std::isfinite(stats.residual)) {
       displacement_ = start;

@@ -31,6 +31,11 @@ namespace vpm {
 
 struct SolverOptions {
   FemMethod method = FemMethod::kCorotationalConsistent;
+  // With kCorotationalConsistent: each solve starts with the cheaper
+  // R K0 R^T tangent and adds the twist term from Newton iteration
+  // adaptive_twist_after + 1 on (mild steps converge before; stressed ones
+  // need it). 0: the twist term throughout.
+  int adaptive_twist_after = 3;
   int max_newton_iterations = 30;
   // Converged when the last Newton update moved no vertex by more than
   // update_tolerance * (largest vertex motion of this solve), dimensionless.
@@ -122,7 +127,8 @@ class CorotationalSolver {
   Status CheckLoad(const Eigen::VectorXd& prescribed_mm, const Eigen::VectorXd& force_n) const;
   // Rotations and forces at displacement_; returns the residual on the free
   // DOFs into residual_ and its relative size.
-  double Evaluate(const Eigen::VectorXd& force_n, const std::vector<int32_t>& constrained);
+  double Evaluate(const Eigen::VectorXd& force_n, const std::vector<int32_t>& constrained,
+                  FemMethod method);
   double MaxVertexNorm(const Eigen::VectorXd& v) const;
   int ElementThreads() const;
   // One Newton iteration: PCG on K(frames_) du = rhs, displacement_ += du;

@@ -1,6 +1,7 @@
 #include "server/fem/flat_tets.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "server/mesh/tet_quality.h"
 
@@ -20,7 +21,7 @@ std::vector<int32_t> NonFlatTets(const std::vector<glm::dvec3>& positions_mm,
     }
     const double volume = SignedVolume(positions_mm[q[0]], positions_mm[q[1]], positions_mm[q[2]],
                                        positions_mm[q[3]]);
-    if (volume > kFlatTetRelativeVolume * longest * longest * longest) {
+    if (std::abs(volume) > kFlatTetRelativeVolume * longest * longest * longest) {
       kept.push_back(static_cast<int32_t>(t));
     }
   }

@@ -16,8 +16,9 @@
 
 namespace vpm {
 
-// A tet with signed volume <= this * (longest edge)^3 counts as flat
-// (dimensionless; 0.118 for the regular tet).
+// A tet with |signed volume| <= this * (longest edge)^3 counts as flat
+// (dimensionless; 0.118 for the regular tet). Inverted tets beyond it are
+// kept, for the element set-up to reject.
 inline constexpr double kFlatTetRelativeVolume = 1e-9;
 
 // Indices of the tets that are not flat.

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "server/fem/fixed_dofs.h"
+#include "server/fem/flat_tets.h"
 #include "server/mesh/build_proxy_mesh.h"
 #include "tests/fem/fem_test_meshes.h"
 #include "tests/mesh/mesh_test_volumes.h"
@@ -90,6 +91,26 @@ TEST(FemModel, GrabRejectsBadInputWithClearCodes) {
   // A mesh with nothing deformable.
   for (MeshVertex& v : mesh.vertices) v.hard = true;
   EXPECT_EQ(FemModel::Create(mesh, kExtent).status().code(), absl::StatusCode::kFailedPrecondition);
+}
+
+// A tet flat to round-off (here 4 corners of one hex face) holds no material
+// but would make the stiffness singular: it is left out; an inverted tet is
+// an error.
+TEST(FemModel, FlatTetsAreLeftOutInvertedOnesRejected) {
+  ProxyMesh mesh = GridMesh({6, 6, 6}, kExtent);
+  const std::array<int32_t, 4> face = {8, 9, 15, 16};  // (1,1,0) (2,1,0) (1,2,0) (2,2,0)
+  mesh.tets.push_back(face);
+  EXPECT_EQ(NonFlatTets(RestPositions(mesh), mesh.tets).size(), mesh.tets.size() - 1);
+  auto model = FemModel::Create(mesh, kExtent);
+  ASSERT_TRUE(model.ok()) << model.status();
+  EXPECT_EQ(model->setup().flat_tets, 1);
+  EXPECT_EQ(model->tets().size(), mesh.tets.size() - 1);
+  mesh.tets.pop_back();
+  std::swap(mesh.tets[10][2], mesh.tets[10][3]);
+  const auto inverted = FemModel::Create(mesh, kExtent);
+  EXPECT_EQ(inverted.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(inverted.status().message().find("tet 10"), std::string::npos)
+      << inverted.status().message();
 }
 
 TEST(FemModel, DragAndPullNeedAGrab) {
