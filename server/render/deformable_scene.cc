@@ -104,8 +104,14 @@ Result<Frame> DeformableScene::Render(const SceneView& view) {
 }
 
 Result<Volume> DeformableScene::WarpedVolume() {
+  // Export through an exact map (one point per voxel centre), not the coarse
+  // interactive one: docs/WARP.md measures what the coarse map costs.
+  BackwardMap::Options exact;
+  exact.map_dims = volume_->dims();
+  ASSIGN_OR_RETURN(BackwardMap map, BackwardMap::Create(*context_, volume_->geometry(), exact));
+  RETURN_IF_ERROR(map.Update(fem_->rest_positions_mm(), fem_->Positions(), fem_->tets()).status());
   ASSIGN_OR_RETURN(VolumeWarper warper, VolumeWarper::Create(*context_));
-  return warper.Warp(*gpu_volume_, *volume_, *map_);
+  return warper.Warp(*gpu_volume_, *volume_, map);
 }
 
 }  // namespace vpm

@@ -69,7 +69,8 @@ class DeformableScene {
   Result<SceneStepTimings> Release();
 
   Result<Frame> Render(const SceneView& view);
-  // The deformed volume at full resolution on the source grid (for export).
+  // The deformed volume at full resolution on the source grid (for export),
+  // through an exact backward map (one point per voxel).
   Result<Volume> WarpedVolume();
 
   const ProxyMesh& mesh() const { return mesh_; }
