@@ -27,11 +27,7 @@ Result<LatticeCosts> LatticeCostsGpu::Evaluate(const GpuVolume& volume, const La
     return absl::InvalidArgumentError("lattice was built for a volume of other dimensions");
   }
   const size_t n = static_cast<size_t>(lattice.size());
-  ASSIGN_OR_RETURN(const gpu::TransferFunctionBlock block, MakeTransferFunctionBlock(tf));
-  ASSIGN_OR_RETURN(gpu::GpuBuffer ubo,
-                   gpu::GpuBuffer::Create(*context_, sizeof(block),
-                                          vk::BufferUsageFlagBits::eUniformBuffer));
-  RETURN_IF_ERROR(ubo.Upload(std::as_bytes(std::span(&block, 1))));
+  ASSIGN_OR_RETURN(gpu::GpuBuffer ubo, UploadTransferFunction(*context_, tf));
   ASSIGN_OR_RETURN(gpu::GpuBuffer out,
                    gpu::GpuBuffer::Create(*context_, n * sizeof(glm::vec4),
                                           vk::BufferUsageFlagBits::eStorageBuffer));

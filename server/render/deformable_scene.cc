@@ -12,6 +12,12 @@ double MsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+SceneStepTimings FromSolve(const SolveStats& solve, std::chrono::steady_clock::time_point t0) {
+  return {.fem_ms = MsSince(t0),
+          .max_displacement_mm = solve.max_displacement_mm,
+          .converged = solve.converged};
+}
+
 }  // namespace
 
 Result<std::unique_ptr<DeformableScene>> DeformableScene::Create(
@@ -52,19 +58,14 @@ Result<SceneStepTimings> DeformableScene::UpdateMap(SceneStepTimings timings) {
 Result<SceneStepTimings> DeformableScene::Drag(const glm::dvec3& offset_mm) {
   const auto t0 = std::chrono::steady_clock::now();
   ASSIGN_OR_RETURN(SolveStats solve, fem_->Drag(offset_mm));
-  SceneStepTimings timings{.fem_ms = MsSince(t0),
-                           .max_displacement_mm = solve.max_displacement_mm,
-                           .converged = solve.converged};
   drag_offset_mm_ = offset_mm;
-  return UpdateMap(timings);
+  return UpdateMap(FromSolve(solve, t0));
 }
 
 Result<SceneStepTimings> DeformableScene::Pull(const glm::dvec3& force_n) {
   const auto t0 = std::chrono::steady_clock::now();
   ASSIGN_OR_RETURN(SolveStats solve, fem_->Pull(force_n));
-  SceneStepTimings timings{.fem_ms = MsSince(t0),
-                           .max_displacement_mm = solve.max_displacement_mm,
-                           .converged = solve.converged};
+  const SceneStepTimings timings = FromSolve(solve, t0);
   // The arrow follows the mean handle displacement.
   glm::dvec3 mean(0.0);
   const auto u = fem_->Displacements();

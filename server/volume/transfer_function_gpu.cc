@@ -19,6 +19,16 @@ Result<gpu::TransferFunctionBlock> MakeTransferFunctionBlock(const TransferFunct
   return block;
 }
 
+Result<gpu::GpuBuffer> UploadTransferFunction(const gpu::GpuContext& context,
+                                              const TransferFunction& tf) {
+  ASSIGN_OR_RETURN(const gpu::TransferFunctionBlock block, MakeTransferFunctionBlock(tf));
+  ASSIGN_OR_RETURN(gpu::GpuBuffer ubo,
+                   gpu::GpuBuffer::Create(context, sizeof(block),
+                                          vk::BufferUsageFlagBits::eUniformBuffer));
+  RETURN_IF_ERROR(ubo.Upload(std::as_bytes(std::span(&block, 1))));
+  return ubo;
+}
+
 Result<TransferFunctionGpu> TransferFunctionGpu::Create(const gpu::GpuContext& context) {
   ASSIGN_OR_RETURN(gpu::ComputeKernel kernel,
                    gpu::ComputeKernel::Create(
@@ -50,11 +60,7 @@ Result<std::vector<float>> TransferFunctionGpu::Run(const GpuVolume& volume,
                                                     double* gpu_ms) const {
   const auto e = volume.extent();
   std::vector<float> result(size_t{e[0]} * e[1] * e[2]);
-  ASSIGN_OR_RETURN(const gpu::TransferFunctionBlock block, MakeTransferFunctionBlock(tf));
-  ASSIGN_OR_RETURN(gpu::GpuBuffer ubo,
-                   gpu::GpuBuffer::Create(*context_, sizeof(block),
-                                          vk::BufferUsageFlagBits::eUniformBuffer));
-  RETURN_IF_ERROR(ubo.Upload(std::as_bytes(std::span(&block, 1))));
+  ASSIGN_OR_RETURN(gpu::GpuBuffer ubo, UploadTransferFunction(*context_, tf));
   ASSIGN_OR_RETURN(gpu::GpuBuffer out,
                    gpu::GpuBuffer::Create(*context_, result.size() * sizeof(float),
                                           vk::BufferUsageFlagBits::eStorageBuffer));

@@ -14,6 +14,9 @@ namespace vpm {
 
 // The std140 uniform block for `tf`; fails if it has more than kMaxTfPoints.
 Result<gpu::TransferFunctionBlock> MakeTransferFunctionBlock(const TransferFunction& tf);
+// That block in a new uniform buffer, for kernels that evaluate TF.
+Result<gpu::GpuBuffer> UploadTransferFunction(const gpu::GpuContext& context,
+                                              const TransferFunction& tf);
 
 class TransferFunctionGpu {
  public:
