@@ -120,8 +120,9 @@ int main(int argc, char** argv) {
   auto gpu_volume = bench::Check(GpuVolume::Upload(*context, volume), "upload");
   const gpu::GpuImage3D* volume_image = bench::Check(gpu_volume.Image(*context, volume), "image");
 
-  // Identity backward map, 33^3 points (the warp's default grid size class).
-  const uint32_t m = 33;
+  // Identity backward map at the warp's default resolution, ceil(n / 4) per
+  // axis (docs/WARP.md): 64^3 for the 256^3 phantom.
+  const uint32_t m = uint32_t(std::max<int64_t>(2, (volume.dims()[0] + 3) / 4));
   auto map = bench::Check(
       gpu::GpuImage3D::Create(*context, {m, m, m}, vk::Format::eR32G32B32A32Sfloat), "map");
   HostBackwardMap host_map{{int(m), int(m), int(m)},

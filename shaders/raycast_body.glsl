@@ -23,7 +23,8 @@
 // first sample grid point past them, so skipping never moves a sample. DVR
 // composites front to back with opacities from the step-corrected table,
 // shaded by a Blinn-Phong headlight on the gradient of J (central
-// differences, one spacing, 6 taps of J), and stops at opacity > 0.99.
+// differences, one spacing, 6 taps of J; samples weighing under 1/256 in the
+// pixel are lit head-on), and stops at opacity > 0.99.
 // The CPU reference, server/render/raycast_cpu.cc, mirrors every step.
 #ifndef VPM_RAYCAST_BODY_GLSL
 #define VPM_RAYCAST_BODY_GLSL
@@ -46,7 +47,9 @@ layout(std430, binding = 5) writeonly buffer Pixels { uint pixels[]; };
 layout(std430, binding = 6) buffer Stats { uint samples_taken; };
 
 const float kOpaque = 0.99;
-const float kShadeMinAlpha = 1.0 / 512.0;  // lighter samples are not worth 6 taps
+// A sample whose weight in the pixel, (1 - A) a, is under 1/256 is not worth
+// six taps: it is lit head-on (ambient + diffuse), as flat tissue is.
+const float kShadeMinWeight = 1.0 / 256.0;
 const float kNoValue = -3.0e38;
 
 bool has_flag(int f) { return (p.image.z & f) != 0; }
@@ -259,12 +262,13 @@ void main() {
     bool composite = false;
     if (phase == 0) {
       c = lut_at(v);
-      if (shading && c.a > kShadeMinAlpha) {
+      if (shading && (1.0 - acc.a) * c.a > kShadeMinWeight) {
         phase = 1;
         x_shade = x;
         c_shade = c;
         g = vec3(0.0);
       } else {
+        if (shading) c.rgb = min(c.rgb * (p.shading.x + p.shading.y), vec3(1.0));
         composite = c.a > 0.0;
         ++k;
       }

@@ -16,7 +16,7 @@ using glm::vec3;
 using glm::vec4;
 
 constexpr float kOpaque = 0.99f;
-constexpr float kShadeMinAlpha = 1.0f / 512.0f;
+constexpr float kShadeMinWeight = 1.0f / 256.0f;
 constexpr float kNoValue = -3.0e38f;
 
 double MsSince(std::chrono::steady_clock::time_point t0) {
@@ -201,7 +201,12 @@ uint32_t Caster::Pixel(int px, int py, int64_t& taken) const {
     } else {
       const vec4 c = LutAt(v);
       if (c.a > 0.0f) {
-        const vec3 rgb = (shading && c.a > kShadeMinAlpha) ? Shade(vec3(c), x, dir) : vec3(c);
+        vec3 rgb = vec3(c);
+        if (shading) {
+          rgb = (1.0f - acc.a) * c.a > kShadeMinWeight
+                    ? Shade(rgb, x, dir)
+                    : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(1.0f));
+        }
         const float w = (1.0f - acc.a) * c.a;
         acc += vec4(w * rgb, w);
         if (early && acc.a > kOpaque) break;
