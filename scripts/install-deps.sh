@@ -15,7 +15,7 @@ packages=(
   libnifti2-dev libdcmtk-dev zlib1g-dev libturbojpeg0-dev libpng-dev
   # service
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
-  prometheus-cpp-dev
+  prometheus-cpp-dev libssl-dev
   # utilities and tests
   nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   python3

@@ -4,16 +4,20 @@
 #include "client/cli/compare_meshes_command.h"
 #include "client/cli/mesh_command.h"
 #include "client/cli/render_command.h"
+#include "client/cli/server_commands.h"
 #include "client/cli/volume_commands.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"vpm: volume proxy meshes for interactive deformation of CT/MRI volumes"};
   app.require_subcommand(1);
   int exit_code = 0;
+  vpm::cli::ServerFlags server_flags;
+  vpm::cli::AddServerFlags(app, &server_flags);
   vpm::cli::AddVolumeCommands(app, &exit_code);
   vpm::cli::AddMeshCommand(app, &exit_code);
   vpm::cli::AddCompareMeshesCommand(app, &exit_code);
   vpm::cli::AddRenderCommand(app, &exit_code);
+  vpm::cli::AddServerCommands(app, &server_flags, &exit_code);
   CLI11_PARSE(app, argc, argv);
   return exit_code;
 }

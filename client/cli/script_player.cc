@@ -1,0 +1,284 @@
+#include "client/cli/script_player.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <thread>
+
+namespace vpm::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MsBetween(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+v1::Vec3 Vec(double x, double y, double z) {
+  v1::Vec3 v;
+  v.set_x(x);
+  v.set_y(y);
+  v.set_z(z);
+  return v;
+}
+
+Result<v1::Vec3> VecOf(const nlohmann::json& j, const char* what) {
+  if (!j.is_array() || j.size() != 3) {
+    return absl::InvalidArgumentError(StrCat(what, ": needs [x, y, z]"));
+  }
+  return Vec(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
+}
+
+}  // namespace
+
+Result<nlohmann::json> ReadJsonFile(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) return absl::NotFoundError(StrCat(path, ": cannot read"));
+  try {
+    return nlohmann::json::parse(file);
+  } catch (const std::exception& e) {
+    return absl::InvalidArgumentError(StrCat(path, ": ", e.what()));
+  }
+}
+
+nlohmann::json DefaultScriptJson() {
+  return nlohmann::json::parse(R"({
+    "volume": "phantom:abdomen?size=64",
+    "settings": {"width": 256, "height": 256},
+    "interval_ms": 33,
+    "steps": [
+      {"camera": {"azimuth_deg": -30, "elevation_deg": 10}},
+      {"orbit": {"to_azimuth_deg": 30, "steps": 8}},
+      {"grab": {"landmark": "liver"}},
+      {"drag": {"to_mm": [0, -15, 10], "steps": 10}},
+      {"wait_ms": 300},
+      {"release": {}}
+    ]})");
+}
+
+Result<Script> ParseScript(const nlohmann::json& j, const v1::VolumeInfo& volume) {
+  Script script;
+  try {
+    if (j.contains("volume")) script.volume = j["volume"].get<std::string>();
+    if (j.contains("settings")) {
+      const auto& s = j["settings"];
+      script.settings.set_width(s.value("width", 256));
+      script.settings.set_height(s.value("height", 256));
+      script.settings.set_mode(s.value("mode", "dvr"));
+      script.settings.set_preset(s.value("preset", ""));
+      script.settings.set_encoding(s.value("encoding", "jpeg"));
+      script.settings.set_jpeg_quality(s.value("jpeg_quality", 0));
+      script.settings.set_overlay(s.value("overlay", false));
+    }
+    const double interval = j.value("interval_ms", 33.0);
+    double azimuth = 0, elevation = 0, distance = 0;
+    auto camera_event = [&] {
+      ScriptEvent e;
+      e.wait_ms = interval;
+      e.event.mutable_camera()->set_azimuth_deg(azimuth);
+      e.event.mutable_camera()->set_elevation_deg(elevation);
+      e.event.mutable_camera()->set_distance_mm(distance);
+      return e;
+    };
+    for (const auto& step : j.at("steps")) {
+      if (step.contains("camera")) {
+        const auto& c = step["camera"];
+        azimuth = c.value("azimuth_deg", 0.0);
+        elevation = c.value("elevation_deg", 0.0);
+        distance = c.value("distance_mm", 0.0);
+        script.events.push_back(camera_event());
+      } else if (step.contains("orbit")) {
+        const auto& o = step["orbit"];
+        const int steps = o.value("steps", 10);
+        const double from = azimuth, to = o.value("to_azimuth_deg", azimuth);
+        const double el_from = elevation, el_to = o.value("to_elevation_deg", elevation);
+        for (int i = 1; i <= steps; ++i) {
+          azimuth = from + (to - from) * i / steps;
+          elevation = el_from + (el_to - el_from) * i / steps;
+          script.events.push_back(camera_event());
+        }
+      } else if (step.contains("grab")) {
+        const auto& g = step["grab"];
+        ScriptEvent e;
+        e.wait_ms = interval;
+        v1::Grab* grab = e.event.mutable_grab();
+        if (g.contains("landmark")) {
+          const std::string name = g["landmark"].get<std::string>();
+          bool found = false;
+          for (const auto& l : volume.landmarks()) {
+            if (l.name() == name) {
+              *grab->mutable_point_mm() = l.position_mm();
+              found = true;
+            }
+          }
+          if (!found) return absl::NotFoundError(StrCat("grab.landmark '", name, "' is not in the volume"));
+        } else if (g.contains("point_mm")) {
+          ASSIGN_OR_RETURN(*grab->mutable_point_mm(), VecOf(g["point_mm"], "grab.point_mm"));
+        } else {
+          // The centre of the volume.
+          *grab->mutable_point_mm() =
+              Vec((volume.dims(0) - 1) * volume.spacing_mm().x() / 2,
+                  (volume.dims(1) - 1) * volume.spacing_mm().y() / 2,
+                  (volume.dims(2) - 1) * volume.spacing_mm().z() / 2);
+        }
+        grab->set_radius_mm(g.value("radius_mm", 0.0));
+        script.events.push_back(e);
+      } else if (step.contains("drag")) {
+        const auto& d = step["drag"];
+        ASSIGN_OR_RETURN(v1::Vec3 to, VecOf(d.at("to_mm"), "drag.to_mm"));
+        const int steps = d.value("steps", 10);
+        for (int i = 1; i <= steps; ++i) {
+          ScriptEvent e;
+          e.wait_ms = interval;
+          const double f = double(i) / steps;
+          *e.event.mutable_drag()->mutable_offset_mm() = Vec(to.x() * f, to.y() * f, to.z() * f);
+          script.events.push_back(e);
+        }
+      } else if (step.contains("pull")) {
+        ScriptEvent e;
+        e.wait_ms = interval;
+        ASSIGN_OR_RETURN(*e.event.mutable_pull()->mutable_force_n(),
+                         VecOf(step["pull"].at("force_n"), "pull.force_n"));
+        script.events.push_back(e);
+      } else if (step.contains("release")) {
+        ScriptEvent e;
+        e.wait_ms = interval;
+        e.event.mutable_release();
+        script.events.push_back(e);
+      } else if (step.contains("wait_ms")) {
+        if (!script.events.empty()) script.events.back().wait_ms += step["wait_ms"].get<double>();
+      } else {
+        return absl::InvalidArgumentError(StrCat("script step ", step.dump(), ": unknown"));
+      }
+    }
+  } catch (const std::exception& e) {
+    return absl::InvalidArgumentError(StrCat("script: ", e.what()));
+  }
+  return script;
+}
+
+PlayResult PlayScript(const ServerConnection& server, const Script& script,
+                      const PlayOptions& options) {
+  PlayResult result;
+  auto context = server.Context(/*streaming=*/true);
+  auto stream = server.stub().Interact(context.get());
+  const Clock::time_point start = Clock::now();
+  std::mutex mutex;
+  std::condition_variable got_final;
+  std::map<uint64_t, Clock::time_point> sent_at;
+  uint64_t last_sequence = 0;
+  bool final_seen = false;
+  bool sending_done = false;
+
+  // Reads until the server ends the stream; the sender half-closes once the
+  // still frame of the last event has arrived.
+  std::thread reader([&] {
+    v1::Frame frame;
+    int64_t index = 0;
+    while (stream->Read(&frame)) {
+      const Clock::time_point now = Clock::now();
+      FrameRecord record;
+      record.received_ms = MsBetween(start, now);
+      record.last_sequence = frame.last_sequence();
+      record.interactive = frame.interactive();
+      record.bytes = static_cast<int64_t>(frame.image().size());
+      record.timings = frame.timings();
+      record.superseded = frame.superseded_frames();
+      {
+        std::lock_guard lock(mutex);
+        auto it = sent_at.find(frame.last_sequence());
+        if (it != sent_at.end()) record.latency_ms = MsBetween(it->second, now);
+        if (result.first_frame_ms < 0) result.first_frame_ms = record.received_ms;
+        result.frames.push_back(record);
+        if (sending_done && frame.last_sequence() == last_sequence && !frame.interactive()) {
+          final_seen = true;
+          got_final.notify_all();
+        }
+      }
+      if (options.on_frame) options.on_frame(frame, index++);
+    }
+    std::lock_guard lock(mutex);
+    final_seen = true;  // the stream ended: nothing more will come
+    got_final.notify_all();
+  });
+
+  auto send = [&](v1::InteractRequest request, uint64_t sequence) {
+    request.mutable_event()->set_sequence(sequence);
+    {
+      std::lock_guard lock(mutex);
+      sent_at[sequence] = Clock::now();
+      last_sequence = sequence;
+    }
+    ++result.events_sent;
+    return stream->Write(request);
+  };
+  uint64_t sequence = 1;
+  v1::InteractRequest first;
+  first.set_session_id(options.session_id);
+  *first.mutable_event()->mutable_settings() = script.settings;
+  bool ok = send(first, sequence);
+  bool grabbed = false;
+  do {
+    for (const ScriptEvent& e : script.events) {
+      if (!ok) break;
+      std::this_thread::sleep_for(std::chrono::microseconds(int64_t(e.wait_ms * 1000)));
+      v1::InteractRequest request;
+      *request.mutable_event() = e.event;
+      if (e.event.has_grab()) grabbed = true;
+      if (e.event.has_release()) grabbed = false;
+      ok = send(request, ++sequence);
+    }
+  } while (ok && options.duration_s > 0 &&
+           MsBetween(start, Clock::now()) < options.duration_s * 1000);
+  if (ok && grabbed) {
+    v1::InteractRequest release;
+    release.mutable_event()->mutable_release();
+    ok = send(release, ++sequence);
+  }
+  {
+    std::unique_lock lock(mutex);
+    sending_done = true;
+    for (const FrameRecord& f : result.frames) {
+      if (f.last_sequence == last_sequence && !f.interactive) final_seen = true;
+    }
+    if (ok && !got_final.wait_for(lock, std::chrono::seconds(60), [&] { return final_seen; })) {
+      context->TryCancel();
+    }
+  }
+  stream->WritesDone();
+  reader.join();
+  result.status = FromGrpc(stream->Finish());
+  result.duration_ms = MsBetween(start, Clock::now());
+  return result;
+}
+
+nlohmann::json Summarize(std::vector<double> v) {
+  nlohmann::json j;
+  j["count"] = v.size();
+  if (v.empty()) return j;
+  std::sort(v.begin(), v.end());
+  double sum = 0, sum2 = 0;
+  for (double x : v) {
+    sum += x;
+    sum2 += x * x;
+  }
+  const double mean = sum / double(v.size());
+  auto pct = [&](double p) {
+    return v[std::min(v.size() - 1, size_t(std::ceil(p / 100.0 * double(v.size()))) - (p > 0 ? 1 : 0))];
+  };
+  j["fastest"] = v.front();
+  j["slowest"] = v.back();
+  j["average"] = mean;
+  j["stddev"] = std::sqrt(std::max(0.0, sum2 / double(v.size()) - mean * mean));
+  j["p50"] = pct(50);
+  j["p90"] = pct(90);
+  j["p95"] = pct(95);
+  j["p99"] = pct(99);
+  return j;
+}
+
+}  // namespace vpm::cli

@@ -1,0 +1,43 @@
+#include "client/cli/server_connection.h"
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+namespace vpm::cli {
+
+Result<ServerConnection> ServerConnection::Connect(const ServerFlags& flags) {
+  if (flags.address.empty()) return absl::InvalidArgumentError("--server HOST:PORT is required");
+  ServerConnection c;
+  c.flags_ = flags;
+  if (c.flags_.token.empty()) {
+    if (const char* token = std::getenv("VPM_TOKEN")) c.flags_.token = token;
+  }
+  std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+  if (!flags.tls_ca.empty()) {
+    std::ifstream file(flags.tls_ca);
+    if (!file) return absl::InvalidArgumentError(StrCat("--tls-ca ", flags.tls_ca, ": cannot read"));
+    std::stringstream pem;
+    pem << file.rdbuf();
+    grpc::SslCredentialsOptions ssl;
+    ssl.pem_root_certs = pem.str();
+    credentials = grpc::SslCredentials(ssl);
+  }
+  grpc::ChannelArguments args;
+  args.SetMaxReceiveMessageSize(64 << 20);
+  c.channel_ = grpc::CreateCustomChannel(flags.address, credentials, args);
+  c.stub_ = v1::Vpm::NewStub(c.channel_);
+  return c;
+}
+
+std::unique_ptr<grpc::ClientContext> ServerConnection::Context(bool streaming) const {
+  auto context = std::make_unique<grpc::ClientContext>();
+  if (!flags_.token.empty()) context->AddMetadata("authorization", "Bearer " + flags_.token);
+  if (!streaming) {
+    context->set_deadline(std::chrono::system_clock::now() +
+                          std::chrono::milliseconds(int64_t(flags_.deadline_s * 1000)));
+  }
+  return context;
+}
+
+}  // namespace vpm::cli

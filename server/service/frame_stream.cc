@@ -1,0 +1,200 @@
+#include "server/service/frame_stream.h"
+
+#include <chrono>
+
+#include "server/service/grpc_status.h"
+
+namespace vpm::service {
+namespace {
+
+double MsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+std::shared_ptr<FrameStream> FrameStream::Create(ServiceContext* service,
+                                                 std::shared_ptr<Session> session,
+                                                 StreamSettings settings, FrameSink* sink,
+                                                 const Options& options) {
+  return std::shared_ptr<FrameStream>(
+      new FrameStream(service, std::move(session), std::move(settings), sink, options));
+}
+
+FrameStream::FrameStream(ServiceContext* service, std::shared_ptr<Session> session,
+                         StreamSettings settings, FrameSink* sink, const Options& options)
+    : service_(service),
+      session_(std::move(session)),
+      options_(options),
+      sink_(sink),
+      settings_(std::move(settings)) {}
+
+void FrameStream::Attach() {
+  std::weak_ptr<FrameStream> weak = weak_from_this();
+  observer_token_ = session_->AddObserver([weak](bool closed) {
+    if (auto self = weak.lock()) {
+      if (closed) {
+        self->Finish(grpc::Status(grpc::FAILED_PRECONDITION, "the session was closed"));
+      } else {
+        self->RequestFrame();
+      }
+    }
+  });
+  RequestFrame();
+}
+
+void FrameStream::ApplyEvent(const v1::ClientEvent& event) {
+  auto self = shared_from_this();
+  const bool posted = service_->render_pool->Post([self, event] {
+    if (event.has_settings()) {
+      auto settings = ToStreamSettings(event.settings(), self->session_->volume().volume,
+                                       self->service_->options.max_frame_side);
+      if (!settings.ok()) return self->Finish(ToGrpcStatus(settings.status()));
+      std::lock_guard lock(self->mutex_);
+      self->settings_ = *std::move(settings);
+    }
+    auto applied = self->session_->Apply(event);
+    if (!applied.ok()) return self->Finish(ToGrpcStatus(applied.status()));
+    std::lock_guard lock(self->mutex_);
+    if (event.sequence() > self->stream_sequence_) self->stream_sequence_ = event.sequence();
+    if (event.want_vertices()) self->want_vertices_ = true;
+    self->dirty_ = true;
+    self->ScheduleLocked();
+    if (self->sink_ != nullptr && !self->finish_) self->sink_->ReadNext();
+  });
+  if (!posted) Finish(grpc::Status(grpc::UNAVAILABLE, "the server is shutting down"));
+}
+
+void FrameStream::RequestFrame() {
+  std::lock_guard lock(mutex_);
+  dirty_ = true;
+  ScheduleLocked();
+}
+
+void FrameStream::ScheduleLocked() {
+  if (render_scheduled_ || finish_ || sink_ == nullptr || !dirty_) return;
+  render_scheduled_ = true;
+  auto self = shared_from_this();
+  const auto queued_at = std::chrono::steady_clock::now();
+  if (!service_->render_pool->Post([self, queued_at] { self->RenderNow(queued_at); })) {
+    render_scheduled_ = false;
+  }
+}
+
+void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
+  const double queue_ms = MsSince(queued_at);
+  StreamSettings settings;
+  bool want_vertices = false;
+  {
+    std::lock_guard lock(mutex_);
+    if (finish_ || sink_ == nullptr) {
+      render_scheduled_ = false;
+      return;
+    }
+    dirty_ = false;
+    settings = settings_;
+    want_vertices = want_vertices_;
+    want_vertices_ = false;
+  }
+  auto frame = session_->Render({&settings, std::nullopt, false, want_vertices});
+  std::lock_guard lock(mutex_);
+  render_scheduled_ = false;
+  if (!frame.ok()) return FinishLocked(ToGrpcStatus(frame.status()));
+  auto out = std::make_unique<v1::Frame>(*std::move(frame));
+  out->mutable_timings()->set_queue_ms(queue_ms);
+  out->mutable_timings()->set_total_ms(out->timings().total_ms() + queue_ms);
+  if (options_.per_stream_sequence) out->set_last_sequence(stream_sequence_);
+  last_interactive_ = out->interactive();
+  DeliverLocked(std::move(out));
+  if (dirty_) {
+    ScheduleLocked();
+  } else if (last_interactive_) {
+    std::weak_ptr<FrameStream> weak = weak_from_this();
+    service_->render_pool->PostAfter(
+        std::chrono::milliseconds(int64_t(service_->options.still_delay_ms) + 5), [weak] {
+          if (auto self = weak.lock()) self->StillCheck();
+        });
+  }
+}
+
+void FrameStream::StillCheck() {
+  std::lock_guard lock(mutex_);
+  if (!last_interactive_ || render_scheduled_) return;
+  dirty_ = true;
+  ScheduleLocked();
+}
+
+void FrameStream::DeliverLocked(std::unique_ptr<v1::Frame> frame) {
+  if (sink_ == nullptr || finish_) return;
+  frame->set_frame_number(++frame_number_);
+  if (write_in_flight_) {
+    if (pending_) {
+      ++superseded_;
+      service_->metrics->Superseded();
+    }
+    pending_ = std::move(frame);
+    return;
+  }
+  WriteLocked(std::move(frame));
+}
+
+void FrameStream::WriteLocked(std::unique_ptr<v1::Frame> frame) {
+  frame->set_superseded_frames(superseded_);
+  service_->metrics->FrameSent(frame->timings());
+  current_ = std::move(frame);
+  write_in_flight_ = true;
+  sink_->WriteFrame(current_.get());
+}
+
+void FrameStream::OnWriteDone(bool ok) {
+  std::lock_guard lock(mutex_);
+  write_in_flight_ = false;
+  if (!ok) {
+    // The client is gone; OnCancel / OnDone follow.
+    pending_.reset();
+    if (finish_ && !finished_ && sink_ != nullptr) {
+      finished_ = true;
+      sink_->FinishStream(*finish_);
+    }
+    return;
+  }
+  if (finish_) {
+    if (!finished_ && sink_ != nullptr) {
+      finished_ = true;
+      sink_->FinishStream(*finish_);
+    }
+    return;
+  }
+  if (pending_ && sink_ != nullptr) WriteLocked(std::move(pending_));
+}
+
+void FrameStream::Finish(const grpc::Status& status) {
+  std::lock_guard lock(mutex_);
+  FinishLocked(status);
+}
+
+void FrameStream::FinishLocked(const grpc::Status& status) {
+  if (finish_) return;
+  finish_ = status;
+  pending_.reset();
+  if (!write_in_flight_ && sink_ != nullptr) {
+    finished_ = true;
+    sink_->FinishStream(status);
+  }
+}
+
+void FrameStream::Detach() {
+  {
+    std::lock_guard lock(mutex_);
+    sink_ = nullptr;
+    pending_.reset();
+  }
+  session_->RemoveObserver(observer_token_);
+}
+
+uint64_t FrameStream::superseded() const {
+  std::lock_guard lock(mutex_);
+  return superseded_;
+}
+
+}  // namespace vpm::service

@@ -1,0 +1,93 @@
+#include "server/service/mesh_store.h"
+
+#include <cmath>
+
+namespace vpm::service {
+
+Status CheckInsideVolume(const VolumeGeometry& geometry, const glm::dvec3& point_mm,
+                         std::string_view field) {
+  const glm::dvec3 extent = geometry.extent_mm();
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!std::isfinite(point_mm[axis])) {
+      return absl::InvalidArgumentError(StrCat(field, ": not a finite point"));
+    }
+    if (point_mm[axis] < 0.0 || point_mm[axis] > extent[axis]) {
+      return absl::OutOfRangeError(StrCat(field, ": (", point_mm.x, ", ", point_mm.y, ", ",
+                                          point_mm.z, ") mm is outside the volume, (0, 0, 0) to (",
+                                          extent.x, ", ", extent.y, ", ", extent.z, ") mm"));
+    }
+  }
+  return absl::OkStatus();
+}
+
+Result<std::unique_ptr<MeshStore>> MeshStore::Create(const Options& options) {
+  if (options.context == nullptr) return absl::InvalidArgumentError("MeshStore: no GPU context");
+  std::unique_ptr<MeshStore> store(new MeshStore(options));
+  ASSIGN_OR_RETURN(LatticeCostsGpu costs, LatticeCostsGpu::Create(*options.context));
+  store->costs_.emplace(std::move(costs));
+  return store;
+}
+
+Result<std::shared_ptr<const MeshEntry>> MeshStore::Build(std::shared_ptr<VolumeEntry> volume,
+                                                          const MeshParams& params) {
+  {
+    std::lock_guard lock(mutex_);
+    if (static_cast<int64_t>(meshes_.size()) >= options_.max_meshes) {
+      return absl::ResourceExhaustedError(
+          StrCat("the server holds its maximum of ", options_.max_meshes, " meshes"));
+    }
+  }
+  if (params.refine_at_mm) {
+    RETURN_IF_ERROR(CheckInsideVolume(volume->volume.geometry(), *params.refine_at_mm,
+                                      "params.refine_at_mm"));
+  }
+  auto entry = std::make_shared<MeshEntry>();
+  entry->volume = volume;
+  entry->params = params;
+  {
+    std::lock_guard lock(costs_mutex_);
+    ASSIGN_OR_RETURN(DecimatedLattice base,
+                     DecimateLattice(volume->volume, params, {&volume->gpu, &*costs_}));
+    entry->base = std::make_shared<const DecimatedLattice>(std::move(base));
+  }
+  ASSIGN_OR_RETURN(entry->mesh, FinishProxyMesh(volume->volume, *entry->base, params));
+  return Add(std::move(entry));
+}
+
+Result<std::shared_ptr<const MeshEntry>> MeshStore::Refine(std::string_view mesh_id,
+                                                           const glm::dvec3& point_mm) {
+  ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> old, Get(mesh_id));
+  RETURN_IF_ERROR(CheckInsideVolume(old->volume->volume.geometry(), point_mm, "point_mm"));
+  auto entry = std::make_shared<MeshEntry>();
+  entry->volume = old->volume;
+  entry->params = old->params;
+  entry->params.refine_at_mm = point_mm;
+  entry->base = old->base;
+  ASSIGN_OR_RETURN(entry->mesh, FinishProxyMesh(entry->volume->volume, *entry->base, entry->params));
+  return Add(std::move(entry));
+}
+
+Result<std::shared_ptr<const MeshEntry>> MeshStore::Add(std::shared_ptr<MeshEntry> entry) {
+  std::lock_guard lock(mutex_);
+  if (static_cast<int64_t>(meshes_.size()) >= options_.max_meshes) {
+    return absl::ResourceExhaustedError(
+        StrCat("the server holds its maximum of ", options_.max_meshes, " meshes"));
+  }
+  entry->id = StrCat("mesh-", next_id_++);
+  meshes_.emplace(entry->id, entry);
+  return std::shared_ptr<const MeshEntry>(entry);
+}
+
+Result<std::shared_ptr<const MeshEntry>> MeshStore::Get(std::string_view id) const {
+  std::lock_guard lock(mutex_);
+  auto it = meshes_.find(id);
+  if (it == meshes_.end()) return absl::NotFoundError(StrCat("mesh_id: no mesh '", id, "'"));
+  return it->second;
+}
+
+void MeshStore::ForgetVolume(std::string_view volume_id) {
+  std::lock_guard lock(mutex_);
+  std::erase_if(meshes_, [&](const auto& kv) { return kv.second->volume->id == volume_id; });
+}
+
+}  // namespace vpm::service

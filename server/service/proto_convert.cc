@@ -1,0 +1,199 @@
+#include "server/service/proto_convert.h"
+
+#include <algorithm>
+#include <tuple>
+
+namespace vpm::service {
+
+v1::Vec3 ToProto(const glm::dvec3& v) {
+  v1::Vec3 out;
+  out.set_x(v.x);
+  out.set_y(v.y);
+  out.set_z(v.z);
+  return out;
+}
+
+void FillVolumeInfo(const VolumeEntry& entry, v1::VolumeInfo* info) {
+  const Volume& volume = entry.volume;
+  const VolumeGeometry& g = volume.geometry();
+  info->set_volume_id(entry.id);
+  info->set_source(volume.source());
+  info->clear_dims();
+  for (int64_t d : g.dims) info->add_dims(d);
+  *info->mutable_spacing_mm() = ToProto(g.spacing_mm);
+  *info->mutable_origin_lps_mm() = ToProto(g.origin_mm);
+  info->clear_direction();
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) info->add_direction(g.direction[c][r]);
+  }
+  info->set_min_value(volume.min_value());
+  info->set_max_value(volume.max_value());
+  info->clear_landmarks();
+  for (const Landmark& l : volume.landmarks()) {
+    v1::Landmark* out = info->add_landmarks();
+    out->set_name(l.name);
+    *out->mutable_position_mm() = ToProto(l.position_mm);
+    *out->mutable_world_lps_mm() = ToProto(g.PhysicalToWorld(l.position_mm));
+    out->set_description(l.description);
+  }
+  info->set_bytes(entry.bytes);
+  info->set_sessions(entry.sessions.load());
+}
+
+void FillMeshInfo(const MeshEntry& entry, v1::MeshInfo* info) {
+  info->set_mesh_id(entry.id);
+  info->set_volume_id(entry.volume->id);
+  const ProxyMesh& mesh = entry.mesh;
+  v1::MeshStats* s = info->mutable_stats();
+  s->set_vertices(static_cast<int64_t>(mesh.vertices.size()));
+  s->set_tets(static_cast<int64_t>(mesh.tets.size()));
+  s->set_hard(mesh.stats.hard);
+  s->set_refined(mesh.stats.refined);
+  s->set_h_mm(mesh.stats.h_mm);
+  s->set_r_mm(mesh.stats.R_mm);
+  s->set_min_dihedral_deg(mesh.quality.min_dihedral_deg);
+  s->set_min_radius_ratio(mesh.quality.min_radius_ratio);
+  s->set_evaluate_ms(mesh.stats.evaluate_ms);
+  s->set_decimate_ms(mesh.stats.decimate_ms);
+  s->set_classify_ms(mesh.stats.classify_ms);
+  s->set_refine_ms(mesh.stats.refine_ms);
+  s->set_tetrahedralize_ms(mesh.stats.tetrahedralize_ms);
+}
+
+void FillMeshGeometry(const ProxyMesh& mesh, v1::GetMeshResponse* response) {
+  for (const MeshVertex& v : mesh.vertices) {
+    v1::MeshVertex* out = response->add_vertices();
+    *out->mutable_position_mm() = ToProto(v.position_mm);
+    out->set_lattice_id(v.lattice_id);
+    out->set_kind(VertexKindName(v.kind));
+    out->set_hard(v.hard);
+    out->set_cost(v.cost);
+  }
+  for (const auto& t : mesh.tets) {
+    v1::Tet* out = response->add_tets();
+    out->set_a(t[0]);
+    out->set_b(t[1]);
+    out->set_c(t[2]);
+    out->set_d(t[3]);
+  }
+}
+
+Result<MeshParams> ToMeshParams(const v1::MeshParams& in) {
+  MeshParams p;
+  if (in.grid_size() != 0) {
+    if (in.grid_size() != 3) {
+      return absl::InvalidArgumentError(
+          StrCat("params.grid: takes 3 values (GX GY GZ), got ", in.grid_size()));
+    }
+    for (int a = 0; a < 3; ++a) {
+      if (in.grid(a) < 2 || in.grid(a) > 256) {
+        return absl::InvalidArgumentError(
+            StrCat("params.grid: ", in.grid(a), " is outside 2..256"));
+      }
+      p.grid[a] = in.grid(a);
+    }
+  }
+  if (in.target() < 0) return absl::InvalidArgumentError("params.target: negative");
+  if (in.target() > 0) p.target = in.target();
+  if (!in.footprint().empty()) {
+    auto footprint = ParseFootprint(in.footprint());
+    if (!footprint.ok()) {
+      return absl::InvalidArgumentError(StrCat("params.footprint: ", footprint.status().message()));
+    }
+    p.footprint = *footprint;
+  }
+  if (!in.density_mode().empty()) {
+    auto mode = ParseDensityMode(in.density_mode());
+    if (!mode.ok()) {
+      return absl::InvalidArgumentError(StrCat("params.density_mode: ", mode.status().message()));
+    }
+    p.density_mode = *mode;
+  }
+  if (in.has_wg()) p.wg = in.wg();
+  if (in.has_wd()) p.wd = in.wd();
+  if (in.has_radius_factor()) {
+    if (!(in.radius_factor() > 0)) {
+      return absl::InvalidArgumentError("params.radius_factor: must be > 0");
+    }
+    p.radius_factor = in.radius_factor();
+  }
+  if (!in.tf().empty()) p.tf = in.tf();
+  if (in.has_bone_threshold()) p.classify.bone_threshold = in.bone_threshold();
+  if (in.has_influence_threshold()) p.classify.influence_threshold = in.influence_threshold();
+  if (in.has_influence_factor()) p.classify.influence_factor = in.influence_factor();
+  if (in.has_refine_at()) p.refine_at_mm = FromProto(in.refine_at_mm());
+  if (in.has_roi_factor()) p.roi_radius_factor = in.roi_factor();
+  if (in.has_refine_count()) {
+    if (in.refine_count() < 0) return absl::InvalidArgumentError("params.refine_count: negative");
+    p.refine_count = in.refine_count();
+  }
+  return p;
+}
+
+Result<StreamSettings> ToStreamSettings(const v1::RenderSettings& in, const Volume& volume,
+                                        int max_side) {
+  StreamSettings out;
+  if (in.mode().empty() || in.mode() == "dvr") {
+    out.view.mode = RenderMode::kDvr;
+  } else if (in.mode() == "mip") {
+    out.view.mode = RenderMode::kMip;
+  } else {
+    return absl::InvalidArgumentError(StrCat("settings.mode: '", in.mode(), "' is not dvr or mip"));
+  }
+  auto preset = MakeRenderPreset(in.preset().empty() ? "ct-soft-tissue" : in.preset(), volume);
+  if (!preset.ok()) {
+    return absl::InvalidArgumentError(StrCat("settings.preset: ", preset.status().message()));
+  }
+  out.view.preset = *std::move(preset);
+  for (auto [name, value, target] : {std::tuple{"settings.width", in.width(), &out.view.width},
+                                     std::tuple{"settings.height", in.height(), &out.view.height}}) {
+    if (value < 0 || value > max_side) {
+      return absl::InvalidArgumentError(
+          StrCat(name, ": ", value, " is outside 1..", max_side, " pixels (0: 512)"));
+    }
+    *target = value == 0 ? std::min(512, max_side) : value;
+  }
+  out.view.overlay = in.overlay();
+  if (in.encoding().empty() || in.encoding() == "jpeg") {
+    out.png = false;
+  } else if (in.encoding() == "png") {
+    out.png = true;
+  } else {
+    return absl::InvalidArgumentError(
+        StrCat("settings.encoding: '", in.encoding(), "' is not jpeg or png"));
+  }
+  if (in.jpeg_quality() < 0 || in.jpeg_quality() > 100) {
+    return absl::InvalidArgumentError(
+        StrCat("settings.jpeg_quality: ", in.jpeg_quality(), " is outside 1..100 (0: 85)"));
+  }
+  out.jpeg_quality = in.jpeg_quality() == 0 ? 85 : in.jpeg_quality();
+  return out;
+}
+
+Result<Camera> ToCamera(const v1::Camera& in, const VolumeGeometry& geometry) {
+  Camera camera = Camera::ForVolume(geometry);
+  Camera::Pose pose = camera.pose();
+  pose.azimuth_deg = in.azimuth_deg();
+  pose.elevation_deg = in.elevation_deg();
+  if (in.distance_mm() < 0) {
+    return absl::InvalidArgumentError("camera.distance_mm: negative (0 fits the volume)");
+  }
+  if (in.distance_mm() > 0) pose.distance_mm = in.distance_mm();
+  pose.pan_mm = {in.pan_mm().x(), in.pan_mm().y()};
+  camera.set_pose(pose);
+  Status valid = camera.Validate();
+  if (!valid.ok()) return absl::InvalidArgumentError(StrCat("camera: ", valid.message()));
+  return camera;
+}
+
+v1::Camera FromCamera(const Camera& camera) {
+  v1::Camera out;
+  out.set_azimuth_deg(camera.pose().azimuth_deg);
+  out.set_elevation_deg(camera.pose().elevation_deg);
+  out.set_distance_mm(camera.pose().distance_mm);
+  out.mutable_pan_mm()->set_x(camera.pose().pan_mm.x);
+  out.mutable_pan_mm()->set_y(camera.pose().pan_mm.y);
+  return out;
+}
+
+}  // namespace vpm::service

@@ -1,0 +1,42 @@
+// Translations between the wire types (vpm/v1/vpm.proto) and the compute
+// core's, with the checks that name the offending field.
+#pragma once
+
+#include <string>
+
+#include "server/common/status.h"
+#include "server/mesh/build_proxy_mesh.h"
+#include "server/render/deformable_scene.h"
+#include "server/service/mesh_store.h"
+#include "server/service/volume_store.h"
+#include "vpm/v1/vpm.pb.h"
+
+namespace vpm::service {
+
+inline glm::dvec3 FromProto(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+v1::Vec3 ToProto(const glm::dvec3& v);
+
+void FillVolumeInfo(const VolumeEntry& entry, v1::VolumeInfo* info);
+void FillMeshInfo(const MeshEntry& entry, v1::MeshInfo* info);
+void FillMeshGeometry(const ProxyMesh& mesh, v1::GetMeshResponse* response);
+
+// Unset fields take the ALGORITHM.md defaults. InvalidArgument names the field.
+Result<MeshParams> ToMeshParams(const v1::MeshParams& params);
+
+// How one stream wants its frames: the scene view but for the camera, plus
+// the encoding.
+struct StreamSettings {
+  SceneView view;             // camera filled in per frame
+  bool png = false;
+  int jpeg_quality = 85;
+};
+// InvalidArgument names the field ("settings.width: ..."); max_side caps
+// width and height.
+Result<StreamSettings> ToStreamSettings(const v1::RenderSettings& settings, const Volume& volume,
+                                        int max_side);
+
+// The absolute pose of `camera` on `volume`'s default camera.
+Result<Camera> ToCamera(const v1::Camera& camera, const VolumeGeometry& geometry);
+v1::Camera FromCamera(const Camera& camera);
+
+}  // namespace vpm::service

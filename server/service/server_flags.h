@@ -1,0 +1,14 @@
+// vpm-server's command line: every ServerOptions field as a documented flag.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include "server/service/server_options.h"
+
+namespace vpm::service {
+
+void AddServerFlags(CLI::App& app, ServerOptions* options);
+// The token from VPM_TOKEN when --token was not given.
+void ApplyEnvironment(ServerOptions* options);
+
+}  // namespace vpm::service

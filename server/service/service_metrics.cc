@@ -1,0 +1,83 @@
+#include "server/service/service_metrics.h"
+
+#include <prometheus/text_serializer.h>
+
+namespace vpm::service {
+namespace {
+
+const prometheus::Histogram::BucketBoundaries& StageBuckets() {
+  static const prometheus::Histogram::BucketBoundaries buckets{
+      0.5, 1, 2, 5, 10, 20, 35, 50, 75, 100, 150, 250, 500, 1000, 2500, 5000};
+  return buckets;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(const Options& options) {
+  std::unique_ptr<ServiceMetrics> m(new ServiceMetrics());
+  m->registry_ = std::make_shared<prometheus::Registry>();
+  auto& r = *m->registry_;
+  m->requests_ = &prometheus::BuildCounter().Name("vpm_requests_total")
+                      .Help("Finished calls by method and status code").Register(r);
+  m->errors_ = &prometheus::BuildCounter().Name("vpm_request_errors_total")
+                    .Help("Calls that finished with a non-OK code").Register(r);
+  m->stages_ = &prometheus::BuildHistogram().Name("vpm_frame_stage_ms")
+                    .Help("Server time per frame by stage, ms").Register(r);
+  m->frames_ = &prometheus::BuildCounter().Name("vpm_frames_total")
+                    .Help("Frames written to streams and unary renders").Register(r).Add({});
+  m->superseded_ = &prometheus::BuildCounter().Name("vpm_frames_superseded_total")
+                        .Help("Frames dropped because a newer one won").Register(r).Add({});
+  m->streams_opened_ = &prometheus::BuildCounter().Name("vpm_streams_opened_total")
+                            .Help("Interact, Watch and UploadVolume streams started").Register(r).Add({});
+  m->streams_closed_ = &prometheus::BuildCounter().Name("vpm_streams_closed_total")
+                            .Help("Streams whose resources were released").Register(r).Add({});
+  m->sessions_ = &prometheus::BuildGauge().Name("vpm_sessions").Help("Open sessions").Register(r).Add({});
+  m->volumes_ = &prometheus::BuildGauge().Name("vpm_volumes").Help("Volumes held").Register(r).Add({});
+  m->volume_bytes_ = &prometheus::BuildGauge().Name("vpm_volume_bytes")
+                          .Help("Host and GPU bytes of the volumes held").Register(r).Add({});
+  if (!options.listen.empty()) {
+    try {
+      m->exposer_ = std::make_unique<prometheus::Exposer>(options.listen);
+    } catch (const std::exception& e) {
+      return absl::InvalidArgumentError(
+          StrCat("--metrics-listen ", options.listen, ": ", e.what()));
+    }
+    m->exposer_->RegisterCollectable(m->registry_);
+  }
+  return m;
+}
+
+void ServiceMetrics::Request(const std::string& method, const char* code) {
+  requests_->Add({{"method", method}, {"code", code}}).Increment();
+  if (std::string_view(code) != "OK") errors_->Add({{"method", method}, {"code", code}}).Increment();
+}
+
+void ServiceMetrics::FrameSent(const v1::StageTimings& t) {
+  frames_->Increment();
+  for (auto [stage, ms] : {std::pair{"fem", t.fem_ms()}, std::pair{"warp", t.warp_ms()},
+                           std::pair{"render", t.render_ms()}, std::pair{"encode", t.encode_ms()},
+                           std::pair{"queue", t.queue_ms()}, std::pair{"total", t.total_ms()}}) {
+    stages_->Add({{"stage", stage}}, StageBuckets()).Observe(ms);
+  }
+}
+
+void ServiceMetrics::Superseded() { superseded_->Increment(); }
+void ServiceMetrics::Sessions(int64_t open) { sessions_->Set(double(open)); }
+void ServiceMetrics::Volumes(int64_t bytes, int64_t count) {
+  volume_bytes_->Set(double(bytes));
+  volumes_->Set(double(count));
+}
+void ServiceMetrics::StreamOpened() { streams_opened_->Increment(); }
+void ServiceMetrics::StreamClosed() { streams_closed_->Increment(); }
+
+std::string ServiceMetrics::Scrape() const {
+  return prometheus::TextSerializer().Serialize(registry_->Collect());
+}
+
+int ServiceMetrics::metrics_port() const {
+  if (!exposer_) return 0;
+  auto ports = exposer_->GetListeningPorts();
+  return ports.empty() ? 0 : ports.front();
+}
+
+}  // namespace vpm::service

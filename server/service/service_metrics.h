@@ -1,0 +1,67 @@
+// Prometheus metrics (prometheus-cpp), served on --metrics-listen:
+//   vpm_requests_total{method,code}        every finished call
+//   vpm_request_errors_total{method,code}  the non-OK ones
+//   vpm_frame_stage_ms{stage}               fem, warp, render, encode, queue, total
+//   vpm_frames_total, vpm_frames_superseded_total
+//   vpm_sessions, vpm_volumes, vpm_volume_bytes
+//   vpm_streams_opened_total, vpm_streams_closed_total (equal when idle)
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <prometheus/counter.h>
+#include <prometheus/exposer.h>
+#include <prometheus/gauge.h>
+#include <prometheus/histogram.h>
+#include <prometheus/registry.h>
+
+#include "server/common/status.h"
+#include "vpm/v1/vpm.pb.h"
+
+namespace vpm::service {
+
+class ServiceMetrics {
+ public:
+  struct Options {
+    std::string listen;  // HOST:PORT for /metrics; empty: kept in process only
+  };
+  static Result<std::unique_ptr<ServiceMetrics>> Create(const Options& options);
+
+  void Request(const std::string& method, const char* code);
+  void FrameSent(const v1::StageTimings& timings);
+  void Superseded();
+  void Sessions(int64_t open);
+  void Volumes(int64_t bytes, int64_t count);
+  void StreamOpened();
+  void StreamClosed();
+
+  // Counters for tests and the shutdown log.
+  double streams_opened() const { return streams_opened_->Value(); }
+  double streams_closed() const { return streams_closed_->Value(); }
+  double superseded() const { return superseded_->Value(); }
+  double frames() const { return frames_->Value(); }
+  // The text exposition format, as /metrics serves it.
+  std::string Scrape() const;
+  // The port /metrics listens on (0 without one).
+  int metrics_port() const;
+
+ private:
+  ServiceMetrics() = default;
+
+  std::shared_ptr<prometheus::Registry> registry_;
+  std::unique_ptr<prometheus::Exposer> exposer_;
+  prometheus::Family<prometheus::Counter>* requests_ = nullptr;
+  prometheus::Family<prometheus::Counter>* errors_ = nullptr;
+  prometheus::Family<prometheus::Histogram>* stages_ = nullptr;
+  prometheus::Counter* frames_ = nullptr;
+  prometheus::Counter* superseded_ = nullptr;
+  prometheus::Counter* streams_opened_ = nullptr;
+  prometheus::Counter* streams_closed_ = nullptr;
+  prometheus::Gauge* sessions_ = nullptr;
+  prometheus::Gauge* volumes_ = nullptr;
+  prometheus::Gauge* volume_bytes_ = nullptr;
+};
+
+}  // namespace vpm::service

@@ -1,0 +1,278 @@
+#include "server/service/session.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "server/render/frame_encoder.h"
+
+namespace vpm::service {
+namespace {
+
+double MsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+Session::Session(std::string id, std::shared_ptr<VolumeEntry> volume,
+                 std::shared_ptr<const MeshEntry> mesh, const Options& options)
+    : id_(std::move(id)),
+      volume_(std::move(volume)),
+      mesh_(std::move(mesh)),
+      options_(options),
+      camera_(Camera::ForVolume(volume_->volume.geometry())),
+      last_touch_(std::chrono::steady_clock::now()) {
+  volume_->sessions.fetch_add(1);
+}
+
+Session::~Session() { volume_->sessions.fetch_sub(1); }
+
+Result<std::shared_ptr<Session>> Session::Create(std::string id, const gpu::GpuContext& context,
+                                                 VolumeRenderer& renderer,
+                                                 std::shared_ptr<VolumeEntry> volume,
+                                                 std::shared_ptr<const MeshEntry> mesh,
+                                                 const Options& options) {
+  std::shared_ptr<Session> session(new Session(std::move(id), volume, mesh, options));
+  std::lock_guard gpu_lock(volume->gpu_mutex);
+  ASSIGN_OR_RETURN(session->scene_, DeformableScene::Create(context, volume->volume, volume->gpu,
+                                                            renderer, mesh->mesh, {}));
+  return session;
+}
+
+Result<glm::dvec3> Session::GrabPoint(const v1::Grab& grab) const {
+  const VolumeGeometry& geometry = volume_->volume.geometry();
+  if (!grab.pick()) {
+    const glm::dvec3 p = FromProto(grab.point_mm());
+    RETURN_IF_ERROR(CheckInsideVolume(geometry, p, "grab.point_mm"));
+    return p;
+  }
+  // A pick takes the pixel's ray to the plane through the orbit centre that
+  // faces the camera: the depth the user is looking at.
+  std::lock_guard lock(state_mutex_);
+  if (grab.pixel_x() < 0 || grab.pixel_x() >= last_frame_width_ || grab.pixel_y() < 0 ||
+      grab.pixel_y() >= last_frame_height_) {
+    return absl::OutOfRangeError(StrCat("grab.pixel: (", grab.pixel_x(), ", ", grab.pixel_y(),
+                                        ") is outside the last frame, ", last_frame_width_, "x",
+                                        last_frame_height_));
+  }
+  const CameraRays rays = camera_.Rays(last_frame_width_, last_frame_height_);
+  const glm::dvec3 dir = rays.Direction(grab.pixel_x(), grab.pixel_y());
+  const double t = glm::dot(camera_.Target() - rays.eye_mm, camera_.Forward()) /
+                   glm::dot(dir, camera_.Forward());
+  const glm::dvec3 p = rays.eye_mm + t * dir;
+  RETURN_IF_ERROR(CheckInsideVolume(geometry, p, "grab.pixel"));
+  return p;
+}
+
+Result<AppliedEvent> Session::Apply(const v1::ClientEvent& event) {
+  if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
+  Touch();
+  std::lock_guard scene_lock(scene_mutex_);
+  ASSIGN_OR_RETURN(AppliedEvent applied, ApplyLocked(event));
+  Changed(event.sequence(), applied.deformed, applied.deformed ? &applied.step : nullptr);
+  return applied;
+}
+
+Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event) {
+  AppliedEvent applied;
+  switch (event.event_case()) {
+    case v1::ClientEvent::kCamera: {
+      ASSIGN_OR_RETURN(Camera camera, ToCamera(event.camera(), volume_->volume.geometry()));
+      std::lock_guard lock(state_mutex_);
+      camera_ = camera;
+      return applied;
+    }
+    case v1::ClientEvent::kGrab: {
+      ASSIGN_OR_RETURN(glm::dvec3 point, GrabPoint(event.grab()));
+      if (event.grab().radius_mm() < 0) {
+        return absl::InvalidArgumentError("grab.radius_mm: negative (0: one lattice step)");
+      }
+      const double radius =
+          event.grab().radius_mm() > 0 ? event.grab().radius_mm() : mesh_->mesh.stats.h_mm;
+      auto info = scene_->Grab(point, radius);
+      if (!info.ok()) return info.status();
+      std::lock_guard lock(state_mutex_);
+      grabbed_ = true;
+      return applied;
+    }
+    case v1::ClientEvent::kDrag:
+    case v1::ClientEvent::kPull: {
+      {
+        std::lock_guard lock(state_mutex_);
+        if (!grabbed_) {
+          return absl::FailedPreconditionError(
+              event.has_drag() ? "drag: no grab in effect; send a grab first"
+                               : "pull: no grab in effect; send a grab first");
+        }
+      }
+      const glm::dvec3 v =
+          FromProto(event.has_drag() ? event.drag().offset_mm() : event.pull().force_n());
+      if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
+        return absl::InvalidArgumentError(event.has_drag() ? "drag.offset_mm: not finite"
+                                                           : "pull.force_n: not finite");
+      }
+      ASSIGN_OR_RETURN(applied.step, event.has_drag() ? scene_->Drag(v) : scene_->Pull(v));
+      applied.deformed = true;
+      std::lock_guard lock(state_mutex_);
+      last_deform_ = std::chrono::steady_clock::now();
+      return applied;
+    }
+    case v1::ClientEvent::kRelease: {
+      {
+        std::lock_guard lock(state_mutex_);
+        if (!grabbed_) return absl::FailedPreconditionError("release: no grab in effect");
+      }
+      ASSIGN_OR_RETURN(applied.step, scene_->Release());
+      applied.deformed = true;
+      std::lock_guard lock(state_mutex_);
+      grabbed_ = false;
+      last_deform_ = {};
+      return applied;
+    }
+    case v1::ClientEvent::kSettings:
+    case v1::ClientEvent::EVENT_NOT_SET:
+      return applied;
+  }
+  return applied;
+}
+
+Status Session::SetCamera(const v1::Camera& camera) {
+  if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
+  Touch();
+  ASSIGN_OR_RETURN(Camera c, ToCamera(camera, volume_->volume.geometry()));
+  {
+    std::lock_guard lock(state_mutex_);
+    camera_ = c;
+  }
+  Changed(0, false, nullptr);
+  return absl::OkStatus();
+}
+
+void Session::Changed(uint64_t sequence, bool deformed, const SceneStepTimings* step) {
+  {
+    std::lock_guard lock(state_mutex_);
+    ++version_;
+    if (sequence > last_sequence_) last_sequence_ = sequence;
+    if (deformed && step != nullptr) last_step_ = *step;
+  }
+  Notify(false);
+}
+
+Result<v1::Frame> Session::Render(const FrameRequest& request) {
+  if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
+  const auto t0 = std::chrono::steady_clock::now();
+  SceneView view = request.settings->view;
+  SceneStepTimings step;
+  {
+    std::lock_guard lock(state_mutex_);
+    view.camera = request.camera ? *request.camera : camera_;
+    step = last_step_;
+    last_frame_width_ = view.width;
+    last_frame_height_ = view.height;
+  }
+  const bool interactive = !request.force_still && Interacting();
+  view.quality = interactive ? RenderQuality::kInteractive : RenderQuality::kStill;
+  v1::Frame out;
+  Frame frame;
+  {
+    std::lock_guard scene_lock(scene_mutex_);
+    ASSIGN_OR_RETURN(frame, scene_->Render(view));
+    if (request.want_vertices) {
+      for (const glm::dvec3& p : scene_->Positions()) *out.add_vertices_mm() = ToProto(p);
+    }
+  }
+  const double render_ms = MsSince(t0);
+  const auto t1 = std::chrono::steady_clock::now();
+  const StreamSettings& s = *request.settings;
+  ASSIGN_OR_RETURN(std::vector<uint8_t> bytes,
+                   s.png ? EncodePng(frame.rgba, frame.width, frame.height)
+                         : EncodeJpeg(frame.rgba, frame.width, frame.height,
+                                      interactive ? std::min(s.jpeg_quality, 75) : s.jpeg_quality));
+  out.set_image(bytes.data(), bytes.size());
+  out.set_encoding(s.png ? "png" : "jpeg");
+  out.set_width(frame.width);
+  out.set_height(frame.height);
+  out.set_interactive(interactive);
+  out.set_last_sequence(last_sequence());
+  out.set_max_displacement_mm(step.max_displacement_mm);
+  v1::StageTimings* timings = out.mutable_timings();
+  timings->set_fem_ms(step.fem_ms);
+  timings->set_warp_ms(step.warp_ms);
+  timings->set_render_ms(render_ms);
+  timings->set_encode_ms(MsSince(t1));
+  timings->set_total_ms(MsSince(t0));
+  return out;
+}
+
+bool Session::Interacting() const {
+  std::lock_guard lock(state_mutex_);
+  if (!grabbed_ || last_deform_ == std::chrono::steady_clock::time_point{}) return false;
+  return MsSince(last_deform_) < options_.still_delay_ms;
+}
+
+uint64_t Session::version() const {
+  std::lock_guard lock(state_mutex_);
+  return version_;
+}
+
+uint64_t Session::last_sequence() const {
+  std::lock_guard lock(state_mutex_);
+  return last_sequence_;
+}
+
+double Session::max_displacement_mm() const {
+  std::lock_guard lock(state_mutex_);
+  return last_step_.max_displacement_mm;
+}
+
+int64_t Session::AddObserver(Observer observer) {
+  std::lock_guard lock(observers_mutex_);
+  const int64_t token = next_observer_++;
+  observers_.emplace(token, std::move(observer));
+  return token;
+}
+
+void Session::RemoveObserver(int64_t token) {
+  std::lock_guard lock(observers_mutex_);
+  observers_.erase(token);
+}
+
+int32_t Session::viewers() const {
+  std::lock_guard lock(observers_mutex_);
+  return static_cast<int32_t>(observers_.size());
+}
+
+void Session::Notify(bool closed) {
+  std::vector<Observer> observers;
+  {
+    std::lock_guard lock(observers_mutex_);
+    for (const auto& [token, observer] : observers_) observers.push_back(observer);
+  }
+  for (const Observer& observer : observers) observer(closed);
+}
+
+void Session::Close() {
+  {
+    std::lock_guard lock(state_mutex_);
+    if (closed_) return;
+    closed_ = true;
+  }
+  Notify(true);
+}
+
+bool Session::closed() const {
+  std::lock_guard lock(state_mutex_);
+  return closed_;
+}
+
+void Session::Touch() {
+  std::lock_guard lock(state_mutex_);
+  last_touch_ = std::chrono::steady_clock::now();
+}
+
+double Session::idle_s() const {
+  std::lock_guard lock(state_mutex_);
+  return MsSince(last_touch_) / 1000.0;
+}
+
+}  // namespace vpm::service

@@ -1,0 +1,115 @@
+// One deformation case that clients attach to: a shared volume, a mesh, the
+// DeformableScene (FEM + backward map) and the camera every viewer shares.
+// Render settings belong to each stream. Thread-safe: scene work is
+// serialised by a mutex; state changes bump a version and notify the
+// attached streams, which render on the worker pool.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "server/render/deformable_scene.h"
+#include "server/service/mesh_store.h"
+#include "server/service/proto_convert.h"
+#include "server/service/volume_store.h"
+#include "vpm/v1/vpm.pb.h"
+
+namespace vpm::service {
+
+// What applying one event did.
+struct AppliedEvent {
+  SceneStepTimings step;   // FEM and warp times (zero for camera events)
+  bool deformed = false;
+};
+
+class Session {
+ public:
+  struct Options {
+    double still_delay_ms = 150;  // a frame is interactive this long after a drag
+  };
+  // The scene is built here (FEM set-up): call from a worker, not a callback.
+  static Result<std::shared_ptr<Session>> Create(std::string id, const gpu::GpuContext& context,
+                                                 VolumeRenderer& renderer,
+                                                 std::shared_ptr<VolumeEntry> volume,
+                                                 std::shared_ptr<const MeshEntry> mesh,
+                                                 const Options& options);
+  ~Session();
+
+  const std::string& id() const { return id_; }
+  const VolumeEntry& volume() const { return *volume_; }
+  const MeshEntry& mesh() const { return *mesh_; }
+
+  // Camera, grab (point or pick), drag, pull, release. Settings events are
+  // the stream's business and ignored here. Errors: InvalidArgument naming
+  // the field, OutOfRange for a point outside the volume,
+  // FailedPrecondition for a drag, pull or release without a grab.
+  Result<AppliedEvent> Apply(const v1::ClientEvent& event);
+  Status SetCamera(const v1::Camera& camera);
+
+  // One frame of the current state, encoded. `camera` overrides the
+  // session's. Interactive quality while a drag is recent (or `force_still`
+  // off), else still.
+  struct FrameRequest {
+    const StreamSettings* settings = nullptr;
+    std::optional<Camera> camera;
+    bool force_still = false;
+    bool want_vertices = false;
+  };
+  Result<v1::Frame> Render(const FrameRequest& request);
+
+  // True while the last drag or pull is younger than still_delay_ms.
+  bool Interacting() const;
+  uint64_t version() const;
+  uint64_t last_sequence() const;
+  double max_displacement_mm() const;
+
+  // Streams watching this session: notified (outside any session lock)
+  // after every change, and with closed = true once when the session closes.
+  using Observer = std::function<void(bool closed)>;
+  int64_t AddObserver(Observer observer);
+  void RemoveObserver(int64_t token);
+  int32_t viewers() const;
+  void Close();  // notifies observers; later calls fail with FailedPrecondition
+  bool closed() const;
+
+  void Touch();
+  double idle_s() const;
+
+ private:
+  Session(std::string id, std::shared_ptr<VolumeEntry> volume,
+          std::shared_ptr<const MeshEntry> mesh, const Options& options);
+  Result<AppliedEvent> ApplyLocked(const v1::ClientEvent& event);
+  Result<glm::dvec3> GrabPoint(const v1::Grab& grab) const;
+  void Changed(uint64_t sequence, bool deformed, const SceneStepTimings* step);
+  void Notify(bool closed);
+
+  const std::string id_;
+  std::shared_ptr<VolumeEntry> volume_;
+  std::shared_ptr<const MeshEntry> mesh_;
+  Options options_;
+
+  std::mutex scene_mutex_;  // the scene is single-threaded
+  std::unique_ptr<DeformableScene> scene_;
+
+  mutable std::mutex state_mutex_;
+  Camera camera_;
+  uint64_t version_ = 0;
+  uint64_t last_sequence_ = 0;
+  bool grabbed_ = false;
+  SceneStepTimings last_step_;
+  int last_frame_width_ = 512, last_frame_height_ = 512;
+  std::chrono::steady_clock::time_point last_deform_{};
+  std::chrono::steady_clock::time_point last_touch_;
+  bool closed_ = false;
+
+  mutable std::mutex observers_mutex_;
+  std::map<int64_t, Observer> observers_;
+  int64_t next_observer_ = 1;
+};
+
+}  // namespace vpm::service

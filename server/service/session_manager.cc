@@ -1,0 +1,99 @@
+#include "server/service/session_manager.h"
+
+namespace vpm::service {
+
+Result<std::unique_ptr<SessionManager>> SessionManager::Create(const Options& options) {
+  if (options.context == nullptr || options.renderer == nullptr) {
+    return absl::InvalidArgumentError("SessionManager: no GPU context or renderer");
+  }
+  return std::unique_ptr<SessionManager>(new SessionManager(options));
+}
+
+Result<std::shared_ptr<Session>> SessionManager::Open(std::shared_ptr<VolumeEntry> volume,
+                                                      std::shared_ptr<const MeshEntry> mesh) {
+  std::string id;
+  {
+    std::lock_guard lock(mutex_);
+    if (static_cast<int64_t>(sessions_.size()) + opening_ >= options_.max_sessions) {
+      return absl::ResourceExhaustedError(StrCat("the server holds its maximum of ",
+                                                 options_.max_sessions,
+                                                 " sessions; close one first"));
+    }
+    ++opening_;
+    id = StrCat("ses-", next_id_++);
+  }
+  auto session = Session::Create(id, *options_.context, *options_.renderer, std::move(volume),
+                                 std::move(mesh), options_.session);
+  std::lock_guard lock(mutex_);
+  --opening_;
+  if (!session.ok()) return session.status();
+  sessions_.emplace(id, *session);
+  NotifyLocked();
+  return *session;
+}
+
+Result<std::shared_ptr<Session>> SessionManager::Get(std::string_view id) const {
+  std::lock_guard lock(mutex_);
+  auto it = sessions_.find(id);
+  if (it == sessions_.end()) return absl::NotFoundError(StrCat("session_id: no session '", id, "'"));
+  it->second->Touch();
+  return it->second;
+}
+
+Status SessionManager::Close(std::string_view id) {
+  std::shared_ptr<Session> session;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = sessions_.find(id);
+    if (it == sessions_.end()) {
+      return absl::NotFoundError(StrCat("session_id: no session '", id, "'"));
+    }
+    session = it->second;
+    sessions_.erase(it);
+    NotifyLocked();
+  }
+  session->Close();
+  return absl::OkStatus();
+}
+
+std::vector<std::shared_ptr<Session>> SessionManager::List() const {
+  std::lock_guard lock(mutex_);
+  std::vector<std::shared_ptr<Session>> out;
+  for (const auto& [id, session] : sessions_) out.push_back(session);
+  return out;
+}
+
+int SessionManager::EvictIdle() {
+  if (options_.idle_session_s <= 0) return 0;
+  std::vector<std::shared_ptr<Session>> evicted;
+  {
+    std::lock_guard lock(mutex_);
+    for (auto it = sessions_.begin(); it != sessions_.end();) {
+      if (it->second->viewers() == 0 && it->second->idle_s() > options_.idle_session_s) {
+        evicted.push_back(it->second);
+        it = sessions_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    if (!evicted.empty()) NotifyLocked();
+  }
+  for (auto& session : evicted) session->Close();
+  return static_cast<int>(evicted.size());
+}
+
+void SessionManager::CloseAll() {
+  std::map<std::string, std::shared_ptr<Session>, std::less<>> sessions;
+  {
+    std::lock_guard lock(mutex_);
+    sessions.swap(sessions_);
+    NotifyLocked();
+  }
+  for (auto& [id, session] : sessions) session->Close();
+}
+
+void SessionManager::NotifyLocked() const {
+  if (options_.on_change) options_.on_change(static_cast<int64_t>(sessions_.size()));
+}
+
+}  // namespace vpm::service

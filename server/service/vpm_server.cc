@@ -1,0 +1,158 @@
+#include "server/service/vpm_server.h"
+
+#include <fstream>
+#include <sstream>
+
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/health_check_service_interface.h>
+
+namespace vpm::service {
+namespace {
+
+Result<std::string> ReadPem(const std::string& path, const char* flag) {
+  std::ifstream file(path);
+  if (!file) return absl::InvalidArgumentError(StrCat(flag, " ", path, ": cannot read"));
+  std::stringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+Result<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(const ServerOptions& o) {
+  if (o.tls_cert.empty() && o.tls_key.empty()) {
+    if (!o.tls_client_ca.empty()) {
+      return absl::InvalidArgumentError("--tls-client-ca needs --tls-cert and --tls-key");
+    }
+    return grpc::InsecureServerCredentials();
+  }
+  if (o.tls_cert.empty() || o.tls_key.empty()) {
+    return absl::InvalidArgumentError("TLS needs both --tls-cert and --tls-key");
+  }
+  grpc::SslServerCredentialsOptions ssl;
+  ASSIGN_OR_RETURN(std::string cert, ReadPem(o.tls_cert, "--tls-cert"));
+  ASSIGN_OR_RETURN(std::string key, ReadPem(o.tls_key, "--tls-key"));
+  ssl.pem_key_cert_pairs.push_back({key, cert});
+  if (!o.tls_client_ca.empty()) {
+    ASSIGN_OR_RETURN(ssl.pem_root_certs, ReadPem(o.tls_client_ca, "--tls-client-ca"));
+    ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
+  }
+  return grpc::SslServerCredentials(ssl);
+}
+
+}  // namespace
+
+Result<std::unique_ptr<VpmServer>> VpmServer::Create(const ServerOptions& options,
+                                                     const gpu::GpuContext* gpu) {
+  std::unique_ptr<VpmServer> s(new VpmServer());
+  s->options_ = options;
+  s->gpu_ = gpu;
+  RETURN_IF_ERROR(s->Start());
+  return s;
+}
+
+Status VpmServer::Start() {
+  const ServerOptions& o = options_;
+  ASSIGN_OR_RETURN(TokenAuth auth, TokenAuth::Create({o.token, o.no_auth}));
+  auth_.emplace(std::move(auth));
+  ASSIGN_OR_RETURN(auto credentials, MakeCredentials(o));
+  ASSIGN_OR_RETURN(metrics_, ServiceMetrics::Create({o.metrics_listen}));
+  gpu::GpuContext::Options gpu_options;
+  gpu_options.device_selector = o.vulkan_device;
+  if (gpu_ == nullptr) {
+    ASSIGN_OR_RETURN(own_gpu_, gpu::GpuContext::Create(gpu_options));
+    gpu_ = own_gpu_.get();
+  }
+  ASSIGN_OR_RETURN(renderer_, VolumeRenderer::Create(*gpu_, {}));
+  ASSIGN_OR_RETURN(request_pool_, WorkerPool::Create({o.request_threads, "request"}));
+  ASSIGN_OR_RETURN(render_pool_, WorkerPool::Create({o.render_threads, "render"}));
+  VolumeStore::Options volume_options;
+  volume_options.context = gpu_;
+  volume_options.data_root = o.data_root;
+  volume_options.max_volumes = o.max_volumes;
+  volume_options.max_bytes = o.max_volume_bytes;
+  volume_options.on_change = [m = metrics_.get()](int64_t bytes, int64_t count) {
+    m->Volumes(bytes, count);
+  };
+  volume_options.forget_gpu = [r = renderer_.get()](const GpuVolume* v) { r->ForgetVolume(v); };
+  ASSIGN_OR_RETURN(volumes_, VolumeStore::Create(volume_options));
+  ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes}));
+  SessionManager::Options session_options;
+  session_options.context = gpu_;
+  session_options.renderer = renderer_.get();
+  session_options.max_sessions = o.max_sessions;
+  session_options.idle_session_s = o.idle_session_s;
+  session_options.session.still_delay_ms = o.still_delay_ms;
+  session_options.on_change = [m = metrics_.get()](int64_t open) { m->Sessions(open); };
+  ASSIGN_OR_RETURN(sessions_, SessionManager::Create(session_options));
+  streams_ = std::make_unique<StreamRegistry>(o.max_streams_per_client);
+
+  context_.options = o;
+  context_.gpu = gpu_;
+  context_.renderer = renderer_.get();
+  context_.auth = &*auth_;
+  context_.volumes = volumes_.get();
+  context_.meshes = meshes_.get();
+  context_.sessions = sessions_.get();
+  context_.metrics = metrics_.get();
+  context_.render_pool = render_pool_.get();
+  context_.request_pool = request_pool_.get();
+  context_.streams = streams_.get();
+  service_ = std::make_unique<VpmService>(&context_);
+
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(o.listen, credentials, &port_);
+  builder.RegisterService(service_.get());
+  builder.SetMaxReceiveMessageSize(o.max_message_bytes);
+  builder.SetMaxSendMessageSize(o.max_message_bytes);
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, o.keepalive_time_s * 1000);
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, o.keepalive_timeout_s * 1000);
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, 5000);
+  server_ = builder.BuildAndStart();
+  if (!server_ || port_ == 0) {
+    return absl::InvalidArgumentError(StrCat("--listen ", o.listen, ": cannot listen there"));
+  }
+  server_->GetHealthCheckService()->SetServingStatus(true);
+  reaper_ = std::thread([this] { ReapIdleSessions(); });
+  return absl::OkStatus();
+}
+
+void VpmServer::ReapIdleSessions() {
+  std::unique_lock lock(mutex_);
+  while (!shut_down_) {
+    stop_.wait_for(lock, std::chrono::seconds(1));
+    if (shut_down_) break;
+    lock.unlock();
+    sessions_->EvictIdle();
+    lock.lock();
+  }
+}
+
+void VpmServer::Shutdown(std::chrono::milliseconds grace) {
+  {
+    std::lock_guard lock(mutex_);
+    if (shut_down_) return;
+    shut_down_ = true;
+  }
+  stop_.notify_all();
+  if (server_) {
+    context_.draining = true;
+    server_->GetHealthCheckService()->SetServingStatus(false);
+    streams_->FinishAll(grpc::Status(grpc::UNAVAILABLE, "the server is shutting down"));
+    server_->Shutdown(std::chrono::system_clock::now() + grace);
+  }
+  if (render_pool_) render_pool_->Shutdown();
+  if (request_pool_) request_pool_->Shutdown();
+  if (sessions_) sessions_->CloseAll();
+  if (reaper_.joinable()) reaper_.join();
+}
+
+void VpmServer::Wait() {
+  std::unique_lock lock(mutex_);
+  stop_.wait(lock, [this] { return shut_down_; });
+}
+
+VpmServer::~VpmServer() { Shutdown(std::chrono::milliseconds(0)); }
+
+}  // namespace vpm::service

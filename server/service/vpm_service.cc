@@ -1,0 +1,236 @@
+#include "server/service/vpm_service.h"
+
+#include "server/service/grpc_status.h"
+#include "server/service/interact_reactor.h"
+#include "server/service/proto_convert.h"
+#include "server/service/upload_volume_reactor.h"
+#include "server/service/watch_reactor.h"
+
+namespace vpm::service {
+
+grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context,
+                                            const char* method, WorkerPool* pool,
+                                            std::function<Status()> fn) {
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  if (Status auth = service_->auth->Check(*context); !auth.ok()) {
+    Done(reactor, method, auth);
+  } else if (pool == nullptr) {
+    Done(reactor, method, fn());
+  } else if (!pool->Post([this, reactor, method, fn = std::move(fn)] {
+               Done(reactor, method, fn());
+             })) {
+    Done(reactor, method, absl::UnavailableError("the server is shutting down"));
+  }
+  return reactor;
+}
+
+void VpmService::Done(grpc::ServerUnaryReactor* reactor, const char* method,
+                      const Status& status) {
+  const grpc::Status g = ToGrpcStatus(status);
+  service_->metrics->Request(method, StatusCodeName(g.error_code()));
+  reactor->Finish(g);
+}
+
+void VpmService::FillSessionInfo(const Session& session, v1::SessionInfo* info) const {
+  info->set_session_id(session.id());
+  info->set_volume_id(session.volume().id);
+  info->set_mesh_id(session.mesh().id);
+  info->set_viewers(session.viewers());
+  info->set_idle_s(session.idle_s());
+}
+
+grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* context,
+                                                 const v1::LoadVolumeRequest* request,
+                                                 v1::VolumeInfo* response) {
+  return Unary(context, "LoadVolume", service_->request_pool, [=, this]() -> Status {
+    if (request->source().empty()) return absl::InvalidArgumentError("source: required");
+    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry, service_->volumes->Load(request->source()));
+    FillVolumeInfo(*entry, response);
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerReadReactor<v1::UploadVolumeRequest>* VpmService::UploadVolume(
+    grpc::CallbackServerContext* context, v1::VolumeInfo* response) {
+  return new UploadVolumeReactor(service_, context, response);
+}
+
+grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* context,
+                                                const v1::GetVolumeRequest* request,
+                                                v1::VolumeInfo* response) {
+  return Unary(context, "GetVolume", nullptr, [=, this]() -> Status {
+    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
+                     service_->volumes->Get(request->volume_id()));
+    FillVolumeInfo(*entry, response);
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::ListVolumes(grpc::CallbackServerContext* context,
+                                                  const v1::ListVolumesRequest*,
+                                                  v1::ListVolumesResponse* response) {
+  return Unary(context, "ListVolumes", nullptr, [=, this]() -> Status {
+    for (const auto& entry : service_->volumes->List()) {
+      FillVolumeInfo(*entry, response->add_volumes());
+    }
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* context,
+                                                   const v1::DeleteVolumeRequest* request,
+                                                   v1::DeleteVolumeResponse*) {
+  return Unary(context, "DeleteVolume", nullptr, [=, this]() -> Status {
+    RETURN_IF_ERROR(service_->volumes->Delete(request->volume_id()));
+    service_->meshes->ForgetVolume(request->volume_id());
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* context,
+                                                const v1::BuildMeshRequest* request,
+                                                v1::MeshInfo* response) {
+  return Unary(context, "BuildMesh", service_->request_pool, [=, this]() -> Status {
+    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
+                     service_->volumes->Get(request->volume_id()));
+    ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(request->params()));
+    ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
+                     service_->meshes->Build(volume, params));
+    FillMeshInfo(*mesh, response);
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::GetMesh(grpc::CallbackServerContext* context,
+                                              const v1::GetMeshRequest* request,
+                                              v1::GetMeshResponse* response) {
+  return Unary(context, "GetMesh", nullptr, [=, this]() -> Status {
+    ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
+                     service_->meshes->Get(request->mesh_id()));
+    FillMeshInfo(*mesh, response->mutable_info());
+    if (request->include_geometry()) FillMeshGeometry(mesh->mesh, response);
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* context,
+                                                 const v1::RefineMeshRequest* request,
+                                                 v1::MeshInfo* response) {
+  return Unary(context, "RefineMesh", service_->request_pool, [=, this]() -> Status {
+    if (!request->has_point_mm()) return absl::InvalidArgumentError("point_mm: required");
+    ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
+                     service_->meshes->Refine(request->mesh_id(), FromProto(request->point_mm())));
+    FillMeshInfo(*mesh, response);
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* context,
+                                                  const v1::OpenSessionRequest* request,
+                                                  v1::SessionInfo* response) {
+  return Unary(context, "OpenSession", service_->request_pool, [=, this]() -> Status {
+    std::shared_ptr<const MeshEntry> mesh;
+    if (!request->mesh_id().empty()) {
+      ASSIGN_OR_RETURN(mesh, service_->meshes->Get(request->mesh_id()));
+      if (!request->volume_id().empty() && mesh->volume->id != request->volume_id()) {
+        return absl::InvalidArgumentError(StrCat("mesh_id: '", request->mesh_id(),
+                                                 "' was built on volume '", mesh->volume->id,
+                                                 "', not '", request->volume_id(), "'"));
+      }
+    } else {
+      if (request->volume_id().empty()) {
+        return absl::InvalidArgumentError("volume_id: required (or a mesh_id)");
+      }
+      ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
+                       service_->volumes->Get(request->volume_id()));
+      ASSIGN_OR_RETURN(mesh, service_->meshes->Build(volume, MeshParams{}));
+    }
+    ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
+                     service_->sessions->Open(mesh->volume, mesh));
+    FillSessionInfo(*session, response);
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::CloseSession(grpc::CallbackServerContext* context,
+                                                   const v1::CloseSessionRequest* request,
+                                                   v1::CloseSessionResponse*) {
+  return Unary(context, "CloseSession", nullptr,
+               [=, this] { return service_->sessions->Close(request->session_id()); });
+}
+
+grpc::ServerUnaryReactor* VpmService::ListSessions(grpc::CallbackServerContext* context,
+                                                   const v1::ListSessionsRequest*,
+                                                   v1::ListSessionsResponse* response) {
+  return Unary(context, "ListSessions", nullptr, [=, this]() -> Status {
+    for (const auto& session : service_->sessions->List()) {
+      FillSessionInfo(*session, response->add_sessions());
+    }
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerBidiReactor<v1::InteractRequest, v1::Frame>* VpmService::Interact(
+    grpc::CallbackServerContext* context) {
+  return new InteractReactor(service_, context);
+}
+
+grpc::ServerWriteReactor<v1::Frame>* VpmService::Watch(grpc::CallbackServerContext* context,
+                                                       const v1::WatchRequest* request) {
+  return new WatchReactor(service_, context, *request);
+}
+
+grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* context,
+                                                 const v1::ManipulateRequest* request,
+                                                 v1::ManipulateResponse* response) {
+  return Unary(context, "Manipulate", service_->render_pool, [=, this]() -> Status {
+    ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
+                     service_->sessions->Get(request->session_id()));
+    const v1::ClientEvent& event = request->event();
+    if (event.event_case() == v1::ClientEvent::EVENT_NOT_SET) {
+      return absl::InvalidArgumentError("event: required (camera, grab, drag, pull or release)");
+    }
+    if (event.has_settings()) {
+      return absl::InvalidArgumentError(
+          "event.settings: render settings belong to a stream (WatchRequest.settings)");
+    }
+    ASSIGN_OR_RETURN(AppliedEvent applied, session->Apply(event));
+    response->set_applied_sequence(event.sequence());
+    response->set_max_displacement_mm(session->max_displacement_mm());
+    (void)applied;
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* context,
+                                                const v1::SetCameraRequest* request,
+                                                v1::SetCameraResponse*) {
+  return Unary(context, "SetCamera", nullptr, [=, this]() -> Status {
+    ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
+                     service_->sessions->Get(request->session_id()));
+    return session->SetCamera(request->camera());
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* context,
+                                             const v1::RenderRequest* request,
+                                             v1::Frame* response) {
+  return Unary(context, "Render", service_->render_pool, [=, this]() -> Status {
+    ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
+                     service_->sessions->Get(request->session_id()));
+    ASSIGN_OR_RETURN(StreamSettings settings,
+                     ToStreamSettings(request->settings(), session->volume().volume,
+                                      service_->options.max_frame_side));
+    Session::FrameRequest frame_request{&settings, std::nullopt, true, false};
+    if (request->has_camera()) {
+      ASSIGN_OR_RETURN(frame_request.camera,
+                       ToCamera(request->camera(), session->volume().volume.geometry()));
+    }
+    ASSIGN_OR_RETURN(*response, session->Render(frame_request));
+    response->set_frame_number(1);
+    service_->metrics->FrameSent(response->timings());
+    return absl::OkStatus();
+  });
+}
+
+}  // namespace vpm::service

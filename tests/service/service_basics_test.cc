@@ -1,0 +1,340 @@
+// Auth, health, reflection, volumes (load, upload, get, list, delete, path
+// rules, caps) and meshes.
+#include <fstream>
+#include <future>
+
+#include <grpcpp/generic/generic_stub.h>
+
+#include "server/service/sha256.h"
+#include "server/volume/read_volume.h"
+#include "server/volume/write_nifti.h"
+#include "tests/service/service_test_util.h"
+
+namespace vpm::service::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+grpc::Status GenericUnary(grpc::Channel* channel, const std::string& method,
+                          const std::string& request_bytes, std::string* response_bytes) {
+  grpc::GenericStub stub(channel->shared_from_this());
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(20));
+  grpc::Slice slice(request_bytes);
+  grpc::ByteBuffer request(&slice, 1);
+  grpc::ByteBuffer response;
+  std::promise<grpc::Status> done;
+  stub.UnaryCall(&context, method, grpc::StubOptions(), &request, &response,
+                 [&](grpc::Status s) { done.set_value(s); });
+  grpc::Status status = done.get_future().get();
+  std::vector<grpc::Slice> slices;
+  if (status.ok() && response.Dump(&slices).ok()) {
+    for (const auto& s : slices) response_bytes->append(reinterpret_cast<const char*>(s.begin()), s.size());
+  }
+  return status;
+}
+
+TEST_F(ServiceTest, Auth_RejectsMissingAndWrongToken) {
+  v1::ListVolumesRequest request;
+  v1::ListVolumesResponse response;
+  auto none = Context("");
+  EXPECT_EQ(stub_->ListVolumes(none.get(), request, &response).error_code(),
+            grpc::UNAUTHENTICATED);
+  auto wrong = Context("not-the-token");
+  EXPECT_EQ(stub_->ListVolumes(wrong.get(), request, &response).error_code(),
+            grpc::UNAUTHENTICATED);
+  auto right = Context();
+  EXPECT_TRUE(stub_->ListVolumes(right.get(), request, &response).ok());
+}
+
+TEST_F(ServiceTest, Health_AnswersServingWithoutToken) {
+  std::string response;
+  // HealthCheckRequest{service: ""} is empty; HealthCheckResponse{SERVING} is 08 01.
+  grpc::Status status =
+      GenericUnary(channel_.get(), "/grpc.health.v1.Health/Check", "", &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response, std::string("\x08\x01", 2));
+}
+
+TEST_F(ServiceTest, Health_NotServingWhileDraining) {
+  server_->context().draining = true;
+  server_->Shutdown(std::chrono::milliseconds(100));
+  std::string response;
+  grpc::Status status =
+      GenericUnary(channel_.get(), "/grpc.health.v1.Health/Check", "", &response);
+  // Once drained the port is closed: either NOT_SERVING or unavailable.
+  EXPECT_TRUE(!status.ok() || response == std::string("\x08\x02", 2));
+  server_.reset();
+}
+
+TEST_F(ServiceTest, Reflection_ListsTheServiceWithoutToken) {
+  grpc::GenericStub stub(channel_);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(20));
+  grpc::CompletionQueue cq;
+  auto call = stub.PrepareCall(&context, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo", &cq);
+  void* tag = nullptr;
+  bool ok = false;
+  call->StartCall(reinterpret_cast<void*>(1));
+  ASSERT_TRUE(cq.Next(&tag, &ok) && ok);
+  // ServerReflectionRequest{list_services: ""}: field 7, length 0.
+  grpc::Slice slice(std::string("\x3a\x00", 2));
+  grpc::ByteBuffer request(&slice, 1);
+  call->Write(request, reinterpret_cast<void*>(2));
+  ASSERT_TRUE(cq.Next(&tag, &ok) && ok);
+  grpc::ByteBuffer response;
+  call->Read(&response, reinterpret_cast<void*>(3));
+  ASSERT_TRUE(cq.Next(&tag, &ok) && ok);
+  std::vector<grpc::Slice> slices;
+  ASSERT_TRUE(response.Dump(&slices).ok());
+  std::string bytes;
+  for (const auto& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
+  EXPECT_NE(bytes.find("vpm.v1.Vpm"), std::string::npos);
+  context.TryCancel();
+  grpc::Status status;
+  call->Finish(&status, reinterpret_cast<void*>(4));
+  cq.Next(&tag, &ok);
+  cq.Shutdown();
+  while (cq.Next(&tag, &ok)) {
+  }
+}
+
+TEST_F(ServiceTest, Volumes_LoadGetListDelete) {
+  v1::VolumeInfo info = LoadPhantom();
+  ASSERT_EQ(info.dims_size(), 3);
+  EXPECT_EQ(info.dims(0), 48);
+  EXPECT_GT(info.landmarks_size(), 0);
+  EXPECT_LT(info.min_value(), info.max_value());
+  EXPECT_EQ(info.direction_size(), 9);
+
+  v1::GetVolumeRequest get;
+  get.set_volume_id(info.volume_id());
+  v1::VolumeInfo got;
+  auto c1 = Context();
+  ASSERT_TRUE(stub_->GetVolume(c1.get(), get, &got).ok());
+  EXPECT_EQ(got.source(), kPhantom);
+
+  v1::ListVolumesResponse list;
+  auto c2 = Context();
+  ASSERT_TRUE(stub_->ListVolumes(c2.get(), {}, &list).ok());
+  EXPECT_EQ(list.volumes_size(), 1);
+
+  v1::DeleteVolumeRequest del;
+  del.set_volume_id(info.volume_id());
+  v1::DeleteVolumeResponse deleted;
+  auto c3 = Context();
+  ASSERT_TRUE(stub_->DeleteVolume(c3.get(), del, &deleted).ok());
+  auto c4 = Context();
+  EXPECT_EQ(stub_->GetVolume(c4.get(), get, &got).error_code(), grpc::NOT_FOUND);
+  auto c5 = Context();
+  EXPECT_EQ(stub_->DeleteVolume(c5.get(), del, &deleted).error_code(), grpc::NOT_FOUND);
+}
+
+TEST_F(ServiceTest, Volumes_CapIsResourceExhausted) {
+  for (int i = 0; i < 4; ++i) LoadPhantom();
+  v1::LoadVolumeRequest request;
+  request.set_source(kPhantom);
+  v1::VolumeInfo info;
+  auto context = Context();
+  EXPECT_EQ(stub_->LoadVolume(context.get(), request, &info).error_code(),
+            grpc::RESOURCE_EXHAUSTED);
+}
+
+TEST_F(ServiceTest, Volumes_BadSourceIsInvalidArgument) {
+  for (const char* source : {"", "phantom:nosuchthing", "raw:/etc/passwd?dims=1,1,1&type=uint8"}) {
+    v1::LoadVolumeRequest request;
+    request.set_source(source);
+    v1::VolumeInfo info;
+    auto context = Context();
+    EXPECT_EQ(stub_->LoadVolume(context.get(), request, &info).error_code(),
+              grpc::INVALID_ARGUMENT)
+        << source;
+  }
+}
+
+class DataRootTest : public ServiceTest {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() / ("vpm-data-root-" + std::to_string(::getpid()));
+    outside_ = fs::temp_directory_path() / ("vpm-outside-" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    fs::remove_all(outside_);
+    fs::create_directories(root_ / "cases");
+    fs::create_directories(outside_);
+    auto volume = ReadVolume("phantom:abdomen?size=24", {});
+    ASSERT_TRUE(volume.ok());
+    ASSERT_TRUE(WriteNifti(*volume, root_ / "cases" / "small.nii.gz").ok());
+    ASSERT_TRUE(WriteNifti(*volume, outside_ / "secret.nii.gz").ok());
+    fs::create_symlink(outside_ / "secret.nii.gz", root_ / "cases" / "escape.nii.gz");
+    fs::create_directory_symlink(outside_, root_ / "outdir");
+    ServerOptions options = SmallServerOptions();
+    options.data_root = root_.string();
+    StartServer(options);
+  }
+  void TearDown() override {
+    ServiceTest::TearDown();
+    fs::remove_all(root_);
+    fs::remove_all(outside_);
+  }
+  grpc::StatusCode Load(const std::string& source) {
+    v1::LoadVolumeRequest request;
+    request.set_source(source);
+    v1::VolumeInfo info;
+    auto context = Context();
+    return stub_->LoadVolume(context.get(), request, &info).error_code();
+  }
+  fs::path root_, outside_;
+};
+
+TEST_F(DataRootTest, LoadVolume_ReadsInsideTheRoot) {
+  EXPECT_EQ(Load("cases/small.nii.gz"), grpc::OK);
+}
+
+TEST_F(DataRootTest, LoadVolume_RefusesTraversalAndSymlinkEscape) {
+  EXPECT_EQ(Load("../vpm-outside-" + std::to_string(::getpid()) + "/secret.nii.gz"),
+            grpc::INVALID_ARGUMENT);
+  EXPECT_EQ(Load("cases/../../etc/passwd"), grpc::INVALID_ARGUMENT);
+  EXPECT_EQ(Load((outside_ / "secret.nii.gz").string()), grpc::INVALID_ARGUMENT);
+  EXPECT_EQ(Load("cases/escape.nii.gz"), grpc::PERMISSION_DENIED);
+  EXPECT_EQ(Load("outdir/secret.nii.gz"), grpc::PERMISSION_DENIED);
+  EXPECT_EQ(Load("cases/missing.nii.gz"), grpc::NOT_FOUND);
+}
+
+class UploadTest : public ServiceTest {
+ protected:
+  std::vector<uint8_t> NiftiBytes() {
+    auto volume = ReadVolume("phantom:abdomen?size=40", {});
+    EXPECT_TRUE(volume.ok());
+    auto bytes = EncodeNifti(*volume);
+    EXPECT_TRUE(bytes.ok());
+    return *bytes;
+  }
+  // Sends the header then `bytes` in chunks of `chunk` bytes.
+  grpc::Status Upload(const std::vector<uint8_t>& bytes, int64_t declared, const std::string& sha,
+                      size_t chunk, v1::VolumeInfo* info, bool header = true) {
+    auto context = Context();
+    auto writer = stub_->UploadVolume(context.get(), info);
+    if (header) {
+      v1::UploadVolumeRequest h;
+      h.mutable_header()->set_file_name("case.nii");
+      h.mutable_header()->set_total_bytes(declared);
+      h.mutable_header()->set_sha256_hex(sha);
+      if (!writer->Write(h)) return writer->Finish();
+    }
+    for (size_t at = 0; at < bytes.size(); at += chunk) {
+      v1::UploadVolumeRequest c;
+      c.set_chunk(bytes.data() + at, std::min(chunk, bytes.size() - at));
+      if (!writer->Write(c)) break;
+    }
+    writer->WritesDone();
+    return writer->Finish();
+  }
+};
+
+TEST_F(UploadTest, UploadVolume_AcceptsChunkedFileWithChecksum) {
+  const std::vector<uint8_t> bytes = NiftiBytes();
+  v1::VolumeInfo info;
+  grpc::Status status = Upload(bytes, int64_t(bytes.size()), Sha256::HexOf(bytes), 64 << 10, &info);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(info.dims(0), 40);
+  EXPECT_EQ(info.source(), "upload:case.nii");
+}
+
+TEST_F(UploadTest, UploadVolume_RejectsChecksumMismatch) {
+  const std::vector<uint8_t> bytes = NiftiBytes();
+  std::string wrong(64, 'a');
+  v1::VolumeInfo info;
+  grpc::Status status = Upload(bytes, int64_t(bytes.size()), wrong, 64 << 10, &info);
+  EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("sha256"), std::string::npos) << status.error_message();
+}
+
+TEST_F(UploadTest, UploadVolume_RejectsTruncatedStream) {
+  std::vector<uint8_t> bytes = NiftiBytes();
+  const std::string sha = Sha256::HexOf(bytes);
+  const int64_t declared = int64_t(bytes.size());
+  bytes.resize(bytes.size() / 2 / (64 << 10) * (64 << 10));
+  v1::VolumeInfo info;
+  grpc::Status status = Upload(bytes, declared, sha, 64 << 10, &info);
+  EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("truncated"), std::string::npos) << status.error_message();
+}
+
+TEST_F(UploadTest, UploadVolume_RejectsBadChunksAndMissingHeader) {
+  const std::vector<uint8_t> bytes = NiftiBytes();
+  const std::string sha = Sha256::HexOf(bytes);
+  v1::VolumeInfo info;
+  EXPECT_EQ(Upload(bytes, int64_t(bytes.size()), sha, 1000, &info).error_code(),
+            grpc::INVALID_ARGUMENT);  // under 64 KiB and not the last
+  const std::vector<uint8_t> big(3 << 20, 0);
+  EXPECT_EQ(Upload(big, int64_t(big.size()), Sha256::HexOf(big), 2 << 20, &info).error_code(),
+            grpc::INVALID_ARGUMENT);  // over 1 MiB
+  EXPECT_EQ(Upload(bytes, 100, sha, 64 << 10, &info).error_code(),
+            grpc::INVALID_ARGUMENT);  // more than declared
+  EXPECT_EQ(Upload(bytes, int64_t(bytes.size()), sha, 64 << 10, &info, false).error_code(),
+            grpc::INVALID_ARGUMENT);  // no header
+}
+
+TEST_F(ServiceTest, Meshes_BuildGetRefine) {
+  v1::VolumeInfo volume = LoadPhantom();
+  v1::BuildMeshRequest build;
+  build.set_volume_id(volume.volume_id());
+  build.mutable_params()->add_grid(10);
+  build.mutable_params()->add_grid(10);
+  build.mutable_params()->add_grid(10);
+  build.mutable_params()->set_target(80);
+  v1::MeshInfo mesh;
+  auto c1 = Context();
+  grpc::Status status = stub_->BuildMesh(c1.get(), build, &mesh);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(mesh.stats().vertices(), 80);
+  EXPECT_GT(mesh.stats().tets(), 0);
+
+  v1::GetMeshRequest get;
+  get.set_mesh_id(mesh.mesh_id());
+  get.set_include_geometry(true);
+  v1::GetMeshResponse got;
+  auto c2 = Context();
+  ASSERT_TRUE(stub_->GetMesh(c2.get(), get, &got).ok());
+  EXPECT_EQ(got.vertices_size(), 80);
+  EXPECT_EQ(got.tets_size(), mesh.stats().tets());
+
+  v1::RefineMeshRequest refine;
+  refine.set_mesh_id(mesh.mesh_id());
+  *refine.mutable_point_mm() = Centre(volume);
+  v1::MeshInfo refined;
+  auto c3 = Context();
+  status = stub_->RefineMesh(c3.get(), refine, &refined);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_NE(refined.mesh_id(), mesh.mesh_id());
+  EXPECT_GT(refined.stats().refined(), 0);
+
+  *refine.mutable_point_mm() = V(-50, 0, 0);
+  auto c4 = Context();
+  EXPECT_EQ(stub_->RefineMesh(c4.get(), refine, &refined).error_code(), grpc::OUT_OF_RANGE);
+  refine.set_mesh_id("mesh-404");
+  auto c5 = Context();
+  EXPECT_EQ(stub_->RefineMesh(c5.get(), refine, &refined).error_code(), grpc::NOT_FOUND);
+}
+
+TEST_F(ServiceTest, Meshes_BadParamsAreInvalidArgument) {
+  v1::VolumeInfo volume = LoadPhantom();
+  v1::BuildMeshRequest build;
+  build.set_volume_id(volume.volume_id());
+  build.mutable_params()->add_grid(10);
+  v1::MeshInfo mesh;
+  auto c1 = Context();
+  grpc::Status status = stub_->BuildMesh(c1.get(), build, &mesh);
+  EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("params.grid"), std::string::npos);
+  build.mutable_params()->clear_grid();
+  build.mutable_params()->set_footprint("blob");
+  auto c2 = Context();
+  EXPECT_EQ(stub_->BuildMesh(c2.get(), build, &mesh).error_code(), grpc::INVALID_ARGUMENT);
+  build.set_volume_id("vol-404");
+  auto c3 = Context();
+  EXPECT_EQ(stub_->BuildMesh(c3.get(), build, &mesh).error_code(), grpc::NOT_FOUND);
+}
+
+}  // namespace
+}  // namespace vpm::service::testing

@@ -1,0 +1,370 @@
+// Sessions, Render, Manipulate, SetCamera, Interact and Watch: status codes,
+// frames, a client that cancels mid-stream, a slow reader, shutdown during a
+// stream, the per-client stream cap.
+#include <thread>
+
+#include "server/render/frame_encoder.h"
+#include "tests/service/service_test_util.h"
+
+namespace vpm::service::testing {
+namespace {
+
+class SessionTest : public ServiceTest {
+ protected:
+  void SetUp() override {
+    ServiceTest::SetUp();
+    volume_ = LoadPhantom();
+    session_ = OpenSession(volume_.volume_id());
+    ASSERT_FALSE(session_.session_id().empty());
+  }
+  grpc::Status Manipulate(const v1::ClientEvent& event, v1::ManipulateResponse* response) {
+    v1::ManipulateRequest request;
+    request.set_session_id(session_.session_id());
+    *request.mutable_event() = event;
+    auto context = Context();
+    return stub_->Manipulate(context.get(), request, response);
+  }
+  v1::ClientEvent Grab(const v1::Vec3& p, uint64_t sequence) {
+    v1::ClientEvent e;
+    e.set_sequence(sequence);
+    *e.mutable_grab()->mutable_point_mm() = p;
+    return e;
+  }
+  v1::ClientEvent Drag(double dx, uint64_t sequence) {
+    v1::ClientEvent e;
+    e.set_sequence(sequence);
+    *e.mutable_drag()->mutable_offset_mm() = V(dx, 0, 0);
+    return e;
+  }
+  static v1::RenderSettings Small() {
+    v1::RenderSettings s;
+    s.set_width(96);
+    s.set_height(96);
+    return s;
+  }
+  v1::VolumeInfo volume_;
+  v1::SessionInfo session_;
+};
+
+TEST_F(SessionTest, Sessions_OpenListClose) {
+  v1::ListSessionsResponse list;
+  auto c1 = Context();
+  ASSERT_TRUE(stub_->ListSessions(c1.get(), {}, &list).ok());
+  ASSERT_EQ(list.sessions_size(), 1);
+  EXPECT_EQ(list.sessions(0).volume_id(), volume_.volume_id());
+
+  // A volume in use cannot be deleted.
+  v1::DeleteVolumeRequest del;
+  del.set_volume_id(volume_.volume_id());
+  v1::DeleteVolumeResponse deleted;
+  auto c2 = Context();
+  EXPECT_EQ(stub_->DeleteVolume(c2.get(), del, &deleted).error_code(),
+            grpc::FAILED_PRECONDITION);
+
+  v1::CloseSessionRequest close;
+  close.set_session_id(session_.session_id());
+  v1::CloseSessionResponse closed;
+  auto c3 = Context();
+  ASSERT_TRUE(stub_->CloseSession(c3.get(), close, &closed).ok());
+  auto c4 = Context();
+  EXPECT_EQ(stub_->CloseSession(c4.get(), close, &closed).error_code(), grpc::NOT_FOUND);
+}
+
+TEST_F(SessionTest, Sessions_CapAndUnknownIds) {
+  OpenSession(volume_.volume_id());
+  OpenSession(volume_.volume_id());
+  v1::OpenSessionRequest request;
+  request.set_volume_id(volume_.volume_id());
+  v1::SessionInfo info;
+  auto c1 = Context();
+  EXPECT_EQ(stub_->OpenSession(c1.get(), request, &info).error_code(), grpc::RESOURCE_EXHAUSTED);
+  request.set_volume_id("vol-404");
+  auto c2 = Context();
+  EXPECT_EQ(stub_->OpenSession(c2.get(), request, &info).error_code(), grpc::NOT_FOUND);
+  request.set_volume_id("");
+  auto c3 = Context();
+  EXPECT_EQ(stub_->OpenSession(c3.get(), request, &info).error_code(), grpc::INVALID_ARGUMENT);
+}
+
+TEST_F(SessionTest, Render_ReturnsDecodableStill) {
+  v1::RenderRequest request;
+  request.set_session_id(session_.session_id());
+  *request.mutable_settings() = Small();
+  v1::Frame frame;
+  auto c1 = Context();
+  grpc::Status status = stub_->Render(c1.get(), request, &frame);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(frame.width(), 96);
+  EXPECT_FALSE(frame.interactive());
+  auto decoded = DecodeJpeg({reinterpret_cast<const uint8_t*>(frame.image().data()),
+                             frame.image().size()});
+  ASSERT_TRUE(decoded.ok());
+  EXPECT_EQ(decoded->height, 96);
+  EXPECT_GT(frame.timings().render_ms(), 0.0);
+
+  request.mutable_settings()->set_width(100000);
+  auto c2 = Context();
+  status = stub_->Render(c2.get(), request, &frame);
+  EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("settings.width"), std::string::npos);
+  request.set_session_id("ses-404");
+  auto c3 = Context();
+  EXPECT_EQ(stub_->Render(c3.get(), request, &frame).error_code(), grpc::NOT_FOUND);
+}
+
+TEST_F(SessionTest, Manipulate_GrabDragReleaseAndTheirErrors) {
+  v1::ManipulateResponse response;
+  EXPECT_EQ(Manipulate(Drag(3, 1), &response).error_code(), grpc::FAILED_PRECONDITION);
+  EXPECT_EQ(Manipulate(Grab(V(-10, 0, 0), 2), &response).error_code(), grpc::OUT_OF_RANGE);
+  EXPECT_EQ(Manipulate(v1::ClientEvent(), &response).error_code(), grpc::INVALID_ARGUMENT);
+  ASSERT_TRUE(Manipulate(Grab(Centre(volume_), 3), &response).ok());
+  grpc::Status status = Manipulate(Drag(4, 4), &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.applied_sequence(), 4u);
+  EXPECT_GT(response.max_displacement_mm(), 0.0);
+  v1::ClientEvent release;
+  release.set_sequence(5);
+  release.mutable_release();
+  ASSERT_TRUE(Manipulate(release, &response).ok());
+
+  v1::SetCameraRequest camera;
+  camera.set_session_id(session_.session_id());
+  camera.mutable_camera()->set_azimuth_deg(30);
+  v1::SetCameraResponse camera_response;
+  auto c1 = Context();
+  EXPECT_TRUE(stub_->SetCamera(c1.get(), camera, &camera_response).ok());
+  camera.mutable_camera()->set_distance_mm(-1);
+  auto c2 = Context();
+  EXPECT_EQ(stub_->SetCamera(c2.get(), camera, &camera_response).error_code(),
+            grpc::INVALID_ARGUMENT);
+}
+
+TEST_F(SessionTest, Interact_FramesEchoTheLastEventAndEndWithAStill) {
+  auto context = Context();
+  auto stream = stub_->Interact(context.get());
+  v1::InteractRequest first;
+  first.set_session_id(session_.session_id());
+  first.mutable_event()->set_sequence(1);
+  *first.mutable_event()->mutable_settings() = Small();
+  ASSERT_TRUE(stream->Write(first));
+  v1::InteractRequest grab;
+  *grab.mutable_event() = Grab(Centre(volume_), 2);
+  ASSERT_TRUE(stream->Write(grab));
+  for (int i = 1; i <= 4; ++i) {
+    v1::InteractRequest drag;
+    *drag.mutable_event() = Drag(1.5 * i, 2 + i);
+    ASSERT_TRUE(stream->Write(drag));
+  }
+  // Read until a still frame reflects the last event (sequence 6).
+  v1::Frame frame;
+  bool saw_final_still = false;
+  int frames = 0;
+  while (stream->Read(&frame)) {
+    ++frames;
+    EXPECT_EQ(frame.width(), 96);
+    if (frame.last_sequence() == 6 && !frame.interactive()) {
+      saw_final_still = true;
+      EXPECT_GT(frame.max_displacement_mm(), 0.0);
+      break;
+    }
+  }
+  EXPECT_TRUE(saw_final_still) << frames << " frames";
+  stream->WritesDone();
+  grpc::Status status = stream->Finish();
+  EXPECT_TRUE(status.ok()) << status.error_message();
+}
+
+TEST_F(SessionTest, Interact_BadEventEndsTheStreamWithItsCode) {
+  auto context = Context();
+  auto stream = stub_->Interact(context.get());
+  v1::InteractRequest first;
+  first.set_session_id(session_.session_id());
+  *first.mutable_event() = Drag(2, 1);  // no grab
+  ASSERT_TRUE(stream->Write(first));
+  stream->WritesDone();
+  v1::Frame frame;
+  while (stream->Read(&frame)) {
+  }
+  EXPECT_EQ(stream->Finish().error_code(), grpc::FAILED_PRECONDITION);
+
+  auto context2 = Context();
+  auto stream2 = stub_->Interact(context2.get());
+  v1::InteractRequest unknown;
+  unknown.set_session_id("ses-404");
+  stream2->Write(unknown);
+  stream2->WritesDone();
+  while (stream2->Read(&frame)) {
+  }
+  EXPECT_EQ(stream2->Finish().error_code(), grpc::NOT_FOUND);
+}
+
+TEST_F(SessionTest, Interact_RejectsMissingToken) {
+  auto context = Context("");
+  auto stream = stub_->Interact(context.get());
+  v1::Frame frame;
+  EXPECT_FALSE(stream->Read(&frame));
+  EXPECT_EQ(stream->Finish().error_code(), grpc::UNAUTHENTICATED);
+}
+
+TEST_F(SessionTest, Interact_ClientCancelMidStreamReleasesEverything) {
+  for (int round = 0; round < 3; ++round) {
+    auto context = Context();
+    auto stream = stub_->Interact(context.get());
+    v1::InteractRequest first;
+    first.set_session_id(session_.session_id());
+    *first.mutable_event()->mutable_settings() = Small();
+    ASSERT_TRUE(stream->Write(first));
+    v1::Frame frame;
+    ASSERT_TRUE(stream->Read(&frame));
+    v1::InteractRequest camera;
+    camera.mutable_event()->set_sequence(2);
+    camera.mutable_event()->mutable_camera()->set_azimuth_deg(45);
+    stream->Write(camera);
+    context->TryCancel();
+    while (stream->Read(&frame)) {
+    }
+    EXPECT_EQ(stream->Finish().error_code(), grpc::CANCELLED);
+  }
+  // Every stream the server created is released (OnDone ran).
+  for (int i = 0; i < 100 && server_->metrics().streams_closed() <
+                                 server_->metrics().streams_opened(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_EQ(server_->metrics().streams_opened(), server_->metrics().streams_closed());
+  EXPECT_EQ(server_->context().streams->open_streams(), 0);
+}
+
+TEST_F(SessionTest, Watch_SlowReaderGetsNewestFrameWithSupersededCounted) {
+  auto context = Context();
+  v1::WatchRequest request;
+  request.set_session_id(session_.session_id());
+  // Large lossless frames fill the transport window after one or two, so
+  // the server must hold back and drop.
+  request.mutable_settings()->set_width(320);
+  request.mutable_settings()->set_height(320);
+  request.mutable_settings()->set_encoding("png");
+  // A client whose transport window stays small (no BDP growth): what it
+  // does not read stays on the server.
+  grpc::ChannelArguments args;
+  args.SetInt(GRPC_ARG_HTTP2_BDP_PROBE, 0);
+  args.SetInt(GRPC_ARG_HTTP2_STREAM_LOOKAHEAD_BYTES, 16 << 10);
+  auto slow_channel = grpc::CreateCustomChannel(
+      "127.0.0.1:" + std::to_string(server_->port()), grpc::InsecureChannelCredentials(), args);
+  auto slow_stub = v1::Vpm::NewStub(slow_channel);
+  auto reader = slow_stub->Watch(context.get(), request);
+  v1::Frame frame;
+  ASSERT_TRUE(reader->Read(&frame));
+  // Camera changes for 4 s while this client does not read.
+  int changes = 0;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(4);
+  while (std::chrono::steady_clock::now() < until) {
+    v1::SetCameraRequest camera;
+    camera.set_session_id(session_.session_id());
+    camera.mutable_camera()->set_azimuth_deg(++changes * 3.0);
+    v1::SetCameraResponse response;
+    auto c = Context();
+    ASSERT_TRUE(stub_->SetCamera(c.get(), camera, &response).ok());
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  // Far fewer frames arrive than changes were made: the newest won.
+  int frames = 0;
+  uint64_t superseded = 0;
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2000));
+    context->TryCancel();
+  });
+  while (frames < 60 && reader->Read(&frame)) {
+    ++frames;
+    superseded = frame.superseded_frames();
+  }
+  stopper.join();
+  reader->Finish();
+  EXPECT_LT(frames, changes);
+  EXPECT_GT(superseded, 0u);
+  // What the stream reported is what the server counted; nothing queued.
+  EXPECT_EQ(superseded, server_->metrics().superseded());
+}
+
+TEST_F(SessionTest, Watch_SeesAnotherClientsManipulation) {
+  auto context = Context();
+  v1::WatchRequest request;
+  request.set_session_id(session_.session_id());
+  *request.mutable_settings() = Small();
+  auto reader = stub_->Watch(context.get(), request);
+  v1::Frame frame;
+  ASSERT_TRUE(reader->Read(&frame));
+  v1::ManipulateResponse response;
+  ASSERT_TRUE(Manipulate(Grab(Centre(volume_), 7), &response).ok());
+  ASSERT_TRUE(Manipulate(Drag(3, 8), &response).ok());
+  bool moved = false;
+  while (reader->Read(&frame)) {
+    if (frame.last_sequence() == 8 && frame.max_displacement_mm() > 0) {
+      moved = true;
+      break;
+    }
+  }
+  EXPECT_TRUE(moved);
+  context->TryCancel();
+  reader->Finish();
+}
+
+TEST_F(SessionTest, Watch_StreamCapPerClientIsResourceExhausted) {
+  std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
+  std::vector<std::unique_ptr<grpc::ClientReader<v1::Frame>>> readers;
+  v1::WatchRequest request;
+  request.set_session_id(session_.session_id());
+  *request.mutable_settings() = Small();
+  for (int i = 0; i < 4; ++i) {
+    contexts.push_back(Context());
+    readers.push_back(stub_->Watch(contexts.back().get(), request));
+    v1::Frame frame;
+    ASSERT_TRUE(readers.back()->Read(&frame));
+  }
+  auto context = Context();
+  auto extra = stub_->Watch(context.get(), request);
+  v1::Frame frame;
+  EXPECT_FALSE(extra->Read(&frame));
+  EXPECT_EQ(extra->Finish().error_code(), grpc::RESOURCE_EXHAUSTED);
+  for (size_t i = 0; i < readers.size(); ++i) {
+    contexts[i]->TryCancel();
+    readers[i]->Finish();
+  }
+}
+
+TEST_F(SessionTest, Shutdown_FinishesOpenStreamsWithUnavailable) {
+  auto context = Context();
+  v1::WatchRequest request;
+  request.set_session_id(session_.session_id());
+  *request.mutable_settings() = Small();
+  auto reader = stub_->Watch(context.get(), request);
+  v1::Frame frame;
+  ASSERT_TRUE(reader->Read(&frame));
+  std::thread stopper([&] { server_->Shutdown(std::chrono::milliseconds(3000)); });
+  while (reader->Read(&frame)) {
+  }
+  EXPECT_EQ(reader->Finish().error_code(), grpc::UNAVAILABLE);
+  stopper.join();
+  EXPECT_EQ(server_->metrics().streams_opened(), server_->metrics().streams_closed());
+}
+
+TEST_F(SessionTest, CloseSession_EndsItsStreams) {
+  auto context = Context();
+  v1::WatchRequest request;
+  request.set_session_id(session_.session_id());
+  *request.mutable_settings() = Small();
+  auto reader = stub_->Watch(context.get(), request);
+  v1::Frame frame;
+  ASSERT_TRUE(reader->Read(&frame));
+  v1::CloseSessionRequest close;
+  close.set_session_id(session_.session_id());
+  v1::CloseSessionResponse closed;
+  auto c = Context();
+  ASSERT_TRUE(stub_->CloseSession(c.get(), close, &closed).ok());
+  while (reader->Read(&frame)) {
+  }
+  EXPECT_EQ(reader->Finish().error_code(), grpc::FAILED_PRECONDITION);
+}
+
+}  // namespace
+}  // namespace vpm::service::testing

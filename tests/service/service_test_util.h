@@ -1,0 +1,109 @@
+// An in-process vpm-server on 127.0.0.1 with an ephemeral port, a stub that
+// carries the token, and small helpers shared by the service tests. The
+// phantom is kept small (48^3) so that meshes and frames are quick on
+// lavapipe.
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+
+#include "server/service/vpm_server.h"
+#include "vpm/v1/vpm.grpc.pb.h"
+
+namespace vpm::service::testing {
+
+inline constexpr char kToken[] = "test-token";
+inline constexpr char kPhantom[] = "phantom:abdomen?size=48";
+
+inline ServerOptions SmallServerOptions() {
+  ServerOptions o;
+  o.listen = "127.0.0.1:0";
+  o.token = kToken;
+  o.max_volumes = 4;
+  o.max_sessions = 3;
+  o.max_streams_per_client = 4;
+  o.still_delay_ms = 100;
+  o.max_frame_side = 512;
+  return o;
+}
+
+// One Vulkan context for the whole test process, as in the server.
+inline const gpu::GpuContext* SharedGpu() {
+  static const gpu::GpuContext* gpu = [] {
+    auto context = gpu::GpuContext::Create({});
+    EXPECT_TRUE(context.ok()) << context.status();
+    return context.ok() ? context->release() : nullptr;
+  }();
+  return gpu;
+}
+
+class ServiceTest : public ::testing::Test {
+ protected:
+  void StartServer(const ServerOptions& options) {
+    auto server = VpmServer::Create(options, SharedGpu());
+    ASSERT_TRUE(server.ok()) << server.status();
+    server_ = *std::move(server);
+    channel_ = grpc::CreateChannel("127.0.0.1:" + std::to_string(server_->port()),
+                                   grpc::InsecureChannelCredentials());
+    stub_ = v1::Vpm::NewStub(channel_);
+  }
+  void SetUp() override { StartServer(SmallServerOptions()); }
+  void TearDown() override {
+    if (server_) server_->Shutdown(std::chrono::milliseconds(2000));
+  }
+
+  // A client context with the token (or `token` when given) and a deadline.
+  static std::unique_ptr<grpc::ClientContext> Context(const std::string& token = kToken,
+                                                      int deadline_s = 120) {
+    auto context = std::make_unique<grpc::ClientContext>();
+    if (!token.empty()) context->AddMetadata("authorization", "Bearer " + token);
+    context->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(deadline_s));
+    return context;
+  }
+
+  v1::VolumeInfo LoadPhantom() {
+    v1::LoadVolumeRequest request;
+    request.set_source(kPhantom);
+    v1::VolumeInfo info;
+    auto context = Context();
+    grpc::Status status = stub_->LoadVolume(context.get(), request, &info);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return info;
+  }
+
+  v1::SessionInfo OpenSession(const std::string& volume_id) {
+    v1::OpenSessionRequest request;
+    request.set_volume_id(volume_id);
+    v1::SessionInfo info;
+    auto context = Context();
+    grpc::Status status = stub_->OpenSession(context.get(), request, &info);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return info;
+  }
+
+  static v1::Vec3 V(double x, double y, double z) {
+    v1::Vec3 v;
+    v.set_x(x);
+    v.set_y(y);
+    v.set_z(z);
+    return v;
+  }
+
+  // The middle of the volume in physical voxel space (mm).
+  static v1::Vec3 Centre(const v1::VolumeInfo& info) {
+    return V((info.dims(0) - 1) * info.spacing_mm().x() / 2,
+             (info.dims(1) - 1) * info.spacing_mm().y() / 2,
+             (info.dims(2) - 1) * info.spacing_mm().z() / 2);
+  }
+
+  std::unique_ptr<VpmServer> server_;
+  std::shared_ptr<grpc::Channel> channel_;
+  std::unique_ptr<v1::Vpm::Stub> stub_;
+};
+
+}  // namespace vpm::service::testing
