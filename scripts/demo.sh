@@ -41,3 +41,6 @@ echo "                               vertices yellow, hard blue, handles and dra
 echo "  deformed.nii.gz              the deformed volume, source geometry"
 echo "  compare-meshes.json          section-6 reconstruction measures"
 echo "  phantom_abdomen.nii.gz       the phantom itself"
+echo
+echo "== the service: vpm-server on loopback, vpm play, vpm-load (scripts/demo_server.sh)"
+scripts/demo_server.sh "$build"

@@ -43,26 +43,64 @@ void FrameStream::Attach() {
   RequestFrame();
 }
 
-void FrameStream::ApplyEvent(const v1::ClientEvent& event) {
+void FrameStream::EnqueueEvent(const v1::ClientEvent& event) {
+  std::lock_guard lock(mutex_);
+  if (finish_) return;
+  const auto kind = event.event_case();
+  const bool replaceable = kind == v1::ClientEvent::kCamera || kind == v1::ClientEvent::kDrag;
+  if (replaceable && !events_.empty() && events_.back().event_case() == kind) {
+    const bool want_vertices = events_.back().want_vertices() || event.want_vertices();
+    events_.back() = event;
+    events_.back().set_want_vertices(want_vertices);
+  } else if (events_.size() >= kMaxQueuedEvents) {
+    return FinishLocked(grpc::Status(grpc::RESOURCE_EXHAUSTED,
+                                     "event: too many events waiting to be applied"));
+  } else {
+    events_.push_back(event);
+  }
+  if (applying_) return;
+  applying_ = true;
   auto self = shared_from_this();
-  const bool posted = service_->render_pool->Post([self, event] {
-    if (event.has_settings()) {
-      auto settings = ToStreamSettings(event.settings(), self->session_->volume().volume,
-                                       self->service_->options.max_frame_side);
-      if (!settings.ok()) return self->Finish(ToGrpcStatus(settings.status()));
-      std::lock_guard lock(self->mutex_);
-      self->settings_ = *std::move(settings);
+  if (!service_->render_pool->Post([self] { self->ApplyQueued(); })) {
+    applying_ = false;
+    FinishLocked(grpc::Status(grpc::UNAVAILABLE, "the server is shutting down"));
+  }
+}
+
+void FrameStream::ReadNext() {
+  std::lock_guard lock(mutex_);
+  if (!finish_ && sink_ != nullptr) sink_->ReadNext();
+}
+
+void FrameStream::ApplyQueued() {
+  while (true) {
+    v1::ClientEvent event;
+    {
+      std::lock_guard lock(mutex_);
+      if (events_.empty() || finish_) {
+        events_.clear();
+        applying_ = false;
+        if (finish_after_events_) FinishLocked(*finish_after_events_);
+        return;
+      }
+      event = std::move(events_.front());
+      events_.pop_front();
     }
-    auto applied = self->session_->Apply(event);
-    if (!applied.ok()) return self->Finish(ToGrpcStatus(applied.status()));
-    std::lock_guard lock(self->mutex_);
-    if (event.sequence() > self->stream_sequence_) self->stream_sequence_ = event.sequence();
-    if (event.want_vertices()) self->want_vertices_ = true;
-    self->dirty_ = true;
-    self->ScheduleLocked();
-    if (self->sink_ != nullptr && !self->finish_) self->sink_->ReadNext();
-  });
-  if (!posted) Finish(grpc::Status(grpc::UNAVAILABLE, "the server is shutting down"));
+    if (event.has_settings()) {
+      auto settings = ToStreamSettings(event.settings(), session_->volume().volume,
+                                       service_->options.max_frame_side);
+      if (!settings.ok()) return Finish(ToGrpcStatus(settings.status()));
+      std::lock_guard lock(mutex_);
+      settings_ = *std::move(settings);
+    }
+    auto applied = session_->Apply(event);
+    if (!applied.ok()) return Finish(ToGrpcStatus(applied.status()));
+    std::lock_guard lock(mutex_);
+    if (event.sequence() > stream_sequence_) stream_sequence_ = event.sequence();
+    if (event.want_vertices()) want_vertices_ = true;
+    dirty_ = true;
+    ScheduleLocked();
+  }
 }
 
 void FrameStream::RequestFrame() {
@@ -85,6 +123,11 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
   const double queue_ms = MsSince(queued_at);
   StreamSettings settings;
   bool want_vertices = false;
+  // Interactive while the held grab has moved since our last still frame;
+  // StillCheck forces the still one once drags stop.
+  const uint64_t deform_count = session_->deform_count();
+  bool interactive = false;
+  uint64_t sequence = 0;
   {
     std::lock_guard lock(mutex_);
     if (finish_ || sink_ == nullptr) {
@@ -95,15 +138,19 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
     settings = settings_;
     want_vertices = want_vertices_;
     want_vertices_ = false;
+    sequence = stream_sequence_;  // events applied before this render starts
+    interactive = !force_still_ && session_->grabbed() && deform_count != still_deform_count_;
+    force_still_ = false;
+    if (!interactive) still_deform_count_ = deform_count;
   }
-  auto frame = session_->Render({&settings, std::nullopt, false, want_vertices});
+  auto frame = session_->Render({&settings, std::nullopt, interactive, want_vertices});
   std::lock_guard lock(mutex_);
   render_scheduled_ = false;
   if (!frame.ok()) return FinishLocked(ToGrpcStatus(frame.status()));
   auto out = std::make_unique<v1::Frame>(*std::move(frame));
   out->mutable_timings()->set_queue_ms(queue_ms);
   out->mutable_timings()->set_total_ms(out->timings().total_ms() + queue_ms);
-  if (options_.per_stream_sequence) out->set_last_sequence(stream_sequence_);
+  if (options_.per_stream_sequence) out->set_last_sequence(sequence);
   last_interactive_ = out->interactive();
   DeliverLocked(std::move(out));
   if (dirty_) {
@@ -119,7 +166,17 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
 
 void FrameStream::StillCheck() {
   std::lock_guard lock(mutex_);
-  if (!last_interactive_ || render_scheduled_) return;
+  if (!last_interactive_ || render_scheduled_ || finish_) return;
+  if (session_->Interacting()) {
+    // Drags still coming: look again later.
+    std::weak_ptr<FrameStream> weak = weak_from_this();
+    service_->render_pool->PostAfter(
+        std::chrono::milliseconds(int64_t(service_->options.still_delay_ms) + 5), [weak] {
+          if (auto self = weak.lock()) self->StillCheck();
+        });
+    return;
+  }
+  force_still_ = true;
   dirty_ = true;
   ScheduleLocked();
 }
@@ -166,6 +223,15 @@ void FrameStream::OnWriteDone(bool ok) {
     return;
   }
   if (pending_ && sink_ != nullptr) WriteLocked(std::move(pending_));
+}
+
+void FrameStream::FinishAfterEvents(const grpc::Status& status) {
+  std::lock_guard lock(mutex_);
+  if (applying_ || !events_.empty()) {
+    finish_after_events_ = status;
+  } else {
+    FinishLocked(status);
+  }
 }
 
 void FrameStream::Finish(const grpc::Status& status) {

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -47,14 +48,23 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
 
   // Watches the session and asks for the first frame.
   void Attach();
-  // Applies `event` on the pool, then reads the next one (ReadNext). An
-  // invalid event finishes the stream with its status.
-  void ApplyEvent(const v1::ClientEvent& event);
+  // Queues `event` for the pool, which applies queued events in order; a
+  // camera or drag event replaces a queued one of the same kind right before
+  // it (the newest wins for input too, so a slow scene never builds a
+  // backlog). An invalid event finishes the stream with its status; more
+  // than kMaxQueuedEvents waiting finishes it with RESOURCE_EXHAUSTED.
+  void EnqueueEvent(const v1::ClientEvent& event);
+  static constexpr size_t kMaxQueuedEvents = 256;
+  // Starts the sink's next read unless the stream is finishing (no read may
+  // start after Finish).
+  void ReadNext();
   void RequestFrame();
   void OnWriteDone(bool ok);
   // Finishes after the write in flight (pending frames are dropped); the
   // first call wins.
   void Finish(const grpc::Status& status);
+  // Finish once the queued events are applied (the client half-closed).
+  void FinishAfterEvents(const grpc::Status& status);
   void Detach();
 
   uint64_t superseded() const;
@@ -63,6 +73,7 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
  private:
   FrameStream(ServiceContext* service, std::shared_ptr<Session> session,
               StreamSettings settings, FrameSink* sink, const Options& options);
+  void ApplyQueued();
   void ScheduleLocked();
   void RenderNow(std::chrono::steady_clock::time_point queued_at);
   void DeliverLocked(std::unique_ptr<v1::Frame> frame);
@@ -81,6 +92,11 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   StreamSettings settings_;
   bool want_vertices_ = false;
   uint64_t stream_sequence_ = 0;
+  std::deque<v1::ClientEvent> events_;
+  bool applying_ = false;
+  std::optional<grpc::Status> finish_after_events_;
+  uint64_t still_deform_count_ = 0;  // the session's deform_count at our last still frame
+  bool force_still_ = false;
   bool render_scheduled_ = false;
   bool dirty_ = false;
   bool last_interactive_ = false;

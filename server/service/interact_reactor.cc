@@ -27,7 +27,7 @@ void InteractReactor::OnReadDone(bool ok) {
   if (!ok) {
     // Half-close (or a broken stream): finish after the write in flight.
     if (stream_) {
-      stream_->Finish(grpc::Status::OK);
+      stream_->FinishAfterEvents(grpc::Status::OK);
     } else {
       FinishEarly(grpc::Status::OK);
     }
@@ -42,7 +42,8 @@ void InteractReactor::OnReadDone(bool ok) {
                                  "session_id: a stream stays on the session it opened"));
     return;
   }
-  stream_->ApplyEvent(request_.event());
+  stream_->EnqueueEvent(request_.event());
+  stream_->ReadNext();
 }
 
 void InteractReactor::Start(const v1::InteractRequest& first) {
@@ -70,13 +71,9 @@ void InteractReactor::Start(const v1::InteractRequest& first) {
                                   {.per_stream_sequence = true});
   }
   registry_token_ = service_->streams->Register(stream_);
-  if (first.has_event()) {
-    stream_->Attach();
-    stream_->ApplyEvent(first.event());  // reads on once applied
-  } else {
-    stream_->Attach();
-    StartRead(&request_);
-  }
+  stream_->Attach();
+  if (first.has_event()) stream_->EnqueueEvent(first.event());
+  stream_->ReadNext();
 }
 
 void InteractReactor::OnWriteDone(bool ok) {

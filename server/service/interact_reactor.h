@@ -1,7 +1,7 @@
 // Interact: events in, frames out, on one bidirectional stream. The first
-// message names the session; each event is applied on the worker pool and
-// the next read starts only after it (events of a stream apply in order);
-// frames flow through a FrameStream (frame_stream.h). Finish is called once:
+// message names the session; events are read continuously and queued on the
+// FrameStream (frame_stream.h), which applies them in order on the worker
+// pool (camera and drag events coalesce) and streams the frames. Finish is called once:
 // OK when the client half-closes, the event's status when one is invalid,
 // CANCELLED when the client goes away, UNAVAILABLE on shutdown.
 #pragma once

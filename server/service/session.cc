@@ -115,6 +115,7 @@ Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event) {
       applied.deformed = true;
       std::lock_guard lock(state_mutex_);
       last_deform_ = std::chrono::steady_clock::now();
+      ++deform_count_;
       return applied;
     }
     case v1::ClientEvent::kRelease: {
@@ -163,19 +164,23 @@ Result<v1::Frame> Session::Render(const FrameRequest& request) {
   const auto t0 = std::chrono::steady_clock::now();
   SceneView view = request.settings->view;
   SceneStepTimings step;
-  {
-    std::lock_guard lock(state_mutex_);
-    view.camera = request.camera ? *request.camera : camera_;
-    step = last_step_;
-    last_frame_width_ = view.width;
-    last_frame_height_ = view.height;
-  }
-  const bool interactive = !request.force_still && Interacting();
+  uint64_t sequence = 0;
+  const bool interactive = request.interactive;
   view.quality = interactive ? RenderQuality::kInteractive : RenderQuality::kStill;
   v1::Frame out;
   Frame frame;
   {
+    // The state is read under the scene lock, so the frame shows exactly
+    // the events it reports.
     std::lock_guard scene_lock(scene_mutex_);
+    {
+      std::lock_guard lock(state_mutex_);
+      view.camera = request.camera ? *request.camera : camera_;
+      step = last_step_;
+      sequence = last_sequence_;
+      last_frame_width_ = view.width;
+      last_frame_height_ = view.height;
+    }
     ASSIGN_OR_RETURN(frame, scene_->Render(view));
     if (request.want_vertices) {
       for (const glm::dvec3& p : scene_->Positions()) *out.add_vertices_mm() = ToProto(p);
@@ -193,7 +198,7 @@ Result<v1::Frame> Session::Render(const FrameRequest& request) {
   out.set_width(frame.width);
   out.set_height(frame.height);
   out.set_interactive(interactive);
-  out.set_last_sequence(last_sequence());
+  out.set_last_sequence(sequence);
   out.set_max_displacement_mm(step.max_displacement_mm);
   v1::StageTimings* timings = out.mutable_timings();
   timings->set_fem_ms(step.fem_ms);
@@ -208,6 +213,16 @@ bool Session::Interacting() const {
   std::lock_guard lock(state_mutex_);
   if (!grabbed_ || last_deform_ == std::chrono::steady_clock::time_point{}) return false;
   return MsSince(last_deform_) < options_.still_delay_ms;
+}
+
+uint64_t Session::deform_count() const {
+  std::lock_guard lock(state_mutex_);
+  return deform_count_;
+}
+
+bool Session::grabbed() const {
+  std::lock_guard lock(state_mutex_);
+  return grabbed_;
 }
 
 uint64_t Session::version() const {

@@ -52,18 +52,21 @@ class Session {
   Status SetCamera(const v1::Camera& camera);
 
   // One frame of the current state, encoded. `camera` overrides the
-  // session's. Interactive quality while a drag is recent (or `force_still`
-  // off), else still.
+  // session's; `interactive` picks the cheap quality (streams use it while
+  // drags keep coming, frame_stream.h).
   struct FrameRequest {
     const StreamSettings* settings = nullptr;
     std::optional<Camera> camera;
-    bool force_still = false;
+    bool interactive = false;
     bool want_vertices = false;
   };
   Result<v1::Frame> Render(const FrameRequest& request);
 
   // True while the last drag or pull is younger than still_delay_ms.
   bool Interacting() const;
+  // Drags and pulls applied so far, and whether a grab is held.
+  uint64_t deform_count() const;
+  bool grabbed() const;
   uint64_t version() const;
   uint64_t last_sequence() const;
   double max_displacement_mm() const;
@@ -104,6 +107,7 @@ class Session {
   SceneStepTimings last_step_;
   int last_frame_width_ = 512, last_frame_height_ = 512;
   std::chrono::steady_clock::time_point last_deform_{};
+  uint64_t deform_count_ = 0;
   std::chrono::steady_clock::time_point last_touch_;
   bool closed_ = false;
 

@@ -221,7 +221,7 @@ grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* contex
     ASSIGN_OR_RETURN(StreamSettings settings,
                      ToStreamSettings(request->settings(), session->volume().volume,
                                       service_->options.max_frame_side));
-    Session::FrameRequest frame_request{&settings, std::nullopt, true, false};
+    Session::FrameRequest frame_request{&settings, std::nullopt, false, false};
     if (request->has_camera()) {
       ASSIGN_OR_RETURN(frame_request.camera,
                        ToCamera(request->camera(), session->volume().volume.geometry()));
