@@ -49,21 +49,12 @@ void PointCosts(const Volume& volume, const Lattice& lattice, const TransferFunc
   *g = GradientMagnitudeAtD(volume, v[0], v[1], v[2]);
 }
 
-LatticeCosts Allocate(size_t n) {
-  LatticeCosts costs;
-  costs.ci_cell.resize(n);
-  costs.g_cell.resize(n);
-  costs.ci_point.resize(n);
-  costs.g_point.resize(n);
-  return costs;
-}
-
 }  // namespace
 
 LatticeCosts EvaluateLatticeCostsCpu(const Volume& volume, const Lattice& lattice,
                                      const TransferFunction& tf, int threads) {
   const int64_t n = lattice.size();
-  LatticeCosts costs = Allocate(n);
+  LatticeCosts costs = LatticeCosts::Zeros(n);
   threads = static_cast<int>(std::clamp<int64_t>(threads, 1, n));
   std::vector<std::thread> workers;
   for (int t = 0; t < threads; ++t) {
@@ -80,7 +71,7 @@ LatticeCosts EvaluateLatticeCostsCpu(const Volume& volume, const Lattice& lattic
 
 LatticeCosts EvaluateVertexCostsCpu(const Volume& volume, const Lattice& lattice,
                                     const TransferFunction& tf, std::span<const int64_t> ids) {
-  LatticeCosts costs = Allocate(ids.size());
+  LatticeCosts costs = LatticeCosts::Zeros(ids.size());
   for (size_t n = 0; n < ids.size(); ++n) {
     CellCosts(volume, lattice, tf, ids[n], &costs.ci_cell[n], &costs.g_cell[n]);
     PointCosts(volume, lattice, tf, ids[n], &costs.ci_point[n], &costs.g_point[n]);

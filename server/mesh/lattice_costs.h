@@ -25,6 +25,12 @@ struct LatticeCosts {
   // One entry per lattice vertex, indexed by linear id. Ci in [0,1]; g in value/mm.
   std::vector<double> ci_cell, g_cell, ci_point, g_point;
 
+  // n zero entries in each array.
+  static LatticeCosts Zeros(size_t n) {
+    return {std::vector<double>(n), std::vector<double>(n), std::vector<double>(n),
+            std::vector<double>(n)};
+  }
+
   const std::vector<double>& ci(Footprint f) const { return f == Footprint::kCell ? ci_cell : ci_point; }
   const std::vector<double>& g(Footprint f) const { return f == Footprint::kCell ? g_cell : g_point; }
 };

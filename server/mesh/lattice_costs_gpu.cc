@@ -45,11 +45,7 @@ Result<LatticeCosts> LatticeCostsGpu::Evaluate(const GpuVolume& volume, const La
   if (gpu_ms != nullptr) *gpu_ms = timings.front().gpu_ms;
   std::vector<glm::vec4> raw(n);
   RETURN_IF_ERROR(out.DownloadSpan(std::span<glm::vec4>(raw)));
-  LatticeCosts costs;
-  costs.ci_cell.resize(n);
-  costs.g_cell.resize(n);
-  costs.ci_point.resize(n);
-  costs.g_point.resize(n);
+  LatticeCosts costs = LatticeCosts::Zeros(n);
   for (size_t i = 0; i < n; ++i) {
     costs.ci_cell[i] = raw[i].x;
     costs.g_cell[i] = raw[i].y;
