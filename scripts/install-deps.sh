@@ -21,7 +21,18 @@ packages=(
   python3
   # a real MRI volume (Colin27 T1) for the mesh tests on MRI
   mricron-data
+  # web viewer end-to-end test: Debian's Chromium driven by playwright-core
+  chromium
+  # workstation viewer (vpm-view) and its test under a virtual X server
+  libsdl2-dev xvfb xdotool x11-utils imagemagick
+  # deployment checks: YAML parsing of the compose, Envoy and Kubernetes files
+  python3-yaml
 )
+# Node.js and npm for the web gateway: Debian's packages unless a node and npm
+# are already on the PATH (a machine may carry a newer Node.js of its own).
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+  packages+=(nodejs npm)
+fi
 
 missing=()
 for p in "${packages[@]}"; do
