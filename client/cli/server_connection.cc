@@ -5,6 +5,17 @@
 #include <sstream>
 
 namespace vpm::cli {
+namespace {
+
+Result<std::string> ReadPem(const std::string& path, const char* flag) {
+  std::ifstream file(path);
+  if (!file) return absl::InvalidArgumentError(StrCat(flag, " ", path, ": cannot read"));
+  std::stringstream pem;
+  pem << file.rdbuf();
+  return pem.str();
+}
+
+}  // namespace
 
 Result<ServerConnection> ServerConnection::Connect(const ServerFlags& flags) {
   if (flags.address.empty()) return absl::InvalidArgumentError("--server HOST:PORT is required");
@@ -14,13 +25,19 @@ Result<ServerConnection> ServerConnection::Connect(const ServerFlags& flags) {
     if (const char* token = std::getenv("VPM_TOKEN")) c.flags_.token = token;
   }
   std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+  if (flags.tls_cert.empty() != flags.tls_key.empty()) {
+    return absl::InvalidArgumentError("mutual TLS needs both --tls-cert and --tls-key");
+  }
+  if (!flags.tls_cert.empty() && flags.tls_ca.empty()) {
+    return absl::InvalidArgumentError("--tls-cert needs --tls-ca (the server's CA): TLS is off without it");
+  }
   if (!flags.tls_ca.empty()) {
-    std::ifstream file(flags.tls_ca);
-    if (!file) return absl::InvalidArgumentError(StrCat("--tls-ca ", flags.tls_ca, ": cannot read"));
-    std::stringstream pem;
-    pem << file.rdbuf();
     grpc::SslCredentialsOptions ssl;
-    ssl.pem_root_certs = pem.str();
+    ASSIGN_OR_RETURN(ssl.pem_root_certs, ReadPem(flags.tls_ca, "--tls-ca"));
+    if (!flags.tls_cert.empty()) {
+      ASSIGN_OR_RETURN(ssl.pem_cert_chain, ReadPem(flags.tls_cert, "--tls-cert"));
+      ASSIGN_OR_RETURN(ssl.pem_private_key, ReadPem(flags.tls_key, "--tls-key"));
+    }
     credentials = grpc::SslCredentials(ssl);
   }
   grpc::ChannelArguments args;

@@ -17,6 +17,8 @@ struct ServerFlags {
   std::string address;  // HOST:PORT; empty: offline
   std::string token;    // default: env VPM_TOKEN
   std::string tls_ca;   // PEM of the CA that signed the server: turns TLS on
+  std::string tls_cert; // client certificate chain (PEM) for mutual TLS
+  std::string tls_key;  // its private key (PEM)
   double deadline_s = 300;
 };
 

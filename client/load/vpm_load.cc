@@ -232,6 +232,8 @@ int main(int argc, char** argv) {
   app.add_option("--server", args.server.address, "HOST:PORT")->required();
   app.add_option("--token", args.server.token, "bearer token (default: env VPM_TOKEN)");
   app.add_option("--tls-ca", args.server.tls_ca, "CA certificate (PEM) of a TLS server");
+  app.add_option("--tls-cert", args.server.tls_cert, "client certificate (PEM) for mutual TLS");
+  app.add_option("--tls-key", args.server.tls_key, "client private key (PEM) for mutual TLS");
   app.add_option("--sessions", args.sessions, "concurrent clients")->capture_default_str();
   app.add_option("--duration", args.duration_s, "seconds each client plays (looping)")
       ->capture_default_str();

@@ -1,0 +1,197 @@
+#!/usr/bin/env bash
+# vpm-server as its own process, driven by the `vpm` client over loopback:
+# status codes seen by a real client (UNAUTHENTICATED, NOT_FOUND,
+# INVALID_ARGUMENT for a path escaping the data root), Prometheus metrics over
+# HTTP, TLS, mutual TLS (a client without a certificate, or with one from
+# another CA, is refused), and graceful shutdown on SIGTERM (exit status 0).
+#
+# Usage: service_process_test.sh BUILD_DIR
+# Certificates are made here with the openssl command line (EC P-256, 1 day).
+set -uo pipefail
+build=$(cd "${1:?usage: $0 BUILD_DIR}" && pwd)
+server_bin="$build/server/service/vpm-server"
+vpm="$build/client/vpm"
+for b in "$server_bin" "$vpm"; do
+  [ -x "$b" ] || { echo "FAIL: $b is not built"; exit 1; }
+done
+command -v openssl >/dev/null || { echo "FAIL: openssl is not installed"; exit 1; }
+
+tmp=$(mktemp -d)
+server_pid=""
+cleanup() {
+  [ -n "$server_pid" ] && kill -KILL "$server_pid" 2>/dev/null
+  rm -rf "$tmp"
+}
+trap cleanup EXIT
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+pass() { echo "ok:   $*"; }
+
+# --- certificates: a CA, a server certificate for 127.0.0.1/localhost, a
+# client certificate from the same CA and one from a rogue CA.
+make_ca() {  # NAME
+  openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:P-256 -nodes -days 1 \
+    -subj "/CN=$1" -keyout "$tmp/$1.key" -out "$tmp/$1.pem" 2>/dev/null
+}
+make_cert() {  # NAME CA SAN
+  openssl req -newkey ec -pkeyopt ec_paramgen_curve:P-256 -nodes -subj "/CN=$1" \
+    -keyout "$tmp/$1.key" -out "$tmp/$1.csr" 2>/dev/null
+  printf 'subjectAltName=%s\n' "$3" > "$tmp/$1.ext"
+  openssl x509 -req -in "$tmp/$1.csr" -CA "$tmp/$2.pem" -CAkey "$tmp/$2.key" \
+    -CAcreateserial -days 1 -extfile "$tmp/$1.ext" -out "$tmp/$1.pem" 2>/dev/null
+}
+make_ca ca && make_ca rogue-ca &&
+  make_cert server ca "IP:127.0.0.1,DNS:localhost" &&
+  make_cert client ca "DNS:vpm-client" &&
+  make_cert rogue-client rogue-ca "DNS:vpm-client" ||
+  { echo "FAIL: openssl could not make the test certificates"; exit 1; }
+
+# --- server control
+port=""
+metrics_port=""
+start_server() {  # extra flags...
+  : > "$tmp/server.log"
+  "$server_bin" --listen 127.0.0.1:0 --metrics-listen 127.0.0.1:0 --token secret \
+    --data-root "$tmp/data" --shutdown-grace-s 2 "$@" > "$tmp/server.log" 2>&1 &
+  server_pid=$!
+  port=""
+  for _ in $(seq 1 200); do
+    port=$(sed -n 's/^vpm-server listening on port \([0-9]*\).*/\1/p' "$tmp/server.log")
+    [ -n "$port" ] && break
+    kill -0 "$server_pid" 2>/dev/null || break
+    sleep 0.05
+  done
+  [ -n "$port" ] || { echo "FAIL: vpm-server did not start:"; cat "$tmp/server.log"; exit 1; }
+  metrics_port=$(sed -n "s/.* metrics on port \([0-9]*\).*/\1/p" "$tmp/server.log" | head -1)
+}
+stop_server() {  # expects exit status 0 within the grace period plus 5 s
+  kill -TERM "$server_pid"
+  local status=""
+  for _ in $(seq 1 140); do
+    if ! kill -0 "$server_pid" 2>/dev/null; then
+      wait "$server_pid"; status=$?; break
+    fi
+    sleep 0.05
+  done
+  if [ -z "$status" ]; then
+    fail "vpm-server ignored SIGTERM for 7 s"; kill -KILL "$server_pid"
+  elif [ "$status" -ne 0 ]; then
+    fail "vpm-server exited with status $status after SIGTERM"; cat "$tmp/server.log"
+  else
+    pass "SIGTERM: drained and exited 0"
+  fi
+  server_pid=""
+}
+# expect_ok DESCRIPTION -- vpm args...
+expect_ok() {
+  local what=$1; shift 2
+  if "$vpm" "$@" > "$tmp/out" 2> "$tmp/err"; then pass "$what"; else
+    fail "$what: exit $?: $(cat "$tmp/err")"; fi
+}
+# expect_error DESCRIPTION CODE -- vpm args...   (stderr names the gRPC code)
+expect_error() {
+  local what=$1 code=$2; shift 3
+  if "$vpm" "$@" > "$tmp/out" 2> "$tmp/err"; then
+    fail "$what: succeeded, expected $code"
+  elif grep -q "$code" "$tmp/err"; then
+    pass "$what: $code"
+  else
+    fail "$what: expected $code, got: $(cat "$tmp/err")"
+  fi
+}
+
+mkdir -p "$tmp/data"
+ln -s /etc "$tmp/data/escape"
+
+# --- plaintext with a token
+start_server
+addr="127.0.0.1:$port"
+expect_ok "load the phantom" -- --server "$addr" --token secret volume load "phantom:abdomen?size=32"
+grep -q '"volume_id"' "$tmp/out" || fail "volume load printed no volume_id: $(cat "$tmp/out")"
+cp "$tmp/out" "$tmp/load.json"
+expect_ok "list volumes" -- --server "$addr" --token secret volume list
+grep -q 'phantom:abdomen' "$tmp/out" || fail "volume list does not show the phantom"
+expect_error "wrong token" UNAUTHENTICATED -- --server "$addr" --token wrong volume list
+expect_error "no token" UNAUTHENTICATED -- --server "$addr" --token "" volume list
+expect_error "unknown volume id" NOT_FOUND -- --server "$addr" --token secret volume get vol-999
+expect_error "path with .." INVALID_ARGUMENT -- --server "$addr" --token secret volume load ../etc/passwd
+expect_error "symlink out of the data root" PERMISSION_DENIED -- \
+  --server "$addr" --token secret volume load escape/passwd
+# A client that vanishes mid-stream: its stream is released on the server.
+volume_id=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["volume_id"])' "$tmp/load.json")
+expect_ok "open a session" -- --server "$addr" --token secret session open --volume-id "$volume_id"
+session_id=$(python3 -c 'import json,sys; print(json.load(sys.stdin)["session_id"])' < "$tmp/out")
+stdbuf -oL "$vpm" --server "$addr" --token secret watch --session "$session_id" --frames 1000 \
+  > "$tmp/watch.out" 2>&1 &
+watch_pid=$!
+for _ in $(seq 1 200); do grep -q '^frame' "$tmp/watch.out" && break; sleep 0.05; done
+grep -q '^frame' "$tmp/watch.out" && pass "watch stream delivers frames" ||
+  fail "watch stream gave no frame: $(cat "$tmp/watch.out")"
+kill -KILL "$watch_pid"; wait "$watch_pid" 2>/dev/null
+streams_balanced() {
+  python3 - "$metrics_port" <<'EOF2'
+import re, sys, time, urllib.request
+for _ in range(100):
+    text = urllib.request.urlopen(f"http://127.0.0.1:{sys.argv[1]}/metrics", timeout=5).read().decode()
+    value = lambda name: float(re.search(rf"^{name} (\S+)$", text, re.M).group(1))
+    opened, closed = value("vpm_streams_opened_total"), value("vpm_streams_closed_total")
+    if opened >= 1 and opened == closed:
+        sys.exit(0)
+    time.sleep(0.1)
+print(f"streams opened {opened}, closed {closed}")
+sys.exit(1)
+EOF2
+}
+streams_balanced && pass "killed client: stream released (opened == closed)" ||
+  fail "killed client's stream not released"
+expect_ok "server still serves after the errors" -- --server "$addr" --token secret volume list
+if [ -n "$metrics_port" ]; then
+  python3 - "$metrics_port" > "$tmp/metrics" <<'EOF' || fail "metrics endpoint did not answer"
+import sys, urllib.request
+print(urllib.request.urlopen(f"http://127.0.0.1:{sys.argv[1]}/metrics", timeout=5).read().decode())
+EOF
+  grep -q 'vpm_requests_total{.*code="NOT_FOUND"' "$tmp/metrics" &&
+    grep -q 'vpm_requests_total{.*code="UNAUTHENTICATED"' "$tmp/metrics" &&
+    pass "metrics count requests by code" ||
+    fail "metrics lack the NOT_FOUND / UNAUTHENTICATED counts: $(grep vpm_requests_total "$tmp/metrics")"
+else
+  fail "the server log names no metrics port: $(cat "$tmp/server.log")"
+fi
+stop_server
+
+# --- TLS
+start_server --tls-cert "$tmp/server.pem" --tls-key "$tmp/server.key"
+addr="127.0.0.1:$port"
+expect_ok "TLS with the CA" -- --server "$addr" --token secret --tls-ca "$tmp/ca.pem" volume list
+expect_error "plaintext client against a TLS server" UNAVAILABLE -- \
+  --server "$addr" --token secret --deadline-s 5 volume list
+expect_error "TLS with the wrong CA" UNAVAILABLE -- \
+  --server "$addr" --token secret --deadline-s 5 --tls-ca "$tmp/rogue-ca.pem" volume list
+stop_server
+
+# --- mutual TLS
+start_server --tls-cert "$tmp/server.pem" --tls-key "$tmp/server.key" --tls-client-ca "$tmp/ca.pem"
+addr="127.0.0.1:$port"
+expect_ok "mutual TLS with a client certificate" -- --server "$addr" --token secret \
+  --tls-ca "$tmp/ca.pem" --tls-cert "$tmp/client.pem" --tls-key "$tmp/client.key" volume list
+expect_error "mutual TLS without a client certificate" UNAVAILABLE -- \
+  --server "$addr" --token secret --deadline-s 5 --tls-ca "$tmp/ca.pem" volume list
+expect_error "mutual TLS with a certificate from another CA" UNAVAILABLE -- \
+  --server "$addr" --token secret --deadline-s 5 --tls-ca "$tmp/ca.pem" \
+  --tls-cert "$tmp/rogue-client.pem" --tls-key "$tmp/rogue-client.key" volume list
+expect_error "client key without certificate" INVALID_ARGUMENT -- \
+  --server "$addr" --tls-ca "$tmp/ca.pem" --tls-key "$tmp/client.key" volume list
+stop_server
+
+# --- a server with bad TLS flags refuses to start, with a message
+if "$server_bin" --listen 127.0.0.1:0 --token secret --tls-cert "$tmp/server.pem" \
+    > "$tmp/bad.log" 2>&1; then
+  fail "vpm-server started with --tls-cert but no --tls-key"
+elif grep -q "tls" "$tmp/bad.log"; then
+  pass "vpm-server refuses --tls-cert without --tls-key"
+else
+  fail "no TLS message: $(cat "$tmp/bad.log")"
+fi
+
+[ "$failures" -eq 0 ] && echo "all passed" || echo "$failures failed"
+exit $((failures > 0))
