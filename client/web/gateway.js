@@ -1,0 +1,102 @@
+#!/usr/bin/env node
+// vpm-web: the thin web viewer's gateway. Serves the page (public/) over
+// HTTP and bridges each browser tab's WebSocket (/ws) to vpm-server's
+// Interact stream (lib/viewer_connection.js). The server's token comes from
+// VPM_TOKEN and stays here: the browser never sees it.
+//
+//   node gateway.js [--listen HOST:PORT] [--server HOST:PORT] [--proto FILE]
+//
+// --listen defaults to 127.0.0.1:8080 (port 0 picks a free one); --server to
+// 127.0.0.1:50051. Prints "vpm-web listening on http://HOST:PORT/" once ready.
+import http from 'node:http';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { parseArgs } from 'node:util';
+
+import { WebSocketServer } from 'ws';
+
+import { staticHandler } from './lib/static_files.js';
+import { ViewerConnection } from './lib/viewer_connection.js';
+import { kDefaultProtoPath, VpmClient } from './lib/vpm_client.js';
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+const kMaxControlMessageBytes = 64 * 1024;  // browser -> gateway JSON
+
+function splitHostPort(value, flag) {
+  const m = /^(.*):(\d+)$/.exec(value);
+  if (!m || Number(m[2]) > 65535) throw new Error(`${flag}: '${value}' is not HOST:PORT`);
+  return { host: m[1].replace(/^\[(.*)\]$/, '$1'), port: Number(m[2]) };
+}
+
+function parseOptions(argv) {
+  const { values } = parseArgs({
+    args: argv,
+    options: {
+      listen: { type: 'string', default: '127.0.0.1:8080' },
+      server: { type: 'string', default: '127.0.0.1:50051' },
+      proto: { type: 'string', default: kDefaultProtoPath },
+      help: { type: 'boolean', default: false },
+    },
+  });
+  if (values.help) {
+    process.stdout.write('usage: node gateway.js [--listen HOST:PORT] [--server HOST:PORT] ' +
+                         '[--proto vpm.proto]\n  the token for vpm-server comes from VPM_TOKEN\n');
+    process.exit(0);
+  }
+  splitHostPort(values.server, '--server');
+  return { ...values, listen: splitHostPort(values.listen, '--listen') };
+}
+
+// Only pages served by this gateway may open its WebSocket: another site in
+// the same browser must not drive the server with the gateway's token.
+function sameOrigin(info) {
+  const { origin } = info;
+  if (!origin) return true;  // not a browser (e.g. a script)
+  try {
+    return new URL(origin).host === info.req.headers.host;
+  } catch {
+    return false;
+  }
+}
+
+function main() {
+  let options;
+  try {
+    options = parseOptions(process.argv.slice(2));
+  } catch (e) {
+    process.stderr.write(`vpm-web: ${e.message}\n`);
+    process.exit(2);
+  }
+  const client = new VpmClient({
+    address: options.server, token: process.env.VPM_TOKEN ?? '', protoPath: options.proto });
+  const log = (line) => process.stderr.write(`vpm-web: ${line}\n`);
+  const server = http.createServer(staticHandler(path.join(here, 'public')));
+  const wss = new WebSocketServer({
+    server, path: '/ws', maxPayload: kMaxControlMessageBytes, verifyClient: sameOrigin });
+  wss.on('connection', (ws) => new ViewerConnection({ ws, client, log }));
+
+  server.listen(options.listen.port, options.listen.host, () => {
+    const { address, port } = server.address();
+    const host = address.includes(':') ? `[${address}]` : address;
+    process.stdout.write(`vpm-web listening on http://${host}:${port}/ ` +
+                         `(vpm-server ${options.server})\n`);
+  });
+  server.on('error', (e) => {
+    log(`cannot listen on ${options.listen.host}:${options.listen.port}: ${e.message}`);
+    process.exit(1);
+  });
+
+  const stop = () => {
+    for (const ws of wss.clients) ws.close(1001, 'gateway stopping');
+    wss.close();
+    server.close(() => {
+      client.close();
+      process.exit(0);
+    });
+    setTimeout(() => process.exit(0), 2000).unref();
+  };
+  process.on('SIGINT', stop);
+  process.on('SIGTERM', stop);
+}
+
+main();

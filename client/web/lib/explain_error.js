@@ -1,0 +1,20 @@
+// Messages a person can act on, from gRPC errors of calls to vpm-server.
+import { GrpcStatus, statusName } from './vpm_client.js';
+
+// err: a grpc-js error (code, details); what: the action that failed, e.g.
+// "Loading phantom:abdomen"; address: the server's HOST:PORT.
+export function explainError(err, what, address) {
+  const details = err?.details || err?.message || String(err);
+  switch (err?.code) {
+    case GrpcStatus.UNAVAILABLE:
+      return `vpm-server at ${address} is not reachable (${details}). ` +
+        'Is it running? The viewer retries on its own.';
+    case GrpcStatus.DEADLINE_EXCEEDED:
+      return `${what}: vpm-server at ${address} did not answer in time.`;
+    case GrpcStatus.UNAUTHENTICATED:
+      return `vpm-server refused the gateway's token (${details}). ` +
+        'Start the gateway with VPM_TOKEN set to the server\'s token.';
+    default:
+      return `${what} failed: ${statusName(err?.code)}: ${details}`;
+  }
+}

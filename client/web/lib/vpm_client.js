@@ -1,0 +1,98 @@
+// The gateway's side of the vpm API: loads the project's own
+// proto/vpm/v1/vpm.proto with @grpc/proto-loader and wraps the unary calls
+// as promises. The token travels as `authorization: Bearer TOKEN` metadata on
+// every call; it never leaves the gateway.
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+import grpc from '@grpc/grpc-js';
+import protoLoader from '@grpc/proto-loader';
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+export const kDefaultProtoPath = path.resolve(here, '../../../proto/vpm/v1/vpm.proto');
+
+// Field names stay snake_case as in the proto (keepCase), 64-bit integers
+// become JS numbers (sequences and sizes stay far below 2^53), unset
+// scalars come back as their defaults, and a oneof reports which member is set.
+const kLoaderOptions = {
+  keepCase: true,
+  longs: Number,
+  enums: String,
+  defaults: true,
+  oneofs: true,
+};
+
+// grpc-js backs off up to 120 s between reconnection attempts by default;
+// a viewer wants to see a restarted server within seconds.
+const kChannelOptions = {
+  'grpc.initial_reconnect_backoff_ms': 250,
+  'grpc.min_reconnect_backoff_ms': 250,
+  'grpc.max_reconnect_backoff_ms': 3000,
+  'grpc.max_receive_message_length': 64 * 1024 * 1024,
+};
+
+// Deadlines of the unary calls, ms. Mesh building and session opening run
+// the proxy-mesh build and the FEM set-up on the server, which takes seconds
+// on lavapipe for a 256^3 volume.
+const kDeadlineMs = {
+  ListVolumes: 5000,
+  GetVolume: 5000,
+  LoadVolume: 120000,
+  BuildMesh: 120000,
+  RefineMesh: 120000,
+  OpenSession: 120000,
+  CloseSession: 5000,
+};
+
+export class VpmClient {
+  // address: HOST:PORT of vpm-server; token: the bearer token ('' for a
+  // server started with --no-auth); protoPath: vpm.proto.
+  constructor({ address, token = '', protoPath = kDefaultProtoPath }) {
+    const definition = protoLoader.loadSync(protoPath, kLoaderOptions);
+    const { Vpm } = grpc.loadPackageDefinition(definition).vpm.v1;
+    this.address = address;
+    this.token = token;
+    this.stub = new Vpm(address, grpc.credentials.createInsecure(), kChannelOptions);
+  }
+
+  metadata() {
+    const md = new grpc.Metadata();
+    if (this.token) md.set('authorization', `Bearer ${this.token}`);
+    return md;
+  }
+
+  // One unary call: resolves with the response, rejects with the gRPC error
+  // (err.code, err.details).
+  call(method, request) {
+    const deadline = new Date(Date.now() + (kDeadlineMs[method] ?? 30000));
+    return new Promise((resolve, reject) => {
+      this.stub[method](request, this.metadata(), { deadline }, (err, response) => {
+        if (err) reject(err);
+        else resolve(response);
+      });
+    });
+  }
+
+  // The bidirectional Interact stream (events in, frames out).
+  interact() {
+    return this.stub.Interact(this.metadata());
+  }
+
+  close() {
+    this.stub.close();
+  }
+}
+
+// The name of a gRPC status code, e.g. 14 -> "UNAVAILABLE".
+export function statusName(code) {
+  const name = Object.keys(grpc.status).find((k) => grpc.status[k] === code);
+  return name ?? `code ${code}`;
+}
+
+// True for errors that mean "the server is not there", as opposed to a call
+// the server refused.
+export function isServerDown(err) {
+  return err?.code === grpc.status.UNAVAILABLE || err?.code === grpc.status.DEADLINE_EXCEEDED;
+}
+
+export const GrpcStatus = grpc.status;

@@ -1,0 +1,249 @@
+// The page: wires the volume picker, the tools and the status line to the
+// gateway socket. The browser only shows frames and sends input; every
+// server call happens in the gateway. `window.vpmViewer` exposes the state
+// (frames, last frame header, peak displacement, errors) to tests.
+import { OrbitCamera } from './camera.js';
+import { FrameStats } from './frame_stats.js';
+import { GatewaySocket } from './gateway_socket.js';
+import { PointerTools } from './pointer_tools.js';
+
+const $ = (id) => document.getElementById(id);
+const canvas = $('frame');
+const context = canvas.getContext('2d');
+const stats = new FrameStats();
+
+const state = {
+  gatewayUp: false,
+  serverUp: null,
+  intent: null,         // what to (re)open: {source} or {volume_id}
+  opening: false,
+  volume: null,
+  mesh: null,
+  session: null,
+  camera: null,         // OrbitCamera of the open volume
+  sequence: 0,          // last event sequence sent
+  lastHeader: null,     // header of the newest frame received
+  framesReceived: 0,
+  framesDrawn: 0,
+  peakDisplacementMm: 0,
+  lastGrabMm: null,
+  errors: [],           // {what, message}
+  stats,
+};
+window.vpmViewer = state;
+
+function showMessage(text, kind = 'info') {
+  $('message').textContent = text;
+  $('message').dataset.kind = text ? kind : 'none';
+}
+
+function setServerState(kind, text) {
+  $('server-state').dataset.state = kind;
+  $('server-state').textContent = text;
+}
+
+const socket = new GatewaySocket({
+  url: `${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/ws`,
+  onOpen() {
+    state.gatewayUp = true;
+    setServerState('unknown', 'gateway connected');
+    if (state.intent) openVolume();
+  },
+  onClose(delayMs) {
+    const wasUp = state.gatewayUp;
+    Object.assign(state, { gatewayUp: false, session: null, opening: false });
+    setServerState('down', 'gateway unreachable');
+    showMessage(`${wasUp ? 'Lost the connection to' : 'Cannot reach'} the web gateway at ` +
+                `${location.host}; retrying in ${(delayMs / 1000).toFixed(1)} s.`, 'error');
+  },
+  onMessage,
+  onFrame,
+});
+
+// ------------------------------------------------------------ events out
+
+function sendEvent(event) {
+  state.sequence += 1;
+  const message = { ...event, sequence: state.sequence };
+  if (socket.send({ type: 'event', event: message })) stats.sent(state.sequence);
+  return state.sequence;
+}
+
+function settings() {
+  const [mode, preset] = $('render').value.split(':');
+  const side = Number($('frame-size').value);
+  return { mode, preset, width: side, height: side, overlay: $('overlay').checked };
+}
+
+function openVolume() {
+  const sameVolume = state.camera && state.intent.source === state.volume?.source;
+  state.opening = true;
+  socket.send({ type: 'open', ...state.intent, settings: settings(),
+                camera: sameVolume ? state.camera.toProto() : null });
+}
+
+function refineAt(pointMm) {
+  if (!state.session) return showMessage('Open a volume first.', 'error');
+  socket.send({ type: 'refine', point_mm: pointMm });
+}
+
+const tools = new PointerTools({
+  canvas,
+  camera: () => (state.session ? state.camera : null),
+  send: sendEvent,
+  onRefine: refineAt,
+  onGrab(pointMm) {
+    state.lastGrabMm = pointMm;
+    $('refine-grab').disabled = false;
+  },
+  onRefused: (text) => showMessage(text, 'error'),
+});
+
+// ------------------------------------------------------------ messages in
+
+const handlers = {
+  hello(m) { state.gatewayServer = m.server; },
+  server(m) {
+    state.serverUp = m.up;
+    if (!m.up) {
+      setServerState('down', 'vpm-server down');
+      showMessage(m.message, 'error');
+      return;
+    }
+    setServerState('up', `vpm-server ${m.address}`);
+    if ($('message').dataset.kind === 'error') showMessage('');
+    if (state.intent && !state.session && !state.opening) openVolume();
+  },
+  volumes(m) { fillLoaded(m.volumes); },
+  progress(m) { showMessage(m.text, 'info'); },
+  opened(m) {
+    const sameVolume = state.camera && m.volume.source === state.volume?.source;
+    Object.assign(state, { volume: m.volume, mesh: m.mesh, session: m.session, opening: false });
+    if (!sameVolume) state.camera = new OrbitCamera(m.volume);
+    state.lastGrabMm = null;
+    $('refine-grab').disabled = true;
+    setServerState('up', `vpm-server ${state.gatewayServer ?? ''}`);
+    showMessage('');
+    showMesh();
+  },
+  refined(m) {
+    Object.assign(state, { mesh: m.mesh, session: m.session });
+    const p = m.point_mm;
+    showMessage(`Refined at (${p.x.toFixed(1)}, ${p.y.toFixed(1)}, ${p.z.toFixed(1)}) mm: ` +
+                'a new session on the finer mesh, starting from rest.', 'info');
+    showMesh();
+  },
+  stream(m) { state.streamOpen = m.state === 'open'; },
+  session_lost(m) {
+    state.session = null;
+    showMessage(m.message, 'info');
+    if (state.intent && !state.opening) openVolume();
+  },
+  error(m) {
+    state.errors.push({ what: m.what, message: m.message });
+    if (m.what !== 'Interaction') state.opening = false;
+    tools.cancelGrab();
+    showMessage(m.message, 'error');
+  },
+};
+
+function onMessage(m) {
+  const handler = handlers[m.type];
+  if (handler) handler(m);
+}
+
+function fillLoaded(volumes) {
+  const group = $('loaded');
+  group.replaceChildren(...volumes.map((v) => {
+    const option = document.createElement('option');
+    option.value = `volume:${v.volume_id}`;
+    option.textContent = `${v.volume_id}: ${v.source} (${v.dims.join(' x ')})`;
+    return option;
+  }));
+}
+
+function showMesh() {
+  const s = state.mesh?.stats;
+  $('mesh-info').textContent = s
+    ? `${state.volume.source} · mesh ${state.mesh.mesh_id}: ${s.vertices} vertices ` +
+      `(${s.hard} hard, ${s.refined} refined), ${s.tets} tets, h ${s.h_mm.toFixed(1)} mm · ` +
+      `session ${state.session.session_id}`
+    : '';
+}
+
+// ------------------------------------------------------------ frames
+
+let drawing = false;
+let waiting = null;  // the newest frame not yet drawn
+
+function onFrame(frame) {
+  const h = frame.header;
+  stats.frame(h);
+  state.lastHeader = h;
+  state.framesReceived += 1;
+  state.peakDisplacementMm = Math.max(state.peakDisplacementMm, h.max_displacement_mm);
+  waiting = frame;
+  if (!drawing) drawNext();
+}
+
+async function drawNext() {
+  drawing = true;
+  while (waiting) {
+    const { header, image } = waiting;
+    waiting = null;
+    try {
+      const bitmap = await createImageBitmap(image);
+      context.drawImage(bitmap, 0, 0, canvas.width, canvas.height);
+      bitmap.close();
+      state.framesDrawn += 1;
+      showStatus(header);
+    } catch (e) {
+      showMessage(`A frame could not be decoded: ${e.message}`, 'error');
+    }
+  }
+  drawing = false;
+}
+
+function showStatus(h) {
+  const latency = stats.latencyMs === null ? '-' : stats.latencyMs.toFixed(0);
+  $('status').textContent =
+    `${stats.fps()} fps · latency ${latency} ms · ${h.width}x${h.height} ` +
+    `${(h.bytes / 1024).toFixed(1)} KB ${h.encoding} · ${h.interactive ? 'interactive' : 'still'}` +
+    ` · server ${h.timings.total_ms.toFixed(0)} ms · max displacement ` +
+    `${h.max_displacement_mm.toFixed(2)} mm · frame ${h.frame_number}`;
+}
+
+// ------------------------------------------------------------ controls
+
+function applyFrameSize() {
+  const side = Number($('frame-size').value);
+  canvas.width = side;
+  canvas.height = side;
+}
+
+$('open').addEventListener('click', () => {
+  const [kind, ...rest] = $('volume').value.split(':');
+  const value = rest.join(':');
+  applyFrameSize();
+  state.intent = kind === 'volume' ? { volume_id: value } : { source: value };
+  if (!socket.send({ type: 'list' })) return;  // the socket's message says why
+  openVolume();
+});
+$('refresh').addEventListener('click', () => socket.send({ type: 'list' }));
+for (const input of document.querySelectorAll('input[name="tool"]')) {
+  input.addEventListener('change', () => { tools.tool = input.value; });
+}
+// Settings go with the open message until a session exists.
+const settingsChanged = () => state.session && sendEvent({ settings: settings() });
+$('render').addEventListener('change', settingsChanged);
+$('overlay').addEventListener('change', settingsChanged);
+$('frame-size').addEventListener('change', () => {
+  if (state.session) applyFrameSize();
+  settingsChanged();
+});
+$('refine-grab').addEventListener('click', () => state.lastGrabMm && refineAt(state.lastGrabMm));
+$('reset-view').addEventListener('click', () => {
+  if (!state.camera) return;
+  state.camera.reset();
+  sendEvent({ camera: state.camera.toProto() });
+});

@@ -1,0 +1,169 @@
+// What the web viewer's end-to-end tests share: starting vpm-server and the
+// gateway on ephemeral ports, driving Debian's Chromium through
+// playwright-core (executablePath: no browser is downloaded), and reading
+// the frame canvas back.
+import { spawn } from 'node:child_process';
+import crypto from 'node:crypto';
+import fs from 'node:fs';
+import { createRequire } from 'node:module';
+import net from 'node:net';
+import path from 'node:path';
+
+export const kChromium = process.env.VPM_CHROMIUM ?? '/usr/bin/chromium';
+
+// argv: --build DIR --source DIR; returns absolute paths and the output
+// folder (BUILD/tests/web), created.
+export function testPaths(argv) {
+  const arg = (name) => {
+    const i = argv.indexOf(name);
+    if (i < 0 || !argv[i + 1]) throw new Error(`missing ${name} DIR`);
+    return path.resolve(argv[i + 1]);
+  };
+  const build = arg('--build');
+  const source = arg('--source');
+  const out = path.join(build, 'tests', 'web');
+  fs.mkdirSync(out, { recursive: true });
+  return { build, source, out };
+}
+
+// Resolves once a line of the child's stdout or stderr matches `pattern`
+// (with the match); rejects when the child exits first or after timeoutMs.
+function waitForLine(child, pattern, what, timeoutMs, logFile) {
+  const log = fs.createWriteStream(logFile);
+  return new Promise((resolve, reject) => {
+    let seen = '';
+    const timer = setTimeout(
+      () => reject(new Error(`${what} did not start in ${timeoutMs} ms; its output:\n${seen}`)),
+      timeoutMs);
+    const onData = (chunk) => {
+      log.write(chunk);
+      seen += chunk.toString();
+      const m = pattern.exec(seen);
+      if (m) {
+        clearTimeout(timer);
+        resolve(m);
+      }
+    };
+    child.stdout.on('data', onData);
+    child.stderr.on('data', onData);
+    child.on('exit', (code, signal) => {
+      clearTimeout(timer);
+      reject(new Error(`${what} exited (${code ?? signal}) before it was ready:\n${seen}`));
+    });
+  });
+}
+
+const children = new Set();
+
+function track(child) {
+  children.add(child);
+  child.on('exit', () => children.delete(child));
+  return child;
+}
+
+// Stops every child this process started (SIGTERM, then SIGKILL after 3 s).
+export async function stopAll() {
+  await Promise.all([...children].map((c) => stopChild(c)));
+}
+
+export function stopChild(child) {
+  if (child.exitCode !== null || child.signalCode !== null) return Promise.resolve();
+  return new Promise((resolve) => {
+    const kill = setTimeout(() => child.kill('SIGKILL'), 3000);
+    child.on('exit', () => {
+      clearTimeout(kill);
+      resolve();
+    });
+    child.kill('SIGTERM');
+  });
+}
+
+export const randomToken = () => crypto.randomBytes(16).toString('hex');
+
+// vpm-server on 127.0.0.1:port (0: ephemeral) with `token`; resolves with
+// {child, port, address}.
+export async function startServer({ build, out, token, port = 0, logName = 'server.log' }) {
+  const binary = path.join(build, 'server', 'service', 'vpm-server');
+  if (!fs.existsSync(binary)) throw new Error(`${binary} is missing: build the vpm-server target`);
+  const child = track(spawn(binary, ['--listen', `127.0.0.1:${port}`], {
+    env: { ...process.env, VPM_TOKEN: token }, stdio: ['ignore', 'pipe', 'pipe'] }));
+  const m = await waitForLine(child, /vpm-server listening on port (\d+)/, 'vpm-server', 30000,
+                              path.join(out, logName));
+  return { child, port: Number(m[1]), address: `127.0.0.1:${m[1]}` };
+}
+
+// The gateway on an ephemeral port, talking to `serverAddress` with `token`;
+// resolves with {child, url}.
+export async function startGateway({ source, out, serverAddress, token,
+                                     logName = 'gateway.log' }) {
+  const child = track(spawn(process.execPath, [
+    path.join(source, 'client', 'web', 'gateway.js'),
+    '--listen', '127.0.0.1:0', '--server', serverAddress], {
+    env: { ...process.env, VPM_TOKEN: token }, stdio: ['ignore', 'pipe', 'pipe'] }));
+  const m = await waitForLine(child, /vpm-web listening on (http:\/\/\S+)/, 'the gateway', 15000,
+                              path.join(out, logName));
+  return { child, url: m[1] };
+}
+
+// A port nothing listens on (bound, then released).
+export function closedPort() {
+  return new Promise((resolve, reject) => {
+    const s = net.createServer();
+    s.on('error', reject);
+    s.listen(0, '127.0.0.1', () => {
+      const { port } = s.address();
+      s.close(() => resolve(port));
+    });
+  });
+}
+
+// Headless Chromium through playwright-core from client/web/node_modules.
+export async function launchBrowser(source) {
+  const require = createRequire(path.join(source, 'client', 'web', 'package.json'));
+  const { chromium } = require('playwright-core');
+  if (!fs.existsSync(kChromium)) throw new Error(`${kChromium} is missing: install chromium`);
+  return chromium.launch({ executablePath: kChromium, headless: true });
+}
+
+// The frame canvas as grey levels (0..255, one per pixel) with its mean and
+// variance.
+export async function canvasGrey(page) {
+  return page.evaluate(() => {
+    const c = document.getElementById('frame');
+    const rgba = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    const grey = new Array(rgba.length / 4);
+    let sum = 0, sum2 = 0;
+    for (let i = 0; i < grey.length; ++i) {
+      const g = 0.299 * rgba[4 * i] + 0.587 * rgba[4 * i + 1] + 0.114 * rgba[4 * i + 2];
+      grey[i] = g;
+      sum += g;
+      sum2 += g * g;
+    }
+    const mean = sum / grey.length;
+    return { grey, mean, variance: sum2 / grey.length - mean * mean };
+  });
+}
+
+// Mean absolute grey difference between two canvasGrey results.
+export function meanAbsDiff(a, b) {
+  if (a.grey.length !== b.grey.length) return Infinity;
+  let sum = 0;
+  for (let i = 0; i < a.grey.length; ++i) sum += Math.abs(a.grey[i] - b.grey[i]);
+  return sum / a.grey.length;
+}
+
+// Waits until every event sent so far is reflected in a drawn frame that
+// matches `extra` (a function body over v = window.vpmViewer and h = its
+// last frame header); returns the header.
+export async function settled(page, extra = 'true', timeoutMs = 20000) {
+  const expression = `(() => { const v = window.vpmViewer; const h = v.lastHeader;
+    return !!h && h.last_sequence >= v.sequence && v.framesDrawn >= v.framesReceived &&
+      (${extra}); })()`;
+  await page.waitForFunction(expression, null, { timeout: timeoutMs, polling: 50 }).catch(async (e) => {
+    const v = await page.evaluate(() => ({
+      sequence: window.vpmViewer.sequence, header: window.vpmViewer.lastHeader,
+      errors: window.vpmViewer.errors, message: document.getElementById('message').textContent }));
+    throw new Error(`frame never settled (${extra}): ${e.message}\n${JSON.stringify(v)}`);
+  });
+  return page.evaluate(() => window.vpmViewer.lastHeader);
+}

@@ -1,0 +1,160 @@
+// End to end in headless Chromium: vpm-server and the gateway on ephemeral
+// ports, the page opens the 128^3 phantom at 256 x 256, the first frame is
+// not blank, an orbit drag changes it, a grab-and-drag deforms the tissue
+// (the server reports max_displacement_mm > 0 and the still frame while
+// holding differs from the one before), release brings it back, the token
+// never reaches the browser, and stopping the server shows a clear message.
+// Usage: node viewer_e2e.mjs --build BUILD --source SOURCE
+import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import path from 'node:path';
+
+import {
+  canvasGrey, launchBrowser, meanAbsDiff, randomToken, settled, startGateway, startServer,
+  stopAll, stopChild, testPaths,
+} from './harness.mjs';
+
+// Grey-level thresholds (0..255, mean over the 256 x 256 canvas). A blank
+// or uniform canvas has variance 0; the phantom's first frame has hundreds.
+const kMinVariance = 50;
+const kMinOrbitDiff = 2;   // a 30-degree turn moves most of the image
+const kMinGrabDiff = 0.2;  // a local deformation moves a small area
+
+const { build, source, out } = testPaths(process.argv);
+const token = randomToken();
+const figures = {};
+const step = (text) => console.log(`web_e2e: ${text}`);
+
+async function dragOnCanvas(page, from, to, steps) {
+  await page.mouse.move(from[0], from[1]);
+  await page.mouse.down();
+  await page.mouse.move(to[0], to[1], { steps });
+}
+
+async function main() {
+  const server = await startServer({ build, out, token });
+  const gateway = await startGateway({ source, out, serverAddress: server.address, token });
+  step(`vpm-server ${server.address}, gateway ${gateway.url}`);
+
+  const browser = await launchBrowser(source);
+  const page = await browser.newPage({ viewport: { width: 1000, height: 900 } });
+  const pageErrors = [];
+  page.on('pageerror', (e) => pageErrors.push(e.message));
+  const console_ = fs.createWriteStream(path.join(out, 'browser_console.log'));
+  page.on('console', (m) => console_.write(`${m.type()}: ${m.text()}\n`));
+  // Everything the gateway sends the browser, to check the token stays out.
+  let tokenSeen = false;
+  page.on('websocket', (ws) => ws.on('framereceived', ({ payload }) => {
+    if (String(payload).includes(token)) tokenSeen = true;
+  }));
+
+  const t0 = performance.now();
+  await page.goto(gateway.url);
+  await page.waitForSelector('#server-state[data-state="up"]', { timeout: 15000 });
+  step('page loaded, gateway reports vpm-server up');
+
+  await page.selectOption('#volume', 'source:phantom:abdomen?size=128');
+  await page.selectOption('#frame-size', '256');
+  const tOpen = performance.now();
+  await page.click('#open');
+  await settled(page, '!h.interactive', 120000);
+  figures.first_frame_ms = Math.round(performance.now() - tOpen);
+  const first = await canvasGrey(page);
+  step(`first frame after ${figures.first_frame_ms} ms: mean ${first.mean.toFixed(1)}, ` +
+       `variance ${first.variance.toFixed(1)}`);
+  assert.ok(first.variance > kMinVariance,
+            `the first frame looks blank: grey variance ${first.variance} <= ${kMinVariance}`);
+  assert.equal(await page.evaluate(() => document.getElementById('frame').width), 256);
+
+  const box = await page.locator('#frame').boundingBox();
+  const centre = [box.x + box.width / 2, box.y + box.height / 2];
+
+  // Orbit: 200 CSS pixels = 100 frame pixels at 0.4 degree each, 40 degrees.
+  await dragOnCanvas(page, centre, [centre[0] + 200, centre[1]], 10);
+  await page.mouse.up();
+  await settled(page, '!h.interactive');
+  const orbited = await canvasGrey(page);
+  const orbitDiff = meanAbsDiff(first, orbited);
+  step(`orbit drag: mean |grey difference| ${orbitDiff.toFixed(2)}`);
+  assert.ok(orbitDiff > kMinOrbitDiff, `the orbit drag did not change the frame (${orbitDiff})`);
+
+  // The vessels preset: soft tissue clears, so a deformation inside shows.
+  await page.selectOption('#render', 'dvr:ct-vessels');
+  await settled(page, '!h.interactive');
+  const before = await canvasGrey(page);
+  const presetDiff = meanAbsDiff(orbited, before);
+  step(`preset ct-vessels: mean |grey difference| ${presetDiff.toFixed(2)}`);
+  assert.ok(presetDiff > kMinOrbitDiff, `the preset did not change the frame (${presetDiff})`);
+
+  // Grab the tissue under the centre and drag it; hold still until the
+  // still frame arrives, so the comparison is between two still frames.
+  await page.check('input[name="tool"][value="grab"]');
+  const tGrab = performance.now();
+  await dragOnCanvas(page, centre, [centre[0] + 20, centre[1] - 30], 12);
+  const held = await settled(page, '!h.interactive && h.max_displacement_mm > 0', 60000);
+  figures.grab_to_still_ms = Math.round(performance.now() - tGrab);
+  figures.max_displacement_mm = held.max_displacement_mm;
+  const dragged = await canvasGrey(page);
+  const grabDiff = meanAbsDiff(before, dragged);
+  step(`grab and drag: server max_displacement_mm ${held.max_displacement_mm.toFixed(2)}, ` +
+       `mean |grey difference| ${grabDiff.toFixed(2)}`);
+  assert.ok(grabDiff > kMinGrabDiff, `the grab-and-drag did not change the frame (${grabDiff})`);
+  const peak = await page.evaluate(() => window.vpmViewer.peakDisplacementMm);
+  assert.ok(peak > 0, 'the page never saw a deformation');
+  const statusLine = await page.textContent('#status');
+  step(`status line: ${statusLine}`);
+  assert.match(statusLine, /\d+ fps · latency \d+ ms · \d+x\d+ [\d.]+ KB jpeg/);
+  const shown = /max displacement ([\d.]+) mm/.exec(statusLine);
+  assert.ok(shown && Number(shown[1]) > 0, 'the status line shows no displacement');
+  const shot = path.join(out, 'web_viewer_drag.png');
+  await page.screenshot({ path: shot });
+  step(`screenshot ${shot}`);
+
+  // The mesh overlay while holding (the mouse is busy: the keyboard
+  // toggles it): vertices, handles and the drag arrow.
+  await page.focus('#overlay');
+  await page.keyboard.press('Space');
+  await settled(page, '!h.interactive');
+  const overlaid = await canvasGrey(page);
+  const overlayDiff = meanAbsDiff(dragged, overlaid);
+  step(`overlay on: mean |grey difference| ${overlayDiff.toFixed(2)}`);
+  assert.ok(overlayDiff > kMinGrabDiff, `the overlay did not change the frame (${overlayDiff})`);
+  await page.screenshot({ path: path.join(out, 'web_viewer_drag_overlay.png') });
+  await page.keyboard.press('Space');
+  await settled(page, '!h.interactive');
+
+  await page.mouse.up();
+  await settled(page, '!h.interactive');
+  const released = await canvasGrey(page);
+  const releaseDiff = meanAbsDiff(before, released);
+  step(`release: mean |grey difference| to before the grab ${releaseDiff.toFixed(2)}`);
+  assert.ok(releaseDiff < 0.5 * grabDiff, 'release did not bring the tissue back to rest');
+  await page.screenshot({ path: path.join(out, 'web_viewer_released.png') });
+
+  figures.latency_ms = await page.evaluate(() => window.vpmViewer.stats.latencyMs);
+  assert.ok(!tokenSeen, 'the token reached the browser');
+  assert.ok(!(await page.content()).includes(token), 'the token is in the page');
+  assert.deepEqual(pageErrors, [], 'the page threw');
+
+  // The server goes away: the page says so.
+  await stopChild(server.child);
+  await page.waitForSelector('#message[data-kind="error"]', { timeout: 15000 });
+  const downMessage = await page.textContent('#message');
+  step(`server stopped; the page says: ${downMessage}`);
+  assert.match(downMessage, /vpm-server at 127\.0\.0\.1:\d+ is not reachable/);
+  assert.equal(await page.getAttribute('#server-state', 'data-state'), 'down');
+
+  figures.total_ms = Math.round(performance.now() - t0);
+  fs.writeFileSync(path.join(out, 'viewer_e2e.json'), JSON.stringify(figures, null, 2));
+  step(`figures ${JSON.stringify(figures)}`);
+  await browser.close();
+}
+
+main()
+  .then(() => stopAll())
+  .then(() => step('PASS'))
+  .catch(async (e) => {
+    console.error(`web_e2e: FAIL: ${e.stack ?? e}`);
+    await stopAll();
+    process.exit(1);
+  });
