@@ -14,9 +14,9 @@ int main(int argc, char** argv) {
   vpm::cli::ServerFlags server_flags;
   vpm::cli::AddServerFlags(app, &server_flags);
   vpm::cli::AddVolumeCommands(app, &exit_code);
-  vpm::cli::AddMeshCommand(app, &exit_code);
+  vpm::cli::AddMeshCommand(app, &server_flags, &exit_code);
   vpm::cli::AddCompareMeshesCommand(app, &exit_code);
-  vpm::cli::AddRenderCommand(app, &exit_code);
+  vpm::cli::AddRenderCommand(app, &server_flags, &exit_code);
   vpm::cli::AddServerCommands(app, &server_flags, &exit_code);
   CLI11_PARSE(app, argc, argv);
   return exit_code;

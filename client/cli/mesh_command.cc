@@ -6,6 +6,7 @@
 #include "client/cli/command_status.h"
 #include "client/cli/gpu_backend.h"
 #include "client/cli/mesh_flags.h"
+#include "client/cli/remote_pipeline.h"
 #include "server/mesh/mesh_json.h"
 #include "server/mesh/write_vtu.h"
 #include "server/volume/read_volume.h"
@@ -19,7 +20,8 @@ struct MeshArgs {
   std::string json_out, vtu_out, backend = "auto";
 };
 
-void PrintSummary(const ProxyMesh& mesh, const GpuBackend* gpu) {
+// `evaluated_on`: where step 1 ran ("GPU", "CPU reference", "server").
+void PrintSummary(const ProxyMesh& mesh, const GpuBackend* gpu, const char* evaluated_on) {
   const MeshStats& s = mesh.stats;
   std::printf("lattice %dx%dx%d = %lld vertices, h = %.2f mm, R = %.2f mm\n", s.grid[0],
               s.grid[1], s.grid[2], static_cast<long long>(s.lattice_vertices), s.h_mm, s.R_mm);
@@ -32,19 +34,37 @@ void PrintSummary(const ProxyMesh& mesh, const GpuBackend* gpu) {
               static_cast<long long>(mesh.quality.removed_zero_volume));
   std::printf("%-18s %9s\n", "stage", "ms");
   if (gpu != nullptr) std::printf("%-18s %9.2f\n", "upload (once)", gpu->upload_ms());
-  std::printf("%-18s %9.2f  (%s)\n", "evaluate", s.evaluate_ms, gpu ? "GPU" : "CPU reference");
+  std::printf("%-18s %9.2f  (%s)\n", "evaluate", s.evaluate_ms, evaluated_on);
   std::printf("%-18s %9.2f\n%-18s %9.2f\n%-18s %9.2f\n%-18s %9.2f\n%-18s %9.2f\n", "decimate",
               s.decimate_ms, "refine", s.refine_ms, "classify", s.classify_ms, "tetrahedralize",
               s.tetrahedralize_ms, "total", s.total_ms);
 }
 
-Status Run(const MeshArgs& args) {
+Result<ProxyMesh> BuildOnServer(const ServerFlags& server, const MeshArgs& args) {
+  if (args.backend != "auto") {
+    return absl::InvalidArgumentError("--backend is offline only: the server picks its own device");
+  }
+  ASSIGN_OR_RETURN(ServerConnection connection, ServerConnection::Connect(server));
+  ASSIGN_OR_RETURN(RemoteMesh remote, BuildMeshOnServer(connection, args.source, args.mesh));
+  std::printf("server %s: volume %s, mesh %s\n", server.address.c_str(),
+              remote.volume.volume_id().c_str(), remote.info.mesh_id().c_str());
+  PrintSummary(remote.mesh, nullptr, "server");
+  return std::move(remote.mesh);
+}
+
+Result<ProxyMesh> BuildOffline(const MeshArgs& args) {
   ASSIGN_OR_RETURN(Volume volume, ReadVolume(args.source, VolumeLimits{}));
   ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(args.mesh, volume));
   ASSIGN_OR_RETURN(auto gpu, GpuBackend::Open(args.backend, volume));
   ASSIGN_OR_RETURN(ProxyMesh mesh,
                    BuildProxyMesh(volume, params, gpu ? gpu->mesh_gpu() : MeshGpu{}));
-  PrintSummary(mesh, gpu.get());
+  PrintSummary(mesh, gpu.get(), gpu ? "GPU" : "CPU reference");
+  return mesh;
+}
+
+Status Run(const ServerFlags& server, const MeshArgs& args) {
+  ASSIGN_OR_RETURN(ProxyMesh mesh,
+                   server.address.empty() ? BuildOffline(args) : BuildOnServer(server, args));
   if (!args.json_out.empty()) {
     RETURN_IF_ERROR(WriteMeshJson(mesh, args.json_out));
     std::cout << "wrote " << args.json_out << "\n";
@@ -58,16 +78,16 @@ Status Run(const MeshArgs& args) {
 
 }  // namespace
 
-void AddMeshCommand(CLI::App& app, int* exit_code) {
+void AddMeshCommand(CLI::App& app, const ServerFlags* server, int* exit_code) {
   auto args = std::make_shared<MeshArgs>();
-  CLI::App* cmd = app.add_subcommand("mesh", "Build the volume proxy mesh of a volume (offline)");
+  CLI::App* cmd = app.add_subcommand("mesh", "Build the volume proxy mesh of a volume (offline, or on --server)");
   cmd->add_option("--volume", args->source,
                   "a file, a DICOM folder, phantom:NAME or raw:PATH?...")->required();
   AddMeshFlags(cmd, &args->mesh);
   cmd->add_option("--json", args->json_out, "write vertices, tets and stats as JSON");
   cmd->add_option("--vtu", args->vtu_out, "write a VTK unstructured grid (ParaView, Slicer)");
   AddBackendFlag(cmd, &args->backend);
-  cmd->callback([args, exit_code] { *exit_code = ExitWith(Run(*args)); });
+  cmd->callback([server, args, exit_code] { *exit_code = ExitWith(Run(*server, *args)); });
 }
 
 }  // namespace vpm::cli

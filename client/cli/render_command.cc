@@ -6,6 +6,7 @@
 
 #include "client/cli/command_status.h"
 #include "client/cli/mesh_flags.h"
+#include "client/cli/remote_pipeline.h"
 #include "server/mesh/mesh_json.h"
 #include "server/render/deformable_scene.h"
 #include "server/render/frame_encoder.h"
@@ -87,11 +88,16 @@ Status WriteFile(const std::string& path, const std::vector<uint8_t>& bytes) {
   return absl::OkStatus();
 }
 
-Status Run(const RenderArgs& args) {
-  const bool jpeg = args.out.ends_with(".jpg") || args.out.ends_with(".jpeg");
-  if (!jpeg && !args.out.ends_with(".png")) {
-    return absl::InvalidArgumentError(StrCat("--out ", args.out, ": use a .png or .jpg name"));
+Result<bool> IsJpegName(const std::string& out) {
+  const bool jpeg = out.ends_with(".jpg") || out.ends_with(".jpeg");
+  if (!jpeg && !out.ends_with(".png")) {
+    return absl::InvalidArgumentError(StrCat("--out ", out, ": use a .png or .jpg name"));
   }
+  return jpeg;
+}
+
+Status RunOffline(const RenderArgs& args) {
+  ASSIGN_OR_RETURN(const bool jpeg, IsJpegName(args.out));
   auto t0 = std::chrono::steady_clock::now();
   ASSIGN_OR_RETURN(Volume volume, ReadVolume(args.source, VolumeLimits{}));
   ASSIGN_OR_RETURN(SceneView view, MakeView(args, volume));
@@ -154,11 +160,135 @@ Status Run(const RenderArgs& args) {
   return absl::OkStatus();
 }
 
+// Closes a server session when it goes out of scope (errors ignored: the
+// server evicts idle sessions anyway).
+class SessionCloser {
+ public:
+  SessionCloser(const ServerConnection& server, std::string id) : server_(server), id_(id) {}
+  ~SessionCloser() {
+    v1::CloseSessionRequest request;
+    request.set_session_id(id_);
+    v1::CloseSessionResponse response;
+    (void)server_.stub().CloseSession(server_.Context().get(), request, &response);
+  }
+  SessionCloser(const SessionCloser&) = delete;
+  SessionCloser& operator=(const SessionCloser&) = delete;
+
+ private:
+  const ServerConnection& server_;
+  std::string id_;
+};
+
+Result<v1::ManipulateResponse> Manipulate(const ServerConnection& server,
+                                          const std::string& session, v1::ClientEvent event) {
+  v1::ManipulateRequest request;
+  request.set_session_id(session);
+  *request.mutable_event() = std::move(event);
+  v1::ManipulateResponse response;
+  RETURN_IF_ERROR(FromGrpc(server.stub().Manipulate(server.Context().get(), request, &response)));
+  return response;
+}
+
+v1::Vec3 Vec3Proto(const std::vector<double>& v) {
+  v1::Vec3 out;
+  out.set_x(v[0]);
+  out.set_y(v[1]);
+  out.set_z(v[2]);
+  return out;
+}
+
+// The same frame rendered by a vpm-server: LoadVolume, BuildMesh (refined
+// at the grab point, as offline), OpenSession, Manipulate, Render.
+Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
+  ASSIGN_OR_RETURN(const bool jpeg, IsJpegName(args.out));
+  if (!args.mesh_json.empty()) {
+    return absl::InvalidArgumentError(
+        "--mesh-json is offline only: with --server the server builds the mesh from the mesh flags");
+  }
+  if (!args.out_volume.empty()) return absl::InvalidArgumentError("--out-volume is offline only");
+  if (args.quality != "still") {
+    return absl::InvalidArgumentError("--quality interactive is offline only (Render is a still frame)");
+  }
+  if (args.size.size() != 2) return absl::InvalidArgumentError("--size takes W H");
+  if (!args.camera.empty() && args.camera.size() != 3) {
+    return absl::InvalidArgumentError("--camera takes AZ EL DIST");
+  }
+  if (args.grab.empty() && args.grab_landmark.empty() && (!args.drag.empty() || !args.pull.empty())) {
+    return absl::InvalidArgumentError("--drag and --pull need --grab or --grab-landmark");
+  }
+  ASSIGN_OR_RETURN(ServerConnection server, ServerConnection::Connect(flags));
+  ASSIGN_OR_RETURN(v1::VolumeInfo volume, LoadVolumeOnServer(server, args.source));
+  std::vector<double> grab = args.grab;
+  if (!args.grab_landmark.empty()) {
+    ASSIGN_OR_RETURN(glm::dvec3 at, FindLandmark(volume, args.grab_landmark));
+    grab = {at.x, at.y, at.z};
+  }
+  MeshFlags mesh_flags = args.mesh;
+  if (!grab.empty() && mesh_flags.refine_at.empty() && mesh_flags.refine_at_landmark.empty()) {
+    mesh_flags.refine_at = grab;
+  }
+  v1::BuildMeshRequest build;
+  build.set_volume_id(volume.volume_id());
+  ASSIGN_OR_RETURN(*build.mutable_params(), ToProtoMeshParams(mesh_flags, volume));
+  v1::MeshInfo mesh;
+  RETURN_IF_ERROR(FromGrpc(server.stub().BuildMesh(server.Context().get(), build, &mesh)));
+  v1::OpenSessionRequest open;
+  open.set_volume_id(volume.volume_id());
+  open.set_mesh_id(mesh.mesh_id());
+  v1::SessionInfo session;
+  RETURN_IF_ERROR(FromGrpc(server.stub().OpenSession(server.Context().get(), open, &session)));
+  SessionCloser closer(server, session.session_id());
+  double max_displacement_mm = 0.0;
+  if (!grab.empty()) {
+    v1::ClientEvent event;
+    *event.mutable_grab()->mutable_point_mm() = Vec3Proto(grab);
+    event.mutable_grab()->set_radius_mm(args.grab_radius);
+    RETURN_IF_ERROR(Manipulate(server, session.session_id(), event).status());
+    event.Clear();
+    if (!args.drag.empty()) *event.mutable_drag()->mutable_offset_mm() = Vec3Proto(args.drag);
+    if (!args.pull.empty()) *event.mutable_pull()->mutable_force_n() = Vec3Proto(args.pull);
+    if (event.event_case() != v1::ClientEvent::EVENT_NOT_SET) {
+      ASSIGN_OR_RETURN(v1::ManipulateResponse moved, Manipulate(server, session.session_id(), event));
+      max_displacement_mm = moved.max_displacement_mm();
+    }
+  }
+  v1::RenderRequest render;
+  render.set_session_id(session.session_id());
+  if (!args.camera.empty()) {
+    render.mutable_camera()->set_azimuth_deg(args.camera[0]);
+    render.mutable_camera()->set_elevation_deg(args.camera[1]);
+    render.mutable_camera()->set_distance_mm(args.camera[2]);
+  }
+  v1::RenderSettings* settings = render.mutable_settings();
+  settings->set_mode(args.mode);
+  settings->set_preset(args.preset);
+  settings->set_width(args.size[0]);
+  settings->set_height(args.size[1]);
+  settings->set_overlay(args.overlay);
+  settings->set_encoding(jpeg ? "jpeg" : "png");
+  settings->set_jpeg_quality(args.jpeg_quality);
+  v1::Frame frame;
+  RETURN_IF_ERROR(FromGrpc(server.stub().Render(server.Context().get(), render, &frame)));
+  RETURN_IF_ERROR(WriteFile(args.out, {frame.image().begin(), frame.image().end()}));
+  std::printf("server %s: volume %s, mesh %s (%lld vertices, %lld tets), session %s\n",
+              flags.address.c_str(), volume.volume_id().c_str(), mesh.mesh_id().c_str(),
+              static_cast<long long>(mesh.stats().vertices()),
+              static_cast<long long>(mesh.stats().tets()), session.session_id().c_str());
+  std::printf("max displacement %.2f mm\n", max_displacement_mm);
+  const v1::StageTimings& t = frame.timings();
+  std::printf("%-22s %9s\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n", "stage (server)",
+              "ms", "render (GPU)", t.render_ms(), "encode", t.encode_ms(), "queue", t.queue_ms(),
+              "total", t.total_ms());
+  std::printf("wrote %s (%dx%d, %zu bytes)\n", args.out.c_str(), frame.width(), frame.height(),
+              frame.image().size());
+  return absl::OkStatus();
+}
+
 }  // namespace
 
-void AddRenderCommand(CLI::App& app, int* exit_code) {
+void AddRenderCommand(CLI::App& app, const ServerFlags* server, int* exit_code) {
   auto a = std::make_shared<RenderArgs>();
-  CLI::App* cmd = app.add_subcommand("render", "Render one frame, optionally after a drag");
+  CLI::App* cmd = app.add_subcommand("render", "Render one frame, optionally after a drag (offline, or on --server)");
   cmd->add_option("--volume", a->source, "a file, a DICOM folder or phantom:NAME")->required();
   cmd->add_option("--mesh-json", a->mesh_json, "a mesh written by `vpm mesh --json`");
   AddMeshFlags(cmd, &a->mesh);
@@ -180,7 +310,9 @@ void AddRenderCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--jpeg-quality", a->jpeg_quality, "1..100")->capture_default_str();
   cmd->add_option("--out", a->out, "frame.png or frame.jpg")->required();
   cmd->add_option("--out-volume", a->out_volume, "also write the deformed volume (NIfTI)");
-  cmd->callback([a, exit_code] { *exit_code = ExitWith(Run(*a)); });
+  cmd->callback([server, a, exit_code] {
+    *exit_code = ExitWith(server->address.empty() ? RunOffline(*a) : RunOnServer(*server, *a));
+  });
 }
 
 }  // namespace vpm::cli

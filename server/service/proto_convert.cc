@@ -58,6 +58,14 @@ void FillMeshInfo(const MeshEntry& entry, v1::MeshInfo* info) {
   s->set_classify_ms(mesh.stats.classify_ms);
   s->set_refine_ms(mesh.stats.refine_ms);
   s->set_tetrahedralize_ms(mesh.stats.tetrahedralize_ms);
+  for (int32_t g : mesh.stats.grid) s->add_grid(g);
+  s->set_lattice_vertices(mesh.stats.lattice_vertices);
+  s->set_kept_lattice(mesh.stats.kept_lattice);
+  s->set_anchors(mesh.stats.anchors);
+  s->set_mean_min_dihedral_deg(mesh.quality.mean_min_dihedral_deg);
+  s->set_mean_radius_ratio(mesh.quality.mean_radius_ratio);
+  s->set_removed_zero_volume(mesh.quality.removed_zero_volume);
+  s->set_total_ms(mesh.stats.total_ms);
 }
 
 void FillMeshGeometry(const ProxyMesh& mesh, v1::GetMeshResponse* response) {

@@ -144,6 +144,28 @@ EOF2
 }
 streams_balanced && pass "killed client: stream released (opened == closed)" ||
   fail "killed client's stream not released"
+# The offline commands with --server: the same mesh as offline, a frame
+# rendered after a drag.
+src="phantom:abdomen?size=48"
+expect_ok "vpm --server mesh" -- --server "$addr" --token secret mesh --volume "$src" \
+  --grid 10 10 10 --target 60 --refine-at-landmark left_renal_artery --json "$tmp/remote.json"
+expect_ok "vpm mesh offline" -- mesh --volume "$src" --grid 10 10 10 --target 60 \
+  --refine-at-landmark left_renal_artery --json "$tmp/offline.json"
+python3 - "$tmp/remote.json" "$tmp/offline.json" <<'EOF2' && pass "server mesh == offline mesh" ||
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+key = lambda m: [(v["kind"], v["lattice_id"], v["hard"], [round(x, 6) for x in v["position_mm"]])
+                 for v in m["vertices"]]
+sys.exit(0 if key(a) == key(b) and a["tets"] == b["tets"] and a["tets"] else 1)
+EOF2
+  fail "the server's mesh differs from the offline mesh"
+expect_ok "vpm --server render after a drag" -- --server "$addr" --token secret render \
+  --volume "$src" --grid 10 10 10 --target 60 --grab-landmark left_renal_artery \
+  --drag 0 0 12 --size 96 96 --out "$tmp/remote.png"
+grep -q "max displacement 12.00 mm" "$tmp/out" && [ -s "$tmp/remote.png" ] &&
+  pass "render: handles moved 12 mm, frame written" || fail "render output: $(cat "$tmp/out")"
+expect_error "--out-volume with --server" INVALID_ARGUMENT -- --server "$addr" --token secret \
+  render --volume "$src" --out-volume "$tmp/x.nii" --out "$tmp/x.png"
 expect_ok "server still serves after the errors" -- --server "$addr" --token secret volume list
 if [ -n "$metrics_port" ]; then
   python3 - "$metrics_port" > "$tmp/metrics" <<'EOF' || fail "metrics endpoint did not answer"

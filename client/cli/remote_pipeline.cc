@@ -1,0 +1,143 @@
+#include "client/cli/remote_pipeline.h"
+
+namespace vpm::cli {
+namespace {
+
+glm::dvec3 FromProto(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+v1::Vec3 ToVec3(const glm::dvec3& p) {
+  v1::Vec3 v;
+  v.set_x(p.x);
+  v.set_y(p.y);
+  v.set_z(p.z);
+  return v;
+}
+
+Result<VertexKind> KindOf(const std::string& name) {
+  for (VertexKind k : {VertexKind::kLattice, VertexKind::kAnchor, VertexKind::kRefined}) {
+    if (name == VertexKindName(k)) return k;
+  }
+  return absl::DataLossError(StrCat("server sent a vertex of unknown kind '", name, "'"));
+}
+
+MeshStats StatsOf(const v1::MeshStats& s) {
+  MeshStats out;
+  for (int i = 0; i < 3 && i < s.grid_size(); ++i) out.grid[i] = s.grid(i);
+  out.lattice_vertices = s.lattice_vertices();
+  out.kept_lattice = s.kept_lattice();
+  out.anchors = s.anchors();
+  out.refined = s.refined();
+  out.hard = s.hard();
+  out.tets = s.tets();
+  out.h_mm = s.h_mm();
+  out.R_mm = s.r_mm();
+  out.evaluate_ms = s.evaluate_ms();
+  out.decimate_ms = s.decimate_ms();
+  out.classify_ms = s.classify_ms();
+  out.refine_ms = s.refine_ms();
+  out.tetrahedralize_ms = s.tetrahedralize_ms();
+  out.total_ms = s.total_ms();
+  return out;
+}
+
+}  // namespace
+
+Result<v1::VolumeInfo> LoadVolumeOnServer(const ServerConnection& server,
+                                          const std::string& source) {
+  v1::LoadVolumeRequest request;
+  request.set_source(source);
+  v1::VolumeInfo info;
+  RETURN_IF_ERROR(FromGrpc(server.stub().LoadVolume(server.Context().get(), request, &info)));
+  return info;
+}
+
+Result<glm::dvec3> FindLandmark(const v1::VolumeInfo& volume, const std::string& name) {
+  std::string names;
+  for (const v1::Landmark& l : volume.landmarks()) {
+    if (l.name() == name) return FromProto(l.position_mm());
+    names += (names.empty() ? "" : ", ") + l.name();
+  }
+  return absl::NotFoundError(StrCat("landmark '", name, "' is not in ", volume.source(),
+                                    names.empty() ? " (it has none)" : " (it has: " + names + ")"));
+}
+
+Result<v1::MeshParams> ToProtoMeshParams(const MeshFlags& f, const v1::VolumeInfo& volume) {
+  v1::MeshParams p;
+  for (int64_t g : f.grid) p.add_grid(g);
+  p.set_target(f.target);
+  p.set_footprint(f.footprint);
+  p.set_density_mode(f.density_mode);
+  p.set_wg(f.wg);
+  p.set_wd(f.wd);
+  p.set_radius_factor(f.radius_factor);
+  p.set_tf(f.tf);
+  p.set_bone_threshold(f.bone);
+  p.set_influence_threshold(f.influence_threshold);
+  p.set_influence_factor(f.influence_factor);
+  p.set_roi_factor(f.roi_factor);
+  p.set_refine_count(f.refine_count);
+  if (!f.refine_at.empty() && !f.refine_at_landmark.empty()) {
+    return absl::InvalidArgumentError("give --refine-at or --refine-at-landmark, not both");
+  }
+  if (!f.refine_at.empty()) {
+    if (f.refine_at.size() != 3) return absl::InvalidArgumentError("--refine-at takes X Y Z");
+    p.set_has_refine_at(true);
+    *p.mutable_refine_at_mm() = ToVec3({f.refine_at[0], f.refine_at[1], f.refine_at[2]});
+  }
+  if (!f.refine_at_landmark.empty()) {
+    ASSIGN_OR_RETURN(glm::dvec3 at, FindLandmark(volume, f.refine_at_landmark));
+    p.set_has_refine_at(true);
+    *p.mutable_refine_at_mm() = ToVec3(at);
+  }
+  return p;
+}
+
+Result<ProxyMesh> FetchMesh(const ServerConnection& server, const std::string& mesh_id) {
+  v1::GetMeshRequest request;
+  request.set_mesh_id(mesh_id);
+  request.set_include_geometry(true);
+  v1::GetMeshResponse response;
+  RETURN_IF_ERROR(FromGrpc(server.stub().GetMesh(server.Context().get(), request, &response)));
+  ProxyMesh mesh;
+  mesh.vertices.reserve(response.vertices_size());
+  for (const v1::MeshVertex& v : response.vertices()) {
+    MeshVertex out;
+    out.position_mm = FromProto(v.position_mm());
+    out.lattice_id = v.lattice_id();
+    ASSIGN_OR_RETURN(out.kind, KindOf(v.kind()));
+    out.hard = v.hard();
+    out.cost = v.cost();
+    mesh.vertices.push_back(out);
+  }
+  const int32_t n = static_cast<int32_t>(mesh.vertices.size());
+  for (const v1::Tet& t : response.tets()) {
+    const std::array<int32_t, 4> tet{t.a(), t.b(), t.c(), t.d()};
+    for (int32_t i : tet) {
+      if (i < 0 || i >= n) return absl::DataLossError(StrCat("server sent a tet with vertex ", i));
+    }
+    mesh.tets.push_back(tet);
+  }
+  const v1::MeshStats& s = response.info().stats();
+  mesh.stats = StatsOf(s);
+  mesh.quality.min_dihedral_deg = s.min_dihedral_deg();
+  mesh.quality.mean_min_dihedral_deg = s.mean_min_dihedral_deg();
+  mesh.quality.min_radius_ratio = s.min_radius_ratio();
+  mesh.quality.mean_radius_ratio = s.mean_radius_ratio();
+  mesh.quality.removed_zero_volume = s.removed_zero_volume();
+  return mesh;
+}
+
+Result<RemoteMesh> BuildMeshOnServer(const ServerConnection& server, const std::string& source,
+                                     const MeshFlags& flags) {
+  RemoteMesh out;
+  ASSIGN_OR_RETURN(out.volume, LoadVolumeOnServer(server, source));
+  v1::BuildMeshRequest request;
+  request.set_volume_id(out.volume.volume_id());
+  ASSIGN_OR_RETURN(*request.mutable_params(), ToProtoMeshParams(flags, out.volume));
+  RETURN_IF_ERROR(
+      FromGrpc(server.stub().BuildMesh(server.Context().get(), request, &out.info)));
+  ASSIGN_OR_RETURN(out.mesh, FetchMesh(server, out.info.mesh_id()));
+  return out;
+}
+
+}  // namespace vpm::cli

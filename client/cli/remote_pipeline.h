@@ -1,0 +1,44 @@
+// The offline commands' work sent to a vpm-server instead: `vpm --server
+// ADDR mesh ...` and `vpm --server ADDR render ...` take the same flags as
+// offline and turn them into LoadVolume / BuildMesh / GetMesh (and, for
+// render, OpenSession / Manipulate / Render / CloseSession) calls.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include <glm/glm.hpp>
+
+#include "client/cli/mesh_flags.h"
+#include "client/cli/server_connection.h"
+#include "server/common/status.h"
+#include "server/mesh/proxy_mesh.h"
+
+namespace vpm::cli {
+
+// LoadVolume: `source` is a path under the server's data root or phantom:NAME.
+Result<v1::VolumeInfo> LoadVolumeOnServer(const ServerConnection& server,
+                                          const std::string& source);
+
+// The mesh flags as the API's MeshParams; --refine-at-landmark is resolved
+// with the landmarks the server reports for `volume` (NOT_FOUND if absent).
+Result<v1::MeshParams> ToProtoMeshParams(const MeshFlags& flags, const v1::VolumeInfo& volume);
+
+// A named landmark of `volume` (physical voxel space, mm); NOT_FOUND lists
+// the volume's landmarks.
+Result<glm::dvec3> FindLandmark(const v1::VolumeInfo& volume, const std::string& name);
+
+// GetMesh with geometry, as the ProxyMesh the offline commands write (voxel
+// indices are not sent by the API and stay 0).
+Result<ProxyMesh> FetchMesh(const ServerConnection& server, const std::string& mesh_id);
+
+// LoadVolume + BuildMesh + FetchMesh.
+struct RemoteMesh {
+  v1::VolumeInfo volume;
+  v1::MeshInfo info;
+  ProxyMesh mesh;
+};
+Result<RemoteMesh> BuildMeshOnServer(const ServerConnection& server, const std::string& source,
+                                     const MeshFlags& flags);
+
+}  // namespace vpm::cli
