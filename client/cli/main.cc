@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 
 #include "client/cli/compare_meshes_command.h"
+#include "client/cli/health_command.h"
 #include "client/cli/mesh_command.h"
 #include "client/cli/render_command.h"
 #include "client/cli/server_commands.h"
@@ -18,6 +19,7 @@ int main(int argc, char** argv) {
   vpm::cli::AddCompareMeshesCommand(app, &exit_code);
   vpm::cli::AddRenderCommand(app, &server_flags, &exit_code);
   vpm::cli::AddServerCommands(app, &server_flags, &exit_code);
+  vpm::cli::AddHealthCommand(app, &server_flags, &exit_code);
   CLI11_PARSE(app, argc, argv);
   return exit_code;
 }
