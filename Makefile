@@ -1,17 +1,22 @@
 # vpm: the two commands a new user runs are `make demo` and `make test`.
-# Both install missing Debian packages (scripts/install-deps.sh), configure
-# and build first.
+# Both install missing Debian packages (scripts/install-deps.sh) and the web
+# viewer's npm packages (scripts/install-web.sh), configure and build first.
+# `make serve` starts vpm-server and the web viewer's gateway.
 BUILD_DIR ?= build
 BUILD_TYPE ?= RelWithDebInfo
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build test demo bench fuzz clean format
+.PHONY: all deps web-deps configure build test demo serve bench fuzz clean format
 
 all: build
 
 deps:
 	@scripts/install-deps.sh
+
+# npm ci of client/web from its lockfile; skipped when already current.
+web-deps: deps
+	@scripts/install-web.sh
 
 configure: deps
 	@cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) $(CMAKE_FLAGS) >/dev/null
@@ -20,11 +25,14 @@ configure: deps
 build: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS)
 
-test: build
+test: build web-deps
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS) --timeout 600
 
-demo: build
+demo: build web-deps
 	@scripts/demo.sh $(BUILD_DIR)
+
+serve: build web-deps
+	@scripts/serve.sh $(BUILD_DIR)
 
 bench: build
 	@scripts/bench.sh $(BUILD_DIR)

@@ -92,17 +92,17 @@ export async function startServer({ build, out, token, port = 0, logName = 'serv
   return { child, port: Number(m[1]), address: `127.0.0.1:${m[1]}` };
 }
 
-// The gateway on an ephemeral port, talking to `serverAddress` with `token`;
-// resolves with {child, url}.
-export async function startGateway({ source, out, serverAddress, token,
+// The gateway on 127.0.0.1:port (0: ephemeral), talking to `serverAddress`
+// with `token`; resolves with {child, url, port}.
+export async function startGateway({ source, out, serverAddress, token, port = 0,
                                      logName = 'gateway.log' }) {
   const child = track(spawn(process.execPath, [
     path.join(source, 'client', 'web', 'gateway.js'),
-    '--listen', '127.0.0.1:0', '--server', serverAddress], {
+    '--listen', `127.0.0.1:${port}`, '--server', serverAddress], {
     env: { ...process.env, VPM_TOKEN: token }, stdio: ['ignore', 'pipe', 'pipe'] }));
-  const m = await waitForLine(child, /vpm-web listening on (http:\/\/\S+)/, 'the gateway', 15000,
-                              path.join(out, logName));
-  return { child, url: m[1] };
+  const m = await waitForLine(child, /vpm-web listening on (http:\/\/\S+:(\d+)\/)/, 'the gateway',
+                              15000, path.join(out, logName));
+  return { child, url: m[1], port: Number(m[2]) };
 }
 
 // A port nothing listens on (bound, then released).

@@ -2,15 +2,17 @@
 import { GrpcStatus, statusName } from './vpm_client.js';
 
 // err: a grpc-js error (code, details); what: the action that failed, e.g.
-// "Loading phantom:abdomen"; address: the server's HOST:PORT.
+// "Loading phantom:abdomen" (null: none in particular); address: the
+// server's HOST:PORT.
 export function explainError(err, what, address) {
   const details = err?.details || err?.message || String(err);
+  const prefix = what ? `${what}: ` : '';
   switch (err?.code) {
     case GrpcStatus.UNAVAILABLE:
-      return `vpm-server at ${address} is not reachable (${details}). ` +
+      return `${prefix}vpm-server at ${address} is not reachable (${details}). ` +
         'Is it running? The viewer retries on its own.';
     case GrpcStatus.DEADLINE_EXCEEDED:
-      return `${what}: vpm-server at ${address} did not answer in time.`;
+      return `${prefix}vpm-server at ${address} did not answer in time.`;
     case GrpcStatus.UNAUTHENTICATED:
       return `vpm-server refused the gateway's token (${details}). ` +
         'Start the gateway with VPM_TOKEN set to the server\'s token.';

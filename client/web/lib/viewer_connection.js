@@ -104,7 +104,7 @@ export class ViewerConnection {
     if (this.serverUp !== false) {
       this.serverUp = false;
       this.send({ type: 'server', up: false,
-                  message: explainError(err, 'Reaching the server', this.client.address) });
+                  message: explainError(err, null, this.client.address) });
     }
     if (this.probeTimer === null) {
       this.probeTimer = setTimeout(() => this.probe(), this.probeBackoff.next());
