@@ -167,3 +167,16 @@ export async function settled(page, extra = 'true', timeoutMs = 20000) {
   });
   return page.evaluate(() => window.vpmViewer.lastHeader);
 }
+
+// Runs a scenario's main(): prints "NAME: PASS", or the failure and exits 1;
+// either way stops every child started.
+export function runScenario(name, main) {
+  main()
+    .then(() => stopAll())
+    .then(() => console.log(`${name}: PASS`))
+    .catch(async (e) => {
+      console.error(`${name}: FAIL: ${e.stack ?? e}`);
+      await stopAll();
+      process.exit(1);
+    });
+}

@@ -13,7 +13,7 @@ import path from 'node:path';
 
 import {
   canvasGrey, closedPort, launchBrowser, randomToken, settled, startGateway, startServer,
-  stopAll, stopChild, testPaths,
+  runScenario, stopChild, testPaths,
 } from './harness.mjs';
 
 const { build, source, out } = testPaths(process.argv);
@@ -91,11 +91,4 @@ async function main() {
   await browser.close();
 }
 
-main()
-  .then(() => stopAll())
-  .then(() => step('PASS'))
-  .catch(async (e) => {
-    console.error(`web_server_down: FAIL: ${e.stack ?? e}`);
-    await stopAll();
-    process.exit(1);
-  });
+runScenario('web_server_down', main);

@@ -14,7 +14,9 @@
 //          'session_lost'|'error', ...}
 // The camera is the session's on the server, render settings the stream's:
 // the gateway remembers the last of each the browser sent and replays them
-// (sequence 0) on every new stream, so reconnecting and refining keep the view.
+// on every new stream, so reconnecting and refining keep the view. Replays
+// carry the browser's last sequence, so frames of the new stream report
+// what the browser has sent as shown.
 import { Backoff } from '../public/backoff.js';
 import { explainError } from './explain_error.js';
 import { packFrame } from './frame_packet.js';
@@ -33,6 +35,7 @@ export class ViewerConnection {
     this.session = null;
     this.settings = null;   // last RenderSettings the browser sent
     this.camera = null;     // last Camera the browser sent
+    this.lastSequence = 0;  // newest event sequence the browser sent
     this.call = null;       // the Interact call
     this.streamGen = 0;     // ignores callbacks of replaced streams
     this.barrenRestarts = 0;
@@ -232,9 +235,10 @@ export class ViewerConnection {
     call.on('end', () => {
       if (gen === this.streamGen) this.call = null;
     });
+    const sequence = this.lastSequence;
     call.write({ session_id: this.session.session_id,
-                 event: { sequence: 0, settings: this.settings ?? {} } });
-    if (this.camera) call.write({ event: { sequence: 0, camera: this.camera } });
+                 event: { sequence, settings: this.settings ?? {} } });
+    if (this.camera) call.write({ event: { sequence, camera: this.camera } });
     this.send({ type: 'stream', state: 'open', session_id: this.session.session_id });
   }
 
@@ -273,6 +277,7 @@ export class ViewerConnection {
       this.send({ type: 'error', what: 'Event', message: 'event: missing' });
       return;
     }
+    this.lastSequence = Math.max(this.lastSequence, Number(event.sequence) || 0);
     if (event.settings) this.settings = event.settings;
     if (event.camera) this.camera = event.camera;
     if (!this.session) {
