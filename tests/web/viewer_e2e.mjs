@@ -2,8 +2,9 @@
 // ports, the page opens the 128^3 phantom at 256 x 256, the first frame is
 // not blank, an orbit drag changes it, a grab-and-drag deforms the tissue
 // (the server reports max_displacement_mm > 0 and the still frame while
-// holding differs from the one before), release brings it back, the token
-// never reaches the browser, and stopping the server shows a clear message.
+// holding differs from the one before), release brings it back, refine,
+// zoom and MIP work, the token never reaches the browser, stopping the
+// server shows a clear message, and restarting it brings the view back.
 // Usage: node viewer_e2e.mjs --build BUILD --source SOURCE
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
@@ -200,6 +201,22 @@ async function main() {
   step(`server stopped; the page says: ${downMessage}`);
   assert.match(downMessage, /vpm-server at 127\.0\.0\.1:\d+ is not reachable/);
   assert.equal(await page.getAttribute('#server-state', 'data-state'), 'down');
+
+  // It comes back on the same port with nothing loaded: the session is
+  // gone (NOT_FOUND), and the page reopens the same source by itself.
+  const framesBefore = await page.evaluate(() => window.vpmViewer.framesReceived);
+  const tRestart = performance.now();
+  await startServer({ build, out, token, port: server.port, logName: 'server_restarted.log' });
+  await page.waitForFunction((n) => window.vpmViewer.framesReceived > n, framesBefore,
+                             { timeout: 60000, polling: 100 });
+  await settled(page, '!h.interactive', 60000);
+  figures.recovered_after_restart_ms = Math.round(performance.now() - tRestart);
+  const reopened = await page.evaluate(() => window.vpmViewer.volume.source);
+  step(`server restarted: the page reopened ${reopened} and shows frames after ` +
+       `${figures.recovered_after_restart_ms} ms`);
+  assert.equal(reopened, 'phantom:abdomen?size=128');
+  await page.screenshot({ path: path.join(out, 'web_viewer_recovered.png') });
+  assert.equal(await page.getAttribute('#server-state', 'data-state'), 'up');
 
   figures.total_ms = Math.round(performance.now() - t0);
   fs.writeFileSync(path.join(out, 'viewer_e2e.json'), JSON.stringify(figures, null, 2));
