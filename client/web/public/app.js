@@ -77,9 +77,9 @@ function settings() {
 
 function openVolume() {
   const sameVolume = state.camera && state.intent.source === state.volume?.source;
-  state.opening = true;
-  socket.send({ type: 'open', ...state.intent, settings: settings(),
-                camera: sameVolume ? state.camera.toProto() : null });
+  // Unsent while the gateway is away; its reconnection reopens.
+  state.opening = socket.send({ type: 'open', ...state.intent, settings: settings(),
+                                camera: sameVolume ? state.camera.toProto() : null });
 }
 
 function refineAt(pointMm) {
@@ -226,7 +226,6 @@ $('open').addEventListener('click', () => {
   const value = rest.join(':');
   applyFrameSize();
   state.intent = kind === 'volume' ? { volume_id: value } : { source: value };
-  if (!socket.send({ type: 'list' })) return;  // the socket's message says why
   openVolume();
 });
 $('refresh').addEventListener('click', () => socket.send({ type: 'list' }));
