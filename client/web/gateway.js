@@ -6,8 +6,10 @@
 //
 //   node gateway.js [--listen HOST:PORT] [--server HOST:PORT] [--proto FILE]
 //
-// --listen defaults to 127.0.0.1:8080 (port 0 picks a free one); --server to
-// 127.0.0.1:50051. Prints "vpm-web listening on http://HOST:PORT/" once ready.
+// --listen defaults to $VPM_WEB_LISTEN or 127.0.0.1:8080 (port 0 picks a
+// free one); --server to $VPM_SERVER or 127.0.0.1:50051. Prints
+// "vpm-web listening on http://HOST:PORT/" once ready. GET /healthz answers
+// 200 while the gateway runs (whether or not vpm-server is up).
 import http from 'node:http';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -32,15 +34,16 @@ function parseOptions(argv) {
   const { values } = parseArgs({
     args: argv,
     options: {
-      listen: { type: 'string', default: '127.0.0.1:8080' },
-      server: { type: 'string', default: '127.0.0.1:50051' },
+      listen: { type: 'string', default: process.env.VPM_WEB_LISTEN || '127.0.0.1:8080' },
+      server: { type: 'string', default: process.env.VPM_SERVER || '127.0.0.1:50051' },
       proto: { type: 'string', default: kDefaultProtoPath },
       help: { type: 'boolean', default: false },
     },
   });
   if (values.help) {
     process.stdout.write('usage: node gateway.js [--listen HOST:PORT] [--server HOST:PORT] ' +
-                         '[--proto vpm.proto]\n  the token for vpm-server comes from VPM_TOKEN\n');
+                         '[--proto vpm.proto]\n  the token for vpm-server comes from VPM_TOKEN; ' +
+                         'VPM_WEB_LISTEN and VPM_SERVER set the defaults of --listen and --server\n');
     process.exit(0);
   }
   splitHostPort(values.server, '--server');
@@ -70,7 +73,14 @@ function main() {
   const client = new VpmClient({
     address: options.server, token: process.env.VPM_TOKEN ?? '', protoPath: options.proto });
   const log = (line) => process.stderr.write(`vpm-web: ${line}\n`);
-  const server = http.createServer(staticHandler(path.join(here, 'public')));
+  const serveFile = staticHandler(path.join(here, 'public'));
+  const server = http.createServer((req, res) => {
+    if (req.url === '/healthz') {
+      res.writeHead(200, { 'Content-Type': 'text/plain' }).end('ok\n');
+    } else {
+      serveFile(req, res);
+    }
+  });
   const wss = new WebSocketServer({
     server, path: '/ws', maxPayload: kMaxControlMessageBytes, verifyClient: sameOrigin });
   wss.on('connection', (ws) => new ViewerConnection({ ws, client, log }));

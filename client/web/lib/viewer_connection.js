@@ -17,6 +17,8 @@
 // on every new stream, so reconnecting and refining keep the view. Replays
 // carry the browser's last sequence, so frames of the new stream report
 // what the browser has sent as shown.
+import crypto from 'node:crypto';
+
 import { Backoff } from '../public/backoff.js';
 import { explainError } from './explain_error.js';
 import { packFrame } from './frame_packet.js';
@@ -30,6 +32,7 @@ export class ViewerConnection {
   // ws: a `ws` WebSocket; client: a VpmClient; log: (line) => void.
   constructor({ ws, client, log = () => {} }) {
     Object.assign(this, { ws, client, log });
+    this.affinity = crypto.randomUUID();  // x-vpm-session of every call of this tab
     this.volume = null;
     this.mesh = null;
     this.session = null;
@@ -52,6 +55,10 @@ export class ViewerConnection {
     ws.on('close', () => this.onClose());
     this.send({ type: 'hello', server: client.address });
     this.probe();
+  }
+
+  rpc(method, request) {
+    return this.client.call(method, request, this.affinity);
   }
 
   send(message) {
@@ -93,7 +100,7 @@ export class ViewerConnection {
     this.probeTimer = null;
     if (this.closed) return;
     try {
-      const { volumes } = await this.client.call('ListVolumes', {});
+      const { volumes } = await this.rpc('ListVolumes', {});
       this.serverUpAgain();
       this.send({ type: 'volumes', volumes });
     } catch (err) {
@@ -127,7 +134,7 @@ export class ViewerConnection {
 
   async listVolumes() {
     try {
-      const { volumes } = await this.client.call('ListVolumes', {});
+      const { volumes } = await this.rpc('ListVolumes', {});
       this.serverUpAgain();
       this.send({ type: 'volumes', volumes });
     } catch (err) {
@@ -147,14 +154,14 @@ export class ViewerConnection {
     const what = volumeId ? `Opening volume ${volumeId}` : `Loading ${source}`;
     try {
       this.send({ type: 'progress', step: 'volume', text: `${what} ...` });
-      const volume = volumeId ? await this.client.call('GetVolume', { volume_id: volumeId })
+      const volume = volumeId ? await this.rpc('GetVolume', { volume_id: volumeId })
                               : await this.loadOrReuse(source);
       if (op !== this.openOp) return;
       this.send({ type: 'progress', step: 'mesh', text: 'Building the proxy mesh ...' });
-      const mesh = await this.client.call('BuildMesh', { volume_id: volume.volume_id });
+      const mesh = await this.rpc('BuildMesh', { volume_id: volume.volume_id });
       if (op !== this.openOp) return;
       this.send({ type: 'progress', step: 'session', text: 'Opening a session ...' });
-      const session = await this.client.call('OpenSession', {
+      const session = await this.rpc('OpenSession', {
         volume_id: volume.volume_id, mesh_id: mesh.mesh_id });
       if (op !== this.openOp || this.closed) {
         this.closeSession(session);
@@ -171,9 +178,9 @@ export class ViewerConnection {
 
   async loadOrReuse(source) {
     if (!source) throw Object.assign(new Error('no source given'), { details: 'source: required' });
-    const { volumes } = await this.client.call('ListVolumes', {});
+    const { volumes } = await this.rpc('ListVolumes', {});
     return volumes.find((v) => v.source === source) ??
-      await this.client.call('LoadVolume', { source });
+      await this.rpc('LoadVolume', { source });
   }
 
   // RefineMesh makes a new mesh (meshes are immutable), so the view moves to
@@ -187,10 +194,10 @@ export class ViewerConnection {
     const what = 'Refining the mesh';
     try {
       this.send({ type: 'progress', step: 'refine', text: `${what} ...` });
-      const mesh = await this.client.call('RefineMesh', {
+      const mesh = await this.rpc('RefineMesh', {
         mesh_id: this.mesh.mesh_id, point_mm: pointMm });
       if (op !== this.openOp) return;
-      const session = await this.client.call('OpenSession', {
+      const session = await this.rpc('OpenSession', {
         volume_id: this.volume.volume_id, mesh_id: mesh.mesh_id });
       if (op !== this.openOp || this.closed) {
         this.closeSession(session);
@@ -208,7 +215,7 @@ export class ViewerConnection {
 
   closeSession(session) {
     if (!session) return;
-    this.client.call('CloseSession', { session_id: session.session_id })
+    this.rpc('CloseSession', { session_id: session.session_id })
       .catch((err) => this.log(`CloseSession ${session.session_id}: ${err.details ?? err}`));
   }
 
@@ -217,7 +224,7 @@ export class ViewerConnection {
   startStream() {
     this.stopStream();
     const gen = ++this.streamGen;
-    const call = this.client.interact();
+    const call = this.client.interact(this.affinity);
     this.call = call;
     let framed = false;
     call.on('data', (frame) => {

@@ -55,18 +55,23 @@ export class VpmClient {
     this.stub = new Vpm(address, grpc.credentials.createInsecure(), kChannelOptions);
   }
 
-  metadata() {
+  // affinity: a key for `x-vpm-session`, on which a consistent-hash router
+  // (Envoy in docker/) picks the replica; every call of one browser tab
+  // carries the same key, so its volume, mesh, session and stream stay on
+  // one server.
+  metadata(affinity) {
     const md = new grpc.Metadata();
     if (this.token) md.set('authorization', `Bearer ${this.token}`);
+    if (affinity) md.set('x-vpm-session', affinity);
     return md;
   }
 
   // One unary call: resolves with the response, rejects with the gRPC error
   // (err.code, err.details).
-  call(method, request) {
+  call(method, request, affinity = '') {
     const deadline = new Date(Date.now() + (kDeadlineMs[method] ?? 30000));
     return new Promise((resolve, reject) => {
-      this.stub[method](request, this.metadata(), { deadline }, (err, response) => {
+      this.stub[method](request, this.metadata(affinity), { deadline }, (err, response) => {
         if (err) reject(err);
         else resolve(response);
       });
@@ -74,8 +79,8 @@ export class VpmClient {
   }
 
   // The bidirectional Interact stream (events in, frames out).
-  interact() {
-    return this.stub.Interact(this.metadata());
+  interact(affinity = '') {
+    return this.stub.Interact(this.metadata(affinity));
   }
 
   close() {
