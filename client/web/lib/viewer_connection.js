@@ -295,6 +295,9 @@ export class ViewerConnection {
       return;
     }
     if (!this.call) {
+      // While the server is down the probe reopens the stream; events
+      // meanwhile would only fail again (the page already says why).
+      if (this.serverUp === false) return;
       this.barrenRestarts = 0;
       this.startStream();
       if (event.settings || event.camera) return;  // replayed by startStream
