@@ -17,6 +17,7 @@ struct LatticeCostsPush {
   ivec4 dims;             // (nx, ny, nz, 0) voxels
   ivec4 grid;             // (Gx, Gy, Gz, 0) lattice vertices
   vec4 inv_two_spacing;   // (1/(2 sx), 1/(2 sy), 1/(2 sz), 0) 1/mm
+  ivec4 chunk;            // (z0, z1, cz0, cz1): voxel slices and cell layers of this pass
 };
 
 // Ray casting (server/render).

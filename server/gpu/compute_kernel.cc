@@ -21,8 +21,7 @@ Result<ComputeKernel> ComputeKernel::Create(const GpuContext& context, KernelSpe
     return absl::InvalidArgumentError(
         absl::StrCat("kernel ", spec.name, ": ", invocations, " invocations per workgroup"));
   }
-  if (spec.push_constant_bytes > limits.maxPushConstantsSize ||
-      spec.push_constant_bytes % 4 != 0) {
+  if (spec.push_constant_bytes > limits.maxPushConstantsSize || spec.push_constant_bytes % 4 != 0) {
     return absl::InvalidArgumentError(absl::StrCat(
         "kernel ", spec.name, ": push constants of ", spec.push_constant_bytes,
         " bytes (must be a multiple of 4, at most ", limits.maxPushConstantsSize, ")"));
@@ -40,9 +39,17 @@ Result<ComputeKernel> ComputeKernel::Create(const GpuContext& context, KernelSpe
     if (spec.push_constant_bytes > 0) layout_info.setPushConstantRanges(range);
     k.layout_ = vk::raii::PipelineLayout(context.device(), layout_info);
     k.module_ = vk::raii::ShaderModule(
-        context.device(), vk::ShaderModuleCreateInfo({}, spec.spirv.size_bytes(), spec.spirv.data()));
+        context.device(),
+        vk::ShaderModuleCreateInfo({}, spec.spirv.size_bytes(), spec.spirv.data()));
+    std::vector<vk::SpecializationMapEntry> entries;
+    for (uint32_t i = 0; i < spec.specialization.size(); ++i) {
+      entries.emplace_back(i, i * uint32_t(sizeof(uint32_t)), sizeof(uint32_t));
+    }
+    const vk::SpecializationInfo specialization(uint32_t(entries.size()), entries.data(),
+                                                spec.specialization.size() * sizeof(uint32_t),
+                                                spec.specialization.data());
     vk::PipelineShaderStageCreateInfo stage({}, vk::ShaderStageFlagBits::eCompute, *k.module_,
-                                            "main");
+                                            "main", entries.empty() ? nullptr : &specialization);
     k.pipeline_ = vk::raii::Pipeline(context.device(), nullptr,
                                      vk::ComputePipelineCreateInfo({}, stage, *k.layout_));
   }));

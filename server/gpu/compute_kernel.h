@@ -16,11 +16,14 @@
 namespace vpm::gpu {
 
 struct KernelSpec {
-  std::string name;                          // for messages and timings
-  std::span<const uint32_t> spirv;           // the embedded k<Name>Spv array
-  std::vector<vk::DescriptorType> bindings;  // set 0, binding i
-  uint32_t push_constant_bytes = 0;          // sizeof the mirrored push struct
+  std::string name;                             // for messages and timings
+  std::span<const uint32_t> spirv;              // the embedded k<Name>Spv array
+  std::vector<vk::DescriptorType> bindings;     // set 0, binding i
+  uint32_t push_constant_bytes = 0;             // sizeof the mirrored push struct
   std::array<uint32_t, 3> local_size{1, 1, 1};  // must equal the shader's local_size
+  // 32-bit specialization constants: constant_id i takes specialization[i]
+  // (a shader's defaults apply to ids past the end).
+  std::vector<uint32_t> specialization;
 };
 
 class ComputeKernel {

@@ -23,16 +23,18 @@ struct VoxelMapPush {
 };
 static_assert(sizeof(VoxelMapPush) == 16);
 
-// lattice_costs.comp: one workgroup per lattice vertex (cell).
+// lattice_costs_rows.comp and lattice_costs_cells.comp (step 1, two passes).
 struct LatticeCostsPush {
   glm::ivec4 dims;             // (nx, ny, nz, 0) voxels
   glm::ivec4 grid;             // (Gx, Gy, Gz, 0) lattice vertices
   glm::vec4 inv_two_spacing;   // (1/(2 sx), 1/(2 sy), 1/(2 sz), 0) 1/mm
+  glm::ivec4 chunk;            // (z0, z1, cz0, cz1): voxel slices and cell layers of this pass
 };
-static_assert(sizeof(LatticeCostsPush) == 48);
+static_assert(sizeof(LatticeCostsPush) == 64);
 
 // Uniform block TransferFunctionBlock (std140): control points (value, cost)
-// sorted by value in points[i].xy, count in count.x.
+// sorted by value in points[i].xy, the slope of the segment ending at point i
+// in points[i].z (0 for i = 0 and for steps), count in count.x.
 inline constexpr int kMaxTfPoints = 32;
 struct TransferFunctionBlock {
   glm::vec4 points[kMaxTfPoints];

@@ -1,7 +1,14 @@
-// Step 1 on the GPU (shaders/lattice_costs.comp): Ci and g of every lattice
-// vertex for both footprints, in one dispatch and one readback.
+// Step 1 on the GPU: Ci and g of every lattice vertex for both footprints.
+// Two passes (shaders/lattice_costs_rows.comp: sum of TF and max |grad|^2
+// per voxel-row segment of a cell; shaders/lattice_costs_cells.comp: those
+// reduced per cell, plus the point footprint), in one submit and one
+// readback.
 // CPU reference: EvaluateLatticeCostsCpu (lattice_costs.h).
 #pragma once
+
+#include <map>
+#include <memory>
+#include <mutex>
 
 #include "server/common/status.h"
 #include "server/gpu/compute_kernel.h"
@@ -14,18 +21,36 @@ namespace vpm {
 
 class LatticeCostsGpu {
  public:
-  static Result<LatticeCostsGpu> Create(const gpu::GpuContext& context);
+  // Row partials (8 bytes each) held at once; more go in chunks of cell
+  // layers (a small budget in tests exercises the chunked path).
+  static constexpr size_t kDefaultPartialsBudgetBytes = size_t{64} << 20;
+
+  static Result<LatticeCostsGpu> Create(const gpu::GpuContext& context,
+                                        size_t partials_budget_bytes = kDefaultPartialsBudgetBytes);
 
   // `lattice` must be built on the geometry of `volume`. gpu_ms, when given,
-  // receives the kernel's GPU time.
+  // receives the kernels' GPU time.
   Result<LatticeCosts> Evaluate(const GpuVolume& volume, const Lattice& lattice,
                                 const TransferFunction& tf, double* gpu_ms = nullptr) const;
 
  private:
-  LatticeCostsGpu(const gpu::GpuContext& context, gpu::ComputeKernel kernel)
-      : context_(&context), kernel_(std::move(kernel)) {}
+  // The two kernels, specialized for a transfer function of `tf_points`
+  // points (docs/MESH.md: the TF loop unrolls).
+  struct Kernels {
+    gpu::ComputeKernel rows;
+    gpu::ComputeKernel cells;
+  };
+  LatticeCostsGpu(const gpu::GpuContext& context, size_t partials_budget_bytes)
+      : context_(&context),
+        partials_budget_bytes_(partials_budget_bytes),
+        mutex_(std::make_unique<std::mutex>()) {}
+  // Built on first use and kept; safe to call from several threads.
+  Result<const Kernels*> KernelsFor(int tf_points) const;
+
   const gpu::GpuContext* context_;
-  gpu::ComputeKernel kernel_;
+  size_t partials_budget_bytes_;
+  std::unique_ptr<std::mutex> mutex_;
+  mutable std::map<int, std::unique_ptr<Kernels>> kernels_;  // by TF point count
 };
 
 }  // namespace vpm

@@ -13,7 +13,15 @@ Result<gpu::TransferFunctionBlock> MakeTransferFunctionBlock(const TransferFunct
   }
   gpu::TransferFunctionBlock block{};
   for (size_t i = 0; i < points.size(); ++i) {
-    block.points[i] = glm::vec4(float(points[i].value), float(points[i].cost), 0.0f, 0.0f);
+    // z: slope (cost per value unit) of the segment ending at point i,
+    // computed once here in double instead of a divide per voxel and
+    // segment in the shader; 0 for i = 0 and for steps (zero width).
+    double slope = 0.0;
+    if (i > 0 && points[i].value > points[i - 1].value) {
+      slope = (points[i].cost - points[i - 1].cost) / (points[i].value - points[i - 1].value);
+    }
+    block.points[i] =
+        glm::vec4(float(points[i].value), float(points[i].cost), float(slope), 0.0f);
   }
   block.count = glm::ivec4(static_cast<int>(points.size()), 0, 0, 0);
   return block;
