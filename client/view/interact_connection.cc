@@ -1,0 +1,310 @@
+#include "client/view/interact_connection.h"
+
+#include <cstdio>
+
+namespace vpm::view {
+namespace {
+
+std::string Describe(const Status& status) {
+  if (absl::IsUnavailable(status)) return StrCat("connection lost: ", status.message());
+  return StrCat(absl::StatusCodeToString(status.code()), ": ", status.message());
+}
+
+Result<DecodedImage> Decode(const v1::Frame& frame) {
+  std::span<const uint8_t> bytes(reinterpret_cast<const uint8_t*>(frame.image().data()),
+                                 frame.image().size());
+  if (frame.encoding() == "png") return DecodePng(bytes);
+  return DecodeJpeg(bytes);
+}
+
+}  // namespace
+
+InteractConnection::InteractConnection(ConnectionOptions options, std::function<void()> wake)
+    : options_(std::move(options)), wake_(std::move(wake)) {
+  state_.session_id = options_.session_id;
+  state_.message = StrCat("connecting to ", options_.server.address, " ...");
+}
+
+InteractConnection::~InteractConnection() { Stop(); }
+
+void InteractConnection::Start() { thread_ = std::thread([this] { Run(); }); }
+
+void InteractConnection::Stop() {
+  stopping_ = true;
+  events_.Close();
+  CancelStream();
+  if (thread_.joinable()) thread_.join();
+}
+
+void InteractConnection::Send(const v1::ClientEvent& event) {
+  {
+    std::lock_guard lock(mutex_);
+    if (event.has_settings()) settings_ = event.settings();
+    if (event.has_camera()) camera_ = event.camera();
+  }
+  events_.Push(event);
+}
+
+void InteractConnection::RefineAt(const glm::dvec3& point_mm) {
+  {
+    std::lock_guard lock(mutex_);
+    refine_at_mm_ = point_mm;
+  }
+  CancelStream();
+}
+
+std::optional<ShownFrame> InteractConnection::TakeFrame() {
+  std::lock_guard lock(mutex_);
+  std::optional<ShownFrame> frame = std::move(newest_);
+  newest_.reset();
+  return frame;
+}
+
+ConnectionState InteractConnection::state() const {
+  std::lock_guard lock(mutex_);
+  return state_;
+}
+
+void InteractConnection::SetState(bool connected, std::string message) {
+  {
+    std::lock_guard lock(mutex_);
+    if (state_.connected == connected && state_.message == message) return;
+    state_.connected = connected;
+    state_.message = std::move(message);
+  }
+  if (!connected) std::fprintf(stderr, "vpm-view: %s\n", state().message.c_str());
+  wake_();
+}
+
+void InteractConnection::CancelStream() {
+  std::lock_guard lock(mutex_);
+  if (context_ != nullptr) context_->TryCancel();
+}
+
+void InteractConnection::Run() {
+  auto server = cli::ServerConnection::Connect(options_.server);
+  if (!server.ok()) return SetState(false, Describe(server.status()));
+  server_ = std::move(*server);
+  int attempt = 0;
+  while (!stopping_) {
+    std::optional<glm::dvec3> refine;
+    {
+      std::lock_guard lock(mutex_);
+      refine = refine_at_mm_;
+      refine_at_mm_.reset();
+    }
+    Status status = refine ? Refine(*refine) : ResolveSession();
+    if (status.ok()) status = StreamOnce();
+    if (stopping_) break;
+    bool refine_pending;
+    {
+      std::lock_guard lock(mutex_);
+      refine_pending = refine_at_mm_.has_value();
+    }
+    if (refine_pending) continue;  // the stream was ended to refine: no wait
+    // A stream that delivered frames resets the backoff.
+    if (state().connected) attempt = 0;
+    const double wait_s = ReconnectBackoffS(attempt++);
+    SetState(false, StrCat(Describe(status.ok() ? absl::UnavailableError("the server ended the "
+                                                                          "stream")
+                                                : status),
+                           "; reconnecting in ", wait_s, " s (attempt ", attempt, ")"));
+    const auto until = Clock::now() + std::chrono::duration<double>(wait_s);
+    while (!stopping_ && Clock::now() < until) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  }
+}
+
+// Joins the remembered session if the server still has it; otherwise loads
+// the volume and opens a new one.
+Status InteractConnection::ResolveSession() {
+  std::string session_id = state().session_id;
+  if (!session_id.empty()) {
+    v1::ListSessionsResponse sessions;
+    auto context = server_->Context();
+    RETURN_IF_ERROR(cli::FromGrpc(server_->stub().ListSessions(context.get(), {}, &sessions)));
+    for (const v1::SessionInfo& s : sessions.sessions()) {
+      if (s.session_id() != session_id) continue;
+      v1::GetVolumeRequest get;
+      get.set_volume_id(s.volume_id());
+      v1::VolumeInfo volume;
+      auto volume_context = server_->Context();
+      RETURN_IF_ERROR(cli::FromGrpc(server_->stub().GetVolume(volume_context.get(), get, &volume)));
+      std::lock_guard lock(mutex_);
+      state_.volume = volume;
+      state_.mesh_id = s.mesh_id();
+      return absl::OkStatus();
+    }
+    if (options_.volume_source.empty()) {
+      return absl::NotFoundError(StrCat("session '", session_id,
+                                        "' is gone and no --volume was given to open a new one"));
+    }
+  }
+  if (options_.volume_source.empty()) {
+    return absl::InvalidArgumentError("give --session ID or --volume SRC");
+  }
+  SetState(false, StrCat("loading ", options_.volume_source, " ..."));
+  v1::LoadVolumeRequest load;
+  load.set_source(options_.volume_source);
+  v1::VolumeInfo volume;
+  auto load_context = server_->Context();
+  RETURN_IF_ERROR(cli::FromGrpc(server_->stub().LoadVolume(load_context.get(), load, &volume)));
+  SetState(false, "opening a session (building the proxy mesh) ...");
+  v1::OpenSessionRequest open;
+  open.set_volume_id(volume.volume_id());
+  v1::SessionInfo session;
+  auto open_context = server_->Context();
+  RETURN_IF_ERROR(cli::FromGrpc(server_->stub().OpenSession(open_context.get(), open, &session)));
+  std::lock_guard lock(mutex_);
+  state_.volume = volume;
+  state_.session_id = session.session_id();
+  state_.mesh_id = session.mesh_id();
+  session_opened_here_ = true;
+  return absl::OkStatus();
+}
+
+Status InteractConnection::Refine(const glm::dvec3& point_mm) {
+  ConnectionState before = state();
+  if (!before.volume || before.mesh_id.empty()) return ResolveSession();
+  SetState(false, StrCat("refining the mesh at (", point_mm.x, ", ", point_mm.y, ", ",
+                         point_mm.z, ") mm ..."));
+  v1::RefineMeshRequest refine;
+  refine.set_mesh_id(before.mesh_id);
+  refine.mutable_point_mm()->set_x(point_mm.x);
+  refine.mutable_point_mm()->set_y(point_mm.y);
+  refine.mutable_point_mm()->set_z(point_mm.z);
+  v1::MeshInfo mesh;
+  auto refine_context = server_->Context();
+  RETURN_IF_ERROR(cli::FromGrpc(server_->stub().RefineMesh(refine_context.get(), refine, &mesh)));
+  v1::OpenSessionRequest open;
+  open.set_volume_id(before.volume->volume_id());
+  open.set_mesh_id(mesh.mesh_id());
+  v1::SessionInfo session;
+  auto open_context = server_->Context();
+  RETURN_IF_ERROR(cli::FromGrpc(server_->stub().OpenSession(open_context.get(), open, &session)));
+  bool close_old;
+  {
+    std::lock_guard lock(mutex_);
+    close_old = session_opened_here_;
+    state_.session_id = session.session_id();
+    state_.mesh_id = session.mesh_id();
+    session_opened_here_ = true;
+  }
+  if (close_old) {
+    // The old session was ours alone; a failure only leaves it to expire.
+    v1::CloseSessionRequest close;
+    close.set_session_id(before.session_id);
+    v1::CloseSessionResponse closed;
+    auto close_context = server_->Context();
+    (void)server_->stub().CloseSession(close_context.get(), close, &closed);
+  }
+  std::fprintf(stderr, "vpm-view: refined mesh %s, session %s\n", mesh.mesh_id().c_str(),
+               session.session_id().c_str());
+  return absl::OkStatus();
+}
+
+Status InteractConnection::StreamOnce() {
+  auto context = server_->Context(/*streaming=*/true);
+  auto stream = server_->stub().Interact(context.get());
+  v1::InteractRequest first;
+  {
+    std::lock_guard lock(mutex_);
+    context_ = context.get();
+    ++state_.stream_generation;
+    latency_.Reset();
+    first.set_session_id(state_.session_id);
+    if (settings_) *first.mutable_event()->mutable_settings() = *settings_;
+  }
+  if (stopping_) context->TryCancel();
+  events_.Clear();
+  events_.Reopen();
+  stream_ended_ = false;
+  uint64_t sequence = 1;
+  first.mutable_event()->set_sequence(sequence);
+  {
+    std::lock_guard lock(mutex_);
+    latency_.Sent(sequence, Clock::now());
+    if (camera_) {  // the view this viewer had, restored on the new stream
+      v1::ClientEvent camera;
+      *camera.mutable_camera() = *camera_;
+      events_.Push(camera);
+    }
+  }
+  std::thread reader([&] { ReadFrames(stream.get()); });
+  if (stream->Write(first)) WriteEvents(stream.get(), &sequence);
+  stream->WritesDone();
+  reader.join();
+  const Status status = cli::FromGrpc(stream->Finish());
+  std::lock_guard lock(mutex_);
+  context_ = nullptr;
+  return status;
+}
+
+void InteractConnection::WriteEvents(
+    grpc::ClientReaderWriter<v1::InteractRequest, v1::Frame>* stream, uint64_t* sequence) {
+  while (!stopping_ && !stream_ended_) {
+    std::optional<v1::ClientEvent> event = events_.Pop(std::chrono::milliseconds(100));
+    if (!event) continue;
+    v1::InteractRequest request;
+    *request.mutable_event() = *event;
+    request.mutable_event()->set_sequence(++*sequence);
+    {
+      std::lock_guard lock(mutex_);
+      latency_.Sent(*sequence, Clock::now());
+    }
+    if (!stream->Write(request)) break;  // the stream is broken: Read ends too
+  }
+  // Stopping: unblock the reader. Otherwise the stream ended by itself and
+  // Finish should report why, not a cancellation of ours.
+  if (stopping_) CancelStream();
+}
+
+void InteractConnection::ReadFrames(
+    grpc::ClientReaderWriter<v1::InteractRequest, v1::Frame>* stream) {
+  v1::Frame frame;
+  while (stream->Read(&frame)) {
+    const Clock::time_point now = Clock::now();
+    auto image = Decode(frame);
+    if (!image.ok()) {
+      std::fprintf(stderr, "vpm-view: frame %llu: %s\n",
+                   static_cast<unsigned long long>(frame.frame_number()),
+                   std::string(image.status().message()).c_str());
+      continue;
+    }
+    ShownFrame shown;
+    shown.image = std::move(*image);
+    frame.clear_image();
+    shown.info = frame;
+    bool reconnected;
+    std::string session_id;
+    {
+      std::lock_guard lock(mutex_);
+      shown.latency_ms = latency_.Received(frame.last_sequence(), now);
+      frame_rate_.OnFrame(now);
+      shown.fps = frame_rate_.Fps(now);
+      reconnected = !state_.connected;
+      session_id = state_.session_id;
+      state_.connected = true;
+      state_.message.clear();
+      newest_ = std::move(shown);
+    }
+    if (reconnected) {
+      std::fprintf(stderr, "vpm-view: connected to %s, session %s\n",
+                   options_.server.address.c_str(), session_id.c_str());
+    }
+    if (options_.log_frames) {
+      std::printf("frame %llu %dx%d seq %llu %s max_displacement_mm %.3f total_ms %.1f\n",
+                  static_cast<unsigned long long>(frame.frame_number()), frame.width(),
+                  frame.height(), static_cast<unsigned long long>(frame.last_sequence()),
+                  frame.interactive() ? "interactive" : "still", frame.max_displacement_mm(),
+                  frame.timings().total_ms());
+      std::fflush(stdout);
+    }
+    wake_();
+  }
+  stream_ended_ = true;
+  events_.Close();
+}
+
+}  // namespace vpm::view

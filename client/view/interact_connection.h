@@ -1,0 +1,105 @@
+// The viewer's link to vpm-server: finds or opens the session, runs one
+// Interact stream at a time and, when it ends, says why and reconnects with
+// backoff (a restarted server gets the volume loaded and a session opened
+// again). Three threads: the connection thread (set-up, then writing the
+// queued events), the reader (frames in, JPEG decoded, newest kept) and the
+// caller's (Send, TakeFrame, state).
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include <glm/glm.hpp>
+
+#include "client/cli/server_connection.h"
+#include "client/view/outbound_events.h"
+#include "client/view/stream_meters.h"
+#include "server/render/frame_encoder.h"
+
+namespace vpm::view {
+
+struct ConnectionOptions {
+  cli::ServerFlags server;
+  std::string volume_source;  // loaded when the session is missing or gone
+  std::string session_id;     // join this one first
+  bool log_frames = false;    // one stdout line per frame
+};
+
+// The newest frame, decoded.
+struct ShownFrame {
+  DecodedImage image;                // RGBA8, row 0 at the top
+  v1::Frame info;                    // the frame without its image bytes
+  std::optional<double> latency_ms;  // event sent -> this frame, when it shows a new event
+  double fps = 0;                    // frames per second received
+};
+
+struct ConnectionState {
+  bool connected = false;   // a stream is up and has delivered a frame
+  std::string message;      // when not connected: what went wrong and what happens next
+  uint64_t stream_generation = 0;  // +1 for every new stream (the server forgot any grab)
+  std::optional<v1::VolumeInfo> volume;
+  std::string session_id;
+  std::string mesh_id;
+};
+
+class InteractConnection {
+ public:
+  // `wake` is called (from the reader or connection thread) whenever a frame
+  // or a state change is ready; it must be thread-safe and cheap.
+  InteractConnection(ConnectionOptions options, std::function<void()> wake);
+  ~InteractConnection();
+  InteractConnection(const InteractConnection&) = delete;
+  InteractConnection& operator=(const InteractConnection&) = delete;
+
+  void Start();
+  void Stop();
+
+  // Queues an event for the current stream. Settings and camera are also
+  // remembered and sent first on every new stream.
+  void Send(const v1::ClientEvent& event);
+  // Ends the current stream, refines the session's mesh at point_mm, opens
+  // a session on the refined mesh and streams from it.
+  void RefineAt(const glm::dvec3& point_mm);
+
+  // The newest frame since the last call, if any.
+  std::optional<ShownFrame> TakeFrame();
+  ConnectionState state() const;
+
+ private:
+  void Run();
+  Status ResolveSession();
+  Status Refine(const glm::dvec3& point_mm);
+  Status StreamOnce();
+  void ReadFrames(grpc::ClientReaderWriter<v1::InteractRequest, v1::Frame>* stream);
+  void WriteEvents(grpc::ClientReaderWriter<v1::InteractRequest, v1::Frame>* stream,
+                   uint64_t* sequence);
+  void SetState(bool connected, std::string message);
+  void CancelStream();
+
+  ConnectionOptions options_;
+  std::function<void()> wake_;
+  std::optional<cli::ServerConnection> server_;
+  OutboundEvents events_;
+
+  mutable std::mutex mutex_;  // guards everything below
+  ConnectionState state_;
+  std::optional<v1::RenderSettings> settings_;
+  std::optional<v1::Camera> camera_;
+  std::optional<glm::dvec3> refine_at_mm_;
+  bool session_opened_here_ = false;
+  std::optional<ShownFrame> newest_;
+  LatencyMeter latency_;
+  FrameRateMeter frame_rate_;
+  grpc::ClientContext* context_ = nullptr;  // of the live stream
+
+  std::atomic<bool> stopping_{false};
+  std::atomic<bool> stream_ended_{false};
+  std::thread thread_;
+};
+
+}  // namespace vpm::view

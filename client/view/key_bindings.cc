@@ -1,0 +1,83 @@
+#include "client/view/key_bindings.h"
+
+#include <algorithm>
+#include <cctype>
+
+namespace vpm::view {
+namespace {
+
+constexpr size_t kKeyColumn = 16;  // characters
+
+bool SameKey(std::string_view a, std::string_view b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+           return std::toupper(static_cast<unsigned char>(x)) ==
+                  std::toupper(static_cast<unsigned char>(y));
+         });
+}
+
+std::string Padded(std::string text) {
+  if (text.size() < kKeyColumn) text.resize(kKeyColumn, ' ');
+  else text += ' ';
+  return text;
+}
+
+}  // namespace
+
+std::span<const KeyBinding> KeyBindings() {
+  static const std::vector<KeyBinding> kBindings = {
+      {{"F1", "H"}, Action::kToggleHelp, "show or hide this help"},
+      {{"G"}, Action::kToggleGrabMode, "grab mode on/off: left drag pulls tissue"},
+      {{"1"}, Action::kPresetSoftTissue, "DVR preset ct-soft-tissue"},
+      {{"2"}, Action::kPresetBone, "DVR preset ct-bone"},
+      {{"3"}, Action::kPresetVessels, "DVR preset ct-vessels"},
+      {{"4"}, Action::kPresetMriT1, "DVR preset mri-t1"},
+      {{"M"}, Action::kMip, "maximum intensity projection (MIP)"},
+      {{"O"}, Action::kToggleOverlay, "proxy-mesh overlay on/off"},
+      {{"R"}, Action::kRefineHere, "refine the mesh at the cursor (new session)"},
+      {{"V", "Home"}, Action::kResetView, "reset the view"},
+      {{"X"}, Action::kResetDeformation, "reset the deformation (let go)"},
+      {{"S", "F12"}, Action::kScreenshot, "save a screenshot (PNG)"},
+      {{"Q", "Escape"}, Action::kQuit, "quit"},
+  };
+  return kBindings;
+}
+
+std::optional<Action> ActionForKey(std::string_view sdl_key_name) {
+  for (const KeyBinding& b : KeyBindings()) {
+    for (std::string_view key : b.keys) {
+      if (SameKey(key, sdl_key_name)) return b.action;
+    }
+  }
+  return std::nullopt;
+}
+
+std::span<const MouseBinding> MouseBindings() {
+  static constexpr MouseBinding kBindings[] = {
+      {"left drag", "orbit"},
+      {"wheel", "zoom"},
+      {"middle drag", "pan (right drag too)"},
+      {"G, left press", "grab the point under the cursor"},
+      {"G, left drag", "pull the grabbed point"},
+      {"G, left release", "let go (hold Shift: keep the pull)"},
+  };
+  return kBindings;
+}
+
+std::vector<std::string> HelpLines() {
+  std::vector<std::string> lines = {"Mouse:"};
+  for (const MouseBinding& m : MouseBindings()) {
+    lines.push_back("  " + Padded(std::string(m.control)) + std::string(m.description));
+  }
+  lines.push_back("Keys:");
+  for (const KeyBinding& b : KeyBindings()) {
+    std::string keys;
+    for (std::string_view key : b.keys) {
+      if (!keys.empty()) keys += ", ";
+      keys += key;
+    }
+    lines.push_back("  " + Padded(keys) + std::string(b.description));
+  }
+  return lines;
+}
+
+}  // namespace vpm::view

@@ -1,0 +1,48 @@
+// The viewer's mouse and key controls: one table, from which the key
+// handling, `vpm-view --help` and the on-screen help overlay all read, so
+// the three never disagree.
+#pragma once
+
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace vpm::view {
+
+enum class Action {
+  kToggleHelp,
+  kToggleGrabMode,
+  kPresetSoftTissue,
+  kPresetBone,
+  kPresetVessels,
+  kPresetMriT1,
+  kMip,
+  kToggleOverlay,
+  kRefineHere,
+  kResetView,
+  kResetDeformation,
+  kScreenshot,
+  kQuit,
+};
+
+struct KeyBinding {
+  std::vector<std::string_view> keys;  // SDL key names (SDL_GetKeyName), e.g. "F1", "H"
+  Action action;
+  std::string_view description;
+};
+
+std::span<const KeyBinding> KeyBindings();
+// The action of an SDL key name, if any ("h" and "H" are the same key).
+std::optional<Action> ActionForKey(std::string_view sdl_key_name);
+struct MouseBinding {
+  std::string_view control;  // "left drag"; "G, ..." means in grab mode
+  std::string_view description;
+};
+std::span<const MouseBinding> MouseBindings();
+// The whole help text, mouse then keys, one control a line, keys padded
+// into a column: used by --help and by the overlay.
+std::vector<std::string> HelpLines();
+
+}  // namespace vpm::view

@@ -1,0 +1,39 @@
+#include "client/view/status_text.h"
+
+#include <cstdio>
+
+namespace vpm::view {
+namespace {
+
+std::string Format(const char* format, double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, format, value);
+  return buffer;
+}
+
+}  // namespace
+
+std::array<std::string, kStatusLineCount> StatusLines(const StatusInputs& in) {
+  std::string rate = Format("%.1f fps", in.fps);
+  rate += in.latency_ms ? Format("  rtt %.0f ms", *in.latency_ms) : std::string("  rtt -");
+  std::string state, stages = "server ms", more;
+  if (in.frame) {
+    const v1::Frame& f = *in.frame;
+    rate += "  " + std::to_string(f.width()) + "x" + std::to_string(f.height());
+    state = f.interactive() ? "interactive" : "still";
+    state += Format("  disp %.1f mm", f.max_displacement_mm());
+    const v1::StageTimings& t = f.timings();
+    stages += Format(" fem %.0f", t.fem_ms()) + Format(" warp %.0f", t.warp_ms()) +
+              Format(" rend %.0f", t.render_ms());
+    more = Format("enc %.0f", t.encode_ms()) + Format(" queue %.0f", t.queue_ms()) +
+           Format(" total %.0f", t.total_ms()) + "  ";
+  } else {
+    state = "no frame yet";
+    stages += " -";
+  }
+  if (in.grab_mode) state += in.grabbed ? "  GRABBED" : "  GRAB MODE";
+  more += "F1/h: help";
+  return {rate, state, stages, more};
+}
+
+}  // namespace vpm::view

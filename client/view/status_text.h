@@ -1,0 +1,28 @@
+// The status bar's two lines, from the newest frame and the stream meters.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+
+#include "vpm/v1/vpm.pb.h"
+
+namespace vpm::view {
+
+struct StatusInputs {
+  double fps = 0;                    // frames per second received
+  std::optional<double> latency_ms;  // newest event-to-frame round trip
+  std::optional<v1::Frame> frame;    // the frame shown (image bytes not needed)
+  bool grab_mode = false;
+  bool grabbed = false;
+};
+
+// Short enough for a 256-pixel-wide window at scale 1 (41 characters):
+//   "12.5 fps  rtt 85 ms  256x256"
+//   "still  disp 3.2 mm  GRAB MODE"
+//   "server ms fem 10 warp 2 rend 45"      (the server's stage times)
+//   "enc 1 queue 0 total 60  F1/h: help"
+inline constexpr int kStatusLineCount = 4;
+std::array<std::string, kStatusLineCount> StatusLines(const StatusInputs& in);
+
+}  // namespace vpm::view

@@ -1,0 +1,45 @@
+// What the status bar measures about the frame stream: frames per second
+// over a sliding window, and the round-trip latency from sending an event
+// to receiving the first frame whose last_sequence covers it.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <optional>
+
+namespace vpm::view {
+
+using Clock = std::chrono::steady_clock;
+
+class FrameRateMeter {
+ public:
+  explicit FrameRateMeter(std::chrono::milliseconds window = std::chrono::milliseconds(1000))
+      : window_(window) {}
+  void OnFrame(Clock::time_point t);
+  // Frames per second over the window ending at `now`; 0 before two frames.
+  double Fps(Clock::time_point now) const;
+
+ private:
+  std::chrono::milliseconds window_;
+  std::deque<Clock::time_point> times_;
+};
+
+class LatencyMeter {
+ public:
+  void Sent(uint64_t sequence, Clock::time_point t);
+  // Latency (ms) of the newest sent event that `last_sequence` covers and no
+  // earlier frame did; empty when this frame shows nothing new.
+  std::optional<double> Received(uint64_t last_sequence, Clock::time_point t);
+  void Reset() { sent_.clear(); }
+
+ private:
+  std::map<uint64_t, Clock::time_point> sent_;  // not yet covered by a frame
+};
+
+// Seconds to wait before reconnect attempt `attempt` (0-based): 0.25 s,
+// doubling, at most 5 s.
+double ReconnectBackoffS(int attempt);
+
+}  // namespace vpm::view

@@ -1,0 +1,76 @@
+// vpm-view's main loop on the SDL thread: window events become camera
+// moves, grabs, drags and settings for the connection; frames and
+// connection state from it become the picture.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <SDL.h>
+
+#include "client/view/interact_connection.h"
+#include "client/view/key_bindings.h"
+#include "client/view/view_camera.h"
+#include "client/view/view_flags.h"
+#include "client/view/viewer_window.h"
+
+namespace vpm::view {
+
+class ViewerApp {
+ public:
+  explicit ViewerApp(ViewFlags flags);
+  ~ViewerApp();
+  // Opens the window, connects and runs until quit. Returns the exit code.
+  int Run();
+
+ private:
+  void HandleEvent(const SDL_Event& event);
+  void OnAction(Action action);
+  void OnButtonDown(const SDL_MouseButtonEvent& button);
+  void OnButtonUp(const SDL_MouseButtonEvent& button);
+  void OnMotion(const SDL_MouseMotionEvent& motion);
+  void StartPull(int window_x, int window_y);
+  void LetGo();
+  void RefineAtCursor();
+  void SaveScreenshot();
+  void PollConnection();
+  void Paint();
+  void SendCamera();
+  void SendSettings();
+  void Notice(std::string text);
+  // Window pixels -> frame pixels (the frame may be drawn scaled).
+  double FramePixelsPerWindowPixel() const;
+
+  ViewFlags flags_;
+  std::unique_ptr<ViewerWindow> window_;
+  std::unique_ptr<InteractConnection> connection_;
+  uint32_t wake_event_ = 0;
+  std::atomic<bool> wake_pending_{false};
+  bool running_ = true;
+
+  std::optional<ViewCamera> camera_;
+  std::string volume_id_;
+  v1::RenderSettings settings_;
+  uint64_t stream_generation_ = 0;
+
+  enum class Gesture { kNone, kOrbit, kPan, kPull };
+  Gesture gesture_ = Gesture::kNone;
+  int last_x_ = 0, last_y_ = 0;        // window pixels of the previous motion
+  int pull_from_x_ = 0, pull_from_y_ = 0;  // window pixels where the grab started
+  bool grab_mode_ = false;
+  bool grabbed_ = false;  // the server holds a grab of ours
+  bool show_help_ = false;
+
+  std::optional<v1::Frame> frame_info_;
+  double fps_ = 0;
+  std::optional<double> latency_ms_;
+  std::string notice_;
+  Clock::time_point notice_until_{};
+  std::optional<Clock::time_point> resize_at_;  // when to ask for the new size
+  int screenshots_ = 0;
+};
+
+}  // namespace vpm::view

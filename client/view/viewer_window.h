@@ -1,0 +1,66 @@
+// The SDL window: the newest frame scaled into the frame area, the status
+// bar under it, the help overlay and the connection message on top.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <SDL.h>
+
+#include "client/view/text_renderer.h"
+#include "server/common/status.h"
+#include "server/render/frame_encoder.h"
+
+namespace vpm::view {
+
+// Height of the status bar under the frame area, window pixels.
+int StatusBarHeight();
+
+struct PaintInputs {
+  std::vector<std::string> status_lines;
+  bool show_help = false;
+  std::string message;  // shown in a red banner when not empty (connection lost, errors)
+  std::string notice;   // shown briefly in a grey banner (screenshot saved, ...)
+};
+
+class ViewerWindow {
+ public:
+  // A resizable window whose frame area is width x height pixels.
+  static Result<std::unique_ptr<ViewerWindow>> Create(const std::string& title, int width,
+                                                      int height);
+  ~ViewerWindow();
+  ViewerWindow(const ViewerWindow&) = delete;
+  ViewerWindow& operator=(const ViewerWindow&) = delete;
+
+  // Replaces the frame shown (RGBA8, row 0 at the top).
+  void SetFrame(const DecodedImage& image);
+  void Paint(const PaintInputs& in);
+
+  // The frame area (window minus the status bar), window pixels.
+  SDL_Rect FrameArea() const;
+  // Where the current frame is drawn (aspect kept, centred in the area).
+  SDL_Rect FrameRect() const;
+  // Window pixel -> pixel of the current frame; empty outside it.
+  std::optional<SDL_Point> ToFramePixel(int window_x, int window_y) const;
+  int frame_width() const { return frame_width_; }
+  int frame_height() const { return frame_height_; }
+
+  // The window's current picture, RGBA8, row 0 at the top.
+  Result<DecodedImage> ReadPixels() const;
+  uint32_t id() const { return SDL_GetWindowID(window_); }
+
+ private:
+  ViewerWindow() = default;
+  void PaintBanner(const std::string& text, SDL_Color fill, int y);
+  void PaintHelp();
+
+  SDL_Window* window_ = nullptr;
+  SDL_Renderer* renderer_ = nullptr;
+  std::unique_ptr<TextRenderer> text_;
+  SDL_Texture* frame_ = nullptr;
+  int frame_width_ = 0, frame_height_ = 0;  // pixels of the frame texture
+};
+
+}  // namespace vpm::view

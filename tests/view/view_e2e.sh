@@ -1,0 +1,206 @@
+#!/usr/bin/env bash
+# vpm-view as a person uses it: a real X server (Xvfb), vpm-server on an
+# ephemeral port with a token and the 128^3 phantom, vpm-view in a window,
+# real mouse and key events through xdotool, and screenshots of the window
+# (ImageMagick's import). Asserts that
+#   - the first frame appears and is not blank (pixel statistics),
+#   - an orbit drag changes the picture,
+#   - the help overlay (h) shows and hides,
+#   - grab mode (g) + a left drag deforms the volume (the server's
+#     max_displacement_mm in the frames vpm-view logs) and releasing lets go,
+#   - S saves a PNG screenshot,
+#   - killing the server shows a red "connection lost" banner, and a server
+#     restarted on the same port is reconnected to and streams again,
+#   - q quits with exit status 0.
+#
+# Usage: view_e2e.sh BUILD_DIR
+set -uo pipefail
+build=$(cd "${1:?usage: $0 BUILD_DIR}" && pwd)
+server_bin="$build/server/service/vpm-server"
+view_bin="$build/client/vpm-view"
+for b in "$server_bin" "$view_bin"; do
+  [ -x "$b" ] || { echo "FAIL: $b is not built"; exit 1; }
+done
+for tool in Xvfb xdotool import convert compare xdpyinfo; do
+  command -v "$tool" >/dev/null || { echo "FAIL: $tool is not installed (scripts/install-deps.sh)"; exit 1; }
+done
+
+tmp=$(mktemp -d)
+xvfb_pid="" server_pid="" view_pid=""
+cleanup() {
+  for pid in $view_pid $server_pid $xvfb_pid; do kill -KILL "$pid" 2>/dev/null; done
+  if [ "${keep_tmp:-0}" = 1 ]; then echo "logs and screenshots kept in $tmp"; else rm -rf "$tmp"; fi
+}
+trap cleanup EXIT
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); keep_tmp=1; }
+pass() { echo "ok:   $*"; }
+die() { echo "FAIL: $*"; keep_tmp=1; echo "--- vpm-view stderr"; cat "$tmp/view.err" 2>/dev/null;
+        echo "--- server log"; cat "$tmp/server.log" 2>/dev/null; exit 1; }
+
+# wait_for SECONDS COMMAND...: polls every 0.1 s until COMMAND succeeds.
+wait_for() {
+  local deadline=$((SECONDS + $1)); shift
+  until "$@"; do
+    [ $SECONDS -ge $deadline ] && return 1
+    sleep 0.1
+  done
+}
+
+# --- X server on a free display
+display=""
+for n in $(seq 90 199); do
+  if [ ! -e "/tmp/.X$n-lock" ] && [ ! -e "/tmp/.X11-unix/X$n" ]; then display=":$n"; break; fi
+done
+[ -n "$display" ] || die "no free X display in :90..:199"
+Xvfb "$display" -screen 0 800x600x24 -nolisten tcp > "$tmp/xvfb.log" 2>&1 &
+xvfb_pid=$!
+disown "$xvfb_pid"  # no "Killed" notice from bash when cleanup ends it
+export DISPLAY="$display"
+wait_for 10 xdpyinfo >/dev/null 2>&1 || die "Xvfb did not start on $display: $(cat "$tmp/xvfb.log")"
+
+# --- server
+token=$(head -c 12 /dev/urandom | od -An -tx1 | tr -d ' \n')
+port=""
+test_listening() { [ "$(grep -c "listening on port" "$tmp/server.log")" -gt "$1" ]; }
+start_server() {  # LISTEN_ADDRESS
+  "$server_bin" --listen "$1" --token "$token" >> "$tmp/server.log" 2>&1 &
+  server_pid=$!
+  local before
+  before=$(grep -c "listening on port" "$tmp/server.log")
+  wait_for 30 test_listening "$before" || die "vpm-server did not start"
+  port=$(sed -n 's/^vpm-server listening on port \([0-9]*\).*/\1/p' "$tmp/server.log" | tail -1)
+}
+start_server 127.0.0.1:0
+
+# --- viewer
+frame_w=256 frame_h=256
+VPM_TOKEN="$token" "$view_bin" --server "127.0.0.1:$port" --volume "phantom:abdomen?size=128" \
+  --size $frame_w $frame_h --log-frames --screenshot-dir "$tmp" > "$tmp/view.out" 2> "$tmp/view.err" &
+view_pid=$!
+window=$(timeout 30 xdotool search --sync --name '^vpm-view' | head -1)
+[ -n "$window" ] || die "no vpm-view window appeared"
+frames() { grep -c '^frame ' "$tmp/view.out"; }
+more_frames_than() { [ "$(frames)" -gt "$1" ]; }
+connects_at_least() { [ "$(grep -c 'vpm-view: connected' "$tmp/view.err")" -ge "$1" ]; }
+# Frame log fields: frame N WxH seq S still|interactive max_displacement_mm D total_ms T
+last_displacement() { awk '$1 == "frame" { d = $8 } END { print d + 0 }' "$tmp/view.out"; }
+displaced_more_than() { gt "$(last_displacement)" "$1"; }
+# Waits for frames after the first N and then for the stream to go quiet
+# (the still frame that follows the last event).
+settle() {  # N
+  wait_for 60 more_frames_than "$1" || return 1
+  local count=-1
+  while [ "$(frames)" != "$count" ]; do count=$(frames); sleep 1.2; done
+}
+shot() {  # NAME: the frame area of the window as NAME.png, the whole window as NAME-window.png
+  import -window "$window" "$tmp/$1-window.png" &&
+    convert "$tmp/$1-window.png" -crop "${frame_w}x${frame_h}+0+0" +repage "$tmp/$1.png"
+}
+stddev() { convert "$1" -colorspace Gray -format '%[fx:standard_deviation]' info:; }
+mean() { convert "$1" -colorspace Gray -format '%[fx:mean]' info:; }
+# Normalised RMS difference of two images (0 equal, 1 opposite).
+rmse() { compare -metric RMSE "$1" "$2" null: 2>&1 | sed -n 's/.*(\(.*\)).*/\1/p'; }
+gt() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a > b) }'; }
+# Pixels that are clearly red (the connection banner): r > 0.55, g and b < 0.25.
+red_pixels() {
+  convert "$1" -fx '(r>0.55 && g<0.25 && b<0.25) ? 1 : 0' -format '%[fx:round(mean*w*h)]' info:
+}
+key() { xdotool windowfocus --sync "$window" 2>/dev/null; xdotool key --clearmodifiers "$@"; }
+drag() {  # BUTTON X0 Y0 DX DY STEPS: press, move in steps, keep holding
+  xdotool mousemove --window "$window" "$2" "$3" mousedown "$1"
+  for i in $(seq 1 "$6"); do
+    xdotool mousemove --window "$window" $(($2 + $4 * i / $6)) $(($3 + $5 * i / $6))
+    sleep 0.08
+  done
+}
+
+# 1. The first frame appears and is not blank.
+wait_for 90 grep -q '^frame ' "$tmp/view.out" || die "no frame within 90 s"
+settle 0
+shot first || die "import could not capture the window"
+sd=$(stddev "$tmp/first.png") m=$(mean "$tmp/first.png")
+if gt "$sd" 0.05 && gt "$m" 0.03; then pass "first frame shown (mean $m, stddev $sd)"
+else fail "first frame looks blank (mean $m, stddev $sd)"; fi
+
+# 2. An orbit drag (left button) changes it.
+n=$(frames)
+drag 1 128 128 80 20 8; xdotool mouseup 1
+settle "$n" || fail "no frame after the orbit drag"
+shot orbit
+d=$(rmse "$tmp/first.png" "$tmp/orbit.png")
+if gt "$d" 0.02; then pass "orbit drag changed the picture (RMSE $d)"
+else fail "orbit drag did not change the picture (RMSE $d)"; fi
+
+# 3. Help overlay on and off.
+key h; sleep 0.5; shot help
+key h; sleep 0.5; shot nohelp
+d_on=$(rmse "$tmp/orbit.png" "$tmp/help.png") d_off=$(rmse "$tmp/orbit.png" "$tmp/nohelp.png")
+if gt "$d_on" 0.05 && ! gt "$d_off" 0.01; then pass "help overlay shows and hides (RMSE $d_on, $d_off)"
+else fail "help overlay: RMSE with $d_on, after hiding $d_off"; fi
+
+# 4. Grab mode, grab the centre, pull 40 px right and 30 px up, hold.
+key g
+n=$(frames)
+drag 1 128 128 40 -30 8
+wait_for 60 displaced_more_than 20
+settle "$n"
+disp=$(last_displacement)
+shot pulled
+if gt "$disp" 20; then pass "grab and drag deformed the volume (server max_displacement_mm $disp)"
+else fail "grab and drag: max_displacement_mm $disp (expected > 20 mm for a 50-pixel pull)"; fi
+d=$(rmse "$tmp/orbit.png" "$tmp/pulled.png")
+if gt "$d" 0.01; then pass "the pull shows in the picture (RMSE $d)"
+else fail "the pull does not show in the picture (RMSE $d)"; fi
+n=$(frames)
+xdotool mouseup 1
+settle "$n"
+disp=$(last_displacement)
+if ! gt "$disp" 0.001; then pass "release let go (max_displacement_mm $disp)"
+else fail "after release max_displacement_mm is $disp"; fi
+key g
+
+# 5. A screenshot.
+key s
+wait_for 10 grep -q '^screenshot ' "$tmp/view.out"
+png=$(sed -n 's/^screenshot //p' "$tmp/view.out" | tail -1)
+if [ -n "$png" ] && [ -s "$png" ] && [ "$(identify -format %m "$png" 2>/dev/null)" = PNG ] &&
+   gt "$(stddev "$png")" 0.05; then pass "S saved $(identify -format '%wx%h' "$png") PNG $(basename "$png")"
+else fail "S did not save a PNG screenshot ($png)"; fi
+
+# 6. The server dies: a red banner says so; it comes back on the same port: frames again.
+kill -KILL "$server_pid"; wait "$server_pid" 2>/dev/null; server_pid=""
+wait_for 15 grep -q 'connection lost' "$tmp/view.err" || fail "vpm-view did not report the lost connection"
+sleep 0.5
+shot lost
+red=$(red_pixels "$tmp/lost-window.png")
+if [ "$red" -gt 1000 ]; then pass "lost connection shown in the window ($red red banner pixels)"
+else fail "no lost-connection banner in the window ($red red pixels)"; fi
+n=$(frames)
+start_server "127.0.0.1:$port"
+wait_for 90 connects_at_least 2 ||
+  fail "vpm-view did not reconnect to the restarted server"
+settle "$n" || fail "no frame from the restarted server"
+shot back
+red=$(red_pixels "$tmp/back-window.png") sd=$(stddev "$tmp/back.png")
+if [ "$red" -lt 100 ] && gt "$sd" 0.05; then pass "reconnected and streaming again (stddev $sd)"
+else fail "after the restart: $red red pixels, frame stddev $sd"; fi
+
+# 7. Quit.
+key q
+if wait_for 15 bash -c "! kill -0 $view_pid 2>/dev/null"; then
+  wait "$view_pid"; rc=$?
+  view_pid=""
+  if [ "$rc" = 0 ]; then pass "q quit (exit status 0)"; else fail "vpm-view exited with $rc"; fi
+else
+  fail "q did not quit vpm-view"
+fi
+
+echo "frames received: $(frames); server total_ms of still frames (median):" \
+  "$(awk '$1 == "frame" && $6 == "still" { print $10 }' "$tmp/view.out" | sort -n |
+     awk '{ a[NR] = $1 } END { if (NR) print a[int((NR + 1) / 2)] }')"
+if [ $failures -gt 0 ]; then
+  echo "--- vpm-view stderr"; cat "$tmp/view.err"
+  echo "$failures check(s) failed"; exit 1
+fi
+echo "all vpm-view end-to-end checks passed"
