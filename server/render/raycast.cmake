@@ -7,6 +7,7 @@ add_library(vpm_raycast
   ${CMAKE_CURRENT_LIST_DIR}/camera.cc
   ${CMAKE_CURRENT_LIST_DIR}/frame_encoder.cc
   ${CMAKE_CURRENT_LIST_DIR}/overlay.cc
+  ${CMAKE_CURRENT_LIST_DIR}/pick_ray.cc
   ${CMAKE_CURRENT_LIST_DIR}/raycast_cpu.cc
   ${CMAKE_CURRENT_LIST_DIR}/render_presets.cc
   ${CMAKE_CURRENT_LIST_DIR}/render_request.cc

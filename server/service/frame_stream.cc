@@ -93,7 +93,12 @@ void FrameStream::ApplyQueued() {
       std::lock_guard lock(mutex_);
       settings_ = *std::move(settings);
     }
-    auto applied = session_->Apply(event);
+    SceneView view;
+    {
+      std::lock_guard lock(mutex_);
+      view = settings_.view;
+    }
+    auto applied = session_->Apply(event, &view);
     if (!applied.ok()) return Finish(ToGrpcStatus(applied.status()));
     std::lock_guard lock(mutex_);
     if (event.sequence() > stream_sequence_) stream_sequence_ = event.sequence();

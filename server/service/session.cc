@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "server/render/frame_encoder.h"
+#include "server/render/pick_ray.h"
 
 namespace vpm::service {
 namespace {
@@ -39,41 +40,44 @@ Result<std::shared_ptr<Session>> Session::Create(std::string id, const gpu::GpuC
   return session;
 }
 
-Result<glm::dvec3> Session::GrabPoint(const v1::Grab& grab) const {
-  const VolumeGeometry& geometry = volume_->volume.geometry();
+Result<glm::dvec3> Session::GrabPoint(const v1::Grab& grab, const SceneView* stream_view) const {
+  const Volume& volume = volume_->volume;
   if (!grab.pick()) {
     const glm::dvec3 p = FromProto(grab.point_mm());
-    RETURN_IF_ERROR(CheckInsideVolume(geometry, p, "grab.point_mm"));
+    RETURN_IF_ERROR(CheckInsideVolume(volume.geometry(), p, "grab.point_mm"));
     return p;
   }
-  // A pick takes the pixel's ray to the plane through the orbit centre that
-  // faces the camera: the depth the user is looking at.
   std::lock_guard lock(state_mutex_);
-  if (grab.pixel_x() < 0 || grab.pixel_x() >= last_frame_width_ || grab.pixel_y() < 0 ||
-      grab.pixel_y() >= last_frame_height_) {
+  const SceneView& view = stream_view != nullptr ? *stream_view : last_view_;
+  if (grab.pixel_x() < 0 || grab.pixel_x() >= view.width || grab.pixel_y() < 0 ||
+      grab.pixel_y() >= view.height) {
     return absl::OutOfRangeError(StrCat("grab.pixel: (", grab.pixel_x(), ", ", grab.pixel_y(),
-                                        ") is outside the last frame, ", last_frame_width_, "x",
-                                        last_frame_height_));
+                                        ") is outside the frame, ", view.width, "x",
+                                        view.height));
   }
-  const CameraRays rays = camera_.Rays(last_frame_width_, last_frame_height_);
+  // The pixel's ray through the volume as the frame showed it
+  // (render/pick_ray.h); a ray that shows nothing falls back to the plane
+  // through the orbit centre that faces the camera.
+  const CameraRays rays = camera_.Rays(view.width, view.height);
   const glm::dvec3 dir = rays.Direction(grab.pixel_x(), grab.pixel_y());
+  if (auto hit = PickAlongRay(volume, view.preset, view.mode, rays.eye_mm, dir)) return *hit;
   const double t = glm::dot(camera_.Target() - rays.eye_mm, camera_.Forward()) /
                    glm::dot(dir, camera_.Forward());
   const glm::dvec3 p = rays.eye_mm + t * dir;
-  RETURN_IF_ERROR(CheckInsideVolume(geometry, p, "grab.pixel"));
+  RETURN_IF_ERROR(CheckInsideVolume(volume.geometry(), p, "grab.pixel"));
   return p;
 }
 
-Result<AppliedEvent> Session::Apply(const v1::ClientEvent& event) {
+Result<AppliedEvent> Session::Apply(const v1::ClientEvent& event, const SceneView* view) {
   if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
   Touch();
   std::lock_guard scene_lock(scene_mutex_);
-  ASSIGN_OR_RETURN(AppliedEvent applied, ApplyLocked(event));
+  ASSIGN_OR_RETURN(AppliedEvent applied, ApplyLocked(event, view));
   Changed(event.sequence(), applied.deformed, applied.deformed ? &applied.step : nullptr);
   return applied;
 }
 
-Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event) {
+Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event, const SceneView* view) {
   AppliedEvent applied;
   switch (event.event_case()) {
     case v1::ClientEvent::kCamera: {
@@ -83,7 +87,7 @@ Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event) {
       return applied;
     }
     case v1::ClientEvent::kGrab: {
-      ASSIGN_OR_RETURN(glm::dvec3 point, GrabPoint(event.grab()));
+      ASSIGN_OR_RETURN(glm::dvec3 point, GrabPoint(event.grab(), view));
       if (event.grab().radius_mm() < 0) {
         return absl::InvalidArgumentError("grab.radius_mm: negative (0: one lattice step)");
       }
@@ -93,6 +97,8 @@ Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event) {
       if (!info.ok()) return info.status();
       std::lock_guard lock(state_mutex_);
       grabbed_ = true;
+      grab_point_ = point;
+      applied.grab_point_mm = point;
       return applied;
     }
     case v1::ClientEvent::kDrag:
@@ -127,6 +133,7 @@ Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event) {
       applied.deformed = true;
       std::lock_guard lock(state_mutex_);
       grabbed_ = false;
+      grab_point_.reset();
       last_deform_ = {};
       return applied;
     }
@@ -178,8 +185,8 @@ Result<v1::Frame> Session::Render(const FrameRequest& request) {
       view.camera = request.camera ? *request.camera : camera_;
       step = last_step_;
       sequence = last_sequence_;
-      last_frame_width_ = view.width;
-      last_frame_height_ = view.height;
+      last_view_ = view;
+      if (grab_point_) *out.mutable_grab_point_mm() = ToProto(*grab_point_);
     }
     ASSIGN_OR_RETURN(frame, scene_->Render(view));
     if (request.want_vertices) {

@@ -25,6 +25,7 @@ namespace vpm::service {
 struct AppliedEvent {
   SceneStepTimings step;   // FEM and warp times (zero for camera events)
   bool deformed = false;
+  std::optional<glm::dvec3> grab_point_mm;  // a grab's point (picked or given)
 };
 
 class Session {
@@ -48,7 +49,10 @@ class Session {
   // the stream's business and ignored here. Errors: InvalidArgument naming
   // the field, OutOfRange for a point outside the volume,
   // FailedPrecondition for a drag, pull or release without a grab.
-  Result<AppliedEvent> Apply(const v1::ClientEvent& event);
+  // `view`: the settings of the stream that sent the event, for a grab by
+  // pixel (frame size, preset and mode of the frame the user clicked);
+  // null (Manipulate) uses those of the last frame rendered.
+  Result<AppliedEvent> Apply(const v1::ClientEvent& event, const SceneView* view = nullptr);
   Status SetCamera(const v1::Camera& camera);
 
   // One frame of the current state, encoded. `camera` overrides the
@@ -86,8 +90,8 @@ class Session {
  private:
   Session(std::string id, std::shared_ptr<VolumeEntry> volume,
           std::shared_ptr<const MeshEntry> mesh, const Options& options);
-  Result<AppliedEvent> ApplyLocked(const v1::ClientEvent& event);
-  Result<glm::dvec3> GrabPoint(const v1::Grab& grab) const;
+  Result<AppliedEvent> ApplyLocked(const v1::ClientEvent& event, const SceneView* view);
+  Result<glm::dvec3> GrabPoint(const v1::Grab& grab, const SceneView* view) const;
   void Changed(uint64_t sequence, bool deformed, const SceneStepTimings* step);
   void Notify(bool closed);
 
@@ -105,7 +109,8 @@ class Session {
   uint64_t last_sequence_ = 0;
   bool grabbed_ = false;
   SceneStepTimings last_step_;
-  int last_frame_width_ = 512, last_frame_height_ = 512;
+  SceneView last_view_;  // settings of the last frame rendered (picks without a stream)
+  std::optional<glm::dvec3> grab_point_;  // while grabbed
   std::chrono::steady_clock::time_point last_deform_{};
   uint64_t deform_count_ = 0;
   std::chrono::steady_clock::time_point last_touch_;

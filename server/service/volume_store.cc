@@ -28,20 +28,33 @@ Status VolumeStore::CheckRoom(int64_t extra_bytes) const {
   return absl::OkStatus();
 }
 
-Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source) {
-  RETURN_IF_ERROR(CheckRoom(0));
-  if (source.starts_with("phantom:")) {
-    ASSIGN_OR_RETURN(Volume volume, ReadVolume(source, options_.read_limits));
-    return Add(std::move(volume));
+std::shared_ptr<VolumeEntry> VolumeStore::FindLoadedLocked(const std::string& load_key) const {
+  for (const auto& [id, entry] : volumes_) {
+    if (!load_key.empty() && entry->load_key == load_key) return entry;
   }
+  return nullptr;
+}
+
+Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source) {
   if (source.starts_with("raw:")) {
     return absl::InvalidArgumentError(
         "source: raw: sources are not served; upload the file instead");
   }
-  ASSIGN_OR_RETURN(std::filesystem::path path, ResolveDataPath(options_.data_root, source));
-  ASSIGN_OR_RETURN(Volume volume, ReadVolume(path.string(), options_.read_limits));
+  std::string key(source);
+  std::string read_from(source);  // phantom spec, or the resolved file path
+  if (!source.starts_with("phantom:")) {
+    ASSIGN_OR_RETURN(std::filesystem::path path, ResolveDataPath(options_.data_root, source));
+    read_from = path.string();
+    key = "file:" + read_from;
+  }
+  {
+    std::lock_guard lock(mutex_);
+    if (auto loaded = FindLoadedLocked(key)) return loaded;
+  }
+  RETURN_IF_ERROR(CheckRoom(0));
+  ASSIGN_OR_RETURN(Volume volume, ReadVolume(read_from, options_.read_limits));
   volume.set_source(std::string(source));
-  return Add(std::move(volume));
+  return Add(std::move(volume), std::move(key));
 }
 
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::AddFile(const std::filesystem::path& path,
@@ -49,14 +62,16 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::AddFile(const std::filesystem:
   RETURN_IF_ERROR(CheckRoom(0));
   ASSIGN_OR_RETURN(Volume volume, ReadVolume(path.string(), options_.read_limits));
   volume.set_source(std::move(source));
-  return Add(std::move(volume));
+  return Add(std::move(volume), "");
 }
 
-Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume) {
+Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string load_key) {
   const int64_t bytes = volume.geometry().voxel_count() * int64_t{sizeof(float)} * 2;
   RETURN_IF_ERROR(CheckRoom(bytes));
   ASSIGN_OR_RETURN(GpuVolume gpu, GpuVolume::Upload(*options_.context, volume));
   std::lock_guard lock(mutex_);
+  // A load of the same source that landed while this one read wins.
+  if (auto loaded = FindLoadedLocked(load_key)) return loaded;
   // Checked again: another load may have landed while this one read.
   if (static_cast<int64_t>(volumes_.size()) >= options_.max_volumes ||
       total_bytes_ + bytes > options_.max_bytes) {
@@ -65,6 +80,7 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume) {
   std::string id = StrCat("vol-", next_id_++);
   auto entry = std::make_shared<VolumeEntry>(id, std::move(volume), std::move(gpu), bytes);
   entry->forget_gpu = options_.forget_gpu;
+  entry->load_key = std::move(load_key);
   volumes_.emplace(id, entry);
   total_bytes_ += bytes;
   NotifyLocked();

@@ -25,6 +25,9 @@ struct VolumeEntry {
   Volume volume;
   GpuVolume gpu;
   int64_t bytes = 0;                // host values + GPU texel buffer
+  // What LoadVolume loaded it from ("phantom:SPEC" or "file:" + the resolved
+  // path); empty for uploads. A second load of the same key shares it.
+  std::string load_key;
   std::atomic<int32_t> sessions{0}; // sessions using it
   // The scene may add a 3D image to `gpu` (export); guarded by this.
   std::mutex gpu_mutex;
@@ -53,8 +56,11 @@ class VolumeStore {
   static Result<std::unique_ptr<VolumeStore>> Create(const Options& options);
 
   // `source`: phantom:SPEC, or a path under the data root (resolve_data_path.h).
-  // Errors: those of ResolveDataPath and ReadVolume; InvalidArgument for raw:
-  // sources; ResourceExhausted past max_volumes or max_bytes.
+  // A source already loaded (the same phantom spec, or a path resolving to
+  // the same file) returns the volume held, not a second copy: delete it to
+  // read the file again. Errors: those of ResolveDataPath and ReadVolume;
+  // InvalidArgument for raw: sources; ResourceExhausted past max_volumes or
+  // max_bytes.
   Result<std::shared_ptr<VolumeEntry>> Load(std::string_view source);
   // A volume read from `path` (an upload's temporary file); `source` is what
   // GetVolume reports.
@@ -70,7 +76,8 @@ class VolumeStore {
 
  private:
   explicit VolumeStore(Options options) : options_(std::move(options)) {}
-  Result<std::shared_ptr<VolumeEntry>> Add(Volume volume);
+  Result<std::shared_ptr<VolumeEntry>> Add(Volume volume, std::string load_key);
+  std::shared_ptr<VolumeEntry> FindLoadedLocked(const std::string& load_key) const;
   void NotifyLocked() const;
 
   Options options_;

@@ -197,7 +197,7 @@ grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* co
     ASSIGN_OR_RETURN(AppliedEvent applied, session->Apply(event));
     response->set_applied_sequence(event.sequence());
     response->set_max_displacement_mm(session->max_displacement_mm());
-    (void)applied;
+    if (applied.grab_point_mm) *response->mutable_grab_point_mm() = ToProto(*applied.grab_point_mm);
     return absl::OkStatus();
   });
 }

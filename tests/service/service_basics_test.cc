@@ -130,10 +130,25 @@ TEST_F(ServiceTest, Volumes_LoadGetListDelete) {
   EXPECT_EQ(stub_->DeleteVolume(c5.get(), del, &deleted).error_code(), grpc::NOT_FOUND);
 }
 
+TEST_F(ServiceTest, Volumes_LoadedOnceAndShared) {
+  const v1::VolumeInfo first = LoadPhantom();
+  const v1::VolumeInfo again = LoadPhantom();
+  EXPECT_EQ(again.volume_id(), first.volume_id());
+  const v1::VolumeInfo other = LoadPhantom(std::string(kPhantom) + "&seed=2");
+  EXPECT_NE(other.volume_id(), first.volume_id());
+  v1::ListVolumesResponse list;
+  auto context = Context();
+  ASSERT_TRUE(stub_->ListVolumes(context.get(), v1::ListVolumesRequest(), &list).ok());
+  EXPECT_EQ(list.volumes_size(), 2);
+}
+
 TEST_F(ServiceTest, Volumes_CapIsResourceExhausted) {
-  for (int i = 0; i < 4; ++i) LoadPhantom();
+  // Distinct sources (seeds): the same source twice is one volume.
+  for (int i = 0; i < 4; ++i) {
+    LoadPhantom(std::string(kPhantom) + "&seed=" + std::to_string(i + 1));
+  }
   v1::LoadVolumeRequest request;
-  request.set_source(kPhantom);
+  request.set_source(std::string(kPhantom) + "&seed=99");
   v1::VolumeInfo info;
   auto context = Context();
   EXPECT_EQ(stub_->LoadVolume(context.get(), request, &info).error_code(),
@@ -188,6 +203,12 @@ class DataRootTest : public ServiceTest {
 
 TEST_F(DataRootTest, LoadVolume_ReadsInsideTheRoot) {
   EXPECT_EQ(Load("cases/small.nii.gz"), grpc::OK);
+  // Another spelling of the same file is the same volume.
+  EXPECT_EQ(Load("cases/./small.nii.gz"), grpc::OK);
+  v1::ListVolumesResponse list;
+  auto context = Context();
+  ASSERT_TRUE(stub_->ListVolumes(context.get(), v1::ListVolumesRequest(), &list).ok());
+  EXPECT_EQ(list.volumes_size(), 1);
 }
 
 TEST_F(DataRootTest, LoadVolume_RefusesTraversalAndSymlinkEscape) {

@@ -139,6 +139,39 @@ TEST_F(SessionTest, Manipulate_GrabDragReleaseAndTheirErrors) {
             grpc::INVALID_ARGUMENT);
 }
 
+TEST_F(SessionTest, Manipulate_PickByPixelGrabsTheSurfaceThePixelShows) {
+  // A frame sets the size and preset picks refer to (Manipulate has no stream).
+  v1::RenderRequest render;
+  render.set_session_id(session_.session_id());
+  *render.mutable_settings() = Small();
+  v1::Frame frame;
+  auto c1 = Context();
+  ASSERT_TRUE(stub_->Render(c1.get(), render, &frame).ok());
+  v1::ClientEvent pick;
+  pick.set_sequence(1);
+  pick.mutable_grab()->set_pick(true);
+  pick.mutable_grab()->set_pixel_x(48);
+  pick.mutable_grab()->set_pixel_y(48);
+  v1::ManipulateResponse response;
+  grpc::Status status = Manipulate(pick, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_TRUE(response.has_grab_point_mm());
+  // The default camera looks from the front (anterior, -y) at the volume's
+  // centre: the body's surface is in front of the centre, on the camera's
+  // side, and the old plane-through-the-centre pick would give the centre.
+  const v1::Vec3 centre = Centre(volume_);
+  const v1::Vec3& p = response.grab_point_mm();
+  EXPECT_LT(p.y(), centre.y() - 20.0) << p.ShortDebugString();
+  EXPECT_NEAR(p.x(), centre.x(), 5.0);
+  // Frames report the held grab's point.
+  auto c2 = Context();
+  ASSERT_TRUE(stub_->Render(c2.get(), render, &frame).ok());
+  ASSERT_TRUE(frame.has_grab_point_mm());
+  EXPECT_DOUBLE_EQ(frame.grab_point_mm().y(), p.y());
+  pick.mutable_grab()->set_pixel_x(96);
+  EXPECT_EQ(Manipulate(pick, &response).error_code(), grpc::OUT_OF_RANGE);
+}
+
 TEST_F(SessionTest, Interact_FramesEchoTheLastEventAndEndWithAStill) {
   auto context = Context();
   auto stream = stub_->Interact(context.get());

@@ -66,9 +66,9 @@ class ServiceTest : public ::testing::Test {
     return context;
   }
 
-  v1::VolumeInfo LoadPhantom() {
+  v1::VolumeInfo LoadPhantom(const std::string& source = kPhantom) {
     v1::LoadVolumeRequest request;
-    request.set_source(kPhantom);
+    request.set_source(source);
     v1::VolumeInfo info;
     auto context = Context();
     grpc::Status status = stub_->LoadVolume(context.get(), request, &info);
