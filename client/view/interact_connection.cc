@@ -278,9 +278,10 @@ void InteractConnection::ReadFrames(
     shown.info = frame;
     bool reconnected;
     std::string session_id;
+    std::optional<double> latency_ms;
     {
       std::lock_guard lock(mutex_);
-      shown.latency_ms = latency_.Received(frame.last_sequence(), now);
+      shown.latency_ms = latency_ms = latency_.Received(frame.last_sequence(), now);
       frame_rate_.OnFrame(now);
       shown.fps = frame_rate_.Fps(now);
       reconnected = !state_.connected;
@@ -294,11 +295,13 @@ void InteractConnection::ReadFrames(
                    options_.server.address.c_str(), session_id.c_str());
     }
     if (options_.log_frames) {
-      std::printf("frame %llu %dx%d seq %llu %s max_displacement_mm %.3f total_ms %.1f\n",
-                  static_cast<unsigned long long>(frame.frame_number()), frame.width(),
-                  frame.height(), static_cast<unsigned long long>(frame.last_sequence()),
-                  frame.interactive() ? "interactive" : "still", frame.max_displacement_mm(),
-                  frame.timings().total_ms());
+      // rtt_ms -1: the frame shows no event that an earlier frame did not.
+      std::printf(
+          "frame %llu %dx%d seq %llu %s max_displacement_mm %.3f total_ms %.1f rtt_ms %.1f\n",
+          static_cast<unsigned long long>(frame.frame_number()), frame.width(), frame.height(),
+          static_cast<unsigned long long>(frame.last_sequence()),
+          frame.interactive() ? "interactive" : "still", frame.max_displacement_mm(),
+          frame.timings().total_ms(), latency_ms.value_or(-1.0));
       std::fflush(stdout);
     }
     wake_();

@@ -33,7 +33,7 @@ void AddViewFlags(CLI::App& app, ViewFlags* f) {
   app.add_option("--screenshot-dir", f->screenshot_dir, "folder for screenshots (S key)");
   app.add_flag("--log-frames", c.log_frames,
                "print one line per received frame on stdout (number, size, last sequence, "
-               "interactive/still, max_displacement_mm, total_ms)");
+               "interactive/still, max_displacement_mm, server total_ms, round-trip rtt_ms)");
   c.server.deadline_s = 120;
   app.add_option("--deadline-s", c.server.deadline_s, "deadline of each unary call, s");
   std::string footer = "\nControls (also on screen with F1 or h):\n";
