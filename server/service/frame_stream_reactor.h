@@ -1,0 +1,103 @@
+// What the Interact and Watch reactors share around their FrameStream:
+// write-done forwarding, cancellation, finishing exactly once (counted by
+// method and status code), the admission checks of a new stream (token,
+// draining, the per-client stream cap) and, when gRPC is done with the call,
+// the release of everything the stream held (a test counts that every
+// stream opened is closed).
+//
+// `Reactor` is grpc::ServerBidiReactor<In, v1::Frame> or
+// grpc::ServerWriteReactor<v1::Frame>.
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <grpcpp/grpcpp.h>
+
+#include "server/service/frame_stream.h"
+#include "server/service/grpc_status.h"
+#include "server/service/service_context.h"
+#include "vpm/v1/vpm.pb.h"
+
+namespace vpm::service {
+
+template <typename Reactor>
+class FrameStreamReactor : public Reactor, public FrameSink {
+ public:
+  void OnWriteDone(bool ok) override {
+    if (auto s = stream()) s->OnWriteDone(ok);
+  }
+  void OnCancel() override {
+    if (auto s = stream()) {
+      s->Finish(grpc::Status::CANCELLED);
+    } else {
+      FinishStream(grpc::Status::CANCELLED);
+    }
+  }
+  void OnDone() override {
+    if (auto s = stream()) {
+      s->Detach();
+      service_->streams->Unregister(registry_token_);
+    }
+    if (slot_held_) service_->streams->Release(peer_);
+    service_->metrics->StreamClosed();
+    delete this;
+  }
+  void WriteFrame(const v1::Frame* frame) override { this->StartWrite(frame); }
+  void FinishStream(const grpc::Status& status) override {
+    {
+      std::lock_guard lock(mutex_);
+      if (finished_) return;
+      finished_ = true;
+    }
+    service_->metrics->Request(method_, StatusCodeName(status.error_code()));
+    this->Finish(status);
+  }
+
+ protected:
+  // `method`: the RPC's name in metrics ("Interact", "Watch").
+  FrameStreamReactor(ServiceContext* service, grpc::CallbackServerContext* context,
+                     const char* method)
+      : service_(service), peer_(context->peer()), method_(method) {
+    service_->metrics->StreamOpened();
+  }
+
+  // Token, draining, then a stream slot for this client (held until OnDone).
+  Status Admit(const grpc::CallbackServerContext& context) {
+    RETURN_IF_ERROR(service_->auth->Check(context));
+    if (service_->draining) return absl::UnavailableError("the server is shutting down");
+    RETURN_IF_ERROR(service_->streams->Acquire(peer_));
+    slot_held_ = true;
+    return absl::OkStatus();
+  }
+
+  // Installs the stream (OnCancel may run beside the reader), registers it
+  // for shutdown and attaches it to its session.
+  void StartStream(std::shared_ptr<FrameStream> stream) {
+    {
+      std::lock_guard lock(mutex_);
+      stream_ = stream;
+    }
+    registry_token_ = service_->streams->Register(stream);
+    stream->Attach();
+  }
+
+  std::shared_ptr<FrameStream> stream() const {
+    std::lock_guard lock(mutex_);
+    return stream_;
+  }
+
+  ServiceContext* const service_;
+
+ private:
+  const std::string peer_;
+  const char* const method_;
+  bool slot_held_ = false;
+  int64_t registry_token_ = 0;
+  mutable std::mutex mutex_;  // stream_ and finished_
+  std::shared_ptr<FrameStream> stream_;
+  bool finished_ = false;
+};
+
+}  // namespace vpm::service
