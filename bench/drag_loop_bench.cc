@@ -3,6 +3,8 @@
 // and the frame rate of the whole interactive loop; for the 250-vertex mesh
 // refined at the left renal artery, and for ~1,000 and ~5,000 vertices.
 #include <cstdio>
+#include <utility>
+#include <vector>
 
 #include "bench/bench_util.h"
 #include "server/mesh/build_proxy_mesh.h"
@@ -20,8 +22,18 @@ struct Case {
   int64_t target;
 };
 
+// Where the time of a step goes, best of the steps per column (ms).
+struct Breakdown {
+  double map_gpu = 1e300, map_copy = 1e300;             // map passes (GPU), image copy (wall)
+  double clear = 0.0, claim = 1e300, write = 1e300;     // map passes (GPU)
+  double texels = 1e300, occupancy = 1e300, cast = 1e300, upscale = 1e300;  // frame, GPU
+  double frame_gpu = 1e300, readback = 1e300;           // frame: all kernels, readback (wall)
+  int64_t moved = 0, processed = 0;
+};
+
 struct Row {
   double fem = 1e300, map = 1e300, interactive = 1e300, still = 1e300, encode = 1e300;
+  Breakdown parts;
   double loop_fps = 0.0;
   int64_t vertices = 0, inverted = 0;
 };
@@ -57,6 +69,23 @@ Row RunCase(const Case& c, const Volume& volume, const gpu::GpuContext& context,
     row.inverted = step.inverted_tets;
     auto frame = bench::Check(scene->Render(interactive), "render");
     row.interactive = std::min(row.interactive, frame.timings.wall_ms);
+    Breakdown& b = row.parts;
+    const FrameTimings& ft = frame.timings;
+    b.map_gpu = std::min(b.map_gpu, step.map_gpu_ms);
+    b.map_copy = std::min(b.map_copy, step.map_copy_ms);
+    for (const auto& pass : step.map_passes) {
+      if (pass.label == "backward_map claim") b.claim = std::min(b.claim, pass.gpu_ms);
+      if (pass.label == "backward_map write") b.write = std::min(b.write, pass.gpu_ms);
+      if (pass.label == "backward_map clear") b.clear = pass.gpu_ms;
+    }
+    b.texels = std::min(b.texels, ft.map_copy_ms);
+    b.occupancy = std::min(b.occupancy, ft.occupancy_ms);
+    b.cast = std::min(b.cast, ft.raycast_ms);
+    b.upscale = std::min(b.upscale, ft.upscale_ms);
+    b.frame_gpu = std::min(b.frame_gpu, ft.render_ms);
+    b.readback = std::min(b.readback, ft.readback_ms);
+    b.moved = step.moved_tets;
+    b.processed = step.processed_tets;
     const auto t0 = std::chrono::steady_clock::now();
     auto jpeg = bench::Check(EncodeJpeg(frame.rgba, frame.width, frame.height, 85), "jpeg");
     row.encode = std::min(row.encode, bench::MsSince(t0));
@@ -86,6 +115,7 @@ int main(int argc, char** argv) {
   std::printf("per step, best of the 10 steps (ms); loop = FEM + map + interactive frame + JPEG\n");
   std::printf("%-22s %6s %8s %8s %13s %11s %8s %9s %9s\n", "mesh", "verts", "FEM", "map",
               "frame 256^2", "still 512^2", "JPEG", "loop fps", "inverted");
+  std::vector<std::pair<const char*, Row>> rows;
   for (const Case& c : {Case{"20^3 -> 250 + refine", {20, 20, 20}, 250},
                         Case{"24^3 -> 1000 + refine", {24, 24, 24}, 1000},
                         Case{"40^3 -> 5000 + refine", {40, 40, 40}, 5000}}) {
@@ -93,6 +123,19 @@ int main(int argc, char** argv) {
     std::printf("%-22s %6lld %8.2f %8.2f %13.1f %11.1f %8.2f %9.1f %9lld\n", c.name,
                 static_cast<long long>(r.vertices), r.fem, r.map, r.interactive, r.still,
                 r.encode, r.loop_fps, static_cast<long long>(r.inverted));
+    rows.emplace_back(c.name, r);
+  }
+  std::printf("\nbreakdown, best of the steps (ms): map = GPU passes + image copy (wall) + host;"
+              " frame = map to texels + occupancy + cast + upscale (GPU) + readback (wall)\n");
+  std::printf("%-22s %11s %8s %8s %8s %8s %8s %8s %8s %8s %8s %8s %8s\n", "mesh", "moved/list",
+              "map GPU", "clear", "claim", "write", "map copy", "texels", "occup.", "cast",
+              "upscale", "frm GPU", "readback");
+  for (const auto& [name, r] : rows) {
+    const Breakdown& b = r.parts;
+    std::printf("%-22s %5lld/%-5lld %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f "
+                "%8.2f\n",
+                name, static_cast<long long>(b.moved), static_cast<long long>(b.processed),
+                b.map_gpu, b.clear, b.claim, b.write, b.map_copy, b.texels, b.occupancy, b.cast, b.upscale, b.frame_gpu, b.readback);
   }
   return 0;
 }

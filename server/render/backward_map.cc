@@ -104,7 +104,7 @@ Result<BackwardMap> BackwardMap::Create(const gpu::GpuContext& context,
                                    vk::BufferUsageFlagBits::eUniformTexelBuffer));
     values.push_back(std::move(slab));
   }
-  BackwardMap map(context, geometry, dims, options.eps,
+  BackwardMap map(context, geometry, dims, options.eps, options.full_rebuild_moved_fraction,
                   Device{std::move(kernel), std::move(image), std::move(owner), std::move(values),
                          slab_points});
   for (auto* buffer : {&map.tets_buffer_, &map.deformed_buffer_, &map.previous_buffer_,
@@ -217,6 +217,15 @@ Result<BackwardMap::UpdateStats> BackwardMap::Apply(std::span<const glm::dvec3> 
     moved = ChangedTets(rest_mm, deformed_mm, tets);
   }
   stats.moved_tets = static_cast<int64_t>(moved.size());
+  // With FEM nearly every tet moves on a drag step; then the clear pass
+  // costs more than clearing everything (buffer fills) and rasterizing every
+  // tet, which gives the same map (docs/WARP.md).
+  if (!stats.full_rebuild && scope != Scope::kListed &&
+      double(moved.size()) > full_rebuild_moved_fraction_ * double(tets.size())) {
+    stats.full_rebuild = true;
+    moved.resize(tets.size());
+    std::iota(moved.begin(), moved.end(), 0);
+  }
   Plan plan = PlanWork(deformed_mm, tets, stats.full_rebuild, std::move(moved));
   stats.processed_tets = static_cast<int64_t>(plan.work.size());
 

@@ -42,6 +42,10 @@ class BackwardMap {
     // Bytes per values slab; 0: the device's storage-buffer range (128 MiB
     // on lavapipe). Smaller values force more slabs (for tests).
     int64_t max_slab_bytes = 0;
+    // Update rebuilds (fills, then every tet; no clear pass) when more than
+    // this fraction of the tets moved: the same map, cheaper than clearing
+    // nearly every tet (docs/WARP.md). 1: never (tests of the clear pass).
+    double full_rebuild_moved_fraction = 0.5;
   };
 
   struct UpdateStats {
@@ -130,11 +134,13 @@ class BackwardMap {
   };
 
   BackwardMap(const gpu::GpuContext& context, const VolumeGeometry& geometry,
-              std::array<int64_t, 3> dims, double eps, Device device)
+              std::array<int64_t, 3> dims, double eps, double full_rebuild_moved_fraction,
+              Device device)
       : context_(&context),
         geometry_(geometry),
         dims_(dims),
         eps_(eps),
+        full_rebuild_moved_fraction_(full_rebuild_moved_fraction),
         device_(std::move(device)) {}
 
   Result<UpdateStats> Apply(std::span<const glm::dvec3> rest_mm,
@@ -170,6 +176,7 @@ class BackwardMap {
   VolumeGeometry geometry_;
   std::array<int64_t, 3> dims_;
   double eps_;
+  double full_rebuild_moved_fraction_;
   Device device_;
   // Grown on demand; created (1 element) with the map so every binding is
   // valid. previous_buffer_ holds the deformed positions of the last update

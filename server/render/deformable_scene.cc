@@ -1,5 +1,6 @@
 #include "server/render/deformable_scene.h"
 
+#include <atomic>
 #include <chrono>
 
 #include "server/render/overlay.h"
@@ -7,6 +8,11 @@
 
 namespace vpm {
 namespace {
+
+// Map versions unique in the process: the renderer keys its cached brick
+// occupancy on (map image, version), and a later scene's map may reuse an
+// address.
+std::atomic<uint64_t> next_map_version{1};
 
 double MsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -34,6 +40,7 @@ Result<std::unique_ptr<DeformableScene>> DeformableScene::Create(
   scene->fem_.emplace(std::move(fem));
   ASSIGN_OR_RETURN(BackwardMap map, BackwardMap::Create(context, volume.geometry(), options.map));
   scene->map_.emplace(std::move(map));
+  scene->map_version_ = next_map_version.fetch_add(1);
   return scene;
 }
 
@@ -47,10 +54,16 @@ Result<GrabInfo> DeformableScene::Grab(const glm::dvec3& point_mm, double radius
 Result<SceneStepTimings> DeformableScene::UpdateMap(SceneStepTimings timings) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<glm::dvec3> deformed = fem_->Positions();
+  map_version_ = 0;  // unknown until the update has succeeded
   ASSIGN_OR_RETURN(BackwardMap::UpdateStats stats,
                    map_->Update(fem_->rest_positions_mm(), deformed, fem_->tets()));
+  map_version_ = next_map_version.fetch_add(1);
   timings.warp_ms = MsSince(t0);
+  timings.map_gpu_ms = stats.gpu_ms;
+  timings.map_copy_ms = stats.copy_ms;
+  timings.map_passes = stats.passes;
   timings.moved_tets = stats.moved_tets;
+  timings.processed_tets = stats.processed_tets;
   timings.inverted_tets = fem_->CountInvertedTets();
   return timings;
 }
@@ -93,6 +106,10 @@ Result<Frame> DeformableScene::Render(const SceneView& view) {
   request.height = view.height;
   request.volume = gpu_volume_;
   request.backward_map = &map_->image();
+  // Frames between drag steps (orbit, zoom, preset of the same mode) reuse
+  // the brick occupancy, and the ray caster reads the map's own buffer.
+  request.backward_map_version = map_version_;
+  request.backward_map_texels = map_->values_buffer();
   if (view.overlay) {
     const std::vector<glm::dvec3> positions = fem_->Positions();
     const auto& handles = fem_->grabbed() ? fem_->grab().handles : std::vector<int32_t>{};

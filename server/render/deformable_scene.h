@@ -10,6 +10,7 @@
 
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "server/common/status.h"
 #include "server/fem/fem_model.h"
@@ -27,7 +28,11 @@ namespace vpm {
 struct SceneStepTimings {
   double fem_ms = 0.0;   // wall: FEM solve (or release)
   double warp_ms = 0.0;  // wall: backward-map upload, update and wait
+  double map_gpu_ms = 0.0;   // GPU: the map's passes (timestamps), part of warp_ms
+  double map_copy_ms = 0.0;  // wall: copying the map's changed box into its image
+  std::vector<gpu::DispatchTiming> map_passes;  // GPU: clear (updates), claim, write
   int64_t moved_tets = 0;
+  int64_t processed_tets = 0;  // moved plus those whose boxes meet them
   double max_displacement_mm = 0.0;
   int64_t inverted_tets = 0;
   bool converged = true;
@@ -91,6 +96,9 @@ class DeformableScene {
   std::optional<BackwardMap> map_;
   std::optional<glm::dvec3> grab_point_mm_;
   glm::dvec3 drag_offset_mm_{0.0};
+  // Changes with every map update (0 while one is in progress): frames with
+  // the same version see the same map (RenderRequest::backward_map_version).
+  uint64_t map_version_ = 0;
 };
 
 }  // namespace vpm

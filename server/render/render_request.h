@@ -11,6 +11,7 @@
 #include <glm/glm.hpp>
 
 #include "server/common/status.h"
+#include "server/gpu/gpu_buffer.h"
 #include "server/gpu/gpu_image3d.h"
 #include "server/gpu/shader_interface.h"
 #include "server/render/camera.h"
@@ -69,6 +70,11 @@ struct RenderRequest {
   // (bump it with every update), so the renderer may reuse its per-frame
   // brick occupancy. 0: unknown, recomputed every frame.
   uint64_t backward_map_version = 0;
+  // Optional: the map's values as a buffer with uniform-texel usage, vec4
+  // per grid point, x fastest (BackwardMap::values_buffer()). The
+  // texel-buffer ray casters then read it in place instead of copying the
+  // image into a buffer of their own every frame (map_to_texels.comp).
+  const gpu::GpuBuffer* backward_map_texels = nullptr;
   RaycastSettings settings;
   OverlayData overlay;
 };

@@ -220,7 +220,8 @@ Status VolumeRenderer::CheckGpuInputs(const RenderRequest& request) const {
 
 Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
                                    const RaycastSetup& setup, const gpu::GpuBuffer& minmax,
-                                   bool upscale, bool occupancy_current) {
+                                   bool upscale, bool occupancy_current,
+                                   vk::BufferView map_view) {
   const gpu::RaycastParams& p = setup.params;
   const gpu::GpuImage3D* map = request.backward_map ? request.backward_map : &*identity_map_;
   const bool sampled = options_.volume_access == VolumeAccess::kSampler3D;
@@ -230,7 +231,9 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
   if (request.settings.count_samples) RETURN_IF_ERROR(batch.Fill(*stats_, 0));
   // The map's texel copy serves the occupancy pass and the texel-buffer ray
   // casters.
-  if (has_map && (occupancy || !sampled)) {
+  const bool in_place = has_map && request.backward_map_texels != nullptr;
+  if (!in_place) map_view = *map_texels_view_;
+  if (has_map && !in_place && (occupancy || !sampled)) {
     const auto& e = map->extent();
     const int points = int(e[0] * e[1] * e[2]);
     const gpu::MapToTexelsPush push{.map_dims = glm::ivec4(e[0], e[1], e[2], 0)};
@@ -248,13 +251,13 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
         .map_dims = glm::vec4(glm::vec3(map->extent()[0], map->extent()[1], map->extent()[2]),
                               0.0f)};
     RETURN_IF_ERROR(batch.Dispatch(*occupancy_kernel_,
-                                   {&minmax, *map_texels_view_, &*nonzero_prefix_, &*occupancy_},
+                                   {&minmax, map_view, &*nonzero_prefix_, &*occupancy_},
                                    push, {GroupCount(bricks, 64), 1, 1}, "occupancy"));
   }
   const gpu::KernelArg volume_arg = sampled ? gpu::KernelArg(request.volume_image)
                                             : gpu::KernelArg(request.volume->texel_view());
   const gpu::KernelArg map_arg =
-      sampled ? gpu::KernelArg(map) : gpu::KernelArg(*map_texels_view_);
+      sampled ? gpu::KernelArg(map) : gpu::KernelArg(map_view);
   const std::array<gpu::KernelArg, 7> args{
       volume_arg, map_arg, &*params_, &*lut_, &*occupancy_, &*pixels_, &*stats_};
   RETURN_IF_ERROR(batch.Dispatch(
@@ -295,8 +298,28 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   if (!occupancy_ || occupancy_->size_bytes() < bricks * sizeof(float)) occupancy_key_.reset();
   RETURN_IF_ERROR(EnsureBuffer(occupancy_, bricks * sizeof(float), BU::eStorageBuffer));
   RETURN_IF_ERROR(EnsureBuffer(pixels_, render_pixels * 4, BU::eStorageBuffer));
+  // A view of the caller's copy of the map, when it gives one: created per
+  // frame (microseconds), so that it never outlives the buffer.
+  vk::raii::BufferView map_view{nullptr};
   if (request.backward_map) {
-    RETURN_IF_ERROR(EnsureMapTexels(size_t(map_dims[0]) * map_dims[1] * map_dims[2]));
+    const size_t points = size_t(map_dims[0]) * map_dims[1] * map_dims[2];
+    if (const gpu::GpuBuffer* texels = request.backward_map_texels) {
+      if (points > context_->limits().maxTexelBufferElements ||
+          texels->size_bytes() < points * sizeof(glm::vec4)) {
+        return absl::InvalidArgumentError(
+            StrCat("backward_map_texels: ", texels->size_bytes(), " bytes for a map of ", points,
+                   " points (16 bytes each, at most ", context_->limits().maxTexelBufferElements,
+                   " texels)"));
+      }
+      RETURN_IF_ERROR(gpu::CatchVulkan("creating a view of the backward map's values", [&] {
+        map_view = vk::raii::BufferView(
+            context_->device(),
+            vk::BufferViewCreateInfo({}, texels->handle(), vk::Format::eR32G32B32A32Sfloat, 0,
+                                     points * sizeof(glm::vec4)));
+      }));
+    } else {
+      RETURN_IF_ERROR(EnsureMapTexels(points));
+    }
   }
   // The occupancy depends on the volume, the table, the mode and the map; a
   // map's content is known unchanged only through backward_map_version.
@@ -310,7 +333,8 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   RETURN_IF_ERROR(params_->Upload(std::as_bytes(std::span<const gpu::RaycastParams>(&p, 1))));
 
   ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 5));
-  RETURN_IF_ERROR(RecordFrame(batch, request, setup, *minmax, upscale, occupancy_current));
+  RETURN_IF_ERROR(
+      RecordFrame(batch, request, setup, *minmax, upscale, occupancy_current, *map_view));
   ASSIGN_OR_RETURN(const auto timings, batch.SubmitAndWait());
   if (request.settings.empty_space_skipping && cacheable) occupancy_key_ = key;
 

@@ -82,7 +82,7 @@ class VolumeRenderer {
   Status EnsureMapTexels(size_t points);
   Status RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
                      const RaycastSetup& setup, const gpu::GpuBuffer& minmax, bool upscale,
-                     bool occupancy_current);
+                     bool occupancy_current, vk::BufferView map_view);
 
   const gpu::GpuContext* context_;
   Options options_;

@@ -29,9 +29,11 @@ VolumeGeometry Geometry(std::array<int64_t, 3> dims, glm::dvec3 spacing_mm) {
   return g;
 }
 
+// Incremental whatever moved, so that the tests exercise the clear pass.
 BackwardMap MakeMap(gpu::GpuContext& context, const VolumeGeometry& g,
-                    std::array<int64_t, 3> map_dims) {
-  auto map = BackwardMap::Create(context, g, {.map_dims = map_dims});
+                    std::array<int64_t, 3> map_dims, double full_rebuild_moved_fraction = 1.0) {
+  auto map = BackwardMap::Create(
+      context, g, {.map_dims = map_dims, .full_rebuild_moved_fraction = full_rebuild_moved_fraction});
   if (!map.ok()) {
     ADD_FAILURE() << map.status();
     std::abort();
@@ -201,6 +203,34 @@ TEST_F(GpuTest, BackwardMap_MovedTetsUpdateEqualsFullRebuild) {
       EXPECT_TRUE(BitwiseEqual(Download(incremental), expected));
       EXPECT_TRUE(BitwiseEqual(Download(listed), expected));
     }
+  }
+}
+
+// By default an update that moves most tets (every free vertex moves under
+// FEM) rebuilds instead of clearing them one by one; a local drag stays
+// incremental; both give the incremental map bit for bit.
+TEST_F(GpuTest, BackwardMap_UpdateMovingMostTetsRebuildsTheSameMap) {
+  const VolumeGeometry g = Geometry({40, 36, 30}, {1.0, 1.1, 1.3});
+  const glm::dvec3 e = g.extent_mm();
+  const WarpMesh mesh = RandomWarpMesh(150, e, 7);
+  BackwardMap by_default = MakeMap(context(), g, {0, 0, 0}, 0.5);
+  BackwardMap incremental = MakeMap(context(), g, {0, 0, 0});
+  for (auto* map : {&by_default, &incremental}) {
+    ASSERT_TRUE(map->Update(mesh.rest_mm, mesh.rest_mm, mesh.tets).ok());
+  }
+  const std::vector<std::vector<glm::dvec3>> steps = {
+      Dragged(mesh, e * 0.3, 0.25 * e.x, {2.0, -1.0, 1.5}), RandomlyMoved(mesh, 1.0, 5),
+      RandomlyMoved(mesh, 1.5, 6)};
+  for (size_t s = 0; s < steps.size(); ++s) {
+    SCOPED_TRACE(::testing::Message() << "step " << s);
+    auto stats = by_default.Update(mesh.rest_mm, steps[s], mesh.tets);
+    ASSERT_TRUE(stats.ok()) << stats.status();
+    auto incremental_stats = incremental.Update(mesh.rest_mm, steps[s], mesh.tets);
+    ASSERT_TRUE(incremental_stats.ok()) << incremental_stats.status();
+    EXPECT_FALSE(incremental_stats->full_rebuild);
+    EXPECT_EQ(stats->full_rebuild, 2 * stats->moved_tets > int64_t(mesh.tets.size()));
+    EXPECT_EQ(stats->full_rebuild, s > 0);
+    EXPECT_TRUE(BitwiseEqual(Download(by_default), Download(incremental)));
   }
 }
 

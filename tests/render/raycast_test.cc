@@ -162,6 +162,36 @@ TEST_F(RaycastTest, DeformingMap_GpuMatchesCpuAndSkippingStaysExact) {
   }
 }
 
+// The map's values given as a buffer (BackwardMap::values_buffer) are read
+// in place, with the same picture as the renderer's own copy of the image;
+// a buffer too small for the map is refused.
+TEST_F(RaycastTest, MapTexelsInPlace_SameFrameAsImageCopy) {
+  HostBackwardMap host;
+  auto map = MakeMap(9, 6.0, &host);
+  ASSERT_TRUE(map.ok()) << map.status();
+  using BU = vk::BufferUsageFlagBits;
+  auto texels = gpu::GpuBuffer::Create(context(), host.texels.size() * sizeof(glm::vec4),
+                                       BU::eStorageBuffer | BU::eUniformTexelBuffer);
+  ASSERT_TRUE(texels.ok()) << texels.status();
+  ASSERT_TRUE(texels->UploadSpan(std::span<const glm::vec4>(host.texels)).ok());
+  for (RenderMode mode : {RenderMode::kDvr, RenderMode::kMip}) {
+    RenderRequest r = Request(mode);
+    r.backward_map = &*map;
+    const Frame copied = RenderGpu(r);
+    r.backward_map_texels = &*texels;
+    const Frame in_place = RenderGpu(r);
+    EXPECT_EQ(in_place.timings.map_copy_ms, 0.0);
+    EXPECT_EQ(in_place.rgba, copied.rgba);
+  }
+  auto small = gpu::GpuBuffer::Create(context(), 16 * sizeof(glm::vec4),
+                                      BU::eStorageBuffer | BU::eUniformTexelBuffer);
+  ASSERT_TRUE(small.ok()) << small.status();
+  RenderRequest r = Request(RenderMode::kDvr);
+  r.backward_map = &*map;
+  r.backward_map_texels = &*small;
+  EXPECT_EQ(renderer_->Render(r).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
 TEST_F(RaycastTest, Occupancy_ReusedOnlyWhileMapVersionAndPresetHold) {
   HostBackwardMap host;
   auto map = MakeMap(9, 6.0, &host);
