@@ -67,13 +67,26 @@ wait_for 10 xdpyinfo >/dev/null 2>&1 || die "Xvfb did not start on $display: $(c
 token=$(head -c 12 /dev/urandom | od -An -tx1 | tr -d ' \n')
 port=""
 test_listening() { [ "$(grep -c "listening on port" "$tmp/server.log")" -gt "$1" ]; }
+listening_or_gone() { test_listening "$1" || ! kill -0 "$server_pid" 2>/dev/null; }
+# Starts vpm-server and waits until it listens. A server that exits at once
+# (the port of a killed server not yet free, a binary being relinked in the
+# shared build tree) is tried again, up to 5 times.
 start_server() {  # LISTEN_ADDRESS
-  "$server_bin" --listen "$1" --token "$token" >> "$tmp/server.log" 2>&1 &
-  server_pid=$!
-  local before
-  before=$(grep -c "listening on port" "$tmp/server.log")
-  wait_for 30 test_listening "$before" || die "vpm-server did not start"
-  port=$(sed -n 's/^vpm-server listening on port \([0-9]*\).*/\1/p' "$tmp/server.log" | tail -1)
+  local before attempt
+  for attempt in 1 2 3 4 5; do
+    touch "$tmp/server.log"
+    before=$(grep -c "listening on port" "$tmp/server.log")
+    "$server_bin" --listen "$1" --token "$token" >> "$tmp/server.log" 2>&1 &
+    server_pid=$!
+    wait_for 60 listening_or_gone "$before" || die "vpm-server did not listen within 60 s"
+    if test_listening "$before"; then
+      port=$(sed -n 's/^vpm-server listening on port \([0-9]*\).*/\1/p' "$tmp/server.log" | tail -1)
+      return 0
+    fi
+    echo "note: vpm-server exited at start (attempt $attempt): $(tail -2 "$tmp/server.log")"
+    sleep 1
+  done
+  die "vpm-server did not start"
 }
 start_server 127.0.0.1:0
 
@@ -189,12 +202,13 @@ else fail "S did not save a PNG screenshot ($png)"; fi
 
 # 7. Resizing the window asks for frames of the new size (the frame area is
 # the window less the status bar).
+n=$(frames)
 xdotool windowsize "$window" 320 300
 bar=$(( $(identify -format %h "$tmp/first-window.png") - frame_h ))
 want="320x$((300 - bar))"
 if wait_for 60 grep -q "^frame [0-9]* $want " "$tmp/view.out"; then pass "resize to 320x300 brought $want frames"
 else fail "no $want frame after resizing the window to 320x300"; fi
-settle "$(frames)"
+settle "$n"
 frame_w=320 frame_h=$((300 - bar))
 
 # 8. The server dies: a red banner says so; it comes back on the same port: frames again.
