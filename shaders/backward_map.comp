@@ -23,14 +23,16 @@
 // owner unless a moved tet now claims it with a smaller index, so the owners
 // come out as in a full rebuild (docs/WARP.md has the argument).
 //
-// One workgroup of 64 per listed tet; its invocations take the rows (y, z)
+// One workgroup of 16 per listed tet (a tet of the 64^3 map spans some 20-40
+// rows; workgroups of 64 left most lanes idle and cost 1.3-2x the time of
+// 16, measured with drag_loop_bench); its invocations take the rows (y, z)
 // of the tet's box in turn, and each row only the x range where the four
 // weights, linear in x along the row, can be >= -eps (widened by one point;
 // the per-point test decides). The clear pass walks the same ranges from the
 // previous positions, so it visits every point the tet claimed then.
 #include "shader_interface.glsl"
 
-layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+layout(local_size_x = 16, local_size_y = 1, local_size_z = 1) in;
 layout(std430, binding = 0) readonly buffer Tets { uvec4 tets[]; };
 layout(std430, binding = 1) readonly buffer Deformed { vec4 deformed[]; };      // mm
 // rest - deformed, mm

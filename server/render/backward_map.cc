@@ -15,7 +15,7 @@ using gpu::BackwardMapTetWork;
 constexpr int kPassClear = 0;
 constexpr int kPassClaim = 1;
 constexpr int kPassWrite = 2;
-constexpr uint32_t kLocalSize = 64;
+constexpr uint32_t kLocalSize = 16;
 constexpr uint32_t kNoOwner = 0xFFFFFFFFu;
 constexpr vk::Format kMapFormat = vk::Format::eR32G32B32A32Sfloat;
 constexpr int64_t kMaxValueSlabs = 4;  // values0..3 in backward_map.comp
