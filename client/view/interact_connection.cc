@@ -122,15 +122,13 @@ Status InteractConnection::ResolveSession() {
   std::string session_id = state().session_id;
   if (!session_id.empty()) {
     v1::ListSessionsResponse sessions;
-    auto context = server_->Context();
-    RETURN_IF_ERROR(cli::FromGrpc(server_->stub().ListSessions(context.get(), {}, &sessions)));
+    RETURN_IF_ERROR(Call(&v1::Vpm::Stub::ListSessions, v1::ListSessionsRequest(), &sessions));
     for (const v1::SessionInfo& s : sessions.sessions()) {
       if (s.session_id() != session_id) continue;
       v1::GetVolumeRequest get;
       get.set_volume_id(s.volume_id());
       v1::VolumeInfo volume;
-      auto volume_context = server_->Context();
-      RETURN_IF_ERROR(cli::FromGrpc(server_->stub().GetVolume(volume_context.get(), get, &volume)));
+      RETURN_IF_ERROR(Call(&v1::Vpm::Stub::GetVolume, get, &volume));
       std::lock_guard lock(mutex_);
       state_.volume = volume;
       state_.mesh_id = s.mesh_id();
@@ -148,14 +146,12 @@ Status InteractConnection::ResolveSession() {
   v1::LoadVolumeRequest load;
   load.set_source(options_.volume_source);
   v1::VolumeInfo volume;
-  auto load_context = server_->Context();
-  RETURN_IF_ERROR(cli::FromGrpc(server_->stub().LoadVolume(load_context.get(), load, &volume)));
+  RETURN_IF_ERROR(Call(&v1::Vpm::Stub::LoadVolume, load, &volume));
   SetState(false, "opening a session (building the proxy mesh) ...");
   v1::OpenSessionRequest open;
   open.set_volume_id(volume.volume_id());
   v1::SessionInfo session;
-  auto open_context = server_->Context();
-  RETURN_IF_ERROR(cli::FromGrpc(server_->stub().OpenSession(open_context.get(), open, &session)));
+  RETURN_IF_ERROR(Call(&v1::Vpm::Stub::OpenSession, open, &session));
   std::lock_guard lock(mutex_);
   state_.volume = volume;
   state_.session_id = session.session_id();
@@ -175,14 +171,12 @@ Status InteractConnection::Refine(const glm::dvec3& point_mm) {
   refine.mutable_point_mm()->set_y(point_mm.y);
   refine.mutable_point_mm()->set_z(point_mm.z);
   v1::MeshInfo mesh;
-  auto refine_context = server_->Context();
-  RETURN_IF_ERROR(cli::FromGrpc(server_->stub().RefineMesh(refine_context.get(), refine, &mesh)));
+  RETURN_IF_ERROR(Call(&v1::Vpm::Stub::RefineMesh, refine, &mesh));
   v1::OpenSessionRequest open;
   open.set_volume_id(before.volume->volume_id());
   open.set_mesh_id(mesh.mesh_id());
   v1::SessionInfo session;
-  auto open_context = server_->Context();
-  RETURN_IF_ERROR(cli::FromGrpc(server_->stub().OpenSession(open_context.get(), open, &session)));
+  RETURN_IF_ERROR(Call(&v1::Vpm::Stub::OpenSession, open, &session));
   bool close_old;
   {
     std::lock_guard lock(mutex_);
@@ -196,8 +190,7 @@ Status InteractConnection::Refine(const glm::dvec3& point_mm) {
     v1::CloseSessionRequest close;
     close.set_session_id(before.session_id);
     v1::CloseSessionResponse closed;
-    auto close_context = server_->Context();
-    (void)server_->stub().CloseSession(close_context.get(), close, &closed);
+    (void)Call(&v1::Vpm::Stub::CloseSession, close, &closed);
   }
   std::fprintf(stderr, "vpm-view: refined mesh %s, session %s\n", mesh.mesh_id().c_str(),
                session.session_id().c_str());

@@ -79,6 +79,14 @@ class InteractConnection {
   void WriteEvents(grpc::ClientReaderWriter<v1::InteractRequest, v1::Frame>* stream,
                    uint64_t* sequence);
   void SetState(bool connected, std::string message);
+  // One unary call with the token and the deadline.
+  template <typename Request, typename Response>
+  Status Call(grpc::Status (v1::Vpm::Stub::*method)(grpc::ClientContext*, const Request&,
+                                                     Response*),
+              const Request& request, Response* response) {
+    auto context = server_->Context();
+    return cli::FromGrpc((server_->stub().*method)(context.get(), request, response));
+  }
   void CancelStream();
 
   ConnectionOptions options_;

@@ -2,6 +2,7 @@
 // outbound event queue, the stream meters and the status bar text.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <set>
 #include <thread>
 
@@ -166,18 +167,28 @@ TEST(ReconnectBackoff, DoublesFromAQuarterSecondUpToFive) {
   EXPECT_DOUBLE_EQ(ReconnectBackoffS(1000), 5.0);
 }
 
+v1::Frame FrameOf(int side, bool interactive, double displacement_mm,
+                  std::array<double, 6> stage_ms) {  // fem warp render encode queue total
+  v1::Frame f;
+  f.set_width(side);
+  f.set_height(side * 3 / 4);
+  f.set_interactive(interactive);
+  f.set_max_displacement_mm(displacement_mm);
+  v1::StageTimings* t = f.mutable_timings();
+  t->set_fem_ms(stage_ms[0]);
+  t->set_warp_ms(stage_ms[1]);
+  t->set_render_ms(stage_ms[2]);
+  t->set_encode_ms(stage_ms[3]);
+  t->set_queue_ms(stage_ms[4]);
+  t->set_total_ms(stage_ms[5]);
+  return f;
+}
+
 TEST(StatusLines, ShowRateLatencySizeQualityDisplacementAndServerTimes) {
   StatusInputs in;
   in.fps = 12.34;
   in.latency_ms = 85.4;
-  v1::Frame f;
-  f.set_width(256);
-  f.set_height(192);
-  f.set_interactive(true);
-  f.set_max_displacement_mm(3.21);
-  f.mutable_timings()->set_fem_ms(10.2);
-  f.mutable_timings()->set_total_ms(60.3);
-  in.frame = f;
+  in.frame = FrameOf(256, true, 3.21, {10.2, 0, 0, 0, 0, 60.3});
   in.grab_mode = true;
   const auto lines = StatusLines(in);
   EXPECT_EQ(lines[0], "12.3 fps  rtt 85 ms  256x192");
@@ -190,19 +201,7 @@ TEST(StatusLines, FitA256PixelWindowWithSlowStages) {
   StatusInputs in;
   in.fps = 123.4;
   in.latency_ms = 12345;
-  v1::Frame f;
-  f.set_width(4096);
-  f.set_height(4096);
-  f.set_max_displacement_mm(123.4);
-  for (auto* t : {f.mutable_timings()}) {
-    t->set_fem_ms(1234);
-    t->set_warp_ms(123);
-    t->set_render_ms(1234);
-    t->set_encode_ms(123);
-    t->set_queue_ms(123);
-    t->set_total_ms(12345);
-  }
-  in.frame = f;
+  in.frame = FrameOf(4096, true, 123.4, {1234, 123, 1234, 123, 123, 12345});
   in.grab_mode = in.grabbed = true;
   for (const std::string& line : StatusLines(in)) {
     EXPECT_LE(TextWidth(line), 256 - 2 * 3) << line;  // 3-pixel margins
