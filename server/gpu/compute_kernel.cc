@@ -1,5 +1,7 @@
 #include "server/gpu/compute_kernel.h"
 
+#include "server/gpu/pipeline_cache.h"
+
 namespace vpm::gpu {
 
 Result<ComputeKernel> ComputeKernel::Create(const GpuContext& context, KernelSpec spec) {
@@ -27,32 +29,7 @@ Result<ComputeKernel> ComputeKernel::Create(const GpuContext& context, KernelSpe
         " bytes (must be a multiple of 4, at most ", limits.maxPushConstantsSize, ")"));
   }
   ComputeKernel k;
-  RETURN_IF_ERROR(CatchVulkan("creating a compute pipeline", [&] {
-    std::vector<vk::DescriptorSetLayoutBinding> bindings;
-    for (uint32_t i = 0; i < spec.bindings.size(); ++i) {
-      bindings.emplace_back(i, spec.bindings[i], 1, vk::ShaderStageFlagBits::eCompute);
-    }
-    k.set_layout_ = vk::raii::DescriptorSetLayout(context.device(), {{}, bindings});
-    vk::PushConstantRange range(vk::ShaderStageFlagBits::eCompute, 0, spec.push_constant_bytes);
-    vk::DescriptorSetLayout set_layout = *k.set_layout_;
-    vk::PipelineLayoutCreateInfo layout_info({}, set_layout);
-    if (spec.push_constant_bytes > 0) layout_info.setPushConstantRanges(range);
-    k.layout_ = vk::raii::PipelineLayout(context.device(), layout_info);
-    k.module_ = vk::raii::ShaderModule(
-        context.device(),
-        vk::ShaderModuleCreateInfo({}, spec.spirv.size_bytes(), spec.spirv.data()));
-    std::vector<vk::SpecializationMapEntry> entries;
-    for (uint32_t i = 0; i < spec.specialization.size(); ++i) {
-      entries.emplace_back(i, i * uint32_t(sizeof(uint32_t)), sizeof(uint32_t));
-    }
-    const vk::SpecializationInfo specialization(uint32_t(entries.size()), entries.data(),
-                                                spec.specialization.size() * sizeof(uint32_t),
-                                                spec.specialization.data());
-    vk::PipelineShaderStageCreateInfo stage({}, vk::ShaderStageFlagBits::eCompute, *k.module_,
-                                            "main", entries.empty() ? nullptr : &specialization);
-    k.pipeline_ = vk::raii::Pipeline(context.device(), nullptr,
-                                     vk::ComputePipelineCreateInfo({}, stage, *k.layout_));
-  }));
+  ASSIGN_OR_RETURN(k.objects_, context.pipelines().Get(context.device(), spec));
   k.spec_ = std::move(spec);
   return k;
 }

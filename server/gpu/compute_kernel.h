@@ -1,9 +1,12 @@
 // A compute pipeline built from embedded SPIR-V, with its descriptor-set
 // layout (one set, binding i of type bindings[i]) and push-constant range.
+// The Vulkan objects come from the context's PipelineCache: kernels of the
+// same spec share one pipeline.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -12,6 +15,7 @@
 
 #include "server/common/status.h"
 #include "server/gpu/gpu_context.h"
+#include "server/gpu/pipeline_cache.h"
 
 namespace vpm::gpu {
 
@@ -34,9 +38,9 @@ class ComputeKernel {
   ComputeKernel& operator=(ComputeKernel&&) = default;
 
   const KernelSpec& spec() const { return spec_; }
-  vk::Pipeline pipeline() const { return *pipeline_; }
-  vk::PipelineLayout layout() const { return *layout_; }
-  vk::DescriptorSetLayout set_layout() const { return *set_layout_; }
+  vk::Pipeline pipeline() const { return *objects_->pipeline; }
+  vk::PipelineLayout layout() const { return *objects_->layout; }
+  vk::DescriptorSetLayout set_layout() const { return *objects_->set_layout; }
 
   // Workgroups needed to cover `threads` invocations (ceil division per axis).
   std::array<uint32_t, 3> GroupsFor(std::array<uint32_t, 3> threads) const;
@@ -45,10 +49,8 @@ class ComputeKernel {
   ComputeKernel() = default;
 
   KernelSpec spec_;
-  vk::raii::DescriptorSetLayout set_layout_{nullptr};
-  vk::raii::PipelineLayout layout_{nullptr};
-  vk::raii::ShaderModule module_{nullptr};
-  vk::raii::Pipeline pipeline_{nullptr};
+  // Shared with every kernel of the same spec (GpuContext::pipelines()).
+  std::shared_ptr<const PipelineObjects> objects_;
 };
 
 }  // namespace vpm::gpu

@@ -1,5 +1,7 @@
 #include "server/gpu/gpu_context.h"
 
+#include "server/gpu/pipeline_cache.h"
+
 #include <algorithm>
 #include <atomic>
 #include <cctype>
@@ -14,9 +16,10 @@ std::atomic<uint64_t> g_validation_messages{0};
 
 constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
 
-VKAPI_ATTR VkBool32 VKAPI_CALL OnValidationMessage(
-    VkDebugUtilsMessageSeverityFlagBitsEXT severity, VkDebugUtilsMessageTypeFlagsEXT /*types*/,
-    const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
+VKAPI_ATTR VkBool32 VKAPI_CALL OnValidationMessage(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                   VkDebugUtilsMessageTypeFlagsEXT /*types*/,
+                                                   const VkDebugUtilsMessengerCallbackDataEXT* data,
+                                                   void* user) {
   if (severity >= VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT) {
     auto* context = static_cast<GpuContext*>(user);
     std::string message = data->pMessage ? data->pMessage : "(no message)";
@@ -34,11 +37,16 @@ std::string Lower(std::string s) {
 
 int DeviceTypeRank(vk::PhysicalDeviceType type) {
   switch (type) {
-    case vk::PhysicalDeviceType::eDiscreteGpu: return 0;
-    case vk::PhysicalDeviceType::eIntegratedGpu: return 1;
-    case vk::PhysicalDeviceType::eVirtualGpu: return 2;
-    case vk::PhysicalDeviceType::eCpu: return 3;
-    default: return 4;
+    case vk::PhysicalDeviceType::eDiscreteGpu:
+      return 0;
+    case vk::PhysicalDeviceType::eIntegratedGpu:
+      return 1;
+    case vk::PhysicalDeviceType::eVirtualGpu:
+      return 2;
+    case vk::PhysicalDeviceType::eCpu:
+      return 3;
+    default:
+      return 4;
   }
 }
 
@@ -65,6 +73,7 @@ Result<std::unique_ptr<GpuContext>> GpuContext::Create(const Options& options) {
 
 GpuContext::~GpuContext() {
   if (*device_) device_.waitIdle();
+  pipelines_.reset();  // before the device (also by declaration order)
 }
 
 Status GpuContext::Init(const Options& options) {
@@ -108,6 +117,7 @@ Status GpuContext::Init(const Options& options) {
     vk::DeviceCreateInfo device_info({}, queue_info);
     device_ = vk::raii::Device(physical_device_, device_info);
     queue_ = vk::raii::Queue(device_, queue_family_, 0);
+    pipelines_ = std::make_unique<PipelineCache>();
     command_pool_ = vk::raii::CommandPool(
         device_, {vk::CommandPoolCreateFlagBits::eResetCommandBuffer, queue_family_});
     if (options.log_device) {

@@ -20,13 +20,15 @@
 
 namespace vpm::gpu {
 
+class PipelineCache;
+
 class GpuContext {
  public:
   struct Options {
-    std::string device_selector;     // "" = automatic (env VPM_VULKAN_DEVICE overrides)
-    bool enable_validation = false;  // also on with env VPM_VULKAN_VALIDATION=1
-    bool require_validation = false; // fail if the Khronos layer is not installed
-    bool log_device = true;          // print the chosen device on stderr
+    std::string device_selector;      // "" = automatic (env VPM_VULKAN_DEVICE overrides)
+    bool enable_validation = false;   // also on with env VPM_VULKAN_VALIDATION=1
+    bool require_validation = false;  // fail if the Khronos layer is not installed
+    bool log_device = true;           // print the chosen device on stderr
   };
 
   static Result<std::unique_ptr<GpuContext>> Create(const Options& options);
@@ -59,6 +61,9 @@ class GpuContext {
   // one-off transfers (uploads, readbacks, layout changes).
   Status RunCommands(const std::function<void(const vk::raii::CommandBuffer&)>& record) const;
 
+  // The compute pipelines built on this device (ComputeKernel::Create).
+  PipelineCache& pipelines() const { return *pipelines_; }
+
   bool validation_enabled() const { return validation_enabled_; }
   // Validation messages of severity warning or error seen so far.
   std::vector<std::string> validation_messages() const;
@@ -86,8 +91,9 @@ class GpuContext {
   vk::raii::Device device_{nullptr};
   vk::raii::Queue queue_{nullptr};
   vk::raii::CommandPool command_pool_{nullptr};
-  mutable std::mutex pool_mutex_;   // command pool is externally synchronised
-  mutable std::mutex queue_mutex_;  // so is the queue
+  std::unique_ptr<PipelineCache> pipelines_;  // destroyed before the device
+  mutable std::mutex pool_mutex_;             // command pool is externally synchronised
+  mutable std::mutex queue_mutex_;            // so is the queue
 
   uint32_t queue_family_ = 0;
   vk::PhysicalDeviceProperties properties_{};

@@ -118,6 +118,27 @@ TEST_F(ComputeBatchTest, ComputeKernel_RejectsMissingSpirvAndBadLocalSize) {
             absl::StatusCode::kInvalidArgument);
 }
 
+TEST_F(ComputeBatchTest, ComputeKernel_SameSpecSharesOnePipeline) {
+  const gpu::KernelSpec spec{.name = "gradient_magnitude",
+                             .spirv = kGradientMagnitudeSpv,
+                             .bindings = {vk::DescriptorType::eUniformTexelBuffer,
+                                          vk::DescriptorType::eStorageBuffer},
+                             .push_constant_bytes = sizeof(gpu::GradientPush),
+                             .local_size = {64, 1, 1}};
+  const size_t cached = context().pipelines().size();
+  auto again = gpu::ComputeKernel::Create(context(), spec);
+  ASSERT_TRUE(again.ok()) << again.status();
+  EXPECT_EQ(again->pipeline(), kernel_->pipeline());
+  EXPECT_EQ(context().pipelines().size(), cached);
+  // Another specialization (or local size) is another pipeline.
+  gpu::KernelSpec other = spec;
+  other.specialization = {1};
+  auto specialized = gpu::ComputeKernel::Create(context(), other);
+  ASSERT_TRUE(specialized.ok()) << specialized.status();
+  EXPECT_NE(specialized->pipeline(), kernel_->pipeline());
+  EXPECT_EQ(context().pipelines().size(), cached + 1);
+}
+
 TEST_F(ComputeBatchTest, Dispatch_RejectsWrongBindingCountAndKinds) {
   auto batch = gpu::ComputeBatch::Begin(context(), 4);
   ASSERT_TRUE(batch.ok());
