@@ -350,7 +350,8 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
   ASSIGN_OR_RETURN(json script_json, ReadJsonFile(script_path));
   const std::string source = script_json.value("volume", "phantom:abdomen?size=64");
   v1::VolumeInfo volume;
-  if (session_id.empty()) {
+  const bool opened_here = session_id.empty();
+  if (opened_here) {
     v1::LoadVolumeRequest load;
     load.set_source(source);
     RETURN_IF_ERROR(FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &volume)));
@@ -384,6 +385,13 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
     (void)WriteBytes(fs::path(out_dir) / name, frame.image());
   };
   PlayResult result = PlayScript(s, script, options);
+  if (opened_here) {
+    // The session this command opened goes with it, whatever the outcome.
+    v1::CloseSessionRequest close;
+    close.set_session_id(session_id);
+    v1::CloseSessionResponse closed;
+    (void)s.stub().CloseSession(s.Context().get(), close, &closed);
+  }
   RETURN_IF_ERROR(result.status);
   std::vector<double> latency, render, fem, warp, encode, intervals;
   int64_t bytes = 0, interactive = 0;
@@ -457,7 +465,8 @@ void AddServerCommands(CLI::App& app, const ServerFlags* flags, int* exit_code) 
   auto a = std::make_shared<PlayArgs>();
   CLI::App* play = app.add_subcommand("play", "server: replay an interaction script over Interact");
   play->add_option("SCRIPT", a->script, "script JSON (see client/cli/script_player.h)")->required();
-  play->add_option("--session", a->session, "play on this session (default: load the script's volume)");
+  play->add_option("--session", a->session,
+                   "play on this session (default: open one on the script's volume, closed at the end)");
   play->add_option("--out-dir", a->out_dir, "save frames and report.json here");
   play->add_option("--report", a->report, "timing report JSON");
   play->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) {
