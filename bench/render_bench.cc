@@ -156,6 +156,11 @@ int main(int argc, char** argv) {
   }
   cases.push_back({"still DVR ct-vessels, no shading", RenderMode::kDvr, "ct-vessels",
                    RenderQuality::kStill, true, false});
+  // The drag loop's frame (drag_loop_bench): what shading costs there.
+  cases.push_back({"interactive DVR ct-soft-tissue", RenderMode::kDvr, "ct-soft-tissue",
+                   RenderQuality::kInteractive, true});
+  cases.push_back({"interactive DVR ct-soft-tissue, no shading", RenderMode::kDvr,
+                   "ct-soft-tissue", RenderQuality::kInteractive, true, false});
   cases.push_back({"still DVR ct-vessels, map unchanged", RenderMode::kDvr, "ct-vessels",
                    RenderQuality::kStill, true});
   cases.push_back({"still DVR ct-vessels, no map", RenderMode::kDvr, "ct-vessels",
@@ -232,6 +237,39 @@ int main(int argc, char** argv) {
     if (c.name == "still DVR ct-vessels") still_frame = best.frame;
   }
 
+  // What the interactive cell gradient costs in picture against the taps
+  // (central differences of J), GPU both, same request (RENDERING.md).
+  if (std::string("interactive cell gradient").find(filter) != std::string::npos ||
+      filter.empty()) {
+    for (const char* preset : {"ct-soft-tissue", "ct-vessels", "ct-bone"}) {
+      RenderRequest r;
+      r.camera = Camera::ForVolume(volume.geometry());
+      r.preset = bench::Check(MakeRenderPreset(preset, volume), "preset");
+      r.quality = RenderQuality::kInteractive;
+      r.width = r.height = size;
+      r.volume = &gpu_volume;
+      r.backward_map = &map;
+      const Frame cell = bench::Check(texel_renderer->Render(r), "render");
+      r.settings.interactive_cell_gradient = false;
+      const Frame taps = bench::Check(texel_renderer->Render(r), "render");
+      WritePng(png_dir, std::string("interactive_cell_gradient_") + preset, cell);
+      WritePng(png_dir, std::string("interactive_tap_gradient_") + preset, taps);
+      double sum = 0.0, sq = 0.0, max = 0.0;
+      size_t count = 0;
+      for (size_t i = 0; i < cell.rgba.size(); ++i) {
+        if (i % 4 == 3) continue;
+        const double d = std::abs(double(cell.rgba[i]) - double(taps.rgba[i]));
+        sum += d;
+        sq += d * d;
+        max = std::max(max, d);
+        ++count;
+      }
+      const double psnr = sq > 0.0 ? 10.0 * std::log10(255.0 * 255.0 * count / sq) : 99.0;
+      std::printf("interactive %s, cell vs tap gradient: mean %.3f/255, max %.0f/255, "
+                  "PSNR %.1f dB; cast %.1f vs %.1f ms\n",
+                  preset, sum / count, max, psnr, cell.timings.raycast_ms, taps.timings.raycast_ms);
+    }
+  }
   if (!png_dir.empty()) WriteViews(png_dir, volume, gpu_volume, *texel_renderer);
   if (!still_frame) return 0;
   // Encoding the still DVR frame.

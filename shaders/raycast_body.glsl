@@ -25,6 +25,11 @@
 // shaded by a Blinn-Phong headlight on the gradient of J (central
 // differences, one spacing, 6 taps of J; samples weighing under 1/256 in the
 // pixel are lit head-on), and stops at opacity > 0.99.
+// Specialization constant 0 (kCellGradient, DVR): shade with the analytic
+// gradient of the trilinear cells a sample already reads (the source's 8
+// voxels, the map's 8 points: the chain rule through the map), no taps and
+// no state machine; interactive frames use it (docs/RENDERING.md,
+// "Drag-loop findings"). A constant, so the pipeline keeps one loop only.
 // The CPU reference, server/render/raycast_cpu.cc, mirrors every step.
 #ifndef VPM_RAYCAST_BODY_GLSL
 #define VPM_RAYCAST_BODY_GLSL
@@ -45,6 +50,8 @@ layout(std140, binding = 3) uniform Lut { vec4 entries[VPM_RENDER_LUT_ENTRIES]; 
 layout(std430, binding = 4) readonly buffer Occupancy { float occupancy[]; };
 layout(std430, binding = 5) writeonly buffer Pixels { uint pixels[]; };
 layout(std430, binding = 6) buffer Stats { uint samples_taken; };
+
+layout(constant_id = 0) const bool kCellGradient = false;
 
 const float kOpaque = 0.99;
 // A sample whose weight in the pixel, (1 - A) a, is under 1/256 is not worth
@@ -129,6 +136,100 @@ float deformed_value(vec3 x) {
   vec3 rest = x;
 #endif
   return source_at(clamp(rest * g_inv_spacing, vec3(0.0), vec3(p.dims.xyz - 1)));
+}
+
+// Texels for the cell gradient: volume voxel i, map point g (displacement).
+float volume_texel(ivec3 i) {
+#ifdef VPM_RAYCAST_SAMPLED
+  return texelFetch(u_volume, i, 0).r;
+#else
+  return texelFetch(u_volume, i.x + p.dims.x * (i.y + p.dims.y * i.z)).r;
+#endif
+}
+
+#ifdef VPM_RAYCAST_MAP
+vec3 map_texel(ivec3 g) {
+  ivec3 m = ivec3(p.map_dims.xyz);
+#ifdef VPM_RAYCAST_SAMPLED
+  return texelFetch(u_map, g, 0).xyz;
+#else
+  return texelFetch(u_map, g.x + m.x * (g.y + m.y * g.z)).xyz;
+#endif
+}
+#endif
+
+// I at continuous index u (the lerps of source_at) and, in grad_u, its
+// gradient per voxel: the derivative of the trilinear interpolant of the
+// cell holding u.
+float source_and_gradient(vec3 u, out vec3 grad_u) {
+  ivec3 n = p.dims.xyz;
+  ivec3 i0 = min(ivec3(floor(u)), n - 2);
+  vec3 f = u - vec3(i0);
+  float c000 = volume_texel(i0);
+  float c100 = volume_texel(i0 + ivec3(1, 0, 0));
+  float c010 = volume_texel(i0 + ivec3(0, 1, 0));
+  float c110 = volume_texel(i0 + ivec3(1, 1, 0));
+  float c001 = volume_texel(i0 + ivec3(0, 0, 1));
+  float c101 = volume_texel(i0 + ivec3(1, 0, 1));
+  float c011 = volume_texel(i0 + ivec3(0, 1, 1));
+  float c111 = volume_texel(i0 + ivec3(1, 1, 1));
+  float c00 = c000 + (c100 - c000) * f.x;
+  float c10 = c010 + (c110 - c010) * f.x;
+  float c01 = c001 + (c101 - c001) * f.x;
+  float c11 = c011 + (c111 - c011) * f.x;
+  float c0 = c00 + (c10 - c00) * f.y;
+  float c1 = c01 + (c11 - c01) * f.y;
+  float dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;
+  float dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;
+  float dy0 = c10 - c00;
+  float dy1 = c11 - c01;
+  grad_u = vec3(dx0 + (dx1 - dx0) * f.z, dy0 + (dy1 - dy0) * f.z, c1 - c0);
+  return c0 + (c1 - c0) * f.z;
+}
+
+// J(x) and its gradient (value/mm) by the chain rule: grad J(x) =
+// (1 + dd/dx)^T grad I(X(x)), with dd/dx that of the trilinear map cell.
+// The clamps at the box's faces are not differentiated.
+float deformed_value_and_gradient(vec3 x, out vec3 grad) {
+  vec3 rest = x;
+  mat3 jacobian = mat3(1.0);  // d rest / d x, columns per x axis
+#ifdef VPM_RAYCAST_MAP
+  vec3 m = p.map_dims.xyz;
+  vec3 to_grid = (m - 1.0) / extent_mm();
+  vec3 gc = clamp(x * to_grid, vec3(0.0), m - 1.0);
+  ivec3 mi = ivec3(m);
+  ivec3 i0 = min(ivec3(floor(gc)), mi - 2);
+  vec3 f = gc - vec3(i0);
+  vec3 c000 = map_texel(i0);
+  vec3 c100 = map_texel(i0 + ivec3(1, 0, 0));
+  vec3 c010 = map_texel(i0 + ivec3(0, 1, 0));
+  vec3 c110 = map_texel(i0 + ivec3(1, 1, 0));
+  vec3 c001 = map_texel(i0 + ivec3(0, 0, 1));
+  vec3 c101 = map_texel(i0 + ivec3(1, 0, 1));
+  vec3 c011 = map_texel(i0 + ivec3(0, 1, 1));
+  vec3 c111 = map_texel(i0 + ivec3(1, 1, 1));
+  vec3 c00 = c000 + (c100 - c000) * f.x;
+  vec3 c10 = c010 + (c110 - c010) * f.x;
+  vec3 c01 = c001 + (c101 - c001) * f.x;
+  vec3 c11 = c011 + (c111 - c011) * f.x;
+  vec3 c0 = c00 + (c10 - c00) * f.y;
+  vec3 c1 = c01 + (c11 - c01) * f.y;
+  vec3 dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;
+  vec3 dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;
+  vec3 dy0 = c10 - c00;
+  vec3 dy1 = c11 - c01;
+  rest = x + (c0 + (c1 - c0) * f.z);
+  jacobian[0] += (dx0 + (dx1 - dx0) * f.z) * to_grid.x;
+  jacobian[1] += (dy0 + (dy1 - dy0) * f.z) * to_grid.y;
+  jacobian[2] += (c1 - c0) * to_grid.z;
+#endif
+  vec3 grad_u;
+  float v = source_and_gradient(clamp(rest * g_inv_spacing, vec3(0.0), vec3(p.dims.xyz - 1)),
+                                grad_u);
+  vec3 grad_rest = grad_u * g_inv_spacing;
+  grad = vec3(dot(jacobian[0], grad_rest), dot(jacobian[1], grad_rest),
+              dot(jacobian[2], grad_rest));
+  return v;
 }
 
 ivec3 brick_of(vec3 x) { return clamp(ivec3(floor(x * g_inv_brick)), ivec3(0), p.bricks.xyz - 1); }
@@ -235,12 +336,38 @@ void main() {
   bool shading = has_flag(VPM_RAYCAST_SHADING);
   bool early = has_flag(VPM_RAYCAST_EARLY_TERMINATION);
   vec4 acc = vec4(0.0);
+  if (kCellGradient) {
+    for (;;) {
+      float t = t_near + float(k) * step;
+      vec3 x = eye + t * dir;
+      while (skipping && t <= t_far && occupancy[brick_index(x)] <= 0.0) {
+        k = next_sample(brick_exit(x, eye, inv_dir), t_near, step, k);
+        t = t_near + float(k) * step;
+        x = eye + t * dir;
+      }
+      if (t > t_far) break;
+      ++taken;
+      vec3 grad;
+      vec4 c = lut_at(deformed_value_and_gradient(x, grad));
+      float w = (1.0 - acc.a) * c.a;
+      if (shading) {
+        c.rgb = w > kShadeMinWeight ? shade(c.rgb, grad, dir)
+                                    : min(c.rgb * (p.shading.x + p.shading.y), vec3(1.0));
+      }
+      if (c.a > 0.0) {
+        acc.rgb += w * c.rgb;
+        acc.a += w;
+        if (early && acc.a > kOpaque) break;
+      }
+      ++k;
+    }
+  }
   int phase = 0;       // 0: the next sample; 1..6: gradient taps around x_shade
   vec3 x_shade = eye;  // the sample being shaded, its colour, its gradient so far
   vec4 c_shade = vec4(0.0);
   vec3 g = vec3(0.0);
   vec3 h = p.spacing_mm.xyz;
-  for (;;) {
+  for (; !kCellGradient;) {
     float t = t_near + float(k) * step;
     vec3 x = eye + t * dir;
     if (phase == 0) {

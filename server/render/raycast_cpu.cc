@@ -108,6 +108,72 @@ class Caster {
     return SourceAt(glm::clamp(rest * inv_spacing_, vec3(0.0f), vec3(n_ - 1)));
   }
 
+  // source_and_gradient() of raycast_body.glsl: I at u and its gradient
+  // per voxel, that of the trilinear cell.
+  float SourceAndGradient(vec3 u, vec3& grad_u) const {
+    const ivec3 i0 = glm::min(ivec3(glm::floor(u)), n_ - 2);
+    const vec3 f = u - vec3(i0);
+    const int64_t sy = n_.x, sz = int64_t(n_.x) * n_.y;
+    const float* b = values_ + i0.x + sy * i0.y + sz * i0.z;
+    const float c000 = b[0], c100 = b[1], c010 = b[sy], c110 = b[sy + 1];
+    const float c001 = b[sz], c101 = b[sz + 1], c011 = b[sz + sy], c111 = b[sz + sy + 1];
+    const float c00 = c000 + (c100 - c000) * f.x;
+    const float c10 = c010 + (c110 - c010) * f.x;
+    const float c01 = c001 + (c101 - c001) * f.x;
+    const float c11 = c011 + (c111 - c011) * f.x;
+    const float c0 = c00 + (c10 - c00) * f.y;
+    const float c1 = c01 + (c11 - c01) * f.y;
+    const float dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;
+    const float dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;
+    const float dy0 = c10 - c00;
+    const float dy1 = c11 - c01;
+    grad_u = vec3(dx0 + (dx1 - dx0) * f.z, dy0 + (dy1 - dy0) * f.z, c1 - c0);
+    return c0 + (c1 - c0) * f.z;
+  }
+
+  // deformed_value_and_gradient() of raycast_body.glsl: J(x) and grad J
+  // (value/mm) by the chain rule through the trilinear map cell.
+  float DeformedValueAndGradient(vec3 x, vec3& grad) const {
+    vec3 rest = x;
+    glm::mat3 jacobian(1.0f);  // d rest / d x, columns per x axis
+    if (Flag(gpu::kRaycastHasMap)) {
+      const HostBackwardMap& map = *in_.map;
+      const vec3 m(p_.map_dims);
+      const vec3 to_grid = (m - 1.0f) / extent_;
+      const vec3 gc = glm::clamp(x * to_grid, vec3(0.0f), m - 1.0f);
+      const ivec3 mi(map.dims[0], map.dims[1], map.dims[2]);
+      const ivec3 i0 = glm::min(ivec3(glm::floor(gc)), mi - 2);
+      const vec3 f = gc - vec3(i0);
+      auto at = [&](int dx, int dy, int dz) {
+        return vec3(
+            map.texels[(i0.x + dx) + size_t(mi.x) * ((i0.y + dy) + size_t(mi.y) * (i0.z + dz))]);
+      };
+      const vec3 c000 = at(0, 0, 0), c100 = at(1, 0, 0), c010 = at(0, 1, 0), c110 = at(1, 1, 0);
+      const vec3 c001 = at(0, 0, 1), c101 = at(1, 0, 1), c011 = at(0, 1, 1), c111 = at(1, 1, 1);
+      const vec3 c00 = c000 + (c100 - c000) * f.x;
+      const vec3 c10 = c010 + (c110 - c010) * f.x;
+      const vec3 c01 = c001 + (c101 - c001) * f.x;
+      const vec3 c11 = c011 + (c111 - c011) * f.x;
+      const vec3 c0 = c00 + (c10 - c00) * f.y;
+      const vec3 c1 = c01 + (c11 - c01) * f.y;
+      const vec3 dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;
+      const vec3 dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;
+      const vec3 dy0 = c10 - c00;
+      const vec3 dy1 = c11 - c01;
+      rest = x + (c0 + (c1 - c0) * f.z);
+      jacobian[0] += (dx0 + (dx1 - dx0) * f.z) * to_grid.x;
+      jacobian[1] += (dy0 + (dy1 - dy0) * f.z) * to_grid.y;
+      jacobian[2] += (c1 - c0) * to_grid.z;
+    }
+    vec3 grad_u;
+    const float v =
+        SourceAndGradient(glm::clamp(rest * inv_spacing_, vec3(0.0f), vec3(n_ - 1)), grad_u);
+    const vec3 grad_rest = grad_u * inv_spacing_;
+    grad = vec3(glm::dot(jacobian[0], grad_rest), glm::dot(jacobian[1], grad_rest),
+                glm::dot(jacobian[2], grad_rest));
+    return v;
+  }
+
   vec4 LutAt(float v) const {
     const auto& e = in_.lut->entries;
     const float n = p_.lut.z;
@@ -117,12 +183,17 @@ class Caster {
     return e[i] + (e[i + 1] - e[i]) * t;
   }
 
-  vec3 Shade(vec3 rgb, vec3 x, vec3 dir) const {
+  // The gradient of J at x by central differences, one spacing wide.
+  vec3 TapGradient(vec3 x) const {
     const vec3 h = spacing_;
-    vec3 g(DeformedValue(x + vec3(h.x, 0, 0)) - DeformedValue(x - vec3(h.x, 0, 0)),
-           DeformedValue(x + vec3(0, h.y, 0)) - DeformedValue(x - vec3(0, h.y, 0)),
-           DeformedValue(x + vec3(0, 0, h.z)) - DeformedValue(x - vec3(0, 0, h.z)));
-    g = g / (2.0f * h);
+    const vec3 g(DeformedValue(x + vec3(h.x, 0, 0)) - DeformedValue(x - vec3(h.x, 0, 0)),
+                 DeformedValue(x + vec3(0, h.y, 0)) - DeformedValue(x - vec3(0, h.y, 0)),
+                 DeformedValue(x + vec3(0, 0, h.z)) - DeformedValue(x - vec3(0, 0, h.z)));
+    return g / (2.0f * h);
+  }
+
+  // shade() of raycast_body.glsl; g: the gradient (value/mm).
+  vec3 Shade(vec3 rgb, vec3 g, vec3 dir) const {
     const float len = glm::length(g);
     const float ndl = len > 0.0f ? std::abs(glm::dot(g, dir)) / len : 1.0f;
     const float s = len / (len + p_.gradient.x);
@@ -177,6 +248,7 @@ uint32_t Caster::Pixel(int px, int py, int64_t& taken) const {
   const bool skipping = Flag(gpu::kRaycastSkipping);
   const bool shading = Flag(gpu::kRaycastShading);
   const bool early = Flag(gpu::kRaycastEarlyTermination);
+  const bool cell = Flag(kRaycastCellGradient);
   float ray_max = kNoValue;
   vec4 acc(0.0f);
   int k = 0;
@@ -195,7 +267,8 @@ uint32_t Caster::Pixel(int px, int py, int64_t& taken) const {
       }
     }
     ++taken;
-    const float v = DeformedValue(x);
+    vec3 cell_gradient(0.0f);
+    const float v = cell ? DeformedValueAndGradient(x, cell_gradient) : DeformedValue(x);
     if (mip) {
       ray_max = std::max(ray_max, v);
     } else {
@@ -204,7 +277,7 @@ uint32_t Caster::Pixel(int px, int py, int64_t& taken) const {
         vec3 rgb = vec3(c);
         if (shading) {
           rgb = (1.0f - acc.a) * c.a > kShadeMinWeight
-                    ? Shade(rgb, x, dir)
+                    ? Shade(rgb, cell ? cell_gradient : TapGradient(x), dir)
                     : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(1.0f));
         }
         const float w = (1.0f - acc.a) * c.a;

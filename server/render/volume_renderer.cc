@@ -87,6 +87,23 @@ Status VolumeRenderer::Init() {
       raycast_kernels_[mip][map].emplace(std::move(raycast));
     }
   }
+  for (int map = 0; map < 2; ++map) {
+    ASSIGN_OR_RETURN(
+        auto raycast,
+        gpu::ComputeKernel::Create(
+            *context_,
+            {.name = StrCat("raycast_dvr", map ? "_map" : "", sampled ? "_sampled" : "",
+                            " (cell gradient)"),
+             .spirv = RaycastSpirv(sampled, false, map),
+             .bindings = {sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
+                          sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
+                          DT::eUniformBuffer, DT::eUniformBuffer,
+                          DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
+             .push_constant_bytes = 0,
+             .local_size = {8, 8, 1},
+             .specialization = {1u}}));  // kCellGradient
+    cell_gradient_kernels_[map].emplace(std::move(raycast));
+  }
   ASSIGN_OR_RETURN(auto upscale,
                    gpu::ComputeKernel::Create(
                        *context_, {.name = "upscale",
@@ -260,8 +277,11 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
       sampled ? gpu::KernelArg(map) : gpu::KernelArg(map_view);
   const std::array<gpu::KernelArg, 7> args{
       volume_arg, map_arg, &*params_, &*lut_, &*occupancy_, &*pixels_, &*stats_};
+  const gpu::ComputeKernel& raycast = (p.image.z & kRaycastCellGradient) != 0
+                                          ? *cell_gradient_kernels_[has_map]
+                                          : *raycast_kernels_[mip][has_map];
   RETURN_IF_ERROR(batch.Dispatch(
-      *raycast_kernels_[mip][has_map], args, {},
+      raycast, args, {},
       {GroupCount(setup.render_width, 8), GroupCount(setup.render_height, 8), 1}, "raycast"));
   if (upscale) {
     const gpu::UpscalePush push{

@@ -90,6 +90,7 @@ class VolumeRenderer {
   std::optional<gpu::ComputeKernel> minmax_kernel_;
   std::optional<gpu::ComputeKernel> occupancy_kernel_;
   std::optional<gpu::ComputeKernel> raycast_kernels_[2][2];  // [mip][backward map]
+  std::optional<gpu::ComputeKernel> cell_gradient_kernels_[2];  // DVR [backward map]
   std::optional<gpu::ComputeKernel> upscale_kernel_;
   std::optional<gpu::ComputeKernel> map_to_texels_kernel_;
   std::optional<gpu::GpuImage3D> identity_map_;  // 2^3 zeros, bound when there is no map

@@ -266,6 +266,35 @@ TEST_F(RaycastTest, InteractiveQuality_HalfResolutionUpscaled) {
   EXPECT_GT(CompareRgba(gpu.rgba, RenderGpu(r).rgba).psnr_db, 22.0);
 }
 
+// Interactive DVR shades with the gradient of the trilinear cells (chain
+// rule through the map): GPU and CPU agree as for the tap gradient, and the
+// picture stays close to that of the taps.
+TEST_F(RaycastTest, InteractiveCellGradient_MatchesCpuAndTheTapGradient) {
+  HostBackwardMap host;
+  auto map = MakeMap(9, 6.0, &host);
+  ASSERT_TRUE(map.ok()) << map.status();
+  for (const char* preset : {"ct-soft-tissue", "ct-vessels", "ct-bone"}) {
+    for (bool with_map : {false, true}) {
+      SCOPED_TRACE(::testing::Message() << preset << (with_map ? " with map" : ""));
+      RenderRequest r = Request(RenderMode::kDvr, preset);
+      r.quality = RenderQuality::kInteractive;
+      r.backward_map = with_map ? &*map : nullptr;
+      const HostBackwardMap* host_map = with_map ? &host : nullptr;
+      const Frame cell = RenderGpu(r);
+      MaybeDump(std::string("interactive_cell_") + preset + (with_map ? "_map" : ""), cell.rgba,
+                cell.width, cell.height);
+      ExpectClose(cell, RenderCpu(r, host_map), 1.0 / 255, 8.0 / 255, "cell gradient vs CPU");
+      r.settings.interactive_cell_gradient = false;
+      const Frame taps = RenderGpu(r);
+      const auto diff = CompareRgba(cell.rgba, taps.rgba);
+      std::printf("  %s%s: cell vs tap gradient mean %.3f/255, max %.0f/255, PSNR %.1f dB\n",
+                  preset, with_map ? " (map)" : "", diff.mean_abs * 255, diff.max_abs * 255,
+                  diff.psnr_db);
+      EXPECT_GT(diff.psnr_db, 30.0);
+    }
+  }
+}
+
 TEST_F(RaycastTest, OrbitHalfTurn_MirrorsMipHorizontally) {
   RenderRequest r = Request(RenderMode::kMip, "ct-vessels", 80);
   // Nearly parallel rays (a 1 degree field of view from far away, same
@@ -311,6 +340,17 @@ TEST_F(RaycastTest, Sampler3DVariant_MatchesCpuReference) {
     ASSERT_TRUE(gpu.ok()) << gpu.status();
     ExpectClose(*gpu, RenderCpu(r), 2.0 / 255, 24.0 / 255, "sampler3D");
   }
+  // Interactive DVR (cell gradient): texelFetch of the 8 corners, as the CPU.
+  HostBackwardMap host;
+  auto map = MakeMap(9, 6.0, &host);
+  ASSERT_TRUE(map.ok()) << map.status();
+  RenderRequest r = Request(RenderMode::kDvr, "ct-soft-tissue");
+  r.quality = RenderQuality::kInteractive;
+  r.volume_image = *image;
+  r.backward_map = &*map;
+  auto gpu = (*renderer)->Render(r);
+  ASSERT_TRUE(gpu.ok()) << gpu.status();
+  ExpectClose(*gpu, RenderCpu(r, &host), 2.0 / 255, 24.0 / 255, "sampler3D, cell gradient");
 }
 
 TEST_F(RaycastTest, BadRequests_InvalidArgument) {
