@@ -1,11 +1,8 @@
 #include "client/cli/health_command.h"
 
 #include <chrono>
-#include <fstream>
 #include <iostream>
-#include <iterator>
 #include <memory>
-#include <tuple>
 
 #include <grpcpp/grpcpp.h>
 
@@ -18,38 +15,13 @@ namespace {
 using grpc::health::v1::HealthCheckRequest;
 using grpc::health::v1::HealthCheckResponse;
 
-// A plain channel: no token, no message-size arguments, nothing a health
-// call needs. TLS when --tls-ca names the CA that signed the server, with a
-// client certificate (--tls-cert, --tls-key) for a server that asks for one.
-Result<std::shared_ptr<grpc::Channel>> HealthChannel(const ServerFlags& flags) {
-  if (flags.address.empty()) return absl::InvalidArgumentError("--server HOST:PORT is required");
-  if (flags.tls_cert.empty() != flags.tls_key.empty() ||
-      (!flags.tls_cert.empty() && flags.tls_ca.empty())) {
-    return absl::InvalidArgumentError("--tls-cert and --tls-key go together, with --tls-ca");
-  }
-  if (flags.tls_ca.empty()) {
-    return grpc::CreateChannel(flags.address, grpc::InsecureChannelCredentials());
-  }
-  grpc::SslCredentialsOptions ssl;
-  const std::tuple<const char*, const std::string&, std::string&> pem_files[] = {
-      {"--tls-ca", flags.tls_ca, ssl.pem_root_certs},
-      {"--tls-cert", flags.tls_cert, ssl.pem_cert_chain},
-      {"--tls-key", flags.tls_key, ssl.pem_private_key}};
-  for (const auto& [flag, path, pem] : pem_files) {
-    if (path.empty()) continue;
-    std::ifstream file(path);
-    if (!file) return absl::InvalidArgumentError(StrCat(flag, " ", path, ": cannot read"));
-    pem.assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
-  }
-  return grpc::CreateChannel(flags.address, grpc::SslCredentials(ssl));
-}
-
 // OK when `service` ("" for the whole server) answers SERVING within
 // `timeout_s` seconds; otherwise an error naming what was seen.
 Status CheckServing(const ServerFlags& flags, const std::string& service, double timeout_s) {
   if (!(timeout_s > 0)) return absl::InvalidArgumentError("--timeout-s must be > 0 seconds");
-  ASSIGN_OR_RETURN(std::shared_ptr<grpc::Channel> channel, HealthChannel(flags));
-  auto stub = grpc::health::v1::Health::NewStub(channel);
+  // The `vpm` connection (TLS when --tls-ca is given); health needs no token.
+  ASSIGN_OR_RETURN(ServerConnection connection, ServerConnection::Connect(flags));
+  auto stub = grpc::health::v1::Health::NewStub(connection.channel());
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() +
                        std::chrono::milliseconds(int64_t(timeout_s * 1000)));

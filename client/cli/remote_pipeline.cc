@@ -1,17 +1,9 @@
 #include "client/cli/remote_pipeline.h"
 
+#include "proto/vec3_convert.h"
+
 namespace vpm::cli {
 namespace {
-
-glm::dvec3 FromProto(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
-
-v1::Vec3 ToVec3(const glm::dvec3& p) {
-  v1::Vec3 v;
-  v.set_x(p.x);
-  v.set_y(p.y);
-  v.set_z(p.z);
-  return v;
-}
 
 Result<VertexKind> KindOf(const std::string& name) {
   for (VertexKind k : {VertexKind::kLattice, VertexKind::kAnchor, VertexKind::kRefined}) {
@@ -82,12 +74,12 @@ Result<v1::MeshParams> ToProtoMeshParams(const MeshFlags& f, const v1::VolumeInf
   if (!f.refine_at.empty()) {
     if (f.refine_at.size() != 3) return absl::InvalidArgumentError("--refine-at takes X Y Z");
     p.set_has_refine_at(true);
-    *p.mutable_refine_at_mm() = ToVec3({f.refine_at[0], f.refine_at[1], f.refine_at[2]});
+    *p.mutable_refine_at_mm() = ToProto({f.refine_at[0], f.refine_at[1], f.refine_at[2]});
   }
   if (!f.refine_at_landmark.empty()) {
     ASSIGN_OR_RETURN(glm::dvec3 at, FindLandmark(volume, f.refine_at_landmark));
     p.set_has_refine_at(true);
-    *p.mutable_refine_at_mm() = ToVec3(at);
+    *p.mutable_refine_at_mm() = ToProto(at);
   }
   return p;
 }
@@ -134,8 +126,7 @@ Result<RemoteMesh> BuildMeshOnServer(const ServerConnection& server, const std::
   v1::BuildMeshRequest request;
   request.set_volume_id(out.volume.volume_id());
   ASSIGN_OR_RETURN(*request.mutable_params(), ToProtoMeshParams(flags, out.volume));
-  RETURN_IF_ERROR(
-      FromGrpc(server.stub().BuildMesh(server.Context().get(), request, &out.info)));
+  RETURN_IF_ERROR(FromGrpc(server.stub().BuildMesh(server.Context().get(), request, &out.info)));
   ASSIGN_OR_RETURN(out.mesh, FetchMesh(server, out.info.mesh_id()));
   return out;
 }

@@ -1,21 +1,10 @@
 #include "client/cli/server_connection.h"
 
+#include "server/common/read_text_file.h"
+
 #include <cstdlib>
-#include <fstream>
-#include <sstream>
 
 namespace vpm::cli {
-namespace {
-
-Result<std::string> ReadPem(const std::string& path, const char* flag) {
-  std::ifstream file(path);
-  if (!file) return absl::InvalidArgumentError(StrCat(flag, " ", path, ": cannot read"));
-  std::stringstream pem;
-  pem << file.rdbuf();
-  return pem.str();
-}
-
-}  // namespace
 
 Result<ServerConnection> ServerConnection::Connect(const ServerFlags& flags) {
   if (flags.address.empty()) return absl::InvalidArgumentError("--server HOST:PORT is required");
@@ -25,18 +14,17 @@ Result<ServerConnection> ServerConnection::Connect(const ServerFlags& flags) {
     if (const char* token = std::getenv("VPM_TOKEN")) c.flags_.token = token;
   }
   std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
-  if (flags.tls_cert.empty() != flags.tls_key.empty()) {
-    return absl::InvalidArgumentError("mutual TLS needs both --tls-cert and --tls-key");
-  }
-  if (!flags.tls_cert.empty() && flags.tls_ca.empty()) {
-    return absl::InvalidArgumentError("--tls-cert needs --tls-ca (the server's CA): TLS is off without it");
+  if (flags.tls_cert.empty() != flags.tls_key.empty() ||
+      (!flags.tls_cert.empty() && flags.tls_ca.empty())) {
+    return absl::InvalidArgumentError(
+        "--tls-cert and --tls-key go together (mutual TLS), with --tls-ca (the server's CA)");
   }
   if (!flags.tls_ca.empty()) {
     grpc::SslCredentialsOptions ssl;
-    ASSIGN_OR_RETURN(ssl.pem_root_certs, ReadPem(flags.tls_ca, "--tls-ca"));
+    ASSIGN_OR_RETURN(ssl.pem_root_certs, ReadTextFile(flags.tls_ca, "--tls-ca"));
     if (!flags.tls_cert.empty()) {
-      ASSIGN_OR_RETURN(ssl.pem_cert_chain, ReadPem(flags.tls_cert, "--tls-cert"));
-      ASSIGN_OR_RETURN(ssl.pem_private_key, ReadPem(flags.tls_key, "--tls-key"));
+      ASSIGN_OR_RETURN(ssl.pem_cert_chain, ReadTextFile(flags.tls_cert, "--tls-cert"));
+      ASSIGN_OR_RETURN(ssl.pem_private_key, ReadTextFile(flags.tls_key, "--tls-key"));
     }
     credentials = grpc::SslCredentials(ssl);
   }

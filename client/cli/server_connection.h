@@ -14,11 +14,11 @@
 namespace vpm::cli {
 
 struct ServerFlags {
-  std::string address;  // HOST:PORT; empty: offline
-  std::string token;    // default: env VPM_TOKEN
-  std::string tls_ca;   // PEM of the CA that signed the server: turns TLS on
-  std::string tls_cert; // client certificate chain (PEM) for mutual TLS
-  std::string tls_key;  // its private key (PEM)
+  std::string address;   // HOST:PORT; empty: offline
+  std::string token;     // default: env VPM_TOKEN
+  std::string tls_ca;    // PEM of the CA that signed the server: turns TLS on
+  std::string tls_cert;  // client certificate chain (PEM) for mutual TLS
+  std::string tls_key;   // its private key (PEM)
   double deadline_s = 300;
 };
 
@@ -27,6 +27,8 @@ class ServerConnection {
   static Result<ServerConnection> Connect(const ServerFlags& flags);
 
   v1::Vpm::Stub& stub() const { return *stub_; }
+  // For other services on the same server (grpc.health.v1).
+  std::shared_ptr<grpc::Channel> channel() const { return channel_; }
   // A context with the token and, unless streaming, a deadline.
   std::unique_ptr<grpc::ClientContext> Context(bool streaming = false) const;
 

@@ -5,14 +5,6 @@
 
 namespace vpm::service {
 
-v1::Vec3 ToProto(const glm::dvec3& v) {
-  v1::Vec3 out;
-  out.set_x(v.x);
-  out.set_y(v.y);
-  out.set_z(v.z);
-  return out;
-}
-
 void FillVolumeInfo(const VolumeEntry& entry, v1::VolumeInfo* info) {
   const Volume& volume = entry.volume;
   const VolumeGeometry& g = volume.geometry();
@@ -153,8 +145,9 @@ Result<StreamSettings> ToStreamSettings(const v1::RenderSettings& in, const Volu
     return absl::InvalidArgumentError(StrCat("settings.preset: ", preset.status().message()));
   }
   out.view.preset = *std::move(preset);
-  for (auto [name, value, target] : {std::tuple{"settings.width", in.width(), &out.view.width},
-                                     std::tuple{"settings.height", in.height(), &out.view.height}}) {
+  for (auto [name, value, target] :
+       {std::tuple{"settings.width", in.width(), &out.view.width},
+        std::tuple{"settings.height", in.height(), &out.view.height}}) {
     if (value < 0 || value > max_side) {
       return absl::InvalidArgumentError(
           StrCat(name, ": ", value, " is outside 1..", max_side, " pixels (0: 512)"));

@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "proto/vec3_convert.h"
 #include "server/common/status.h"
 #include "server/mesh/build_proxy_mesh.h"
 #include "server/render/deformable_scene.h"
@@ -12,9 +13,6 @@
 #include "vpm/v1/vpm.pb.h"
 
 namespace vpm::service {
-
-inline glm::dvec3 FromProto(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
-v1::Vec3 ToProto(const glm::dvec3& v);
 
 void FillVolumeInfo(const VolumeEntry& entry, v1::VolumeInfo* info);
 void FillMeshInfo(const MeshEntry& entry, v1::MeshInfo* info);
@@ -26,7 +24,7 @@ Result<MeshParams> ToMeshParams(const v1::MeshParams& params);
 // How one stream wants its frames: the scene view but for the camera, plus
 // the encoding.
 struct StreamSettings {
-  SceneView view;             // camera filled in per frame
+  SceneView view;  // camera filled in per frame
   bool png = false;
   int jpeg_quality = 85;
 };

@@ -1,21 +1,12 @@
 #include "server/service/vpm_server.h"
 
-#include <fstream>
-#include <sstream>
+#include "server/common/read_text_file.h"
 
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
 
 namespace vpm::service {
 namespace {
-
-Result<std::string> ReadPem(const std::string& path, const char* flag) {
-  std::ifstream file(path);
-  if (!file) return absl::InvalidArgumentError(StrCat(flag, " ", path, ": cannot read"));
-  std::stringstream text;
-  text << file.rdbuf();
-  return text.str();
-}
 
 Result<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(const ServerOptions& o) {
   if (o.tls_cert.empty() && o.tls_key.empty()) {
@@ -28,11 +19,11 @@ Result<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(const ServerOpt
     return absl::InvalidArgumentError("TLS needs both --tls-cert and --tls-key");
   }
   grpc::SslServerCredentialsOptions ssl;
-  ASSIGN_OR_RETURN(std::string cert, ReadPem(o.tls_cert, "--tls-cert"));
-  ASSIGN_OR_RETURN(std::string key, ReadPem(o.tls_key, "--tls-key"));
+  ASSIGN_OR_RETURN(std::string cert, ReadTextFile(o.tls_cert, "--tls-cert"));
+  ASSIGN_OR_RETURN(std::string key, ReadTextFile(o.tls_key, "--tls-key"));
   ssl.pem_key_cert_pairs.push_back({key, cert});
   if (!o.tls_client_ca.empty()) {
-    ASSIGN_OR_RETURN(ssl.pem_root_certs, ReadPem(o.tls_client_ca, "--tls-client-ca"));
+    ASSIGN_OR_RETURN(ssl.pem_root_certs, ReadTextFile(o.tls_client_ca, "--tls-client-ca"));
     ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
   }
   return grpc::SslServerCredentials(ssl);
