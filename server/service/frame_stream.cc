@@ -48,6 +48,7 @@ void FrameStream::EnqueueEvent(const v1::ClientEvent& event) {
   if (finish_) return;
   const auto kind = event.event_case();
   const bool replaceable = kind == v1::ClientEvent::kCamera || kind == v1::ClientEvent::kDrag;
+  last_event_at_ = std::chrono::steady_clock::now();
   if (replaceable && !events_.empty() && events_.back().event_case() == kind) {
     const bool want_vertices = events_.back().want_vertices() || event.want_vertices();
     events_.back() = event;
@@ -128,9 +129,10 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
   const double queue_ms = MsSince(queued_at);
   StreamSettings settings;
   bool want_vertices = false;
-  // Interactive while the held grab has moved since our last still frame;
-  // StillCheck forces the still one once drags stop.
-  const uint64_t deform_count = session_->deform_count();
+  // Interactive while the client is interacting (ClientActiveLocked);
+  // StillCheck forces the still frame once it has been idle for
+  // --still-delay-ms.
+  const bool session_changing = session_->RecentlyChanged();
   bool interactive = false;
   uint64_t sequence = 0;
   {
@@ -144,9 +146,8 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
     want_vertices = want_vertices_;
     want_vertices_ = false;
     sequence = stream_sequence_;  // events applied before this render starts
-    interactive = !force_still_ && session_->grabbed() && deform_count != still_deform_count_;
+    interactive = !force_still_ && (session_changing || ClientActiveLocked());
     force_still_ = false;
-    if (!interactive) still_deform_count_ = deform_count;
   }
   auto frame = session_->Render({&settings, std::nullopt, interactive, want_vertices});
   std::lock_guard lock(mutex_);
@@ -169,11 +170,17 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
   }
 }
 
+bool FrameStream::ClientActiveLocked() const {
+  if (!events_.empty() || applying_) return true;
+  return last_event_at_ != std::chrono::steady_clock::time_point{} &&
+         MsSince(last_event_at_) < service_->options.still_delay_ms;
+}
+
 void FrameStream::StillCheck() {
   std::lock_guard lock(mutex_);
   if (!last_interactive_ || render_scheduled_ || finish_) return;
-  if (session_->Interacting()) {
-    // Drags still coming: look again later.
+  if (session_->RecentlyChanged() || ClientActiveLocked()) {
+    // Events still coming: look again later.
     std::weak_ptr<FrameStream> weak = weak_from_this();
     service_->render_pool->PostAfter(
         std::chrono::milliseconds(int64_t(service_->options.still_delay_ms) + 5), [weak] {

@@ -5,8 +5,13 @@
 // frame waits in a single slot and replaces (supersedes, counted) any older
 // one there, so a slow reader costs at most two frames of memory. At most one
 // render per stream is queued or running: changes that arrive meanwhile mark
-// the stream dirty and are folded into the next render. An interactive frame
-// is followed, once the session is idle for still_delay_ms, by a still one.
+// the stream dirty and are folded into the next render. Frames are
+// interactive (cheap) while the client interacts: this stream's events keep
+// arriving, or the session changed (camera, grab, drag, ...: from any
+// client) within still_delay_ms; a still, full-quality frame follows once
+// both have been idle that long. Whether the client is active is judged by
+// when events arrive, not when they are applied, so that under load the
+// queue wait does not turn a moving client's frames into stills.
 //
 // Lifetime: the pool's tasks hold the FrameStream (shared_ptr), never the
 // reactor; the reactor calls Detach() from OnDone, after which the stream
@@ -79,6 +84,9 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   void DeliverLocked(std::unique_ptr<v1::Frame> frame);
   void WriteLocked(std::unique_ptr<v1::Frame> frame);
   void StillCheck();
+  // The client is interacting: events queued or being applied, or one
+  // arrived within still_delay_ms.
+  bool ClientActiveLocked() const;
   void FinishLocked(const grpc::Status& status);
 
   ServiceContext* service_;
@@ -95,7 +103,10 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   std::deque<v1::ClientEvent> events_;
   bool applying_ = false;
   std::optional<grpc::Status> finish_after_events_;
-  uint64_t still_deform_count_ = 0;  // the session's deform_count at our last still frame
+  // When this stream's client last sent an event (events arrive here before
+  // they are applied: under load the queue wait must not turn a moving
+  // client's frames into stills).
+  std::chrono::steady_clock::time_point last_event_at_{};
   bool force_still_ = false;
   bool render_scheduled_ = false;
   bool dirty_ = false;

@@ -60,7 +60,10 @@ Result<glm::dvec3> Session::GrabPoint(const v1::Grab& grab, const SceneView* str
   // through the orbit centre that faces the camera.
   const CameraRays rays = camera_.Rays(view.width, view.height);
   const glm::dvec3 dir = rays.Direction(grab.pixel_x(), grab.pixel_y());
-  if (auto hit = PickAlongRay(volume, view.preset, view.mode, rays.eye_mm, dir)) return *hit;
+  // Before any frame (Manipulate first) there is no preset to pick with.
+  if (view.preset.points.size() >= 2) {
+    if (auto hit = PickAlongRay(volume, view.preset, view.mode, rays.eye_mm, dir)) return *hit;
+  }
   const double t = glm::dot(camera_.Target() - rays.eye_mm, camera_.Forward()) /
                    glm::dot(dir, camera_.Forward());
   const glm::dvec3 p = rays.eye_mm + t * dir;
@@ -120,7 +123,6 @@ Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event, const Sc
       ASSIGN_OR_RETURN(applied.step, event.has_drag() ? scene_->Drag(v) : scene_->Pull(v));
       applied.deformed = true;
       std::lock_guard lock(state_mutex_);
-      last_deform_ = std::chrono::steady_clock::now();
       ++deform_count_;
       return applied;
     }
@@ -134,7 +136,6 @@ Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event, const Sc
       std::lock_guard lock(state_mutex_);
       grabbed_ = false;
       grab_point_.reset();
-      last_deform_ = {};
       return applied;
     }
     case v1::ClientEvent::kSettings:
@@ -160,6 +161,7 @@ void Session::Changed(uint64_t sequence, bool deformed, const SceneStepTimings* 
   {
     std::lock_guard lock(state_mutex_);
     ++version_;
+    last_change_ = std::chrono::steady_clock::now();
     if (sequence > last_sequence_) last_sequence_ = sequence;
     if (deformed && step != nullptr) last_step_ = *step;
   }
@@ -216,10 +218,10 @@ Result<v1::Frame> Session::Render(const FrameRequest& request) {
   return out;
 }
 
-bool Session::Interacting() const {
+bool Session::RecentlyChanged() const {
   std::lock_guard lock(state_mutex_);
-  if (!grabbed_ || last_deform_ == std::chrono::steady_clock::time_point{}) return false;
-  return MsSince(last_deform_) < options_.still_delay_ms;
+  if (last_change_ == std::chrono::steady_clock::time_point{}) return false;
+  return MsSince(last_change_) < options_.still_delay_ms;
 }
 
 uint64_t Session::deform_count() const {

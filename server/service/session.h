@@ -66,8 +66,10 @@ class Session {
   };
   Result<v1::Frame> Render(const FrameRequest& request);
 
-  // True while the last drag or pull is younger than still_delay_ms.
-  bool Interacting() const;
+  // True while the last change (camera, grab, drag, pull, release,
+  // settings; from any client) is younger than still_delay_ms: frames are
+  // interactive meanwhile.
+  bool RecentlyChanged() const;
   // Drags and pulls applied so far, and whether a grab is held.
   uint64_t deform_count() const;
   bool grabbed() const;
@@ -111,7 +113,7 @@ class Session {
   SceneStepTimings last_step_;
   SceneView last_view_;  // settings of the last frame rendered (picks without a stream)
   std::optional<glm::dvec3> grab_point_;  // while grabbed
-  std::chrono::steady_clock::time_point last_deform_{};
+  std::chrono::steady_clock::time_point last_change_{};
   uint64_t deform_count_ = 0;
   std::chrono::steady_clock::time_point last_touch_;
   bool closed_ = false;

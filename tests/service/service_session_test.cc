@@ -139,6 +139,20 @@ TEST_F(SessionTest, Manipulate_GrabDragReleaseAndTheirErrors) {
             grpc::INVALID_ARGUMENT);
 }
 
+TEST_F(SessionTest, Manipulate_PickBeforeAnyFrameTakesTheOrbitCentrePlane) {
+  // No frame yet: no preset to cast with; the default 512x512 view's centre
+  // pixel lies on the plane through the orbit centre.
+  v1::ClientEvent pick;
+  pick.set_sequence(1);
+  pick.mutable_grab()->set_pick(true);
+  pick.mutable_grab()->set_pixel_x(256);
+  pick.mutable_grab()->set_pixel_y(256);
+  v1::ManipulateResponse response;
+  grpc::Status status = Manipulate(pick, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_NEAR(response.grab_point_mm().y(), Centre(volume_).y(), 5.0);
+}
+
 TEST_F(SessionTest, Manipulate_PickByPixelGrabsTheSurfaceThePixelShows) {
   // A frame sets the size and preset picks refer to (Manipulate has no stream).
   v1::RenderRequest render;
