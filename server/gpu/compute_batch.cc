@@ -9,9 +9,10 @@ bool IsBufferType(DT t) { return t == DT::eStorageBuffer || t == DT::eUniformBuf
 bool IsImageType(DT t) { return t == DT::eStorageImage || t == DT::eCombinedImageSampler; }
 bool IsTexelType(DT t) { return t == DT::eUniformTexelBuffer || t == DT::eStorageTexelBuffer; }
 
-const vk::MemoryBarrier kComputeToCompute(
-    vk::AccessFlagBits::eShaderWrite | vk::AccessFlagBits::eTransferWrite,
-    vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
+const vk::MemoryBarrier kComputeToCompute(vk::AccessFlagBits::eShaderWrite |
+                                              vk::AccessFlagBits::eTransferWrite,
+                                          vk::AccessFlagBits::eShaderRead |
+                                              vk::AccessFlagBits::eShaderWrite);
 
 }  // namespace
 
@@ -23,32 +24,31 @@ Result<ComputeBatch> ComputeBatch::Begin(const GpuContext& context, uint32_t max
     // Up to 16 descriptors of each kind per dispatch.
     const uint32_t n = 16 * max_dispatches;
     const std::array<vk::DescriptorPoolSize, 6> sizes{{{DT::eStorageBuffer, n},
-                                                      {DT::eUniformBuffer, n},
-                                                      {DT::eStorageImage, n},
-                                                      {DT::eCombinedImageSampler, n},
-                                                      {DT::eUniformTexelBuffer, n},
-                                                      {DT::eStorageTexelBuffer, n}}};
+                                                       {DT::eUniformBuffer, n},
+                                                       {DT::eStorageImage, n},
+                                                       {DT::eCombinedImageSampler, n},
+                                                       {DT::eUniformTexelBuffer, n},
+                                                       {DT::eStorageTexelBuffer, n}}};
     b.descriptor_pool_ = vk::raii::DescriptorPool(
         context.device(),
         {vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, max_dispatches, sizes});
     if (context.timestamp_period_ns() > 0) {
-      b.query_pool_ = vk::raii::QueryPool(
-          context.device(), {{}, vk::QueryType::eTimestamp, 2 * max_dispatches});
+      b.query_pool_ = vk::raii::QueryPool(context.device(),
+                                          {{}, vk::QueryType::eTimestamp, 2 * max_dispatches});
     }
-    b.commands_.emplace(context.AllocateCommandBuffer());
+    b.command_pool_ = context.CreateCommandPool();
+    b.commands_.emplace(context.AllocateCommandBuffer(b.command_pool_));
     b.commands_->begin({vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
     if (*b.query_pool_) b.commands_->resetQueryPool(*b.query_pool_, 0, 2 * max_dispatches);
   }));
   return b;
 }
 
-Status ComputeBatch::CheckArgs(const ComputeKernel& kernel,
-                               std::span<const KernelArg> args) const {
+Status ComputeBatch::CheckArgs(const ComputeKernel& kernel, std::span<const KernelArg> args) const {
   const KernelSpec& spec = kernel.spec();
   if (args.size() != spec.bindings.size()) {
-    return absl::InvalidArgumentError(absl::StrCat("kernel ", spec.name, " takes ",
-                                                   spec.bindings.size(), " bindings, got ",
-                                                   args.size()));
+    return absl::InvalidArgumentError(absl::StrCat(
+        "kernel ", spec.name, " takes ", spec.bindings.size(), " bindings, got ", args.size()));
   }
   for (size_t i = 0; i < args.size(); ++i) {
     const DT type = spec.bindings[i];
@@ -56,16 +56,15 @@ Status ComputeBatch::CheckArgs(const ComputeKernel& kernel,
     if (const auto* buffer = std::get_if<const GpuBuffer*>(&args[i])) {
       const auto need = type == DT::eStorageBuffer ? vk::BufferUsageFlagBits::eStorageBuffer
                                                    : vk::BufferUsageFlagBits::eUniformBuffer;
-      ok = *buffer != nullptr && IsBufferType(type) &&
-           static_cast<bool>((*buffer)->usage() & need);
+      ok = *buffer != nullptr && IsBufferType(type) && static_cast<bool>((*buffer)->usage() & need);
     } else if (const auto* image = std::get_if<const GpuImage3D*>(&args[i])) {
       ok = *image != nullptr && IsImageType(type);
     } else {
       ok = static_cast<bool>(std::get<vk::BufferView>(args[i])) && IsTexelType(type);
     }
     if (!ok) {
-      return absl::InvalidArgumentError(absl::StrCat("kernel ", spec.name, ": binding ", i,
-                                                     " must be a ", vk::to_string(type)));
+      return absl::InvalidArgumentError(
+          absl::StrCat("kernel ", spec.name, ": binding ", i, " must be a ", vk::to_string(type)));
     }
   }
   return absl::OkStatus();

@@ -67,7 +67,8 @@ class ComputeBatch {
   uint32_t max_dispatches_ = 0;
   vk::raii::DescriptorPool descriptor_pool_{nullptr};
   vk::raii::QueryPool query_pool_{nullptr};
-  std::optional<vk::raii::CommandBuffer> commands_;
+  vk::raii::CommandPool command_pool_{nullptr};      // this batch's own (see GpuContext)
+  std::optional<vk::raii::CommandBuffer> commands_;  // after its pool: freed first
   std::vector<vk::raii::DescriptorSet> sets_;
   std::vector<std::string> labels_;
   bool needs_barrier_ = false;

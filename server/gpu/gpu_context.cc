@@ -118,8 +118,6 @@ Status GpuContext::Init(const Options& options) {
     device_ = vk::raii::Device(physical_device_, device_info);
     queue_ = vk::raii::Queue(device_, queue_family_, 0);
     pipelines_ = std::make_unique<PipelineCache>();
-    command_pool_ = vk::raii::CommandPool(
-        device_, {vk::CommandPoolCreateFlagBits::eResetCommandBuffer, queue_family_});
     if (options.log_device) {
       std::cerr << "vpm: Vulkan device '" << device_name_ << "' ("
                 << vk::to_string(properties_.deviceType) << ", API "
@@ -195,9 +193,12 @@ vk::MemoryPropertyFlags GpuContext::memory_flags(uint32_t type_index) const {
   return memory_properties_.memoryTypes[type_index].propertyFlags;
 }
 
-vk::raii::CommandBuffer GpuContext::AllocateCommandBuffer() const {
-  std::lock_guard lock(pool_mutex_);
-  vk::CommandBufferAllocateInfo info(*command_pool_, vk::CommandBufferLevel::ePrimary, 1);
+vk::raii::CommandPool GpuContext::CreateCommandPool() const {
+  return vk::raii::CommandPool(device_, {vk::CommandPoolCreateFlagBits::eTransient, queue_family_});
+}
+
+vk::raii::CommandBuffer GpuContext::AllocateCommandBuffer(const vk::raii::CommandPool& pool) const {
+  vk::CommandBufferAllocateInfo info(*pool, vk::CommandBufferLevel::ePrimary, 1);
   return std::move(vk::raii::CommandBuffers(device_, info).front());
 }
 
@@ -218,17 +219,16 @@ Status GpuContext::SubmitAndWait(const vk::raii::CommandBuffer& commands) const 
 
 Status GpuContext::RunCommands(
     const std::function<void(const vk::raii::CommandBuffer&)>& record) const {
-  std::optional<vk::raii::CommandBuffer> commands;
+  vk::raii::CommandPool pool{nullptr};
+  std::optional<vk::raii::CommandBuffer> commands;  // freed before its pool
   RETURN_IF_ERROR(CatchVulkan("recording GPU commands", [&] {
-    commands.emplace(AllocateCommandBuffer());
+    pool = CreateCommandPool();
+    commands.emplace(AllocateCommandBuffer(pool));
     commands->begin({vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
     record(*commands);
     commands->end();
   }));
-  Status status = SubmitAndWait(*commands);
-  std::lock_guard lock(pool_mutex_);  // freeing returns it to the shared pool
-  commands.reset();
-  return status;
+  return SubmitAndWait(*commands);
 }
 
 std::vector<std::string> GpuContext::validation_messages() const {

@@ -56,7 +56,13 @@ class GpuContext {
   // Submits one recorded command buffer and waits for it. The queue is shared
   // by every user of the context, so submission is serialised here.
   Status SubmitAndWait(const vk::raii::CommandBuffer& commands) const;
-  vk::raii::CommandBuffer AllocateCommandBuffer() const;
+  // A command pool for one recording: command pools are externally
+  // synchronised, recording into their buffers included, so a pool shared by
+  // the render threads let two recordings corrupt each other (a lavapipe
+  // crash under load, bench/soak.sh). Creating one costs microseconds.
+  vk::raii::CommandPool CreateCommandPool() const;
+  // One primary command buffer from `pool` (keep the pool alive longer).
+  vk::raii::CommandBuffer AllocateCommandBuffer(const vk::raii::CommandPool& pool) const;
   // Records `record` into a fresh command buffer, submits it and waits: for
   // one-off transfers (uploads, readbacks, layout changes).
   Status RunCommands(const std::function<void(const vk::raii::CommandBuffer&)>& record) const;
@@ -90,9 +96,7 @@ class GpuContext {
   vk::raii::PhysicalDevice physical_device_{nullptr};
   vk::raii::Device device_{nullptr};
   vk::raii::Queue queue_{nullptr};
-  vk::raii::CommandPool command_pool_{nullptr};
   std::unique_ptr<PipelineCache> pipelines_;  // destroyed before the device
-  mutable std::mutex pool_mutex_;             // command pool is externally synchronised
   mutable std::mutex queue_mutex_;            // so is the queue
 
   uint32_t queue_family_ = 0;
