@@ -36,8 +36,7 @@ Result<ComputeBatch> ComputeBatch::Begin(const GpuContext& context, uint32_t max
       b.query_pool_ = vk::raii::QueryPool(context.device(),
                                           {{}, vk::QueryType::eTimestamp, 2 * max_dispatches});
     }
-    b.command_pool_ = context.CreateCommandPool();
-    b.commands_.emplace(context.AllocateCommandBuffer(b.command_pool_));
+    b.commands_.emplace(context.AllocateCommandBuffer());
     b.commands_->begin({vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
     if (*b.query_pool_) b.commands_->resetQueryPool(*b.query_pool_, 0, 2 * max_dispatches);
   }));

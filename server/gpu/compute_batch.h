@@ -67,8 +67,9 @@ class ComputeBatch {
   uint32_t max_dispatches_ = 0;
   vk::raii::DescriptorPool descriptor_pool_{nullptr};
   vk::raii::QueryPool query_pool_{nullptr};
-  vk::raii::CommandPool command_pool_{nullptr};      // this batch's own (see GpuContext)
-  std::optional<vk::raii::CommandBuffer> commands_;  // after its pool: freed first
+  // From the recording thread's pool (GpuContext::ThreadCommandPool): a batch
+  // is recorded, submitted and destroyed on one thread.
+  std::optional<vk::raii::CommandBuffer> commands_;
   std::vector<vk::raii::DescriptorSet> sets_;
   std::vector<std::string> labels_;
   bool needs_barrier_ = false;

@@ -193,12 +193,19 @@ vk::MemoryPropertyFlags GpuContext::memory_flags(uint32_t type_index) const {
   return memory_properties_.memoryTypes[type_index].propertyFlags;
 }
 
-vk::raii::CommandPool GpuContext::CreateCommandPool() const {
-  return vk::raii::CommandPool(device_, {vk::CommandPoolCreateFlagBits::eTransient, queue_family_});
+const vk::raii::CommandPool& GpuContext::ThreadCommandPool() const {
+  std::lock_guard lock(pools_mutex_);
+  auto& pool = thread_pools_[std::this_thread::get_id()];
+  if (!pool) {
+    pool = std::make_unique<vk::raii::CommandPool>(
+        device_, vk::CommandPoolCreateInfo{vk::CommandPoolCreateFlagBits::eResetCommandBuffer,
+                                           queue_family_});
+  }
+  return *pool;
 }
 
-vk::raii::CommandBuffer GpuContext::AllocateCommandBuffer(const vk::raii::CommandPool& pool) const {
-  vk::CommandBufferAllocateInfo info(*pool, vk::CommandBufferLevel::ePrimary, 1);
+vk::raii::CommandBuffer GpuContext::AllocateCommandBuffer() const {
+  vk::CommandBufferAllocateInfo info(*ThreadCommandPool(), vk::CommandBufferLevel::ePrimary, 1);
   return std::move(vk::raii::CommandBuffers(device_, info).front());
 }
 
@@ -219,11 +226,9 @@ Status GpuContext::SubmitAndWait(const vk::raii::CommandBuffer& commands) const 
 
 Status GpuContext::RunCommands(
     const std::function<void(const vk::raii::CommandBuffer&)>& record) const {
-  vk::raii::CommandPool pool{nullptr};
-  std::optional<vk::raii::CommandBuffer> commands;  // freed before its pool
+  std::optional<vk::raii::CommandBuffer> commands;  // this thread's pool
   RETURN_IF_ERROR(CatchVulkan("recording GPU commands", [&] {
-    pool = CreateCommandPool();
-    commands.emplace(AllocateCommandBuffer(pool));
+    commands.emplace(AllocateCommandBuffer());
     commands->begin({vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
     record(*commands);
     commands->end();

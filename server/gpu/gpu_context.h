@@ -9,9 +9,11 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <vulkan/vulkan_raii.hpp>
@@ -56,13 +58,15 @@ class GpuContext {
   // Submits one recorded command buffer and waits for it. The queue is shared
   // by every user of the context, so submission is serialised here.
   Status SubmitAndWait(const vk::raii::CommandBuffer& commands) const;
-  // A command pool for one recording: command pools are externally
-  // synchronised, recording into their buffers included, so a pool shared by
-  // the render threads let two recordings corrupt each other (a lavapipe
-  // crash under load, bench/soak.sh). Creating one costs microseconds.
-  vk::raii::CommandPool CreateCommandPool() const;
-  // One primary command buffer from `pool` (keep the pool alive longer).
-  vk::raii::CommandBuffer AllocateCommandBuffer(const vk::raii::CommandPool& pool) const;
+  // The calling thread's command pool (made on its first use). Command pools
+  // are externally synchronised, recording into their buffers included, so
+  // one pool shared by the render threads let two recordings corrupt each
+  // other (a lavapipe crash under load, bench/soak.sh); a pool per recording
+  // instead made lavapipe compile code per pool. A buffer from it must be
+  // recorded and freed on the same thread.
+  const vk::raii::CommandPool& ThreadCommandPool() const;
+  // One primary command buffer from the calling thread's pool.
+  vk::raii::CommandBuffer AllocateCommandBuffer() const;
   // Records `record` into a fresh command buffer, submits it and waits: for
   // one-off transfers (uploads, readbacks, layout changes).
   Status RunCommands(const std::function<void(const vk::raii::CommandBuffer&)>& record) const;
@@ -97,7 +101,9 @@ class GpuContext {
   vk::raii::Device device_{nullptr};
   vk::raii::Queue queue_{nullptr};
   std::unique_ptr<PipelineCache> pipelines_;  // destroyed before the device
-  mutable std::mutex queue_mutex_;            // so is the queue
+  mutable std::mutex pools_mutex_;            // guards the map, not the pools
+  mutable std::map<std::thread::id, std::unique_ptr<vk::raii::CommandPool>> thread_pools_;
+  mutable std::mutex queue_mutex_;  // so is the queue
 
   uint32_t queue_family_ = 0;
   vk::PhysicalDeviceProperties properties_{};
