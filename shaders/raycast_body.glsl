@@ -158,6 +158,28 @@ vec3 map_texel(ivec3 g) {
 }
 #endif
 
+// Trilinear interpolation of the corners c000..c111 (locals of type T, x
+// fastest) at the fraction f of the cell, and its derivatives per unit of
+// f.x, f.y, f.z: one macro for the volume's floats and the map's vec3s, so
+// that both do the same arithmetic in the same order.
+#define VPM_TRILINEAR_WITH_DERIVATIVES(T, f, value, d_fx, d_fy, d_fz)          \
+  {                                                                            \
+    T c00 = c000 + (c100 - c000) * f.x;                                        \
+    T c10 = c010 + (c110 - c010) * f.x;                                        \
+    T c01 = c001 + (c101 - c001) * f.x;                                        \
+    T c11 = c011 + (c111 - c011) * f.x;                                        \
+    T c0 = c00 + (c10 - c00) * f.y;                                            \
+    T c1 = c01 + (c11 - c01) * f.y;                                            \
+    T dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;             \
+    T dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;             \
+    T dy0 = c10 - c00;                                                         \
+    T dy1 = c11 - c01;                                                         \
+    value = c0 + (c1 - c0) * f.z;                                              \
+    d_fx = dx0 + (dx1 - dx0) * f.z;                                            \
+    d_fy = dy0 + (dy1 - dy0) * f.z;                                            \
+    d_fz = c1 - c0;                                                            \
+  }
+
 // I at continuous index u (the lerps of source_at) and, in grad_u, its
 // gradient per voxel: the derivative of the trilinear interpolant of the
 // cell holding u.
@@ -173,18 +195,10 @@ float source_and_gradient(vec3 u, out vec3 grad_u) {
   float c101 = volume_texel(i0 + ivec3(1, 0, 1));
   float c011 = volume_texel(i0 + ivec3(0, 1, 1));
   float c111 = volume_texel(i0 + ivec3(1, 1, 1));
-  float c00 = c000 + (c100 - c000) * f.x;
-  float c10 = c010 + (c110 - c010) * f.x;
-  float c01 = c001 + (c101 - c001) * f.x;
-  float c11 = c011 + (c111 - c011) * f.x;
-  float c0 = c00 + (c10 - c00) * f.y;
-  float c1 = c01 + (c11 - c01) * f.y;
-  float dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;
-  float dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;
-  float dy0 = c10 - c00;
-  float dy1 = c11 - c01;
-  grad_u = vec3(dx0 + (dx1 - dx0) * f.z, dy0 + (dy1 - dy0) * f.z, c1 - c0);
-  return c0 + (c1 - c0) * f.z;
+  float value, d_fx, d_fy, d_fz;
+  VPM_TRILINEAR_WITH_DERIVATIVES(float, f, value, d_fx, d_fy, d_fz);
+  grad_u = vec3(d_fx, d_fy, d_fz);
+  return value;
 }
 
 // J(x) and its gradient (value/mm) by the chain rule: grad J(x) =
@@ -208,20 +222,12 @@ float deformed_value_and_gradient(vec3 x, out vec3 grad) {
   vec3 c101 = map_texel(i0 + ivec3(1, 0, 1));
   vec3 c011 = map_texel(i0 + ivec3(0, 1, 1));
   vec3 c111 = map_texel(i0 + ivec3(1, 1, 1));
-  vec3 c00 = c000 + (c100 - c000) * f.x;
-  vec3 c10 = c010 + (c110 - c010) * f.x;
-  vec3 c01 = c001 + (c101 - c001) * f.x;
-  vec3 c11 = c011 + (c111 - c011) * f.x;
-  vec3 c0 = c00 + (c10 - c00) * f.y;
-  vec3 c1 = c01 + (c11 - c01) * f.y;
-  vec3 dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;
-  vec3 dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;
-  vec3 dy0 = c10 - c00;
-  vec3 dy1 = c11 - c01;
-  rest = x + (c0 + (c1 - c0) * f.z);
-  jacobian[0] += (dx0 + (dx1 - dx0) * f.z) * to_grid.x;
-  jacobian[1] += (dy0 + (dy1 - dy0) * f.z) * to_grid.y;
-  jacobian[2] += (c1 - c0) * to_grid.z;
+  vec3 offset, d_fx, d_fy, d_fz;
+  VPM_TRILINEAR_WITH_DERIVATIVES(vec3, f, offset, d_fx, d_fy, d_fz);
+  rest = x + offset;
+  jacobian[0] += d_fx * to_grid.x;
+  jacobian[1] += d_fy * to_grid.y;
+  jacobian[2] += d_fz * to_grid.z;
 #endif
   vec3 grad_u;
   float v = source_and_gradient(clamp(rest * g_inv_spacing, vec3(0.0), vec3(p.dims.xyz - 1)),
