@@ -7,6 +7,7 @@
 #include "client/cli/command_status.h"
 #include "client/cli/mesh_flags.h"
 #include "client/cli/remote_pipeline.h"
+#include "proto/vec3_convert.h"
 #include "server/mesh/mesh_json.h"
 #include "server/render/deformable_scene.h"
 #include "server/render/frame_encoder.h"
@@ -55,8 +56,8 @@ Result<std::optional<glm::dvec3>> GrabPoint(const RenderArgs& args, const Volume
   for (const Landmark& l : volume.landmarks()) {
     if (l.name == args.grab_landmark) return std::optional<glm::dvec3>(l.position_mm);
   }
-  return absl::NotFoundError(StrCat("landmark '", args.grab_landmark, "' is not in ",
-                                    volume.source()));
+  return absl::NotFoundError(
+      StrCat("landmark '", args.grab_landmark, "' is not in ", volume.source()));
 }
 
 Result<SceneView> MakeView(const RenderArgs& args, const Volume& volume) {
@@ -73,7 +74,8 @@ Result<SceneView> MakeView(const RenderArgs& args, const Volume& volume) {
   }
   view.mode = args.mode == "mip" ? RenderMode::kMip : RenderMode::kDvr;
   ASSIGN_OR_RETURN(view.preset, MakeRenderPreset(args.preset, volume));
-  view.quality = args.quality == "interactive" ? RenderQuality::kInteractive : RenderQuality::kStill;
+  view.quality =
+      args.quality == "interactive" ? RenderQuality::kInteractive : RenderQuality::kStill;
   if (args.size.size() != 2) return absl::InvalidArgumentError("--size takes W H");
   view.width = args.size[0];
   view.height = args.size[1];
@@ -145,8 +147,7 @@ Status RunOffline(const RenderArgs& args) {
               mesh.vertices.size(), mesh.tets.size(), step.max_displacement_mm,
               static_cast<long long>(step.inverted_tets));
   std::printf("%-22s %9s\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n", "stage", "ms",
-              "load volume", load_ms, "upload", upload_ms, "mesh", mesh_ms, "FEM setup",
-              setup_ms);
+              "load volume", load_ms, "upload", upload_ms, "mesh", mesh_ms, "FEM setup", setup_ms);
   std::printf("%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n", "FEM solve", step.fem_ms,
               "backward map", step.warp_ms, "render (GPU)", frame.timings.render_ms, "encode",
               encode_ms);
@@ -189,31 +190,26 @@ Result<v1::ManipulateResponse> Manipulate(const ServerConnection& server,
   return response;
 }
 
-v1::Vec3 Vec3Proto(const std::vector<double>& v) {
-  v1::Vec3 out;
-  out.set_x(v[0]);
-  out.set_y(v[1]);
-  out.set_z(v[2]);
-  return out;
-}
-
 // The same frame rendered by a vpm-server: LoadVolume, BuildMesh (refined
 // at the grab point, as offline), OpenSession, Manipulate, Render.
 Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
   ASSIGN_OR_RETURN(const bool jpeg, IsJpegName(args.out));
   if (!args.mesh_json.empty()) {
     return absl::InvalidArgumentError(
-        "--mesh-json is offline only: with --server the server builds the mesh from the mesh flags");
+        "--mesh-json is offline only: with --server the server builds the mesh from the mesh "
+        "flags");
   }
   if (!args.out_volume.empty()) return absl::InvalidArgumentError("--out-volume is offline only");
   if (args.quality != "still") {
-    return absl::InvalidArgumentError("--quality interactive is offline only (Render is a still frame)");
+    return absl::InvalidArgumentError(
+        "--quality interactive is offline only (Render is a still frame)");
   }
   if (args.size.size() != 2) return absl::InvalidArgumentError("--size takes W H");
   if (!args.camera.empty() && args.camera.size() != 3) {
     return absl::InvalidArgumentError("--camera takes AZ EL DIST");
   }
-  if (args.grab.empty() && args.grab_landmark.empty() && (!args.drag.empty() || !args.pull.empty())) {
+  if (args.grab.empty() && args.grab_landmark.empty() &&
+      (!args.drag.empty() || !args.pull.empty())) {
     return absl::InvalidArgumentError("--drag and --pull need --grab or --grab-landmark");
   }
   ASSIGN_OR_RETURN(ServerConnection server, ServerConnection::Connect(flags));
@@ -241,14 +237,22 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
   double max_displacement_mm = 0.0;
   if (!grab.empty()) {
     v1::ClientEvent event;
-    *event.mutable_grab()->mutable_point_mm() = Vec3Proto(grab);
+    ASSIGN_OR_RETURN(const glm::dvec3 grab_mm, Vec3Of(grab, "--grab"));
+    *event.mutable_grab()->mutable_point_mm() = ToProto(grab_mm);
     event.mutable_grab()->set_radius_mm(args.grab_radius);
     RETURN_IF_ERROR(Manipulate(server, session.session_id(), event).status());
     event.Clear();
-    if (!args.drag.empty()) *event.mutable_drag()->mutable_offset_mm() = Vec3Proto(args.drag);
-    if (!args.pull.empty()) *event.mutable_pull()->mutable_force_n() = Vec3Proto(args.pull);
+    if (!args.drag.empty()) {
+      ASSIGN_OR_RETURN(const glm::dvec3 offset, Vec3Of(args.drag, "--drag"));
+      *event.mutable_drag()->mutable_offset_mm() = ToProto(offset);
+    }
+    if (!args.pull.empty()) {
+      ASSIGN_OR_RETURN(const glm::dvec3 force, Vec3Of(args.pull, "--pull"));
+      *event.mutable_pull()->mutable_force_n() = ToProto(force);
+    }
     if (event.event_case() != v1::ClientEvent::EVENT_NOT_SET) {
-      ASSIGN_OR_RETURN(v1::ManipulateResponse moved, Manipulate(server, session.session_id(), event));
+      ASSIGN_OR_RETURN(v1::ManipulateResponse moved,
+                       Manipulate(server, session.session_id(), event));
       max_displacement_mm = moved.max_displacement_mm();
     }
   }
@@ -288,18 +292,23 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
 
 void AddRenderCommand(CLI::App& app, const ServerFlags* server, int* exit_code) {
   auto a = std::make_shared<RenderArgs>();
-  CLI::App* cmd = app.add_subcommand("render", "Render one frame, optionally after a drag (offline, or on --server)");
+  CLI::App* cmd = app.add_subcommand(
+      "render", "Render one frame, optionally after a drag (offline, or on --server)");
   cmd->add_option("--volume", a->source, "a file, a DICOM folder or phantom:NAME")->required();
   cmd->add_option("--mesh-json", a->mesh_json, "a mesh written by `vpm mesh --json`");
   AddMeshFlags(cmd, &a->mesh);
   cmd->add_option("--camera", a->camera,
-                  "AZ EL DIST: degrees from the anterior view, DIST mm (0: fit)")->expected(3);
-  cmd->add_option("--mode", a->mode, "dvr or mip")->check(CLI::IsMember({"dvr", "mip"}))
+                  "AZ EL DIST: degrees from the anterior view, DIST mm (0: fit)")
+      ->expected(3);
+  cmd->add_option("--mode", a->mode, "dvr or mip")
+      ->check(CLI::IsMember({"dvr", "mip"}))
       ->capture_default_str();
-  cmd->add_option("--preset", a->preset, "render preset: ct-soft-tissue, ct-bone, ct-vessels, mri-t1")
+  cmd->add_option("--preset", a->preset,
+                  "render preset: ct-soft-tissue, ct-bone, ct-vessels, mri-t1")
       ->capture_default_str();
   cmd->add_option("--quality", a->quality, "still or interactive")
-      ->check(CLI::IsMember({"still", "interactive"}))->capture_default_str();
+      ->check(CLI::IsMember({"still", "interactive"}))
+      ->capture_default_str();
   cmd->add_option("--grab", a->grab, "grab point X Y Z (mm, physical voxel space)")->expected(3);
   cmd->add_option("--grab-landmark", a->grab_landmark, "grab at a named landmark");
   cmd->add_option("--grab-radius", a->grab_radius, "handle radius in mm (default: h)");

@@ -52,8 +52,7 @@ Result<glm::dvec3> Session::GrabPoint(const v1::Grab& grab, const SceneView* str
   if (grab.pixel_x() < 0 || grab.pixel_x() >= view.width || grab.pixel_y() < 0 ||
       grab.pixel_y() >= view.height) {
     return absl::OutOfRangeError(StrCat("grab.pixel: (", grab.pixel_x(), ", ", grab.pixel_y(),
-                                        ") is outside the frame, ", view.width, "x",
-                                        view.height));
+                                        ") is outside the frame, ", view.width, "x", view.height));
   }
   // The pixel's ray through the volume as the frame showed it
   // (render/pick_ray.h); a ray that shows nothing falls back to the plane
@@ -109,9 +108,9 @@ Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event, const Sc
       {
         std::lock_guard lock(state_mutex_);
         if (!grabbed_) {
-          return absl::FailedPreconditionError(
-              event.has_drag() ? "drag: no grab in effect; send a grab first"
-                               : "pull: no grab in effect; send a grab first");
+          return absl::FailedPreconditionError(event.has_drag()
+                                                   ? "drag: no grab in effect; send a grab first"
+                                                   : "pull: no grab in effect; send a grab first");
         }
       }
       const glm::dvec3 v =
@@ -122,8 +121,6 @@ Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event, const Sc
       }
       ASSIGN_OR_RETURN(applied.step, event.has_drag() ? scene_->Drag(v) : scene_->Pull(v));
       applied.deformed = true;
-      std::lock_guard lock(state_mutex_);
-      ++deform_count_;
       return applied;
     }
     case v1::ClientEvent::kRelease: {
@@ -222,16 +219,6 @@ bool Session::RecentlyChanged() const {
   std::lock_guard lock(state_mutex_);
   if (last_change_ == std::chrono::steady_clock::time_point{}) return false;
   return MsSince(last_change_) < options_.still_delay_ms;
-}
-
-uint64_t Session::deform_count() const {
-  std::lock_guard lock(state_mutex_);
-  return deform_count_;
-}
-
-bool Session::grabbed() const {
-  std::lock_guard lock(state_mutex_);
-  return grabbed_;
 }
 
 uint64_t Session::version() const {

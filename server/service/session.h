@@ -23,7 +23,7 @@ namespace vpm::service {
 
 // What applying one event did.
 struct AppliedEvent {
-  SceneStepTimings step;   // FEM and warp times (zero for camera events)
+  SceneStepTimings step;  // FEM and warp times (zero for camera events)
   bool deformed = false;
   std::optional<glm::dvec3> grab_point_mm;  // a grab's point (picked or given)
 };
@@ -70,9 +70,6 @@ class Session {
   // settings; from any client) is younger than still_delay_ms: frames are
   // interactive meanwhile.
   bool RecentlyChanged() const;
-  // Drags and pulls applied so far, and whether a grab is held.
-  uint64_t deform_count() const;
-  bool grabbed() const;
   uint64_t version() const;
   uint64_t last_sequence() const;
   double max_displacement_mm() const;
@@ -114,7 +111,6 @@ class Session {
   SceneView last_view_;  // settings of the last frame rendered (picks without a stream)
   std::optional<glm::dvec3> grab_point_;  // while grabbed
   std::chrono::steady_clock::time_point last_change_{};
-  uint64_t deform_count_ = 0;
   std::chrono::steady_clock::time_point last_touch_;
   bool closed_ = false;
 
