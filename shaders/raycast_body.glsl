@@ -67,6 +67,33 @@ vec3 g_inv_brick;    // 1 / brick size (mm)
 
 vec3 extent_mm() { return vec3(p.dims.xyz - 1) * p.spacing_mm.xyz; }
 
+// Trilinear interpolation of the corners c000..c111 (locals of type T, x
+// fastest) at the fraction f of the cell, in the order x, y, z, each lerp
+// a + (b - a) * f, as the CPU reference: VPM_TRILINEAR_XY declares the x
+// lerps c00..c11 and the y lerps c0, c1 (the value is c0 + (c1 - c0) * f.z);
+// VPM_TRILINEAR_WITH_DERIVATIVES also gives the derivatives per unit of
+// f.x, f.y, f.z. Macros serve the volume's floats and the map's vec3s alike.
+#define VPM_TRILINEAR_XY(T, f)                \
+  T c00 = c000 + (c100 - c000) * f.x;         \
+  T c10 = c010 + (c110 - c010) * f.x;         \
+  T c01 = c001 + (c101 - c001) * f.x;         \
+  T c11 = c011 + (c111 - c011) * f.x;         \
+  T c0 = c00 + (c10 - c00) * f.y;             \
+  T c1 = c01 + (c11 - c01) * f.y
+
+#define VPM_TRILINEAR_WITH_DERIVATIVES(T, f, value, d_fx, d_fy, d_fz)          \
+  {                                                                            \
+    VPM_TRILINEAR_XY(T, f);                                                    \
+    T dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;             \
+    T dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;             \
+    T dy0 = c10 - c00;                                                         \
+    T dy1 = c11 - c01;                                                         \
+    value = c0 + (c1 - c0) * f.z;                                              \
+    d_fx = dx0 + (dx1 - dx0) * f.z;                                            \
+    d_fy = dy0 + (dy1 - dy0) * f.z;                                            \
+    d_fz = c1 - c0;                                                            \
+  }
+
 // I at continuous index u in [0, n - 1].
 float source_at(vec3 u) {
 #ifdef VPM_RAYCAST_SAMPLED
@@ -86,12 +113,7 @@ float source_at(vec3 u) {
   float c101 = texelFetch(u_volume, base + sz + 1).r;
   float c011 = texelFetch(u_volume, base + sz + sy).r;
   float c111 = texelFetch(u_volume, base + sz + sy + 1).r;
-  float c00 = c000 + (c100 - c000) * f.x;
-  float c10 = c010 + (c110 - c010) * f.x;
-  float c01 = c001 + (c101 - c001) * f.x;
-  float c11 = c011 + (c111 - c011) * f.x;
-  float c0 = c00 + (c10 - c00) * f.y;
-  float c1 = c01 + (c11 - c01) * f.y;
+  VPM_TRILINEAR_XY(float, f);
   return c0 + (c1 - c0) * f.z;
 #endif
 }
@@ -116,12 +138,7 @@ vec3 rest_from_texels(vec3 x) {
   vec3 c101 = texelFetch(u_map, base + sz + 1).xyz;
   vec3 c011 = texelFetch(u_map, base + sz + sy).xyz;
   vec3 c111 = texelFetch(u_map, base + sz + sy + 1).xyz;
-  vec3 c00 = c000 + (c100 - c000) * f.x;
-  vec3 c10 = c010 + (c110 - c010) * f.x;
-  vec3 c01 = c001 + (c101 - c001) * f.x;
-  vec3 c11 = c011 + (c111 - c011) * f.x;
-  vec3 c0 = c00 + (c10 - c00) * f.y;
-  vec3 c1 = c01 + (c11 - c01) * f.y;
+  VPM_TRILINEAR_XY(vec3, f);
   return x + (c0 + (c1 - c0) * f.z);
 }
 #endif
@@ -157,28 +174,6 @@ vec3 map_texel(ivec3 g) {
 #endif
 }
 #endif
-
-// Trilinear interpolation of the corners c000..c111 (locals of type T, x
-// fastest) at the fraction f of the cell, and its derivatives per unit of
-// f.x, f.y, f.z: one macro for the volume's floats and the map's vec3s, so
-// that both do the same arithmetic in the same order.
-#define VPM_TRILINEAR_WITH_DERIVATIVES(T, f, value, d_fx, d_fy, d_fz)          \
-  {                                                                            \
-    T c00 = c000 + (c100 - c000) * f.x;                                        \
-    T c10 = c010 + (c110 - c010) * f.x;                                        \
-    T c01 = c001 + (c101 - c001) * f.x;                                        \
-    T c11 = c011 + (c111 - c011) * f.x;                                        \
-    T c0 = c00 + (c10 - c00) * f.y;                                            \
-    T c1 = c01 + (c11 - c01) * f.y;                                            \
-    T dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;             \
-    T dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;             \
-    T dy0 = c10 - c00;                                                         \
-    T dy1 = c11 - c01;                                                         \
-    value = c0 + (c1 - c0) * f.z;                                              \
-    d_fx = dx0 + (dx1 - dx0) * f.z;                                            \
-    d_fy = dy0 + (dy1 - dy0) * f.z;                                            \
-    d_fz = c1 - c0;                                                            \
-  }
 
 // I at continuous index u (the lerps of source_at) and, in grad_u, its
 // gradient per voxel: the derivative of the trilinear interpolant of the
