@@ -1,7 +1,6 @@
 #include "server/render/raycast_cpu.h"
 
 #include <algorithm>
-#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -30,8 +29,8 @@ uint32_t PackRgba(vec3 rgb) {
 }
 
 vec4 Unpack(uint32_t w) {
-  return vec4(float(w & 255u), float((w >> 8) & 255u), float((w >> 16) & 255u), float(w >> 24)) /
-         255.0f;
+  return vec4(float(w & 255u), float((w >> 8) & 255u), float((w >> 16) & 255u),
+              float(w >> 24)) / 255.0f;
 }
 
 // Runs fn(row) for rows 0..rows-1 on `threads` threads, rows interleaved
@@ -49,64 +48,20 @@ void ForRows(int rows, int threads, Fn fn) {
   for (auto& th : pool) th.join();
 }
 
-// The corners of a trilinear cell, x fastest: c000, c100, c010, c110, c001,
-// c101, c011, c111.
-template <typename T>
-using Corners = std::array<T, 8>;
-
-// A cell's value at the fraction f and its derivatives per unit of f.x,
-// f.y, f.z: VPM_TRILINEAR_WITH_DERIVATIVES of raycast_body.glsl, the same
-// lerps in the same order.
-template <typename T>
-struct TrilinearSample {
-  T value, d_fx, d_fy, d_fz;
-};
-
-template <typename T>
-TrilinearSample<T> TrilinearWithDerivatives(const Corners<T>& c, vec3 f) {
-  const auto& [c000, c100, c010, c110, c001, c101, c011, c111] = c;
-  const T c00 = c000 + (c100 - c000) * f.x;
-  const T c10 = c010 + (c110 - c010) * f.x;
-  const T c01 = c001 + (c101 - c001) * f.x;
-  const T c11 = c011 + (c111 - c011) * f.x;
-  const T c0 = c00 + (c10 - c00) * f.y;
-  const T c1 = c01 + (c11 - c01) * f.y;
-  const T dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;
-  const T dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;
-  const T dy0 = c10 - c00;
-  const T dy1 = c11 - c01;
-  return {c0 + (c1 - c0) * f.z, dx0 + (dx1 - dx0) * f.z, dy0 + (dy1 - dy0) * f.z, c1 - c0};
-}
-
-// The map cell holding grid coordinate gc (already clamped to the grid):
-// its fraction and its corners (displacements, mm).
-struct MapCell {
-  vec3 f;
-  Corners<vec3> c;
-};
-
-MapCell MapCellAt(const HostBackwardMap& map, vec3 gc) {
-  const ivec3 mi(map.dims[0], map.dims[1], map.dims[2]);
-  const ivec3 i0 = glm::min(ivec3(glm::floor(gc)), mi - 2);
-  auto at = [&](int dx, int dy, int dz) {
-    return vec3(
-        map.texels[(i0.x + dx) + size_t(mi.x) * ((i0.y + dy) + size_t(mi.y) * (i0.z + dz))]);
-  };
-  return {gc - vec3(i0),
-          {at(0, 0, 0), at(1, 0, 0), at(0, 1, 0), at(1, 1, 0), at(0, 0, 1), at(1, 0, 1),
-           at(0, 1, 1), at(1, 1, 1)}};
-}
-
 // X(x) - x from the map: rest_from_texels() of raycast_body.glsl (the
 // sampler's linear, clamp-to-edge filtering with exact weights).
 vec3 MapDisplacement(const HostBackwardMap& map, vec3 x, vec3 extent, vec3 m) {
-  const MapCell cell = MapCellAt(map, glm::clamp(x / extent * (m - 1.0f), vec3(0.0f), m - 1.0f));
-  const auto& [c000, c100, c010, c110, c001, c101, c011, c111] = cell.c;
-  const vec3 f = cell.f;
-  const vec3 c00 = c000 + (c100 - c000) * f.x;
-  const vec3 c10 = c010 + (c110 - c010) * f.x;
-  const vec3 c01 = c001 + (c101 - c001) * f.x;
-  const vec3 c11 = c011 + (c111 - c011) * f.x;
+  const vec3 gc = glm::clamp(x / extent * (m - 1.0f), vec3(0.0f), m - 1.0f);
+  const ivec3 mi(map.dims[0], map.dims[1], map.dims[2]);
+  const ivec3 i0 = glm::min(ivec3(glm::floor(gc)), mi - 2);
+  const vec3 f = gc - vec3(i0);
+  auto at = [&](int dx, int dy, int dz) {
+    return vec3(map.texels[(i0.x + dx) + size_t(mi.x) * ((i0.y + dy) + size_t(mi.y) * (i0.z + dz))]);
+  };
+  const vec3 c00 = at(0, 0, 0) + (at(1, 0, 0) - at(0, 0, 0)) * f.x;
+  const vec3 c10 = at(0, 1, 0) + (at(1, 1, 0) - at(0, 1, 0)) * f.x;
+  const vec3 c01 = at(0, 0, 1) + (at(1, 0, 1) - at(0, 0, 1)) * f.x;
+  const vec3 c11 = at(0, 1, 1) + (at(1, 1, 1) - at(0, 1, 1)) * f.x;
   const vec3 c0 = c00 + (c10 - c00) * f.y;
   const vec3 c1 = c01 + (c11 - c01) * f.y;
   return c0 + (c1 - c0) * f.z;
@@ -160,10 +115,20 @@ class Caster {
     const vec3 f = u - vec3(i0);
     const int64_t sy = n_.x, sz = int64_t(n_.x) * n_.y;
     const float* b = values_ + i0.x + sy * i0.y + sz * i0.z;
-    const auto t = TrilinearWithDerivatives<float>(
-        {b[0], b[1], b[sy], b[sy + 1], b[sz], b[sz + 1], b[sz + sy], b[sz + sy + 1]}, f);
-    grad_u = vec3(t.d_fx, t.d_fy, t.d_fz);
-    return t.value;
+    const float c000 = b[0], c100 = b[1], c010 = b[sy], c110 = b[sy + 1];
+    const float c001 = b[sz], c101 = b[sz + 1], c011 = b[sz + sy], c111 = b[sz + sy + 1];
+    const float c00 = c000 + (c100 - c000) * f.x;
+    const float c10 = c010 + (c110 - c010) * f.x;
+    const float c01 = c001 + (c101 - c001) * f.x;
+    const float c11 = c011 + (c111 - c011) * f.x;
+    const float c0 = c00 + (c10 - c00) * f.y;
+    const float c1 = c01 + (c11 - c01) * f.y;
+    const float dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;
+    const float dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;
+    const float dy0 = c10 - c00;
+    const float dy1 = c11 - c01;
+    grad_u = vec3(dx0 + (dx1 - dx0) * f.z, dy0 + (dy1 - dy0) * f.z, c1 - c0);
+    return c0 + (c1 - c0) * f.z;
   }
 
   // deformed_value_and_gradient() of raycast_body.glsl: J(x) and grad J
@@ -172,14 +137,33 @@ class Caster {
     vec3 rest = x;
     glm::mat3 jacobian(1.0f);  // d rest / d x, columns per x axis
     if (Flag(gpu::kRaycastHasMap)) {
+      const HostBackwardMap& map = *in_.map;
       const vec3 m(p_.map_dims);
       const vec3 to_grid = (m - 1.0f) / extent_;
-      const MapCell cell = MapCellAt(*in_.map, glm::clamp(x * to_grid, vec3(0.0f), m - 1.0f));
-      const auto t = TrilinearWithDerivatives(cell.c, cell.f);
-      rest = x + t.value;
-      jacobian[0] += t.d_fx * to_grid.x;
-      jacobian[1] += t.d_fy * to_grid.y;
-      jacobian[2] += t.d_fz * to_grid.z;
+      const vec3 gc = glm::clamp(x * to_grid, vec3(0.0f), m - 1.0f);
+      const ivec3 mi(map.dims[0], map.dims[1], map.dims[2]);
+      const ivec3 i0 = glm::min(ivec3(glm::floor(gc)), mi - 2);
+      const vec3 f = gc - vec3(i0);
+      auto at = [&](int dx, int dy, int dz) {
+        return vec3(
+            map.texels[(i0.x + dx) + size_t(mi.x) * ((i0.y + dy) + size_t(mi.y) * (i0.z + dz))]);
+      };
+      const vec3 c000 = at(0, 0, 0), c100 = at(1, 0, 0), c010 = at(0, 1, 0), c110 = at(1, 1, 0);
+      const vec3 c001 = at(0, 0, 1), c101 = at(1, 0, 1), c011 = at(0, 1, 1), c111 = at(1, 1, 1);
+      const vec3 c00 = c000 + (c100 - c000) * f.x;
+      const vec3 c10 = c010 + (c110 - c010) * f.x;
+      const vec3 c01 = c001 + (c101 - c001) * f.x;
+      const vec3 c11 = c011 + (c111 - c011) * f.x;
+      const vec3 c0 = c00 + (c10 - c00) * f.y;
+      const vec3 c1 = c01 + (c11 - c01) * f.y;
+      const vec3 dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;
+      const vec3 dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;
+      const vec3 dy0 = c10 - c00;
+      const vec3 dy1 = c11 - c01;
+      rest = x + (c0 + (c1 - c0) * f.z);
+      jacobian[0] += (dx0 + (dx1 - dx0) * f.z) * to_grid.x;
+      jacobian[1] += (dy0 + (dy1 - dy0) * f.z) * to_grid.y;
+      jacobian[2] += (c1 - c0) * to_grid.z;
     }
     vec3 grad_u;
     const float v =
@@ -216,7 +200,8 @@ class Caster {
     const float n = p_.shading.w;
     const float spec = ndl / (n - n * ndl + ndl);  // Schlick's ndl^n
     const float diffuse = 1.0f + (ndl - 1.0f) * s;
-    const vec3 lit = rgb * (p_.shading.x + p_.shading.y * diffuse) + vec3(p_.shading.z * spec * s);
+    const vec3 lit =
+        rgb * (p_.shading.x + p_.shading.y * diffuse) + vec3(p_.shading.z * spec * s);
     return glm::min(lit, vec3(1.0f));
   }
 
@@ -397,7 +382,8 @@ std::vector<uint32_t> RaycastCpu(const gpu::RaycastParams& params, const Raycast
   return pixels;
 }
 
-std::vector<uint32_t> UpscaleCpu(std::span<const uint32_t> source, int sw, int sh, int tw, int th) {
+std::vector<uint32_t> UpscaleCpu(std::span<const uint32_t> source, int sw, int sh, int tw,
+                                 int th) {
   std::vector<uint32_t> out(size_t(tw) * th);
   const glm::vec2 scale = glm::vec2(sw, sh) / glm::vec2(tw, th);
   for (int y = 0; y < th; ++y) {
@@ -411,8 +397,8 @@ std::vector<uint32_t> UpscaleCpu(std::span<const uint32_t> source, int sw, int s
       const vec4 top = at(i0.x, i0.y) + (at(i1.x, i0.y) - at(i0.x, i0.y)) * f.x;
       const vec4 bottom = at(i0.x, i1.y) + (at(i1.x, i1.y) - at(i0.x, i1.y)) * f.x;
       const vec4 c = glm::clamp(top + (bottom - top) * f.y, 0.0f, 1.0f) * 255.0f + 0.5f;
-      out[size_t(y) * tw + x] =
-          uint32_t(c.r) | (uint32_t(c.g) << 8) | (uint32_t(c.b) << 16) | (uint32_t(c.a) << 24);
+      out[size_t(y) * tw + x] = uint32_t(c.r) | (uint32_t(c.g) << 8) | (uint32_t(c.b) << 16) |
+                                (uint32_t(c.a) << 24);
     }
   }
   return out;
@@ -449,8 +435,9 @@ Result<Frame> RenderReference(const RenderRequest& request, const Volume& volume
     occupancy = BrickOccupancyCpu(brick_minmax ? *brick_minmax : own, g, request.mode, lut, map);
     const float black = setup.params.window.x;
     const bool mip = request.mode == RenderMode::kMip;
-    frame.occupied_bricks = std::count_if(occupancy.begin(), occupancy.end(),
-                                          [&](float o) { return mip ? o > black : o > 0.0f; });
+    frame.occupied_bricks = std::count_if(occupancy.begin(), occupancy.end(), [&](float o) {
+      return mip ? o > black : o > 0.0f;
+    });
   }
   frame.timings.occupancy_ms = MsSince(t0);
   t0 = std::chrono::steady_clock::now();
@@ -461,8 +448,8 @@ Result<Frame> RenderReference(const RenderRequest& request, const Volume& volume
   frame.timings.raycast_ms = MsSince(t0);
   if (setup.render_width != request.width || setup.render_height != request.height) {
     t0 = std::chrono::steady_clock::now();
-    pixels =
-        UpscaleCpu(pixels, setup.render_width, setup.render_height, request.width, request.height);
+    pixels = UpscaleCpu(pixels, setup.render_width, setup.render_height, request.width,
+                        request.height);
     frame.timings.upscale_ms = MsSince(t0);
   }
   frame.rgba.resize(pixels.size() * 4);
