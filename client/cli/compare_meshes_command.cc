@@ -22,13 +22,15 @@ struct CompareArgs {
   std::string backend = "auto", json_out;
   bool deformation = true;
   std::string drag_landmark = StandardDrag{}.landmark;
-  std::vector<double> drag{0.0, 0.0, 12.0};
+  std::vector<double> drag{StandardDrag{}.offset_mm.x, StandardDrag{}.offset_mm.y,
+                           StandardDrag{}.offset_mm.z};
+  double grab_radius_factor = StandardDrag{}.grab_radius_factor;
 };
 
 void PrintDeformation(const std::vector<DeformationMeasure>& rows, const StandardDrag& drag) {
-  std::printf("\ndeformation: grab '%s' (radius h), drag (%.1f, %.1f, %.1f) mm; error vs the "
+  std::printf("\ndeformation: grab '%s' (radius %.2f h), drag (%.1f, %.1f, %.1f) mm; error vs the "
               "dense-lattice reference over body voxels (every 4th per axis)\n",
-              drag.landmark.c_str(), drag.offset_mm.x, drag.offset_mm.y, drag.offset_mm.z);
+              drag.landmark.c_str(), drag.grab_radius_factor, drag.offset_mm.x, drag.offset_mm.y, drag.offset_mm.z);
   std::printf("%-10s %6s %8s %10s %10s %12s %11s %12s %9s  %s\n", "mesh", "verts", "handles",
               "RMS mm", "max mm", "bone max %", "inverted", "inv @1.5h", "FEM ms",
               "worst bone voxel (mm)");
@@ -93,7 +95,8 @@ Status Run(const CompareArgs& args) {
     return absl::OkStatus();
   }
   const StandardDrag drag{.landmark = args.drag_landmark,
-                          .offset_mm = glm::dvec3(args.drag[0], args.drag[1], args.drag[2])};
+                          .offset_mm = glm::dvec3(args.drag[0], args.drag[1], args.drag[2]),
+                          .grab_radius_factor = args.grab_radius_factor};
   ASSIGN_OR_RETURN(auto deformation, CompareDeformation(volume, params, drag));
   PrintDeformation(deformation, drag);
   return absl::OkStatus();
@@ -113,6 +116,10 @@ void AddCompareMeshesCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--drag-landmark", args->drag_landmark, "the standard drag's grab point")
       ->capture_default_str();
   cmd->add_option("--drag", args->drag, "the standard drag, DX DY DZ mm")->expected(3)
+      ->capture_default_str();
+  cmd->add_option("--grab-radius", args->grab_radius_factor,
+                  "the standard drag's grab radius, in lattice steps h")
+      ->check(CLI::Range(0.01, 10.0))
       ->capture_default_str();
   AddBackendFlag(cmd, &args->backend);
   cmd->callback([args, exit_code] { *exit_code = ExitWith(Run(*args)); });

@@ -22,13 +22,16 @@
 
 namespace vpm {
 
-// The standard drag (docs/MESH.md): grab the phantom's left renal artery with
-// a radius of one lattice step h and drag it 12 mm cranially (+z), across the
-// vessel's course.
+// The standard drag (docs/MESH.md, "The standard drag"): grab the phantom's
+// left kidney centre (medulla, 59 HU: deformable under both rules of section
+// 3) with a radius of half a lattice step h and drag it 12 mm anteriorly
+// (-y, towards the surgeon, as a retraction), through the perirenal fat.
+// The renal artery is no fit: section 3's influence rule makes its vertices
+// near the spine hard, so a grab there holds fixed vertices.
 struct StandardDrag {
-  std::string landmark = "left_renal_artery";
-  glm::dvec3 offset_mm{0.0, 0.0, 12.0};
-  double grab_radius_factor = 1.0;  // x h of the G lattice
+  std::string landmark = "left_kidney_center";
+  glm::dvec3 offset_mm{0.0, -12.0, 0.0};
+  double grab_radius_factor = 0.5;  // x h of the G lattice
 };
 
 struct DeformationMeasure {

@@ -42,14 +42,18 @@ class DeformationOnPhantom : public ::testing::Test {
 };
 std::vector<DeformationMeasure>* DeformationOnPhantom::rows_ = nullptr;
 
-// What holds on the phantom. Measured and NOT holding (docs/MESH.md, "Open
-// findings"): step 2 beats the regular lattice; bone moves under 5% of the
-// drag; no inverted tet after a 1.5 h drag of the refined meshes.
+// What section 6 expects, on the standard drag (docs/MESH.md): step 4 beats
+// step 2, step 2 beats the regular lattice, and bone moves under 5% of the
+// drag on the step-4 mesh. Measured and NOT holding (docs/MESH.md, "Open
+// findings"): no inverted tet after a 1.5 h drag of the optimized meshes.
 // One test (one process under ctest): the dense reference solve dominates.
-TEST_F(DeformationOnPhantom, Step4BeatsStep2AndRegularAndTheReferenceStaysValid) {
+TEST_F(DeformationOnPhantom, Step4BeatsStep2BeatsRegularAndBoneStaysRigid) {
   EXPECT_LT(Row("step 4").rms_error_mm, Row("step 2").rms_error_mm);
-  EXPECT_LT(Row("step 4").rms_error_mm, Row("regular").rms_error_mm);
+  EXPECT_LT(Row("step 2").rms_error_mm, Row("regular").rms_error_mm);
+  EXPECT_LT(Row("step 4").bone_max_fraction, 0.05);
+  EXPECT_LT(Row("reference").bone_max_fraction, 0.05);
   EXPECT_EQ(Row("reference").inverted_at_drag, 0);
+  EXPECT_EQ(Row("reference").inverted_at_1_5h, 0);
   EXPECT_EQ(Row("regular").inverted_at_drag, 0);
   EXPECT_EQ(Row("regular").inverted_at_1_5h, 0);
   for (const auto& r : *rows_) {
