@@ -58,7 +58,7 @@ void StageTable(const Volume& volume, const gpu::GpuContext& context, const GpuV
 }
 
 void ScalingTable(const Volume& volume, const GpuVolume& gpu_volume,
-                  const LatticeCostsGpu& costs_gpu) {
+                  const LatticeCostsGpu& costs_gpu, bool naive) {
   std::printf("\nstep 2 scaling: decimate to 3%% of N (spread, cell footprint)\n");
   std::printf("%10s %12s %14s %10s %18s\n", "N", "fast ms", "naive ms", "naive/fast",
               "fast/(N log N) rel");
@@ -78,13 +78,16 @@ void ScalingTable(const Volume& volume, const GpuVolume& gpu_volume,
     // The naive scan runs only where its predicted time is under a minute.
     double naive_ms = -1.0;
     const double predicted_ms = naive_per_n2 * double(n) * double(n);
-    if (naive_per_n2 == 0.0 || predicted_ms < 60'000.0) {
+    if (naive && (naive_per_n2 == 0.0 || predicted_ms < 60'000.0)) {
       naive_ms = bench::MinMs(1, [&] { bench::Check(DecimateNaive(in, p), "naive"); });
       naive_per_n2 = naive_ms / (double(n) * double(n));
     }
     if (naive_ms >= 0) {
       std::printf("%10lld %12.1f %14.1f %10.1f %18.2f\n", (long long)n, fast_ms, naive_ms,
                   naive_ms / fast_ms, fast_ms / nlogn / first_norm);
+    } else if (!naive) {
+      std::printf("%10lld %12.1f %14s %10s %18.2f\n", (long long)n, fast_ms, "-", "-",
+                  fast_ms / nlogn / first_norm);
     } else {
       std::printf("%10lld %12.1f %14s %10s %18.2f   (naive predicted %.0f s: skipped)\n",
                   (long long)n, fast_ms, "-", "-", fast_ms / nlogn / first_norm,
@@ -95,13 +98,17 @@ void ScalingTable(const Volume& volume, const GpuVolume& gpu_volume,
 
 }  // namespace
 
-// Usage: mesh_build_bench [SOURCE] [--stages-only]
+// Usage: mesh_build_bench [SOURCE] [--stages-only | --scaling-only] [--no-naive]
 int main(int argc, char** argv) {
   std::string source = "phantom:abdomen";
-  bool scaling = true;
+  bool stages = true, scaling = true, naive = true;
   for (int i = 1; i < argc; ++i) {
     if (std::string(argv[i]) == "--stages-only") {
       scaling = false;
+    } else if (std::string(argv[i]) == "--scaling-only") {
+      stages = false;
+    } else if (std::string(argv[i]) == "--no-naive") {
+      naive = false;
     } else {
       source = argv[i];
     }
@@ -113,7 +120,7 @@ int main(int argc, char** argv) {
     gpu_volume.emplace(bench::Check(GpuVolume::Upload(*context, volume), "upload"));
   });
   auto costs_gpu = bench::Check(LatticeCostsGpu::Create(*context), "pipeline");
-  StageTable(volume, *context, *gpu_volume, costs_gpu, upload_ms);
-  if (scaling) ScalingTable(volume, *gpu_volume, costs_gpu);
+  if (stages) StageTable(volume, *context, *gpu_volume, costs_gpu, upload_ms);
+  if (scaling) ScalingTable(volume, *gpu_volume, costs_gpu, naive);
   return 0;
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <thread>
 
 #include "server/mesh/indexed_min_heap.h"
@@ -63,48 +64,110 @@ struct CostModel {
   }
 };
 
-// Every vertex's neighbours within R (CSR, ids ascending), found once with a
-// uniform grid of cell size R, so that each removal visits only its dozens of
-// neighbours instead of the hundreds of grid candidates.
+// Every vertex's neighbours within R (CSR, ids ascending), found once with
+// a uniform grid of cell size R, so that each removal visits only its dozens
+// of neighbours.
 struct NeighbourLists {
-  std::vector<int64_t> start;  // #N+1
-  std::vector<int32_t> ids;
+  std::vector<int64_t> start;                // #N+1
+  std::unique_ptr<int32_t[]> ids;            // start[N] neighbour ids, ascending per vertex
+  std::unique_ptr<double[]> inv_distance;    // start[N]: 1 / |p_u - p_v|, 1/mm, beside ids
+};
+
+// The candidates around one grid bucket, sorted by id, as flat arrays (mm).
+struct Candidates {
+  std::vector<std::pair<int64_t, int64_t>> order;  // (id, grid slot)
+  std::vector<int64_t> id;
+  std::vector<double> x, y, z, d;
+
+  // sorted: by id (needed where the order of a sum matters).
+  void Gather(const PointGrid& grid, int64_t bucket, bool sorted) {
+    order.clear();
+    grid.ForEachSlotAround(bucket, [&](int64_t slot) { order.emplace_back(grid.item(slot), slot); });
+    if (sorted) std::sort(order.begin(), order.end());
+    const size_t m = order.size();
+    id.resize(m);
+    x.resize(m);
+    y.resize(m);
+    z.resize(m);
+    d.resize(m);
+    for (size_t j = 0; j < m; ++j) {
+      id[j] = order[j].first;
+      const glm::dvec3& p = grid.position(order[j].second);
+      x[j] = p.x;
+      y[j] = p.y;
+      z[j] = p.z;
+    }
+  }
+  // d[j] = PointDistance(candidate j, q), the same bits (one loop the
+  // compiler vectorizes; sqrt is correctly rounded in either form).
+  void DistancesTo(const glm::dvec3& q) {
+    const size_t m = id.size();
+    const double* __restrict px = x.data();
+    const double* __restrict py = y.data();
+    const double* __restrict pz = z.data();
+    double* __restrict pd = d.data();
+    const double qx = q.x, qy = q.y, qz = q.z;
+    for (size_t j = 0; j < m; ++j) {
+      const double dx = px[j] - qx, dy = py[j] - qy, dz = pz[j] - qz;
+      pd[j] = std::sqrt(dx * dx + dy * dy + dz * dz);
+    }
+  }
 };
 
 // Fills dens (#N, 1/mm) with the initial densities, each summed in
-// increasing neighbour id as the naive scan does, on two threads over halves
-// of the id range.
+// increasing neighbour id as the naive scan does. Bucket by bucket, the
+// candidates of a bucket's 3x3x3 neighbourhood are gathered and sorted once
+// for all of its points; two passes (count, then fill the exact CSR) on two
+// threads over halves of the buckets.
 NeighbourLists FindNeighbours(const std::vector<glm::dvec3>& positions, double r,
                               std::vector<double>& dens) {
   const int64_t n = static_cast<int64_t>(positions.size());
   const PointGrid grid(positions, r);
-  constexpr int kThreads = 2;
-  std::vector<int64_t> counts(n, 0);
-  std::vector<std::vector<int32_t>> part_ids(kThreads);
-  auto work = [&](int t) {
-    std::vector<std::pair<int64_t, double>> found;  // (id, distance) within R
-    for (int64_t v = n * t / kThreads; v < n * (t + 1) / kThreads; ++v) {
-      found.clear();
-      grid.ForEachCandidate(positions[v], [&](int64_t u, const glm::dvec3& pu) {
-        const double d = PointDistance(pu, positions[v]);
-        if (u != v && d < r) found.emplace_back(u, d);
-      });
-      std::sort(found.begin(), found.end());
-      for (const auto& [u, d] : found) {
-        dens[v] += 1.0 / d;
-        part_ids[t].push_back(static_cast<int32_t>(u));
-      }
-      counts[v] = static_cast<int64_t>(found.size());
-    }
-  };
-  std::thread helper(work, 1);
-  work(0);
-  helper.join();
+  const int64_t buckets = grid.bucket_count();
+  int64_t split = 0;  // first bucket of the second thread: about n/2 points each
+  while (split < buckets && grid.slot_begin(split) < n / 2) ++split;
   NeighbourLists lists;
   lists.start.assign(n + 1, 0);
-  for (int64_t v = 0; v < n; ++v) lists.start[v + 1] = lists.start[v] + counts[v];
-  lists.ids.reserve(lists.start[n]);
-  for (const auto& part : part_ids) lists.ids.insert(lists.ids.end(), part.begin(), part.end());
+  auto pass = [&](int64_t first, int64_t last, bool fill) {
+    Candidates c;
+    for (int64_t b = first; b < last; ++b) {
+      if (grid.slot_begin(b) == grid.slot_begin(b + 1)) continue;
+      c.Gather(grid, b, fill);
+      const size_t m = c.id.size();
+      for (int64_t q = grid.slot_begin(b); q < grid.slot_begin(b + 1); ++q) {
+        const int64_t v = grid.item(q);
+        c.DistancesTo(grid.position(q));
+        if (!fill) {
+          int64_t count = 0;
+          for (size_t j = 0; j < m; ++j) count += (c.id[j] != v && c.d[j] < r) ? 1 : 0;
+          lists.start[v + 1] = count;
+          continue;
+        }
+        int64_t k = lists.start[v];
+        double sum = 0.0;
+        for (size_t j = 0; j < m; ++j) {
+          if (c.id[j] == v || !(c.d[j] < r)) continue;
+          const double inv = 1.0 / c.d[j];
+          sum += inv;
+          lists.ids[k] = static_cast<int32_t>(c.id[j]);
+          lists.inv_distance[k] = inv;
+          ++k;
+        }
+        dens[v] = sum;
+      }
+    }
+  };
+  auto both = [&](bool fill) {
+    std::thread helper(pass, split, buckets, fill);
+    pass(0, split, fill);
+    helper.join();
+  };
+  both(false);
+  for (int64_t v = 0; v < n; ++v) lists.start[v + 1] += lists.start[v];
+  // Left uninitialized: the second pass writes every entry.
+  lists.ids.reset(new int32_t[lists.start[n]]);
+  lists.inv_distance.reset(new double[lists.start[n]]);
+  both(true);
   return lists;
 }
 
@@ -126,24 +189,13 @@ DecimationResult Finish(const std::vector<char>& alive, const std::vector<double
 Result<DecimationResult> DecimateFast(const DecimationInput& in, const DecimationParams& p) {
   RETURN_IF_ERROR(Validate(in, p));
   const int64_t n = static_cast<int64_t>(in.positions.size());
-  const double r = p.radius_mm;
   std::vector<double> dens(n, 0.0);
-  const NeighbourLists neighbours = FindNeighbours(in.positions, r, dens);
+  const NeighbourLists neighbours = FindNeighbours(in.positions, p.radius_mm, dens);
   const double d0 = n > 0 ? *std::max_element(dens.begin(), dens.end()) : 0.0;
   const CostModel cost{in, p, d0};
   std::vector<double> initial(n);
   for (int64_t v = 0; v < n; ++v) initial[v] = cost(v, dens[v]);
-  IndexedMinHeap heap(std::move(initial));
-  // Position, density and liveness of a vertex side by side: a removal
-  // touches dozens of neighbours scattered through memory, and one cache
-  // line per neighbour beats three.
-  struct State {
-    glm::dvec3 p;
-    double dens;
-    bool alive;
-  };
-  std::vector<State> state(n);
-  for (int64_t v = 0; v < n; ++v) state[v] = {in.positions[v], dens[v], true};
+  IndexedMinHeap heap(initial);
   std::vector<int64_t> order;
   order.reserve(std::max<int64_t>(0, n - (p.target - kAnchorCount)));
   // A removal lowers its neighbours' densities. In spread mode that can only
@@ -154,27 +206,25 @@ Result<DecimationResult> DecimateFast(const DecimationInput& in, const Decimatio
   const bool lazy = p.density_mode == DensityMode::kSpread;
   while (heap.size() > p.target - kAnchorCount) {
     const int64_t v = heap.top();
-    const double current = cost(v, state[v].dens);
-    if (current != heap.cost(v)) {
+    const double current = cost(v, dens[v]);
+    if (current != heap.top_cost()) {
       heap.Update(v, current);
       continue;
     }
     heap.Pop();
-    state[v].alive = false;
     order.push_back(v);
+    // The removed vertices' densities are lowered too (never read again),
+    // which spares a liveness test per neighbour. Each 1/d is the one the
+    // initial sum added, so a density is exactly the sum over its alive
+    // neighbours taken in removal order, as in the naive scan.
     for (int64_t k = neighbours.start[v]; k < neighbours.start[v + 1]; ++k) {
-      const int64_t id = neighbours.ids[k];
-      State& u = state[id];
-      if (!u.alive) continue;
-      u.dens -= 1.0 / PointDistance(u.p, state[v].p);
-      if (!lazy) heap.Update(id, cost(id, u.dens));
+      const int32_t id = neighbours.ids[k];
+      dens[id] -= neighbours.inv_distance[k];
+      if (!lazy && heap.contains(id)) heap.Update(id, cost(id, dens[id]));
     }
   }
   std::vector<char> alive(n);
-  for (int64_t v = 0; v < n; ++v) {
-    alive[v] = state[v].alive;
-    dens[v] = state[v].dens;
-  }
+  for (int64_t v = 0; v < n; ++v) alive[v] = heap.contains(v);
   return Finish(alive, dens, cost, std::move(order));
 }
 

@@ -18,6 +18,27 @@ class PointGrid {
   // points: #P positions (mm); cell_mm > 0.
   PointGrid(const std::vector<glm::dvec3>& points, double cell_mm);
 
+  int64_t bucket_count() const { return static_cast<int64_t>(start_.size()) - 1; }
+  // Bucket b holds the points in slots [slot_begin(b), slot_begin(b + 1)),
+  // ids ascending: item(slot) is the point's id, position(slot) its position.
+  int64_t slot_begin(int64_t b) const { return start_[b]; }
+  int64_t item(int64_t slot) const { return items_[slot]; }
+  const glm::dvec3& position(int64_t slot) const { return positions_[slot]; }
+
+  // Calls fn(slot) for every slot of the 3x3x3 buckets around bucket b (b's
+  // own included): a superset of the points within cell_mm of any of b's.
+  template <typename Fn>
+  void ForEachSlotAround(int64_t b, Fn&& fn) const {
+    const int64_t cx = b % dims_[0], cy = (b / dims_[0]) % dims_[1], cz = b / (dims_[0] * dims_[1]);
+    for (int64_t z = std::max<int64_t>(cz - 1, 0); z <= std::min(cz + 1, dims_[2] - 1); ++z)
+      for (int64_t y = std::max<int64_t>(cy - 1, 0); y <= std::min(cy + 1, dims_[1] - 1); ++y) {
+        const int64_t row = dims_[0] * (y + dims_[1] * z);
+        const int64_t x0 = std::max<int64_t>(cx - 1, 0), x1 = std::min(cx + 1, dims_[0] - 1);
+        // Buckets x0..x1 of one row are contiguous in slot order.
+        for (int64_t n = start_[row + x0]; n < start_[row + x1 + 1]; ++n) fn(n);
+      }
+  }
+
   // Calls fn(id, position) for every point in the buckets that a ball of
   // radius <= cell_mm around p can touch (a superset: callers test the
   // distance). Positions are stored in bucket order, so the scan is

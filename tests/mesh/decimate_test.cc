@@ -1,6 +1,7 @@
 #include "server/mesh/decimate.h"
 
 #include <random>
+#include <set>
 
 #include <gtest/gtest.h>
 
@@ -36,6 +37,41 @@ TEST(IndexedMinHeap, PopsInCostThenIdOrderUnderUpdates) {
   EXPECT_EQ(order, (std::vector<int64_t>{4, 3, 2, 0, 1}));
 }
 
+// Against an ordered set of (cost, item): random costs from few values (so
+// ties are common), random raises and lowers, pops interleaved, sizes around
+// the 4-ary heap's level boundaries.
+TEST(IndexedMinHeap, MatchesAnOrderedSetUnderRandomUpdatesAndPops) {
+  std::mt19937 rng(11);
+  for (int n : {0, 1, 2, 4, 5, 6, 21, 22, 85, 86, 1000}) {
+    std::uniform_int_distribution<int> value(0, 9);
+    std::vector<double> costs(n);
+    for (auto& c : costs) c = value(rng) * 0.5;
+    IndexedMinHeap heap(costs);
+    std::set<std::pair<double, int64_t>> reference;
+    for (int i = 0; i < n; ++i) reference.emplace(costs[i], i);
+    while (!reference.empty()) {
+      ASSERT_EQ(heap.size(), static_cast<int64_t>(reference.size()));
+      ASSERT_EQ(heap.top(), reference.begin()->second) << "n " << n;
+      ASSERT_EQ(heap.top_cost(), reference.begin()->first);
+      if (rng() % 3 == 0) {
+        EXPECT_EQ(heap.Pop(), reference.begin()->second);
+        reference.erase(reference.begin());
+        continue;
+      }
+      // Update a random contained item up or down.
+      auto it = std::next(reference.begin(), rng() % reference.size());
+      const int64_t item = it->second;
+      const double cost = value(rng) * 0.5;
+      reference.erase(it);
+      reference.emplace(cost, item);
+      heap.Update(item, cost);
+      ASSERT_TRUE(heap.contains(item));
+      ASSERT_EQ(heap.cost(item), cost);
+    }
+    EXPECT_TRUE(heap.empty());
+  }
+}
+
 class DecimateModes : public ::testing::TestWithParam<DensityMode> {};
 
 TEST_P(DecimateModes, FastAndNaiveKeepTheSameVertices) {
@@ -46,6 +82,26 @@ TEST_P(DecimateModes, FastAndNaiveKeepTheSameVertices) {
   ASSERT_TRUE(fast.ok() && naive.ok());
   EXPECT_EQ(fast->kept.size(), 112u);  // target counts the 8 anchors
   EXPECT_EQ(fast->kept, naive->kept);
+  EXPECT_EQ(fast->removal_order, naive->removal_order);
+  EXPECT_EQ(fast->kept_cost, naive->kept_cost);
+  EXPECT_EQ(fast->d0, naive->d0);
+}
+
+// Scattered (not lattice) points: the grid's buckets then hold uneven
+// counts, some none, and neighbour lists differ from vertex to vertex.
+TEST_P(DecimateModes, FastAndNaiveAgreeOnScatteredPoints) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  DecimationInput in;
+  for (int i = 0; i < 900; ++i) {
+    in.positions.emplace_back(60.0 * u(rng), 40.0 * u(rng) * u(rng), 25.0 * u(rng));
+    in.ci.push_back(u(rng) < 0.3 ? 0.0 : u(rng));
+    in.cg.push_back(u(rng));
+  }
+  const DecimationParams p{.target = 100, .radius_mm = 7.5, .density_mode = GetParam()};
+  auto fast = DecimateFast(in, p);
+  auto naive = DecimateNaive(in, p);
+  ASSERT_TRUE(fast.ok() && naive.ok());
   EXPECT_EQ(fast->removal_order, naive->removal_order);
   EXPECT_EQ(fast->kept_cost, naive->kept_cost);
   EXPECT_EQ(fast->d0, naive->d0);
