@@ -1,27 +1,24 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// Rasterizes the backward map (shaders/backward_map.glsl, docs/WARP.md) tet
-// by tet. Grid point g at p = g * step_mm belongs to the smallest-index tet
-// whose barycentric weights at p, computed from its deformed positions, are
-// all >= -eps; its value is (sum_i w_i (rest_i - deformed_i), 1) = (X(p) - p,
-// 1), and (0, 0, 0, 0) when no tet contains p. Values go to storage buffers
-// (x fastest; up to 4 slabs of whole z slices, since one storage binding
-// spans at most 128 MiB on lavapipe) that the host copies into the map
-// image: on lavapipe an imageStore costs several times a buffer store.
+// Rasterizes the owners of the backward map (shaders/backward_map.glsl,
+// docs/WARP.md) tet by tet. Grid point g at p = g * step_mm belongs to the
+// smallest-index tet whose barycentric weights at p, computed from its
+// deformed positions, are all >= -eps; backward_map_write.comp then writes
+// each point's value, (X(p) - p, 1) from its owner, or 0 where none.
 //
 // Passes (map_dims.w), one dispatch each, in this order:
 //   0 clear  per moved tet, at its previous positions: the points it owned
-//            get owner none and value 0;
+//            get owner none (their values are rewritten by the write pass,
+//            whose box holds the moved tets' previous boxes);
 //   1 claim  per listed tet, its box now: atomicMin(owner, tet) at every
-//            point it contains (no float atomics needed);
-//   2 write  per listed tet: the value at every point it owns.
-// A full rebuild fills owner with none and values with 0 (vkCmdFillBuffer),
-// then runs 1, 2 over all tets. An update runs 0 over the tets that moved
-// (listed first, work.y of them) and 1, 2 over those plus every unmoved tet
-// whose box meets a moved tet's previous box (work.x in all): a point a
-// moved tet owned may now belong to such a tet, any other point keeps its
-// owner unless a moved tet now claims it with a smaller index, so the owners
-// come out as in a full rebuild (docs/WARP.md has the argument).
+//            point it contains (no float atomics needed).
+// A full rebuild fills owner with none (vkCmdFillBuffer), then runs 1 over
+// all tets. An update runs 0 over the tets that moved (listed first, work.y
+// of them) and 1 over those plus every unmoved tet whose box meets a moved
+// tet's previous box (work.x in all): a point a moved tet owned may now
+// belong to such a tet, any other point keeps its owner unless a moved tet
+// now claims it with a smaller index, so the owners come out as in a full
+// rebuild (docs/WARP.md has the argument).
 //
 // One workgroup of 16 per listed tet (a tet of the 64^3 map spans some 20-40
 // rows; workgroups of 64 left most lanes idle and cost 1.3-2x the time of
@@ -34,37 +31,16 @@
 
 layout(local_size_x = 16, local_size_y = 1, local_size_z = 1) in;
 layout(std430, binding = 0) readonly buffer Tets { uvec4 tets[]; };
-layout(std430, binding = 1) readonly buffer Deformed { vec4 deformed[]; };      // mm
-// rest - deformed, mm
-layout(std430, binding = 2) readonly buffer RestOffset { vec4 rest_offset[]; };
-layout(std430, binding = 3) readonly buffer Work { BackwardMapTetWork work[]; };
-layout(std430, binding = 4) buffer Owner { uint owner[]; };
+layout(std430, binding = 1) readonly buffer Deformed { vec4 deformed[]; };  // mm
+layout(std430, binding = 2) readonly buffer Work { BackwardMapTetWork work[]; };
+layout(std430, binding = 3) buffer Owner { uint owner[]; };
 // The deformed positions of the previous update, mm.
-layout(std430, binding = 5) readonly buffer Previous { vec4 previous[]; };
-// The map values, x fastest, work.z points per slab.
-layout(std430, binding = 6) writeonly buffer Values0 { vec4 values0[]; };
-layout(std430, binding = 7) writeonly buffer Values1 { vec4 values1[]; };
-layout(std430, binding = 8) writeonly buffer Values2 { vec4 values2[]; };
-layout(std430, binding = 9) writeonly buffer Values3 { vec4 values3[]; };
+layout(std430, binding = 4) readonly buffer Previous { vec4 previous[]; };
 layout(push_constant) uniform Push { BackwardMapPush pc; };
 
 const uint kNone = 0xFFFFFFFFu;
 const int kClear = 0;
 const int kClaim = 1;
-const int kWrite = 2;
-
-void store_value(uint n, vec4 value) {
-  uint slab = pc.work.z;
-  if (n < slab) {
-    values0[n] = value;
-  } else if (n < 2u * slab) {
-    values1[n - slab] = value;
-  } else if (n < 3u * slab) {
-    values2[n - 2u * slab] = value;
-  } else {
-    values3[n - 3u * slab] = value;
-  }
-}
 
 uint grid_index(ivec3 g) {
   return uint(g.x) + uint(pc.map_dims.x) * (uint(g.y) + uint(pc.map_dims.y) * uint(g.z));
@@ -125,18 +101,15 @@ ivec2 row_range(TetFrame f, int y, int z, int lo_x, int hi_x) {
 void clear_row(uint t, int y, int z, ivec2 range) {
   for (int x = range.x; x <= range.y; ++x) {
     uint n = grid_index(ivec3(x, y, z));
-    if (owner[n] == t) {
-      owner[n] = kNone;
-      store_value(n, vec4(0.0));
-    }
+    if (owner[n] == t) owner[n] = kNone;
   }
 }
 
-// offsets: rest_offset of the tet's 4 corners, as columns. The weights are
-// linear along the row: evaluated at its first point, then stepped, which
-// costs 4 multiply-adds per point and stays within float round-off of the
-// direct formula (the steps are short, the weights of order 1).
-void claim_or_write_row(int pass, uint t, mat4x3 offsets, TetFrame f, int y, int z, ivec2 range) {
+// The weights are linear along the row: evaluated at its first point, then
+// stepped, which costs 4 multiply-adds per point and stays within float
+// round-off of the direct formula (the steps are short, the weights of
+// order 1).
+void claim_row(uint t, TetFrame f, int y, int z, ivec2 range) {
   float eps = pc.step_mm.w;
   vec4 w0 = weights_at(f, vec3(range.x, y, z) * pc.step_mm.xyz);
   vec3 dw = f.inv[0] * pc.step_mm.x;
@@ -145,11 +118,7 @@ void claim_or_write_row(int pass, uint t, mat4x3 offsets, TetFrame f, int y, int
   for (int i = 0; i <= range.y - range.x; ++i) {
     uint n = n0 + uint(i);
     vec4 w = w0 + float(i) * step_w;
-    if (pass == kClaim) {
-      if (all(greaterThanEqual(w, vec4(-eps)))) atomicMin(owner[n], t);
-    } else if (owner[n] == t) {
-      store_value(n, vec4(offsets * w, 1.0));
-    }
+    if (all(greaterThanEqual(w, vec4(-eps)))) atomicMin(owner[n], t);
   }
 }
 
@@ -166,8 +135,6 @@ void main() {
   // A tet that was flat when claimed owns nothing to clear.
   TetFrame f = tet_frame(q, pass == kClear);
   if (!f.usable) return;
-  mat4x3 offsets = mat4x3(rest_offset[q.x].xyz, rest_offset[q.y].xyz, rest_offset[q.z].xyz,
-                          rest_offset[q.w].xyz);
   uint rows_y = uint(hi.y - lo.y + 1);
   uint rows = rows_y * uint(hi.z - lo.z + 1);
   for (uint r = gl_LocalInvocationID.x; r < rows; r += gl_WorkGroupSize.x) {
@@ -177,7 +144,7 @@ void main() {
     if (pass == kClear) {
       clear_row(t, y, z, range);
     } else {
-      claim_or_write_row(pass, t, offsets, f, y, z, range);
+      claim_row(t, f, y, z, range);
     }
   }
 }

@@ -70,8 +70,15 @@ struct MapToTexelsPush {
 struct BackwardMapPush {
   ivec4 map_dims;  // (mx, my, mz, pass) grid points
   vec4 step_mm;    // (hx, hy, hz, eps): grid step extent/(M-1) mm; barycentric tolerance
-  // (listed tets, moved tets (listed first, cleared), points per values slab, 0)
+  // (listed tets, moved tets (listed first, cleared), 0, 0)
   uvec4 work;
+};
+
+struct BackwardMapWritePush {
+  ivec4 map_dims;  // (mx, my, mz, points per values slab) grid points
+  vec4 step_mm;    // (hx, hy, hz, 0): grid step extent/(M-1) mm
+  ivec4 box_lo;    // (x, y, z, 0) first grid point of the box
+  ivec4 box_hi;    // (x, y, z, 0) last grid point of the box (inclusive)
 };
 
 struct BackwardMapTetWork {

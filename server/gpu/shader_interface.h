@@ -108,17 +108,26 @@ struct MapToTexelsPush {
 };
 static_assert(sizeof(MapToTexelsPush) == 16);
 
-// backward_map.comp: rasterizes the backward map tet by tet, one workgroup
-// per listed tet. pass (in map_dims.w): 0 clear the previous coverage of the
-// moved tets, 1 claim (atomicMin of the tet index), 2 write the value of the
-// winning tet.
+// backward_map.comp: rasterizes the backward map's owners tet by tet, one
+// workgroup per listed tet. pass (in map_dims.w): 0 clear the previous
+// coverage of the moved tets, 1 claim (atomicMin of the tet index).
 struct BackwardMapPush {
   glm::ivec4 map_dims;  // (mx, my, mz, pass) grid points
   glm::vec4 step_mm;    // (hx, hy, hz, eps): grid step extent/(M-1) mm; barycentric tolerance
-  // (listed tets, moved tets (listed first, cleared), points per values slab, 0)
+  // (listed tets, moved tets (listed first, cleared), 0, 0)
   glm::uvec4 work;
 };
 static_assert(sizeof(BackwardMapPush) == 48);
+
+// backward_map_write.comp: the value of every grid point of a box from its
+// owner's affine frame, one invocation per point.
+struct BackwardMapWritePush {
+  glm::ivec4 map_dims;  // (mx, my, mz, points per values slab) grid points
+  glm::vec4 step_mm;    // (hx, hy, hz, 0): grid step extent/(M-1) mm
+  glm::ivec4 box_lo;    // (x, y, z, 0) first grid point of the box
+  glm::ivec4 box_hi;    // (x, y, z, 0) last grid point of the box (inclusive)
+};
+static_assert(sizeof(BackwardMapWritePush) == 64);
 
 // One listed tet of backward_map.comp (std430 storage buffer element): its
 // grid-point box at the previous update (pass 0, moved tets only) and now

@@ -5,7 +5,9 @@
 #include <numeric>
 
 #include "server/render/check_map_inputs.h"
+#include "server/render/tet_displacement_frame.h"
 #include "shaders/backward_map.spv.h"
+#include "shaders/backward_map_write.spv.h"
 
 namespace vpm {
 namespace {
@@ -14,8 +16,8 @@ using gpu::BackwardMapTetWork;
 
 constexpr int kPassClear = 0;
 constexpr int kPassClaim = 1;
-constexpr int kPassWrite = 2;
-constexpr uint32_t kLocalSize = 16;
+constexpr uint32_t kLocalSize = 16;       // backward_map.comp: lanes per tet
+constexpr uint32_t kWriteLocalSize = 64;  // backward_map_write.comp: points per workgroup
 constexpr uint32_t kNoOwner = 0xFFFFFFFFu;
 constexpr vk::Format kMapFormat = vk::Format::eR32G32B32A32Sfloat;
 constexpr int64_t kMaxValueSlabs = 4;  // values0..3 in backward_map.comp
@@ -82,11 +84,18 @@ Result<BackwardMap> BackwardMap::Create(const gpu::GpuContext& context,
           context, {.name = "backward_map",
                     .spirv = kBackwardMapSpv,
                     .bindings = {DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer,
-                                 DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer,
-                                 DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer,
-                                 DT::eStorageBuffer},
+                                 DT::eStorageBuffer, DT::eStorageBuffer},
                     .push_constant_bytes = sizeof(gpu::BackwardMapPush),
                     .local_size = {kLocalSize, 1, 1}}));
+  ASSIGN_OR_RETURN(
+      gpu::ComputeKernel write_kernel,
+      gpu::ComputeKernel::Create(
+          context, {.name = "backward_map_write",
+                    .spirv = kBackwardMapWriteSpv,
+                    .bindings = {DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer,
+                                 DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
+                    .push_constant_bytes = sizeof(gpu::BackwardMapWritePush),
+                    .local_size = {kWriteLocalSize, 1, 1}}));
   ASSIGN_OR_RETURN(
       gpu::GpuImage3D image,
       gpu::GpuImage3D::Create(context, {uint32_t(dims[0]), uint32_t(dims[1]), uint32_t(dims[2])},
@@ -105,10 +114,10 @@ Result<BackwardMap> BackwardMap::Create(const gpu::GpuContext& context,
     values.push_back(std::move(slab));
   }
   BackwardMap map(context, geometry, dims, options.eps, options.full_rebuild_moved_fraction,
-                  Device{std::move(kernel), std::move(image), std::move(owner), std::move(values),
-                         slab_points});
+                  Device{std::move(kernel), std::move(write_kernel), std::move(image),
+                         std::move(owner), std::move(values), slab_points});
   for (auto* buffer : {&map.tets_buffer_, &map.deformed_buffer_, &map.previous_buffer_,
-                       &map.rest_offset_buffer_, &map.work_buffer_}) {
+                       &map.frames_buffer_, &map.work_buffer_}) {
     RETURN_IF_ERROR(EnsureCapacity(context, *buffer, 0));
   }
   const GridBox all{glm::ivec3(0), glm::ivec3(dims[0] - 1, dims[1] - 1, dims[2] - 1)};
@@ -153,7 +162,7 @@ std::vector<int32_t> BackwardMap::ChangedTets(std::span<const glm::dvec3> rest_m
 
 BackwardMap::Plan BackwardMap::PlanWork(std::span<const glm::dvec3> deformed_mm,
                                         std::span<const std::array<int32_t, 4>> tets, bool full,
-                                        std::vector<int32_t> moved) const {
+                                        const std::vector<int32_t>& moved) const {
   Plan plan;
   const glm::dvec3 step = extent_mm() / glm::dvec3(dims_[0] - 1, dims_[1] - 1, dims_[2] - 1);
   plan.boxes = full ? std::vector<GridBox>(tets.size()) : state_.boxes;
@@ -226,12 +235,12 @@ Result<BackwardMap::UpdateStats> BackwardMap::Apply(std::span<const glm::dvec3> 
     moved.resize(tets.size());
     std::iota(moved.begin(), moved.end(), 0);
   }
-  Plan plan = PlanWork(deformed_mm, tets, stats.full_rebuild, std::move(moved));
+  Plan plan = PlanWork(deformed_mm, tets, stats.full_rebuild, moved);
   stats.processed_tets = static_cast<int64_t>(plan.work.size());
 
   state_.valid = false;  // until the GPU holds what the host state says
   if (stats.full_rebuild || !plan.work.empty()) {
-    RETURN_IF_ERROR(Upload(rest_mm, deformed_mm, tets, stats.full_rebuild, plan.work));
+    RETURN_IF_ERROR(Upload(rest_mm, deformed_mm, tets, stats.full_rebuild, moved, plan.work));
     const auto t0 = std::chrono::steady_clock::now();
     ASSIGN_OR_RETURN(stats.passes, Run(stats.full_rebuild, uint32_t(plan.work.size()), plan.cleared,
                                        plan.changed));
@@ -254,24 +263,32 @@ Result<BackwardMap::UpdateStats> BackwardMap::Apply(std::span<const glm::dvec3> 
 
 Status BackwardMap::Upload(std::span<const glm::dvec3> rest_mm,
                            std::span<const glm::dvec3> deformed_mm,
-                           std::span<const std::array<int32_t, 4>> tets, bool upload_tets,
+                           std::span<const std::array<int32_t, 4>> tets, bool full,
+                           std::span<const int32_t> moved,
                            std::span<const BackwardMapTetWork> work) {
   const size_t n = rest_mm.size();
-  std::vector<glm::vec4> deformed(n), rest_offset(n);
-  for (size_t v = 0; v < n; ++v) {
-    deformed[v] = glm::vec4(glm::vec3(deformed_mm[v]), 0.0f);
-    // Rest minus deformed in double, then rounded: the map value is a blend
-    // of these, accurate to float relative to the displacement, not to the
-    // coordinates.
-    rest_offset[v] = glm::vec4(glm::vec3(rest_mm[v] - deformed_mm[v]), 0.0f);
+  std::vector<glm::vec4> deformed(n);
+  for (size_t v = 0; v < n; ++v) deformed[v] = glm::vec4(glm::vec3(deformed_mm[v]), 0.0f);
+  // The frames of unmoved tets are those of the previous update (same
+  // corners). In double from the double positions, then rounded: the map
+  // value is accurate to float relative to the displacement, not to the
+  // coordinates.
+  if (full) state_.frames.assign(tets.size() * 4, glm::vec4(0.0f));
+  for (int32_t t : moved) {
+    const auto& q = tets[t];
+    const auto frame = TetDisplacementFrame(
+        {rest_mm[q[0]], rest_mm[q[1]], rest_mm[q[2]], rest_mm[q[3]]},
+        {deformed_mm[q[0]], deformed_mm[q[1]], deformed_mm[q[2]], deformed_mm[q[3]]});
+    std::copy(frame.begin(), frame.end(), state_.frames.begin() + 4 * size_t(t));
   }
   RETURN_IF_ERROR(EnsureCapacity(*context_, deformed_buffer_, n * sizeof(glm::vec4)));
-  RETURN_IF_ERROR(EnsureCapacity(*context_, rest_offset_buffer_, n * sizeof(glm::vec4)));
+  RETURN_IF_ERROR(
+      EnsureCapacity(*context_, frames_buffer_, state_.frames.size() * sizeof(glm::vec4)));
   RETURN_IF_ERROR(EnsureCapacity(*context_, work_buffer_, work.size() * sizeof(work[0])));
   RETURN_IF_ERROR(deformed_buffer_->UploadSpan(std::span<const glm::vec4>(deformed)));
-  RETURN_IF_ERROR(rest_offset_buffer_->UploadSpan(std::span<const glm::vec4>(rest_offset)));
+  RETURN_IF_ERROR(frames_buffer_->UploadSpan(std::span<const glm::vec4>(state_.frames)));
   RETURN_IF_ERROR(work_buffer_->UploadSpan(work));
-  if (upload_tets) {
+  if (full) {
     RETURN_IF_ERROR(EnsureCapacity(*context_, tets_buffer_, tets.size() * sizeof(glm::uvec4)));
     RETURN_IF_ERROR(tets_buffer_->UploadSpan(tets));
   }
@@ -281,32 +298,42 @@ Status BackwardMap::Upload(std::span<const glm::dvec3> rest_mm,
 Result<std::vector<gpu::DispatchTiming>> BackwardMap::Run(bool full, uint32_t listed,
                                                           uint32_t moved, const GridBox& changed) {
   ASSIGN_OR_RETURN(gpu::ComputeBatch batch, gpu::ComputeBatch::Begin(*context_, 3));
-  gpu::BackwardMapPush push{
-      .map_dims = glm::ivec4(dims_[0], dims_[1], dims_[2], 0),
-      .step_mm =
-          glm::vec4(glm::vec3(extent_mm() / glm::dvec3(dims_[0] - 1, dims_[1] - 1, dims_[2] - 1)),
-                    float(eps_)),
-      .work = glm::uvec4(listed, moved, device_.slab_points, 0)};
+  const glm::vec3 step_mm(extent_mm() / glm::dvec3(dims_[0] - 1, dims_[1] - 1, dims_[2] - 1));
+  gpu::BackwardMapPush push{.map_dims = glm::ivec4(dims_[0], dims_[1], dims_[2], 0),
+                            .step_mm = glm::vec4(step_mm, float(eps_)),
+                            .work = glm::uvec4(listed, moved, 0, 0)};
+  const uint32_t max_groups_x = context_->limits().maxComputeWorkGroupCount[0];
   auto dispatch = [&](int pass, uint32_t tets, const char* label) {
     push.map_dims.w = pass;
     // One workgroup per tet, folded into 2D past the x limit.
-    const uint32_t gx = std::min(tets, context_->limits().maxComputeWorkGroupCount[0]);
+    const uint32_t gx = std::min(tets, max_groups_x);
+    return batch.Dispatch(kernel(),
+                          {&*tets_buffer_, &*deformed_buffer_, &*work_buffer_, &device_.owner,
+                           &*previous_buffer_},
+                          push, {gx, (tets + gx - 1) / gx, 1}, label);
+  };
+  if (full) RETURN_IF_ERROR(batch.Fill(device_.owner, kNoOwner));
+  if (moved > 0) RETURN_IF_ERROR(dispatch(kPassClear, moved, "backward_map clear"));
+  if (listed > 0) RETURN_IF_ERROR(dispatch(kPassClaim, listed, "backward_map claim"));
+  if (!changed.empty()) {
+    // Every point of the box gets its owner's value (0 where none): points
+    // whose owner did not change get the value they had, bit for bit.
+    const glm::ivec3 size = changed.hi - changed.lo + 1;
+    const uint32_t points = uint32_t(size.x) * uint32_t(size.y) * uint32_t(size.z);
+    const uint32_t groups = (points + kWriteLocalSize - 1) / kWriteLocalSize;
+    const uint32_t gx = std::min(groups, max_groups_x);
     const auto& v = device_.values;
     auto slab = [&](size_t s) { return &v[std::min(s, v.size() - 1)]; };
-    return batch.Dispatch(
-        kernel(),
-        {&*tets_buffer_, &*deformed_buffer_, &*rest_offset_buffer_, &*work_buffer_, &device_.owner,
-         &*previous_buffer_, slab(0), slab(1), slab(2), slab(3)},
-        push, {gx, (tets + gx - 1) / gx, 1}, label);
-  };
-  if (full) {
-    RETURN_IF_ERROR(batch.Fill(device_.owner, kNoOwner));
-    for (const gpu::GpuBuffer& slab : device_.values) RETURN_IF_ERROR(batch.Fill(slab, 0));
-  }
-  if (moved > 0) RETURN_IF_ERROR(dispatch(kPassClear, moved, "backward_map clear"));
-  if (listed > 0) {
-    RETURN_IF_ERROR(dispatch(kPassClaim, listed, "backward_map claim"));
-    RETURN_IF_ERROR(dispatch(kPassWrite, listed, "backward_map write"));
+    const gpu::BackwardMapWritePush write_push{
+        .map_dims = glm::ivec4(dims_[0], dims_[1], dims_[2], int32_t(device_.slab_points)),
+        .step_mm = glm::vec4(step_mm, 0.0f),
+        .box_lo = glm::ivec4(changed.lo, 0),
+        .box_hi = glm::ivec4(changed.hi, 0)};
+    RETURN_IF_ERROR(batch.Dispatch(device_.write_kernel,
+                                   {&device_.owner, &*frames_buffer_, slab(0), slab(1), slab(2),
+                                    slab(3)},
+                                   write_push, {gx, (groups + gx - 1) / gx, 1},
+                                   "backward_map write"));
   }
   ASSIGN_OR_RETURN(auto timings, batch.SubmitAndWait());
   RETURN_IF_ERROR(CopyToImage(changed));

@@ -2,7 +2,9 @@
 // a grid of M points over the image box, the rest position of each point
 // found through the deformed tet that contains it, kept in an RGBA32F 3D
 // image that the warp and the ray caster sample (shaders/backward_map.glsl).
-// Kernel: shaders/backward_map.comp. CPU reference: BackwardMapCpu.
+// Kernels: shaders/backward_map.comp (owners, per tet) and
+// backward_map_write.comp (values, per grid point). CPU reference:
+// BackwardMapCpu.
 //
 // Updates are incremental: only the tets that moved since the previous
 // update, and the unmoved tets whose boxes meet the moved ones' previous
@@ -120,11 +122,14 @@ class BackwardMap {
     std::vector<glm::dvec3> rest_mm, deformed_mm;
     std::vector<std::array<int32_t, 4>> tets;
     std::vector<GridBox> boxes;  // per tet, the box it was last rasterized in
+    // Per tet its 4 vec4 of TetDisplacementFrame, as last uploaded.
+    std::vector<glm::vec4> frames;
   };
 
   // The map's GPU objects, in dependency order.
   struct Device {
-    gpu::ComputeKernel kernel;
+    gpu::ComputeKernel kernel;        // backward_map.comp: clear, claim
+    gpu::ComputeKernel write_kernel;  // backward_map_write.comp
     gpu::GpuImage3D image;
     gpu::GpuBuffer owner;  // per grid point: the owning tet, or 0xFFFFFFFF
     // Per grid point the value (vec4, x fastest), in slabs of whole z slices
@@ -158,16 +163,18 @@ class BackwardMap {
 
   Plan PlanWork(std::span<const glm::dvec3> deformed_mm,
                 std::span<const std::array<int32_t, 4>> tets, bool full,
-                std::vector<int32_t> moved) const;
+                const std::vector<int32_t>& moved) const;
   const gpu::ComputeKernel& kernel() const { return device_.kernel; }
   std::vector<int32_t> ChangedTets(std::span<const glm::dvec3> rest_mm,
                                    std::span<const glm::dvec3> deformed_mm,
                                    std::span<const std::array<int32_t, 4>> tets) const;
+  // Recomputes the frames (state_.frames) of the `moved` tets (every tet
+  // when `full`) and uploads positions, frames, work (and tets when full).
   Status Upload(std::span<const glm::dvec3> rest_mm, std::span<const glm::dvec3> deformed_mm,
-                std::span<const std::array<int32_t, 4>> tets, bool upload_tets,
-                std::span<const gpu::BackwardMapTetWork> work);
-  // Records the passes (full: fills instead of the clear pass), submits, and
-  // copies the values in `changed` into the image.
+                std::span<const std::array<int32_t, 4>> tets, bool full,
+                std::span<const int32_t> moved, std::span<const gpu::BackwardMapTetWork> work);
+  // Records the passes (full: a fill instead of the clear pass), then the
+  // write pass over `changed`, submits, and copies `changed` into the image.
   Result<std::vector<gpu::DispatchTiming>> Run(bool full, uint32_t listed, uint32_t moved,
                                                const GridBox& changed);
   Status CopyToImage(const GridBox& box);
@@ -181,8 +188,8 @@ class BackwardMap {
   // Grown on demand; created (1 element) with the map so every binding is
   // valid. previous_buffer_ holds the deformed positions of the last update
   // (the clear pass walks the moved tets there); the two swap per update.
-  std::optional<gpu::GpuBuffer> tets_buffer_, deformed_buffer_, previous_buffer_,
-      rest_offset_buffer_, work_buffer_;
+  std::optional<gpu::GpuBuffer> tets_buffer_, deformed_buffer_, previous_buffer_, frames_buffer_,
+      work_buffer_;
   HostState state_;
 };
 

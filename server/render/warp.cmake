@@ -5,6 +5,7 @@ add_library(vpm_warp
   ${CMAKE_CURRENT_LIST_DIR}/backward_map_cpu.cc
   ${CMAKE_CURRENT_LIST_DIR}/backward_map_values.cc
   ${CMAKE_CURRENT_LIST_DIR}/check_map_inputs.cc
+  ${CMAKE_CURRENT_LIST_DIR}/tet_displacement_frame.cc
   ${CMAKE_CURRENT_LIST_DIR}/tet_grid_boxes.cc
   ${CMAKE_CURRENT_LIST_DIR}/warp_volume.cc
   ${CMAKE_CURRENT_LIST_DIR}/warp_volume_cpu.cc
