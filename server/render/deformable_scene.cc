@@ -41,6 +41,7 @@ Result<std::unique_ptr<DeformableScene>> DeformableScene::Create(
   ASSIGN_OR_RETURN(BackwardMap map, BackwardMap::Create(context, volume.geometry(), options.map));
   scene->map_.emplace(std::move(map));
   scene->map_version_ = next_map_version.fetch_add(1);
+  scene->defer_map_update_ = options.defer_map_update;
   return scene;
 }
 
@@ -68,11 +69,25 @@ Result<SceneStepTimings> DeformableScene::UpdateMap(SceneStepTimings timings) {
   return timings;
 }
 
+Result<SceneStepTimings> DeformableScene::AfterStep(SceneStepTimings timings) {
+  if (!defer_map_update_) return UpdateMap(timings);
+  map_stale_ = true;
+  timings.inverted_tets = fem_->CountInvertedTets();
+  return timings;
+}
+
+Result<SceneStepTimings> DeformableScene::SyncMap() {
+  if (!map_stale_) return SceneStepTimings{};
+  ASSIGN_OR_RETURN(SceneStepTimings timings, UpdateMap({}));
+  map_stale_ = false;
+  return timings;
+}
+
 Result<SceneStepTimings> DeformableScene::Drag(const glm::dvec3& offset_mm) {
   const auto t0 = std::chrono::steady_clock::now();
   ASSIGN_OR_RETURN(SolveStats solve, fem_->Drag(offset_mm));
   drag_offset_mm_ = offset_mm;
-  return UpdateMap(FromSolve(solve, t0));
+  return AfterStep(FromSolve(solve, t0));
 }
 
 Result<SceneStepTimings> DeformableScene::Pull(const glm::dvec3& force_n) {
@@ -85,7 +100,7 @@ Result<SceneStepTimings> DeformableScene::Pull(const glm::dvec3& force_n) {
   for (int32_t h : fem_->grab().handles) mean += u[h];
   if (!fem_->grab().handles.empty()) mean /= double(fem_->grab().handles.size());
   drag_offset_mm_ = mean;
-  return UpdateMap(timings);
+  return AfterStep(timings);
 }
 
 Result<SceneStepTimings> DeformableScene::Release() {
@@ -93,10 +108,12 @@ Result<SceneStepTimings> DeformableScene::Release() {
   fem_->Release();
   grab_point_mm_.reset();
   drag_offset_mm_ = glm::dvec3(0.0);
-  return UpdateMap({.fem_ms = MsSince(t0)});
+  return AfterStep({.fem_ms = MsSince(t0)});
 }
 
-Result<Frame> DeformableScene::Render(const SceneView& view) {
+Result<Frame> DeformableScene::Render(const SceneView& view, SceneStepTimings* map_update) {
+  ASSIGN_OR_RETURN(SceneStepTimings sync, SyncMap());
+  if (map_update != nullptr) *map_update = sync;
   RenderRequest request;
   request.camera = view.camera;
   request.mode = view.mode;

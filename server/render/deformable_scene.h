@@ -53,6 +53,12 @@ class DeformableScene {
   struct Options {
     BackwardMap::Options map;
     FemOptions fem;
+    // false: Drag, Pull and Release update the backward map at once (their
+    // timings include it). true: they solve FEM only and mark the map stale;
+    // the next Render (or SyncMap) updates it once for every step since, so
+    // a burst of events costs one map update per frame (the server's
+    // sessions: docs/SERVICE.md).
+    bool defer_map_update = false;
   };
 
   // `volume`, `gpu_volume` and `renderer` must outlive the scene (the scene
@@ -70,10 +76,15 @@ class DeformableScene {
   // Prescribed handle displacement from the grab (mm), or a total force (N).
   Result<SceneStepTimings> Drag(const glm::dvec3& offset_mm);
   Result<SceneStepTimings> Pull(const glm::dvec3& force_n);
-  // Back to rest; the map becomes the identity again.
+  // Back to rest; the map becomes the identity again (deferred mode: at the
+  // next Render).
   Result<SceneStepTimings> Release();
 
-  Result<Frame> Render(const SceneView& view);
+  // map_update (optional): the timings of the map update this frame needed
+  // (deferred mode), zeros when the map was current.
+  Result<Frame> Render(const SceneView& view, SceneStepTimings* map_update = nullptr);
+  // Brings the map up to date with FEM (deferred mode); zeros if it was.
+  Result<SceneStepTimings> SyncMap();
   // The deformed volume at full resolution on the source grid (for export),
   // through an exact backward map (one point per voxel).
   Result<Volume> WarpedVolume();
@@ -81,11 +92,13 @@ class DeformableScene {
   const ProxyMesh& mesh() const { return mesh_; }
   const FemModel& fem() const { return *fem_; }
   std::vector<glm::dvec3> Positions() const { return fem_->Positions(); }
-  const BackwardMap& backward_map() const { return *map_; }
+  const BackwardMap& backward_map() const { return *map_; }  // stale until SyncMap (deferred)
 
  private:
   DeformableScene() = default;
   Result<SceneStepTimings> UpdateMap(SceneStepTimings timings);
+  // After FEM changed the deformation: update the map now, or mark it stale.
+  Result<SceneStepTimings> AfterStep(SceneStepTimings timings);
 
   const gpu::GpuContext* context_ = nullptr;
   const Volume* volume_ = nullptr;
@@ -99,6 +112,8 @@ class DeformableScene {
   // Changes with every map update (0 while one is in progress): frames with
   // the same version see the same map (RenderRequest::backward_map_version).
   uint64_t map_version_ = 0;
+  bool defer_map_update_ = false;
+  bool map_stale_ = false;  // deferred mode: FEM moved since the last map update
 };
 
 }  // namespace vpm

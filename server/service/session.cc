@@ -35,8 +35,13 @@ Result<std::shared_ptr<Session>> Session::Create(std::string id, const gpu::GpuC
                                                  const Options& options) {
   std::shared_ptr<Session> session(new Session(std::move(id), volume, mesh, options));
   std::lock_guard gpu_lock(volume->gpu_mutex);
+  // Events update FEM only; each frame brings the backward map up to date
+  // once, however many steps came since (a slow stream or a busy server
+  // would otherwise pay a map update per event it never shows).
+  DeformableScene::Options scene_options;
+  scene_options.defer_map_update = true;
   ASSIGN_OR_RETURN(session->scene_, DeformableScene::Create(context, volume->volume, volume->gpu,
-                                                            renderer, mesh->mesh, {}));
+                                                            renderer, mesh->mesh, scene_options));
   return session;
 }
 
@@ -169,7 +174,8 @@ Result<v1::Frame> Session::Render(const FrameRequest& request) {
   if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
   const auto t0 = std::chrono::steady_clock::now();
   SceneView view = request.settings->view;
-  SceneStepTimings step;
+  SceneStepTimings step;        // the last deformation step's FEM
+  SceneStepTimings map_update;  // the map update this frame needed, if any
   uint64_t sequence = 0;
   const bool interactive = request.interactive;
   view.quality = interactive ? RenderQuality::kInteractive : RenderQuality::kStill;
@@ -187,12 +193,12 @@ Result<v1::Frame> Session::Render(const FrameRequest& request) {
       last_view_ = view;
       if (grab_point_) *out.mutable_grab_point_mm() = ToProto(*grab_point_);
     }
-    ASSIGN_OR_RETURN(frame, scene_->Render(view));
+    ASSIGN_OR_RETURN(frame, scene_->Render(view, &map_update));
     if (request.want_vertices) {
       for (const glm::dvec3& p : scene_->Positions()) *out.add_vertices_mm() = ToProto(p);
     }
   }
-  const double render_ms = MsSince(t0);
+  const double render_ms = MsSince(t0) - map_update.warp_ms;
   const auto t1 = std::chrono::steady_clock::now();
   const StreamSettings& s = *request.settings;
   ASSIGN_OR_RETURN(std::vector<uint8_t> bytes,
@@ -208,7 +214,7 @@ Result<v1::Frame> Session::Render(const FrameRequest& request) {
   out.set_max_displacement_mm(step.max_displacement_mm);
   v1::StageTimings* timings = out.mutable_timings();
   timings->set_fem_ms(step.fem_ms);
-  timings->set_warp_ms(step.warp_ms);
+  timings->set_warp_ms(map_update.warp_ms);
   timings->set_render_ms(render_ms);
   timings->set_encode_ms(MsSince(t1));
   timings->set_total_ms(MsSince(t0));
