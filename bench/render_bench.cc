@@ -35,6 +35,7 @@ struct Case {
   bool shading = true;
   bool map = true;
   VolumeAccess access = VolumeAccess::kTexelBuffer;
+  bool cell_gradient = true;  // DVR shading: cell gradient, else central-difference taps
 };
 
 struct Measured {
@@ -156,6 +157,13 @@ int main(int argc, char** argv) {
   }
   cases.push_back({"still DVR ct-vessels, no shading", RenderMode::kDvr, "ct-vessels",
                    RenderQuality::kStill, true, false});
+  // Still frames with the central-difference taps (the default before the
+  // cell gradient).
+  for (const char* preset : {"ct-vessels", "ct-soft-tissue", "ct-bone"}) {
+    cases.push_back({std::string("still DVR ") + preset + ", tap gradient", RenderMode::kDvr,
+                     preset, RenderQuality::kStill, true, true, true, VolumeAccess::kTexelBuffer,
+                     false});
+  }
   // The drag loop's frame (drag_loop_bench): what shading costs there.
   cases.push_back({"interactive DVR ct-soft-tissue", RenderMode::kDvr, "ct-soft-tissue",
                    RenderQuality::kInteractive, true});
@@ -198,6 +206,7 @@ int main(int argc, char** argv) {
     r.backward_map_version = c.name.find("map unchanged") != std::string::npos ? 1 : 0;
     r.settings.empty_space_skipping = c.skipping;
     r.settings.shading = c.shading;
+    r.settings.interactive_cell_gradient = r.settings.still_cell_gradient = c.cell_gradient;
     VolumeRenderer& renderer =
         c.access == VolumeAccess::kTexelBuffer ? *texel_renderer : *sampled_renderer;
     Measured best;
@@ -237,23 +246,24 @@ int main(int argc, char** argv) {
     if (c.name == "still DVR ct-vessels") still_frame = best.frame;
   }
 
-  // What the interactive cell gradient costs in picture against the taps
-  // (central differences of J), GPU both, same request (RENDERING.md).
-  if (std::string("interactive cell gradient").find(filter) != std::string::npos ||
-      filter.empty()) {
+  // What the cell gradient costs in picture against the taps (central
+  // differences of J), GPU both, same request (RENDERING.md).
+  for (const char* quality : {"interactive", "still"}) {
+    if ((std::string(quality) + " cell gradient").find(filter) == std::string::npos) continue;
     for (const char* preset : {"ct-soft-tissue", "ct-vessels", "ct-bone"}) {
       RenderRequest r;
       r.camera = Camera::ForVolume(volume.geometry());
       r.preset = bench::Check(MakeRenderPreset(preset, volume), "preset");
-      r.quality = RenderQuality::kInteractive;
+      r.quality = std::string(quality) == "still" ? RenderQuality::kStill
+                                                  : RenderQuality::kInteractive;
       r.width = r.height = size;
       r.volume = &gpu_volume;
       r.backward_map = &map;
       const Frame cell = bench::Check(texel_renderer->Render(r), "render");
-      r.settings.interactive_cell_gradient = false;
+      r.settings.interactive_cell_gradient = r.settings.still_cell_gradient = false;
       const Frame taps = bench::Check(texel_renderer->Render(r), "render");
-      WritePng(png_dir, std::string("interactive_cell_gradient_") + preset, cell);
-      WritePng(png_dir, std::string("interactive_tap_gradient_") + preset, taps);
+      WritePng(png_dir, std::string(quality) + "_cell_gradient_" + preset, cell);
+      WritePng(png_dir, std::string(quality) + "_tap_gradient_" + preset, taps);
       double sum = 0.0, sq = 0.0, max = 0.0;
       size_t count = 0;
       for (size_t i = 0; i < cell.rgba.size(); ++i) {
@@ -265,9 +275,10 @@ int main(int argc, char** argv) {
         ++count;
       }
       const double psnr = sq > 0.0 ? 10.0 * std::log10(255.0 * 255.0 * count / sq) : 99.0;
-      std::printf("interactive %s, cell vs tap gradient: mean %.3f/255, max %.0f/255, "
+      std::printf("%s %s, cell vs tap gradient: mean %.3f/255, max %.0f/255, "
                   "PSNR %.1f dB; cast %.1f vs %.1f ms\n",
-                  preset, sum / count, max, psnr, cell.timings.raycast_ms, taps.timings.raycast_ms);
+                  quality, preset, sum / count, max, psnr, cell.timings.raycast_ms,
+                  taps.timings.raycast_ms);
     }
   }
   if (!png_dir.empty()) WriteViews(png_dir, volume, gpu_volume, *texel_renderer);

@@ -90,7 +90,8 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   if (s.early_termination) flags |= gpu::kRaycastEarlyTermination;
   if (has_map) flags |= gpu::kRaycastHasMap;
   if (s.count_samples) flags |= gpu::kRaycastCountSamples;
-  if (interactive && s.interactive_cell_gradient && request.mode == RenderMode::kDvr) {
+  if ((interactive ? s.interactive_cell_gradient : s.still_cell_gradient) &&
+      request.mode == RenderMode::kDvr) {
     flags |= kRaycastCellGradient;
   }
   const auto bricks = BrickGridDims(geometry.dims);

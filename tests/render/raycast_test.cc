@@ -106,15 +106,22 @@ int64_t LitPixels(const Frame& f) {
   return lit;
 }
 
+// Both gradients of a still frame: the cell gradient (the default) and the
+// central-difference taps.
 TEST_F(RaycastTest, Dvr_GpuMatchesCpuReference) {
   for (const char* preset : {"ct-vessels", "ct-soft-tissue", "ct-bone"}) {
-    RenderRequest r = Request(RenderMode::kDvr, preset);
-    const Frame gpu = RenderGpu(r);
-    const Frame cpu = RenderCpu(r);
-    MaybeDump(std::string("dvr_gpu_") + preset, gpu.rgba, gpu.width, gpu.height);
-    MaybeDump(std::string("dvr_cpu_") + preset, cpu.rgba, cpu.width, cpu.height);
-    EXPECT_GT(LitPixels(gpu), 300) << preset;
-    ExpectClose(gpu, cpu, 1.0 / 255, 8.0 / 255, preset);
+    for (bool cell : {true, false}) {
+      SCOPED_TRACE(::testing::Message() << preset << (cell ? " cell gradient" : " taps"));
+      RenderRequest r = Request(RenderMode::kDvr, preset);
+      r.settings.still_cell_gradient = cell;
+      const Frame gpu = RenderGpu(r);
+      const Frame cpu = RenderCpu(r);
+      const std::string name = std::string(preset) + (cell ? "" : "_taps");
+      MaybeDump("dvr_gpu_" + name, gpu.rgba, gpu.width, gpu.height);
+      MaybeDump("dvr_cpu_" + name, cpu.rgba, cpu.width, cpu.height);
+      EXPECT_GT(LitPixels(gpu), 300) << preset;
+      ExpectClose(gpu, cpu, 1.0 / 255, 8.0 / 255, preset);
+    }
   }
 }
 
@@ -145,13 +152,17 @@ TEST_F(RaycastTest, DeformingMap_GpuMatchesCpuAndSkippingStaysExact) {
   HostBackwardMap host;
   auto map = MakeMap(9, 6.0, &host);
   ASSERT_TRUE(map.ok()) << map.status();
-  for (RenderMode mode : {RenderMode::kDvr, RenderMode::kMip}) {
+  for (int variant = 0; variant < 3; ++variant) {
+    // DVR with the cell gradient, DVR with the taps, MIP.
+    const RenderMode mode = variant < 2 ? RenderMode::kDvr : RenderMode::kMip;
+    SCOPED_TRACE(variant);
     RenderRequest r = Request(mode);
+    r.settings.still_cell_gradient = variant == 0;
     const Frame undeformed = RenderGpu(r);
     r.backward_map = &*map;
     const Frame gpu = RenderGpu(r);
-    MaybeDump(mode == RenderMode::kDvr ? "deformed_dvr" : "deformed_mip", gpu.rgba, gpu.width,
-              gpu.height);
+    MaybeDump(variant == 0 ? "deformed_dvr" : variant == 1 ? "deformed_dvr_taps" : "deformed_mip",
+              gpu.rgba, gpu.width, gpu.height);
     // The map moves the picture.
     EXPECT_GT(CompareRgba(gpu.rgba, undeformed.rgba).mean_abs, 2.0 / 255);
     // Lavapipe's sampler weighs the map with 8-bit fractions, the CPU exactly.
@@ -269,28 +280,34 @@ TEST_F(RaycastTest, InteractiveQuality_HalfResolutionUpscaled) {
 // Interactive DVR shades with the gradient of the trilinear cells (chain
 // rule through the map): GPU and CPU agree as for the tap gradient, and the
 // picture stays close to that of the taps.
-TEST_F(RaycastTest, InteractiveCellGradient_MatchesCpuAndTheTapGradient) {
+TEST_F(RaycastTest, CellGradient_MatchesCpuAndTheTapGradient) {
   HostBackwardMap host;
   auto map = MakeMap(9, 6.0, &host);
   ASSERT_TRUE(map.ok()) << map.status();
-  for (const char* preset : {"ct-soft-tissue", "ct-vessels", "ct-bone"}) {
-    for (bool with_map : {false, true}) {
-      SCOPED_TRACE(::testing::Message() << preset << (with_map ? " with map" : ""));
-      RenderRequest r = Request(RenderMode::kDvr, preset);
-      r.quality = RenderQuality::kInteractive;
-      r.backward_map = with_map ? &*map : nullptr;
-      const HostBackwardMap* host_map = with_map ? &host : nullptr;
-      const Frame cell = RenderGpu(r);
-      MaybeDump(std::string("interactive_cell_") + preset + (with_map ? "_map" : ""), cell.rgba,
-                cell.width, cell.height);
-      ExpectClose(cell, RenderCpu(r, host_map), 1.0 / 255, 8.0 / 255, "cell gradient vs CPU");
-      r.settings.interactive_cell_gradient = false;
-      const Frame taps = RenderGpu(r);
-      const auto diff = CompareRgba(cell.rgba, taps.rgba);
-      std::printf("  %s%s: cell vs tap gradient mean %.3f/255, max %.0f/255, PSNR %.1f dB\n",
-                  preset, with_map ? " (map)" : "", diff.mean_abs * 255, diff.max_abs * 255,
-                  diff.psnr_db);
-      EXPECT_GT(diff.psnr_db, 30.0);
+  for (RenderQuality quality : {RenderQuality::kInteractive, RenderQuality::kStill}) {
+    const bool interactive = quality == RenderQuality::kInteractive;
+    for (const char* preset : {"ct-soft-tissue", "ct-vessels", "ct-bone"}) {
+      for (bool with_map : {false, true}) {
+        SCOPED_TRACE(::testing::Message() << (interactive ? "interactive " : "still ") << preset
+                                          << (with_map ? " with map" : ""));
+        RenderRequest r = Request(RenderMode::kDvr, preset);
+        r.quality = quality;
+        r.backward_map = with_map ? &*map : nullptr;
+        const HostBackwardMap* host_map = with_map ? &host : nullptr;
+        const Frame cell = RenderGpu(r);
+        MaybeDump(std::string(interactive ? "interactive_cell_" : "still_cell_") + preset +
+                      (with_map ? "_map" : ""),
+                  cell.rgba, cell.width, cell.height);
+        ExpectClose(cell, RenderCpu(r, host_map), 1.0 / 255, 8.0 / 255, "cell gradient vs CPU");
+        r.settings.interactive_cell_gradient = false;
+        r.settings.still_cell_gradient = false;
+        const Frame taps = RenderGpu(r);
+        const auto diff = CompareRgba(cell.rgba, taps.rgba);
+        std::printf("  %s %s%s: cell vs tap gradient mean %.3f/255, max %.0f/255, PSNR %.1f dB\n",
+                    interactive ? "interactive" : "still", preset, with_map ? " (map)" : "",
+                    diff.mean_abs * 255, diff.max_abs * 255, diff.psnr_db);
+        EXPECT_GT(diff.psnr_db, 30.0);
+      }
     }
   }
 }
@@ -429,6 +446,8 @@ TEST_F(RaycastTest, GoldenPhantomFrame_Psnr) {
     ASSERT_EQ(stored->width, 64);
     ASSERT_EQ(stored->height, 64);
     const auto e = CompareRgba(frame.rgba, stored->rgba);
+    std::printf("  golden %s: PSNR %.1f dB, mean %.3f/255, max %.0f/255\n", mode, e.psnr_db,
+                e.mean_abs * 255, e.max_abs * 255);
     EXPECT_GT(e.psnr_db, 35.0) << mode << ": mean " << e.mean_abs * 255 << "/255";
   }
 }
