@@ -45,7 +45,11 @@ layout(binding = 1) uniform sampler3D u_map;
 layout(binding = 0) uniform samplerBuffer u_volume;
 layout(binding = 1) uniform samplerBuffer u_map;  // RGBA32F, grid points x fastest
 #endif
-layout(std140, binding = 2) uniform Params { RaycastParams p; };
+// A storage buffer, not a uniform block: lavapipe 22.3 inlines uniform-block
+// values that steer branches into a freshly compiled shader at every
+// descriptor bind, and never frees it (docs/SERVICE.md, "Memory findings");
+// storage-buffer loads are not inlined.
+layout(std140, binding = 2) restrict readonly buffer Params { RaycastParams p; };
 layout(std140, binding = 3) uniform Lut { vec4 entries[VPM_RENDER_LUT_ENTRIES]; } u_lut;
 layout(std430, binding = 4) readonly buffer Occupancy { float occupancy[]; };
 layout(std430, binding = 5) writeonly buffer Pixels { uint pixels[]; };

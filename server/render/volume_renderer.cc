@@ -80,7 +80,7 @@ Status VolumeRenderer::Init() {
                .spirv = RaycastSpirv(sampled, mip, map),
                .bindings = {sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
                             sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
-                            DT::eUniformBuffer, DT::eUniformBuffer,
+                            DT::eStorageBuffer, DT::eUniformBuffer,
                             DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
                .push_constant_bytes = 0,
                .local_size = {8, 8, 1}}));
@@ -97,7 +97,7 @@ Status VolumeRenderer::Init() {
              .spirv = RaycastSpirv(sampled, false, map),
              .bindings = {sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
                           sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
-                          DT::eUniformBuffer, DT::eUniformBuffer,
+                          DT::eStorageBuffer, DT::eUniformBuffer,
                           DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
              .push_constant_bytes = 0,
              .local_size = {8, 8, 1},
@@ -128,7 +128,8 @@ Status VolumeRenderer::Init() {
   const std::vector<glm::vec4> zeros(8, glm::vec4(0.0f));
   RETURN_IF_ERROR(identity.Upload(std::as_bytes(std::span<const glm::vec4>(zeros))));
   identity_map_.emplace(std::move(identity));
-  RETURN_IF_ERROR(EnsureBuffer(params_, sizeof(gpu::RaycastParams), BU::eUniformBuffer));
+  // Params are a storage buffer (shaders/raycast_body.glsl says why).
+  RETURN_IF_ERROR(EnsureBuffer(params_, sizeof(gpu::RaycastParams), BU::eStorageBuffer));
   RETURN_IF_ERROR(EnsureBuffer(lut_, sizeof(gpu::RenderLutBlock), BU::eUniformBuffer));
   RETURN_IF_ERROR(EnsureBuffer(nonzero_prefix_, (gpu::kRenderLutEntries + 1) * sizeof(int32_t),
                                BU::eStorageBuffer));
