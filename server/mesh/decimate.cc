@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <array>
 #include <memory>
 #include <thread>
 
 #include "server/mesh/indexed_min_heap.h"
+#include "server/mesh/monotone_min_queue.h"
 #include "server/mesh/point_grid.h"
 
 namespace vpm {
@@ -193,38 +195,55 @@ Result<DecimationResult> DecimateFast(const DecimationInput& in, const Decimatio
   const NeighbourLists neighbours = FindNeighbours(in.positions, p.radius_mm, dens);
   const double d0 = n > 0 ? *std::max_element(dens.begin(), dens.end()) : 0.0;
   const CostModel cost{in, p, d0};
-  std::vector<double> initial(n);
-  for (int64_t v = 0; v < n; ++v) initial[v] = cost(v, dens[v]);
-  IndexedMinHeap heap(initial);
+  const int64_t keep = p.target - kAnchorCount;
   std::vector<int64_t> order;
-  order.reserve(std::max<int64_t>(0, n - (p.target - kAnchorCount)));
-  // A removal lowers its neighbours' densities. In spread mode that can only
-  // raise their Ctotal (S = 1 - Cd, all factors >= 0, rounding monotonic), so
-  // their heap keys are left as underestimates and refreshed lazily when they
-  // reach the top: the top is the true minimum once its key is current. In
-  // paper mode Ctotal can only fall, so keys are lowered at once (sift up).
-  const bool lazy = p.density_mode == DensityMode::kSpread;
-  while (heap.size() > p.target - kAnchorCount) {
-    const int64_t v = heap.top();
-    const double current = cost(v, dens[v]);
-    if (current != heap.top_cost()) {
-      heap.Update(v, current);
-      continue;
-    }
-    heap.Pop();
+  order.reserve(std::max<int64_t>(0, n - keep));
+  std::vector<char> alive(n, 1);
+  // Removes v: lowers its neighbours' densities, the removed ones' too (never
+  // read again, which spares a liveness test per neighbour). Each 1/d is the
+  // one the initial sum added, so a density is exactly the sum over its
+  // alive neighbours taken in removal order, as in the naive scan.
+  auto remove = [&](int64_t v, auto&& on_neighbour) {
+    alive[v] = 0;
     order.push_back(v);
-    // The removed vertices' densities are lowered too (never read again),
-    // which spares a liveness test per neighbour. Each 1/d is the one the
-    // initial sum added, so a density is exactly the sum over its alive
-    // neighbours taken in removal order, as in the naive scan.
     for (int64_t k = neighbours.start[v]; k < neighbours.start[v + 1]; ++k) {
       const int32_t id = neighbours.ids[k];
       dens[id] -= neighbours.inv_distance[k];
-      if (!lazy && heap.contains(id)) heap.Update(id, cost(id, dens[id]));
+      on_neighbour(id);
+    }
+  };
+  if (p.density_mode == DensityMode::kSpread) {
+    // A removal can only raise its neighbours' Ctotal (S = 1 - Cd, all
+    // factors >= 0, rounding monotonic), so their queued keys are left as
+    // underestimates and refreshed when they come out first: the first key
+    // is the true minimum once it is current. Every key queued is then at
+    // least the last one taken, which a monotone queue exploits.
+    MonotoneMinQueue queue;
+    for (int64_t v = 0; v < n; ++v) queue.Push(cost(v, dens[v]), static_cast<int32_t>(v));
+    for (int64_t remaining = n; remaining > keep;) {
+      const MonotoneMinQueue::Entry top = queue.Top();
+      queue.Pop();
+      const double current = cost(top.item, dens[top.item]);
+      if (current != top.cost) {
+        queue.Push(current, top.item);
+        continue;
+      }
+      remove(top.item, [](int32_t) {});
+      --remaining;
+    }
+  } else {
+    // In paper mode Ctotal can only fall, so keys are lowered at once.
+    std::vector<double> initial(n);
+    for (int64_t v = 0; v < n; ++v) initial[v] = cost(v, dens[v]);
+    IndexedMinHeap heap(initial);
+    while (heap.size() > keep) {
+      const int64_t v = heap.top();
+      heap.Pop();
+      remove(v, [&](int32_t id) {
+        if (heap.contains(id)) heap.Update(id, cost(id, dens[id]));
+      });
     }
   }
-  std::vector<char> alive(n);
-  for (int64_t v = 0; v < n; ++v) alive[v] = heap.contains(v);
   return Finish(alive, dens, cost, std::move(order));
 }
 

@@ -4,6 +4,7 @@ add_library(vpm_mesh
   ${CMAKE_CURRENT_LIST_DIR}/lattice_costs.cc
   ${CMAKE_CURRENT_LIST_DIR}/lattice_costs_gpu.cc
   ${CMAKE_CURRENT_LIST_DIR}/indexed_min_heap.cc
+  ${CMAKE_CURRENT_LIST_DIR}/monotone_min_queue.cc
   ${CMAKE_CURRENT_LIST_DIR}/point_grid.cc
   ${CMAKE_CURRENT_LIST_DIR}/decimate.cc
   ${CMAKE_CURRENT_LIST_DIR}/classify_hardness.cc

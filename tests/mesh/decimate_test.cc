@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "server/mesh/indexed_min_heap.h"
+#include "server/mesh/monotone_min_queue.h"
 #include "server/mesh/lattice.h"
 #include "server/mesh/lattice_costs.h"
 #include "tests/mesh/mesh_test_volumes.h"
@@ -69,6 +70,45 @@ TEST(IndexedMinHeap, MatchesAnOrderedSetUnderRandomUpdatesAndPops) {
       ASSERT_EQ(heap.cost(item), cost);
     }
     EXPECT_TRUE(heap.empty());
+  }
+}
+
+// The monotone queue against an ordered set: each step pops the smallest key
+// and, two times in three, pushes it back raised (as step 2 refreshes a
+// stale key) or pushes a new item at or above it; costs from few values
+// (ties common), zeros and -0.0 among them.
+TEST(MonotoneMinQueue, PopsWhatAnOrderedSetPopsUnderMonotonePushes) {
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> value(0, 7);
+  for (int n : {1, 2, 33, 500, 3000}) {
+    MonotoneMinQueue queue;
+    std::set<std::pair<double, int32_t>> reference;
+    int32_t next_item = 0;
+    for (; next_item < n; ++next_item) {
+      const double cost = next_item % 5 == 0 ? -0.0 : value(rng) * 0.25;
+      queue.Push(cost, next_item);
+      reference.emplace(cost + 0.0, next_item);
+    }
+    while (!reference.empty()) {
+      ASSERT_EQ(queue.size(), static_cast<int64_t>(reference.size()));
+      const auto top = queue.Top();
+      ASSERT_EQ(top.item, reference.begin()->second) << "n " << n;
+      ASSERT_EQ(top.cost, reference.begin()->first);
+      queue.Pop();
+      reference.erase(reference.begin());
+      const int action = static_cast<int>(rng() % 3);
+      if (action == 0 && next_item < 4 * n) {  // a raised key for the same item
+        const double cost = top.cost + value(rng) * 0.25;
+        queue.Push(cost, top.item);
+        reference.emplace(cost, top.item);
+      } else if (action == 1 && next_item < 4 * n) {  // a new item, not below the last key
+        const double cost = top.cost + value(rng) * 0.25;
+        queue.Push(cost, next_item);
+        reference.emplace(cost, next_item);
+        ++next_item;
+      }
+    }
+    EXPECT_TRUE(queue.empty());
   }
 }
 
