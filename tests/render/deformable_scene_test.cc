@@ -10,7 +10,7 @@
 #include "server/mesh/compare_meshes.h"
 #include "server/render/render_presets.h"
 #include "tests/gpu/gpu_test_context.h"
-#include "tests/render/render_test_util.h"
+#include "tests/render/sphere_rod_scene.h"
 
 namespace vpm {
 namespace {
@@ -19,14 +19,10 @@ class DeformableSceneTest : public testing::GpuTest {
  protected:
   void SetUp() override {
     GpuTest::SetUp();
-    volume_.emplace(testing::MakeSphereRodVolume());
-    auto gpu = GpuVolume::Upload(context(), *volume_);
-    ASSERT_TRUE(gpu.ok()) << gpu.status();
-    gpu_volume_.emplace(std::move(*gpu));
-    auto renderer = VolumeRenderer::Create(context(), {});
-    ASSERT_TRUE(renderer.ok()) << renderer.status();
-    renderer_ = std::move(*renderer);
-    auto mesh = BuildRegularMesh(*volume_, 216);
+    auto scene = testing::MakeSphereRodScene(context());
+    ASSERT_TRUE(scene.ok()) << scene.status();
+    case_ = std::move(*scene);
+    auto mesh = BuildRegularMesh(case_->volume, 216);
     ASSERT_TRUE(mesh.ok()) << mesh.status();
     mesh_ = std::move(*mesh);
   }
@@ -35,26 +31,24 @@ class DeformableSceneTest : public testing::GpuTest {
     DeformableScene::Options options;
     options.map.map_dims = {24, 24, 24};
     options.defer_map_update = defer;
-    auto scene =
-        DeformableScene::Create(context(), *volume_, *gpu_volume_, *renderer_, mesh_, options);
+    auto scene = DeformableScene::Create(context(), case_->volume, case_->gpu_volume,
+                                         *case_->renderer, mesh_, options);
     EXPECT_TRUE(scene.ok()) << scene.status();
     return scene.ok() ? std::move(*scene) : nullptr;
   }
 
   SceneView View() const {
     SceneView view;
-    view.camera = Camera::ForVolume(volume_->geometry());
+    view.camera = Camera::ForVolume(case_->volume.geometry());
     view.camera.Orbit(25.0, 15.0);
-    view.preset = *MakeRenderPreset("ct-vessels", *volume_);
+    view.preset = *MakeRenderPreset("ct-vessels", case_->volume);
     view.width = view.height = 64;
     return view;
   }
 
-  glm::dvec3 Centre() const { return 0.5 * volume_->geometry().extent_mm(); }
+  glm::dvec3 Centre() const { return 0.5 * case_->volume.geometry().extent_mm(); }
 
-  std::optional<Volume> volume_;
-  std::optional<GpuVolume> gpu_volume_;
-  std::unique_ptr<VolumeRenderer> renderer_;
+  std::unique_ptr<testing::SphereRodScene> case_;
   ProxyMesh mesh_;
 };
 
