@@ -1,7 +1,8 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// Min and max of the source volume over each brick of 8^3 cells: brick b
-// spans voxels [8 b, min(8 b + 8, n - 1)] per axis, boundary layers shared,
+// Min and max of the source volume over each brick of w^3 cells (w =
+// pc.bricks.w: 4 for still frames, 8 for interactive ones): brick b spans
+// voxels [w b, min(w b + w, n - 1)] per axis, boundary layers shared,
 // so every trilinear sample at an index inside the brick reads only voxels
 // it covers. One invocation per brick; built once per volume.
 #include "shader_interface.glsl"

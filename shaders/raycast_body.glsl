@@ -17,7 +17,8 @@
 //
 // Per ray: intersect the image box [0, extent_mm]; samples at
 // t_k = t_near + k * step; each reads the deformed volume J(x) = I(X(x)), X
-// from the backward map. Bricks of 8^3 cells that the occupancy pass marked
+// from the backward map. Bricks of w^3 cells (w = p.bricks.w: 4 still, 8
+// interactive) that the occupancy pass marked
 // empty (DVR: zero opacity over every value the brick can show; MIP: nothing
 // above the running maximum or the window's black) are jumped over to the
 // first sample grid point past them, so skipping never moves a sample. DVR

@@ -294,20 +294,21 @@ uint32_t Caster::Pixel(int px, int py, int64_t& taken) const {
 
 }  // namespace
 
-std::vector<glm::vec2> BrickMinMaxCpu(const Volume& volume) {
-  const auto nb = BrickGridDims(volume.dims());
+std::vector<glm::vec2> BrickMinMaxCpu(const Volume& volume, int brick_voxels) {
+  const int64_t w = brick_voxels;
+  const auto nb = BrickGridDims(volume.dims(), brick_voxels);
   const auto& n = volume.dims();
   std::vector<glm::vec2> out(static_cast<size_t>(nb[0]) * nb[1] * nb[2]);
   for (int bz = 0; bz < nb[2]; ++bz)
     for (int by = 0; by < nb[1]; ++by)
       for (int bx = 0; bx < nb[0]; ++bx) {
         float lo = 3.0e38f, hi = -3.0e38f;
-        const int64_t z1 = std::min<int64_t>(bz * kBrickVoxels + kBrickVoxels, n[2] - 1);
-        const int64_t y1 = std::min<int64_t>(by * kBrickVoxels + kBrickVoxels, n[1] - 1);
-        const int64_t x1 = std::min<int64_t>(bx * kBrickVoxels + kBrickVoxels, n[0] - 1);
-        for (int64_t z = bz * kBrickVoxels; z <= z1; ++z)
-          for (int64_t y = by * kBrickVoxels; y <= y1; ++y)
-            for (int64_t x = bx * kBrickVoxels; x <= x1; ++x) {
+        const int64_t z1 = std::min<int64_t>(bz * w + w, n[2] - 1);
+        const int64_t y1 = std::min<int64_t>(by * w + w, n[1] - 1);
+        const int64_t x1 = std::min<int64_t>(bx * w + w, n[0] - 1);
+        for (int64_t z = bz * w; z <= z1; ++z)
+          for (int64_t y = by * w; y <= y1; ++y)
+            for (int64_t x = bx * w; x <= x1; ++x) {
               const float v = volume.At(x, y, z);
               lo = std::min(lo, v);
               hi = std::max(hi, v);
@@ -318,17 +319,19 @@ std::vector<glm::vec2> BrickMinMaxCpu(const Volume& volume) {
 }
 
 std::vector<float> BrickOccupancyCpu(std::span<const glm::vec2> minmax,
-                                     const VolumeGeometry& geometry, RenderMode mode,
-                                     const RenderLut& lut, const HostBackwardMap* map) {
-  const auto nba = BrickGridDims(geometry.dims);
+                                     const VolumeGeometry& geometry, int brick_voxels,
+                                     RenderMode mode, const RenderLut& lut,
+                                     const HostBackwardMap* map) {
+  const int w = brick_voxels;
+  const auto nba = BrickGridDims(geometry.dims, brick_voxels);
   const ivec3 nb(nba[0], nba[1], nba[2]);
   const ivec3 n(int(geometry.dims[0]), int(geometry.dims[1]), int(geometry.dims[2]));
   const vec3 s(geometry.spacing_mm);
   std::vector<float> out(size_t(nb.x) * nb.y * nb.z);
   for (int index = 0; index < int(out.size()); ++index) {
     const ivec3 b(index % nb.x, (index / nb.x) % nb.y, index / (nb.x * nb.y));
-    const vec3 lo_mm = vec3(b * kBrickVoxels) * s;
-    const vec3 hi_mm = vec3(glm::min((b + 1) * kBrickVoxels, n - 1)) * s;
+    const vec3 lo_mm = vec3(b * w) * s;
+    const vec3 hi_mm = vec3(glm::min((b + 1) * w, n - 1)) * s;
     vec3 dmin(0.0f), dmax(0.0f);
     if (map != nullptr) {
       const ivec3 m(map->dims[0], map->dims[1], map->dims[2]);
@@ -347,8 +350,8 @@ std::vector<float> BrickOccupancyCpu(std::span<const glm::vec2> minmax,
     }
     const vec3 u_lo = glm::clamp((lo_mm + dmin) / s, vec3(0.0f), vec3(n - 1));
     const vec3 u_hi = glm::clamp((hi_mm + dmax) / s, vec3(0.0f), vec3(n - 1));
-    const ivec3 s_lo = glm::clamp(ivec3(glm::floor(u_lo / float(kBrickVoxels))), ivec3(0), nb - 1);
-    const ivec3 s_hi = glm::clamp(ivec3(glm::floor(u_hi / float(kBrickVoxels))), ivec3(0), nb - 1);
+    const ivec3 s_lo = glm::clamp(ivec3(glm::floor(u_lo / float(w))), ivec3(0), nb - 1);
+    const ivec3 s_hi = glm::clamp(ivec3(glm::floor(u_hi / float(w))), ivec3(0), nb - 1);
     float vmin = 3.0e38f, vmax = -3.0e38f;
     for (int z = s_lo.z; z <= s_hi.z; ++z)
       for (int y = s_lo.y; y <= s_hi.y; ++y)
@@ -425,14 +428,21 @@ Result<Frame> RenderReference(const RenderRequest& request, const Volume& volume
   frame.render_width = setup.render_width;
   frame.render_height = setup.render_height;
   frame.step_mm = setup.step_mm;
-  const auto nb = BrickGridDims(g.dims);
+  const int brick_voxels = setup.params.bricks.w;
+  const auto nb = BrickGridDims(g.dims, brick_voxels);
   frame.total_bricks = int64_t(nb[0]) * nb[1] * nb[2];
+  if (brick_minmax != nullptr && int64_t(brick_minmax->size()) != frame.total_bricks) {
+    return absl::InvalidArgumentError(
+        StrCat("brick_minmax holds ", brick_minmax->size(), " bricks; bricks of ", brick_voxels,
+               " voxels make ", frame.total_bricks));
+  }
   std::vector<float> occupancy;
   auto t0 = std::chrono::steady_clock::now();
   if (request.settings.empty_space_skipping) {
     std::vector<glm::vec2> own;
-    if (brick_minmax == nullptr) own = BrickMinMaxCpu(volume);
-    occupancy = BrickOccupancyCpu(brick_minmax ? *brick_minmax : own, g, request.mode, lut, map);
+    if (brick_minmax == nullptr) own = BrickMinMaxCpu(volume, brick_voxels);
+    occupancy = BrickOccupancyCpu(brick_minmax ? *brick_minmax : own, g, brick_voxels,
+                                  request.mode, lut, map);
     const float black = setup.params.window.x;
     const bool mip = request.mode == RenderMode::kMip;
     frame.occupied_bricks = std::count_if(occupancy.begin(), occupancy.end(), [&](float o) {

@@ -27,15 +27,17 @@ struct HostBackwardMap {
   std::vector<glm::vec4> texels;
 };
 
-// Min and max of `volume` per brick (BrickGridDims bricks, x fastest), as
-// brick_minmax.comp.
-std::vector<glm::vec2> BrickMinMaxCpu(const Volume& volume);
+// Min and max of `volume` per brick of `brick_voxels` voxels per side
+// (BrickGridDims bricks, x fastest), as brick_minmax.comp.
+std::vector<glm::vec2> BrickMinMaxCpu(const Volume& volume, int brick_voxels);
 
 // Occupancy per brick of deformed space, as brick_occupancy.comp: DVR 1/0,
-// MIP the reachable max. `map` may be null (no deformation).
+// MIP the reachable max. `minmax`: BrickMinMaxCpu for the same brick size;
+// `map` may be null (no deformation).
 std::vector<float> BrickOccupancyCpu(std::span<const glm::vec2> minmax,
-                                     const VolumeGeometry& geometry, RenderMode mode,
-                                     const RenderLut& lut, const HostBackwardMap* map);
+                                     const VolumeGeometry& geometry, int brick_voxels,
+                                     RenderMode mode, const RenderLut& lut,
+                                     const HostBackwardMap* map);
 
 struct RaycastCpuInputs {
   const Volume* volume = nullptr;
@@ -55,8 +57,9 @@ std::vector<uint32_t> UpscaleCpu(std::span<const uint32_t> source, int source_wi
 
 // A whole frame on the CPU, as VolumeRenderer::Render: the request's GPU
 // handles are ignored; `volume` is the source and `map` (optional) the
-// backward map. `brick_minmax` may hold BrickMinMaxCpu(volume) to save its
-// cost; timings are wall clock (occupancy_ms, raycast_ms, upscale_ms).
+// backward map. `brick_minmax` may hold BrickMinMaxCpu(volume,
+// BrickVoxels(request.quality)) to save its cost (InvalidArgument when its
+// size is not that brick grid's); timings are wall clock (occupancy_ms, raycast_ms, upscale_ms).
 Result<Frame> RenderReference(const RenderRequest& request, const Volume& volume,
                               const HostBackwardMap* map, int threads = 2,
                               const std::vector<glm::vec2>* brick_minmax = nullptr);

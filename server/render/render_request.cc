@@ -31,10 +31,14 @@ Status CheckSettings(const RaycastSettings& s) {
 
 }  // namespace
 
-std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims) {
+int BrickVoxels(RenderQuality quality) {
+  return quality == RenderQuality::kInteractive ? kInteractiveBrickVoxels : kStillBrickVoxels;
+}
+
+std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims, int brick_voxels) {
   std::array<int, 3> b{};
   for (int a = 0; a < 3; ++a) {
-    b[a] = std::max<int>(1, int((dims[a] - 1 + kBrickVoxels - 1) / kBrickVoxels));
+    b[a] = std::max<int>(1, int((dims[a] - 1 + brick_voxels - 1) / brick_voxels));
   }
   return b;
 }
@@ -94,7 +98,8 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
       request.mode == RenderMode::kDvr) {
     flags |= kRaycastCellGradient;
   }
-  const auto bricks = BrickGridDims(geometry.dims);
+  const int brick_voxels = BrickVoxels(request.quality);
+  const auto bricks = BrickGridDims(geometry.dims, brick_voxels);
   gpu::RaycastParams& p = setup.params;
   p.eye_mm = Vec4(rays.eye_mm, step);
   p.forward = Vec4(rays.forward);
@@ -104,7 +109,7 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
                       request.mode == RenderMode::kMip ? 1 : 0);
   p.spacing_mm = Vec4(geometry.spacing_mm);
   p.image = glm::ivec4(setup.render_width, setup.render_height, flags, 0);
-  p.bricks = glm::ivec4(bricks[0], bricks[1], bricks[2], kBrickVoxels);
+  p.bricks = glm::ivec4(bricks[0], bricks[1], bricks[2], brick_voxels);
   p.window = glm::vec4(float(window.level - 0.5 * window.width), float(1.0 / window.width), 0.0f,
                        0.0f);
   p.background = Vec4(s.background);

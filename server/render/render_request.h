@@ -30,7 +30,14 @@ enum class RenderMode { kDvr, kMip };
 enum class RenderQuality { kStill, kInteractive };
 
 inline constexpr int kMaxFrameSide = 4096;
-inline constexpr int kBrickVoxels = 4;  // empty-space-skipping brick: 8^3 cells
+// Empty-space-skipping bricks, voxels per side: 4 (4^3 cells) for still
+// frames, 8 for interactive ones. The occupancy pass, rerun whenever the map
+// changes (every drag step), reads some 27 map points per brick: 4^3 bricks
+// (262k for 256^3) cost it 17 ms per interactive frame, 8^3 bricks 3.6 ms,
+// while the interactive cast (half size, step 1.0) lost about 1 ms to the
+// coarser skipping; the still cast loses more (docs/RENDERING.md).
+inline constexpr int kStillBrickVoxels = 4;
+inline constexpr int kInteractiveBrickVoxels = 8;
 inline constexpr double kStillStepFactor = 0.5;
 inline constexpr double kInteractiveStepFactor = 1.0;
 // Longest ray, in samples, a request may ask for (the box diagonal / step):
@@ -119,9 +126,13 @@ struct Frame {
   FrameTimings timings;
 };
 
-// Brick grid of a volume: ceil((n - 1) / kBrickVoxels) bricks per axis (at
-// least 1); brick b spans voxels [8 b, min(8 b + 8, n - 1)].
-std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims);
+// Voxels per brick side for a quality: kStillBrickVoxels or
+// kInteractiveBrickVoxels.
+int BrickVoxels(RenderQuality quality);
+
+// Brick grid of a volume: ceil((n - 1) / w) bricks per axis (at least 1) for
+// bricks of w voxels per side; brick b spans voxels [w b, min(w b + w, n - 1)].
+std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims, int brick_voxels);
 
 struct RaycastSetup {
   gpu::RaycastParams params{};

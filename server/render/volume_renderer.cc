@@ -25,7 +25,8 @@ namespace {
 using DT = vk::DescriptorType;
 using BU = vk::BufferUsageFlagBits;
 
-constexpr size_t kMaxCachedVolumes = 4;
+// Brick grids cached: 4 volumes at both brick sizes.
+constexpr size_t kMaxCachedBrickGrids = 8;
 
 double MsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -175,29 +176,30 @@ void VolumeRenderer::ForgetVolume(const GpuVolume* volume) {
   if (occupancy_key_ && occupancy_key_->volume == volume) occupancy_key_.reset();
 }
 
-Result<const gpu::GpuBuffer*> VolumeRenderer::BrickMinMax(const GpuVolume& volume) {
+Result<const gpu::GpuBuffer*> VolumeRenderer::BrickMinMax(const GpuVolume& volume,
+                                                          int brick_voxels) {
   const vk::Buffer handle = volume.buffer().handle();
   for (auto it = brick_grids_.begin(); it != brick_grids_.end(); ++it) {
-    if (it->volume == &volume) {
+    if (it->volume == &volume && it->brick_voxels == brick_voxels) {
       if (it->buffer == handle && it->extent == volume.extent()) return &it->minmax;
       brick_grids_.erase(it);
       break;
     }
   }
   const auto& g = volume.geometry();
-  const auto nb = BrickGridDims(g.dims);
+  const auto nb = BrickGridDims(g.dims, brick_voxels);
   const int bricks = nb[0] * nb[1] * nb[2];
   ASSIGN_OR_RETURN(auto minmax, gpu::GpuBuffer::Create(*context_, bricks * sizeof(glm::vec2),
                                                        BU::eStorageBuffer));
   ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 1));
   const gpu::BrickMinMaxPush push{
       .dims = glm::ivec4(int(g.dims[0]), int(g.dims[1]), int(g.dims[2]), 0),
-      .bricks = glm::ivec4(nb[0], nb[1], nb[2], kBrickVoxels)};
+      .bricks = glm::ivec4(nb[0], nb[1], nb[2], brick_voxels)};
   RETURN_IF_ERROR(batch.Dispatch(*minmax_kernel_, {volume.texel_view(), &minmax}, push,
                                  {GroupCount(bricks, 64), 1, 1}, "brick_minmax"));
   RETURN_IF_ERROR(batch.SubmitAndWait().status());
-  if (brick_grids_.size() >= kMaxCachedVolumes) brick_grids_.erase(brick_grids_.begin());
-  brick_grids_.push_back({&volume, handle, volume.extent(), std::move(minmax)});
+  if (brick_grids_.size() >= kMaxCachedBrickGrids) brick_grids_.erase(brick_grids_.begin());
+  brick_grids_.push_back({&volume, brick_voxels, handle, volume.extent(), std::move(minmax)});
   return &brick_grids_.back().minmax;
 }
 
@@ -309,7 +311,8 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
                    PrepareRaycast(request, request.volume->geometry(), map_dims));
   RETURN_IF_ERROR(PrepareLut(request.preset, setup.step_mm));
   setup.params.lut = lut_params_;
-  ASSIGN_OR_RETURN(const gpu::GpuBuffer* minmax, BrickMinMax(*request.volume));
+  ASSIGN_OR_RETURN(const gpu::GpuBuffer* minmax,
+                   BrickMinMax(*request.volume, setup.params.bricks.w));
 
   const gpu::RaycastParams& p = setup.params;
   const size_t bricks = size_t(p.bricks.x) * p.bricks.y * p.bricks.z;
@@ -344,9 +347,10 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   }
   // The occupancy depends on the volume, the table, the mode and the map; a
   // map's content is known unchanged only through backward_map_version.
-  const OccupancyKey key{request.volume,  request.volume->buffer().handle(),
-                         request.mode,    lut_generation_,
-                         request.backward_map, request.backward_map_version};
+  const OccupancyKey key{request.volume,      request.volume->buffer().handle(),
+                         request.mode,        lut_generation_,
+                         p.bricks.w,          request.backward_map,
+                         request.backward_map_version};
   const bool cacheable = request.backward_map == nullptr || request.backward_map_version != 0;
   const bool occupancy_current = cacheable && occupancy_key_ == key;
   occupancy_key_.reset();  // until this frame's pass has run

@@ -250,6 +250,63 @@ TEST_F(RaycastTest, EmptySpaceSkipping_SameImageFewerSamples) {
   }
 }
 
+// The occupancy pass (brick_occupancy.comp) keeps the bricks the CPU
+// reference keeps, through deforming maps coarser and finer than the voxels
+// (9^3, 48^3, 160^3, 1100 x 9 x 9 points on a 48^3 volume; 1200 x 3 x 3 on a
+// 6^3 one), for the bricks of still (4^3) and interactive (8^3) frames.
+TEST_F(RaycastTest, Occupancy_GpuMatchesCpuThroughDeformingMaps) {
+  struct MapCase {
+    int n;  // volume side
+    std::array<int, 3> dims;
+  };
+  for (const MapCase& c : {MapCase{48, {9, 9, 9}}, MapCase{48, {48, 48, 48}},
+                           MapCase{48, {160, 160, 160}}, MapCase{48, {1100, 9, 9}},
+                           MapCase{6, {1200, 3, 3}}}) {
+    const Volume volume = testing::MakeSphereRodVolume(c.n);
+    auto gpu_volume = GpuVolume::Upload(context(), volume);
+    ASSERT_TRUE(gpu_volume.ok()) << gpu_volume.status();
+    HostBackwardMap host{c.dims, {}};
+    const auto& m = c.dims;
+    host.texels.resize(size_t(m[0]) * m[1] * m[2]);
+    for (int k = 0; k < m[2]; ++k)
+      for (int j = 0; j < m[1]; ++j)
+        for (int i = 0; i < m[0]; ++i) {
+          const double s = std::sin(std::numbers::pi * i / (m[0] - 1)) *
+                           std::sin(std::numbers::pi * (j + 0.5) / m[1]) *
+                           std::sin(std::numbers::pi * (k + 0.5) / m[2]);
+          host.texels[i + m[0] * (j + m[1] * k)] =
+              glm::vec4(float(5.0 * s), float(-2.0 * s), float(-3.0 * s), 1.0f);
+        }
+    auto map = gpu::GpuImage3D::Create(
+        context(), {uint32_t(m[0]), uint32_t(m[1]), uint32_t(m[2])},
+        vk::Format::eR32G32B32A32Sfloat);
+    ASSERT_TRUE(map.ok()) << map.status();
+    ASSERT_TRUE(map->Upload(std::as_bytes(std::span<const glm::vec4>(host.texels))).ok());
+    for (int variant = 0; variant < 4; ++variant) {
+      const RenderMode mode = variant % 2 == 0 ? RenderMode::kDvr : RenderMode::kMip;
+      const RenderQuality quality = variant < 2 ? RenderQuality::kStill : RenderQuality::kInteractive;
+      SCOPED_TRACE(::testing::Message() << "volume " << c.n << ", map " << m[0] << "x" << m[1]
+                                        << "x" << m[2] << (mode == RenderMode::kDvr ? " DVR" : " MIP")
+                                        << (variant < 2 ? " still" : " interactive"));
+      // The 6^3 volume has no bone: its soft tissue instead.
+      RenderRequest r = Request(mode, c.n > 6 ? "ct-bone" : "ct-soft-tissue", 48);
+      r.camera = Camera::ForVolume(volume.geometry());
+      r.camera.Orbit(30.0, 20.0);
+      r.volume = &*gpu_volume;
+      r.backward_map = &*map;
+      r.quality = quality;
+      r.mip_window = c.n > 6 ? MipWindow{450.0, 500.0} : MipWindow{-100.0, 200.0};
+      r.settings.count_samples = true;
+      const Frame gpu = RenderGpu(r);
+      auto cpu = RenderReference(r, volume, &host, 2);
+      ASSERT_TRUE(cpu.ok()) << cpu.status();
+      EXPECT_GT(gpu.occupied_bricks, 0);
+      EXPECT_EQ(gpu.occupied_bricks, cpu->occupied_bricks);
+      EXPECT_NEAR(double(cpu->samples), double(gpu.samples), 0.002 * gpu.samples + 2.0);
+    }
+  }
+}
+
 TEST_F(RaycastTest, EarlyTermination_SameImageFewerSamples) {
   RenderRequest r = Request(RenderMode::kDvr, "ct-soft-tissue");
   r.settings.count_samples = true;
