@@ -72,7 +72,6 @@ struct CostModel {
 struct NeighbourLists {
   std::vector<int64_t> start;                // #N+1
   std::unique_ptr<int32_t[]> ids;            // start[N] neighbour ids, ascending per vertex
-  std::unique_ptr<double[]> inv_distance;    // start[N]: 1 / |p_u - p_v|, 1/mm, beside ids
 };
 
 // The candidates around one grid bucket, sorted by id, as flat arrays (mm).
@@ -152,7 +151,6 @@ NeighbourLists FindNeighbours(const std::vector<glm::dvec3>& positions, double r
           const double inv = 1.0 / c.d[j];
           sum += inv;
           lists.ids[k] = static_cast<int32_t>(c.id[j]);
-          lists.inv_distance[k] = inv;
           ++k;
         }
         dens[v] = sum;
@@ -168,7 +166,6 @@ NeighbourLists FindNeighbours(const std::vector<glm::dvec3>& positions, double r
   for (int64_t v = 0; v < n; ++v) lists.start[v + 1] += lists.start[v];
   // Left uninitialized: the second pass writes every entry.
   lists.ids.reset(new int32_t[lists.start[n]]);
-  lists.inv_distance.reset(new double[lists.start[n]]);
   both(true);
   return lists;
 }
@@ -200,15 +197,17 @@ Result<DecimationResult> DecimateFast(const DecimationInput& in, const Decimatio
   order.reserve(std::max<int64_t>(0, n - keep));
   std::vector<char> alive(n, 1);
   // Removes v: lowers its neighbours' densities, the removed ones' too (never
-  // read again, which spares a liveness test per neighbour). Each 1/d is the
-  // one the initial sum added, so a density is exactly the sum over its
-  // alive neighbours taken in removal order, as in the naive scan.
+  // read again, which spares a liveness test per neighbour). Each 1/d has the
+  // bits the initial sum added (PointDistance is symmetric), so a density is
+  // exactly the sum over its alive neighbours taken in removal order, as in
+  // the naive scan.
   auto remove = [&](int64_t v, auto&& on_neighbour) {
     alive[v] = 0;
     order.push_back(v);
+    const glm::dvec3 pv = in.positions[v];
     for (int64_t k = neighbours.start[v]; k < neighbours.start[v + 1]; ++k) {
       const int32_t id = neighbours.ids[k];
-      dens[id] -= neighbours.inv_distance[k];
+      dens[id] -= 1.0 / PointDistance(in.positions[id], pv);
       on_neighbour(id);
     }
   };
