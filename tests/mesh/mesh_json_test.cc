@@ -7,6 +7,7 @@
 
 #include "server/mesh/tetrahedralize.h"
 #include "tests/mesh/tet_mesh_test_util.h"
+#include "tests/volume/io_test_util.h"
 
 namespace vpm {
 namespace {
@@ -38,7 +39,8 @@ ProxyMesh SampleMesh() {
   return mesh;
 }
 
-std::string TempPath(const std::string& name) { return ::testing::TempDir() + "/" + name; }
+// In a folder of the current test's own (tests of this file run side by side).
+std::string TempPath(const std::string& name) { return (testing::MakeTempDir() / name).string(); }
 
 void WriteText(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary | std::ios::trunc) << text;

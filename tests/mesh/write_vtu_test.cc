@@ -9,6 +9,7 @@
 
 #include "server/mesh/tetrahedralize.h"
 #include "tests/mesh/tet_mesh_test_util.h"
+#include "tests/volume/io_test_util.h"
 
 namespace vpm {
 namespace {
@@ -58,7 +59,7 @@ TEST(WriteVtu, WritesTheRightCounts) {
   mesh.vertices[0].hard = true;
   mesh.vertices[1].kind = VertexKind::kRefined;
   ASSERT_TRUE(Tetrahedralize(mesh, extent).ok());
-  const std::string path = ::testing::TempDir() + "/mesh.vtu";
+  const std::string path = (testing::MakeTempDir() / "mesh.vtu").string();
   ASSERT_TRUE(WriteVtu(mesh, path).ok());
   const std::string xml = ReadText(path);
   const size_t V = mesh.vertices.size(), T = mesh.tets.size();

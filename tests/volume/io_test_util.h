@@ -10,16 +10,20 @@
 #include <utility>
 #include <vector>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "server/volume/volume.h"
 
 namespace vpm::testing {
 
-// A fresh empty folder under ::testing::TempDir(), unique to the current test.
+// A fresh empty folder under ::testing::TempDir(), unique to the current test
+// and process (ctest -j runs tests, and other builds' tests, side by side).
 inline std::filesystem::path MakeTempDir() {
   const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) / "vpm_io" /
+  std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) /
+                              ("vpm_io_" + std::to_string(::getpid())) /
                               (std::string(info->test_suite_name()) + "." + info->name());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
