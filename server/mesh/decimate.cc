@@ -5,8 +5,10 @@
 #include <limits>
 #include <array>
 #include <memory>
+#include <optional>
 #include <thread>
 
+#include "server/common/huge_page_array.h"
 #include "server/mesh/indexed_min_heap.h"
 #include "server/mesh/monotone_min_queue.h"
 #include "server/mesh/point_grid.h"
@@ -56,13 +58,14 @@ Status Validate(const DecimationInput& in, const DecimationParams& p) {
 
 // Evaluates Ctotal from one vertex's terms.
 struct CostModel {
-  const DecimationInput& in;
+  const double* ci;  // #N
+  const double* cg;  // #N
   const DecimationParams& p;
   double d0;
   double operator()(int64_t v, double dens) const {
     const double cd = d0 > 0.0 ? dens / d0 : 0.0;
     const double s = p.density_mode == DensityMode::kSpread ? 1.0 - cd : cd;
-    return in.ci[v] * (p.wg * in.cg[v] + p.wd * s);
+    return ci[v] * (p.wg * cg[v] + p.wd * s);
   }
 };
 
@@ -70,8 +73,9 @@ struct CostModel {
 // a uniform grid of cell size R, so that each removal visits only its dozens
 // of neighbours.
 struct NeighbourLists {
-  std::vector<int64_t> start;                // #N+1
-  std::unique_ptr<int32_t[]> ids;            // start[N] neighbour ids, ascending per vertex
+  explicit NeighbourLists(int64_t n) : start(n + 1) {}
+  HugePageArray<int64_t> start;                 // #N+1
+  std::optional<HugePageArray<int32_t>> ids;    // start[N] neighbour ids, ascending per vertex
 };
 
 // The candidates around one grid bucket, sorted by id, as flat arrays (mm).
@@ -121,14 +125,13 @@ struct Candidates {
 // for all of its points; two passes (count, then fill the exact CSR) on two
 // threads over halves of the buckets.
 NeighbourLists FindNeighbours(const std::vector<glm::dvec3>& positions, double r,
-                              std::vector<double>& dens) {
+                              double* dens) {
   const int64_t n = static_cast<int64_t>(positions.size());
   const PointGrid grid(positions, r);
   const int64_t buckets = grid.bucket_count();
   int64_t split = 0;  // first bucket of the second thread: about n/2 points each
   while (split < buckets && grid.slot_begin(split) < n / 2) ++split;
-  NeighbourLists lists;
-  lists.start.assign(n + 1, 0);
+  NeighbourLists lists(n);
   auto pass = [&](int64_t first, int64_t last, bool fill) {
     Candidates c;
     for (int64_t b = first; b < last; ++b) {
@@ -150,7 +153,7 @@ NeighbourLists FindNeighbours(const std::vector<glm::dvec3>& positions, double r
           if (c.id[j] == v || !(c.d[j] < r)) continue;
           const double inv = 1.0 / c.d[j];
           sum += inv;
-          lists.ids[k] = static_cast<int32_t>(c.id[j]);
+          (*lists.ids)[k] = static_cast<int32_t>(c.id[j]);
           ++k;
         }
         dens[v] = sum;
@@ -165,15 +168,16 @@ NeighbourLists FindNeighbours(const std::vector<glm::dvec3>& positions, double r
   both(false);
   for (int64_t v = 0; v < n; ++v) lists.start[v + 1] += lists.start[v];
   // Left uninitialized: the second pass writes every entry.
-  lists.ids.reset(new int32_t[lists.start[n]]);
+  lists.ids.emplace(lists.start[n], HugePageArray<int32_t>::Init::kNone);
   both(true);
   return lists;
 }
 
-DecimationResult Finish(const std::vector<char>& alive, const std::vector<double>& dens,
-                        const CostModel& cost, std::vector<int64_t> removal_order) {
+// alive, dens: #N.
+DecimationResult Finish(const char* alive, const double* dens, int64_t n, const CostModel& cost,
+                        std::vector<int64_t> removal_order) {
   DecimationResult r;
-  for (int64_t v = 0; v < static_cast<int64_t>(alive.size()); ++v) {
+  for (int64_t v = 0; v < n; ++v) {
     if (!alive[v]) continue;
     r.kept.push_back(v);
     r.kept_cost.push_back(cost(v, dens[v]));
@@ -188,14 +192,21 @@ DecimationResult Finish(const std::vector<char>& alive, const std::vector<double
 Result<DecimationResult> DecimateFast(const DecimationInput& in, const DecimationParams& p) {
   RETURN_IF_ERROR(Validate(in, p));
   const int64_t n = static_cast<int64_t>(in.positions.size());
-  std::vector<double> dens(n, 0.0);
-  const NeighbourLists neighbours = FindNeighbours(in.positions, p.radius_mm, dens);
+  // What the removal loop reads at scattered addresses, in huge pages.
+  HugePageArray<double> dens(n), ci(n, HugePageArray<double>::Init::kNone),
+      cg(n, HugePageArray<double>::Init::kNone);
+  HugePageArray<glm::dvec3> positions(n, HugePageArray<glm::dvec3>::Init::kNone);
+  std::copy(in.ci.begin(), in.ci.end(), ci.begin());
+  std::copy(in.cg.begin(), in.cg.end(), cg.begin());
+  std::copy(in.positions.begin(), in.positions.end(), positions.begin());
+  const NeighbourLists neighbours = FindNeighbours(in.positions, p.radius_mm, dens.data());
   const double d0 = n > 0 ? *std::max_element(dens.begin(), dens.end()) : 0.0;
-  const CostModel cost{in, p, d0};
+  const CostModel cost{ci.data(), cg.data(), p, d0};
   const int64_t keep = p.target - kAnchorCount;
   std::vector<int64_t> order;
   order.reserve(std::max<int64_t>(0, n - keep));
-  std::vector<char> alive(n, 1);
+  HugePageArray<char> alive(n);
+  std::fill(alive.begin(), alive.end(), char{1});
   // Removes v: lowers its neighbours' densities, the removed ones' too (never
   // read again, which spares a liveness test per neighbour). Each 1/d has the
   // bits the initial sum added (PointDistance is symmetric), so a density is
@@ -204,10 +215,11 @@ Result<DecimationResult> DecimateFast(const DecimationInput& in, const Decimatio
   auto remove = [&](int64_t v, auto&& on_neighbour) {
     alive[v] = 0;
     order.push_back(v);
-    const glm::dvec3 pv = in.positions[v];
+    const glm::dvec3 pv = positions[v];
+    const int32_t* ids = neighbours.ids->data();
     for (int64_t k = neighbours.start[v]; k < neighbours.start[v + 1]; ++k) {
-      const int32_t id = neighbours.ids[k];
-      dens[id] -= 1.0 / PointDistance(in.positions[id], pv);
+      const int32_t id = ids[k];
+      dens[id] -= 1.0 / PointDistance(positions[id], pv);
       on_neighbour(id);
     }
   };
@@ -243,7 +255,7 @@ Result<DecimationResult> DecimateFast(const DecimationInput& in, const Decimatio
       });
     }
   }
-  return Finish(alive, dens, cost, std::move(order));
+  return Finish(alive.data(), dens.data(), n, cost, std::move(order));
 }
 
 Result<DecimationResult> DecimateNaive(const DecimationInput& in, const DecimationParams& p) {
@@ -258,7 +270,7 @@ Result<DecimationResult> DecimateNaive(const DecimationInput& in, const Decimati
     }
   }
   const double d0 = n > 0 ? *std::max_element(dens.begin(), dens.end()) : 0.0;
-  const CostModel cost{in, p, d0};
+  const CostModel cost{in.ci.data(), in.cg.data(), p, d0};
   std::vector<double> total(n);
   for (int64_t v = 0; v < n; ++v) total[v] = cost(v, dens[v]);
   std::vector<char> alive(n, 1);
@@ -279,7 +291,7 @@ Result<DecimationResult> DecimateNaive(const DecimationInput& in, const Decimati
       }
     }
   }
-  return Finish(alive, dens, cost, std::move(order));
+  return Finish(alive.data(), dens.data(), n, cost, std::move(order));
 }
 
 }  // namespace vpm
