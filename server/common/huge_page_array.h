@@ -7,6 +7,7 @@
 // systems, the array is ordinary memory.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdlib>
 #include <cstring>
