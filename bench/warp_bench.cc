@@ -7,6 +7,7 @@
 // (full-resolution) warp.
 #include <algorithm>
 #include <cmath>
+
 #include <cstdio>
 #include <optional>
 
@@ -202,6 +203,24 @@ double MaxAbsDiff(std::span<const float> a, std::span<const float> b) {
   return m;
 }
 
+// Voxels differing by more than 1 HU, and how many of them lie on a face of
+// the volume (where the box-face vertices slide).
+std::pair<int64_t, int64_t> CountOver1Hu(const Volume& a, const Volume& b) {
+  const auto& d = a.dims();
+  int64_t over = 0, on_face = 0;
+  for (int64_t k = 0; k < d[2]; ++k)
+    for (int64_t j = 0; j < d[1]; ++j)
+      for (int64_t i = 0; i < d[0]; ++i) {
+        const int64_t n = a.LinearIndex(i, j, k);
+        if (std::abs(a.values()[n] - b.values()[n]) <= 1.0f) continue;
+        ++over;
+        if (i == 0 || j == 0 || k == 0 || i == d[0] - 1 || j == d[1] - 1 || k == d[2] - 1) {
+          ++on_face;
+        }
+      }
+  return {over, on_face};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -263,7 +282,12 @@ int main(int argc, char** argv) {
   std::printf("GPU vs CPU max |J| difference: coarse %.4f HU, exact %.4f HU\n",
               MaxAbsDiff(warped_coarse.values(), cpu_warp->values()),
               MaxAbsDiff(warped_exact.values(), cpu_exact->values()));
-
+  for (const auto& [name, gpu, cpu] :
+       {std::tuple{"coarse", &warped_coarse, &*cpu_warp}, {"exact", &warped_exact, &*cpu_exact}}) {
+    const auto [over, on_face] = CountOver1Hu(*gpu, *cpu);
+    std::printf("GPU vs CPU, %s: %lld voxels differ by more than 1 HU, %lld of them on the "
+                "volume's faces\n", name, (long long)over, (long long)on_face);
+  }
   std::printf("\ncoarse map vs exact warp (body: exact J > -500 HU; moved: |d| > 0.01 mm)\n");
   std::printf("%-14s %10s %11s %8s %8s %13s %11s\n", "map", "RMSE body", "RMSE moved", "max HU",
               "max mm", "P99 mm moved", "RMS mm moved");
