@@ -186,14 +186,39 @@ BackwardMap::Plan BackwardMap::PlanWork(std::span<const glm::dvec3> deformed_mm,
   if (full) {
     plan.changed = {glm::ivec3(0), glm::ivec3(dims_[0] - 1, dims_[1] - 1, dims_[2] - 1)};
   }
+  plan.listed_tets = static_cast<int64_t>(listed.size());
+  uint32_t cleared_entries = 0;
   for (size_t n = 0; n < listed.size(); ++n) {
     const int32_t t = listed[n];
     const GridBox old_box = n < plan.cleared ? state_.boxes[t] : GridBox{};
     const GridBox& new_box = plan.boxes[t];
     plan.changed = Union(plan.changed, Union(old_box, new_box));
-    plan.work.push_back(
-        {WithW(old_box.lo, t), WithW(old_box.hi, 0), WithW(new_box.lo, 0), WithW(new_box.hi, 0)});
+    // One work item per slab of z-slices small enough that no lane of the
+    // claim and clear passes loops more than kLaneIterations times:
+    // llvmpipe ends every loop of an invocation silently once their
+    // iterations add up to 65,535 (LP_MAX_TGSI_LOOP_ITERATIONS, Mesa 22.3),
+    // which left large tets on fine grids half claimed (docs/WARP.md).
+    const GridBox both = Union(old_box, new_box);
+    if (both.empty()) continue;
+    const glm::ivec3 size = both.hi - both.lo + 1;
+    constexpr int64_t kLanes = 16;           // backward_map.comp's local size
+    constexpr int64_t kLaneIterations = 30000;  // of the 65,535
+    const int64_t per_slice = (int64_t(size.y) + kLanes - 1) / kLanes * (int64_t(size.x) + 8);
+    const int slab = static_cast<int>(std::max<int64_t>(1, kLaneIterations / per_slice));
+    for (int z0 = both.lo.z; z0 <= both.hi.z; z0 += slab) {
+      const int z1 = std::min(z0 + slab - 1, both.hi.z);
+      auto cut = [&](const GridBox& b) {
+        GridBox c = b;
+        c.lo.z = std::max(b.lo.z, z0);
+        c.hi.z = std::min(b.hi.z, z1);
+        return c;
+      };
+      const GridBox o = cut(old_box), w = cut(new_box);
+      plan.work.push_back({WithW(o.lo, t), WithW(o.hi, 0), WithW(w.lo, 0), WithW(w.hi, 0)});
+      if (n < plan.cleared) ++cleared_entries;
+    }
   }
+  plan.cleared = cleared_entries;
   return plan;
 }
 
@@ -236,7 +261,7 @@ Result<BackwardMap::UpdateStats> BackwardMap::Apply(std::span<const glm::dvec3> 
     std::iota(moved.begin(), moved.end(), 0);
   }
   Plan plan = PlanWork(deformed_mm, tets, stats.full_rebuild, moved);
-  stats.processed_tets = static_cast<int64_t>(plan.work.size());
+  stats.processed_tets = plan.listed_tets;
 
   state_.valid = false;  // until the GPU holds what the host state says
   if (stats.full_rebuild || !plan.work.empty()) {

@@ -156,8 +156,9 @@ class BackwardMap {
   // tets first, `cleared` of them), and the grid box whose values change.
   struct Plan {
     std::vector<GridBox> boxes;
-    std::vector<gpu::BackwardMapTetWork> work;
-    uint32_t cleared = 0;
+    std::vector<gpu::BackwardMapTetWork> work;  // per tet and slab of z-slices
+    uint32_t cleared = 0;                       // work items of moved tets (first)
+    int64_t listed_tets = 0;
     GridBox changed;
   };
 
