@@ -86,6 +86,29 @@ vec3 extent_mm() { return vec3(p.dims.xyz - 1) * p.spacing_mm.xyz; }
   T c0 = c00 + (c10 - c00) * f.y;             \
   T c1 = c01 + (c11 - c01) * f.y
 
+// The 8 corners c000..c111 of the cell at linear index `base` of a texel
+// buffer with x stride 1, y stride sy, z stride sz; SW picks the channels.
+#define VPM_FETCH_CELL(T, tex, SW)                       \
+  T c000 = texelFetch(tex, base).SW;                     \
+  T c100 = texelFetch(tex, base + 1).SW;                 \
+  T c010 = texelFetch(tex, base + sy).SW;                \
+  T c110 = texelFetch(tex, base + sy + 1).SW;            \
+  T c001 = texelFetch(tex, base + sz).SW;                \
+  T c101 = texelFetch(tex, base + sz + 1).SW;            \
+  T c011 = texelFetch(tex, base + sz + sy).SW;           \
+  T c111 = texelFetch(tex, base + sz + sy + 1).SW
+
+// The same corners through a per-point fetch function (fetch(ivec3 index)).
+#define VPM_FETCH_CELL_AT(T, fetch, i0)                  \
+  T c000 = fetch(i0);                                    \
+  T c100 = fetch(i0 + ivec3(1, 0, 0));                   \
+  T c010 = fetch(i0 + ivec3(0, 1, 0));                   \
+  T c110 = fetch(i0 + ivec3(1, 1, 0));                   \
+  T c001 = fetch(i0 + ivec3(0, 0, 1));                   \
+  T c101 = fetch(i0 + ivec3(1, 0, 1));                   \
+  T c011 = fetch(i0 + ivec3(0, 1, 1));                   \
+  T c111 = fetch(i0 + ivec3(1, 1, 1))
+
 #define VPM_TRILINEAR_WITH_DERIVATIVES(T, f, value, d_fx, d_fy, d_fz)          \
   {                                                                            \
     VPM_TRILINEAR_XY(T, f);                                                    \
@@ -110,14 +133,7 @@ float source_at(vec3 u) {
   vec3 f = u - vec3(i0);
   int sy = n.x, sz = n.x * n.y;
   int base = i0.x + sy * i0.y + sz * i0.z;
-  float c000 = texelFetch(u_volume, base).r;
-  float c100 = texelFetch(u_volume, base + 1).r;
-  float c010 = texelFetch(u_volume, base + sy).r;
-  float c110 = texelFetch(u_volume, base + sy + 1).r;
-  float c001 = texelFetch(u_volume, base + sz).r;
-  float c101 = texelFetch(u_volume, base + sz + 1).r;
-  float c011 = texelFetch(u_volume, base + sz + sy).r;
-  float c111 = texelFetch(u_volume, base + sz + sy + 1).r;
+  VPM_FETCH_CELL(float, u_volume, r);
   VPM_TRILINEAR_XY(float, f);
   return c0 + (c1 - c0) * f.z;
 #endif
@@ -135,14 +151,7 @@ vec3 rest_from_texels(vec3 x) {
   vec3 f = gc - vec3(i0);
   int sy = mi.x, sz = mi.x * mi.y;
   int base = i0.x + sy * i0.y + sz * i0.z;
-  vec3 c000 = texelFetch(u_map, base).xyz;
-  vec3 c100 = texelFetch(u_map, base + 1).xyz;
-  vec3 c010 = texelFetch(u_map, base + sy).xyz;
-  vec3 c110 = texelFetch(u_map, base + sy + 1).xyz;
-  vec3 c001 = texelFetch(u_map, base + sz).xyz;
-  vec3 c101 = texelFetch(u_map, base + sz + 1).xyz;
-  vec3 c011 = texelFetch(u_map, base + sz + sy).xyz;
-  vec3 c111 = texelFetch(u_map, base + sz + sy + 1).xyz;
+  VPM_FETCH_CELL(vec3, u_map, xyz);
   VPM_TRILINEAR_XY(vec3, f);
   return x + (c0 + (c1 - c0) * f.z);
 }
@@ -187,14 +196,7 @@ float source_and_gradient(vec3 u, out vec3 grad_u) {
   ivec3 n = p.dims.xyz;
   ivec3 i0 = min(ivec3(floor(u)), n - 2);
   vec3 f = u - vec3(i0);
-  float c000 = volume_texel(i0);
-  float c100 = volume_texel(i0 + ivec3(1, 0, 0));
-  float c010 = volume_texel(i0 + ivec3(0, 1, 0));
-  float c110 = volume_texel(i0 + ivec3(1, 1, 0));
-  float c001 = volume_texel(i0 + ivec3(0, 0, 1));
-  float c101 = volume_texel(i0 + ivec3(1, 0, 1));
-  float c011 = volume_texel(i0 + ivec3(0, 1, 1));
-  float c111 = volume_texel(i0 + ivec3(1, 1, 1));
+  VPM_FETCH_CELL_AT(float, volume_texel, i0);
   float value, d_fx, d_fy, d_fz;
   VPM_TRILINEAR_WITH_DERIVATIVES(float, f, value, d_fx, d_fy, d_fz);
   grad_u = vec3(d_fx, d_fy, d_fz);
@@ -214,14 +216,7 @@ float deformed_value_and_gradient(vec3 x, out vec3 grad) {
   ivec3 mi = ivec3(m);
   ivec3 i0 = min(ivec3(floor(gc)), mi - 2);
   vec3 f = gc - vec3(i0);
-  vec3 c000 = map_texel(i0);
-  vec3 c100 = map_texel(i0 + ivec3(1, 0, 0));
-  vec3 c010 = map_texel(i0 + ivec3(0, 1, 0));
-  vec3 c110 = map_texel(i0 + ivec3(1, 1, 0));
-  vec3 c001 = map_texel(i0 + ivec3(0, 0, 1));
-  vec3 c101 = map_texel(i0 + ivec3(1, 0, 1));
-  vec3 c011 = map_texel(i0 + ivec3(0, 1, 1));
-  vec3 c111 = map_texel(i0 + ivec3(1, 1, 1));
+  VPM_FETCH_CELL_AT(vec3, map_texel, i0);
   vec3 offset, d_fx, d_fy, d_fz;
   VPM_TRILINEAR_WITH_DERIVATIVES(vec3, f, offset, d_fx, d_fy, d_fz);
   rest = x + offset;
