@@ -256,6 +256,18 @@ int next_sample(float t_exit, float t_near, float step, int k) {
   return max(k + 1, int(floor((t_exit - t_near) / step)) + 1);
 }
 
+// Jumps over bricks whose occupancy is <= threshold, in a loop of its own
+// that takes no sample: moves sample k (at t along the ray, point x) to the
+// first sample in a brick above the threshold, or past t_far.
+void skip_empty_bricks(inout int k, inout float t, inout vec3 x, float threshold, vec3 eye,
+                       vec3 dir, vec3 inv_dir, float t_near, float t_far, float step) {
+  while (t <= t_far && occupancy[brick_index(x)] <= threshold) {
+    k = next_sample(brick_exit(x, eye, inv_dir), t_near, step, k);
+    t = t_near + float(k) * step;
+    x = eye + t * dir;
+  }
+}
+
 vec4 lut_at(float v) {
   float n = p.lut.z;
   float f = clamp((v - p.lut.x) * p.lut.y, 0.0, n - 1.0);
@@ -321,11 +333,10 @@ void main() {
   for (;;) {
     float t = t_near + float(k) * step;
     vec3 x = eye + t * dir;
-    // Jump over empty bricks in a loop of its own, which costs no sample.
-    while (skipping && t <= t_far && occupancy[brick_index(x)] <= max(ray_max, p.window.x)) {
-      k = next_sample(brick_exit(x, eye, inv_dir), t_near, step, k);
-      t = t_near + float(k) * step;
-      x = eye + t * dir;
+    // Bricks that cannot raise the maximum (or show above the window).
+    if (skipping) {
+      skip_empty_bricks(k, t, x, max(ray_max, p.window.x), eye, dir, inv_dir, t_near, t_far,
+                        step);
     }
     if (t > t_far) break;
     ++taken;
@@ -341,11 +352,7 @@ void main() {
     for (;;) {
       float t = t_near + float(k) * step;
       vec3 x = eye + t * dir;
-      while (skipping && t <= t_far && occupancy[brick_index(x)] <= 0.0) {
-        k = next_sample(brick_exit(x, eye, inv_dir), t_near, step, k);
-        t = t_near + float(k) * step;
-        x = eye + t * dir;
-      }
+      if (skipping) skip_empty_bricks(k, t, x, 0.0, eye, dir, inv_dir, t_near, t_far, step);
       if (t > t_far) break;
       ++taken;
       vec3 grad;
@@ -372,12 +379,7 @@ void main() {
     float t = t_near + float(k) * step;
     vec3 x = eye + t * dir;
     if (phase == 0) {
-      // Jump over empty bricks in a loop of its own, which costs no sample.
-      while (skipping && t <= t_far && occupancy[brick_index(x)] <= 0.0) {
-        k = next_sample(brick_exit(x, eye, inv_dir), t_near, step, k);
-        t = t_near + float(k) * step;
-        x = eye + t * dir;
-      }
+      if (skipping) skip_empty_bricks(k, t, x, 0.0, eye, dir, inv_dir, t_near, t_far, step);
       if (t > t_far) break;
       ++taken;
     }
