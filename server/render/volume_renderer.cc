@@ -70,39 +70,31 @@ Status VolumeRenderer::Init() {
                                                 DT::eStorageBuffer, DT::eStorageBuffer},
                                    .push_constant_bytes = sizeof(gpu::BrickOccupancyPush),
                                    .local_size = {64, 1, 1}}));
+  // The ray casters: DVR or MIP, with or without a backward map, and DVR
+  // shaded with the cell gradient (specialization constant kCellGradient).
+  auto raycast_spec = [&](bool mip, bool map, bool cell_gradient) {
+    const DT volume_read = sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer;
+    gpu::KernelSpec spec{
+        .name = StrCat("raycast_", mip ? "mip" : "dvr", map ? "_map" : "", sampled ? "_sampled" : "",
+                       cell_gradient ? " (cell gradient)" : ""),
+        .spirv = RaycastSpirv(sampled, mip, map),
+        .bindings = {volume_read, volume_read, DT::eStorageBuffer, DT::eUniformBuffer,
+                     DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
+        .push_constant_bytes = 0,
+        .local_size = {8, 8, 1}};
+    if (cell_gradient) spec.specialization = {1u};
+    return spec;
+  };
   for (int mip = 0; mip < 2; ++mip) {
     for (int map = 0; map < 2; ++map) {
-      ASSIGN_OR_RETURN(
-          auto raycast,
-          gpu::ComputeKernel::Create(
-              *context_,
-              {.name = StrCat("raycast_", mip ? "mip" : "dvr", map ? "_map" : "",
-                              sampled ? "_sampled" : ""),
-               .spirv = RaycastSpirv(sampled, mip, map),
-               .bindings = {sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
-                            sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
-                            DT::eStorageBuffer, DT::eUniformBuffer,
-                            DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
-               .push_constant_bytes = 0,
-               .local_size = {8, 8, 1}}));
+      ASSIGN_OR_RETURN(auto raycast,
+                       gpu::ComputeKernel::Create(*context_, raycast_spec(mip, map, false)));
       raycast_kernels_[mip][map].emplace(std::move(raycast));
     }
   }
   for (int map = 0; map < 2; ++map) {
-    ASSIGN_OR_RETURN(
-        auto raycast,
-        gpu::ComputeKernel::Create(
-            *context_,
-            {.name = StrCat("raycast_dvr", map ? "_map" : "", sampled ? "_sampled" : "",
-                            " (cell gradient)"),
-             .spirv = RaycastSpirv(sampled, false, map),
-             .bindings = {sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
-                          sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer,
-                          DT::eStorageBuffer, DT::eUniformBuffer,
-                          DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
-             .push_constant_bytes = 0,
-             .local_size = {8, 8, 1},
-             .specialization = {1u}}));  // kCellGradient
+    ASSIGN_OR_RETURN(auto raycast,
+                     gpu::ComputeKernel::Create(*context_, raycast_spec(false, map, true)));
     cell_gradient_kernels_[map].emplace(std::move(raycast));
   }
   ASSIGN_OR_RETURN(auto upscale,
