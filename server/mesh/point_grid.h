@@ -1,6 +1,7 @@
 // A uniform grid of buckets over a fixed point set, for "all points within R
-// of p" queries (ALGORITHM.md step 2 asks for cell size R). Buckets hold point
-// ids in increasing order.
+// of the points of a bucket" queries (ALGORITHM.md step 2 asks for cell size
+// R). Buckets hold point ids in increasing order, their positions stored in
+// bucket order so that a scan is contiguous in memory.
 #pragma once
 
 #include <algorithm>
@@ -37,22 +38,6 @@ class PointGrid {
         // Buckets x0..x1 of one row are contiguous in slot order.
         for (int64_t n = start_[row + x0]; n < start_[row + x1 + 1]; ++n) fn(n);
       }
-  }
-
-  // Calls fn(id, position) for every point in the buckets that a ball of
-  // radius <= cell_mm around p can touch (a superset: callers test the
-  // distance). Positions are stored in bucket order, so the scan is
-  // contiguous in memory.
-  template <typename Fn>
-  void ForEachCandidate(const glm::dvec3& p, Fn&& fn) const {
-    const auto c = CellOf(p);
-    for (int64_t z = std::max<int64_t>(c[2] - 1, 0); z <= std::min(c[2] + 1, dims_[2] - 1); ++z)
-      for (int64_t y = std::max<int64_t>(c[1] - 1, 0); y <= std::min(c[1] + 1, dims_[1] - 1); ++y)
-        for (int64_t x = std::max<int64_t>(c[0] - 1, 0); x <= std::min(c[0] + 1, dims_[0] - 1);
-             ++x) {
-          const int64_t cell = x + dims_[0] * (y + dims_[1] * z);
-          for (int64_t n = start_[cell]; n < start_[cell + 1]; ++n) fn(items_[n], positions_[n]);
-        }
   }
 
  private:
