@@ -65,14 +65,13 @@ Result<SceneStepTimings> DeformableScene::UpdateMap(SceneStepTimings timings) {
   timings.map_passes = stats.passes;
   timings.moved_tets = stats.moved_tets;
   timings.processed_tets = stats.processed_tets;
-  timings.inverted_tets = fem_->CountInvertedTets();
   return timings;
 }
 
 Result<SceneStepTimings> DeformableScene::AfterStep(SceneStepTimings timings) {
+  timings.inverted_tets = fem_->CountInvertedTets();
   if (!defer_map_update_) return UpdateMap(timings);
   map_stale_ = true;
-  timings.inverted_tets = fem_->CountInvertedTets();
   return timings;
 }
 

@@ -34,7 +34,7 @@ struct SceneStepTimings {
   int64_t moved_tets = 0;
   int64_t processed_tets = 0;  // moved plus those whose boxes meet them
   double max_displacement_mm = 0.0;
-  int64_t inverted_tets = 0;
+  int64_t inverted_tets = 0;  // after the FEM step (Drag, Pull, Release), not set by SyncMap
   bool converged = true;
 };
 
