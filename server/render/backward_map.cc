@@ -201,9 +201,11 @@ BackwardMap::Plan BackwardMap::PlanWork(std::span<const glm::dvec3> deformed_mm,
     const GridBox both = Union(old_box, new_box);
     if (both.empty()) continue;
     const glm::ivec3 size = both.hi - both.lo + 1;
-    constexpr int64_t kLanes = 16;           // backward_map.comp's local size
     constexpr int64_t kLaneIterations = 30000;  // of the 65,535
-    const int64_t per_slice = (int64_t(size.y) + kLanes - 1) / kLanes * (int64_t(size.x) + 8);
+    // A slice's rows shared by the kLocalSize lanes, each row its points plus
+    // row_range's few loop steps.
+    const int64_t per_slice =
+        (int64_t(size.y) + kLocalSize - 1) / kLocalSize * (int64_t(size.x) + 8);
     const int slab = static_cast<int>(std::max<int64_t>(1, kLaneIterations / per_slice));
     for (int z0 = both.lo.z; z0 <= both.hi.z; z0 += slab) {
       const int z1 = std::min(z0 + slab - 1, both.hi.z);
