@@ -5,7 +5,9 @@
 // volume reads; then JPEG (quality 85) and PNG encoding of the still frame.
 // Usage: render_bench [SOURCE] [PNG_DIR] [FILTER] [SIZE]
 //   PNG_DIR: where to write the frames ("" for nowhere); FILTER: only the
-//   rows whose name contains it; SIZE: frame side (default 512).
+//   rows whose name contains it, or one of several separated by '|' (a part
+//   ending in '$' must end the name: "still MIP$|still DVR ct-bone$");
+//   SIZE: frame side (default 512).
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -107,6 +109,44 @@ void WriteViews(const std::string& dir, const Volume& volume, const GpuVolume& g
   WritePng(dir, "overlay_ct_vessels", bench::Check(renderer.Render(r), "render"));
 }
 
+// Whether a row or section name passes FILTER (see the usage above).
+bool Matches(const std::string& name, const std::string& filter) {
+  size_t begin = 0;
+  for (;;) {
+    const size_t end = std::min(filter.find('|', begin), filter.size());
+    std::string part = filter.substr(begin, end - begin);
+    const bool anchored = !part.empty() && part.back() == '$';
+    if (anchored) part.pop_back();
+    if (anchored ? name.size() >= part.size() &&
+                       name.compare(name.size() - part.size(), part.size(), part) == 0
+                 : name.find(part) != std::string::npos) {
+      return true;
+    }
+    if (end == filter.size()) return false;
+    begin = end + 1;
+  }
+}
+
+// Channel-by-channel difference of two RGBA8 frames over RGB.
+struct Difference {
+  double mean = 0.0, max = 0.0, psnr_db = 99.0;
+};
+
+Difference Compare(const Frame& a, const Frame& b) {
+  double sum = 0.0, sq = 0.0, max = 0.0;
+  size_t count = 0;
+  for (size_t i = 0; i < a.rgba.size(); ++i) {
+    if (i % 4 == 3) continue;
+    const double d = std::abs(double(a.rgba[i]) - double(b.rgba[i]));
+    sum += d;
+    sq += d * d;
+    max = std::max(max, d);
+    ++count;
+  }
+  return {sum / double(count), max,
+          sq > 0.0 ? 10.0 * std::log10(255.0 * 255.0 * double(count) / sq) : 99.0};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -193,7 +233,7 @@ int main(int argc, char** argv) {
               "CPU/GPU", "err mean", "max/255");
   std::optional<Frame> still_frame;
   for (const Case& c : cases) {
-    if (c.name.find(filter) == std::string::npos) continue;
+    if (!Matches(c.name, filter)) continue;
     RenderRequest r;
     r.camera = Camera::ForVolume(volume.geometry());
     r.mode = c.mode;
@@ -252,7 +292,7 @@ int main(int argc, char** argv) {
   // What the cell gradient costs in picture against the taps (central
   // differences of J), GPU both, same request (RENDERING.md).
   for (const char* quality : {"interactive", "still"}) {
-    if ((std::string(quality) + " cell gradient").find(filter) == std::string::npos) continue;
+    if (!Matches(std::string(quality) + " cell gradient", filter)) continue;
     for (const char* preset : {"ct-soft-tissue", "ct-vessels", "ct-bone"}) {
       RenderRequest r;
       r.camera = Camera::ForVolume(volume.geometry());
@@ -267,21 +307,54 @@ int main(int argc, char** argv) {
       const Frame taps = bench::Check(texel_renderer->Render(r), "render");
       WritePng(png_dir, std::string(quality) + "_cell_gradient_" + preset, cell);
       WritePng(png_dir, std::string(quality) + "_tap_gradient_" + preset, taps);
-      double sum = 0.0, sq = 0.0, max = 0.0;
-      size_t count = 0;
-      for (size_t i = 0; i < cell.rgba.size(); ++i) {
-        if (i % 4 == 3) continue;
-        const double d = std::abs(double(cell.rgba[i]) - double(taps.rgba[i]));
-        sum += d;
-        sq += d * d;
-        max = std::max(max, d);
-        ++count;
-      }
-      const double psnr = sq > 0.0 ? 10.0 * std::log10(255.0 * 255.0 * count / sq) : 99.0;
+      const Difference d = Compare(cell, taps);
       std::printf("%s %s, cell vs tap gradient: mean %.3f/255, max %.0f/255, "
                   "PSNR %.1f dB; cast %.1f vs %.1f ms\n",
-                  quality, preset, sum / count, max, psnr, cell.timings.raycast_ms,
+                  quality, preset, d.mean, d.max, d.psnr_db, cell.timings.raycast_ms,
                   taps.timings.raycast_ms);
+    }
+  }
+  // Still frames at larger steps against the default still step, GPU both,
+  // same request: picture difference, samples per pixel, cast time (min of
+  // `reps`, the two alternating).
+  if (Matches("still step", filter)) {
+    const double smallest = std::min({volume.geometry().spacing_mm[0],
+                                      volume.geometry().spacing_mm[1],
+                                      volume.geometry().spacing_mm[2]});
+    for (const char* preset : {"ct-soft-tissue", "ct-vessels", "ct-bone", "mip"}) {
+      for (double factor : {0.75, 1.0}) {
+        RenderRequest r;
+        r.camera = Camera::ForVolume(volume.geometry());
+        r.mode = std::string(preset) == "mip" ? RenderMode::kMip : RenderMode::kDvr;
+        r.preset = bench::Check(
+            MakeRenderPreset(r.mode == RenderMode::kMip ? "ct-vessels" : preset, volume),
+            "preset");
+        r.width = r.height = size;
+        r.volume = &gpu_volume;
+        r.backward_map = &map;
+        r.settings.count_samples = true;
+        RenderRequest larger = r;
+        larger.settings.step_mm = factor * smallest;
+        Frame base, other;
+        double base_ms = 1e300, other_ms = 1e300;
+        for (int rep = 0; rep < reps; ++rep) {
+          base = bench::Check(texel_renderer->Render(r), "render");
+          other = bench::Check(texel_renderer->Render(larger), "render");
+          base_ms = std::min(base_ms, base.timings.raycast_ms);
+          other_ms = std::min(other_ms, other.timings.raycast_ms);
+        }
+        char tag[64];
+        std::snprintf(tag, sizeof(tag), "still_step_%.2f_%s", factor, preset);
+        WritePng(png_dir, tag, other);
+        WritePng(png_dir, std::string("still_step_default_") + preset, base);
+        const Difference d = Compare(other, base);
+        const double pixels = double(r.width) * r.height;
+        std::printf("still step %.2f vs %.2f x spacing, %s: mean %.3f/255, max %.0f/255, "
+                    "PSNR %.1f dB; samples/pixel %.1f vs %.1f; cast %.1f vs %.1f ms\n",
+                    factor, base.step_mm / smallest, preset, d.mean, d.max, d.psnr_db,
+                    double(other.samples) / pixels, double(base.samples) / pixels, other_ms,
+                    base_ms);
+      }
     }
   }
   if (!png_dir.empty()) WriteViews(png_dir, volume, gpu_volume, *texel_renderer);
