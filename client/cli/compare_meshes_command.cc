@@ -28,26 +28,38 @@ struct CompareArgs {
 };
 
 void PrintDeformation(const std::vector<DeformationMeasure>& rows, const StandardDrag& drag) {
-  std::printf("\ndeformation: grab '%s' (radius %.2f h), drag (%.1f, %.1f, %.1f) mm; error vs the "
-              "dense-lattice reference over body voxels (every 4th per axis)\n",
-              drag.landmark.c_str(), drag.grab_radius_factor, drag.offset_mm.x, drag.offset_mm.y, drag.offset_mm.z);
+  std::printf(
+      "\ndeformation: grab '%s' (radius %.2f h), drag (%.1f, %.1f, %.1f) mm; error vs the "
+      "dense-lattice reference over body voxels (every 4th per axis)\n",
+      drag.landmark.c_str(), drag.grab_radius_factor, drag.offset_mm.x, drag.offset_mm.y,
+      drag.offset_mm.z);
   std::printf("%-10s %6s %8s %10s %10s %12s %11s %12s %9s  %s\n", "mesh", "verts", "handles",
               "RMS mm", "max mm", "bone max %", "inverted", "inv @1.5h", "FEM ms",
               "worst bone voxel (mm)");
   for (const auto& r : rows) {
-    std::printf("%-10s %6lld %8lld %10.3f %10.3f %12.2f %11lld %12lld %9.1f  (%.0f, %.0f, %.0f)%s\n",
-                r.name.c_str(),
-                static_cast<long long>(r.vertices), static_cast<long long>(r.handles),
-                r.rms_error_mm, r.max_error_mm, 100.0 * r.bone_max_fraction,
-                static_cast<long long>(r.inverted_at_drag),
-                static_cast<long long>(r.inverted_at_1_5h), r.solve_ms, r.bone_worst_mm.x,
-                r.bone_worst_mm.y, r.bone_worst_mm.z, r.converged ? "" : " (not converged)");
+    std::printf(
+        "%-10s %6lld %8lld %10.3f %10.3f %12.2f %11lld %12lld %9.1f  (%.0f, %.0f, %.0f)%s\n",
+        r.name.c_str(), static_cast<long long>(r.vertices), static_cast<long long>(r.handles),
+        r.rms_error_mm, r.max_error_mm, 100.0 * r.bone_max_fraction,
+        static_cast<long long>(r.inverted_at_drag), static_cast<long long>(r.inverted_at_1_5h),
+        r.solve_ms, r.bone_worst_mm.x, r.bone_worst_mm.y, r.bone_worst_mm.z,
+        r.converged ? "" : " (not converged)");
+  }
+  for (const auto& r : rows) {
+    if (r.forced_at_drag || r.forced_at_1_5h) {
+      std::printf(
+          "%s: the prescribed drag (%s) flattens a tet by itself (handles and a fixed vertex "
+          "in one tet); the inverted tets are forced by the mesh, not the material\n",
+          r.name.c_str(),
+          r.forced_at_drag ? (r.forced_at_1_5h ? "the standard one and 1.5 h" : "the standard one")
+                           : "1.5 h");
+    }
   }
 }
 
 void PrintTable(const std::vector<MeshComparisonRow>& rows) {
-  std::printf("%-14s %6s %6s %12s %14s %12s %10s %10s\n", "mesh", "verts", "tets",
-              "RMSE all", "RMSE TF>0", "empty R mm", "min dih", "build ms");
+  std::printf("%-14s %6s %6s %12s %14s %12s %10s %10s\n", "mesh", "verts", "tets", "RMSE all",
+              "RMSE TF>0", "empty R mm", "min dih", "build ms");
   for (const auto& r : rows) {
     std::printf("%-14s %6lld %6lld %12.2f %14.2f %12.2f %10.2f %10.1f%s\n",
                 (r.name + (r.is_default ? "*" : "")).c_str(), static_cast<long long>(r.vertices),
@@ -55,8 +67,9 @@ void PrintTable(const std::vector<MeshComparisonRow>& rows) {
                 r.reconstruction.rmse_tf_positive, r.largest_empty_sphere.radius_mm,
                 r.quality.min_dihedral_deg, r.build_ms, "");
   }
-  std::printf("* default (cell footprint, spread). RMSE in volume units (HU); empty R: largest "
-              "empty sphere centred in the body (TF > 0); min dih: smallest dihedral angle, deg\n");
+  std::printf(
+      "* default (cell footprint, spread). RMSE in volume units (HU); empty R: largest "
+      "empty sphere centred in the body (TF > 0); min dih: smallest dihedral angle, deg\n");
 }
 
 Status WriteJson(const std::vector<MeshComparisonRow>& rows, const std::string& path) {
@@ -115,7 +128,8 @@ void AddCompareMeshesCommand(CLI::App& app, int* exit_code) {
                 "skip the deformation measures (FEM on each mesh and on the dense reference)");
   cmd->add_option("--drag-landmark", args->drag_landmark, "the standard drag's grab point")
       ->capture_default_str();
-  cmd->add_option("--drag", args->drag, "the standard drag, DX DY DZ mm")->expected(3)
+  cmd->add_option("--drag", args->drag, "the standard drag, DX DY DZ mm")
+      ->expected(3)
       ->capture_default_str();
   cmd->add_option("--grab-radius", args->grab_radius_factor,
                   "the standard drag's grab radius, in lattice steps h")

@@ -13,7 +13,7 @@ Eigen::Matrix<double, 12, 12> ElementTangent(const TetElement& element,
     Eigen::Matrix<double, 3, 4> unit = Eigen::Matrix<double, 3, 4>::Zero();
     unit(col % 3, col / 3) = 1.0;
     const Eigen::Matrix<double, 3, 4> f =
-        ApplyElementTangent(element, frames.rotations[t], twist, unit);
+        ApplyElementTangent(element, frames.rotations[t], twist, unit, frames.Barrier(t));
     for (int a = 0; a < 4; ++a) k.block<3, 1>(3 * a, col) = f.col(a);
   }
   return k;

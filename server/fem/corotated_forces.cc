@@ -76,7 +76,7 @@ void SumParts(std::vector<Eigen::VectorXd>& parts, Eigen::VectorXd& out) {
 
 void CorotatedForces(const std::vector<TetElement>& elements, const Eigen::VectorXd& u_mm,
                      FemMethod method, CorotatedFrames& frames, Eigen::VectorXd& forces_n,
-                     int threads) {
+                     int threads, bool inversion_barrier) {
   frames.rotations.resize(elements.size());
   if (method == FemMethod::kCorotationalConsistent) {
     frames.twist.resize(elements.size());
@@ -84,6 +84,11 @@ void CorotatedForces(const std::vector<TetElement>& elements, const Eigen::Vecto
   } else {
     frames.twist.clear();
     frames.twisted.clear();
+  }
+  if (inversion_barrier) {
+    frames.barrier.resize(elements.size());
+  } else {
+    frames.barrier.clear();
   }
   std::vector<Eigen::VectorXd> partial(std::max(1, threads));
   ParallelChunks(
@@ -105,7 +110,12 @@ void CorotatedForces(const std::vector<TetElement>& elements, const Eigen::Vecto
               frames.twisted[t] = 1;
             }
           }
-          ScatterAdd(element, r * StressNodalForces(element, LinearStress(element, h)), out);
+          Eigen::Matrix<double, 3, 4> f = r * StressNodalForces(element, LinearStress(element, h));
+          if (inversion_barrier) {
+            frames.barrier[t] = EvaluateBarrier(element, Eigen::Matrix3d::Identity() + g);
+            f += BarrierForces(element, frames.barrier[t]);
+          }
+          ScatterAdd(element, f, out);
         }
       });
   SumParts(partial, forces_n);
@@ -114,14 +124,17 @@ void CorotatedForces(const std::vector<TetElement>& elements, const Eigen::Vecto
 Eigen::Matrix<double, 3, 4> ApplyElementTangent(const TetElement& element,
                                                 const Eigen::Matrix3d& rotation,
                                                 const Eigen::Matrix3d* twist,
-                                                const Eigen::Matrix<double, 3, 4>& v_mm) {
+                                                const Eigen::Matrix<double, 3, 4>& v_mm,
+                                                const BarrierTerm* barrier) {
   const Eigen::Matrix3d g = rotation.transpose() * DisplacementGradient(element, v_mm);
   Eigen::Matrix3d p = LinearStress(element, g);
   if (twist != nullptr) {
     const Eigen::Vector3d a(g(2, 1) - g(1, 2), g(0, 2) - g(2, 0), g(1, 0) - g(0, 1));
     p += Cross(*twist * a);
   }
-  return rotation * StressNodalForces(element, p);
+  Eigen::Matrix<double, 3, 4> f = rotation * StressNodalForces(element, p);
+  if (barrier != nullptr) f += ApplyBarrierTangent(element, *barrier, v_mm);
+  return f;
 }
 
 void ApplyCorotatedStiffness(const std::vector<TetElement>& elements, const CorotatedFrames& frames,
@@ -135,7 +148,7 @@ void ApplyCorotatedStiffness(const std::vector<TetElement>& elements, const Coro
                      const TetElement& element = elements[t];
                      ScatterAdd(element,
                                 ApplyElementTangent(element, frames.rotations[t], frames.Twist(t),
-                                                    Gather(element, v_mm)),
+                                                    Gather(element, v_mm), frames.Barrier(t)),
                                 out);
                    }
                  });
@@ -143,7 +156,8 @@ void ApplyCorotatedStiffness(const std::vector<TetElement>& elements, const Coro
 }
 
 double CorotatedEnergy(const std::vector<TetElement>& elements,
-                       const std::vector<Eigen::Matrix3d>& rotations, const Eigen::VectorXd& u_mm) {
+                       const std::vector<Eigen::Matrix3d>& rotations, const Eigen::VectorXd& u_mm,
+                       bool inversion_barrier) {
   double energy = 0.0;
   for (size_t t = 0; t < elements.size(); ++t) {
     const TetElement& element = elements[t];
@@ -152,6 +166,9 @@ double CorotatedEnergy(const std::vector<TetElement>& elements,
     const Eigen::Matrix3d eps = 0.5 * (h + h.transpose());
     energy += element.volume_mm3 * (element.mu_n_per_mm2 * eps.squaredNorm() +
                                     0.5 * element.lambda_n_per_mm2 * eps.trace() * eps.trace());
+    if (inversion_barrier) {
+      energy += EvaluateBarrier(element, Eigen::Matrix3d::Identity() + g).energy_n_mm;
+    }
   }
   return energy;
 }

@@ -15,6 +15,8 @@
 // rest. Without it, the fixed-point iteration on R K0 R^T alone over-corrects
 // the soft rotation modes of a stressed body and diverges, e.g. on a slender
 // bar stretched by 10% (tests/fem/uniaxial_bar_test.cc).
+// With the inversion barrier on (inversion_barrier.h), each element's barrier
+// forces and tangent are added to these.
 // All vectors are 3 * #V long, vertex v's axis i at 3v + i.
 #pragma once
 
@@ -23,6 +25,7 @@
 
 #include <Eigen/Core>
 
+#include "server/fem/inversion_barrier.h"
 #include "server/fem/tet_element.h"
 
 namespace vpm {
@@ -45,10 +48,15 @@ struct CorotatedFrames {
   std::vector<Eigen::Matrix3d> rotations;  // #T
   std::vector<Eigen::Matrix3d> twist;      // #T, or empty for none
   std::vector<uint8_t> twisted;            // #T (with twist): 1 where Q != 0
+  std::vector<BarrierTerm> barrier;        // #T with the barrier on, else empty
 
   // Q of element t, or null where it is 0 or absent.
   const Eigen::Matrix3d* Twist(size_t t) const {
     return !twist.empty() && twisted[t] ? &twist[t] : nullptr;
+  }
+  // Element t's barrier term, or null where it is inactive or off.
+  const BarrierTerm* Barrier(size_t t) const {
+    return !barrier.empty() && barrier[t].active ? &barrier[t] : nullptr;
   }
 };
 
@@ -57,20 +65,24 @@ struct CorotatedFrames {
 //   u_mm      3*#V displacements, mm
 //   method    which tangent the frames describe
 //   threads   threads to split the elements between (ParallelChunks)
+//   inversion_barrier  add the barrier's forces (and keep its terms)
 // Outputs:
-//   frames    #T rotations (identity for kLinear) and, for the consistent
-//             method, #T twist matrices (resized)
+//   frames    #T rotations (identity for kLinear), for the consistent
+//             method #T twist matrices, with the barrier #T barrier terms
+//             (resized)
 //   forces_n  3*#V elastic (internal) forces, N (resized, overwritten)
 void CorotatedForces(const std::vector<TetElement>& elements, const Eigen::VectorXd& u_mm,
                      FemMethod method, CorotatedFrames& frames, Eigen::VectorXd& forces_n,
-                     int threads = 1);
+                     int threads = 1, bool inversion_barrier = false);
 
 // Tangent of one element applied to its corner vectors v (3 by 4, mm):
-// (R K0 R^T + K_twist) v as 3 by 4 nodal forces, N. twist may be null.
+// (R K0 R^T + K_twist + K_barrier) v as 3 by 4 nodal forces, N. twist and
+// barrier may be null.
 Eigen::Matrix<double, 3, 4> ApplyElementTangent(const TetElement& element,
                                                 const Eigen::Matrix3d& rotation,
                                                 const Eigen::Matrix3d* twist,
-                                                const Eigen::Matrix<double, 3, 4>& v_mm);
+                                                const Eigen::Matrix<double, 3, 4>& v_mm,
+                                                const BarrierTerm* barrier = nullptr);
 
 // y = K v = sum_e K_e v_e with the frames from CorotatedForces.
 //   v_mm  3*#V
@@ -79,8 +91,10 @@ void ApplyCorotatedStiffness(const std::vector<TetElement>& elements, const Coro
                              const Eigen::VectorXd& v_mm, Eigen::VectorXd& y_n, int threads = 1);
 
 // Elastic energy sum_e V (mu eps:eps + lambda/2 tr(eps)^2) with
-// eps = sym(R^T F - I), N*mm; rotations as from CorotatedForces at u_mm.
+// eps = sym(R^T F - I), N*mm; rotations as from CorotatedForces at u_mm;
+// plus the barrier energies when inversion_barrier.
 double CorotatedEnergy(const std::vector<TetElement>& elements,
-                       const std::vector<Eigen::Matrix3d>& rotations, const Eigen::VectorXd& u_mm);
+                       const std::vector<Eigen::Matrix3d>& rotations, const Eigen::VectorXd& u_mm,
+                       bool inversion_barrier = false);
 
 }  // namespace vpm

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "server/fem/assemble_stiffness.h"
+#include "server/fem/inversion_barrier.h"
 #include "server/fem/projected_pcg.h"
 
 namespace vpm {
@@ -19,6 +20,13 @@ double MsSince(Clock::time_point t0) {
 
 // Below this relative residual the state is in equilibrium to round-off.
 constexpr double kRoundOffResidual = 1e-13;
+
+// With the barrier: an update may take at most 1 - kFeasibleKeep of an
+// element's volume ratio below the onset (FeasibleStepFraction), and a load
+// step smaller than kMinLoadFraction of what is left means the prescribed
+// motion itself is crushing an element.
+constexpr double kFeasibleKeep = 0.2;
+constexpr double kMinLoadFraction = 1.0 / 64.0;
 
 }  // namespace
 
@@ -34,8 +42,8 @@ Result<CorotationalSolver> CorotationalSolver::Create(
     return absl::InvalidArgumentError(StrCat("poisson must lie in (-1, 0.5), got ", poisson));
   }
   if (options.max_newton_iterations < 1 || options.max_cg_iterations < 1 || options.threads < 1 ||
-      options.adaptive_twist_after < 0 || !(options.update_tolerance > 0.0) ||
-      !(options.cg_tolerance > 0.0)) {
+      options.adaptive_twist_after < 0 || options.max_load_steps < 1 ||
+      !(options.update_tolerance > 0.0) || !(options.cg_tolerance > 0.0)) {
     return absl::InvalidArgumentError("solver iteration limits and tolerances must be > 0");
   }
   CorotationalSolver solver;
@@ -69,6 +77,7 @@ void CorotationalSolver::Reset() {
   frames_.rotations.assign(elements_.size(), Eigen::Matrix3d::Identity());
   frames_.twist.clear();
   frames_.twisted.clear();
+  frames_.barrier.clear();
   linearized_ = false;
 }
 
@@ -97,7 +106,8 @@ int CorotationalSolver::ElementThreads() const {
 
 double CorotationalSolver::Evaluate(const Eigen::VectorXd& force_n,
                                     const std::vector<int32_t>& constrained, FemMethod method) {
-  CorotatedForces(elements_, displacement_, method, frames_, forces_, ElementThreads());
+  CorotatedForces(elements_, displacement_, method, frames_, forces_, ElementThreads(),
+                  options_.inversion_barrier);
   residual_ = force_n - forces_;
   Eigen::VectorXd applied = force_n;
   for (int32_t d : constrained) {
@@ -111,9 +121,9 @@ double CorotationalSolver::Evaluate(const Eigen::VectorXd& force_n,
   return reference > 0.0 ? r / reference : 0.0;
 }
 
-double CorotationalSolver::NewtonUpdate(const Eigen::VectorXd& rhs,
-                                        const std::vector<int32_t>& constrained, bool with_handles,
-                                        SolveStats& stats) {
+Eigen::VectorXd CorotationalSolver::TangentSolve(const Eigen::VectorXd& rhs,
+                                                 const std::vector<int32_t>& constrained,
+                                                 bool with_handles, SolveStats& stats) {
   const auto t0 = Clock::now();
   const LinearMap apply_k = [this](const Eigen::VectorXd& v, Eigen::VectorXd& y) {
     ApplyCorotatedStiffness(elements_, frames_, v, y, ElementThreads());
@@ -125,43 +135,39 @@ double CorotationalSolver::NewtonUpdate(const Eigen::VectorXd& rhs,
   Eigen::VectorXd update;
   const PcgStats pcg = ProjectedPcg(apply_k, precondition, constrained, rhs, options_.cg_tolerance,
                                     options_.max_cg_iterations, update, &linear_residual_);
-  displacement_ += update;
   stats.solve_ms += MsSince(t0);
   ++stats.newton_iterations;
   stats.cg_iterations += pcg.iterations;
-  return MaxVertexNorm(update);
+  return update;
 }
 
-Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_mm,
-                                             const Eigen::VectorXd& force_n, HandleMode mode) {
-  RETURN_IF_ERROR(CheckLoad(prescribed_mm, force_n));
-  const bool with_handles = mode == HandleMode::kPrescribed;
-  std::vector<int32_t> constrained = fixed_list_;
-  if (with_handles) constrained.insert(constrained.end(), handles_.begin(), handles_.end());
-  const Eigen::VectorXd start = displacement_;
-  Eigen::VectorXd jump = Eigen::VectorXd::Zero(displacement_.size());
-  for (int32_t d : constrained) jump[d] = prescribed_mm[d] - displacement_[d];
-  displacement_ += jump;
-  double step_scale = MaxVertexNorm(jump);
-  SolveStats stats;
-  if (linearized_ && linearized_mode_ == mode) {
-    // First iteration without evaluating: the residual at the new state
-    // linearised with the previous tangent, r_last + df_ext - K jump.
-    const auto t0 = Clock::now();
-    Eigen::VectorXd rhs = linear_residual_ + (force_n - linearized_force_);
-    Eigen::VectorXd k_jump;
-    ApplyCorotatedStiffness(elements_, frames_, jump, k_jump, ElementThreads());
-    rhs -= k_jump;
-    for (int32_t d : constrained) rhs[d] = 0.0;
-    stats.assembly_ms += MsSince(t0);
-    NewtonUpdate(rhs, constrained, with_handles, stats);
-    step_scale = std::max(step_scale, MaxVertexNorm(displacement_ - start));
+double CorotationalSolver::NewtonUpdate(const Eigen::VectorXd& rhs,
+                                        const std::vector<int32_t>& constrained, bool with_handles,
+                                        SolveStats& stats) {
+  const Eigen::VectorXd update = TangentSolve(rhs, constrained, with_handles, stats);
+  const double alpha = options_.inversion_barrier
+                           ? FeasibleStepFraction(elements_, displacement_, update, kFeasibleKeep)
+                           : 1.0;
+  if (alpha < 1.0) {
+    // The residual linearised at the shortened step: rhs - alpha K du.
+    linear_residual_ = (1.0 - alpha) * rhs + alpha * linear_residual_;
+    ++stats.shortened_updates;
   }
-  linearized_ = false;
+  displacement_ += alpha * update;
+  // A shortened update says nothing about convergence.
+  return alpha == 1.0 ? MaxVertexNorm(update) : std::numeric_limits<double>::infinity();
+}
+
+Status CorotationalSolver::Equilibrate(const Eigen::VectorXd& force_n,
+                                       const std::vector<int32_t>& constrained, bool with_handles,
+                                       const Eigen::VectorXd& start, double step_scale,
+                                       int first_iteration, SolveStats& stats) {
+  stats.converged = false;
   for (;;) {
     const auto t0 = Clock::now();
+    const int iterations = stats.newton_iterations - first_iteration;
     const bool plain_first = options_.method == FemMethod::kCorotationalConsistent &&
-                             stats.newton_iterations < options_.adaptive_twist_after;
+                             iterations < options_.adaptive_twist_after;
     stats.residual =
         Evaluate(force_n, constrained, plain_first ? FemMethod::kCorotational : options_.method);
     stats.assembly_ms += MsSince(t0);
@@ -172,17 +178,82 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
     linear_residual_ = residual_;
     if (stats.residual <= kRoundOffResidual) {
       stats.converged = true;
-      break;
+      return absl::OkStatus();
     }
-    if (stats.newton_iterations >= options_.max_newton_iterations) break;
+    if (iterations >= options_.max_newton_iterations) return absl::OkStatus();
     const double moved = NewtonUpdate(residual_, constrained, with_handles, stats);
     step_scale = std::max(step_scale, MaxVertexNorm(displacement_ - start));
     // Stopping here, without evaluating the new state, saves one force
     // evaluation per step; the residual reported is the one before the update.
     if (moved <= options_.update_tolerance * step_scale) {
       stats.converged = true;
-      break;
+      return absl::OkStatus();
     }
+  }
+}
+
+Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_mm,
+                                             const Eigen::VectorXd& force_n, HandleMode mode) {
+  RETURN_IF_ERROR(CheckLoad(prescribed_mm, force_n));
+  const bool with_handles = mode == HandleMode::kPrescribed;
+  std::vector<int32_t> constrained = fixed_list_;
+  if (with_handles) constrained.insert(constrained.end(), handles_.begin(), handles_.end());
+  const Eigen::VectorXd start = displacement_;
+  SolveStats stats;
+  // The prescribed DOFs move in load steps: all at once unless that would
+  // crush an element (inversion barrier), then by the largest feasible
+  // fraction of what is left, each step brought to equilibrium.
+  for (;;) {
+    Eigen::VectorXd jump = Eigen::VectorXd::Zero(displacement_.size());
+    for (int32_t d : constrained) jump[d] = prescribed_mm[d] - displacement_[d];
+    const Eigen::VectorXd step_start = displacement_;
+    const int first_iteration = stats.newton_iterations;
+    ++stats.load_steps;
+    const bool warm = linearized_ && linearized_mode_ == mode;
+    double alpha = 1.0;
+    if (warm || options_.inversion_barrier) {
+      // Predictor, without evaluating forces: the prescribed DOFs take the
+      // jump and the free ones follow through the last tangent, with the
+      // residual linearised from the last solve when there is one:
+      // K du = r_last + df_ext - K jump.
+      const auto t0 = Clock::now();
+      Eigen::VectorXd rhs = warm ? Eigen::VectorXd(linear_residual_ + (force_n - linearized_force_))
+                                 : Eigen::VectorXd::Zero(jump.size());
+      Eigen::VectorXd k_jump;
+      ApplyCorotatedStiffness(elements_, frames_, jump, k_jump, ElementThreads());
+      rhs -= k_jump;
+      for (int32_t d : constrained) rhs[d] = 0.0;
+      stats.assembly_ms += MsSince(t0);
+      const Eigen::VectorXd direction = jump + TangentSolve(rhs, constrained, with_handles, stats);
+      if (options_.inversion_barrier) {
+        alpha = stats.load_steps <= options_.max_load_steps
+                    ? FeasibleStepFraction(elements_, displacement_, direction, kFeasibleKeep,
+                                           kMinLoadFraction)
+                    : 0.0;
+        if (alpha == 0.0) {
+          // No feasible part (or no load steps left): the prescribed motion
+          // itself flattens an element, e.g. a handle edge sweeping over a
+          // fixed vertex, where nothing free can make room. The rest is
+          // applied at once; elements it inverts lose their barrier
+          // (inversion_barrier.h) and the caller counts them.
+          stats.forced_inversion = true;
+          alpha = 1.0;
+        }
+      }
+      displacement_ += alpha * direction;
+    } else {
+      displacement_ += jump;
+    }
+    linearized_ = false;
+    const Status status =
+        Equilibrate(force_n, constrained, with_handles, start,
+                    MaxVertexNorm(displacement_ - step_start), first_iteration, stats);
+    if (!status.ok()) return status;
+    if (alpha == 1.0) break;
+    // The last update's linearised residual starts the next load step.
+    linearized_ = true;
+    linearized_mode_ = mode;
+    linearized_force_ = force_n;
   }
   linearized_ = true;
   linearized_mode_ = mode;

@@ -36,7 +36,7 @@ struct SolverOptions {
   // adaptive_twist_after + 1 on (mild steps converge before; stressed ones
   // need it). 0: the twist term throughout.
   int adaptive_twist_after = 3;
-  int max_newton_iterations = 30;
+  int max_newton_iterations = 30;  // per load step
   // Converged when the last Newton update moved no vertex by more than
   // update_tolerance * (largest vertex motion of this solve), dimensionless.
   // The default suits interaction: the next step starts from this state and
@@ -51,6 +51,15 @@ struct SolverOptions {
   // kMinTetsToSplit tets; the factor solves stay on one thread. 1 by
   // default: on a shared 2-core machine a second thread mostly waits.
   int threads = 1;
+  // Add the inversion barrier (inversion_barrier.h) to the corotated energy
+  // and never step across it: no element inverts. Off: the plain model of
+  // ALGORITHM.md section 5, which crushes elements in front of a point-like
+  // handle dragged further than their size.
+  bool inversion_barrier = true;
+  // With the barrier: at most this many load steps per Solve (a prescribed
+  // jump that would crush an element is applied in feasible parts; after
+  // these, or when no part is feasible, the rest at once).
+  int max_load_steps = 64;
 };
 
 // Below this many tets the element loops run on one thread (a split costs
@@ -65,6 +74,12 @@ struct SolveStats {
   double solve_ms = 0.0;     // PCG (preconditioner and matrix-free products)
   int newton_iterations = 0;
   int cg_iterations = 0;  // summed over Newton iterations
+  int load_steps = 0;     // parts the prescribed jump was applied in
+  // Newton updates shortened to keep every element's volume ratio positive.
+  int shortened_updates = 0;
+  // The prescribed motion could not be reached without flattening an
+  // element, and was applied regardless (it may leave inverted elements).
+  bool forced_inversion = false;
   // |f_ext - f_int| on the free DOFs / (|f_int| + |f_ext|) over all DOFs,
   // dimensionless, at the state the last Newton update started from (the
   // solve stops after an update without evaluating again; that update
@@ -131,10 +146,22 @@ class CorotationalSolver {
                   FemMethod method);
   double MaxVertexNorm(const Eigen::VectorXd& v) const;
   int ElementThreads() const;
-  // One Newton iteration: PCG on K(frames_) du = rhs, displacement_ += du;
-  // keeps the PCG residual in linear_residual_. Returns max vertex |du|, mm.
+  // PCG on K(frames_) du = rhs (constrained DOFs 0); keeps the PCG residual
+  // in linear_residual_ and counts one Newton iteration. Returns du, mm.
+  Eigen::VectorXd TangentSolve(const Eigen::VectorXd& rhs, const std::vector<int32_t>& constrained,
+                               bool with_handles, SolveStats& stats);
+  // One Newton iteration: TangentSolve, then displacement_ += du (with the
+  // barrier: alpha du, the largest feasible alpha <= 1). Returns max vertex
+  // |du|, mm (infinity for a shortened update).
   double NewtonUpdate(const Eigen::VectorXd& rhs, const std::vector<int32_t>& constrained,
                       bool with_handles, SolveStats& stats);
+  // Newton iterations from displacement_ until the update tolerance, the
+  // iteration limit (counted from stats.newton_iterations = first_iteration)
+  // or round-off; step_scale (mm) is this load step's motion. Internal (state
+  // restored to start) when the state becomes non-finite.
+  Status Equilibrate(const Eigen::VectorXd& force_n, const std::vector<int32_t>& constrained,
+                     bool with_handles, const Eigen::VectorXd& start, double step_scale,
+                     int first_iteration, SolveStats& stats);
 
   SolverOptions options_;
   std::vector<TetElement> elements_;

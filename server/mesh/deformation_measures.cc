@@ -45,15 +45,17 @@ Result<std::vector<glm::dvec3>> DisplacementAt(const FemModel& fem,
 Result<Solved> Solve(const Volume& volume, const ProxyMesh& mesh, const std::string& name,
                      const glm::dvec3& grab_mm, double radius_mm, const glm::dvec3& offset_mm,
                      double h_mm, const SampledVoxels& voxels, const FemOptions& fem_options) {
-  ASSIGN_OR_RETURN(FemModel fem, FemModel::Create(mesh, volume.geometry().extent_mm(), fem_options));
+  ASSIGN_OR_RETURN(FemModel fem,
+                   FemModel::Create(mesh, volume.geometry().extent_mm(), fem_options));
   Solved out;
   out.row.name = name;
   out.row.vertices = static_cast<int64_t>(mesh.vertices.size());
   // Validity first: the 1.5 h drag in the same direction.
   ASSIGN_OR_RETURN(GrabInfo grab, fem.Grab(grab_mm, radius_mm));
   out.row.handles = static_cast<int64_t>(grab.handles.size());
-  RETURN_IF_ERROR(fem.Drag(glm::normalize(offset_mm) * (1.5 * h_mm)).status());
+  ASSIGN_OR_RETURN(const SolveStats validity, fem.Drag(glm::normalize(offset_mm) * (1.5 * h_mm)));
   out.row.inverted_at_1_5h = fem.CountInvertedTets();
+  out.row.forced_at_1_5h = validity.forced_inversion;
   fem.Release();
   RETURN_IF_ERROR(fem.Grab(grab_mm, radius_mm).status());
   const auto t0 = std::chrono::steady_clock::now();
@@ -61,6 +63,7 @@ Result<Solved> Solve(const Volume& volume, const ProxyMesh& mesh, const std::str
   out.row.solve_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   out.row.converged = stats.converged;
+  out.row.forced_at_drag = stats.forced_inversion;
   out.row.inverted_at_drag = fem.CountInvertedTets();
   ASSIGN_OR_RETURN(out.body_u, DisplacementAt(fem, voxels.body));
   ASSIGN_OR_RETURN(out.bone_u, DisplacementAt(fem, voxels.bone));
@@ -97,7 +100,8 @@ Result<std::vector<DeformationMeasure>> CompareDeformation(const Volume& volume,
     if (l.name == drag.landmark) landmark = &l;
   }
   if (landmark == nullptr) {
-    return absl::NotFoundError(StrCat("landmark '", drag.landmark, "' is not in ", volume.source()));
+    return absl::NotFoundError(
+        StrCat("landmark '", drag.landmark, "' is not in ", volume.source()));
   }
   if (options.voxel_stride < 1) return absl::InvalidArgumentError("voxel stride must be >= 1");
   ASSIGN_OR_RETURN(TransferFunction tf, TransferFunction::FromSpec(params.tf, volume));
@@ -119,7 +123,8 @@ Result<std::vector<DeformationMeasure>> CompareDeformation(const Volume& volume,
   ASSIGN_OR_RETURN(ProxyMesh step2_mesh, BuildProxyMesh(volume, step2));
   ASSIGN_OR_RETURN(ProxyMesh regular_mesh, BuildRegularMesh(volume, budget));
   // The regular lattice gets the same bone classification as the others.
-  RETURN_IF_ERROR(ClassifyHardness(volume, base.stats.R_mm, params.classify, regular_mesh.vertices));
+  RETURN_IF_ERROR(
+      ClassifyHardness(volume, base.stats.R_mm, params.classify, regular_mesh.vertices));
   MeshParams dense = params;
   dense.refine_at_mm.reset();
   dense.target = base.lattice.size() + kAnchorCount;  // keep every lattice vertex
@@ -131,8 +136,8 @@ Result<std::vector<DeformationMeasure>> CompareDeformation(const Volume& volume,
   std::vector<DeformationMeasure> rows{reference.row};
   for (auto& [name, mesh] : std::vector<std::pair<std::string, const ProxyMesh*>>{
            {"regular", &regular_mesh}, {"step 2", &step2_mesh}, {"step 4", &refined_mesh}}) {
-    ASSIGN_OR_RETURN(Solved s, Solve(volume, *mesh, name, at, radius, drag.offset_mm, h, voxels,
-                                     options.fem));
+    ASSIGN_OR_RETURN(
+        Solved s, Solve(volume, *mesh, name, at, radius, drag.offset_mm, h, voxels, options.fem));
     ErrorAgainst(reference, s);
     rows.push_back(s.row);
   }

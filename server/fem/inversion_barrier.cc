@@ -1,0 +1,82 @@
+#include "server/fem/inversion_barrier.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Geometry>
+
+namespace vpm {
+namespace {
+
+Eigen::Matrix<double, 3, 4> Corners(const TetElement& element, const Eigen::VectorXd& v) {
+  Eigen::Matrix<double, 3, 4> corners;
+  for (int a = 0; a < 4; ++a) corners.col(a) = v.segment<3>(3 * element.vertices[a]);
+  return corners;
+}
+
+double Det(const Eigen::Matrix3d& f) { return f.col(0).dot(f.col(1).cross(f.col(2))); }
+
+}  // namespace
+
+BarrierTerm EvaluateBarrier(const TetElement& element, const Eigen::Matrix3d& f) {
+  BarrierTerm term;
+  const double j = Det(f);
+  constexpr double j0 = kBarrierOnsetVolumeRatio;
+  if (!(j > 0.0 && j < j0)) return term;
+  const double k = element.lambda_n_per_mm2 + 2.0 * element.mu_n_per_mm2;
+  const double d = j - j0;             // < 0
+  const double ln = std::log(j / j0);  // < 0
+  term.active = true;
+  term.cofactor.col(0) = f.col(1).cross(f.col(2));
+  term.cofactor.col(1) = f.col(2).cross(f.col(0));
+  term.cofactor.col(2) = f.col(0).cross(f.col(1));
+  term.energy_n_mm = element.volume_mm3 * k * (-d * d * ln);
+  term.stress_scale_n_per_mm2 = k * (-2.0 * d * ln - d * d / j);
+  term.curvature_n_per_mm2 = k * (-2.0 * ln - 4.0 * d / j + d * d / (j * j));
+  return term;
+}
+
+Eigen::Matrix<double, 3, 4> BarrierForces(const TetElement& element, const BarrierTerm& term) {
+  if (!term.active) return Eigen::Matrix<double, 3, 4>::Zero();
+  return StressNodalForces(element, term.stress_scale_n_per_mm2 * term.cofactor);
+}
+
+Eigen::Matrix<double, 3, 4> ApplyBarrierTangent(const TetElement& element, const BarrierTerm& term,
+                                                const Eigen::Matrix<double, 3, 4>& v_mm) {
+  if (!term.active) return Eigen::Matrix<double, 3, 4>::Zero();
+  const double rate = term.cofactor.cwiseProduct(DisplacementGradient(element, v_mm)).sum();
+  return StressNodalForces(element, term.curvature_n_per_mm2 * rate * term.cofactor);
+}
+
+double VolumeRatio(const TetElement& element, const Eigen::VectorXd& u_mm) {
+  return Det(Eigen::Matrix3d::Identity() + DisplacementGradient(element, Corners(element, u_mm)));
+}
+
+double FeasibleStepFraction(const std::vector<TetElement>& elements, const Eigen::VectorXd& u_mm,
+                            const Eigen::VectorXd& du_mm, double keep, double min_alpha) {
+  // Per element: F(u) and dF = grad du, so F(u + alpha du) = F + alpha dF.
+  struct Watched {
+    Eigen::Matrix3d f, df;
+    double floor;
+  };
+  std::vector<Watched> watched;
+  for (const TetElement& element : elements) {
+    const Eigen::Matrix<double, 3, 4> du = Corners(element, du_mm);
+    if (du.isZero(0.0)) continue;
+    const Eigen::Matrix3d f =
+        Eigen::Matrix3d::Identity() + DisplacementGradient(element, Corners(element, u_mm));
+    const double j = Det(f);
+    if (!(j > 0.0)) continue;
+    watched.push_back(
+        {f, DisplacementGradient(element, du), keep * std::min(j, kBarrierOnsetVolumeRatio)});
+  }
+  for (double alpha = 1.0; alpha >= min_alpha; alpha *= 0.5) {
+    const bool ok = std::all_of(watched.begin(), watched.end(), [alpha](const Watched& w) {
+      return Det(w.f + alpha * w.df) >= w.floor;
+    });
+    if (ok) return alpha;
+  }
+  return 0.0;
+}
+
+}  // namespace vpm
