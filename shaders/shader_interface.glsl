@@ -52,7 +52,7 @@ struct RaycastParams {
   ivec4 image;      // (width, height, flags, 0) pixels
   ivec4 bricks;     // (bx, by, bz, brick_voxels)
   vec4 lut;         // (value_lo, entries per value unit, entry count, 0)
-  vec4 window;      // MIP (value of black, 1 / window width, 0, 0)
+  vec4 window;      // MIP (value of black, 1 / window width, value of white, 0)
   vec4 background;  // rgb in [0, 1]
   vec4 shading;     // (ambient, diffuse, specular, shininess)
   vec4 map_dims;    // (Mx, My, Mz, 0) backward-map grid points

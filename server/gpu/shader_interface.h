@@ -80,7 +80,7 @@ struct RaycastParams {
   glm::ivec4 image;      // (width, height, flags, 0) pixels
   glm::ivec4 bricks;     // (bx, by, bz, brick_voxels)
   glm::vec4 lut;         // (value_lo, entries per value unit, entry count, 0)
-  glm::vec4 window;      // MIP (value of black, 1 / window width, 0, 0)
+  glm::vec4 window;      // MIP (value of black, 1 / window width, value of white, 0)
   glm::vec4 background;  // rgb in [0, 1]
   glm::vec4 shading;     // (ambient, diffuse, specular, shininess)
   glm::vec4 map_dims;    // (Mx, My, Mz, 0) backward-map grid points

@@ -271,6 +271,7 @@ uint32_t Caster::Pixel(int px, int py, int64_t& taken) const {
     const float v = cell ? DeformedValueAndGradient(x, cell_gradient) : DeformedValue(x);
     if (mip) {
       ray_max = std::max(ray_max, v);
+      if (early && ray_max >= p_.window.z) break;  // white: no later sample shows
     } else {
       const vec4 c = LutAt(v);
       if (c.a > 0.0f) {

@@ -44,6 +44,12 @@ struct RenderPreset {
   // Gradient magnitude (value/mm) at which DVR shading is half on: weaker
   // gradients (noise inside homogeneous tissue) shade less. > 0.
   double shading_gradient = 30.0;
+  // Still DVR frames sample every still_step_factor x the smallest voxel
+  // spacing (kStill's default step; RaycastSettings::step_mm overrides).
+  // 0.5 unless a preset's picture was measured to hold at a larger step
+  // (ct-soft-tissue: 1.0, docs/RENDERING.md "Still step per preset").
+  // In (0, 4].
+  double still_step_factor = 0.5;
   bool operator==(const RenderPreset&) const = default;
 };
 

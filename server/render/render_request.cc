@@ -46,8 +46,9 @@ std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims, int brick_v
 double RequestStepMm(const RenderRequest& request, const VolumeGeometry& geometry) {
   if (request.settings.step_mm > 0.0) return request.settings.step_mm;
   const glm::dvec3& s = geometry.spacing_mm;
-  const double factor =
-      request.quality == RenderQuality::kStill ? kStillStepFactor : kInteractiveStepFactor;
+  const double factor = request.quality == RenderQuality::kInteractive ? kInteractiveStepFactor
+                        : request.mode == RenderMode::kMip   ? kStillMipStepFactor
+                                                             : request.preset.still_step_factor;
   return factor * std::min({s.x, s.y, s.z});
 }
 
@@ -110,8 +111,8 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   p.spacing_mm = Vec4(geometry.spacing_mm);
   p.image = glm::ivec4(setup.render_width, setup.render_height, flags, 0);
   p.bricks = glm::ivec4(bricks[0], bricks[1], bricks[2], brick_voxels);
-  p.window = glm::vec4(float(window.level - 0.5 * window.width), float(1.0 / window.width), 0.0f,
-                       0.0f);
+  p.window = glm::vec4(float(window.level - 0.5 * window.width), float(1.0 / window.width),
+                       float(window.level + 0.5 * window.width), 0.0f);
   p.background = Vec4(s.background);
   p.shading = glm::vec4(float(s.ambient), float(s.diffuse), float(s.specular),
                         float(s.shininess));

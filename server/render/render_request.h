@@ -24,7 +24,8 @@ namespace vpm {
 
 enum class RenderMode { kDvr, kMip };
 
-// kStill: full resolution, step 0.5 x the smallest spacing.
+// kStill: full resolution, step 0.5 x the smallest spacing for DVR
+// (RenderPreset::still_step_factor: 1.0 for ct-soft-tissue), 1.0 for MIP.
 // kInteractive: half resolution in each direction (bilinear upscale on the
 // GPU), step 1.0 x the smallest spacing: about 8x fewer samples.
 enum class RenderQuality { kStill, kInteractive };
@@ -38,7 +39,9 @@ inline constexpr int kMaxFrameSide = 4096;
 // coarser skipping; the still cast loses more (docs/RENDERING.md).
 inline constexpr int kStillBrickVoxels = 4;
 inline constexpr int kInteractiveBrickVoxels = 8;
-inline constexpr double kStillStepFactor = 0.5;
+// MIP stills: a maximum along the ray, 47 dB against step 0.5 on the
+// phantom (docs/RENDERING.md); DVR stills take the preset's factor.
+inline constexpr double kStillMipStepFactor = 1.0;
 inline constexpr double kInteractiveStepFactor = 1.0;
 // Longest ray, in samples, a request may ask for (the box diagonal / step):
 // bounds a frame's work on any device (a GPU watchdog kills long dispatches).
@@ -46,7 +49,7 @@ inline constexpr double kMaxSamplesPerRay = 32768;
 
 struct RaycastSettings {
   bool empty_space_skipping = true;
-  bool early_termination = true;  // stop when accumulated opacity > 0.99
+  bool early_termination = true;  // DVR: stop when opacity > 0.99; MIP: at the window's white
   bool shading = true;            // DVR gradient shading (Blinn-Phong headlight)
   double step_mm = 0.0;           // 0: the quality's default
   glm::dvec3 background{0.0};     // rgb in [0, 1]

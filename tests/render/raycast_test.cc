@@ -318,6 +318,20 @@ TEST_F(RaycastTest, EarlyTermination_SameImageFewerSamples) {
   EXPECT_LT(on.samples, off.samples);
 }
 
+// MIP stops once its maximum reaches the window's white (the bone rod at
+// 700 HU, white at 450 under ct-vessels): the picture cannot change, so it
+// must stay bit for bit; GPU and CPU stop alike.
+TEST_F(RaycastTest, MipEarlyTermination_SameImageFewerSamples) {
+  RenderRequest r = Request(RenderMode::kMip);
+  r.settings.count_samples = true;
+  const Frame on = RenderGpu(r);
+  ExpectClose(on, RenderCpu(r), 1.0 / 255, 8.0 / 255, "mip, early termination");
+  r.settings.early_termination = false;
+  const Frame off = RenderGpu(r);
+  ExpectClose(on, off, 1e-9, 1e-9, "mip, early termination on/off");
+  EXPECT_LT(on.samples, off.samples);
+}
+
 TEST_F(RaycastTest, InteractiveQuality_HalfResolutionUpscaled) {
   RenderRequest r = Request(RenderMode::kDvr);
   r.quality = RenderQuality::kInteractive;

@@ -1,12 +1,14 @@
 // Presets: every named preset is valid, the CT presets show what they
 // promise, the baked table matches the control points and its step
-// correction, and the non-zero prefix agrees with the table.
+// correction, the non-zero prefix agrees with the table, and the still step
+// follows the preset and the mode.
 #include <cmath>
 
 #include <gtest/gtest.h>
 
 #include "server/gpu/shader_interface.h"
 #include "server/render/render_presets.h"
+#include "server/render/render_request.h"
 #include "tests/render/render_test_util.h"
 
 namespace vpm {
@@ -84,6 +86,33 @@ TEST(RenderPresets, RejectsBadPresets) {
   bad = p;
   bad.shading_gradient = 0.0;
   EXPECT_FALSE(ValidateRenderPreset(bad).ok());
+  for (double factor : {0.0, -0.5, 4.5, double(NAN)}) {
+    bad = p;
+    bad.still_step_factor = factor;
+    EXPECT_FALSE(ValidateRenderPreset(bad).ok()) << factor;
+  }
+}
+
+// Still DVR steps by the preset's factor (ct-soft-tissue 1.0, the others
+// 0.5) of the smallest spacing, still MIP by 1.0, interactive frames by 1.0;
+// an explicit step wins.
+TEST(RenderPresets, StillStepFollowsPresetAndMode) {
+  const Volume volume = testing::MakeSphereRodVolume(16);  // smallest spacing 1.0 mm
+  RenderRequest r;
+  r.preset = *MakeRenderPreset("ct-vessels", volume);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), 0.5);
+  r.preset = *MakeRenderPreset("ct-bone", volume);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), 0.5);
+  r.preset = *MakeRenderPreset("ct-soft-tissue", volume);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), 1.0);
+  r.mode = RenderMode::kMip;
+  r.preset = *MakeRenderPreset("ct-vessels", volume);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), 1.0);
+  r.mode = RenderMode::kDvr;
+  r.quality = RenderQuality::kInteractive;
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), 1.0);
+  r.settings.step_mm = 0.25;
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), 0.25);
 }
 
 }  // namespace
