@@ -17,6 +17,7 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "bench/bench_util.h"
 #include "server/render/frame_encoder.h"
@@ -317,15 +318,22 @@ int main(int argc, char** argv) {
   // Still frames at larger steps against step 0.5 x the smallest spacing
   // (the still step of every preset and mode before RenderPreset's
   // still_step_factor), GPU both, same request: picture difference, samples
-  // per pixel, cast time (min of `reps`, the two alternating).
-  if (Matches("still step", filter)) {
+  // per pixel, cast time (min of `reps`, the two alternating). "still step
+  // oblique": the same from WriteViews' oblique camera (azimuth 35,
+  // elevation 20), for the larger steps only.
+  for (const bool oblique : {false, true}) {
+    const std::string section = oblique ? "still step oblique" : "still step";
+    if (!Matches(section, filter)) continue;
     const double smallest = std::min({volume.geometry().spacing_mm[0],
                                       volume.geometry().spacing_mm[1],
                                       volume.geometry().spacing_mm[2]});
+    const std::vector<double> factors =
+        oblique ? std::vector<double>{1.0, 1.25, 1.5} : std::vector<double>{0.75, 1.0, 1.25, 1.5, 2.0};
     for (const char* preset : {"ct-soft-tissue", "ct-vessels", "ct-bone", "mip"}) {
-      for (double factor : {0.75, 1.0, 1.25, 1.5, 2.0}) {
+      for (double factor : factors) {
         RenderRequest r;
         r.camera = Camera::ForVolume(volume.geometry());
+        if (oblique) r.camera.Orbit(35.0, 20.0);
         r.mode = std::string(preset) == "mip" ? RenderMode::kMip : RenderMode::kDvr;
         r.preset = bench::Check(
             MakeRenderPreset(r.mode == RenderMode::kMip ? "ct-vessels" : preset, volume),
@@ -346,14 +354,17 @@ int main(int argc, char** argv) {
           other_ms = std::min(other_ms, other.timings.raycast_ms);
         }
         char tag[64];
-        std::snprintf(tag, sizeof(tag), "still_step_%.2f_%s", factor, preset);
+        std::snprintf(tag, sizeof(tag), "%s_%.2f_%s", oblique ? "oblique_step" : "still_step",
+                      factor, preset);
         WritePng(png_dir, tag, other);
-        WritePng(png_dir, std::string("still_step_0.50_") + preset, base);
+        WritePng(png_dir, std::string(oblique ? "oblique_step_0.50_" : "still_step_0.50_") + preset,
+                 base);
         const Difference d = Compare(other, base);
         const double pixels = double(r.width) * r.height;
-        std::printf("still step %.2f vs %.2f x spacing, %s: mean %.3f/255, max %.0f/255, "
+        std::printf("%s %.2f vs %.2f x spacing, %s: mean %.3f/255, max %.0f/255, "
                     "PSNR %.1f dB; samples/pixel %.1f vs %.1f; cast %.1f vs %.1f ms\n",
-                    factor, base.step_mm / smallest, preset, d.mean, d.max, d.psnr_db,
+                    section.c_str(), factor, base.step_mm / smallest, preset, d.mean, d.max,
+                    d.psnr_db,
                     double(other.samples) / pixels, double(base.samples) / pixels, other_ms,
                     base_ms);
       }
