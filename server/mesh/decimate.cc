@@ -43,6 +43,9 @@ Status Validate(const DecimationInput& in, const DecimationParams& p) {
   if (!(p.radius_mm > 0.0) || !std::isfinite(p.radius_mm)) {
     return absl::InvalidArgumentError(StrCat("density radius ", p.radius_mm, " mm must be > 0"));
   }
+  if (p.threads < 0 || p.threads > 256) {
+    return absl::InvalidArgumentError(StrCat("decimation threads ", p.threads, ": use 0..256"));
+  }
   for (double w : {p.wg, p.wd}) {
     if (!std::isfinite(w) || w < 0.0) {
       return absl::InvalidArgumentError("weights wg and wd must be finite and >= 0");
@@ -56,135 +59,221 @@ Status Validate(const DecimationInput& in, const DecimationParams& p) {
   return absl::OkStatus();
 }
 
-// Evaluates Ctotal from one vertex's terms.
+// Evaluates Ctotal from one vertex's terms: ci * (wg * cg + wd * S), with
+// wg * cg passed in as one product (the same rounding as computing it here).
 struct CostModel {
-  const double* ci;  // #N
-  const double* cg;  // #N
   const DecimationParams& p;
   double d0;
-  double operator()(int64_t v, double dens) const {
+  double operator()(double ci, double wg_cg, double dens) const {
     const double cd = d0 > 0.0 ? dens / d0 : 0.0;
     const double s = p.density_mode == DensityMode::kSpread ? 1.0 - cd : cd;
-    return ci[v] * (p.wg * cg[v] + p.wd * s);
+    return ci * (wg_cg + p.wd * s);
   }
 };
 
-// Every vertex's neighbours within R (CSR, ids ascending), found once with
-// a uniform grid of cell size R, so that each removal visits only its dozens
-// of neighbours.
-struct NeighbourLists {
-  explicit NeighbourLists(int64_t n) : start(n + 1) {}
-  HugePageArray<int64_t> start;                 // #N+1
-  std::optional<HugePageArray<int32_t>> ids;    // start[N] neighbour ids, ascending per vertex
+// One lattice vertex as DecimateFast's removal loop sees it, 64 bytes: one
+// cache line in a line-aligned array (HugePageArray's large ones are). A
+// removal reads a neighbour's position, density and cost terms at one
+// scattered address instead of four.
+struct VertexState {
+  double dens;           // 1/mm, summed over the alive neighbours
+  double ci;             // intensity cost
+  double wg_cg;          // wg * Cg
+  glm::dvec3 position;   // mm
+  int64_t list_begin;    // this vertex's neighbours: ids[list_begin, +list_size)
+  int32_t list_size;
+  int32_t alive;         // 1 until removed
 };
+static_assert(sizeof(VertexState) == 64);
 
-// The candidates around one grid bucket, sorted by id, as flat arrays (mm).
-struct Candidates {
-  std::vector<std::pair<int64_t, int64_t>> order;  // (id, grid slot)
-  std::vector<int64_t> id;
-  std::vector<double> x, y, z, d;
-
-  // sorted: by id (needed where the order of a sum matters).
-  void Gather(const PointGrid& grid, int64_t bucket, bool sorted) {
-    order.clear();
-    grid.ForEachSlotAround(bucket, [&](int64_t slot) { order.emplace_back(grid.item(slot), slot); });
-    if (sorted) std::sort(order.begin(), order.end());
-    const size_t m = order.size();
-    id.resize(m);
-    x.resize(m);
-    y.resize(m);
-    z.resize(m);
-    d.resize(m);
-    for (size_t j = 0; j < m; ++j) {
-      id[j] = order[j].first;
-      const glm::dvec3& p = grid.position(order[j].second);
-      x[j] = p.x;
-      y[j] = p.y;
-      z[j] = p.z;
+// The candidates around one grid bucket (its 3x3x3 neighbourhood) as flat
+// arrays, for the points of the bucket one after the other.
+class Candidates {
+ public:
+  // Positions only (mm), in grid order: enough for counting.
+  void GatherPositions(const PointGrid& grid, int64_t bucket) {
+    Clear();
+    grid.ForEachSlotAround(bucket, [&](int64_t slot) { Append(grid.position(slot)); });
+  }
+  // Positions and ids, ascending by id (the order of the density sums).
+  void GatherSortedById(const PointGrid& grid, int64_t bucket) {
+    order_.clear();
+    // id < 2^31 and slot < 2^31: one integer sorts as (id, slot).
+    grid.ForEachSlotAround(bucket, [&](int64_t slot) {
+      order_.push_back(static_cast<uint64_t>(grid.item(slot)) << 32 | static_cast<uint64_t>(slot));
+    });
+    std::sort(order_.begin(), order_.end());
+    Clear();
+    for (const uint64_t key : order_) {
+      Append(grid.position(static_cast<int64_t>(key & 0xffffffffu)));
+      id_.push_back(static_cast<int32_t>(key >> 32));
     }
   }
-  // d[j] = PointDistance(candidate j, q), the same bits (one loop the
+
+  // How many candidates lie within r of q (|p - q| < r, PointDistance's
+  // bits), q's own point included.
+  int64_t CountWithin(const glm::dvec3& q, double r) const {
+    const size_t m = x_.size();
+    const double* __restrict px = x_.data();
+    const double* __restrict py = y_.data();
+    const double* __restrict pz = z_.data();
+    const double qx = q.x, qy = q.y, qz = q.z;
+    double count = 0.0;  // a double sum vectorizes (an integer one does not); exact below 2^53
+    for (size_t j = 0; j < m; ++j) {
+      const double dx = px[j] - qx, dy = py[j] - qy, dz = pz[j] - qz;
+      count += std::sqrt(dx * dx + dy * dy + dz * dz) < r ? 1.0 : 0.0;
+    }
+    return static_cast<int64_t>(count);
+  }
+
+  // After GatherSortedById: writes the ids of the candidates within r of
+  // point v at q, v excluded, ascending, to out; returns the sum of their
+  // 1/d (1/mm) taken in that order.
+  double Neighbours(int64_t v, const glm::dvec3& q, double r, int32_t* out) {
+    DistancesTo(q);
+    const size_t m = x_.size();
+    hit_.resize(m);
+    // Branch-free: one hit in eight, in patterns the predictor misses.
+    size_t hits = 0;
+    for (size_t j = 0; j < m; ++j) {
+      hit_[hits] = static_cast<uint32_t>(j);
+      hits += (d_[j] < r) & (id_[j] != v);
+    }
+    double sum = 0.0;
+    for (size_t k = 0; k < hits; ++k) {
+      const uint32_t j = hit_[k];
+      sum += 1.0 / d_[j];
+      out[k] = id_[j];
+    }
+    return sum;
+  }
+
+ private:
+  void Clear() {
+    x_.clear();
+    y_.clear();
+    z_.clear();
+    id_.clear();
+  }
+  void Append(const glm::dvec3& p) {
+    x_.push_back(p.x);
+    y_.push_back(p.y);
+    z_.push_back(p.z);
+  }
+  // d_[j] = PointDistance(candidate j, q), the same bits (one loop the
   // compiler vectorizes; sqrt is correctly rounded in either form).
   void DistancesTo(const glm::dvec3& q) {
-    const size_t m = id.size();
-    const double* __restrict px = x.data();
-    const double* __restrict py = y.data();
-    const double* __restrict pz = z.data();
-    double* __restrict pd = d.data();
+    const size_t m = x_.size();
+    d_.resize(m);
+    const double* __restrict px = x_.data();
+    const double* __restrict py = y_.data();
+    const double* __restrict pz = z_.data();
+    double* __restrict pd = d_.data();
     const double qx = q.x, qy = q.y, qz = q.z;
     for (size_t j = 0; j < m; ++j) {
       const double dx = px[j] - qx, dy = py[j] - qy, dz = pz[j] - qz;
       pd[j] = std::sqrt(dx * dx + dy * dy + dz * dz);
     }
   }
+
+  std::vector<uint64_t> order_;  // (id << 32 | grid slot), ascending
+  std::vector<double> x_, y_, z_, d_;  // mm
+  std::vector<int32_t> id_;
+  std::vector<uint32_t> hit_;
 };
 
-// Fills dens (#N, 1/mm) with the initial densities, each summed in
-// increasing neighbour id as the naive scan does. Bucket by bucket, the
-// candidates of a bucket's 3x3x3 neighbourhood are gathered and sorted once
-// for all of its points; two passes (count, then fill the exact CSR) on two
-// threads over halves of the buckets.
-NeighbourLists FindNeighbours(const std::vector<glm::dvec3>& positions, double r,
-                              double* dens) {
+// The first bucket whose slots start at or after `slot` (buckets are laid out
+// in slot order).
+int64_t FirstBucketFrom(const PointGrid& grid, int64_t slot) {
+  int64_t lo = 0, hi = grid.bucket_count();
+  while (lo < hi) {
+    const int64_t mid = lo + (hi - lo) / 2;
+    if (grid.slot_begin(mid) < slot) {
+      lo = mid + 1;
+    } else {
+      hi = mid;
+    }
+  }
+  return lo;
+}
+
+// Returns every vertex's neighbour ids within r (ascending per vertex) and
+// sets state[v] (#N) .dens (1/mm), .list_begin and .list_size; each density
+// is summed in increasing neighbour id as the naive scan does. Bucket by
+// bucket, the candidates of a bucket's 3x3x3 neighbourhood are gathered and
+// sorted once for all of its points; two passes (count, then fill the exact
+// CSR). Each pass splits the buckets between `threads` threads, about the
+// same number of points each; a vertex's list and density do not depend on
+// which thread computes them.
+HugePageArray<int32_t> FindNeighbours(const std::vector<glm::dvec3>& positions, double r,
+                                      int threads, VertexState* state) {
   const int64_t n = static_cast<int64_t>(positions.size());
   const PointGrid grid(positions, r);
-  const int64_t buckets = grid.bucket_count();
-  int64_t split = 0;  // first bucket of the second thread: about n/2 points each
-  while (split < buckets && grid.slot_begin(split) < n / 2) ++split;
-  NeighbourLists lists(n);
-  auto pass = [&](int64_t first, int64_t last, bool fill) {
+  const int parts = static_cast<int>(
+      std::clamp<int64_t>(n / kMinPointsPerSearchThread, 1, std::max(threads, 1)));
+  std::vector<int64_t> part_begin(parts + 1);  // buckets of part k: [part_begin[k], part_begin[k+1])
+  for (int k = 0; k <= parts; ++k) part_begin[k] = FirstBucketFrom(grid, n * k / parts);
+  part_begin[parts] = grid.bucket_count();
+  std::optional<HugePageArray<int32_t>> ids;
+  auto pass = [&](int part, bool fill) {
     Candidates c;
-    for (int64_t b = first; b < last; ++b) {
+    for (int64_t b = part_begin[part]; b < part_begin[part + 1]; ++b) {
       if (grid.slot_begin(b) == grid.slot_begin(b + 1)) continue;
-      c.Gather(grid, b, fill);
-      const size_t m = c.id.size();
+      if (fill) {
+        c.GatherSortedById(grid, b);
+      } else {
+        c.GatherPositions(grid, b);
+      }
       for (int64_t q = grid.slot_begin(b); q < grid.slot_begin(b + 1); ++q) {
         const int64_t v = grid.item(q);
-        c.DistancesTo(grid.position(q));
-        if (!fill) {
-          int64_t count = 0;
-          for (size_t j = 0; j < m; ++j) count += (c.id[j] != v && c.d[j] < r) ? 1 : 0;
-          lists.start[v + 1] = count;
-          continue;
+        const glm::dvec3& pq = grid.position(q);
+        VertexState& sv = state[v];
+        if (fill) {
+          sv.dens = c.Neighbours(v, pq, r, ids->data() + sv.list_begin);
+        } else {
+          // v is among its own candidates, at distance PointDistance(pq, pq).
+          const int64_t self = PointDistance(pq, pq) < r ? 1 : 0;
+          sv.list_size = static_cast<int32_t>(c.CountWithin(pq, r) - self);
         }
-        int64_t k = lists.start[v];
-        double sum = 0.0;
-        for (size_t j = 0; j < m; ++j) {
-          if (c.id[j] == v || !(c.d[j] < r)) continue;
-          const double inv = 1.0 / c.d[j];
-          sum += inv;
-          (*lists.ids)[k] = static_cast<int32_t>(c.id[j]);
-          ++k;
-        }
-        dens[v] = sum;
       }
     }
   };
-  auto both = [&](bool fill) {
-    std::thread helper(pass, split, buckets, fill);
-    pass(0, split, fill);
-    helper.join();
+  auto all_parts = [&](bool fill) {
+    std::vector<std::thread> helpers;
+    for (int k = 1; k < parts; ++k) helpers.emplace_back(pass, k, fill);
+    pass(0, fill);
+    for (std::thread& t : helpers) t.join();
   };
-  both(false);
-  for (int64_t v = 0; v < n; ++v) lists.start[v + 1] += lists.start[v];
+  all_parts(false);
+  int64_t total = 0;
+  for (int64_t v = 0; v < n; ++v) {
+    state[v].list_begin = total;
+    total += state[v].list_size;
+  }
   // Left uninitialized: the second pass writes every entry.
-  lists.ids.emplace(lists.start[n], HugePageArray<int32_t>::Init::kNone);
-  both(true);
-  return lists;
+  ids.emplace(total, HugePageArray<int32_t>::Init::kNone);
+  all_parts(true);
+  return std::move(*ids);
 }
 
-// alive, dens: #N.
-DecimationResult Finish(const char* alive, const double* dens, int64_t n, const CostModel& cost,
+// Lists the kept vertices (alive(v) true) with their costs; d0 and the
+// removal order are passed through.
+template <typename Alive, typename Cost>
+DecimationResult Finish(int64_t n, Alive&& alive, Cost&& cost, double d0,
                         std::vector<int64_t> removal_order) {
   DecimationResult r;
   for (int64_t v = 0; v < n; ++v) {
-    if (!alive[v]) continue;
+    if (!alive(v)) continue;
     r.kept.push_back(v);
-    r.kept_cost.push_back(cost(v, dens[v]));
+    r.kept_cost.push_back(cost(v));
   }
   r.removal_order = std::move(removal_order);
-  r.d0 = cost.d0;
+  r.d0 = d0;
   return r;
+}
+
+int DefaultThreads() {
+  return static_cast<int>(std::clamp<unsigned>(std::thread::hardware_concurrency(), 1, 8));
 }
 
 }  // namespace
@@ -193,33 +282,44 @@ Result<DecimationResult> DecimateFast(const DecimationInput& in, const Decimatio
   RETURN_IF_ERROR(Validate(in, p));
   const int64_t n = static_cast<int64_t>(in.positions.size());
   // What the removal loop reads at scattered addresses, in huge pages.
-  HugePageArray<double> dens(n), ci(n, HugePageArray<double>::Init::kNone),
-      cg(n, HugePageArray<double>::Init::kNone);
-  HugePageArray<glm::dvec3> positions(n, HugePageArray<glm::dvec3>::Init::kNone);
-  std::copy(in.ci.begin(), in.ci.end(), ci.begin());
-  std::copy(in.cg.begin(), in.cg.end(), cg.begin());
-  std::copy(in.positions.begin(), in.positions.end(), positions.begin());
-  const NeighbourLists neighbours = FindNeighbours(in.positions, p.radius_mm, dens.data());
-  const double d0 = n > 0 ? *std::max_element(dens.begin(), dens.end()) : 0.0;
-  const CostModel cost{ci.data(), cg.data(), p, d0};
+  HugePageArray<VertexState> state(n, HugePageArray<VertexState>::Init::kNone);
+  for (int64_t v = 0; v < n; ++v) {
+    state[v] = VertexState{.dens = 0.0,
+                           .ci = in.ci[v],
+                           .wg_cg = p.wg * in.cg[v],
+                           .position = in.positions[v],
+                           .list_begin = 0,
+                           .list_size = 0,
+                           .alive = 1};
+  }
+  const HugePageArray<int32_t> neighbour_ids = FindNeighbours(
+      in.positions, p.radius_mm, p.threads > 0 ? p.threads : DefaultThreads(), state.data());
+  double d0 = 0.0;
+  for (int64_t v = 0; v < n; ++v) d0 = std::max(d0, state[v].dens);
+  const CostModel cost_model{p, d0};
+  auto cost = [&](int64_t v) {
+    const VertexState& s = state[v];
+    return cost_model(s.ci, s.wg_cg, s.dens);
+  };
   const int64_t keep = p.target - kAnchorCount;
   std::vector<int64_t> order;
   order.reserve(std::max<int64_t>(0, n - keep));
-  HugePageArray<char> alive(n);
-  std::fill(alive.begin(), alive.end(), char{1});
   // Removes v: lowers its neighbours' densities, the removed ones' too (never
   // read again, which spares a liveness test per neighbour). Each 1/d has the
   // bits the initial sum added (PointDistance is symmetric), so a density is
   // exactly the sum over its alive neighbours taken in removal order, as in
   // the naive scan.
   auto remove = [&](int64_t v, auto&& on_neighbour) {
-    alive[v] = 0;
+    VertexState& sv = state[v];
+    sv.alive = 0;
     order.push_back(v);
-    const glm::dvec3 pv = positions[v];
-    const int32_t* ids = neighbours.ids->data();
-    for (int64_t k = neighbours.start[v]; k < neighbours.start[v + 1]; ++k) {
+    const glm::dvec3 pv = sv.position;
+    const int32_t* ids = neighbour_ids.data() + sv.list_begin;
+    const int32_t size = sv.list_size;
+    for (int32_t k = 0; k < size; ++k) {
       const int32_t id = ids[k];
-      dens[id] -= 1.0 / PointDistance(positions[id], pv);
+      VertexState& su = state[id];
+      su.dens -= 1.0 / PointDistance(su.position, pv);
       on_neighbour(id);
     }
   };
@@ -228,34 +328,41 @@ Result<DecimationResult> DecimateFast(const DecimationInput& in, const Decimatio
     // factors >= 0, rounding monotonic), so their queued keys are left as
     // underestimates and refreshed when they come out first: the first key
     // is the true minimum once it is current. Every key queued is then at
-    // least the last one taken, which a monotone queue exploits.
+    // least the last one taken, which a monotone queue exploits. A removal
+    // recomputes its neighbours' Ctotal while their lines are in cache, into
+    // a dense array (#N, 8 MB at 1,000,000) that a stale key is checked
+    // against, so that the 4 stale keys per removal cost no visit to the
+    // vertex states.
+    HugePageArray<double> current(n, HugePageArray<double>::Init::kNone);
     MonotoneMinQueue queue;
-    for (int64_t v = 0; v < n; ++v) queue.Push(cost(v, dens[v]), static_cast<int32_t>(v));
+    for (int64_t v = 0; v < n; ++v) {
+      current[v] = cost(v);
+      queue.Push(current[v], static_cast<int32_t>(v));
+    }
     for (int64_t remaining = n; remaining > keep;) {
       const MonotoneMinQueue::Entry top = queue.Top();
       queue.Pop();
-      const double current = cost(top.item, dens[top.item]);
-      if (current != top.cost) {
-        queue.Push(current, top.item);
+      if (current[top.item] != top.cost) {
+        queue.Push(current[top.item], top.item);
         continue;
       }
-      remove(top.item, [](int32_t) {});
+      remove(top.item, [&](int32_t id) { current[id] = cost(id); });
       --remaining;
     }
   } else {
     // In paper mode Ctotal can only fall, so keys are lowered at once.
     std::vector<double> initial(n);
-    for (int64_t v = 0; v < n; ++v) initial[v] = cost(v, dens[v]);
+    for (int64_t v = 0; v < n; ++v) initial[v] = cost(v);
     IndexedMinHeap heap(initial);
     while (heap.size() > keep) {
       const int64_t v = heap.top();
       heap.Pop();
       remove(v, [&](int32_t id) {
-        if (heap.contains(id)) heap.Update(id, cost(id, dens[id]));
+        if (heap.contains(id)) heap.Update(id, cost(id));
       });
     }
   }
-  return Finish(alive.data(), dens.data(), n, cost, std::move(order));
+  return Finish(n, [&](int64_t v) { return state[v].alive != 0; }, cost, d0, std::move(order));
 }
 
 Result<DecimationResult> DecimateNaive(const DecimationInput& in, const DecimationParams& p) {
@@ -270,9 +377,10 @@ Result<DecimationResult> DecimateNaive(const DecimationInput& in, const Decimati
     }
   }
   const double d0 = n > 0 ? *std::max_element(dens.begin(), dens.end()) : 0.0;
-  const CostModel cost{in.ci.data(), in.cg.data(), p, d0};
+  const CostModel cost_model{p, d0};
+  auto cost = [&](int64_t v) { return cost_model(in.ci[v], p.wg * in.cg[v], dens[v]); };
   std::vector<double> total(n);
-  for (int64_t v = 0; v < n; ++v) total[v] = cost(v, dens[v]);
+  for (int64_t v = 0; v < n; ++v) total[v] = cost(v);
   std::vector<char> alive(n, 1);
   std::vector<int64_t> order;
   for (int64_t remaining = n; remaining > p.target - kAnchorCount; --remaining) {
@@ -287,11 +395,11 @@ Result<DecimationResult> DecimateNaive(const DecimationInput& in, const Decimati
       const double d = PointDistance(in.positions[u], in.positions[best]);
       if (d < r) {
         dens[u] -= 1.0 / d;
-        total[u] = cost(u, dens[u]);
+        total[u] = cost(u);
       }
     }
   }
-  return Finish(alive.data(), dens.data(), n, cost, std::move(order));
+  return Finish(n, [&](int64_t v) { return alive[v] != 0; }, cost, d0, std::move(order));
 }
 
 }  // namespace vpm

@@ -36,7 +36,14 @@ struct DecimationParams {
   double wd = 0.5;       // weight of the spreading term
   double radius_mm = 0;  // density radius R (radius_factor * h), > 0
   DensityMode density_mode = DensityMode::kSpread;
+  // Threads for the neighbour search in DecimateFast, 0..256; 0: one per
+  // hardware thread, at most 8. The results do not depend on it.
+  int threads = 0;
 };
+
+// DecimateFast gives each neighbour-search thread at least this many points
+// (fewer would spend more on starting threads than they save).
+inline constexpr int64_t kMinPointsPerSearchThread = 16384;
 
 struct DecimationInput {
   std::vector<glm::dvec3> positions;  // #N lattice vertex positions, mm

@@ -147,6 +147,28 @@ TEST_P(DecimateModes, FastAndNaiveAgreeOnScatteredPoints) {
   EXPECT_EQ(fast->d0, naive->d0);
 }
 
+// The neighbour search splits the grid's buckets between threads; each
+// vertex's list and density must not depend on the split. The lattice has
+// enough points for four threads (at least kMinPointsPerSearchThread each).
+TEST_P(DecimateModes, ThreadCountDoesNotChangeTheResult) {
+  const DecimationInput in = LatticeInput({48, 40, 36}, 1.0, 13);
+  ASSERT_GE(static_cast<int64_t>(in.positions.size()), 4 * kMinPointsPerSearchThread);
+  const DecimationParams one{.target = 500, .radius_mm = 2.0, .density_mode = GetParam(),
+                             .threads = 1};
+  auto reference = DecimateFast(in, one);
+  ASSERT_TRUE(reference.ok());
+  for (int threads : {2, 3, 4, 0}) {
+    DecimationParams p = one;
+    p.threads = threads;
+    auto r = DecimateFast(in, p);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r->removal_order, reference->removal_order) << threads << " threads";
+    EXPECT_EQ(r->kept, reference->kept) << threads << " threads";
+    EXPECT_EQ(r->kept_cost, reference->kept_cost) << threads << " threads";
+    EXPECT_EQ(r->d0, reference->d0) << threads << " threads";
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(BothModes, DecimateModes,
                          ::testing::Values(DensityMode::kSpread, DensityMode::kPaper));
 
@@ -202,6 +224,7 @@ TEST(Decimate, RejectsBadParameters) {
   EXPECT_FALSE(DecimateFast(in, {.target = 8 + 65, .radius_mm = 2}).ok());
   EXPECT_FALSE(DecimateFast(in, {.target = 20, .radius_mm = 0}).ok());
   EXPECT_FALSE(DecimateFast(in, {.target = 20, .wg = -1, .radius_mm = 2}).ok());
+  EXPECT_FALSE(DecimateFast(in, {.target = 20, .radius_mm = 2, .threads = -1}).ok());
   DecimationInput bad = in;
   bad.ci[5] = std::nan("");
   EXPECT_FALSE(DecimateFast(bad, {.target = 20, .radius_mm = 2}).ok());
