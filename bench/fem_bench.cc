@@ -9,7 +9,8 @@
 //   - validity: inverted tets after drags of 0.5, 1 and 1.5 h.
 // Times are the best of --reps runs (the machine is shared).
 //
-//   fem_bench [SOURCE] [--reps N]    SOURCE defaults to phantom:abdomen
+//   fem_bench [SOURCE] [--reps N] [--min-load-fraction F]
+//   SOURCE defaults to phantom:abdomen; F: SolverOptions::min_load_fraction
 #include <time.h>
 
 #include <algorithm>
@@ -72,7 +73,10 @@ struct DragResult {
   double cg = 0.0;
   double max_residual = 0.0;
   int unconverged = 0;
-  int64_t inverted = 0;  // after the last step
+  double load_steps = 0.0;  // per step, mean (inversion barrier)
+  double shortened = 0.0;   // Newton updates cut by the barrier, per step
+  int forced = 0;           // steps whose prescribed motion flattened a tet
+  int64_t inverted = 0;     // after the last step
   double grab_ms = 0.0;
   size_t handles = 0;
   std::vector<glm::dvec3> displacement;  // after the last step
@@ -93,6 +97,9 @@ DragResult Drag(FemModel& model, const glm::dvec3& point, double radius_mm) {
     r.cg += static_cast<double>(st.cg_iterations) / kSteps;
     r.max_residual = std::max(r.max_residual, st.residual);
     r.unconverged += !st.converged;
+    r.load_steps += static_cast<double>(st.load_steps) / kSteps;
+    r.shortened += static_cast<double>(st.shortened_updates) / kSteps;
+    r.forced += st.forced_inversion;
   }
   r.inverted = model.CountInvertedTets();
   r.displacement = model.Displacements();
@@ -144,17 +151,20 @@ void PrintRow(const char* mesh_name, const char* variant, const ProxyMesh& mesh,
               const FemModel& model, const DragResult& r, double h, double error_mm) {
   std::printf(
       "%-8s %-14s %6zu %6zu %4zu %7.1f %8.1f %7.1f %5.1f %7.2f %7.2f %7.2f %5.1f %5.1f "
-      "%7.1e %4lld %8.1e%s\n",
+      "%5.1f %5.1f %4d %7.1e %4lld %8.1e%s\n",
       mesh_name, variant, mesh.vertices.size(), model.tets().size(), r.handles,
       model.setup().assembly_ms, model.setup().factor_ms, r.grab_ms, h, r.step_ms, r.step_cpu_ms,
-      r.max_step_ms, r.newton, r.cg, r.max_residual, static_cast<long long>(r.inverted), error_mm,
+      r.max_step_ms, r.newton, r.cg, r.load_steps, r.shortened, r.forced, r.max_residual,
+      static_cast<long long>(r.inverted), error_mm,
       r.unconverged ? "  (some steps hit the iteration limit)" : "");
 }
 
 // Inverted tets after drags of 0.5, 1 and 1.5 h (15 steps of 0.1 h).
 void Validity(const ProxyMesh& mesh, const Volume& volume, const glm::dvec3& point, double h,
-              double radius_h) {
-  FemModel model = Check(FemModel::Create(mesh, volume.geometry().extent_mm()), "setup");
+              double radius_h, const SolverOptions& base) {
+  FemOptions options;
+  options.solver = base;
+  FemModel model = Check(FemModel::Create(mesh, volume.geometry().extent_mm(), options), "setup");
   const size_t handles = Check(model.Grab(point, radius_h * h), "grab").handles.size();
   std::printf("  validity, radius %.1f h (%zu handles): inverted tets after", radius_h, handles);
   for (int s = 1; s <= 15; ++s) {
@@ -173,7 +183,8 @@ struct MeshCase {
   bool refine;
 };
 
-void RunCase(const MeshCase& c, const Volume& volume, const glm::dvec3& landmark, int reps) {
+void RunCase(const MeshCase& c, const Volume& volume, const glm::dvec3& landmark, int reps,
+             const SolverOptions& base) {
   MeshParams params;
   params.grid = {c.grid, c.grid, c.grid};
   params.target = c.target;
@@ -192,24 +203,29 @@ void RunCase(const MeshCase& c, const Volume& volume, const glm::dvec3& landmark
     FemMethod method;
     int adaptive_twist_after;
     int threads;
+    bool barrier = true;
   };
   const SolverOptions defaults;
-  const Variant variants[] = {{"default", defaults.method, defaults.adaptive_twist_after, 1},
-                              {"default 2T", defaults.method, defaults.adaptive_twist_after, 2},
-                              {"twist always", FemMethod::kCorotationalConsistent, 0, 1},
-                              {"RK0R^T only", FemMethod::kCorotational, 0, 1}};
+  const Variant variants[] = {
+      {"default", defaults.method, defaults.adaptive_twist_after, 1},
+      {"default 2T", defaults.method, defaults.adaptive_twist_after, 2},
+      {"twist always", FemMethod::kCorotationalConsistent, 0, 1},
+      {"RK0R^T only", FemMethod::kCorotational, 0, 1},
+      {"no barrier", defaults.method, defaults.adaptive_twist_after, 1, false}};
   for (const Variant& v : variants) {
     FemOptions options;
+    options.solver = base;
     options.solver.method = v.method;
     options.solver.adaptive_twist_after = v.adaptive_twist_after;
     options.solver.threads = v.threads;
+    options.solver.inversion_barrier = v.barrier;
     FemModel model = Check(FemModel::Create(mesh, extent, options), "FEM setup");
     const DragResult r = BestDrag(model, landmark, h, reps);
     PrintRow(c.name, v.name, mesh, model, r, h,
              MaxDistance(r.displacement, reference.displacement));
     if (&v == &variants[0]) KernelCosts(model, 5 * reps);
   }
-  for (double radius_h : {1.0, 2.0}) Validity(mesh, volume, landmark, h, radius_h);
+  for (double radius_h : {1.0, 2.0}) Validity(mesh, volume, landmark, h, radius_h, base);
 }
 
 }  // namespace
@@ -217,9 +233,12 @@ void RunCase(const MeshCase& c, const Volume& volume, const glm::dvec3& landmark
 int main(int argc, char** argv) {
   std::string source = "phantom:abdomen";
   int reps = 3;
+  double min_load_fraction = SolverOptions{}.min_load_fraction;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc) {
       reps = std::max(1, std::atoi(argv[++i]));
+    } else if (std::strcmp(argv[i], "--min-load-fraction") == 0 && i + 1 < argc) {
+      min_load_fraction = std::atof(argv[++i]);
     } else {
       source = argv[i];
     }
@@ -234,15 +253,20 @@ int main(int argc, char** argv) {
       "(%.1f, %.1f, %.1f) mm, radius 1 h; best of %d runs\n",
       volume.source().c_str(), kDragMm, kDirection.x, kDirection.y, kDirection.z, kSteps,
       landmark.x, landmark.y, landmark.z, reps);
-  std::printf("%-8s %-14s %6s %6s %4s %7s %8s %7s %5s %7s %7s %7s %5s %5s %7s %4s %8s\n", "mesh",
-              "solver", "verts", "tets", "hdl", "asm ms", "fact ms", "grab ms", "h mm", "step ms",
-              "cpu ms", "max ms", "newt", "cg", "resid", "inv", "err mm");
+  std::printf(
+      "%-8s %-14s %6s %6s %4s %7s %8s %7s %5s %7s %7s %7s %5s %5s %5s %5s %4s %7s %4s %8s\n",
+      "mesh", "solver", "verts", "tets", "hdl", "asm ms", "fact ms", "grab ms", "h mm", "step ms",
+      "cpu ms", "max ms", "newt", "cg", "load", "short", "forc", "resid", "inv", "err mm");
   const MeshCase cases[] = {
       {"250+150", 20, 250, true}, {"1000", 20, 1000, false}, {"5000", 30, 5000, false}};
-  for (const MeshCase& c : cases) RunCase(c, volume, landmark, reps);
+  SolverOptions base;
+  base.min_load_fraction = min_load_fraction;
+  for (const MeshCase& c : cases) RunCase(c, volume, landmark, reps, base);
   std::printf(
       "step ms / cpu ms: wall / this thread's CPU time per drag step (mean of %d); "
-      "err mm: largest vertex distance from a solve converged to 1e-7\n",
+      "err mm: largest vertex distance from a solve converged to 1e-7; load / short: load steps "
+      "and barrier-shortened Newton updates per step; forc: steps whose prescribed motion "
+      "flattened a tet (inversion barrier, docs/FEM.md)\n",
       kSteps);
   return 0;
 }

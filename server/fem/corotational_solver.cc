@@ -22,11 +22,8 @@ double MsSince(Clock::time_point t0) {
 constexpr double kRoundOffResidual = 1e-13;
 
 // With the barrier: an update may take at most 1 - kFeasibleKeep of an
-// element's volume ratio below the onset (FeasibleStepFraction), and a load
-// step smaller than kMinLoadFraction of what is left means the prescribed
-// motion itself is crushing an element.
+// element's volume ratio below the onset (FeasibleStepFraction).
 constexpr double kFeasibleKeep = 0.2;
-constexpr double kMinLoadFraction = 1.0 / 64.0;
 
 }  // namespace
 
@@ -43,6 +40,7 @@ Result<CorotationalSolver> CorotationalSolver::Create(
   }
   if (options.max_newton_iterations < 1 || options.max_cg_iterations < 1 || options.threads < 1 ||
       options.adaptive_twist_after < 0 || options.max_load_steps < 1 ||
+      !(options.min_load_fraction > 0.0 && options.min_load_fraction <= 1.0) ||
       !(options.update_tolerance > 0.0) || !(options.cg_tolerance > 0.0)) {
     return absl::InvalidArgumentError("solver iteration limits and tolerances must be > 0");
   }
@@ -200,6 +198,19 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
   if (with_handles) constrained.insert(constrained.end(), handles_.begin(), handles_.end());
   const Eigen::VectorXd start = displacement_;
   SolveStats stats;
+  // Elements whose every DOF is prescribed: their shape is the load's, and
+  // no step size can change it, so the barrier does not limit the steps.
+  std::vector<uint8_t> prescribed_elements;
+  if (options_.inversion_barrier) {
+    std::vector<uint8_t> is_constrained(displacement_.size(), 0);
+    for (int32_t d : constrained) is_constrained[d] = 1;
+    prescribed_elements.assign(elements_.size(), 1);
+    for (size_t t = 0; t < elements_.size(); ++t) {
+      for (int32_t v : elements_[t].vertices) {
+        for (int i = 0; i < 3; ++i) prescribed_elements[t] &= is_constrained[3 * v + i];
+      }
+    }
+  }
   // The prescribed DOFs move in load steps: all at once unless that would
   // crush an element (inversion barrier), then by the largest feasible
   // fraction of what is left, each step brought to equilibrium.
@@ -228,7 +239,7 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
       if (options_.inversion_barrier) {
         alpha = stats.load_steps <= options_.max_load_steps
                     ? FeasibleStepFraction(elements_, displacement_, direction, kFeasibleKeep,
-                                           kMinLoadFraction)
+                                           options_.min_load_fraction, prescribed_elements)
                     : 0.0;
         if (alpha == 0.0) {
           // No feasible part (or no load steps left): the prescribed motion

@@ -60,6 +60,10 @@ struct SolverOptions {
   // jump that would crush an element is applied in feasible parts; after
   // these, or when no part is feasible, the rest at once).
   int max_load_steps = 64;
+  // A load step shorter than this fraction of the rest of the jump means the
+  // prescribed motion itself is crushing an element: the rest is applied at
+  // once (SolveStats::forced_inversion). In (0, 1].
+  double min_load_fraction = 1.0 / 64.0;
 };
 
 // Below this many tets the element loops run on one thread (a split costs

@@ -53,14 +53,17 @@ double VolumeRatio(const TetElement& element, const Eigen::VectorXd& u_mm) {
 }
 
 double FeasibleStepFraction(const std::vector<TetElement>& elements, const Eigen::VectorXd& u_mm,
-                            const Eigen::VectorXd& du_mm, double keep, double min_alpha) {
+                            const Eigen::VectorXd& du_mm, double keep, double min_alpha,
+                            const std::vector<uint8_t>& skip) {
   // Per element: F(u) and dF = grad du, so F(u + alpha du) = F + alpha dF.
   struct Watched {
     Eigen::Matrix3d f, df;
     double floor;
   };
   std::vector<Watched> watched;
-  for (const TetElement& element : elements) {
+  for (size_t t = 0; t < elements.size(); ++t) {
+    if (!skip.empty() && skip[t]) continue;
+    const TetElement& element = elements[t];
     const Eigen::Matrix<double, 3, 4> du = Corners(element, du_mm);
     if (du.isZero(0.0)) continue;
     const Eigen::Matrix3d f =

@@ -20,6 +20,7 @@
 //            projected Newton; it only steers the iterations)
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -63,11 +64,13 @@ double VolumeRatio(const TetElement& element, const Eigen::VectorXd& u_mm);
 // that every element keeps J(u + alpha du) >= keep * min(J(u), J0): an
 // element may lose at most (1 - keep) of its volume ratio per step once it
 // is near the barrier, so a state with every J > 0 stays so. Elements with
-// J(u) <= 0 (inverted before the barrier was on) are not checked.
+// J(u) <= 0 (inverted before the barrier was on) are not checked, nor those
+// flagged in `skip` (#T, or empty for none).
 //   u_mm, du_mm  3*#V, mm
 //   keep         in (0, 1), dimensionless
 double FeasibleStepFraction(const std::vector<TetElement>& elements, const Eigen::VectorXd& u_mm,
                             const Eigen::VectorXd& du_mm, double keep = 0.2,
-                            double min_alpha = 1.0 / 1048576.0);
+                            double min_alpha = 1.0 / 1048576.0,
+                            const std::vector<uint8_t>& skip = {});
 
 }  // namespace vpm
