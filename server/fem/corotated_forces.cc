@@ -11,12 +11,6 @@
 namespace vpm {
 namespace {
 
-Eigen::Matrix<double, 3, 4> Gather(const TetElement& element, const Eigen::VectorXd& v) {
-  Eigen::Matrix<double, 3, 4> corners;
-  for (int a = 0; a < 4; ++a) corners.col(a) = v.segment<3>(3 * element.vertices[a]);
-  return corners;
-}
-
 void ScatterAdd(const TetElement& element, const Eigen::Matrix<double, 3, 4>& f,
                 Eigen::VectorXd& out) {
   for (int a = 0; a < 4; ++a) out.segment<3>(3 * element.vertices[a]) += f.col(a);
@@ -97,7 +91,7 @@ void CorotatedForces(const std::vector<TetElement>& elements, const Eigen::Vecto
         out.setZero(u_mm.size());
         for (int64_t t = begin; t < end; ++t) {
           const TetElement& element = elements[t];
-          const Eigen::Matrix3d g = DisplacementGradient(element, Gather(element, u_mm));
+          const Eigen::Matrix3d g = DisplacementGradient(element, GatherCorners(element, u_mm));
           const Eigen::Matrix3d r = method == FemMethod::kLinear
                                         ? Eigen::Matrix3d::Identity()
                                         : PolarRotation(Eigen::Matrix3d::Identity() + g);
@@ -140,18 +134,18 @@ Eigen::Matrix<double, 3, 4> ApplyElementTangent(const TetElement& element,
 void ApplyCorotatedStiffness(const std::vector<TetElement>& elements, const CorotatedFrames& frames,
                              const Eigen::VectorXd& v_mm, Eigen::VectorXd& y_n, int threads) {
   std::vector<Eigen::VectorXd> partial(std::max(1, threads));
-  ParallelChunks(threads, static_cast<int64_t>(elements.size()),
-                 [&](int64_t begin, int64_t end, int part) {
-                   Eigen::VectorXd& out = partial[part];
-                   out.setZero(v_mm.size());
-                   for (int64_t t = begin; t < end; ++t) {
-                     const TetElement& element = elements[t];
-                     ScatterAdd(element,
-                                ApplyElementTangent(element, frames.rotations[t], frames.Twist(t),
-                                                    Gather(element, v_mm), frames.Barrier(t)),
-                                out);
-                   }
-                 });
+  ParallelChunks(
+      threads, static_cast<int64_t>(elements.size()), [&](int64_t begin, int64_t end, int part) {
+        Eigen::VectorXd& out = partial[part];
+        out.setZero(v_mm.size());
+        for (int64_t t = begin; t < end; ++t) {
+          const TetElement& element = elements[t];
+          ScatterAdd(element,
+                     ApplyElementTangent(element, frames.rotations[t], frames.Twist(t),
+                                         GatherCorners(element, v_mm), frames.Barrier(t)),
+                     out);
+        }
+      });
   SumParts(partial, y_n);
 }
 
@@ -161,7 +155,7 @@ double CorotatedEnergy(const std::vector<TetElement>& elements,
   double energy = 0.0;
   for (size_t t = 0; t < elements.size(); ++t) {
     const TetElement& element = elements[t];
-    const Eigen::Matrix3d g = DisplacementGradient(element, Gather(element, u_mm));
+    const Eigen::Matrix3d g = DisplacementGradient(element, GatherCorners(element, u_mm));
     const Eigen::Matrix3d h = CorotatedStrainSource(rotations[t], g);
     const Eigen::Matrix3d eps = 0.5 * (h + h.transpose());
     energy += element.volume_mm3 * (element.mu_n_per_mm2 * eps.squaredNorm() +

@@ -8,12 +8,6 @@
 namespace vpm {
 namespace {
 
-Eigen::Matrix<double, 3, 4> Corners(const TetElement& element, const Eigen::VectorXd& v) {
-  Eigen::Matrix<double, 3, 4> corners;
-  for (int a = 0; a < 4; ++a) corners.col(a) = v.segment<3>(3 * element.vertices[a]);
-  return corners;
-}
-
 double Det(const Eigen::Matrix3d& f) { return f.col(0).dot(f.col(1).cross(f.col(2))); }
 
 }  // namespace
@@ -49,7 +43,8 @@ Eigen::Matrix<double, 3, 4> ApplyBarrierTangent(const TetElement& element, const
 }
 
 double VolumeRatio(const TetElement& element, const Eigen::VectorXd& u_mm) {
-  return Det(Eigen::Matrix3d::Identity() + DisplacementGradient(element, Corners(element, u_mm)));
+  return Det(Eigen::Matrix3d::Identity() +
+             DisplacementGradient(element, GatherCorners(element, u_mm)));
 }
 
 double FeasibleStepFraction(const std::vector<TetElement>& elements, const Eigen::VectorXd& u_mm,
@@ -64,10 +59,10 @@ double FeasibleStepFraction(const std::vector<TetElement>& elements, const Eigen
   for (size_t t = 0; t < elements.size(); ++t) {
     if (!skip.empty() && skip[t]) continue;
     const TetElement& element = elements[t];
-    const Eigen::Matrix<double, 3, 4> du = Corners(element, du_mm);
+    const Eigen::Matrix<double, 3, 4> du = GatherCorners(element, du_mm);
     if (du.isZero(0.0)) continue;
     const Eigen::Matrix3d f =
-        Eigen::Matrix3d::Identity() + DisplacementGradient(element, Corners(element, u_mm));
+        Eigen::Matrix3d::Identity() + DisplacementGradient(element, GatherCorners(element, u_mm));
     const double j = Det(f);
     if (!(j > 0.0)) continue;
     watched.push_back(

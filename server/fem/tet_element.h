@@ -44,6 +44,15 @@ Result<std::vector<TetElement>> MakeTetElements(const std::vector<glm::dvec3>& r
                                                 const std::vector<double>& young_n_per_mm2,
                                                 double poisson);
 
+// The element's 4 corner vectors from a 3*#V vector v (vertex i's axis k at
+// 3i + k) as 3 by 4, column a for corner a.
+inline Eigen::Matrix<double, 3, 4> GatherCorners(const TetElement& element,
+                                                 const Eigen::VectorXd& v) {
+  Eigen::Matrix<double, 3, 4> corners;
+  for (int a = 0; a < 4; ++a) corners.col(a) = v.segment<3>(3 * element.vertices[a]);
+  return corners;
+}
+
 // Displacement gradient sum_a u_a grad_a^T (3 by 3, dimensionless) of the
 // corner displacements u (3 by 4, mm; column a for vertex a).
 inline Eigen::Matrix3d DisplacementGradient(const TetElement& element,

@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <glm/glm.hpp>
 
+#include "server/mesh/build_proxy_mesh.h"
 #include "server/mesh/proxy_mesh.h"
 #include "server/mesh/tet_quality.h"
 #include "server/mesh/tetrahedralize.h"
@@ -92,6 +93,17 @@ inline ProxyMesh RandomBoxMesh(int interior, int per_face, const glm::dvec3& ext
   }
   if (!Tetrahedralize(mesh, extent).ok()) mesh.tets.clear();
   return mesh;
+}
+
+// The proxy mesh of a volume (10^3 lattice to 200 vertices) refined with 40
+// vertices at the centre of its box, the grab point of the validity tests.
+inline Result<ProxyMesh> CentreRefinedMesh(const Volume& volume) {
+  MeshParams params;
+  params.grid = {10, 10, 10};
+  params.target = 200;
+  params.refine_at_mm = volume.geometry().extent_mm() * 0.5;
+  params.refine_count = 40;
+  return BuildProxyMesh(volume, params);
 }
 
 inline std::vector<glm::dvec3> RestPositions(const ProxyMesh& mesh) {

@@ -126,13 +126,8 @@ TEST(InversionBarrier, FeasibleStepKeepsEveryElementPositive) {
 // it; with the barrier the drag is reached and every tet stays positive.
 TEST(InversionBarrier, ProxyMeshDragOfOneAndAHalfHInvertsNoTet) {
   const Volume volume = testing::MakeBodyVolume();
-  MeshParams params;
-  params.grid = {10, 10, 10};
-  params.target = 200;
   const glm::dvec3 point = volume.geometry().extent_mm() * 0.5;
-  params.refine_at_mm = point;
-  params.refine_count = 40;
-  auto mesh = BuildProxyMesh(volume, params);
+  auto mesh = testing::CentreRefinedMesh(volume);
   ASSERT_TRUE(mesh.ok()) << mesh.status();
   const double h = mesh->stats.h_mm;
   const glm::dvec3 drag(1.5 * h, 0.0, 0.0);
