@@ -3,7 +3,9 @@
 // (fast O(N log N) removal vs the naive O(N^2) scan) on lattices of 8,000 to
 // 1,000,000 vertices decimated to 3%.
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 
 #include "bench/bench_util.h"
 #include "server/mesh/build_proxy_mesh.h"
@@ -57,8 +59,27 @@ void StageTable(const Volume& volume, const gpu::GpuContext& context, const GpuV
               (long long)mesh.stats.hard);
 }
 
+// FNV-1a over a decimation's removal order, kept set, kept costs (bits) and
+// D0 (bits): equal hashes mean identical results.
+uint64_t ResultHash(const DecimationResult& r) {
+  uint64_t h = 1469598103934665603ull;
+  auto mix = [&](uint64_t x) {
+    for (int b = 0; b < 8; ++b) h = (h ^ ((x >> (8 * b)) & 0xff)) * 1099511628211ull;
+  };
+  auto bits = [](double d) {
+    uint64_t u;
+    std::memcpy(&u, &d, sizeof u);
+    return u;
+  };
+  for (int64_t v : r.removal_order) mix(static_cast<uint64_t>(v));
+  for (int64_t v : r.kept) mix(static_cast<uint64_t>(v));
+  for (double c : r.kept_cost) mix(bits(c));
+  mix(bits(r.d0));
+  return h;
+}
+
 void ScalingTable(const Volume& volume, const GpuVolume& gpu_volume,
-                  const LatticeCostsGpu& costs_gpu, bool naive) {
+                  const LatticeCostsGpu& costs_gpu, bool naive, bool hash) {
   std::printf("\nstep 2 scaling: decimate to 3%% of N (spread, cell footprint)\n");
   std::printf("%10s %12s %14s %10s %18s\n", "N", "fast ms", "naive ms", "naive/fast",
               "fast/(N log N) rel");
@@ -73,6 +94,15 @@ void ScalingTable(const Volume& volume, const GpuVolume& gpu_volume,
     const DecimationParams p{.target = n * 3 / 100 + kAnchorCount,
                              .radius_mm = 2.0 * lattice.h_mm()};
     const double fast_ms = bench::MinMs(3, [&] { bench::Check(DecimateFast(in, p), "fast"); });
+    if (hash) {
+      for (DensityMode mode : {DensityMode::kSpread, DensityMode::kPaper}) {
+        DecimationParams q = p;
+        q.density_mode = mode;
+        const auto r = bench::Check(DecimateFast(in, q), "fast");
+        std::printf("%10lld hash %-6s %016llx\n", (long long)n, DensityModeName(mode),
+                    (unsigned long long)ResultHash(r));
+      }
+    }
     const double nlogn = double(n) * std::log2(double(n));
     if (first_norm == 0.0) first_norm = fast_ms / nlogn;
     // The naive scan runs only where its predicted time is under a minute.
@@ -98,10 +128,13 @@ void ScalingTable(const Volume& volume, const GpuVolume& gpu_volume,
 
 }  // namespace
 
-// Usage: mesh_build_bench [SOURCE] [--stages-only | --scaling-only] [--no-naive]
+// Usage: mesh_build_bench [SOURCE] [--stages-only | --scaling-only] [--no-naive] [--hash]
+// --hash prints, per scaling size, a hash of step 2's result (removal order,
+// kept set and costs, D0) in spread and paper mode, to check that a change
+// to DecimateFast leaves its results identical.
 int main(int argc, char** argv) {
   std::string source = "phantom:abdomen";
-  bool stages = true, scaling = true, naive = true;
+  bool stages = true, scaling = true, naive = true, hash = false;
   for (int i = 1; i < argc; ++i) {
     if (std::string(argv[i]) == "--stages-only") {
       scaling = false;
@@ -109,6 +142,8 @@ int main(int argc, char** argv) {
       stages = false;
     } else if (std::string(argv[i]) == "--no-naive") {
       naive = false;
+    } else if (std::string(argv[i]) == "--hash") {
+      hash = true;
     } else {
       source = argv[i];
     }
@@ -121,6 +156,6 @@ int main(int argc, char** argv) {
   });
   auto costs_gpu = bench::Check(LatticeCostsGpu::Create(*context), "pipeline");
   if (stages) StageTable(volume, *context, *gpu_volume, costs_gpu, upload_ms);
-  if (scaling) ScalingTable(volume, *gpu_volume, costs_gpu, naive);
+  if (scaling) ScalingTable(volume, *gpu_volume, costs_gpu, naive, hash);
   return 0;
 }
