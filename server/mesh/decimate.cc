@@ -86,20 +86,53 @@ struct VertexState {
 };
 static_assert(sizeof(VertexState) == 64);
 
-// The candidates around one grid bucket (its 3x3x3 neighbourhood) as flat
-// arrays, for the points of the bucket one after the other.
+// The bounding box of a grid bucket's points (mm) and the test that keeps a
+// candidate only if it may lie within r of one of them.
+struct BucketBox {
+  glm::dvec3 lo, hi;
+  bool finite;
+
+  BucketBox(const PointGrid& grid, int64_t bucket) {
+    lo = hi = grid.position(grid.slot_begin(bucket));
+    for (int64_t q = grid.slot_begin(bucket) + 1; q < grid.slot_begin(bucket + 1); ++q) {
+      lo = glm::min(lo, grid.position(q));
+      hi = glm::max(hi, grid.position(q));
+    }
+    finite = std::isfinite(lo.x + lo.y + lo.z + hi.x + hi.y + hi.z);
+  }
+  // False only if PointDistance(p, q) >= r for every q in the box: per axis
+  // the gap to the box is at most |p - q| after rounding (rounding is
+  // monotonic), and so are its square, the sum taken in PointDistance's order
+  // and the root. Exact, no margin needed.
+  bool MayReach(const glm::dvec3& p, double r) const {
+    if (!finite) return true;
+    const double gx = std::max({lo.x - p.x, p.x - hi.x, 0.0});
+    const double gy = std::max({lo.y - p.y, p.y - hi.y, 0.0});
+    const double gz = std::max({lo.z - p.z, p.z - hi.z, 0.0});
+    return std::sqrt(gx * gx + gy * gy + gz * gz) < r;
+  }
+};
+
+// The candidates around one grid bucket (those of its 3x3x3 neighbourhood
+// that may lie within r of its box, about 40% on a lattice) as flat arrays,
+// for the points of the bucket one after the other.
 class Candidates {
  public:
   // Positions only (mm), in grid order: enough for counting.
-  void GatherPositions(const PointGrid& grid, int64_t bucket) {
+  void GatherPositions(const PointGrid& grid, int64_t bucket, double r) {
     Clear();
-    grid.ForEachSlotAround(bucket, [&](int64_t slot) { Append(grid.position(slot)); });
+    const BucketBox box(grid, bucket);
+    grid.ForEachSlotAround(bucket, [&](int64_t slot) {
+      if (box.MayReach(grid.position(slot), r)) Append(grid.position(slot));
+    });
   }
   // Positions and ids, ascending by id (the order of the density sums).
-  void GatherSortedById(const PointGrid& grid, int64_t bucket) {
+  void GatherSortedById(const PointGrid& grid, int64_t bucket, double r) {
     order_.clear();
+    const BucketBox box(grid, bucket);
     // id < 2^31 and slot < 2^31: one integer sorts as (id, slot).
     grid.ForEachSlotAround(bucket, [&](int64_t slot) {
+      if (!box.MayReach(grid.position(slot), r)) return;
       order_.push_back(static_cast<uint64_t>(grid.item(slot)) << 32 | static_cast<uint64_t>(slot));
     });
     std::sort(order_.begin(), order_.end());
@@ -200,8 +233,8 @@ int64_t FirstBucketFrom(const PointGrid& grid, int64_t slot) {
 // Returns every vertex's neighbour ids within r (ascending per vertex) and
 // sets state[v] (#N) .dens (1/mm), .list_begin and .list_size; each density
 // is summed in increasing neighbour id as the naive scan does. Bucket by
-// bucket, the candidates of a bucket's 3x3x3 neighbourhood are gathered and
-// sorted once for all of its points; two passes (count, then fill the exact
+// bucket, the candidates of a bucket's 3x3x3 neighbourhood that may reach its
+// box are gathered and sorted once for all of its points; two passes (count, then fill the exact
 // CSR). Each pass splits the buckets between `threads` threads, about the
 // same number of points each; a vertex's list and density do not depend on
 // which thread computes them.
@@ -220,9 +253,9 @@ HugePageArray<int32_t> FindNeighbours(const std::vector<glm::dvec3>& positions, 
     for (int64_t b = part_begin[part]; b < part_begin[part + 1]; ++b) {
       if (grid.slot_begin(b) == grid.slot_begin(b + 1)) continue;
       if (fill) {
-        c.GatherSortedById(grid, b);
+        c.GatherSortedById(grid, b, r);
       } else {
-        c.GatherPositions(grid, b);
+        c.GatherPositions(grid, b, r);
       }
       for (int64_t q = grid.slot_begin(b); q < grid.slot_begin(b + 1); ++q) {
         const int64_t v = grid.item(q);
