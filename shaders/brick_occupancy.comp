@@ -42,10 +42,16 @@ void main() {
           dmax = max(dmax, d);
         }
   }
-  vec3 u_lo = clamp((lo_mm + dmin) / s, vec3(0.0), vec3(n - 1));
-  vec3 u_hi = clamp((hi_mm + dmax) / s, vec3(0.0), vec3(n - 1));
+  // Source indices the brick's samples reach, u in [u_lo, u_hi] (voxels);
+  // a trilinear read at u takes voxels floor(u) .. ceil(u) with non-zero
+  // weight, so the source bricks covering voxels floor(u_lo) .. ceil(u_hi)
+  // (brick s covers [w s, w s + w]) hold every value a sample can take.
+  // Without displacement u_hi is the brick's own upper face: its own
+  // source brick suffices, not the next one as well.
+  vec3 u_lo = clamp(vec3(b * pc.bricks.w) + dmin / s, vec3(0.0), vec3(n - 1));
+  vec3 u_hi = clamp(vec3(min((b + 1) * pc.bricks.w, n - 1)) + dmax / s, vec3(0.0), vec3(n - 1));
   ivec3 s_lo = clamp(ivec3(floor(u_lo / float(pc.bricks.w))), ivec3(0), nb - 1);
-  ivec3 s_hi = clamp(ivec3(floor(u_hi / float(pc.bricks.w))), ivec3(0), nb - 1);
+  ivec3 s_hi = clamp(ivec3(ceil(u_hi / float(pc.bricks.w))) - 1, s_lo, nb - 1);
   float vmin = 3.0e38, vmax = -3.0e38;
   for (int z = s_lo.z; z <= s_hi.z; ++z)
     for (int y = s_lo.y; y <= s_hi.y; ++y)

@@ -349,10 +349,13 @@ std::vector<float> BrickOccupancyCpu(std::span<const glm::vec2> minmax,
             dmax = glm::max(dmax, d);
           }
     }
-    const vec3 u_lo = glm::clamp((lo_mm + dmin) / s, vec3(0.0f), vec3(n - 1));
-    const vec3 u_hi = glm::clamp((hi_mm + dmax) / s, vec3(0.0f), vec3(n - 1));
+    // Source bricks covering voxels floor(u_lo) .. ceil(u_hi), as
+    // brick_occupancy.comp.
+    const vec3 u_lo = glm::clamp(vec3(b * w) + dmin / s, vec3(0.0f), vec3(n - 1));
+    const vec3 u_hi =
+        glm::clamp(vec3(glm::min((b + 1) * w, n - 1)) + dmax / s, vec3(0.0f), vec3(n - 1));
     const ivec3 s_lo = glm::clamp(ivec3(glm::floor(u_lo / float(w))), ivec3(0), nb - 1);
-    const ivec3 s_hi = glm::clamp(ivec3(glm::floor(u_hi / float(w))), ivec3(0), nb - 1);
+    const ivec3 s_hi = glm::clamp(ivec3(glm::ceil(u_hi / float(w))) - 1, s_lo, nb - 1);
     float vmin = 3.0e38f, vmax = -3.0e38f;
     for (int z = s_lo.z; z <= s_hi.z; ++z)
       for (int y = s_lo.y; y <= s_hi.y; ++y)
