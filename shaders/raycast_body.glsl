@@ -6,7 +6,7 @@
 //                        trilinear filtering (the map through
 //                        backward_map.glsl's rest_position); else both from
 //                        uniform texel buffers with manual trilinear (the map
-//                        copied by map_to_texels.comp): faster on lavapipe,
+//                        copied there by VolumeRenderer): faster on lavapipe,
 //                        docs/RENDERING.md
 // Mode and map are compile-time because lavapipe runs both sides of every
 // branch under a lane mask: a runtime `if (mip)` or `if (has_map)` costs the

@@ -63,10 +63,6 @@ struct UpscalePush {
   ivec4 size;  // (source width, source height, target width, target height)
 };
 
-struct MapToTexelsPush {
-  ivec4 map_dims;  // (Mx, My, Mz, 0) grid points
-};
-
 struct BackwardMapPush {
   ivec4 map_dims;  // (mx, my, mz, pass) grid points
   vec4 step_mm;    // (hx, hy, hz, eps): grid step extent/(M-1) mm; barycentric tolerance

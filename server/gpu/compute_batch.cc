@@ -12,7 +12,21 @@ bool IsTexelType(DT t) { return t == DT::eUniformTexelBuffer || t == DT::eStorag
 const vk::MemoryBarrier kComputeToCompute(vk::AccessFlagBits::eShaderWrite |
                                               vk::AccessFlagBits::eTransferWrite,
                                           vk::AccessFlagBits::eShaderRead |
-                                              vk::AccessFlagBits::eShaderWrite);
+                                              vk::AccessFlagBits::eShaderWrite |
+                                              vk::AccessFlagBits::eTransferRead |
+                                              vk::AccessFlagBits::eTransferWrite);
+
+// The image's layout from `from` to `to` around a copy, ordered after and
+// before compute and transfer work.
+void ImageLayoutBarrier(const vk::raii::CommandBuffer& cmd, vk::Image image, vk::ImageLayout from,
+                        vk::ImageLayout to) {
+  const auto all = vk::AccessFlagBits::eMemoryRead | vk::AccessFlagBits::eMemoryWrite;
+  const vk::ImageMemoryBarrier barrier(
+      all, all, from, to, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, image,
+      vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1));
+  const auto stages = vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer;
+  cmd.pipelineBarrier(stages, stages, {}, {}, {}, barrier);
+}
 
 }  // namespace
 
@@ -151,6 +165,41 @@ Status ComputeBatch::Fill(const GpuBuffer& buffer, uint32_t word) {
   return CatchVulkan("recording a buffer fill", [&] {
     BarrierIfNeeded();
     commands_->fillBuffer(buffer.handle(), 0, VK_WHOLE_SIZE, word);
+  });
+}
+
+Status ComputeBatch::CopyImageToBuffer(const GpuImage3D& image, const GpuBuffer& buffer,
+                                       std::string label) {
+  if (submitted_) return absl::FailedPreconditionError("compute batch already submitted");
+  if (labels_.size() >= max_dispatches_) {
+    return absl::ResourceExhaustedError(
+        absl::StrCat("compute batch holds at most ", max_dispatches_, " dispatches"));
+  }
+  if (!(buffer.usage() & vk::BufferUsageFlagBits::eTransferDst) ||
+      buffer.size_bytes() < image.size_bytes()) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "copying a 3D image of ", image.size_bytes(), " bytes needs a transfer-destination ",
+        "buffer at least as large; got ", buffer.size_bytes(), " bytes"));
+  }
+  return CatchVulkan("recording an image-to-buffer copy", [&] {
+    BarrierIfNeeded();
+    const uint32_t q = static_cast<uint32_t>(labels_.size());
+    if (*query_pool_) {
+      commands_->writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *query_pool_, 2 * q);
+    }
+    const auto& e = image.extent();
+    const vk::BufferImageCopy region(0, 0, 0, {vk::ImageAspectFlagBits::eColor, 0, 0, 1},
+                                     {0, 0, 0}, vk::Extent3D(e[0], e[1], e[2]));
+    // The image lives in GENERAL; the copy reads it in TRANSFER_SRC_OPTIMAL
+    // (what the validation layer asks for, and what a GPU may copy fastest).
+    constexpr auto kSrc = vk::ImageLayout::eTransferSrcOptimal;
+    ImageLayoutBarrier(*commands_, image.image(), vk::ImageLayout::eGeneral, kSrc);
+    commands_->copyImageToBuffer(image.image(), kSrc, buffer.handle(), region);
+    ImageLayoutBarrier(*commands_, image.image(), kSrc, vk::ImageLayout::eGeneral);
+    if (*query_pool_) {
+      commands_->writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *query_pool_, 2 * q + 1);
+    }
+    labels_.push_back(std::move(label));
   });
 }
 

@@ -55,6 +55,11 @@ class ComputeBatch {
   // Fills `buffer` with a repeated 32-bit word (e.g. 0 to clear).
   Status Fill(const GpuBuffer& buffer, uint32_t word);
 
+  // Copies every texel of `image` (kept in GENERAL layout) into `buffer`
+  // (transfer-destination usage, at least image.size_bytes()), tightly
+  // packed, x fastest; timed and counted like a dispatch.
+  Status CopyImageToBuffer(const GpuImage3D& image, const GpuBuffer& buffer, std::string label);
+
   // Submits everything recorded, waits, and returns one timing per dispatch.
   Result<std::vector<DispatchTiming>> SubmitAndWait();
 

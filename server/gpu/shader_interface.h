@@ -102,12 +102,6 @@ struct UpscalePush {
 };
 static_assert(sizeof(UpscalePush) == 16);
 
-// map_to_texels.comp: the backward map image copied to a texel buffer.
-struct MapToTexelsPush {
-  glm::ivec4 map_dims;  // (Mx, My, Mz, 0) grid points
-};
-static_assert(sizeof(MapToTexelsPush) == 16);
-
 // backward_map.comp: rasterizes the backward map's owners tet by tet, one
 // workgroup per listed tet. pass (in map_dims.w): 0 clear the previous
 // coverage of the moved tets, 1 claim (atomicMin of the tet index).

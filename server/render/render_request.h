@@ -98,7 +98,7 @@ struct RenderRequest {
   // Optional: the map's values as a buffer with uniform-texel usage, vec4
   // per grid point, x fastest (BackwardMap::values_buffer()). The
   // texel-buffer ray casters then read it in place instead of copying the
-  // image into a buffer of their own every frame (map_to_texels.comp).
+  // image into a buffer of their own every frame (a transfer copy).
   const gpu::GpuBuffer* backward_map_texels = nullptr;
   RaycastSettings settings;
   OverlayData overlay;

@@ -8,7 +8,6 @@
 #include "server/gpu/shader_interface.h"
 #include "shaders/brick_minmax.spv.h"
 #include "shaders/brick_occupancy.spv.h"
-#include "shaders/map_to_texels.spv.h"
 #include "shaders/raycast_dvr.spv.h"
 #include "shaders/raycast_dvr_map.spv.h"
 #include "shaders/raycast_dvr_map_sampled.spv.h"
@@ -104,14 +103,6 @@ Status VolumeRenderer::Init() {
                                    .bindings = {DT::eStorageBuffer, DT::eStorageBuffer},
                                    .push_constant_bytes = sizeof(gpu::UpscalePush),
                                    .local_size = {8, 8, 1}}));
-  ASSIGN_OR_RETURN(auto map_to_texels,
-                   gpu::ComputeKernel::Create(
-                       *context_, {.name = "map_to_texels",
-                                   .spirv = kMapToTexelsSpv,
-                                   .bindings = {DT::eCombinedImageSampler, DT::eStorageBuffer},
-                                   .push_constant_bytes = sizeof(gpu::MapToTexelsPush),
-                                   .local_size = {64, 1, 1}}));
-  map_to_texels_kernel_.emplace(std::move(map_to_texels));
   minmax_kernel_.emplace(std::move(minmax));
   occupancy_kernel_.emplace(std::move(occupancy));
   upscale_kernel_.emplace(std::move(upscale));
@@ -143,7 +134,8 @@ Status VolumeRenderer::EnsureMapTexels(size_t points) {
   map_texels_.reset();
   ASSIGN_OR_RETURN(auto buffer, gpu::GpuBuffer::Create(*context_, points * sizeof(glm::vec4),
                                                        BU::eStorageBuffer |
-                                                           BU::eUniformTexelBuffer));
+                                                           BU::eUniformTexelBuffer |
+                                                           BU::eTransferDst));
   map_texels_.emplace(std::move(buffer));
   return gpu::CatchVulkan("creating the backward map's texel view", [&] {
     map_texels_view_ = vk::raii::BufferView(
@@ -246,11 +238,7 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
   const bool in_place = has_map && request.backward_map_texels != nullptr;
   if (!in_place) map_view = *map_texels_view_;
   if (has_map && !in_place && (occupancy || !sampled)) {
-    const auto& e = map->extent();
-    const int points = int(e[0] * e[1] * e[2]);
-    const gpu::MapToTexelsPush push{.map_dims = glm::ivec4(e[0], e[1], e[2], 0)};
-    RETURN_IF_ERROR(batch.Dispatch(*map_to_texels_kernel_, {map, &*map_texels_}, push,
-                                   {GroupCount(points, 64), 1, 1}, "map_to_texels"));
+    RETURN_IF_ERROR(batch.CopyImageToBuffer(*map, *map_texels_, "map_copy"));
   }
   if (occupancy) {
     const int bricks = p.bricks.x * p.bricks.y * p.bricks.z;
@@ -365,7 +353,7 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   frame.occupancy_reused = request.settings.empty_space_skipping && occupancy_current;
   for (const auto& t : timings) {
     if (t.label == "occupancy") frame.timings.occupancy_ms = t.gpu_ms;
-    if (t.label == "map_to_texels") frame.timings.map_copy_ms = t.gpu_ms;
+    if (t.label == "map_copy") frame.timings.map_copy_ms = t.gpu_ms;
     if (t.label == "raycast") frame.timings.raycast_ms = t.gpu_ms;
     if (t.label == "upscale") frame.timings.upscale_ms = t.gpu_ms;
     frame.timings.render_ms += std::max(0.0, t.gpu_ms);
