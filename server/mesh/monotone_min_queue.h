@@ -5,10 +5,12 @@
 // promise it pops exactly what IndexedMinHeap would, with sequential memory
 // traffic instead of a sift through a large tree: a key waits in the bucket
 // of the highest bit in which it differs from the last key popped, and
-// buckets are only ever scanned and split front to back.
+// buckets are only ever scanned and split front to back. A bitmask of the
+// non-empty buckets finds the first without a scan.
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -29,6 +31,13 @@ class MonotoneMinQueue {
   // The smallest key; the queue must not be empty.
   const Entry& Top();
   void Pop();
+  // Pops the smallest keys, at least one and at most kMaxRun, appending them
+  // to run in ascending order: the whole first bucket when it is that small
+  // (one sort instead of a split per bit left), else the smallest key alone.
+  // The queue must not be empty.
+  void PopRun(std::vector<Entry>* run);
+
+  static constexpr size_t kMaxRun = 32;
 
  private:
   // The order of keys as one 96-bit unsigned number: cost bits (non-negative
@@ -38,10 +47,23 @@ class MonotoneMinQueue {
     uint32_t lo;
   };
   static Key KeyOf(const Entry& e);
+  static bool KeyLess(const Key& a, const Key& b) {
+    return a.hi < b.hi || (a.hi == b.hi && a.lo < b.lo);
+  }
   int BucketOf(const Entry& e) const;
-  void Refill();  // moves the smallest non-empty bucket's keys down
+  void Add(int bucket, const Entry& e) {
+    buckets_[bucket].push_back(e);
+    non_empty_[bucket >> 6] |= uint64_t{1} << (bucket & 63);
+  }
+  void MarkEmpty(int bucket) { non_empty_[bucket >> 6] &= ~(uint64_t{1} << (bucket & 63)); }
+  int FirstNonEmptyAboveZero() const;  // some bucket 1..96 must hold a key
+  // Makes the smallest key of bucket b (the first non-empty one) last_ and
+  // moves b's keys down to the buckets they now belong to.
+  void Split(int b);
+  void Refill() { Split(FirstNonEmptyAboveZero()); }
 
   std::array<std::vector<Entry>, 97> buckets_;
+  std::array<uint64_t, 2> non_empty_{0, 0};  // bit b: buckets_[b] holds a key
   Key last_{0, 0};
   int64_t size_ = 0;
 };

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "server/mesh/indexed_min_heap.h"
+#include "server/mesh/lookahead_min_queue.h"
 #include "server/mesh/monotone_min_queue.h"
 #include "server/mesh/lattice.h"
 #include "server/mesh/lattice_costs.h"
@@ -105,6 +106,54 @@ TEST(MonotoneMinQueue, PopsWhatAnOrderedSetPopsUnderMonotonePushes) {
         const double cost = top.cost + value(rng) * 0.25;
         queue.Push(cost, next_item);
         reference.emplace(cost, next_item);
+        ++next_item;
+      }
+    }
+    EXPECT_TRUE(queue.empty());
+  }
+}
+
+// The same scenario through the lookahead queue, whose pops come in runs
+// (sorted buckets of at most MonotoneMinQueue::kMaxRun keys) and whose
+// raised keys may land in its window: what it pops, and the keys it shows
+// ahead, are what an ordered set holds at that moment.
+TEST(LookaheadMinQueue, PopsAndShowsAheadWhatAnOrderedSetHolds) {
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> value(0, 7);
+  for (int n : {1, 2, 33, 500, 3000, 20000}) {
+    LookaheadMinQueue queue;
+    std::set<std::pair<double, int32_t>> reference;
+    int32_t next_item = 0;
+    for (; next_item < n; ++next_item) {
+      const double cost = next_item % 5 == 0 ? -0.0 : value(rng) * (n > 3000 ? 1e-3 : 0.25);
+      queue.Push(cost, next_item);
+      reference.emplace(cost + 0.0, next_item);
+    }
+    while (!reference.empty()) {
+      ASSERT_EQ(queue.size(), static_cast<int64_t>(reference.size()));
+      auto expected = reference.begin();
+      for (size_t k = 0; k < 6; ++k, ++expected) {
+        const LookaheadMinQueue::Entry* ahead = queue.Ahead(k);
+        if (expected == reference.end()) {
+          ASSERT_EQ(ahead, nullptr);
+          break;
+        }
+        ASSERT_NE(ahead, nullptr);
+        ASSERT_EQ(ahead->item, expected->second) << "n " << n << " k " << k;
+        ASSERT_EQ(ahead->cost, expected->first);
+      }
+      const auto top = queue.Top();
+      ASSERT_EQ(top.item, reference.begin()->second) << "n " << n;
+      queue.Pop();
+      reference.erase(reference.begin());
+      const int action = static_cast<int>(rng() % 3);
+      const double step = value(rng) * (rng() % 2 == 0 ? 0.25 : 1e-6);
+      if (action == 0 && next_item < 4 * n) {  // a raised key for the same item
+        queue.Push(top.cost + step, top.item);
+        reference.emplace(top.cost + step, top.item);
+      } else if (action == 1 && next_item < 4 * n) {  // a new item, not below the last key
+        queue.Push(top.cost + step, next_item);
+        reference.emplace(top.cost + step, next_item);
         ++next_item;
       }
     }
