@@ -33,6 +33,9 @@ double MsSince(std::chrono::steady_clock::time_point t0) {
 
 uint32_t GroupCount(int threads, int local) { return uint32_t((threads + local - 1) / local); }
 
+// Consecutive pixels of a row per invocation of upscale.comp.
+constexpr int kUpscalePixelsPerInvocation = 4;
+
 // The ray-casting variant for (access, mode, map): shaders/raycast_body.glsl.
 std::span<const uint32_t> RaycastSpirv(bool sampled, bool mip, bool map) {
   if (sampled) {
@@ -271,8 +274,8 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
         .size = glm::ivec4(setup.render_width, setup.render_height, request.width,
                            request.height)};
     RETURN_IF_ERROR(batch.Dispatch(*upscale_kernel_, {&*pixels_, &*upscaled_}, push,
-                                   {GroupCount(request.width, 8), GroupCount(request.height, 8),
-                                    1},
+                                   {GroupCount(request.width, 8 * kUpscalePixelsPerInvocation),
+                                    GroupCount(request.height, 8), 1},
                                    "upscale"));
   }
   return absl::OkStatus();
