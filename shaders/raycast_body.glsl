@@ -67,11 +67,40 @@ const float kNoValue = -3.0e38;
 
 bool has_flag(int f) { return (p.image.z & f) != 0; }
 
-// Reciprocals set once per invocation: a multiply per sample, not a divide.
+// Set once per invocation (set_globals), so that the sample loop neither
+// reloads the parameter buffer nor divides: the same values and operations
+// as computing them in place, so the same results.
 vec3 g_inv_spacing;  // 1/mm
 vec3 g_inv_brick;    // 1 / brick size (mm)
+vec3 g_extent_mm;    // the image box, (n - 1) * spacing, mm
+vec3 g_last_index;   // n - 1, voxels
+ivec3 g_dims;        // n, voxels
+ivec3 g_bricks;      // brick grid
+vec3 g_brick_mm;     // brick size, mm
+vec3 g_map_last;     // M - 1, map grid points
+ivec3 g_map_dims;    // M, map grid points
+vec3 g_to_grid;      // (M - 1) / extent: map grid points per mm
+vec4 g_lut;          // p.lut
+vec4 g_shading;      // p.shading
+float g_gradient_half;  // p.gradient.x, value/mm
 
-vec3 extent_mm() { return vec3(p.dims.xyz - 1) * p.spacing_mm.xyz; }
+void set_globals() {
+  g_inv_spacing = 1.0 / p.spacing_mm.xyz;
+  g_inv_brick = 1.0 / (p.spacing_mm.xyz * float(p.bricks.w));
+  g_extent_mm = vec3(p.dims.xyz - 1) * p.spacing_mm.xyz;
+  g_last_index = vec3(p.dims.xyz - 1);
+  g_dims = p.dims.xyz;
+  g_bricks = p.bricks.xyz;
+  g_brick_mm = p.spacing_mm.xyz * float(p.bricks.w);
+  g_map_last = p.map_dims.xyz - 1.0;
+  g_map_dims = ivec3(p.map_dims.xyz);
+  g_to_grid = g_map_last / g_extent_mm;
+  g_lut = p.lut;
+  g_shading = p.shading;
+  g_gradient_half = p.gradient.x;
+}
+
+vec3 extent_mm() { return g_extent_mm; }
 
 // Trilinear interpolation of the corners c000..c111 (locals of type T, x
 // fastest) at the fraction f of the cell, in the order x, y, z, each lerp
@@ -129,7 +158,7 @@ float source_at(vec3 u) {
   return textureLod(u_volume, (u + 0.5) / vec3(p.dims.xyz), 0.0).r;
 #else
   // Lerps in the order x, y, z, each a + (b - a) * f, as the CPU reference.
-  ivec3 n = p.dims.xyz;
+  ivec3 n = g_dims;
   ivec3 i0 = min(ivec3(floor(u)), n - 2);
   vec3 f = u - vec3(i0);
   int sy = n.x, sz = n.x * n.y;
@@ -145,9 +174,8 @@ float source_at(vec3 u) {
 // the sampler (grid point a at a * extent / (M - 1), clamped to the edge),
 // with exact weights; lerps in the order x, y, z as the CPU reference.
 vec3 rest_from_texels(vec3 x) {
-  vec3 m = p.map_dims.xyz;
-  vec3 gc = clamp(x / extent_mm() * (m - 1.0), vec3(0.0), m - 1.0);
-  ivec3 mi = ivec3(m);
+  vec3 gc = clamp(x / g_extent_mm * g_map_last, vec3(0.0), g_map_last);
+  ivec3 mi = g_map_dims;
   ivec3 i0 = min(ivec3(floor(gc)), mi - 2);
   vec3 f = gc - vec3(i0);
   int sy = mi.x, sz = mi.x * mi.y;
@@ -167,7 +195,7 @@ float deformed_value(vec3 x) {
 #else
   vec3 rest = x;
 #endif
-  return source_at(clamp(rest * g_inv_spacing, vec3(0.0), vec3(p.dims.xyz - 1)));
+  return source_at(clamp(rest * g_inv_spacing, vec3(0.0), g_last_index));
 }
 
 // Texels for the cell gradient: volume voxel i, map point g (displacement).
@@ -175,13 +203,13 @@ float volume_texel(ivec3 i) {
 #ifdef VPM_RAYCAST_SAMPLED
   return texelFetch(u_volume, i, 0).r;
 #else
-  return texelFetch(u_volume, i.x + p.dims.x * (i.y + p.dims.y * i.z)).r;
+  return texelFetch(u_volume, i.x + g_dims.x * (i.y + g_dims.y * i.z)).r;
 #endif
 }
 
 #ifdef VPM_RAYCAST_MAP
 vec3 map_texel(ivec3 g) {
-  ivec3 m = ivec3(p.map_dims.xyz);
+  ivec3 m = g_map_dims;
 #ifdef VPM_RAYCAST_SAMPLED
   return texelFetch(u_map, g, 0).xyz;
 #else
@@ -194,7 +222,7 @@ vec3 map_texel(ivec3 g) {
 // gradient per voxel: the derivative of the trilinear interpolant of the
 // cell holding u.
 float source_and_gradient(vec3 u, out vec3 grad_u) {
-  ivec3 n = p.dims.xyz;
+  ivec3 n = g_dims;
   ivec3 i0 = min(ivec3(floor(u)), n - 2);
   vec3 f = u - vec3(i0);
   VPM_FETCH_CELL_AT(float, volume_texel, i0);
@@ -211,10 +239,9 @@ float deformed_value_and_gradient(vec3 x, out vec3 grad) {
   vec3 rest = x;
   mat3 jacobian = mat3(1.0);  // d rest / d x, columns per x axis
 #ifdef VPM_RAYCAST_MAP
-  vec3 m = p.map_dims.xyz;
-  vec3 to_grid = (m - 1.0) / extent_mm();
-  vec3 gc = clamp(x * to_grid, vec3(0.0), m - 1.0);
-  ivec3 mi = ivec3(m);
+  vec3 to_grid = g_to_grid;
+  vec3 gc = clamp(x * to_grid, vec3(0.0), g_map_last);
+  ivec3 mi = g_map_dims;
   ivec3 i0 = min(ivec3(floor(gc)), mi - 2);
   vec3 f = gc - vec3(i0);
   VPM_FETCH_CELL_AT(vec3, map_texel, i0);
@@ -226,7 +253,7 @@ float deformed_value_and_gradient(vec3 x, out vec3 grad) {
   jacobian[2] += d_fz * to_grid.z;
 #endif
   vec3 grad_u;
-  float v = source_and_gradient(clamp(rest * g_inv_spacing, vec3(0.0), vec3(p.dims.xyz - 1)),
+  float v = source_and_gradient(clamp(rest * g_inv_spacing, vec3(0.0), g_last_index),
                                 grad_u);
   vec3 grad_rest = grad_u * g_inv_spacing;
   grad = vec3(dot(jacobian[0], grad_rest), dot(jacobian[1], grad_rest),
@@ -234,16 +261,16 @@ float deformed_value_and_gradient(vec3 x, out vec3 grad) {
   return v;
 }
 
-ivec3 brick_of(vec3 x) { return clamp(ivec3(floor(x * g_inv_brick)), ivec3(0), p.bricks.xyz - 1); }
+ivec3 brick_of(vec3 x) { return clamp(ivec3(floor(x * g_inv_brick)), ivec3(0), g_bricks - 1); }
 
 int brick_index(vec3 x) {
   ivec3 b = brick_of(x);
-  return b.x + p.bricks.x * (b.y + p.bricks.y * b.z);
+  return b.x + g_bricks.x * (b.y + g_bricks.y * b.z);
 }
 
 // Ray parameter where the ray leaves the brick holding x.
 float brick_exit(vec3 x, vec3 eye, vec3 inv_dir) {
-  vec3 size = p.spacing_mm.xyz * float(p.bricks.w);
+  vec3 size = g_brick_mm;
   ivec3 b = brick_of(x);
   vec3 lo = vec3(b) * size;
   vec3 hi = min(vec3(b + 1) * size, extent_mm());
@@ -270,8 +297,8 @@ void skip_empty_bricks(inout int k, inout float t, inout vec3 x, float threshold
 }
 
 vec4 lut_at(float v) {
-  float n = p.lut.z;
-  float f = clamp((v - p.lut.x) * p.lut.y, 0.0, n - 1.0);
+  float n = g_lut.z;
+  float f = clamp((v - g_lut.x) * g_lut.y, 0.0, n - 1.0);
   int i = min(int(f), int(n) - 2);
   float t = f - float(i);
   vec4 a = u_lut.entries[i];
@@ -289,11 +316,11 @@ vec4 lut_at(float v) {
 vec3 shade(vec3 rgb, vec3 g, vec3 dir) {
   float len = length(g);
   float ndl = len > 0.0 ? abs(dot(g, dir)) / len : 1.0;
-  float s = len / (len + p.gradient.x);
-  float n = p.shading.w;
+  float s = len / (len + g_gradient_half);
+  float n = g_shading.w;
   float spec = ndl / (n - n * ndl + ndl);
   float diffuse = 1.0 + (ndl - 1.0) * s;
-  vec3 lit = rgb * (p.shading.x + p.shading.y * diffuse) + vec3(p.shading.z * spec * s);
+  vec3 lit = rgb * (g_shading.x + g_shading.y * diffuse) + vec3(g_shading.z * spec * s);
   return min(lit, vec3(1.0));
 }
 
@@ -319,6 +346,7 @@ void main() {
   if (px.x >= p.image.x || px.y >= p.image.y) return;
   vec2 ndc = vec2(2.0 * (float(px.x) + 0.5) / float(p.image.x) - 1.0,
                   1.0 - 2.0 * (float(px.y) + 0.5) / float(p.image.y));
+  set_globals();
   vec3 eye = p.eye_mm.xyz;
   vec3 dir = normalize(p.forward.xyz + ndc.x * p.right.xyz + ndc.y * p.up.xyz);
   // No zero components: 1/dir stays finite and keeps its sign.
@@ -335,8 +363,6 @@ void main() {
     pixels[out_index] = pack_rgba(p.background.rgb);
     return;
   }
-  g_inv_spacing = 1.0 / p.spacing_mm.xyz;
-  g_inv_brick = 1.0 / (p.spacing_mm.xyz * float(p.bricks.w));
   float step = p.eye_mm.w;
   bool skipping = has_flag(VPM_RAYCAST_SKIPPING);
   uint taken = 0u;
@@ -346,18 +372,19 @@ void main() {
   // later sample can change the pixel.
   bool early = has_flag(VPM_RAYCAST_EARLY_TERMINATION);
   float ray_max = kNoValue;
+  float black = p.window.x, white = p.window.z;
   for (;;) {
     float t = t_near + float(k) * step;
     vec3 x = eye + t * dir;
     // Bricks that cannot raise the maximum (or show above the window).
     if (skipping) {
-      skip_empty_bricks(k, t, x, max(ray_max, p.window.x), eye, dir, inv_dir, t_near, t_far,
+      skip_empty_bricks(k, t, x, max(ray_max, black), eye, dir, inv_dir, t_near, t_far,
                         step);
     }
     if (t > t_far) break;
     ++taken;
     ray_max = max(ray_max, deformed_value(x));
-    if (early && ray_max >= p.window.z) break;
+    if (early && ray_max >= white) break;
     ++k;
   }
   vec3 rgb = vec3(clamp((ray_max - p.window.x) * p.window.y, 0.0, 1.0));
@@ -377,7 +404,7 @@ void main() {
       float w = (1.0 - acc.a) * c.a;
       if (shading) {
         c.rgb = w > kShadeMinWeight ? shade(c.rgb, grad, dir)
-                                    : min(c.rgb * (p.shading.x + p.shading.y), vec3(1.0));
+                                    : min(c.rgb * (g_shading.x + g_shading.y), vec3(1.0));
       }
       if (c.a > 0.0) {
         acc.rgb += w * c.rgb;
@@ -415,7 +442,7 @@ void main() {
         c_shade = c;
         g = vec3(0.0);
       } else {
-        if (shading) c.rgb = min(c.rgb * (p.shading.x + p.shading.y), vec3(1.0));
+        if (shading) c.rgb = min(c.rgb * (g_shading.x + g_shading.y), vec3(1.0));
         composite = c.a > 0.0;
         ++k;
       }
