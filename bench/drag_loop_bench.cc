@@ -2,7 +2,13 @@
 // update, ray casting (interactive 256x256 and still 512x512), JPEG encode,
 // and the frame rate of the whole interactive loop; for the 250-vertex mesh
 // refined at the left renal artery, and for ~1,000 and ~5,000 vertices.
+//   drag_loop_bench [SOURCE] [--max-load-steps N] [--min-load-fraction F]
+//                   [--intermediate-newton N] [--no-barrier] [--max-vertices N]
+// (solver flags: SolverOptions; --max-vertices: only meshes decimated to at
+// most N vertices)
 #include <cstdio>
+#include <cstdlib>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -42,15 +48,18 @@ struct Row {
 };
 
 Row RunCase(const Case& c, const Volume& volume, const gpu::GpuContext& context,
-            GpuVolume& gpu_volume, VolumeRenderer& renderer, const glm::dvec3& grab) {
+            GpuVolume& gpu_volume, VolumeRenderer& renderer, const glm::dvec3& grab,
+            const SolverOptions& solver) {
   MeshParams params;
   params.grid = c.grid;
   params.target = c.target;
   params.refine_at_mm = grab;
   auto costs = bench::Check(LatticeCostsGpu::Create(context), "kernel");
   auto mesh = bench::Check(BuildProxyMesh(volume, params, {&gpu_volume, &costs}), "mesh");
+  DeformableScene::Options options;
+  options.fem.solver = solver;
   auto scene = bench::Check(
-      DeformableScene::Create(context, volume, gpu_volume, renderer, mesh, {}), "scene");
+      DeformableScene::Create(context, volume, gpu_volume, renderer, mesh, options), "scene");
   bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
   SceneView interactive{.camera = Camera::ForVolume(volume.geometry()),
                         .preset = bench::Check(MakeRenderPreset("ct-soft-tissue", volume), "preset"),
@@ -115,7 +124,25 @@ Row RunCase(const Case& c, const Volume& volume, const gpu::GpuContext& context,
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string source = argc > 1 ? argv[1] : "phantom:abdomen";
+  std::string source = "phantom:abdomen";
+  SolverOptions solver;
+  int64_t max_vertices = 1 << 30;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--max-load-steps" && i + 1 < argc) {
+      solver.max_load_steps = std::atoi(argv[++i]);
+    } else if (arg == "--min-load-fraction" && i + 1 < argc) {
+      solver.min_load_fraction = std::atof(argv[++i]);
+    } else if (arg == "--intermediate-newton" && i + 1 < argc) {
+      solver.intermediate_newton_iterations = std::atoi(argv[++i]);
+    } else if (arg == "--no-barrier") {
+      solver.inversion_barrier = false;
+    } else if (arg == "--max-vertices" && i + 1 < argc) {
+      max_vertices = std::atoll(argv[++i]);
+    } else {
+      source = arg;
+    }
+  }
   auto volume = bench::Check(ReadVolume(source, {}), "reading the volume");
   auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
   auto gpu_volume = bench::Check(GpuVolume::Upload(*context, volume), "upload");
@@ -126,6 +153,11 @@ int main(int argc, char** argv) {
   }
   std::printf("drag loop: %s, grab left_renal_artery, drag 12 mm in 10 steps, device '%s'\n",
               source.c_str(), context->device_name().c_str());
+  std::printf(
+      "FEM: inversion barrier %s, at most %d load steps, min load fraction %g, %d Newton "
+      "iterations after a partial load step\n",
+      solver.inversion_barrier ? "on" : "off", solver.max_load_steps, solver.min_load_fraction,
+      solver.intermediate_newton_iterations);
   std::printf("per step, best of the 10 steps (ms; FEM also mean and worst); loop fps = 10 steps "
               "/ their whole wall time (FEM + map + interactive frame + JPEG)\n");
   std::printf("%-22s %6s %8s %9s %8s %8s %13s %11s %8s %9s %9s\n", "mesh", "verts", "FEM",
@@ -135,7 +167,8 @@ int main(int argc, char** argv) {
   for (const Case& c : {Case{"20^3 -> 250 + refine", {20, 20, 20}, 250},
                         Case{"24^3 -> 1000 + refine", {24, 24, 24}, 1000},
                         Case{"40^3 -> 5000 + refine", {40, 40, 40}, 5000}}) {
-    const Row r = RunCase(c, volume, *context, gpu_volume, *renderer, grab);
+    if (c.target > max_vertices) continue;
+    const Row r = RunCase(c, volume, *context, gpu_volume, *renderer, grab, solver);
     std::printf("%-22s %6lld %8.2f %9.2f %8.2f %8.2f %13.1f %11.1f %8.2f %9.1f %9lld\n", c.name,
                 static_cast<long long>(r.vertices), r.fem, r.fem_sum / r.steps, r.fem_max, r.map,
                 r.interactive, r.still, r.encode, r.loop_fps, static_cast<long long>(r.inverted));

@@ -9,7 +9,9 @@
 //   - validity: inverted tets after drags of 0.5, 1 and 1.5 h.
 // Times are the best of --reps runs (the machine is shared).
 //
-//   fem_bench [SOURCE] [--reps N] [--min-load-fraction F]
+//   fem_bench [SOURCE] [--reps N] [--min-load-fraction F] [--intermediate-newton N]
+//             [--max-vertices N]
+// (--max-vertices: only the meshes decimated to at most N vertices)
 //   SOURCE defaults to phantom:abdomen; F: SolverOptions::min_load_fraction
 #include <time.h>
 
@@ -234,9 +236,15 @@ int main(int argc, char** argv) {
   std::string source = "phantom:abdomen";
   int reps = 3;
   double min_load_fraction = SolverOptions{}.min_load_fraction;
+  int64_t max_vertices = 1 << 30;
+  int intermediate_newton = SolverOptions{}.intermediate_newton_iterations;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc) {
       reps = std::max(1, std::atoi(argv[++i]));
+    } else if (std::strcmp(argv[i], "--intermediate-newton") == 0 && i + 1 < argc) {
+      intermediate_newton = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--max-vertices") == 0 && i + 1 < argc) {
+      max_vertices = std::atoll(argv[++i]);
     } else if (std::strcmp(argv[i], "--min-load-fraction") == 0 && i + 1 < argc) {
       min_load_fraction = std::atof(argv[++i]);
     } else {
@@ -261,7 +269,10 @@ int main(int argc, char** argv) {
       {"250+150", 20, 250, true}, {"1000", 20, 1000, false}, {"5000", 30, 5000, false}};
   SolverOptions base;
   base.min_load_fraction = min_load_fraction;
-  for (const MeshCase& c : cases) RunCase(c, volume, landmark, reps, base);
+  base.intermediate_newton_iterations = intermediate_newton;
+  for (const MeshCase& c : cases) {
+    if (c.target <= max_vertices) RunCase(c, volume, landmark, reps, base);
+  }
   std::printf(
       "step ms / cpu ms: wall / this thread's CPU time per drag step (mean of %d); "
       "err mm: largest vertex distance from a solve converged to 1e-7; load / short: load steps "

@@ -40,6 +40,7 @@ Result<CorotationalSolver> CorotationalSolver::Create(
   }
   if (options.max_newton_iterations < 1 || options.max_cg_iterations < 1 || options.threads < 1 ||
       options.adaptive_twist_after < 0 || options.max_load_steps < 1 ||
+      options.intermediate_newton_iterations < 1 ||
       !(options.min_load_fraction > 0.0 && options.min_load_fraction <= 1.0) ||
       !(options.update_tolerance > 0.0) || !(options.cg_tolerance > 0.0)) {
     return absl::InvalidArgumentError("solver iteration limits and tolerances must be > 0");
@@ -159,7 +160,8 @@ double CorotationalSolver::NewtonUpdate(const Eigen::VectorXd& rhs,
 Status CorotationalSolver::Equilibrate(const Eigen::VectorXd& force_n,
                                        const std::vector<int32_t>& constrained, bool with_handles,
                                        const Eigen::VectorXd& start, double step_scale,
-                                       int first_iteration, SolveStats& stats) {
+                                       int first_iteration, int max_iterations,
+                                       SolveStats& stats) {
   stats.converged = false;
   for (;;) {
     const auto t0 = Clock::now();
@@ -178,7 +180,7 @@ Status CorotationalSolver::Equilibrate(const Eigen::VectorXd& force_n,
       stats.converged = true;
       return absl::OkStatus();
     }
-    if (iterations >= options_.max_newton_iterations) return absl::OkStatus();
+    if (iterations >= max_iterations) return absl::OkStatus();
     const double moved = NewtonUpdate(residual_, constrained, with_handles, stats);
     step_scale = std::max(step_scale, MaxVertexNorm(displacement_ - start));
     // Stopping here, without evaluating the new state, saves one force
@@ -256,9 +258,11 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
       displacement_ += jump;
     }
     linearized_ = false;
-    const Status status =
-        Equilibrate(force_n, constrained, with_handles, start,
-                    MaxVertexNorm(displacement_ - step_start), first_iteration, stats);
+    const Status status = Equilibrate(
+        force_n, constrained, with_handles, start, MaxVertexNorm(displacement_ - step_start),
+        first_iteration,
+        alpha == 1.0 ? options_.max_newton_iterations : options_.intermediate_newton_iterations,
+        stats);
     if (!status.ok()) return status;
     if (alpha == 1.0) break;
     // The last update's linearised residual starts the next load step.

@@ -58,12 +58,20 @@ struct SolverOptions {
   bool inversion_barrier = true;
   // With the barrier: at most this many load steps per Solve (a prescribed
   // jump that would crush an element is applied in feasible parts; after
-  // these, or when no part is feasible, the rest at once).
-  int max_load_steps = 64;
+  // these, or when no part is feasible, the rest at once). The default
+  // bounds the cost of an interactive drag step whose handles crush tets
+  // whatever the free vertices do (docs/FEM.md, "Cost"); measurements
+  // (MeasurementFemOptions) allow 64.
+  int max_load_steps = 4;
   // A load step shorter than this fraction of the rest of the jump means the
   // prescribed motion itself is crushing an element: the rest is applied at
   // once (SolveStats::forced_inversion). In (0, 1].
   double min_load_fraction = 1.0 / 64.0;
+  // Newton iterations after a partial load step (one that is not the last):
+  // the next step's predictor starts from its linearised residual, so the
+  // path only has to stay near equilibrium; the last load step iterates up
+  // to max_newton_iterations.
+  int intermediate_newton_iterations = 1;
 };
 
 // Below this many tets the element loops run on one thread (a split costs
@@ -159,13 +167,13 @@ class CorotationalSolver {
   // |du|, mm (infinity for a shortened update).
   double NewtonUpdate(const Eigen::VectorXd& rhs, const std::vector<int32_t>& constrained,
                       bool with_handles, SolveStats& stats);
-  // Newton iterations from displacement_ until the update tolerance, the
-  // iteration limit (counted from stats.newton_iterations = first_iteration)
+  // Newton iterations from displacement_ until the update tolerance,
+  // max_iterations (counted from stats.newton_iterations = first_iteration)
   // or round-off; step_scale (mm) is this load step's motion. Internal (state
   // restored to start) when the state becomes non-finite.
   Status Equilibrate(const Eigen::VectorXd& force_n, const std::vector<int32_t>& constrained,
                      bool with_handles, const Eigen::VectorXd& start, double step_scale,
-                     int first_iteration, SolveStats& stats);
+                     int first_iteration, int max_iterations, SolveStats& stats);
 
   SolverOptions options_;
   std::vector<TetElement> elements_;

@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "server/fem/corotated_forces.h"
+#include "server/fem/corotational_solver.h"
 #include "server/fem/fem_model.h"
 #include "server/mesh/build_proxy_mesh.h"
 #include "tests/fem/fem_test_meshes.h"
@@ -121,9 +122,31 @@ TEST(InversionBarrier, FeasibleStepKeepsEveryElementPositive) {
   EXPECT_EQ(FeasibleStepFraction(elements, rest, Eigen::VectorXd::Zero(12)), 1.0);
 }
 
+TEST(InversionBarrier, LoadStepOptionsOutOfRangeAreInvalidArgument) {
+  const std::vector<glm::dvec3> rest = {glm::dvec3(0, 0, 0), glm::dvec3(1, 0, 0),
+                                        glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)};
+  const std::vector<std::array<int32_t, 4>> tets = {{0, 1, 2, 3}};
+  std::vector<uint8_t> fixed(12, 0);
+  for (int d = 0; d < 9; ++d) fixed[d] = 1;  // vertices 0-2 fixed
+  ASSERT_TRUE(CorotationalSolver::Create(rest, tets, {kYoung}, 0.45, fixed).ok());
+  for (int bad = 0; bad < 4; ++bad) {
+    SolverOptions options;
+    if (bad == 0) options.max_load_steps = 0;
+    if (bad == 1) options.min_load_fraction = 0.0;
+    if (bad == 2) options.min_load_fraction = 1.5;
+    if (bad == 3) options.intermediate_newton_iterations = 0;
+    EXPECT_EQ(CorotationalSolver::Create(rest, tets, {kYoung}, 0.45, fixed, options).status().code(),
+              absl::StatusCode::kInvalidArgument)
+        << bad;
+  }
+}
+
 // The validity measure of ALGORITHM.md section 6 on a small body: a ball of
 // handles dragged 1.5 h. The plain corotated model crushes tets in front of
-// it; with the barrier the drag is reached and every tet stays positive.
+// it; with the barrier the drag is reached and every tet stays positive:
+// taken at once with the measurement settings (up to 64 load steps), and in
+// 10 increments, as a user drags, with the interactive defaults (4 load
+// steps per increment).
 TEST(InversionBarrier, ProxyMeshDragOfOneAndAHalfHInvertsNoTet) {
   const Volume volume = testing::MakeBodyVolume();
   const glm::dvec3 point = volume.geometry().extent_mm() * 0.5;
@@ -131,23 +154,41 @@ TEST(InversionBarrier, ProxyMeshDragOfOneAndAHalfHInvertsNoTet) {
   ASSERT_TRUE(mesh.ok()) << mesh.status();
   const double h = mesh->stats.h_mm;
   const glm::dvec3 drag(1.5 * h, 0.0, 0.0);
+  struct Case {
+    const char* name;
+    bool barrier;
+    SolverOptions solver;
+    int increments;
+  };
+  SolverOptions measuring = SolverOptions{};
+  measuring.max_load_steps = 64;
+  measuring.intermediate_newton_iterations = measuring.max_newton_iterations;
+  const Case cases[] = {{"no barrier, at once", false, measuring, 1},
+                        {"barrier, at once, 64 load steps", true, measuring, 1},
+                        {"barrier, 10 increments, defaults", true, SolverOptions{}, 10}};
   int64_t inverted_without = -1;
-  for (bool barrier : {false, true}) {
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
     FemOptions options;
-    options.solver.inversion_barrier = barrier;
+    options.solver = c.solver;
+    options.solver.inversion_barrier = c.barrier;
     auto model = FemModel::Create(*mesh, volume.geometry().extent_mm(), options);
     ASSERT_TRUE(model.ok()) << model.status();
     const auto grab = model->Grab(point, h);
     ASSERT_TRUE(grab.ok()) << grab.status();
-    const auto stats = model->Drag(drag);
-    ASSERT_TRUE(stats.ok()) << stats.status();
-    EXPECT_FALSE(stats->forced_inversion);
+    int barrier_work = 0;
+    for (int i = 1; i <= c.increments; ++i) {
+      const auto stats = model->Drag(drag * (static_cast<double>(i) / c.increments));
+      ASSERT_TRUE(stats.ok()) << stats.status();
+      EXPECT_FALSE(stats->forced_inversion) << "increment " << i;
+      barrier_work += stats->load_steps - 1 + stats->shortened_updates;
+    }
     // The handles reached the prescribed drag.
     const auto u = model->Displacements();
     for (int32_t v : grab->handles) EXPECT_NEAR(glm::length(u[v] - drag), 0.0, 1e-9) << v;
-    if (barrier) {
+    if (c.barrier) {
       EXPECT_EQ(model->CountInvertedTets(), 0);
-      EXPECT_GT(stats->load_steps + stats->shortened_updates, 1);  // the barrier did work
+      EXPECT_GT(barrier_work, 0);  // the barrier did work
     } else {
       inverted_without = model->CountInvertedTets();
     }
