@@ -42,6 +42,13 @@ class SessionTest : public ServiceTest {
     s.set_height(96);
     return s;
   }
+  // A Watch of this test's session at 96x96.
+  v1::WatchRequest SmallWatch() const {
+    v1::WatchRequest request;
+    request.set_session_id(session_.session_id());
+    *request.mutable_settings() = Small();
+    return request;
+  }
   v1::VolumeInfo volume_;
   v1::SessionInfo session_;
 };
@@ -335,9 +342,7 @@ TEST_F(SessionTest, Watch_SlowReaderGetsNewestFrameWithSupersededCounted) {
 
 TEST_F(SessionTest, Watch_SeesAnotherClientsManipulation) {
   auto context = Context();
-  v1::WatchRequest request;
-  request.set_session_id(session_.session_id());
-  *request.mutable_settings() = Small();
+  const v1::WatchRequest request = SmallWatch();
   auto reader = stub_->Watch(context.get(), request);
   v1::Frame frame;
   ASSERT_TRUE(reader->Read(&frame));
@@ -359,9 +364,7 @@ TEST_F(SessionTest, Watch_SeesAnotherClientsManipulation) {
 TEST_F(SessionTest, Watch_StreamCapPerClientIsResourceExhausted) {
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
   std::vector<std::unique_ptr<grpc::ClientReader<v1::Frame>>> readers;
-  v1::WatchRequest request;
-  request.set_session_id(session_.session_id());
-  *request.mutable_settings() = Small();
+  const v1::WatchRequest request = SmallWatch();
   for (int i = 0; i < 4; ++i) {
     contexts.push_back(Context());
     readers.push_back(stub_->Watch(contexts.back().get(), request));
@@ -381,9 +384,7 @@ TEST_F(SessionTest, Watch_StreamCapPerClientIsResourceExhausted) {
 
 TEST_F(SessionTest, Shutdown_FinishesOpenStreamsWithUnavailable) {
   auto context = Context();
-  v1::WatchRequest request;
-  request.set_session_id(session_.session_id());
-  *request.mutable_settings() = Small();
+  const v1::WatchRequest request = SmallWatch();
   auto reader = stub_->Watch(context.get(), request);
   v1::Frame frame;
   ASSERT_TRUE(reader->Read(&frame));
@@ -397,9 +398,7 @@ TEST_F(SessionTest, Shutdown_FinishesOpenStreamsWithUnavailable) {
 
 TEST_F(SessionTest, CloseSession_EndsItsStreams) {
   auto context = Context();
-  v1::WatchRequest request;
-  request.set_session_id(session_.session_id());
-  *request.mutable_settings() = Small();
+  const v1::WatchRequest request = SmallWatch();
   auto reader = stub_->Watch(context.get(), request);
   v1::Frame frame;
   ASSERT_TRUE(reader->Read(&frame));
