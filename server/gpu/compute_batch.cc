@@ -24,7 +24,8 @@ void ImageLayoutBarrier(const vk::raii::CommandBuffer& cmd, vk::Image image, vk:
   const vk::ImageMemoryBarrier barrier(
       all, all, from, to, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, image,
       vk::ImageSubresourceRange(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1));
-  const auto stages = vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer;
+  const auto stages =
+      vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer;
   cmd.pipelineBarrier(stages, stages, {}, {}, {}, barrier);
 }
 
