@@ -4,10 +4,11 @@
 // more than it computes (docs/MESH.md).
 //
 // The smallest keys are held in a sorted window popped from the queue (in
-// runs: MonotoneMinQueue::PopRun), every window key at most every queued key. A key pushed below the window's
-// largest is inserted into the window; any other goes to the queue, which
-// then still sees only keys at least its last popped one. Pops come out in
-// exactly MonotoneMinQueue's order, (cost, item) ascending.
+// runs: MonotoneMinQueue::PopRun), every window key at most every queued
+// key. A key pushed below the window's largest is inserted into the window;
+// any other goes to the queue, which then still sees only keys at least its
+// last popped one. Pops come out in exactly MonotoneMinQueue's order, (cost,
+// item) ascending.
 #pragma once
 
 #include <algorithm>
@@ -23,9 +24,7 @@ class LookaheadMinQueue {
   using Entry = MonotoneMinQueue::Entry;
 
   bool empty() const { return front_ == window_.size() && queue_.empty(); }
-  int64_t size() const {
-    return static_cast<int64_t>(window_.size() - front_) + queue_.size();
-  }
+  int64_t size() const { return static_cast<int64_t>(window_.size() - front_) + queue_.size(); }
 
   // cost must be finite, >= 0 and, with item, not below the last popped key.
   void Push(double cost, int32_t item) {
