@@ -140,9 +140,13 @@ void ApplyCorotatedStiffness(const std::vector<TetElement>& elements, const Coro
         out.setZero(v_mm.size());
         for (int64_t t = begin; t < end; ++t) {
           const TetElement& element = elements[t];
+          const Eigen::Matrix<double, 3, 4> v = GatherCorners(element, v_mm);
+          // K_e 0 = 0: a sparse v (the predictor's handle jump) touches few
+          // elements.
+          if (v.isZero(0.0)) continue;
           ScatterAdd(element,
-                     ApplyElementTangent(element, frames.rotations[t], frames.Twist(t),
-                                         GatherCorners(element, v_mm), frames.Barrier(t)),
+                     ApplyElementTangent(element, frames.rotations[t], frames.Twist(t), v,
+                                         frames.Barrier(t)),
                      out);
         }
       });
