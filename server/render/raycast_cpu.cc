@@ -23,6 +23,30 @@ double MsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// A trilinear cell's interpolant at fraction f (each in [0, 1]) and its
+// partial derivatives per cell unit, for corner values c[x + 2y + 4z] of type
+// T (float for the volume, vec3 for the backward map), in the order of
+// operations of raycast_body.glsl so that both agree to the last bit.
+template <typename T>
+struct TrilinearWithPartials {
+  T value, d_dx, d_dy, d_dz;
+};
+
+template <typename T>
+TrilinearWithPartials<T> InterpolateCell(const T (&c)[8], vec3 f) {
+  const T c00 = c[0] + (c[1] - c[0]) * f.x;
+  const T c10 = c[2] + (c[3] - c[2]) * f.x;
+  const T c01 = c[4] + (c[5] - c[4]) * f.x;
+  const T c11 = c[6] + (c[7] - c[6]) * f.x;
+  const T c0 = c00 + (c10 - c00) * f.y;
+  const T c1 = c01 + (c11 - c01) * f.y;
+  const T dx0 = (c[1] - c[0]) + ((c[3] - c[2]) - (c[1] - c[0])) * f.y;
+  const T dx1 = (c[5] - c[4]) + ((c[7] - c[6]) - (c[5] - c[4])) * f.y;
+  const T dy0 = c10 - c00;
+  const T dy1 = c11 - c01;
+  return {c0 + (c1 - c0) * f.z, dx0 + (dx1 - dx0) * f.z, dy0 + (dy1 - dy0) * f.z, c1 - c0};
+}
+
 uint32_t PackRgba(vec3 rgb) {
   const vec3 c = glm::clamp(rgb, 0.0f, 1.0f) * 255.0f + 0.5f;
   return uint32_t(c.r) | (uint32_t(c.g) << 8) | (uint32_t(c.b) << 16) | (255u << 24);
@@ -115,20 +139,11 @@ class Caster {
     const vec3 f = u - vec3(i0);
     const int64_t sy = n_.x, sz = int64_t(n_.x) * n_.y;
     const float* b = values_ + i0.x + sy * i0.y + sz * i0.z;
-    const float c000 = b[0], c100 = b[1], c010 = b[sy], c110 = b[sy + 1];
-    const float c001 = b[sz], c101 = b[sz + 1], c011 = b[sz + sy], c111 = b[sz + sy + 1];
-    const float c00 = c000 + (c100 - c000) * f.x;
-    const float c10 = c010 + (c110 - c010) * f.x;
-    const float c01 = c001 + (c101 - c001) * f.x;
-    const float c11 = c011 + (c111 - c011) * f.x;
-    const float c0 = c00 + (c10 - c00) * f.y;
-    const float c1 = c01 + (c11 - c01) * f.y;
-    const float dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;
-    const float dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;
-    const float dy0 = c10 - c00;
-    const float dy1 = c11 - c01;
-    grad_u = vec3(dx0 + (dx1 - dx0) * f.z, dy0 + (dy1 - dy0) * f.z, c1 - c0);
-    return c0 + (c1 - c0) * f.z;
+    const float c[8] = {b[0],  b[1],      b[sy],      b[sy + 1],
+                        b[sz], b[sz + 1], b[sz + sy], b[sz + sy + 1]};
+    const TrilinearWithPartials<float> t = InterpolateCell(c, f);
+    grad_u = vec3(t.d_dx, t.d_dy, t.d_dz);
+    return t.value;
   }
 
   // deformed_value_and_gradient() of raycast_body.glsl: J(x) and grad J
@@ -148,22 +163,13 @@ class Caster {
         return vec3(
             map.texels[(i0.x + dx) + size_t(mi.x) * ((i0.y + dy) + size_t(mi.y) * (i0.z + dz))]);
       };
-      const vec3 c000 = at(0, 0, 0), c100 = at(1, 0, 0), c010 = at(0, 1, 0), c110 = at(1, 1, 0);
-      const vec3 c001 = at(0, 0, 1), c101 = at(1, 0, 1), c011 = at(0, 1, 1), c111 = at(1, 1, 1);
-      const vec3 c00 = c000 + (c100 - c000) * f.x;
-      const vec3 c10 = c010 + (c110 - c010) * f.x;
-      const vec3 c01 = c001 + (c101 - c001) * f.x;
-      const vec3 c11 = c011 + (c111 - c011) * f.x;
-      const vec3 c0 = c00 + (c10 - c00) * f.y;
-      const vec3 c1 = c01 + (c11 - c01) * f.y;
-      const vec3 dx0 = (c100 - c000) + ((c110 - c010) - (c100 - c000)) * f.y;
-      const vec3 dx1 = (c101 - c001) + ((c111 - c011) - (c101 - c001)) * f.y;
-      const vec3 dy0 = c10 - c00;
-      const vec3 dy1 = c11 - c01;
-      rest = x + (c0 + (c1 - c0) * f.z);
-      jacobian[0] += (dx0 + (dx1 - dx0) * f.z) * to_grid.x;
-      jacobian[1] += (dy0 + (dy1 - dy0) * f.z) * to_grid.y;
-      jacobian[2] += (c1 - c0) * to_grid.z;
+      const vec3 c[8] = {at(0, 0, 0), at(1, 0, 0), at(0, 1, 0), at(1, 1, 0),
+                         at(0, 0, 1), at(1, 0, 1), at(0, 1, 1), at(1, 1, 1)};
+      const TrilinearWithPartials<vec3> t = InterpolateCell(c, f);
+      rest = x + t.value;
+      jacobian[0] += t.d_dx * to_grid.x;
+      jacobian[1] += t.d_dy * to_grid.y;
+      jacobian[2] += t.d_dz * to_grid.z;
     }
     vec3 grad_u;
     const float v =
