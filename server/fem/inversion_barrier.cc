@@ -50,23 +50,40 @@ double VolumeRatio(const TetElement& element, const Eigen::VectorXd& u_mm) {
 double FeasibleStepFraction(const std::vector<TetElement>& elements, const Eigen::VectorXd& u_mm,
                             const Eigen::VectorXd& du_mm, double keep, double min_alpha,
                             const std::vector<uint8_t>& skip) {
-  // Per element: F(u) and dF = grad du, so F(u + alpha du) = F + alpha dF.
+  // Per watched element: F(u) and dF = grad du, so F(u + alpha du) = F +
+  // alpha dF, and the floor its det must keep.
   struct Watched {
     Eigen::Matrix3d f, df;
     double floor;
   };
-  std::vector<Watched> watched;
-  for (size_t t = 0; t < elements.size(); ++t) {
-    if (!skip.empty() && skip[t]) continue;
+  // False for elements that do not limit the step: skipped, not moved by
+  // du, or already inverted.
+  const auto watch = [&](size_t t, Watched& w) {
+    if (!skip.empty() && skip[t]) return false;
     const TetElement& element = elements[t];
     const Eigen::Matrix<double, 3, 4> du = GatherCorners(element, du_mm);
-    if (du.isZero(0.0)) continue;
-    const Eigen::Matrix3d f =
-        Eigen::Matrix3d::Identity() + DisplacementGradient(element, GatherCorners(element, u_mm));
-    const double j = Det(f);
-    if (!(j > 0.0)) continue;
-    watched.push_back(
-        {f, DisplacementGradient(element, du), keep * std::min(j, kBarrierOnsetVolumeRatio)});
+    if (du.isZero(0.0)) return false;
+    w.f = Eigen::Matrix3d::Identity() + DisplacementGradient(element, GatherCorners(element, u_mm));
+    const double j = Det(w.f);
+    if (!(j > 0.0)) return false;
+    w.df = DisplacementGradient(element, du);
+    w.floor = keep * std::min(j, kBarrierOnsetVolumeRatio);
+    return true;
+  };
+  // alpha = 1, the first fraction tried and the common case, in a pass that
+  // stores nothing.
+  if (min_alpha <= 1.0) {
+    bool all_hold = true;
+    Watched w;
+    for (size_t t = 0; t < elements.size() && all_hold; ++t) {
+      if (watch(t, w)) all_hold = Det(w.f + w.df) >= w.floor;
+    }
+    if (all_hold) return 1.0;
+  }
+  std::vector<Watched> watched;
+  Watched w;
+  for (size_t t = 0; t < elements.size(); ++t) {
+    if (watch(t, w)) watched.push_back(w);
   }
   for (double alpha = 1.0; alpha >= min_alpha; alpha *= 0.5) {
     const bool ok = std::all_of(watched.begin(), watched.end(), [alpha](const Watched& w) {
