@@ -11,11 +11,6 @@
 namespace vpm {
 namespace {
 
-void ScatterAdd(const TetElement& element, const Eigen::Matrix<double, 3, 4>& f,
-                Eigen::VectorXd& out) {
-  for (int a = 0; a < 4; ++a) out.segment<3>(3 * element.vertices[a]) += f.col(a);
-}
-
 // R^T F - I with F = I + G, computed without forming F so that small
 // displacements keep their relative precision.
 Eigen::Matrix3d CorotatedStrainSource(const Eigen::Matrix3d& r, const Eigen::Matrix3d& g) {
@@ -58,8 +53,25 @@ Eigen::Matrix3d TwistStiffness(const TetElement& element, const Eigen::Matrix3d&
   return eigen.eigenvectors() * q.asDiagonal() * eigen.eigenvectors().transpose();
 }
 
-// out = the sum of the parts that were filled (the first part always is).
-void SumParts(std::vector<Eigen::VectorXd>& parts, Eigen::VectorXd& out) {
+// out (dofs entries) = the sum over elements of their nodal vectors
+// scattered to their corners; element_vector(t, f) fills f (3 by 4) for
+// element t and returns false when it adds nothing. The elements are split
+// between `threads` (ParallelChunks), each summing into its own vector.
+template <typename ElementVector>
+void SumOverElements(const std::vector<TetElement>& elements, int64_t dofs, int threads,
+                     const ElementVector& element_vector, Eigen::VectorXd& out) {
+  std::vector<Eigen::VectorXd> parts(std::max(1, threads));
+  ParallelChunks(
+      threads, static_cast<int64_t>(elements.size()), [&](int64_t begin, int64_t end, int part) {
+        Eigen::VectorXd& sum = parts[part];
+        sum.setZero(dofs);
+        Eigen::Matrix<double, 3, 4> f;
+        for (int64_t t = begin; t < end; ++t) {
+          if (!element_vector(t, f)) continue;
+          for (int a = 0; a < 4; ++a) sum.segment<3>(3 * elements[t].vertices[a]) += f.col(a);
+        }
+      });
+  // The first part is always filled; others only when their chunk ran.
   out = std::move(parts[0]);
   for (size_t p = 1; p < parts.size(); ++p) {
     if (parts[p].size() == out.size()) out += parts[p];
@@ -84,35 +96,29 @@ void CorotatedForces(const std::vector<TetElement>& elements, const Eigen::Vecto
   } else {
     frames.barrier.clear();
   }
-  std::vector<Eigen::VectorXd> partial(std::max(1, threads));
-  ParallelChunks(
-      threads, static_cast<int64_t>(elements.size()), [&](int64_t begin, int64_t end, int part) {
-        Eigen::VectorXd& out = partial[part];
-        out.setZero(u_mm.size());
-        for (int64_t t = begin; t < end; ++t) {
-          const TetElement& element = elements[t];
-          const Eigen::Matrix3d g = DisplacementGradient(element, GatherCorners(element, u_mm));
-          const Eigen::Matrix3d r = method == FemMethod::kLinear
-                                        ? Eigen::Matrix3d::Identity()
-                                        : PolarRotation(Eigen::Matrix3d::Identity() + g);
-          frames.rotations[t] = r;
-          const Eigen::Matrix3d h = CorotatedStrainSource(r, g);
-          if (!frames.twist.empty()) {
-            const Eigen::Matrix3d strain = 0.5 * (h + h.transpose());
-            if (strain.squaredNorm() >= kTwistMinStrain * kTwistMinStrain) {
-              frames.twist[t] = TwistStiffness(element, strain);
-              frames.twisted[t] = 1;
-            }
-          }
-          Eigen::Matrix<double, 3, 4> f = r * StressNodalForces(element, LinearStress(element, h));
-          if (inversion_barrier) {
-            frames.barrier[t] = EvaluateBarrier(element, Eigen::Matrix3d::Identity() + g);
-            f += BarrierForces(element, frames.barrier[t]);
-          }
-          ScatterAdd(element, f, out);
-        }
-      });
-  SumParts(partial, forces_n);
+  const auto element_forces = [&](int64_t t, Eigen::Matrix<double, 3, 4>& f) {
+    const TetElement& element = elements[t];
+    const Eigen::Matrix3d g = DisplacementGradient(element, GatherCorners(element, u_mm));
+    const Eigen::Matrix3d r = method == FemMethod::kLinear
+                                  ? Eigen::Matrix3d::Identity()
+                                  : PolarRotation(Eigen::Matrix3d::Identity() + g);
+    frames.rotations[t] = r;
+    const Eigen::Matrix3d h = CorotatedStrainSource(r, g);
+    if (!frames.twist.empty()) {
+      const Eigen::Matrix3d strain = 0.5 * (h + h.transpose());
+      if (strain.squaredNorm() >= kTwistMinStrain * kTwistMinStrain) {
+        frames.twist[t] = TwistStiffness(element, strain);
+        frames.twisted[t] = 1;
+      }
+    }
+    f = r * StressNodalForces(element, LinearStress(element, h));
+    if (inversion_barrier) {
+      frames.barrier[t] = EvaluateBarrier(element, Eigen::Matrix3d::Identity() + g);
+      f += BarrierForces(element, frames.barrier[t]);
+    }
+    return true;
+  };
+  SumOverElements(elements, u_mm.size(), threads, element_forces, forces_n);
 }
 
 Eigen::Matrix<double, 3, 4> ApplyElementTangent(const TetElement& element,
@@ -133,24 +139,16 @@ Eigen::Matrix<double, 3, 4> ApplyElementTangent(const TetElement& element,
 
 void ApplyCorotatedStiffness(const std::vector<TetElement>& elements, const CorotatedFrames& frames,
                              const Eigen::VectorXd& v_mm, Eigen::VectorXd& y_n, int threads) {
-  std::vector<Eigen::VectorXd> partial(std::max(1, threads));
-  ParallelChunks(
-      threads, static_cast<int64_t>(elements.size()), [&](int64_t begin, int64_t end, int part) {
-        Eigen::VectorXd& out = partial[part];
-        out.setZero(v_mm.size());
-        for (int64_t t = begin; t < end; ++t) {
-          const TetElement& element = elements[t];
-          const Eigen::Matrix<double, 3, 4> v = GatherCorners(element, v_mm);
-          // K_e 0 = 0: a sparse v (the predictor's handle jump) touches few
-          // elements.
-          if (v.isZero(0.0)) continue;
-          ScatterAdd(element,
-                     ApplyElementTangent(element, frames.rotations[t], frames.Twist(t), v,
-                                         frames.Barrier(t)),
-                     out);
-        }
-      });
-  SumParts(partial, y_n);
+  const auto element_product = [&](int64_t t, Eigen::Matrix<double, 3, 4>& f) {
+    const TetElement& element = elements[t];
+    const Eigen::Matrix<double, 3, 4> v = GatherCorners(element, v_mm);
+    // K_e 0 = 0: a sparse v (the predictor's handle jump) touches few
+    // elements.
+    if (v.isZero(0.0)) return false;
+    f = ApplyElementTangent(element, frames.rotations[t], frames.Twist(t), v, frames.Barrier(t));
+    return true;
+  };
+  SumOverElements(elements, v_mm.size(), threads, element_product, y_n);
 }
 
 double CorotatedEnergy(const std::vector<TetElement>& elements,
