@@ -4,15 +4,14 @@
 // refined at the left renal artery, and for ~1,000 and ~5,000 vertices.
 //   drag_loop_bench [SOURCE] [--max-load-steps N] [--min-load-fraction F]
 //                   [--intermediate-newton N] [--no-barrier] [--max-vertices N]
-// (solver flags: SolverOptions; --max-vertices: only meshes decimated to at
-// most N vertices)
+// (bench/fem_flags.h)
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "bench/bench_util.h"
+#include "bench/fem_flags.h"
 #include "server/mesh/build_proxy_mesh.h"
 #include "server/render/deformable_scene.h"
 #include "server/render/frame_encoder.h"
@@ -125,24 +124,16 @@ Row RunCase(const Case& c, const Volume& volume, const gpu::GpuContext& context,
 
 int main(int argc, char** argv) {
   std::string source = "phantom:abdomen";
-  SolverOptions solver;
-  int64_t max_vertices = 1 << 30;
+  bench::FemFlags flags;
   for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--max-load-steps" && i + 1 < argc) {
-      solver.max_load_steps = std::atoi(argv[++i]);
-    } else if (arg == "--min-load-fraction" && i + 1 < argc) {
-      solver.min_load_fraction = std::atof(argv[++i]);
-    } else if (arg == "--intermediate-newton" && i + 1 < argc) {
-      solver.intermediate_newton_iterations = std::atoi(argv[++i]);
-    } else if (arg == "--no-barrier") {
-      solver.inversion_barrier = false;
-    } else if (arg == "--max-vertices" && i + 1 < argc) {
-      max_vertices = std::atoll(argv[++i]);
+    if (bench::ParseFemFlag(argc, argv, i, flags)) continue;
+    if (std::string(argv[i]) == "--no-barrier") {
+      flags.solver.inversion_barrier = false;
     } else {
-      source = arg;
+      source = argv[i];
     }
   }
+  const SolverOptions& solver = flags.solver;
   auto volume = bench::Check(ReadVolume(source, {}), "reading the volume");
   auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
   auto gpu_volume = bench::Check(GpuVolume::Upload(*context, volume), "upload");
@@ -167,7 +158,7 @@ int main(int argc, char** argv) {
   for (const Case& c : {Case{"20^3 -> 250 + refine", {20, 20, 20}, 250},
                         Case{"24^3 -> 1000 + refine", {24, 24, 24}, 1000},
                         Case{"40^3 -> 5000 + refine", {40, 40, 40}, 5000}}) {
-    if (c.target > max_vertices) continue;
+    if (c.target > flags.max_vertices) continue;
     const Row r = RunCase(c, volume, *context, gpu_volume, *renderer, grab, solver);
     std::printf("%-22s %6lld %8.2f %9.2f %8.2f %8.2f %13.1f %11.1f %8.2f %9.1f %9lld\n", c.name,
                 static_cast<long long>(r.vertices), r.fem, r.fem_sum / r.steps, r.fem_max, r.map,

@@ -9,23 +9,22 @@
 //   - validity: inverted tets after drags of 0.5, 1 and 1.5 h.
 // Times are the best of --reps runs (the machine is shared).
 //
-//   fem_bench [SOURCE] [--reps N] [--min-load-fraction F] [--intermediate-newton N]
-//             [--max-vertices N]
-// (--max-vertices: only the meshes decimated to at most N vertices)
-//   SOURCE defaults to phantom:abdomen; F: SolverOptions::min_load_fraction
+//   fem_bench [SOURCE] [--reps N] [--max-load-steps N] [--min-load-fraction F]
+//             [--intermediate-newton N] [--max-vertices N]
+//   SOURCE defaults to phantom:abdomen; the other flags: bench/fem_flags.h
 #include <time.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
 
+#include "bench/bench_util.h"
+#include "bench/fem_flags.h"
 #include "server/fem/corotated_forces.h"
 #include "server/fem/fem_model.h"
 #include "server/mesh/build_proxy_mesh.h"
@@ -41,27 +40,8 @@ double CpuMs() {
   return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
 }
 
-double MinMs(int reps, const std::function<void()>& fn) {
-  double best = std::numeric_limits<double>::infinity();
-  for (int r = 0; r < reps; ++r) {
-    const auto t0 = std::chrono::steady_clock::now();
-    fn();
-    best = std::min(
-        best,
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-  }
-  return best;
-}
-
-template <typename T>
-T Check(Result<T> result, const char* what) {
-  if (!result.ok()) {
-    std::fprintf(stderr, "fem_bench: %s failed: %s\n", what,
-                 std::string(result.status().message()).c_str());
-    std::exit(1);
-  }
-  return *std::move(result);
-}
+using bench::Check;
+using bench::MinMs;
 
 constexpr double kDragMm = 12.0;
 constexpr int kSteps = 10;
@@ -235,18 +215,11 @@ void RunCase(const MeshCase& c, const Volume& volume, const glm::dvec3& landmark
 int main(int argc, char** argv) {
   std::string source = "phantom:abdomen";
   int reps = 3;
-  double min_load_fraction = SolverOptions{}.min_load_fraction;
-  int64_t max_vertices = 1 << 30;
-  int intermediate_newton = SolverOptions{}.intermediate_newton_iterations;
+  bench::FemFlags flags;
   for (int i = 1; i < argc; ++i) {
+    if (bench::ParseFemFlag(argc, argv, i, flags)) continue;
     if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc) {
       reps = std::max(1, std::atoi(argv[++i]));
-    } else if (std::strcmp(argv[i], "--intermediate-newton") == 0 && i + 1 < argc) {
-      intermediate_newton = std::atoi(argv[++i]);
-    } else if (std::strcmp(argv[i], "--max-vertices") == 0 && i + 1 < argc) {
-      max_vertices = std::atoll(argv[++i]);
-    } else if (std::strcmp(argv[i], "--min-load-fraction") == 0 && i + 1 < argc) {
-      min_load_fraction = std::atof(argv[++i]);
     } else {
       source = argv[i];
     }
@@ -267,11 +240,8 @@ int main(int argc, char** argv) {
       "cpu ms", "max ms", "newt", "cg", "load", "short", "forc", "resid", "inv", "err mm");
   const MeshCase cases[] = {
       {"250+150", 20, 250, true}, {"1000", 20, 1000, false}, {"5000", 30, 5000, false}};
-  SolverOptions base;
-  base.min_load_fraction = min_load_fraction;
-  base.intermediate_newton_iterations = intermediate_newton;
   for (const MeshCase& c : cases) {
-    if (c.target <= max_vertices) RunCase(c, volume, landmark, reps, base);
+    if (c.target <= flags.max_vertices) RunCase(c, volume, landmark, reps, flags.solver);
   }
   std::printf(
       "step ms / cpu ms: wall / this thread's CPU time per drag step (mean of %d); "

@@ -1,0 +1,38 @@
+// Command-line flags that the FEM benchmarks share: solver settings
+// (SolverOptions) and which meshes to run.
+#pragma once
+
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+
+#include "server/fem/corotational_solver.h"
+
+namespace vpm::bench {
+
+struct FemFlags {
+  SolverOptions solver;
+  int64_t max_vertices = int64_t{1} << 30;  // only meshes decimated to at most this
+};
+
+// Reads the flag at argv[i] (and its value, advancing i) when it is one of
+//   --max-load-steps N  --min-load-fraction F  --intermediate-newton N
+//   --max-vertices N
+// into `flags`; false for any other argument.
+inline bool ParseFemFlag(int argc, char** argv, int& i, FemFlags& flags) {
+  if (i + 1 >= argc) return false;
+  if (std::strcmp(argv[i], "--max-load-steps") == 0) {
+    flags.solver.max_load_steps = std::atoi(argv[++i]);
+  } else if (std::strcmp(argv[i], "--min-load-fraction") == 0) {
+    flags.solver.min_load_fraction = std::atof(argv[++i]);
+  } else if (std::strcmp(argv[i], "--intermediate-newton") == 0) {
+    flags.solver.intermediate_newton_iterations = std::atoi(argv[++i]);
+  } else if (std::strcmp(argv[i], "--max-vertices") == 0) {
+    flags.max_vertices = std::atoll(argv[++i]);
+  } else {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace vpm::bench
