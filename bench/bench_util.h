@@ -11,12 +11,9 @@
 #include <string>
 
 #include "absl/status/statusor.h"
+#include "server/common/clock.h"
 
 namespace vpm::bench {
-
-inline double MsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // Runs fn `reps` times; returns the fastest wall time in ms.
 inline double MinMs(int reps, const std::function<void()>& fn) {

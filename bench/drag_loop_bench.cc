@@ -13,9 +13,9 @@
 #include "bench/bench_util.h"
 #include "bench/fem_flags.h"
 #include "server/mesh/build_proxy_mesh.h"
-#include "server/render/deformable_scene.h"
-#include "server/render/frame_encoder.h"
-#include "server/volume/read_volume.h"
+#include "server/scene/deformable_scene.h"
+#include "server/raycast/frame_encoder.h"
+#include "server/io/read_volume.h"
 
 using namespace vpm;
 
@@ -103,9 +103,9 @@ Row RunCase(const Case& c, const Volume& volume, const gpu::GpuContext& context,
     b.processed = step.processed_tets;
     const auto t0 = std::chrono::steady_clock::now();
     auto jpeg = bench::Check(EncodeJpeg(frame.rgba, frame.width, frame.height, 85), "jpeg");
-    row.encode = std::min(row.encode, bench::MsSince(t0));
+    row.encode = std::min(row.encode, MsSince(t0));
   }
-  row.loop_fps = steps / (bench::MsSince(t_loop) / 1000.0);
+  row.loop_fps = steps / (MsSince(t_loop) / 1000.0);
   // Orbiting between drag steps: same map, so the brick occupancy is reused.
   SceneView orbit = interactive;
   for (int r = 0; r < 3; ++r) {

@@ -28,7 +28,7 @@
 #include "server/fem/corotated_forces.h"
 #include "server/fem/fem_model.h"
 #include "server/mesh/build_proxy_mesh.h"
-#include "server/volume/read_volume.h"
+#include "server/io/read_volume.h"
 
 using namespace vpm;
 

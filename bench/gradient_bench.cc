@@ -7,7 +7,7 @@
 #include "server/gpu/compute_batch.h"
 #include "server/volume/gradient_magnitude.h"
 #include "server/volume/gradient_magnitude_gpu.h"
-#include "server/volume/read_volume.h"
+#include "server/io/read_volume.h"
 
 using namespace vpm;
 
@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
     auto batch = bench::Check(gpu::ComputeBatch::Begin(*context, 1), "batch");
     if (!op.Record(batch, *gpu_volume, out).ok()) return 1;
     auto timings = bench::Check(batch.SubmitAndWait(), "submit");
-    submit_ms = std::min(submit_ms, bench::MsSince(t0));
+    submit_ms = std::min(submit_ms, MsSince(t0));
     kernel_ms = std::min(kernel_ms, timings.front().gpu_ms);
   }
   std::vector<float> result(static_cast<size_t>(voxels));

@@ -10,7 +10,7 @@
 #include "bench/bench_util.h"
 #include "server/mesh/build_proxy_mesh.h"
 #include "server/mesh/decimate.h"
-#include "server/volume/read_volume.h"
+#include "server/io/read_volume.h"
 
 using namespace vpm;
 

@@ -20,10 +20,10 @@
 #include <vector>
 
 #include "bench/bench_util.h"
-#include "server/render/frame_encoder.h"
-#include "server/render/raycast_cpu.h"
-#include "server/render/volume_renderer.h"
-#include "server/volume/read_volume.h"
+#include "server/raycast/frame_encoder.h"
+#include "server/raycast/raycast_cpu.h"
+#include "server/raycast/volume_renderer.h"
+#include "server/io/read_volume.h"
 
 using namespace vpm;
 
@@ -176,7 +176,7 @@ int main(int argc, char** argv) {
 
   auto t0 = std::chrono::steady_clock::now();
   auto texel_renderer = bench::Check(VolumeRenderer::Create(*context, {}), "renderer");
-  const double create_ms = bench::MsSince(t0);
+  const double create_ms = MsSince(t0);
   auto sampled_renderer = bench::Check(
       VolumeRenderer::Create(*context, {.volume_access = VolumeAccess::kSampler3D}), "renderer");
   const auto still_minmax = BrickMinMaxCpu(volume, kStillBrickVoxels);

@@ -15,12 +15,12 @@
 #include "server/gpu/compute_batch.h"
 #include "server/mesh/build_proxy_mesh.h"
 #include "server/mesh/tet_quality.h"
-#include "server/render/backward_map.h"
-#include "server/render/backward_map_cpu.h"
-#include "server/render/parallel_slices.h"
-#include "server/render/warp_volume.h"
-#include "server/render/warp_volume_cpu.h"
-#include "server/volume/read_volume.h"
+#include "server/warp/backward_map.h"
+#include "server/warp/backward_map_cpu.h"
+#include "server/common/parallel_chunks.h"
+#include "server/warp/warp_volume.h"
+#include "server/warp/warp_volume_cpu.h"
+#include "server/io/read_volume.h"
 
 using namespace vpm;
 
@@ -94,14 +94,14 @@ UpdateTimes TimeUpdates(BackwardMap& map, const Scene& s, int reps) {
   for (int r = 0; r < reps; ++r) {
     const auto t0 = std::chrono::steady_clock::now();
     auto stats = bench::Check(map.Rebuild(s.rest, s.drag, s.tets), "rebuild");
-    t.all_ms = std::min(t.all_ms, bench::MsSince(t0));
+    t.all_ms = std::min(t.all_ms, MsSince(t0));
     t.all_gpu_ms = std::min(t.all_gpu_ms, stats.gpu_ms);
   }
   for (int r = 0; r < reps; ++r) {
     bench::Check(map.Update(s.rest, s.half_drag, s.tets), "update");
     const auto t0 = std::chrono::steady_clock::now();
     t.moved_stats = bench::Check(map.Update(s.rest, s.drag, s.tets), "update");
-    t.moved_ms = std::min(t.moved_ms, bench::MsSince(t0));
+    t.moved_ms = std::min(t.moved_ms, MsSince(t0));
     t.moved_gpu_ms = std::min(t.moved_gpu_ms, t.moved_stats.gpu_ms);
   }
   return t;
@@ -133,7 +133,7 @@ std::pair<double, double> TimeWarp(const gpu::GpuContext& context, const VolumeW
     auto batch = bench::Check(gpu::ComputeBatch::Begin(context, 1), "batch");
     if (!warper.Record(batch, volume, image, map, out).ok()) std::exit(1);
     auto timings = bench::Check(batch.SubmitAndWait(), "warp");
-    wall = std::min(wall, bench::MsSince(t0));
+    wall = std::min(wall, MsSince(t0));
     kernel = std::min(kernel, timings.front().gpu_ms);
   }
   return {wall, kernel};

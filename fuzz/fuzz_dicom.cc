@@ -7,7 +7,7 @@
 #include <dcmtk/oflog/oflog.h>
 
 #include "fuzz/fuzz_limits.h"
-#include "server/volume/read_dicom_slice.h"
+#include "server/io/read_dicom_slice.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   // DCMTK logs every parse problem; hostile input makes that a flood.

@@ -3,7 +3,7 @@
 #include <cstdint>
 
 #include "fuzz/fuzz_limits.h"
-#include "server/volume/read_nifti.h"
+#include "server/io/read_nifti.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   vpm::fuzz::CheckVolume(

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "fuzz/fuzz_limits.h"
-#include "server/volume/read_nrrd.h"
+#include "server/io/read_nrrd.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const vpm::DataFileLoader loader = [&](std::string_view) -> vpm::Result<std::vector<uint8_t>> {

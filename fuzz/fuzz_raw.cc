@@ -5,8 +5,8 @@
 #include <string_view>
 
 #include "fuzz/fuzz_limits.h"
-#include "server/volume/parse_raw_source.h"
-#include "server/volume/read_raw.h"
+#include "server/io/parse_raw_source.h"
+#include "server/io/read_raw.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);

@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "server/volume/gzip_stream.h"
-#include "server/volume/nifti_c_api.h"
-#include "server/volume/write_nifti.h"
-#include "tests/volume/dicom_test_util.h"
+#include "server/io/gzip_stream.h"
+#include "server/io/nifti_c_api.h"
+#include "server/io/write_nifti.h"
+#include "tests/io/dicom_test_util.h"
 
 namespace {
 

@@ -32,7 +32,7 @@
 // voxels, the map's 8 points: the chain rule through the map), no taps and
 // no state machine; interactive frames use it (docs/RENDERING.md,
 // "Drag-loop findings"). A constant, so the pipeline keeps one loop only.
-// The CPU reference, server/render/raycast_cpu.cc, mirrors every step.
+// The CPU reference, server/raycast/raycast_cpu.cc, mirrors every step.
 #ifndef VPM_RAYCAST_BODY_GLSL
 #define VPM_RAYCAST_BODY_GLSL
 

@@ -20,7 +20,7 @@ struct LatticeCostsPush {
   ivec4 chunk;            // (z0, z1, cz0, cz1): voxel slices and cell layers of this pass
 };
 
-// Ray casting (server/render).
+// Ray casting (server/raycast).
 #define VPM_RENDER_LUT_ENTRIES 1024
 #define VPM_RAYCAST_SHADING 1
 #define VPM_RAYCAST_SKIPPING 2

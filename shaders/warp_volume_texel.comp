@@ -2,7 +2,7 @@
 #extension GL_GOOGLE_include_directive : require
 // J(x) = I(X(x)) per voxel, the source read through its uniform texel buffer
 // with a manual trilinear interpolation, the same arithmetic as
-// SampleTrilinear (server/mesh/sample_trilinear.h). One invocation per
+// SampleTrilinear (server/volume/sample_trilinear.h). One invocation per
 // voxel, 64 along x.
 #include "shader_interface.glsl"
 

@@ -9,9 +9,9 @@
 #include "client/cli/command_status.h"
 #include "client/cli/gpu_backend.h"
 #include "client/cli/mesh_flags.h"
-#include "server/mesh/compare_meshes.h"
-#include "server/mesh/deformation_measures.h"
-#include "server/volume/read_volume.h"
+#include "server/measures/compare_meshes.h"
+#include "server/measures/deformation_measures.h"
+#include "server/io/read_volume.h"
 
 namespace vpm::cli {
 namespace {

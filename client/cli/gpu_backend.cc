@@ -1,4 +1,5 @@
 #include "client/cli/gpu_backend.h"
+#include "server/common/clock.h"
 
 #include <chrono>
 #include <iostream>
@@ -27,7 +28,7 @@ Result<std::unique_ptr<GpuBackend>> GpuBackend::Open(const std::string& backend,
   const auto t0 = std::chrono::steady_clock::now();
   ASSIGN_OR_RETURN(GpuVolume gpu_volume, GpuVolume::Upload(*b->context_, volume));
   b->upload_ms_ =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      MsSince(t0);
   b->volume_.emplace(std::move(gpu_volume));
   ASSIGN_OR_RETURN(LatticeCostsGpu costs, LatticeCostsGpu::Create(*b->context_));
   b->lattice_costs_.emplace(std::move(costs));

@@ -9,7 +9,7 @@
 #include "client/cli/remote_pipeline.h"
 #include "server/mesh/mesh_json.h"
 #include "server/mesh/write_vtu.h"
-#include "server/volume/read_volume.h"
+#include "server/io/read_volume.h"
 
 namespace vpm::cli {
 namespace {

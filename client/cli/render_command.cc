@@ -8,11 +8,12 @@
 #include "client/cli/mesh_flags.h"
 #include "client/cli/remote_pipeline.h"
 #include "proto/vec3_convert.h"
+#include "server/common/clock.h"
 #include "server/mesh/mesh_json.h"
-#include "server/render/deformable_scene.h"
-#include "server/render/frame_encoder.h"
-#include "server/volume/read_volume.h"
-#include "server/volume/write_nifti.h"
+#include "server/scene/deformable_scene.h"
+#include "server/raycast/frame_encoder.h"
+#include "server/io/read_volume.h"
+#include "server/io/write_nifti.h"
 
 namespace vpm::cli {
 namespace {
@@ -29,10 +30,6 @@ struct RenderArgs {
   bool overlay = false;
   int jpeg_quality = 90;
 };
-
-double MsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 Result<glm::dvec3> Vec3Of(const std::vector<double>& v, const char* flag) {
   if (v.size() != 3) return absl::InvalidArgumentError(StrCat(flag, " takes 3 numbers"));

@@ -1,4 +1,5 @@
 #include "client/cli/script_player.h"
+#include "server/common/clock.h"
 
 #include <algorithm>
 #include <chrono>
@@ -12,11 +13,6 @@
 namespace vpm::cli {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double MsBetween(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
 
 v1::Vec3 Vec(double x, double y, double z) {
   v1::Vec3 v;
@@ -166,10 +162,10 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
   PlayResult result;
   auto context = server.Context(/*streaming=*/true);
   auto stream = server.stub().Interact(context.get());
-  const Clock::time_point start = Clock::now();
+  const SteadyClock::time_point start = SteadyClock::now();
   std::mutex mutex;
   std::condition_variable got_final;
-  std::map<uint64_t, Clock::time_point> sent_at;
+  std::map<uint64_t, SteadyClock::time_point> sent_at;
   uint64_t last_sequence = 0;
   bool final_seen = false;
   bool sending_done = false;
@@ -180,7 +176,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
     v1::Frame frame;
     int64_t index = 0;
     while (stream->Read(&frame)) {
-      const Clock::time_point now = Clock::now();
+      const SteadyClock::time_point now = SteadyClock::now();
       FrameRecord record;
       record.received_ms = MsBetween(start, now);
       record.last_sequence = frame.last_sequence();
@@ -210,7 +206,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
     request.mutable_event()->set_sequence(sequence);
     {
       std::lock_guard lock(mutex);
-      sent_at[sequence] = Clock::now();
+      sent_at[sequence] = SteadyClock::now();
       last_sequence = sequence;
     }
     ++result.events_sent;
@@ -233,7 +229,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
       ok = send(request, ++sequence);
     }
   } while (ok && options.duration_s > 0 &&
-           MsBetween(start, Clock::now()) < options.duration_s * 1000);
+           MsBetween(start, SteadyClock::now()) < options.duration_s * 1000);
   if (ok && grabbed) {
     v1::InteractRequest release;
     release.mutable_event()->mutable_release();
@@ -252,7 +248,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
   stream->WritesDone();
   reader.join();
   result.status = FromGrpc(stream->Finish());
-  result.duration_ms = MsBetween(start, Clock::now());
+  result.duration_ms = MsBetween(start, SteadyClock::now());
   return result;
 }
 

@@ -9,7 +9,7 @@
 
 #include "client/cli/command_status.h"
 #include "client/cli/script_player.h"
-#include "server/service/sha256.h"
+#include "server/common/sha256.h"
 
 namespace vpm::cli {
 namespace {

@@ -7,8 +7,8 @@
 #include <nlohmann/json.hpp>
 
 #include "client/cli/command_status.h"
-#include "server/volume/read_volume.h"
-#include "server/volume/write_nifti.h"
+#include "server/io/read_volume.h"
+#include "server/io/write_nifti.h"
 
 namespace vpm::cli {
 namespace {

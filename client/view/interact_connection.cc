@@ -109,8 +109,8 @@ void InteractConnection::Run() {
                                                                           "stream")
                                                 : status),
                            "; reconnecting in ", wait_s, " s (attempt ", attempt, ")"));
-    const auto until = Clock::now() + std::chrono::duration<double>(wait_s);
-    while (!stopping_ && Clock::now() < until) {
+    const auto until = SteadyClock::now() + std::chrono::duration<double>(wait_s);
+    while (!stopping_ && SteadyClock::now() < until) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   }
@@ -217,7 +217,7 @@ Status InteractConnection::StreamOnce() {
   first.mutable_event()->set_sequence(sequence);
   {
     std::lock_guard lock(mutex_);
-    latency_.Sent(sequence, Clock::now());
+    latency_.Sent(sequence, SteadyClock::now());
     if (camera_) {  // the view this viewer had, restored on the new stream
       v1::ClientEvent camera;
       *camera.mutable_camera() = *camera_;
@@ -244,7 +244,7 @@ void InteractConnection::WriteEvents(
     request.mutable_event()->set_sequence(++*sequence);
     {
       std::lock_guard lock(mutex_);
-      latency_.Sent(*sequence, Clock::now());
+      latency_.Sent(*sequence, SteadyClock::now());
     }
     if (!stream->Write(request)) break;  // the stream is broken: Read ends too
   }
@@ -257,7 +257,7 @@ void InteractConnection::ReadFrames(
     grpc::ClientReaderWriter<v1::InteractRequest, v1::Frame>* stream) {
   v1::Frame frame;
   while (stream->Read(&frame)) {
-    const Clock::time_point now = Clock::now();
+    const SteadyClock::time_point now = SteadyClock::now();
     auto image = Decode(frame);
     if (!image.ok()) {
       std::fprintf(stderr, "vpm-view: frame %llu: %s\n",

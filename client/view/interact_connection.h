@@ -19,7 +19,7 @@
 #include "client/cli/server_connection.h"
 #include "client/view/outbound_events.h"
 #include "client/view/stream_meters.h"
-#include "server/render/frame_encoder.h"
+#include "server/raycast/frame_encoder.h"
 
 namespace vpm::view {
 

@@ -1,29 +1,30 @@
 #include "client/view/stream_meters.h"
+#include "server/common/clock.h"
 
 #include <algorithm>
 #include <cmath>
 
 namespace vpm::view {
 
-void FrameRateMeter::OnFrame(Clock::time_point t) {
+void FrameRateMeter::OnFrame(SteadyClock::time_point t) {
   times_.push_back(t);
   while (times_.size() > 2 && t - times_.front() > window_) times_.pop_front();
 }
 
-double FrameRateMeter::Fps(Clock::time_point now) const {
+double FrameRateMeter::Fps(SteadyClock::time_point now) const {
   if (times_.size() < 2 || now - times_.back() > window_) return 0.0;
   const double span_s = std::chrono::duration<double>(times_.back() - times_.front()).count();
   return span_s > 0 ? double(times_.size() - 1) / span_s : 0.0;
 }
 
-void LatencyMeter::Sent(uint64_t sequence, Clock::time_point t) { sent_[sequence] = t; }
+void LatencyMeter::Sent(uint64_t sequence, SteadyClock::time_point t) { sent_[sequence] = t; }
 
-std::optional<double> LatencyMeter::Received(uint64_t last_sequence, Clock::time_point t) {
+std::optional<double> LatencyMeter::Received(uint64_t last_sequence, SteadyClock::time_point t) {
   auto end = sent_.upper_bound(last_sequence);
   if (end == sent_.begin()) return std::nullopt;
-  const Clock::time_point newest = std::prev(end)->second;
+  const SteadyClock::time_point newest = std::prev(end)->second;
   sent_.erase(sent_.begin(), end);
-  return std::chrono::duration<double, std::milli>(t - newest).count();
+  return MsBetween(newest, t);
 }
 
 double ReconnectBackoffS(int attempt) {

@@ -9,33 +9,33 @@
 #include <map>
 #include <optional>
 
-namespace vpm::view {
+#include "server/common/clock.h"
 
-using Clock = std::chrono::steady_clock;
+namespace vpm::view {
 
 class FrameRateMeter {
  public:
   explicit FrameRateMeter(std::chrono::milliseconds window = std::chrono::milliseconds(1000))
       : window_(window) {}
-  void OnFrame(Clock::time_point t);
+  void OnFrame(SteadyClock::time_point t);
   // Frames per second over the window ending at `now`; 0 before two frames.
-  double Fps(Clock::time_point now) const;
+  double Fps(SteadyClock::time_point now) const;
 
  private:
   std::chrono::milliseconds window_;
-  std::deque<Clock::time_point> times_;
+  std::deque<SteadyClock::time_point> times_;
 };
 
 class LatencyMeter {
  public:
-  void Sent(uint64_t sequence, Clock::time_point t);
+  void Sent(uint64_t sequence, SteadyClock::time_point t);
   // Latency (ms) of the newest sent event that `last_sequence` covers and no
   // earlier frame did; empty when this frame shows nothing new.
-  std::optional<double> Received(uint64_t last_sequence, Clock::time_point t);
+  std::optional<double> Received(uint64_t last_sequence, SteadyClock::time_point t);
   void Reset() { sent_.clear(); }
 
  private:
-  std::map<uint64_t, Clock::time_point> sent_;  // not yet covered by a frame
+  std::map<uint64_t, SteadyClock::time_point> sent_;  // not yet covered by a frame
 };
 
 // Seconds to wait before reconnect attempt `attempt` (0-based): 0.25 s,

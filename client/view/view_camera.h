@@ -1,5 +1,5 @@
 // The viewer's copy of the session camera, kept in step with the server's
-// (server/render/camera.h, the same class): mouse motion in window pixels
+// (server/raycast/camera.h, the same class): mouse motion in window pixels
 // becomes orbit angles, zoom factors, pan and drag offsets in mm, and a
 // click becomes the point the server's pick will grab.
 //
@@ -13,7 +13,7 @@
 #include <glm/glm.hpp>
 
 #include "server/common/status.h"
-#include "server/render/camera.h"
+#include "server/raycast/camera.h"
 #include "server/volume/volume.h"
 #include "vpm/v1/vpm.pb.h"
 

@@ -59,7 +59,7 @@ int ViewerApp::Run() {
       while (running_ && SDL_PollEvent(&event)) HandleEvent(event);
     }
     PollConnection();
-    if (resize_at_ && Clock::now() >= *resize_at_) {
+    if (resize_at_ && SteadyClock::now() >= *resize_at_) {
       resize_at_.reset();
       const SDL_Rect area = window_->FrameArea();
       settings_.set_width(std::clamp(area.w, 16, 4096));
@@ -82,7 +82,7 @@ void ViewerApp::HandleEvent(const SDL_Event& e) {
       break;
     case SDL_WINDOWEVENT:
       if (e.window.event == SDL_WINDOWEVENT_SIZE_CHANGED) {
-        resize_at_ = Clock::now() + kResizeQuiet;
+        resize_at_ = SteadyClock::now() + kResizeQuiet;
       }
       break;
     case SDL_KEYDOWN:
@@ -295,7 +295,7 @@ void ViewerApp::Paint() {
   for (const std::string& line : StatusLines(status)) in.status_lines.push_back(line);
   in.show_help = show_help_;
   if (!state.connected) in.message = state.message;
-  if (Clock::now() < notice_until_) in.notice = notice_;
+  if (SteadyClock::now() < notice_until_) in.notice = notice_;
   window_->Paint(in);
 }
 
@@ -314,7 +314,7 @@ void ViewerApp::SendSettings() {
 
 void ViewerApp::Notice(std::string text) {
   notice_ = std::move(text);
-  notice_until_ = Clock::now() + kNoticeTime;
+  notice_until_ = SteadyClock::now() + kNoticeTime;
 }
 
 double ViewerApp::FramePixelsPerWindowPixel() const {

@@ -68,8 +68,8 @@ class ViewerApp {
   double fps_ = 0;
   std::optional<double> latency_ms_;
   std::string notice_;
-  Clock::time_point notice_until_{};
-  std::optional<Clock::time_point> resize_at_;  // when to ask for the new size
+  SteadyClock::time_point notice_until_{};
+  std::optional<SteadyClock::time_point> resize_at_;  // when to ask for the new size
   int screenshots_ = 0;
 };
 

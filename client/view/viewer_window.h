@@ -11,7 +11,7 @@
 
 #include "client/view/text_renderer.h"
 #include "server/common/status.h"
-#include "server/render/frame_encoder.h"
+#include "server/raycast/frame_encoder.h"
 
 namespace vpm::view {
 

@@ -5,11 +5,11 @@
 
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "absl/strings/str_cat.h"
 
 namespace vpm {
 
@@ -17,14 +17,36 @@ using Status = absl::Status;
 template <typename T>
 using Result = absl::StatusOr<T>;
 
-// Concatenates anything streamable into a message. Debian's abseil is built
-// with its own string_view type, so absl::StrCat rejects std::string_view;
-// this one takes both.
+namespace internal {
+// One-byte integers print as numbers, not as characters; char stays a
+// character.
+template <typename T>
+decltype(auto) StrCatArg(const T& value) {
+  if constexpr (std::is_integral_v<T> && sizeof(T) == 1 && !std::is_same_v<T, char> &&
+                !std::is_same_v<T, bool>) {
+    return static_cast<int>(value);
+  } else {
+    return (value);
+  }
+}
+}  // namespace internal
+
+// Concatenates anything streamable into a message; numbers as `operator<<`
+// writes them (floating point with 6 significant digits). The project's one
+// StrCat: Debian's abseil is built with its own string_view type, so
+// absl::StrCat rejects std::string_view, and one-byte integers would print as
+// characters through a plain stream.
 template <typename... Args>
 std::string StrCat(const Args&... args) {
   std::ostringstream out;
-  (out << ... << args);
+  (out << ... << internal::StrCatArg(args));
   return out.str();
+}
+
+// Appends the concatenation of args to *text.
+template <typename... Args>
+void StrAppend(std::string* text, const Args&... args) {
+  text->append(StrCat(args...));
 }
 
 }  // namespace vpm

@@ -5,7 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
-#include "server/fem/parallel_chunks.h"
+#include "server/common/parallel_chunks.h"
 #include "server/fem/polar_rotation.h"
 
 namespace vpm {

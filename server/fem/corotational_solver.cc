@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "server/common/clock.h"
 #include "server/fem/assemble_stiffness.h"
 #include "server/fem/inversion_barrier.h"
 #include "server/fem/projected_pcg.h"
@@ -12,11 +13,6 @@
 namespace vpm {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double MsSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 // Below this relative residual the state is in equilibrium to round-off.
 constexpr double kRoundOffResidual = 1e-13;
@@ -47,12 +43,12 @@ Result<CorotationalSolver> CorotationalSolver::Create(
   }
   CorotationalSolver solver;
   solver.options_ = options;
-  const auto t0 = Clock::now();
+  const auto t0 = SteadyClock::now();
   ASSIGN_OR_RETURN(solver.elements_, MakeTetElements(rest_mm, tets, young_n_per_mm2, poisson));
   const Eigen::SparseMatrix<double> rest_stiffness =
       AssembleStiffness(solver.elements_, CorotatedFrames{}, static_cast<int64_t>(rest_mm.size()));
   solver.setup_assembly_ms_ = MsSince(t0);
-  const auto t1 = Clock::now();
+  const auto t1 = SteadyClock::now();
   ASSIGN_OR_RETURN(solver.factor_, ConstrainedFactor::Create(rest_stiffness, fixed_dofs));
   solver.setup_factor_ms_ = MsSince(t1);
   solver.fixed_ = fixed_dofs;
@@ -123,7 +119,7 @@ double CorotationalSolver::Evaluate(const Eigen::VectorXd& force_n,
 Eigen::VectorXd CorotationalSolver::TangentSolve(const Eigen::VectorXd& rhs,
                                                  const std::vector<int32_t>& constrained,
                                                  bool with_handles, SolveStats& stats) {
-  const auto t0 = Clock::now();
+  const auto t0 = SteadyClock::now();
   const LinearMap apply_k = [this](const Eigen::VectorXd& v, Eigen::VectorXd& y) {
     ApplyCorotatedStiffness(elements_, frames_, v, y, ElementThreads());
   };
@@ -164,7 +160,7 @@ Status CorotationalSolver::Equilibrate(const Eigen::VectorXd& force_n,
                                        SolveStats& stats) {
   stats.converged = false;
   for (;;) {
-    const auto t0 = Clock::now();
+    const auto t0 = SteadyClock::now();
     const int iterations = stats.newton_iterations - first_iteration;
     const bool plain_first = options_.method == FemMethod::kCorotationalConsistent &&
                              iterations < options_.adaptive_twist_after;
@@ -229,7 +225,7 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
       // jump and the free ones follow through the last tangent, with the
       // residual linearised from the last solve when there is one:
       // K du = r_last + df_ext - K jump.
-      const auto t0 = Clock::now();
+      const auto t0 = SteadyClock::now();
       Eigen::VectorXd rhs = warm ? Eigen::VectorXd(linear_residual_ + (force_n - linearized_force_))
                                  : Eigen::VectorXd::Zero(jump.size());
       Eigen::VectorXd k_jump;

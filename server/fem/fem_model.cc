@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "server/common/clock.h"
 #include "server/fem/fixed_dofs.h"
 #include "server/fem/flat_tets.h"
 #include "server/mesh/tet_quality.h"
@@ -68,7 +69,7 @@ Result<GrabInfo> FemModel::Grab(const glm::dvec3& point_mm, double radius_mm) {
   }
   RETURN_IF_ERROR(solver_.SetHandles(dofs));
   info.setup_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      MsSince(t0);
   handle_dofs_ = std::move(dofs);
   displacement_at_grab_ = solver_.displacement_mm();
   grab_ = info;

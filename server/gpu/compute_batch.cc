@@ -61,7 +61,7 @@ Result<ComputeBatch> ComputeBatch::Begin(const GpuContext& context, uint32_t max
 Status ComputeBatch::CheckArgs(const ComputeKernel& kernel, std::span<const KernelArg> args) const {
   const KernelSpec& spec = kernel.spec();
   if (args.size() != spec.bindings.size()) {
-    return absl::InvalidArgumentError(absl::StrCat(
+    return absl::InvalidArgumentError(StrCat(
         "kernel ", spec.name, " takes ", spec.bindings.size(), " bindings, got ", args.size()));
   }
   for (size_t i = 0; i < args.size(); ++i) {
@@ -78,7 +78,7 @@ Status ComputeBatch::CheckArgs(const ComputeKernel& kernel, std::span<const Kern
     }
     if (!ok) {
       return absl::InvalidArgumentError(
-          absl::StrCat("kernel ", spec.name, ": binding ", i, " must be a ", vk::to_string(type)));
+          StrCat("kernel ", spec.name, ": binding ", i, " must be a ", vk::to_string(type)));
     }
   }
   return absl::OkStatus();
@@ -101,18 +101,18 @@ Status ComputeBatch::Dispatch(const ComputeKernel& kernel, std::span<const Kerne
   if (submitted_) return absl::FailedPreconditionError("compute batch already submitted");
   if (labels_.size() >= max_dispatches_) {
     return absl::ResourceExhaustedError(
-        absl::StrCat("compute batch holds at most ", max_dispatches_, " dispatches"));
+        StrCat("compute batch holds at most ", max_dispatches_, " dispatches"));
   }
   RETURN_IF_ERROR(CheckArgs(kernel, args));
   if (push_constants.size() != spec.push_constant_bytes) {
-    return absl::InvalidArgumentError(absl::StrCat("kernel ", spec.name, ": push constants of ",
+    return absl::InvalidArgumentError(StrCat("kernel ", spec.name, ": push constants of ",
                                                    push_constants.size(), " bytes, expected ",
                                                    spec.push_constant_bytes));
   }
   const auto& max_groups = context_->limits().maxComputeWorkGroupCount;
   for (int a = 0; a < 3; ++a) {
     if (groups[a] == 0 || groups[a] > max_groups[a]) {
-      return absl::InvalidArgumentError(absl::StrCat("kernel ", spec.name, ": ", groups[a],
+      return absl::InvalidArgumentError(StrCat("kernel ", spec.name, ": ", groups[a],
                                                      " workgroups on axis ", a, " (limit ",
                                                      max_groups[a], ")"));
     }
@@ -174,11 +174,11 @@ Status ComputeBatch::CopyImageToBuffer(const GpuImage3D& image, const GpuBuffer&
   if (submitted_) return absl::FailedPreconditionError("compute batch already submitted");
   if (labels_.size() >= max_dispatches_) {
     return absl::ResourceExhaustedError(
-        absl::StrCat("compute batch holds at most ", max_dispatches_, " dispatches"));
+        StrCat("compute batch holds at most ", max_dispatches_, " dispatches"));
   }
   if (!(buffer.usage() & vk::BufferUsageFlagBits::eTransferDst) ||
       buffer.size_bytes() < image.size_bytes()) {
-    return absl::InvalidArgumentError(absl::StrCat(
+    return absl::InvalidArgumentError(StrCat(
         "copying a 3D image of ", image.size_bytes(), " bytes needs a transfer-destination ",
         "buffer at least as large; got ", buffer.size_bytes(), " bytes"));
   }

@@ -49,7 +49,7 @@ Result<GpuBuffer> GpuBuffer::Allocate(const GpuContext& context, vk::DeviceSize 
 
 Status GpuBuffer::CheckRange(size_t bytes, vk::DeviceSize offset) const {
   if (offset > size_bytes_ || bytes > size_bytes_ - offset) {
-    return absl::OutOfRangeError(absl::StrCat("GPU buffer access of ", bytes, " bytes at ",
+    return absl::OutOfRangeError(StrCat("GPU buffer access of ", bytes, " bytes at ",
                                               offset, " exceeds its ", size_bytes_, " bytes"));
   }
   return absl::OkStatus();

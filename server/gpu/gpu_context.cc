@@ -136,13 +136,13 @@ Status GpuContext::PickPhysicalDevice(const std::string& selector) {
   std::string names;
   for (size_t i = 0; i < devices.size(); ++i) {
     const auto props = devices[i].getProperties();
-    absl::StrAppend(&names, names.empty() ? "" : ", ", i, ": ", props.deviceName.data());
+    StrAppend(&names, names.empty() ? "" : ", ", i, ": ", props.deviceName.data());
     if (props.apiVersion >= VK_API_VERSION_1_1 && ComputeQueueFamily(devices[i])) {
       usable.push_back(i);
     }
   }
   if (usable.empty()) {
-    return absl::FailedPreconditionError(absl::StrCat(
+    return absl::FailedPreconditionError(StrCat(
         "no Vulkan 1.1 device with a compute queue (found: ", names.empty() ? "none" : names,
         "); install mesa-vulkan-drivers for lavapipe"));
   }
@@ -155,7 +155,7 @@ Status GpuContext::PickPhysicalDevice(const std::string& selector) {
              std::string::npos;
     });
     if (match == usable.end()) {
-      return absl::NotFoundError(absl::StrCat("no Vulkan device matches VPM_VULKAN_DEVICE='",
+      return absl::NotFoundError(StrCat("no Vulkan device matches VPM_VULKAN_DEVICE='",
                                               selector, "' (devices: ", names, ")"));
     }
     chosen = *match;
@@ -186,7 +186,7 @@ Result<uint32_t> GpuContext::FindMemoryType(uint32_t type_bits, vk::MemoryProper
     }
   }
   return absl::ResourceExhaustedError(
-      absl::StrCat("no Vulkan memory type with flags ", vk::to_string(required)));
+      StrCat("no Vulkan memory type with flags ", vk::to_string(required)));
 }
 
 vk::MemoryPropertyFlags GpuContext::memory_flags(uint32_t type_index) const {

@@ -121,11 +121,11 @@ Status CatchVulkan(const char* what, Fn&& fn) {
     fn();
     return absl::OkStatus();
   } catch (const vk::OutOfDeviceMemoryError& e) {
-    return absl::ResourceExhaustedError(absl::StrCat(what, ": out of device memory: ", e.what()));
+    return absl::ResourceExhaustedError(StrCat(what, ": out of device memory: ", e.what()));
   } catch (const vk::OutOfHostMemoryError& e) {
-    return absl::ResourceExhaustedError(absl::StrCat(what, ": out of host memory: ", e.what()));
+    return absl::ResourceExhaustedError(StrCat(what, ": out of host memory: ", e.what()));
   } catch (const std::exception& e) {
-    return absl::InternalError(absl::StrCat(what, ": ", e.what()));
+    return absl::InternalError(StrCat(what, ": ", e.what()));
   }
 }
 

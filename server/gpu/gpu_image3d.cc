@@ -42,12 +42,12 @@ Result<GpuImage3D> GpuImage3D::Create(const GpuContext& context, std::array<uint
   img.texel_bytes_ = TexelBytes(format);
   if (img.texel_bytes_ == 0) {
     return absl::InvalidArgumentError(
-        absl::StrCat("unsupported 3D image format ", vk::to_string(format)));
+        StrCat("unsupported 3D image format ", vk::to_string(format)));
   }
   const uint32_t max_dim = context.limits().maxImageDimension3D;
   for (uint32_t e : extent) {
     if (e == 0 || e > max_dim) {
-      return absl::ResourceExhaustedError(absl::StrCat(
+      return absl::ResourceExhaustedError(StrCat(
           "3D image of ", extent[0], "x", extent[1], "x", extent[2],
           " texels: each side must be in 1..", max_dim, " on this device"));
     }
@@ -99,7 +99,7 @@ Result<GpuImage3D> GpuImage3D::Create(const GpuContext& context, std::array<uint
 
 Status GpuImage3D::CheckSize(size_t bytes) const {
   if (bytes != size_bytes()) {
-    return absl::InvalidArgumentError(absl::StrCat("3D image transfer of ", bytes,
+    return absl::InvalidArgumentError(StrCat("3D image transfer of ", bytes,
                                                    " bytes; the image holds ", size_bytes()));
   }
   return absl::OkStatus();

@@ -42,7 +42,7 @@ struct TransferFunctionBlock {
 };
 static_assert(sizeof(TransferFunctionBlock) == 528);
 
-// Ray casting (server/render). brick_minmax.comp: one invocation per brick
+// Ray casting (server/raycast). brick_minmax.comp: one invocation per brick
 // of brick_voxels^3 cells (bricks share their boundary voxel layer).
 struct BrickMinMaxPush {
   glm::ivec4 dims;    // (nx, ny, nz, 0) voxels

@@ -3,16 +3,12 @@
 #include <algorithm>
 #include <chrono>
 
+#include "server/common/clock.h"
 #include "server/mesh/refine_at_point.h"
 #include "server/mesh/tetrahedralize.h"
 
 namespace vpm {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double MsSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 Status CheckParams(const MeshParams& p) {
   for (double v : {p.wg, p.wd, p.radius_factor, p.roi_radius_factor}) {
@@ -46,7 +42,7 @@ Result<DecimatedLattice> DecimateLattice(const Volume& volume, const MeshParams&
   RETURN_IF_ERROR(CheckParams(params));
   ASSIGN_OR_RETURN(Lattice lattice, Lattice::Create(volume.geometry(), params.grid));
   ASSIGN_OR_RETURN(TransferFunction tf, TransferFunction::FromSpec(params.tf, volume));
-  auto t0 = Clock::now();
+  auto t0 = SteadyClock::now();
   LatticeCosts costs;
   if (gpu.volume != nullptr && gpu.lattice_costs != nullptr) {
     ASSIGN_OR_RETURN(costs, gpu.lattice_costs->Evaluate(*gpu.volume, lattice, tf));
@@ -55,7 +51,7 @@ Result<DecimatedLattice> DecimateLattice(const Volume& volume, const MeshParams&
   }
   MeshStats stats;
   stats.evaluate_ms = MsSince(t0);
-  t0 = Clock::now();
+  t0 = SteadyClock::now();
   const auto& g = costs.g(params.footprint);
   DecimationInput input{.ci = costs.ci(params.footprint), .cg = NormalizeGradientCost(g)};
   input.positions.resize(lattice.size());
@@ -93,7 +89,7 @@ Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& 
   ProxyMesh mesh;
   mesh.stats = base.stats;
   mesh.vertices = base.vertices;
-  auto t0 = Clock::now();
+  auto t0 = SteadyClock::now();
   if (params.refine_at_mm) {
     const RefineParams rp{.point_mm = *params.refine_at_mm,
                           .roi_radius_mm = params.roi_radius_factor * base.stats.h_mm,
@@ -105,12 +101,12 @@ Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& 
     mesh.vertices.insert(mesh.vertices.end(), refined.begin(), refined.end());
   }
   mesh.stats.refine_ms = MsSince(t0);
-  t0 = Clock::now();
+  t0 = SteadyClock::now();
   RETURN_IF_ERROR(ClassifyHardness(volume, base.stats.R_mm, params.classify, mesh.vertices));
   mesh.stats.hard = std::count_if(mesh.vertices.begin(), mesh.vertices.end(),
                                   [](const MeshVertex& v) { return v.hard; });
   mesh.stats.classify_ms = MsSince(t0);
-  t0 = Clock::now();
+  t0 = SteadyClock::now();
   RETURN_IF_ERROR(Tetrahedralize(mesh, volume.geometry().extent_mm()));
   mesh.stats.tetrahedralize_ms = MsSince(t0);
   mesh.stats.tets = static_cast<int64_t>(mesh.tets.size());

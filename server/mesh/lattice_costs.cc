@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <thread>
+
+#include "server/common/parallel_chunks.h"
 
 namespace vpm {
 
@@ -55,17 +56,12 @@ LatticeCosts EvaluateLatticeCostsCpu(const Volume& volume, const Lattice& lattic
                                      const TransferFunction& tf, int threads) {
   const int64_t n = lattice.size();
   LatticeCosts costs = LatticeCosts::Zeros(n);
-  threads = static_cast<int>(std::clamp<int64_t>(threads, 1, n));
-  std::vector<std::thread> workers;
-  for (int t = 0; t < threads; ++t) {
-    workers.emplace_back([&, t] {
-      for (int64_t id = n * t / threads; id < n * (t + 1) / threads; ++id) {
-        CellCosts(volume, lattice, tf, id, &costs.ci_cell[id], &costs.g_cell[id]);
-        PointCosts(volume, lattice, tf, id, &costs.ci_point[id], &costs.g_point[id]);
-      }
-    });
-  }
-  for (auto& w : workers) w.join();
+  ParallelChunks(threads, n, [&](int64_t begin, int64_t end, int) {
+    for (int64_t id = begin; id < end; ++id) {
+      CellCosts(volume, lattice, tf, id, &costs.ci_cell[id], &costs.g_cell[id]);
+      PointCosts(volume, lattice, tf, id, &costs.ci_point[id], &costs.g_point[id]);
+    }
+  });
   return costs;
 }
 

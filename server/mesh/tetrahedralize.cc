@@ -12,6 +12,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_vertex_base_with_info_3.h>
 
+#include "server/common/clock.h"
 #include "server/mesh/tet_quality.h"
 
 namespace vpm {
@@ -159,7 +160,7 @@ Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm) {
   mesh.quality.removed_zero_volume = removed;
   mesh.stats.tets = static_cast<int64_t>(mesh.tets.size());
   mesh.stats.tetrahedralize_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      MsSince(start);
   return absl::OkStatus();
 }
 

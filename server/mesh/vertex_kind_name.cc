@@ -1,5 +1,5 @@
-// VertexKindName of proxy_mesh.h. It lives in vpm_tetmesh, the lowest mesh
-// library, because the mesh files (mesh_json, write_vtu) need it.
+// VertexKindName of proxy_mesh.h: the names the mesh files (mesh_json,
+// write_vtu) and the service write.
 #include "server/mesh/proxy_mesh.h"
 
 namespace vpm {

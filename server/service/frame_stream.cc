@@ -2,14 +2,11 @@
 
 #include <chrono>
 
+#include "server/common/clock.h"
 #include "server/service/grpc_status.h"
 
 namespace vpm::service {
 namespace {
-
-double MsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 }  // namespace
 

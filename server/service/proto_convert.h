@@ -7,7 +7,7 @@
 #include "proto/vec3_convert.h"
 #include "server/common/status.h"
 #include "server/mesh/build_proxy_mesh.h"
-#include "server/render/deformable_scene.h"
+#include "server/scene/deformable_scene.h"
 #include "server/service/mesh_store.h"
 #include "server/service/volume_store.h"
 #include "vpm/v1/vpm.pb.h"

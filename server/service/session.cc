@@ -3,15 +3,12 @@
 #include <chrono>
 #include <cmath>
 
-#include "server/render/frame_encoder.h"
-#include "server/render/pick_ray.h"
+#include "server/common/clock.h"
+#include "server/raycast/frame_encoder.h"
+#include "server/raycast/pick_ray.h"
 
 namespace vpm::service {
 namespace {
-
-double MsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 }  // namespace
 

@@ -13,7 +13,7 @@
 #include <optional>
 #include <string>
 
-#include "server/render/deformable_scene.h"
+#include "server/scene/deformable_scene.h"
 #include "server/service/mesh_store.h"
 #include "server/service/proto_convert.h"
 #include "server/service/volume_store.h"

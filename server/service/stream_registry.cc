@@ -1,5 +1,8 @@
+#include "server/service/stream_registry.h"
+
+#include <vector>
+
 #include "server/service/frame_stream.h"
-#include "server/service/service_context.h"
 
 namespace vpm::service {
 

@@ -15,7 +15,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "server/service/service_context.h"
-#include "server/service/sha256.h"
+#include "server/common/sha256.h"
 #include "vpm/v1/vpm.pb.h"
 
 namespace vpm::service {

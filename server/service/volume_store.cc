@@ -1,7 +1,7 @@
 #include "server/service/volume_store.h"
 
 #include "server/service/resolve_data_path.h"
-#include "server/volume/read_volume.h"
+#include "server/io/read_volume.h"
 
 namespace vpm::service {
 

@@ -13,7 +13,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "server/gpu/gpu_context.h"
-#include "server/render/volume_renderer.h"
+#include "server/raycast/volume_renderer.h"
 #include "server/service/server_options.h"
 #include "server/service/service_context.h"
 #include "server/service/vpm_service.h"

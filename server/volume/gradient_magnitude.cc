@@ -1,7 +1,8 @@
 #include "server/volume/gradient_magnitude.h"
 
 #include <algorithm>
-#include <thread>
+
+#include "server/common/parallel_chunks.h"
 
 namespace vpm {
 namespace {
@@ -35,13 +36,8 @@ void GradientSlab(const Volume& v, int64_t k_begin, int64_t k_end, float* out) {
 std::vector<float> GradientMagnitude(const Volume& volume, int threads) {
   std::vector<float> out(volume.values().size());
   const int64_t nz = volume.dims()[2];
-  threads = static_cast<int>(std::clamp<int64_t>(threads, 1, nz));
-  std::vector<std::thread> workers;
-  for (int t = 0; t < threads; ++t) {
-    const int64_t k0 = nz * t / threads, k1 = nz * (t + 1) / threads;
-    workers.emplace_back([&, k0, k1] { GradientSlab(volume, k0, k1, out.data()); });
-  }
-  for (auto& w : workers) w.join();
+  ParallelChunks(threads, nz,
+                 [&](int64_t k0, int64_t k1, int) { GradientSlab(volume, k0, k1, out.data()); });
   return out;
 }
 

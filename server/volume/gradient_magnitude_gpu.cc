@@ -22,7 +22,7 @@ Status GradientMagnitudeGpu::Record(gpu::ComputeBatch& batch, const GpuVolume& v
   const auto e = volume.extent();
   const uint64_t bytes = uint64_t{e[0]} * e[1] * e[2] * sizeof(float);
   if (out.size_bytes() < bytes) {
-    return absl::InvalidArgumentError(absl::StrCat("gradient output buffer holds ",
+    return absl::InvalidArgumentError(StrCat("gradient output buffer holds ",
                                                    out.size_bytes(), " bytes, needs ", bytes));
   }
   const glm::dvec3& s = volume.geometry().spacing_mm;

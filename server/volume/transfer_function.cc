@@ -48,7 +48,7 @@ Result<TransferFunction> TransferFunction::Create(std::vector<TfPoint> points) {
   if (points.empty()) return absl::InvalidArgumentError("transfer function has no points");
   for (const TfPoint& p : points) {
     if (!std::isfinite(p.value) || !std::isfinite(p.cost) || p.cost < 0.0 || p.cost > 1.0) {
-      return absl::InvalidArgumentError(absl::StrCat("transfer function point (", p.value, ", ",
+      return absl::InvalidArgumentError(StrCat("transfer function point (", p.value, ", ",
                                                      p.cost,
                                                      "): value must be finite and cost in [0,1]"));
     }
@@ -67,7 +67,7 @@ Result<TransferFunction> TransferFunction::Parse(std::string_view text) {
     if (vc.size() != 2 || !absl::SimpleAtod(absl::StripAsciiWhitespace(vc[0]), &p.value) ||
         !absl::SimpleAtod(absl::StripAsciiWhitespace(vc[1]), &p.cost)) {
       return absl::InvalidArgumentError(
-          absl::StrCat("transfer function item '", item, "' is not VALUE:COST"));
+          StrCat("transfer function item '", item, "' is not VALUE:COST"));
     }
     points.push_back(p);
   }
@@ -99,7 +99,7 @@ Result<TransferFunction> TransferFunction::FromSpec(std::string_view spec, const
   if (spec == "mri-t1") return ResolvePercentiles(volume);
   if (spec.find(':') != std::string_view::npos) return Parse(spec);
   std::string names;
-  for (const auto& [name, _] : PresetNames()) absl::StrAppend(&names, names.empty() ? "" : ", ", name);
+  for (const auto& [name, _] : PresetNames()) StrAppend(&names, names.empty() ? "" : ", ", name);
   return absl::InvalidArgumentError(StrCat("unknown transfer function '", spec,
                                                  "': use a preset (", names,
                                                  ") or VALUE:COST,VALUE:COST,..."));
@@ -120,7 +120,7 @@ double TransferFunction::Evaluate(double value) const {
 
 std::string TransferFunction::ToString() const {
   std::string s;
-  for (const TfPoint& p : points_) absl::StrAppend(&s, s.empty() ? "" : ",", p.value, ":", p.cost);
+  for (const TfPoint& p : points_) StrAppend(&s, s.empty() ? "" : ",", p.value, ":", p.cost);
   return s;
 }
 

@@ -7,7 +7,7 @@ namespace vpm {
 Result<gpu::TransferFunctionBlock> MakeTransferFunctionBlock(const TransferFunction& tf) {
   const auto& points = tf.points();
   if (points.size() > gpu::kMaxTfPoints) {
-    return absl::InvalidArgumentError(absl::StrCat("transfer function has ", points.size(),
+    return absl::InvalidArgumentError(StrCat("transfer function has ", points.size(),
                                                    " points; the GPU takes at most ",
                                                    gpu::kMaxTfPoints));
   }

@@ -11,31 +11,31 @@ Status ValidateGeometry(const VolumeGeometry& g, const VolumeLimits& limits) {
   for (int a = 0; a < 3; ++a) {
     if (g.dims[a] <= 0) {
       return absl::InvalidArgumentError(
-          absl::StrCat("dimension ", kAxis[a], " is ", g.dims[a], "; it must be positive"));
+          StrCat("dimension ", kAxis[a], " is ", g.dims[a], "; it must be positive"));
     }
     if (g.dims[a] > limits.max_voxels) {
-      return absl::ResourceExhaustedError(absl::StrCat("dimension ", kAxis[a], " is ", g.dims[a],
+      return absl::ResourceExhaustedError(StrCat("dimension ", kAxis[a], " is ", g.dims[a],
                                                        ", over the cap of ", limits.max_voxels,
                                                        " voxels"));
     }
     const double s = g.spacing_mm[a];
     if (!std::isfinite(s) || s <= 0.0) {
-      return absl::InvalidArgumentError(absl::StrCat(
+      return absl::InvalidArgumentError(StrCat(
           "spacing ", kAxis[a], " is ", s, " mm; it must be a positive finite number"));
     }
     if (!std::isfinite(g.origin_mm[a])) {
-      return absl::InvalidArgumentError(absl::StrCat("origin ", kAxis[a], " is not finite"));
+      return absl::InvalidArgumentError(StrCat("origin ", kAxis[a], " is not finite"));
     }
   }
   // Overflow-safe product check against the voxel cap.
   if (g.dims[0] > limits.max_voxels / g.dims[1] ||
       g.dims[0] * g.dims[1] > limits.max_voxels / g.dims[2]) {
     return absl::ResourceExhaustedError(
-        absl::StrCat("volume of ", g.dims[0], "x", g.dims[1], "x", g.dims[2],
+        StrCat("volume of ", g.dims[0], "x", g.dims[1], "x", g.dims[2],
                      " voxels is over the cap of ", limits.max_voxels, " voxels"));
   }
   if (g.voxel_count() * int64_t{sizeof(float)} > limits.max_bytes) {
-    return absl::ResourceExhaustedError(absl::StrCat("volume needs ", g.voxel_count() * 4,
+    return absl::ResourceExhaustedError(StrCat("volume needs ", g.voxel_count() * 4,
                                                      " bytes, over the cap of ",
                                                      limits.max_bytes, " bytes"));
   }
@@ -61,7 +61,7 @@ Result<Volume> Volume::Create(VolumeGeometry geometry, std::vector<float> values
                               const VolumeLimits& limits) {
   RETURN_IF_ERROR(ValidateGeometry(geometry, limits));
   if (static_cast<int64_t>(values.size()) != geometry.voxel_count()) {
-    return absl::InvalidArgumentError(absl::StrCat("volume has ", values.size(),
+    return absl::InvalidArgumentError(StrCat("volume has ", values.size(),
                                                    " values, expected ", geometry.voxel_count()));
   }
   Volume volume(geometry, std::move(values));

@@ -7,7 +7,7 @@
 
 #include "server/mesh/tetrahedralize.h"
 #include "tests/mesh/tet_mesh_test_util.h"
-#include "tests/volume/io_test_util.h"
+#include "tests/io/io_test_util.h"
 
 namespace vpm {
 namespace {

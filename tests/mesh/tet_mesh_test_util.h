@@ -1,4 +1,4 @@
-// Meshes and volumes for the vpm_tetmesh tests.
+// Meshes and volumes for the mesh, measures and warp tests.
 #pragma once
 
 #include <functional>

@@ -1,4 +1,5 @@
 // Delaunay tetrahedralization of the proxy mesh (ALGORITHM.md section 5).
+#include "server/common/clock.h"
 #include "server/mesh/tetrahedralize.h"
 
 #include <algorithm>
@@ -186,7 +187,7 @@ TEST(Tetrahedralize, TimingOnTypicalVertexCounts) {
     const auto start = std::chrono::steady_clock::now();
     ASSERT_TRUE(Tetrahedralize(c.mesh, extent).ok());
     const double ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        MsSince(start);
     std::printf("Tetrahedralize %-16s %6zu vertices %7zu tets %8.2f ms  min dihedral %.2f deg\n",
                 c.name, c.mesh.vertices.size(), c.mesh.tets.size(), ms,
                 c.mesh.quality.min_dihedral_deg);

@@ -5,9 +5,9 @@
 
 #include <grpcpp/generic/generic_stub.h>
 
-#include "server/service/sha256.h"
-#include "server/volume/read_volume.h"
-#include "server/volume/write_nifti.h"
+#include "server/common/sha256.h"
+#include "server/io/read_volume.h"
+#include "server/io/write_nifti.h"
 #include "tests/service/service_test_util.h"
 
 namespace vpm::service::testing {

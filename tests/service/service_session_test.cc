@@ -3,7 +3,7 @@
 // stream, the per-client stream cap.
 #include <thread>
 
-#include "server/render/frame_encoder.h"
+#include "server/raycast/frame_encoder.h"
 #include "tests/service/service_test_util.h"
 
 namespace vpm::service::testing {

@@ -1,5 +1,5 @@
 // The page's orbit camera (client/web/public/camera.js) against the
-// conventions of server/render/camera.{h,cc} it mirrors: the anatomical
+// conventions of server/raycast/camera.{h,cc} it mirrors: the anatomical
 // default view, an orthonormal frame, the fitted distance, picks on the
 // orbit-centre plane, and drag offsets that follow the pointer exactly.
 import assert from 'node:assert/strict';

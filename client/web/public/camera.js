@@ -1,4 +1,4 @@
-// The orbit camera of server/render/camera.{h,cc}, mirrored in the browser
+// The orbit camera of server/raycast/camera.{h,cc}, mirrored in the browser
 // so that screen motion becomes millimetres: drag offsets for the grab tool,
 // and the picked point for refine-here (the server does not report the
 // point it picks). Physical voxel space (index * spacing, mm) throughout.

@@ -1,0 +1,283 @@
+#include "server/io/read_dicom_slice.h"
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <mutex>
+#include <optional>
+
+#include <dcmtk/config/osconfig.h>  // must come first among DCMTK headers
+#include <dcmtk/dcmdata/dcdeftag.h>
+#include <dcmtk/dcmdata/dcfilefo.h>
+#include <dcmtk/dcmdata/dcistrmb.h>
+#include <dcmtk/dcmdata/dcpixel.h>
+#include <dcmtk/dcmdata/dcpixseq.h>
+#include <dcmtk/dcmdata/dcpxitem.h>
+#include <dcmtk/dcmdata/dcrledrg.h>
+#include <dcmtk/dcmdata/dcxfer.h>
+#include <dcmtk/dcmjpeg/djdecode.h>
+#include <dcmtk/dcmjpls/djdecode.h>
+
+#include "server/io/check_dicom_structure.h"
+#include "server/io/voxel_type.h"
+
+namespace vpm {
+namespace {
+
+// DCMTK keeps its decoders in a process-wide registry; registering them once,
+// on first use, is the library's intended pattern.
+void RegisterDecodersOnce() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    DcmRLEDecoderRegistration::registerCodecs();
+    DJDecoderRegistration::registerCodecs();
+    DJLSDecoderRegistration::registerCodecs();
+  });
+}
+
+Result<std::unique_ptr<DcmFileFormat>> ParseFile(std::span<const uint8_t> bytes) {
+  // Only structurally sound files reach DCMTK (see check_dicom_structure.h).
+  ASSIGN_OR_RETURN(const std::string syntax_uid, CheckDicomStructure(bytes));
+  DcmInputBufferStream stream;
+  stream.setBuffer(bytes.data(), static_cast<offile_off_t>(bytes.size()));
+  stream.setEos();
+  auto file = std::make_unique<DcmFileFormat>();
+  file->transferInit();
+  // The syntax the walk used, so that DCMTK never guesses another.
+  const OFCondition cond =
+      file->read(stream, DcmXfer(syntax_uid.c_str()).getXfer(), EGL_noChange, DCM_MaxReadLength);
+  file->transferEnd();
+  if (cond.bad()) {
+    return absl::InvalidArgumentError(
+        StrCat("not a readable DICOM file (truncated or corrupt): ", cond.text()));
+  }
+  return file;
+}
+
+struct PixelFormat {
+  int64_t bits_allocated = 0;
+  int64_t bits_stored = 0;
+  int64_t high_bit = 0;
+  bool is_signed = false;
+  double slope = 1.0;
+  double intercept = 0.0;
+};
+
+Result<int64_t> GetInt(DcmDataset& ds, const DcmTagKey& tag, const char* name,
+                       std::optional<int64_t> fallback = std::nullopt) {
+  Sint32 value = 0;
+  if (ds.findAndGetSint32(tag, value).good()) return value;
+  Uint16 value16 = 0;
+  if (ds.findAndGetUint16(tag, value16).good()) return value16;
+  if (fallback.has_value()) return *fallback;
+  return absl::InvalidArgumentError(StrCat(name, " is missing"));
+}
+
+Result<double> GetDouble(DcmDataset& ds, const DcmTagKey& tag, unsigned long pos, const char* name,
+                         std::optional<double> fallback = std::nullopt) {
+  Float64 value = 0.0;
+  if (ds.findAndGetFloat64(tag, value, pos).good()) {
+    if (!std::isfinite(value))
+      return absl::InvalidArgumentError(StrCat(name, " is not finite"));
+    return value;
+  }
+  if (fallback.has_value()) return *fallback;
+  return absl::InvalidArgumentError(
+      StrCat(name, " is missing (needed to place the slice in space)"));
+}
+
+Status CheckImageKind(DcmDataset& ds) {
+  ASSIGN_OR_RETURN(const int64_t samples, GetInt(ds, DCM_SamplesPerPixel, "SamplesPerPixel", 1));
+  if (samples != 1) {
+    return absl::UnimplementedError(
+        StrCat("SamplesPerPixel is ", samples, "; only greyscale images are supported"));
+  }
+  OFString photometric;
+  if (ds.findAndGetOFString(DCM_PhotometricInterpretation, photometric).good() &&
+      photometric != "MONOCHROME1" && photometric != "MONOCHROME2") {
+    return absl::UnimplementedError(
+        StrCat("PhotometricInterpretation ", photometric.c_str(), " is not supported"));
+  }
+  ASSIGN_OR_RETURN(const int64_t frames, GetInt(ds, DCM_NumberOfFrames, "NumberOfFrames", 1));
+  if (frames != 1) {
+    return absl::UnimplementedError(
+        StrCat("multi-frame images (", frames, " frames) are not supported"));
+  }
+  return absl::OkStatus();
+}
+
+Result<PixelFormat> ReadPixelFormat(DcmDataset& ds) {
+  PixelFormat f;
+  ASSIGN_OR_RETURN(f.bits_allocated, GetInt(ds, DCM_BitsAllocated, "BitsAllocated"));
+  if (f.bits_allocated != 8 && f.bits_allocated != 16) {
+    return absl::UnimplementedError(
+        StrCat("BitsAllocated is ", f.bits_allocated, "; only 8 and 16 are supported"));
+  }
+  ASSIGN_OR_RETURN(f.bits_stored, GetInt(ds, DCM_BitsStored, "BitsStored", f.bits_allocated));
+  ASSIGN_OR_RETURN(f.high_bit, GetInt(ds, DCM_HighBit, "HighBit", f.bits_stored - 1));
+  if (f.bits_stored < 1 || f.bits_stored > f.bits_allocated || f.high_bit >= f.bits_allocated ||
+      f.high_bit + 1 < f.bits_stored) {
+    return absl::InvalidArgumentError(StrCat("BitsStored ", f.bits_stored, " / HighBit ",
+                                                   f.high_bit, " do not fit BitsAllocated ",
+                                                   f.bits_allocated));
+  }
+  ASSIGN_OR_RETURN(const int64_t representation,
+                   GetInt(ds, DCM_PixelRepresentation, "PixelRepresentation", 0));
+  f.is_signed = representation == 1;
+  ASSIGN_OR_RETURN(f.slope, GetDouble(ds, DCM_RescaleSlope, 0, "RescaleSlope", 1.0));
+  ASSIGN_OR_RETURN(f.intercept, GetDouble(ds, DCM_RescaleIntercept, 0, "RescaleIntercept", 0.0));
+  if (f.slope == 0.0) return absl::InvalidArgumentError("RescaleSlope is 0");
+  return f;
+}
+
+Status ReadGeometry(DcmDataset& ds, DicomSlice& slice) {
+  for (int n = 0; n < 2; ++n) {
+    ASSIGN_OR_RETURN(slice.pixel_spacing_mm[n], GetDouble(ds, DCM_PixelSpacing, n, "PixelSpacing"));
+  }
+  for (int n = 0; n < 6; ++n) {
+    ASSIGN_OR_RETURN(slice.orientation[n],
+                     GetDouble(ds, DCM_ImageOrientationPatient, n, "ImageOrientationPatient"));
+  }
+  for (int n = 0; n < 3; ++n) {
+    ASSIGN_OR_RETURN(slice.position_mm[n],
+                     GetDouble(ds, DCM_ImagePositionPatient, n, "ImagePositionPatient"));
+  }
+  ASSIGN_OR_RETURN(slice.slice_thickness_mm,
+                   GetDouble(ds, DCM_SliceThickness, 0, "SliceThickness", 0.0));
+  OFString uid;
+  if (ds.findAndGetOFString(DCM_SeriesInstanceUID, uid).good()) slice.series_uid = uid.c_str();
+  return absl::OkStatus();
+}
+
+// DCMTK 3.6.7's JPEG decoder loops forever when the marker walk it does to
+// find the frame header (DJCodecDecoder::scanJpegDataForBitDepth) meets a TEM
+// marker (FF01), which it does not step over. The same walk is done here and
+// such fragments are refused; everything else is left to the decoder.
+Status CheckJpegMarkers(const Uint8* data, uint32_t length) {
+  uint32_t offset = 0;
+  while (data != nullptr && offset + 4 < length) {
+    const uint8_t marker = data[offset + 1];
+    if (data[offset] != 0xff) return absl::OkStatus();  // DCMTK stops here
+    const bool frame_header =
+        (marker >= 0xc0 && marker <= 0xcf && marker != 0xc4 && marker != 0xc8 && marker != 0xcc);
+    if (frame_header) return absl::OkStatus();  // found: the walk ends
+    if (marker == 0x01) {
+      return absl::InvalidArgumentError("JPEG data holds a TEM marker before its frame header");
+    }
+    const uint32_t segment = (uint32_t{data[offset + 2]} << 8) | data[offset + 3];
+    if (marker == 0xff) {
+      offset += 1;
+    } else if ((marker >= 0xd0 && marker <= 0xd9) || (marker > 0x02 && marker <= 0xbf)) {
+      offset += 2;
+    } else if (marker >= 0xc4) {
+      offset += segment + 2;
+    } else {
+      return absl::OkStatus();  // an invalid marker: DCMTK stops too
+    }
+  }
+  return absl::OkStatus();
+}
+
+Status CheckFragments(DcmDataset& ds, E_TransferSyntax xfer) {
+  DcmElement* element = nullptr;
+  if (ds.findAndGetElement(DCM_PixelData, element).bad() || element == nullptr ||
+      element->ident() != EVR_PixelData) {
+    return absl::InvalidArgumentError("PixelData is missing");
+  }
+  DcmPixelSequence* sequence = nullptr;
+  if (static_cast<DcmPixelData*>(element)
+          ->getEncapsulatedRepresentation(xfer, nullptr, sequence)
+          .bad() ||
+      sequence == nullptr) {
+    return absl::InvalidArgumentError("compressed PixelData has no fragments");
+  }
+  for (unsigned long n = 0; n < sequence->card(); ++n) {
+    DcmPixelItem* item = nullptr;
+    Uint8* data = nullptr;
+    if (sequence->getItem(item, n).good() && item != nullptr && item->getUint8Array(data).good()) {
+      RETURN_IF_ERROR(CheckJpegMarkers(data, item->getLength()));
+    }
+  }
+  return absl::OkStatus();
+}
+
+Status DecompressIfNeeded(DcmDataset& ds) {
+  const DcmXfer xfer(ds.getOriginalXfer());
+  if (!xfer.isEncapsulated()) return absl::OkStatus();
+  if (xfer.getXfer() != EXS_RLELossless) RETURN_IF_ERROR(CheckFragments(ds, xfer.getXfer()));
+  RegisterDecodersOnce();
+  const OFCondition cond = ds.chooseRepresentation(EXS_LittleEndianExplicit, nullptr);
+  if (cond.bad() || !ds.canWriteXfer(EXS_LittleEndianExplicit)) {
+    return absl::UnimplementedError(StrCat(
+        "transfer syntax ", xfer.getXferName(), " (", xfer.getXferID(),
+        ") is compressed and could not be decoded: ", cond.bad() ? cond.text() : "no decoder"));
+  }
+  return absl::OkStatus();
+}
+
+// Stored sample -> value: keep bits [high_bit - bits_stored + 1, high_bit],
+// sign-extend when signed, then rescale.
+float SampleToValue(uint32_t raw, const PixelFormat& f) {
+  const int64_t shift = f.high_bit + 1 - f.bits_stored;
+  const uint32_t mask = f.bits_stored >= 32 ? 0xffffffffu : ((1u << f.bits_stored) - 1u);
+  int64_t value = (raw >> shift) & mask;
+  if (f.is_signed && (value >> (f.bits_stored - 1)) != 0) value -= int64_t{1} << f.bits_stored;
+  return DoubleToFloat(static_cast<double>(value) * f.slope + f.intercept);
+}
+
+Status ReadPixels(DcmDataset& ds, const PixelFormat& f, DicomSlice& slice) {
+  const int64_t count = slice.rows * slice.columns;
+  DcmElement* element = nullptr;
+  if (ds.findAndGetElement(DCM_PixelData, element).bad() || element == nullptr) {
+    return absl::InvalidArgumentError("PixelData is missing");
+  }
+  const int64_t have_bytes = element->getLength();
+  const int64_t need_bytes = count * (f.bits_allocated / 8);
+  if (have_bytes < need_bytes) {
+    return absl::InvalidArgumentError(
+        StrCat("PixelData holds ", have_bytes, " bytes but ", slice.rows, "x", slice.columns,
+                     "x", f.bits_allocated, " bits need ", need_bytes, " (truncated)"));
+  }
+  slice.values.resize(static_cast<size_t>(count));
+  if (f.bits_allocated == 8) {
+    Uint8* data = nullptr;
+    if (element->getUint8Array(data).bad() || data == nullptr) {
+      return absl::InvalidArgumentError("PixelData cannot be read as 8-bit samples");
+    }
+    for (int64_t n = 0; n < count; ++n) slice.values[n] = SampleToValue(data[n], f);
+  } else {
+    Uint16* data = nullptr;
+    if (element->getUint16Array(data).bad() || data == nullptr) {
+      return absl::InvalidArgumentError("PixelData cannot be read as 16-bit samples");
+    }
+    for (int64_t n = 0; n < count; ++n) slice.values[n] = SampleToValue(data[n], f);
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+bool LooksLikeDicom(std::span<const uint8_t> bytes) {
+  return bytes.size() >= 132 && std::memcmp(bytes.data() + 128, "DICM", 4) == 0;
+}
+
+Result<DicomSlice> ParseDicomSlice(std::span<const uint8_t> bytes, const VolumeLimits& limits) {
+  ASSIGN_OR_RETURN(const std::unique_ptr<DcmFileFormat> file, ParseFile(bytes));
+  DcmDataset& ds = *file->getDataset();
+  DicomSlice slice;
+  if (!ds.tagExists(DCM_PixelData)) return slice;  // not an image
+  slice.is_image = true;
+  RETURN_IF_ERROR(CheckImageKind(ds));
+  ASSIGN_OR_RETURN(slice.rows, GetInt(ds, DCM_Rows, "Rows"));
+  ASSIGN_OR_RETURN(slice.columns, GetInt(ds, DCM_Columns, "Columns"));
+  VolumeGeometry plane;
+  plane.dims = {slice.columns, slice.rows, 1};
+  RETURN_IF_ERROR(ValidateGeometry(plane, limits));  // before any decoding
+  ASSIGN_OR_RETURN(const PixelFormat format, ReadPixelFormat(ds));
+  RETURN_IF_ERROR(ReadGeometry(ds, slice));
+  RETURN_IF_ERROR(DecompressIfNeeded(ds));
+  RETURN_IF_ERROR(ReadPixels(ds, format, slice));
+  return slice;
+}
+
+}  // namespace vpm

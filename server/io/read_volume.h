@@ -1,0 +1,29 @@
+// One entry point from a source string to a Volume.
+#pragma once
+
+#include <string_view>
+
+#include "server/common/status.h"
+#include "server/volume/volume.h"
+
+namespace vpm {
+
+// The source forms ReadVolume accepts, for messages and help texts.
+inline constexpr std::string_view kVolumeSourceForms =
+    "phantom:SPEC (e.g. phantom:abdomen?size=128), a folder of DICOM files, "
+    "FILE.nii, FILE.nii.gz, FILE.nrrd, FILE.nhdr, FILE.mha, FILE.mhd, or "
+    "raw:PATH?dims=X,Y,Z&type=int16&spacing=A,B,C[&endian=little|big][&offset=N]";
+
+// Reads the volume `source` names:
+//   phantom:SPEC        MakePhantom(SPEC) (server/phantom/phantom.h)
+//   raw:PATH?...        ReadRaw with the options in the query (parse_raw_source.h)
+//   an existing folder  ReadDicomSeries
+//   *.nii, *.nii.gz     ReadNifti
+//   *.nrrd, *.nhdr      ReadNrrd
+//   *.mha, *.mhd        ReadMetaImage
+// Extensions are matched case-insensitively. Every reader checks `limits`
+// before allocating. The volume's source() is set to `source`. Errors: those
+// of the reader; InvalidArgument listing the forms above for anything else.
+Result<Volume> ReadVolume(std::string_view source, const VolumeLimits& limits);
+
+}  // namespace vpm

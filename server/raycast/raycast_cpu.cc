@@ -1,0 +1,481 @@
+#include "server/raycast/raycast_cpu.h"
+#include "server/common/clock.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <thread>
+
+namespace vpm {
+namespace {
+
+using glm::ivec3;
+using glm::vec2;
+using glm::vec3;
+using glm::vec4;
+
+constexpr float kOpaque = 0.99f;
+constexpr float kShadeMinWeight = 1.0f / 256.0f;
+constexpr float kNoValue = -3.0e38f;
+
+// A trilinear cell's interpolant at fraction f (each in [0, 1]) and its
+// partial derivatives per cell unit, for corner values c[x + 2y + 4z] of type
+// T (float for the volume, vec3 for the backward map), in the order of
+// operations of raycast_body.glsl so that both agree to the last bit.
+template <typename T>
+struct TrilinearWithPartials {
+  T value, d_dx, d_dy, d_dz;
+};
+
+template <typename T>
+TrilinearWithPartials<T> InterpolateCell(const T (&c)[8], vec3 f) {
+  const T c00 = c[0] + (c[1] - c[0]) * f.x;
+  const T c10 = c[2] + (c[3] - c[2]) * f.x;
+  const T c01 = c[4] + (c[5] - c[4]) * f.x;
+  const T c11 = c[6] + (c[7] - c[6]) * f.x;
+  const T c0 = c00 + (c10 - c00) * f.y;
+  const T c1 = c01 + (c11 - c01) * f.y;
+  const T dx0 = (c[1] - c[0]) + ((c[3] - c[2]) - (c[1] - c[0])) * f.y;
+  const T dx1 = (c[5] - c[4]) + ((c[7] - c[6]) - (c[5] - c[4])) * f.y;
+  const T dy0 = c10 - c00;
+  const T dy1 = c11 - c01;
+  return {c0 + (c1 - c0) * f.z, dx0 + (dx1 - dx0) * f.z, dy0 + (dy1 - dy0) * f.z, c1 - c0};
+}
+
+uint32_t PackRgba(vec3 rgb) {
+  const vec3 c = glm::clamp(rgb, 0.0f, 1.0f) * 255.0f + 0.5f;
+  return uint32_t(c.r) | (uint32_t(c.g) << 8) | (uint32_t(c.b) << 16) | (255u << 24);
+}
+
+vec4 Unpack(uint32_t w) {
+  return vec4(float(w & 255u), float((w >> 8) & 255u), float((w >> 16) & 255u),
+              float(w >> 24)) / 255.0f;
+}
+
+// Runs fn(row) for rows 0..rows-1 on `threads` threads, rows interleaved
+// (neighbouring rows cost about the same).
+template <typename Fn>
+void ForRows(int rows, int threads, Fn fn) {
+  threads = std::max(1, std::min(threads, rows));
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) {
+    pool.emplace_back([&, t] {
+      for (int r = t; r < rows; r += threads) fn(r);
+    });
+  }
+  for (int r = 0; r < rows; r += threads) fn(r);
+  for (auto& th : pool) th.join();
+}
+
+// X(x) - x from the map: rest_from_texels() of raycast_body.glsl (the
+// sampler's linear, clamp-to-edge filtering with exact weights).
+vec3 MapDisplacement(const HostBackwardMap& map, vec3 x, vec3 extent, vec3 m) {
+  const vec3 gc = glm::clamp(x / extent * (m - 1.0f), vec3(0.0f), m - 1.0f);
+  const ivec3 mi(map.dims[0], map.dims[1], map.dims[2]);
+  const ivec3 i0 = glm::min(ivec3(glm::floor(gc)), mi - 2);
+  const vec3 f = gc - vec3(i0);
+  auto at = [&](int dx, int dy, int dz) {
+    return vec3(map.texels[(i0.x + dx) + size_t(mi.x) * ((i0.y + dy) + size_t(mi.y) * (i0.z + dz))]);
+  };
+  const vec3 c00 = at(0, 0, 0) + (at(1, 0, 0) - at(0, 0, 0)) * f.x;
+  const vec3 c10 = at(0, 1, 0) + (at(1, 1, 0) - at(0, 1, 0)) * f.x;
+  const vec3 c01 = at(0, 0, 1) + (at(1, 0, 1) - at(0, 0, 1)) * f.x;
+  const vec3 c11 = at(0, 1, 1) + (at(1, 1, 1) - at(0, 1, 1)) * f.x;
+  const vec3 c0 = c00 + (c10 - c00) * f.y;
+  const vec3 c1 = c01 + (c11 - c01) * f.y;
+  return c0 + (c1 - c0) * f.z;
+}
+
+// One frame's ray caster: raycast_body.glsl, function by function.
+class Caster {
+ public:
+  Caster(const gpu::RaycastParams& p, const RaycastCpuInputs& in)
+      : p_(p), in_(in), values_(in.volume->values().data()) {
+    n_ = ivec3(p.dims);
+    spacing_ = vec3(p.spacing_mm);
+    extent_ = vec3(n_ - 1) * spacing_;
+    flags_ = p.image.z;
+    nb_ = ivec3(p.bricks);
+    brick_size_ = spacing_ * float(p.bricks.w);
+    inv_spacing_ = 1.0f / spacing_;
+    inv_brick_ = 1.0f / brick_size_;
+  }
+
+  uint32_t Pixel(int px, int py, int64_t& taken) const;
+
+ private:
+  bool Flag(int f) const { return (flags_ & f) != 0; }
+
+  float SourceAt(vec3 u) const {
+    const ivec3 i0 = glm::min(ivec3(glm::floor(u)), n_ - 2);
+    const vec3 f = u - vec3(i0);
+    const int64_t sy = n_.x, sz = int64_t(n_.x) * n_.y;
+    const float* b = values_ + i0.x + sy * i0.y + sz * i0.z;
+    const float c00 = b[0] + (b[1] - b[0]) * f.x;
+    const float c10 = b[sy] + (b[sy + 1] - b[sy]) * f.x;
+    const float c01 = b[sz] + (b[sz + 1] - b[sz]) * f.x;
+    const float c11 = b[sz + sy] + (b[sz + sy + 1] - b[sz + sy]) * f.x;
+    const float c0 = c00 + (c10 - c00) * f.y;
+    const float c1 = c01 + (c11 - c01) * f.y;
+    return c0 + (c1 - c0) * f.z;
+  }
+
+  float DeformedValue(vec3 x) const {
+    const vec3 rest = Flag(gpu::kRaycastHasMap)
+                          ? x + MapDisplacement(*in_.map, x, extent_, vec3(p_.map_dims))
+                          : x;
+    return SourceAt(glm::clamp(rest * inv_spacing_, vec3(0.0f), vec3(n_ - 1)));
+  }
+
+  // source_and_gradient() of raycast_body.glsl: I at u and its gradient
+  // per voxel, that of the trilinear cell.
+  float SourceAndGradient(vec3 u, vec3& grad_u) const {
+    const ivec3 i0 = glm::min(ivec3(glm::floor(u)), n_ - 2);
+    const vec3 f = u - vec3(i0);
+    const int64_t sy = n_.x, sz = int64_t(n_.x) * n_.y;
+    const float* b = values_ + i0.x + sy * i0.y + sz * i0.z;
+    const float c[8] = {b[0],  b[1],      b[sy],      b[sy + 1],
+                        b[sz], b[sz + 1], b[sz + sy], b[sz + sy + 1]};
+    const TrilinearWithPartials<float> t = InterpolateCell(c, f);
+    grad_u = vec3(t.d_dx, t.d_dy, t.d_dz);
+    return t.value;
+  }
+
+  // deformed_value_and_gradient() of raycast_body.glsl: J(x) and grad J
+  // (value/mm) by the chain rule through the trilinear map cell.
+  float DeformedValueAndGradient(vec3 x, vec3& grad) const {
+    vec3 rest = x;
+    glm::mat3 jacobian(1.0f);  // d rest / d x, columns per x axis
+    if (Flag(gpu::kRaycastHasMap)) {
+      const HostBackwardMap& map = *in_.map;
+      const vec3 m(p_.map_dims);
+      const vec3 to_grid = (m - 1.0f) / extent_;
+      const vec3 gc = glm::clamp(x * to_grid, vec3(0.0f), m - 1.0f);
+      const ivec3 mi(map.dims[0], map.dims[1], map.dims[2]);
+      const ivec3 i0 = glm::min(ivec3(glm::floor(gc)), mi - 2);
+      const vec3 f = gc - vec3(i0);
+      auto at = [&](int dx, int dy, int dz) {
+        return vec3(
+            map.texels[(i0.x + dx) + size_t(mi.x) * ((i0.y + dy) + size_t(mi.y) * (i0.z + dz))]);
+      };
+      const vec3 c[8] = {at(0, 0, 0), at(1, 0, 0), at(0, 1, 0), at(1, 1, 0),
+                         at(0, 0, 1), at(1, 0, 1), at(0, 1, 1), at(1, 1, 1)};
+      const TrilinearWithPartials<vec3> t = InterpolateCell(c, f);
+      rest = x + t.value;
+      jacobian[0] += t.d_dx * to_grid.x;
+      jacobian[1] += t.d_dy * to_grid.y;
+      jacobian[2] += t.d_dz * to_grid.z;
+    }
+    vec3 grad_u;
+    const float v =
+        SourceAndGradient(glm::clamp(rest * inv_spacing_, vec3(0.0f), vec3(n_ - 1)), grad_u);
+    const vec3 grad_rest = grad_u * inv_spacing_;
+    grad = vec3(glm::dot(jacobian[0], grad_rest), glm::dot(jacobian[1], grad_rest),
+                glm::dot(jacobian[2], grad_rest));
+    return v;
+  }
+
+  vec4 LutAt(float v) const {
+    const auto& e = in_.lut->entries;
+    const float n = p_.lut.z;
+    const float f = std::clamp((v - p_.lut.x) * p_.lut.y, 0.0f, n - 1.0f);
+    const int i = std::min(int(f), int(n) - 2);
+    const float t = f - float(i);
+    return e[i] + (e[i + 1] - e[i]) * t;
+  }
+
+  // The gradient of J at x by central differences, one spacing wide.
+  vec3 TapGradient(vec3 x) const {
+    const vec3 h = spacing_;
+    const vec3 g(DeformedValue(x + vec3(h.x, 0, 0)) - DeformedValue(x - vec3(h.x, 0, 0)),
+                 DeformedValue(x + vec3(0, h.y, 0)) - DeformedValue(x - vec3(0, h.y, 0)),
+                 DeformedValue(x + vec3(0, 0, h.z)) - DeformedValue(x - vec3(0, 0, h.z)));
+    return g / (2.0f * h);
+  }
+
+  // shade() of raycast_body.glsl; g: the gradient (value/mm).
+  vec3 Shade(vec3 rgb, vec3 g, vec3 dir) const {
+    const float len = glm::length(g);
+    const float ndl = len > 0.0f ? std::abs(glm::dot(g, dir)) / len : 1.0f;
+    const float s = len / (len + p_.gradient.x);
+    const float n = p_.shading.w;
+    const float spec = ndl / (n - n * ndl + ndl);  // Schlick's ndl^n
+    const float diffuse = 1.0f + (ndl - 1.0f) * s;
+    const vec3 lit =
+        rgb * (p_.shading.x + p_.shading.y * diffuse) + vec3(p_.shading.z * spec * s);
+    return glm::min(lit, vec3(1.0f));
+  }
+
+  ivec3 BrickOf(vec3 x) const {
+    return glm::clamp(ivec3(glm::floor(x * inv_brick_)), ivec3(0), nb_ - 1);
+  }
+
+  float BrickExit(vec3 x, vec3 eye, vec3 inv_dir) const {
+    const ivec3 b = BrickOf(x);
+    const vec3 lo = vec3(b) * brick_size_;
+    const vec3 hi = glm::min(vec3(b + 1) * brick_size_, extent_);
+    vec3 t;
+    for (int a = 0; a < 3; ++a) t[a] = ((inv_dir[a] > 0.0f ? hi[a] : lo[a]) - eye[a]) * inv_dir[a];
+    return std::min(t.x, std::min(t.y, t.z));
+  }
+
+  const gpu::RaycastParams& p_;
+  const RaycastCpuInputs& in_;
+  const float* values_;
+  ivec3 n_, nb_;
+  vec3 spacing_, extent_, brick_size_, inv_spacing_, inv_brick_;
+  int flags_ = 0;
+};
+
+uint32_t Caster::Pixel(int px, int py, int64_t& taken) const {
+  const vec2 ndc(2.0f * (float(px) + 0.5f) / float(p_.image.x) - 1.0f,
+                 1.0f - 2.0f * (float(py) + 0.5f) / float(p_.image.y));
+  const vec3 eye(p_.eye_mm);
+  const vec3 dir = glm::normalize(vec3(p_.forward) + ndc.x * vec3(p_.right) + ndc.y * vec3(p_.up));
+  vec3 inv_dir;
+  for (int a = 0; a < 3; ++a) {
+    const float safe = std::abs(dir[a]) < 1e-20f ? (dir[a] < 0.0f ? -1e-20f : 1e-20f) : dir[a];
+    inv_dir[a] = 1.0f / safe;
+  }
+  const vec3 ta = (vec3(0.0f) - eye) * inv_dir;
+  const vec3 tb = (extent_ - eye) * inv_dir;
+  const vec3 tmin = glm::min(ta, tb), tmax = glm::max(ta, tb);
+  const float t_near = std::max(std::max(std::max(tmin.x, tmin.y), tmin.z), 0.0f);
+  const float t_far = std::min(std::min(tmax.x, tmax.y), tmax.z);
+  const vec3 background(p_.background);
+  if (t_near > t_far) return PackRgba(background);
+  const float step = p_.eye_mm.w;
+  const bool mip = p_.dims.w == 1;
+  const bool skipping = Flag(gpu::kRaycastSkipping);
+  const bool shading = Flag(gpu::kRaycastShading);
+  const bool early = Flag(gpu::kRaycastEarlyTermination);
+  const bool cell = Flag(kRaycastCellGradient);
+  float ray_max = kNoValue;
+  vec4 acc(0.0f);
+  int k = 0;
+  for (;;) {
+    const float t = t_near + float(k) * step;
+    if (t > t_far) break;
+    const vec3 x = eye + t * dir;
+    if (skipping) {
+      const ivec3 b = BrickOf(x);
+      const float occ = in_.occupancy[b.x + nb_.x * (b.y + nb_.y * b.z)];
+      const bool empty = mip ? occ <= std::max(ray_max, p_.window.x) : occ <= 0.0f;
+      if (empty) {
+        const float t_exit = BrickExit(x, eye, inv_dir);
+        k = std::max(k + 1, int(std::floor((t_exit - t_near) / step)) + 1);
+        continue;
+      }
+    }
+    ++taken;
+    vec3 cell_gradient(0.0f);
+    const float v = cell ? DeformedValueAndGradient(x, cell_gradient) : DeformedValue(x);
+    if (mip) {
+      ray_max = std::max(ray_max, v);
+      if (early && ray_max >= p_.window.z) break;  // white: no later sample shows
+    } else {
+      const vec4 c = LutAt(v);
+      if (c.a > 0.0f) {
+        vec3 rgb = vec3(c);
+        if (shading) {
+          rgb = (1.0f - acc.a) * c.a > kShadeMinWeight
+                    ? Shade(rgb, cell ? cell_gradient : TapGradient(x), dir)
+                    : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(1.0f));
+        }
+        const float w = (1.0f - acc.a) * c.a;
+        acc += vec4(w * rgb, w);
+        if (early && acc.a > kOpaque) break;
+      }
+    }
+    ++k;
+  }
+  const vec3 rgb = mip ? vec3(std::clamp((ray_max - p_.window.x) * p_.window.y, 0.0f, 1.0f))
+                       : vec3(acc) + (1.0f - acc.a) * background;
+  return PackRgba(rgb);
+}
+
+}  // namespace
+
+std::vector<glm::vec2> BrickMinMaxCpu(const Volume& volume, int brick_voxels) {
+  const int64_t w = brick_voxels;
+  const auto nb = BrickGridDims(volume.dims(), brick_voxels);
+  const auto& n = volume.dims();
+  std::vector<glm::vec2> out(static_cast<size_t>(nb[0]) * nb[1] * nb[2]);
+  for (int bz = 0; bz < nb[2]; ++bz)
+    for (int by = 0; by < nb[1]; ++by)
+      for (int bx = 0; bx < nb[0]; ++bx) {
+        float lo = 3.0e38f, hi = -3.0e38f;
+        const int64_t z1 = std::min<int64_t>(bz * w + w, n[2] - 1);
+        const int64_t y1 = std::min<int64_t>(by * w + w, n[1] - 1);
+        const int64_t x1 = std::min<int64_t>(bx * w + w, n[0] - 1);
+        for (int64_t z = bz * w; z <= z1; ++z)
+          for (int64_t y = by * w; y <= y1; ++y)
+            for (int64_t x = bx * w; x <= x1; ++x) {
+              const float v = volume.At(x, y, z);
+              lo = std::min(lo, v);
+              hi = std::max(hi, v);
+            }
+        out[bx + nb[0] * (by + size_t(nb[1]) * bz)] = glm::vec2(lo, hi);
+      }
+  return out;
+}
+
+std::vector<float> BrickOccupancyCpu(std::span<const glm::vec2> minmax,
+                                     const VolumeGeometry& geometry, int brick_voxels,
+                                     RenderMode mode, const RenderLut& lut,
+                                     const HostBackwardMap* map) {
+  const int w = brick_voxels;
+  const auto nba = BrickGridDims(geometry.dims, brick_voxels);
+  const ivec3 nb(nba[0], nba[1], nba[2]);
+  const ivec3 n(int(geometry.dims[0]), int(geometry.dims[1]), int(geometry.dims[2]));
+  const vec3 s(geometry.spacing_mm);
+  std::vector<float> out(size_t(nb.x) * nb.y * nb.z);
+  for (int index = 0; index < int(out.size()); ++index) {
+    const ivec3 b(index % nb.x, (index / nb.x) % nb.y, index / (nb.x * nb.y));
+    const vec3 lo_mm = vec3(b * w) * s;
+    const vec3 hi_mm = vec3(glm::min((b + 1) * w, n - 1)) * s;
+    vec3 dmin(0.0f), dmax(0.0f);
+    if (map != nullptr) {
+      const ivec3 m(map->dims[0], map->dims[1], map->dims[2]);
+      const vec3 to_grid = vec3(m - 1) / (vec3(n - 1) * s);
+      const ivec3 g_lo = glm::clamp(ivec3(glm::floor(lo_mm * to_grid)), ivec3(0), m - 1);
+      const ivec3 g_hi = glm::clamp(ivec3(glm::floor(hi_mm * to_grid)) + 1, ivec3(0), m - 1);
+      dmin = vec3(3.0e38f);
+      dmax = vec3(-3.0e38f);
+      for (int z = g_lo.z; z <= g_hi.z; ++z)
+        for (int y = g_lo.y; y <= g_hi.y; ++y)
+          for (int x = g_lo.x; x <= g_hi.x; ++x) {
+            const vec3 d(map->texels[x + m.x * (y + size_t(m.y) * z)]);
+            dmin = glm::min(dmin, d);
+            dmax = glm::max(dmax, d);
+          }
+    }
+    // Source bricks covering voxels floor(u_lo) .. ceil(u_hi), as
+    // brick_occupancy.comp.
+    const vec3 u_lo = glm::clamp(vec3(b * w) + dmin / s, vec3(0.0f), vec3(n - 1));
+    const vec3 u_hi =
+        glm::clamp(vec3(glm::min((b + 1) * w, n - 1)) + dmax / s, vec3(0.0f), vec3(n - 1));
+    const ivec3 s_lo = glm::clamp(ivec3(glm::floor(u_lo / float(w))), ivec3(0), nb - 1);
+    const ivec3 s_hi = glm::clamp(ivec3(glm::ceil(u_hi / float(w))) - 1, s_lo, nb - 1);
+    float vmin = 3.0e38f, vmax = -3.0e38f;
+    for (int z = s_lo.z; z <= s_hi.z; ++z)
+      for (int y = s_lo.y; y <= s_hi.y; ++y)
+        for (int x = s_lo.x; x <= s_hi.x; ++x) {
+          const glm::vec2 r = minmax[x + nb.x * (y + size_t(nb.y) * z)];
+          vmin = std::min(vmin, r.x);
+          vmax = std::max(vmax, r.y);
+        }
+    if (mode == RenderMode::kMip) {
+      out[index] = vmax;
+    } else {
+      const auto [e_lo, e_hi] = LutEntryRange(lut, vmin, vmax);
+      out[index] = lut.nonzero_prefix[e_hi + 1] - lut.nonzero_prefix[e_lo] > 0 ? 1.0f : 0.0f;
+    }
+  }
+  return out;
+}
+
+std::vector<uint32_t> RaycastCpu(const gpu::RaycastParams& params, const RaycastCpuInputs& in,
+                                 int threads, int64_t* samples) {
+  const int w = params.image.x, h = params.image.y;
+  std::vector<uint32_t> pixels(size_t(w) * h);
+  const Caster caster(params, in);
+  std::atomic<int64_t> total{0};
+  ForRows(h, threads, [&](int y) {
+    int64_t taken = 0;
+    for (int x = 0; x < w; ++x) pixels[size_t(y) * w + x] = caster.Pixel(x, y, taken);
+    total += taken;
+  });
+  if (samples != nullptr) *samples = total;
+  return pixels;
+}
+
+std::vector<uint32_t> UpscaleCpu(std::span<const uint32_t> source, int sw, int sh, int tw,
+                                 int th) {
+  std::vector<uint32_t> out(size_t(tw) * th);
+  const glm::vec2 scale = glm::vec2(sw, sh) / glm::vec2(tw, th);
+  for (int y = 0; y < th; ++y) {
+    for (int x = 0; x < tw; ++x) {
+      const glm::vec2 s = glm::clamp((glm::vec2(x, y) + 0.5f) * scale - 0.5f, glm::vec2(0.0f),
+                                     glm::vec2(sw - 1, sh - 1));
+      const glm::ivec2 i0 = glm::ivec2(glm::floor(s));
+      const glm::ivec2 i1 = glm::min(i0 + 1, glm::ivec2(sw - 1, sh - 1));
+      const glm::vec2 f = s - glm::vec2(i0);
+      auto at = [&](int qx, int qy) { return Unpack(source[size_t(qy) * sw + qx]); };
+      const vec4 top = at(i0.x, i0.y) + (at(i1.x, i0.y) - at(i0.x, i0.y)) * f.x;
+      const vec4 bottom = at(i0.x, i1.y) + (at(i1.x, i1.y) - at(i0.x, i1.y)) * f.x;
+      const vec4 c = glm::clamp(top + (bottom - top) * f.y, 0.0f, 1.0f) * 255.0f + 0.5f;
+      out[size_t(y) * tw + x] = uint32_t(c.r) | (uint32_t(c.g) << 8) | (uint32_t(c.b) << 16) |
+                                (uint32_t(c.a) << 24);
+    }
+  }
+  return out;
+}
+
+Result<Frame> RenderReference(const RenderRequest& request, const Volume& volume,
+                              const HostBackwardMap* map, int threads,
+                              const std::vector<glm::vec2>* brick_minmax) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const VolumeGeometry& g = volume.geometry();
+  std::array<int, 3> map_dims{0, 0, 0};
+  if (map != nullptr) {
+    map_dims = map->dims;
+    if (map->texels.size() != size_t(map_dims[0]) * map_dims[1] * map_dims[2]) {
+      return absl::InvalidArgumentError("host backward map: texel count does not match dims");
+    }
+  }
+  ASSIGN_OR_RETURN(RaycastSetup setup, PrepareRaycast(request, g, map_dims));
+  const RenderLut lut = BakeRenderLut(request.preset, setup.step_mm);
+  setup.params.lut = LutParams(lut);
+  Frame frame;
+  frame.width = request.width;
+  frame.height = request.height;
+  frame.render_width = setup.render_width;
+  frame.render_height = setup.render_height;
+  frame.step_mm = setup.step_mm;
+  const int brick_voxels = setup.params.bricks.w;
+  const auto nb = BrickGridDims(g.dims, brick_voxels);
+  frame.total_bricks = int64_t(nb[0]) * nb[1] * nb[2];
+  if (brick_minmax != nullptr && int64_t(brick_minmax->size()) != frame.total_bricks) {
+    return absl::InvalidArgumentError(
+        StrCat("brick_minmax holds ", brick_minmax->size(), " bricks; bricks of ", brick_voxels,
+               " voxels make ", frame.total_bricks));
+  }
+  std::vector<float> occupancy;
+  auto t0 = std::chrono::steady_clock::now();
+  if (request.settings.empty_space_skipping) {
+    std::vector<glm::vec2> own;
+    if (brick_minmax == nullptr) own = BrickMinMaxCpu(volume, brick_voxels);
+    occupancy = BrickOccupancyCpu(brick_minmax ? *brick_minmax : own, g, brick_voxels,
+                                  request.mode, lut, map);
+    const float black = setup.params.window.x;
+    const bool mip = request.mode == RenderMode::kMip;
+    frame.occupied_bricks = std::count_if(occupancy.begin(), occupancy.end(), [&](float o) {
+      return mip ? o > black : o > 0.0f;
+    });
+  }
+  frame.timings.occupancy_ms = MsSince(t0);
+  t0 = std::chrono::steady_clock::now();
+  const RaycastCpuInputs inputs{&volume, map, &lut, occupancy};
+  int64_t samples = 0;
+  std::vector<uint32_t> pixels = RaycastCpu(setup.params, inputs, threads, &samples);
+  if (request.settings.count_samples) frame.samples = samples;
+  frame.timings.raycast_ms = MsSince(t0);
+  if (setup.render_width != request.width || setup.render_height != request.height) {
+    t0 = std::chrono::steady_clock::now();
+    pixels = UpscaleCpu(pixels, setup.render_width, setup.render_height, request.width,
+                        request.height);
+    frame.timings.upscale_ms = MsSince(t0);
+  }
+  frame.rgba.resize(pixels.size() * 4);
+  std::memcpy(frame.rgba.data(), pixels.data(), frame.rgba.size());
+  t0 = std::chrono::steady_clock::now();
+  DrawOverlay(request.overlay, request.camera, frame.width, frame.height, frame.rgba);
+  frame.timings.overlay_ms = MsSince(t0);
+  frame.timings.wall_ms = MsSince(t_start);
+  return frame;
+}
+
+}  // namespace vpm

@@ -1,0 +1,213 @@
+#include "server/raycast/render_presets.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "server/gpu/shader_interface.h"
+
+namespace vpm {
+namespace {
+
+using glm::dvec4;
+
+// CT soft tissue: fat almost clear, skin, muscle and organs red-brown and
+// nearly opaque (a ray stops within some 20 mm of tissue: the skin surface
+// over the muscle wall, organs only where fat lies between), bone ivory.
+// The opacity also sets the cost: every tissue sample is shaded (7 reads).
+// Still step 1.0 x the spacing: its smooth table and thick layers give
+// 44 dB against step 0.5 at half the samples (docs/RENDERING.md).
+RenderPreset CtSoftTissue() {
+  RenderPreset preset = {"ct-soft-tissue",
+          {{-1000, dvec4(0.0, 0.0, 0.0, 0.0)},
+           {-300, dvec4(0.85, 0.70, 0.45, 0.0)},
+           {-100, dvec4(0.90, 0.75, 0.50, 0.002)},
+           {-50, dvec4(0.90, 0.72, 0.50, 0.002)},
+           {10, dvec4(0.80, 0.40, 0.30, 0.06)},
+           {40, dvec4(0.85, 0.42, 0.33, 0.2)},
+           {80, dvec4(0.90, 0.45, 0.35, 0.22)},
+           {150, dvec4(0.95, 0.55, 0.45, 0.25)},
+           {250, dvec4(0.95, 0.90, 0.80, 0.45)},
+           {700, dvec4(1.0, 0.97, 0.90, 0.9)},
+           {3000, dvec4(1.0, 0.97, 0.90, 0.9)}},
+          {40.0, 400.0}};
+  preset.still_step_factor = 1.0;
+  return preset;
+}
+
+// CT bone: everything below 230 HU transparent (the aorta at 210 HU and the
+// kidney cortex at 160 HU stay out), cancellous bone ivory, cortex opaque.
+RenderPreset CtBone() {
+  return {"ct-bone",
+          {{-1000, dvec4(0.0, 0.0, 0.0, 0.0)},
+           {230, dvec4(0.85, 0.70, 0.50, 0.0)},
+           {300, dvec4(0.92, 0.85, 0.70, 0.5)},
+           {700, dvec4(1.0, 0.98, 0.92, 1.0)},
+           {3000, dvec4(1.0, 0.98, 0.92, 1.0)}},
+          {400.0, 1000.0}};
+}
+
+// CT angiography: contrast-filled vessels (150-260 HU) red and fairly
+// opaque; the enhancing kidney cortex (160 HU) falls in the same range and
+// shows with them; bone faint ivory for orientation; soft tissue hidden.
+RenderPreset CtVessels() {
+  return {"ct-vessels",
+          {{-1000, dvec4(0.0, 0.0, 0.0, 0.0)},
+           {110, dvec4(0.70, 0.05, 0.05, 0.0)},
+           {150, dvec4(0.85, 0.12, 0.10, 0.25)},
+           {200, dvec4(0.95, 0.18, 0.12, 0.6)},
+           {260, dvec4(1.0, 0.30, 0.20, 0.6)},
+           {290, dvec4(0.90, 0.85, 0.75, 0.08)},
+           {700, dvec4(1.0, 0.97, 0.90, 0.3)},
+           {3000, dvec4(1.0, 0.97, 0.90, 0.3)}},
+          {200.0, 500.0}};
+}
+
+double Percentile(const std::vector<float>& sorted, double p) {
+  const double pos = p / 100.0 * static_cast<double>(sorted.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(pos));
+  const size_t hi = std::min(lo + 1, sorted.size() - 1);
+  return sorted[lo] + (pos - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
+}
+
+// MRI T1 on the volume's own percentiles (at most ~1M voxels sampled):
+// greyscale warming towards white, transparent below p5.
+RenderPreset MriT1(const Volume& volume) {
+  const auto values = volume.values();
+  const size_t stride = std::max<size_t>(1, values.size() / (1u << 20));
+  std::vector<float> sample;
+  for (size_t n = 0; n < values.size(); n += stride) sample.push_back(values[n]);
+  std::sort(sample.begin(), sample.end());
+  struct Anchor {
+    double percentile;
+    dvec4 rgba;
+  };
+  const Anchor anchors[] = {{5.0, dvec4(0.0, 0.0, 0.0, 0.0)},
+                            {30.0, dvec4(0.35, 0.33, 0.30, 0.005)},
+                            {60.0, dvec4(0.65, 0.62, 0.58, 0.02)},
+                            {90.0, dvec4(0.95, 0.90, 0.85, 0.08)},
+                            {99.5, dvec4(1.0, 1.0, 1.0, 0.15)}};
+  RenderPreset preset{"mri-t1", {}, {}, 30.0};
+  double last = -INFINITY;
+  for (const Anchor& a : anchors) {
+    // Strictly increasing, so that flat images still give a valid preset.
+    double v = Percentile(sample, a.percentile);
+    if (v <= last) v = last + 1e-3;
+    preset.points.push_back({v, a.rgba});
+    last = v;
+  }
+  const double p1 = Percentile(sample, 1.0);
+  const double p995 = std::max(Percentile(sample, 99.5), p1 + 1e-3);
+  preset.mip_window = {0.5 * (p1 + p995), p995 - p1};
+  // CT's 30 HU/mm is about 1/50 of the soft tissue to bone range per mm.
+  preset.shading_gradient = std::max(1e-6, (p995 - p1) / 50.0);
+  return preset;
+}
+
+bool InUnit(const dvec4& c) {
+  for (int i = 0; i < 4; ++i) {
+    if (!(c[i] >= 0.0 && c[i] <= 1.0)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> RenderPresetNames() {
+  return {
+      {"ct-soft-tissue", "CT: fat nearly clear, skin and muscle red-brown, bone ivory"},
+      {"ct-bone", "CT: bone only (>= 230 HU), cortex opaque"},
+      {"ct-vessels", "CT angiography: contrast vessels and kidney cortex red, bone faint"},
+      {"mri-t1", "MRI T1: greyscale on the volume's percentiles (p5 transparent .. p99.5)"},
+  };
+}
+
+Result<RenderPreset> MakeRenderPreset(std::string_view name, const Volume& volume) {
+  if (name == "ct-soft-tissue") return CtSoftTissue();
+  if (name == "ct-bone") return CtBone();
+  if (name == "ct-vessels") return CtVessels();
+  if (name == "mri-t1") return MriT1(volume);
+  std::string names;
+  for (const auto& [n, _] : RenderPresetNames()) names += (names.empty() ? "" : ", ") + n;
+  return absl::InvalidArgumentError(
+      StrCat("unknown render preset '", name, "': use one of ", names));
+}
+
+Status ValidateRenderPreset(const RenderPreset& preset) {
+  if (preset.points.size() < 2) {
+    return absl::InvalidArgumentError(
+        StrCat("render preset '", preset.name, "' needs at least 2 points"));
+  }
+  for (size_t i = 0; i < preset.points.size(); ++i) {
+    const ColorPoint& p = preset.points[i];
+    if (!std::isfinite(p.value) || !InUnit(p.rgba)) {
+      return absl::InvalidArgumentError(StrCat("render preset '", preset.name, "' point ", i,
+                                               ": value must be finite, rgba in [0, 1]"));
+    }
+    if (i > 0 && p.value < preset.points[i - 1].value) {
+      return absl::InvalidArgumentError(
+          StrCat("render preset '", preset.name, "': values must be sorted ascending"));
+    }
+  }
+  if (!std::isfinite(preset.shading_gradient) || !(preset.shading_gradient > 0.0)) {
+    return absl::InvalidArgumentError(
+        StrCat("render preset '", preset.name, "': shading_gradient must be > 0"));
+  }
+  if (!std::isfinite(preset.still_step_factor) || !(preset.still_step_factor > 0.0) ||
+      preset.still_step_factor > 4.0) {
+    return absl::InvalidArgumentError(
+        StrCat("render preset '", preset.name, "': still_step_factor must be in (0, 4]"));
+  }
+  const MipWindow& w = preset.mip_window;
+  if (!std::isfinite(w.level) || !std::isfinite(w.width) || !(w.width > 0.0)) {
+    return absl::InvalidArgumentError(StrCat("render preset '", preset.name,
+                                             "': MIP window needs a finite level and width > 0"));
+  }
+  return absl::OkStatus();
+}
+
+RenderLut BakeRenderLut(const RenderPreset& preset, double step_mm) {
+  const auto& pts = preset.points;
+  const int n = gpu::kRenderLutEntries;
+  const double lo = pts.front().value;
+  const double hi = std::max(pts.back().value, lo + 1e-3);
+  RenderLut lut;
+  lut.value_lo = static_cast<float>(lo);
+  lut.entries_per_value = static_cast<float>((n - 1) / (hi - lo));
+  lut.entries.resize(n);
+  lut.nonzero_prefix.assign(n + 1, 0);
+  const double exponent = step_mm / kOpacityReferenceMm;
+  size_t seg = 0;
+  for (int i = 0; i < n; ++i) {
+    const double v = lo + (hi - lo) * i / (n - 1);
+    while (seg + 2 < pts.size() && v >= pts[seg + 1].value) ++seg;
+    const ColorPoint& a = pts[seg];
+    const ColorPoint& b = pts[seg + 1];
+    const double width = b.value - a.value;
+    const double t = width > 0.0 ? std::clamp((v - a.value) / width, 0.0, 1.0)
+                                 : (v >= b.value ? 1.0 : 0.0);
+    const dvec4 c = a.rgba + (b.rgba - a.rgba) * t;
+    const double alpha = c.a >= 1.0 ? 1.0 : 1.0 - std::pow(1.0 - c.a, exponent);
+    lut.entries[i] = glm::vec4(c.r, c.g, c.b, alpha);
+    lut.nonzero_prefix[i + 1] = lut.nonzero_prefix[i] + (lut.entries[i].a > 0.0f ? 1 : 0);
+  }
+  return lut;
+}
+
+glm::vec4 SampleRenderLut(const RenderLut& lut, float value) {
+  const int n = static_cast<int>(lut.entries.size());
+  const float f = std::clamp((value - lut.value_lo) * lut.entries_per_value, 0.0f, float(n - 1));
+  const int i = std::min(static_cast<int>(f), n - 2);
+  const float t = f - static_cast<float>(i);
+  return lut.entries[i] + (lut.entries[i + 1] - lut.entries[i]) * t;
+}
+
+std::pair<int, int> LutEntryRange(const RenderLut& lut, float min_value, float max_value) {
+  const int n = static_cast<int>(lut.entries.size());
+  const float f_lo = std::clamp((min_value - lut.value_lo) * lut.entries_per_value, 0.0f,
+                                float(n - 1));
+  const float f_hi = std::clamp((max_value - lut.value_lo) * lut.entries_per_value, 0.0f,
+                                float(n - 1));
+  return {std::min(static_cast<int>(f_lo), n - 2), std::min(static_cast<int>(f_hi) + 1, n - 1)};
+}
+
+}  // namespace vpm

@@ -1,0 +1,128 @@
+#include "server/raycast/render_request.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace vpm {
+namespace {
+
+glm::vec4 Vec4(const glm::dvec3& v, double w = 0.0) {
+  return glm::vec4(float(v.x), float(v.y), float(v.z), float(w));
+}
+
+bool FiniteUnit(double v) { return std::isfinite(v) && v >= 0.0 && v <= 1.0; }
+
+Status CheckSettings(const RaycastSettings& s) {
+  if (!FiniteUnit(s.background.r) || !FiniteUnit(s.background.g) ||
+      !FiniteUnit(s.background.b)) {
+    return absl::InvalidArgumentError("background colour must be in [0, 1]");
+  }
+  if (!FiniteUnit(s.ambient) || !FiniteUnit(s.diffuse) || !FiniteUnit(s.specular) ||
+      !std::isfinite(s.shininess) || s.shininess < 1.0 || s.shininess > 256.0) {
+    return absl::InvalidArgumentError(
+        "shading: ambient, diffuse and specular in [0, 1], shininess in [1, 256]");
+  }
+  if (!std::isfinite(s.step_mm) || s.step_mm < 0.0) {
+    return absl::InvalidArgumentError(
+        StrCat("step ", s.step_mm, " mm: must be finite and >= 0 (0: default)"));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+int BrickVoxels(RenderQuality quality) {
+  return quality == RenderQuality::kInteractive ? kInteractiveBrickVoxels : kStillBrickVoxels;
+}
+
+std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims, int brick_voxels) {
+  std::array<int, 3> b{};
+  for (int a = 0; a < 3; ++a) {
+    b[a] = std::max<int>(1, int((dims[a] - 1 + brick_voxels - 1) / brick_voxels));
+  }
+  return b;
+}
+
+double RequestStepMm(const RenderRequest& request, const VolumeGeometry& geometry) {
+  if (request.settings.step_mm > 0.0) return request.settings.step_mm;
+  const glm::dvec3& s = geometry.spacing_mm;
+  const double factor = request.quality == RenderQuality::kInteractive ? kInteractiveStepFactor
+                        : request.mode == RenderMode::kMip   ? kStillMipStepFactor
+                                                             : request.preset.still_step_factor;
+  return factor * std::min({s.x, s.y, s.z});
+}
+
+Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGeometry& geometry,
+                                    const std::array<int, 3>& map_dims) {
+  if (request.width < 1 || request.height < 1 || request.width > kMaxFrameSide ||
+      request.height > kMaxFrameSide) {
+    return absl::InvalidArgumentError(StrCat("frame size ", request.width, "x", request.height,
+                                             ": each side must be in 1..", kMaxFrameSide));
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (geometry.dims[a] < 2) {
+      return absl::InvalidArgumentError("ray casting needs at least 2 voxels along each axis");
+    }
+  }
+  RETURN_IF_ERROR(request.camera.Validate());
+  RETURN_IF_ERROR(ValidateRenderPreset(request.preset));
+  RETURN_IF_ERROR(CheckSettings(request.settings));
+  const MipWindow window = request.mip_window.value_or(request.preset.mip_window);
+  if (!std::isfinite(window.level) || !std::isfinite(window.width) || !(window.width > 0.0)) {
+    return absl::InvalidArgumentError("MIP window needs a finite level and width > 0");
+  }
+  const double step = RequestStepMm(request, geometry);
+  const glm::dvec3 extent = geometry.extent_mm();
+  if (glm::length(extent) / step > kMaxSamplesPerRay) {
+    return absl::InvalidArgumentError(StrCat("step ", step, " mm gives more than ",
+                                             kMaxSamplesPerRay, " samples along the diagonal"));
+  }
+  const bool has_map = map_dims[0] > 0;
+  if (has_map && (map_dims[0] < 2 || map_dims[1] < 2 || map_dims[2] < 2)) {
+    return absl::InvalidArgumentError("backward map needs at least 2 grid points per axis");
+  }
+
+  RaycastSetup setup;
+  setup.step_mm = step;
+  const bool interactive = request.quality == RenderQuality::kInteractive;
+  setup.render_width = interactive ? (request.width + 1) / 2 : request.width;
+  setup.render_height = interactive ? (request.height + 1) / 2 : request.height;
+  const CameraRays rays = request.camera.Rays(setup.render_width, setup.render_height);
+  const RaycastSettings& s = request.settings;
+  int flags = 0;
+  if (s.shading) flags |= gpu::kRaycastShading;
+  if (s.empty_space_skipping) flags |= gpu::kRaycastSkipping;
+  if (s.early_termination) flags |= gpu::kRaycastEarlyTermination;
+  if (has_map) flags |= gpu::kRaycastHasMap;
+  if (s.count_samples) flags |= gpu::kRaycastCountSamples;
+  if ((interactive ? s.interactive_cell_gradient : s.still_cell_gradient) &&
+      request.mode == RenderMode::kDvr) {
+    flags |= kRaycastCellGradient;
+  }
+  const int brick_voxels = BrickVoxels(request.quality);
+  const auto bricks = BrickGridDims(geometry.dims, brick_voxels);
+  gpu::RaycastParams& p = setup.params;
+  p.eye_mm = Vec4(rays.eye_mm, step);
+  p.forward = Vec4(rays.forward);
+  p.right = Vec4(rays.right);
+  p.up = Vec4(rays.up);
+  p.dims = glm::ivec4(int(geometry.dims[0]), int(geometry.dims[1]), int(geometry.dims[2]),
+                      request.mode == RenderMode::kMip ? 1 : 0);
+  p.spacing_mm = Vec4(geometry.spacing_mm);
+  p.image = glm::ivec4(setup.render_width, setup.render_height, flags, 0);
+  p.bricks = glm::ivec4(bricks[0], bricks[1], bricks[2], brick_voxels);
+  p.window = glm::vec4(float(window.level - 0.5 * window.width), float(1.0 / window.width),
+                       float(window.level + 0.5 * window.width), 0.0f);
+  p.background = Vec4(s.background);
+  p.shading = glm::vec4(float(s.ambient), float(s.diffuse), float(s.specular),
+                        float(s.shininess));
+  p.map_dims = glm::vec4(float(map_dims[0]), float(map_dims[1]), float(map_dims[2]), 0.0f);
+  p.gradient = glm::vec4(float(request.preset.shading_gradient), 0.0f, 0.0f, 0.0f);
+  return setup;
+}
+
+glm::vec4 LutParams(const RenderLut& lut) {
+  return glm::vec4(lut.value_lo, lut.entries_per_value, float(lut.entries.size()), 0.0f);
+}
+
+}  // namespace vpm

@@ -1,0 +1,161 @@
+// What one frame asks for (RenderRequest) and what comes back (Frame), plus
+// the translation of a request into the ray caster's parameter block, shared
+// by the GPU renderer and the CPU reference so that both cast the same rays.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "server/common/status.h"
+#include "server/gpu/gpu_buffer.h"
+#include "server/gpu/gpu_image3d.h"
+#include "server/gpu/shader_interface.h"
+#include "server/raycast/camera.h"
+#include "server/raycast/overlay.h"
+#include "server/raycast/render_presets.h"
+#include "server/volume/gpu_volume.h"
+#include "server/volume/volume.h"
+
+namespace vpm {
+
+enum class RenderMode { kDvr, kMip };
+
+// kStill: full resolution, step 0.5 x the smallest spacing for DVR
+// (RenderPreset::still_step_factor: 1.0 for ct-soft-tissue), 1.0 for MIP.
+// kInteractive: half resolution in each direction (bilinear upscale on the
+// GPU), step 1.0 x the smallest spacing: about 8x fewer samples.
+enum class RenderQuality { kStill, kInteractive };
+
+inline constexpr int kMaxFrameSide = 4096;
+// Empty-space-skipping bricks, voxels per side: 4 (4^3 cells) for still
+// frames, 8 for interactive ones. The occupancy pass, rerun whenever the map
+// changes (every drag step), reads some 27 map points per brick: 4^3 bricks
+// (262k for 256^3) cost it 17 ms per interactive frame, 8^3 bricks 3.6 ms,
+// while the interactive cast (half size, step 1.0) lost about 1 ms to the
+// coarser skipping; the still cast loses more (docs/RENDERING.md).
+inline constexpr int kStillBrickVoxels = 4;
+inline constexpr int kInteractiveBrickVoxels = 8;
+// MIP stills: a maximum along the ray, 47 dB against step 0.5 on the
+// phantom (docs/RENDERING.md); DVR stills take the preset's factor.
+inline constexpr double kStillMipStepFactor = 1.0;
+inline constexpr double kInteractiveStepFactor = 1.0;
+// Longest ray, in samples, a request may ask for (the box diagonal / step):
+// bounds a frame's work on any device (a GPU watchdog kills long dispatches).
+inline constexpr double kMaxSamplesPerRay = 32768;
+
+struct RaycastSettings {
+  bool empty_space_skipping = true;
+  bool early_termination = true;  // DVR: stop when opacity > 0.99; MIP: at the window's white
+  bool shading = true;            // DVR gradient shading (Blinn-Phong headlight)
+  double step_mm = 0.0;           // 0: the quality's default
+  glm::dvec3 background{0.0};     // rgb in [0, 1]
+  double ambient = 0.35;
+  double diffuse = 0.65;
+  double specular = 0.25;
+  double shininess = 24.0;
+  // Count the samples taken (GPU: one atomic add per pixel), for tests.
+  bool count_samples = false;
+  // Interactive DVR frames shade with the gradient of the trilinear cells
+  // each sample reads (chain rule through the map; no extra reads) instead
+  // of central differences of J (6 more reads per shaded sample): the
+  // interactive soft-tissue cast 29 -> 17 ms, measured error in
+  // docs/RENDERING.md ("Drag-loop findings").
+  bool interactive_cell_gradient = true;
+  // The same for still DVR frames: the 512x512 soft-tissue still about
+  // halves (GPU 563 -> 276 ms in one run), at 33-37 dB PSNR against the taps
+  // (docs/RENDERING.md, "Quality modes"); false: the central-difference taps.
+  bool still_cell_gradient = true;
+};
+
+// Raycast flag (RaycastParams::image.z) beside gpu::kRaycast*: shade with
+// the cell gradient (the GPU picks the pipeline by it, the CPU reference
+// the code path).
+inline constexpr int kRaycastCellGradient = 32;
+
+struct RenderRequest {
+  Camera camera;
+  RenderMode mode = RenderMode::kDvr;
+  RenderPreset preset;                   // MakeRenderPreset(name, volume)
+  std::optional<MipWindow> mip_window;   // default: preset.mip_window
+  RenderQuality quality = RenderQuality::kStill;
+  int width = 512;                       // output pixels, 1..kMaxFrameSide
+  int height = 512;
+  const GpuVolume* volume = nullptr;     // the source (rest) volume
+  // The source volume as a 3D image (GpuVolume::Image); only read when the
+  // renderer samples through a sampler3D (VolumeAccess::kSampler3D).
+  const gpu::GpuImage3D* volume_image = nullptr;
+  // Backward map, R32G32B32A32Sfloat, M grid points corner to corner of the
+  // image box, texel = (X(p) - p in mm, inside); null: undeformed.
+  const gpu::GpuImage3D* backward_map = nullptr;
+  // Nonzero: the map's content is unchanged for as long as this number is
+  // (bump it with every update), so the renderer may reuse its per-frame
+  // brick occupancy. 0: unknown, recomputed every frame.
+  uint64_t backward_map_version = 0;
+  // Optional: the map's values as a buffer with uniform-texel usage, vec4
+  // per grid point, x fastest (BackwardMap::values_buffer()). The
+  // texel-buffer ray casters then read it in place instead of copying the
+  // image into a buffer of their own every frame (a transfer copy).
+  const gpu::GpuBuffer* backward_map_texels = nullptr;
+  RaycastSettings settings;
+  OverlayData overlay;
+};
+
+struct FrameTimings {
+  double map_copy_ms = 0.0;   // GPU: backward map to texel buffer
+  double occupancy_ms = 0.0;  // GPU: per-frame brick occupancy kernel
+  double raycast_ms = 0.0;    // GPU: ray casting kernel
+  double upscale_ms = 0.0;    // GPU: interactive upscale
+  double render_ms = 0.0;     // sum of the kernels above (GPU timestamps)
+  double readback_ms = 0.0;   // wall
+  double overlay_ms = 0.0;    // wall
+  double wall_ms = 0.0;       // the whole Render call
+};
+
+struct Frame {
+  std::vector<uint8_t> rgba;  // width * height * 4, row 0 at the top
+  int width = 0;
+  int height = 0;
+  int render_width = 0;       // ray-cast resolution (interactive: about half)
+  int render_height = 0;
+  double step_mm = 0.0;
+  int64_t samples = -1;       // samples taken, when settings.count_samples
+  int64_t occupied_bricks = -1;  // bricks the occupancy pass kept (skipping on)
+  int64_t total_bricks = 0;
+  bool occupancy_reused = false;  // the occupancy of an earlier frame still held
+  FrameTimings timings;
+};
+
+// Voxels per brick side for a quality: kStillBrickVoxels or
+// kInteractiveBrickVoxels.
+int BrickVoxels(RenderQuality quality);
+
+// Brick grid of a volume: ceil((n - 1) / w) bricks per axis (at least 1) for
+// bricks of w voxels per side; brick b spans voxels [w b, min(w b + w, n - 1)].
+std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims, int brick_voxels);
+
+struct RaycastSetup {
+  gpu::RaycastParams params{};
+  int render_width = 0;
+  int render_height = 0;
+  double step_mm = 0.0;
+};
+
+// Checks the request against `geometry` (size, camera, preset, window,
+// step, settings; GPU handles are the renderer's business) and fills the
+// parameter block but for params.lut (LutParams, once the table for
+// setup.step_mm is baked). map_dims: the backward map's grid points,
+// {0, 0, 0} for none. Errors: InvalidArgument naming what is wrong.
+Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGeometry& geometry,
+                                    const std::array<int, 3>& map_dims);
+
+// params.lut for `lut`: (value_lo, entries per value unit, entry count, 0).
+glm::vec4 LutParams(const RenderLut& lut);
+
+// The step a request will use (validated by PrepareRaycast).
+double RequestStepMm(const RenderRequest& request, const VolumeGeometry& geometry);
+
+}  // namespace vpm

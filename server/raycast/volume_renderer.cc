@@ -1,0 +1,386 @@
+#include "server/raycast/volume_renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+
+#include "server/common/clock.h"
+#include "server/gpu/compute_batch.h"
+#include "server/gpu/shader_interface.h"
+#include "shaders/brick_minmax.spv.h"
+#include "shaders/brick_occupancy.spv.h"
+#include "shaders/raycast_dvr.spv.h"
+#include "shaders/raycast_dvr_map.spv.h"
+#include "shaders/raycast_dvr_map_sampled.spv.h"
+#include "shaders/raycast_dvr_sampled.spv.h"
+#include "shaders/raycast_mip.spv.h"
+#include "shaders/raycast_mip_map.spv.h"
+#include "shaders/raycast_mip_map_sampled.spv.h"
+#include "shaders/raycast_mip_sampled.spv.h"
+#include "shaders/upscale.spv.h"
+
+namespace vpm {
+namespace {
+
+using DT = vk::DescriptorType;
+using BU = vk::BufferUsageFlagBits;
+
+// Brick grids cached: 4 volumes at both brick sizes.
+constexpr size_t kMaxCachedBrickGrids = 8;
+
+uint32_t GroupCount(int threads, int local) { return uint32_t((threads + local - 1) / local); }
+
+// Consecutive pixels of a row per invocation of upscale.comp.
+constexpr int kUpscalePixelsPerInvocation = 4;
+
+// The ray-casting variant for (access, mode, map): shaders/raycast_body.glsl.
+std::span<const uint32_t> RaycastSpirv(bool sampled, bool mip, bool map) {
+  if (sampled) {
+    if (mip) return map ? std::span<const uint32_t>(kRaycastMipMapSampledSpv) : kRaycastMipSampledSpv;
+    return map ? std::span<const uint32_t>(kRaycastDvrMapSampledSpv) : kRaycastDvrSampledSpv;
+  }
+  if (mip) return map ? std::span<const uint32_t>(kRaycastMipMapSpv) : kRaycastMipSpv;
+  return map ? std::span<const uint32_t>(kRaycastDvrMapSpv) : kRaycastDvrSpv;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<VolumeRenderer>> VolumeRenderer::Create(const gpu::GpuContext& context,
+                                                               const Options& options) {
+  std::unique_ptr<VolumeRenderer> renderer(new VolumeRenderer(context, options));
+  RETURN_IF_ERROR(renderer->Init());
+  return renderer;
+}
+
+Status VolumeRenderer::Init() {
+  const bool sampled = options_.volume_access == VolumeAccess::kSampler3D;
+  ASSIGN_OR_RETURN(auto minmax,
+                   gpu::ComputeKernel::Create(
+                       *context_, {.name = "brick_minmax",
+                                   .spirv = kBrickMinmaxSpv,
+                                   .bindings = {DT::eUniformTexelBuffer, DT::eStorageBuffer},
+                                   .push_constant_bytes = sizeof(gpu::BrickMinMaxPush),
+                                   .local_size = {64, 1, 1}}));
+  ASSIGN_OR_RETURN(auto occupancy,
+                   gpu::ComputeKernel::Create(
+                       *context_, {.name = "brick_occupancy",
+                                   .spirv = kBrickOccupancySpv,
+                                   .bindings = {DT::eStorageBuffer, DT::eUniformTexelBuffer,
+                                                DT::eStorageBuffer, DT::eStorageBuffer},
+                                   .push_constant_bytes = sizeof(gpu::BrickOccupancyPush),
+                                   .local_size = {64, 1, 1}}));
+  // The ray casters: DVR or MIP, with or without a backward map, and DVR
+  // shaded with the cell gradient (specialization constant kCellGradient).
+  auto raycast_spec = [&](bool mip, bool map, bool cell_gradient) {
+    const DT volume_read = sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer;
+    gpu::KernelSpec spec{
+        .name = StrCat("raycast_", mip ? "mip" : "dvr", map ? "_map" : "", sampled ? "_sampled" : "",
+                       cell_gradient ? " (cell gradient)" : ""),
+        .spirv = RaycastSpirv(sampled, mip, map),
+        .bindings = {volume_read, volume_read, DT::eStorageBuffer, DT::eUniformBuffer,
+                     DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
+        .push_constant_bytes = 0,
+        .local_size = {8, 8, 1}};
+    if (cell_gradient) spec.specialization = {1u};
+    return spec;
+  };
+  for (int mip = 0; mip < 2; ++mip) {
+    for (int map = 0; map < 2; ++map) {
+      ASSIGN_OR_RETURN(auto raycast,
+                       gpu::ComputeKernel::Create(*context_, raycast_spec(mip, map, false)));
+      raycast_kernels_[mip][map].emplace(std::move(raycast));
+    }
+  }
+  for (int map = 0; map < 2; ++map) {
+    ASSIGN_OR_RETURN(auto raycast,
+                     gpu::ComputeKernel::Create(*context_, raycast_spec(false, map, true)));
+    cell_gradient_kernels_[map].emplace(std::move(raycast));
+  }
+  ASSIGN_OR_RETURN(auto upscale,
+                   gpu::ComputeKernel::Create(
+                       *context_, {.name = "upscale",
+                                   .spirv = kUpscaleSpv,
+                                   .bindings = {DT::eStorageBuffer, DT::eStorageBuffer},
+                                   .push_constant_bytes = sizeof(gpu::UpscalePush),
+                                   .local_size = {8, 8, 1}}));
+  minmax_kernel_.emplace(std::move(minmax));
+  occupancy_kernel_.emplace(std::move(occupancy));
+  upscale_kernel_.emplace(std::move(upscale));
+
+  ASSIGN_OR_RETURN(auto identity, gpu::GpuImage3D::Create(*context_, {2, 2, 2},
+                                                          vk::Format::eR32G32B32A32Sfloat));
+  const std::vector<glm::vec4> zeros(8, glm::vec4(0.0f));
+  RETURN_IF_ERROR(identity.Upload(std::as_bytes(std::span<const glm::vec4>(zeros))));
+  identity_map_.emplace(std::move(identity));
+  // Params are a storage buffer (shaders/raycast_body.glsl says why).
+  RETURN_IF_ERROR(EnsureBuffer(params_, sizeof(gpu::RaycastParams), BU::eStorageBuffer));
+  RETURN_IF_ERROR(EnsureBuffer(lut_, sizeof(gpu::RenderLutBlock), BU::eUniformBuffer));
+  RETURN_IF_ERROR(EnsureBuffer(nonzero_prefix_, (gpu::kRenderLutEntries + 1) * sizeof(int32_t),
+                               BU::eStorageBuffer));
+  RETURN_IF_ERROR(EnsureBuffer(stats_, 16, BU::eStorageBuffer));
+  return EnsureMapTexels(8);
+}
+
+Status VolumeRenderer::EnsureMapTexels(size_t points) {
+  if (map_texels_ && map_texels_->size_bytes() >= points * sizeof(glm::vec4)) {
+    return absl::OkStatus();
+  }
+  if (points > context_->limits().maxTexelBufferElements) {
+    return absl::ResourceExhaustedError(
+        StrCat("backward map of ", points, " points exceeds this device's texel-buffer limit of ",
+               context_->limits().maxTexelBufferElements, "; use VolumeAccess::kSampler3D"));
+  }
+  map_texels_view_ = nullptr;
+  map_texels_.reset();
+  ASSIGN_OR_RETURN(auto buffer, gpu::GpuBuffer::Create(*context_, points * sizeof(glm::vec4),
+                                                       BU::eStorageBuffer |
+                                                           BU::eUniformTexelBuffer |
+                                                           BU::eTransferDst));
+  map_texels_.emplace(std::move(buffer));
+  return gpu::CatchVulkan("creating the backward map's texel view", [&] {
+    map_texels_view_ = vk::raii::BufferView(
+        context_->device(), vk::BufferViewCreateInfo({}, map_texels_->handle(),
+                                                     vk::Format::eR32G32B32A32Sfloat, 0,
+                                                     VK_WHOLE_SIZE));
+  });
+}
+
+Status VolumeRenderer::EnsureBuffer(std::optional<gpu::GpuBuffer>& buffer, vk::DeviceSize bytes,
+                                    vk::BufferUsageFlags usage) {
+  if (buffer && buffer->size_bytes() >= bytes) return absl::OkStatus();
+  buffer.reset();
+  ASSIGN_OR_RETURN(auto created, gpu::GpuBuffer::Create(*context_, bytes, usage));
+  buffer.emplace(std::move(created));
+  return absl::OkStatus();
+}
+
+void VolumeRenderer::ForgetVolume(const GpuVolume* volume) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::erase_if(brick_grids_, [&](const BrickGrid& g) { return g.volume == volume; });
+  if (occupancy_key_ && occupancy_key_->volume == volume) occupancy_key_.reset();
+}
+
+Result<const gpu::GpuBuffer*> VolumeRenderer::BrickMinMax(const GpuVolume& volume,
+                                                          int brick_voxels) {
+  const vk::Buffer handle = volume.buffer().handle();
+  for (auto it = brick_grids_.begin(); it != brick_grids_.end(); ++it) {
+    if (it->volume == &volume && it->brick_voxels == brick_voxels) {
+      if (it->buffer == handle && it->extent == volume.extent()) return &it->minmax;
+      brick_grids_.erase(it);
+      break;
+    }
+  }
+  const auto& g = volume.geometry();
+  const auto nb = BrickGridDims(g.dims, brick_voxels);
+  const int bricks = nb[0] * nb[1] * nb[2];
+  ASSIGN_OR_RETURN(auto minmax, gpu::GpuBuffer::Create(*context_, bricks * sizeof(glm::vec2),
+                                                       BU::eStorageBuffer));
+  ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 1));
+  const gpu::BrickMinMaxPush push{
+      .dims = glm::ivec4(int(g.dims[0]), int(g.dims[1]), int(g.dims[2]), 0),
+      .bricks = glm::ivec4(nb[0], nb[1], nb[2], brick_voxels)};
+  RETURN_IF_ERROR(batch.Dispatch(*minmax_kernel_, {volume.texel_view(), &minmax}, push,
+                                 {GroupCount(bricks, 64), 1, 1}, "brick_minmax"));
+  RETURN_IF_ERROR(batch.SubmitAndWait().status());
+  if (brick_grids_.size() >= kMaxCachedBrickGrids) brick_grids_.erase(brick_grids_.begin());
+  brick_grids_.push_back({&volume, brick_voxels, handle, volume.extent(), std::move(minmax)});
+  return &brick_grids_.back().minmax;
+}
+
+Status VolumeRenderer::PrepareLut(const RenderPreset& preset, double step_mm) {
+  if (lut_preset_ && *lut_preset_ == preset && lut_step_mm_ == step_mm) return absl::OkStatus();
+  const RenderLut lut = BakeRenderLut(preset, step_mm);
+  RETURN_IF_ERROR(lut_->Upload(std::as_bytes(std::span<const glm::vec4>(lut.entries))));
+  RETURN_IF_ERROR(
+      nonzero_prefix_->Upload(std::as_bytes(std::span<const int32_t>(lut.nonzero_prefix))));
+  lut_preset_ = preset;
+  lut_step_mm_ = step_mm;
+  ++lut_generation_;
+  lut_params_ = LutParams(lut);
+  return absl::OkStatus();
+}
+
+Status VolumeRenderer::CheckGpuInputs(const RenderRequest& request) const {
+  if (request.volume == nullptr) {
+    return absl::InvalidArgumentError("render request has no volume");
+  }
+  if (options_.volume_access == VolumeAccess::kSampler3D) {
+    const gpu::GpuImage3D* image = request.volume_image;
+    if (image == nullptr || image->extent() != request.volume->extent()) {
+      return absl::InvalidArgumentError(
+          "this renderer samples a 3D image: the request needs volume_image "
+          "(GpuVolume::Image) of the volume's extent");
+    }
+  }
+  if (const gpu::GpuImage3D* map = request.backward_map) {
+    const auto& e = map->extent();
+    if (map->format() != vk::Format::eR32G32B32A32Sfloat || e[0] < 2 || e[1] < 2 || e[2] < 2) {
+      return absl::InvalidArgumentError(
+          "backward map must be an R32G32B32A32Sfloat 3D image of at least 2^3 points");
+    }
+  }
+  return absl::OkStatus();
+}
+
+Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
+                                   const RaycastSetup& setup, const gpu::GpuBuffer& minmax,
+                                   bool upscale, bool occupancy_current,
+                                   vk::BufferView map_view) {
+  const gpu::RaycastParams& p = setup.params;
+  const gpu::GpuImage3D* map = request.backward_map ? request.backward_map : &*identity_map_;
+  const bool sampled = options_.volume_access == VolumeAccess::kSampler3D;
+  const bool mip = request.mode == RenderMode::kMip;
+  const bool has_map = request.backward_map != nullptr;
+  const bool occupancy = request.settings.empty_space_skipping && !occupancy_current;
+  if (request.settings.count_samples) RETURN_IF_ERROR(batch.Fill(*stats_, 0));
+  // The map's texel copy serves the occupancy pass and the texel-buffer ray
+  // casters.
+  const bool in_place = has_map && request.backward_map_texels != nullptr;
+  if (!in_place) map_view = *map_texels_view_;
+  if (has_map && !in_place && (occupancy || !sampled)) {
+    RETURN_IF_ERROR(batch.CopyImageToBuffer(*map, *map_texels_, "map_copy"));
+  }
+  if (occupancy) {
+    const int bricks = p.bricks.x * p.bricks.y * p.bricks.z;
+    const gpu::BrickOccupancyPush push{
+        .dims = glm::ivec4(glm::ivec3(p.dims), 0),
+        .bricks = p.bricks,
+        .spacing_mm = p.spacing_mm,
+        .lut = p.lut,
+        .flags = glm::ivec4(p.dims.w, has_map ? 1 : 0, 0, 0),
+        .map_dims = glm::vec4(glm::vec3(map->extent()[0], map->extent()[1], map->extent()[2]),
+                              0.0f)};
+    RETURN_IF_ERROR(batch.Dispatch(*occupancy_kernel_,
+                                   {&minmax, map_view, &*nonzero_prefix_, &*occupancy_},
+                                   push, {GroupCount(bricks, 64), 1, 1}, "occupancy"));
+  }
+  const gpu::KernelArg volume_arg = sampled ? gpu::KernelArg(request.volume_image)
+                                            : gpu::KernelArg(request.volume->texel_view());
+  const gpu::KernelArg map_arg =
+      sampled ? gpu::KernelArg(map) : gpu::KernelArg(map_view);
+  const std::array<gpu::KernelArg, 7> args{
+      volume_arg, map_arg, &*params_, &*lut_, &*occupancy_, &*pixels_, &*stats_};
+  const gpu::ComputeKernel& raycast = (p.image.z & kRaycastCellGradient) != 0
+                                          ? *cell_gradient_kernels_[has_map]
+                                          : *raycast_kernels_[mip][has_map];
+  RETURN_IF_ERROR(batch.Dispatch(
+      raycast, args, {},
+      {GroupCount(setup.render_width, 8), GroupCount(setup.render_height, 8), 1}, "raycast"));
+  if (upscale) {
+    const gpu::UpscalePush push{
+        .size = glm::ivec4(setup.render_width, setup.render_height, request.width,
+                           request.height)};
+    RETURN_IF_ERROR(batch.Dispatch(*upscale_kernel_, {&*pixels_, &*upscaled_}, push,
+                                   {GroupCount(request.width, 8 * kUpscalePixelsPerInvocation),
+                                    GroupCount(request.height, 8), 1},
+                                   "upscale"));
+  }
+  return absl::OkStatus();
+}
+
+Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto t_start = std::chrono::steady_clock::now();
+  RETURN_IF_ERROR(CheckGpuInputs(request));
+  std::array<int, 3> map_dims{0, 0, 0};
+  if (request.backward_map) {
+    const auto& e = request.backward_map->extent();
+    map_dims = {int(e[0]), int(e[1]), int(e[2])};
+  }
+  ASSIGN_OR_RETURN(RaycastSetup setup,
+                   PrepareRaycast(request, request.volume->geometry(), map_dims));
+  RETURN_IF_ERROR(PrepareLut(request.preset, setup.step_mm));
+  setup.params.lut = lut_params_;
+  ASSIGN_OR_RETURN(const gpu::GpuBuffer* minmax,
+                   BrickMinMax(*request.volume, setup.params.bricks.w));
+
+  const gpu::RaycastParams& p = setup.params;
+  const size_t bricks = size_t(p.bricks.x) * p.bricks.y * p.bricks.z;
+  const size_t render_pixels = size_t(setup.render_width) * setup.render_height;
+  const size_t out_pixels = size_t(request.width) * request.height;
+  const bool upscale = render_pixels != out_pixels;
+  if (!occupancy_ || occupancy_->size_bytes() < bricks * sizeof(float)) occupancy_key_.reset();
+  RETURN_IF_ERROR(EnsureBuffer(occupancy_, bricks * sizeof(float), BU::eStorageBuffer));
+  RETURN_IF_ERROR(EnsureBuffer(pixels_, render_pixels * 4, BU::eStorageBuffer));
+  // A view of the caller's copy of the map, when it gives one: created per
+  // frame (microseconds), so that it never outlives the buffer.
+  vk::raii::BufferView map_view{nullptr};
+  if (request.backward_map) {
+    const size_t points = size_t(map_dims[0]) * map_dims[1] * map_dims[2];
+    if (const gpu::GpuBuffer* texels = request.backward_map_texels) {
+      if (points > context_->limits().maxTexelBufferElements ||
+          texels->size_bytes() < points * sizeof(glm::vec4)) {
+        return absl::InvalidArgumentError(
+            StrCat("backward_map_texels: ", texels->size_bytes(), " bytes for a map of ", points,
+                   " points (16 bytes each, at most ", context_->limits().maxTexelBufferElements,
+                   " texels)"));
+      }
+      RETURN_IF_ERROR(gpu::CatchVulkan("creating a view of the backward map's values", [&] {
+        map_view = vk::raii::BufferView(
+            context_->device(),
+            vk::BufferViewCreateInfo({}, texels->handle(), vk::Format::eR32G32B32A32Sfloat, 0,
+                                     points * sizeof(glm::vec4)));
+      }));
+    } else {
+      RETURN_IF_ERROR(EnsureMapTexels(points));
+    }
+  }
+  // The occupancy depends on the volume, the table, the mode and the map; a
+  // map's content is known unchanged only through backward_map_version.
+  const OccupancyKey key{request.volume,      request.volume->buffer().handle(),
+                         request.mode,        lut_generation_,
+                         p.bricks.w,          request.backward_map,
+                         request.backward_map_version};
+  const bool cacheable = request.backward_map == nullptr || request.backward_map_version != 0;
+  const bool occupancy_current = cacheable && occupancy_key_ == key;
+  occupancy_key_.reset();  // until this frame's pass has run
+  if (upscale) RETURN_IF_ERROR(EnsureBuffer(upscaled_, out_pixels * 4, BU::eStorageBuffer));
+  RETURN_IF_ERROR(params_->Upload(std::as_bytes(std::span<const gpu::RaycastParams>(&p, 1))));
+
+  ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 5));
+  RETURN_IF_ERROR(
+      RecordFrame(batch, request, setup, *minmax, upscale, occupancy_current, *map_view));
+  ASSIGN_OR_RETURN(const auto timings, batch.SubmitAndWait());
+  if (request.settings.empty_space_skipping && cacheable) occupancy_key_ = key;
+
+  Frame frame;
+  frame.width = request.width;
+  frame.height = request.height;
+  frame.render_width = setup.render_width;
+  frame.render_height = setup.render_height;
+  frame.step_mm = setup.step_mm;
+  frame.total_bricks = int64_t(bricks);
+  frame.occupancy_reused = request.settings.empty_space_skipping && occupancy_current;
+  for (const auto& t : timings) {
+    if (t.label == "occupancy") frame.timings.occupancy_ms = t.gpu_ms;
+    if (t.label == "map_copy") frame.timings.map_copy_ms = t.gpu_ms;
+    if (t.label == "raycast") frame.timings.raycast_ms = t.gpu_ms;
+    if (t.label == "upscale") frame.timings.upscale_ms = t.gpu_ms;
+    frame.timings.render_ms += std::max(0.0, t.gpu_ms);
+  }
+  auto t0 = std::chrono::steady_clock::now();
+  frame.rgba.resize(out_pixels * 4);
+  RETURN_IF_ERROR((upscale ? *upscaled_ : *pixels_).Download(std::as_writable_bytes(
+      std::span<uint8_t>(frame.rgba))));
+  frame.timings.readback_ms = MsSince(t0);
+  if (request.settings.count_samples) {
+    uint32_t samples = 0;
+    RETURN_IF_ERROR(stats_->Download(std::as_writable_bytes(std::span<uint32_t>(&samples, 1))));
+    frame.samples = samples;
+    if (request.settings.empty_space_skipping) {
+      std::vector<float> occupancy(bricks);
+      RETURN_IF_ERROR(occupancy_->DownloadSpan(std::span<float>(occupancy)));
+      const bool mip = request.mode == RenderMode::kMip;
+      frame.occupied_bricks = std::count_if(occupancy.begin(), occupancy.end(), [&](float o) {
+        return mip ? o > p.window.x : o > 0.0f;
+      });
+    }
+  }
+  t0 = std::chrono::steady_clock::now();
+  DrawOverlay(request.overlay, request.camera, frame.width, frame.height, frame.rgba);
+  frame.timings.overlay_ms = MsSince(t0);
+  frame.timings.wall_ms = MsSince(t_start);
+  return frame;
+}
+
+}  // namespace vpm

@@ -1,0 +1,119 @@
+// Renders frames of a (deformed) volume on the GPU: owns the ray-casting
+// kernels (pipelines built once), the per-volume brick min-max grid (built
+// once per volume), the lookup table (rebaked when the preset or the step
+// changes), and the frame buffers. One frame = one command buffer: occupancy
+// (when skipping), ray cast, upscale (interactive), then readback and the
+// overlay on the CPU. Render is serialised by a mutex; one renderer per
+// session is the intended use.
+//
+// CPU reference: RenderReference() in raycast_cpu.h.
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <vector>
+
+#include "server/common/status.h"
+#include "server/gpu/compute_batch.h"
+#include "server/gpu/compute_kernel.h"
+#include "server/gpu/gpu_buffer.h"
+#include "server/gpu/gpu_context.h"
+#include "server/gpu/gpu_image3d.h"
+#include "server/raycast/render_presets.h"
+#include "server/raycast/render_request.h"
+
+namespace vpm {
+
+// How the ray caster reads the source volume: a uniform texel buffer with
+// manual trilinear interpolation (GpuVolume::texel_view), or a 3D image
+// through a linear sampler (GpuVolume::Image, request.volume_image).
+enum class VolumeAccess { kTexelBuffer, kSampler3D };
+
+class VolumeRenderer {
+ public:
+  struct Options {
+    VolumeAccess volume_access = VolumeAccess::kTexelBuffer;
+  };
+
+  static Result<std::unique_ptr<VolumeRenderer>> Create(const gpu::GpuContext& context,
+                                                        const Options& options);
+
+  // Errors: InvalidArgument for a bad request (size outside 1..4096, camera
+  // not finite, no volume, missing volume_image for kSampler3D, a backward
+  // map of another format or under 2 points per axis, bad preset, window or
+  // step); Vulkan failures as Internal / ResourceExhausted.
+  Result<Frame> Render(const RenderRequest& request);
+
+  // Drops the cached brick grid of `volume`. Call it before freeing a
+  // GpuVolume whose address a later volume may reuse; the cache also
+  // checks the buffer handle and extent, and holds at most 4 volumes.
+  void ForgetVolume(const GpuVolume* volume);
+
+  VolumeAccess volume_access() const { return options_.volume_access; }
+
+ private:
+  // What the occupancy buffer was computed for.
+  struct OccupancyKey {
+    const GpuVolume* volume;
+    vk::Buffer volume_buffer;
+    RenderMode mode;
+    uint64_t lut_generation;
+    int brick_voxels;
+    const gpu::GpuImage3D* map;
+    uint64_t map_version;
+    bool operator==(const OccupancyKey&) const = default;
+  };
+
+  struct BrickGrid {
+    const GpuVolume* volume;
+    int brick_voxels;                 // per side
+    vk::Buffer buffer;                // the volume's texel buffer, to detect reuse
+    std::array<uint32_t, 3> extent;
+    gpu::GpuBuffer minmax;            // vec2 per brick
+  };
+
+  VolumeRenderer(const gpu::GpuContext& context, const Options& options)
+      : context_(&context), options_(options) {}
+  Status Init();
+  Status CheckGpuInputs(const RenderRequest& request) const;
+  // The volume's brick min-max grid for bricks of `brick_voxels` per side,
+  // computed on first use and cached.
+  Result<const gpu::GpuBuffer*> BrickMinMax(const GpuVolume& volume, int brick_voxels);
+  Status PrepareLut(const RenderPreset& preset, double step_mm);
+  Status EnsureBuffer(std::optional<gpu::GpuBuffer>& buffer, vk::DeviceSize bytes,
+                      vk::BufferUsageFlags usage);
+  Status EnsureMapTexels(size_t points);
+  Status RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
+                     const RaycastSetup& setup, const gpu::GpuBuffer& minmax, bool upscale,
+                     bool occupancy_current, vk::BufferView map_view);
+
+  const gpu::GpuContext* context_;
+  Options options_;
+  std::mutex mutex_;
+  std::optional<gpu::ComputeKernel> minmax_kernel_;
+  std::optional<gpu::ComputeKernel> occupancy_kernel_;
+  std::optional<gpu::ComputeKernel> raycast_kernels_[2][2];  // [mip][backward map]
+  std::optional<gpu::ComputeKernel> cell_gradient_kernels_[2];  // DVR [backward map]
+  std::optional<gpu::ComputeKernel> upscale_kernel_;
+  std::optional<gpu::GpuImage3D> identity_map_;  // 2^3 zeros, bound when there is no map
+  // The backward map copied per frame for the texel-buffer variants (RGBA32F,
+  // vkCmdCopyImageToBuffer: 2-3x faster than a copy kernel on lavapipe).
+  std::optional<gpu::GpuBuffer> map_texels_;
+  vk::raii::BufferView map_texels_view_{nullptr};  // after the buffer it views
+  std::optional<gpu::GpuBuffer> params_;          // RaycastParams, uniform
+  std::optional<gpu::GpuBuffer> lut_;             // RenderLutBlock, uniform
+  std::optional<gpu::GpuBuffer> nonzero_prefix_;  // int per entry + 1, storage
+  std::optional<gpu::GpuBuffer> stats_;           // sample counter, storage
+  std::optional<gpu::GpuBuffer> occupancy_;       // float per brick, storage
+  std::optional<gpu::GpuBuffer> pixels_;          // ray-cast RGBA8, storage
+  std::optional<gpu::GpuBuffer> upscaled_;        // interactive output, storage
+  std::vector<BrickGrid> brick_grids_;
+  std::optional<RenderPreset> lut_preset_;
+  double lut_step_mm_ = 0.0;
+  glm::vec4 lut_params_{0.0f};
+  uint64_t lut_generation_ = 0;  // bumped at every bake
+  std::optional<OccupancyKey> occupancy_key_;
+};
+
+}  // namespace vpm

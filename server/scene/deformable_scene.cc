@@ -1,0 +1,148 @@
+#include "server/scene/deformable_scene.h"
+
+#include <atomic>
+#include <chrono>
+
+#include "server/common/clock.h"
+#include "server/raycast/overlay.h"
+#include "server/warp/warp_volume.h"
+
+namespace vpm {
+namespace {
+
+// Map versions unique in the process: the renderer keys its cached brick
+// occupancy on (map image, version), and a later scene's map may reuse an
+// address.
+std::atomic<uint64_t> next_map_version{1};
+
+SceneStepTimings FromSolve(const SolveStats& solve, std::chrono::steady_clock::time_point t0) {
+  return {.fem_ms = MsSince(t0),
+          .max_displacement_mm = solve.max_displacement_mm,
+          .converged = solve.converged};
+}
+
+}  // namespace
+
+Result<std::unique_ptr<DeformableScene>> DeformableScene::Create(
+    const gpu::GpuContext& context, const Volume& volume, GpuVolume& gpu_volume,
+    VolumeRenderer& renderer, const ProxyMesh& mesh, const Options& options) {
+  std::unique_ptr<DeformableScene> scene(new DeformableScene());
+  scene->context_ = &context;
+  scene->volume_ = &volume;
+  scene->gpu_volume_ = &gpu_volume;
+  scene->renderer_ = &renderer;
+  scene->mesh_ = mesh;
+  ASSIGN_OR_RETURN(FemModel fem,
+                   FemModel::Create(mesh, volume.geometry().extent_mm(), options.fem));
+  scene->fem_.emplace(std::move(fem));
+  ASSIGN_OR_RETURN(BackwardMap map, BackwardMap::Create(context, volume.geometry(), options.map));
+  scene->map_.emplace(std::move(map));
+  scene->map_version_ = next_map_version.fetch_add(1);
+  scene->defer_map_update_ = options.defer_map_update;
+  return scene;
+}
+
+Result<GrabInfo> DeformableScene::Grab(const glm::dvec3& point_mm, double radius_mm) {
+  ASSIGN_OR_RETURN(GrabInfo info, fem_->Grab(point_mm, radius_mm));
+  grab_point_mm_ = point_mm;
+  drag_offset_mm_ = glm::dvec3(0.0);
+  return info;
+}
+
+Result<SceneStepTimings> DeformableScene::UpdateMap(SceneStepTimings timings) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<glm::dvec3> deformed = fem_->Positions();
+  map_version_ = 0;  // unknown until the update has succeeded
+  ASSIGN_OR_RETURN(BackwardMap::UpdateStats stats,
+                   map_->Update(fem_->rest_positions_mm(), deformed, fem_->tets()));
+  map_version_ = next_map_version.fetch_add(1);
+  timings.warp_ms = MsSince(t0);
+  timings.map_gpu_ms = stats.gpu_ms;
+  timings.map_copy_ms = stats.copy_ms;
+  timings.map_passes = stats.passes;
+  timings.moved_tets = stats.moved_tets;
+  timings.processed_tets = stats.processed_tets;
+  return timings;
+}
+
+Result<SceneStepTimings> DeformableScene::AfterStep(SceneStepTimings timings) {
+  timings.inverted_tets = fem_->CountInvertedTets();
+  if (!defer_map_update_) return UpdateMap(timings);
+  map_stale_ = true;
+  return timings;
+}
+
+Result<SceneStepTimings> DeformableScene::SyncMap() {
+  if (!map_stale_) return SceneStepTimings{};
+  ASSIGN_OR_RETURN(SceneStepTimings timings, UpdateMap({}));
+  map_stale_ = false;
+  return timings;
+}
+
+Result<SceneStepTimings> DeformableScene::Drag(const glm::dvec3& offset_mm) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(SolveStats solve, fem_->Drag(offset_mm));
+  drag_offset_mm_ = offset_mm;
+  return AfterStep(FromSolve(solve, t0));
+}
+
+Result<SceneStepTimings> DeformableScene::Pull(const glm::dvec3& force_n) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(SolveStats solve, fem_->Pull(force_n));
+  const SceneStepTimings timings = FromSolve(solve, t0);
+  // The arrow follows the mean handle displacement.
+  glm::dvec3 mean(0.0);
+  const auto u = fem_->Displacements();
+  for (int32_t h : fem_->grab().handles) mean += u[h];
+  if (!fem_->grab().handles.empty()) mean /= double(fem_->grab().handles.size());
+  drag_offset_mm_ = mean;
+  return AfterStep(timings);
+}
+
+Result<SceneStepTimings> DeformableScene::Release() {
+  const auto t0 = std::chrono::steady_clock::now();
+  fem_->Release();
+  grab_point_mm_.reset();
+  drag_offset_mm_ = glm::dvec3(0.0);
+  return AfterStep({.fem_ms = MsSince(t0)});
+}
+
+Result<Frame> DeformableScene::Render(const SceneView& view, SceneStepTimings* map_update) {
+  ASSIGN_OR_RETURN(SceneStepTimings sync, SyncMap());
+  if (map_update != nullptr) *map_update = sync;
+  RenderRequest request;
+  request.camera = view.camera;
+  request.mode = view.mode;
+  request.preset = view.preset;
+  request.quality = view.quality;
+  request.width = view.width;
+  request.height = view.height;
+  request.volume = gpu_volume_;
+  request.backward_map = &map_->image();
+  // Frames between drag steps (orbit, zoom, preset of the same mode) reuse
+  // the brick occupancy, and the ray caster reads the map's own buffer.
+  request.backward_map_version = map_version_;
+  request.backward_map_texels = map_->values_buffer();
+  if (view.overlay) {
+    const std::vector<glm::dvec3> positions = fem_->Positions();
+    const auto& handles = fem_->grabbed() ? fem_->grab().handles : std::vector<int32_t>{};
+    request.overlay = MakeMeshOverlay(mesh_, positions, handles);
+    if (grab_point_mm_) {
+      request.overlay.drag = DragArrow{*grab_point_mm_, *grab_point_mm_ + drag_offset_mm_};
+    }
+  }
+  return renderer_->Render(request);
+}
+
+Result<Volume> DeformableScene::WarpedVolume() {
+  // Export through an exact map (one point per voxel centre), not the coarse
+  // interactive one: docs/WARP.md measures what the coarse map costs.
+  BackwardMap::Options exact;
+  exact.map_dims = volume_->dims();
+  ASSIGN_OR_RETURN(BackwardMap map, BackwardMap::Create(*context_, volume_->geometry(), exact));
+  RETURN_IF_ERROR(map.Update(fem_->rest_positions_mm(), fem_->Positions(), fem_->tets()).status());
+  ASSIGN_OR_RETURN(VolumeWarper warper, VolumeWarper::Create(*context_));
+  return warper.Warp(*gpu_volume_, *volume_, map);
+}
+
+}  // namespace vpm

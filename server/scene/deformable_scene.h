@@ -1,0 +1,119 @@
+// One deformable case: a volume on the GPU, its proxy mesh under FEM, the
+// backward map of the current deformation, and frames of it. The offline
+// `vpm render`, the demo, the drag-loop benchmark and the server's sessions
+// all drive this.
+//
+// Per drag step: FEM solve (CPU), backward-map update of the tets that moved
+// (GPU), then any number of frames sampled through the map (GPU): the volume
+// itself is never warped per frame (docs/LAVAPIPE.md: ~130 ms per 256^3 warp).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "server/common/status.h"
+#include "server/fem/fem_model.h"
+#include "server/gpu/gpu_context.h"
+#include "server/mesh/proxy_mesh.h"
+#include "server/warp/backward_map.h"
+#include "server/raycast/camera.h"
+#include "server/raycast/render_presets.h"
+#include "server/raycast/volume_renderer.h"
+#include "server/volume/gpu_volume.h"
+#include "server/volume/volume.h"
+
+namespace vpm {
+
+struct SceneStepTimings {
+  double fem_ms = 0.0;   // wall: FEM solve (or release)
+  double warp_ms = 0.0;  // wall: backward-map upload, update and wait
+  double map_gpu_ms = 0.0;   // GPU: the map's passes (timestamps), part of warp_ms
+  double map_copy_ms = 0.0;  // wall: copying the map's changed box into its image
+  std::vector<gpu::DispatchTiming> map_passes;  // GPU: clear (updates), claim, write
+  int64_t moved_tets = 0;
+  int64_t processed_tets = 0;  // moved plus those whose boxes meet them
+  double max_displacement_mm = 0.0;
+  int64_t inverted_tets = 0;  // after the FEM step (Drag, Pull, Release), not set by SyncMap
+  bool converged = true;
+};
+
+struct SceneView {
+  Camera camera;
+  RenderMode mode = RenderMode::kDvr;
+  RenderPreset preset;
+  RenderQuality quality = RenderQuality::kStill;
+  int width = 512;
+  int height = 512;
+  bool overlay = false;  // mesh vertices (deformable yellow, hard blue), handles, drag
+};
+
+class DeformableScene {
+ public:
+  struct Options {
+    BackwardMap::Options map;
+    FemOptions fem;
+    // false: Drag, Pull and Release update the backward map at once (their
+    // timings include it). true: they solve FEM only and mark the map stale;
+    // the next Render (or SyncMap) updates it once for every step since, so
+    // a burst of events costs one map update per frame (the server's
+    // sessions: docs/SERVICE.md).
+    bool defer_map_update = false;
+  };
+
+  // `volume`, `gpu_volume` and `renderer` must outlive the scene (the scene
+  // may add the volume's 3D image to `gpu_volume` for export); the mesh
+  // is copied.
+  static Result<std::unique_ptr<DeformableScene>> Create(const gpu::GpuContext& context,
+                                                         const Volume& volume,
+                                                         GpuVolume& gpu_volume,
+                                                         VolumeRenderer& renderer,
+                                                         const ProxyMesh& mesh,
+                                                         const Options& options);
+
+  // Handles for the next Drag/Pull (FemModel::Grab rules).
+  Result<GrabInfo> Grab(const glm::dvec3& point_mm, double radius_mm);
+  // Prescribed handle displacement from the grab (mm), or a total force (N).
+  Result<SceneStepTimings> Drag(const glm::dvec3& offset_mm);
+  Result<SceneStepTimings> Pull(const glm::dvec3& force_n);
+  // Back to rest; the map becomes the identity again (deferred mode: at the
+  // next Render).
+  Result<SceneStepTimings> Release();
+
+  // map_update (optional): the timings of the map update this frame needed
+  // (deferred mode), zeros when the map was current.
+  Result<Frame> Render(const SceneView& view, SceneStepTimings* map_update = nullptr);
+  // Brings the map up to date with FEM (deferred mode); zeros if it was.
+  Result<SceneStepTimings> SyncMap();
+  // The deformed volume at full resolution on the source grid (for export),
+  // through an exact backward map (one point per voxel).
+  Result<Volume> WarpedVolume();
+
+  const ProxyMesh& mesh() const { return mesh_; }
+  const FemModel& fem() const { return *fem_; }
+  std::vector<glm::dvec3> Positions() const { return fem_->Positions(); }
+  const BackwardMap& backward_map() const { return *map_; }  // stale until SyncMap (deferred)
+
+ private:
+  DeformableScene() = default;
+  Result<SceneStepTimings> UpdateMap(SceneStepTimings timings);
+  // After FEM changed the deformation: update the map now, or mark it stale.
+  Result<SceneStepTimings> AfterStep(SceneStepTimings timings);
+
+  const gpu::GpuContext* context_ = nullptr;
+  const Volume* volume_ = nullptr;
+  GpuVolume* gpu_volume_ = nullptr;
+  VolumeRenderer* renderer_ = nullptr;
+  ProxyMesh mesh_;
+  std::optional<FemModel> fem_;
+  std::optional<BackwardMap> map_;
+  std::optional<glm::dvec3> grab_point_mm_;
+  glm::dvec3 drag_offset_mm_{0.0};
+  // Changes with every map update (0 while one is in progress): frames with
+  // the same version see the same map (RenderRequest::backward_map_version).
+  uint64_t map_version_ = 0;
+  bool defer_map_update_ = false;
+  bool map_stale_ = false;  // deferred mode: FEM moved since the last map update
+};
+
+}  // namespace vpm

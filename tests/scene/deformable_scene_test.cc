@@ -1,0 +1,111 @@
+// The deformable scene's two ways of keeping the backward map: updated at
+// every step (offline tools, benchmarks) or deferred to the next frame (the
+// server's sessions). Deferring must change when the work happens, never
+// the picture: after the same events both scenes show the same frame, and a
+// burst of steps costs one map update.
+#include "server/scene/deformable_scene.h"
+
+#include <gtest/gtest.h>
+
+#include "server/measures/compare_meshes.h"
+#include "server/raycast/render_presets.h"
+#include "tests/gpu/gpu_test_context.h"
+#include "tests/scene/sphere_rod_scene.h"
+
+namespace vpm {
+namespace {
+
+class DeformableSceneTest : public testing::GpuTest {
+ protected:
+  void SetUp() override {
+    GpuTest::SetUp();
+    auto scene = testing::MakeSphereRodScene(context());
+    ASSERT_TRUE(scene.ok()) << scene.status();
+    case_ = std::move(*scene);
+    auto mesh = BuildRegularMesh(case_->volume, 216);
+    ASSERT_TRUE(mesh.ok()) << mesh.status();
+    mesh_ = std::move(*mesh);
+  }
+
+  std::unique_ptr<DeformableScene> Scene(bool defer) {
+    DeformableScene::Options options;
+    options.map.map_dims = {24, 24, 24};
+    options.defer_map_update = defer;
+    auto scene = DeformableScene::Create(context(), case_->volume, case_->gpu_volume,
+                                         *case_->renderer, mesh_, options);
+    EXPECT_TRUE(scene.ok()) << scene.status();
+    return scene.ok() ? std::move(*scene) : nullptr;
+  }
+
+  SceneView View() const {
+    SceneView view;
+    view.camera = Camera::ForVolume(case_->volume.geometry());
+    view.camera.Orbit(25.0, 15.0);
+    view.preset = *MakeRenderPreset("ct-vessels", case_->volume);
+    view.width = view.height = 64;
+    return view;
+  }
+
+  glm::dvec3 Centre() const { return 0.5 * case_->volume.geometry().extent_mm(); }
+
+  std::unique_ptr<testing::SphereRodScene> case_;
+  ProxyMesh mesh_;
+};
+
+TEST_F(DeformableSceneTest, DeferredMapGivesTheSameFramesAsImmediateUpdates) {
+  auto immediate = Scene(false);
+  auto deferred = Scene(true);
+  ASSERT_TRUE(immediate && deferred);
+  auto rest = immediate->Render(View());
+  ASSERT_TRUE(rest.ok()) << rest.status();
+  for (DeformableScene* scene : {immediate.get(), deferred.get()}) {
+    ASSERT_TRUE(scene->Grab(Centre(), 12.0).ok());
+    for (double dz : {2.0, 4.0, 6.0}) {
+      auto step = scene->Drag({0.0, 1.0, dz});
+      ASSERT_TRUE(step.ok()) << step.status();
+      // Immediate steps include the map update; deferred ones do not.
+      if (scene == immediate.get()) {
+        EXPECT_GT(step->warp_ms, 0.0);
+      } else {
+        EXPECT_EQ(step->warp_ms, 0.0);
+      }
+    }
+  }
+  SceneStepTimings immediate_sync, deferred_sync;
+  auto a = immediate->Render(View(), &immediate_sync);
+  auto b = deferred->Render(View(), &deferred_sync);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_EQ(immediate_sync.warp_ms, 0.0);  // its map was current
+  EXPECT_GT(deferred_sync.warp_ms, 0.0);   // one update for the three steps
+  EXPECT_GT(deferred_sync.moved_tets, 0);
+  const auto moved = testing::CompareRgba(a->rgba, rest->rgba);
+  EXPECT_GT(moved.max_abs, 0.1) << "the drag should show in the frame";
+  const auto same = testing::CompareRgba(a->rgba, b->rgba);
+  EXPECT_EQ(same.max_abs, 0.0) << "mean " << same.mean_abs;
+
+  // A second frame with nothing new needs no update.
+  SceneStepTimings again;
+  ASSERT_TRUE(deferred->Render(View(), &again).ok());
+  EXPECT_EQ(again.warp_ms, 0.0);
+
+  // Release, then a new grab and drag before any frame: one update again.
+  for (DeformableScene* scene : {immediate.get(), deferred.get()}) {
+    ASSERT_TRUE(scene->Release().ok());
+    ASSERT_TRUE(scene->Grab(Centre() + glm::dvec3(3.0, 0.0, 0.0), 12.0).ok());
+    ASSERT_TRUE(scene->Drag({-4.0, 0.0, 0.0}).ok());
+  }
+  a = immediate->Render(View());
+  b = deferred->Render(View(), &deferred_sync);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_GT(deferred_sync.warp_ms, 0.0);
+  EXPECT_EQ(testing::CompareRgba(a->rgba, b->rgba).max_abs, 0.0);
+
+  // Release alone: back to the rest frame exactly.
+  ASSERT_TRUE(deferred->Release().ok());
+  b = deferred->Render(View());
+  ASSERT_TRUE(b.ok());
+  EXPECT_EQ(testing::CompareRgba(b->rgba, rest->rgba).max_abs, 0.0);
+}
+
+}  // namespace
+}  // namespace vpm
