@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The service soak (issue 5; a benchmark, not part of `make test`): one
+# The service soak (a benchmark, not part of `make test`): one
 # vpm-server on loopback, vpm-load at 1, 2, 4, 8 and 16 concurrent sessions
 # for DURATION seconds each, then the goals checked and printed:
 #   - zero errors (every status code OK);

@@ -1,4 +1,4 @@
-// Volume warping (ALGORITHM.md section 7, docs/WARP.md) on the phantom
+// Volume warping (docs/ALGORITHM.md section 7, docs/WARP.md) on the phantom
 // (default 256^3) with its 250-vertex proxy mesh and a synthetic smooth drag
 // at the liver landmark: backward-map updates (all tets, moved tets only) at
 // the default map resolution and at full resolution, the full-volume warp

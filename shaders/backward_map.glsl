@@ -1,4 +1,4 @@
-// The backward map of ALGORITHM.md section 7, as the ray caster and the warp
+// The backward map of docs/ALGORITHM.md section 7, as the ray caster and the warp
 // read it (docs/WARP.md).
 //
 // The map is an RGBA32F 3D image of M = (mx, my, mz) grid points covering

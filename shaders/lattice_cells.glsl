@@ -1,4 +1,4 @@
-// The lattice cells of ALGORITHM.md section 1 (the `cell` footprint): along
+// The lattice cells of docs/ALGORITHM.md section 1 (the `cell` footprint): along
 // an axis of n voxels and g lattice vertices, cell c covers the half-open
 // voxel range [floor(c n / g), floor((c + 1) n / g)); the cells partition
 // the volume.

@@ -1,6 +1,6 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// Step 1 (ALGORITHM.md section 1), pass 2 of 2: one invocation per lattice
+// Step 1 (docs/ALGORITHM.md section 1), pass 2 of 2: one invocation per lattice
 // vertex (cell) of the chunk's cell layers [cz0, cz1) reduces the row
 // partials of pass 1 over its (y, z) rows in a fixed order and writes
 // costs[id] = (mean TF over the cell, max |grad I| over the cell,

@@ -1,6 +1,6 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// Step 1 (ALGORITHM.md section 1), pass 1 of 2: partial cell footprints per
+// Step 1 (docs/ALGORITHM.md section 1), pass 1 of 2: partial cell footprints per
 // voxel row. Invocation i walks the x range of lattice cell cx along one
 // voxel row (y, z) and writes partials[i] = (sum of TF, max |grad I|^2) over
 // that row segment, with i = (row - first row of the chunk) * Gx + cx and
@@ -39,7 +39,7 @@ void main() {
   int z = z0 + row / dims.y;
   ivec2 rx = cell_range(cx, dims.x, int(gx));
   // Offsets (voxels) of the rows this segment and its y/z neighbours lie on,
-  // clamped at the volume's faces (ALGORITHM.md section 0).
+  // clamped at the volume's faces (docs/ALGORITHM.md section 0).
   int here = dims.x * (y + dims.y * z);
   int y_lo = dims.x * (max(y - 1, 0) + dims.y * z);
   int y_hi = dims.x * (min(y + 1, dims.y - 1) + dims.y * z);

@@ -30,8 +30,9 @@
 // Specialization constant 0 (kCellGradient, DVR): shade with the analytic
 // gradient of the trilinear cells a sample already reads (the source's 8
 // voxels, the map's 8 points: the chain rule through the map), no taps and
-// no state machine; interactive frames use it (docs/RENDERING.md,
-// "Drag-loop findings"). A constant, so the pipeline keeps one loop only.
+// no state machine; interactive and still DVR frames use it by default
+// (docs/RENDERING.md, "Quality modes"). A constant, so the pipeline keeps
+// one loop only.
 // The CPU reference, server/raycast/raycast_cpu.cc, mirrors every step.
 #ifndef VPM_RAYCAST_BODY_GLSL
 #define VPM_RAYCAST_BODY_GLSL

@@ -1,4 +1,4 @@
-// TF(value) of ALGORITHM.md section 1: piecewise linear through sorted
+// TF(value) of docs/ALGORITHM.md section 1: piecewise linear through sorted
 // control points, clamped outside. Expects the uniform block
 // `TransferFunctionBlock { vec4 points[VPM_MAX_TF_POINTS]; ivec4 count; } u_tf`.
 //

@@ -1,4 +1,4 @@
-// Voxel reads with the clamped indexing of ALGORITHM.md section 0.
+// Voxel reads with the clamped indexing of docs/ALGORITHM.md section 0.
 // Expects `uniform samplerBuffer u_volume` (R32F, one texel per voxel, x
 // fastest) declared by the including shader: on lavapipe a uniform texel
 // buffer reads about twice as fast as a 3D image (docs/LAVAPIPE.md).

@@ -1,4 +1,4 @@
-// J(x) = I(X(x)) for every voxel x (ALGORITHM.md section 7): the body shared
+// J(x) = I(X(x)) for every voxel x (docs/ALGORITHM.md section 7): the body shared
 // by warp_volume.comp (source read through a sampler3D) and
 // warp_volume_texel.comp (source read through a uniform texel buffer, manual
 // trilinear). The including shader declares u_map, the Out buffer `warped`,

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
 
 #include <nlohmann/json.hpp>
 
@@ -10,6 +9,7 @@
 #include "client/cli/gpu_backend.h"
 #include "client/cli/mesh_flags.h"
 #include "server/measures/compare_meshes.h"
+#include "server/common/write_file.h"
 #include "server/measures/deformation_measures.h"
 #include "server/io/read_volume.h"
 
@@ -85,10 +85,7 @@ Status WriteJson(const std::vector<MeshComparisonRow>& rows, const std::string& 
                    {"min_dihedral_deg", r.quality.min_dihedral_deg},
                    {"build_ms", r.build_ms}});
   }
-  std::ofstream file(path);
-  file << out.dump(2) << "\n";
-  if (!file) return absl::InternalError(StrCat("cannot write ", path));
-  return absl::OkStatus();
+  return WriteFile(path, out.dump(2) + "\n");
 }
 
 Status Run(const CompareArgs& args) {

@@ -2,13 +2,14 @@
 
 #include <chrono>
 #include <cstdio>
-#include <fstream>
+#include <string_view>
 
 #include "client/cli/command_status.h"
 #include "client/cli/mesh_flags.h"
 #include "client/cli/remote_pipeline.h"
 #include "proto/vec3_convert.h"
 #include "server/common/clock.h"
+#include "server/common/write_file.h"
 #include "server/mesh/mesh_json.h"
 #include "server/scene/deformable_scene.h"
 #include "server/raycast/frame_encoder.h"
@@ -80,13 +81,6 @@ Result<SceneView> MakeView(const RenderArgs& args, const Volume& volume) {
   return view;
 }
 
-Status WriteFile(const std::string& path, const std::vector<uint8_t>& bytes) {
-  std::ofstream file(path, std::ios::binary);
-  file.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
-  if (!file) return absl::PermissionDeniedError(StrCat("cannot write ", path));
-  return absl::OkStatus();
-}
-
 Result<bool> IsJpegName(const std::string& out) {
   const bool jpeg = out.ends_with(".jpg") || out.ends_with(".jpeg");
   if (!jpeg && !out.ends_with(".png")) {
@@ -139,7 +133,8 @@ Status RunOffline(const RenderArgs& args) {
                    jpeg ? EncodeJpeg(frame.rgba, frame.width, frame.height, args.jpeg_quality)
                         : EncodePng(frame.rgba, frame.width, frame.height));
   const double encode_ms = MsSince(t0);
-  RETURN_IF_ERROR(WriteFile(args.out, bytes));
+  RETURN_IF_ERROR(WriteFile(
+      args.out, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size())));
   std::printf("mesh %zu vertices, %zu tets; max displacement %.2f mm, inverted tets %lld\n",
               mesh.vertices.size(), mesh.tets.size(), step.max_displacement_mm,
               static_cast<long long>(step.inverted_tets));
@@ -270,7 +265,7 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
   settings->set_jpeg_quality(args.jpeg_quality);
   v1::Frame frame;
   RETURN_IF_ERROR(FromGrpc(server.stub().Render(server.Context().get(), render, &frame)));
-  RETURN_IF_ERROR(WriteFile(args.out, {frame.image().begin(), frame.image().end()}));
+  RETURN_IF_ERROR(WriteFile(args.out, frame.image()));
   std::printf("server %s: volume %s, mesh %s (%lld vertices, %lld tets), session %s\n",
               flags.address.c_str(), volume.volume_id().c_str(), mesh.mesh_id().c_str(),
               static_cast<long long>(mesh.stats().vertices()),

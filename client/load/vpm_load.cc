@@ -3,7 +3,6 @@
 // concurrency levels; a ghz-style report on stdout and in JSON.
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -14,6 +13,7 @@
 
 #include "client/cli/command_status.h"
 #include "client/cli/script_player.h"
+#include "server/common/write_file.h"
 
 namespace vpm::load {
 namespace {
@@ -217,7 +217,7 @@ Status Run(const LoadArgs& args) {
     }
   }
   if (!args.json_out.empty()) {
-    std::ofstream(args.json_out) << report.dump(2) << "\n";
+    RETURN_IF_ERROR(WriteFile(args.json_out, report.dump(2) + "\n"));
     std::printf("\nreport in %s\n", args.json_out.c_str());
   }
   return absl::OkStatus();

@@ -2,7 +2,7 @@
 
 #include <openssl/evp.h>
 
-namespace vpm::service {
+namespace vpm {
 
 struct Sha256::Impl {
   EVP_MD_CTX* ctx = nullptr;
@@ -38,4 +38,4 @@ std::string Sha256::HexOf(std::span<const uint8_t> bytes) {
   return sha.FinishHex();
 }
 
-}  // namespace vpm::service
+}  // namespace vpm

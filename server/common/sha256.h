@@ -6,7 +6,7 @@
 #include <span>
 #include <string>
 
-namespace vpm::service {
+namespace vpm {
 
 class Sha256 {
  public:
@@ -26,4 +26,4 @@ class Sha256 {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace vpm::service
+}  // namespace vpm

@@ -1,5 +1,5 @@
 // Quasi-static corotational FEM on a tet mesh with Dirichlet constraints
-// (ALGORITHM.md section 5); units in fem_units.h.
+// (docs/ALGORITHM.md section 5); units in fem_units.h.
 //
 // Each Solve finds u with f_int(u) = f_ext on the unconstrained DOFs and u =
 // the prescribed values on the constrained ones, by Newton-like iterations
@@ -53,7 +53,7 @@ struct SolverOptions {
   int threads = 1;
   // Add the inversion barrier (inversion_barrier.h) to the corotated energy
   // and never step across it: no element inverts. Off: the plain model of
-  // ALGORITHM.md section 5, which crushes elements in front of a point-like
+  // docs/ALGORITHM.md section 5, which crushes elements in front of a point-like
   // handle dragged further than their size.
   bool inversion_barrier = true;
   // With the barrier: at most this many load steps per Solve (a prescribed

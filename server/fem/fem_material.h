@@ -1,4 +1,4 @@
-// Material per tet (ALGORITHM.md section 5): soft tissue everywhere, hard
+// Material per tet (docs/ALGORITHM.md section 5): soft tissue everywhere, hard
 // (bone) in every tet that touches a hard vertex.
 #pragma once
 

@@ -1,4 +1,4 @@
-// FEM on a volume proxy mesh with manipulation (ALGORITHM.md section 5):
+// FEM on a volume proxy mesh with manipulation (docs/ALGORITHM.md section 5):
 // grab vertices near a point, drag them (prescribed displacement) or pull
 // them (force), release back to rest. Units: mm, N, E in kPa at the API
 // (fem_units.h).

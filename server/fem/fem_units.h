@@ -1,4 +1,4 @@
-// Units inside the FEM (ALGORITHM.md section 5).
+// Units inside the FEM (docs/ALGORITHM.md section 5).
 //
 // The API takes Young's modulus in kPa (the unit of soft-tissue elastography)
 // and everything else in the project's units. Internally one consistent set

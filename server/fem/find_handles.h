@@ -1,4 +1,4 @@
-// Which vertices a grab takes (ALGORITHM.md section 5, "grab(point,
+// Which vertices a grab takes (docs/ALGORITHM.md section 5, "grab(point,
 // radius)").
 #pragma once
 

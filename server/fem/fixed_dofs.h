@@ -1,4 +1,4 @@
-// The permanent Dirichlet constraints of ALGORITHM.md section 5.
+// The permanent Dirichlet constraints of docs/ALGORITHM.md section 5.
 #pragma once
 
 #include <cstdint>

@@ -1,6 +1,6 @@
 // A volumetric barrier that keeps elements from inverting.
 //
-// ALGORITHM.md section 6 asks for no inverted tet (signed volume <= 0) after
+// docs/ALGORITHM.md section 6 asks for no inverted tet (signed volume <= 0) after
 // drags of up to 1.5 h, but corotated linear elasticity (section 5) has no
 // barrier against collapse: its energy stays finite as an element is crushed
 // flat and through itself, so a handle dragged further than the tets around

@@ -62,7 +62,7 @@ struct BrickOccupancyPush {
 };
 static_assert(sizeof(BrickOccupancyPush) == 96);
 
-// raycast.comp, raycast_sampled.comp: uniform block RaycastParams (std140).
+// raycast_*.comp (the body in raycast_body.glsl): uniform block RaycastParams (std140).
 // Ray of pixel (px, py): eye + t * normalize(forward + ndc.x * right + ndc.y * up),
 // ndc = (2 (px + 0.5) / width - 1, 1 - 2 (py + 0.5) / height).
 inline constexpr int kRaycastShading = 1;           // image.z flag bits

@@ -1,4 +1,4 @@
-// The deformation measures of ALGORITHM.md section 6, for meshes of one
+// The deformation measures of docs/ALGORITHM.md section 6, for meshes of one
 // vertex budget under one standard drag:
 //  - deformation error: RMS (and max) over the body voxels (TF > 0) of the
 //    displacement interpolated on the mesh minus the displacement of a

@@ -1,4 +1,4 @@
-// The whole proxy-mesh pipeline of ALGORITHM.md sections 1-5, with timings:
+// The whole proxy-mesh pipeline of docs/ALGORITHM.md sections 1-5, with timings:
 // step 1 (GPU when given, else the CPU reference), step 2, step 4 at an
 // optional manipulation point, step 3 over the final vertex set, and the
 // Delaunay tetrahedralization.

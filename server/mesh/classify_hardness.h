@@ -1,4 +1,4 @@
-// Step 3 of ALGORITHM.md: which vertices are non-deformable (bone).
+// Step 3 of docs/ALGORITHM.md: which vertices are non-deformable (bone).
 //  1. v is hard if I[voxel(v)] >= bone_threshold.
 //  2. One pass over the hard set of rule 1 (not transitive): a deformable u
 //     becomes hard if some hard h has |p_u - p_h| < influence_radius and

@@ -1,4 +1,4 @@
-// Step 2 of ALGORITHM.md: remove the cheapest lattice vertex again and again
+// Step 2 of docs/ALGORITHM.md: remove the cheapest lattice vertex again and again
 // until `target` vertices remain (the 8 anchors counted), updating the
 // density of the neighbours of each removed vertex.
 //

@@ -1,5 +1,5 @@
 // A 4-ary min-heap over items 0..n-1 keyed by (cost, item): the smallest
-// cost first, ties to the smaller item, as ALGORITHM.md step 2 orders
+// cost first, ties to the smaller item, as docs/ALGORITHM.md step 2 orders
 // removals. Each item's position is tracked, so Update moves an item in
 // O(log n) whether its cost went up or down, and no stale entries pile up.
 //

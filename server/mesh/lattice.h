@@ -1,4 +1,4 @@
-// The regular lattice of ALGORITHM.md section 1 over a volume.
+// The regular lattice of docs/ALGORITHM.md section 1 over a volume.
 //
 // Vertex (a,b,c), linear id a + Gx*(b + Gy*c), owns the cell of voxels
 // i in [floor(a*nx/Gx), floor((a+1)*nx/Gx)) (likewise j, k); its position is

@@ -1,4 +1,4 @@
-// Step 1 of ALGORITHM.md: the image terms of every lattice vertex.
+// Step 1 of docs/ALGORITHM.md: the image terms of every lattice vertex.
 //  - point footprint: Ci = TF(I[voxel(v)]), g = |grad I| at voxel(v);
 //  - cell footprint:  Ci = mean of TF(I) over the vertex's cell,
 //                     g = max of |grad I| over the cell.

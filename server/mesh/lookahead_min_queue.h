@@ -1,5 +1,5 @@
 // A MonotoneMinQueue whose next few keys can be read ahead of popping them,
-// so that step 2's removal loop (ALGORITHM.md, `spread` mode) can prefetch
+// so that step 2's removal loop (docs/ALGORITHM.md, `spread` mode) can prefetch
 // the vertex records of the removals to come: that loop waits on memory far
 // more than it computes (docs/MESH.md).
 //

@@ -1,4 +1,4 @@
-// The proxy mesh as JSON (the `vpm build --json` output, read back by
+// The proxy mesh as JSON (the `vpm mesh --json` output, read back by
 // `vpm render --mesh-json`).
 //
 // {"vertices": [{"lattice_id": int, "kind": "lattice|anchor|refined",

@@ -1,6 +1,6 @@
 // A monotone priority queue (a radix heap) of (cost, item) keys: the
 // smallest cost first, ties to the smaller item, for step 2 in `spread` mode
-// (ALGORITHM.md), where a removal only ever raises the costs of the vertices
+// (docs/ALGORITHM.md), where a removal only ever raises the costs of the vertices
 // left, so every key pushed is at least the last one popped. Under that
 // promise it pops exactly what IndexedMinHeap would, with sequential memory
 // traffic instead of a sift through a large tree: a key waits in the bucket

@@ -1,5 +1,5 @@
 // A uniform grid of buckets over a fixed point set, for "all points within R
-// of the points of a bucket" queries (ALGORITHM.md step 2 asks for cell size
+// of the points of a bucket" queries (docs/ALGORITHM.md step 2 asks for cell size
 // R). Buckets hold point ids in increasing order, their positions stored in
 // bucket order so that a scan is contiguous in memory.
 #pragma once

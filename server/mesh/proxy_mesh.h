@@ -1,5 +1,5 @@
 // The volume proxy mesh (VPM): the vertices kept by steps 2-4 of
-// ALGORITHM.md, their classification, and their tetrahedralization.
+// docs/ALGORITHM.md, their classification, and their tetrahedralization.
 // Positions are in physical voxel space (mm): index * spacing.
 #pragma once
 

@@ -1,4 +1,4 @@
-// Step 4 of ALGORITHM.md: refinement around a manipulation point m.
+// Step 4 of docs/ALGORITHM.md: refinement around a manipulation point m.
 // Candidates are the vertices of a lattice 3x finer than G inside the ball
 // |p - m| <= roi_radius, scored Ci*Cg with the chosen footprint over their
 // own (smaller) cells; taken in decreasing score (ties: smaller fine id),

@@ -1,4 +1,4 @@
-// Tet shape measures (ALGORITHM.md section 5) and the section-6 validity
+// Tet shape measures (docs/ALGORITHM.md section 5) and the section-6 validity
 // measure (no inverted tet).
 #pragma once
 

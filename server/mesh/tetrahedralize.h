@@ -1,4 +1,4 @@
-// Delaunay tetrahedralization of the proxy mesh (ALGORITHM.md section 5).
+// Delaunay tetrahedralization of the proxy mesh (docs/ALGORITHM.md section 5).
 #pragma once
 
 #include <glm/glm.hpp>

@@ -42,7 +42,7 @@ inline constexpr float kKidneyCortex = 160.0f;
 inline constexpr float kKidneyMedulla = 60.0f;
 inline constexpr float kUrine = 10.0f;  // renal pelvis, ureter
 // Enhanced blood. Every vessel stays below the 250 HU bone threshold
-// (ALGORITHM.md section 3) by at least 4 noise sigmas, so no vessel voxel is
+// (docs/ALGORITHM.md section 3) by at least 4 noise sigmas, so no vessel voxel is
 // mistaken for bone.
 inline constexpr float kAorta = 210.0f;
 inline constexpr float kArtery = 200.0f;

@@ -1,5 +1,5 @@
 // A perspective orbit camera around the centre of a volume's image box, in
-// physical voxel space (mm, index * spacing; ALGORITHM.md section 0).
+// physical voxel space (mm, index * spacing; docs/ALGORITHM.md section 0).
 //
 // Orientation is anatomical, taken from the volume's direction matrix, so a
 // volume stored in any axis order shows the same default view:

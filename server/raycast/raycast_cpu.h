@@ -1,5 +1,5 @@
 // The ray caster in plain C++: the test oracle and the benchmark baseline of
-// shaders/raycast.comp. Same rays, sampling positions, trilinear reads,
+// shaders/raycast_body.glsl. Same rays, sampling positions, trilinear reads,
 // lookup table, shading, compositing, early termination and empty-space
 // skipping, in float, in the same order, on `threads` threads (rows
 // interleaved).

@@ -63,7 +63,7 @@ struct RaycastSettings {
   // each sample reads (chain rule through the map; no extra reads) instead
   // of central differences of J (6 more reads per shaded sample): the
   // interactive soft-tissue cast 29 -> 17 ms, measured error in
-  // docs/RENDERING.md ("Drag-loop findings").
+  // docs/RENDERING.md ("Quality modes").
   bool interactive_cell_gradient = true;
   // The same for still DVR frames: the 512x512 soft-tissue still about
   // halves (GPU 563 -> 276 ms in one run), at 33-37 dB PSNR against the taps

@@ -101,7 +101,7 @@ class VolumeRenderer {
   // vkCmdCopyImageToBuffer: 2-3x faster than a copy kernel on lavapipe).
   std::optional<gpu::GpuBuffer> map_texels_;
   vk::raii::BufferView map_texels_view_{nullptr};  // after the buffer it views
-  std::optional<gpu::GpuBuffer> params_;          // RaycastParams, uniform
+  std::optional<gpu::GpuBuffer> params_;          // RaycastParams, storage
   std::optional<gpu::GpuBuffer> lut_;             // RenderLutBlock, uniform
   std::optional<gpu::GpuBuffer> nonzero_prefix_;  // int per entry + 1, storage
   std::optional<gpu::GpuBuffer> stats_;           // sample counter, storage

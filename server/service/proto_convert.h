@@ -18,7 +18,7 @@ void FillVolumeInfo(const VolumeEntry& entry, v1::VolumeInfo* info);
 void FillMeshInfo(const MeshEntry& entry, v1::MeshInfo* info);
 void FillMeshGeometry(const ProxyMesh& mesh, v1::GetMeshResponse* response);
 
-// Unset fields take the ALGORITHM.md defaults. InvalidArgument names the field.
+// Unset fields take the docs/ALGORITHM.md defaults. InvalidArgument names the field.
 Result<MeshParams> ToMeshParams(const v1::MeshParams& params);
 
 // How one stream wants its frames: the scene view but for the camera, plus

@@ -1,4 +1,4 @@
-// |grad I| of ALGORITHM.md section 1: central differences in physical units
+// |grad I| of docs/ALGORITHM.md section 1: central differences in physical units
 // (value/mm), indices clamped at the borders:
 //   gx = (I[i+1,j,k] - I[i-1,j,k]) / (2*sx), likewise y, z.
 // The CPU reference for the GPU kernel, and the oracle in tests.

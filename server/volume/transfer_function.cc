@@ -81,7 +81,7 @@ TransferFunction TransferFunction::CtSoftTissue() {
 
 std::vector<std::pair<std::string, std::string>> TransferFunction::PresetNames() {
   return {
-      {"ct-soft-tissue", "CT default (ALGORITHM.md): fat to soft tissue high, bone half"},
+      {"ct-soft-tissue", "CT default (docs/ALGORITHM.md): fat to soft tissue high, bone half"},
       {"ct-vessels", "CT angiography: contrast-filled vessels (150-300 HU) highest"},
       {"ct-bone", "CT bone: cancellous and cortical bone (>= 250 HU) highest"},
       {"mri-t1", "MRI T1: on the volume's own intensity percentiles (p2 0, p20 0.2, "

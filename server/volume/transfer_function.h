@@ -1,4 +1,4 @@
-// The transfer cost TF(value) of ALGORITHM.md section 1: piecewise linear
+// The transfer cost TF(value) of docs/ALGORITHM.md section 1: piecewise linear
 // through control points (value, cost) sorted by value, clamped to the first
 // and last cost outside them.
 #pragma once
@@ -28,7 +28,7 @@ class TransferFunction {
   // A named preset (see PresetNames()) or a "v:c,..." list. Presets defined
   // on intensity percentiles (mri-t1) are resolved against `volume`.
   static Result<TransferFunction> FromSpec(std::string_view spec, const Volume& volume);
-  // The ALGORITHM.md default, `ct-soft-tissue`.
+  // The docs/ALGORITHM.md default, `ct-soft-tissue`.
   static TransferFunction CtSoftTissue();
 
   // Preset names with a one-line description each, for --help.

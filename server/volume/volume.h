@@ -1,6 +1,6 @@
 // The volume model: a scalar image on a regular grid, with its geometry.
 //
-// Coordinates (ALGORITHM.md section 0):
+// Coordinates (docs/ALGORITHM.md section 0):
 //  - index space: continuous, voxel centres at integer indices (i, j, k);
 //  - physical voxel space (mm): index * spacing_mm, what the algorithm uses;
 //  - world space (mm, LPS): origin_mm + direction * (index * spacing_mm), used

@@ -1,4 +1,4 @@
-// The backward map of ALGORITHM.md section 7 on the GPU (docs/WARP.md): for
+// The backward map of docs/ALGORITHM.md section 7 on the GPU (docs/WARP.md): for
 // a grid of M points over the image box, the rest position of each point
 // found through the deformed tet that contains it, kept in an RGBA32F 3D
 // image that the warp and the ray caster sample (shaders/backward_map.glsl).

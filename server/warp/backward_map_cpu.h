@@ -1,4 +1,4 @@
-// CPU reference of the backward map (ALGORITHM.md section 7; the GPU version
+// CPU reference of the backward map (docs/ALGORITHM.md section 7; the GPU version
 // is BackwardMap in backward_map.h): every grid point located in the
 // deformed mesh with TetLocator, in double.
 #pragma once

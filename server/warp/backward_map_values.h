@@ -1,4 +1,4 @@
-// The backward map of ALGORITHM.md section 7 on the host: its grid, its
+// The backward map of docs/ALGORITHM.md section 7 on the host: its grid, its
 // values, and the trilinear lookup the GPU's sampler performs
 // (shaders/backward_map.glsl; docs/WARP.md).
 #pragma once

@@ -1,4 +1,4 @@
-// The deformed volume J(x) = I(X(x)) of ALGORITHM.md section 7 on the GPU:
+// The deformed volume J(x) = I(X(x)) of docs/ALGORITHM.md section 7 on the GPU:
 // every voxel x = index * spacing of the source grid reads its rest position
 // X(x) through a BackwardMap and the source trilinearly there (kernels
 // shaders/warp_volume.comp and warp_volume_texel.comp). With a map of one

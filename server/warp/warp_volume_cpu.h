@@ -1,4 +1,4 @@
-// CPU references of the volume warp J(x) = I(X(x)) (ALGORITHM.md section 7;
+// CPU references of the volume warp J(x) = I(X(x)) (docs/ALGORITHM.md section 7;
 // the GPU version is VolumeWarper in warp_volume.h).
 #pragma once
 

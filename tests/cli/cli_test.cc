@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -63,6 +64,20 @@ TEST(VpmCli, BadSourceExitsNonZeroNamingTheFile) {
                           "--refine-at -5 0 0 --backend cpu");
   EXPECT_NE(outside.exit_code, 0);
   EXPECT_NE(outside.output.find("OUT_OF_RANGE"), std::string::npos) << outside.output;
+}
+
+TEST(VpmCli, FailedWritesExitNonZeroNamingTheFile) {
+  // /dev/full fails every write with ENOSPC, as a full disk does.
+  for (const std::string& args : std::vector<std::string>
+       {"mesh --volume 'phantom:abdomen?size=32' --json /dev/full",
+        "compare-meshes --volume 'phantom:abdomen?size=32' --no-deformation --json /dev/full",
+        "volume export 'phantom:abdomen?size=16' " + TempPath("no/such/folder/out.nii.gz")}) {
+    const CliRun run = Vpm(args);
+    EXPECT_NE(run.exit_code, 0) << args << "\n" << run.output;
+    EXPECT_TRUE(run.output.find("/dev/full") != std::string::npos ||
+                run.output.find("out.nii.gz") != std::string::npos)
+        << args << "\n" << run.output;
+  }
 }
 
 TEST(VpmCli, MeshWritesJsonWithTheDocumentedFields) {

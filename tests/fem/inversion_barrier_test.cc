@@ -141,7 +141,7 @@ TEST(InversionBarrier, LoadStepOptionsOutOfRangeAreInvalidArgument) {
   }
 }
 
-// The validity measure of ALGORITHM.md section 6 on a small body: a ball of
+// The validity measure of docs/ALGORITHM.md section 6 on a small body: a ball of
 // handles dragged 1.5 h. The plain corotated model crushes tets in front of
 // it; with the barrier the drag is reached and every tet stays positive:
 // taken at once with the measurement settings (up to 64 load steps), and in

@@ -1,4 +1,4 @@
-// Section 6 deformation measures on the phantom (ALGORITHM.md): error of the
+// Section 6 deformation measures on the phantom (docs/ALGORITHM.md): error of the
 // standard drag against the dense-lattice reference, rigidity of bone, and
 // validity of the mesh after drags up to 1.5 h.
 #include "server/measures/deformation_measures.h"

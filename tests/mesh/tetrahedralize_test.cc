@@ -1,4 +1,4 @@
-// Delaunay tetrahedralization of the proxy mesh (ALGORITHM.md section 5).
+// Delaunay tetrahedralization of the proxy mesh (docs/ALGORITHM.md section 5).
 #include "server/common/clock.h"
 #include "server/mesh/tetrahedralize.h"
 

@@ -121,6 +121,15 @@ expect_error "symlink out of the data root" PERMISSION_DENIED -- \
 volume_id=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["volume_id"])' "$tmp/load.json")
 expect_ok "open a session" -- --server "$addr" --token secret session open --volume-id "$volume_id"
 session_id=$(python3 -c 'import json,sys; print(json.load(sys.stdin)["session_id"])' < "$tmp/out")
+# Output that cannot be written is an error naming the file, never a silent success.
+expect_error "snapshot onto a full disk" RESOURCE_EXHAUSTED -- \
+  --server "$addr" --token secret snapshot --session "$session_id" --size 64 64 --out /dev/full
+grep -q "/dev/full" "$tmp/err" || fail "snapshot error does not name the file: $(cat "$tmp/err")"
+expect_error "snapshot into a missing folder" NOT_FOUND -- \
+  --server "$addr" --token secret snapshot --session "$session_id" --size 64 64 \
+  --out "$tmp/no/such/folder/frame.jpg"
+expect_error "watch frames into a folder under a file" FAILED_PRECONDITION -- \
+  --server "$addr" --token secret watch --session "$session_id" --frames 1 --out-dir /dev/full/frames
 stdbuf -oL "$vpm" --server "$addr" --token secret watch --session "$session_id" --frames 1000 \
   > "$tmp/watch.out" 2>&1 &
 watch_pid=$!

@@ -1,5 +1,5 @@
 // |grad I| on the GPU against the CPU reference, and both against analytic
-// values (ALGORITHM.md section 1: central differences, value/mm, clamped).
+// values (docs/ALGORITHM.md section 1: central differences, value/mm, clamped).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

@@ -1,4 +1,4 @@
-// TF(value) of ALGORITHM.md section 1 on the CPU (the contract) and the GPU.
+// TF(value) of docs/ALGORITHM.md section 1 on the CPU (the contract) and the GPU.
 #include <cmath>
 
 #include <gtest/gtest.h>

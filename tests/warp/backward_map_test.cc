@@ -1,4 +1,4 @@
-// The backward map (ALGORITHM.md section 7, docs/WARP.md) on the GPU against
+// The backward map (docs/ALGORITHM.md section 7, docs/WARP.md) on the GPU against
 // its definition and its CPU reference.
 #include "server/warp/backward_map.h"
 

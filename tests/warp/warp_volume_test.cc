@@ -1,4 +1,4 @@
-// The warped volume J(x) = I(X(x)) (ALGORITHM.md section 7) on the GPU,
+// The warped volume J(x) = I(X(x)) (docs/ALGORITHM.md section 7) on the GPU,
 // against its definition and the CPU references, for both ways of reading
 // the source (sampler, texel buffer).
 #include "server/warp/warp_volume.h"

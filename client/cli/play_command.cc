@@ -1,0 +1,139 @@
+#include "client/cli/play_command.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "client/cli/script_player.h"
+#include "client/cli/server_flags.h"
+#include "server/common/write_file.h"
+
+namespace vpm::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+Status Play(const ServerConnection& s, const std::string& script_path, std::string session_id,
+            const std::string& out_dir, std::string report_path) {
+  ASSIGN_OR_RETURN(json script_json, ReadJsonFile(script_path));
+  const std::string source = script_json.value("volume", "phantom:abdomen?size=64");
+  v1::VolumeInfo volume;
+  const bool opened_here = session_id.empty();
+  if (opened_here) {
+    v1::LoadVolumeRequest load;
+    load.set_source(source);
+    RETURN_IF_ERROR(FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &volume)));
+    v1::OpenSessionRequest open;
+    open.set_volume_id(volume.volume_id());
+    v1::SessionInfo info;
+    RETURN_IF_ERROR(FromGrpc(s.stub().OpenSession(s.Context().get(), open, &info)));
+    session_id = info.session_id();
+    std::printf("volume %s, session %s\n", volume.volume_id().c_str(), session_id.c_str());
+  } else {
+    v1::ListSessionsResponse sessions;
+    RETURN_IF_ERROR(FromGrpc(s.stub().ListSessions(s.Context().get(), {}, &sessions)));
+    for (const auto& x : sessions.sessions()) {
+      if (x.session_id() == session_id) {
+        v1::GetVolumeRequest get;
+        get.set_volume_id(x.volume_id());
+        RETURN_IF_ERROR(FromGrpc(s.stub().GetVolume(s.Context().get(), get, &volume)));
+      }
+    }
+    if (volume.volume_id().empty()) return absl::NotFoundError(StrCat("session ", session_id));
+  }
+  ASSIGN_OR_RETURN(Script script, ParseScript(script_json, volume));
+  if (!out_dir.empty()) RETURN_IF_ERROR(MakeDirectories(out_dir));
+  PlayOptions options;
+  options.session_id = session_id;
+  Status write_status;  // the first frame that could not be saved, reported at the end
+  options.on_frame = [&](const v1::Frame& frame, int64_t index) {
+    if (out_dir.empty() || !write_status.ok()) return;
+    char name[64];
+    std::snprintf(name, sizeof name, "frame_%04lld.%s", (long long)index,
+                  frame.encoding() == "png" ? "png" : "jpg");
+    write_status = WriteFile(fs::path(out_dir) / name, frame.image());
+  };
+  PlayResult result = PlayScript(s, script, options);
+  if (opened_here) {
+    // The session this command opened goes with it, whatever the outcome.
+    v1::CloseSessionRequest close;
+    close.set_session_id(session_id);
+    v1::CloseSessionResponse closed;
+    (void)s.stub().CloseSession(s.Context().get(), close, &closed);
+  }
+  RETURN_IF_ERROR(result.status);
+  RETURN_IF_ERROR(write_status);
+  std::vector<double> latency, render, fem, warp, encode, intervals;
+  int64_t bytes = 0, interactive = 0;
+  for (size_t i = 0; i < result.frames.size(); ++i) {
+    const FrameRecord& f = result.frames[i];
+    if (f.latency_ms >= 0) latency.push_back(f.latency_ms);
+    render.push_back(f.timings.render_ms());
+    fem.push_back(f.timings.fem_ms());
+    warp.push_back(f.timings.warp_ms());
+    encode.push_back(f.timings.encode_ms());
+    if (i > 0) intervals.push_back(f.received_ms - result.frames[i - 1].received_ms);
+    bytes += f.bytes;
+    interactive += f.interactive;
+  }
+  const double seconds = result.duration_ms / 1000.0;
+  json report{{"session_id", session_id},
+              {"events", result.events_sent},
+              {"frames", result.frames.size()},
+              {"interactive_frames", interactive},
+              {"duration_s", seconds},
+              {"fps", seconds > 0 ? double(result.frames.size()) / seconds : 0.0},
+              {"time_to_first_frame_ms", result.first_frame_ms},
+              {"bytes_per_frame", result.frames.empty() ? 0 : bytes / int64_t(result.frames.size())},
+              {"superseded", result.frames.empty() ? 0 : result.frames.back().superseded},
+              {"latency_ms", Summarize(latency)},
+              {"frame_interval_ms", Summarize(intervals)},
+              {"server_render_ms", Summarize(render)},
+              {"server_fem_ms", Summarize(fem)},
+              {"server_warp_ms", Summarize(warp)},
+              {"server_encode_ms", Summarize(encode)}};
+  if (report_path.empty() && !out_dir.empty()) report_path = (fs::path(out_dir) / "report.json").string();
+  if (!report_path.empty()) RETURN_IF_ERROR(WriteFile(report_path, report.dump(2) + "\n"));
+  std::printf("%zu frames (%lld interactive) for %lld events in %.2f s: %.1f fps, first frame %.0f ms\n",
+              result.frames.size(), (long long)interactive, (long long)result.events_sent, seconds,
+              report["fps"].get<double>(), result.first_frame_ms);
+  std::printf("%-18s %8s %8s %8s %8s\n", "ms", "avg", "p50", "p95", "max");
+  for (auto [name, key] : {std::pair{"event->frame", "latency_ms"},
+                           std::pair{"server render", "server_render_ms"},
+                           std::pair{"server fem", "server_fem_ms"},
+                           std::pair{"server warp", "server_warp_ms"},
+                           std::pair{"server encode", "server_encode_ms"}}) {
+    const json& j = report[key];
+    if (j["count"].get<size_t>() == 0) continue;
+    std::printf("%-18s %8.1f %8.1f %8.1f %8.1f\n", name, j["average"].get<double>(),
+                j["p50"].get<double>(), j["p95"].get<double>(), j["slowest"].get<double>());
+  }
+  if (!out_dir.empty()) std::printf("frames in %s\n", out_dir.c_str());
+  if (!report_path.empty()) std::printf("report in %s\n", report_path.c_str());
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+void AddPlayCommand(CLI::App& app, const ServerFlags* flags, int* exit_code) {
+  struct PlayArgs {
+    std::string script, session, out_dir, report;
+  };
+  auto a = std::make_shared<PlayArgs>();
+  CLI::App* play = app.add_subcommand("play", "server: replay an interaction script over Interact");
+  play->add_option("SCRIPT", a->script, "script JSON (see client/cli/script_player.h)")->required();
+  play->add_option("--session", a->session,
+                   "play on this session (default: open one on the script's volume, closed at the end)");
+  play->add_option("--out-dir", a->out_dir, "save frames and report.json here");
+  play->add_option("--report", a->report, "timing report JSON");
+  play->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) {
+    return Play(s, a->script, a->session, a->out_dir, a->report);
+  }));
+}
+
+}  // namespace vpm::cli

@@ -1,0 +1,14 @@
+// `vpm play SCRIPT.json`: replays an interaction script over a session's
+// Interact stream (the script format is in client/cli/script_player.h),
+// saves the frames and prints and writes a timing report.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include "client/cli/server_connection.h"
+
+namespace vpm::cli {
+
+void AddPlayCommand(CLI::App& app, const ServerFlags* flags, int* exit_code);
+
+}  // namespace vpm::cli

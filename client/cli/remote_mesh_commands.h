@@ -1,0 +1,13 @@
+// `vpm mesh-build|mesh-get|mesh-refine`: the mesh RPCs of a vpm-server
+// (BuildMesh, GetMesh with --json for the geometry, RefineMesh).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include "client/cli/server_connection.h"
+
+namespace vpm::cli {
+
+void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_code);
+
+}  // namespace vpm::cli

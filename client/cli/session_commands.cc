@@ -1,0 +1,154 @@
+#include "client/cli/session_commands.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "client/cli/proto_json.h"
+#include "client/cli/server_flags.h"
+#include "server/common/write_file.h"
+
+namespace vpm::cli {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code) {
+  struct Args {
+    std::string volume_id, mesh_id, session_id, out, out_dir;
+    std::vector<double> camera, grab, drag, pull;
+    std::vector<int> size{512, 512};
+    bool release = false;
+    int frames = 10;
+  };
+  auto a = std::make_shared<Args>();
+  CLI::App* session = app.add_subcommand("session", "server: sessions");
+  session->require_subcommand(1);
+  CLI::App* open = session->add_subcommand("open", "OpenSession");
+  open->add_option("--volume-id", a->volume_id);
+  open->add_option("--mesh-id", a->mesh_id, "empty: a mesh with default parameters");
+  open->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
+    v1::OpenSessionRequest request;
+    request.set_volume_id(a->volume_id);
+    request.set_mesh_id(a->mesh_id);
+    v1::SessionInfo info;
+    RETURN_IF_ERROR(FromGrpc(s.stub().OpenSession(s.Context().get(), request, &info)));
+    PrintJson(SessionJson(info));
+    return absl::OkStatus();
+  }));
+  session->add_subcommand("list", "ListSessions")
+      ->callback(WithServer(flags, exit_code, [](const ServerConnection& s) -> Status {
+        v1::ListSessionsResponse response;
+        RETURN_IF_ERROR(FromGrpc(s.stub().ListSessions(s.Context().get(), {}, &response)));
+        json j = json::array();
+        for (const auto& x : response.sessions()) j.push_back(SessionJson(x));
+        PrintJson(j);
+        return absl::OkStatus();
+      }));
+  CLI::App* close = session->add_subcommand("close", "CloseSession");
+  close->add_option("ID", a->session_id)->required();
+  close->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
+    v1::CloseSessionRequest request;
+    request.set_session_id(a->session_id);
+    v1::CloseSessionResponse response;
+    return FromGrpc(s.stub().CloseSession(s.Context().get(), request, &response));
+  }));
+
+  CLI::App* snapshot = app.add_subcommand("snapshot", "server: Render one still frame");
+  snapshot->add_option("--session", a->session_id)->required();
+  snapshot->add_option("--camera", a->camera, "AZ EL DIST (DIST 0: fit)")->expected(3);
+  snapshot->add_option("--size", a->size, "W H")->expected(2);
+  snapshot->add_option("--out", a->out, "frame.jpg or frame.png")->required();
+  snapshot->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
+    v1::RenderRequest request;
+    request.set_session_id(a->session_id);
+    if (a->camera.size() == 3) {
+      request.mutable_camera()->set_azimuth_deg(a->camera[0]);
+      request.mutable_camera()->set_elevation_deg(a->camera[1]);
+      request.mutable_camera()->set_distance_mm(a->camera[2]);
+    }
+    request.mutable_settings()->set_width(a->size[0]);
+    request.mutable_settings()->set_height(a->size[1]);
+    request.mutable_settings()->set_encoding(a->out.ends_with(".png") ? "png" : "jpeg");
+    v1::Frame frame;
+    RETURN_IF_ERROR(FromGrpc(s.stub().Render(s.Context().get(), request, &frame)));
+    RETURN_IF_ERROR(WriteFile(a->out, frame.image()));
+    std::printf("wrote %s (%dx%d, %zu bytes; render %.1f ms, encode %.1f ms)\n", a->out.c_str(),
+                frame.width(), frame.height(), frame.image().size(), frame.timings().render_ms(),
+                frame.timings().encode_ms());
+    return absl::OkStatus();
+  }));
+
+  CLI::App* manipulate = app.add_subcommand("manipulate", "server: Manipulate (one event)");
+  manipulate->add_option("--session", a->session_id)->required();
+  manipulate->add_option("--grab", a->grab, "X Y Z mm")->expected(3);
+  manipulate->add_option("--drag", a->drag, "DX DY DZ mm")->expected(3);
+  manipulate->add_option("--pull", a->pull, "FX FY FZ N")->expected(3);
+  manipulate->add_flag("--release", a->release);
+  manipulate->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
+    v1::ManipulateRequest request;
+    request.set_session_id(a->session_id);
+    v1::ClientEvent* e = request.mutable_event();
+    e->set_sequence(1);
+    auto set = [](v1::Vec3* v, const std::vector<double>& x) {
+      v->set_x(x[0]);
+      v->set_y(x[1]);
+      v->set_z(x[2]);
+    };
+    if (a->grab.size() == 3) set(e->mutable_grab()->mutable_point_mm(), a->grab);
+    else if (a->drag.size() == 3) set(e->mutable_drag()->mutable_offset_mm(), a->drag);
+    else if (a->pull.size() == 3) set(e->mutable_pull()->mutable_force_n(), a->pull);
+    else if (a->release) e->mutable_release();
+    v1::ManipulateResponse response;
+    RETURN_IF_ERROR(FromGrpc(s.stub().Manipulate(s.Context().get(), request, &response)));
+    std::printf("applied; max displacement %.2f mm\n", response.max_displacement_mm());
+    return absl::OkStatus();
+  }));
+
+  CLI::App* camera = app.add_subcommand("set-camera", "server: SetCamera");
+  camera->add_option("--session", a->session_id)->required();
+  camera->add_option("POSE", a->camera, "AZ EL [DIST]")->expected(2, 3)->required();
+  camera->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
+    v1::SetCameraRequest request;
+    request.set_session_id(a->session_id);
+    request.mutable_camera()->set_azimuth_deg(a->camera[0]);
+    request.mutable_camera()->set_elevation_deg(a->camera[1]);
+    if (a->camera.size() == 3) request.mutable_camera()->set_distance_mm(a->camera[2]);
+    v1::SetCameraResponse response;
+    return FromGrpc(s.stub().SetCamera(s.Context().get(), request, &response));
+  }));
+
+  CLI::App* watch = app.add_subcommand("watch", "server: Watch a session's frames");
+  watch->add_option("--session", a->session_id)->required();
+  watch->add_option("--frames", a->frames, "stop after this many frames")->capture_default_str();
+  watch->add_option("--out-dir", a->out_dir, "save the frames here");
+  watch->add_option("--size", a->size, "W H")->expected(2);
+  watch->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
+    v1::WatchRequest request;
+    request.set_session_id(a->session_id);
+    request.mutable_settings()->set_width(a->size[0]);
+    request.mutable_settings()->set_height(a->size[1]);
+    auto context = s.Context(true);
+    auto reader = s.stub().Watch(context.get(), request);
+    if (!a->out_dir.empty()) RETURN_IF_ERROR(MakeDirectories(a->out_dir));
+    v1::Frame frame;
+    int n = 0;
+    while (n < a->frames && reader->Read(&frame)) {
+      std::printf("frame %llu: seq %llu %s %zu bytes, render %.1f ms\n",
+                  (unsigned long long)frame.frame_number(), (unsigned long long)frame.last_sequence(),
+                  frame.interactive() ? "interactive" : "still", frame.image().size(),
+                  frame.timings().render_ms());
+      if (!a->out_dir.empty()) {
+        RETURN_IF_ERROR(WriteFile(fs::path(a->out_dir) / StrCat("watch_", n, ".jpg"), frame.image()));
+      }
+      ++n;
+    }
+    context->TryCancel();
+    grpc::Status status = reader->Finish();
+    return status.error_code() == grpc::CANCELLED ? absl::OkStatus() : FromGrpc(status);
+  }));
+}
+
+}  // namespace vpm::cli
