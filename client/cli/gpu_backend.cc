@@ -1,8 +1,9 @@
 #include "client/cli/gpu_backend.h"
-#include "server/common/clock.h"
 
 #include <chrono>
 #include <iostream>
+
+#include "server/common/clock.h"
 
 namespace vpm::cli {
 

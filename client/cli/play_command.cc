@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "client/cli/script_player.h"
+#include "proto/enum_names.h"
 #include "client/cli/server_flags.h"
 #include "server/common/write_file.h"
 
@@ -22,24 +23,24 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
             const std::string& out_dir, std::string report_path) {
   ASSIGN_OR_RETURN(json script_json, ReadJsonFile(script_path));
   const std::string source = script_json.value("volume", "phantom:abdomen?size=64");
-  v1::VolumeInfo volume;
+  v2::VolumeInfo volume;
   const bool opened_here = session_id.empty();
   if (opened_here) {
-    v1::LoadVolumeRequest load;
+    v2::LoadVolumeRequest load;
     load.set_source(source);
     RETURN_IF_ERROR(FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &volume)));
-    v1::OpenSessionRequest open;
+    v2::OpenSessionRequest open;
     open.set_volume_id(volume.volume_id());
-    v1::SessionInfo info;
+    v2::SessionInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().OpenSession(s.Context().get(), open, &info)));
     session_id = info.session_id();
     std::printf("volume %s, session %s\n", volume.volume_id().c_str(), session_id.c_str());
   } else {
-    v1::ListSessionsResponse sessions;
+    v2::ListSessionsResponse sessions;
     RETURN_IF_ERROR(FromGrpc(s.stub().ListSessions(s.Context().get(), {}, &sessions)));
     for (const auto& x : sessions.sessions()) {
       if (x.session_id() == session_id) {
-        v1::GetVolumeRequest get;
+        v2::GetVolumeRequest get;
         get.set_volume_id(x.volume_id());
         RETURN_IF_ERROR(FromGrpc(s.stub().GetVolume(s.Context().get(), get, &volume)));
       }
@@ -51,19 +52,19 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
   PlayOptions options;
   options.session_id = session_id;
   Status write_status;  // the first frame that could not be saved, reported at the end
-  options.on_frame = [&](const v1::Frame& frame, int64_t index) {
+  options.on_frame = [&](const v2::Frame& frame, int64_t index) {
     if (out_dir.empty() || !write_status.ok()) return;
     char name[64];
     std::snprintf(name, sizeof name, "frame_%04lld.%s", (long long)index,
-                  frame.encoding() == "png" ? "png" : "jpg");
+                  std::string(EncodingExtension(frame.encoding())).c_str());
     write_status = WriteFile(fs::path(out_dir) / name, frame.image());
   };
   PlayResult result = PlayScript(s, script, options);
   if (opened_here) {
     // The session this command opened goes with it, whatever the outcome.
-    v1::CloseSessionRequest close;
+    v2::CloseSessionRequest close;
     close.set_session_id(session_id);
-    v1::CloseSessionResponse closed;
+    v2::CloseSessionResponse closed;
     (void)s.stub().CloseSession(s.Context().get(), close, &closed);
   }
   RETURN_IF_ERROR(result.status);

@@ -7,7 +7,7 @@ namespace vpm::cli {
 
 using nlohmann::json;
 
-json VolumeJson(const v1::VolumeInfo& v) {
+json VolumeJson(const v2::VolumeInfo& v) {
   json j{{"volume_id", v.volume_id()}, {"source", v.source()}, {"bytes", v.bytes()},
          {"sessions", v.sessions()}, {"min_value", v.min_value()}, {"max_value", v.max_value()}};
   j["dims"] = std::vector<int64_t>(v.dims().begin(), v.dims().end());
@@ -20,14 +20,14 @@ json VolumeJson(const v1::VolumeInfo& v) {
   return j;
 }
 
-json MeshJson(const v1::MeshInfo& m) {
+json MeshJson(const v2::MeshInfo& m) {
   const auto& s = m.stats();
   return {{"mesh_id", m.mesh_id()}, {"volume_id", m.volume_id()},
           {"vertices", s.vertices()}, {"tets", s.tets()}, {"hard", s.hard()},
           {"refined", s.refined()}, {"h_mm", s.h_mm()}, {"min_dihedral_deg", s.min_dihedral_deg()}};
 }
 
-json SessionJson(const v1::SessionInfo& s) {
+json SessionJson(const v2::SessionInfo& s) {
   return {{"session_id", s.session_id()}, {"volume_id", s.volume_id()},
           {"mesh_id", s.mesh_id()}, {"viewers", s.viewers()}, {"idle_s", s.idle_s()}};
 }

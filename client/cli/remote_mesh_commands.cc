@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "client/cli/proto_json.h"
+#include "proto/enum_names.h"
 #include "client/cli/server_flags.h"
 #include "server/common/write_file.h"
 
@@ -30,19 +31,18 @@ void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_co
   build->add_option("--tf", a->tf, "transfer-function preset or v:c,...");
   build->add_option("--refine-at", a->point, "X Y Z mm")->expected(3);
   build->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v1::BuildMeshRequest request;
+    v2::BuildMeshRequest request;
     request.set_volume_id(a->volume_id);
     for (int64_t g : a->grid) request.mutable_params()->add_grid(g);
     request.mutable_params()->set_target(a->target);
     request.mutable_params()->set_tf(a->tf);
     if (a->point.size() == 3) {
-      request.mutable_params()->set_has_refine_at(true);
       auto* p = request.mutable_params()->mutable_refine_at_mm();
       p->set_x(a->point[0]);
       p->set_y(a->point[1]);
       p->set_z(a->point[2]);
     }
-    v1::MeshInfo info;
+    v2::MeshInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().BuildMesh(s.Context().get(), request, &info)));
     PrintJson(MeshJson(info));
     return absl::OkStatus();
@@ -52,17 +52,17 @@ void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_co
   get->add_flag("--geometry", a->geometry, "include vertices and tets");
   get->add_option("--json", a->json_out, "write the response as JSON here");
   get->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v1::GetMeshRequest request;
+    v2::GetMeshRequest request;
     request.set_mesh_id(a->mesh_id);
     request.set_include_geometry(a->geometry || !a->json_out.empty());
-    v1::GetMeshResponse response;
+    v2::GetMeshResponse response;
     RETURN_IF_ERROR(FromGrpc(s.stub().GetMesh(s.Context().get(), request, &response)));
     json j = MeshJson(response.info());
     if (!a->json_out.empty()) {
       for (const auto& v : response.vertices()) {
         j["vertices"].push_back({{"position_mm", {v.position_mm().x(), v.position_mm().y(),
                                                   v.position_mm().z()}},
-                                 {"kind", v.kind()}, {"hard", v.hard()}});
+                                 {"kind", std::string(VertexKindName(v.kind()))}, {"hard", v.hard()}});
       }
       for (const auto& t : response.tets()) j["tets"].push_back({t.a(), t.b(), t.c(), t.d()});
       RETURN_IF_ERROR(WriteFile(a->json_out, j.dump() + "\n"));
@@ -76,12 +76,12 @@ void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_co
   refine->add_option("ID", a->mesh_id)->required();
   refine->add_option("POINT", a->point, "X Y Z mm")->expected(3)->required();
   refine->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v1::RefineMeshRequest request;
+    v2::RefineMeshRequest request;
     request.set_mesh_id(a->mesh_id);
     request.mutable_point_mm()->set_x(a->point[0]);
     request.mutable_point_mm()->set_y(a->point[1]);
     request.mutable_point_mm()->set_z(a->point[2]);
-    v1::MeshInfo info;
+    v2::MeshInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().RefineMesh(s.Context().get(), request, &info)));
     PrintJson(MeshJson(info));
     return absl::OkStatus();

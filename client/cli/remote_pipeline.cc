@@ -1,18 +1,21 @@
 #include "client/cli/remote_pipeline.h"
 
+#include "proto/enum_names.h"
 #include "proto/vec3_convert.h"
 
 namespace vpm::cli {
 namespace {
 
-Result<VertexKind> KindOf(const std::string& name) {
-  for (VertexKind k : {VertexKind::kLattice, VertexKind::kAnchor, VertexKind::kRefined}) {
-    if (name == VertexKindName(k)) return k;
+Result<VertexKind> KindOf(v2::VertexKind kind) {
+  switch (kind) {
+    case v2::VERTEX_KIND_LATTICE: return VertexKind::kLattice;
+    case v2::VERTEX_KIND_ANCHOR: return VertexKind::kAnchor;
+    case v2::VERTEX_KIND_REFINED: return VertexKind::kRefined;
+    default: return absl::DataLossError(StrCat("server sent a vertex of unknown kind ", kind));
   }
-  return absl::DataLossError(StrCat("server sent a vertex of unknown kind '", name, "'"));
 }
 
-MeshStats StatsOf(const v1::MeshStats& s) {
+MeshStats StatsOf(const v2::MeshStats& s) {
   MeshStats out;
   for (int i = 0; i < 3 && i < s.grid_size(); ++i) out.grid[i] = s.grid(i);
   out.lattice_vertices = s.lattice_vertices();
@@ -34,18 +37,18 @@ MeshStats StatsOf(const v1::MeshStats& s) {
 
 }  // namespace
 
-Result<v1::VolumeInfo> LoadVolumeOnServer(const ServerConnection& server,
+Result<v2::VolumeInfo> LoadVolumeOnServer(const ServerConnection& server,
                                           const std::string& source) {
-  v1::LoadVolumeRequest request;
+  v2::LoadVolumeRequest request;
   request.set_source(source);
-  v1::VolumeInfo info;
+  v2::VolumeInfo info;
   RETURN_IF_ERROR(FromGrpc(server.stub().LoadVolume(server.Context().get(), request, &info)));
   return info;
 }
 
-Result<glm::dvec3> FindLandmark(const v1::VolumeInfo& volume, const std::string& name) {
+Result<glm::dvec3> FindLandmark(const v2::VolumeInfo& volume, const std::string& name) {
   std::string names;
-  for (const v1::Landmark& l : volume.landmarks()) {
+  for (const v2::Landmark& l : volume.landmarks()) {
     if (l.name() == name) return FromProto(l.position_mm());
     names += (names.empty() ? "" : ", ") + l.name();
   }
@@ -53,12 +56,21 @@ Result<glm::dvec3> FindLandmark(const v1::VolumeInfo& volume, const std::string&
                                     names.empty() ? " (it has none)" : " (it has: " + names + ")"));
 }
 
-Result<v1::MeshParams> ToProtoMeshParams(const MeshFlags& f, const v1::VolumeInfo& volume) {
-  v1::MeshParams p;
+Result<v2::MeshParams> ToProtoMeshParams(const MeshFlags& f, const v2::VolumeInfo& volume) {
+  v2::MeshParams p;
   for (int64_t g : f.grid) p.add_grid(g);
   p.set_target(f.target);
-  p.set_footprint(f.footprint);
-  p.set_density_mode(f.density_mode);
+  const auto footprint = FootprintFromName(f.footprint);
+  if (!footprint) {
+    return absl::InvalidArgumentError(StrCat("--footprint: '", f.footprint, "' is not point or cell"));
+  }
+  p.set_footprint(*footprint);
+  const auto density_mode = DensityModeFromName(f.density_mode);
+  if (!density_mode) {
+    return absl::InvalidArgumentError(
+        StrCat("--density-mode: '", f.density_mode, "' is not spread or paper"));
+  }
+  p.set_density_mode(*density_mode);
   p.set_wg(f.wg);
   p.set_wd(f.wd);
   p.set_radius_factor(f.radius_factor);
@@ -73,26 +85,24 @@ Result<v1::MeshParams> ToProtoMeshParams(const MeshFlags& f, const v1::VolumeInf
   }
   if (!f.refine_at.empty()) {
     if (f.refine_at.size() != 3) return absl::InvalidArgumentError("--refine-at takes X Y Z");
-    p.set_has_refine_at(true);
     *p.mutable_refine_at_mm() = ToProto({f.refine_at[0], f.refine_at[1], f.refine_at[2]});
   }
   if (!f.refine_at_landmark.empty()) {
     ASSIGN_OR_RETURN(glm::dvec3 at, FindLandmark(volume, f.refine_at_landmark));
-    p.set_has_refine_at(true);
     *p.mutable_refine_at_mm() = ToProto(at);
   }
   return p;
 }
 
 Result<ProxyMesh> FetchMesh(const ServerConnection& server, const std::string& mesh_id) {
-  v1::GetMeshRequest request;
+  v2::GetMeshRequest request;
   request.set_mesh_id(mesh_id);
   request.set_include_geometry(true);
-  v1::GetMeshResponse response;
+  v2::GetMeshResponse response;
   RETURN_IF_ERROR(FromGrpc(server.stub().GetMesh(server.Context().get(), request, &response)));
   ProxyMesh mesh;
   mesh.vertices.reserve(response.vertices_size());
-  for (const v1::MeshVertex& v : response.vertices()) {
+  for (const v2::MeshVertex& v : response.vertices()) {
     MeshVertex out;
     out.position_mm = FromProto(v.position_mm());
     out.lattice_id = v.lattice_id();
@@ -102,14 +112,14 @@ Result<ProxyMesh> FetchMesh(const ServerConnection& server, const std::string& m
     mesh.vertices.push_back(out);
   }
   const int32_t n = static_cast<int32_t>(mesh.vertices.size());
-  for (const v1::Tet& t : response.tets()) {
+  for (const v2::Tet& t : response.tets()) {
     const std::array<int32_t, 4> tet{t.a(), t.b(), t.c(), t.d()};
     for (int32_t i : tet) {
       if (i < 0 || i >= n) return absl::DataLossError(StrCat("server sent a tet with vertex ", i));
     }
     mesh.tets.push_back(tet);
   }
-  const v1::MeshStats& s = response.info().stats();
+  const v2::MeshStats& s = response.info().stats();
   mesh.stats = StatsOf(s);
   mesh.quality.min_dihedral_deg = s.min_dihedral_deg();
   mesh.quality.mean_min_dihedral_deg = s.mean_min_dihedral_deg();
@@ -123,7 +133,7 @@ Result<RemoteMesh> BuildMeshOnServer(const ServerConnection& server, const std::
                                      const MeshFlags& flags) {
   RemoteMesh out;
   ASSIGN_OR_RETURN(out.volume, LoadVolumeOnServer(server, source));
-  v1::BuildMeshRequest request;
+  v2::BuildMeshRequest request;
   request.set_volume_id(out.volume.volume_id());
   ASSIGN_OR_RETURN(*request.mutable_params(), ToProtoMeshParams(flags, out.volume));
   RETURN_IF_ERROR(FromGrpc(server.stub().BuildMesh(server.Context().get(), request, &out.info)));

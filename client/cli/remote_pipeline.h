@@ -17,16 +17,16 @@
 namespace vpm::cli {
 
 // LoadVolume: `source` is a path under the server's data root or phantom:NAME.
-Result<v1::VolumeInfo> LoadVolumeOnServer(const ServerConnection& server,
+Result<v2::VolumeInfo> LoadVolumeOnServer(const ServerConnection& server,
                                           const std::string& source);
 
 // The mesh flags as the API's MeshParams; --refine-at-landmark is resolved
 // with the landmarks the server reports for `volume` (NOT_FOUND if absent).
-Result<v1::MeshParams> ToProtoMeshParams(const MeshFlags& flags, const v1::VolumeInfo& volume);
+Result<v2::MeshParams> ToProtoMeshParams(const MeshFlags& flags, const v2::VolumeInfo& volume);
 
 // A named landmark of `volume` (physical voxel space, mm); NOT_FOUND lists
 // the volume's landmarks.
-Result<glm::dvec3> FindLandmark(const v1::VolumeInfo& volume, const std::string& name);
+Result<glm::dvec3> FindLandmark(const v2::VolumeInfo& volume, const std::string& name);
 
 // GetMesh with geometry, as the ProxyMesh the offline commands write (voxel
 // indices are not sent by the API and stay 0).
@@ -34,8 +34,8 @@ Result<ProxyMesh> FetchMesh(const ServerConnection& server, const std::string& m
 
 // LoadVolume + BuildMesh + FetchMesh.
 struct RemoteMesh {
-  v1::VolumeInfo volume;
-  v1::MeshInfo info;
+  v2::VolumeInfo volume;
+  v2::MeshInfo info;
   ProxyMesh mesh;
 };
 Result<RemoteMesh> BuildMeshOnServer(const ServerConnection& server, const std::string& source,

@@ -22,16 +22,16 @@ Status Upload(const ServerConnection& server, const std::string& path) {
   std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(file)),
                              std::istreambuf_iterator<char>());
   auto context = server.Context();
-  v1::VolumeInfo info;
+  v2::VolumeInfo info;
   auto writer = server.stub().UploadVolume(context.get(), &info);
-  v1::UploadVolumeRequest header;
+  v2::UploadVolumeRequest header;
   header.mutable_header()->set_file_name(fs::path(path).filename().string());
   header.mutable_header()->set_total_bytes(int64_t(bytes.size()));
   header.mutable_header()->set_sha256_hex(Sha256::HexOf(bytes));
   bool ok = writer->Write(header);
   constexpr size_t kChunk = 1 << 20;
   for (size_t at = 0; ok && at < bytes.size(); at += kChunk) {
-    v1::UploadVolumeRequest chunk;
+    v2::UploadVolumeRequest chunk;
     chunk.set_chunk(bytes.data() + at, std::min(kChunk, bytes.size() - at));
     ok = writer->Write(chunk);
   }
@@ -49,9 +49,9 @@ void AddRemoteVolumeCommands(CLI::App& app, const ServerFlags* flags, int* exit_
   CLI::App* load = volume->add_subcommand("load", "server: LoadVolume (data-root path or phantom:)");
   load->add_option("SOURCE", *source, "path under the server's data root, or phantom:NAME")->required();
   load->callback(WithServer(flags, exit_code, [source](const ServerConnection& s) -> Status {
-    v1::LoadVolumeRequest request;
+    v2::LoadVolumeRequest request;
     request.set_source(*source);
-    v1::VolumeInfo info;
+    v2::VolumeInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().LoadVolume(s.Context().get(), request, &info)));
     PrintJson(VolumeJson(info));
     return absl::OkStatus();
@@ -64,7 +64,7 @@ void AddRemoteVolumeCommands(CLI::App& app, const ServerFlags* flags, int* exit_
   }));
   volume->add_subcommand("list", "server: ListVolumes")
       ->callback(WithServer(flags, exit_code, [](const ServerConnection& s) -> Status {
-        v1::ListVolumesResponse response;
+        v2::ListVolumesResponse response;
         RETURN_IF_ERROR(FromGrpc(s.stub().ListVolumes(s.Context().get(), {}, &response)));
         json j = json::array();
         for (const auto& v : response.volumes()) j.push_back(VolumeJson(v));
@@ -75,9 +75,9 @@ void AddRemoteVolumeCommands(CLI::App& app, const ServerFlags* flags, int* exit_
   CLI::App* get = volume->add_subcommand("get", "server: GetVolume");
   get->add_option("ID", *id)->required();
   get->callback(WithServer(flags, exit_code, [id](const ServerConnection& s) -> Status {
-    v1::GetVolumeRequest request;
+    v2::GetVolumeRequest request;
     request.set_volume_id(*id);
-    v1::VolumeInfo info;
+    v2::VolumeInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().GetVolume(s.Context().get(), request, &info)));
     PrintJson(VolumeJson(info));
     return absl::OkStatus();
@@ -85,9 +85,9 @@ void AddRemoteVolumeCommands(CLI::App& app, const ServerFlags* flags, int* exit_
   CLI::App* del = volume->add_subcommand("delete", "server: DeleteVolume");
   del->add_option("ID", *id)->required();
   del->callback(WithServer(flags, exit_code, [id](const ServerConnection& s) -> Status {
-    v1::DeleteVolumeRequest request;
+    v2::DeleteVolumeRequest request;
     request.set_volume_id(*id);
-    v1::DeleteVolumeResponse response;
+    v2::DeleteVolumeResponse response;
     return FromGrpc(s.stub().DeleteVolume(s.Context().get(), request, &response));
   }));
 }

@@ -7,6 +7,7 @@
 #include "client/cli/command_status.h"
 #include "client/cli/mesh_flags.h"
 #include "client/cli/remote_pipeline.h"
+#include "proto/enum_names.h"
 #include "proto/vec3_convert.h"
 #include "server/common/clock.h"
 #include "server/common/write_file.h"
@@ -159,9 +160,9 @@ class SessionCloser {
  public:
   SessionCloser(const ServerConnection& server, std::string id) : server_(server), id_(id) {}
   ~SessionCloser() {
-    v1::CloseSessionRequest request;
+    v2::CloseSessionRequest request;
     request.set_session_id(id_);
-    v1::CloseSessionResponse response;
+    v2::CloseSessionResponse response;
     (void)server_.stub().CloseSession(server_.Context().get(), request, &response);
   }
   SessionCloser(const SessionCloser&) = delete;
@@ -172,12 +173,12 @@ class SessionCloser {
   std::string id_;
 };
 
-Result<v1::ManipulateResponse> Manipulate(const ServerConnection& server,
-                                          const std::string& session, v1::ClientEvent event) {
-  v1::ManipulateRequest request;
+Result<v2::ManipulateResponse> Manipulate(const ServerConnection& server,
+                                          const std::string& session, v2::ClientEvent event) {
+  v2::ManipulateRequest request;
   request.set_session_id(session);
   *request.mutable_event() = std::move(event);
-  v1::ManipulateResponse response;
+  v2::ManipulateResponse response;
   RETURN_IF_ERROR(FromGrpc(server.stub().Manipulate(server.Context().get(), request, &response)));
   return response;
 }
@@ -205,7 +206,7 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
     return absl::InvalidArgumentError("--drag and --pull need --grab or --grab-landmark");
   }
   ASSIGN_OR_RETURN(ServerConnection server, ServerConnection::Connect(flags));
-  ASSIGN_OR_RETURN(v1::VolumeInfo volume, LoadVolumeOnServer(server, args.source));
+  ASSIGN_OR_RETURN(v2::VolumeInfo volume, LoadVolumeOnServer(server, args.source));
   std::vector<double> grab = args.grab;
   if (!args.grab_landmark.empty()) {
     ASSIGN_OR_RETURN(glm::dvec3 at, FindLandmark(volume, args.grab_landmark));
@@ -215,20 +216,20 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
   if (!grab.empty() && mesh_flags.refine_at.empty() && mesh_flags.refine_at_landmark.empty()) {
     mesh_flags.refine_at = grab;
   }
-  v1::BuildMeshRequest build;
+  v2::BuildMeshRequest build;
   build.set_volume_id(volume.volume_id());
   ASSIGN_OR_RETURN(*build.mutable_params(), ToProtoMeshParams(mesh_flags, volume));
-  v1::MeshInfo mesh;
+  v2::MeshInfo mesh;
   RETURN_IF_ERROR(FromGrpc(server.stub().BuildMesh(server.Context().get(), build, &mesh)));
-  v1::OpenSessionRequest open;
+  v2::OpenSessionRequest open;
   open.set_volume_id(volume.volume_id());
   open.set_mesh_id(mesh.mesh_id());
-  v1::SessionInfo session;
+  v2::SessionInfo session;
   RETURN_IF_ERROR(FromGrpc(server.stub().OpenSession(server.Context().get(), open, &session)));
   SessionCloser closer(server, session.session_id());
   double max_displacement_mm = 0.0;
   if (!grab.empty()) {
-    v1::ClientEvent event;
+    v2::ClientEvent event;
     ASSIGN_OR_RETURN(const glm::dvec3 grab_mm, Vec3Of(grab, "--grab"));
     *event.mutable_grab()->mutable_point_mm() = ToProto(grab_mm);
     event.mutable_grab()->set_radius_mm(args.grab_radius);
@@ -242,28 +243,30 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
       ASSIGN_OR_RETURN(const glm::dvec3 force, Vec3Of(args.pull, "--pull"));
       *event.mutable_pull()->mutable_force_n() = ToProto(force);
     }
-    if (event.event_case() != v1::ClientEvent::EVENT_NOT_SET) {
-      ASSIGN_OR_RETURN(v1::ManipulateResponse moved,
+    if (event.event_case() != v2::ClientEvent::EVENT_NOT_SET) {
+      ASSIGN_OR_RETURN(v2::ManipulateResponse moved,
                        Manipulate(server, session.session_id(), event));
       max_displacement_mm = moved.max_displacement_mm();
     }
   }
-  v1::RenderRequest render;
+  v2::RenderRequest render;
   render.set_session_id(session.session_id());
   if (!args.camera.empty()) {
     render.mutable_camera()->set_azimuth_deg(args.camera[0]);
     render.mutable_camera()->set_elevation_deg(args.camera[1]);
     render.mutable_camera()->set_distance_mm(args.camera[2]);
   }
-  v1::RenderSettings* settings = render.mutable_settings();
-  settings->set_mode(args.mode);
+  v2::RenderSettings* settings = render.mutable_settings();
+  const auto mode = RenderModeFromName(args.mode);
+  if (!mode) return absl::InvalidArgumentError(StrCat("--mode: '", args.mode, "' is not dvr or mip"));
+  settings->set_mode(*mode);
   settings->set_preset(args.preset);
   settings->set_width(args.size[0]);
   settings->set_height(args.size[1]);
   settings->set_overlay(args.overlay);
-  settings->set_encoding(jpeg ? "jpeg" : "png");
+  settings->set_encoding(jpeg ? v2::ENCODING_JPEG : v2::ENCODING_PNG);
   settings->set_jpeg_quality(args.jpeg_quality);
-  v1::Frame frame;
+  v2::Frame frame;
   RETURN_IF_ERROR(FromGrpc(server.stub().Render(server.Context().get(), render, &frame)));
   RETURN_IF_ERROR(WriteFile(args.out, frame.image()));
   std::printf("server %s: volume %s, mesh %s (%lld vertices, %lld tets), session %s\n",
@@ -271,7 +274,7 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
               static_cast<long long>(mesh.stats().vertices()),
               static_cast<long long>(mesh.stats().tets()), session.session_id().c_str());
   std::printf("max displacement %.2f mm\n", max_displacement_mm);
-  const v1::StageTimings& t = frame.timings();
+  const v2::StageTimings& t = frame.timings();
   std::printf("%-22s %9s\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n", "stage (server)",
               "ms", "render (GPU)", t.render_ms(), "encode", t.encode_ms(), "queue", t.queue_ms(),
               "total", t.total_ms());

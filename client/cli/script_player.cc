@@ -1,5 +1,4 @@
 #include "client/cli/script_player.h"
-#include "server/common/clock.h"
 
 #include <algorithm>
 #include <chrono>
@@ -10,19 +9,21 @@
 #include <mutex>
 #include <thread>
 
+#include "proto/enum_names.h"
+#include "server/common/clock.h"
+
 namespace vpm::cli {
 namespace {
 
-
-v1::Vec3 Vec(double x, double y, double z) {
-  v1::Vec3 v;
+v2::Vec3 Vec(double x, double y, double z) {
+  v2::Vec3 v;
   v.set_x(x);
   v.set_y(y);
   v.set_z(z);
   return v;
 }
 
-Result<v1::Vec3> VecOf(const nlohmann::json& j, const char* what) {
+Result<v2::Vec3> VecOf(const nlohmann::json& j, const char* what) {
   if (!j.is_array() || j.size() != 3) {
     return absl::InvalidArgumentError(StrCat(what, ": needs [x, y, z]"));
   }
@@ -56,7 +57,7 @@ nlohmann::json DefaultScriptJson() {
     ]})");
 }
 
-Result<Script> ParseScript(const nlohmann::json& j, const v1::VolumeInfo& volume) {
+Result<Script> ParseScript(const nlohmann::json& j, const v2::VolumeInfo& volume) {
   Script script;
   try {
     if (j.contains("volume")) script.volume = j["volume"].get<std::string>();
@@ -64,9 +65,20 @@ Result<Script> ParseScript(const nlohmann::json& j, const v1::VolumeInfo& volume
       const auto& s = j["settings"];
       script.settings.set_width(s.value("width", 256));
       script.settings.set_height(s.value("height", 256));
-      script.settings.set_mode(s.value("mode", "dvr"));
+      const std::string mode = s.value("mode", "dvr");
+      const auto mode_value = RenderModeFromName(mode);
+      if (!mode_value) {
+        return absl::InvalidArgumentError(StrCat("settings.mode: '", mode, "' is not dvr or mip"));
+      }
+      script.settings.set_mode(*mode_value);
       script.settings.set_preset(s.value("preset", ""));
-      script.settings.set_encoding(s.value("encoding", "jpeg"));
+      const std::string encoding = s.value("encoding", "jpeg");
+      const auto encoding_value = EncodingFromName(encoding);
+      if (!encoding_value) {
+        return absl::InvalidArgumentError(
+            StrCat("settings.encoding: '", encoding, "' is not jpeg or png"));
+      }
+      script.settings.set_encoding(*encoding_value);
       script.settings.set_jpeg_quality(s.value("jpeg_quality", 0));
       script.settings.set_overlay(s.value("overlay", false));
     }
@@ -101,7 +113,7 @@ Result<Script> ParseScript(const nlohmann::json& j, const v1::VolumeInfo& volume
         const auto& g = step["grab"];
         ScriptEvent e;
         e.wait_ms = interval;
-        v1::Grab* grab = e.event.mutable_grab();
+        v2::Grab* grab = e.event.mutable_grab();
         if (g.contains("landmark")) {
           const std::string name = g["landmark"].get<std::string>();
           bool found = false;
@@ -125,7 +137,7 @@ Result<Script> ParseScript(const nlohmann::json& j, const v1::VolumeInfo& volume
         script.events.push_back(e);
       } else if (step.contains("drag")) {
         const auto& d = step["drag"];
-        ASSIGN_OR_RETURN(v1::Vec3 to, VecOf(d.at("to_mm"), "drag.to_mm"));
+        ASSIGN_OR_RETURN(v2::Vec3 to, VecOf(d.at("to_mm"), "drag.to_mm"));
         const int steps = d.value("steps", 10);
         for (int i = 1; i <= steps; ++i) {
           ScriptEvent e;
@@ -173,7 +185,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
   // Reads until the server ends the stream; the sender half-closes once the
   // still frame of the last event has arrived.
   std::thread reader([&] {
-    v1::Frame frame;
+    v2::Frame frame;
     int64_t index = 0;
     while (stream->Read(&frame)) {
       const SteadyClock::time_point now = SteadyClock::now();
@@ -202,7 +214,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
     got_final.notify_all();
   });
 
-  auto send = [&](v1::InteractRequest request, uint64_t sequence) {
+  auto send = [&](v2::InteractRequest request, uint64_t sequence) {
     request.mutable_event()->set_sequence(sequence);
     {
       std::lock_guard lock(mutex);
@@ -213,7 +225,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
     return stream->Write(request);
   };
   uint64_t sequence = 1;
-  v1::InteractRequest first;
+  v2::InteractRequest first;
   first.set_session_id(options.session_id);
   *first.mutable_event()->mutable_settings() = script.settings;
   bool ok = send(first, sequence);
@@ -222,7 +234,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
     for (const ScriptEvent& e : script.events) {
       if (!ok) break;
       std::this_thread::sleep_for(std::chrono::microseconds(int64_t(e.wait_ms * 1000)));
-      v1::InteractRequest request;
+      v2::InteractRequest request;
       *request.mutable_event() = e.event;
       if (e.event.has_grab()) grabbed = true;
       if (e.event.has_release()) grabbed = false;
@@ -231,7 +243,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
   } while (ok && options.duration_s > 0 &&
            MsBetween(start, SteadyClock::now()) < options.duration_s * 1000);
   if (ok && grabbed) {
-    v1::InteractRequest release;
+    v2::InteractRequest release;
     release.mutable_event()->mutable_release();
     ok = send(release, ++sequence);
   }

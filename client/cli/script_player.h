@@ -30,18 +30,18 @@
 namespace vpm::cli {
 
 struct ScriptEvent {
-  v1::ClientEvent event;  // sequence filled in when sent
+  v2::ClientEvent event;  // sequence filled in when sent
   double wait_ms = 0;     // pause before sending
 };
 
 struct Script {
   std::string volume = "phantom:abdomen?size=64";
-  v1::RenderSettings settings;
+  v2::RenderSettings settings;
   std::vector<ScriptEvent> events;
 };
 
 // Landmarks are resolved against `volume` (from GetVolume/LoadVolume).
-Result<Script> ParseScript(const nlohmann::json& json, const v1::VolumeInfo& volume);
+Result<Script> ParseScript(const nlohmann::json& json, const v2::VolumeInfo& volume);
 Result<nlohmann::json> ReadJsonFile(const std::string& path);
 // A default script: orbit, grab at the centre, drag, release.
 nlohmann::json DefaultScriptJson();
@@ -52,7 +52,7 @@ struct FrameRecord {
   uint64_t last_sequence = 0;
   bool interactive = false;
   int64_t bytes = 0;
-  v1::StageTimings timings;
+  v2::StageTimings timings;
   uint64_t superseded = 0;
 };
 
@@ -68,7 +68,7 @@ struct PlayOptions {
   std::string session_id;
   double duration_s = 0;  // 0: play once; else loop the events until then
   // Called for each frame (e.g. to save it); may be empty.
-  std::function<void(const v1::Frame&, int64_t index)> on_frame;
+  std::function<void(const v2::Frame&, int64_t index)> on_frame;
 };
 
 // Opens an Interact stream on options.session_id, plays the script, waits

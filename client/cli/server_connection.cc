@@ -31,7 +31,7 @@ Result<ServerConnection> ServerConnection::Connect(const ServerFlags& flags) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(64 << 20);
   c.channel_ = grpc::CreateCustomChannel(flags.address, credentials, args);
-  c.stub_ = v1::Vpm::NewStub(c.channel_);
+  c.stub_ = v2::Vpm::NewStub(c.channel_);
   return c;
 }
 

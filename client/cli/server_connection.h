@@ -9,7 +9,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "server/common/status.h"
-#include "vpm/v1/vpm.grpc.pb.h"
+#include "vpm/v2/vpm.grpc.pb.h"
 
 namespace vpm::cli {
 
@@ -26,7 +26,7 @@ class ServerConnection {
  public:
   static Result<ServerConnection> Connect(const ServerFlags& flags);
 
-  v1::Vpm::Stub& stub() const { return *stub_; }
+  v2::Vpm::Stub& stub() const { return *stub_; }
   // For other services on the same server (grpc.health.v1).
   std::shared_ptr<grpc::Channel> channel() const { return channel_; }
   // A context with the token and, unless streaming, a deadline.
@@ -35,7 +35,7 @@ class ServerConnection {
  private:
   ServerFlags flags_;
   std::shared_ptr<grpc::Channel> channel_;
-  std::shared_ptr<v1::Vpm::Stub> stub_;
+  std::shared_ptr<v2::Vpm::Stub> stub_;
 };
 
 inline Status FromGrpc(const grpc::Status& status) {

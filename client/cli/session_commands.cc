@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "client/cli/proto_json.h"
+#include "proto/enum_names.h"
 #include "client/cli/server_flags.h"
 #include "server/common/write_file.h"
 
@@ -30,17 +31,17 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   open->add_option("--volume-id", a->volume_id);
   open->add_option("--mesh-id", a->mesh_id, "empty: a mesh with default parameters");
   open->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v1::OpenSessionRequest request;
+    v2::OpenSessionRequest request;
     request.set_volume_id(a->volume_id);
     request.set_mesh_id(a->mesh_id);
-    v1::SessionInfo info;
+    v2::SessionInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().OpenSession(s.Context().get(), request, &info)));
     PrintJson(SessionJson(info));
     return absl::OkStatus();
   }));
   session->add_subcommand("list", "ListSessions")
       ->callback(WithServer(flags, exit_code, [](const ServerConnection& s) -> Status {
-        v1::ListSessionsResponse response;
+        v2::ListSessionsResponse response;
         RETURN_IF_ERROR(FromGrpc(s.stub().ListSessions(s.Context().get(), {}, &response)));
         json j = json::array();
         for (const auto& x : response.sessions()) j.push_back(SessionJson(x));
@@ -50,9 +51,9 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   CLI::App* close = session->add_subcommand("close", "CloseSession");
   close->add_option("ID", a->session_id)->required();
   close->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v1::CloseSessionRequest request;
+    v2::CloseSessionRequest request;
     request.set_session_id(a->session_id);
-    v1::CloseSessionResponse response;
+    v2::CloseSessionResponse response;
     return FromGrpc(s.stub().CloseSession(s.Context().get(), request, &response));
   }));
 
@@ -62,7 +63,7 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   snapshot->add_option("--size", a->size, "W H")->expected(2);
   snapshot->add_option("--out", a->out, "frame.jpg or frame.png")->required();
   snapshot->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v1::RenderRequest request;
+    v2::RenderRequest request;
     request.set_session_id(a->session_id);
     if (a->camera.size() == 3) {
       request.mutable_camera()->set_azimuth_deg(a->camera[0]);
@@ -71,8 +72,8 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
     }
     request.mutable_settings()->set_width(a->size[0]);
     request.mutable_settings()->set_height(a->size[1]);
-    request.mutable_settings()->set_encoding(a->out.ends_with(".png") ? "png" : "jpeg");
-    v1::Frame frame;
+    request.mutable_settings()->set_encoding(EncodingForFile(a->out));
+    v2::Frame frame;
     RETURN_IF_ERROR(FromGrpc(s.stub().Render(s.Context().get(), request, &frame)));
     RETURN_IF_ERROR(WriteFile(a->out, frame.image()));
     std::printf("wrote %s (%dx%d, %zu bytes; render %.1f ms, encode %.1f ms)\n", a->out.c_str(),
@@ -88,11 +89,11 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   manipulate->add_option("--pull", a->pull, "FX FY FZ N")->expected(3);
   manipulate->add_flag("--release", a->release);
   manipulate->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v1::ManipulateRequest request;
+    v2::ManipulateRequest request;
     request.set_session_id(a->session_id);
-    v1::ClientEvent* e = request.mutable_event();
+    v2::ClientEvent* e = request.mutable_event();
     e->set_sequence(1);
-    auto set = [](v1::Vec3* v, const std::vector<double>& x) {
+    auto set = [](v2::Vec3* v, const std::vector<double>& x) {
       v->set_x(x[0]);
       v->set_y(x[1]);
       v->set_z(x[2]);
@@ -101,7 +102,7 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
     else if (a->drag.size() == 3) set(e->mutable_drag()->mutable_offset_mm(), a->drag);
     else if (a->pull.size() == 3) set(e->mutable_pull()->mutable_force_n(), a->pull);
     else if (a->release) e->mutable_release();
-    v1::ManipulateResponse response;
+    v2::ManipulateResponse response;
     RETURN_IF_ERROR(FromGrpc(s.stub().Manipulate(s.Context().get(), request, &response)));
     std::printf("applied; max displacement %.2f mm\n", response.max_displacement_mm());
     return absl::OkStatus();
@@ -111,12 +112,12 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   camera->add_option("--session", a->session_id)->required();
   camera->add_option("POSE", a->camera, "AZ EL [DIST]")->expected(2, 3)->required();
   camera->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v1::SetCameraRequest request;
+    v2::SetCameraRequest request;
     request.set_session_id(a->session_id);
     request.mutable_camera()->set_azimuth_deg(a->camera[0]);
     request.mutable_camera()->set_elevation_deg(a->camera[1]);
     if (a->camera.size() == 3) request.mutable_camera()->set_distance_mm(a->camera[2]);
-    v1::SetCameraResponse response;
+    v2::SetCameraResponse response;
     return FromGrpc(s.stub().SetCamera(s.Context().get(), request, &response));
   }));
 
@@ -126,14 +127,14 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   watch->add_option("--out-dir", a->out_dir, "save the frames here");
   watch->add_option("--size", a->size, "W H")->expected(2);
   watch->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v1::WatchRequest request;
+    v2::WatchRequest request;
     request.set_session_id(a->session_id);
     request.mutable_settings()->set_width(a->size[0]);
     request.mutable_settings()->set_height(a->size[1]);
     auto context = s.Context(true);
     auto reader = s.stub().Watch(context.get(), request);
     if (!a->out_dir.empty()) RETURN_IF_ERROR(MakeDirectories(a->out_dir));
-    v1::Frame frame;
+    v2::Frame frame;
     int n = 0;
     while (n < a->frames && reader->Read(&frame)) {
       std::printf("frame %llu: seq %llu %s %zu bytes, render %.1f ms\n",

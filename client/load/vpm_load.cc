@@ -49,21 +49,21 @@ json Histogram(const std::vector<double>& v, int buckets = 10) {
 
 Result<json> RunLevel(const cli::ServerConnection& s, const json& script_json, int concurrency,
                       const LoadArgs& args) {
-  v1::LoadVolumeRequest load;
+  v2::LoadVolumeRequest load;
   load.set_source(script_json.value("volume", "phantom:abdomen?size=64"));
-  v1::VolumeInfo volume;
+  v2::VolumeInfo volume;
   RETURN_IF_ERROR(FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &volume)));
   ASSIGN_OR_RETURN(cli::Script script, cli::ParseScript(script_json, volume));
-  v1::BuildMeshRequest build;
+  v2::BuildMeshRequest build;
   build.set_volume_id(volume.volume_id());
-  v1::MeshInfo mesh;
+  v2::MeshInfo mesh;
   RETURN_IF_ERROR(FromGrpc(s.stub().BuildMesh(s.Context().get(), build, &mesh)));
   std::vector<std::string> sessions;
   std::map<std::string, int64_t> codes;
   for (int i = 0; i < (args.shared_session ? 1 : concurrency); ++i) {
-    v1::OpenSessionRequest open;
+    v2::OpenSessionRequest open;
     open.set_mesh_id(mesh.mesh_id());
-    v1::SessionInfo info;
+    v2::SessionInfo info;
     grpc::Status status = s.stub().OpenSession(s.Context().get(), open, &info);
     if (!status.ok()) {
       codes[absl::StatusCodeToString(FromGrpc(status).code())]++;
@@ -84,14 +84,14 @@ Result<json> RunLevel(const cli::ServerConnection& s, const json& script_json, i
   }
   for (auto& t : threads) t.join();
   for (const std::string& id : sessions) {
-    v1::CloseSessionRequest close;
+    v2::CloseSessionRequest close;
     close.set_session_id(id);
-    v1::CloseSessionResponse closed;
+    v2::CloseSessionResponse closed;
     (void)s.stub().CloseSession(s.Context().get(), close, &closed);
   }
-  v1::DeleteVolumeRequest del;
+  v2::DeleteVolumeRequest del;
   del.set_volume_id(volume.volume_id());
-  v1::DeleteVolumeResponse deleted;
+  v2::DeleteVolumeResponse deleted;
   (void)s.stub().DeleteVolume(s.Context().get(), del, &deleted);
 
   std::vector<double> latency, first, fps, jitter;

@@ -10,10 +10,10 @@ std::string Describe(const Status& status) {
   return StrCat(absl::StatusCodeToString(status.code()), ": ", status.message());
 }
 
-Result<DecodedImage> Decode(const v1::Frame& frame) {
+Result<DecodedImage> Decode(const v2::Frame& frame) {
   std::span<const uint8_t> bytes(reinterpret_cast<const uint8_t*>(frame.image().data()),
                                  frame.image().size());
-  if (frame.encoding() == "png") return DecodePng(bytes);
+  if (frame.encoding() == v2::ENCODING_PNG) return DecodePng(bytes);
   return DecodeJpeg(bytes);
 }
 
@@ -36,7 +36,7 @@ void InteractConnection::Stop() {
   if (thread_.joinable()) thread_.join();
 }
 
-void InteractConnection::Send(const v1::ClientEvent& event) {
+void InteractConnection::Send(const v2::ClientEvent& event) {
   {
     std::lock_guard lock(mutex_);
     if (event.has_settings()) settings_ = event.settings();
@@ -121,14 +121,14 @@ void InteractConnection::Run() {
 Status InteractConnection::ResolveSession() {
   std::string session_id = state().session_id;
   if (!session_id.empty()) {
-    v1::ListSessionsResponse sessions;
-    RETURN_IF_ERROR(Call(&v1::Vpm::Stub::ListSessions, v1::ListSessionsRequest(), &sessions));
-    for (const v1::SessionInfo& s : sessions.sessions()) {
+    v2::ListSessionsResponse sessions;
+    RETURN_IF_ERROR(Call(&v2::Vpm::Stub::ListSessions, v2::ListSessionsRequest(), &sessions));
+    for (const v2::SessionInfo& s : sessions.sessions()) {
       if (s.session_id() != session_id) continue;
-      v1::GetVolumeRequest get;
+      v2::GetVolumeRequest get;
       get.set_volume_id(s.volume_id());
-      v1::VolumeInfo volume;
-      RETURN_IF_ERROR(Call(&v1::Vpm::Stub::GetVolume, get, &volume));
+      v2::VolumeInfo volume;
+      RETURN_IF_ERROR(Call(&v2::Vpm::Stub::GetVolume, get, &volume));
       std::lock_guard lock(mutex_);
       state_.volume = volume;
       state_.mesh_id = s.mesh_id();
@@ -143,15 +143,15 @@ Status InteractConnection::ResolveSession() {
     return absl::InvalidArgumentError("give --session ID or --volume SRC");
   }
   SetState(false, StrCat("loading ", options_.volume_source, " ..."));
-  v1::LoadVolumeRequest load;
+  v2::LoadVolumeRequest load;
   load.set_source(options_.volume_source);
-  v1::VolumeInfo volume;
-  RETURN_IF_ERROR(Call(&v1::Vpm::Stub::LoadVolume, load, &volume));
+  v2::VolumeInfo volume;
+  RETURN_IF_ERROR(Call(&v2::Vpm::Stub::LoadVolume, load, &volume));
   SetState(false, "opening a session (building the proxy mesh) ...");
-  v1::OpenSessionRequest open;
+  v2::OpenSessionRequest open;
   open.set_volume_id(volume.volume_id());
-  v1::SessionInfo session;
-  RETURN_IF_ERROR(Call(&v1::Vpm::Stub::OpenSession, open, &session));
+  v2::SessionInfo session;
+  RETURN_IF_ERROR(Call(&v2::Vpm::Stub::OpenSession, open, &session));
   std::lock_guard lock(mutex_);
   state_.volume = volume;
   state_.session_id = session.session_id();
@@ -165,18 +165,18 @@ Status InteractConnection::Refine(const glm::dvec3& point_mm) {
   if (!before.volume || before.mesh_id.empty()) return ResolveSession();
   SetState(false, StrCat("refining the mesh at (", point_mm.x, ", ", point_mm.y, ", ",
                          point_mm.z, ") mm ..."));
-  v1::RefineMeshRequest refine;
+  v2::RefineMeshRequest refine;
   refine.set_mesh_id(before.mesh_id);
   refine.mutable_point_mm()->set_x(point_mm.x);
   refine.mutable_point_mm()->set_y(point_mm.y);
   refine.mutable_point_mm()->set_z(point_mm.z);
-  v1::MeshInfo mesh;
-  RETURN_IF_ERROR(Call(&v1::Vpm::Stub::RefineMesh, refine, &mesh));
-  v1::OpenSessionRequest open;
+  v2::MeshInfo mesh;
+  RETURN_IF_ERROR(Call(&v2::Vpm::Stub::RefineMesh, refine, &mesh));
+  v2::OpenSessionRequest open;
   open.set_volume_id(before.volume->volume_id());
   open.set_mesh_id(mesh.mesh_id());
-  v1::SessionInfo session;
-  RETURN_IF_ERROR(Call(&v1::Vpm::Stub::OpenSession, open, &session));
+  v2::SessionInfo session;
+  RETURN_IF_ERROR(Call(&v2::Vpm::Stub::OpenSession, open, &session));
   bool close_old;
   {
     std::lock_guard lock(mutex_);
@@ -187,10 +187,10 @@ Status InteractConnection::Refine(const glm::dvec3& point_mm) {
   }
   if (close_old) {
     // The old session was ours alone; a failure only leaves it to expire.
-    v1::CloseSessionRequest close;
+    v2::CloseSessionRequest close;
     close.set_session_id(before.session_id);
-    v1::CloseSessionResponse closed;
-    (void)Call(&v1::Vpm::Stub::CloseSession, close, &closed);
+    v2::CloseSessionResponse closed;
+    (void)Call(&v2::Vpm::Stub::CloseSession, close, &closed);
   }
   std::fprintf(stderr, "vpm-view: refined mesh %s, session %s\n", mesh.mesh_id().c_str(),
                session.session_id().c_str());
@@ -200,7 +200,7 @@ Status InteractConnection::Refine(const glm::dvec3& point_mm) {
 Status InteractConnection::StreamOnce() {
   auto context = server_->Context(/*streaming=*/true);
   auto stream = server_->stub().Interact(context.get());
-  v1::InteractRequest first;
+  v2::InteractRequest first;
   {
     std::lock_guard lock(mutex_);
     context_ = context.get();
@@ -219,7 +219,7 @@ Status InteractConnection::StreamOnce() {
     std::lock_guard lock(mutex_);
     latency_.Sent(sequence, SteadyClock::now());
     if (camera_) {  // the view this viewer had, restored on the new stream
-      v1::ClientEvent camera;
+      v2::ClientEvent camera;
       *camera.mutable_camera() = *camera_;
       events_.Push(camera);
     }
@@ -235,11 +235,11 @@ Status InteractConnection::StreamOnce() {
 }
 
 void InteractConnection::WriteEvents(
-    grpc::ClientReaderWriter<v1::InteractRequest, v1::Frame>* stream, uint64_t* sequence) {
+    grpc::ClientReaderWriter<v2::InteractRequest, v2::Frame>* stream, uint64_t* sequence) {
   while (!stopping_ && !stream_ended_) {
-    std::optional<v1::ClientEvent> event = events_.Pop(std::chrono::milliseconds(100));
+    std::optional<v2::ClientEvent> event = events_.Pop(std::chrono::milliseconds(100));
     if (!event) continue;
-    v1::InteractRequest request;
+    v2::InteractRequest request;
     *request.mutable_event() = *event;
     request.mutable_event()->set_sequence(++*sequence);
     {
@@ -254,8 +254,8 @@ void InteractConnection::WriteEvents(
 }
 
 void InteractConnection::ReadFrames(
-    grpc::ClientReaderWriter<v1::InteractRequest, v1::Frame>* stream) {
-  v1::Frame frame;
+    grpc::ClientReaderWriter<v2::InteractRequest, v2::Frame>* stream) {
+  v2::Frame frame;
   while (stream->Read(&frame)) {
     const SteadyClock::time_point now = SteadyClock::now();
     auto image = Decode(frame);

@@ -2,20 +2,20 @@
 
 namespace vpm::view {
 
-bool Coalesces(const v1::ClientEvent& a, const v1::ClientEvent& b) {
+bool Coalesces(const v2::ClientEvent& a, const v2::ClientEvent& b) {
   if (a.event_case() != b.event_case()) return false;
   switch (a.event_case()) {
-    case v1::ClientEvent::kCamera:
-    case v1::ClientEvent::kDrag:
-    case v1::ClientEvent::kSettings:
-    case v1::ClientEvent::kPull:
+    case v2::ClientEvent::kCamera:
+    case v2::ClientEvent::kDrag:
+    case v2::ClientEvent::kSettings:
+    case v2::ClientEvent::kPull:
       return !a.want_vertices() || b.want_vertices();
     default:
       return false;
   }
 }
 
-void OutboundEvents::Push(const v1::ClientEvent& event) {
+void OutboundEvents::Push(const v2::ClientEvent& event) {
   {
     std::lock_guard lock(mutex_);
     if (!events_.empty() && Coalesces(events_.back(), event)) {
@@ -27,11 +27,11 @@ void OutboundEvents::Push(const v1::ClientEvent& event) {
   changed_.notify_one();
 }
 
-std::optional<v1::ClientEvent> OutboundEvents::Pop(std::chrono::milliseconds timeout) {
+std::optional<v2::ClientEvent> OutboundEvents::Pop(std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
   changed_.wait_for(lock, timeout, [this] { return closed_ || !events_.empty(); });
   if (closed_ || events_.empty()) return std::nullopt;
-  v1::ClientEvent event = std::move(events_.front());
+  v2::ClientEvent event = std::move(events_.front());
   events_.pop_front();
   return event;
 }

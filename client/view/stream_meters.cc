@@ -1,8 +1,9 @@
 #include "client/view/stream_meters.h"
-#include "server/common/clock.h"
 
 #include <algorithm>
 #include <cmath>
+
+#include "server/common/clock.h"
 
 namespace vpm::view {
 

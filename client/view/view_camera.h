@@ -15,7 +15,7 @@
 #include "server/common/status.h"
 #include "server/raycast/camera.h"
 #include "server/volume/volume.h"
-#include "vpm/v1/vpm.pb.h"
+#include "vpm/v2/vpm.pb.h"
 
 namespace vpm::view {
 
@@ -26,7 +26,7 @@ inline constexpr double kZoomPerWheelClick = 1.1;
 
 // dims, spacing, origin and direction (9 values, column-major) of `info`.
 // InvalidArgument when a field is missing or not positive.
-Result<VolumeGeometry> GeometryFromProto(const v1::VolumeInfo& info);
+Result<VolumeGeometry> GeometryFromProto(const v2::VolumeInfo& info);
 
 class ViewCamera {
  public:
@@ -44,7 +44,7 @@ class ViewCamera {
   void Pan(double dx_px, double dy_px, int frame_width, int frame_height);
   void Reset();
 
-  v1::Camera ToProto() const;
+  v2::Camera ToProto() const;
   const Camera& camera() const { return camera_; }
 
   // mm covered by one frame pixel in the plane through the orbit centre

@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "client/view/status_text.h"
+#include "proto/enum_names.h"
 
 namespace vpm::view {
 namespace {
@@ -16,12 +17,12 @@ constexpr auto kResizeQuiet = std::chrono::milliseconds(200);  // debounce of wi
 }  // namespace
 
 ViewerApp::ViewerApp(ViewFlags flags) : flags_(std::move(flags)) {
-  settings_.set_mode(flags_.mode);
+  settings_.set_mode(RenderModeFromName(flags_.mode).value_or(v2::RENDER_MODE_DVR));
   settings_.set_preset(flags_.preset);
   settings_.set_width(flags_.width);
   settings_.set_height(flags_.height);
   settings_.set_overlay(flags_.overlay);
-  settings_.set_encoding("jpeg");
+  settings_.set_encoding(v2::ENCODING_JPEG);
   settings_.set_jpeg_quality(flags_.jpeg_quality);
 }
 
@@ -110,7 +111,7 @@ void ViewerApp::HandleEvent(const SDL_Event& e) {
 
 void ViewerApp::OnAction(Action action) {
   auto preset = [this](const char* name) {
-    settings_.set_mode("dvr");
+    settings_.set_mode(v2::RENDER_MODE_DVR);
     settings_.set_preset(name);
     SendSettings();
     Notice(StrCat("DVR ", name));
@@ -126,9 +127,10 @@ void ViewerApp::OnAction(Action action) {
     case Action::kPresetVessels: preset("ct-vessels"); break;
     case Action::kPresetMriT1: preset("mri-t1"); break;
     case Action::kMip:
-      settings_.set_mode(settings_.mode() == "mip" ? "dvr" : "mip");
+      settings_.set_mode(settings_.mode() == v2::RENDER_MODE_MIP ? v2::RENDER_MODE_DVR
+                                                                 : v2::RENDER_MODE_MIP);
       SendSettings();
-      Notice(settings_.mode() == "mip" ? "MIP" : "DVR");
+      Notice(settings_.mode() == v2::RENDER_MODE_MIP ? "MIP" : "DVR");
       break;
     case Action::kToggleOverlay:
       settings_.set_overlay(!settings_.overlay());
@@ -191,7 +193,7 @@ void ViewerApp::OnMotion(const SDL_MouseMotionEvent& m) {
   } else if (gesture_ == Gesture::kPull && grabbed_) {
     const glm::dvec3 offset = camera_->DragOffsetMm((m.x - pull_from_x_) * scale,
                                                     (m.y - pull_from_y_) * scale, fw, fh);
-    v1::ClientEvent event;
+    v2::ClientEvent event;
     event.mutable_drag()->mutable_offset_mm()->set_x(offset.x);
     event.mutable_drag()->mutable_offset_mm()->set_y(offset.y);
     event.mutable_drag()->mutable_offset_mm()->set_z(offset.z);
@@ -207,8 +209,8 @@ void ViewerApp::StartPull(int window_x, int window_y) {
     Notice("nothing to grab there: the point is outside the volume");
     return;
   }
-  v1::ClientEvent event;
-  v1::Grab* grab = event.mutable_grab();
+  v2::ClientEvent event;
+  v2::Grab* grab = event.mutable_grab();
   grab->set_pick(true);
   grab->set_pixel_x(px->x);
   grab->set_pixel_y(px->y);
@@ -220,7 +222,7 @@ void ViewerApp::StartPull(int window_x, int window_y) {
 }
 
 void ViewerApp::LetGo() {
-  v1::ClientEvent event;
+  v2::ClientEvent event;
   event.mutable_release();
   connection_->Send(event);
   grabbed_ = false;
@@ -301,13 +303,13 @@ void ViewerApp::Paint() {
 
 void ViewerApp::SendCamera() {
   if (!camera_) return;
-  v1::ClientEvent event;
+  v2::ClientEvent event;
   *event.mutable_camera() = camera_->ToProto();
   connection_->Send(event);
 }
 
 void ViewerApp::SendSettings() {
-  v1::ClientEvent event;
+  v2::ClientEvent event;
   *event.mutable_settings() = settings_;
   connection_->Send(event);
 }

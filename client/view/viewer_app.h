@@ -53,7 +53,7 @@ class ViewerApp {
 
   std::optional<ViewCamera> camera_;
   std::string volume_id_;
-  v1::RenderSettings settings_;
+  v2::RenderSettings settings_;
   uint64_t stream_generation_ = 0;
 
   enum class Gesture { kNone, kOrbit, kPan, kPull };
@@ -64,7 +64,7 @@ class ViewerApp {
   bool grabbed_ = false;  // the server holds a grab of ours
   bool show_help_ = false;
 
-  std::optional<v1::Frame> frame_info_;
+  std::optional<v2::Frame> frame_info_;
   double fps_ = 0;
   std::optional<double> latency_ms_;
   std::string notice_;

@@ -13,7 +13,6 @@
 namespace vpm {
 namespace {
 
-
 // Below this relative residual the state is in equilibrium to round-off.
 constexpr double kRoundOffResidual = 1e-13;
 

@@ -9,7 +9,6 @@
 namespace vpm {
 namespace {
 
-
 // The grid with the most vertices <= budget, and among those the one closest
 // to the box proportions.
 std::array<int64_t, 3> RegularGrid(const VolumeGeometry& g, int64_t budget) {

@@ -7,7 +7,7 @@
 // and the four children of a slot share one 64-byte cache line, so a sift
 // step costs one line instead of a line per compared item; with 4 children
 // the tree is half as deep as a binary one (decimation of 1,000,000
-// vertices: bench/mesh_build_bench, docs/MESH.md).
+// vertices: bench/mesh_build_bench.cc, docs/MESH.md).
 #pragma once
 
 #include <cstdint>

@@ -1,5 +1,4 @@
 #include "server/raycast/raycast_cpu.h"
-#include "server/common/clock.h"
 
 #include <algorithm>
 #include <atomic>
@@ -7,6 +6,8 @@
 #include <cmath>
 #include <cstring>
 #include <thread>
+
+#include "server/common/clock.h"
 
 namespace vpm {
 namespace {

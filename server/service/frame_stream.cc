@@ -40,11 +40,11 @@ void FrameStream::Attach() {
   RequestFrame();
 }
 
-void FrameStream::EnqueueEvent(const v1::ClientEvent& event) {
+void FrameStream::EnqueueEvent(const v2::ClientEvent& event) {
   std::lock_guard lock(mutex_);
   if (finish_) return;
   const auto kind = event.event_case();
-  const bool replaceable = kind == v1::ClientEvent::kCamera || kind == v1::ClientEvent::kDrag;
+  const bool replaceable = kind == v2::ClientEvent::kCamera || kind == v2::ClientEvent::kDrag;
   last_event_at_ = std::chrono::steady_clock::now();
   if (replaceable && !events_.empty() && events_.back().event_case() == kind) {
     const bool want_vertices = events_.back().want_vertices() || event.want_vertices();
@@ -72,7 +72,7 @@ void FrameStream::ReadNext() {
 
 void FrameStream::ApplyQueued() {
   while (true) {
-    v1::ClientEvent event;
+    v2::ClientEvent event;
     {
       std::lock_guard lock(mutex_);
       if (events_.empty() || finish_) {
@@ -150,7 +150,7 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
   std::lock_guard lock(mutex_);
   render_scheduled_ = false;
   if (!frame.ok()) return FinishLocked(ToGrpcStatus(frame.status()));
-  auto out = std::make_unique<v1::Frame>(*std::move(frame));
+  auto out = std::make_unique<v2::Frame>(*std::move(frame));
   out->mutable_timings()->set_queue_ms(queue_ms);
   out->mutable_timings()->set_total_ms(out->timings().total_ms() + queue_ms);
   if (options_.per_stream_sequence) out->set_last_sequence(sequence);
@@ -190,7 +190,7 @@ void FrameStream::StillCheck() {
   ScheduleLocked();
 }
 
-void FrameStream::DeliverLocked(std::unique_ptr<v1::Frame> frame) {
+void FrameStream::DeliverLocked(std::unique_ptr<v2::Frame> frame) {
   if (sink_ == nullptr || finish_) return;
   frame->set_frame_number(++frame_number_);
   if (write_in_flight_) {
@@ -204,7 +204,7 @@ void FrameStream::DeliverLocked(std::unique_ptr<v1::Frame> frame) {
   WriteLocked(std::move(frame));
 }
 
-void FrameStream::WriteLocked(std::unique_ptr<v1::Frame> frame) {
+void FrameStream::WriteLocked(std::unique_ptr<v2::Frame> frame) {
   frame->set_superseded_frames(superseded_);
   service_->metrics->FrameSent(frame->timings());
   current_ = std::move(frame);

@@ -5,8 +5,8 @@
 // the release of everything the stream held (a test counts that every
 // stream opened is closed).
 //
-// `Reactor` is grpc::ServerBidiReactor<In, v1::Frame> or
-// grpc::ServerWriteReactor<v1::Frame>.
+// `Reactor` is grpc::ServerBidiReactor<In, v2::Frame> or
+// grpc::ServerWriteReactor<v2::Frame>.
 #pragma once
 
 #include <memory>
@@ -18,7 +18,7 @@
 #include "server/service/frame_stream.h"
 #include "server/service/grpc_status.h"
 #include "server/service/service_context.h"
-#include "vpm/v1/vpm.pb.h"
+#include "vpm/v2/vpm.pb.h"
 
 namespace vpm::service {
 
@@ -44,7 +44,7 @@ class FrameStreamReactor : public Reactor, public FrameSink {
     service_->metrics->StreamClosed();
     delete this;
   }
-  void WriteFrame(const v1::Frame* frame) override { this->StartWrite(frame); }
+  void WriteFrame(const v2::Frame* frame) override { this->StartWrite(frame); }
   void FinishStream(const grpc::Status& status) override {
     {
       std::lock_guard lock(mutex_);

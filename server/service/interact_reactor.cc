@@ -37,7 +37,7 @@ void InteractReactor::OnReadDone(bool ok) {
   current->ReadNext();
 }
 
-void InteractReactor::Start(const v1::InteractRequest& first) {
+void InteractReactor::Start(const v2::InteractRequest& first) {
   if (first.session_id().empty()) {
     FinishStream(grpc::Status(grpc::INVALID_ARGUMENT,
                               "session_id: required on the first message of Interact"));
@@ -50,7 +50,7 @@ void InteractReactor::Start(const v1::InteractRequest& first) {
   }
   // Settings on the first event shape the first frame too.
   auto settings = ToStreamSettings(
-      first.event().has_settings() ? first.event().settings() : v1::RenderSettings(),
+      first.event().has_settings() ? first.event().settings() : v2::RenderSettings(),
       (*session)->volume().volume, service_->options.max_frame_side);
   if (!settings.ok()) {
     FinishStream(ToGrpcStatus(settings.status()));

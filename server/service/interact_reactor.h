@@ -15,7 +15,7 @@
 namespace vpm::service {
 
 class InteractReactor
-    : public FrameStreamReactor<grpc::ServerBidiReactor<v1::InteractRequest, v1::Frame>> {
+    : public FrameStreamReactor<grpc::ServerBidiReactor<v2::InteractRequest, v2::Frame>> {
  public:
   InteractReactor(ServiceContext* service, grpc::CallbackServerContext* context);
 
@@ -23,9 +23,9 @@ class InteractReactor
   void ReadNext() override { StartRead(&request_); }
 
  private:
-  void Start(const v1::InteractRequest& first);
+  void Start(const v2::InteractRequest& first);
 
-  v1::InteractRequest request_;
+  v2::InteractRequest request_;
 };
 
 }  // namespace vpm::service

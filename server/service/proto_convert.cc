@@ -5,7 +5,7 @@
 
 namespace vpm::service {
 
-void FillVolumeInfo(const VolumeEntry& entry, v1::VolumeInfo* info) {
+void FillVolumeInfo(const VolumeEntry& entry, v2::VolumeInfo* info) {
   const Volume& volume = entry.volume;
   const VolumeGeometry& g = volume.geometry();
   info->set_volume_id(entry.id);
@@ -22,7 +22,7 @@ void FillVolumeInfo(const VolumeEntry& entry, v1::VolumeInfo* info) {
   info->set_max_value(volume.max_value());
   info->clear_landmarks();
   for (const Landmark& l : volume.landmarks()) {
-    v1::Landmark* out = info->add_landmarks();
+    v2::Landmark* out = info->add_landmarks();
     out->set_name(l.name);
     *out->mutable_position_mm() = ToProto(l.position_mm);
     *out->mutable_world_lps_mm() = ToProto(g.PhysicalToWorld(l.position_mm));
@@ -32,11 +32,11 @@ void FillVolumeInfo(const VolumeEntry& entry, v1::VolumeInfo* info) {
   info->set_sessions(entry.sessions.load());
 }
 
-void FillMeshInfo(const MeshEntry& entry, v1::MeshInfo* info) {
+void FillMeshInfo(const MeshEntry& entry, v2::MeshInfo* info) {
   info->set_mesh_id(entry.id);
   info->set_volume_id(entry.volume->id);
   const ProxyMesh& mesh = entry.mesh;
-  v1::MeshStats* s = info->mutable_stats();
+  v2::MeshStats* s = info->mutable_stats();
   s->set_vertices(static_cast<int64_t>(mesh.vertices.size()));
   s->set_tets(static_cast<int64_t>(mesh.tets.size()));
   s->set_hard(mesh.stats.hard);
@@ -60,17 +60,30 @@ void FillMeshInfo(const MeshEntry& entry, v1::MeshInfo* info) {
   s->set_total_ms(mesh.stats.total_ms);
 }
 
-void FillMeshGeometry(const ProxyMesh& mesh, v1::GetMeshResponse* response) {
+namespace {
+
+v2::VertexKind KindToProto(VertexKind kind) {
+  switch (kind) {
+    case VertexKind::kLattice: return v2::VERTEX_KIND_LATTICE;
+    case VertexKind::kAnchor: return v2::VERTEX_KIND_ANCHOR;
+    case VertexKind::kRefined: return v2::VERTEX_KIND_REFINED;
+  }
+  return v2::VERTEX_KIND_UNSPECIFIED;
+}
+
+}  // namespace
+
+void FillMeshGeometry(const ProxyMesh& mesh, v2::GetMeshResponse* response) {
   for (const MeshVertex& v : mesh.vertices) {
-    v1::MeshVertex* out = response->add_vertices();
+    v2::MeshVertex* out = response->add_vertices();
     *out->mutable_position_mm() = ToProto(v.position_mm);
     out->set_lattice_id(v.lattice_id);
-    out->set_kind(VertexKindName(v.kind));
+    out->set_kind(KindToProto(v.kind));
     out->set_hard(v.hard);
     out->set_cost(v.cost);
   }
   for (const auto& t : mesh.tets) {
-    v1::Tet* out = response->add_tets();
+    v2::Tet* out = response->add_tets();
     out->set_a(t[0]);
     out->set_b(t[1]);
     out->set_c(t[2]);
@@ -78,7 +91,7 @@ void FillMeshGeometry(const ProxyMesh& mesh, v1::GetMeshResponse* response) {
   }
 }
 
-Result<MeshParams> ToMeshParams(const v1::MeshParams& in) {
+Result<MeshParams> ToMeshParams(const v2::MeshParams& in) {
   MeshParams p;
   if (in.grid_size() != 0) {
     if (in.grid_size() != 3) {
@@ -95,19 +108,21 @@ Result<MeshParams> ToMeshParams(const v1::MeshParams& in) {
   }
   if (in.target() < 0) return absl::InvalidArgumentError("params.target: negative");
   if (in.target() > 0) p.target = in.target();
-  if (!in.footprint().empty()) {
-    auto footprint = ParseFootprint(in.footprint());
-    if (!footprint.ok()) {
-      return absl::InvalidArgumentError(StrCat("params.footprint: ", footprint.status().message()));
-    }
-    p.footprint = *footprint;
+  switch (in.footprint()) {
+    case v2::FOOTPRINT_UNSPECIFIED: break;
+    case v2::FOOTPRINT_POINT: p.footprint = Footprint::kPoint; break;
+    case v2::FOOTPRINT_CELL: p.footprint = Footprint::kCell; break;
+    default:
+      return absl::InvalidArgumentError(
+          StrCat("params.footprint: ", in.footprint(), " is not a Footprint"));
   }
-  if (!in.density_mode().empty()) {
-    auto mode = ParseDensityMode(in.density_mode());
-    if (!mode.ok()) {
-      return absl::InvalidArgumentError(StrCat("params.density_mode: ", mode.status().message()));
-    }
-    p.density_mode = *mode;
+  switch (in.density_mode()) {
+    case v2::DENSITY_MODE_UNSPECIFIED: break;
+    case v2::DENSITY_MODE_SPREAD: p.density_mode = DensityMode::kSpread; break;
+    case v2::DENSITY_MODE_PAPER: p.density_mode = DensityMode::kPaper; break;
+    default:
+      return absl::InvalidArgumentError(
+          StrCat("params.density_mode: ", in.density_mode(), " is not a DensityMode"));
   }
   if (in.has_wg()) p.wg = in.wg();
   if (in.has_wd()) p.wd = in.wd();
@@ -121,7 +136,7 @@ Result<MeshParams> ToMeshParams(const v1::MeshParams& in) {
   if (in.has_bone_threshold()) p.classify.bone_threshold = in.bone_threshold();
   if (in.has_influence_threshold()) p.classify.influence_threshold = in.influence_threshold();
   if (in.has_influence_factor()) p.classify.influence_factor = in.influence_factor();
-  if (in.has_refine_at()) p.refine_at_mm = FromProto(in.refine_at_mm());
+  if (in.has_refine_at_mm()) p.refine_at_mm = FromProto(in.refine_at_mm());
   if (in.has_roi_factor()) p.roi_radius_factor = in.roi_factor();
   if (in.has_refine_count()) {
     if (in.refine_count() < 0) return absl::InvalidArgumentError("params.refine_count: negative");
@@ -130,15 +145,15 @@ Result<MeshParams> ToMeshParams(const v1::MeshParams& in) {
   return p;
 }
 
-Result<StreamSettings> ToStreamSettings(const v1::RenderSettings& in, const Volume& volume,
+Result<StreamSettings> ToStreamSettings(const v2::RenderSettings& in, const Volume& volume,
                                         int max_side) {
   StreamSettings out;
-  if (in.mode().empty() || in.mode() == "dvr") {
-    out.view.mode = RenderMode::kDvr;
-  } else if (in.mode() == "mip") {
-    out.view.mode = RenderMode::kMip;
-  } else {
-    return absl::InvalidArgumentError(StrCat("settings.mode: '", in.mode(), "' is not dvr or mip"));
+  switch (in.mode()) {
+    case v2::RENDER_MODE_UNSPECIFIED:
+    case v2::RENDER_MODE_DVR: out.view.mode = RenderMode::kDvr; break;
+    case v2::RENDER_MODE_MIP: out.view.mode = RenderMode::kMip; break;
+    default:
+      return absl::InvalidArgumentError(StrCat("settings.mode: ", in.mode(), " is not a RenderMode"));
   }
   auto preset = MakeRenderPreset(in.preset().empty() ? "ct-soft-tissue" : in.preset(), volume);
   if (!preset.ok()) {
@@ -155,13 +170,13 @@ Result<StreamSettings> ToStreamSettings(const v1::RenderSettings& in, const Volu
     *target = value == 0 ? std::min(512, max_side) : value;
   }
   out.view.overlay = in.overlay();
-  if (in.encoding().empty() || in.encoding() == "jpeg") {
-    out.png = false;
-  } else if (in.encoding() == "png") {
-    out.png = true;
-  } else {
-    return absl::InvalidArgumentError(
-        StrCat("settings.encoding: '", in.encoding(), "' is not jpeg or png"));
+  switch (in.encoding()) {
+    case v2::ENCODING_UNSPECIFIED:
+    case v2::ENCODING_JPEG: out.png = false; break;
+    case v2::ENCODING_PNG: out.png = true; break;
+    default:
+      return absl::InvalidArgumentError(
+          StrCat("settings.encoding: ", in.encoding(), " is not an Encoding"));
   }
   if (in.jpeg_quality() < 0 || in.jpeg_quality() > 100) {
     return absl::InvalidArgumentError(
@@ -171,7 +186,7 @@ Result<StreamSettings> ToStreamSettings(const v1::RenderSettings& in, const Volu
   return out;
 }
 
-Result<Camera> ToCamera(const v1::Camera& in, const VolumeGeometry& geometry) {
+Result<Camera> ToCamera(const v2::Camera& in, const VolumeGeometry& geometry) {
   Camera camera = Camera::ForVolume(geometry);
   Camera::Pose pose = camera.pose();
   pose.azimuth_deg = in.azimuth_deg();
@@ -187,8 +202,8 @@ Result<Camera> ToCamera(const v1::Camera& in, const VolumeGeometry& geometry) {
   return camera;
 }
 
-v1::Camera FromCamera(const Camera& camera) {
-  v1::Camera out;
+v2::Camera FromCamera(const Camera& camera) {
+  v2::Camera out;
   out.set_azimuth_deg(camera.pose().azimuth_deg);
   out.set_elevation_deg(camera.pose().elevation_deg);
   out.set_distance_mm(camera.pose().distance_mm);

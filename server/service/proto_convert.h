@@ -1,4 +1,4 @@
-// Translations between the wire types (vpm/v1/vpm.proto) and the compute
+// Translations between the wire types (vpm/v2/vpm.proto) and the compute
 // core's, with the checks that name the offending field.
 #pragma once
 
@@ -10,16 +10,16 @@
 #include "server/scene/deformable_scene.h"
 #include "server/service/mesh_store.h"
 #include "server/service/volume_store.h"
-#include "vpm/v1/vpm.pb.h"
+#include "vpm/v2/vpm.pb.h"
 
 namespace vpm::service {
 
-void FillVolumeInfo(const VolumeEntry& entry, v1::VolumeInfo* info);
-void FillMeshInfo(const MeshEntry& entry, v1::MeshInfo* info);
-void FillMeshGeometry(const ProxyMesh& mesh, v1::GetMeshResponse* response);
+void FillVolumeInfo(const VolumeEntry& entry, v2::VolumeInfo* info);
+void FillMeshInfo(const MeshEntry& entry, v2::MeshInfo* info);
+void FillMeshGeometry(const ProxyMesh& mesh, v2::GetMeshResponse* response);
 
 // Unset fields take the docs/ALGORITHM.md defaults. InvalidArgument names the field.
-Result<MeshParams> ToMeshParams(const v1::MeshParams& params);
+Result<MeshParams> ToMeshParams(const v2::MeshParams& params);
 
 // How one stream wants its frames: the scene view but for the camera, plus
 // the encoding.
@@ -30,11 +30,11 @@ struct StreamSettings {
 };
 // InvalidArgument names the field ("settings.width: ..."); max_side caps
 // width and height.
-Result<StreamSettings> ToStreamSettings(const v1::RenderSettings& settings, const Volume& volume,
+Result<StreamSettings> ToStreamSettings(const v2::RenderSettings& settings, const Volume& volume,
                                         int max_side);
 
 // The absolute pose of `camera` on `volume`'s default camera.
-Result<Camera> ToCamera(const v1::Camera& camera, const VolumeGeometry& geometry);
-v1::Camera FromCamera(const Camera& camera);
+Result<Camera> ToCamera(const v2::Camera& camera, const VolumeGeometry& geometry);
+v2::Camera FromCamera(const Camera& camera);
 
 }  // namespace vpm::service

@@ -52,7 +52,7 @@ void ServiceMetrics::Request(const std::string& method, const char* code) {
   if (std::string_view(code) != "OK") errors_->Add({{"method", method}, {"code", code}}).Increment();
 }
 
-void ServiceMetrics::FrameSent(const v1::StageTimings& t) {
+void ServiceMetrics::FrameSent(const v2::StageTimings& t) {
   frames_->Increment();
   for (auto [stage, ms] : {std::pair{"fem", t.fem_ms()}, std::pair{"warp", t.warp_ms()},
                            std::pair{"render", t.render_ms()}, std::pair{"encode", t.encode_ms()},

@@ -18,7 +18,7 @@
 #include <prometheus/registry.h>
 
 #include "server/common/status.h"
-#include "vpm/v1/vpm.pb.h"
+#include "vpm/v2/vpm.pb.h"
 
 namespace vpm::service {
 
@@ -30,7 +30,7 @@ class ServiceMetrics {
   static Result<std::unique_ptr<ServiceMetrics>> Create(const Options& options);
 
   void Request(const std::string& method, const char* code);
-  void FrameSent(const v1::StageTimings& timings);
+  void FrameSent(const v2::StageTimings& timings);
   void Superseded();
   void Sessions(int64_t open);
   void Volumes(int64_t bytes, int64_t count);

@@ -42,7 +42,7 @@ Result<std::shared_ptr<Session>> Session::Create(std::string id, const gpu::GpuC
   return session;
 }
 
-Result<glm::dvec3> Session::GrabPoint(const v1::Grab& grab, const SceneView* stream_view) const {
+Result<glm::dvec3> Session::GrabPoint(const v2::Grab& grab, const SceneView* stream_view) const {
   const Volume& volume = volume_->volume;
   if (!grab.pick()) {
     const glm::dvec3 p = FromProto(grab.point_mm());
@@ -57,7 +57,7 @@ Result<glm::dvec3> Session::GrabPoint(const v1::Grab& grab, const SceneView* str
                                         ") is outside the frame, ", view.width, "x", view.height));
   }
   // The pixel's ray through the volume as the frame showed it
-  // (render/pick_ray.h); a ray that shows nothing falls back to the plane
+  // (server/raycast/pick_ray.h); a ray that shows nothing falls back to the plane
   // through the orbit centre that faces the camera.
   const CameraRays rays = camera_.Rays(view.width, view.height);
   const glm::dvec3 dir = rays.Direction(grab.pixel_x(), grab.pixel_y());
@@ -72,7 +72,7 @@ Result<glm::dvec3> Session::GrabPoint(const v1::Grab& grab, const SceneView* str
   return p;
 }
 
-Result<AppliedEvent> Session::Apply(const v1::ClientEvent& event, const SceneView* view) {
+Result<AppliedEvent> Session::Apply(const v2::ClientEvent& event, const SceneView* view) {
   if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
   Touch();
   std::lock_guard scene_lock(scene_mutex_);
@@ -81,16 +81,16 @@ Result<AppliedEvent> Session::Apply(const v1::ClientEvent& event, const SceneVie
   return applied;
 }
 
-Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event, const SceneView* view) {
+Result<AppliedEvent> Session::ApplyLocked(const v2::ClientEvent& event, const SceneView* view) {
   AppliedEvent applied;
   switch (event.event_case()) {
-    case v1::ClientEvent::kCamera: {
+    case v2::ClientEvent::kCamera: {
       ASSIGN_OR_RETURN(Camera camera, ToCamera(event.camera(), volume_->volume.geometry()));
       std::lock_guard lock(state_mutex_);
       camera_ = camera;
       return applied;
     }
-    case v1::ClientEvent::kGrab: {
+    case v2::ClientEvent::kGrab: {
       ASSIGN_OR_RETURN(glm::dvec3 point, GrabPoint(event.grab(), view));
       if (event.grab().radius_mm() < 0) {
         return absl::InvalidArgumentError("grab.radius_mm: negative (0: one lattice step)");
@@ -105,8 +105,8 @@ Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event, const Sc
       applied.grab_point_mm = point;
       return applied;
     }
-    case v1::ClientEvent::kDrag:
-    case v1::ClientEvent::kPull: {
+    case v2::ClientEvent::kDrag:
+    case v2::ClientEvent::kPull: {
       {
         std::lock_guard lock(state_mutex_);
         if (!grabbed_) {
@@ -125,7 +125,7 @@ Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event, const Sc
       applied.deformed = true;
       return applied;
     }
-    case v1::ClientEvent::kRelease: {
+    case v2::ClientEvent::kRelease: {
       {
         std::lock_guard lock(state_mutex_);
         if (!grabbed_) return absl::FailedPreconditionError("release: no grab in effect");
@@ -137,14 +137,14 @@ Result<AppliedEvent> Session::ApplyLocked(const v1::ClientEvent& event, const Sc
       grab_point_.reset();
       return applied;
     }
-    case v1::ClientEvent::kSettings:
-    case v1::ClientEvent::EVENT_NOT_SET:
+    case v2::ClientEvent::kSettings:
+    case v2::ClientEvent::EVENT_NOT_SET:
       return applied;
   }
   return applied;
 }
 
-Status Session::SetCamera(const v1::Camera& camera) {
+Status Session::SetCamera(const v2::Camera& camera) {
   if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
   Touch();
   ASSIGN_OR_RETURN(Camera c, ToCamera(camera, volume_->volume.geometry()));
@@ -167,7 +167,7 @@ void Session::Changed(uint64_t sequence, bool deformed, const SceneStepTimings* 
   Notify(false);
 }
 
-Result<v1::Frame> Session::Render(const FrameRequest& request) {
+Result<v2::Frame> Session::Render(const FrameRequest& request) {
   if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
   const auto t0 = std::chrono::steady_clock::now();
   SceneView view = request.settings->view;
@@ -176,7 +176,7 @@ Result<v1::Frame> Session::Render(const FrameRequest& request) {
   uint64_t sequence = 0;
   const bool interactive = request.interactive;
   view.quality = interactive ? RenderQuality::kInteractive : RenderQuality::kStill;
-  v1::Frame out;
+  v2::Frame out;
   Frame frame;
   {
     // The state is read under the scene lock, so the frame shows exactly
@@ -203,13 +203,13 @@ Result<v1::Frame> Session::Render(const FrameRequest& request) {
                          : EncodeJpeg(frame.rgba, frame.width, frame.height,
                                       interactive ? std::min(s.jpeg_quality, 75) : s.jpeg_quality));
   out.set_image(bytes.data(), bytes.size());
-  out.set_encoding(s.png ? "png" : "jpeg");
+  out.set_encoding(s.png ? v2::ENCODING_PNG : v2::ENCODING_JPEG);
   out.set_width(frame.width);
   out.set_height(frame.height);
   out.set_interactive(interactive);
   out.set_last_sequence(sequence);
   out.set_max_displacement_mm(step.max_displacement_mm);
-  v1::StageTimings* timings = out.mutable_timings();
+  v2::StageTimings* timings = out.mutable_timings();
   timings->set_fem_ms(step.fem_ms);
   timings->set_warp_ms(map_update.warp_ms);
   timings->set_render_ms(render_ms);

@@ -17,7 +17,7 @@
 #include "server/service/mesh_store.h"
 #include "server/service/proto_convert.h"
 #include "server/service/volume_store.h"
-#include "vpm/v1/vpm.pb.h"
+#include "vpm/v2/vpm.pb.h"
 
 namespace vpm::service {
 
@@ -52,8 +52,8 @@ class Session {
   // `view`: the settings of the stream that sent the event, for a grab by
   // pixel (frame size, preset and mode of the frame the user clicked);
   // null (Manipulate) uses those of the last frame rendered.
-  Result<AppliedEvent> Apply(const v1::ClientEvent& event, const SceneView* view = nullptr);
-  Status SetCamera(const v1::Camera& camera);
+  Result<AppliedEvent> Apply(const v2::ClientEvent& event, const SceneView* view = nullptr);
+  Status SetCamera(const v2::Camera& camera);
 
   // One frame of the current state, encoded. `camera` overrides the
   // session's; `interactive` picks the cheap quality (streams use it while
@@ -64,7 +64,7 @@ class Session {
     bool interactive = false;
     bool want_vertices = false;
   };
-  Result<v1::Frame> Render(const FrameRequest& request);
+  Result<v2::Frame> Render(const FrameRequest& request);
 
   // True while the last change (camera, grab, drag, pull, release,
   // settings; from any client) is younger than still_delay_ms: frames are
@@ -89,8 +89,8 @@ class Session {
  private:
   Session(std::string id, std::shared_ptr<VolumeEntry> volume,
           std::shared_ptr<const MeshEntry> mesh, const Options& options);
-  Result<AppliedEvent> ApplyLocked(const v1::ClientEvent& event, const SceneView* view);
-  Result<glm::dvec3> GrabPoint(const v1::Grab& grab, const SceneView* view) const;
+  Result<AppliedEvent> ApplyLocked(const v2::ClientEvent& event, const SceneView* view);
+  Result<glm::dvec3> GrabPoint(const v2::Grab& grab, const SceneView* view) const;
   void Changed(uint64_t sequence, bool deformed, const SceneStepTimings* step);
   void Notify(bool closed);
 

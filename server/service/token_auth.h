@@ -1,4 +1,4 @@
-// Bearer-token check for every vpm.v1.Vpm call: `authorization: Bearer
+// Bearer-token check for every vpm.v2.Vpm call: `authorization: Bearer
 // TOKEN` metadata. Health checking and reflection are other services and
 // never reach it, so probes answer without a token.
 #pragma once

@@ -33,7 +33,7 @@ bool IsHex64(const std::string& s) {
 
 UploadVolumeReactor::UploadVolumeReactor(ServiceContext* service,
                                          grpc::CallbackServerContext* context,
-                                         v1::VolumeInfo* response)
+                                         v2::VolumeInfo* response)
     : service_(service), response_(response) {
   service_->metrics->StreamOpened();
   if (Status auth = service_->auth->Check(*context); !auth.ok()) {
@@ -43,7 +43,7 @@ UploadVolumeReactor::UploadVolumeReactor(ServiceContext* service,
   StartRead(&request_);
 }
 
-Status UploadVolumeReactor::TakeHeader(const v1::UploadVolumeRequest::Header& header) {
+Status UploadVolumeReactor::TakeHeader(const v2::UploadVolumeRequest::Header& header) {
   const std::string& name = header.file_name();
   if (name.empty() || name.find('/') != std::string::npos || name.find('\\') != std::string::npos ||
       name == "." || name == "..") {
@@ -121,7 +121,7 @@ void UploadVolumeReactor::OnReadDone(bool ok) {
   if (request_.has_header()) {
     status = have_header_ ? absl::InvalidArgumentError("header: sent twice")
                           : TakeHeader(request_.header());
-  } else if (request_.part_case() == v1::UploadVolumeRequest::kChunk) {
+  } else if (request_.part_case() == v2::UploadVolumeRequest::kChunk) {
     status = have_header_ ? TakeChunk(request_.chunk())
                           : absl::InvalidArgumentError("header: must come before any chunk");
   } else {

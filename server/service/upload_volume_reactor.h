@@ -16,31 +16,31 @@
 
 #include "server/service/service_context.h"
 #include "server/common/sha256.h"
-#include "vpm/v1/vpm.pb.h"
+#include "vpm/v2/vpm.pb.h"
 
 namespace vpm::service {
 
 inline constexpr int64_t kMinUploadChunkBytes = 64 << 10;
 inline constexpr int64_t kMaxUploadChunkBytes = 1 << 20;
 
-class UploadVolumeReactor : public grpc::ServerReadReactor<v1::UploadVolumeRequest> {
+class UploadVolumeReactor : public grpc::ServerReadReactor<v2::UploadVolumeRequest> {
  public:
   UploadVolumeReactor(ServiceContext* service, grpc::CallbackServerContext* context,
-                      v1::VolumeInfo* response);
+                      v2::VolumeInfo* response);
 
   void OnReadDone(bool ok) override;
   void OnCancel() override;
   void OnDone() override;
 
  private:
-  Status TakeHeader(const v1::UploadVolumeRequest::Header& header);
+  Status TakeHeader(const v2::UploadVolumeRequest::Header& header);
   Status TakeChunk(const std::string& chunk);
   void Complete();  // on the request pool
   void FinishOnce(const Status& status);
 
   ServiceContext* service_;
-  v1::VolumeInfo* response_;
-  v1::UploadVolumeRequest request_;
+  v2::VolumeInfo* response_;
+  v2::UploadVolumeRequest request_;
   bool have_header_ = false;
   std::string file_name_;
   int64_t total_bytes_ = 0;

@@ -31,7 +31,7 @@ void VpmService::Done(grpc::ServerUnaryReactor* reactor, const char* method,
   reactor->Finish(g);
 }
 
-void VpmService::FillSessionInfo(const Session& session, v1::SessionInfo* info) const {
+void VpmService::FillSessionInfo(const Session& session, v2::SessionInfo* info) const {
   info->set_session_id(session.id());
   info->set_volume_id(session.volume().id);
   info->set_mesh_id(session.mesh().id);
@@ -40,8 +40,8 @@ void VpmService::FillSessionInfo(const Session& session, v1::SessionInfo* info) 
 }
 
 grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* context,
-                                                 const v1::LoadVolumeRequest* request,
-                                                 v1::VolumeInfo* response) {
+                                                 const v2::LoadVolumeRequest* request,
+                                                 v2::VolumeInfo* response) {
   return Unary(context, "LoadVolume", service_->request_pool, [=, this]() -> Status {
     if (request->source().empty()) return absl::InvalidArgumentError("source: required");
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry, service_->volumes->Load(request->source()));
@@ -50,14 +50,14 @@ grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* co
   });
 }
 
-grpc::ServerReadReactor<v1::UploadVolumeRequest>* VpmService::UploadVolume(
-    grpc::CallbackServerContext* context, v1::VolumeInfo* response) {
+grpc::ServerReadReactor<v2::UploadVolumeRequest>* VpmService::UploadVolume(
+    grpc::CallbackServerContext* context, v2::VolumeInfo* response) {
   return new UploadVolumeReactor(service_, context, response);
 }
 
 grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* context,
-                                                const v1::GetVolumeRequest* request,
-                                                v1::VolumeInfo* response) {
+                                                const v2::GetVolumeRequest* request,
+                                                v2::VolumeInfo* response) {
   return Unary(context, "GetVolume", nullptr, [=, this]() -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
                      service_->volumes->Get(request->volume_id()));
@@ -67,8 +67,8 @@ grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* con
 }
 
 grpc::ServerUnaryReactor* VpmService::ListVolumes(grpc::CallbackServerContext* context,
-                                                  const v1::ListVolumesRequest*,
-                                                  v1::ListVolumesResponse* response) {
+                                                  const v2::ListVolumesRequest*,
+                                                  v2::ListVolumesResponse* response) {
   return Unary(context, "ListVolumes", nullptr, [=, this]() -> Status {
     for (const auto& entry : service_->volumes->List()) {
       FillVolumeInfo(*entry, response->add_volumes());
@@ -78,8 +78,8 @@ grpc::ServerUnaryReactor* VpmService::ListVolumes(grpc::CallbackServerContext* c
 }
 
 grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* context,
-                                                   const v1::DeleteVolumeRequest* request,
-                                                   v1::DeleteVolumeResponse*) {
+                                                   const v2::DeleteVolumeRequest* request,
+                                                   v2::DeleteVolumeResponse*) {
   return Unary(context, "DeleteVolume", nullptr, [=, this]() -> Status {
     RETURN_IF_ERROR(service_->volumes->Delete(request->volume_id()));
     service_->meshes->ForgetVolume(request->volume_id());
@@ -88,8 +88,8 @@ grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* 
 }
 
 grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* context,
-                                                const v1::BuildMeshRequest* request,
-                                                v1::MeshInfo* response) {
+                                                const v2::BuildMeshRequest* request,
+                                                v2::MeshInfo* response) {
   return Unary(context, "BuildMesh", service_->request_pool, [=, this]() -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
                      service_->volumes->Get(request->volume_id()));
@@ -102,8 +102,8 @@ grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* con
 }
 
 grpc::ServerUnaryReactor* VpmService::GetMesh(grpc::CallbackServerContext* context,
-                                              const v1::GetMeshRequest* request,
-                                              v1::GetMeshResponse* response) {
+                                              const v2::GetMeshRequest* request,
+                                              v2::GetMeshResponse* response) {
   return Unary(context, "GetMesh", nullptr, [=, this]() -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
                      service_->meshes->Get(request->mesh_id()));
@@ -114,8 +114,8 @@ grpc::ServerUnaryReactor* VpmService::GetMesh(grpc::CallbackServerContext* conte
 }
 
 grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* context,
-                                                 const v1::RefineMeshRequest* request,
-                                                 v1::MeshInfo* response) {
+                                                 const v2::RefineMeshRequest* request,
+                                                 v2::MeshInfo* response) {
   return Unary(context, "RefineMesh", service_->request_pool, [=, this]() -> Status {
     if (!request->has_point_mm()) return absl::InvalidArgumentError("point_mm: required");
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
@@ -126,8 +126,8 @@ grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* co
 }
 
 grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* context,
-                                                  const v1::OpenSessionRequest* request,
-                                                  v1::SessionInfo* response) {
+                                                  const v2::OpenSessionRequest* request,
+                                                  v2::SessionInfo* response) {
   return Unary(context, "OpenSession", service_->request_pool, [=, this]() -> Status {
     std::shared_ptr<const MeshEntry> mesh;
     if (!request->mesh_id().empty()) {
@@ -153,15 +153,15 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
 }
 
 grpc::ServerUnaryReactor* VpmService::CloseSession(grpc::CallbackServerContext* context,
-                                                   const v1::CloseSessionRequest* request,
-                                                   v1::CloseSessionResponse*) {
+                                                   const v2::CloseSessionRequest* request,
+                                                   v2::CloseSessionResponse*) {
   return Unary(context, "CloseSession", nullptr,
                [=, this] { return service_->sessions->Close(request->session_id()); });
 }
 
 grpc::ServerUnaryReactor* VpmService::ListSessions(grpc::CallbackServerContext* context,
-                                                   const v1::ListSessionsRequest*,
-                                                   v1::ListSessionsResponse* response) {
+                                                   const v2::ListSessionsRequest*,
+                                                   v2::ListSessionsResponse* response) {
   return Unary(context, "ListSessions", nullptr, [=, this]() -> Status {
     for (const auto& session : service_->sessions->List()) {
       FillSessionInfo(*session, response->add_sessions());
@@ -170,24 +170,24 @@ grpc::ServerUnaryReactor* VpmService::ListSessions(grpc::CallbackServerContext* 
   });
 }
 
-grpc::ServerBidiReactor<v1::InteractRequest, v1::Frame>* VpmService::Interact(
+grpc::ServerBidiReactor<v2::InteractRequest, v2::Frame>* VpmService::Interact(
     grpc::CallbackServerContext* context) {
   return new InteractReactor(service_, context);
 }
 
-grpc::ServerWriteReactor<v1::Frame>* VpmService::Watch(grpc::CallbackServerContext* context,
-                                                       const v1::WatchRequest* request) {
+grpc::ServerWriteReactor<v2::Frame>* VpmService::Watch(grpc::CallbackServerContext* context,
+                                                       const v2::WatchRequest* request) {
   return new WatchReactor(service_, context, *request);
 }
 
 grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* context,
-                                                 const v1::ManipulateRequest* request,
-                                                 v1::ManipulateResponse* response) {
+                                                 const v2::ManipulateRequest* request,
+                                                 v2::ManipulateResponse* response) {
   return Unary(context, "Manipulate", service_->render_pool, [=, this]() -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id()));
-    const v1::ClientEvent& event = request->event();
-    if (event.event_case() == v1::ClientEvent::EVENT_NOT_SET) {
+    const v2::ClientEvent& event = request->event();
+    if (event.event_case() == v2::ClientEvent::EVENT_NOT_SET) {
       return absl::InvalidArgumentError("event: required (camera, grab, drag, pull or release)");
     }
     if (event.has_settings()) {
@@ -203,8 +203,8 @@ grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* co
 }
 
 grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* context,
-                                                const v1::SetCameraRequest* request,
-                                                v1::SetCameraResponse*) {
+                                                const v2::SetCameraRequest* request,
+                                                v2::SetCameraResponse*) {
   return Unary(context, "SetCamera", nullptr, [=, this]() -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id()));
@@ -213,8 +213,8 @@ grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* con
 }
 
 grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* context,
-                                             const v1::RenderRequest* request,
-                                             v1::Frame* response) {
+                                             const v2::RenderRequest* request,
+                                             v2::Frame* response) {
   return Unary(context, "Render", service_->render_pool, [=, this]() -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id()));

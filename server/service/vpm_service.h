@@ -1,4 +1,4 @@
-// vpm.v1.Vpm on gRPC's callback API. Unary calls check the token, then run
+// vpm.v2.Vpm on gRPC's callback API. Unary calls check the token, then run
 // cheap lookups inline and anything heavy (reads, mesh builds, FEM, frames)
 // on a worker pool, finishing the call from there; streaming calls are
 // reactors in their own files. Every call is counted by method and code.
@@ -7,50 +7,50 @@
 #include <grpcpp/grpcpp.h>
 
 #include "server/service/service_context.h"
-#include "vpm/v1/vpm.grpc.pb.h"
+#include "vpm/v2/vpm.grpc.pb.h"
 
 namespace vpm::service {
 
-class VpmService final : public v1::Vpm::CallbackService {
+class VpmService final : public v2::Vpm::CallbackService {
  public:
   explicit VpmService(ServiceContext* service) : service_(service) {}
 
-  grpc::ServerUnaryReactor* LoadVolume(grpc::CallbackServerContext*, const v1::LoadVolumeRequest*,
-                                       v1::VolumeInfo*) override;
-  grpc::ServerReadReactor<v1::UploadVolumeRequest>* UploadVolume(grpc::CallbackServerContext*,
-                                                                 v1::VolumeInfo*) override;
-  grpc::ServerUnaryReactor* GetVolume(grpc::CallbackServerContext*, const v1::GetVolumeRequest*,
-                                      v1::VolumeInfo*) override;
+  grpc::ServerUnaryReactor* LoadVolume(grpc::CallbackServerContext*, const v2::LoadVolumeRequest*,
+                                       v2::VolumeInfo*) override;
+  grpc::ServerReadReactor<v2::UploadVolumeRequest>* UploadVolume(grpc::CallbackServerContext*,
+                                                                 v2::VolumeInfo*) override;
+  grpc::ServerUnaryReactor* GetVolume(grpc::CallbackServerContext*, const v2::GetVolumeRequest*,
+                                      v2::VolumeInfo*) override;
   grpc::ServerUnaryReactor* ListVolumes(grpc::CallbackServerContext*,
-                                        const v1::ListVolumesRequest*,
-                                        v1::ListVolumesResponse*) override;
+                                        const v2::ListVolumesRequest*,
+                                        v2::ListVolumesResponse*) override;
   grpc::ServerUnaryReactor* DeleteVolume(grpc::CallbackServerContext*,
-                                         const v1::DeleteVolumeRequest*,
-                                         v1::DeleteVolumeResponse*) override;
-  grpc::ServerUnaryReactor* BuildMesh(grpc::CallbackServerContext*, const v1::BuildMeshRequest*,
-                                      v1::MeshInfo*) override;
-  grpc::ServerUnaryReactor* GetMesh(grpc::CallbackServerContext*, const v1::GetMeshRequest*,
-                                    v1::GetMeshResponse*) override;
-  grpc::ServerUnaryReactor* RefineMesh(grpc::CallbackServerContext*, const v1::RefineMeshRequest*,
-                                       v1::MeshInfo*) override;
+                                         const v2::DeleteVolumeRequest*,
+                                         v2::DeleteVolumeResponse*) override;
+  grpc::ServerUnaryReactor* BuildMesh(grpc::CallbackServerContext*, const v2::BuildMeshRequest*,
+                                      v2::MeshInfo*) override;
+  grpc::ServerUnaryReactor* GetMesh(grpc::CallbackServerContext*, const v2::GetMeshRequest*,
+                                    v2::GetMeshResponse*) override;
+  grpc::ServerUnaryReactor* RefineMesh(grpc::CallbackServerContext*, const v2::RefineMeshRequest*,
+                                       v2::MeshInfo*) override;
   grpc::ServerUnaryReactor* OpenSession(grpc::CallbackServerContext*,
-                                        const v1::OpenSessionRequest*, v1::SessionInfo*) override;
+                                        const v2::OpenSessionRequest*, v2::SessionInfo*) override;
   grpc::ServerUnaryReactor* CloseSession(grpc::CallbackServerContext*,
-                                         const v1::CloseSessionRequest*,
-                                         v1::CloseSessionResponse*) override;
+                                         const v2::CloseSessionRequest*,
+                                         v2::CloseSessionResponse*) override;
   grpc::ServerUnaryReactor* ListSessions(grpc::CallbackServerContext*,
-                                         const v1::ListSessionsRequest*,
-                                         v1::ListSessionsResponse*) override;
-  grpc::ServerBidiReactor<v1::InteractRequest, v1::Frame>* Interact(
+                                         const v2::ListSessionsRequest*,
+                                         v2::ListSessionsResponse*) override;
+  grpc::ServerBidiReactor<v2::InteractRequest, v2::Frame>* Interact(
       grpc::CallbackServerContext*) override;
-  grpc::ServerWriteReactor<v1::Frame>* Watch(grpc::CallbackServerContext*,
-                                             const v1::WatchRequest*) override;
-  grpc::ServerUnaryReactor* Manipulate(grpc::CallbackServerContext*, const v1::ManipulateRequest*,
-                                       v1::ManipulateResponse*) override;
-  grpc::ServerUnaryReactor* SetCamera(grpc::CallbackServerContext*, const v1::SetCameraRequest*,
-                                      v1::SetCameraResponse*) override;
-  grpc::ServerUnaryReactor* Render(grpc::CallbackServerContext*, const v1::RenderRequest*,
-                                   v1::Frame*) override;
+  grpc::ServerWriteReactor<v2::Frame>* Watch(grpc::CallbackServerContext*,
+                                             const v2::WatchRequest*) override;
+  grpc::ServerUnaryReactor* Manipulate(grpc::CallbackServerContext*, const v2::ManipulateRequest*,
+                                       v2::ManipulateResponse*) override;
+  grpc::ServerUnaryReactor* SetCamera(grpc::CallbackServerContext*, const v2::SetCameraRequest*,
+                                      v2::SetCameraResponse*) override;
+  grpc::ServerUnaryReactor* Render(grpc::CallbackServerContext*, const v2::RenderRequest*,
+                                   v2::Frame*) override;
 
  private:
   // Checks the token, then runs `fn` inline (pool == nullptr) or on `pool`,
@@ -58,7 +58,7 @@ class VpmService final : public v1::Vpm::CallbackService {
   grpc::ServerUnaryReactor* Unary(grpc::CallbackServerContext* context, const char* method,
                                   WorkerPool* pool, std::function<Status()> fn);
   void Done(grpc::ServerUnaryReactor* reactor, const char* method, const Status& status);
-  void FillSessionInfo(const Session& session, v1::SessionInfo* info) const;
+  void FillSessionInfo(const Session& session, v2::SessionInfo* info) const;
 
   ServiceContext* service_;
 };

@@ -5,7 +5,7 @@
 namespace vpm::service {
 
 WatchReactor::WatchReactor(ServiceContext* service, grpc::CallbackServerContext* context,
-                           const v1::WatchRequest& request)
+                           const v2::WatchRequest& request)
     : FrameStreamReactor(service, context, "Watch") {
   auto start = [&]() -> Result<std::shared_ptr<FrameStream>> {
     RETURN_IF_ERROR(Admit(*context));

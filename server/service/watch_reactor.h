@@ -12,10 +12,10 @@
 
 namespace vpm::service {
 
-class WatchReactor : public FrameStreamReactor<grpc::ServerWriteReactor<v1::Frame>> {
+class WatchReactor : public FrameStreamReactor<grpc::ServerWriteReactor<v2::Frame>> {
  public:
   WatchReactor(ServiceContext* service, grpc::CallbackServerContext* context,
-               const v1::WatchRequest& request);
+               const v2::WatchRequest& request);
 };
 
 }  // namespace vpm::service

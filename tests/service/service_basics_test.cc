@@ -8,6 +8,7 @@
 #include "server/common/sha256.h"
 #include "server/io/read_volume.h"
 #include "server/io/write_nifti.h"
+#include "server/service/proto_convert.h"
 #include "tests/service/service_test_util.h"
 
 namespace vpm::service::testing {
@@ -35,8 +36,8 @@ grpc::Status GenericUnary(grpc::Channel* channel, const std::string& method,
 }
 
 TEST_F(ServiceTest, Auth_RejectsMissingAndWrongToken) {
-  v1::ListVolumesRequest request;
-  v1::ListVolumesResponse response;
+  v2::ListVolumesRequest request;
+  v2::ListVolumesResponse response;
   auto none = Context("");
   EXPECT_EQ(stub_->ListVolumes(none.get(), request, &response).error_code(),
             grpc::UNAUTHENTICATED);
@@ -89,7 +90,7 @@ TEST_F(ServiceTest, Reflection_ListsTheServiceWithoutToken) {
   ASSERT_TRUE(response.Dump(&slices).ok());
   std::string bytes;
   for (const auto& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
-  EXPECT_NE(bytes.find("vpm.v1.Vpm"), std::string::npos);
+  EXPECT_NE(bytes.find("vpm.v2.Vpm"), std::string::npos);
   context.TryCancel();
   grpc::Status status;
   call->Finish(&status, reinterpret_cast<void*>(4));
@@ -100,28 +101,28 @@ TEST_F(ServiceTest, Reflection_ListsTheServiceWithoutToken) {
 }
 
 TEST_F(ServiceTest, Volumes_LoadGetListDelete) {
-  v1::VolumeInfo info = LoadPhantom();
+  v2::VolumeInfo info = LoadPhantom();
   ASSERT_EQ(info.dims_size(), 3);
   EXPECT_EQ(info.dims(0), 48);
   EXPECT_GT(info.landmarks_size(), 0);
   EXPECT_LT(info.min_value(), info.max_value());
   EXPECT_EQ(info.direction_size(), 9);
 
-  v1::GetVolumeRequest get;
+  v2::GetVolumeRequest get;
   get.set_volume_id(info.volume_id());
-  v1::VolumeInfo got;
+  v2::VolumeInfo got;
   auto c1 = Context();
   ASSERT_TRUE(stub_->GetVolume(c1.get(), get, &got).ok());
   EXPECT_EQ(got.source(), kPhantom);
 
-  v1::ListVolumesResponse list;
+  v2::ListVolumesResponse list;
   auto c2 = Context();
   ASSERT_TRUE(stub_->ListVolumes(c2.get(), {}, &list).ok());
   EXPECT_EQ(list.volumes_size(), 1);
 
-  v1::DeleteVolumeRequest del;
+  v2::DeleteVolumeRequest del;
   del.set_volume_id(info.volume_id());
-  v1::DeleteVolumeResponse deleted;
+  v2::DeleteVolumeResponse deleted;
   auto c3 = Context();
   ASSERT_TRUE(stub_->DeleteVolume(c3.get(), del, &deleted).ok());
   auto c4 = Context();
@@ -131,14 +132,14 @@ TEST_F(ServiceTest, Volumes_LoadGetListDelete) {
 }
 
 TEST_F(ServiceTest, Volumes_LoadedOnceAndShared) {
-  const v1::VolumeInfo first = LoadPhantom();
-  const v1::VolumeInfo again = LoadPhantom();
+  const v2::VolumeInfo first = LoadPhantom();
+  const v2::VolumeInfo again = LoadPhantom();
   EXPECT_EQ(again.volume_id(), first.volume_id());
-  const v1::VolumeInfo other = LoadPhantom(std::string(kPhantom) + "&seed=2");
+  const v2::VolumeInfo other = LoadPhantom(std::string(kPhantom) + "&seed=2");
   EXPECT_NE(other.volume_id(), first.volume_id());
-  v1::ListVolumesResponse list;
+  v2::ListVolumesResponse list;
   auto context = Context();
-  ASSERT_TRUE(stub_->ListVolumes(context.get(), v1::ListVolumesRequest(), &list).ok());
+  ASSERT_TRUE(stub_->ListVolumes(context.get(), v2::ListVolumesRequest(), &list).ok());
   EXPECT_EQ(list.volumes_size(), 2);
 }
 
@@ -147,9 +148,9 @@ TEST_F(ServiceTest, Volumes_CapIsResourceExhausted) {
   for (int i = 0; i < 4; ++i) {
     LoadPhantom(std::string(kPhantom) + "&seed=" + std::to_string(i + 1));
   }
-  v1::LoadVolumeRequest request;
+  v2::LoadVolumeRequest request;
   request.set_source(std::string(kPhantom) + "&seed=99");
-  v1::VolumeInfo info;
+  v2::VolumeInfo info;
   auto context = Context();
   EXPECT_EQ(stub_->LoadVolume(context.get(), request, &info).error_code(),
             grpc::RESOURCE_EXHAUSTED);
@@ -157,9 +158,9 @@ TEST_F(ServiceTest, Volumes_CapIsResourceExhausted) {
 
 TEST_F(ServiceTest, Volumes_BadSourceIsInvalidArgument) {
   for (const char* source : {"", "phantom:nosuchthing", "raw:/etc/passwd?dims=1,1,1&type=uint8"}) {
-    v1::LoadVolumeRequest request;
+    v2::LoadVolumeRequest request;
     request.set_source(source);
-    v1::VolumeInfo info;
+    v2::VolumeInfo info;
     auto context = Context();
     EXPECT_EQ(stub_->LoadVolume(context.get(), request, &info).error_code(),
               grpc::INVALID_ARGUMENT)
@@ -192,9 +193,9 @@ class DataRootTest : public ServiceTest {
     fs::remove_all(outside_);
   }
   grpc::StatusCode Load(const std::string& source) {
-    v1::LoadVolumeRequest request;
+    v2::LoadVolumeRequest request;
     request.set_source(source);
-    v1::VolumeInfo info;
+    v2::VolumeInfo info;
     auto context = Context();
     return stub_->LoadVolume(context.get(), request, &info).error_code();
   }
@@ -205,9 +206,9 @@ TEST_F(DataRootTest, LoadVolume_ReadsInsideTheRoot) {
   EXPECT_EQ(Load("cases/small.nii.gz"), grpc::OK);
   // Another spelling of the same file is the same volume.
   EXPECT_EQ(Load("cases/./small.nii.gz"), grpc::OK);
-  v1::ListVolumesResponse list;
+  v2::ListVolumesResponse list;
   auto context = Context();
-  ASSERT_TRUE(stub_->ListVolumes(context.get(), v1::ListVolumesRequest(), &list).ok());
+  ASSERT_TRUE(stub_->ListVolumes(context.get(), v2::ListVolumesRequest(), &list).ok());
   EXPECT_EQ(list.volumes_size(), 1);
 }
 
@@ -232,18 +233,18 @@ class UploadTest : public ServiceTest {
   }
   // Sends the header then `bytes` in chunks of `chunk` bytes.
   grpc::Status Upload(const std::vector<uint8_t>& bytes, int64_t declared, const std::string& sha,
-                      size_t chunk, v1::VolumeInfo* info, bool header = true) {
+                      size_t chunk, v2::VolumeInfo* info, bool header = true) {
     auto context = Context();
     auto writer = stub_->UploadVolume(context.get(), info);
     if (header) {
-      v1::UploadVolumeRequest h;
+      v2::UploadVolumeRequest h;
       h.mutable_header()->set_file_name("case.nii");
       h.mutable_header()->set_total_bytes(declared);
       h.mutable_header()->set_sha256_hex(sha);
       if (!writer->Write(h)) return writer->Finish();
     }
     for (size_t at = 0; at < bytes.size(); at += chunk) {
-      v1::UploadVolumeRequest c;
+      v2::UploadVolumeRequest c;
       c.set_chunk(bytes.data() + at, std::min(chunk, bytes.size() - at));
       if (!writer->Write(c)) break;
     }
@@ -254,7 +255,7 @@ class UploadTest : public ServiceTest {
 
 TEST_F(UploadTest, UploadVolume_AcceptsChunkedFileWithChecksum) {
   const std::vector<uint8_t> bytes = NiftiBytes();
-  v1::VolumeInfo info;
+  v2::VolumeInfo info;
   grpc::Status status = Upload(bytes, int64_t(bytes.size()), Sha256::HexOf(bytes), 64 << 10, &info);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(info.dims(0), 40);
@@ -264,7 +265,7 @@ TEST_F(UploadTest, UploadVolume_AcceptsChunkedFileWithChecksum) {
 TEST_F(UploadTest, UploadVolume_RejectsChecksumMismatch) {
   const std::vector<uint8_t> bytes = NiftiBytes();
   std::string wrong(64, 'a');
-  v1::VolumeInfo info;
+  v2::VolumeInfo info;
   grpc::Status status = Upload(bytes, int64_t(bytes.size()), wrong, 64 << 10, &info);
   EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("sha256"), std::string::npos) << status.error_message();
@@ -275,7 +276,7 @@ TEST_F(UploadTest, UploadVolume_RejectsTruncatedStream) {
   const std::string sha = Sha256::HexOf(bytes);
   const int64_t declared = int64_t(bytes.size());
   bytes.resize(bytes.size() / 2 / (64 << 10) * (64 << 10));
-  v1::VolumeInfo info;
+  v2::VolumeInfo info;
   grpc::Status status = Upload(bytes, declared, sha, 64 << 10, &info);
   EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("truncated"), std::string::npos) << status.error_message();
@@ -284,7 +285,7 @@ TEST_F(UploadTest, UploadVolume_RejectsTruncatedStream) {
 TEST_F(UploadTest, UploadVolume_RejectsBadChunksAndMissingHeader) {
   const std::vector<uint8_t> bytes = NiftiBytes();
   const std::string sha = Sha256::HexOf(bytes);
-  v1::VolumeInfo info;
+  v2::VolumeInfo info;
   EXPECT_EQ(Upload(bytes, int64_t(bytes.size()), sha, 1000, &info).error_code(),
             grpc::INVALID_ARGUMENT);  // under 64 KiB and not the last
   const std::vector<uint8_t> big(3 << 20, 0);
@@ -297,33 +298,33 @@ TEST_F(UploadTest, UploadVolume_RejectsBadChunksAndMissingHeader) {
 }
 
 TEST_F(ServiceTest, Meshes_BuildGetRefine) {
-  v1::VolumeInfo volume = LoadPhantom();
-  v1::BuildMeshRequest build;
+  v2::VolumeInfo volume = LoadPhantom();
+  v2::BuildMeshRequest build;
   build.set_volume_id(volume.volume_id());
   build.mutable_params()->add_grid(10);
   build.mutable_params()->add_grid(10);
   build.mutable_params()->add_grid(10);
   build.mutable_params()->set_target(80);
-  v1::MeshInfo mesh;
+  v2::MeshInfo mesh;
   auto c1 = Context();
   grpc::Status status = stub_->BuildMesh(c1.get(), build, &mesh);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(mesh.stats().vertices(), 80);
   EXPECT_GT(mesh.stats().tets(), 0);
 
-  v1::GetMeshRequest get;
+  v2::GetMeshRequest get;
   get.set_mesh_id(mesh.mesh_id());
   get.set_include_geometry(true);
-  v1::GetMeshResponse got;
+  v2::GetMeshResponse got;
   auto c2 = Context();
   ASSERT_TRUE(stub_->GetMesh(c2.get(), get, &got).ok());
   EXPECT_EQ(got.vertices_size(), 80);
   EXPECT_EQ(got.tets_size(), mesh.stats().tets());
 
-  v1::RefineMeshRequest refine;
+  v2::RefineMeshRequest refine;
   refine.set_mesh_id(mesh.mesh_id());
   *refine.mutable_point_mm() = Centre(volume);
-  v1::MeshInfo refined;
+  v2::MeshInfo refined;
   auto c3 = Context();
   status = stub_->RefineMesh(c3.get(), refine, &refined);
   ASSERT_TRUE(status.ok()) << status.error_message();
@@ -339,22 +340,52 @@ TEST_F(ServiceTest, Meshes_BuildGetRefine) {
 }
 
 TEST_F(ServiceTest, Meshes_BadParamsAreInvalidArgument) {
-  v1::VolumeInfo volume = LoadPhantom();
-  v1::BuildMeshRequest build;
+  v2::VolumeInfo volume = LoadPhantom();
+  v2::BuildMeshRequest build;
   build.set_volume_id(volume.volume_id());
   build.mutable_params()->add_grid(10);
-  v1::MeshInfo mesh;
+  v2::MeshInfo mesh;
   auto c1 = Context();
   grpc::Status status = stub_->BuildMesh(c1.get(), build, &mesh);
   EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("params.grid"), std::string::npos);
   build.mutable_params()->clear_grid();
-  build.mutable_params()->set_footprint("blob");
+  // An enum value this server does not know (a newer client's) is refused.
+  build.mutable_params()->set_footprint(static_cast<v2::Footprint>(7));
   auto c2 = Context();
-  EXPECT_EQ(stub_->BuildMesh(c2.get(), build, &mesh).error_code(), grpc::INVALID_ARGUMENT);
+  status = stub_->BuildMesh(c2.get(), build, &mesh);
+  EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("params.footprint"), std::string::npos);
+  build.mutable_params()->set_footprint(v2::FOOTPRINT_UNSPECIFIED);
   build.set_volume_id("vol-404");
   auto c3 = Context();
   EXPECT_EQ(stub_->BuildMesh(c3.get(), build, &mesh).error_code(), grpc::NOT_FOUND);
+}
+
+TEST(ProtoConvert, RenderSettingsEnumsMapAndUnknownValuesAreRefused) {
+  auto read = ReadVolume("phantom:abdomen?size=16", VolumeLimits{});
+  ASSERT_TRUE(read.ok()) << read.status();
+  const Volume& volume = *read;
+  v2::RenderSettings settings;
+  auto defaults = ToStreamSettings(settings, volume, 1024);
+  ASSERT_TRUE(defaults.ok()) << defaults.status();
+  EXPECT_EQ(defaults->view.mode, RenderMode::kDvr);
+  EXPECT_FALSE(defaults->png);
+  settings.set_mode(v2::RENDER_MODE_MIP);
+  settings.set_encoding(v2::ENCODING_PNG);
+  auto chosen = ToStreamSettings(settings, volume, 1024);
+  ASSERT_TRUE(chosen.ok()) << chosen.status();
+  EXPECT_EQ(chosen->view.mode, RenderMode::kMip);
+  EXPECT_TRUE(chosen->png);
+  settings.set_mode(static_cast<v2::RenderMode>(9));
+  auto bad_mode = ToStreamSettings(settings, volume, 1024);
+  EXPECT_EQ(bad_mode.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(bad_mode.status().message().find("settings.mode"), std::string::npos);
+  settings.set_mode(v2::RENDER_MODE_DVR);
+  settings.set_encoding(static_cast<v2::Encoding>(5));
+  auto bad_encoding = ToStreamSettings(settings, volume, 1024);
+  EXPECT_EQ(bad_encoding.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(bad_encoding.status().message().find("settings.encoding"), std::string::npos);
 }
 
 }  // namespace

@@ -17,60 +17,60 @@ class SessionTest : public ServiceTest {
     session_ = OpenSession(volume_.volume_id());
     ASSERT_FALSE(session_.session_id().empty());
   }
-  grpc::Status Manipulate(const v1::ClientEvent& event, v1::ManipulateResponse* response) {
-    v1::ManipulateRequest request;
+  grpc::Status Manipulate(const v2::ClientEvent& event, v2::ManipulateResponse* response) {
+    v2::ManipulateRequest request;
     request.set_session_id(session_.session_id());
     *request.mutable_event() = event;
     auto context = Context();
     return stub_->Manipulate(context.get(), request, response);
   }
-  v1::ClientEvent Grab(const v1::Vec3& p, uint64_t sequence) {
-    v1::ClientEvent e;
+  v2::ClientEvent Grab(const v2::Vec3& p, uint64_t sequence) {
+    v2::ClientEvent e;
     e.set_sequence(sequence);
     *e.mutable_grab()->mutable_point_mm() = p;
     return e;
   }
-  v1::ClientEvent Drag(double dx, uint64_t sequence) {
-    v1::ClientEvent e;
+  v2::ClientEvent Drag(double dx, uint64_t sequence) {
+    v2::ClientEvent e;
     e.set_sequence(sequence);
     *e.mutable_drag()->mutable_offset_mm() = V(dx, 0, 0);
     return e;
   }
-  static v1::RenderSettings Small() {
-    v1::RenderSettings s;
+  static v2::RenderSettings Small() {
+    v2::RenderSettings s;
     s.set_width(96);
     s.set_height(96);
     return s;
   }
   // A Watch of this test's session at 96x96.
-  v1::WatchRequest SmallWatch() const {
-    v1::WatchRequest request;
+  v2::WatchRequest SmallWatch() const {
+    v2::WatchRequest request;
     request.set_session_id(session_.session_id());
     *request.mutable_settings() = Small();
     return request;
   }
-  v1::VolumeInfo volume_;
-  v1::SessionInfo session_;
+  v2::VolumeInfo volume_;
+  v2::SessionInfo session_;
 };
 
 TEST_F(SessionTest, Sessions_OpenListClose) {
-  v1::ListSessionsResponse list;
+  v2::ListSessionsResponse list;
   auto c1 = Context();
   ASSERT_TRUE(stub_->ListSessions(c1.get(), {}, &list).ok());
   ASSERT_EQ(list.sessions_size(), 1);
   EXPECT_EQ(list.sessions(0).volume_id(), volume_.volume_id());
 
   // A volume in use cannot be deleted.
-  v1::DeleteVolumeRequest del;
+  v2::DeleteVolumeRequest del;
   del.set_volume_id(volume_.volume_id());
-  v1::DeleteVolumeResponse deleted;
+  v2::DeleteVolumeResponse deleted;
   auto c2 = Context();
   EXPECT_EQ(stub_->DeleteVolume(c2.get(), del, &deleted).error_code(),
             grpc::FAILED_PRECONDITION);
 
-  v1::CloseSessionRequest close;
+  v2::CloseSessionRequest close;
   close.set_session_id(session_.session_id());
-  v1::CloseSessionResponse closed;
+  v2::CloseSessionResponse closed;
   auto c3 = Context();
   ASSERT_TRUE(stub_->CloseSession(c3.get(), close, &closed).ok());
   auto c4 = Context();
@@ -80,9 +80,9 @@ TEST_F(SessionTest, Sessions_OpenListClose) {
 TEST_F(SessionTest, Sessions_CapAndUnknownIds) {
   OpenSession(volume_.volume_id());
   OpenSession(volume_.volume_id());
-  v1::OpenSessionRequest request;
+  v2::OpenSessionRequest request;
   request.set_volume_id(volume_.volume_id());
-  v1::SessionInfo info;
+  v2::SessionInfo info;
   auto c1 = Context();
   EXPECT_EQ(stub_->OpenSession(c1.get(), request, &info).error_code(), grpc::RESOURCE_EXHAUSTED);
   request.set_volume_id("vol-404");
@@ -94,10 +94,10 @@ TEST_F(SessionTest, Sessions_CapAndUnknownIds) {
 }
 
 TEST_F(SessionTest, Render_ReturnsDecodableStill) {
-  v1::RenderRequest request;
+  v2::RenderRequest request;
   request.set_session_id(session_.session_id());
   *request.mutable_settings() = Small();
-  v1::Frame frame;
+  v2::Frame frame;
   auto c1 = Context();
   grpc::Status status = stub_->Render(c1.get(), request, &frame);
   ASSERT_TRUE(status.ok()) << status.error_message();
@@ -120,24 +120,24 @@ TEST_F(SessionTest, Render_ReturnsDecodableStill) {
 }
 
 TEST_F(SessionTest, Manipulate_GrabDragReleaseAndTheirErrors) {
-  v1::ManipulateResponse response;
+  v2::ManipulateResponse response;
   EXPECT_EQ(Manipulate(Drag(3, 1), &response).error_code(), grpc::FAILED_PRECONDITION);
   EXPECT_EQ(Manipulate(Grab(V(-10, 0, 0), 2), &response).error_code(), grpc::OUT_OF_RANGE);
-  EXPECT_EQ(Manipulate(v1::ClientEvent(), &response).error_code(), grpc::INVALID_ARGUMENT);
+  EXPECT_EQ(Manipulate(v2::ClientEvent(), &response).error_code(), grpc::INVALID_ARGUMENT);
   ASSERT_TRUE(Manipulate(Grab(Centre(volume_), 3), &response).ok());
   grpc::Status status = Manipulate(Drag(4, 4), &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(response.applied_sequence(), 4u);
   EXPECT_GT(response.max_displacement_mm(), 0.0);
-  v1::ClientEvent release;
+  v2::ClientEvent release;
   release.set_sequence(5);
   release.mutable_release();
   ASSERT_TRUE(Manipulate(release, &response).ok());
 
-  v1::SetCameraRequest camera;
+  v2::SetCameraRequest camera;
   camera.set_session_id(session_.session_id());
   camera.mutable_camera()->set_azimuth_deg(30);
-  v1::SetCameraResponse camera_response;
+  v2::SetCameraResponse camera_response;
   auto c1 = Context();
   EXPECT_TRUE(stub_->SetCamera(c1.get(), camera, &camera_response).ok());
   camera.mutable_camera()->set_distance_mm(-1);
@@ -149,12 +149,12 @@ TEST_F(SessionTest, Manipulate_GrabDragReleaseAndTheirErrors) {
 TEST_F(SessionTest, Manipulate_PickBeforeAnyFrameTakesTheOrbitCentrePlane) {
   // No frame yet: no preset to cast with; the default 512x512 view's centre
   // pixel lies on the plane through the orbit centre.
-  v1::ClientEvent pick;
+  v2::ClientEvent pick;
   pick.set_sequence(1);
   pick.mutable_grab()->set_pick(true);
   pick.mutable_grab()->set_pixel_x(256);
   pick.mutable_grab()->set_pixel_y(256);
-  v1::ManipulateResponse response;
+  v2::ManipulateResponse response;
   grpc::Status status = Manipulate(pick, &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_NEAR(response.grab_point_mm().y(), Centre(volume_).y(), 5.0);
@@ -162,26 +162,26 @@ TEST_F(SessionTest, Manipulate_PickBeforeAnyFrameTakesTheOrbitCentrePlane) {
 
 TEST_F(SessionTest, Manipulate_PickByPixelGrabsTheSurfaceThePixelShows) {
   // A frame sets the size and preset picks refer to (Manipulate has no stream).
-  v1::RenderRequest render;
+  v2::RenderRequest render;
   render.set_session_id(session_.session_id());
   *render.mutable_settings() = Small();
-  v1::Frame frame;
+  v2::Frame frame;
   auto c1 = Context();
   ASSERT_TRUE(stub_->Render(c1.get(), render, &frame).ok());
-  v1::ClientEvent pick;
+  v2::ClientEvent pick;
   pick.set_sequence(1);
   pick.mutable_grab()->set_pick(true);
   pick.mutable_grab()->set_pixel_x(48);
   pick.mutable_grab()->set_pixel_y(48);
-  v1::ManipulateResponse response;
+  v2::ManipulateResponse response;
   grpc::Status status = Manipulate(pick, &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   ASSERT_TRUE(response.has_grab_point_mm());
   // The default camera looks from the front (anterior, -y) at the volume's
   // centre: the body's surface is in front of the centre, on the camera's
   // side, and the old plane-through-the-centre pick would give the centre.
-  const v1::Vec3 centre = Centre(volume_);
-  const v1::Vec3& p = response.grab_point_mm();
+  const v2::Vec3 centre = Centre(volume_);
+  const v2::Vec3& p = response.grab_point_mm();
   EXPECT_LT(p.y(), centre.y() - 20.0) << p.ShortDebugString();
   EXPECT_NEAR(p.x(), centre.x(), 5.0);
   // Frames report the held grab's point.
@@ -196,21 +196,21 @@ TEST_F(SessionTest, Manipulate_PickByPixelGrabsTheSurfaceThePixelShows) {
 TEST_F(SessionTest, Interact_FramesEchoTheLastEventAndEndWithAStill) {
   auto context = Context();
   auto stream = stub_->Interact(context.get());
-  v1::InteractRequest first;
+  v2::InteractRequest first;
   first.set_session_id(session_.session_id());
   first.mutable_event()->set_sequence(1);
   *first.mutable_event()->mutable_settings() = Small();
   ASSERT_TRUE(stream->Write(first));
-  v1::InteractRequest grab;
+  v2::InteractRequest grab;
   *grab.mutable_event() = Grab(Centre(volume_), 2);
   ASSERT_TRUE(stream->Write(grab));
   for (int i = 1; i <= 4; ++i) {
-    v1::InteractRequest drag;
+    v2::InteractRequest drag;
     *drag.mutable_event() = Drag(1.5 * i, 2 + i);
     ASSERT_TRUE(stream->Write(drag));
   }
   // Read until a still frame reflects the last event (sequence 6).
-  v1::Frame frame;
+  v2::Frame frame;
   bool saw_final_still = false;
   int frames = 0;
   while (stream->Read(&frame)) {
@@ -231,19 +231,19 @@ TEST_F(SessionTest, Interact_FramesEchoTheLastEventAndEndWithAStill) {
 TEST_F(SessionTest, Interact_BadEventEndsTheStreamWithItsCode) {
   auto context = Context();
   auto stream = stub_->Interact(context.get());
-  v1::InteractRequest first;
+  v2::InteractRequest first;
   first.set_session_id(session_.session_id());
   *first.mutable_event() = Drag(2, 1);  // no grab
   ASSERT_TRUE(stream->Write(first));
   stream->WritesDone();
-  v1::Frame frame;
+  v2::Frame frame;
   while (stream->Read(&frame)) {
   }
   EXPECT_EQ(stream->Finish().error_code(), grpc::FAILED_PRECONDITION);
 
   auto context2 = Context();
   auto stream2 = stub_->Interact(context2.get());
-  v1::InteractRequest unknown;
+  v2::InteractRequest unknown;
   unknown.set_session_id("ses-404");
   stream2->Write(unknown);
   stream2->WritesDone();
@@ -255,7 +255,7 @@ TEST_F(SessionTest, Interact_BadEventEndsTheStreamWithItsCode) {
 TEST_F(SessionTest, Interact_RejectsMissingToken) {
   auto context = Context("");
   auto stream = stub_->Interact(context.get());
-  v1::Frame frame;
+  v2::Frame frame;
   EXPECT_FALSE(stream->Read(&frame));
   EXPECT_EQ(stream->Finish().error_code(), grpc::UNAUTHENTICATED);
 }
@@ -264,13 +264,13 @@ TEST_F(SessionTest, Interact_ClientCancelMidStreamReleasesEverything) {
   for (int round = 0; round < 3; ++round) {
     auto context = Context();
     auto stream = stub_->Interact(context.get());
-    v1::InteractRequest first;
+    v2::InteractRequest first;
     first.set_session_id(session_.session_id());
     *first.mutable_event()->mutable_settings() = Small();
     ASSERT_TRUE(stream->Write(first));
-    v1::Frame frame;
+    v2::Frame frame;
     ASSERT_TRUE(stream->Read(&frame));
-    v1::InteractRequest camera;
+    v2::InteractRequest camera;
     camera.mutable_event()->set_sequence(2);
     camera.mutable_event()->mutable_camera()->set_azimuth_deg(45);
     stream->Write(camera);
@@ -290,13 +290,13 @@ TEST_F(SessionTest, Interact_ClientCancelMidStreamReleasesEverything) {
 
 TEST_F(SessionTest, Watch_SlowReaderGetsNewestFrameWithSupersededCounted) {
   auto context = Context();
-  v1::WatchRequest request;
+  v2::WatchRequest request;
   request.set_session_id(session_.session_id());
   // Large lossless frames fill the transport window after one or two, so
   // the server must hold back and drop.
   request.mutable_settings()->set_width(320);
   request.mutable_settings()->set_height(320);
-  request.mutable_settings()->set_encoding("png");
+  request.mutable_settings()->set_encoding(v2::ENCODING_PNG);
   // A client whose transport window stays small (no BDP growth): what it
   // does not read stays on the server.
   grpc::ChannelArguments args;
@@ -304,18 +304,18 @@ TEST_F(SessionTest, Watch_SlowReaderGetsNewestFrameWithSupersededCounted) {
   args.SetInt(GRPC_ARG_HTTP2_STREAM_LOOKAHEAD_BYTES, 16 << 10);
   auto slow_channel = grpc::CreateCustomChannel(
       "127.0.0.1:" + std::to_string(server_->port()), grpc::InsecureChannelCredentials(), args);
-  auto slow_stub = v1::Vpm::NewStub(slow_channel);
+  auto slow_stub = v2::Vpm::NewStub(slow_channel);
   auto reader = slow_stub->Watch(context.get(), request);
-  v1::Frame frame;
+  v2::Frame frame;
   ASSERT_TRUE(reader->Read(&frame));
   // Camera changes for 4 s while this client does not read.
   int changes = 0;
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(4);
   while (std::chrono::steady_clock::now() < until) {
-    v1::SetCameraRequest camera;
+    v2::SetCameraRequest camera;
     camera.set_session_id(session_.session_id());
     camera.mutable_camera()->set_azimuth_deg(++changes * 3.0);
-    v1::SetCameraResponse response;
+    v2::SetCameraResponse response;
     auto c = Context();
     ASSERT_TRUE(stub_->SetCamera(c.get(), camera, &response).ok());
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -342,11 +342,11 @@ TEST_F(SessionTest, Watch_SlowReaderGetsNewestFrameWithSupersededCounted) {
 
 TEST_F(SessionTest, Watch_SeesAnotherClientsManipulation) {
   auto context = Context();
-  const v1::WatchRequest request = SmallWatch();
+  const v2::WatchRequest request = SmallWatch();
   auto reader = stub_->Watch(context.get(), request);
-  v1::Frame frame;
+  v2::Frame frame;
   ASSERT_TRUE(reader->Read(&frame));
-  v1::ManipulateResponse response;
+  v2::ManipulateResponse response;
   ASSERT_TRUE(Manipulate(Grab(Centre(volume_), 7), &response).ok());
   ASSERT_TRUE(Manipulate(Drag(3, 8), &response).ok());
   bool moved = false;
@@ -363,17 +363,17 @@ TEST_F(SessionTest, Watch_SeesAnotherClientsManipulation) {
 
 TEST_F(SessionTest, Watch_StreamCapPerClientIsResourceExhausted) {
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
-  std::vector<std::unique_ptr<grpc::ClientReader<v1::Frame>>> readers;
-  const v1::WatchRequest request = SmallWatch();
+  std::vector<std::unique_ptr<grpc::ClientReader<v2::Frame>>> readers;
+  const v2::WatchRequest request = SmallWatch();
   for (int i = 0; i < 4; ++i) {
     contexts.push_back(Context());
     readers.push_back(stub_->Watch(contexts.back().get(), request));
-    v1::Frame frame;
+    v2::Frame frame;
     ASSERT_TRUE(readers.back()->Read(&frame));
   }
   auto context = Context();
   auto extra = stub_->Watch(context.get(), request);
-  v1::Frame frame;
+  v2::Frame frame;
   EXPECT_FALSE(extra->Read(&frame));
   EXPECT_EQ(extra->Finish().error_code(), grpc::RESOURCE_EXHAUSTED);
   for (size_t i = 0; i < readers.size(); ++i) {
@@ -384,9 +384,9 @@ TEST_F(SessionTest, Watch_StreamCapPerClientIsResourceExhausted) {
 
 TEST_F(SessionTest, Shutdown_FinishesOpenStreamsWithUnavailable) {
   auto context = Context();
-  const v1::WatchRequest request = SmallWatch();
+  const v2::WatchRequest request = SmallWatch();
   auto reader = stub_->Watch(context.get(), request);
-  v1::Frame frame;
+  v2::Frame frame;
   ASSERT_TRUE(reader->Read(&frame));
   std::thread stopper([&] { server_->Shutdown(std::chrono::milliseconds(3000)); });
   while (reader->Read(&frame)) {
@@ -398,13 +398,13 @@ TEST_F(SessionTest, Shutdown_FinishesOpenStreamsWithUnavailable) {
 
 TEST_F(SessionTest, CloseSession_EndsItsStreams) {
   auto context = Context();
-  const v1::WatchRequest request = SmallWatch();
+  const v2::WatchRequest request = SmallWatch();
   auto reader = stub_->Watch(context.get(), request);
-  v1::Frame frame;
+  v2::Frame frame;
   ASSERT_TRUE(reader->Read(&frame));
-  v1::CloseSessionRequest close;
+  v2::CloseSessionRequest close;
   close.set_session_id(session_.session_id());
-  v1::CloseSessionResponse closed;
+  v2::CloseSessionResponse closed;
   auto c = Context();
   ASSERT_TRUE(stub_->CloseSession(c.get(), close, &closed).ok());
   while (reader->Read(&frame)) {

@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "server/service/vpm_server.h"
-#include "vpm/v1/vpm.grpc.pb.h"
+#include "vpm/v2/vpm.grpc.pb.h"
 
 namespace vpm::service::testing {
 
@@ -50,7 +50,7 @@ class ServiceTest : public ::testing::Test {
     server_ = *std::move(server);
     channel_ = grpc::CreateChannel("127.0.0.1:" + std::to_string(server_->port()),
                                    grpc::InsecureChannelCredentials());
-    stub_ = v1::Vpm::NewStub(channel_);
+    stub_ = v2::Vpm::NewStub(channel_);
   }
   void SetUp() override { StartServer(SmallServerOptions()); }
   void TearDown() override {
@@ -66,28 +66,28 @@ class ServiceTest : public ::testing::Test {
     return context;
   }
 
-  v1::VolumeInfo LoadPhantom(const std::string& source = kPhantom) {
-    v1::LoadVolumeRequest request;
+  v2::VolumeInfo LoadPhantom(const std::string& source = kPhantom) {
+    v2::LoadVolumeRequest request;
     request.set_source(source);
-    v1::VolumeInfo info;
+    v2::VolumeInfo info;
     auto context = Context();
     grpc::Status status = stub_->LoadVolume(context.get(), request, &info);
     EXPECT_TRUE(status.ok()) << status.error_message();
     return info;
   }
 
-  v1::SessionInfo OpenSession(const std::string& volume_id) {
-    v1::OpenSessionRequest request;
+  v2::SessionInfo OpenSession(const std::string& volume_id) {
+    v2::OpenSessionRequest request;
     request.set_volume_id(volume_id);
-    v1::SessionInfo info;
+    v2::SessionInfo info;
     auto context = Context();
     grpc::Status status = stub_->OpenSession(context.get(), request, &info);
     EXPECT_TRUE(status.ok()) << status.error_message();
     return info;
   }
 
-  static v1::Vec3 V(double x, double y, double z) {
-    v1::Vec3 v;
+  static v2::Vec3 V(double x, double y, double z) {
+    v2::Vec3 v;
     v.set_x(x);
     v.set_y(y);
     v.set_z(z);
@@ -95,7 +95,7 @@ class ServiceTest : public ::testing::Test {
   }
 
   // The middle of the volume in physical voxel space (mm).
-  static v1::Vec3 Centre(const v1::VolumeInfo& info) {
+  static v2::Vec3 Centre(const v2::VolumeInfo& info) {
     return V((info.dims(0) - 1) * info.spacing_mm().x() / 2,
              (info.dims(1) - 1) * info.spacing_mm().y() / 2,
              (info.dims(2) - 1) * info.spacing_mm().z() / 2);
@@ -103,7 +103,7 @@ class ServiceTest : public ::testing::Test {
 
   std::unique_ptr<VpmServer> server_;
   std::shared_ptr<grpc::Channel> channel_;
-  std::unique_ptr<v1::Vpm::Stub> stub_;
+  std::unique_ptr<v2::Vpm::Stub> stub_;
 };
 
 }  // namespace vpm::service::testing

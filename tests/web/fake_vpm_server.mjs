@@ -11,9 +11,9 @@ export async function startFakeServer(source) {
   const grpc = require('@grpc/grpc-js');
   const protoLoader = require('@grpc/proto-loader');
   const definition = protoLoader.loadSync(
-    path.join(source, 'proto', 'vpm', 'v1', 'vpm.proto'),
+    path.join(source, 'proto', 'vpm', 'v2', 'vpm.proto'),
     { keepCase: true, longs: Number, enums: String, defaults: true, oneofs: true });
-  const { Vpm } = grpc.loadPackageDefinition(definition).vpm.v1;
+  const { Vpm } = grpc.loadPackageDefinition(definition).vpm.v2;
 
   const calls = [];  // {method, request, metadata: {authorization, session}}
   const record = (method, call) => {
@@ -55,7 +55,7 @@ export async function startFakeServer(source) {
           return;
         }
         sequence = Math.max(sequence, Number(event.sequence) || 0);
-        call.write({ image: Buffer.from([0xff, 0xd8, ++frames, 0xff, 0xd9]), encoding: 'jpeg',
+        call.write({ image: Buffer.from([0xff, 0xd8, ++frames, 0xff, 0xd9]), encoding: 'ENCODING_JPEG',
                      width: 4, height: 4, last_sequence: sequence, frame_number: frames,
                      max_displacement_mm: event.drag ? 1.5 : 0, timings: { total_ms: 1 } });
       });

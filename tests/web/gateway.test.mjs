@@ -155,7 +155,7 @@ test('Gateway_EventErrorReportsAndReopensTheStreamWithCameraAndSettings', async 
   const events = callsSince(start).filter((c) => c.method === 'Interact.event');
   const first = events.findIndex((c) => c.request.session_id === opened.session.session_id);
   assert.ok(first >= 0, 'no new stream on the session');
-  assert.equal(events[first].request.event.settings.mode, 'mip');
+  assert.equal(events[first].request.event.settings.mode, 'RENDER_MODE_MIP');
   assert.equal(events[first].request.event.sequence, 4);
   assert.equal(events[first + 1].request.event.camera.azimuth_deg, 40);
   t.ws.close();

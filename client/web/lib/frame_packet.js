@@ -4,12 +4,14 @@
 //   the rest     the encoded image (JPEG, or PNG when the settings ask for it)
 // The browser reads it back in public/frame_packet.js.
 
-// frame: a vpm.v1.Frame as loaded by proto-loader (snake_case fields);
+import { encodingName } from './render_settings.js';
+
+// frame: a vpm.v2.Frame as loaded by proto-loader (snake_case fields);
 // extra: fields the gateway adds (e.g. gateway_dropped).
 export function packFrame(frame, extra = {}) {
   const image = Buffer.from(frame.image ?? []);
   const header = {
-    encoding: frame.encoding || 'jpeg',
+    encoding: encodingName(frame.encoding),
     width: frame.width,            // pixels of this frame (half size while interactive)
     height: frame.height,
     last_sequence: Number(frame.last_sequence),

@@ -22,6 +22,7 @@ import crypto from 'node:crypto';
 import { Backoff } from '../public/backoff.js';
 import { explainError } from './explain_error.js';
 import { packFrame } from './frame_packet.js';
+import { toProtoSettings } from './render_settings.js';
 import { GrpcStatus, isServerDown, statusName } from './vpm_client.js';
 
 // Stream restarts after an event error that get no frame before failing
@@ -244,7 +245,7 @@ export class ViewerConnection {
     });
     const sequence = this.lastSequence;
     call.write({ session_id: this.session.session_id,
-                 event: { sequence, settings: this.settings ?? {} } });
+                 event: { sequence, settings: toProtoSettings(this.settings) } });
     if (this.camera) call.write({ event: { sequence, camera: this.camera } });
     this.send({ type: 'stream', state: 'open', session_id: this.session.session_id });
   }
@@ -302,7 +303,8 @@ export class ViewerConnection {
       this.startStream();
       if (event.settings || event.camera) return;  // replayed by startStream
     }
-    this.call.write({ event });
+    this.call.write({ event: event.settings ? { ...event, settings: toProtoSettings(event.settings) }
+                                            : event });
   }
 
   // Newest frame wins: one frame in flight on the WebSocket, a newer one

@@ -1,5 +1,5 @@
 // The gateway's side of the vpm API: loads the project's own
-// proto/vpm/v1/vpm.proto with @grpc/proto-loader and wraps the unary calls
+// proto/vpm/v2/vpm.proto with @grpc/proto-loader and wraps the unary calls
 // as promises. The token travels as `authorization: Bearer TOKEN` metadata on
 // every call; it never leaves the gateway.
 import path from 'node:path';
@@ -9,7 +9,7 @@ import grpc from '@grpc/grpc-js';
 import protoLoader from '@grpc/proto-loader';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
-export const kDefaultProtoPath = path.resolve(here, '../../../proto/vpm/v1/vpm.proto');
+export const kDefaultProtoPath = path.resolve(here, '../../../proto/vpm/v2/vpm.proto');
 
 // Field names stay snake_case as in the proto (keepCase), 64-bit integers
 // become JS numbers (sequences and sizes stay far below 2^53), unset
@@ -49,7 +49,7 @@ export class VpmClient {
   // server started with --no-auth); protoPath: vpm.proto.
   constructor({ address, token = '', protoPath = kDefaultProtoPath }) {
     const definition = protoLoader.loadSync(protoPath, kLoaderOptions);
-    const { Vpm } = grpc.loadPackageDefinition(definition).vpm.v1;
+    const { Vpm } = grpc.loadPackageDefinition(definition).vpm.v2;
     this.address = address;
     this.token = token;
     this.stub = new Vpm(address, grpc.credentials.createInsecure(), kChannelOptions);

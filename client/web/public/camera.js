@@ -102,7 +102,7 @@ export class OrbitCamera {
     this.distanceMm = Math.max(0.05 * fit, Math.min(20 * fit, this.distanceMm / factor));
   }
 
-  // The vpm.v1.Camera message.
+  // The vpm.v2.Camera message.
   toProto() {
     return { azimuth_deg: this.azimuthDeg, elevation_deg: this.elevationDeg,
              distance_mm: this.distanceMm, pan_mm: { x: this.panMm[0], y: this.panMm[1], z: 0 } };
