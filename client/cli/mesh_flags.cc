@@ -15,9 +15,9 @@ void AddMeshFlags(CLI::App* app, MeshFlags* f) {
       ->capture_default_str();
   app->add_option("--target", f->target, "vertices to keep, the 8 corner anchors included")
       ->capture_default_str();
-  app->add_option("--footprint", f->footprint, "cell (mean TF, max gradient over the cell) or "
-                  "point (the voxel nearest the vertex)")
-      ->check(CLI::IsMember({"cell", "point"}))->capture_default_str();
+  app->add_option("--footprint", f->footprint, "point (the voxel nearest the vertex) or "
+                  "cell (mean TF, max gradient over the cell)")
+      ->check(CLI::IsMember({"point", "cell"}))->capture_default_str();
   app->add_option("--density-mode", f->density_mode,
                   "spread: S = 1 - Cd (crowded vertices go first); paper: S = Cd")
       ->check(CLI::IsMember({"spread", "paper"}))->capture_default_str();

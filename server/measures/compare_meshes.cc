@@ -92,7 +92,7 @@ Result<std::vector<MeshComparisonRow>> CompareMeshes(const Volume& volume, const
       ASSIGN_OR_RETURN(
           auto r, Measure(volume, tf, StrCat(FootprintName(footprint), "/", DensityModeName(mode)),
                           mesh, ms));
-      r.is_default = footprint == Footprint::kCell && mode == DensityMode::kSpread;
+      r.is_default = footprint == MeshParams{}.footprint && mode == MeshParams{}.density_mode;
       rows.push_back(std::move(r));
     }
   }

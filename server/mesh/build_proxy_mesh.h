@@ -30,6 +30,8 @@ namespace vpm {
 struct MeshParams {
   std::array<int64_t, 3> grid{20, 20, 20};  // G
   int64_t target = 250;                      // kept vertices, 8 anchors included
+  // docs/ALGORITHM.md section 1: point is the intended default; it stays
+  // cell until point meshes pass the validity tests (see there).
   Footprint footprint = Footprint::kCell;
   DensityMode density_mode = DensityMode::kSpread;
   double wg = 1.0;
