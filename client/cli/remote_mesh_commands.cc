@@ -86,6 +86,14 @@ void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_co
     PrintJson(MeshJson(info));
     return absl::OkStatus();
   }));
+  CLI::App* del = app.add_subcommand("mesh-delete", "server: DeleteMesh (not while a session uses it)");
+  del->add_option("ID", a->mesh_id)->required();
+  del->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
+    v2::DeleteMeshRequest request;
+    request.set_mesh_id(a->mesh_id);
+    v2::DeleteMeshResponse response;
+    return FromGrpc(s.stub().DeleteMesh(s.Context().get(), request, &response));
+  }));
 }
 
 }  // namespace vpm::cli

@@ -1,5 +1,6 @@
-// `vpm mesh-build|mesh-get|mesh-refine`: the mesh RPCs of a vpm-server
-// (BuildMesh, GetMesh with --json for the geometry, RefineMesh).
+// `vpm mesh-build|mesh-get|mesh-refine|mesh-delete`: the mesh RPCs of a
+// vpm-server (BuildMesh, GetMesh with --json for the geometry, RefineMesh,
+// DeleteMesh).
 #pragma once
 
 #include <CLI/CLI.hpp>

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "server/service/mesh_params_key.h"
+
 namespace vpm::service {
 
 Status CheckInsideVolume(const VolumeGeometry& geometry, const glm::dvec3& point_mm,
@@ -30,18 +32,18 @@ Result<std::unique_ptr<MeshStore>> MeshStore::Create(const Options& options) {
 
 Result<std::shared_ptr<const MeshEntry>> MeshStore::Build(std::shared_ptr<VolumeEntry> volume,
                                                           const MeshParams& params) {
-  {
-    std::lock_guard lock(mutex_);
-    if (static_cast<int64_t>(meshes_.size()) >= options_.max_meshes) {
-      return absl::ResourceExhaustedError(
-          StrCat("the server holds its maximum of ", options_.max_meshes, " meshes"));
-    }
-  }
   if (params.refine_at_mm) {
     RETURN_IF_ERROR(CheckInsideVolume(volume->volume.geometry(), *params.refine_at_mm,
                                       "params.refine_at_mm"));
   }
   auto entry = std::make_shared<MeshEntry>();
+  entry->key = MeshParamsKey(volume->id, params);
+  {
+    std::lock_guard lock(mutex_);
+    if (auto held = FindLocked(entry->key)) return held;
+    // Refuse before the work when every held mesh is pinned.
+    RETURN_IF_ERROR(MakeRoomLocked());
+  }
   entry->volume = volume;
   entry->params = params;
   {
@@ -62,19 +64,63 @@ Result<std::shared_ptr<const MeshEntry>> MeshStore::Refine(std::string_view mesh
   entry->volume = old->volume;
   entry->params = old->params;
   entry->params.refine_at_mm = point_mm;
+  entry->key = MeshParamsKey(entry->volume->id, entry->params);
+  {
+    std::lock_guard lock(mutex_);
+    if (auto held = FindLocked(entry->key)) return held;
+    RETURN_IF_ERROR(MakeRoomLocked());
+  }
   entry->base = old->base;
   ASSIGN_OR_RETURN(entry->mesh, FinishProxyMesh(entry->volume->volume, *entry->base, entry->params));
   return Add(std::move(entry));
 }
 
+std::shared_ptr<const MeshEntry> MeshStore::FindLocked(
+    const std::optional<std::string>& key) const {
+  if (!key) return nullptr;
+  for (const auto& [id, entry] : meshes_) {
+    if (entry->key == key) {
+      last_used_[id] = ++tick_;
+      return entry;
+    }
+  }
+  return nullptr;
+}
+
+Status MeshStore::MakeRoomLocked() {
+  while (static_cast<int64_t>(meshes_.size()) >= options_.max_meshes) {
+    // Only the store holds an unpinned mesh. The count cannot rise from 1
+    // meanwhile: new references come from this store, under this lock.
+    std::string oldest;
+    int64_t oldest_tick = 0;
+    for (const auto& [id, entry] : meshes_) {
+      const int64_t used = last_used_[id];
+      if (entry.use_count() == 1 && (oldest.empty() || used < oldest_tick)) {
+        oldest = id;
+        oldest_tick = used;
+      }
+    }
+    if (oldest.empty()) {
+      return absl::ResourceExhaustedError(
+          StrCat("the server holds its maximum of ", options_.max_meshes,
+                 " meshes and sessions use every one of them; close a session (vpm session "
+                 "close) or raise --max-meshes"));
+    }
+    meshes_.erase(oldest);
+    last_used_.erase(oldest);
+  }
+  return absl::OkStatus();
+}
+
 Result<std::shared_ptr<const MeshEntry>> MeshStore::Add(std::shared_ptr<MeshEntry> entry) {
   std::lock_guard lock(mutex_);
-  if (static_cast<int64_t>(meshes_.size()) >= options_.max_meshes) {
-    return absl::ResourceExhaustedError(
-        StrCat("the server holds its maximum of ", options_.max_meshes, " meshes"));
-  }
+  // Another call may have built the same mesh meanwhile: one copy is kept.
+  if (auto held = FindLocked(entry->key)) return held;
+  RETURN_IF_ERROR(MakeRoomLocked());
   entry->id = StrCat("mesh-", next_id_++);
   meshes_.emplace(entry->id, entry);
+  last_used_[entry->id] = ++tick_;
+  ChangedLocked();
   return std::shared_ptr<const MeshEntry>(entry);
 }
 
@@ -82,12 +128,41 @@ Result<std::shared_ptr<const MeshEntry>> MeshStore::Get(std::string_view id) con
   std::lock_guard lock(mutex_);
   auto it = meshes_.find(id);
   if (it == meshes_.end()) return absl::NotFoundError(StrCat("mesh_id: no mesh '", id, "'"));
+  last_used_[it->first] = ++tick_;
   return it->second;
+}
+
+Status MeshStore::Delete(std::string_view id) {
+  std::lock_guard lock(mutex_);
+  auto it = meshes_.find(id);
+  if (it == meshes_.end()) return absl::NotFoundError(StrCat("mesh_id: no mesh '", id, "'"));
+  if (it->second.use_count() > 1) {
+    return absl::FailedPreconditionError(
+        StrCat("mesh ", id, " is in use by a session; close the session first"));
+  }
+  last_used_.erase(it->first);
+  meshes_.erase(it);
+  ChangedLocked();
+  return absl::OkStatus();
 }
 
 void MeshStore::ForgetVolume(std::string_view volume_id) {
   std::lock_guard lock(mutex_);
-  std::erase_if(meshes_, [&](const auto& kv) { return kv.second->volume->id == volume_id; });
+  std::erase_if(meshes_, [&](const auto& kv) {
+    if (kv.second->volume->id != volume_id) return false;
+    last_used_.erase(kv.first);
+    return true;
+  });
+  ChangedLocked();
+}
+
+void MeshStore::ChangedLocked() const {
+  if (options_.on_change) options_.on_change(static_cast<int64_t>(meshes_.size()));
+}
+
+int64_t MeshStore::size() const {
+  std::lock_guard lock(mutex_);
+  return static_cast<int64_t>(meshes_.size());
 }
 
 }  // namespace vpm::service

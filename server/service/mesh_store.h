@@ -1,9 +1,17 @@
 // Proxy meshes built on the server's volumes. A mesh is immutable once
 // built: RefineMesh makes a new one from the same decimated lattice (steps
 // 1-2 are not redone), so sessions on the old mesh are unaffected.
+//
+// Lifecycle: a Build or Refine whose volume and parameters equal those of a
+// held mesh returns that mesh. A mesh a session holds is pinned (the session
+// keeps a reference). At the cap, unpinned meshes are evicted least recently
+// used first; ResourceExhausted only when every held mesh is pinned.
+// Delete drops an unpinned mesh; a pinned one is FailedPrecondition.
 #pragma once
 
+#include <functional>
 #include <map>
+#include <optional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -17,6 +25,7 @@ namespace vpm::service {
 
 struct MeshEntry {
   std::string id;
+  std::optional<std::string> key;  // MeshParamsKey: equal keys, equal meshes
   std::shared_ptr<VolumeEntry> volume;
   MeshParams params;
   std::shared_ptr<const DecimatedLattice> base;  // shared by refinements
@@ -28,6 +37,7 @@ class MeshStore {
   struct Options {
     const gpu::GpuContext* context = nullptr;  // step 1 on the GPU; outlives the store
     int64_t max_meshes = 64;
+    std::function<void(int64_t count)> on_change;  // metrics: meshes held, after each change
   };
   static Result<std::unique_ptr<MeshStore>> Create(const Options& options);
 
@@ -38,18 +48,29 @@ class MeshStore {
   Result<std::shared_ptr<const MeshEntry>> Refine(std::string_view mesh_id,
                                                   const glm::dvec3& point_mm);
   Result<std::shared_ptr<const MeshEntry>> Get(std::string_view id) const;  // NotFound
+  // NotFound, or FailedPrecondition while a session holds the mesh.
+  Status Delete(std::string_view id);
   // Drops the meshes of a volume (when it is deleted).
   void ForgetVolume(std::string_view volume_id);
+  int64_t size() const;
 
  private:
   explicit MeshStore(Options options) : options_(options) {}
+  // The held mesh with this key, marked used; null if none. Under mutex_.
+  std::shared_ptr<const MeshEntry> FindLocked(const std::optional<std::string>& key) const;
+  // Evicts unpinned meshes, least recently used first, until one more fits;
+  // ResourceExhausted naming what holds the rest. Under mutex_.
+  Status MakeRoomLocked();
   Result<std::shared_ptr<const MeshEntry>> Add(std::shared_ptr<MeshEntry> entry);
+  void ChangedLocked() const;
 
   Options options_;
   std::optional<LatticeCostsGpu> costs_;
   std::mutex costs_mutex_;  // the step-1 kernel's buffers are not shared
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<const MeshEntry>, std::less<>> meshes_;
+  mutable std::map<std::string, int64_t, std::less<>> last_used_;  // id -> use tick
+  mutable int64_t tick_ = 0;
   int64_t next_id_ = 1;
 };
 

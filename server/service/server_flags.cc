@@ -10,7 +10,8 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--token", o->token,
                  "bearer token every call but health and reflection must carry "
                  "(authorization: Bearer TOKEN); default: env VPM_TOKEN");
-  app.add_flag("--no-auth", o->no_auth, "serve without a token (local use only)");
+  app.add_flag("--no-auth", o->no_auth,
+               "serve without a token; only on a loopback --listen address");
   app.add_option("--data-root", o->data_root,
                  "folder LoadVolume paths are resolved under (no '..', no symlink escape); "
                  "empty: only phantom: sources and uploads");

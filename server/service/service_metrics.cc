@@ -33,6 +33,7 @@ Result<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(const Options& op
                             .Help("Streams whose resources were released").Register(r).Add({});
   m->sessions_ = &prometheus::BuildGauge().Name("vpm_sessions").Help("Open sessions").Register(r).Add({});
   m->volumes_ = &prometheus::BuildGauge().Name("vpm_volumes").Help("Volumes held").Register(r).Add({});
+  m->meshes_ = &prometheus::BuildGauge().Name("vpm_meshes").Help("Meshes held").Register(r).Add({});
   m->volume_bytes_ = &prometheus::BuildGauge().Name("vpm_volume_bytes")
                           .Help("Host and GPU bytes of the volumes held").Register(r).Add({});
   if (!options.listen.empty()) {
@@ -67,6 +68,7 @@ void ServiceMetrics::Volumes(int64_t bytes, int64_t count) {
   volume_bytes_->Set(double(bytes));
   volumes_->Set(double(count));
 }
+void ServiceMetrics::Meshes(int64_t count) { meshes_->Set(double(count)); }
 void ServiceMetrics::StreamOpened() { streams_opened_->Increment(); }
 void ServiceMetrics::StreamClosed() { streams_closed_->Increment(); }
 

@@ -34,6 +34,7 @@ class ServiceMetrics {
   void Superseded();
   void Sessions(int64_t open);
   void Volumes(int64_t bytes, int64_t count);
+  void Meshes(int64_t count);
   void StreamOpened();
   void StreamClosed();
 
@@ -62,6 +63,7 @@ class ServiceMetrics {
   prometheus::Gauge* sessions_ = nullptr;
   prometheus::Gauge* volumes_ = nullptr;
   prometheus::Gauge* volume_bytes_ = nullptr;
+  prometheus::Gauge* meshes_ = nullptr;
 };
 
 }  // namespace vpm::service

@@ -1,6 +1,7 @@
 #include "server/service/vpm_server.h"
 
 #include "server/common/read_text_file.h"
+#include "server/service/loopback_address.h"
 
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
@@ -42,6 +43,12 @@ Result<std::unique_ptr<VpmServer>> VpmServer::Create(const ServerOptions& option
 
 Status VpmServer::Start() {
   const ServerOptions& o = options_;
+  if (o.no_auth && !IsLoopbackAddress(o.listen)) {
+    return absl::InvalidArgumentError(
+        StrCat("--no-auth serves every caller without a token, so it listens on loopback only "
+               "(127.0.0.1:PORT, [::1]:PORT, localhost:PORT or unix:PATH), not --listen ",
+               o.listen, "; give --token (or VPM_TOKEN) to listen there"));
+  }
   ASSIGN_OR_RETURN(TokenAuth auth, TokenAuth::Create({o.token, o.no_auth}));
   auth_.emplace(std::move(auth));
   ASSIGN_OR_RETURN(auto credentials, MakeCredentials(o));
@@ -65,7 +72,8 @@ Status VpmServer::Start() {
   };
   volume_options.forget_gpu = [r = renderer_.get()](const GpuVolume* v) { r->ForgetVolume(v); };
   ASSIGN_OR_RETURN(volumes_, VolumeStore::Create(volume_options));
-  ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes}));
+  ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes, [m = metrics_.get()](
+                                                   int64_t count) { m->Meshes(count); }}));
   SessionManager::Options session_options;
   session_options.context = gpu_;
   session_options.renderer = renderer_.get();

@@ -125,6 +125,14 @@ grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* co
   });
 }
 
+grpc::ServerUnaryReactor* VpmService::DeleteMesh(grpc::CallbackServerContext* context,
+                                                 const v2::DeleteMeshRequest* request,
+                                                 v2::DeleteMeshResponse*) {
+  return Unary(context, "DeleteMesh", service_->request_pool, [=, this]() -> Status {
+    return service_->meshes->Delete(request->mesh_id());
+  });
+}
+
 grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* context,
                                                   const v2::OpenSessionRequest* request,
                                                   v2::SessionInfo* response) {

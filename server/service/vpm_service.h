@@ -33,6 +33,8 @@ class VpmService final : public v2::Vpm::CallbackService {
                                     v2::GetMeshResponse*) override;
   grpc::ServerUnaryReactor* RefineMesh(grpc::CallbackServerContext*, const v2::RefineMeshRequest*,
                                        v2::MeshInfo*) override;
+  grpc::ServerUnaryReactor* DeleteMesh(grpc::CallbackServerContext*, const v2::DeleteMeshRequest*,
+                                       v2::DeleteMeshResponse*) override;
   grpc::ServerUnaryReactor* OpenSession(grpc::CallbackServerContext*,
                                         const v2::OpenSessionRequest*, v2::SessionInfo*) override;
   grpc::ServerUnaryReactor* CloseSession(grpc::CallbackServerContext*,

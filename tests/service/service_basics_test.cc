@@ -8,6 +8,7 @@
 #include "server/common/sha256.h"
 #include "server/io/read_volume.h"
 #include "server/io/write_nifti.h"
+#include "server/service/loopback_address.h"
 #include "server/service/proto_convert.h"
 #include "tests/service/service_test_util.h"
 
@@ -360,6 +361,17 @@ TEST_F(ServiceTest, Meshes_BadParamsAreInvalidArgument) {
   build.set_volume_id("vol-404");
   auto c3 = Context();
   EXPECT_EQ(stub_->BuildMesh(c3.get(), build, &mesh).error_code(), grpc::NOT_FOUND);
+}
+
+TEST(LoopbackAddress, OnlyAddressesThatStayOnThisMachine) {
+  for (const char* local : {"127.0.0.1:50051", "127.1.2.3:0", "localhost:50051", "[::1]:50051",
+                            "[::ffff:127.0.0.1]:1", "unix:/tmp/vpm.sock"}) {
+    EXPECT_TRUE(IsLoopbackAddress(local)) << local;
+  }
+  for (const char* remote : {"0.0.0.0:50051", "[::]:50051", "10.0.0.5:50051", "example.org:50051",
+                             "[::ffff:10.0.0.1]:1", "50051", ""}) {
+    EXPECT_FALSE(IsLoopbackAddress(remote)) << remote;
+  }
 }
 
 TEST(ProtoConvert, RenderSettingsEnumsMapAndUnknownValuesAreRefused) {

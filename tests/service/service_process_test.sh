@@ -100,6 +100,15 @@ expect_error() {
   fi
 }
 
+# --no-auth serves without a token: never on an address others can reach.
+if timeout 20 "$server_bin" --no-auth --listen 0.0.0.0:0 > "$tmp/noauth.log" 2>&1; then
+  fail "--no-auth on 0.0.0.0 started"
+elif grep -q "loopback" "$tmp/noauth.log"; then
+  pass "--no-auth refuses a non-loopback --listen"
+else
+  fail "--no-auth on 0.0.0.0: unclear error: $(cat "$tmp/noauth.log")"
+fi
+
 mkdir -p "$tmp/data"
 ln -s /etc "$tmp/data/escape"
 

@@ -180,7 +180,7 @@ test('Gateway_RefusesForeignOriginsAndFilesOutsideThePage', async () => {
   t.ws.close();
   for (const [url, status] of [['/', 200], ['/app.js', 200], ['/healthz', 200],
                                ['/%2e%2e/gateway.js', 404], ['/../package.json', 404],
-                               ['/.hidden', 404]]) {
+                               ['/.hidden', 404], ['/%', 400], ['/%zz', 400]]) {
     const r = await fetch(base + url);
     assert.equal(r.status, status, url);
   }
@@ -195,5 +195,14 @@ test('Gateway_RejectsMalformedMessages', async () => {
   assert.match((await t.next((m) => m.type === 'error')).message, /open a volume first/);
   t.send({ type: 'nonsense' });
   assert.match((await t.next((m) => m.type === 'error')).message, /unknown message type/);
+  // JSON that is not an object, and an event that is not one: each an error
+  // on this connection, which stays open.
+  for (const text of ['null', '[]', '"open"', '42', '{"type":"event","event":null}',
+                      '{"type":"refine","point_mm":null}']) {
+    t.ws.send(text);
+    await t.next((m) => m.type === 'error');
+  }
+  t.send({ type: 'list' });
+  await t.next((m) => m.type === 'volumes');
   t.ws.close();
 });

@@ -157,7 +157,8 @@ export function meanAbsDiff(a, b) {
 // last frame header); returns the header.
 export async function settled(page, extra = 'true', timeoutMs = 20000) {
   const expression = `(() => { const v = window.vpmViewer; const h = v.lastHeader;
-    return !!h && h.last_sequence >= v.sequence && v.framesDrawn >= v.framesReceived &&
+    return !!h && h.last_sequence >= v.sequence &&
+      v.framesDrawn + v.framesSuperseded >= v.framesReceived &&
       (${extra}); })()`;
   await page.waitForFunction(expression, null, { timeout: timeoutMs, polling: 50 }).catch(async (e) => {
     const v = await page.evaluate(() => ({

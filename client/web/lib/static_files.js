@@ -1,5 +1,7 @@
 // Serves the page: GET of files under public/, nothing else. "/" is
 // index.html; names are resolved inside the folder (no "..", no dot files).
+// A path that does not decode (a lone "%") is 400; nothing a request holds
+// throws out of the handler.
 import fs from 'node:fs/promises';
 import path from 'node:path';
 
@@ -19,8 +21,14 @@ export function staticHandler(root) {
       res.writeHead(405, { Allow: 'GET, HEAD' }).end('method not allowed\n');
       return;
     }
-    const url = new URL(req.url, 'http://gateway');
-    const name = url.pathname === '/' ? 'index.html' : decodeURIComponent(url.pathname.slice(1));
+    let name;
+    try {
+      const url = new URL(req.url, 'http://gateway');
+      name = url.pathname === '/' ? 'index.html' : decodeURIComponent(url.pathname.slice(1));
+    } catch {
+      res.writeHead(400).end('bad request path\n');
+      return;
+    }
     const file = path.resolve(base, name);
     const type = kTypes[path.extname(file)];
     if (!file.startsWith(base + path.sep) || name.split('/').some((p) => p.startsWith('.')) ||

@@ -52,7 +52,13 @@ export class ViewerConnection {
     this.dropped = 0;       // frames the gateway replaced before sending
     this.closed = false;
 
-    ws.on('message', (data, isBinary) => this.onMessage(data, isBinary));
+    // An error nothing else caught ends this connection only, with a message;
+    // the gateway and every other tab carry on.
+    ws.on('message', (data, isBinary) => this.onMessage(data, isBinary).catch((e) => {
+      this.log(`closing a connection after an unexpected error: ${e?.stack ?? e}`);
+      this.send({ type: 'error', what: 'gateway', message: `internal error: ${e?.message ?? e}` });
+      this.ws.close(1011, 'internal error');
+    }));
     ws.on('close', () => this.onClose());
     this.send({ type: 'hello', server: client.address });
     this.probe();
@@ -78,6 +84,9 @@ export class ViewerConnection {
     try {
       if (isBinary) throw new Error('binary messages are not accepted');
       message = JSON.parse(data.toString('utf8'));
+      if (message === null || typeof message !== 'object' || Array.isArray(message)) {
+        throw new Error('a message is a JSON object with a "type"');
+      }
     } catch (e) {
       this.send({ type: 'error', what: 'message', message: `bad message: ${e.message}` });
       return;

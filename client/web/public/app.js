@@ -25,6 +25,7 @@ const state = {
   lastHeader: null,     // header of the newest frame received
   framesReceived: 0,
   framesDrawn: 0,
+  framesSuperseded: 0,  // received while another waited undrawn: replaced, never drawn
   peakDisplacementMm: 0,
   lastGrabMm: null,
   errors: [],           // {what, message}
@@ -182,6 +183,7 @@ function onFrame(frame) {
   state.lastHeader = h;
   state.framesReceived += 1;
   state.peakDisplacementMm = Math.max(state.peakDisplacementMm, h.max_displacement_mm);
+  if (waiting) state.framesSuperseded += 1;  // newest wins: the waiting one is dropped
   waiting = frame;
   if (!drawing) drawNext();
 }
