@@ -34,6 +34,10 @@ Result<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(const Options& op
   m->sessions_ = &prometheus::BuildGauge().Name("vpm_sessions").Help("Open sessions").Register(r).Add({});
   m->volumes_ = &prometheus::BuildGauge().Name("vpm_volumes").Help("Volumes held").Register(r).Add({});
   m->meshes_ = &prometheus::BuildGauge().Name("vpm_meshes").Help("Meshes held").Register(r).Add({});
+  m->dropped_ = &prometheus::BuildCounter()
+                     .Name("vpm_dropped_jobs_total")
+                     .Help("Queued calls dropped before they ran: cancelled, or past their deadline")
+                     .Register(r);
   m->volume_bytes_ = &prometheus::BuildGauge().Name("vpm_volume_bytes")
                           .Help("Host and GPU bytes of the volumes held").Register(r).Add({});
   if (!options.listen.empty()) {
@@ -69,6 +73,10 @@ void ServiceMetrics::Volumes(int64_t bytes, int64_t count) {
   volumes_->Set(double(count));
 }
 void ServiceMetrics::Meshes(int64_t count) { meshes_->Set(double(count)); }
+void ServiceMetrics::DroppedJob(const std::string& method, const std::string& reason) {
+  dropped_->Add({{"method", method}, {"reason", reason}}).Increment();
+  ++dropped_total_;
+}
 void ServiceMetrics::StreamOpened() { streams_opened_->Increment(); }
 void ServiceMetrics::StreamClosed() { streams_closed_->Increment(); }
 

@@ -3,10 +3,13 @@
 //   vpm_request_errors_total{method,code}  the non-OK ones
 //   vpm_frame_stage_ms{stage}               fem, warp, render, encode, queue, total
 //   vpm_frames_total, vpm_frames_superseded_total
-//   vpm_sessions, vpm_volumes, vpm_volume_bytes
+//   vpm_sessions, vpm_volumes, vpm_volume_bytes, vpm_meshes
+//   vpm_dropped_jobs_total{method,reason}  queued calls dropped: cancelled, deadline
 //   vpm_streams_opened_total, vpm_streams_closed_total (equal when idle)
 #pragma once
 
+#include <atomic>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -35,11 +38,18 @@ class ServiceMetrics {
   void Sessions(int64_t open);
   void Volumes(int64_t bytes, int64_t count);
   void Meshes(int64_t count);
+  // A queued call dropped before it ran; reason "cancelled" or "deadline".
+  void DroppedJob(const std::string& method, const std::string& reason);
   void StreamOpened();
   void StreamClosed();
 
   // Counters for tests and the shutdown log.
   double streams_opened() const { return streams_opened_->Value(); }
+  int64_t dropped_jobs() const { return dropped_total_.load(); }
+  // Finished calls of `method` with status `code` ("OK", "DEADLINE_EXCEEDED", ...).
+  double requests(const std::string& method, const std::string& code) const {
+    return requests_->Add({{"method", method}, {"code", code}}).Value();
+  }
   double streams_closed() const { return streams_closed_->Value(); }
   double superseded() const { return superseded_->Value(); }
   double frames() const { return frames_->Value(); }
@@ -64,6 +74,8 @@ class ServiceMetrics {
   prometheus::Gauge* volumes_ = nullptr;
   prometheus::Gauge* volume_bytes_ = nullptr;
   prometheus::Gauge* meshes_ = nullptr;
+  prometheus::Family<prometheus::Counter>* dropped_ = nullptr;
+  std::atomic<int64_t> dropped_total_{0};
 };
 
 }  // namespace vpm::service

@@ -16,12 +16,31 @@ grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context
     Done(reactor, method, auth);
   } else if (pool == nullptr) {
     Done(reactor, method, fn());
-  } else if (!pool->Post([this, reactor, method, fn = std::move(fn)] {
+  } else if (!pool->Post([this, context, reactor, method, fn = std::move(fn)] {
+               // Work nobody waits for any more is dropped before it starts:
+               // a cancelled or expired call must not delay the calls behind it.
+               if (Status gone = CallGone(*context); !gone.ok()) {
+                 service_->metrics->DroppedJob(method, gone.code() == absl::StatusCode::kCancelled
+                                                           ? "cancelled"
+                                                           : "deadline");
+                 Done(reactor, method, gone);
+                 return;
+               }
                Done(reactor, method, fn());
              })) {
     Done(reactor, method, absl::UnavailableError("the server is shutting down"));
   }
   return reactor;
+}
+
+Status VpmService::CallGone(grpc::CallbackServerContext& context) {
+  if (context.IsCancelled()) {
+    return absl::CancelledError("the call was cancelled before its turn on the server");
+  }
+  if (std::chrono::system_clock::now() > context.deadline()) {
+    return absl::DeadlineExceededError("the call's deadline passed while it waited in the queue");
+  }
+  return absl::OkStatus();
 }
 
 void VpmService::Done(grpc::ServerUnaryReactor* reactor, const char* method,

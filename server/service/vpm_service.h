@@ -60,6 +60,8 @@ class VpmService final : public v2::Vpm::CallbackService {
   grpc::ServerUnaryReactor* Unary(grpc::CallbackServerContext* context, const char* method,
                                   WorkerPool* pool, std::function<Status()> fn);
   void Done(grpc::ServerUnaryReactor* reactor, const char* method, const Status& status);
+  // Cancelled or DeadlineExceeded when the client no longer waits for the call.
+  static Status CallGone(grpc::CallbackServerContext& context);
   void FillSessionInfo(const Session& session, v2::SessionInfo* info) const;
 
   ServiceContext* service_;
