@@ -5,11 +5,18 @@
 // VPM_TOKEN and stays here: the browser never sees it.
 //
 //   node gateway.js [--listen HOST:PORT] [--server HOST:PORT] [--proto FILE]
+//                   [--allowed-host NAME ...]
 //
 // --listen defaults to $VPM_WEB_LISTEN or 127.0.0.1:8080 (port 0 picks a
 // free one); --server to $VPM_SERVER or 127.0.0.1:50051. Prints
 // "vpm-web listening on http://HOST:PORT/" once ready. GET /healthz answers
 // 200 while the gateway runs (whether or not vpm-server is up).
+//
+// Every other request, the WebSocket upgrade included, must name an allowed
+// host in its Host header (--allowed-host, repeatable, or the comma list in
+// $VPM_WEB_ALLOWED_HOSTS; localhost, 127.0.0.1 and ::1 always): a page on
+// another site whose name an attacker points at this machine (DNS
+// rebinding) sends its own name as Host and is refused with 421.
 import http from 'node:http';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -37,17 +44,37 @@ function parseOptions(argv) {
       listen: { type: 'string', default: process.env.VPM_WEB_LISTEN || '127.0.0.1:8080' },
       server: { type: 'string', default: process.env.VPM_SERVER || '127.0.0.1:50051' },
       proto: { type: 'string', default: kDefaultProtoPath },
+      'allowed-host': { type: 'string', multiple: true, default: [] },
       help: { type: 'boolean', default: false },
     },
   });
   if (values.help) {
     process.stdout.write('usage: node gateway.js [--listen HOST:PORT] [--server HOST:PORT] ' +
-                         '[--proto vpm.proto]\n  the token for vpm-server comes from VPM_TOKEN; ' +
-                         'VPM_WEB_LISTEN and VPM_SERVER set the defaults of --listen and --server\n');
+                         '[--proto vpm.proto] [--allowed-host NAME ...]\n' +
+                         '  the token for vpm-server comes from VPM_TOKEN; ' +
+                         'VPM_WEB_LISTEN and VPM_SERVER set the defaults of --listen and --server;\n' +
+                         '  --allowed-host: a name browsers use to reach the gateway (localhost, ' +
+                         '127.0.0.1 and ::1 always are; also VPM_WEB_ALLOWED_HOSTS=a,b)\n');
     process.exit(0);
   }
   splitHostPort(values.server, '--server');
-  return { ...values, listen: splitHostPort(values.listen, '--listen') };
+  const allowedHosts = new Set(['localhost', '127.0.0.1', '::1']);
+  const fromEnv = (process.env.VPM_WEB_ALLOWED_HOSTS ?? '').split(',');
+  for (const name of [...values['allowed-host'], ...fromEnv]) {
+    if (name.trim()) allowedHosts.add(name.trim().toLowerCase().replace(/^\[(.*)\]$/, '$1'));
+  }
+  return { ...values, allowedHosts, listen: splitHostPort(values.listen, '--listen') };
+}
+
+// The host name of a Host header ("name:port", "[v6]:port"), lower case;
+// null when it does not parse.
+function hostName(header) {
+  if (typeof header !== 'string' || header === '') return null;
+  try {
+    return new URL(`http://${header}/`).hostname.toLowerCase().replace(/^\[(.*)\]$/, '$1');
+  } catch {
+    return null;
+  }
 }
 
 // Only pages served by this gateway may open its WebSocket: another site in
@@ -74,15 +101,21 @@ function main() {
     address: options.server, token: process.env.VPM_TOKEN ?? '', protoPath: options.proto });
   const log = (line) => process.stderr.write(`vpm-web: ${line}\n`);
   const serveFile = staticHandler(path.join(here, 'public'));
+  const allowedHost = (req) => options.allowedHosts.has(hostName(req.headers.host));
   const server = http.createServer((req, res) => {
     if (req.url === '/healthz') {
       res.writeHead(200, { 'Content-Type': 'text/plain' }).end('ok\n');
+    } else if (!allowedHost(req)) {
+      res.writeHead(421, { 'Content-Type': 'text/plain' })
+        .end(`vpm-web: '${hostName(req.headers.host) ?? ''}' is not an allowed host ` +
+             '(start the gateway with --allowed-host NAME)\n');
     } else {
       serveFile(req, res);
     }
   });
   const wss = new WebSocketServer({
-    server, path: '/ws', maxPayload: kMaxControlMessageBytes, verifyClient: sameOrigin });
+    server, path: '/ws', maxPayload: kMaxControlMessageBytes,
+    verifyClient: (info) => allowedHost(info.req) && sameOrigin(info) });
   wss.on('connection', (ws) => new ViewerConnection({ ws, client, log }));
 
   server.listen(options.listen.port, options.listen.host, () => {

@@ -7,6 +7,7 @@
 // Usage: node --test gateway.test.mjs (SOURCE is found from this file).
 import assert from 'node:assert/strict';
 import { spawn } from 'node:child_process';
+import http from 'node:http';
 import { createRequire } from 'node:module';
 import path from 'node:path';
 import { after, before, test } from 'node:test';
@@ -185,6 +186,29 @@ test('Gateway_RefusesForeignOriginsAndFilesOutsideThePage', async () => {
     assert.equal(r.status, status, url);
   }
   assert.equal((await fetch(base + '/', { method: 'POST' })).status, 405);
+});
+
+// DNS rebinding: a page on a foreign name that resolves to the gateway sends
+// that name as Host (and as Origin, so same-origin alone would pass).
+test('Gateway_RefusesHostsNotAllowed', async () => {
+  const port = new URL(base).port;
+  const evil = `rebind.example:${port}`;
+  const status = await new Promise((resolve, reject) => {
+    http.get({ host: '127.0.0.1', port, path: '/', headers: { Host: evil } },
+             (res) => { res.resume(); resolve(res.statusCode); }).on('error', reject);
+  });
+  assert.equal(status, 421);
+  await assert.rejects(connect({ Host: evil, Origin: `http://${evil}` }), /Unexpected server response/);
+  const local = await new Promise((resolve, reject) => {
+    http.get({ host: '127.0.0.1', port, path: '/', headers: { Host: `localhost:${port}` } },
+             (res) => { res.resume(); resolve(res.statusCode); }).on('error', reject);
+  });
+  assert.equal(local, 200);
+  const health = await new Promise((resolve, reject) => {
+    http.get({ host: '127.0.0.1', port, path: '/healthz', headers: { Host: evil } },
+             (res) => { res.resume(); resolve(res.statusCode); }).on('error', reject);
+  });
+  assert.equal(health, 200);  // probes reach the pod by its address
 });
 
 test('Gateway_RejectsMalformedMessages', async () => {
