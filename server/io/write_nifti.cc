@@ -1,9 +1,9 @@
 #include "server/io/write_nifti.h"
 
 #include <cstring>
-#include <fstream>
 #include <string>
 
+#include "server/common/write_file.h"
 #include "server/io/byte_order.h"
 #include "server/io/gzip_stream.h"
 #include "server/io/nifti_geometry.h"
@@ -83,13 +83,8 @@ Status WriteNifti(const Volume& volume, const std::filesystem::path& path) {
   if (name.size() >= 3 && name.compare(name.size() - 3, 3, ".gz") == 0) {
     ASSIGN_OR_RETURN(bytes, GzipCompress(*bytes));
   }
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return absl::NotFoundError(StrCat(name, ": cannot create the file"));
-  out.write(reinterpret_cast<const char*>(bytes->data()),
-            static_cast<std::streamsize>(bytes->size()));
-  out.close();
-  if (!out) return absl::InternalError(StrCat(name, ": write failed (disk full?)"));
-  return absl::OkStatus();
+  return WriteFile(
+      path, std::string_view(reinterpret_cast<const char*>(bytes->data()), bytes->size()));
 }
 
 }  // namespace vpm

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "server/common/write_file.h"
 #include "server/mesh/tet_quality.h"
 
 namespace vpm {
@@ -251,12 +252,7 @@ Status WriteMeshJson(const ProxyMesh& mesh, const std::string& path) {
   if (!finite.ok()) {
     return absl::InvalidArgumentError(StrCat("WriteMeshJson(", path, "): ", finite.message()));
   }
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return absl::NotFoundError(StrCat("WriteMeshJson: cannot open ", path, " for writing"));
-  out << MeshToJson(mesh).dump() << '\n';
-  out.close();
-  if (!out) return absl::DataLossError(StrCat("WriteMeshJson: writing ", path, " failed"));
-  return absl::OkStatus();
+  return WriteFile(path, MeshToJson(mesh).dump() + '\n');
 }
 
 Result<ProxyMesh> ReadMeshJson(const std::string& path) {

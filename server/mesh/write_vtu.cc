@@ -1,7 +1,9 @@
 #include "server/mesh/write_vtu.h"
 
-#include <fstream>
 #include <limits>
+#include <sstream>
+
+#include "server/common/write_file.h"
 
 namespace vpm {
 namespace {
@@ -32,8 +34,7 @@ void WritePointArray(std::ostream& out, const ProxyMesh& mesh, const char* type,
 }  // namespace
 
 Status WriteVtu(const ProxyMesh& mesh, const std::string& path) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return absl::NotFoundError(StrCat("WriteVtu: cannot open ", path, " for writing"));
+  std::ostringstream out;
   out.precision(std::numeric_limits<double>::max_digits10);
   out << "<?xml version=\"1.0\"?>\n"
       << "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
@@ -71,9 +72,7 @@ Status WriteVtu(const ProxyMesh& mesh, const std::string& path) {
       << "    </Piece>\n"
       << "  </UnstructuredGrid>\n"
       << "</VTKFile>\n";
-  out.close();
-  if (!out) return absl::DataLossError(StrCat("WriteVtu: writing ", path, " failed"));
-  return absl::OkStatus();
+  return WriteFile(path, out.str());
 }
 
 }  // namespace vpm
