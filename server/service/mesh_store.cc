@@ -78,10 +78,10 @@ Result<std::shared_ptr<const MeshEntry>> MeshStore::Refine(std::string_view mesh
 std::shared_ptr<const MeshEntry> MeshStore::FindLocked(
     const std::optional<std::string>& key) const {
   if (!key) return nullptr;
-  for (const auto& [id, entry] : meshes_) {
-    if (entry->key == key) {
-      last_used_[id] = ++tick_;
-      return entry;
+  for (const auto& [id, held] : meshes_) {
+    if (held.entry->key == key) {
+      held.last_used = ++tick_;
+      return held.entry;
     }
   }
   return nullptr;
@@ -91,23 +91,21 @@ Status MeshStore::MakeRoomLocked() {
   while (static_cast<int64_t>(meshes_.size()) >= options_.max_meshes) {
     // Only the store holds an unpinned mesh. The count cannot rise from 1
     // meanwhile: new references come from this store, under this lock.
-    std::string oldest;
-    int64_t oldest_tick = 0;
-    for (const auto& [id, entry] : meshes_) {
-      const int64_t used = last_used_[id];
-      if (entry.use_count() == 1 && (oldest.empty() || used < oldest_tick)) {
-        oldest = id;
-        oldest_tick = used;
+    auto oldest = meshes_.end();
+    for (auto it = meshes_.begin(); it != meshes_.end(); ++it) {
+      if (it->second.entry.use_count() == 1 &&
+          (oldest == meshes_.end() || it->second.last_used < oldest->second.last_used)) {
+        oldest = it;
       }
     }
-    if (oldest.empty()) {
+    if (oldest == meshes_.end()) {
       return absl::ResourceExhaustedError(
           StrCat("the server holds its maximum of ", options_.max_meshes,
                  " meshes and sessions use every one of them; close a session (vpm session "
                  "close) or raise --max-meshes"));
     }
     meshes_.erase(oldest);
-    last_used_.erase(oldest);
+    ChangedLocked();
   }
   return absl::OkStatus();
 }
@@ -118,8 +116,7 @@ Result<std::shared_ptr<const MeshEntry>> MeshStore::Add(std::shared_ptr<MeshEntr
   if (auto held = FindLocked(entry->key)) return held;
   RETURN_IF_ERROR(MakeRoomLocked());
   entry->id = StrCat("mesh-", next_id_++);
-  meshes_.emplace(entry->id, entry);
-  last_used_[entry->id] = ++tick_;
+  meshes_.emplace(entry->id, Held{entry, ++tick_});
   ChangedLocked();
   return std::shared_ptr<const MeshEntry>(entry);
 }
@@ -128,19 +125,18 @@ Result<std::shared_ptr<const MeshEntry>> MeshStore::Get(std::string_view id) con
   std::lock_guard lock(mutex_);
   auto it = meshes_.find(id);
   if (it == meshes_.end()) return absl::NotFoundError(StrCat("mesh_id: no mesh '", id, "'"));
-  last_used_[it->first] = ++tick_;
-  return it->second;
+  it->second.last_used = ++tick_;
+  return it->second.entry;
 }
 
 Status MeshStore::Delete(std::string_view id) {
   std::lock_guard lock(mutex_);
   auto it = meshes_.find(id);
   if (it == meshes_.end()) return absl::NotFoundError(StrCat("mesh_id: no mesh '", id, "'"));
-  if (it->second.use_count() > 1) {
+  if (it->second.entry.use_count() > 1) {
     return absl::FailedPreconditionError(
         StrCat("mesh ", id, " is in use by a session; close the session first"));
   }
-  last_used_.erase(it->first);
   meshes_.erase(it);
   ChangedLocked();
   return absl::OkStatus();
@@ -148,11 +144,7 @@ Status MeshStore::Delete(std::string_view id) {
 
 void MeshStore::ForgetVolume(std::string_view volume_id) {
   std::lock_guard lock(mutex_);
-  std::erase_if(meshes_, [&](const auto& kv) {
-    if (kv.second->volume->id != volume_id) return false;
-    last_used_.erase(kv.first);
-    return true;
-  });
+  std::erase_if(meshes_, [&](const auto& kv) { return kv.second.entry->volume->id == volume_id; });
   ChangedLocked();
 }
 

@@ -68,8 +68,11 @@ class MeshStore {
   std::optional<LatticeCostsGpu> costs_;
   std::mutex costs_mutex_;  // the step-1 kernel's buffers are not shared
   mutable std::mutex mutex_;
-  std::map<std::string, std::shared_ptr<const MeshEntry>, std::less<>> meshes_;
-  mutable std::map<std::string, int64_t, std::less<>> last_used_;  // id -> use tick
+  struct Held {
+    std::shared_ptr<const MeshEntry> entry;  // use_count() == 1: no session holds it
+    mutable int64_t last_used = 0;           // tick_ of the last Build, Refine or Get
+  };
+  std::map<std::string, Held, std::less<>> meshes_;
   mutable int64_t tick_ = 0;
   int64_t next_id_ = 1;
 };
