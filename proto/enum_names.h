@@ -1,8 +1,8 @@
 // The API's enums by the names the CLI flags, interaction scripts, the web
 // page and the JSON outputs use ("dvr", "png", "point", "spread",
 // "lattice"), shared by the server and the clients. FromName returns nullopt
-// for a name it does not know; Name gives the default's name for
-// UNSPECIFIED and "unknown" for a value outside the enum.
+// for a name it does not know; VertexKindName gives "unknown" for a value
+// outside the enum.
 #pragma once
 
 #include <optional>
@@ -16,15 +16,6 @@ inline std::optional<v2::RenderMode> RenderModeFromName(std::string_view name) {
   if (name == "dvr") return v2::RENDER_MODE_DVR;
   if (name == "mip") return v2::RENDER_MODE_MIP;
   return std::nullopt;
-}
-
-inline std::string_view RenderModeName(v2::RenderMode mode) {
-  switch (mode) {
-    case v2::RENDER_MODE_UNSPECIFIED:
-    case v2::RENDER_MODE_DVR: return "dvr";
-    case v2::RENDER_MODE_MIP: return "mip";
-    default: return "unknown";
-  }
 }
 
 inline std::optional<v2::Encoding> EncodingFromName(std::string_view name) {
