@@ -330,6 +330,27 @@ uint pack_rgba(vec3 rgb) {
   return c.r | (c.g << 8) | (c.b << 16) | (255u << 24);
 }
 
+// Narrows [t_near, t_far] to the part of the ray inside every clip half
+// space (crop box faces and clip planes, server/raycast/clip_region.h): the
+// kept region is convex, so one interval; as ClipRayInterval on the CPU.
+void clip_ray(vec3 eye, vec3 dir, inout float t_near, inout float t_far) {
+  for (int i = 0; i < p.clip.x; ++i) {
+    vec4 plane = p.clip_planes[i];
+    float along = dot(plane.xyz, dir);
+    float inside = dot(plane.xyz, eye) - plane.w;
+    if (abs(along) < 1e-20) {
+      if (inside < 0.0) t_far = -1.0;
+    } else {
+      float t = -inside / along;
+      if (along > 0.0) {
+        t_near = max(t_near, t);
+      } else {
+        t_far = min(t_far, t);
+      }
+    }
+  }
+}
+
 // The pixel of this invocation: lavapipe runs 8 consecutive invocations of
 // a workgroup as one SIMD vector, and a vector costs as much as its slowest
 // lane; each 8 consecutive invocations take a 4x2 block of the 8x8 tile
@@ -359,6 +380,7 @@ void main() {
   vec3 tmin = min(ta, tb), tmax = max(ta, tb);
   float t_near = max(max(max(tmin.x, tmin.y), tmin.z), 0.0);
   float t_far = min(min(tmax.x, tmax.y), tmax.z);
+  clip_ray(eye, dir, t_near, t_far);
   uint out_index = uint(px.y) * uint(p.image.x) + uint(px.x);
   if (t_near > t_far) {
     pixels[out_index] = pack_rgba(p.background.rgb);

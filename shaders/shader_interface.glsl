@@ -27,6 +27,7 @@ struct LatticeCostsPush {
 #define VPM_RAYCAST_EARLY_TERMINATION 4
 #define VPM_RAYCAST_HAS_MAP 8
 #define VPM_RAYCAST_COUNT_SAMPLES 16
+#define VPM_RAYCAST_MAX_CLIP_PLANES 16
 
 struct BrickMinMaxPush {
   ivec4 dims;    // (nx, ny, nz, 0) voxels
@@ -57,6 +58,8 @@ struct RaycastParams {
   vec4 shading;     // (ambient, diffuse, specular, shininess)
   vec4 map_dims;    // (Mx, My, Mz, 0) backward-map grid points
   vec4 gradient;    // (|grad| at which shading is half on, value/mm; 0, 0, 0)
+  ivec4 clip;       // (planes used, 0, 0, 0)
+  vec4 clip_planes[VPM_RAYCAST_MAX_CLIP_PLANES];  // keep dot(xyz, x) >= w (mm)
 };
 
 struct UpscalePush {
@@ -90,6 +93,17 @@ struct WarpVolumePush {
   vec4 spacing_mm;    // (sx, sy, sz, 0) mm
   vec4 extent_mm;     // ((n-1)*s, 0) mm, the image box
   vec4 map_dims;      // (mx, my, mz, 0) backward-map grid points, as floats
+};
+
+struct SliceVolumePush {
+  ivec4 dims;         // (nx, ny, nz, 0) voxels
+  vec4 inv_spacing;   // (1/sx, 1/sy, 1/sz, 0) 1/mm
+  vec4 extent_mm;     // ((n-1)*s, 0) mm, the image box
+  vec4 map_dims;      // (mx, my, mz, 0) backward-map grid points, as floats
+  vec4 origin_mm;     // physical corner of pixel (0, 0), mm
+  vec4 step_u_mm;     // one pixel right, mm
+  vec4 step_v_mm;     // one pixel down, mm
+  ivec4 image;        // (width, height, 0, 0) pixels
 };
 
 #endif

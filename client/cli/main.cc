@@ -12,6 +12,7 @@
 #include "client/cli/render_command.h"
 #include "client/cli/server_flags.h"
 #include "client/cli/session_commands.h"
+#include "client/cli/slice_command.h"
 #include "client/cli/volume_commands.h"
 
 int main(int argc, char** argv) {
@@ -24,6 +25,7 @@ int main(int argc, char** argv) {
   vpm::cli::AddMeshCommand(app, &server_flags, &exit_code);
   vpm::cli::AddCompareMeshesCommand(app, &exit_code);
   vpm::cli::AddRenderCommand(app, &server_flags, &exit_code);
+  vpm::cli::AddSliceCommand(app, &exit_code);
   vpm::cli::AddRemoteVolumeCommands(app, &server_flags, &exit_code);
   vpm::cli::AddRemoteMeshCommands(app, &server_flags, &exit_code);
   vpm::cli::AddSessionCommands(app, &server_flags, &exit_code);

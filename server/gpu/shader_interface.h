@@ -70,6 +70,7 @@ inline constexpr int kRaycastSkipping = 2;
 inline constexpr int kRaycastEarlyTermination = 4;
 inline constexpr int kRaycastHasMap = 8;
 inline constexpr int kRaycastCountSamples = 16;
+inline constexpr int kRaycastMaxClipPlanes = 16;  // VPM_RAYCAST_MAX_CLIP_PLANES
 struct RaycastParams {
   glm::vec4 eye_mm;      // xyz eye (physical mm); w: step_mm
   glm::vec4 forward;     // xyz unit view direction
@@ -85,8 +86,12 @@ struct RaycastParams {
   glm::vec4 shading;     // (ambient, diffuse, specular, shininess)
   glm::vec4 map_dims;    // (Mx, My, Mz, 0) backward-map grid points
   glm::vec4 gradient;    // (|grad| at which shading is half on, value/mm; 0, 0, 0)
+  glm::ivec4 clip;       // (planes used, 0, 0, 0)
+  // Half spaces of physical space a sample must lie in: xyz unit normal n,
+  // w offset d (mm), keeps dot(n, x) >= d (server/raycast/clip_region.h).
+  glm::vec4 clip_planes[kRaycastMaxClipPlanes];
 };
-static_assert(sizeof(RaycastParams) == 224);
+static_assert(sizeof(RaycastParams) == 240 + 16 * kRaycastMaxClipPlanes);
 
 // Uniform block RenderLutBlock (std140): colour (rgb) and opacity for the
 // frame's step (a) at value_lo + i / (entries per value unit).
@@ -143,5 +148,18 @@ struct WarpVolumePush {
   glm::vec4 map_dims;      // (mx, my, mz, 0) backward-map grid points, as floats
 };
 static_assert(sizeof(WarpVolumePush) == 80);
+
+// slice_volume.comp: J on a plane of pixels (server/raycast/slice_sampler.h).
+struct SliceVolumePush {
+  glm::ivec4 dims;         // (nx, ny, nz, 0) voxels
+  glm::vec4 inv_spacing;   // (1/sx, 1/sy, 1/sz, 0) 1/mm
+  glm::vec4 extent_mm;     // ((n-1)*s, 0) mm, the image box
+  glm::vec4 map_dims;      // (mx, my, mz, 0) backward-map grid points, as floats
+  glm::vec4 origin_mm;     // physical corner of pixel (0, 0), mm
+  glm::vec4 step_u_mm;     // one pixel right, mm
+  glm::vec4 step_v_mm;     // one pixel down, mm
+  glm::ivec4 image;        // (width, height, 0, 0) pixels
+};
+static_assert(sizeof(SliceVolumePush) == 128);
 
 }  // namespace vpm::gpu

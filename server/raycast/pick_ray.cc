@@ -46,10 +46,24 @@ std::optional<std::pair<double, double>> ClipToBox(const VolumeGeometry& g, cons
 
 std::optional<glm::dvec3> PickAlongRay(const Volume& volume, const RenderPreset& preset,
                                        RenderMode mode, const glm::dvec3& eye_mm,
-                                       const glm::dvec3& direction) {
+                                       const glm::dvec3& direction,
+                                       std::span<const glm::dvec4> clip_planes) {
   const VolumeGeometry& g = volume.geometry();
-  const auto range = ClipToBox(g, eye_mm, direction);
+  auto range = ClipToBox(g, eye_mm, direction);
   if (!range) return std::nullopt;
+  for (const glm::dvec4& plane : clip_planes) {
+    const glm::dvec3 n(plane);
+    const double along = glm::dot(n, direction);
+    const double inside = glm::dot(n, eye_mm) - plane.w;
+    if (std::abs(along) < 1e-12) {
+      if (inside < 0.0) return std::nullopt;
+    } else if (along > 0.0) {
+      range->first = std::max(range->first, -inside / along);
+    } else {
+      range->second = std::min(range->second, -inside / along);
+    }
+  }
+  if (range->first > range->second) return std::nullopt;
   const double step =
       0.5 * std::min({g.spacing_mm.x, g.spacing_mm.y, g.spacing_mm.z});  // the still step
   const RenderLut lut = BakeRenderLut(preset, step);  // opacity per step

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <optional>
+#include <span>
 
 #include <glm/glm.hpp>
 
@@ -24,8 +25,11 @@ inline constexpr double kPickOpacity = 0.5;  // composited opacity of a DVR pick
 // `eye_mm` and the unit `direction` in physical voxel space (mm). nullopt
 // when the ray misses the volume's box or stays below kPickOpacity (DVR) /
 // sees only the background value (MIP).
+// `clip_planes`: the frame's ClipPlanesInPhysical; the ray only looks at
+// what the frame shows, so a pick on a cut lands on the cut face.
 std::optional<glm::dvec3> PickAlongRay(const Volume& volume, const RenderPreset& preset,
                                        RenderMode mode, const glm::dvec3& eye_mm,
-                                       const glm::dvec3& direction);
+                                       const glm::dvec3& direction,
+                                       std::span<const glm::dvec4> clip_planes = {});
 
 }  // namespace vpm

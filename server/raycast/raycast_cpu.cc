@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "server/common/clock.h"
+#include "server/raycast/clip_region.h"
 
 namespace vpm {
 namespace {
@@ -243,8 +244,10 @@ uint32_t Caster::Pixel(int px, int py, int64_t& taken) const {
   const vec3 ta = (vec3(0.0f) - eye) * inv_dir;
   const vec3 tb = (extent_ - eye) * inv_dir;
   const vec3 tmin = glm::min(ta, tb), tmax = glm::max(ta, tb);
-  const float t_near = std::max(std::max(std::max(tmin.x, tmin.y), tmin.z), 0.0f);
-  const float t_far = std::min(std::min(tmax.x, tmax.y), tmax.z);
+  float t_near = std::max(std::max(std::max(tmin.x, tmin.y), tmin.z), 0.0f);
+  float t_far = std::min(std::min(tmax.x, tmax.y), tmax.z);
+  ClipRayInterval(std::span<const vec4>(p_.clip_planes, size_t(p_.clip.x)), eye, dir, t_near,
+                  t_far);
   const vec3 background(p_.background);
   if (t_near > t_far) return PackRgba(background);
   const float step = p_.eye_mm.w;

@@ -67,6 +67,7 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   RETURN_IF_ERROR(request.camera.Validate());
   RETURN_IF_ERROR(ValidateRenderPreset(request.preset));
   RETURN_IF_ERROR(CheckSettings(request.settings));
+  RETURN_IF_ERROR(ValidateClipRegion(request.clip));
   const MipWindow window = request.mip_window.value_or(request.preset.mip_window);
   if (!std::isfinite(window.level) || !std::isfinite(window.width) || !(window.width > 0.0)) {
     return absl::InvalidArgumentError("MIP window needs a finite level and width > 0");
@@ -118,6 +119,10 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
                         float(s.shininess));
   p.map_dims = glm::vec4(float(map_dims[0]), float(map_dims[1]), float(map_dims[2]), 0.0f);
   p.gradient = glm::vec4(float(request.preset.shading_gradient), 0.0f, 0.0f, 0.0f);
+  const std::vector<glm::dvec4> planes = ClipPlanesInPhysical(request.clip, geometry);
+  static_assert(kMaxClipPlanes == gpu::kRaycastMaxClipPlanes);
+  p.clip = glm::ivec4(int(planes.size()), 0, 0, 0);
+  for (size_t i = 0; i < planes.size(); ++i) p.clip_planes[i] = glm::vec4(planes[i]);
   return setup;
 }
 

@@ -15,6 +15,7 @@
 #include "server/gpu/gpu_image3d.h"
 #include "server/gpu/shader_interface.h"
 #include "server/raycast/camera.h"
+#include "server/raycast/clip_region.h"
 #include "server/raycast/overlay.h"
 #include "server/raycast/render_presets.h"
 #include "server/volume/gpu_volume.h"
@@ -101,6 +102,8 @@ struct RenderRequest {
   // image into a buffer of their own every frame (a transfer copy).
   const gpu::GpuBuffer* backward_map_texels = nullptr;
   RaycastSettings settings;
+  // What part of the deformed volume shows (world frame); empty: all of it.
+  ClipRegion clip;
   OverlayData overlay;
 };
 

@@ -107,6 +107,18 @@ Result<SceneStepTimings> DeformableScene::Release() {
   return AfterStep({.fem_ms = MsSince(t0)});
 }
 
+ClipRegion DeformableScene::ViewClip(const SceneView& view) const {
+  ClipRegion clip = view.clip;
+  if (view.view_cut) {
+    const VolumeGeometry& g = volume_->geometry();
+    const glm::dvec3 at_mm =
+        grab_point_mm_ ? *grab_point_mm_ + drag_offset_mm_ : view.camera.Target();
+    clip.planes.push_back(
+        CutPlaneFacing(g.PhysicalToWorld(at_mm), g.direction * view.camera.Forward()));
+  }
+  return clip;
+}
+
 Result<Frame> DeformableScene::Render(const SceneView& view, SceneStepTimings* map_update) {
   ASSIGN_OR_RETURN(SceneStepTimings sync, SyncMap());
   if (map_update != nullptr) *map_update = sync;
@@ -117,6 +129,7 @@ Result<Frame> DeformableScene::Render(const SceneView& view, SceneStepTimings* m
   request.quality = view.quality;
   request.width = view.width;
   request.height = view.height;
+  request.clip = ViewClip(view);
   request.volume = gpu_volume_;
   request.backward_map = &map_->image();
   // Frames between drag steps (orbit, zoom, preset of the same mode) reuse
@@ -132,6 +145,31 @@ Result<Frame> DeformableScene::Render(const SceneView& view, SceneStepTimings* m
     }
   }
   return renderer_->Render(request);
+}
+
+Result<SliceFrame> DeformableScene::RenderSlice(const SliceView& view) {
+  RETURN_IF_ERROR(SyncMap().status());
+  SliceFrame frame;
+  frame.window = view.window.value_or(DefaultSliceWindow(*volume_));
+  RETURN_IF_ERROR(ValidateSliceWindow(frame.window));
+  ASSIGN_OR_RETURN(frame.grid, MakeSliceGrid(view.plane, volume_->geometry(), view.pixel_mm));
+  if (!slice_sampler_) {
+    ASSIGN_OR_RETURN(SliceSampler sampler, SliceSampler::Create(*context_));
+    slice_sampler_.emplace(std::move(sampler));
+  }
+  ASSIGN_OR_RETURN(const std::vector<float> values,
+                   slice_sampler_->Sample(*gpu_volume_, map_->image(), map_->dims(), frame.grid,
+                                          &frame.gpu_ms));
+  frame.rgba = SliceToRgba(values, frame.grid.width, frame.grid.height, frame.window);
+  if (view.overlay) {
+    const std::vector<glm::dvec3> positions = fem_->Positions();
+    frame.cut_tets = DrawCutTets(frame.grid, positions, mesh_.tets, kDeformableRgb, frame.rgba);
+    if (grab_point_mm_) {
+      DrawSliceMarker(frame.grid, *grab_point_mm_ + drag_offset_mm_, mesh_.stats.h_mm,
+                      kHandleRgb, frame.rgba);
+    }
+  }
+  return frame;
 }
 
 Result<Volume> DeformableScene::WarpedVolume() {

@@ -18,6 +18,9 @@
 #include "server/mesh/proxy_mesh.h"
 #include "server/warp/backward_map.h"
 #include "server/raycast/camera.h"
+#include "server/raycast/clip_region.h"
+#include "server/raycast/slice_sampler.h"
+#include "server/scene/slice_view.h"
 #include "server/raycast/render_presets.h"
 #include "server/raycast/volume_renderer.h"
 #include "server/volume/gpu_volume.h"
@@ -46,6 +49,12 @@ struct SceneView {
   int width = 512;
   int height = 512;
   bool overlay = false;  // mesh vertices (deformable yellow, hard blue), handles, drag
+  ClipRegion clip;       // crop box and clip planes, world (LPS) mm
+  // Also cut away what lies in front of the plane that faces the camera
+  // through the grabbed tissue (the grab point moved by the drag) or, with
+  // nothing grabbed, through the orbit centre: the view shows the tissue
+  // being moved, not the skin in front of it (DeformableScene::ViewClip).
+  bool view_cut = false;
 };
 
 class DeformableScene {
@@ -80,9 +89,15 @@ class DeformableScene {
   // next Render).
   Result<SceneStepTimings> Release();
 
+  // The clip region a frame of `view` uses: view.clip plus the view cut.
+  ClipRegion ViewClip(const SceneView& view) const;
+
   // map_update (optional): the timings of the map update this frame needed
   // (deferred mode), zeros when the map was current.
   Result<Frame> Render(const SceneView& view, SceneStepTimings* map_update = nullptr);
+  // A slice of the deformed volume through the same backward map as the 3D
+  // frames (deferred mode: brought up to date first).
+  Result<SliceFrame> RenderSlice(const SliceView& view);
   // Brings the map up to date with FEM (deferred mode); zeros if it was.
   Result<SceneStepTimings> SyncMap();
   // The deformed volume at full resolution on the source grid (for export),
@@ -107,6 +122,7 @@ class DeformableScene {
   ProxyMesh mesh_;
   std::optional<FemModel> fem_;
   std::optional<BackwardMap> map_;
+  std::optional<SliceSampler> slice_sampler_;  // made at the first slice
   std::optional<glm::dvec3> grab_point_mm_;
   glm::dvec3 drag_offset_mm_{0.0};
   // Changes with every map update (0 while one is in progress): frames with

@@ -170,6 +170,16 @@ Result<StreamSettings> ToStreamSettings(const v2::RenderSettings& in, const Volu
     *target = value == 0 ? std::min(512, max_side) : value;
   }
   out.view.overlay = in.overlay();
+  if (in.has_crop()) {
+    out.view.clip.crop = CropBox{FromProto(in.crop().lo_mm()), FromProto(in.crop().hi_mm())};
+  }
+  for (const v2::ClipPlane& plane : in.clip()) {
+    out.view.clip.planes.push_back(ClipPlane{FromProto(plane.normal()), plane.offset_mm()});
+  }
+  if (Status clip = ValidateClipRegion(out.view.clip); !clip.ok()) {
+    return absl::InvalidArgumentError(StrCat("settings.crop/clip: ", clip.message()));
+  }
+  out.view.view_cut = in.view_cut();
   switch (in.encoding()) {
     case v2::ENCODING_UNSPECIFIED:
     case v2::ENCODING_JPEG: out.png = false; break;

@@ -62,8 +62,16 @@ Result<glm::dvec3> Session::GrabPoint(const v2::Grab& grab, const SceneView* str
   const CameraRays rays = camera_.Rays(view.width, view.height);
   const glm::dvec3 dir = rays.Direction(grab.pixel_x(), grab.pixel_y());
   // Before any frame (Manipulate first) there is no preset to pick with.
+  // The caller (ApplyLocked) holds scene_mutex_, so the scene's grab state
+  // that places the view cut cannot change under the pick.
   if (view.preset.points.size() >= 2) {
-    if (auto hit = PickAlongRay(volume, view.preset, view.mode, rays.eye_mm, dir)) return *hit;
+    SceneView shown = view;
+    shown.camera = camera_;
+    const std::vector<glm::dvec4> clip =
+        ClipPlanesInPhysical(scene_->ViewClip(shown), volume.geometry());
+    if (auto hit = PickAlongRay(volume, view.preset, view.mode, rays.eye_mm, dir, clip)) {
+      return *hit;
+    }
   }
   const double t = glm::dot(camera_.Target() - rays.eye_mm, camera_.Forward()) /
                    glm::dot(dir, camera_.Forward());

@@ -1,0 +1,127 @@
+#include "client/cli/offline_scene.h"
+
+#include <chrono>
+#include <cstdio>
+
+#include "server/common/clock.h"
+#include "server/mesh/build_proxy_mesh.h"
+#include "server/mesh/lattice_costs_gpu.h"
+#include "server/mesh/mesh_json.h"
+#include "server/io/read_volume.h"
+
+namespace vpm::cli {
+namespace {
+
+Result<ProxyMesh> LoadOrBuildMesh(const RenderArgs& args, const Volume& volume,
+                                  const gpu::GpuContext& context, const GpuVolume& gpu_volume) {
+  if (!args.mesh_json.empty()) return ReadMeshJson(args.mesh_json);
+  ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(args.mesh, volume));
+  if (params.refine_at_mm == std::nullopt && !args.grab.empty()) {
+    params.refine_at_mm = glm::dvec3(args.grab[0], args.grab[1], args.grab[2]);
+  }
+  ASSIGN_OR_RETURN(LatticeCostsGpu costs, LatticeCostsGpu::Create(context));
+  return BuildProxyMesh(volume, params, {&gpu_volume, &costs});
+}
+
+Result<std::optional<glm::dvec3>> GrabPoint(const RenderArgs& args, const Volume& volume) {
+  if (!args.grab.empty()) return std::optional<glm::dvec3>(*Vec3Of(args.grab, "--grab"));
+  if (args.grab_landmark.empty()) return std::optional<glm::dvec3>();
+  for (const Landmark& l : volume.landmarks()) {
+    if (l.name == args.grab_landmark) return std::optional<glm::dvec3>(l.position_mm);
+  }
+  return absl::NotFoundError(
+      StrCat("landmark '", args.grab_landmark, "' is not in ", volume.source()));
+}
+
+}  // namespace
+
+void AddGrabFlags(CLI::App* app, RenderArgs* a) {
+  app->add_option("--grab", a->grab, "grab point X Y Z (mm, physical voxel space)")->expected(3);
+  app->add_option("--grab-landmark", a->grab_landmark, "grab at a named landmark");
+  app->add_option("--grab-radius", a->grab_radius, "handle radius in mm (default: h)");
+  app->add_option("--drag", a->drag, "drag the handles by DX DY DZ mm")->expected(3);
+  app->add_option("--pull", a->pull, "pull the handles with FX FY FZ N in total")->expected(3);
+}
+
+Result<glm::dvec3> Vec3Of(const std::vector<double>& v, const char* flag) {
+  if (v.size() != 3) return absl::InvalidArgumentError(StrCat(flag, " takes 3 numbers"));
+  return glm::dvec3(v[0], v[1], v[2]);
+}
+
+Result<SceneView> MakeView(const RenderArgs& args, const Volume& volume) {
+  SceneView view;
+  view.camera = Camera::ForVolume(volume.geometry());
+  if (!args.camera.empty()) {
+    if (args.camera.size() != 3) return absl::InvalidArgumentError("--camera takes AZ EL DIST");
+    Camera::Pose pose = view.camera.pose();
+    pose.azimuth_deg = args.camera[0];
+    pose.elevation_deg = args.camera[1];
+    if (args.camera[2] > 0.0) pose.distance_mm = args.camera[2];
+    view.camera.set_pose(pose);
+    RETURN_IF_ERROR(view.camera.Validate());
+  }
+  view.mode = args.mode == "mip" ? RenderMode::kMip : RenderMode::kDvr;
+  ASSIGN_OR_RETURN(view.preset, MakeRenderPreset(args.preset, volume));
+  view.quality =
+      args.quality == "interactive" ? RenderQuality::kInteractive : RenderQuality::kStill;
+  if (args.size.size() != 2) return absl::InvalidArgumentError("--size takes W H");
+  view.width = args.size[0];
+  view.height = args.size[1];
+  view.overlay = args.overlay;
+  ASSIGN_OR_RETURN(const ClipChoice clip, ToClipChoice(args.clip));
+  view.clip = clip.region;
+  view.view_cut = clip.view_cut;
+  return view;
+}
+
+Result<std::unique_ptr<OfflineScene>> PrepareOfflineScene(const RenderArgs& args) {
+  auto out = std::make_unique<OfflineScene>();
+  auto t0 = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(Volume volume, ReadVolume(args.source, VolumeLimits{}));
+  out->volume.emplace(std::move(volume));
+  ASSIGN_OR_RETURN(out->grab, GrabPoint(args, *out->volume));
+  out->load_ms = MsSince(t0);
+  ASSIGN_OR_RETURN(out->context, gpu::GpuContext::Create({}));
+  t0 = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(GpuVolume gpu_volume, GpuVolume::Upload(*out->context, *out->volume));
+  out->gpu_volume.emplace(std::move(gpu_volume));
+  out->upload_ms = MsSince(t0);
+  t0 = std::chrono::steady_clock::now();
+  RenderArgs effective = args;
+  if (out->grab) effective.grab = {out->grab->x, out->grab->y, out->grab->z};
+  ASSIGN_OR_RETURN(out->mesh,
+                   LoadOrBuildMesh(effective, *out->volume, *out->context, *out->gpu_volume));
+  out->mesh_ms = MsSince(t0);
+  ASSIGN_OR_RETURN(out->renderer, VolumeRenderer::Create(*out->context, {}));
+  t0 = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(out->scene, DeformableScene::Create(*out->context, *out->volume,
+                                                       *out->gpu_volume, *out->renderer,
+                                                       out->mesh, {}));
+  out->setup_ms = MsSince(t0);
+  const std::optional<glm::dvec3>& grab = out->grab;
+  if (grab) {
+    const double radius = args.grab_radius > 0 ? args.grab_radius : out->mesh.stats.h_mm;
+    ASSIGN_OR_RETURN(GrabInfo info, out->scene->Grab(*grab, radius));
+    std::printf("grab at (%.1f, %.1f, %.1f) mm, radius %.1f mm: %zu handles%s%s\n", grab->x,
+                grab->y, grab->z, radius, info.handles.size(), info.message.empty() ? "" : "; ",
+                info.message.c_str());
+    if (!args.drag.empty()) {
+      ASSIGN_OR_RETURN(glm::dvec3 offset, Vec3Of(args.drag, "--drag"));
+      ASSIGN_OR_RETURN(out->step, out->scene->Drag(offset));
+    } else if (!args.pull.empty()) {
+      ASSIGN_OR_RETURN(glm::dvec3 force, Vec3Of(args.pull, "--pull"));
+      ASSIGN_OR_RETURN(out->step, out->scene->Pull(force));
+    }
+  } else if (!args.drag.empty() || !args.pull.empty()) {
+    return absl::InvalidArgumentError("--drag and --pull need --grab or --grab-landmark");
+  }
+  return out;
+}
+
+void PrintSetupTimings(const OfflineScene& o) {
+  std::printf("%-22s %9s\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n", "stage", "ms",
+              "load volume", o.load_ms, "upload", o.upload_ms, "mesh", o.mesh_ms, "FEM setup",
+              o.setup_ms);
+}
+
+}  // namespace vpm::cli

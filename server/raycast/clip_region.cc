@@ -1,0 +1,99 @@
+#include "server/raycast/clip_region.h"
+
+#include <cmath>
+
+namespace vpm {
+namespace {
+
+bool Finite(const glm::dvec3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+// The half space dot(n, x) >= d of world space, in physical space: x = o + D p
+// gives dot(D^T n, p) >= d - dot(n, o); D is orthonormal, so D^T n stays unit.
+glm::dvec4 ToPhysical(const glm::dvec3& normal_world, double offset_mm,
+                      const VolumeGeometry& geometry) {
+  const glm::dvec3 n = glm::normalize(normal_world);
+  const double d = offset_mm / glm::length(normal_world);
+  return glm::dvec4(glm::transpose(geometry.direction) * n,
+                    d - glm::dot(n, geometry.origin_mm));
+}
+
+}  // namespace
+
+Status ValidateClipRegion(const ClipRegion& region) {
+  int count = static_cast<int>(region.planes.size());
+  if (region.crop) {
+    count += 6;
+    const CropBox& box = *region.crop;
+    if (!Finite(box.lo_mm) || !Finite(box.hi_mm)) {
+      return absl::InvalidArgumentError("crop box: corners must be finite numbers (mm)");
+    }
+    for (int a = 0; a < 3; ++a) {
+      if (box.lo_mm[a] > box.hi_mm[a]) {
+        return absl::InvalidArgumentError(
+            StrCat("crop box: ", "xyz"[a], " from ", box.lo_mm[a], " to ", box.hi_mm[a],
+                   " mm is empty (the first corner must be the lower one)"));
+      }
+    }
+  }
+  for (size_t i = 0; i < region.planes.size(); ++i) {
+    const ClipPlane& plane = region.planes[i];
+    if (!Finite(plane.normal) || !std::isfinite(plane.offset_mm)) {
+      return absl::InvalidArgumentError(
+          StrCat("clip plane ", i + 1, ": normal and offset must be finite numbers"));
+    }
+    if (!(glm::length(plane.normal) > 1e-12)) {
+      return absl::InvalidArgumentError(StrCat("clip plane ", i + 1, ": the normal is zero"));
+    }
+  }
+  if (count > kMaxClipPlanes) {
+    return absl::InvalidArgumentError(StrCat(count, " clip planes (a crop box counts 6): at most ",
+                                             kMaxClipPlanes));
+  }
+  return absl::OkStatus();
+}
+
+std::vector<glm::dvec4> ClipPlanesInPhysical(const ClipRegion& region,
+                                             const VolumeGeometry& geometry) {
+  std::vector<glm::dvec4> out;
+  if (region.crop) {
+    for (int a = 0; a < 3; ++a) {
+      glm::dvec3 axis(0.0);
+      axis[a] = 1.0;
+      out.push_back(ToPhysical(axis, region.crop->lo_mm[a], geometry));
+      out.push_back(ToPhysical(-axis, -region.crop->hi_mm[a], geometry));
+    }
+  }
+  for (const ClipPlane& plane : region.planes) {
+    out.push_back(ToPhysical(plane.normal, plane.offset_mm, geometry));
+  }
+  return out;
+}
+
+void ClipRayInterval(std::span<const glm::vec4> planes, const glm::vec3& eye,
+                     const glm::vec3& dir, float& t_near, float& t_far) {
+  for (const glm::vec4& plane : planes) {
+    const glm::vec3 n(plane);
+    const float along = glm::dot(n, dir);
+    const float inside = glm::dot(n, eye) - plane.w;  // >= 0: the eye is kept
+    if (std::abs(along) < 1e-20f) {
+      // Parallel to the plane: all kept or all cut.
+      if (inside < 0.0f) t_far = -1.0f;
+      continue;
+    }
+    const float t = -inside / along;
+    if (along > 0.0f) {
+      t_near = std::max(t_near, t);
+    } else {
+      t_far = std::min(t_far, t);
+    }
+  }
+}
+
+ClipPlane CutPlaneFacing(const glm::dvec3& point_world, const glm::dvec3& forward_world) {
+  const glm::dvec3 n = glm::normalize(forward_world);
+  return ClipPlane{n, glm::dot(n, point_world)};
+}
+
+}  // namespace vpm
