@@ -3,7 +3,9 @@
 // frame in one run (runs alternate, minimum of 5 each), with empty-space skipping on and off, still 512x512 and
 // interactive (512x512 shown, 256x256 cast), texel-buffer and sampler3D
 // volume reads; then JPEG (quality 85) and PNG encoding of the still frame.
-// Usage: render_bench [SOURCE] [PNG_DIR] [FILTER] [SIZE]
+// Usage: render_bench [--render-tf FILE] [SOURCE] [PNG_DIR] [FILTER] [SIZE]
+//   --render-tf: adds the row "still DVR custom", DVR with the transfer
+//   function of FILE (ParaView .json[#NAME] or Slicer .vp);
 //   PNG_DIR: where to write the frames ("" for nowhere); FILTER: only the
 //   rows whose name contains it, or one of several separated by '|' (a part
 //   ending in '$' must end the name: "still MIP$|still DVR ct-bone$");
@@ -23,16 +25,20 @@
 #include "server/raycast/frame_encoder.h"
 #include "server/raycast/raycast_cpu.h"
 #include "server/raycast/volume_renderer.h"
+#include "server/io/read_render_transfer_function.h"
 #include "server/io/read_volume.h"
+#include "server/raycast/render_preset_from_tf.h"
 
 using namespace vpm;
 
 namespace {
 
+constexpr const char* kCustomPreset = "custom";
+
 struct Case {
   std::string name;
   RenderMode mode;
-  const char* preset;
+  const char* preset;  // a preset name, or kCustomPreset (--render-tf)
   RenderQuality quality;
   bool skipping;
   bool shading = true;
@@ -153,7 +159,18 @@ Difference Compare(const Frame& a, const Frame& b) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int raw_argc, char** raw_argv) {
+  std::string render_tf;  // --render-tf FILE, anywhere; the rest are positional
+  std::vector<char*> positional{raw_argv[0]};
+  for (int i = 1; i < raw_argc; ++i) {
+    if (std::string(raw_argv[i]) == "--render-tf" && i + 1 < raw_argc) {
+      render_tf = raw_argv[++i];
+    } else {
+      positional.push_back(raw_argv[i]);
+    }
+  }
+  const int argc = int(positional.size());
+  char** argv = positional.data();
   const std::string source = argc > 1 ? argv[1] : "phantom:abdomen";
   const std::string png_dir = argc > 2 ? argv[2] : "";
   const std::string filter = argc > 3 ? argv[3] : "";
@@ -182,7 +199,19 @@ int main(int argc, char** argv) {
   const auto still_minmax = BrickMinMaxCpu(volume, kStillBrickVoxels);
   const auto interactive_minmax = BrickMinMaxCpu(volume, kInteractiveBrickVoxels);
 
+  std::optional<RenderPreset> custom;
+  if (!render_tf.empty()) {
+    custom = bench::Check(RenderPresetFromTf(bench::Check(ReadRenderTransferFunction(render_tf),
+                                                          "--render-tf"),
+                                             volume),
+                          "--render-tf preset");
+  }
+
   std::vector<Case> cases;
+  if (custom) {
+    cases.push_back({"still DVR custom", RenderMode::kDvr, kCustomPreset, RenderQuality::kStill,
+                     true});
+  }
   for (bool skip : {true, false}) {
     const char* s = skip ? "" : ", no skip";
     cases.push_back({std::string("still DVR ct-vessels") + s, RenderMode::kDvr, "ct-vessels",
@@ -241,7 +270,8 @@ int main(int argc, char** argv) {
     RenderRequest r;
     r.camera = Camera::ForVolume(volume.geometry());
     r.mode = c.mode;
-    r.preset = bench::Check(MakeRenderPreset(c.preset, volume), "preset");
+    r.preset = c.preset == kCustomPreset ? *custom
+                                         : bench::Check(MakeRenderPreset(c.preset, volume), "preset");
     r.quality = c.quality;
     r.width = r.height = size;
     r.volume = &gpu_volume;

@@ -1,13 +1,16 @@
 #include "client/cli/offline_scene.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 
 #include "server/common/clock.h"
 #include "server/mesh/build_proxy_mesh.h"
 #include "server/mesh/lattice_costs_gpu.h"
 #include "server/mesh/mesh_json.h"
+#include "server/io/read_render_transfer_function.h"
 #include "server/io/read_volume.h"
+#include "server/raycast/render_preset_from_tf.h"
 
 namespace vpm::cli {
 namespace {
@@ -35,6 +38,15 @@ Result<std::optional<glm::dvec3>> GrabPoint(const RenderArgs& args, const Volume
 
 }  // namespace
 
+// --window W L: MIP black at L - W/2, white at L + W/2.
+Result<std::optional<MipWindow>> WindowOf(const std::vector<double>& w) {
+  if (w.empty()) return std::optional<MipWindow>();
+  if (w.size() != 2 || !std::isfinite(w[0]) || !std::isfinite(w[1]) || !(w[0] > 0.0)) {
+    return absl::InvalidArgumentError("--window takes W L: a width > 0 and a level");
+  }
+  return std::optional<MipWindow>(MipWindow{w[1], w[0]});
+}
+
 void AddGrabFlags(CLI::App* app, RenderArgs* a) {
   app->add_option("--grab", a->grab, "grab point X Y Z (mm, physical voxel space)")->expected(3);
   app->add_option("--grab-landmark", a->grab_landmark, "grab at a named landmark");
@@ -61,7 +73,14 @@ Result<SceneView> MakeView(const RenderArgs& args, const Volume& volume) {
     RETURN_IF_ERROR(view.camera.Validate());
   }
   view.mode = args.mode == "mip" ? RenderMode::kMip : RenderMode::kDvr;
-  ASSIGN_OR_RETURN(view.preset, MakeRenderPreset(args.preset, volume));
+  if (args.render_tf.empty()) {
+    ASSIGN_OR_RETURN(view.preset, MakeRenderPreset(args.preset, volume));
+  } else {
+    ASSIGN_OR_RETURN(const RenderTransferFunction tf, ReadRenderTransferFunction(args.render_tf));
+    ASSIGN_OR_RETURN(view.preset, RenderPresetFromTf(tf, volume));
+  }
+  ASSIGN_OR_RETURN(const std::optional<MipWindow> window, WindowOf(args.window));
+  if (window) view.preset.mip_window = *window;
   view.quality =
       args.quality == "interactive" ? RenderQuality::kInteractive : RenderQuality::kStill;
   if (args.size.size() != 2) return absl::InvalidArgumentError("--size takes W H");

@@ -28,6 +28,8 @@ struct RenderArgs {
   MeshFlags mesh;
   std::vector<double> camera;  // AZ EL DIST
   std::string mode = "dvr", preset = "ct-soft-tissue", quality = "still";
+  std::string render_tf;        // a ParaView .json[#NAME] or Slicer .vp; overrides preset
+  std::vector<double> window;   // MIP: W L (the volume's units)
   std::vector<double> grab, drag, pull;
   std::string grab_landmark;
   double grab_radius = 0.0;
@@ -40,6 +42,9 @@ struct RenderArgs {
 // The grab and drag flags (--grab, --grab-landmark, --grab-radius, --drag,
 // --pull), shared by the commands that deform.
 void AddGrabFlags(CLI::App* app, RenderArgs* args);
+
+// --window W L: MIP black at L - W/2, white at L + W/2; empty: none.
+Result<std::optional<MipWindow>> WindowOf(const std::vector<double>& w);
 
 Result<glm::dvec3> Vec3Of(const std::vector<double>& v, const char* flag);
 

@@ -1,6 +1,7 @@
 #include "client/cli/render_command.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <string_view>
 
@@ -10,13 +11,16 @@
 #include "client/cli/offline_scene.h"
 #include "client/cli/remote_pipeline.h"
 #include "proto/enum_names.h"
+#include "proto/render_tf_convert.h"
 #include "proto/vec3_convert.h"
 #include "server/common/clock.h"
 #include "server/common/write_file.h"
 #include "server/mesh/mesh_json.h"
 #include "server/scene/deformable_scene.h"
 #include "server/raycast/frame_encoder.h"
+#include "server/io/read_render_transfer_function.h"
 #include "server/io/read_volume.h"
+#include "server/raycast/render_preset_from_tf.h"
 #include "server/io/write_nifti.h"
 
 namespace vpm::cli {
@@ -168,7 +172,17 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
   const auto mode = RenderModeFromName(args.mode);
   if (!mode) return absl::InvalidArgumentError(StrCat("--mode: '", args.mode, "' is not dvr or mip"));
   settings->set_mode(*mode);
-  settings->set_preset(args.preset);
+  if (args.render_tf.empty()) {
+    settings->set_preset(args.preset);
+  } else {
+    ASSIGN_OR_RETURN(const RenderTransferFunction tf, ReadRenderTransferFunction(args.render_tf));
+    *settings->mutable_render_tf() = ToProto(tf);
+  }
+  ASSIGN_OR_RETURN(const std::optional<MipWindow> window, WindowOf(args.window));
+  if (window) {
+    settings->mutable_mip_window()->set_width(window->width);
+    settings->mutable_mip_window()->set_level(window->level);
+  }
   settings->set_width(args.size[0]);
   settings->set_height(args.size[1]);
   settings->set_overlay(args.overlay);
@@ -209,8 +223,17 @@ void AddRenderCommand(CLI::App& app, const ServerFlags* server, int* exit_code) 
       ->check(CLI::IsMember({"dvr", "mip"}))
       ->capture_default_str();
   cmd->add_option("--preset", a->preset,
-                  "render preset: ct-soft-tissue, ct-bone, ct-vessels, mri-t1")
+                  "render preset: ct-soft-tissue, ct-bone, ct-vessels, mri-t1, or Slicer's "
+                  "CT-AAA, CT-Bone, CT-Muscle, CT-Chest-Contrast-Enhanced, CT-Soft-Tissue, "
+                  "MR-Default")
       ->capture_default_str();
+  cmd->add_option("--render-tf", a->render_tf,
+                  "DVR transfer function file (overrides --preset): ParaView FILE.json[#NAME] "
+                  "or 3D Slicer FILE.vp");
+  cmd->add_option("--window", a->window,
+                  "MIP window W L: black at L - W/2, white at L + W/2 (default: the volume's "
+                  "1st..99.5th percentile, above air for CT)")
+      ->expected(2);
   cmd->add_option("--quality", a->quality, "still or interactive")
       ->check(CLI::IsMember({"still", "interactive"}))
       ->capture_default_str();

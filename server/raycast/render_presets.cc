@@ -4,6 +4,9 @@
 #include <cmath>
 
 #include "server/gpu/shader_interface.h"
+#include "server/raycast/render_preset_from_tf.h"
+#include "server/raycast/slicer_presets.h"
+#include "server/raycast/volume_mip_window.h"
 
 namespace vpm {
 namespace {
@@ -28,8 +31,7 @@ RenderPreset CtSoftTissue() {
            {150, dvec4(0.95, 0.55, 0.45, 0.25)},
            {250, dvec4(0.95, 0.90, 0.80, 0.45)},
            {700, dvec4(1.0, 0.97, 0.90, 0.9)},
-           {3000, dvec4(1.0, 0.97, 0.90, 0.9)}},
-          {40.0, 400.0}};
+           {3000, dvec4(1.0, 0.97, 0.90, 0.9)}}};
   preset.still_step_factor = 1.0;
   return preset;
 }
@@ -42,8 +44,7 @@ RenderPreset CtBone() {
            {230, dvec4(0.85, 0.70, 0.50, 0.0)},
            {300, dvec4(0.92, 0.85, 0.70, 0.5)},
            {700, dvec4(1.0, 0.98, 0.92, 1.0)},
-           {3000, dvec4(1.0, 0.98, 0.92, 1.0)}},
-          {400.0, 1000.0}};
+           {3000, dvec4(1.0, 0.98, 0.92, 1.0)}}};
 }
 
 // CT angiography: contrast-filled vessels (150-260 HU) red and fairly
@@ -58,25 +59,12 @@ RenderPreset CtVessels() {
            {260, dvec4(1.0, 0.30, 0.20, 0.6)},
            {290, dvec4(0.90, 0.85, 0.75, 0.08)},
            {700, dvec4(1.0, 0.97, 0.90, 0.3)},
-           {3000, dvec4(1.0, 0.97, 0.90, 0.3)}},
-          {200.0, 500.0}};
+           {3000, dvec4(1.0, 0.97, 0.90, 0.3)}}};
 }
 
-double Percentile(const std::vector<float>& sorted, double p) {
-  const double pos = p / 100.0 * static_cast<double>(sorted.size() - 1);
-  const size_t lo = static_cast<size_t>(std::floor(pos));
-  const size_t hi = std::min(lo + 1, sorted.size() - 1);
-  return sorted[lo] + (pos - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
-}
-
-// MRI T1 on the volume's own percentiles (at most ~1M voxels sampled):
-// greyscale warming towards white, transparent below p5.
+// MRI T1 on the volume's own percentiles: greyscale warming towards white,
+// transparent below p5.
 RenderPreset MriT1(const Volume& volume) {
-  const auto values = volume.values();
-  const size_t stride = std::max<size_t>(1, values.size() / (1u << 20));
-  std::vector<float> sample;
-  for (size_t n = 0; n < values.size(); n += stride) sample.push_back(values[n]);
-  std::sort(sample.begin(), sample.end());
   struct Anchor {
     double percentile;
     dvec4 rgba;
@@ -86,56 +74,64 @@ RenderPreset MriT1(const Volume& volume) {
                             {60.0, dvec4(0.65, 0.62, 0.58, 0.02)},
                             {90.0, dvec4(0.95, 0.90, 0.85, 0.08)},
                             {99.5, dvec4(1.0, 1.0, 1.0, 0.15)}};
+  std::vector<float> sample = SampleVolumeValues(volume, -INFINITY);
+  std::vector<double> percentiles;
+  for (const Anchor& a : anchors) percentiles.push_back(a.percentile);
+  const std::vector<double> at = Percentiles(sample, percentiles);
   RenderPreset preset{"mri-t1", {}, {}, 30.0};
   double last = -INFINITY;
-  for (const Anchor& a : anchors) {
+  for (size_t i = 0; i < at.size(); ++i) {
     // Strictly increasing, so that flat images still give a valid preset.
-    double v = Percentile(sample, a.percentile);
-    if (v <= last) v = last + 1e-3;
-    preset.points.push_back({v, a.rgba});
+    const double v = at[i] <= last ? last + 1e-3 : at[i];
+    preset.points.push_back({v, anchors[i].rgba});
     last = v;
   }
-  const double p1 = Percentile(sample, 1.0);
-  const double p995 = std::max(Percentile(sample, 99.5), p1 + 1e-3);
-  preset.mip_window = {0.5 * (p1 + p995), p995 - p1};
   // CT's 30 HU/mm is about 1/50 of the soft tissue to bone range per mm.
-  preset.shading_gradient = std::max(1e-6, (p995 - p1) / 50.0);
+  preset.shading_gradient = std::max(1e-6, VolumeMipWindow(volume).width / 50.0);
   return preset;
 }
 
-bool InUnit(const dvec4& c) {
-  for (int i = 0; i < 4; ++i) {
-    if (!(c[i] >= 0.0 && c[i] <= 1.0)) return false;
-  }
-  return true;
-}
+bool InUnit(double v) { return std::isfinite(v) && v >= 0.0 && v <= 1.0; }
 
-}  // namespace
+bool InUnit(const dvec4& c) { return InUnit(c.r) && InUnit(c.g) && InUnit(c.b) && InUnit(c.a); }
 
-std::vector<std::pair<std::string, std::string>> RenderPresetNames() {
-  return {
-      {"ct-soft-tissue", "CT: fat nearly clear, skin and muscle red-brown, bone ivory"},
-      {"ct-bone", "CT: bone only (>= 230 HU), cortex opaque"},
-      {"ct-vessels", "CT angiography: contrast vessels and kidney cortex red, bone faint"},
-      {"mri-t1", "MRI T1: greyscale on the volume's percentiles (p5 transparent .. p99.5)"},
-  };
-}
-
-Result<RenderPreset> MakeRenderPreset(std::string_view name, const Volume& volume) {
+// A named preset (vpm's or Slicer's), before its MIP window is set.
+Result<RenderPreset> VpmPreset(std::string_view name, const Volume& volume) {
   if (name == "ct-soft-tissue") return CtSoftTissue();
   if (name == "ct-bone") return CtBone();
   if (name == "ct-vessels") return CtVessels();
   if (name == "mri-t1") return MriT1(volume);
+  if (auto slicer = SlicerPreset(name)) return RenderPresetFromTf(*slicer, volume);
   std::string names;
   for (const auto& [n, _] : RenderPresetNames()) names += (names.empty() ? "" : ", ") + n;
   return absl::InvalidArgumentError(
       StrCat("unknown render preset '", name, "': use one of ", names));
 }
 
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> RenderPresetNames() {
+  std::vector<std::pair<std::string, std::string>> names = {
+      {"ct-soft-tissue", "CT: fat nearly clear, skin and muscle red-brown, bone ivory"},
+      {"ct-bone", "CT: bone only (>= 230 HU), cortex opaque"},
+      {"ct-vessels", "CT angiography: contrast vessels and kidney cortex red, bone faint"},
+      {"mri-t1", "MRI T1: greyscale on the volume's percentiles (p5 transparent .. p99.5)"},
+  };
+  for (auto& slicer : SlicerPresetNames()) names.push_back(std::move(slicer));
+  return names;
+}
+
+Result<RenderPreset> MakeRenderPreset(std::string_view name, const Volume& volume) {
+  ASSIGN_OR_RETURN(RenderPreset preset, VpmPreset(name, volume));
+  preset.mip_window = VolumeMipWindow(volume);
+  return preset;
+}
+
 Status ValidateRenderPreset(const RenderPreset& preset) {
-  if (preset.points.size() < 2) {
-    return absl::InvalidArgumentError(
-        StrCat("render preset '", preset.name, "' needs at least 2 points"));
+  if (preset.points.size() < 2 || preset.points.size() > kMaxRenderPresetPoints) {
+    return absl::InvalidArgumentError(StrCat("render preset '", preset.name, "' has ",
+                                             preset.points.size(), " points; 2..",
+                                             kMaxRenderPresetPoints, " expected"));
   }
   for (size_t i = 0; i < preset.points.size(); ++i) {
     const ColorPoint& p = preset.points[i];
@@ -156,6 +152,14 @@ Status ValidateRenderPreset(const RenderPreset& preset) {
       preset.still_step_factor > 4.0) {
     return absl::InvalidArgumentError(
         StrCat("render preset '", preset.name, "': still_step_factor must be in (0, 4]"));
+  }
+  if (const auto& l = preset.lighting;
+      l && (!InUnit(l->ambient) || !InUnit(l->diffuse) || !InUnit(l->specular) ||
+            !std::isfinite(l->specular_power) || l->specular_power < 1.0 ||
+            l->specular_power > 256.0)) {
+    return absl::InvalidArgumentError(
+        StrCat("render preset '", preset.name,
+               "': lighting needs ambient, diffuse, specular in [0, 1], power in [1, 256]"));
   }
   const MipWindow& w = preset.mip_window;
   if (!std::isfinite(w.level) || !std::isfinite(w.width) || !(w.width > 0.0)) {

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -18,11 +19,15 @@
 #include <glm/glm.hpp>
 
 #include "server/common/status.h"
+#include "server/io/render_transfer_function.h"
 #include "server/volume/volume.h"
 
 namespace vpm {
 
 inline constexpr double kOpacityReferenceMm = 1.0;
+// A merged transfer function has at most two points per control value of
+// its colour and opacity lists (render_preset_from_tf.h).
+inline constexpr size_t kMaxRenderPresetPoints = 4 * kMaxRenderTfPoints;
 
 struct ColorPoint {
   double value = 0.0;      // volume value (HU for CT)
@@ -50,20 +55,28 @@ struct RenderPreset {
   // (ct-soft-tissue: 1.0, docs/RENDERING.md "Still step per preset").
   // In (0, 4].
   double still_step_factor = 0.5;
+  // The lighting the preset was made with (Slicer's presets and .vp files):
+  // replaces RaycastSettings' shading on/off, ambient, diffuse, specular and
+  // shininess (Slicer's specular power). nullopt: RaycastSettings'.
+  std::optional<TfLighting> lighting;
   bool operator==(const RenderPreset&) const = default;
 };
 
-// Names with a one-line description each: ct-soft-tissue, ct-bone,
-// ct-vessels, mri-t1.
+// Names with a one-line description each: vpm's ct-soft-tissue, ct-bone,
+// ct-vessels, mri-t1, then 3D Slicer's (slicer_presets.h: CT-AAA, CT-Bone,
+// ...; names are case-sensitive, so ct-bone and CT-Bone are two presets).
 std::vector<std::pair<std::string, std::string>> RenderPresetNames();
 
 // A named preset. mri-t1 is defined on intensity percentiles of `volume`
-// (p5 transparent up to p99.5 brightest), the CT presets in HU. Errors:
-// InvalidArgument for an unknown name, listing the valid ones.
+// (p5 transparent up to p99.5 brightest), the CT presets in HU. Every
+// preset's MIP window is VolumeMipWindow(volume) (the volume's own
+// percentiles, volume_mip_window.h). Errors: InvalidArgument for an unknown
+// name, listing the valid ones.
 Result<RenderPreset> MakeRenderPreset(std::string_view name, const Volume& volume);
 
-// InvalidArgument unless: >= 2 points, finite values sorted ascending,
-// colours and opacities in [0, 1], window level finite and width > 0.
+// InvalidArgument unless: 2..kMaxRenderPresetPoints points, finite values
+// sorted ascending, colours and opacities in [0, 1], window level finite and
+// width > 0, lighting (if any) in [0, 1] with shininess in [1, 256].
 Status ValidateRenderPreset(const RenderPreset& preset);
 
 // The lookup table of a preset for one sampling step: kRenderLutEntries

@@ -90,8 +90,10 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   setup.render_height = interactive ? (request.height + 1) / 2 : request.height;
   const CameraRays rays = request.camera.Rays(setup.render_width, setup.render_height);
   const RaycastSettings& s = request.settings;
+  // A preset made with its own lighting (Slicer's) brings it along.
+  const std::optional<TfLighting>& lighting = request.preset.lighting;
   int flags = 0;
-  if (s.shading) flags |= gpu::kRaycastShading;
+  if (lighting ? lighting->shade : s.shading) flags |= gpu::kRaycastShading;
   if (s.empty_space_skipping) flags |= gpu::kRaycastSkipping;
   if (s.early_termination) flags |= gpu::kRaycastEarlyTermination;
   if (has_map) flags |= gpu::kRaycastHasMap;
@@ -115,8 +117,10 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   p.window = glm::vec4(float(window.level - 0.5 * window.width), float(1.0 / window.width),
                        float(window.level + 0.5 * window.width), 0.0f);
   p.background = Vec4(s.background);
-  p.shading = glm::vec4(float(s.ambient), float(s.diffuse), float(s.specular),
-                        float(s.shininess));
+  p.shading = lighting ? glm::vec4(float(lighting->ambient), float(lighting->diffuse),
+                                   float(lighting->specular), float(lighting->specular_power))
+                       : glm::vec4(float(s.ambient), float(s.diffuse), float(s.specular),
+                                   float(s.shininess));
   p.map_dims = glm::vec4(float(map_dims[0]), float(map_dims[1]), float(map_dims[2]), 0.0f);
   p.gradient = glm::vec4(float(request.preset.shading_gradient), 0.0f, 0.0f, 0.0f);
   const std::vector<glm::dvec4> planes = ClipPlanesInPhysical(request.clip, geometry);

@@ -1,7 +1,11 @@
 #include "server/service/proto_convert.h"
 
 #include <algorithm>
+#include <cmath>
 #include <tuple>
+
+#include "proto/render_tf_convert.h"
+#include "server/raycast/render_preset_from_tf.h"
 
 namespace vpm::service {
 
@@ -155,11 +159,27 @@ Result<StreamSettings> ToStreamSettings(const v2::RenderSettings& in, const Volu
     default:
       return absl::InvalidArgumentError(StrCat("settings.mode: ", in.mode(), " is not a RenderMode"));
   }
-  auto preset = MakeRenderPreset(in.preset().empty() ? "ct-soft-tissue" : in.preset(), volume);
+  if (in.has_render_tf() && !in.preset().empty()) {
+    return absl::InvalidArgumentError("settings: give preset or render_tf, not both");
+  }
+  auto preset = in.has_render_tf()
+                    ? RenderPresetFromTf(FromProto(in.render_tf()), volume)
+                    : MakeRenderPreset(in.preset().empty() ? "ct-soft-tissue" : in.preset(), volume);
   if (!preset.ok()) {
-    return absl::InvalidArgumentError(StrCat("settings.preset: ", preset.status().message()));
+    return absl::InvalidArgumentError(StrCat(in.has_render_tf() ? "settings.render_tf: "
+                                                                : "settings.preset: ",
+                                             preset.status().message()));
   }
   out.view.preset = *std::move(preset);
+  if (in.has_mip_window()) {
+    const v2::WindowLevel& w = in.mip_window();
+    if (!std::isfinite(w.level()) || !std::isfinite(w.width()) || !(w.width() > 0.0)) {
+      return absl::InvalidArgumentError(StrCat("settings.mip_window: width ", w.width(),
+                                               ", level ", w.level(),
+                                               ": needs a finite level and width > 0"));
+    }
+    out.view.preset.mip_window = {w.level(), w.width()};
+  }
   for (auto [name, value, target] :
        {std::tuple{"settings.width", in.width(), &out.view.width},
         std::tuple{"settings.height", in.height(), &out.view.height}}) {

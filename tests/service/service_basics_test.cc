@@ -5,9 +5,11 @@
 
 #include <grpcpp/generic/generic_stub.h>
 
+#include "proto/render_tf_convert.h"
 #include "server/common/sha256.h"
 #include "server/io/read_volume.h"
 #include "server/io/write_nifti.h"
+#include "server/raycast/render_preset_from_tf.h"
 #include "server/service/loopback_address.h"
 #include "server/service/proto_convert.h"
 #include "tests/service/service_test_util.h"
@@ -398,6 +400,44 @@ TEST(ProtoConvert, RenderSettingsEnumsMapAndUnknownValuesAreRefused) {
   auto bad_encoding = ToStreamSettings(settings, volume, 1024);
   EXPECT_EQ(bad_encoding.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(bad_encoding.status().message().find("settings.encoding"), std::string::npos);
+}
+
+// RenderSettings.render_tf (a transfer function a client read from a file)
+// becomes the frame's preset, round trip through ToProto / FromProto;
+// mip_window overrides the volume's window; bad values name the field.
+TEST(ProtoConvert, RenderTfAndMipWindowReachTheView) {
+  auto read = ReadVolume("phantom:abdomen?size=16", VolumeLimits{});
+  ASSERT_TRUE(read.ok()) << read.status();
+  const Volume& volume = *read;
+  const RenderTransferFunction tf{"mine",
+                                  {{-100.0, glm::dvec3(1, 0, 0)}, {300.0, glm::dvec3(1, 1, 1)}},
+                                  {{0.0, 0.0}, {300.0, 0.4}},
+                                  TfLighting{false, 0.3, 0.7, 0.1, 5.0}};
+  EXPECT_EQ(FromProto(ToProto(tf)), tf);
+  v2::RenderSettings settings;
+  *settings.mutable_render_tf() = ToProto(tf);
+  settings.mutable_mip_window()->set_width(500.0);
+  settings.mutable_mip_window()->set_level(200.0);
+  auto converted = ToStreamSettings(settings, volume, 1024);
+  ASSERT_TRUE(converted.ok()) << converted.status();
+  auto expected = RenderPresetFromTf(tf, volume);
+  ASSERT_TRUE(expected.ok()) << expected.status();
+  expected->mip_window = {200.0, 500.0};
+  EXPECT_EQ(converted->view.preset, *expected);
+  settings.mutable_mip_window()->set_width(0.0);
+  auto bad_window = ToStreamSettings(settings, volume, 1024);
+  EXPECT_NE(bad_window.status().message().find("settings.mip_window"), std::string::npos);
+  settings.clear_mip_window();
+  settings.mutable_render_tf()->mutable_opacities(1)->set_value(-500.0);  // unsorted
+  auto bad_tf = ToStreamSettings(settings, volume, 1024);
+  EXPECT_EQ(bad_tf.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(bad_tf.status().message().find("settings.render_tf"), std::string::npos);
+  settings.set_preset("CT-Bone");
+  EXPECT_FALSE(ToStreamSettings(settings, volume, 1024).ok());  // both
+  settings.clear_render_tf();
+  auto slicer = ToStreamSettings(settings, volume, 1024);
+  ASSERT_TRUE(slicer.ok()) << slicer.status();
+  EXPECT_EQ(slicer->view.preset.name, "CT-Bone");
 }
 
 }  // namespace
