@@ -60,9 +60,11 @@ struct SolverOptions {
   // jump that would crush an element is applied in feasible parts; after
   // these, or when no part is feasible, the rest at once). The default
   // bounds the cost of an interactive drag step whose handles crush tets
-  // whatever the free vertices do (docs/FEM.md, "Cost"); measurements
-  // (MeasurementFemOptions) allow 64.
-  int max_load_steps = 4;
+  // whatever the free vertices do (docs/FEM.md, "Cost of the barrier"); 4
+  // left inverted tets after 1.5 h drags of point-footprint meshes, 16 with
+  // 2 iterations between steps none (bench/mesh_validity_bench.cc).
+  // Measurements (MeasurementFemOptions) allow 64.
+  int max_load_steps = 16;
   // A load step shorter than this fraction of the rest of the jump means the
   // prescribed motion itself is crushing an element: the rest is applied at
   // once (SolveStats::forced_inversion). In (0, 1].
@@ -71,7 +73,9 @@ struct SolverOptions {
   // the next step's predictor starts from its linearised residual, so the
   // path only has to stay near equilibrium; the last load step iterates up
   // to max_newton_iterations.
-  int intermediate_newton_iterations = 1;
+  // One left the path so far from equilibrium that the next predictor could
+  // only take slivers of the jump (forced inversions); 2 keeps it feasible.
+  int intermediate_newton_iterations = 2;
 };
 
 // Below this many tets the element loops run on one thread (a split costs
