@@ -13,6 +13,8 @@ packages=(
   libglm-dev libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev
   # volume formats and images
   libnifti2-dev libdcmtk-dev zlib1g-dev libturbojpeg0-dev libpng-dev
+  # the reference DICOM converter the DICOM reader is tested against
+  dcm2niix
   # service
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   prometheus-cpp-dev libssl-dev

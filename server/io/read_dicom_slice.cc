@@ -19,6 +19,7 @@
 #include <dcmtk/dcmjpls/djdecode.h>
 
 #include "server/io/check_dicom_structure.h"
+#include "server/io/header_text.h"
 #include "server/io/voxel_type.h"
 
 namespace vpm {
@@ -144,9 +145,33 @@ Status ReadGeometry(DcmDataset& ds, DicomSlice& slice) {
   }
   ASSIGN_OR_RETURN(slice.slice_thickness_mm,
                    GetDouble(ds, DCM_SliceThickness, 0, "SliceThickness", 0.0));
-  OFString uid;
-  if (ds.findAndGetOFString(DCM_SeriesInstanceUID, uid).good()) slice.series_uid = uid.c_str();
   return absl::OkStatus();
+}
+
+std::string GetString(DcmDataset& ds, const DcmTagKey& tag) {
+  OFString value;
+  if (ds.findAndGetOFStringArray(tag, value).good()) return value.c_str();
+  return "";
+}
+
+// Identity fields, and whether the image is one that never belongs in a
+// volume: scanners put localizers (scouts) and screenshots beside the slices,
+// sometimes under the same SeriesInstanceUID.
+void ReadIdentity(DcmDataset& ds, DicomSlice& slice) {
+  slice.series_uid = GetString(ds, DCM_SeriesInstanceUID);
+  slice.series_description = GetString(ds, DCM_SeriesDescription);
+  slice.modality = GetString(ds, DCM_Modality);
+  slice.sop_class_uid = GetString(ds, DCM_SOPClassUID);
+  Sint32 number = 0;
+  if (ds.findAndGetSint32(DCM_SeriesNumber, number).good()) slice.series_number = number;
+  // Secondary Capture Image Storage and its multi-frame variants (1.2.840.10008.5.1.4.1.1.7.x).
+  constexpr std::string_view kSecondaryCapture = "1.2.840.10008.5.1.4.1.1.7";
+  const std::string_view sop = slice.sop_class_uid;
+  if (sop == kSecondaryCapture || sop.starts_with(StrCat(kSecondaryCapture, "."))) {
+    slice.not_a_slice_reason = "secondary capture";
+  } else if (ToLowerAscii(GetString(ds, DCM_ImageType)).find("localizer") != std::string::npos) {
+    slice.not_a_slice_reason = "localizer";
+  }
 }
 
 // DCMTK 3.6.7's JPEG decoder loops forever when the marker walk it does to
@@ -261,12 +286,15 @@ bool LooksLikeDicom(std::span<const uint8_t> bytes) {
   return bytes.size() >= 132 && std::memcmp(bytes.data() + 128, "DICM", 4) == 0;
 }
 
-Result<DicomSlice> ParseDicomSlice(std::span<const uint8_t> bytes, const VolumeLimits& limits) {
+Result<DicomSlice> ParseDicomSlice(std::span<const uint8_t> bytes, const VolumeLimits& limits,
+                                   DicomDecode decode) {
   ASSIGN_OR_RETURN(const std::unique_ptr<DcmFileFormat> file, ParseFile(bytes));
   DcmDataset& ds = *file->getDataset();
   DicomSlice slice;
   if (!ds.tagExists(DCM_PixelData)) return slice;  // not an image
   slice.is_image = true;
+  ReadIdentity(ds, slice);
+  if (!slice.not_a_slice_reason.empty()) return slice;
   RETURN_IF_ERROR(CheckImageKind(ds));
   ASSIGN_OR_RETURN(slice.rows, GetInt(ds, DCM_Rows, "Rows"));
   ASSIGN_OR_RETURN(slice.columns, GetInt(ds, DCM_Columns, "Columns"));
@@ -275,6 +303,7 @@ Result<DicomSlice> ParseDicomSlice(std::span<const uint8_t> bytes, const VolumeL
   RETURN_IF_ERROR(ValidateGeometry(plane, limits));  // before any decoding
   ASSIGN_OR_RETURN(const PixelFormat format, ReadPixelFormat(ds));
   RETURN_IF_ERROR(ReadGeometry(ds, slice));
+  if (decode == DicomDecode::kHeaderOnly) return slice;
   RETURN_IF_ERROR(DecompressIfNeeded(ds));
   RETURN_IF_ERROR(ReadPixels(ds, format, slice));
   return slice;
