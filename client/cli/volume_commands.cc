@@ -59,8 +59,8 @@ nlohmann::json SeriesJson(const std::vector<DicomSeriesSummary>& series) {
                    {"number", s.series_number},
                    {"description", s.description},
                    {"modality", s.modality},
-                   {"dims", {s.columns, s.rows, s.files.size()}},
-                   {"images", s.files.size()},
+                   {"dims", {s.columns, s.rows, s.images}},
+                   {"images", s.images},
                    {"not_a_volume", s.not_a_volume_reason}});
   }
   return out;
@@ -71,7 +71,7 @@ void PrintSeries(const std::vector<DicomSeriesSummary>& series) {
     const DicomSeriesSummary& s = series[n];
     std::cout << (n == 0 ? "series      " : "            ") << n + 1 << ". " << s.uid << "  "
               << (s.modality.empty() ? "?" : s.modality) << "  \"" << s.description << "\"  "
-              << s.columns << " x " << s.rows << " x " << s.files.size() << " images"
+              << s.columns << " x " << s.rows << " x " << s.images << " images"
               << (s.not_a_volume_reason.empty() ? "" : "  (" + s.not_a_volume_reason + ": never read)")
               << "\n";
   }

@@ -30,8 +30,8 @@ Result<std::vector<std::filesystem::path>> ListFiles(const std::filesystem::path
 
 std::string Describe(const DicomSeriesSummary& s, size_t index) {
   return StrCat(index + 1, " = ", s.uid.empty() ? "(no UID)" : s.uid, " (",
-                s.not_a_volume_reason.empty() ? s.modality : s.not_a_volume_reason, ", ",
-                s.files.size(), " images)");
+                s.not_a_volume_reason.empty() ? s.modality : s.not_a_volume_reason, ", ", s.images,
+                " images)");
 }
 
 std::string ListChoices(const std::vector<DicomSeriesSummary>& series) {
@@ -58,8 +58,10 @@ Result<std::vector<DicomSeriesSummary>> ListDicomSeries(const std::filesystem::p
     ASSIGN_OR_RETURN(const std::vector<uint8_t> prefix, ReadFilePrefix(path, 132));
     if (!LooksLikeDicom(prefix)) continue;
     ASSIGN_OR_RETURN(const std::vector<uint8_t> bytes, budget.Read(path));
-    Result<DicomSlice> slice = ParseDicomSlice(bytes, limits, DicomDecode::kHeaderOnly);
-    if (!slice.ok()) return PrefixStatus(slice.status(), path.string());
+    Result<std::vector<DicomSlice>> frames =
+        ParseDicomFrames(bytes, limits, DicomDecode::kHeaderOnly);
+    if (!frames.ok()) return PrefixStatus(frames.status(), path.string());
+    const DicomSlice* slice = &frames->front();  // every frame has the file's identity
     if (!slice->is_image) continue;
     DicomSeriesSummary& s =
         groups[{slice->series_number, slice->series_uid, slice->not_a_slice_reason}];
@@ -73,6 +75,7 @@ Result<std::vector<DicomSeriesSummary>> ListDicomSeries(const std::filesystem::p
       s.not_a_volume_reason = slice->not_a_slice_reason;
     }
     s.files.push_back(path);
+    s.images += static_cast<int64_t>(frames->size());
   }
   if (groups.empty()) {
     return absl::InvalidArgumentError(
@@ -88,9 +91,7 @@ Result<size_t> ChooseDicomSeries(const std::vector<DicomSeriesSummary>& series,
   std::optional<size_t> chosen;
   if (selector.empty()) {
     const auto better = [](const DicomSeriesSummary& a, const DicomSeriesSummary& b) {
-      const auto voxels = [](const DicomSeriesSummary& s) {
-        return s.columns * s.rows * static_cast<int64_t>(s.files.size());
-      };
+      const auto voxels = [](const DicomSeriesSummary& s) { return s.columns * s.rows * s.images; };
       return std::make_tuple(IsCtOrMr(a), voxels(a)) > std::make_tuple(IsCtOrMr(b), voxels(b));
     };
     for (size_t n = 0; n < series.size(); ++n) {

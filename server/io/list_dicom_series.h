@@ -22,7 +22,8 @@ struct DicomSeriesSummary {
   // volume (they form a group of their own even when they share the UID of
   // a real series); "" for a series of slices.
   std::string not_a_volume_reason;
-  std::vector<std::filesystem::path> files;  // sorted by name; one per image
+  std::vector<std::filesystem::path> files;  // sorted by name
+  int64_t images = 0;  // slices: one per classic file, one per frame of a multi-frame one
 };
 
 // Parses the header of every regular DICOM file in `folder` (not its
@@ -32,7 +33,7 @@ struct DicomSeriesSummary {
 // localizers. The bytes read are held to `limits.max_bytes` as a running
 // total. Errors: NotFound (no folder), InvalidArgument (no DICOM images, an
 // unreadable file, named), ResourceExhausted, Unimplemented (an image kind
-// ParseDicomSlice does not read).
+// ParseDicomFrames does not read).
 Result<std::vector<DicomSeriesSummary>> ListDicomSeries(const std::filesystem::path& folder,
                                                         const VolumeLimits& limits);
 

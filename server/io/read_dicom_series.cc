@@ -39,14 +39,19 @@ Result<std::vector<NamedSlice>> DecodeSeries(const std::filesystem::path& folder
   int64_t voxels = 0;
   for (const std::filesystem::path& path : series.files) {
     ASSIGN_OR_RETURN(const std::vector<uint8_t> bytes, budget.Read(path));
-    Result<DicomSlice> slice = ParseDicomSlice(bytes, limits, DicomDecode::kPixels);
-    if (!slice.ok()) return PrefixStatus(slice.status(), path.string());
-    voxels += slice->rows * slice->columns;
-    if (voxels > limits.max_voxels) {
-      return absl::ResourceExhaustedError(StrCat(folder.string(), ": the slices hold over ",
-                                                 limits.max_voxels, " voxels (the cap)"));
+    Result<std::vector<DicomSlice>> frames = ParseDicomFrames(bytes, limits, DicomDecode::kPixels);
+    if (!frames.ok()) return PrefixStatus(frames.status(), path.string());
+    for (size_t f = 0; f < frames->size(); ++f) {
+      DicomSlice& slice = (*frames)[f];
+      voxels += slice.rows * slice.columns;
+      if (voxels > limits.max_voxels) {
+        return absl::ResourceExhaustedError(StrCat(folder.string(), ": the slices hold over ",
+                                                   limits.max_voxels, " voxels (the cap)"));
+      }
+      const std::string name = path.filename().string();
+      slices.push_back({frames->size() == 1 ? name : StrCat(name, " frame ", f + 1),
+                        std::move(slice), glm::dvec3(0.0)});
     }
-    slices.push_back({path.filename().string(), *std::move(slice), glm::dvec3(0.0)});
   }
   return slices;
 }
@@ -241,7 +246,7 @@ Result<Volume> ReadDicomSeries(const std::filesystem::path& folder, const Volume
     const DicomSeriesSummary& s = series[*chosen];
     volume->add_note(StrCat("the folder holds ", series.size(), " series; read series ",
                             *chosen + 1, " (", s.uid, ", ", s.modality, " \"", s.description,
-                            "\", ", s.files.size(),
+                            "\", ", s.images,
                             " slices); ?series=N or ?series=UID picks "
                             "another"));
   }

@@ -9,7 +9,8 @@
 
 namespace vpm {
 
-// Reads one series of the DICOM files in `folder` (not its subfolders):
+// Reads one series of the DICOM files in `folder` (not its subfolders; a
+// file holds one slice, or several as an enhanced multi-frame image):
 // `options.series` picks it (ListDicomSeries, ChooseDicomSeries: by default
 // the largest CT or MR series; localizers and secondary captures never).
 // The slices must share Rows, Columns, PixelSpacing and
@@ -28,7 +29,7 @@ namespace vpm {
 // the folder holds several. Values are rescaled (HU for CT).
 // Errors: NotFound (no folder), InvalidArgument (no images, unknown series,
 // mismatched slices, duplicate positions, bad files), ResourceExhausted (over
-// `limits`, including the resampled grid), Unimplemented (see ParseDicomSlice).
+// `limits`, including the resampled grid), Unimplemented (see ParseDicomFrames).
 Result<Volume> ReadDicomSeries(const std::filesystem::path& folder, const VolumeLimits& limits,
                                const DicomReadOptions& options = {});
 

@@ -14,10 +14,12 @@
 #include <dcmtk/dcmdata/dcpixseq.h>
 #include <dcmtk/dcmdata/dcpxitem.h>
 #include <dcmtk/dcmdata/dcrledrg.h>
+#include <dcmtk/dcmdata/dcsequen.h>
 #include <dcmtk/dcmdata/dcxfer.h>
 #include <dcmtk/dcmjpeg/djdecode.h>
 #include <dcmtk/dcmjpls/djdecode.h>
 
+#include "server/common/prefix_status.h"
 #include "server/io/check_dicom_structure.h"
 #include "server/io/header_text.h"
 #include "server/io/voxel_type.h"
@@ -64,7 +66,7 @@ struct PixelFormat {
   double intercept = 0.0;
 };
 
-Result<int64_t> GetInt(DcmDataset& ds, const DcmTagKey& tag, const char* name,
+Result<int64_t> GetInt(DcmItem& ds, const DcmTagKey& tag, const char* name,
                        std::optional<int64_t> fallback = std::nullopt) {
   Sint32 value = 0;
   if (ds.findAndGetSint32(tag, value).good()) return value;
@@ -74,12 +76,11 @@ Result<int64_t> GetInt(DcmDataset& ds, const DcmTagKey& tag, const char* name,
   return absl::InvalidArgumentError(StrCat(name, " is missing"));
 }
 
-Result<double> GetDouble(DcmDataset& ds, const DcmTagKey& tag, unsigned long pos, const char* name,
+Result<double> GetDouble(DcmItem& ds, const DcmTagKey& tag, unsigned long pos, const char* name,
                          std::optional<double> fallback = std::nullopt) {
   Float64 value = 0.0;
   if (ds.findAndGetFloat64(tag, value, pos).good()) {
-    if (!std::isfinite(value))
-      return absl::InvalidArgumentError(StrCat(name, " is not finite"));
+    if (!std::isfinite(value)) return absl::InvalidArgumentError(StrCat(name, " is not finite"));
     return value;
   }
   if (fallback.has_value()) return *fallback;
@@ -99,12 +100,28 @@ Status CheckImageKind(DcmDataset& ds) {
     return absl::UnimplementedError(
         StrCat("PhotometricInterpretation ", photometric.c_str(), " is not supported"));
   }
-  ASSIGN_OR_RETURN(const int64_t frames, GetInt(ds, DCM_NumberOfFrames, "NumberOfFrames", 1));
-  if (frames != 1) {
-    return absl::UnimplementedError(
-        StrCat("multi-frame images (", frames, " frames) are not supported"));
-  }
   return absl::OkStatus();
+}
+
+// NumberOfFrames (1 when absent). Several frames need per-frame positions
+// (an enhanced CT/MR image's PerFrameFunctionalGroupsSequence, one item per
+// frame); older multi-frame kinds (cine, NM) do not place their frames.
+Result<int64_t> CountFrames(DcmDataset& ds) {
+  ASSIGN_OR_RETURN(const int64_t frames, GetInt(ds, DCM_NumberOfFrames, "NumberOfFrames", 1));
+  if (frames < 1) return absl::InvalidArgumentError(StrCat("NumberOfFrames is ", frames));
+  if (frames == 1) return frames;
+  DcmSequenceOfItems* per_frame = nullptr;
+  if (ds.findAndGetSequence(DCM_PerFrameFunctionalGroupsSequence, per_frame).bad() ||
+      per_frame == nullptr) {
+    return absl::UnimplementedError(
+        StrCat("multi-frame images (", frames,
+               " frames) without PerFrameFunctionalGroupsSequence are not supported"));
+  }
+  if (static_cast<int64_t>(per_frame->card()) != frames) {
+    return absl::InvalidArgumentError(StrCat("PerFrameFunctionalGroupsSequence has ",
+                                             per_frame->card(), " items for ", frames, " frames"));
+  }
+  return frames;
 }
 
 Result<PixelFormat> ReadPixelFormat(DcmDataset& ds) {
@@ -119,8 +136,8 @@ Result<PixelFormat> ReadPixelFormat(DcmDataset& ds) {
   if (f.bits_stored < 1 || f.bits_stored > f.bits_allocated || f.high_bit >= f.bits_allocated ||
       f.high_bit + 1 < f.bits_stored) {
     return absl::InvalidArgumentError(StrCat("BitsStored ", f.bits_stored, " / HighBit ",
-                                                   f.high_bit, " do not fit BitsAllocated ",
-                                                   f.bits_allocated));
+                                             f.high_bit, " do not fit BitsAllocated ",
+                                             f.bits_allocated));
   }
   ASSIGN_OR_RETURN(const int64_t representation,
                    GetInt(ds, DCM_PixelRepresentation, "PixelRepresentation", 0));
@@ -131,20 +148,70 @@ Result<PixelFormat> ReadPixelFormat(DcmDataset& ds) {
   return f;
 }
 
-Status ReadGeometry(DcmDataset& ds, DicomSlice& slice) {
+// Where one frame's attributes live: the item of a functional group macro
+// (per-frame first, then shared), or the dataset itself for a classic image.
+struct FrameItems {
+  DcmItem* pixel_measures;   // PixelSpacing, SliceThickness
+  DcmItem* orientation;      // ImageOrientationPatient
+  DcmItem* position;         // ImagePositionPatient
+  DcmItem* value_transform;  // RescaleSlope, RescaleIntercept
+};
+
+DcmItem* FindGroup(DcmItem* per_frame, DcmItem* shared, const DcmTagKey& sequence,
+                   DcmItem& fallback) {
+  DcmItem* item = nullptr;
+  for (DcmItem* group : {per_frame, shared}) {
+    if (group != nullptr && group->findAndGetSequenceItem(sequence, item, 0).good() &&
+        item != nullptr) {
+      return item;
+    }
+  }
+  return &fallback;
+}
+
+FrameItems ItemsOfFrame(DcmDataset& ds, int64_t frame) {
+  DcmItem* shared = nullptr;
+  DcmItem* per_frame = nullptr;
+  if (ds.findAndGetSequenceItem(DCM_SharedFunctionalGroupsSequence, shared, 0).bad()) {
+    shared = nullptr;
+  }
+  if (ds.findAndGetSequenceItem(DCM_PerFrameFunctionalGroupsSequence, per_frame,
+                                static_cast<signed long>(frame))
+          .bad()) {
+    per_frame = nullptr;
+  }
+  return {FindGroup(per_frame, shared, DCM_PixelMeasuresSequence, ds),
+          FindGroup(per_frame, shared, DCM_PlaneOrientationSequence, ds),
+          FindGroup(per_frame, shared, DCM_PlanePositionSequence, ds),
+          FindGroup(per_frame, shared, DCM_PixelValueTransformationSequence, ds)};
+}
+
+Status ReadGeometry(const FrameItems& items, DicomSlice& slice) {
   for (int n = 0; n < 2; ++n) {
-    ASSIGN_OR_RETURN(slice.pixel_spacing_mm[n], GetDouble(ds, DCM_PixelSpacing, n, "PixelSpacing"));
+    ASSIGN_OR_RETURN(slice.pixel_spacing_mm[n],
+                     GetDouble(*items.pixel_measures, DCM_PixelSpacing, n, "PixelSpacing"));
   }
   for (int n = 0; n < 6; ++n) {
-    ASSIGN_OR_RETURN(slice.orientation[n],
-                     GetDouble(ds, DCM_ImageOrientationPatient, n, "ImageOrientationPatient"));
+    ASSIGN_OR_RETURN(
+        slice.orientation[n],
+        GetDouble(*items.orientation, DCM_ImageOrientationPatient, n, "ImageOrientationPatient"));
   }
   for (int n = 0; n < 3; ++n) {
-    ASSIGN_OR_RETURN(slice.position_mm[n],
-                     GetDouble(ds, DCM_ImagePositionPatient, n, "ImagePositionPatient"));
+    ASSIGN_OR_RETURN(slice.position_mm[n], GetDouble(*items.position, DCM_ImagePositionPatient, n,
+                                                     "ImagePositionPatient"));
   }
   ASSIGN_OR_RETURN(slice.slice_thickness_mm,
-                   GetDouble(ds, DCM_SliceThickness, 0, "SliceThickness", 0.0));
+                   GetDouble(*items.pixel_measures, DCM_SliceThickness, 0, "SliceThickness", 0.0));
+  return absl::OkStatus();
+}
+
+// The frame's own rescale where its functional groups carry one.
+Status ReadRescale(const FrameItems& items, PixelFormat& f) {
+  ASSIGN_OR_RETURN(f.slope,
+                   GetDouble(*items.value_transform, DCM_RescaleSlope, 0, "RescaleSlope", f.slope));
+  ASSIGN_OR_RETURN(f.intercept, GetDouble(*items.value_transform, DCM_RescaleIntercept, 0,
+                                          "RescaleIntercept", f.intercept));
+  if (f.slope == 0.0) return absl::InvalidArgumentError("RescaleSlope is 0");
   return absl::OkStatus();
 }
 
@@ -250,18 +317,20 @@ float SampleToValue(uint32_t raw, const PixelFormat& f) {
   return DoubleToFloat(static_cast<double>(value) * f.slope + f.intercept);
 }
 
-Status ReadPixels(DcmDataset& ds, const PixelFormat& f, DicomSlice& slice) {
+// Frame `frame` of the (decoded) pixel data; frames follow each other.
+Status ReadPixels(DcmDataset& ds, const PixelFormat& f, int64_t frame, DicomSlice& slice) {
   const int64_t count = slice.rows * slice.columns;
+  const int64_t first = frame * count;
   DcmElement* element = nullptr;
   if (ds.findAndGetElement(DCM_PixelData, element).bad() || element == nullptr) {
     return absl::InvalidArgumentError("PixelData is missing");
   }
   const int64_t have_bytes = element->getLength();
-  const int64_t need_bytes = count * (f.bits_allocated / 8);
+  const int64_t need_bytes = (first + count) * (f.bits_allocated / 8);
   if (have_bytes < need_bytes) {
-    return absl::InvalidArgumentError(
-        StrCat("PixelData holds ", have_bytes, " bytes but ", slice.rows, "x", slice.columns,
-                     "x", f.bits_allocated, " bits need ", need_bytes, " (truncated)"));
+    return absl::InvalidArgumentError(StrCat(
+        "PixelData holds ", have_bytes, " bytes but ", frame + 1, " frames of ", slice.rows, "x",
+        slice.columns, "x", f.bits_allocated, " bits need ", need_bytes, " (truncated)"));
   }
   slice.values.resize(static_cast<size_t>(count));
   if (f.bits_allocated == 8) {
@@ -269,13 +338,13 @@ Status ReadPixels(DcmDataset& ds, const PixelFormat& f, DicomSlice& slice) {
     if (element->getUint8Array(data).bad() || data == nullptr) {
       return absl::InvalidArgumentError("PixelData cannot be read as 8-bit samples");
     }
-    for (int64_t n = 0; n < count; ++n) slice.values[n] = SampleToValue(data[n], f);
+    for (int64_t n = 0; n < count; ++n) slice.values[n] = SampleToValue(data[first + n], f);
   } else {
     Uint16* data = nullptr;
     if (element->getUint16Array(data).bad() || data == nullptr) {
       return absl::InvalidArgumentError("PixelData cannot be read as 16-bit samples");
     }
-    for (int64_t n = 0; n < count; ++n) slice.values[n] = SampleToValue(data[n], f);
+    for (int64_t n = 0; n < count; ++n) slice.values[n] = SampleToValue(data[first + n], f);
   }
   return absl::OkStatus();
 }
@@ -286,27 +355,37 @@ bool LooksLikeDicom(std::span<const uint8_t> bytes) {
   return bytes.size() >= 132 && std::memcmp(bytes.data() + 128, "DICM", 4) == 0;
 }
 
-Result<DicomSlice> ParseDicomSlice(std::span<const uint8_t> bytes, const VolumeLimits& limits,
-                                   DicomDecode decode) {
+Result<std::vector<DicomSlice>> ParseDicomFrames(std::span<const uint8_t> bytes,
+                                                 const VolumeLimits& limits, DicomDecode decode) {
   ASSIGN_OR_RETURN(const std::unique_ptr<DcmFileFormat> file, ParseFile(bytes));
   DcmDataset& ds = *file->getDataset();
-  DicomSlice slice;
-  if (!ds.tagExists(DCM_PixelData)) return slice;  // not an image
-  slice.is_image = true;
-  ReadIdentity(ds, slice);
-  if (!slice.not_a_slice_reason.empty()) return slice;
+  DicomSlice base;
+  if (!ds.tagExists(DCM_PixelData)) return std::vector<DicomSlice>{base};  // not an image
+  base.is_image = true;
+  ReadIdentity(ds, base);
+  if (!base.not_a_slice_reason.empty()) return std::vector<DicomSlice>{base};
   RETURN_IF_ERROR(CheckImageKind(ds));
-  ASSIGN_OR_RETURN(slice.rows, GetInt(ds, DCM_Rows, "Rows"));
-  ASSIGN_OR_RETURN(slice.columns, GetInt(ds, DCM_Columns, "Columns"));
-  VolumeGeometry plane;
-  plane.dims = {slice.columns, slice.rows, 1};
-  RETURN_IF_ERROR(ValidateGeometry(plane, limits));  // before any decoding
+  ASSIGN_OR_RETURN(const int64_t frames, CountFrames(ds));
+  ASSIGN_OR_RETURN(base.rows, GetInt(ds, DCM_Rows, "Rows"));
+  ASSIGN_OR_RETURN(base.columns, GetInt(ds, DCM_Columns, "Columns"));
+  VolumeGeometry planes;
+  planes.dims = {base.columns, base.rows, frames};
+  RETURN_IF_ERROR(ValidateGeometry(planes, limits));  // before any decoding
   ASSIGN_OR_RETURN(const PixelFormat format, ReadPixelFormat(ds));
-  RETURN_IF_ERROR(ReadGeometry(ds, slice));
-  if (decode == DicomDecode::kHeaderOnly) return slice;
+  std::vector<DicomSlice> slices(static_cast<size_t>(frames), base);
+  std::vector<PixelFormat> formats(static_cast<size_t>(frames), format);
+  for (int64_t f = 0; f < frames; ++f) {
+    const FrameItems items = ItemsOfFrame(ds, f);
+    Status status = ReadGeometry(items, slices[f]);
+    if (status.ok() && frames > 1) status = ReadRescale(items, formats[f]);
+    if (!status.ok()) {
+      return frames == 1 ? status : PrefixStatus(status, StrCat("frame ", f + 1));
+    }
+  }
+  if (decode == DicomDecode::kHeaderOnly) return slices;
   RETURN_IF_ERROR(DecompressIfNeeded(ds));
-  RETURN_IF_ERROR(ReadPixels(ds, format, slice));
-  return slice;
+  for (int64_t f = 0; f < frames; ++f) RETURN_IF_ERROR(ReadPixels(ds, formats[f], f, slices[f]));
+  return slices;
 }
 
 }  // namespace vpm

@@ -50,18 +50,25 @@ enum class DicomDecode {
 // True when `bytes` has the DICOM Part 10 preamble and "DICM" prefix.
 bool LooksLikeDicom(std::span<const uint8_t> bytes);
 
-// Parses one DICOM Part 10 file. Values are stored * RescaleSlope +
+// Parses one DICOM Part 10 file into its frames: one DicomSlice for a
+// classic image, one per frame for an enhanced multi-frame CT/MR image
+// (geometry and rescale from the per-frame, else shared, functional groups:
+// PlanePositionSequence, PlaneOrientationSequence, PixelMeasuresSequence,
+// PixelValueTransformationSequence). Values are stored * RescaleSlope +
 // RescaleIntercept (Hounsfield units for CT). Handles BitsAllocated 8 and 16,
 // signed and unsigned (PixelRepresentation), BitsStored / HighBit masking,
 // uncompressed transfer syntaxes, and the RLE, JPEG and JPEG-LS ones through
-// DCMTK's decoders. Errors (messages without the file name): InvalidArgument
-// for malformed or truncated files or missing geometry attributes,
-// ResourceExhausted for slices over `limits`, Unimplemented for valid files
-// we do not read (colour, multi-frame, 32-bit, a compressed transfer syntax
-// without a decoder, deflate; the message names the syntax). Localizers
-// (ImageType holds LOCALIZER) and secondary captures (their SOP classes) are
-// returned with `not_a_slice_reason` set and neither geometry nor pixels.
-Result<DicomSlice> ParseDicomSlice(std::span<const uint8_t> bytes, const VolumeLimits& limits,
-                                   DicomDecode decode = DicomDecode::kPixels);
+// DCMTK's decoders. A file without pixel data gives one slice with is_image
+// false. Errors (messages without the file name): InvalidArgument for
+// malformed or truncated files or missing geometry attributes,
+// ResourceExhausted for frames over `limits`, Unimplemented for valid files
+// we do not read (colour, multi-frame without per-frame positions, 32-bit, a
+// compressed transfer syntax without a decoder, deflate; the message names
+// the syntax). Localizers (ImageType holds LOCALIZER) and secondary captures
+// (their SOP classes) are returned with `not_a_slice_reason` set and neither
+// geometry nor pixels.
+Result<std::vector<DicomSlice>> ParseDicomFrames(std::span<const uint8_t> bytes,
+                                                 const VolumeLimits& limits,
+                                                 DicomDecode decode = DicomDecode::kPixels);
 
 }  // namespace vpm

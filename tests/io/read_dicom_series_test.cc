@@ -382,14 +382,14 @@ TEST(DicomSlice, RejectsMissingPositionAndPlainBytes) {
   ASSERT_TRUE(WriteDicomSlice(path, s));
   auto bytes = ReadFileBytes(path, {});
   ASSERT_TRUE(bytes.ok());
-  auto slice = ParseDicomSlice(*bytes, {});
+  auto slice = ParseDicomFrames(*bytes, {});
   ASSERT_FALSE(slice.ok());
   EXPECT_EQ(slice.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(slice.status().message().find("ImagePositionPatient is missing"),
             absl::string_view::npos)
       << slice.status();
   const std::vector<uint8_t> junk(300, 7);
-  EXPECT_EQ(ParseDicomSlice(junk, {}).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(ParseDicomFrames(junk, {}).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
 }  // namespace
