@@ -21,6 +21,7 @@
 
 #include "server/common/prefix_status.h"
 #include "server/io/check_dicom_structure.h"
+#include "server/io/decode_jpeg2000.h"
 #include "server/io/header_text.h"
 #include "server/io/voxel_type.h"
 
@@ -293,6 +294,60 @@ Status CheckFragments(DcmDataset& ds, E_TransferSyntax xfer) {
   return absl::OkStatus();
 }
 
+bool IsJpeg2000(E_TransferSyntax xfer) {
+  return xfer == EXS_JPEG2000LosslessOnly || xfer == EXS_JPEG2000;
+}
+
+// The codestream of each frame: one fragment per frame, or all fragments of
+// a single-frame image joined (an encoder may split one codestream).
+Result<std::vector<std::vector<uint8_t>>> Jpeg2000Codestreams(DcmDataset& ds, int64_t frames) {
+  DcmElement* element = nullptr;
+  DcmPixelSequence* sequence = nullptr;
+  if (ds.findAndGetElement(DCM_PixelData, element).bad() || element == nullptr ||
+      element->ident() != EVR_PixelData ||
+      static_cast<DcmPixelData*>(element)
+          ->getEncapsulatedRepresentation(ds.getOriginalXfer(), nullptr, sequence)
+          .bad() ||
+      sequence == nullptr || sequence->card() < 2) {
+    return absl::InvalidArgumentError("JPEG 2000 PixelData has no fragments");
+  }
+  const int64_t fragments = static_cast<int64_t>(sequence->card()) - 1;  // item 0: offset table
+  if (fragments != frames && frames != 1) {
+    return absl::UnimplementedError(StrCat("JPEG 2000 with ", fragments, " fragments for ", frames,
+                                           " frames is not supported"));
+  }
+  std::vector<std::vector<uint8_t>> out(static_cast<size_t>(frames));
+  for (int64_t n = 0; n < fragments; ++n) {
+    DcmPixelItem* item = nullptr;
+    Uint8* data = nullptr;
+    if (sequence->getItem(item, static_cast<unsigned long>(n + 1)).bad() || item == nullptr ||
+        item->getUint8Array(data).bad()) {
+      return absl::InvalidArgumentError("JPEG 2000 fragment cannot be read");
+    }
+    std::vector<uint8_t>& frame = out[frames == 1 ? 0 : n];
+    if (data != nullptr) frame.insert(frame.end(), data, data + item->getLength());
+  }
+  return out;
+}
+
+// JPEG 2000 frames through OpenJPEG; decoded samples are the stored values.
+Status ReadJpeg2000Frames(DcmDataset& ds, const std::vector<PixelFormat>& formats,
+                          std::vector<DicomSlice>& slices) {
+  const int64_t frames = static_cast<int64_t>(slices.size());
+  ASSIGN_OR_RETURN(const std::vector<std::vector<uint8_t>> streams,
+                   Jpeg2000Codestreams(ds, frames));
+  for (int64_t f = 0; f < frames; ++f) {
+    DicomSlice& slice = slices[f];
+    ASSIGN_OR_RETURN(const std::vector<int32_t> samples,
+                     DecodeJpeg2000(streams[f], slice.columns, slice.rows));
+    slice.values.resize(samples.size());
+    for (size_t n = 0; n < samples.size(); ++n) {
+      slice.values[n] = DoubleToFloat(samples[n] * formats[f].slope + formats[f].intercept);
+    }
+  }
+  return absl::OkStatus();
+}
+
 Status DecompressIfNeeded(DcmDataset& ds) {
   const DcmXfer xfer(ds.getOriginalXfer());
   if (!xfer.isEncapsulated()) return absl::OkStatus();
@@ -383,6 +438,10 @@ Result<std::vector<DicomSlice>> ParseDicomFrames(std::span<const uint8_t> bytes,
     }
   }
   if (decode == DicomDecode::kHeaderOnly) return slices;
+  if (IsJpeg2000(ds.getOriginalXfer())) {
+    RETURN_IF_ERROR(ReadJpeg2000Frames(ds, formats, slices));
+    return slices;
+  }
   RETURN_IF_ERROR(DecompressIfNeeded(ds));
   for (int64_t f = 0; f < frames; ++f) RETURN_IF_ERROR(ReadPixels(ds, formats[f], f, slices[f]));
   return slices;
