@@ -1,4 +1,4 @@
-// libFuzzer target: one DICOM file's bytes -> ParseDicomSlice (the per-file
+// libFuzzer target: one DICOM file's bytes -> ParseDicomFrames (the per-file
 // path of the series reader, DCMTK's parser and decoders included).
 #include <cstddef>
 #include <cstdint>
@@ -17,10 +17,14 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const vpm::VolumeLimits limits = vpm::fuzz::FuzzLimits();
-  const vpm::Result<vpm::DicomSlice> slice = vpm::ParseDicomSlice({data, size}, limits);
-  if (slice.ok() && slice->is_image &&
-      static_cast<int64_t>(slice->values.size()) != slice->rows * slice->columns) {
-    __builtin_trap();
+  const vpm::Result<std::vector<vpm::DicomSlice>> frames =
+      vpm::ParseDicomFrames({data, size}, limits);
+  if (!frames.ok()) return 0;
+  for (const vpm::DicomSlice& slice : *frames) {
+    const bool decoded = slice.is_image && slice.not_a_slice_reason.empty();
+    if (decoded && static_cast<int64_t>(slice.values.size()) != slice.rows * slice.columns) {
+      __builtin_trap();
+    }
   }
   return 0;
 }

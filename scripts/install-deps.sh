@@ -12,7 +12,9 @@ packages=(
   # maths, geometry
   libglm-dev libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev
   # volume formats and images
-  libnifti2-dev libdcmtk-dev zlib1g-dev libturbojpeg0-dev libpng-dev
+  libnifti2-dev libdcmtk-dev zlib1g-dev libturbojpeg0-dev libpng-dev libopenjp2-7-dev
+  # the reference DICOM converter the DICOM reader is tested against
+  dcm2niix
   # service
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   prometheus-cpp-dev libssl-dev

@@ -3,10 +3,15 @@
 #include <chrono>
 #include <iomanip>
 #include <iostream>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "client/cli/command_status.h"
+#include "server/io/list_dicom_series.h"
+#include "server/io/parse_dicom_source.h"
 #include "server/io/read_volume.h"
 #include "server/io/write_nifti.h"
 
@@ -32,7 +37,44 @@ nlohmann::json VolumeInfoJson(const Volume& v) {
           {"extent_mm", Vec(g.extent_mm())},
           {"value_range", {v.min_value(), v.max_value()}},
           {"non_finite_voxels_replaced", v.non_finite_count()},
+          {"notes", v.notes()},
           {"landmarks", landmarks}};
+}
+
+// The series of a DICOM folder source, or none for any other source.
+std::vector<DicomSeriesSummary> DicomSeriesOf(const std::string& source) {
+  const Result<std::optional<DicomSource>> dicom = ParseDicomSource(source);
+  if (!dicom.ok() || !dicom->has_value()) return {};
+  Result<std::vector<DicomSeriesSummary>> series =
+      ListDicomSeries((*dicom)->folder, VolumeLimits{});
+  return series.ok() ? *std::move(series) : std::vector<DicomSeriesSummary>{};
+}
+
+nlohmann::json SeriesJson(const std::vector<DicomSeriesSummary>& series) {
+  nlohmann::json out = nlohmann::json::array();
+  for (size_t n = 0; n < series.size(); ++n) {
+    const DicomSeriesSummary& s = series[n];
+    out.push_back({{"index", n + 1},
+                   {"uid", s.uid},
+                   {"number", s.series_number},
+                   {"description", s.description},
+                   {"modality", s.modality},
+                   {"dims", {s.columns, s.rows, s.images}},
+                   {"images", s.images},
+                   {"not_a_volume", s.not_a_volume_reason}});
+  }
+  return out;
+}
+
+void PrintSeries(const std::vector<DicomSeriesSummary>& series) {
+  for (size_t n = 0; n < series.size(); ++n) {
+    const DicomSeriesSummary& s = series[n];
+    std::cout << (n == 0 ? "series      " : "            ") << n + 1 << ". " << s.uid << "  "
+              << (s.modality.empty() ? "?" : s.modality) << "  \"" << s.description << "\"  "
+              << s.columns << " x " << s.rows << " x " << s.images << " images"
+              << (s.not_a_volume_reason.empty() ? "" : "  (" + s.not_a_volume_reason + ": never read)")
+              << "\n";
+  }
 }
 
 void PrintInfo(const Volume& v) {
@@ -51,6 +93,7 @@ void PrintInfo(const Volume& v) {
   }
   std::cout << std::setprecision(1) << "values      " << v.min_value() << " .. " << v.max_value()
             << "\n";
+  for (const std::string& note : v.notes()) std::cout << "note        " << note << "\n";
   if (v.non_finite_count() > 0) {
     std::cout << "warning     " << v.non_finite_count()
               << " NaN/infinite voxels were replaced by the minimum\n";
@@ -82,10 +125,14 @@ void AddVolumeCommands(CLI::App& app, int* exit_code) {
       *exit_code = ExitWith(v.status());
       return;
     }
+    const std::vector<DicomSeriesSummary> series = DicomSeriesOf(info_args->source);
     if (info_args->json) {
-      std::cout << VolumeInfoJson(*v).dump(2) << "\n";
+      nlohmann::json json = VolumeInfoJson(*v);
+      if (!series.empty()) json["dicom_series"] = SeriesJson(series);
+      std::cout << json.dump(2) << "\n";
     } else {
       PrintInfo(*v);
+      PrintSeries(series);
     }
   });
 

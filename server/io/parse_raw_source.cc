@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "server/io/header_text.h"
+#include "server/io/parse_source_query.h"
 
 namespace vpm {
 namespace {
@@ -54,19 +55,12 @@ Result<RawSource> ParseRawSource(std::string_view source) {
   RawSource out;
   out.path = std::string(source.substr(0, question));
   if (out.path.empty()) return Bad("empty path");
-  std::string_view query = source.substr(question + 1);
-  std::set<std::string, std::less<>> seen;
-  while (!query.empty()) {
-    const size_t amp = query.find('&');
-    const std::string_view param = query.substr(0, amp);
-    query = amp == std::string_view::npos ? std::string_view() : query.substr(amp + 1);
-    const size_t equals = param.find('=');
-    if (equals == std::string_view::npos) return Bad("parameters are key=value");
-    const std::string_view key = param.substr(0, equals);
-    if (!seen.emplace(key).second) {
-      return Bad(StrCat("\"", std::string(key.substr(0, 40)), "\" given twice"));
-    }
-    RETURN_IF_ERROR(ParseParam(key, param.substr(equals + 1), out.options));
+  Result<std::vector<SourceParam>> params = ParseSourceQuery(source.substr(question + 1));
+  if (!params.ok()) return Bad(std::string(params.status().message()));
+  std::set<std::string_view> seen;
+  for (const auto& [key, value] : *params) {
+    seen.insert(key);
+    RETURN_IF_ERROR(ParseParam(key, value, out.options));
   }
   for (const char* required : {"dims", "type", "spacing"}) {
     if (seen.count(std::string_view(required)) == 0) {

@@ -2,14 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <string>
-#include <system_error>
 #include <vector>
 
 #include "server/common/prefix_status.h"
+#include "server/io/folder_read_budget.h"
+#include "server/io/list_dicom_series.h"
 #include "server/io/read_dicom_slice.h"
-#include "server/io/read_file_bytes.h"
+#include "server/io/resample_sheared_stack.h"
 
 namespace vpm {
 namespace {
@@ -17,78 +17,43 @@ namespace {
 constexpr double kGapTolerance = 0.01;          // relative to the mean gap
 constexpr double kOrientationTolerance = 1e-4;  // per direction-cosine component
 constexpr double kSpacingTolerance = 1e-4;      // relative
+// A gap this many times the smallest one suggests missing slices: still
+// interpolated across, but said in the notes.
+constexpr double kLargeGapFactor = 5.0;
 
 struct NamedSlice {
   std::string file;
   DicomSlice slice;
-  double position_along_normal = 0.0;
+  glm::dvec3 position_in_frame_mm{0.0};  // (along row dir, along column dir, along normal)
 };
 
-Result<std::vector<std::filesystem::path>> ListFiles(const std::filesystem::path& folder) {
-  std::error_code ec;
-  if (!std::filesystem::is_directory(folder, ec)) {
-    return absl::NotFoundError(StrCat(folder.string(), ": no such folder"));
-  }
-  std::vector<std::filesystem::path> files;
-  for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
-    if (entry.is_regular_file(ec)) files.push_back(entry.path());
-  }
-  if (ec) return absl::InvalidArgumentError(StrCat(folder.string(), ": cannot list files"));
-  std::sort(files.begin(), files.end());
-  return files;
-}
+// One decimal, for notes meant to be read: "18.5".
+double Round1(double x) { return std::round(x * 10.0) / 10.0; }
 
-// Parses every DICOM image in the folder, keeping the running totals under
-// the caps so that a folder of many files cannot exhaust memory.
-Result<std::vector<NamedSlice>> ParseAll(const std::filesystem::path& folder,
-                                         const VolumeLimits& limits) {
-  ASSIGN_OR_RETURN(const std::vector<std::filesystem::path> files, ListFiles(folder));
+// Decodes the chosen series' files, holding bytes and voxels to the caps.
+Result<std::vector<NamedSlice>> DecodeSeries(const std::filesystem::path& folder,
+                                             const DicomSeriesSummary& series,
+                                             const VolumeLimits& limits) {
+  FolderReadBudget budget(folder, limits);
   std::vector<NamedSlice> slices;
-  int64_t bytes_read = 0;
   int64_t voxels = 0;
-  for (const std::filesystem::path& path : files) {
-    // A look at the prefix first, so that large non-DICOM files in the
-    // folder (a PDF report, a video) are neither read nor counted.
-    ASSIGN_OR_RETURN(const std::vector<uint8_t> prefix, ReadFilePrefix(path, 132));
-    if (!LooksLikeDicom(prefix)) continue;
-    VolumeLimits remaining = limits;
-    remaining.max_bytes = limits.max_bytes - bytes_read;
-    Result<std::vector<uint8_t>> bytes = ReadFileBytes(path, remaining);
-    if (bytes.status().code() == absl::StatusCode::kResourceExhausted) {
-      return absl::ResourceExhaustedError(StrCat(
-          folder.string(), ": the DICOM files hold over ", limits.max_bytes, " bytes (the cap)"));
+  for (const std::filesystem::path& path : series.files) {
+    ASSIGN_OR_RETURN(const std::vector<uint8_t> bytes, budget.Read(path));
+    Result<std::vector<DicomSlice>> frames = ParseDicomFrames(bytes, limits, DicomDecode::kPixels);
+    if (!frames.ok()) return PrefixStatus(frames.status(), path.string());
+    for (size_t f = 0; f < frames->size(); ++f) {
+      DicomSlice& slice = (*frames)[f];
+      voxels += slice.rows * slice.columns;
+      if (voxels > limits.max_voxels) {
+        return absl::ResourceExhaustedError(StrCat(folder.string(), ": the slices hold over ",
+                                                   limits.max_voxels, " voxels (the cap)"));
+      }
+      const std::string name = path.filename().string();
+      slices.push_back({frames->size() == 1 ? name : StrCat(name, " frame ", f + 1),
+                        std::move(slice), glm::dvec3(0.0)});
     }
-    if (!bytes.ok()) return bytes.status();
-    bytes_read += static_cast<int64_t>(bytes->size());
-    Result<DicomSlice> slice = ParseDicomSlice(*bytes, limits);
-    if (!slice.ok()) return PrefixStatus(slice.status(), path.string());
-    if (!slice->is_image) continue;
-    voxels += slice->rows * slice->columns;
-    if (voxels > limits.max_voxels) {
-      return absl::ResourceExhaustedError(StrCat(folder.string(), ": the slices hold over ",
-                                                       limits.max_voxels, " voxels (the cap)"));
-    }
-    slices.push_back({path.filename().string(), *std::move(slice), 0.0});
-  }
-  if (slices.empty()) {
-    return absl::InvalidArgumentError(StrCat(folder.string(), ": holds no DICOM images (",
-                                                   files.size(), " files checked)"));
   }
   return slices;
-}
-
-Status CheckOneSeries(const std::filesystem::path& folder, const std::vector<NamedSlice>& slices) {
-  std::map<std::string, int> series;
-  for (const NamedSlice& s : slices) ++series[s.slice.series_uid];
-  if (series.size() == 1) return absl::OkStatus();
-  std::string uids;
-  for (const auto& [uid, count] : series) {
-    StrAppend(&uids, uids.empty() ? "" : ", ", uid.empty() ? "(none)" : uid, " (", count,
-                    " files)");
-  }
-  return absl::InvalidArgumentError(StrCat("folder ", folder.string(), " holds ",
-                                                 series.size(), " series (UIDs ", uids,
-                                                 "); pass one series per folder"));
 }
 
 Status CheckSameFrame(const NamedSlice& first, const NamedSlice& other) {
@@ -97,7 +62,7 @@ Status CheckSameFrame(const NamedSlice& first, const NamedSlice& other) {
   const std::string pair = StrCat(" differ between ", first.file, " and ", other.file);
   if (a.rows != b.rows || a.columns != b.columns) {
     return absl::InvalidArgumentError(StrCat("Rows/Columns (", a.rows, "x", a.columns, " vs ",
-                                                   b.rows, "x", b.columns, ")", pair));
+                                             b.rows, "x", b.columns, ")", pair));
   }
   for (int n = 0; n < 2; ++n) {
     if (std::abs(a.pixel_spacing_mm[n] - b.pixel_spacing_mm[n]) >
@@ -113,61 +78,8 @@ Status CheckSameFrame(const NamedSlice& first, const NamedSlice& other) {
   return absl::OkStatus();
 }
 
-// Sorts along the normal and returns the mean gap (0 for one slice).
-Result<double> SortAndCheckGaps(std::vector<NamedSlice>& slices, const glm::dvec3& normal) {
-  for (NamedSlice& s : slices) s.position_along_normal = glm::dot(s.slice.position_mm, normal);
-  std::sort(slices.begin(), slices.end(), [](const NamedSlice& a, const NamedSlice& b) {
-    return a.position_along_normal < b.position_along_normal;
-  });
-  const size_t n = slices.size();
-  if (n < 2) return 0.0;
-  const double mean_gap =
-      (slices.back().position_along_normal - slices.front().position_along_normal) / (n - 1);
-  // Duplicates first: they also make the gaps uneven, but deserve their own message.
-  for (size_t k = 1; k < n; ++k) {
-    const NamedSlice& a = slices[k - 1];
-    const NamedSlice& b = slices[k];
-    const double gap = b.position_along_normal - a.position_along_normal;
-    if (gap <= kGapTolerance * mean_gap || gap < 1e-6) {
-      return absl::InvalidArgumentError(
-          StrCat("duplicate slice position: ", a.file, " and ", b.file, " are both at ",
-                       a.position_along_normal, " mm along the slice normal"));
-    }
-  }
-  for (size_t k = 1; k < n; ++k) {
-    const NamedSlice& a = slices[k - 1];
-    const NamedSlice& b = slices[k];
-    const double gap = b.position_along_normal - a.position_along_normal;
-    if (std::abs(gap - mean_gap) > kGapTolerance * mean_gap) {
-      return absl::InvalidArgumentError(StrCat(
-          "uneven slice spacing: the gap between ", a.file, " and ", b.file, " is ", gap,
-          " mm but the mean gap is ", mean_gap, " mm (tolerance 1%); missing or extra slices?"));
-    }
-  }
-  return mean_gap;
-}
-
-// Every slice must sit on the line through the first along the normal.
-Status CheckStacked(const std::vector<NamedSlice>& slices, const glm::dvec3& normal) {
-  const glm::dvec3 p0 = slices.front().slice.position_mm;
-  for (const NamedSlice& s : slices) {
-    const glm::dvec3 d = s.slice.position_mm - p0;
-    const double along = glm::dot(d, normal);
-    const double across = glm::length(d - along * normal);
-    if (across > kGapTolerance * std::abs(along) + 1e-3) {
-      return absl::UnimplementedError(
-          StrCat(s.file, " is shifted ", across,
-                       " mm across the slice normal (tilted gantry or "
-                       "sheared stack); such series are not supported"));
-    }
-  }
-  return absl::OkStatus();
-}
-
-Result<Volume> AssembleSeries(const std::filesystem::path& folder, std::vector<NamedSlice> slices,
-                              const VolumeLimits& limits) {
-  for (const NamedSlice& s : slices) RETURN_IF_ERROR(CheckSameFrame(slices.front(), s));
-  const DicomSlice& first = slices.front().slice;
+// Columns: row direction, column direction, slice normal (world LPS).
+Result<glm::dmat3> SliceFrame(const DicomSlice& first) {
   const glm::dvec3 row_dir(first.orientation[0], first.orientation[1], first.orientation[2]);
   const glm::dvec3 col_dir(first.orientation[3], first.orientation[4], first.orientation[5]);
   const glm::dvec3 cross = glm::cross(row_dir, col_dir);
@@ -176,17 +88,101 @@ Result<Volume> AssembleSeries(const std::filesystem::path& folder, std::vector<N
     return absl::InvalidArgumentError(
         "ImageOrientationPatient row and column directions are not perpendicular unit vectors");
   }
-  const glm::dvec3 normal = cross / cross_length;
-  ASSIGN_OR_RETURN(const double mean_gap, SortAndCheckGaps(slices, normal));
-  RETURN_IF_ERROR(CheckStacked(slices, normal));
+  return glm::dmat3(row_dir, col_dir, cross / cross_length);
+}
+
+// Sorts along the normal; duplicate positions are an error.
+Status SortAlongNormal(std::vector<NamedSlice>& slices, const glm::dmat3& frame) {
+  for (NamedSlice& s : slices) {
+    s.position_in_frame_mm = glm::transpose(frame) * s.slice.position_mm;
+  }
+  std::sort(slices.begin(), slices.end(), [](const NamedSlice& a, const NamedSlice& b) {
+    return a.position_in_frame_mm.z < b.position_in_frame_mm.z;
+  });
+  if (slices.size() < 2) return absl::OkStatus();
+  const double mean_gap =
+      (slices.back().position_in_frame_mm.z - slices.front().position_in_frame_mm.z) /
+      static_cast<double>(slices.size() - 1);
+  for (size_t k = 1; k < slices.size(); ++k) {
+    const NamedSlice& a = slices[k - 1];
+    const NamedSlice& b = slices[k];
+    const double gap = b.position_in_frame_mm.z - a.position_in_frame_mm.z;
+    if (gap <= kGapTolerance * mean_gap || gap < 1e-6) {
+      return absl::InvalidArgumentError(StrCat("duplicate slice position: ", a.file, " and ",
+                                               b.file, " are both at ", a.position_in_frame_mm.z,
+                                               " mm along the slice normal"));
+    }
+  }
+  return absl::OkStatus();
+}
+
+// What the sorted stack looks like: its gaps and its shear.
+struct StackShape {
+  double mean_gap_mm = 0.0;
+  double min_gap_mm = 0.0;
+  double max_gap_mm = 0.0;
+  size_t max_gap_at = 0;  // the gap between slices max_gap_at - 1 and max_gap_at
+  bool uneven = false;
+  double tilt_deg = 0.0;  // angle between the stack's axis and the slice normal
+  bool sheared = false;
+};
+
+StackShape MeasureStack(const std::vector<NamedSlice>& slices) {
+  StackShape shape;
+  const size_t n = slices.size();
+  const glm::dvec3 first = slices.front().position_in_frame_mm;
+  shape.mean_gap_mm = (slices.back().position_in_frame_mm.z - first.z) / (n - 1);
+  shape.min_gap_mm = shape.mean_gap_mm;
+  for (size_t k = 1; k < n; ++k) {
+    const double gap = slices[k].position_in_frame_mm.z - slices[k - 1].position_in_frame_mm.z;
+    shape.uneven |= std::abs(gap - shape.mean_gap_mm) > kGapTolerance * shape.mean_gap_mm;
+    shape.min_gap_mm = std::min(shape.min_gap_mm, gap);
+    if (gap > shape.max_gap_mm) {
+      shape.max_gap_mm = gap;
+      shape.max_gap_at = k;
+    }
+    // Every slice must sit on the normal through the first, else the stack is sheared.
+    const glm::dvec3 d = slices[k].position_in_frame_mm - first;
+    const double across = glm::length(glm::dvec2(d));
+    shape.sheared |= across > kGapTolerance * std::abs(d.z) + 1e-3;
+  }
+  const glm::dvec3 d = slices.back().position_in_frame_mm - first;
+  shape.tilt_deg = glm::degrees(std::atan2(glm::length(glm::dvec2(d)), d.z));
+  return shape;
+}
+
+// The notes that say what was corrected, for `vpm volume info`.
+void AddResampleNotes(const std::vector<NamedSlice>& slices, const StackShape& shape,
+                      double spacing_mm, Volume& volume) {
+  if (shape.sheared) {
+    volume.add_note(StrCat("gantry tilt ", Round1(shape.tilt_deg),
+                           " deg (slices shifted across the normal): resampled onto the "
+                           "orthogonal grid of row, column and normal directions"));
+  }
+  if (shape.uneven) {
+    volume.add_note(StrCat("slice gaps ", Round1(shape.min_gap_mm), " to ",
+                           Round1(shape.max_gap_mm), " mm: resampled to ", spacing_mm, " mm"));
+  } else if (std::abs(spacing_mm - shape.mean_gap_mm) > kGapTolerance * shape.mean_gap_mm) {
+    volume.add_note(StrCat("slice gap ", shape.mean_gap_mm, " mm: resampled to ", spacing_mm,
+                           " mm (spacing option)"));
+  }
+  if (shape.max_gap_mm > kLargeGapFactor * shape.min_gap_mm) {
+    volume.add_note(StrCat("the gap of ", Round1(shape.max_gap_mm), " mm between ",
+                           slices[shape.max_gap_at - 1].file, " and ",
+                           slices[shape.max_gap_at].file, " is over ", kLargeGapFactor,
+                           " times the smallest (", Round1(shape.min_gap_mm),
+                           " mm): missing slices? linearly interpolated across"));
+  }
+}
+
+Result<Volume> StackAsStored(std::vector<NamedSlice>& slices, const glm::dmat3& frame,
+                             double slice_spacing_mm, const VolumeLimits& limits) {
   const DicomSlice& base = slices.front().slice;
   VolumeGeometry g;
   g.dims = {base.columns, base.rows, static_cast<int64_t>(slices.size())};
-  const double thickness = base.slice_thickness_mm > 0.0 ? base.slice_thickness_mm : 1.0;
-  g.spacing_mm = {base.pixel_spacing_mm[1], base.pixel_spacing_mm[0],
-                  slices.size() > 1 ? mean_gap : thickness};
+  g.spacing_mm = {base.pixel_spacing_mm[1], base.pixel_spacing_mm[0], slice_spacing_mm};
   g.origin_mm = base.position_mm;
-  g.direction = glm::dmat3(row_dir, col_dir, normal);
+  g.direction = frame;
   RETURN_IF_ERROR(ValidateGeometry(g, limits));
   std::vector<float> values;
   values.reserve(static_cast<size_t>(g.voxel_count()));
@@ -194,18 +190,67 @@ Result<Volume> AssembleSeries(const std::filesystem::path& folder, std::vector<N
     values.insert(values.end(), s.slice.values.begin(), s.slice.values.end());
     s.slice.values = {};
   }
-  ASSIGN_OR_RETURN(Volume volume, Volume::Create(g, std::move(values), limits));
-  volume.set_source(folder.string());
+  return Volume::Create(g, std::move(values), limits);
+}
+
+Result<Volume> Resample(const std::vector<NamedSlice>& slices, const glm::dmat3& frame,
+                        double slice_spacing_mm, const VolumeLimits& limits) {
+  const DicomSlice& base = slices.front().slice;
+  ShearedStack stack;
+  stack.columns = base.columns;
+  stack.rows = base.rows;
+  stack.pixel_spacing_mm = {base.pixel_spacing_mm[1], base.pixel_spacing_mm[0]};
+  stack.frame = frame;
+  // Outside the stack: the series' minimum (air, or the scanner's own
+  // padding value), so that the added margins read as background.
+  float fill = std::numeric_limits<float>::max();
+  for (const NamedSlice& s : slices) {
+    stack.slices.push_back({s.position_in_frame_mm, s.slice.values});
+    for (float v : s.slice.values) fill = std::isfinite(v) ? std::min(fill, v) : fill;
+  }
+  return ResampleShearedStack(stack, slice_spacing_mm, fill, limits);
+}
+
+Result<Volume> AssembleSeries(std::vector<NamedSlice> slices, const DicomReadOptions& options,
+                              const VolumeLimits& limits) {
+  for (const NamedSlice& s : slices) RETURN_IF_ERROR(CheckSameFrame(slices.front(), s));
+  ASSIGN_OR_RETURN(const glm::dmat3 frame, SliceFrame(slices.front().slice));
+  RETURN_IF_ERROR(SortAlongNormal(slices, frame));
+  if (slices.size() == 1) {
+    const double thickness = slices.front().slice.slice_thickness_mm;
+    return StackAsStored(slices, frame, thickness > 0.0 ? thickness : 1.0, limits);
+  }
+  const StackShape shape = MeasureStack(slices);
+  const bool respace = options.spacing_mm > 0.0;
+  if (!shape.sheared && !shape.uneven && !respace) {
+    return StackAsStored(slices, frame, shape.mean_gap_mm, limits);
+  }
+  const double spacing_mm =
+      respace ? options.spacing_mm : (shape.uneven ? shape.min_gap_mm : shape.mean_gap_mm);
+  ASSIGN_OR_RETURN(Volume volume, Resample(slices, frame, spacing_mm, limits));
+  AddResampleNotes(slices, shape, spacing_mm, volume);
   return volume;
 }
 
 }  // namespace
 
-Result<Volume> ReadDicomSeries(const std::filesystem::path& folder, const VolumeLimits& limits) {
-  ASSIGN_OR_RETURN(std::vector<NamedSlice> slices, ParseAll(folder, limits));
-  RETURN_IF_ERROR(CheckOneSeries(folder, slices));
-  Result<Volume> volume = AssembleSeries(folder, std::move(slices), limits);
+Result<Volume> ReadDicomSeries(const std::filesystem::path& folder, const VolumeLimits& limits,
+                               const DicomReadOptions& options) {
+  ASSIGN_OR_RETURN(const std::vector<DicomSeriesSummary> series, ListDicomSeries(folder, limits));
+  Result<size_t> chosen = ChooseDicomSeries(series, options.series);
+  if (!chosen.ok()) return PrefixStatus(chosen.status(), folder.string());
+  ASSIGN_OR_RETURN(std::vector<NamedSlice> slices, DecodeSeries(folder, series[*chosen], limits));
+  Result<Volume> volume = AssembleSeries(std::move(slices), options, limits);
   if (!volume.ok()) return PrefixStatus(volume.status(), folder.string());
+  if (series.size() > 1) {
+    const DicomSeriesSummary& s = series[*chosen];
+    volume->add_note(StrCat("the folder holds ", series.size(), " series; read series ",
+                            *chosen + 1, " (", s.uid, ", ", s.modality, " \"", s.description,
+                            "\", ", s.images,
+                            " slices); ?series=N or ?series=UID picks "
+                            "another"));
+  }
+  volume->set_source(folder.string());
   return volume;
 }
 

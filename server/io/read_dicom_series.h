@@ -4,26 +4,33 @@
 #include <filesystem>
 
 #include "server/common/status.h"
+#include "server/io/parse_dicom_source.h"
 #include "server/volume/volume.h"
 
 namespace vpm {
 
-// Reads every regular file in `folder` (not its subfolders). Files without
-// the DICOM "DICM" prefix, and DICOM files without pixel data (DICOMDIR,
-// reports), are skipped; any other unreadable file is an error naming it.
-// The slices must form one series (one SeriesInstanceUID), share Rows,
-// Columns, PixelSpacing and ImageOrientationPatient, and stack along the
-// slice normal (row x column direction) at even gaps (1% of the mean gap)
-// without duplicates. They are sorted by their ImagePositionPatient along
-// that normal.
-// Output geometry (LPS): dims (Columns, Rows, slices); spacing (PixelSpacing
-// [1], PixelSpacing[0], mean gap; SliceThickness or 1 mm for one slice);
-// origin = the first slice's position; direction = (row dir, column dir,
-// normal). Values are rescaled (HU for CT).
-// Errors: NotFound (no folder), InvalidArgument (no images, several series,
-// mismatched slices, uneven or duplicate positions, bad files),
-// ResourceExhausted (over `limits`), Unimplemented (see ParseDicomSlice; a
-// tilted-gantry stack whose slices shift across the normal).
-Result<Volume> ReadDicomSeries(const std::filesystem::path& folder, const VolumeLimits& limits);
+// Reads one series of the DICOM files in `folder` (not its subfolders; a
+// file holds one slice, or several as an enhanced multi-frame image):
+// `options.series` picks it (ListDicomSeries, ChooseDicomSeries: by default
+// the largest CT or MR series; localizers and secondary captures never).
+// The slices must share Rows, Columns, PixelSpacing and
+// ImageOrientationPatient and lie at distinct positions along the slice
+// normal (row x column direction); they are sorted by ImagePositionPatient
+// along it.
+// Output geometry (LPS): direction = (row dir, column dir, normal); spacing
+// (PixelSpacing[1], PixelSpacing[0], slice gap along the normal;
+// SliceThickness or 1 mm for one slice). An evenly spaced stack (gaps within
+// 1% of their mean) whose slices line up along the normal is stored as is:
+// dims (Columns, Rows, slices), origin = the first slice's position. Other
+// stacks are resampled (ResampleShearedStack) onto a grid that covers them:
+// a gantry-tilted or sheared stack (slices shifted across the normal), uneven
+// gaps (to the smallest gap), or any stack given `options.spacing_mm`. The
+// volume's notes() say what was corrected, and which series was read when
+// the folder holds several. Values are rescaled (HU for CT).
+// Errors: NotFound (no folder), InvalidArgument (no images, unknown series,
+// mismatched slices, duplicate positions, bad files), ResourceExhausted (over
+// `limits`, including the resampled grid), Unimplemented (see ParseDicomFrames).
+Result<Volume> ReadDicomSeries(const std::filesystem::path& folder, const VolumeLimits& limits,
+                               const DicomReadOptions& options = {});
 
 }  // namespace vpm

@@ -14,11 +14,15 @@
 #include <dcmtk/dcmdata/dcpixseq.h>
 #include <dcmtk/dcmdata/dcpxitem.h>
 #include <dcmtk/dcmdata/dcrledrg.h>
+#include <dcmtk/dcmdata/dcsequen.h>
 #include <dcmtk/dcmdata/dcxfer.h>
 #include <dcmtk/dcmjpeg/djdecode.h>
 #include <dcmtk/dcmjpls/djdecode.h>
 
+#include "server/common/prefix_status.h"
 #include "server/io/check_dicom_structure.h"
+#include "server/io/decode_jpeg2000.h"
+#include "server/io/header_text.h"
 #include "server/io/voxel_type.h"
 
 namespace vpm {
@@ -63,7 +67,7 @@ struct PixelFormat {
   double intercept = 0.0;
 };
 
-Result<int64_t> GetInt(DcmDataset& ds, const DcmTagKey& tag, const char* name,
+Result<int64_t> GetInt(DcmItem& ds, const DcmTagKey& tag, const char* name,
                        std::optional<int64_t> fallback = std::nullopt) {
   Sint32 value = 0;
   if (ds.findAndGetSint32(tag, value).good()) return value;
@@ -73,12 +77,11 @@ Result<int64_t> GetInt(DcmDataset& ds, const DcmTagKey& tag, const char* name,
   return absl::InvalidArgumentError(StrCat(name, " is missing"));
 }
 
-Result<double> GetDouble(DcmDataset& ds, const DcmTagKey& tag, unsigned long pos, const char* name,
+Result<double> GetDouble(DcmItem& ds, const DcmTagKey& tag, unsigned long pos, const char* name,
                          std::optional<double> fallback = std::nullopt) {
   Float64 value = 0.0;
   if (ds.findAndGetFloat64(tag, value, pos).good()) {
-    if (!std::isfinite(value))
-      return absl::InvalidArgumentError(StrCat(name, " is not finite"));
+    if (!std::isfinite(value)) return absl::InvalidArgumentError(StrCat(name, " is not finite"));
     return value;
   }
   if (fallback.has_value()) return *fallback;
@@ -98,12 +101,28 @@ Status CheckImageKind(DcmDataset& ds) {
     return absl::UnimplementedError(
         StrCat("PhotometricInterpretation ", photometric.c_str(), " is not supported"));
   }
-  ASSIGN_OR_RETURN(const int64_t frames, GetInt(ds, DCM_NumberOfFrames, "NumberOfFrames", 1));
-  if (frames != 1) {
-    return absl::UnimplementedError(
-        StrCat("multi-frame images (", frames, " frames) are not supported"));
-  }
   return absl::OkStatus();
+}
+
+// NumberOfFrames (1 when absent). Several frames need per-frame positions
+// (an enhanced CT/MR image's PerFrameFunctionalGroupsSequence, one item per
+// frame); older multi-frame kinds (cine, NM) do not place their frames.
+Result<int64_t> CountFrames(DcmDataset& ds) {
+  ASSIGN_OR_RETURN(const int64_t frames, GetInt(ds, DCM_NumberOfFrames, "NumberOfFrames", 1));
+  if (frames < 1) return absl::InvalidArgumentError(StrCat("NumberOfFrames is ", frames));
+  if (frames == 1) return frames;
+  DcmSequenceOfItems* per_frame = nullptr;
+  if (ds.findAndGetSequence(DCM_PerFrameFunctionalGroupsSequence, per_frame).bad() ||
+      per_frame == nullptr) {
+    return absl::UnimplementedError(
+        StrCat("multi-frame images (", frames,
+               " frames) without PerFrameFunctionalGroupsSequence are not supported"));
+  }
+  if (static_cast<int64_t>(per_frame->card()) != frames) {
+    return absl::InvalidArgumentError(StrCat("PerFrameFunctionalGroupsSequence has ",
+                                             per_frame->card(), " items for ", frames, " frames"));
+  }
+  return frames;
 }
 
 Result<PixelFormat> ReadPixelFormat(DcmDataset& ds) {
@@ -118,8 +137,8 @@ Result<PixelFormat> ReadPixelFormat(DcmDataset& ds) {
   if (f.bits_stored < 1 || f.bits_stored > f.bits_allocated || f.high_bit >= f.bits_allocated ||
       f.high_bit + 1 < f.bits_stored) {
     return absl::InvalidArgumentError(StrCat("BitsStored ", f.bits_stored, " / HighBit ",
-                                                   f.high_bit, " do not fit BitsAllocated ",
-                                                   f.bits_allocated));
+                                             f.high_bit, " do not fit BitsAllocated ",
+                                             f.bits_allocated));
   }
   ASSIGN_OR_RETURN(const int64_t representation,
                    GetInt(ds, DCM_PixelRepresentation, "PixelRepresentation", 0));
@@ -130,23 +149,97 @@ Result<PixelFormat> ReadPixelFormat(DcmDataset& ds) {
   return f;
 }
 
-Status ReadGeometry(DcmDataset& ds, DicomSlice& slice) {
+// Where one frame's attributes live: the item of a functional group macro
+// (per-frame first, then shared), or the dataset itself for a classic image.
+struct FrameItems {
+  DcmItem* pixel_measures;   // PixelSpacing, SliceThickness
+  DcmItem* orientation;      // ImageOrientationPatient
+  DcmItem* position;         // ImagePositionPatient
+  DcmItem* value_transform;  // RescaleSlope, RescaleIntercept
+};
+
+DcmItem* FindGroup(DcmItem* per_frame, DcmItem* shared, const DcmTagKey& sequence,
+                   DcmItem& fallback) {
+  DcmItem* item = nullptr;
+  for (DcmItem* group : {per_frame, shared}) {
+    if (group != nullptr && group->findAndGetSequenceItem(sequence, item, 0).good() &&
+        item != nullptr) {
+      return item;
+    }
+  }
+  return &fallback;
+}
+
+FrameItems ItemsOfFrame(DcmDataset& ds, int64_t frame) {
+  DcmItem* shared = nullptr;
+  DcmItem* per_frame = nullptr;
+  if (ds.findAndGetSequenceItem(DCM_SharedFunctionalGroupsSequence, shared, 0).bad()) {
+    shared = nullptr;
+  }
+  if (ds.findAndGetSequenceItem(DCM_PerFrameFunctionalGroupsSequence, per_frame,
+                                static_cast<signed long>(frame))
+          .bad()) {
+    per_frame = nullptr;
+  }
+  return {FindGroup(per_frame, shared, DCM_PixelMeasuresSequence, ds),
+          FindGroup(per_frame, shared, DCM_PlaneOrientationSequence, ds),
+          FindGroup(per_frame, shared, DCM_PlanePositionSequence, ds),
+          FindGroup(per_frame, shared, DCM_PixelValueTransformationSequence, ds)};
+}
+
+Status ReadGeometry(const FrameItems& items, DicomSlice& slice) {
   for (int n = 0; n < 2; ++n) {
-    ASSIGN_OR_RETURN(slice.pixel_spacing_mm[n], GetDouble(ds, DCM_PixelSpacing, n, "PixelSpacing"));
+    ASSIGN_OR_RETURN(slice.pixel_spacing_mm[n],
+                     GetDouble(*items.pixel_measures, DCM_PixelSpacing, n, "PixelSpacing"));
   }
   for (int n = 0; n < 6; ++n) {
-    ASSIGN_OR_RETURN(slice.orientation[n],
-                     GetDouble(ds, DCM_ImageOrientationPatient, n, "ImageOrientationPatient"));
+    ASSIGN_OR_RETURN(
+        slice.orientation[n],
+        GetDouble(*items.orientation, DCM_ImageOrientationPatient, n, "ImageOrientationPatient"));
   }
   for (int n = 0; n < 3; ++n) {
-    ASSIGN_OR_RETURN(slice.position_mm[n],
-                     GetDouble(ds, DCM_ImagePositionPatient, n, "ImagePositionPatient"));
+    ASSIGN_OR_RETURN(slice.position_mm[n], GetDouble(*items.position, DCM_ImagePositionPatient, n,
+                                                     "ImagePositionPatient"));
   }
   ASSIGN_OR_RETURN(slice.slice_thickness_mm,
-                   GetDouble(ds, DCM_SliceThickness, 0, "SliceThickness", 0.0));
-  OFString uid;
-  if (ds.findAndGetOFString(DCM_SeriesInstanceUID, uid).good()) slice.series_uid = uid.c_str();
+                   GetDouble(*items.pixel_measures, DCM_SliceThickness, 0, "SliceThickness", 0.0));
   return absl::OkStatus();
+}
+
+// The frame's own rescale where its functional groups carry one.
+Status ReadRescale(const FrameItems& items, PixelFormat& f) {
+  ASSIGN_OR_RETURN(f.slope,
+                   GetDouble(*items.value_transform, DCM_RescaleSlope, 0, "RescaleSlope", f.slope));
+  ASSIGN_OR_RETURN(f.intercept, GetDouble(*items.value_transform, DCM_RescaleIntercept, 0,
+                                          "RescaleIntercept", f.intercept));
+  if (f.slope == 0.0) return absl::InvalidArgumentError("RescaleSlope is 0");
+  return absl::OkStatus();
+}
+
+std::string GetString(DcmDataset& ds, const DcmTagKey& tag) {
+  OFString value;
+  if (ds.findAndGetOFStringArray(tag, value).good()) return value.c_str();
+  return "";
+}
+
+// Identity fields, and whether the image is one that never belongs in a
+// volume: scanners put localizers (scouts) and screenshots beside the slices,
+// sometimes under the same SeriesInstanceUID.
+void ReadIdentity(DcmDataset& ds, DicomSlice& slice) {
+  slice.series_uid = GetString(ds, DCM_SeriesInstanceUID);
+  slice.series_description = GetString(ds, DCM_SeriesDescription);
+  slice.modality = GetString(ds, DCM_Modality);
+  slice.sop_class_uid = GetString(ds, DCM_SOPClassUID);
+  Sint32 number = 0;
+  if (ds.findAndGetSint32(DCM_SeriesNumber, number).good()) slice.series_number = number;
+  // Secondary Capture Image Storage and its multi-frame variants (1.2.840.10008.5.1.4.1.1.7.x).
+  constexpr std::string_view kSecondaryCapture = "1.2.840.10008.5.1.4.1.1.7";
+  const std::string_view sop = slice.sop_class_uid;
+  if (sop == kSecondaryCapture || sop.starts_with(StrCat(kSecondaryCapture, "."))) {
+    slice.not_a_slice_reason = "secondary capture";
+  } else if (ToLowerAscii(GetString(ds, DCM_ImageType)).find("localizer") != std::string::npos) {
+    slice.not_a_slice_reason = "localizer";
+  }
 }
 
 // DCMTK 3.6.7's JPEG decoder loops forever when the marker walk it does to
@@ -201,6 +294,60 @@ Status CheckFragments(DcmDataset& ds, E_TransferSyntax xfer) {
   return absl::OkStatus();
 }
 
+bool IsJpeg2000(E_TransferSyntax xfer) {
+  return xfer == EXS_JPEG2000LosslessOnly || xfer == EXS_JPEG2000;
+}
+
+// The codestream of each frame: one fragment per frame, or all fragments of
+// a single-frame image joined (an encoder may split one codestream).
+Result<std::vector<std::vector<uint8_t>>> Jpeg2000Codestreams(DcmDataset& ds, int64_t frames) {
+  DcmElement* element = nullptr;
+  DcmPixelSequence* sequence = nullptr;
+  if (ds.findAndGetElement(DCM_PixelData, element).bad() || element == nullptr ||
+      element->ident() != EVR_PixelData ||
+      static_cast<DcmPixelData*>(element)
+          ->getEncapsulatedRepresentation(ds.getOriginalXfer(), nullptr, sequence)
+          .bad() ||
+      sequence == nullptr || sequence->card() < 2) {
+    return absl::InvalidArgumentError("JPEG 2000 PixelData has no fragments");
+  }
+  const int64_t fragments = static_cast<int64_t>(sequence->card()) - 1;  // item 0: offset table
+  if (fragments != frames && frames != 1) {
+    return absl::UnimplementedError(StrCat("JPEG 2000 with ", fragments, " fragments for ", frames,
+                                           " frames is not supported"));
+  }
+  std::vector<std::vector<uint8_t>> out(static_cast<size_t>(frames));
+  for (int64_t n = 0; n < fragments; ++n) {
+    DcmPixelItem* item = nullptr;
+    Uint8* data = nullptr;
+    if (sequence->getItem(item, static_cast<unsigned long>(n + 1)).bad() || item == nullptr ||
+        item->getUint8Array(data).bad()) {
+      return absl::InvalidArgumentError("JPEG 2000 fragment cannot be read");
+    }
+    std::vector<uint8_t>& frame = out[frames == 1 ? 0 : n];
+    if (data != nullptr) frame.insert(frame.end(), data, data + item->getLength());
+  }
+  return out;
+}
+
+// JPEG 2000 frames through OpenJPEG; decoded samples are the stored values.
+Status ReadJpeg2000Frames(DcmDataset& ds, const std::vector<PixelFormat>& formats,
+                          std::vector<DicomSlice>& slices) {
+  const int64_t frames = static_cast<int64_t>(slices.size());
+  ASSIGN_OR_RETURN(const std::vector<std::vector<uint8_t>> streams,
+                   Jpeg2000Codestreams(ds, frames));
+  for (int64_t f = 0; f < frames; ++f) {
+    DicomSlice& slice = slices[f];
+    ASSIGN_OR_RETURN(const std::vector<int32_t> samples,
+                     DecodeJpeg2000(streams[f], slice.columns, slice.rows));
+    slice.values.resize(samples.size());
+    for (size_t n = 0; n < samples.size(); ++n) {
+      slice.values[n] = DoubleToFloat(samples[n] * formats[f].slope + formats[f].intercept);
+    }
+  }
+  return absl::OkStatus();
+}
+
 Status DecompressIfNeeded(DcmDataset& ds) {
   const DcmXfer xfer(ds.getOriginalXfer());
   if (!xfer.isEncapsulated()) return absl::OkStatus();
@@ -225,18 +372,20 @@ float SampleToValue(uint32_t raw, const PixelFormat& f) {
   return DoubleToFloat(static_cast<double>(value) * f.slope + f.intercept);
 }
 
-Status ReadPixels(DcmDataset& ds, const PixelFormat& f, DicomSlice& slice) {
+// Frame `frame` of the (decoded) pixel data; frames follow each other.
+Status ReadPixels(DcmDataset& ds, const PixelFormat& f, int64_t frame, DicomSlice& slice) {
   const int64_t count = slice.rows * slice.columns;
+  const int64_t first = frame * count;
   DcmElement* element = nullptr;
   if (ds.findAndGetElement(DCM_PixelData, element).bad() || element == nullptr) {
     return absl::InvalidArgumentError("PixelData is missing");
   }
   const int64_t have_bytes = element->getLength();
-  const int64_t need_bytes = count * (f.bits_allocated / 8);
+  const int64_t need_bytes = (first + count) * (f.bits_allocated / 8);
   if (have_bytes < need_bytes) {
-    return absl::InvalidArgumentError(
-        StrCat("PixelData holds ", have_bytes, " bytes but ", slice.rows, "x", slice.columns,
-                     "x", f.bits_allocated, " bits need ", need_bytes, " (truncated)"));
+    return absl::InvalidArgumentError(StrCat(
+        "PixelData holds ", have_bytes, " bytes but ", frame + 1, " frames of ", slice.rows, "x",
+        slice.columns, "x", f.bits_allocated, " bits need ", need_bytes, " (truncated)"));
   }
   slice.values.resize(static_cast<size_t>(count));
   if (f.bits_allocated == 8) {
@@ -244,13 +393,13 @@ Status ReadPixels(DcmDataset& ds, const PixelFormat& f, DicomSlice& slice) {
     if (element->getUint8Array(data).bad() || data == nullptr) {
       return absl::InvalidArgumentError("PixelData cannot be read as 8-bit samples");
     }
-    for (int64_t n = 0; n < count; ++n) slice.values[n] = SampleToValue(data[n], f);
+    for (int64_t n = 0; n < count; ++n) slice.values[n] = SampleToValue(data[first + n], f);
   } else {
     Uint16* data = nullptr;
     if (element->getUint16Array(data).bad() || data == nullptr) {
       return absl::InvalidArgumentError("PixelData cannot be read as 16-bit samples");
     }
-    for (int64_t n = 0; n < count; ++n) slice.values[n] = SampleToValue(data[n], f);
+    for (int64_t n = 0; n < count; ++n) slice.values[n] = SampleToValue(data[first + n], f);
   }
   return absl::OkStatus();
 }
@@ -261,23 +410,41 @@ bool LooksLikeDicom(std::span<const uint8_t> bytes) {
   return bytes.size() >= 132 && std::memcmp(bytes.data() + 128, "DICM", 4) == 0;
 }
 
-Result<DicomSlice> ParseDicomSlice(std::span<const uint8_t> bytes, const VolumeLimits& limits) {
+Result<std::vector<DicomSlice>> ParseDicomFrames(std::span<const uint8_t> bytes,
+                                                 const VolumeLimits& limits, DicomDecode decode) {
   ASSIGN_OR_RETURN(const std::unique_ptr<DcmFileFormat> file, ParseFile(bytes));
   DcmDataset& ds = *file->getDataset();
-  DicomSlice slice;
-  if (!ds.tagExists(DCM_PixelData)) return slice;  // not an image
-  slice.is_image = true;
+  DicomSlice base;
+  if (!ds.tagExists(DCM_PixelData)) return std::vector<DicomSlice>{base};  // not an image
+  base.is_image = true;
+  ReadIdentity(ds, base);
+  if (!base.not_a_slice_reason.empty()) return std::vector<DicomSlice>{base};
   RETURN_IF_ERROR(CheckImageKind(ds));
-  ASSIGN_OR_RETURN(slice.rows, GetInt(ds, DCM_Rows, "Rows"));
-  ASSIGN_OR_RETURN(slice.columns, GetInt(ds, DCM_Columns, "Columns"));
-  VolumeGeometry plane;
-  plane.dims = {slice.columns, slice.rows, 1};
-  RETURN_IF_ERROR(ValidateGeometry(plane, limits));  // before any decoding
+  ASSIGN_OR_RETURN(const int64_t frames, CountFrames(ds));
+  ASSIGN_OR_RETURN(base.rows, GetInt(ds, DCM_Rows, "Rows"));
+  ASSIGN_OR_RETURN(base.columns, GetInt(ds, DCM_Columns, "Columns"));
+  VolumeGeometry planes;
+  planes.dims = {base.columns, base.rows, frames};
+  RETURN_IF_ERROR(ValidateGeometry(planes, limits));  // before any decoding
   ASSIGN_OR_RETURN(const PixelFormat format, ReadPixelFormat(ds));
-  RETURN_IF_ERROR(ReadGeometry(ds, slice));
+  std::vector<DicomSlice> slices(static_cast<size_t>(frames), base);
+  std::vector<PixelFormat> formats(static_cast<size_t>(frames), format);
+  for (int64_t f = 0; f < frames; ++f) {
+    const FrameItems items = ItemsOfFrame(ds, f);
+    Status status = ReadGeometry(items, slices[f]);
+    if (status.ok() && frames > 1) status = ReadRescale(items, formats[f]);
+    if (!status.ok()) {
+      return frames == 1 ? status : PrefixStatus(status, StrCat("frame ", f + 1));
+    }
+  }
+  if (decode == DicomDecode::kHeaderOnly) return slices;
+  if (IsJpeg2000(ds.getOriginalXfer())) {
+    RETURN_IF_ERROR(ReadJpeg2000Frames(ds, formats, slices));
+    return slices;
+  }
   RETURN_IF_ERROR(DecompressIfNeeded(ds));
-  RETURN_IF_ERROR(ReadPixels(ds, format, slice));
-  return slice;
+  for (int64_t f = 0; f < frames; ++f) RETURN_IF_ERROR(ReadPixels(ds, formats[f], f, slices[f]));
+  return slices;
 }
 
 }  // namespace vpm

@@ -20,6 +20,15 @@ struct DicomSlice {
   // fields below are then unset and a series reader skips the file.
   bool is_image = false;
   std::string series_uid;  // SeriesInstanceUID ("" if absent)
+  // Identity, for listing the series of a folder ("" or 0 if absent).
+  std::string series_description;  // SeriesDescription
+  std::string modality;            // Modality: CT, MR, ...
+  std::string sop_class_uid;       // SOPClassUID
+  int64_t series_number = 0;       // SeriesNumber
+  // Why this image must never be stacked into a volume ("localizer",
+  // "secondary capture"); "" for an ordinary slice. When set, the geometry
+  // and pixel fields below are not read.
+  std::string not_a_slice_reason;
   int64_t rows = 0;        // j extent
   int64_t columns = 0;     // i extent
   // PixelSpacing as stored: [0] between rows (along j), [1] between columns
@@ -33,18 +42,33 @@ struct DicomSlice {
   std::vector<float> values;        // rows * columns, i fastest, after rescale
 };
 
+enum class DicomDecode {
+  kHeaderOnly,  // identity and geometry only: `values` stays empty
+  kPixels,      // also decode the pixel data
+};
+
 // True when `bytes` has the DICOM Part 10 preamble and "DICM" prefix.
 bool LooksLikeDicom(std::span<const uint8_t> bytes);
 
-// Parses one DICOM Part 10 file. Values are stored * RescaleSlope +
+// Parses one DICOM Part 10 file into its frames: one DicomSlice for a
+// classic image, one per frame for an enhanced multi-frame CT/MR image
+// (geometry and rescale from the per-frame, else shared, functional groups:
+// PlanePositionSequence, PlaneOrientationSequence, PixelMeasuresSequence,
+// PixelValueTransformationSequence). Values are stored * RescaleSlope +
 // RescaleIntercept (Hounsfield units for CT). Handles BitsAllocated 8 and 16,
 // signed and unsigned (PixelRepresentation), BitsStored / HighBit masking,
 // uncompressed transfer syntaxes, and the RLE, JPEG and JPEG-LS ones through
-// DCMTK's decoders. Errors (messages without the file name): InvalidArgument
-// for malformed or truncated files or missing geometry attributes,
-// ResourceExhausted for slices over `limits`, Unimplemented for valid files
-// we do not read (colour, multi-frame, 32-bit, a compressed transfer syntax
-// without a decoder, deflate; the message names the syntax).
-Result<DicomSlice> ParseDicomSlice(std::span<const uint8_t> bytes, const VolumeLimits& limits);
+// DCMTK's decoders. A file without pixel data gives one slice with is_image
+// false. Errors (messages without the file name): InvalidArgument for
+// malformed or truncated files or missing geometry attributes,
+// ResourceExhausted for frames over `limits`, Unimplemented for valid files
+// we do not read (colour, multi-frame without per-frame positions, 32-bit, a
+// compressed transfer syntax without a decoder, deflate; the message names
+// the syntax). Localizers (ImageType holds LOCALIZER) and secondary captures
+// (their SOP classes) are returned with `not_a_slice_reason` set and neither
+// geometry nor pixels.
+Result<std::vector<DicomSlice>> ParseDicomFrames(std::span<const uint8_t> bytes,
+                                                 const VolumeLimits& limits,
+                                                 DicomDecode decode = DicomDecode::kPixels);
 
 }  // namespace vpm

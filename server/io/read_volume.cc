@@ -2,9 +2,10 @@
 
 #include <filesystem>
 #include <string>
-#include <system_error>
+#include <optional>
 
 #include "server/io/header_text.h"
+#include "server/io/parse_dicom_source.h"
 #include "server/io/parse_raw_source.h"
 #include "server/phantom/phantom.h"
 #include "server/io/read_dicom_series.h"
@@ -27,9 +28,9 @@ Result<Volume> ReadByKind(std::string_view source, const VolumeLimits& limits) {
     ASSIGN_OR_RETURN(const RawSource raw, ParseRawSource(source));
     return ReadRaw(raw.path, raw.options, limits);
   }
+  ASSIGN_OR_RETURN(const std::optional<DicomSource> dicom, ParseDicomSource(source));
+  if (dicom.has_value()) return ReadDicomSeries(dicom->folder, limits, dicom->options);
   const std::filesystem::path path{std::string(source)};
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) return ReadDicomSeries(path, limits);
   const std::string lower = ToLowerAscii(source);
   if (EndsWith(lower, ".nii") || EndsWith(lower, ".nii.gz")) return ReadNifti(path, limits);
   if (EndsWith(lower, ".nrrd") || EndsWith(lower, ".nhdr")) return ReadNrrd(path, limits);

@@ -10,14 +10,15 @@ namespace vpm {
 
 // The source forms ReadVolume accepts, for messages and help texts.
 inline constexpr std::string_view kVolumeSourceForms =
-    "phantom:SPEC (e.g. phantom:abdomen?size=128), a folder of DICOM files, "
+    "phantom:SPEC (e.g. phantom:abdomen?size=128), a folder of DICOM files "
+    "(FOLDER[?series=UID|N][&spacing=MM]), "
     "FILE.nii, FILE.nii.gz, FILE.nrrd, FILE.nhdr, FILE.mha, FILE.mhd, or "
     "raw:PATH?dims=X,Y,Z&type=int16&spacing=A,B,C[&endian=little|big][&offset=N]";
 
 // Reads the volume `source` names:
 //   phantom:SPEC        MakePhantom(SPEC) (server/phantom/phantom.h)
 //   raw:PATH?...        ReadRaw with the options in the query (parse_raw_source.h)
-//   an existing folder  ReadDicomSeries
+//   FOLDER[?series=S&spacing=MM]  ReadDicomSeries (parse_dicom_source.h)
 //   *.nii, *.nii.gz     ReadNifti
 //   *.nrrd, *.nhdr      ReadNrrd
 //   *.mha, *.mhd        ReadMetaImage

@@ -91,6 +91,11 @@ class Volume {
   // Where the volume came from (file path or phantom:NAME), for messages.
   const std::string& source() const { return source_; }
   void set_source(std::string source) { source_ = std::move(source); }
+  // What a reader corrected or chose on the way in, one sentence each (e.g.
+  // "gantry tilt 18.5 deg: resampled onto an orthogonal grid"), so that
+  // `vpm volume info` can say that the grid is not the scanner's.
+  const std::vector<std::string>& notes() const { return notes_; }
+  void add_note(std::string note) { notes_.push_back(std::move(note)); }
 
  private:
   Volume(VolumeGeometry geometry, std::vector<float> values);
@@ -102,6 +107,7 @@ class Volume {
   int64_t non_finite_count_ = 0;
   std::vector<Landmark> landmarks_;
   std::string source_;
+  std::vector<std::string> notes_;
 };
 
 }  // namespace vpm

@@ -55,6 +55,27 @@ TEST(VpmCli, ExportWritesNiftiThatReadsBackWithTheSameGeometry) {
   EXPECT_NEAR(info["spacing_mm"][0].get<double>(), 380.0 / 40, 1e-4);
 }
 
+TEST(VpmCli, VolumeInfoSaysATiltedDicomSeriesWasResampledAndListsSeries) {
+  const std::string folder = std::string(VPM_TEST_SOURCE_DIR) + "/tests/data/ct-philips-tilt";
+  const CliRun run = Vpm("volume info '" + folder + "' --json");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto info = nlohmann::json::parse(run.output.substr(run.output.find('{')));
+  // 512 rows grow to 600 to hold the 18.5 degree shear of 54 slices.
+  EXPECT_EQ(info["dims"], nlohmann::json({512, 600, 54}));
+  ASSERT_EQ(info["notes"].size(), 1u) << info["notes"];
+  EXPECT_NE(info["notes"][0].get<std::string>().find("gantry tilt 18.5 deg"), std::string::npos);
+  ASSERT_EQ(info["dicom_series"].size(), 1u);
+  EXPECT_EQ(info["dicom_series"][0]["images"], 54);
+  EXPECT_EQ(info["dicom_series"][0]["modality"], "CT");
+  const CliRun text = Vpm("volume info '" + folder + "?spacing=5'");
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_NE(text.output.find("resampled to 5 mm"), std::string::npos) << text.output;
+  EXPECT_NE(text.output.find("series      1. "), std::string::npos) << text.output;
+  const CliRun bad = Vpm("volume info '" + folder + "?series=2'");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("no series \"2\""), std::string::npos) << bad.output;
+}
+
 TEST(VpmCli, BadSourceExitsNonZeroNamingTheFile) {
   const CliRun run = Vpm("volume info /no/such/scan.nii.gz");
   EXPECT_NE(run.exit_code, 0);

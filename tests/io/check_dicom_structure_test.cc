@@ -53,7 +53,7 @@ TEST(DicomStructure, RejectsElementLongerThanTheFile) {
   bytes.resize(bytes.size() + 16, 0);
   ExpectStatus(CheckDicomStructure(bytes).status(), absl::StatusCode::kInvalidArgument,
                "claims 1073741824 bytes but only 16 follow");
-  ExpectStatus(ParseDicomSlice(bytes, {}).status(), absl::StatusCode::kInvalidArgument, "claims");
+  ExpectStatus(ParseDicomFrames(bytes, {}).status(), absl::StatusCode::kInvalidArgument, "claims");
 }
 
 TEST(DicomStructure, RejectsDeepNesting) {
@@ -110,7 +110,7 @@ TEST(DicomSlice, RejectsJpegThatWouldHangDcmtk) {
   auto at = std::search(bytes.begin(), bytes.end(), std::begin(soi), std::end(soi));
   ASSERT_NE(at, bytes.end());
   *(at + 3) = 0x01;  // the marker after SOI becomes TEM (FF01)
-  ExpectStatus(ParseDicomSlice(bytes, {}).status(), absl::StatusCode::kInvalidArgument,
+  ExpectStatus(ParseDicomFrames(bytes, {}).status(), absl::StatusCode::kInvalidArgument,
                "TEM marker");
 }
 

@@ -22,6 +22,14 @@ namespace vpm::testing {
 
 struct DicomSliceSpec {
   std::string series_uid = "1.2.826.0.1.3680043.8.498.1";
+  std::string sop_class_uid = UID_CTImageStorage;
+  std::string modality = "CT";
+  std::string series_description;  // empty: not written
+  std::string image_type;          // e.g. "ORIGINAL\\PRIMARY\\LOCALIZER"; empty: not written
+  int series_number = 0;           // 0: not written
+  int instance_number = 0;         // 0: not written
+  std::string manufacturer;        // empty: not written
+  std::string gantry_tilt_deg;     // GantryDetectorTilt as text; empty: not written
   int rows = 3;
   int columns = 4;
   std::array<double, 2> pixel_spacing_mm{0.75, 0.5};  // between rows, between columns
@@ -72,12 +80,26 @@ inline void PutPixels(DcmDataset& ds, const DicomSliceSpec& s) {
 // Fills a CT image dataset from `s`.
 inline void FillDicomSlice(DcmDataset& ds, const DicomSliceSpec& s) {
   char uid[100];
-  ds.putAndInsertString(DCM_SOPClassUID, UID_CTImageStorage);
+  ds.putAndInsertString(DCM_SOPClassUID, s.sop_class_uid.c_str());
   ds.putAndInsertString(DCM_SOPInstanceUID,
                         dcmGenerateUniqueIdentifier(uid, SITE_INSTANCE_UID_ROOT));
   ds.putAndInsertString(DCM_StudyInstanceUID, "1.2.826.0.1.3680043.8.498.9");
   ds.putAndInsertString(DCM_SeriesInstanceUID, s.series_uid.c_str());
-  ds.putAndInsertString(DCM_Modality, "CT");
+  ds.putAndInsertString(DCM_Modality, s.modality.c_str());
+  if (!s.series_description.empty()) {
+    ds.putAndInsertString(DCM_SeriesDescription, s.series_description.c_str());
+  }
+  if (!s.image_type.empty()) ds.putAndInsertString(DCM_ImageType, s.image_type.c_str());
+  if (s.instance_number != 0) {
+    ds.putAndInsertString(DCM_InstanceNumber, std::to_string(s.instance_number).c_str());
+  }
+  if (!s.manufacturer.empty()) ds.putAndInsertString(DCM_Manufacturer, s.manufacturer.c_str());
+  if (!s.gantry_tilt_deg.empty()) {
+    ds.putAndInsertString(DCM_GantryDetectorTilt, s.gantry_tilt_deg.c_str());
+  }
+  if (s.series_number != 0) {
+    ds.putAndInsertString(DCM_SeriesNumber, std::to_string(s.series_number).c_str());
+  }
   ds.putAndInsertUint16(DCM_Rows, static_cast<Uint16>(s.rows));
   ds.putAndInsertUint16(DCM_Columns, static_cast<Uint16>(s.columns));
   ds.putAndInsertUint16(DCM_SamplesPerPixel, static_cast<Uint16>(s.samples_per_pixel));

@@ -60,8 +60,8 @@ TEST(FuzzSeeds, AreValidFiles) {
     }
   }
   for (const fs::path& p : Seeds("dicom")) {
-    const Result<DicomSlice> slice = ParseDicomSlice(Bytes(p), {});
-    EXPECT_TRUE(slice.ok() && slice->is_image) << p << ": " << slice.status();
+    const Result<std::vector<DicomSlice>> slice = ParseDicomFrames(Bytes(p), {});
+    EXPECT_TRUE(slice.ok() && slice->front().is_image) << p << ": " << slice.status();
     ++count;
   }
   for (const fs::path& p : Seeds("raw")) {
@@ -83,7 +83,7 @@ TEST(FuzzSeeds, RegressionInputsAreRejected) {
   const std::vector<fs::path> seeds = Seeds("dicom", true);
   EXPECT_GE(seeds.size(), 5u);
   for (const fs::path& p : seeds) {
-    const Result<DicomSlice> slice = ParseDicomSlice(Bytes(p), {});
+    const Result<std::vector<DicomSlice>> slice = ParseDicomFrames(Bytes(p), {});
     EXPECT_EQ(slice.status().code(), absl::StatusCode::kInvalidArgument)
         << p << ": " << slice.status();
   }

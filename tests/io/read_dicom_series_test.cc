@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include "server/io/list_dicom_series.h"
 #include "server/io/read_dicom_slice.h"
+#include "server/io/read_volume.h"
 #include "server/io/read_file_bytes.h"
 #include "tests/io/dicom_test_util.h"
 #include "tests/io/io_test_util.h"
@@ -134,25 +136,6 @@ TEST(DicomSeriesReader, SingleSliceUsesSliceThickness) {
 
 // ---- Bad input ----
 
-TEST(DicomSeriesReader, RejectsMixedSeries) {
-  DicomSliceSpec s;
-  const auto dir = WriteSeries(s, 2, 1.0, glm::dvec3(0.0));
-  s.series_uid = "1.2.3.4.5";
-  s.position_mm = glm::dvec3(0, 0, 9);
-  ASSERT_TRUE(WriteDicomSlice(dir / "other.dcm", s));
-  ExpectError(ReadDicomSeries(dir, {}), absl::StatusCode::kInvalidArgument,
-              "holds 2 series (UIDs 1.2.3.4.5 (1 files), 1.2.826.0.1.3680043.8.498.1 (2 files)); "
-              "pass one series per folder");
-}
-
-TEST(DicomSeriesReader, RejectsUnevenSpacing) {
-  DicomSliceSpec s;
-  const auto dir = WriteSeries(s, 3, 1.0, glm::dvec3(0.0));
-  s.position_mm = glm::dvec3(0, 0, 4.0);  // slice at 3 mm is missing
-  ASSERT_TRUE(WriteDicomSlice(dir / "late.dcm", s));
-  ExpectError(ReadDicomSeries(dir, {}), absl::StatusCode::kInvalidArgument, "uneven slice spacing");
-}
-
 TEST(DicomSeriesReader, RejectsDuplicatePositions) {
   DicomSliceSpec s;
   const auto dir = WriteSeries(s, 3, 1.0, glm::dvec3(0.0));
@@ -195,15 +178,169 @@ TEST(DicomSeriesReader, RejectsNonOrthonormalOrientation) {
   ExpectError(ReadDicomSeries(dir, {}), absl::StatusCode::kInvalidArgument, "orthonormal");
 }
 
-TEST(DicomSeriesReader, RejectsTiltedStackAsUnimplemented) {
+bool HasNote(const Volume& v, const std::string& fragment) {
+  for (const std::string& note : v.notes()) {
+    if (note.find(fragment) != std::string::npos) return true;
+  }
+  return false;
+}
+
+std::string Notes(const Volume& v) {
+  std::string out;
+  for (const std::string& note : v.notes()) out += note + "\n";
+  return out;
+}
+
+// ---- Several series, localizers, secondary captures ----
+
+TEST(DicomSeriesReader, ReadsTheLargestCtSeriesAndPicksOthersOnRequest) {
+  DicomSliceSpec small;
+  small.series_uid = "1.2.3.4.5";
+  small.series_number = 2;
+  const auto dir = WriteSeries(small, 2, 1.0, glm::dvec3(0.0));
+  DicomSliceSpec big;
+  big.series_number = 3;
+  big.series_description = "thin axial";
+  for (int k = 0; k < 4; ++k) {
+    big.position_mm = glm::dvec3(0, 0, 0.5 * k);
+    ASSERT_TRUE(WriteDicomSlice(dir / ("big" + std::to_string(k) + ".dcm"), big));
+  }
+  DicomSliceSpec mr = big;  // more voxels, but CT comes first by default
+  mr.series_uid = "1.2.3.4.6";
+  mr.series_number = 4;
+  mr.modality = "OT";
+  mr.rows = 6;
+  for (int k = 0; k < 4; ++k) {
+    mr.position_mm = glm::dvec3(0, 0, 0.5 * k);
+    ASSERT_TRUE(WriteDicomSlice(dir / ("ot" + std::to_string(k) + ".dcm"), mr));
+  }
+  auto series = ListDicomSeries(dir, {});
+  ASSERT_TRUE(series.ok()) << series.status();
+  ASSERT_EQ(series->size(), 3u);
+  EXPECT_EQ((*series)[0].uid, "1.2.3.4.5");  // by SeriesNumber
+  EXPECT_EQ((*series)[1].description, "thin axial");
+  EXPECT_EQ((*series)[2].rows, 6);
+
+  auto v = ReadDicomSeries(dir, {});
+  ASSERT_TRUE(v.ok()) << v.status();
+  EXPECT_EQ(v->dims()[2], 4);
+  EXPECT_DOUBLE_EQ(v->spacing_mm().z, 0.5);
+  EXPECT_TRUE(HasNote(*v, "holds 3 series; read series 2 (1.2.826.0.1.3680043.8.498.1"))
+      << Notes(*v);
+
+  auto by_uid = ReadDicomSeries(dir, {}, {.series = "1.2.3.4.5"});
+  ASSERT_TRUE(by_uid.ok()) << by_uid.status();
+  EXPECT_EQ(by_uid->dims()[2], 2);
+  auto by_index = ReadDicomSeries(dir, {}, {.series = "3"});
+  ASSERT_TRUE(by_index.ok()) << by_index.status();
+  EXPECT_EQ(by_index->dims()[1], 6);
+
+  ExpectError(ReadDicomSeries(dir, {}, {.series = "9.9.9"}), absl::StatusCode::kInvalidArgument,
+              "no series \"9.9.9\" (a UID or 1..3); the folder holds 1 = 1.2.3.4.5 (CT, 2 images)");
+  ExpectError(ReadDicomSeries(dir, {}, {.series = "0"}), absl::StatusCode::kInvalidArgument,
+              "no series \"0\"");
+}
+
+TEST(DicomSeriesReader, NeverStacksLocalizersOrSecondaryCaptures) {
   DicomSliceSpec s;
+  const auto dir = WriteSeries(s, 3, 1.0, glm::dvec3(0.0));
+  DicomSliceSpec scout = s;  // same series UID, as some scanners write them
+  scout.image_type = "ORIGINAL\\PRIMARY\\LOCALIZER";
+  scout.orientation = {0, 1, 0, 0, 0, -1};
+  ASSERT_TRUE(WriteDicomSlice(dir / "scout.dcm", scout));
+  DicomSliceSpec capture;
+  capture.series_uid = "1.2.3.4.7";
+  capture.sop_class_uid = UID_SecondaryCaptureImageStorage;
+  capture.samples_per_pixel = 3;  // a screenshot: colour, which a slice could not be
+  capture.bits_allocated = capture.bits_stored = 8;
+  capture.is_signed = false;
+  capture.with_position = false;
+  ASSERT_TRUE(WriteDicomSlice(dir / "capture.dcm", capture));
+  auto series = ListDicomSeries(dir, {});
+  ASSERT_TRUE(series.ok()) << series.status();
+  ASSERT_EQ(series->size(), 3u);
+  auto v = ReadDicomSeries(dir, {});
+  ASSERT_TRUE(v.ok()) << v.status();
+  EXPECT_EQ(v->dims(), (std::array<int64_t, 3>{4, 3, 3}));
+  size_t scout_index = 0;
+  for (size_t n = 0; n < series->size(); ++n) {
+    if ((*series)[n].not_a_volume_reason == "localizer") scout_index = n + 1;
+  }
+  ASSERT_GT(scout_index, 0u);
+  ExpectError(ReadDicomSeries(dir, {}, {.series = std::to_string(scout_index)}),
+              absl::StatusCode::kInvalidArgument, "is a localizer, not a volume");
+  std::filesystem::remove(dir / "im1.dcm");
+  std::filesystem::remove(dir / "im2.dcm");
+  std::filesystem::remove(dir / "im3.dcm");
+  ExpectError(ReadDicomSeries(dir, {}), absl::StatusCode::kInvalidArgument,
+              "holds no series of slices, only localizers or secondary captures");
+}
+
+// ---- Uneven gaps and tilted stacks: resampled ----
+
+TEST(DicomSeriesReader, ResamplesUnevenSpacingToTheSmallestGap) {
+  DicomSliceSpec s;
+  s.intercept = 0.0;
+  const auto dir = WriteSeries(s, 3, 1.0, glm::dvec3(0.0));  // slices 0, 1, 2 mm: 100 k + n
+  s.position_mm = glm::dvec3(0, 0, 8.0);  // a 6 mm hole: slices missing
+  s.stored.clear();
+  for (int n = 0; n < 12; ++n) s.stored.push_back(800 + n);
+  ASSERT_TRUE(WriteDicomSlice(dir / "late.dcm", s));
+  auto v = ReadDicomSeries(dir, {});
+  ASSERT_TRUE(v.ok()) << v.status();
+  EXPECT_EQ(v->dims(), (std::array<int64_t, 3>{4, 3, 9}));
+  EXPECT_DOUBLE_EQ(v->spacing_mm().z, 1.0);
+  EXPECT_FLOAT_EQ(v->At(1, 2, 1), 100 + 9);
+  EXPECT_FLOAT_EQ(v->At(1, 2, 5), 200 + 9 + 0.5f * 600);  // halfway from 2 mm to 8 mm
+  EXPECT_FLOAT_EQ(v->At(1, 2, 8), 800 + 9);
+  EXPECT_TRUE(HasNote(*v, "slice gaps 1 to 6 mm: resampled to 1 mm")) << Notes(*v);
+  EXPECT_TRUE(HasNote(*v, "over 5 times the smallest")) << Notes(*v);
+
+  auto coarse = ReadDicomSeries(dir, {}, {.spacing_mm = 2.0});
+  ASSERT_TRUE(coarse.ok()) << coarse.status();
+  EXPECT_EQ(coarse->dims()[2], 5);
+  EXPECT_FLOAT_EQ(coarse->At(1, 2, 2), 200 + 9 + 2.0f / 6.0f * 600);  // at 4 mm
+}
+
+TEST(DicomSeriesReader, ExplicitSpacingResamplesAnEvenStack) {
+  const auto dir = WriteSeries(DicomSliceSpec{}, 3, 2.0, glm::dvec3(0.0));
+  auto v = ReadVolume(dir.string() + "?spacing=0.5", {});
+  ASSERT_TRUE(v.ok()) << v.status();
+  EXPECT_EQ(v->dims()[2], 9);
+  EXPECT_DOUBLE_EQ(v->spacing_mm().z, 0.5);
+  EXPECT_FLOAT_EQ(v->At(0, 0, 1), -1024 + 25);  // a quarter of the way to the next slice
+  EXPECT_TRUE(HasNote(*v, "slice gap 2 mm: resampled to 0.5 mm")) << Notes(*v);
+  ExpectError(ReadVolume(dir.string() + "?spacing=-1", {}), absl::StatusCode::kInvalidArgument,
+              "spacing must be a number of mm > 0");
+  ExpectError(ReadVolume(dir.string() + "?serie=1", {}), absl::StatusCode::kInvalidArgument,
+              "unknown key \"serie\"");
+}
+
+TEST(DicomSeriesReader, ResamplesATiltedStackOntoTheOrthogonalGrid) {
+  DicomSliceSpec s;
+  s.intercept = 0.0;
   const auto dir = MakeTempDir();
   for (int k = 0; k < 3; ++k) {
-    s.position_mm = glm::dvec3(0, 0.5 * k, 1.0 * k);  // shifts along y as it rises
+    s.stored.clear();
+    for (int n = 0; n < 12; ++n) s.stored.push_back(500 + n);
+    if (k == 0) s.stored[0] = 100;  // the series' minimum: the fill outside the stack
+    s.position_mm = glm::dvec3(0, 0.75 * k, 1.0 * k);  // one row further per slice
     ASSERT_TRUE(WriteDicomSlice(dir / ("t" + std::to_string(k) + ".dcm"), s));
   }
-  ExpectError(ReadDicomSeries(dir, {}), absl::StatusCode::kUnimplemented,
-              "across the slice normal");
+  auto v = ReadDicomSeries(dir, {});
+  ASSERT_TRUE(v.ok()) << v.status();
+  const VolumeGeometry& g = v->geometry();
+  EXPECT_EQ(g.dims, (std::array<int64_t, 3>{4, 5, 3}));  // 2 rows more, to hold the shift
+  EXPECT_NEAR(g.spacing_mm.y, 0.75, 1e-9);
+  EXPECT_NEAR(g.spacing_mm.z, 1.0, 1e-5);
+  EXPECT_NEAR(glm::distance(g.direction[2], glm::dvec3(0, 0, 1)), 0.0, 1e-9);
+  for (int k = 0; k < 3; ++k) {
+    for (int j = 0; j < 5; ++j) {
+      const bool inside = j >= k && j < k + 3;
+      EXPECT_FLOAT_EQ(v->At(2, j, k), inside ? 502.0f + 4 * (j - k) : 100.0f) << j << " " << k;
+    }
+  }
+  EXPECT_TRUE(HasNote(*v, "gantry tilt 36.9 deg")) << Notes(*v);
 }
 
 TEST(DicomSeriesReader, RejectsEmptyAndMissingFolders) {
@@ -245,14 +382,14 @@ TEST(DicomSlice, RejectsMissingPositionAndPlainBytes) {
   ASSERT_TRUE(WriteDicomSlice(path, s));
   auto bytes = ReadFileBytes(path, {});
   ASSERT_TRUE(bytes.ok());
-  auto slice = ParseDicomSlice(*bytes, {});
+  auto slice = ParseDicomFrames(*bytes, {});
   ASSERT_FALSE(slice.ok());
   EXPECT_EQ(slice.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(slice.status().message().find("ImagePositionPatient is missing"),
             absl::string_view::npos)
       << slice.status();
   const std::vector<uint8_t> junk(300, 7);
-  EXPECT_EQ(ParseDicomSlice(junk, {}).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(ParseDicomFrames(junk, {}).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
 }  // namespace

@@ -1,0 +1,47 @@
+// The series a DICOM folder holds, from the files' headers alone.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "server/common/status.h"
+#include "server/volume/volume.h"
+
+namespace vpm {
+
+struct DicomSeriesSummary {
+  std::string uid;          // SeriesInstanceUID ("" if absent)
+  std::string description;  // SeriesDescription of the first file
+  std::string modality;     // CT, MR, ...
+  int64_t series_number = 0;
+  int64_t columns = 0;  // of the first file
+  int64_t rows = 0;
+  // "localizer" or "secondary capture" for images never stacked into a
+  // volume (they form a group of their own even when they share the UID of
+  // a real series); "" for a series of slices.
+  std::string not_a_volume_reason;
+  std::vector<std::filesystem::path> files;  // sorted by name
+  int64_t images = 0;  // slices: one per classic file, one per frame of a multi-frame one
+};
+
+// Parses the header of every regular DICOM file in `folder` (not its
+// subfolders; files without the "DICM" prefix, and DICOM files without pixel
+// data such as DICOMDIR or dose reports, are skipped) and groups the images
+// by SeriesInstanceUID. Order: by SeriesNumber, then UID, slices before
+// localizers. The bytes read are held to `limits.max_bytes` as a running
+// total. Errors: NotFound (no folder), InvalidArgument (no DICOM images, an
+// unreadable file, named), ResourceExhausted, Unimplemented (an image kind
+// ParseDicomFrames does not read).
+Result<std::vector<DicomSeriesSummary>> ListDicomSeries(const std::filesystem::path& folder,
+                                                        const VolumeLimits& limits);
+
+// Index into `series` of the one `selector` names: "" picks the series of
+// slices with the most voxels, CT and MR before other modalities; else a
+// SeriesInstanceUID or a 1-based index N. InvalidArgument naming the
+// choices for an unknown UID or index, or a localizer / secondary capture.
+Result<size_t> ChooseDicomSeries(const std::vector<DicomSeriesSummary>& series,
+                                 std::string_view selector);
+
+}  // namespace vpm

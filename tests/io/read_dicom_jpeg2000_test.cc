@@ -1,0 +1,159 @@
+// JPEG 2000 DICOM (1.2.840.10008.1.2.4.90 and .91): codestreams made here
+// with OpenJPEG's encoder, wrapped by DCMTK as encapsulated pixel data.
+#include <openjpeg.h>
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <dcmtk/config/osconfig.h>  // must come first among DCMTK headers
+#include <dcmtk/dcmdata/dcdeftag.h>
+#include <dcmtk/dcmdata/dcfilefo.h>
+#include <dcmtk/dcmdata/dcpixel.h>
+#include <dcmtk/dcmdata/dcpixseq.h>
+#include <dcmtk/dcmdata/dcpxitem.h>
+#include <gtest/gtest.h>
+
+#include "server/io/decode_jpeg2000.h"
+#include "server/io/read_dicom_series.h"
+#include "tests/io/dicom_test_util.h"
+#include "tests/io/io_test_util.h"
+
+namespace vpm {
+namespace {
+
+using ::vpm::testing::DicomSliceSpec;
+using ::vpm::testing::MakeTempDir;
+
+struct MemoryWriter {
+  std::vector<uint8_t> bytes;
+  size_t offset = 0;
+};
+
+OPJ_SIZE_T Write(void* buffer, OPJ_SIZE_T count, void* user) {
+  auto* w = static_cast<MemoryWriter*>(user);
+  if (w->bytes.size() < w->offset + count) w->bytes.resize(w->offset + count);
+  std::memcpy(w->bytes.data() + w->offset, buffer, count);
+  w->offset += count;
+  return count;
+}
+OPJ_OFF_T Skip(OPJ_OFF_T count, void* user) {
+  static_cast<MemoryWriter*>(user)->offset += static_cast<size_t>(count);
+  return count;
+}
+OPJ_BOOL Seek(OPJ_OFF_T position, void* user) {
+  static_cast<MemoryWriter*>(user)->offset = static_cast<size_t>(position);
+  return OPJ_TRUE;
+}
+
+// A lossless (reversible 5/3 wavelet) J2K codestream of one greyscale
+// component, 16-bit signed samples.
+std::vector<uint8_t> EncodeJ2k(const std::vector<int32_t>& samples, int columns, int rows) {
+  opj_cparameters_t parameters;
+  opj_set_default_encoder_parameters(&parameters);
+  parameters.tcp_numlayers = 1;
+  parameters.tcp_rates[0] = 0;  // no rate target: lossless
+  parameters.cp_disto_alloc = 1;
+  parameters.irreversible = 0;
+  parameters.numresolution = 1;  // the test images are a few pixels wide
+  opj_image_cmptparm_t component{};
+  component.dx = component.dy = 1;
+  component.w = static_cast<OPJ_UINT32>(columns);
+  component.h = static_cast<OPJ_UINT32>(rows);
+  component.prec = 16;
+  component.sgnd = 1;
+  opj_image_t* image = opj_image_create(1, &component, OPJ_CLRSPC_GRAY);
+  image->x1 = static_cast<OPJ_UINT32>(columns);
+  image->y1 = static_cast<OPJ_UINT32>(rows);
+  std::copy(samples.begin(), samples.end(), image->comps[0].data);
+  opj_codec_t* codec = opj_create_compress(OPJ_CODEC_J2K);
+  MemoryWriter writer;
+  opj_stream_t* stream = opj_stream_create(1 << 16, OPJ_FALSE);
+  opj_stream_set_user_data(stream, &writer, nullptr);
+  opj_stream_set_write_function(stream, Write);
+  opj_stream_set_skip_function(stream, Skip);
+  opj_stream_set_seek_function(stream, Seek);
+  const bool ok = opj_setup_encoder(codec, &parameters, image) &&
+                  opj_start_compress(codec, image, stream) && opj_encode(codec, stream) &&
+                  opj_end_compress(codec, stream);
+  opj_stream_destroy(stream);
+  opj_destroy_codec(codec);
+  opj_image_destroy(image);
+  EXPECT_TRUE(ok) << "OpenJPEG could not encode the test image";
+  return writer.bytes;
+}
+
+// A CT slice whose PixelData is `codestream`, encapsulated in `syntax`.
+void WriteJpeg2000Slice(const std::filesystem::path& path, DicomSliceSpec s,
+                        const std::vector<uint8_t>& codestream, E_TransferSyntax syntax) {
+  s.with_pixel_data = false;
+  DcmFileFormat file;
+  DcmDataset& ds = *file.getDataset();
+  testing::FillDicomSlice(ds, s);
+  auto* sequence = new DcmPixelSequence(DCM_PixelSequenceTag);
+  sequence->insert(new DcmPixelItem(DCM_PixelItemTag));  // empty basic offset table
+  auto* fragment = new DcmPixelItem(DCM_PixelItemTag);
+  std::vector<uint8_t> even = codestream;
+  if (even.size() % 2 != 0) even.push_back(0);  // fragments have even length
+  fragment->putUint8Array(even.data(), static_cast<unsigned long>(even.size()));
+  sequence->insert(fragment);
+  auto* pixels = new DcmPixelData(DCM_PixelData);
+  pixels->putOriginalRepresentation(syntax, nullptr, sequence);
+  ds.insert(pixels, true);
+  ASSERT_TRUE(file.saveFile(path.c_str(), syntax).good()) << path;
+}
+
+std::vector<int32_t> Samples(int k, int count) {
+  std::vector<int32_t> out;
+  for (int n = 0; n < count; ++n) out.push_back(-1000 + 300 * k + 7 * n * (n % 3 == 0 ? -1 : 1));
+  return out;
+}
+
+TEST(DicomJpeg2000, ReadsLosslessAndLossySyntaxesBitExact) {
+  for (const E_TransferSyntax syntax : {EXS_JPEG2000LosslessOnly, EXS_JPEG2000}) {
+    const auto dir = MakeTempDir() / (syntax == EXS_JPEG2000 ? "91" : "90");
+    std::filesystem::create_directories(dir);
+    DicomSliceSpec s;
+    s.rows = 5;
+    s.columns = 6;
+    s.intercept = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      s.position_mm = glm::dvec3(0, 0, 1.5 * k);
+      WriteJpeg2000Slice(dir / ("j" + std::to_string(k) + ".dcm"), s,
+                         EncodeJ2k(Samples(k, 30), 6, 5), syntax);
+    }
+    auto v = ReadDicomSeries(dir, {});
+    ASSERT_TRUE(v.ok()) << v.status();
+    EXPECT_EQ(v->dims(), (std::array<int64_t, 3>{6, 5, 3}));
+    for (int k = 0; k < 3; ++k) {
+      const std::vector<int32_t> expected = Samples(k, 30);
+      for (int n = 0; n < 30; ++n) EXPECT_EQ(v->values()[k * 30 + n], expected[n]) << k << " " << n;
+    }
+  }
+}
+
+TEST(DicomJpeg2000, RejectsCorruptOrMismatchedCodestreams) {
+  const std::vector<uint8_t> good = EncodeJ2k(Samples(0, 30), 6, 5);
+  EXPECT_TRUE(DecodeJpeg2000(good, 6, 5).ok());
+  const auto mismatch = DecodeJpeg2000(good, 600, 500);  // the header is believed only if it agrees
+  EXPECT_EQ(mismatch.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(mismatch.status().message().find("1 of 600x500"), absl::string_view::npos)
+      << mismatch.status();
+  std::vector<uint8_t> truncated(good.begin(), good.begin() + good.size() / 2);
+  EXPECT_EQ(DecodeJpeg2000(truncated, 6, 5).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(DecodeJpeg2000(std::vector<uint8_t>(40, 0xff), 6, 5).status().code(),
+            absl::StatusCode::kInvalidArgument);
+
+  const auto dir = MakeTempDir();
+  DicomSliceSpec s;
+  s.rows = 5;
+  s.columns = 7;  // the codestream is 6 wide
+  WriteJpeg2000Slice(dir / "bad.dcm", s, good, EXS_JPEG2000LosslessOnly);
+  auto v = ReadDicomSeries(dir, {});
+  ASSERT_FALSE(v.ok());
+  EXPECT_NE(v.status().message().find("bad.dcm"), absl::string_view::npos) << v.status();
+}
+
+}  // namespace
+}  // namespace vpm
