@@ -52,6 +52,11 @@ Status RunOffline(const RenderArgs& args) {
   std::printf("mesh %zu vertices, %zu tets; max displacement %.2f mm, inverted tets %lld\n",
               mesh.vertices.size(), mesh.tets.size(), step.max_displacement_mm,
               static_cast<long long>(step.inverted_tets));
+  if (offline->grab) {
+    if (auto at = view.camera.Project(*offline->grab, frame.width, frame.height)) {
+      std::printf("grab point at pixel (%.0f, %.0f)\n", at->x, at->y);
+    }
+  }
   PrintSetupTimings(*offline);
   std::printf("%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n", "FEM solve", step.fem_ms,
               "backward map", step.warp_ms, "render (GPU)", frame.timings.render_ms, "encode",

@@ -14,7 +14,7 @@ namespace vpm {
 
 struct MeshComparisonRow {
   std::string name;             // "regular", "cell/spread", ...
-  bool is_default = false;      // the default configuration (MeshParams{}: point, spread)
+  bool is_default = false;      // the default configuration (MeshParams{}: cell, spread)
   int64_t vertices = 0;
   int64_t tets = 0;
   ReconstructionError reconstruction;

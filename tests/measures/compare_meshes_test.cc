@@ -22,7 +22,7 @@ class CompareMeshesOnPhantom : public ::testing::Test {
   static void SetUpTestSuite() {
     auto volume = MakePhantom("abdomen", VolumeLimits{});
     ASSERT_TRUE(volume.ok()) << volume.status();
-    auto rows = CompareMeshes(*volume, MeshParams{});  // the defaults: 20^3 -> 250, point, spread
+    auto rows = CompareMeshes(*volume, MeshParams{});  // the defaults: 20^3 -> 250, cell, spread
     ASSERT_TRUE(rows.ok()) << rows.status();
     rows_ = new std::vector<MeshComparisonRow>(std::move(*rows));
     for (const auto& r : *rows_) {
