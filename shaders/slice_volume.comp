@@ -3,8 +3,8 @@
 // A slice of the deformed volume J(x) = I(X(x)): one invocation per pixel,
 // 8 x 8 per workgroup. Pixel (i, j) samples the physical point origin +
 // (i + 0.5) step_u + (j + 0.5) step_v; X(x) from the backward map through
-// its sampler (backward_map.glsl), I by the manual trilinear of
-// warp_volume_texel.comp; NaN outside the image box (1e-4 mm margin).
+// its sampler (backward_map.glsl), I by source_texel_trilinear.glsl (as
+// warp_volume_texel.comp); NaN outside the image box (1e-4 mm margin).
 // CPU reference: SampleSliceCpu (server/raycast/slice_sampler.h).
 #include "shader_interface.glsl"
 #include "backward_map.glsl"
@@ -15,26 +15,7 @@ layout(binding = 1) uniform samplerBuffer u_volume;
 layout(std430, binding = 2) writeonly buffer Out { float values[]; };
 layout(push_constant) uniform Push { SliceVolumePush pc; };
 
-float source_at(ivec3 p, ivec3 dims) {
-  p = min(p, dims - 1);
-  return texelFetch(u_volume, p.x + dims.x * (p.y + dims.y * p.z)).r;
-}
-
-// As SampleTrilinear: clamped to [0, n - 1], NaN reads voxel 0.
-float sample_source(vec3 index) {
-  ivec3 dims = pc.dims.xyz;
-  vec3 n1 = vec3(dims - 1);
-  index = mix(index, vec3(0.0), isnan(index));
-  index = clamp(index, vec3(0.0), n1);
-  vec3 base = min(floor(index), max(n1 - 1.0, vec3(0.0)));
-  vec3 f = index - base;
-  ivec3 i0 = ivec3(base);
-  float c00 = mix(source_at(i0, dims), source_at(i0 + ivec3(1, 0, 0), dims), f.x);
-  float c10 = mix(source_at(i0 + ivec3(0, 1, 0), dims), source_at(i0 + ivec3(1, 1, 0), dims), f.x);
-  float c01 = mix(source_at(i0 + ivec3(0, 0, 1), dims), source_at(i0 + ivec3(1, 0, 1), dims), f.x);
-  float c11 = mix(source_at(i0 + ivec3(0, 1, 1), dims), source_at(i0 + ivec3(1, 1, 1), dims), f.x);
-  return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
-}
+#include "source_texel_trilinear.glsl"
 
 void main() {
   ivec2 px = ivec2(gl_GlobalInvocationID.xy);

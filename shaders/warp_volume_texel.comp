@@ -12,28 +12,7 @@ layout(binding = 1) uniform samplerBuffer u_volume;
 layout(std430, binding = 2) writeonly buffer Out { float warped[]; };
 layout(push_constant) uniform Push { WarpVolumePush pc; };
 
-float source_at(ivec3 p, ivec3 dims) {
-  p = min(p, dims - 1);
-  return texelFetch(u_volume, p.x + dims.x * (p.y + dims.y * p.z)).r;
-}
-
-float sample_source(vec3 index) {
-  ivec3 dims = pc.dims.xyz;
-  vec3 n1 = vec3(dims - 1);
-  // NaN (a non-finite map value) reads voxel 0 like SampleTrilinear.
-  index = mix(index, vec3(0.0), isnan(index));
-  index = clamp(index, vec3(0.0), n1);
-  // The lower corner stays one below the last voxel so that the upper one
-  // exists; its weight is then exactly 1 on the far face.
-  vec3 base = min(floor(index), max(n1 - 1.0, vec3(0.0)));
-  vec3 f = index - base;
-  ivec3 i0 = ivec3(base);
-  float c00 = mix(source_at(i0, dims), source_at(i0 + ivec3(1, 0, 0), dims), f.x);
-  float c10 = mix(source_at(i0 + ivec3(0, 1, 0), dims), source_at(i0 + ivec3(1, 1, 0), dims), f.x);
-  float c01 = mix(source_at(i0 + ivec3(0, 0, 1), dims), source_at(i0 + ivec3(1, 0, 1), dims), f.x);
-  float c11 = mix(source_at(i0 + ivec3(0, 1, 1), dims), source_at(i0 + ivec3(1, 1, 1), dims), f.x);
-  return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
-}
+#include "source_texel_trilinear.glsl"
 
 #include "warp_volume.glsl"
 

@@ -33,11 +33,7 @@ Result<glm::dvec3> PlanePoint(const SliceArgs& args, const OfflineScene& offline
     return absl::NotFoundError(StrCat("landmark '", args.at_landmark, "' is not in ",
                                       offline.volume->source()));
   }
-  if (offline.grab) {
-    glm::dvec3 p = *offline.grab;
-    if (!args.scene.drag.empty()) p += glm::dvec3(args.scene.drag[0], args.scene.drag[1], args.scene.drag[2]);
-    return g.PhysicalToWorld(p);
-  }
+  if (const auto grabbed = offline.scene->GrabbedTissueMm()) return g.PhysicalToWorld(*grabbed);
   return g.PhysicalToWorld(0.5 * g.extent_mm());
 }
 
@@ -79,7 +75,7 @@ Status RunSlice(const SliceArgs& args) {
   ASSIGN_OR_RETURN(view.plane, MakePlane(args, *offline));
   view.pixel_mm = args.pixel_mm;
   view.overlay = args.scene.overlay;
-  if (!args.window.empty()) view.window = SliceWindow{args.window[1], args.window[0]};
+  ASSIGN_OR_RETURN(view.window, WindowOf(args.window));
   ASSIGN_OR_RETURN(SliceFrame frame, offline->scene->RenderSlice(view));
   const int w = frame.grid.width, h = frame.grid.height;
   ASSIGN_OR_RETURN(std::vector<uint8_t> bytes,

@@ -19,6 +19,29 @@ glm::dvec4 ToPhysical(const glm::dvec3& normal_world, double offset_mm,
                     d - glm::dot(n, geometry.origin_mm));
 }
 
+// ClipRayInterval in float or double; `parallel`: |dot(n, dir)| below which
+// the ray runs along the plane.
+template <typename Real>
+void ClipInterval(std::span<const glm::vec<4, Real>> planes, const glm::vec<3, Real>& eye,
+                  const glm::vec<3, Real>& dir, Real parallel, Real& t_near, Real& t_far) {
+  for (const glm::vec<4, Real>& plane : planes) {
+    const glm::vec<3, Real> n(plane);
+    const Real along = glm::dot(n, dir);
+    const Real inside = glm::dot(n, eye) - plane.w;  // >= 0: the eye is kept
+    if (std::abs(along) < parallel) {
+      // Parallel to the plane: all kept or all cut.
+      if (inside < Real(0)) t_far = Real(-1);
+      continue;
+    }
+    const Real t = -inside / along;
+    if (along > Real(0)) {
+      t_near = std::max(t_near, t);
+    } else {
+      t_far = std::min(t_far, t);
+    }
+  }
+}
+
 }  // namespace
 
 Status ValidateClipRegion(const ClipRegion& region) {
@@ -73,22 +96,12 @@ std::vector<glm::dvec4> ClipPlanesInPhysical(const ClipRegion& region,
 
 void ClipRayInterval(std::span<const glm::vec4> planes, const glm::vec3& eye,
                      const glm::vec3& dir, float& t_near, float& t_far) {
-  for (const glm::vec4& plane : planes) {
-    const glm::vec3 n(plane);
-    const float along = glm::dot(n, dir);
-    const float inside = glm::dot(n, eye) - plane.w;  // >= 0: the eye is kept
-    if (std::abs(along) < 1e-20f) {
-      // Parallel to the plane: all kept or all cut.
-      if (inside < 0.0f) t_far = -1.0f;
-      continue;
-    }
-    const float t = -inside / along;
-    if (along > 0.0f) {
-      t_near = std::max(t_near, t);
-    } else {
-      t_far = std::min(t_far, t);
-    }
-  }
+  ClipInterval(planes, eye, dir, 1e-20f, t_near, t_far);
+}
+
+void ClipRayInterval(std::span<const glm::dvec4> planes, const glm::dvec3& eye,
+                     const glm::dvec3& dir, double& t_near, double& t_far) {
+  ClipInterval(planes, eye, dir, 1e-12, t_near, t_far);
 }
 
 ClipPlane CutPlaneFacing(const glm::dvec3& point_world, const glm::dvec3& forward_world) {

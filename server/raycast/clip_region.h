@@ -53,9 +53,12 @@ std::vector<glm::dvec4> ClipPlanesInPhysical(const ClipRegion& region,
 
 // Narrows the ray eye + t dir (t in [t_near, t_far]) to the part that keeps
 // dot(n, x) >= d for every plane (n, d) in `planes`; t_near > t_far after it
-// when nothing is left. Single precision, as shaders/raycast_body.glsl.
+// when nothing is left. Single precision as shaders/raycast_body.glsl (the
+// CPU reference of the ray caster); double for picking.
 void ClipRayInterval(std::span<const glm::vec4> planes, const glm::vec3& eye,
                      const glm::vec3& dir, float& t_near, float& t_far);
+void ClipRayInterval(std::span<const glm::dvec4> planes, const glm::dvec3& eye,
+                     const glm::dvec3& dir, double& t_near, double& t_far);
 
 // The plane through `point_world` (LPS, mm) facing away from a camera that
 // looks along `forward_world`: keeps what lies beyond the point, so the

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "server/raycast/clip_region.h"
+
 namespace vpm {
 namespace {
 
@@ -51,18 +53,7 @@ std::optional<glm::dvec3> PickAlongRay(const Volume& volume, const RenderPreset&
   const VolumeGeometry& g = volume.geometry();
   auto range = ClipToBox(g, eye_mm, direction);
   if (!range) return std::nullopt;
-  for (const glm::dvec4& plane : clip_planes) {
-    const glm::dvec3 n(plane);
-    const double along = glm::dot(n, direction);
-    const double inside = glm::dot(n, eye_mm) - plane.w;
-    if (std::abs(along) < 1e-12) {
-      if (inside < 0.0) return std::nullopt;
-    } else if (along > 0.0) {
-      range->first = std::max(range->first, -inside / along);
-    } else {
-      range->second = std::min(range->second, -inside / along);
-    }
-  }
+  ClipRayInterval(clip_planes, eye_mm, direction, range->first, range->second);
   if (range->first > range->second) return std::nullopt;
   const double step =
       0.5 * std::min({g.spacing_mm.x, g.spacing_mm.y, g.spacing_mm.z});  // the still step

@@ -127,6 +127,15 @@ Result<RenderPreset> MakeRenderPreset(std::string_view name, const Volume& volum
   return preset;
 }
 
+Status ValidateMipWindow(const MipWindow& window) {
+  if (!std::isfinite(window.level) || !std::isfinite(window.width) || !(window.width > 0.0)) {
+    return absl::InvalidArgumentError(StrCat("window level ", window.level, " width ",
+                                             window.width,
+                                             ": needs a finite level and width > 0"));
+  }
+  return absl::OkStatus();
+}
+
 Status ValidateRenderPreset(const RenderPreset& preset) {
   if (preset.points.size() < 2 || preset.points.size() > kMaxRenderPresetPoints) {
     return absl::InvalidArgumentError(StrCat("render preset '", preset.name, "' has ",

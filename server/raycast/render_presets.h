@@ -78,6 +78,9 @@ Result<RenderPreset> MakeRenderPreset(std::string_view name, const Volume& volum
 // sorted ascending, colours and opacities in [0, 1], window level finite and
 // width > 0, lighting (if any) in [0, 1] with shininess in [1, 256].
 Status ValidateRenderPreset(const RenderPreset& preset);
+// InvalidArgument unless the level is finite and the width finite and > 0
+// (MIP windows and slice windows alike).
+Status ValidateMipWindow(const MipWindow& window);
 
 // The lookup table of a preset for one sampling step: kRenderLutEntries
 // entries evenly over [first point's value, last point's value]; entry i at

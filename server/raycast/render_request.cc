@@ -69,9 +69,7 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   RETURN_IF_ERROR(CheckSettings(request.settings));
   RETURN_IF_ERROR(ValidateClipRegion(request.clip));
   const MipWindow window = request.mip_window.value_or(request.preset.mip_window);
-  if (!std::isfinite(window.level) || !std::isfinite(window.width) || !(window.width > 0.0)) {
-    return absl::InvalidArgumentError("MIP window needs a finite level and width > 0");
-  }
+  RETURN_IF_ERROR(ValidateMipWindow(window));
   const double step = RequestStepMm(request, geometry);
   const glm::dvec3 extent = geometry.extent_mm();
   if (glm::length(extent) / step > kMaxSamplesPerRay) {

@@ -3,15 +3,22 @@
 #include <algorithm>
 #include <cmath>
 
+#include "server/raycast/volume_mip_window.h"
+
 namespace vpm {
 namespace {
 
+// The plane's unit normal in physical space.
+glm::dvec3 PhysicalNormal(const SliceGrid& grid) {
+  return glm::normalize(glm::cross(grid.step_u_mm, grid.step_v_mm));
+}
+
 // Continuous pixel position (pixel (i, j) covers [i, i+1) x [j, j+1)) and
-// signed distance from the plane (mm) of physical point p.
-glm::dvec3 ToSlice(const SliceGrid& grid, const glm::dvec3& p) {
+// signed distance from the plane (mm) of physical point p; `normal`:
+// PhysicalNormal(grid).
+glm::dvec3 ToSlice(const SliceGrid& grid, const glm::dvec3& normal, const glm::dvec3& p) {
   const glm::dvec3 d = p - grid.origin_mm;
   const double pixel2 = grid.pixel_mm * grid.pixel_mm;
-  const glm::dvec3 normal = glm::normalize(glm::cross(grid.step_u_mm, grid.step_v_mm));
   return glm::dvec3(glm::dot(d, grid.step_u_mm) / pixel2, glm::dot(d, grid.step_v_mm) / pixel2,
                     glm::dot(d, normal));
 }
@@ -39,31 +46,15 @@ void DrawSegment(const SliceGrid& grid, glm::dvec2 a, glm::dvec2 b, const uint8_
 
 }  // namespace
 
-SliceWindow DefaultSliceWindow(const Volume& volume) {
-  if (volume.min_value() <= -900.0f && volume.max_value() > 100.0f) return SliceWindow{40.0, 400.0};
-  std::vector<float> sample;
-  const auto values = volume.values();
-  const size_t stride = std::max<size_t>(1, values.size() / 200000);
-  for (size_t i = 0; i < values.size(); i += stride) sample.push_back(values[i]);
-  const auto at = [&](double q) {
-    const size_t k = std::min(sample.size() - 1, size_t(q * double(sample.size() - 1)));
-    std::nth_element(sample.begin(), sample.begin() + k, sample.end());
-    return double(sample[k]);
-  };
-  const double lo = at(0.01), hi = at(0.99);
-  return SliceWindow{0.5 * (lo + hi), std::max(hi - lo, 1e-6)};
-}
-
-Status ValidateSliceWindow(const SliceWindow& window) {
-  if (!std::isfinite(window.level) || !std::isfinite(window.width) || !(window.width > 0.0)) {
-    return absl::InvalidArgumentError(StrCat("window width ", window.width, " level ",
-                                             window.level, ": need a finite level and width > 0"));
-  }
-  return absl::OkStatus();
+MipWindow DefaultSliceWindow(const Volume& volume) {
+  if (volume.min_value() <= -900.0f && volume.max_value() > 100.0f) return MipWindow{40.0, 400.0};
+  std::vector<float> sample = SampleVolumeValues(volume, -INFINITY);
+  const std::vector<double> p = Percentiles(sample, {1.0, 99.0});
+  return MipWindow{0.5 * (p[0] + p[1]), std::max(p[1] - p[0], 1e-6)};
 }
 
 std::vector<uint8_t> SliceToRgba(std::span<const float> values, int width, int height,
-                                 const SliceWindow& window) {
+                                 const MipWindow& window) {
   std::vector<uint8_t> rgba(size_t(width) * height * 4, 0);
   const double black = window.level - 0.5 * window.width;
   for (size_t i = 0; i < size_t(width) * height && i < values.size(); ++i) {
@@ -82,12 +73,13 @@ int64_t DrawCutTets(const SliceGrid& grid, std::span<const glm::dvec3> positions
   static constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
   int64_t cut = 0;
   const int64_t n = int64_t(positions_mm.size());
+  const glm::dvec3 normal = PhysicalNormal(grid);
   for (const auto& tet : tets) {
     glm::dvec3 p[4];
     bool valid = true;
     for (int c = 0; c < 4; ++c) {
       if (tet[c] < 0 || tet[c] >= n) valid = false;
-      if (valid) p[c] = ToSlice(grid, positions_mm[tet[c]]);
+      if (valid) p[c] = ToSlice(grid, normal, positions_mm[tet[c]]);
     }
     if (!valid) continue;
     const double lo = std::min({p[0].z, p[1].z, p[2].z, p[3].z});
@@ -113,7 +105,7 @@ int64_t DrawCutTets(const SliceGrid& grid, std::span<const glm::dvec3> positions
 
 bool DrawSliceMarker(const SliceGrid& grid, const glm::dvec3& point_mm, double within_mm,
                      const uint8_t rgb[3], std::span<uint8_t> rgba) {
-  const glm::dvec3 s = ToSlice(grid, point_mm);
+  const glm::dvec3 s = ToSlice(grid, PhysicalNormal(grid), point_mm);
   if (std::abs(s.z) > within_mm) return false;
   const int arm = std::max(4, std::min(grid.width, grid.height) / 40);
   const int x = int(std::floor(s.x)), y = int(std::floor(s.y));

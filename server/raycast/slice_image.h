@@ -11,29 +11,24 @@
 #include <glm/glm.hpp>
 
 #include "server/common/status.h"
+#include "server/raycast/render_presets.h"
 #include "server/raycast/slice_grid.h"
 #include "server/volume/volume.h"
 
 namespace vpm {
 
-// Values level - width / 2 .. level + width / 2 map to black .. white.
-struct SliceWindow {
-  double level = 40.0;  // value units (HU for CT)
-  double width = 400.0;
-};
-
-// CT (values reach -900 HU or below and above 100): the soft-tissue window
-// W 400 L 40 a radiologist starts from. Anything else (MRI, unitless): the
-// 1st to 99th percentile of the voxels.
-SliceWindow DefaultSliceWindow(const Volume& volume);
-
-// InvalidArgument unless level is finite and width finite and > 0.
-Status ValidateSliceWindow(const SliceWindow& window);
+// A slice's window is a MipWindow (render_presets.h): values level -
+// width / 2 .. level + width / 2 map to black .. white (ValidateMipWindow).
+// Default: for CT (values reach -900 HU or below and above 100) the
+// soft-tissue window W 400 L 40 a radiologist starts from; anything else
+// (MRI, unitless): the 1st to 99th percentile of the voxels
+// (SampleVolumeValues, Percentiles).
+MipWindow DefaultSliceWindow(const Volume& volume);
 
 // RGBA8, width * height * 4 bytes, row 0 at the top; NaN (outside the
 // volume) is black.
 std::vector<uint8_t> SliceToRgba(std::span<const float> values, int width, int height,
-                                 const SliceWindow& window);
+                                 const MipWindow& window);
 
 // Where each deformed tet (positions_mm #V by 3, physical mm; tets #T by 4)
 // meets the plane: the segments its faces cut, drawn 1 pixel wide in `rgb`.

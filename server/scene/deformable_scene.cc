@@ -107,12 +107,16 @@ Result<SceneStepTimings> DeformableScene::Release() {
   return AfterStep({.fem_ms = MsSince(t0)});
 }
 
+std::optional<glm::dvec3> DeformableScene::GrabbedTissueMm() const {
+  if (!grab_point_mm_) return std::nullopt;
+  return *grab_point_mm_ + drag_offset_mm_;
+}
+
 ClipRegion DeformableScene::ViewClip(const SceneView& view) const {
   ClipRegion clip = view.clip;
   if (view.view_cut) {
     const VolumeGeometry& g = volume_->geometry();
-    const glm::dvec3 at_mm =
-        grab_point_mm_ ? *grab_point_mm_ + drag_offset_mm_ : view.camera.Target();
+    const glm::dvec3 at_mm = GrabbedTissueMm().value_or(view.camera.Target());
     clip.planes.push_back(
         CutPlaneFacing(g.PhysicalToWorld(at_mm), g.direction * view.camera.Forward()));
   }
@@ -151,7 +155,7 @@ Result<SliceFrame> DeformableScene::RenderSlice(const SliceView& view) {
   RETURN_IF_ERROR(SyncMap().status());
   SliceFrame frame;
   frame.window = view.window.value_or(DefaultSliceWindow(*volume_));
-  RETURN_IF_ERROR(ValidateSliceWindow(frame.window));
+  RETURN_IF_ERROR(ValidateMipWindow(frame.window));
   ASSIGN_OR_RETURN(frame.grid, MakeSliceGrid(view.plane, volume_->geometry(), view.pixel_mm));
   if (!slice_sampler_) {
     ASSIGN_OR_RETURN(SliceSampler sampler, SliceSampler::Create(*context_));
@@ -164,9 +168,8 @@ Result<SliceFrame> DeformableScene::RenderSlice(const SliceView& view) {
   if (view.overlay) {
     const std::vector<glm::dvec3> positions = fem_->Positions();
     frame.cut_tets = DrawCutTets(frame.grid, positions, mesh_.tets, kDeformableRgb, frame.rgba);
-    if (grab_point_mm_) {
-      DrawSliceMarker(frame.grid, *grab_point_mm_ + drag_offset_mm_, mesh_.stats.h_mm,
-                      kHandleRgb, frame.rgba);
+    if (const auto grabbed = GrabbedTissueMm()) {
+      DrawSliceMarker(frame.grid, *grabbed, mesh_.stats.h_mm, kHandleRgb, frame.rgba);
     }
   }
   return frame;

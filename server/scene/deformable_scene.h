@@ -89,6 +89,11 @@ class DeformableScene {
   // next Render).
   Result<SceneStepTimings> Release();
 
+  // Where the grabbed tissue is now: the grab point moved by the drag
+  // (physical mm); empty with nothing grabbed. The view cut and the slice
+  // marker pass through it.
+  std::optional<glm::dvec3> GrabbedTissueMm() const;
+
   // The clip region a frame of `view` uses: view.clip plus the view cut.
   ClipRegion ViewClip(const SceneView& view) const;
 

@@ -14,7 +14,7 @@ namespace vpm {
 struct SliceView {
   SlicePlane plane;
   double pixel_mm = 0.0;               // 0: the smallest voxel spacing
-  std::optional<SliceWindow> window;   // default: DefaultSliceWindow(volume)
+  std::optional<MipWindow> window;     // default: DefaultSliceWindow(volume)
   // Outline the deformed tets the plane cuts (yellow) and mark the grabbed
   // tissue (the grab point moved by the drag, red) when it lies within one
   // lattice step h of the plane.
@@ -24,7 +24,7 @@ struct SliceView {
 struct SliceFrame {
   std::vector<uint8_t> rgba;  // grid.width * grid.height * 4, row 0 at the top
   SliceGrid grid;
-  SliceWindow window;
+  MipWindow window;
   int64_t cut_tets = -1;      // overlay: tets the plane cuts
   double gpu_ms = 0.0;        // the slice kernel
 };

@@ -164,15 +164,15 @@ TEST_F(SliceGpuTest, GpuMatchesCpuThroughADeformingMap) {
 
 TEST(SliceImage, WindowMapsLevelToMidGreyAndNanToBlack) {
   const std::vector<float> values = {40.0f, -160.0f, 240.0f, 1000.0f, NAN, -2000.0f};
-  const auto rgba = SliceToRgba(values, 3, 2, SliceWindow{40.0, 400.0});
+  const auto rgba = SliceToRgba(values, 3, 2, MipWindow{40.0, 400.0});
   EXPECT_EQ(rgba[0], 128);
   EXPECT_EQ(rgba[4], 0);
   EXPECT_EQ(rgba[8], 255);
   EXPECT_EQ(rgba[12], 255);
   EXPECT_EQ(rgba[16], 0);
   EXPECT_EQ(rgba[19], 255);
-  EXPECT_FALSE(ValidateSliceWindow({40.0, 0.0}).ok());
-  EXPECT_FALSE(ValidateSliceWindow({NAN, 10.0}).ok());
+  EXPECT_FALSE(ValidateMipWindow({40.0, 0.0}).ok());
+  EXPECT_FALSE(ValidateMipWindow({NAN, 10.0}).ok());
 }
 
 TEST(SliceImage, CutTetsOutlineOnlyTheTetsThePlaneCrosses) {
