@@ -43,7 +43,7 @@ void InteractReactor::Start(const v2::InteractRequest& first) {
                               "session_id: required on the first message of Interact"));
     return;
   }
-  auto session = service_->sessions->Get(first.session_id());
+  auto session = service_->sessions->Get(first.session_id(), user(), SessionRole::kOwner);
   if (!session.ok()) {
     FinishStream(ToGrpcStatus(session.status()));
     return;

@@ -9,7 +9,9 @@ namespace vpm::service {
 
 struct ServerOptions {
   std::string listen = "127.0.0.1:50051";  // HOST:PORT; port 0 picks a free one
-  std::string token;                       // bearer token (or env VPM_TOKEN)
+  std::string token;                       // the user `default`'s bearer token (or env VPM_TOKEN)
+  std::string token_file;                  // or read from this file (not on the command line)
+  std::string users_file;                  // one `NAME TOKEN-SHA256` a line (users_file.h)
   bool no_auth = false;                    // explicitly off, for local use only
   std::string data_root;                   // LoadVolume paths resolve under it
   std::string metrics_listen;              // HOST:PORT for Prometheus, empty: off
@@ -26,7 +28,8 @@ struct ServerOptions {
   int64_t max_upload_bytes = int64_t{1} << 30;   // one uploaded file
   int64_t max_meshes = 64;
   int64_t max_sessions = 32;
-  int64_t max_streams_per_client = 8;            // Interact + Watch streams per peer address
+  int64_t max_sessions_per_user = 16;            // sessions one user owns (0: no cap)
+  int64_t max_streams_per_user = 8;              // Interact + Watch streams per user
   double idle_session_s = 900;                   // evict sessions idle this long (0: never)
   int max_frame_side = 2048;                     // pixels
 

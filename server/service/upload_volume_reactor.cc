@@ -36,10 +36,12 @@ UploadVolumeReactor::UploadVolumeReactor(ServiceContext* service,
                                          v2::VolumeInfo* response)
     : service_(service), response_(response) {
   service_->metrics->StreamOpened();
-  if (Status auth = service_->auth->Check(*context); !auth.ok()) {
-    FinishOnce(auth);
+  Result<std::string> user = service_->auth->Authenticate(*context);
+  if (!user.ok()) {
+    FinishOnce(user.status());
     return;
   }
+  user_ = *std::move(user);
   StartRead(&request_);
 }
 
@@ -148,6 +150,7 @@ void UploadVolumeReactor::Complete() {
     if (!fs::create_directory(dir, error)) {
       return absl::InternalError(StrCat("upload: cannot make a temporary folder: ", error.message()));
     }
+    service_->metrics->TempFiles(+1);
     const fs::path path = dir / file_name_;
     Status status = [&]() -> Status {
       {
@@ -157,11 +160,12 @@ void UploadVolumeReactor::Complete() {
       }
       std::vector<uint8_t>().swap(bytes_);
       ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
-                       service_->volumes->AddFile(path, StrCat("upload:", file_name_)));
+                       service_->volumes->AddFile(path, StrCat("upload:", file_name_), user_));
       FillVolumeInfo(*entry, response_);
       return absl::OkStatus();
     }();
     fs::remove_all(dir, error);
+    service_->metrics->TempFiles(-1);
     // A file that no reader accepts is a malformed upload.
     if (!status.ok() && status.code() != absl::StatusCode::kResourceExhausted &&
         status.code() != absl::StatusCode::kInternal) {
@@ -187,7 +191,7 @@ void UploadVolumeReactor::FinishOnce(const Status& status) {
     finished_ = true;
   }
   const grpc::Status g = ToGrpcStatus(status);
-  service_->metrics->Request("UploadVolume", StatusCodeName(g.error_code()));
+  service_->metrics->Request("UploadVolume", StatusCodeName(g.error_code()), user_);
   Finish(g);
 }
 

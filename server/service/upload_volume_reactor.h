@@ -40,6 +40,7 @@ class UploadVolumeReactor : public grpc::ServerReadReactor<v2::UploadVolumeReque
 
   ServiceContext* service_;
   v2::VolumeInfo* response_;
+  std::string user_;  // the caller: the volume's owner
   v2::UploadVolumeRequest request_;
   bool have_header_ = false;
   std::string file_name_;

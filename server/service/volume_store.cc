@@ -5,6 +5,12 @@
 
 namespace vpm::service {
 
+Status CheckVolumeAccess(const VolumeEntry& volume, std::string_view user) {
+  if (volume.owner.empty() || volume.owner == user) return absl::OkStatus();
+  return absl::PermissionDeniedError(
+      StrCat("volume_id: volume '", volume.id, "' was uploaded by another user"));
+}
+
 Result<std::unique_ptr<VolumeStore>> VolumeStore::Create(const Options& options) {
   if (options.context == nullptr) return absl::InvalidArgumentError("VolumeStore: no GPU context");
   if (options.max_volumes < 1 || options.max_bytes < 1) {
@@ -35,7 +41,8 @@ std::shared_ptr<VolumeEntry> VolumeStore::FindLoadedLocked(const std::string& lo
   return nullptr;
 }
 
-Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source) {
+Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
+                                                       const std::string& user) {
   if (source.starts_with("raw:")) {
     return absl::InvalidArgumentError(
         "source: raw: sources are not served; upload the file instead");
@@ -49,29 +56,38 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source) 
   }
   {
     std::lock_guard lock(mutex_);
-    if (auto loaded = FindLoadedLocked(key)) return loaded;
+    if (auto loaded = FindLoadedLocked(key)) {
+      loaded_by_[loaded->id].insert(user);
+      return loaded;
+    }
   }
   RETURN_IF_ERROR(CheckRoom(0));
   ASSIGN_OR_RETURN(Volume volume, ReadVolume(read_from, options_.read_limits));
   volume.set_source(std::string(source));
-  return Add(std::move(volume), std::move(key));
+  return Add(std::move(volume), std::move(key), user);
 }
 
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::AddFile(const std::filesystem::path& path,
-                                                          std::string source) {
+                                                          std::string source, std::string owner) {
   RETURN_IF_ERROR(CheckRoom(0));
   ASSIGN_OR_RETURN(Volume volume, ReadVolume(path.string(), options_.read_limits));
   volume.set_source(std::move(source));
-  return Add(std::move(volume), "");
+  return Add(std::move(volume), "", owner);
 }
 
-Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string load_key) {
+// `load_key` empty: an upload owned by `user`; else a shared volume `user`
+// loaded.
+Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string load_key,
+                                                      const std::string& user) {
   const int64_t bytes = volume.geometry().voxel_count() * int64_t{sizeof(float)} * 2;
   RETURN_IF_ERROR(CheckRoom(bytes));
   ASSIGN_OR_RETURN(GpuVolume gpu, GpuVolume::Upload(*options_.context, volume));
   std::lock_guard lock(mutex_);
   // A load of the same source that landed while this one read wins.
-  if (auto loaded = FindLoadedLocked(load_key)) return loaded;
+  if (auto loaded = FindLoadedLocked(load_key)) {
+    loaded_by_[loaded->id].insert(user);
+    return loaded;
+  }
   // Checked again: another load may have landed while this one read.
   if (static_cast<int64_t>(volumes_.size()) >= options_.max_volumes ||
       total_bytes_ + bytes > options_.max_bytes) {
@@ -80,6 +96,11 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string
   std::string id = StrCat("vol-", next_id_++);
   auto entry = std::make_shared<VolumeEntry>(id, std::move(volume), std::move(gpu), bytes);
   entry->forget_gpu = options_.forget_gpu;
+  if (load_key.empty()) {
+    entry->owner = user;
+  } else {
+    loaded_by_[id].insert(user);
+  }
   entry->load_key = std::move(load_key);
   volumes_.emplace(id, entry);
   total_bytes_ += bytes;
@@ -87,30 +108,46 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string
   return entry;
 }
 
-Result<std::shared_ptr<VolumeEntry>> VolumeStore::Get(std::string_view id) const {
+Result<std::shared_ptr<VolumeEntry>> VolumeStore::Get(std::string_view id,
+                                                      std::string_view user) const {
   std::lock_guard lock(mutex_);
   auto it = volumes_.find(id);
   if (it == volumes_.end()) return absl::NotFoundError(StrCat("volume_id: no volume '", id, "'"));
+  RETURN_IF_ERROR(CheckVolumeAccess(*it->second, user));
   return it->second;
 }
 
-std::vector<std::shared_ptr<VolumeEntry>> VolumeStore::List() const {
+std::vector<std::shared_ptr<VolumeEntry>> VolumeStore::List(std::string_view user) const {
   std::lock_guard lock(mutex_);
   std::vector<std::shared_ptr<VolumeEntry>> out;
-  for (const auto& [id, entry] : volumes_) out.push_back(entry);
+  for (const auto& [id, entry] : volumes_) {
+    if (CheckVolumeAccess(*entry, user).ok()) out.push_back(entry);
+  }
   return out;
 }
 
-Status VolumeStore::Delete(std::string_view id) {
+Status VolumeStore::Delete(std::string_view id, const std::string& user) {
   std::lock_guard lock(mutex_);
   auto it = volumes_.find(id);
   if (it == volumes_.end()) return absl::NotFoundError(StrCat("volume_id: no volume '", id, "'"));
+  RETURN_IF_ERROR(CheckVolumeAccess(*it->second, user));
+  if (it->second->owner.empty()) {
+    const std::set<std::string>& loaders = loaded_by_[it->first];
+    if (!loaders.contains(user) || loaders.size() > 1) {
+      return absl::PermissionDeniedError(
+          StrCat("volume '", id, "' is shared: ",
+                 loaders.contains(user) ? "other users loaded it too"
+                                        : "you did not load it",
+                 "; only a user who alone loaded it may delete it"));
+    }
+  }
   if (it->second->sessions.load() > 0) {
     return absl::FailedPreconditionError(StrCat("volume '", id, "' is used by ",
                                                 it->second->sessions.load(),
                                                 " session(s); close them first"));
   }
   total_bytes_ -= it->second->bytes;
+  loaded_by_.erase(it->first);
   volumes_.erase(it);
   NotifyLocked();
   return absl::OkStatus();

@@ -2,6 +2,13 @@
 // phantom or an upload), uploaded to the GPU once, and shared by every mesh
 // and session that uses it (shared_ptr: a deleted volume lives on until its
 // last session closes).
+//
+// Ownership: an uploaded volume belongs to the user who uploaded it; every
+// other user gets PermissionDenied on it (it is not even listed). A volume
+// loaded from the data root or a phantom is shared read-only: every user
+// may read, list, mesh and open sessions on it (each could load the same
+// source anyway), and a user may delete it only when no other user loaded
+// it too (and, as for every volume, no session uses it).
 #pragma once
 
 #include <atomic>
@@ -10,6 +17,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -28,6 +36,9 @@ struct VolumeEntry {
   // What LoadVolume loaded it from ("phantom:SPEC" or "file:" + the resolved
   // path); empty for uploads. A second load of the same key shares it.
   std::string load_key;
+  // The uploader; empty for a shared volume (loaded from the data root or a
+  // phantom).
+  std::string owner;
   std::atomic<int32_t> sessions{0}; // sessions using it
   // The scene may add a 3D image to `gpu` (export); guarded by this.
   std::mutex gpu_mutex;
@@ -41,6 +52,10 @@ struct VolumeEntry {
     if (forget_gpu) forget_gpu(&gpu);
   }
 };
+
+// PermissionDenied unless `user` may use `volume`: its owner, or anyone for
+// a shared volume.
+Status CheckVolumeAccess(const VolumeEntry& volume, std::string_view user);
 
 class VolumeStore {
  public:
@@ -61,28 +76,36 @@ class VolumeStore {
   // read the file again. Errors: those of ResolveDataPath and ReadVolume;
   // InvalidArgument for raw: sources; ResourceExhausted past max_volumes or
   // max_bytes.
-  Result<std::shared_ptr<VolumeEntry>> Load(std::string_view source);
+  // `user` is recorded as one of its loaders.
+  Result<std::shared_ptr<VolumeEntry>> Load(std::string_view source, const std::string& user);
   // A volume read from `path` (an upload's temporary file); `source` is what
-  // GetVolume reports.
+  // GetVolume reports; `owner` the uploader.
   Result<std::shared_ptr<VolumeEntry>> AddFile(const std::filesystem::path& path,
-                                               std::string source);
-  Result<std::shared_ptr<VolumeEntry>> Get(std::string_view id) const;  // NotFound
-  std::vector<std::shared_ptr<VolumeEntry>> List() const;
-  // NotFound; FailedPrecondition while a session uses it.
-  Status Delete(std::string_view id);
+                                               std::string source, std::string owner);
+  // NotFound; PermissionDenied for another user's upload.
+  Result<std::shared_ptr<VolumeEntry>> Get(std::string_view id, std::string_view user) const;
+  // The volumes `user` may use.
+  std::vector<std::shared_ptr<VolumeEntry>> List(std::string_view user) const;
+  // NotFound; PermissionDenied for another user's upload, or a shared
+  // volume that `user` did not load or that another user loaded too;
+  // FailedPrecondition while a session uses it.
+  Status Delete(std::string_view id, const std::string& user);
   // ResourceExhausted when `extra_bytes` more would pass a cap.
   Status CheckRoom(int64_t extra_bytes) const;
   int64_t total_bytes() const;
 
  private:
   explicit VolumeStore(Options options) : options_(std::move(options)) {}
-  Result<std::shared_ptr<VolumeEntry>> Add(Volume volume, std::string load_key);
+  Result<std::shared_ptr<VolumeEntry>> Add(Volume volume, std::string load_key,
+                                           const std::string& user);
   std::shared_ptr<VolumeEntry> FindLoadedLocked(const std::string& load_key) const;
   void NotifyLocked() const;
 
   Options options_;
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<VolumeEntry>, std::less<>> volumes_;
+  // The users who loaded each shared volume, by id.
+  std::map<std::string, std::set<std::string>, std::less<>> loaded_by_;
   int64_t total_bytes_ = 0;
   int64_t next_id_ = 1;
 };

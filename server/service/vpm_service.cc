@@ -10,25 +10,26 @@ namespace vpm::service {
 
 grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context,
                                             const char* method, WorkerPool* pool,
-                                            std::function<Status()> fn) {
+                                            std::function<Status(const std::string& user)> fn) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  if (Status auth = service_->auth->Check(*context); !auth.ok()) {
-    Done(reactor, method, auth);
+  Result<std::string> user = service_->auth->Authenticate(*context);
+  if (!user.ok()) {
+    Done(reactor, method, user.status(), "");
   } else if (pool == nullptr) {
-    Done(reactor, method, fn());
-  } else if (!pool->Post([this, context, reactor, method, fn = std::move(fn)] {
+    Done(reactor, method, fn(*user), *user);
+  } else if (!pool->Post([this, context, reactor, method, fn = std::move(fn), user = *user] {
                // Work nobody waits for any more is dropped before it starts:
                // a cancelled or expired call must not delay the calls behind it.
                if (Status gone = CallGone(*context); !gone.ok()) {
                  service_->metrics->DroppedJob(method, gone.code() == absl::StatusCode::kCancelled
                                                            ? "cancelled"
                                                            : "deadline");
-                 Done(reactor, method, gone);
+                 Done(reactor, method, gone, user);
                  return;
                }
-               Done(reactor, method, fn());
+               Done(reactor, method, fn(user), user);
              })) {
-    Done(reactor, method, absl::UnavailableError("the server is shutting down"));
+    Done(reactor, method, absl::UnavailableError("the server is shutting down"), *user);
   }
   return reactor;
 }
@@ -44,26 +45,41 @@ Status VpmService::CallGone(grpc::CallbackServerContext& context) {
 }
 
 void VpmService::Done(grpc::ServerUnaryReactor* reactor, const char* method,
-                      const Status& status) {
+                      const Status& status, const std::string& user) {
   const grpc::Status g = ToGrpcStatus(status);
-  service_->metrics->Request(method, StatusCodeName(g.error_code()));
+  service_->metrics->Request(method, StatusCodeName(g.error_code()), user);
   reactor->Finish(g);
 }
 
-void VpmService::FillSessionInfo(const Session& session, v2::SessionInfo* info) const {
+void VpmService::FillSessionInfo(const Session& session, const std::string& user,
+                                 v2::SessionInfo* info) const {
   info->set_session_id(session.id());
   info->set_volume_id(session.volume().id);
   info->set_mesh_id(session.mesh().id);
   info->set_viewers(session.viewers());
   info->set_idle_s(session.idle_s());
+  info->set_owner(session.access().owner());
+  if (session.access().IsOwner(user)) {
+    for (const std::string& viewer : session.access().viewers()) info->add_shared_with(viewer);
+  }
+}
+
+Result<std::shared_ptr<const MeshEntry>> VpmService::FindMesh(std::string_view mesh_id,
+                                                             const std::string& user) const {
+  ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh, service_->meshes->Get(mesh_id));
+  if (!CheckVolumeAccess(*mesh->volume, user).ok()) {
+    return absl::PermissionDeniedError(
+        StrCat("mesh_id: mesh '", mesh_id, "' is on a volume another user uploaded"));
+  }
+  return mesh;
 }
 
 grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* context,
                                                  const v2::LoadVolumeRequest* request,
                                                  v2::VolumeInfo* response) {
-  return Unary(context, "LoadVolume", service_->request_pool, [=, this]() -> Status {
+  return Unary(context, "LoadVolume", service_->request_pool, [=, this](const std::string& user) -> Status {
     if (request->source().empty()) return absl::InvalidArgumentError("source: required");
-    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry, service_->volumes->Load(request->source()));
+    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry, service_->volumes->Load(request->source(), user));
     FillVolumeInfo(*entry, response);
     return absl::OkStatus();
   });
@@ -77,9 +93,9 @@ grpc::ServerReadReactor<v2::UploadVolumeRequest>* VpmService::UploadVolume(
 grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* context,
                                                 const v2::GetVolumeRequest* request,
                                                 v2::VolumeInfo* response) {
-  return Unary(context, "GetVolume", nullptr, [=, this]() -> Status {
+  return Unary(context, "GetVolume", nullptr, [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
-                     service_->volumes->Get(request->volume_id()));
+                     service_->volumes->Get(request->volume_id(), user));
     FillVolumeInfo(*entry, response);
     return absl::OkStatus();
   });
@@ -88,8 +104,8 @@ grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* con
 grpc::ServerUnaryReactor* VpmService::ListVolumes(grpc::CallbackServerContext* context,
                                                   const v2::ListVolumesRequest*,
                                                   v2::ListVolumesResponse* response) {
-  return Unary(context, "ListVolumes", nullptr, [=, this]() -> Status {
-    for (const auto& entry : service_->volumes->List()) {
+  return Unary(context, "ListVolumes", nullptr, [=, this](const std::string& user) -> Status {
+    for (const auto& entry : service_->volumes->List(user)) {
       FillVolumeInfo(*entry, response->add_volumes());
     }
     return absl::OkStatus();
@@ -99,8 +115,8 @@ grpc::ServerUnaryReactor* VpmService::ListVolumes(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* context,
                                                    const v2::DeleteVolumeRequest* request,
                                                    v2::DeleteVolumeResponse*) {
-  return Unary(context, "DeleteVolume", nullptr, [=, this]() -> Status {
-    RETURN_IF_ERROR(service_->volumes->Delete(request->volume_id()));
+  return Unary(context, "DeleteVolume", nullptr, [=, this](const std::string& user) -> Status {
+    RETURN_IF_ERROR(service_->volumes->Delete(request->volume_id(), user));
     service_->meshes->ForgetVolume(request->volume_id());
     return absl::OkStatus();
   });
@@ -109,9 +125,9 @@ grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* 
 grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* context,
                                                 const v2::BuildMeshRequest* request,
                                                 v2::MeshInfo* response) {
-  return Unary(context, "BuildMesh", service_->request_pool, [=, this]() -> Status {
+  return Unary(context, "BuildMesh", service_->request_pool, [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
-                     service_->volumes->Get(request->volume_id()));
+                     service_->volumes->Get(request->volume_id(), user));
     ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(request->params()));
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
                      service_->meshes->Build(volume, params));
@@ -123,9 +139,8 @@ grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* con
 grpc::ServerUnaryReactor* VpmService::GetMesh(grpc::CallbackServerContext* context,
                                               const v2::GetMeshRequest* request,
                                               v2::GetMeshResponse* response) {
-  return Unary(context, "GetMesh", nullptr, [=, this]() -> Status {
-    ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
-                     service_->meshes->Get(request->mesh_id()));
+  return Unary(context, "GetMesh", nullptr, [=, this](const std::string& user) -> Status {
+    ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh, FindMesh(request->mesh_id(), user));
     FillMeshInfo(*mesh, response->mutable_info());
     if (request->include_geometry()) FillMeshGeometry(mesh->mesh, response);
     return absl::OkStatus();
@@ -135,8 +150,9 @@ grpc::ServerUnaryReactor* VpmService::GetMesh(grpc::CallbackServerContext* conte
 grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* context,
                                                  const v2::RefineMeshRequest* request,
                                                  v2::MeshInfo* response) {
-  return Unary(context, "RefineMesh", service_->request_pool, [=, this]() -> Status {
+  return Unary(context, "RefineMesh", service_->request_pool, [=, this](const std::string& user) -> Status {
     if (!request->has_point_mm()) return absl::InvalidArgumentError("point_mm: required");
+    RETURN_IF_ERROR(FindMesh(request->mesh_id(), user).status());
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
                      service_->meshes->Refine(request->mesh_id(), FromProto(request->point_mm())));
     FillMeshInfo(*mesh, response);
@@ -147,7 +163,9 @@ grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::DeleteMesh(grpc::CallbackServerContext* context,
                                                  const v2::DeleteMeshRequest* request,
                                                  v2::DeleteMeshResponse*) {
-  return Unary(context, "DeleteMesh", service_->request_pool, [=, this]() -> Status {
+  return Unary(context, "DeleteMesh", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
+    RETURN_IF_ERROR(FindMesh(request->mesh_id(), user).status());
     return service_->meshes->Delete(request->mesh_id());
   });
 }
@@ -155,10 +173,10 @@ grpc::ServerUnaryReactor* VpmService::DeleteMesh(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* context,
                                                   const v2::OpenSessionRequest* request,
                                                   v2::SessionInfo* response) {
-  return Unary(context, "OpenSession", service_->request_pool, [=, this]() -> Status {
+  return Unary(context, "OpenSession", service_->request_pool, [=, this](const std::string& user) -> Status {
     std::shared_ptr<const MeshEntry> mesh;
     if (!request->mesh_id().empty()) {
-      ASSIGN_OR_RETURN(mesh, service_->meshes->Get(request->mesh_id()));
+      ASSIGN_OR_RETURN(mesh, FindMesh(request->mesh_id(), user));
       if (!request->volume_id().empty() && mesh->volume->id != request->volume_id()) {
         return absl::InvalidArgumentError(StrCat("mesh_id: '", request->mesh_id(),
                                                  "' was built on volume '", mesh->volume->id,
@@ -169,12 +187,12 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
         return absl::InvalidArgumentError("volume_id: required (or a mesh_id)");
       }
       ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
-                       service_->volumes->Get(request->volume_id()));
+                       service_->volumes->Get(request->volume_id(), user));
       ASSIGN_OR_RETURN(mesh, service_->meshes->Build(volume, MeshParams{}));
     }
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
-                     service_->sessions->Open(mesh->volume, mesh));
-    FillSessionInfo(*session, response);
+                     service_->sessions->Open(user, mesh->volume, mesh));
+    FillSessionInfo(*session, user, response);
     return absl::OkStatus();
   });
 }
@@ -182,17 +200,48 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* VpmService::CloseSession(grpc::CallbackServerContext* context,
                                                    const v2::CloseSessionRequest* request,
                                                    v2::CloseSessionResponse*) {
-  return Unary(context, "CloseSession", nullptr,
-               [=, this] { return service_->sessions->Close(request->session_id()); });
+  return Unary(context, "CloseSession", nullptr, [=, this](const std::string& user) {
+    return service_->sessions->Close(request->session_id(), user);
+  });
 }
 
 grpc::ServerUnaryReactor* VpmService::ListSessions(grpc::CallbackServerContext* context,
                                                    const v2::ListSessionsRequest*,
                                                    v2::ListSessionsResponse* response) {
-  return Unary(context, "ListSessions", nullptr, [=, this]() -> Status {
-    for (const auto& session : service_->sessions->List()) {
-      FillSessionInfo(*session, response->add_sessions());
+  return Unary(context, "ListSessions", nullptr, [=, this](const std::string& user) -> Status {
+    for (const auto& session : service_->sessions->List(user)) {
+      FillSessionInfo(*session, user, response->add_sessions());
     }
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::GetSession(grpc::CallbackServerContext* context,
+                                                 const v2::GetSessionRequest* request,
+                                                 v2::SessionInfo* response) {
+  return Unary(context, "GetSession", nullptr, [=, this](const std::string& user) -> Status {
+    ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
+                     service_->sessions->Get(request->session_id(), user, SessionRole::kViewer));
+    FillSessionInfo(*session, user, response);
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::ShareSession(grpc::CallbackServerContext* context,
+                                                   const v2::ShareSessionRequest* request,
+                                                   v2::SessionInfo* response) {
+  return Unary(context, "ShareSession", nullptr, [=, this](const std::string& user) -> Status {
+    ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
+                     service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
+    if (!service_->auth->HasUser(request->user())) {
+      return absl::InvalidArgumentError(
+          StrCat("user: '", request->user(), "' is not a user of this server"));
+    }
+    if (request->user() == user) {
+      return absl::InvalidArgumentError("user: a session is always its owner's");
+    }
+    session->access().Share(request->user(), !request->revoke());
+    FillSessionInfo(*session, user, response);
     return absl::OkStatus();
   });
 }
@@ -210,9 +259,9 @@ grpc::ServerWriteReactor<v2::Frame>* VpmService::Watch(grpc::CallbackServerConte
 grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* context,
                                                  const v2::ManipulateRequest* request,
                                                  v2::ManipulateResponse* response) {
-  return Unary(context, "Manipulate", service_->render_pool, [=, this]() -> Status {
+  return Unary(context, "Manipulate", service_->render_pool, [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
-                     service_->sessions->Get(request->session_id()));
+                     service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
     const v2::ClientEvent& event = request->event();
     if (event.event_case() == v2::ClientEvent::EVENT_NOT_SET) {
       return absl::InvalidArgumentError("event: required (camera, grab, drag, pull or release)");
@@ -232,9 +281,9 @@ grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* context,
                                                 const v2::SetCameraRequest* request,
                                                 v2::SetCameraResponse*) {
-  return Unary(context, "SetCamera", nullptr, [=, this]() -> Status {
+  return Unary(context, "SetCamera", nullptr, [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
-                     service_->sessions->Get(request->session_id()));
+                     service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
     return session->SetCamera(request->camera());
   });
 }
@@ -242,9 +291,9 @@ grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* con
 grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* context,
                                              const v2::RenderRequest* request,
                                              v2::Frame* response) {
-  return Unary(context, "Render", service_->render_pool, [=, this]() -> Status {
+  return Unary(context, "Render", service_->render_pool, [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
-                     service_->sessions->Get(request->session_id()));
+                     service_->sessions->Get(request->session_id(), user, SessionRole::kViewer));
     ASSIGN_OR_RETURN(StreamSettings settings,
                      ToStreamSettings(request->settings(), session->volume().volume,
                                       service_->options.max_frame_side));

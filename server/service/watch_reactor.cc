@@ -13,7 +13,7 @@ WatchReactor::WatchReactor(ServiceContext* service, grpc::CallbackServerContext*
       return absl::InvalidArgumentError("session_id: required");
     }
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
-                     service_->sessions->Get(request.session_id()));
+                     service_->sessions->Get(request.session_id(), user(), SessionRole::kViewer));
     ASSIGN_OR_RETURN(StreamSettings settings,
                      ToStreamSettings(request.settings(), session->volume().volume,
                                       service_->options.max_frame_side));
