@@ -173,9 +173,12 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
       }
       ++n;
     }
-    context->TryCancel();
+    // Cancelled by us only once the frames asked for came; a stream the
+    // server ended early (PERMISSION_DENIED, NOT_FOUND, ...) keeps its status.
+    const bool got_all = n == a->frames;
+    if (got_all) context->TryCancel();
     grpc::Status status = reader->Finish();
-    return status.error_code() == grpc::CANCELLED ? absl::OkStatus() : FromGrpc(status);
+    return got_all && status.error_code() == grpc::CANCELLED ? absl::OkStatus() : FromGrpc(status);
   }));
 }
 
