@@ -9,12 +9,13 @@
 //                   [--allowed-host NAME ...] [--allowed-origin ORIGIN ...]
 //                   [--tls-cert PEM --tls-key PEM]
 //                   [--server-tls-ca PEM [--server-tls-cert PEM --server-tls-key PEM]]
-//                   [--session-hours H] [--max-tabs-per-user N]
+//                   [--session-hours H] [--cookie-key-file FILE] [--max-tabs-per-user N]
 //
 // Who may sign in (lib/users.js): the users of --users (vpm-server's users
 // file: each signs in with their own token) and the viewer token
 // (--viewer-token-file, --viewer-token, $VPM_VIEWER_TOKEN, else $VPM_TOKEN:
-// the user `viewer`). Sign-in and the cookie: lib/sign_ins.js; the HTTP
+// the user `viewer`). Sign-in and the sealed cookie (--cookie-key-file):
+// lib/sign_ins.js; the HTTP
 // routes: lib/http_handler.js. The WebSocket upgrade needs a signed-in
 // cookie, an Origin from --allowed-origin (default: this gateway's own
 // origin under each allowed host) and an allowed Host (--allowed-host;
@@ -27,6 +28,7 @@
 // answers 200 while the gateway runs (whether or not vpm-server is up). No
 // input ends the process: a request or message that fails closes that one
 // connection with a message.
+import crypto from 'node:crypto';
 import fs from 'node:fs';
 import http from 'node:http';
 import https from 'node:https';
@@ -51,7 +53,7 @@ const kUsage = `usage: node gateway.js [--listen HOST:PORT] [--server HOST:PORT]
   [--users FILE] [--viewer-token TOKEN | --viewer-token-file FILE]
   [--allowed-host NAME ...] [--allowed-origin ORIGIN ...]
   [--tls-cert PEM --tls-key PEM] [--server-tls-ca PEM [--server-tls-cert PEM --server-tls-key PEM]]
-  [--session-hours 12] [--max-tabs-per-user 8]
+  [--session-hours 12] [--cookie-key-file FILE] [--max-tabs-per-user 8]
  --users: vpm-server's users file (NAME TOKEN-SHA256 lines); each user signs in with their token,
    which the gateway forwards to vpm-server as theirs
  --viewer-token(-file): one more token that signs in as the user 'viewer' (default:
@@ -61,6 +63,8 @@ const kUsage = `usage: node gateway.js [--listen HOST:PORT] [--server HOST:PORT]
    pages may open the WebSocket (default: this gateway under each allowed host)
  --tls-cert/--tls-key: serve HTTPS and WSS; --server-tls-ca: vpm-server uses TLS (its CA),
    --server-tls-cert/--server-tls-key: and wants a client certificate (mutual TLS)
+ --cookie-key-file: a secret (16 bytes or more) that seals the sign-in cookies; give every
+   gateway replica the same one, and sign-ins survive restarts (default: random per process)
  VPM_WEB_LISTEN and VPM_SERVER set the defaults of --listen and --server
 `;
 
@@ -102,6 +106,7 @@ function parseOptions(argv) {
       'server-tls-cert': { type: 'string' },
       'server-tls-key': { type: 'string' },
       'session-hours': { type: 'string', default: '12' },
+      'cookie-key-file': { type: 'string' },
       'max-tabs-per-user': { type: 'string', default: '8' },
       help: { type: 'boolean', default: false },
     },
@@ -155,8 +160,14 @@ function parseOptions(argv) {
   if (values['viewer-token-file'] && !viewerToken) {
     throw new Error(`--viewer-token-file ${values['viewer-token-file']}: empty`);
   }
+  let cookieKey;
+  if (values['cookie-key-file']) {
+    const secret = readFile(values['cookie-key-file'], '--cookie-key-file');
+    if (secret.length < 16) throw new Error('--cookie-key-file: at least 16 bytes of secret');
+    cookieKey = crypto.createHash('sha256').update(secret).digest();
+  }
   return {
-    ...values, allowedHosts, allowedOrigins, tls, serverTls,
+    ...values, allowedHosts, allowedOrigins, tls, serverTls, cookieKey,
     users: Users.fromFile(values.users, viewerToken),
     sessionHours: positive(values['session-hours'], '--session-hours'),
     maxTabsPerUser: positive(values['max-tabs-per-user'], '--max-tabs-per-user'),
@@ -177,8 +188,8 @@ function main() {
   }
   const log = (line) => process.stderr.write(`vpm-web: ${line}\n`);
   const shape = new ProtoShape(client.definition);
-  const signIns = new SignIns({ users: options.users, maxAgeS: options.sessionHours * 3600,
-                                secure: Boolean(options.tls) });
+  const signIns = new SignIns({ users: options.users, key: options.cookieKey,
+                                maxAgeS: options.sessionHours * 3600, secure: Boolean(options.tls) });
   const scheme = options.tls ? 'https' : 'http';
   let port = 0;  // once listening
   const allowedHost = (req) => options.allowedHosts.has(hostName(req.headers.host));
@@ -236,9 +247,8 @@ function main() {
       }
       return wss.handleUpgrade(req, socket, head, (ws) => {
         tabsOf.set(signIn.user, (tabsOf.get(signIn.user) ?? 0) + 1);
-        signIn.sockets.add(ws);
+        signIns.addSocket(signIn.id, ws);
         ws.on('close', () => {
-          signIn.sockets.delete(ws);
           const left = (tabsOf.get(signIn.user) ?? 1) - 1;
           if (left > 0) tabsOf.set(signIn.user, left);
           else tabsOf.delete(signIn.user);

@@ -113,16 +113,16 @@ export function makeRequestHandler({ signIns, serveFile, allowedHost, allowedOri
       const signIn = signIns.signIn(tokenGiven, address(req));
       if (!signIn) return onFailure();
       log(`signed in: ${signIn.user} from ${address(req)}`);
-      return signIn;
+      return signIn;  // res not answered yet: the caller redirects
     };
     if (token !== null && req.method === 'GET') {
       url.searchParams.delete('token');
       const signIn = signInWith(token, () =>
         html(401, loginPage('That token is not valid here.')));
-      if (signIn?.id) {
+      if (signIn?.user) {
         const rest = url.searchParams.toString();
         return redirect(`${url.pathname}${rest ? `?${rest}` : ''}`,
-                        { 'Set-Cookie': signIns.cookie(signIn) });
+                        { 'Set-Cookie': signIns.cookie(signIn), 'Referrer-Policy': 'no-referrer' });
       }
       return undefined;
     }
@@ -137,13 +137,13 @@ export function makeRequestHandler({ signIns, serveFile, allowedHost, allowedOri
       }
       const signIn = signInWith(form.get('token') ?? '', () =>
         html(401, loginPage('That token is not valid here.')));
-      if (signIn?.id) return redirect('/', { 'Set-Cookie': signIns.cookie(signIn) });
+      if (signIn?.user) return redirect('/', { 'Set-Cookie': signIns.cookie(signIn) });
       return undefined;
     }
     const signIn = signIns.fromRequest(req);
     if (url.pathname === '/logout') {
       if (req.method !== 'POST') return text(405, 'method not allowed', { Allow: 'POST' });
-      if (signIn) signIns.remove(signIn.id);
+      if (signIn) signIns.remove(signIn);
       return redirect('/login', { 'Set-Cookie': signIns.clearedCookie() });
     }
     if (url.pathname === '/whoami') {
