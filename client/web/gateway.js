@@ -39,6 +39,7 @@ import { parseArgs } from 'node:util';
 import { WebSocketServer } from 'ws';
 
 import { hostName, makeRequestHandler } from './lib/http_handler.js';
+import { MeshRefs } from './lib/mesh_refs.js';
 import { ProtoShape } from './lib/proto_shape.js';
 import { SignIns } from './lib/sign_ins.js';
 import { staticHandler } from './lib/static_files.js';
@@ -225,6 +226,7 @@ function main() {
   if (options.tls) server.on('tlsClientError', () => {});
 
   const tabsOf = new Map();  // user -> open tabs
+  const meshRefs = new MeshRefs();
   const wss = new WebSocketServer({ noServer: true, maxPayload: kMaxControlMessageBytes });
   const refuse = (socket, status, reason) => {
     socket.end(`HTTP/1.1 ${status} ${reason}\r\nConnection: close\r\n` +
@@ -254,7 +256,7 @@ function main() {
           else tabsOf.delete(signIn.user);
         });
         try {
-          new ViewerConnection({ ws, client, shape, token: signIn.token, log });  // eslint-disable-line no-new
+          new ViewerConnection({ ws, client, shape, meshRefs, token: signIn.token, log });  // eslint-disable-line no-new
         } catch (e) {
           log(`closing a connection after an unexpected error: ${e?.stack ?? e}`);
           ws.close(1011, 'internal error');

@@ -36,17 +36,19 @@ import { GrpcStatus, isServerDown, statusName } from './vpm_client.js';
 // Stream restarts after an event error that get no frame before failing
 // again: past this many the gateway waits for the browser's next event.
 const kMaxBarrenRestarts = 3;
+// DeleteMesh attempts after FAILED_PRECONDITION (100 ms doubling: 3.1 s in all).
+const kDeleteMeshRetries = 5;
 
 export class ViewerConnection {
   // ws: a `ws` WebSocket; client: a VpmClient; shape: a ProtoShape of the
-  // client's proto; token: the signed-in user's token ('' for a server
-  // without auth); log: (line) => void.
-  constructor({ ws, client, shape, token = '', log = () => {} }) {
-    Object.assign(this, { ws, client, shape, log });
+  // client's proto; meshRefs: the gateway's MeshRefs; token: the signed-in
+  // user's token ('' for a server without auth); log: (line) => void.
+  constructor({ ws, client, shape, meshRefs, token = '', log = () => {} }) {
+    Object.assign(this, { ws, client, shape, meshRefs, log });
     // Every call of this tab: the user's token and one x-vpm-session key.
     this.as = { token, affinity: crypto.randomUUID() };
     this.watching = false;  // the session is another user's, shared to watch
-    this.builtMeshes = new Set();  // mesh ids this tab built or refined
+    this.builtMeshes = new Map();  // mesh id -> {volumeId, holds}: built or refined here
     this.volume = null;
     this.mesh = null;
     this.session = null;
@@ -213,9 +215,23 @@ export class ViewerConnection {
   }
 
   async buildMesh(volume) {
-    const mesh = await this.rpc('BuildMesh', { volume_id: volume.volume_id });
-    this.builtMeshes.add(mesh.mesh_id);
-    return mesh;
+    await this.meshRefs.quiet(volume.volume_id);
+    const done = this.meshRefs.build(volume.volume_id);
+    try {
+      const mesh = await this.rpc('BuildMesh', { volume_id: volume.volume_id });
+      this.holdMesh(mesh);
+      return mesh;
+    } finally {
+      done();
+    }
+  }
+
+  // This tab uses `mesh` (a hold per BuildMesh or RefineMesh answer).
+  holdMesh(mesh) {
+    this.meshRefs.hold(mesh.mesh_id);
+    const mine = this.builtMeshes.get(mesh.mesh_id) ?? { volumeId: mesh.volume_id, holds: 0 };
+    mine.holds += 1;
+    this.builtMeshes.set(mesh.mesh_id, mine);
   }
 
   // Watches a session another user shared with this one: frames only.
@@ -256,9 +272,11 @@ export class ViewerConnection {
     const what = 'Refining the mesh';
     try {
       this.send({ type: 'progress', step: 'refine', text: `${what} ...` });
+      await this.meshRefs.quiet(this.volume.volume_id);
+      const done = this.meshRefs.build(this.volume.volume_id);
       const mesh = await this.rpc('RefineMesh', {
-        mesh_id: this.mesh.mesh_id, point_mm: pointMm });
-      this.builtMeshes.add(mesh.mesh_id);
+        mesh_id: this.mesh.mesh_id, point_mm: pointMm }).finally(done);
+      this.holdMesh({ ...mesh, volume_id: this.volume.volume_id });
       if (op !== this.openOp) return;
       const session = await this.rpc('OpenSession', {
         volume_id: this.volume.volume_id, mesh_id: mesh.mesh_id });
@@ -288,29 +306,52 @@ export class ViewerConnection {
   }
 
   // CloseSession, then DeleteMesh of `mesh` if this tab built it and no
-  // longer shows it (every mesh it built once the tab is gone): the server
-  // keeps a mesh another session uses (FAILED_PRECONDITION) and would evict
-  // an unused one at its cap anyway; deleting it now brings the server's
-  // mesh count back to where it was before the tab came.
+  // longer shows it (every mesh it built once the tab is gone) and no other
+  // tab of this gateway uses it: the server would evict an unused mesh at
+  // its cap anyway, but deleting it now brings the server's mesh count back
+  // to where it was before the tab came.
   closeSession(session, mesh = null) {
     const closing = session
       ? this.rpc('CloseSession', { session_id: session.session_id })
         .catch((err) => this.log(`CloseSession ${session.session_id}: ${err.details ?? err}`))
       : Promise.resolve();
     closing.then(() => {
-      if (this.closed) return this.deleteMeshes([...this.builtMeshes]);
-      if (mesh && mesh.mesh_id !== this.mesh?.mesh_id) return this.deleteMeshes([mesh.mesh_id]);
+      if (this.closed) return this.releaseMeshes([...this.builtMeshes.keys()]);
+      if (mesh && mesh.mesh_id !== this.mesh?.mesh_id) return this.releaseMeshes([mesh.mesh_id]);
       return undefined;
     });
   }
 
-  deleteMeshes(ids) {
-    const mine = ids.filter((id) => this.builtMeshes.delete(id));
-    return Promise.all(mine.map((id) => this.rpc('DeleteMesh', { mesh_id: id }).catch((err) => {
-      if (err?.code !== GrpcStatus.FAILED_PRECONDITION && err?.code !== GrpcStatus.NOT_FOUND) {
-        this.log(`DeleteMesh ${id}: ${err.details ?? err}`);
-      }
-    })));
+  // Drops this tab's holds on `ids` and deletes those nobody here uses. A
+  // closed session keeps its mesh pinned on the server until its stream has
+  // finished (a moment after CloseSession answers): FAILED_PRECONDITION is
+  // tried again a few times while still unused here, then left to the
+  // server's eviction (another gateway's tab may be using it).
+  releaseMeshes(ids) {
+    const doomed = [];
+    for (const id of ids) {
+      const mine = this.builtMeshes.get(id);
+      if (!mine) continue;
+      this.builtMeshes.delete(id);
+      for (let i = 0; i < mine.holds; ++i) this.meshRefs.release(id);
+      doomed.push({ id, volumeId: mine.volumeId });
+    }
+    const attempt = ({ id, volumeId }, left, delayMs) => {
+      if (this.meshRefs.inUse(id, volumeId)) return undefined;
+      const deleting = this.rpc('DeleteMesh', { mesh_id: id });
+      this.meshRefs.deleteStarted(volumeId, deleting);
+      return deleting.catch((err) => {
+        if (err?.code === GrpcStatus.FAILED_PRECONDITION && left > 0) {
+          return new Promise((r) => setTimeout(r, delayMs))
+            .then(() => attempt({ id, volumeId }, left - 1, 2 * delayMs));
+        }
+        if (err?.code !== GrpcStatus.FAILED_PRECONDITION && err?.code !== GrpcStatus.NOT_FOUND) {
+          this.log(`DeleteMesh ${id}: ${err.details ?? err}`);
+        }
+        return undefined;
+      });
+    };
+    return Promise.all(doomed.map((m) => attempt(m, kDeleteMeshRetries, 100)));
   }
 
   // ------------------------------------------------------------ the stream
