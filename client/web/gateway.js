@@ -64,8 +64,9 @@ const kUsage = `usage: node gateway.js [--listen HOST:PORT] [--server HOST:PORT]
    pages may open the WebSocket (default: this gateway under each allowed host)
  --tls-cert/--tls-key: serve HTTPS and WSS; --server-tls-ca: vpm-server uses TLS (its CA),
    --server-tls-cert/--server-tls-key: and wants a client certificate (mutual TLS)
- --cookie-key-file: a secret (16 bytes or more) that seals the sign-in cookies; give every
-   gateway replica the same one, and sign-ins survive restarts (default: random per process)
+ --cookie-key-file: a secret (16 bytes or more; or VPM_WEB_COOKIE_KEY) that seals the sign-in
+   cookies; give every gateway replica the same one, and sign-ins survive restarts (default:
+   random per process)
  VPM_WEB_LISTEN and VPM_SERVER set the defaults of --listen and --server
 `;
 
@@ -162,9 +163,11 @@ function parseOptions(argv) {
     throw new Error(`--viewer-token-file ${values['viewer-token-file']}: empty`);
   }
   let cookieKey;
-  if (values['cookie-key-file']) {
-    const secret = readFile(values['cookie-key-file'], '--cookie-key-file');
-    if (secret.length < 16) throw new Error('--cookie-key-file: at least 16 bytes of secret');
+  const secret = values['cookie-key-file']
+    ? readFile(values['cookie-key-file'], '--cookie-key-file')
+    : (process.env.VPM_WEB_COOKIE_KEY ? Buffer.from(process.env.VPM_WEB_COOKIE_KEY) : null);
+  if (secret) {
+    if (secret.length < 16) throw new Error('the cookie key: at least 16 bytes of secret');
     cookieKey = crypto.createHash('sha256').update(secret).digest();
   }
   return {
