@@ -94,6 +94,18 @@ export function statusName(code) {
   return name ?? `code ${code}`;
 }
 
+// A stream that a balancer cut when the vpm-server replica behind it died
+// ends without gRPC trailers, which grpc-js reports as UNKNOWN "No status
+// received": returned as UNAVAILABLE saying so (other errors unchanged).
+export function streamError(err) {
+  if (err?.code !== grpc.status.UNKNOWN || !/No status received/.test(err?.details ?? '')) return err;
+  return Object.assign(new Error('replica lost'), {
+    code: grpc.status.UNAVAILABLE,
+    details: 'the stream ended without a status: the vpm-server replica behind the balancer ' +
+             'went away',
+  });
+}
+
 // True for errors that mean "the server is not there", as opposed to a call
 // the server refused.
 export function isServerDown(err) {
