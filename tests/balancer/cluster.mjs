@@ -138,25 +138,31 @@ export async function startBalancer({ source, out, replicas }) {
   });
   failed.catch(() => {});
   const balancer = { child, address: `127.0.0.1:${port}`, statsPort };
+  // Servers start UP before their first check: wait for a passed check.
   await Promise.race([failed, waitUntil(async () => {
-    const states = await replicaStates(balancer).catch(() => null);
-    return states && replicas.every((r) => states[r.name] === 'UP');
-  }, 'HAProxy to report every replica UP', 20000, 200)]);
+    const checks = await replicaChecks(balancer).catch(() => null);
+    return checks && replicas.every((r) => checks[r.name] === 'L7OK');
+  }, 'HAProxy\'s health check to pass on every replica', 20000, 200)]);
   return balancer;
 }
 
-// {replica name: HAProxy's status (UP, DOWN, MAINT, "UP 1/2", ...)} from
-// the stats page's CSV.
-export async function replicaStates(balancer) {
+// {replica name: a column of the stats page's CSV for it}.
+async function statsColumn(balancer, column) {
   const response = await fetch(`http://127.0.0.1:${balancer.statsPort}/;csv`);
-  const rows = (await response.text()).split('\n').filter((l) => l && !l.startsWith('#'));
-  const states = {};
-  for (const row of rows) {
+  const rows = (await response.text()).split('\n').filter((l) => l);
+  const index = rows[0].replace(/^# /, '').split(',').indexOf(column);
+  const values = {};
+  for (const row of rows.slice(1)) {
     const f = row.split(',');
-    if (f[0] === 'vpm_servers' && f[1] !== 'BACKEND') states[f[1]] = f[17];
+    if (f[0] === 'vpm_servers' && f[1] !== 'BACKEND') values[f[1]] = f[index];
   }
-  return states;
+  return values;
 }
+
+// {replica name: HAProxy's status: UP, DOWN, MAINT, "UP 1/2", ...}.
+export const replicaStates = (balancer) => statsColumn(balancer, 'status');
+// {replica name: the last health check's result: L7OK, L7RSP, L4CON, ...}.
+export const replicaChecks = (balancer) => statsColumn(balancer, 'check_status');
 
 // The replica whose tag an id carries.
 export function replicaOf(replicas, id) {
