@@ -49,8 +49,11 @@ std::unique_ptr<grpc::ClientContext> ServerConnection::Context(bool streaming) c
 }
 
 Status FromStreamEnd(const grpc::Status& status) {
-  if (status.error_code() == grpc::StatusCode::UNKNOWN &&
-      status.error_message() == "No status received") {
+  const bool no_trailers = status.error_code() == grpc::StatusCode::UNKNOWN &&
+                           status.error_message() == "No status received";
+  const bool reset = status.error_code() == grpc::StatusCode::CANCELLED &&
+                     status.error_message().starts_with("Received RST_STREAM");
+  if (no_trailers || reset) {
     return absl::UnavailableError(
         "the stream ended without a status: the vpm-server replica behind the balancer went "
         "away");

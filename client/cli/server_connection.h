@@ -48,8 +48,8 @@ inline Status FromGrpc(const grpc::Status& status) {
 
 // The end of a stream as a Status. A balancer that loses the replica behind
 // a stream (HAProxy when a vpm-server dies) ends the stream without gRPC
-// trailers, which gRPC reports as UNKNOWN "No status received": that
-// becomes UNAVAILABLE saying so.
+// trailers, which gRPC reports as UNKNOWN "No status received", or resets it
+// (CANCELLED "Received RST_STREAM ..."): either becomes UNAVAILABLE saying so.
 Status FromStreamEnd(const grpc::Status& status);
 
 // True when the session is gone with its replica, or out of reach: the

@@ -247,6 +247,7 @@ export class ViewerConnection {
       this.deliver(frame);
     });
     call.on('error', (err) => {
+      // Streams the gateway cancels are replaced first (streamGen moved on).
       if (gen === this.streamGen) this.onStreamError(streamError(err), framed);
     });
     call.on('end', () => {

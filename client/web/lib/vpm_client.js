@@ -94,11 +94,15 @@ export function statusName(code) {
   return name ?? `code ${code}`;
 }
 
-// A stream that a balancer cut when the vpm-server replica behind it died
-// ends without gRPC trailers, which grpc-js reports as UNKNOWN "No status
-// received": returned as UNAVAILABLE saying so (other errors unchanged).
+// The error of a stream the gateway did not cancel itself. A balancer that
+// loses the vpm-server replica behind a stream resets it (grpc-js: CANCELLED
+// "Call cancelled") or ends it without gRPC trailers (UNKNOWN "No status
+// received"): either is returned as UNAVAILABLE saying so; other errors
+// unchanged.
 export function streamError(err) {
-  if (err?.code !== grpc.status.UNKNOWN || !/No status received/.test(err?.details ?? '')) return err;
+  const cut = err?.code === grpc.status.CANCELLED ||
+    (err?.code === grpc.status.UNKNOWN && /No status received/.test(err?.details ?? ''));
+  if (!cut) return err;
   return Object.assign(new Error('replica lost'), {
     code: grpc.status.UNAVAILABLE,
     details: 'the stream ended without a status: the vpm-server replica behind the balancer ' +
