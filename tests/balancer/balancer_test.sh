@@ -11,8 +11,8 @@ fail() { echo "balancer_test: FAIL: $*" >&2; exit 1; }
 
 command -v haproxy >/dev/null 2>&1 || fail "haproxy is not installed: run scripts/install-deps.sh"
 command -v node >/dev/null 2>&1 || fail "node is not installed: run scripts/install-deps.sh"
-for binary in server/service/vpm-server client/vpm client/vpm-view; do
-  [ -x "$build/$binary" ] || fail "$build/$binary is not built"
+for binary in "$build/server/service/vpm-server" "$build/client/vpm" "$build/client/vpm-view"; do
+  [ -x "$binary" ] || fail "$binary is not built"
 done
 case "$scenario" in
   failover)

@@ -80,7 +80,7 @@ BREAKAGES = [
     ("Dockerfile.balancer", "install -y -q --no-install-recommends haproxy",
      "install -y -q --no-install-recommends haproxy-nosuch", "no Debian 12 candidate"),
     ("Dockerfile.balancer", "COPY docker/haproxy.cfg /etc/haproxy/vpm.cfg",
-     "COPY docker/haproxy.conf /etc/haproxy/vpm.cfg", "not in the repository"),
+     "COPY haproxy.cfg /etc/haproxy/vpm.cfg", "not in the repository"),
     ("haproxy.cfg", "balance hdr(x-vpm-session)", "balance hdr(x-session)", "does not hash on"),
     ("haproxy.cfg", "hash-type consistent", "hash-type map-based", "is not consistent"),
     ("haproxy.cfg", "default-server proto h2", "default-server", "needs `proto h2`"),

@@ -56,7 +56,7 @@ export class VpmClient {
   }
 
   // affinity: a key for `x-vpm-session`, on which a consistent-hash router
-  // (Envoy in docker/) picks the replica; every call of one browser tab
+  // (HAProxy in docker/) picks the replica; every call of one browser tab
   // carries the same key, so its volume, mesh, session and stream stay on
   // one server.
   metadata(affinity) {
