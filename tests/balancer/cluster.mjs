@@ -208,6 +208,21 @@ export async function metric(replica, name, labels = {}) {
   return 0;
 }
 
+// A stream watched across time t: `samples` [{t: ms, n: frames so far}] in
+// time order. Returns {after: frames after t, longestGap: the longest time,
+// ms, after t without a new frame (to the last sample)}.
+export function framesSince(samples, t) {
+  let lastChange = t;
+  let longestGap = 0;
+  for (let i = 1; i < samples.length; ++i) {
+    if (samples[i].t < t || samples[i].n === samples[i - 1].n) continue;
+    longestGap = Math.max(longestGap, samples[i].t - lastChange);
+    lastChange = samples[i].t;
+  }
+  longestGap = Math.max(longestGap, samples.at(-1).t - lastChange);
+  return { after: samples.at(-1).n - samples.find((s) => s.t >= t).n, longestGap };
+}
+
 // Resolves with the child's exit {code, signal}.
 export function exited(child) {
   if (child.exitCode !== null || child.signalCode !== null) {

@@ -18,8 +18,8 @@ import path from 'node:path';
 
 import { runScenario } from '../web/harness.mjs';
 import {
-  exited, keyFor, kToken, makeDataRoot, replicaOf, replicaStates, sleep, startBalancer,
-  startReplicas, testPaths, track, waitUntil,
+  exited, framesSince, keyFor, kToken, makeDataRoot, replicaOf, replicaStates, sleep,
+  startBalancer, startReplicas, testPaths, track, waitUntil,
 } from './cluster.mjs';
 
 const { build, source, out } = testPaths(process.argv, 'failover');
@@ -110,17 +110,7 @@ async function main() {
   victim.child.kill('SIGKILL');
   await exited(victim.child);
   await watching;
-  let lastChange = tKill;
-  let longestGap = 0;
-  for (let i = 1; i < samples.length; ++i) {
-    if (samples[i].t < tKill) continue;
-    if (samples[i].n !== samples[i - 1].n) {
-      longestGap = Math.max(longestGap, samples[i].t - lastChange);
-      lastChange = samples[i].t;
-    }
-  }
-  longestGap = Math.max(longestGap, samples.at(-1).t - lastChange);
-  const controlAfter = samples.at(-1).n - samples.find((s) => s.t >= tKill).n;
+  const { after: controlAfter, longestGap } = framesSince(samples, tKill);
   step(`SIGKILL ${victim.name}: the control stream on ${control.name} got ${controlAfter} frames ` +
        `in the next 4 s, longest gap ${longestGap} ms`);
   assert.ok(controlAfter >= 5, `the control stream got ${controlAfter} frames after the kill`);

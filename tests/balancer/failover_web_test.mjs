@@ -17,7 +17,8 @@ import {
   canvasGrey, launchBrowser, runScenario, settled, startGateway,
 } from '../web/harness.mjs';
 import {
-  exited, kToken, makeDataRoot, replicaOf, sleep, startBalancer, startReplicas, testPaths,
+  exited, framesSince, kToken, makeDataRoot, replicaOf, sleep, startBalancer, startReplicas,
+  testPaths,
 } from './cluster.mjs';
 
 const { build, source, out } = testPaths(process.argv, 'failover_web');
@@ -88,17 +89,7 @@ async function main() {
   }
   await b.page.mouse.up();
   await exited(victim.child);
-  let lastChange = tKill;
-  let longestGap = 0;
-  for (let i = 1; i < samples.length; ++i) {
-    if (samples[i].t < tKill) continue;
-    if (samples[i].n !== samples[i - 1].n) {
-      longestGap = Math.max(longestGap, samples[i].t - lastChange);
-      lastChange = samples[i].t;
-    }
-  }
-  longestGap = Math.max(longestGap, samples.at(-1).t - lastChange);
-  const bAfter = samples.at(-1).n - samples.find((s) => s.t >= tKill).n;
+  const { after: bAfter, longestGap } = framesSince(samples, tKill);
   step(`SIGKILL ${victim.name}: tab B got ${bAfter} frames in the next 4 s, longest gap ` +
        `${longestGap} ms`);
   assert.ok(bAfter >= 5, `tab B got ${bAfter} frames after the kill`);
