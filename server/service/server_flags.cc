@@ -49,8 +49,14 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--still-delay-ms", o->still_delay_ms,
                  "idle time after a drag before the full-quality still frame")
       ->capture_default_str();
+  app.add_option("--drain-s", o->drain_s,
+                 "on SIGTERM/SIGINT, report NOT_SERVING to health checks for this long first, "
+                 "while calls on existing sessions go on and new volumes, meshes and sessions "
+                 "are refused (UNAVAILABLE): a balancer takes the replica out of rotation "
+                 "before it stops (longer than its health-check fall time)")
+      ->capture_default_str();
   app.add_option("--shutdown-grace-s", o->shutdown_grace_s,
-                 "on SIGTERM/SIGINT, calls get this long before they are cancelled")
+                 "after the drain, streams end and calls get this long before they are cancelled")
       ->capture_default_str();
   app.add_option("--vulkan-device", o->vulkan_device,
                  "GPU by index or name substring (default: env VPM_VULKAN_DEVICE, else automatic)");

@@ -39,7 +39,8 @@ struct ServerOptions {
   int render_threads = 2;                        // frame and event workers
   int request_threads = 2;                       // unary workers (load, mesh builds)
   double still_delay_ms = 150;                   // idle time before a still frame
-  double shutdown_grace_s = 5;                   // SIGTERM: streams get this long
+  double drain_s = 0;                            // SIGTERM: NOT_SERVING this long first
+  double shutdown_grace_s = 5;                   // then streams get this long
 
   std::string vulkan_device;                     // VPM_VULKAN_DEVICE-style selector
 };

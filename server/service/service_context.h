@@ -28,7 +28,19 @@ struct ServiceContext {
   WorkerPool* render_pool = nullptr;   // events and frames
   WorkerPool* request_pool = nullptr;  // unary work
   StreamRegistry* streams = nullptr;
+  // Health says NOT_SERVING (VpmServer::BeginDrain): calls on what exists go
+  // on, calls that would create volumes, meshes or sessions are refused.
+  std::atomic<bool> leaving{false};
+  // Shutting down: new streams are refused too.
   std::atomic<bool> draining{false};
+
+  // UNAVAILABLE while leaving, for the calls that create state.
+  Status AcceptingNewWork() const {
+    if (!leaving) return absl::OkStatus();
+    return absl::UnavailableError(
+        "this vpm-server replica is draining before it stops: it takes no new volumes, meshes "
+        "or sessions; retry (a balancer sends the retry to another replica)");
+  }
 };
 
 }  // namespace vpm::service

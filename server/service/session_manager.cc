@@ -20,7 +20,7 @@ Result<std::shared_ptr<Session>> SessionManager::Open(std::shared_ptr<VolumeEntr
                                                  " sessions; close one first"));
     }
     ++opening_;
-    id = StrCat("ses-", next_id_++);
+    id = StrCat(options_.id_prefix, next_id_++);
   }
   auto session = Session::Create(id, *options_.context, *options_.renderer, std::move(volume),
                                  std::move(mesh), options_.session);

@@ -22,6 +22,7 @@ class SessionManager {
     double idle_session_s = 900;  // 0: never evict
     Session::Options session;
     std::function<void(int64_t open)> on_change;  // metrics
+    std::string id_prefix = "ses-";  // ids are id_prefix + 1, 2, ...
   };
   static Result<std::unique_ptr<SessionManager>> Create(const Options& options);
 

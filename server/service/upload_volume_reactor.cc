@@ -40,6 +40,10 @@ UploadVolumeReactor::UploadVolumeReactor(ServiceContext* service,
     FinishOnce(auth);
     return;
   }
+  if (Status accepting = service_->AcceptingNewWork(); !accepting.ok()) {
+    FinishOnce(accepting);
+    return;
+  }
   StartRead(&request_);
 }
 

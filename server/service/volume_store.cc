@@ -77,7 +77,7 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string
       total_bytes_ + bytes > options_.max_bytes) {
     return absl::ResourceExhaustedError("volume caps reached while loading; delete a volume");
   }
-  std::string id = StrCat("vol-", next_id_++);
+  std::string id = StrCat(options_.id_prefix, next_id_++);
   auto entry = std::make_shared<VolumeEntry>(id, std::move(volume), std::move(gpu), bytes);
   entry->forget_gpu = options_.forget_gpu;
   entry->load_key = std::move(load_key);

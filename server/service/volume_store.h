@@ -52,6 +52,7 @@ class VolumeStore {
     VolumeLimits read_limits;
     std::function<void(int64_t bytes, int64_t count)> on_change;  // metrics
     std::function<void(const GpuVolume*)> forget_gpu;              // VolumeEntry::forget_gpu
+    std::string id_prefix = "vol-";                                // ids: id_prefix + 1, 2, ...
   };
   static Result<std::unique_ptr<VolumeStore>> Create(const Options& options);
 

@@ -3,6 +3,9 @@
 #include "server/common/read_text_file.h"
 #include "server/service/loopback_address.h"
 
+#include <cstdio>
+#include <random>
+
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
 
@@ -28,6 +31,14 @@ Result<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(const ServerOpt
     ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
   }
   return grpc::SslServerCredentials(ssl);
+}
+
+// 8 hex digits from the OS's random source.
+std::string RandomIdTag() {
+  std::random_device random;
+  char tag[9];
+  std::snprintf(tag, sizeof tag, "%08x", static_cast<unsigned>(random()));
+  return tag;
 }
 
 }  // namespace
@@ -71,9 +82,14 @@ Status VpmServer::Start() {
     m->Volumes(bytes, count);
   };
   volume_options.forget_gpu = [r = renderer_.get()](const GpuVolume* v) { r->ForgetVolume(v); };
+  id_tag_ = RandomIdTag();
+  volume_options.id_prefix = StrCat("vol-", id_tag_, "-");
   ASSIGN_OR_RETURN(volumes_, VolumeStore::Create(volume_options));
-  ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes, [m = metrics_.get()](
-                                                   int64_t count) { m->Meshes(count); }}));
+  ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes,
+                                               [m = metrics_.get()](int64_t count) {
+                                                 m->Meshes(count);
+                                               },
+                                               StrCat("mesh-", id_tag_, "-")}));
   SessionManager::Options session_options;
   session_options.context = gpu_;
   session_options.renderer = renderer_.get();
@@ -81,6 +97,7 @@ Status VpmServer::Start() {
   session_options.idle_session_s = o.idle_session_s;
   session_options.session.still_delay_ms = o.still_delay_ms;
   session_options.on_change = [m = metrics_.get()](int64_t open) { m->Sessions(open); };
+  session_options.id_prefix = StrCat("ses-", id_tag_, "-");
   ASSIGN_OR_RETURN(sessions_, SessionManager::Create(session_options));
   streams_ = std::make_unique<StreamRegistry>(o.max_streams_per_client);
 
@@ -128,6 +145,11 @@ void VpmServer::ReapIdleSessions() {
   }
 }
 
+void VpmServer::BeginDrain() {
+  context_.leaving = true;
+  if (server_) server_->GetHealthCheckService()->SetServingStatus(false);
+}
+
 void VpmServer::Shutdown(std::chrono::milliseconds grace) {
   {
     std::lock_guard lock(mutex_);
@@ -136,6 +158,7 @@ void VpmServer::Shutdown(std::chrono::milliseconds grace) {
   }
   stop_.notify_all();
   if (server_) {
+    context_.leaving = true;
     context_.draining = true;
     server_->GetHealthCheckService()->SetServingStatus(false);
     streams_->FinishAll(grpc::Status(grpc::UNAVAILABLE, "the server is shutting down"));

@@ -62,6 +62,7 @@ grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* co
                                                  const v2::LoadVolumeRequest* request,
                                                  v2::VolumeInfo* response) {
   return Unary(context, "LoadVolume", service_->request_pool, [=, this]() -> Status {
+    RETURN_IF_ERROR(service_->AcceptingNewWork());
     if (request->source().empty()) return absl::InvalidArgumentError("source: required");
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry, service_->volumes->Load(request->source()));
     FillVolumeInfo(*entry, response);
@@ -110,6 +111,7 @@ grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* con
                                                 const v2::BuildMeshRequest* request,
                                                 v2::MeshInfo* response) {
   return Unary(context, "BuildMesh", service_->request_pool, [=, this]() -> Status {
+    RETURN_IF_ERROR(service_->AcceptingNewWork());
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
                      service_->volumes->Get(request->volume_id()));
     ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(request->params()));
@@ -136,6 +138,7 @@ grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* co
                                                  const v2::RefineMeshRequest* request,
                                                  v2::MeshInfo* response) {
   return Unary(context, "RefineMesh", service_->request_pool, [=, this]() -> Status {
+    RETURN_IF_ERROR(service_->AcceptingNewWork());
     if (!request->has_point_mm()) return absl::InvalidArgumentError("point_mm: required");
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
                      service_->meshes->Refine(request->mesh_id(), FromProto(request->point_mm())));
@@ -156,6 +159,7 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
                                                   const v2::OpenSessionRequest* request,
                                                   v2::SessionInfo* response) {
   return Unary(context, "OpenSession", service_->request_pool, [=, this]() -> Status {
+    RETURN_IF_ERROR(service_->AcceptingNewWork());
     std::shared_ptr<const MeshEntry> mesh;
     if (!request->mesh_id().empty()) {
       ASSIGN_OR_RETURN(mesh, service_->meshes->Get(request->mesh_id()));
