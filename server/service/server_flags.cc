@@ -26,6 +26,13 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "host + GPU bytes of all volumes held")->capture_default_str();
   app.add_option("--max-upload-bytes", o->max_upload_bytes, "size of one uploaded file")
       ->capture_default_str();
+  app.add_option("--max-upload-memory-bytes", o->max_upload_memory_bytes,
+                 "bytes of all uploads in flight (held in memory until complete); "
+                 "an upload whose declared size would pass it is refused")
+      ->capture_default_str();
+  app.add_option("--upload-idle-s", o->upload_idle_s,
+                 "an upload that sends no chunk for this long is ended, seconds")
+      ->capture_default_str();
   app.add_option("--max-meshes", o->max_meshes, "meshes held at once")->capture_default_str();
   app.add_option("--max-sessions", o->max_sessions, "sessions open at once")
       ->capture_default_str();

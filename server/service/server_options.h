@@ -24,6 +24,8 @@ struct ServerOptions {
   int64_t max_volumes = 16;
   int64_t max_volume_bytes = int64_t{8} << 30;   // host + GPU bytes of every volume held
   int64_t max_upload_bytes = int64_t{1} << 30;   // one uploaded file
+  int64_t max_upload_memory_bytes = int64_t{2} << 30;  // all uploads in flight, in memory
+  double upload_idle_s = 60;                     // an upload with no chunk this long fails
   int64_t max_meshes = 64;
   int64_t max_sessions = 32;
   int64_t max_streams_per_client = 8;            // Interact + Watch streams per peer address

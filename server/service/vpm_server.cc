@@ -83,6 +83,7 @@ Status VpmServer::Start() {
   session_options.on_change = [m = metrics_.get()](int64_t open) { m->Sessions(open); };
   ASSIGN_OR_RETURN(sessions_, SessionManager::Create(session_options));
   streams_ = std::make_unique<StreamRegistry>(o.max_streams_per_client);
+  upload_memory_ = std::make_unique<ByteBudget>(o.max_upload_memory_bytes);
 
   context_.options = o;
   context_.gpu = gpu_;
@@ -95,6 +96,7 @@ Status VpmServer::Start() {
   context_.render_pool = render_pool_.get();
   context_.request_pool = request_pool_.get();
   context_.streams = streams_.get();
+  context_.upload_memory = upload_memory_.get();
   service_ = std::make_unique<VpmService>(&context_);
 
   grpc::EnableDefaultHealthCheckService(true);

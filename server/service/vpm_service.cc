@@ -71,7 +71,7 @@ grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* co
 
 grpc::ServerReadReactor<v2::UploadVolumeRequest>* VpmService::UploadVolume(
     grpc::CallbackServerContext* context, v2::VolumeInfo* response) {
-  return new UploadVolumeReactor(service_, context, response);
+  return UploadVolumeReactor::Make(service_, context, response);
 }
 
 grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* context,
@@ -199,12 +199,12 @@ grpc::ServerUnaryReactor* VpmService::ListSessions(grpc::CallbackServerContext* 
 
 grpc::ServerBidiReactor<v2::InteractRequest, v2::Frame>* VpmService::Interact(
     grpc::CallbackServerContext* context) {
-  return new InteractReactor(service_, context);
+  return InteractReactor::Make<InteractReactor>(service_, context);
 }
 
 grpc::ServerWriteReactor<v2::Frame>* VpmService::Watch(grpc::CallbackServerContext* context,
                                                        const v2::WatchRequest* request) {
-  return new WatchReactor(service_, context, *request);
+  return WatchReactor::Make<WatchReactor>(service_, context, *request);
 }
 
 grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* context,
