@@ -55,7 +55,7 @@ void FrameStream::EnqueueEvent(const v2::ClientEvent& event) {
   if (applying_) return;
   applying_ = true;
   auto self = shared_from_this();
-  if (!service_->render_pool->Post([self] { self->ApplyQueued(); })) {
+  if (!PostToPool([self] { self->ApplyQueued(); })) {
     applying_ = false;
     FinishLocked(grpc::Status(grpc::UNAVAILABLE, "the server is shutting down"));
   }
@@ -113,7 +113,7 @@ void FrameStream::ScheduleLocked() {
   render_scheduled_ = true;
   auto self = shared_from_this();
   const auto queued_at = std::chrono::steady_clock::now();
-  if (!service_->render_pool->Post([self, queued_at] { self->RenderNow(queued_at); })) {
+  if (!PostToPool([self, queued_at] { self->RenderNow(queued_at); })) {
     render_scheduled_ = false;
   }
 }
@@ -252,6 +252,15 @@ void FrameStream::FinishLocked(const grpc::Status& status) {
     finished_ = true;
     outbox_.push_back({SinkCall::Kind::kFinish, nullptr, status});
   }
+}
+
+bool FrameStream::PostToPool(std::function<void()> task) {
+  // This stream's own lane: it takes its turn beside every other stream and
+  // every user's unary calls, however many of those are queued.
+  return service_->render_pool
+      ->Submit(Job{.lane = StrCat("stream:", reinterpret_cast<uintptr_t>(this)),
+                   .run = std::move(task)})
+      .ok();
 }
 
 void FrameStream::Flush() {

@@ -27,6 +27,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -86,6 +87,8 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   FrameStream(ServiceContext* service, std::shared_ptr<Session> session,
               StreamSettings settings, FrameSink* sink, const Options& options);
   void ApplyQueued();
+  // Runs `task` on the render pool in this stream's lane; false when refused.
+  bool PostToPool(std::function<void()> task);
   void ScheduleLocked();
   void RenderNow(std::chrono::steady_clock::time_point queued_at);
   void DeliverLocked(std::unique_ptr<v2::Frame> frame);

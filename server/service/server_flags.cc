@@ -53,6 +53,11 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
       ->capture_default_str();
   app.add_option("--request-threads", o->request_threads,
                  "workers for loads, mesh builds and session set-up")->capture_default_str();
+  app.add_option("--max-queued-per-client", o->max_queued_per_client,
+                 "calls one client may have waiting per worker pool; past it: "
+                 "RESOURCE_EXHAUSTED with a retry hint (0: no cap)")->capture_default_str();
+  app.add_option("--max-queued", o->max_queued,
+                 "calls waiting per worker pool, all clients (0: no cap)")->capture_default_str();
   app.add_option("--still-delay-ms", o->still_delay_ms,
                  "idle time after a drag before the full-quality still frame")
       ->capture_default_str();

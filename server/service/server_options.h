@@ -40,6 +40,8 @@ struct ServerOptions {
   // Work.
   int render_threads = 2;                        // frame and event workers
   int request_threads = 2;                       // unary workers (load, mesh builds)
+  int64_t max_queued_per_client = 64;           // jobs one client may have waiting per pool
+  int64_t max_queued = 1024;                     // jobs waiting per pool, all clients
   double still_delay_ms = 150;                   // idle time before a still frame
   double shutdown_grace_s = 5;                   // SIGTERM: streams get this long
 

@@ -60,8 +60,10 @@ Status VpmServer::Start() {
     gpu_ = own_gpu_.get();
   }
   ASSIGN_OR_RETURN(renderer_, VolumeRenderer::Create(*gpu_, {}));
-  ASSIGN_OR_RETURN(request_pool_, WorkerPool::Create({o.request_threads, "request"}));
-  ASSIGN_OR_RETURN(render_pool_, WorkerPool::Create({o.render_threads, "render"}));
+  const FairJobQueue::Limits queue_limits{o.max_queued_per_client, o.max_queued};
+  ASSIGN_OR_RETURN(request_pool_,
+                   WorkerPool::Create({o.request_threads, "request", queue_limits}));
+  ASSIGN_OR_RETURN(render_pool_, WorkerPool::Create({o.render_threads, "render", queue_limits}));
   VolumeStore::Options volume_options;
   volume_options.context = gpu_;
   volume_options.data_root = o.data_root;
@@ -141,10 +143,19 @@ void VpmServer::Shutdown(std::chrono::milliseconds grace) {
     context_.draining = true;
     server_->GetHealthCheckService()->SetServingStatus(false);
     streams_->FinishAll(grpc::Status(grpc::UNAVAILABLE, "the server is shutting down"));
-    server_->Shutdown(std::chrono::system_clock::now() + grace);
   }
-  if (render_pool_) render_pool_->Shutdown();
-  if (request_pool_) request_pool_->Shutdown();
+  // Queued work runs until the grace period ends; what is left then is
+  // dropped (each call answered UNAVAILABLE, counted), so that the process
+  // exits within the grace period but for a job already running.
+  const auto deadline = std::chrono::steady_clock::now() + grace;
+  if (render_pool_) render_pool_->Shutdown(deadline);
+  if (request_pool_) request_pool_->Shutdown(deadline);
+  if (server_) {
+    const auto left = std::max(deadline - std::chrono::steady_clock::now(),
+                               std::chrono::steady_clock::duration::zero());
+    server_->Shutdown(std::chrono::system_clock::now() +
+                      std::chrono::duration_cast<std::chrono::system_clock::duration>(left));
+  }
   if (sessions_) sessions_->CloseAll();
   if (reaper_.joinable()) reaper_.join();
 }
