@@ -41,6 +41,10 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--idle-session-s", o->idle_session_s,
                  "close sessions without calls or viewers for this long, seconds (0: never)")
       ->capture_default_str();
+  app.add_option("--idle-watched-session-s", o->idle_watched_session_s,
+                 "close sessions that are watched but get no event, camera move or call for "
+                 "this long, seconds; their Watch streams end (0: never)")
+      ->capture_default_str();
   app.add_option("--max-frame-side", o->max_frame_side, "largest frame width or height, pixels")
       ->capture_default_str();
   app.add_option("--keepalive-time-s", o->keepalive_time_s,

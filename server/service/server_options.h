@@ -30,6 +30,7 @@ struct ServerOptions {
   int64_t max_sessions = 32;
   int64_t max_streams_per_client = 8;            // Interact + Watch streams per peer address
   double idle_session_s = 900;                   // evict sessions idle this long (0: never)
+  double idle_watched_session_s = 3600;          // ... watched, but driven by nobody (0: never)
   int max_frame_side = 2048;                     // pixels
 
   // Transport.

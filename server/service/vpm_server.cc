@@ -73,6 +73,10 @@ Status VpmServer::Start() {
     m->Volumes(bytes, count);
   };
   volume_options.forget_gpu = [r = renderer_.get()](const GpuVolume* v) { r->ForgetVolume(v); };
+  volume_options.on_evict = [this](const std::string& id) {
+    metrics_->VolumeEvicted();
+    if (meshes_) meshes_->ForgetVolume(id);
+  };
   ASSIGN_OR_RETURN(volumes_, VolumeStore::Create(volume_options));
   ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes, [m = metrics_.get()](
                                                    int64_t count) { m->Meshes(count); }}));
@@ -81,6 +85,7 @@ Status VpmServer::Start() {
   session_options.renderer = renderer_.get();
   session_options.max_sessions = o.max_sessions;
   session_options.idle_session_s = o.idle_session_s;
+  session_options.idle_watched_session_s = o.idle_watched_session_s;
   session_options.session.still_delay_ms = o.still_delay_ms;
   session_options.on_change = [m = metrics_.get()](int64_t open) { m->Sessions(open); };
   ASSIGN_OR_RETURN(sessions_, SessionManager::Create(session_options));

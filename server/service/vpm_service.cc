@@ -123,7 +123,8 @@ grpc::ServerReadReactor<v2::UploadVolumeRequest>* VpmService::UploadVolume(
 grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* context,
                                                 const v2::GetVolumeRequest* request,
                                                 v2::VolumeInfo* response) {
-  return Unary(context, "GetVolume", nullptr, [=, this]() -> Status {
+  // On a pool: an evicted volume is read again.
+  return Unary(context, "GetVolume", service_->request_pool, [=, this]() -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
                      service_->volumes->Get(request->volume_id()));
     FillVolumeInfo(*entry, response);
