@@ -26,6 +26,13 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "host + GPU bytes of all volumes held")->capture_default_str();
   app.add_option("--max-upload-bytes", o->max_upload_bytes, "size of one uploaded file")
       ->capture_default_str();
+  app.add_option("--max-upload-memory-bytes", o->max_upload_memory_bytes,
+                 "bytes of all uploads in flight (held in memory until complete); "
+                 "an upload whose declared size would pass it is refused")
+      ->capture_default_str();
+  app.add_option("--upload-idle-s", o->upload_idle_s,
+                 "an upload that sends no chunk for this long is ended, seconds")
+      ->capture_default_str();
   app.add_option("--max-meshes", o->max_meshes, "meshes held at once")->capture_default_str();
   app.add_option("--max-sessions", o->max_sessions, "sessions open at once")
       ->capture_default_str();
@@ -33,6 +40,10 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "Interact + Watch streams per client address (0: no cap)")->capture_default_str();
   app.add_option("--idle-session-s", o->idle_session_s,
                  "close sessions without calls or viewers for this long, seconds (0: never)")
+      ->capture_default_str();
+  app.add_option("--idle-watched-session-s", o->idle_watched_session_s,
+                 "close sessions that are watched but get no event, camera move or call for "
+                 "this long, seconds; their Watch streams end (0: never)")
       ->capture_default_str();
   app.add_option("--max-frame-side", o->max_frame_side, "largest frame width or height, pixels")
       ->capture_default_str();
@@ -46,6 +57,11 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
       ->capture_default_str();
   app.add_option("--request-threads", o->request_threads,
                  "workers for loads, mesh builds and session set-up")->capture_default_str();
+  app.add_option("--max-queued-per-client", o->max_queued_per_client,
+                 "calls one client may have waiting per worker pool; past it: "
+                 "RESOURCE_EXHAUSTED with a retry hint (0: no cap)")->capture_default_str();
+  app.add_option("--max-queued", o->max_queued,
+                 "calls waiting per worker pool, all clients (0: no cap)")->capture_default_str();
   app.add_option("--still-delay-ms", o->still_delay_ms,
                  "idle time after a drag before the full-quality still frame")
       ->capture_default_str();

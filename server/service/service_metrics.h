@@ -4,7 +4,9 @@
 //   vpm_frame_stage_ms{stage}               fem, warp, render, encode, queue, total
 //   vpm_frames_total, vpm_frames_superseded_total
 //   vpm_sessions, vpm_volumes, vpm_volume_bytes, vpm_meshes
-//   vpm_dropped_jobs_total{method,reason}  queued calls dropped: cancelled, deadline
+//   vpm_dropped_jobs_total{method,reason}  queued calls dropped: cancelled, deadline,
+//                                          queue_full, shutdown, idle (uploads)
+//   vpm_volumes_evicted_total               idle volumes evicted to make room
 //   vpm_streams_opened_total, vpm_streams_closed_total (equal when idle)
 #pragma once
 
@@ -40,12 +42,14 @@ class ServiceMetrics {
   void Meshes(int64_t count);
   // A queued call dropped before it ran; reason "cancelled" or "deadline".
   void DroppedJob(const std::string& method, const std::string& reason);
+  void VolumeEvicted();
   void StreamOpened();
   void StreamClosed();
 
   // Counters for tests and the shutdown log.
   double streams_opened() const { return streams_opened_->Value(); }
   int64_t dropped_jobs() const { return dropped_total_.load(); }
+  double volumes_evicted() const { return evicted_->Value(); }
   // Finished calls of `method` with status `code` ("OK", "DEADLINE_EXCEEDED", ...).
   double requests(const std::string& method, const std::string& code) const {
     return requests_->Add({{"method", method}, {"code", code}}).Value();
@@ -75,6 +79,7 @@ class ServiceMetrics {
   prometheus::Gauge* volume_bytes_ = nullptr;
   prometheus::Gauge* meshes_ = nullptr;
   prometheus::Family<prometheus::Counter>* dropped_ = nullptr;
+  prometheus::Counter* evicted_ = nullptr;
   std::atomic<int64_t> dropped_total_{0};
 };
 

@@ -64,12 +64,14 @@ std::vector<std::shared_ptr<Session>> SessionManager::List() const {
 }
 
 int SessionManager::EvictIdle() {
-  if (options_.idle_session_s <= 0) return 0;
+  auto idle_past = [](double idle_s, double limit_s) { return limit_s > 0 && idle_s > limit_s; };
   std::vector<std::shared_ptr<Session>> evicted;
   {
     std::lock_guard lock(mutex_);
     for (auto it = sessions_.begin(); it != sessions_.end();) {
-      if (it->second->viewers() == 0 && it->second->idle_s() > options_.idle_session_s) {
+      const Session& s = *it->second;
+      if (idle_past(s.idle_s(), s.viewers() == 0 ? options_.idle_session_s
+                                                 : options_.idle_watched_session_s)) {
         evicted.push_back(it->second);
         it = sessions_.erase(it);
       } else {

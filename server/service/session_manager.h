@@ -1,5 +1,7 @@
 // The open sessions: created on a volume and mesh, looked up by id, closed
-// by a client or evicted after idle_session_s without calls or viewers.
+// by a client, or evicted: after idle_session_s without calls or viewers
+// (the last stream ended), or after idle_watched_session_s watched but
+// driven by nobody (no event, camera move or call naming it).
 #pragma once
 
 #include <functional>
@@ -19,7 +21,8 @@ class SessionManager {
     const gpu::GpuContext* context = nullptr;  // outlive the manager
     VolumeRenderer* renderer = nullptr;
     int64_t max_sessions = 32;
-    double idle_session_s = 900;  // 0: never evict
+    double idle_session_s = 900;           // no viewer; 0: never evict
+    double idle_watched_session_s = 3600;  // viewers but no driver; 0: never
     Session::Options session;
     std::function<void(int64_t open)> on_change;  // metrics
     std::string id_prefix = "ses-";  // ids are id_prefix + 1, 2, ...

@@ -1,7 +1,12 @@
 // The volumes the server holds: each read once (from the data root, a
 // phantom or an upload), uploaded to the GPU once, and shared by every mesh
 // and session that uses it (shared_ptr: a deleted volume lives on until its
-// last session closes).
+// last session closes). When a cap (count or bytes) is reached, idle volumes
+// (no session, and a source that can be read again: a phantom or a file
+// under the data root, never an upload) are evicted least recently used
+// first; their ids stay valid, and the next Get reads them again. Only when
+// nothing can be evicted is a load refused, with a message saying what
+// holds the room.
 #pragma once
 
 #include <atomic>
@@ -29,6 +34,7 @@ struct VolumeEntry {
   // path); empty for uploads. A second load of the same key shares it.
   std::string load_key;
   std::atomic<int32_t> sessions{0}; // sessions using it
+  std::atomic<int64_t> last_used{0};  // a use counter, for LRU eviction
   // The scene may add a 3D image to `gpu` (export); guarded by this.
   std::mutex gpu_mutex;
 
@@ -53,6 +59,9 @@ class VolumeStore {
     std::function<void(int64_t bytes, int64_t count)> on_change;  // metrics
     std::function<void(const GpuVolume*)> forget_gpu;              // VolumeEntry::forget_gpu
     std::string id_prefix = "vol-";                                // ids: id_prefix + 1, 2, ...
+    // Called (without the store's lock) with the id of each evicted volume,
+    // so that the meshes built on it are dropped too.
+    std::function<void(const std::string& id)> on_evict;
   };
   static Result<std::unique_ptr<VolumeStore>> Create(const Options& options);
 
@@ -67,23 +76,40 @@ class VolumeStore {
   // GetVolume reports.
   Result<std::shared_ptr<VolumeEntry>> AddFile(const std::filesystem::path& path,
                                                std::string source);
-  Result<std::shared_ptr<VolumeEntry>> Get(std::string_view id) const;  // NotFound
+  // NotFound; an evicted volume is read again (the errors of Load).
+  Result<std::shared_ptr<VolumeEntry>> Get(std::string_view id);
   std::vector<std::shared_ptr<VolumeEntry>> List() const;
   // NotFound; FailedPrecondition while a session uses it.
   Status Delete(std::string_view id);
-  // ResourceExhausted when `extra_bytes` more would pass a cap.
+  // ResourceExhausted when one more volume of `extra_bytes` would pass a cap
+  // even after evicting every idle volume (which this does not do).
   Status CheckRoom(int64_t extra_bytes) const;
   int64_t total_bytes() const;
+  int64_t evictions() const;
 
  private:
   explicit VolumeStore(Options options) : options_(std::move(options)) {}
-  Result<std::shared_ptr<VolumeEntry>> Add(Volume volume, std::string load_key);
+  // `id`: empty for a new one, else the id of an evicted volume read again.
+  Result<std::shared_ptr<VolumeEntry>> Add(Volume volume, std::string load_key,
+                                           std::string id = {});
+  Result<Volume> ReadSource(const std::string& load_key, const std::string& source) const;
   std::shared_ptr<VolumeEntry> FindLoadedLocked(const std::string& load_key) const;
+  // Evicts idle volumes, least recently used first, until one more of
+  // `extra_bytes` fits (appending their ids to `evicted`); else
+  // ResourceExhausted naming what holds the room.
+  Status MakeRoomLocked(int64_t extra_bytes, std::vector<std::string>* evicted);
+  void ReportEvicted(const std::vector<std::string>& evicted) const;
   void NotifyLocked() const;
 
   Options options_;
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<VolumeEntry>, std::less<>> volumes_;
+  struct Evicted {
+    std::string load_key;
+    std::string source;
+  };
+  std::map<std::string, Evicted, std::less<>> evicted_;  // by id
+  int64_t evictions_ = 0;
   int64_t total_bytes_ = 0;
   int64_t next_id_ = 1;
 };

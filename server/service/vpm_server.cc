@@ -71,8 +71,10 @@ Status VpmServer::Start() {
     gpu_ = own_gpu_.get();
   }
   ASSIGN_OR_RETURN(renderer_, VolumeRenderer::Create(*gpu_, {}));
-  ASSIGN_OR_RETURN(request_pool_, WorkerPool::Create({o.request_threads, "request"}));
-  ASSIGN_OR_RETURN(render_pool_, WorkerPool::Create({o.render_threads, "render"}));
+  const FairJobQueue::Limits queue_limits{o.max_queued_per_client, o.max_queued};
+  ASSIGN_OR_RETURN(request_pool_,
+                   WorkerPool::Create({o.request_threads, "request", queue_limits}));
+  ASSIGN_OR_RETURN(render_pool_, WorkerPool::Create({o.render_threads, "render", queue_limits}));
   VolumeStore::Options volume_options;
   volume_options.context = gpu_;
   volume_options.data_root = o.data_root;
@@ -84,6 +86,10 @@ Status VpmServer::Start() {
   volume_options.forget_gpu = [r = renderer_.get()](const GpuVolume* v) { r->ForgetVolume(v); };
   id_tag_ = RandomIdTag();
   volume_options.id_prefix = StrCat("vol-", id_tag_, "-");
+  volume_options.on_evict = [this](const std::string& id) {
+    metrics_->VolumeEvicted();
+    if (meshes_) meshes_->ForgetVolume(id);
+  };
   ASSIGN_OR_RETURN(volumes_, VolumeStore::Create(volume_options));
   ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes,
                                                [m = metrics_.get()](int64_t count) {
@@ -95,11 +101,13 @@ Status VpmServer::Start() {
   session_options.renderer = renderer_.get();
   session_options.max_sessions = o.max_sessions;
   session_options.idle_session_s = o.idle_session_s;
+  session_options.idle_watched_session_s = o.idle_watched_session_s;
   session_options.session.still_delay_ms = o.still_delay_ms;
   session_options.on_change = [m = metrics_.get()](int64_t open) { m->Sessions(open); };
   session_options.id_prefix = StrCat("ses-", id_tag_, "-");
   ASSIGN_OR_RETURN(sessions_, SessionManager::Create(session_options));
   streams_ = std::make_unique<StreamRegistry>(o.max_streams_per_client);
+  upload_memory_ = std::make_unique<ByteBudget>(o.max_upload_memory_bytes);
 
   context_.options = o;
   context_.gpu = gpu_;
@@ -112,6 +120,7 @@ Status VpmServer::Start() {
   context_.render_pool = render_pool_.get();
   context_.request_pool = request_pool_.get();
   context_.streams = streams_.get();
+  context_.upload_memory = upload_memory_.get();
   service_ = std::make_unique<VpmService>(&context_);
 
   grpc::EnableDefaultHealthCheckService(true);
@@ -162,10 +171,19 @@ void VpmServer::Shutdown(std::chrono::milliseconds grace) {
     context_.draining = true;
     server_->GetHealthCheckService()->SetServingStatus(false);
     streams_->FinishAll(grpc::Status(grpc::UNAVAILABLE, "the server is shutting down"));
-    server_->Shutdown(std::chrono::system_clock::now() + grace);
   }
-  if (render_pool_) render_pool_->Shutdown();
-  if (request_pool_) request_pool_->Shutdown();
+  // Queued work runs until the grace period ends; what is left then is
+  // dropped (each call answered UNAVAILABLE, counted), so that the process
+  // exits within the grace period but for a job already running.
+  const auto deadline = std::chrono::steady_clock::now() + grace;
+  if (render_pool_) render_pool_->Shutdown(deadline);
+  if (request_pool_) request_pool_->Shutdown(deadline);
+  if (server_) {
+    const auto left = std::max(deadline - std::chrono::steady_clock::now(),
+                               std::chrono::steady_clock::duration::zero());
+    server_->Shutdown(std::chrono::system_clock::now() +
+                      std::chrono::duration_cast<std::chrono::system_clock::duration>(left));
+  }
   if (sessions_) sessions_->CloseAll();
   if (reaper_.joinable()) reaper_.join();
 }

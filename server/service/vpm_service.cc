@@ -1,5 +1,6 @@
 #include "server/service/vpm_service.h"
 
+#include "server/common/clock.h"
 #include "server/service/grpc_status.h"
 #include "server/service/interact_reactor.h"
 #include "server/service/proto_convert.h"
@@ -14,31 +15,76 @@ grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
   if (Status auth = service_->auth->Check(*context); !auth.ok()) {
     Done(reactor, method, auth);
-  } else if (pool == nullptr) {
+    return reactor;
+  }
+  if (pool == nullptr) {
     Done(reactor, method, fn());
-  } else if (!pool->Post([this, context, reactor, method, fn = std::move(fn)] {
-               // Work nobody waits for any more is dropped before it starts:
-               // a cancelled or expired call must not delay the calls behind it.
-               if (Status gone = CallGone(*context); !gone.ok()) {
-                 service_->metrics->DroppedJob(method, gone.code() == absl::StatusCode::kCancelled
-                                                           ? "cancelled"
-                                                           : "deadline");
-                 Done(reactor, method, gone);
-                 return;
-               }
-               Done(reactor, method, fn());
-             })) {
-    Done(reactor, method, absl::UnavailableError("the server is shutting down"));
+    return reactor;
+  }
+  // Dropped unrun, answered with `why`.
+  auto dropped = [this, reactor, method](const Status& why) {
+    service_->metrics->DroppedJob(method, why.code() == absl::StatusCode::kCancelled ? "cancelled"
+                                          : why.code() == absl::StatusCode::kDeadlineExceeded
+                                              ? "deadline"
+                                              : "shutdown");
+    Done(reactor, method, why);
+  };
+  // Purged to make room (gone), or still queued at shutdown.
+  auto drop = [context, dropped] {
+    Status gone = CallGone(*context);
+    dropped(gone.ok() ? absl::UnavailableError("the server shut down before this call's turn")
+                      : gone);
+  };
+  const std::string lane = StrCat("unary:", FairShareKey(*context));
+  Status queued = pool->Submit(Job{
+      .lane = lane,
+      .run =
+          [this, context, reactor, method, fn = std::move(fn), dropped] {
+            // Work nobody waits for any more is dropped before it starts: a
+            // cancelled or expired call, or one whose deadline would pass
+            // before a typical job here finishes, must not delay the calls
+            // behind it.
+            if (Status gone = CallGone(*context, 0.5 * run_times_.MeanMs(method)); !gone.ok()) {
+              return dropped(gone);
+            }
+            const auto start = std::chrono::steady_clock::now();
+            Status status = fn();
+            run_times_.Add(method, MsSince(start));
+            Done(reactor, method, status);
+          },
+      .gone = [context] { return !CallGone(*context).ok(); },
+      .drop = drop,
+  });
+  if (absl::IsResourceExhausted(queued)) {
+    // gRPC's retry pushback trailer, and the same hint in words.
+    const int64_t retry_ms = pool->RetryAfterMs(lane);
+    context->AddTrailingMetadata("grpc-retry-pushback-ms", std::to_string(retry_ms));
+    service_->metrics->DroppedJob(method, "queue_full");
+    Done(reactor, method,
+         absl::ResourceExhaustedError(StrCat(queued.message(), "; retry after about ", retry_ms,
+                                             " ms")));
+  } else if (!queued.ok()) {
+    Done(reactor, method, queued);
   }
   return reactor;
 }
 
-Status VpmService::CallGone(grpc::CallbackServerContext& context) {
+std::string VpmService::FairShareKey(const grpc::CallbackServerContext& context) {
+  return StreamRegistry::ClientOf(context.peer());
+}
+
+Status VpmService::CallGone(grpc::CallbackServerContext& context, double need_ms) {
   if (context.IsCancelled()) {
     return absl::CancelledError("the call was cancelled before its turn on the server");
   }
-  if (std::chrono::system_clock::now() > context.deadline()) {
+  const auto now = std::chrono::system_clock::now();
+  if (now > context.deadline()) {
     return absl::DeadlineExceededError("the call's deadline passed while it waited in the queue");
+  }
+  if (now + std::chrono::microseconds(int64_t(need_ms * 1000)) > context.deadline()) {
+    return absl::DeadlineExceededError(StrCat("the call's deadline would pass before it could "
+                                              "finish (a job here takes about ",
+                                              int64_t(2 * need_ms), " ms)"));
   }
   return absl::OkStatus();
 }
@@ -72,13 +118,14 @@ grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* co
 
 grpc::ServerReadReactor<v2::UploadVolumeRequest>* VpmService::UploadVolume(
     grpc::CallbackServerContext* context, v2::VolumeInfo* response) {
-  return new UploadVolumeReactor(service_, context, response);
+  return UploadVolumeReactor::Make(service_, context, response);
 }
 
 grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* context,
                                                 const v2::GetVolumeRequest* request,
                                                 v2::VolumeInfo* response) {
-  return Unary(context, "GetVolume", nullptr, [=, this]() -> Status {
+  // On a pool: an evicted volume is read again.
+  return Unary(context, "GetVolume", service_->request_pool, [=, this]() -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
                      service_->volumes->Get(request->volume_id()));
     FillVolumeInfo(*entry, response);
@@ -100,7 +147,7 @@ grpc::ServerUnaryReactor* VpmService::ListVolumes(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* context,
                                                    const v2::DeleteVolumeRequest* request,
                                                    v2::DeleteVolumeResponse*) {
-  return Unary(context, "DeleteVolume", nullptr, [=, this]() -> Status {
+  return Unary(context, "DeleteVolume", service_->request_pool, [=, this]() -> Status {
     RETURN_IF_ERROR(service_->volumes->Delete(request->volume_id()));
     service_->meshes->ForgetVolume(request->volume_id());
     return absl::OkStatus();
@@ -125,7 +172,7 @@ grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* con
 grpc::ServerUnaryReactor* VpmService::GetMesh(grpc::CallbackServerContext* context,
                                               const v2::GetMeshRequest* request,
                                               v2::GetMeshResponse* response) {
-  return Unary(context, "GetMesh", nullptr, [=, this]() -> Status {
+  return Unary(context, "GetMesh", service_->request_pool, [=, this]() -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
                      service_->meshes->Get(request->mesh_id()));
     FillMeshInfo(*mesh, response->mutable_info());
@@ -186,7 +233,7 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* VpmService::CloseSession(grpc::CallbackServerContext* context,
                                                    const v2::CloseSessionRequest* request,
                                                    v2::CloseSessionResponse*) {
-  return Unary(context, "CloseSession", nullptr,
+  return Unary(context, "CloseSession", service_->request_pool,
                [=, this] { return service_->sessions->Close(request->session_id()); });
 }
 
@@ -203,12 +250,12 @@ grpc::ServerUnaryReactor* VpmService::ListSessions(grpc::CallbackServerContext* 
 
 grpc::ServerBidiReactor<v2::InteractRequest, v2::Frame>* VpmService::Interact(
     grpc::CallbackServerContext* context) {
-  return new InteractReactor(service_, context);
+  return InteractReactor::Make<InteractReactor>(service_, context);
 }
 
 grpc::ServerWriteReactor<v2::Frame>* VpmService::Watch(grpc::CallbackServerContext* context,
                                                        const v2::WatchRequest* request) {
-  return new WatchReactor(service_, context, *request);
+  return WatchReactor::Make<WatchReactor>(service_, context, *request);
 }
 
 grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* context,
@@ -236,7 +283,7 @@ grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* context,
                                                 const v2::SetCameraRequest* request,
                                                 v2::SetCameraResponse*) {
-  return Unary(context, "SetCamera", nullptr, [=, this]() -> Status {
+  return Unary(context, "SetCamera", service_->render_pool, [=, this]() -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id()));
     return session->SetCamera(request->camera());

@@ -4,6 +4,10 @@
 // reactors in their own files. Every call is counted by method and code.
 #pragma once
 
+#include <map>
+#include <mutex>
+#include <string>
+
 #include <grpcpp/grpcpp.h>
 
 #include "server/service/service_context.h"
@@ -61,7 +65,31 @@ class VpmService final : public v2::Vpm::CallbackService {
                                   WorkerPool* pool, std::function<Status()> fn);
   void Done(grpc::ServerUnaryReactor* reactor, const char* method, const Status& status);
   // Cancelled or DeadlineExceeded when the client no longer waits for the call.
-  static Status CallGone(grpc::CallbackServerContext& context);
+  // How long each method's work takes (moving average, ms), so that a call
+  // whose deadline leaves less than half of that is not started.
+  class RunTimes {
+   public:
+    void Add(const char* method, double ms) {
+      std::lock_guard lock(mutex_);
+      double& mean = mean_ms_[method];
+      mean = mean == 0.0 ? ms : 0.9 * mean + 0.1 * ms;
+    }
+    double MeanMs(const char* method) const {
+      std::lock_guard lock(mutex_);
+      auto it = mean_ms_.find(method);
+      return it == mean_ms_.end() ? 0.0 : it->second;
+    }
+
+   private:
+    mutable std::mutex mutex_;
+    std::map<std::string, double, std::less<>> mean_ms_;
+  };
+  RunTimes run_times_;
+
+  // Cancelled, past its deadline, or with less than `need_ms` left.
+  static Status CallGone(grpc::CallbackServerContext& context, double need_ms = 0.0);
+  // Whose fair share a call counts against (the client address).
+  static std::string FairShareKey(const grpc::CallbackServerContext& context);
   void FillSessionInfo(const Session& session, v2::SessionInfo* info) const;
 
   ServiceContext* service_;
