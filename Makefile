@@ -7,7 +7,7 @@ BUILD_TYPE ?= RelWithDebInfo
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps web-deps configure build test demo serve bench fuzz clean format
+.PHONY: all deps web-deps configure build test demo serve bench fuzz asan tsan clean format
 
 all: build
 
@@ -37,6 +37,14 @@ serve: build web-deps
 bench: build
 	@scripts/bench.sh $(BUILD_DIR)
 
+# The service, render and FEM tests under AddressSanitizer + UBSan, or
+# ThreadSanitizer (scripts/sanitize.sh says which tests).
+asan: deps
+	@scripts/sanitize.sh address
+
+tsan: deps
+	@scripts/sanitize.sh thread
+
 fuzz: deps
 	@scripts/fuzz.sh 60
 
@@ -44,4 +52,4 @@ format:
 	@git ls-files '*.h' '*.cc' | xargs clang-format -i
 
 clean:
-	rm -rf $(BUILD_DIR) build-fuzz out
+	rm -rf $(BUILD_DIR) build-fuzz build-asan build-tsan out

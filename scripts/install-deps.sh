@@ -27,8 +27,9 @@ packages=(
   chromium
   # workstation viewer (vpm-view) and its test under a virtual X server
   libsdl2-dev xvfb xdotool x11-utils imagemagick
-  # deployment checks: YAML parsing of the compose, Envoy and Kubernetes files
-  python3-yaml
+  # deployment checks: YAML parsing of the compose and Kubernetes files; the
+  # balancer docker/ ships (HAProxy), run by `ctest -R balancer`
+  python3-yaml haproxy
 )
 # Node.js and npm for the web gateway: Debian's packages unless a node and npm
 # are already on the PATH (a machine may carry a newer Node.js of its own).

@@ -1,9 +1,11 @@
 #include "client/cli/play_command.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -11,6 +13,7 @@
 #include "client/cli/script_player.h"
 #include "proto/enum_names.h"
 #include "client/cli/server_flags.h"
+#include "server/common/clock.h"
 #include "server/common/write_file.h"
 
 namespace vpm::cli {
@@ -18,6 +21,51 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+
+// Sessions reopened after the one in use was lost with its replica.
+constexpr int kMaxReopens = 3;
+// How long a reopen keeps trying while the balancer has no replica for the
+// key (or the one it picks is draining), seconds.
+constexpr double kReopenPatienceS = 60;
+
+// Loads `source` and opens a session on it: where the balancer sends the
+// session key now. Retries UNAVAILABLE (the balancer has not yet seen the
+// replica go, or a draining replica refuses new sessions) with backoff.
+Result<std::string> Reopen(const ServerConnection& s, const std::string& source) {
+  const SteadyClock::time_point start = SteadyClock::now();
+  double wait_s = 0.25;
+  while (true) {
+    v2::LoadVolumeRequest load;
+    load.set_source(source);
+    v2::VolumeInfo volume;
+    Status status = FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &volume));
+    v2::SessionInfo info;
+    if (status.ok()) {
+      v2::OpenSessionRequest open;
+      open.set_volume_id(volume.volume_id());
+      status = FromGrpc(s.stub().OpenSession(s.Context().get(), open, &info));
+    }
+    if (status.ok()) return info.session_id();
+    if (!absl::IsUnavailable(status) || MsSince(start) / 1000 + wait_s > kReopenPatienceS) {
+      return status;
+    }
+    std::this_thread::sleep_for(std::chrono::duration<double>(wait_s));
+    wait_s = std::min(2.0, wait_s * 2);
+  }
+}
+
+// Appends a segment's frames (times shifted by offset_ms) and counts.
+void Append(const PlayResult& segment, double offset_ms, PlayResult* all) {
+  for (FrameRecord f : segment.frames) {
+    f.received_ms += offset_ms;
+    all->frames.push_back(f);
+  }
+  if (all->first_frame_ms < 0 && segment.first_frame_ms >= 0) {
+    all->first_frame_ms = segment.first_frame_ms + offset_ms;
+  }
+  all->events_sent += segment.events_sent;
+  all->status = segment.status;
+}
 
 Status Play(const ServerConnection& s, const std::string& script_path, std::string session_id,
             const std::string& out_dir, std::string report_path) {
@@ -52,14 +100,56 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
   PlayOptions options;
   options.session_id = session_id;
   Status write_status;  // the first frame that could not be saved, reported at the end
-  options.on_frame = [&](const v2::Frame& frame, int64_t index) {
+  int64_t frame_index = 0;  // across reopened sessions
+  options.on_frame = [&](const v2::Frame& frame, int64_t) {
     if (out_dir.empty() || !write_status.ok()) return;
     char name[64];
-    std::snprintf(name, sizeof name, "frame_%04lld.%s", (long long)index,
+    std::snprintf(name, sizeof name, "frame_%04lld.%s", (long long)frame_index++,
                   std::string(EncodingExtension(frame.encoding())).c_str());
     write_status = WriteFile(fs::path(out_dir) / name, frame.image());
   };
-  PlayResult result = PlayScript(s, script, options);
+  // Behind a balancer the session's replica may die or be drained: the
+  // stream ends UNAVAILABLE (or NOT_FOUND on a replica without it). A session
+  // this command opened is then reopened where the balancer now sends the
+  // key (the volume reloaded from its source), the script's events so far
+  // are replayed at once to restore the deformation, and the script goes on.
+  PlayResult result;
+  std::vector<std::string> sessions{session_id};
+  const SteadyClock::time_point play_start = SteadyClock::now();
+  for (int reopened = 0;; ++reopened) {
+    const PlayResult segment = PlayScript(s, script, options);
+    Append(segment, MsBetween(play_start, SteadyClock::now()) - segment.duration_ms, &result);
+    if (segment.status.ok() || !SessionLost(segment.status)) break;
+    if (!opened_here) {
+      result.status = Status(segment.status.code(),
+                             StrCat(segment.status.message(), " (session ", session_id,
+                                    " given by --session cannot be reopened here: play without "
+                                    "--session to have vpm reopen one)"));
+      break;
+    }
+    if (reopened == kMaxReopens) break;
+    std::fprintf(stderr,
+                 "vpm play: session %s lost (%s: %s); reopening: %s reloaded where the "
+                 "balancer sends key %s now, %lld events replayed\n",
+                 options.session_id.c_str(),
+                 std::string(absl::StatusCodeToString(segment.status.code())).c_str(),
+                 std::string(segment.status.message()).c_str(), source.c_str(),
+                 s.session_key().c_str(),
+                 (long long)std::max(options.resume_at, segment.script_events_written));
+    Result<std::string> reopened_id = Reopen(s, source);
+    if (!reopened_id.ok()) {
+      result.status = Status(reopened_id.status().code(),
+                             StrCat("reopening after the loss of session ", options.session_id,
+                                    ": ", reopened_id.status().message()));
+      break;
+    }
+    options.resume_at = std::max(options.resume_at, segment.script_events_written);
+    options.session_id = *reopened_id;
+    sessions.push_back(*reopened_id);
+    std::fprintf(stderr, "vpm play: reopened as session %s\n", reopened_id->c_str());
+  }
+  result.duration_ms = MsBetween(play_start, SteadyClock::now());
+  session_id = options.session_id;
   if (opened_here) {
     // The session this command opened goes with it, whatever the outcome.
     v2::CloseSessionRequest close;
@@ -84,6 +174,8 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
   }
   const double seconds = result.duration_ms / 1000.0;
   json report{{"session_id", session_id},
+              {"sessions", sessions},
+              {"reopened", sessions.size() - 1},
               {"events", result.events_sent},
               {"frames", result.frames.size()},
               {"interactive_frames", interactive},

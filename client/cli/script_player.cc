@@ -231,14 +231,19 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
   bool ok = send(first, sequence);
   bool grabbed = false;
   do {
-    for (const ScriptEvent& e : script.events) {
+    for (size_t i = 0; i < script.events.size(); ++i) {
+      const ScriptEvent& e = script.events[i];
       if (!ok) break;
-      std::this_thread::sleep_for(std::chrono::microseconds(int64_t(e.wait_ms * 1000)));
+      const bool catching_up = static_cast<int64_t>(i) < options.resume_at;
+      if (!catching_up) {
+        std::this_thread::sleep_for(std::chrono::microseconds(int64_t(e.wait_ms * 1000)));
+      }
       v2::InteractRequest request;
       *request.mutable_event() = e.event;
       if (e.event.has_grab()) grabbed = true;
       if (e.event.has_release()) grabbed = false;
       ok = send(request, ++sequence);
+      if (ok) result.script_events_written = static_cast<int64_t>(i) + 1;
     }
   } while (ok && options.duration_s > 0 &&
            MsBetween(start, SteadyClock::now()) < options.duration_s * 1000);
@@ -259,7 +264,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
   }
   stream->WritesDone();
   reader.join();
-  result.status = FromGrpc(stream->Finish());
+  result.status = FromStreamEnd(stream->Finish());
   result.duration_ms = MsBetween(start, SteadyClock::now());
   return result;
 }

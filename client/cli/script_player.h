@@ -57,16 +57,21 @@ struct FrameRecord {
 };
 
 struct PlayResult {
-  Status status;
+  Status status;  // a stream cut by a balancer reads UNAVAILABLE (FromStreamEnd)
   std::vector<FrameRecord> frames;
   double first_frame_ms = -1;  // time to first frame
   double duration_ms = 0;
   int64_t events_sent = 0;
+  int64_t script_events_written = 0;  // of script.events, counting from 0 (not resume_at)
 };
 
 struct PlayOptions {
   std::string session_id;
   double duration_s = 0;  // 0: play once; else loop the events until then
+  // Script events before this index are sent at once, without their waits
+  // (a reopened session catches up with the deformation), then the script
+  // goes on from here.
+  int64_t resume_at = 0;
   // Called for each frame (e.g. to save it); may be empty.
   std::function<void(const v2::Frame&, int64_t index)> on_frame;
 };

@@ -1,5 +1,6 @@
 #include "client/cli/server_connection.h"
 
+#include "client/cli/session_key.h"
 #include "server/common/read_text_file.h"
 
 #include <cstdlib>
@@ -13,6 +14,7 @@ Result<ServerConnection> ServerConnection::Connect(const ServerFlags& flags) {
   if (c.flags_.token.empty()) {
     if (const char* token = std::getenv("VPM_TOKEN")) c.flags_.token = token;
   }
+  if (c.flags_.session_key.empty()) c.flags_.session_key = DefaultSessionKey();
   std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
   if (flags.tls_cert.empty() != flags.tls_key.empty() ||
       (!flags.tls_cert.empty() && flags.tls_ca.empty())) {
@@ -38,11 +40,29 @@ Result<ServerConnection> ServerConnection::Connect(const ServerFlags& flags) {
 std::unique_ptr<grpc::ClientContext> ServerConnection::Context(bool streaming) const {
   auto context = std::make_unique<grpc::ClientContext>();
   if (!flags_.token.empty()) context->AddMetadata("authorization", "Bearer " + flags_.token);
+  context->AddMetadata(kSessionKeyHeader, flags_.session_key);
   if (!streaming) {
     context->set_deadline(std::chrono::system_clock::now() +
                           std::chrono::milliseconds(int64_t(flags_.deadline_s * 1000)));
   }
   return context;
+}
+
+Status FromStreamEnd(const grpc::Status& status) {
+  const bool no_trailers = status.error_code() == grpc::StatusCode::UNKNOWN &&
+                           status.error_message() == "No status received";
+  const bool reset = status.error_code() == grpc::StatusCode::CANCELLED &&
+                     status.error_message().starts_with("Received RST_STREAM");
+  if (no_trailers || reset) {
+    return absl::UnavailableError(
+        "the stream ended without a status: the vpm-server replica behind the balancer went "
+        "away");
+  }
+  return FromGrpc(status);
+}
+
+bool SessionLost(const Status& status) {
+  return absl::IsUnavailable(status) || absl::IsNotFound(status);
 }
 
 }  // namespace vpm::cli

@@ -1,5 +1,5 @@
 // The global flags of the server commands (--server, --token, --tls-*,
-// --deadline-s) and WithServer, which runs a command on a connection and
+// --session-key, --deadline-s) and WithServer, which runs a command on a connection and
 // turns its Status into the process's exit code.
 #pragma once
 
@@ -12,7 +12,8 @@
 
 namespace vpm::cli {
 
-// Adds --server, --token, --tls-ca, --tls-cert, --tls-key, --deadline-s to
+// Adds --server, --token, --tls-ca, --tls-cert, --tls-key, --session-key,
+// --deadline-s to
 // `app` (global: before the command).
 void AddServerFlags(CLI::App& app, ServerFlags* flags);
 

@@ -234,6 +234,10 @@ int main(int argc, char** argv) {
   app.add_option("--tls-ca", args.server.tls_ca, "CA certificate (PEM) of a TLS server");
   app.add_option("--tls-cert", args.server.tls_cert, "client certificate (PEM) for mutual TLS");
   app.add_option("--tls-key", args.server.tls_key, "client private key (PEM) for mutual TLS");
+  app.add_option("--session-key", args.server.session_key,
+                 "x-vpm-session of every call: behind a balancer all of this run's sessions "
+                 "share one replica (default: env VPM_SESSION_KEY, else one key per user and "
+                 "host)");
   app.add_option("--sessions", args.sessions, "concurrent clients")->capture_default_str();
   app.add_option("--duration", args.duration_s, "seconds each client plays (looping)")
       ->capture_default_str();

@@ -152,6 +152,9 @@ Status InteractConnection::ResolveSession() {
   open.set_volume_id(volume.volume_id());
   v2::SessionInfo session;
   RETURN_IF_ERROR(Call(&v2::Vpm::Stub::OpenSession, open, &session));
+  std::fprintf(stderr, "vpm-view: opened session %s on %s (volume %s)\n",
+               session.session_id().c_str(), options_.volume_source.c_str(),
+               volume.volume_id().c_str());
   std::lock_guard lock(mutex_);
   state_.volume = volume;
   state_.session_id = session.session_id();
@@ -228,7 +231,7 @@ Status InteractConnection::StreamOnce() {
   if (stream->Write(first)) WriteEvents(stream.get(), &sequence);
   stream->WritesDone();
   reader.join();
-  const Status status = cli::FromGrpc(stream->Finish());
+  const Status status = cli::FromStreamEnd(stream->Finish());
   std::lock_guard lock(mutex_);
   context_ = nullptr;
   return status;

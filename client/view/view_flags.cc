@@ -18,6 +18,9 @@ void AddViewFlags(CLI::App& app, ViewFlags* f) {
                  "phantom:NAME[?size=N]); also used to reopen after the server lost the session "
                  "(default phantom:abdomen when --session is not given either)");
   app.add_option("--session", c.session_id, "join this existing session");
+  app.add_option("--session-key", c.server.session_key,
+                 "x-vpm-session of every call, on which a balancer picks the replica (default: "
+                 "env VPM_SESSION_KEY, else the key `vpm` uses for this user and host)");
   app.add_option("--size", [f](const CLI::results_t& r) {
                    f->width = std::stoi(r.at(0));
                    f->height = std::stoi(r.at(1));

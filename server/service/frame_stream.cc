@@ -6,10 +6,6 @@
 #include "server/service/grpc_status.h"
 
 namespace vpm::service {
-namespace {
-
-}  // namespace
-
 std::shared_ptr<FrameStream> FrameStream::Create(ServiceContext* service,
                                                  std::shared_ptr<Session> session,
                                                  StreamSettings settings, FrameSink* sink,
@@ -41,7 +37,7 @@ void FrameStream::Attach() {
 }
 
 void FrameStream::EnqueueEvent(const v2::ClientEvent& event) {
-  std::lock_guard lock(mutex_);
+  auto lock = Lock();
   if (finish_) return;
   const auto kind = event.event_case();
   const bool replaceable = kind == v2::ClientEvent::kCamera || kind == v2::ClientEvent::kDrag;
@@ -59,22 +55,22 @@ void FrameStream::EnqueueEvent(const v2::ClientEvent& event) {
   if (applying_) return;
   applying_ = true;
   auto self = shared_from_this();
-  if (!service_->render_pool->Post([self] { self->ApplyQueued(); })) {
+  if (!PostToPool([self] { self->ApplyQueued(); })) {
     applying_ = false;
     FinishLocked(grpc::Status(grpc::UNAVAILABLE, "the server is shutting down"));
   }
 }
 
 void FrameStream::ReadNext() {
-  std::lock_guard lock(mutex_);
-  if (!finish_ && sink_ != nullptr) sink_->ReadNext();
+  auto lock = Lock();
+  if (!finish_ && sink_ != nullptr) outbox_.push_back({SinkCall::Kind::kRead});
 }
 
 void FrameStream::ApplyQueued() {
   while (true) {
     v2::ClientEvent event;
     {
-      std::lock_guard lock(mutex_);
+      auto lock = Lock();
       if (events_.empty() || finish_) {
         events_.clear();
         applying_ = false;
@@ -88,17 +84,17 @@ void FrameStream::ApplyQueued() {
       auto settings = ToStreamSettings(event.settings(), session_->volume().volume,
                                        service_->options.max_frame_side);
       if (!settings.ok()) return Finish(ToGrpcStatus(settings.status()));
-      std::lock_guard lock(mutex_);
+      auto lock = Lock();
       settings_ = *std::move(settings);
     }
     SceneView view;
     {
-      std::lock_guard lock(mutex_);
+      auto lock = Lock();
       view = settings_.view;
     }
     auto applied = session_->Apply(event, &view);
     if (!applied.ok()) return Finish(ToGrpcStatus(applied.status()));
-    std::lock_guard lock(mutex_);
+    auto lock = Lock();
     if (event.sequence() > stream_sequence_) stream_sequence_ = event.sequence();
     if (event.want_vertices()) want_vertices_ = true;
     dirty_ = true;
@@ -107,7 +103,7 @@ void FrameStream::ApplyQueued() {
 }
 
 void FrameStream::RequestFrame() {
-  std::lock_guard lock(mutex_);
+  auto lock = Lock();
   dirty_ = true;
   ScheduleLocked();
 }
@@ -117,7 +113,7 @@ void FrameStream::ScheduleLocked() {
   render_scheduled_ = true;
   auto self = shared_from_this();
   const auto queued_at = std::chrono::steady_clock::now();
-  if (!service_->render_pool->Post([self, queued_at] { self->RenderNow(queued_at); })) {
+  if (!PostToPool([self, queued_at] { self->RenderNow(queued_at); })) {
     render_scheduled_ = false;
   }
 }
@@ -133,7 +129,7 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
   bool interactive = false;
   uint64_t sequence = 0;
   {
-    std::lock_guard lock(mutex_);
+    auto lock = Lock();
     if (finish_ || sink_ == nullptr) {
       render_scheduled_ = false;
       return;
@@ -147,7 +143,7 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
     force_still_ = false;
   }
   auto frame = session_->Render({&settings, std::nullopt, interactive, want_vertices});
-  std::lock_guard lock(mutex_);
+  auto lock = Lock();
   render_scheduled_ = false;
   if (!frame.ok()) return FinishLocked(ToGrpcStatus(frame.status()));
   auto out = std::make_unique<v2::Frame>(*std::move(frame));
@@ -174,7 +170,7 @@ bool FrameStream::ClientActiveLocked() const {
 }
 
 void FrameStream::StillCheck() {
-  std::lock_guard lock(mutex_);
+  auto lock = Lock();
   if (!last_interactive_ || render_scheduled_ || finish_) return;
   if (session_->RecentlyChanged() || ClientActiveLocked()) {
     // Events still coming: look again later.
@@ -209,25 +205,25 @@ void FrameStream::WriteLocked(std::unique_ptr<v2::Frame> frame) {
   service_->metrics->FrameSent(frame->timings());
   current_ = std::move(frame);
   write_in_flight_ = true;
-  sink_->WriteFrame(current_.get());
+  outbox_.push_back({SinkCall::Kind::kWrite, current_.get()});
 }
 
 void FrameStream::OnWriteDone(bool ok) {
-  std::lock_guard lock(mutex_);
+  auto lock = Lock();
   write_in_flight_ = false;
   if (!ok) {
     // The client is gone; OnCancel / OnDone follow.
     pending_.reset();
     if (finish_ && !finished_ && sink_ != nullptr) {
       finished_ = true;
-      sink_->FinishStream(*finish_);
+      outbox_.push_back({SinkCall::Kind::kFinish, nullptr, *finish_});
     }
     return;
   }
   if (finish_) {
     if (!finished_ && sink_ != nullptr) {
       finished_ = true;
-      sink_->FinishStream(*finish_);
+      outbox_.push_back({SinkCall::Kind::kFinish, nullptr, *finish_});
     }
     return;
   }
@@ -235,7 +231,7 @@ void FrameStream::OnWriteDone(bool ok) {
 }
 
 void FrameStream::FinishAfterEvents(const grpc::Status& status) {
-  std::lock_guard lock(mutex_);
+  auto lock = Lock();
   if (applying_ || !events_.empty()) {
     finish_after_events_ = status;
   } else {
@@ -244,7 +240,7 @@ void FrameStream::FinishAfterEvents(const grpc::Status& status) {
 }
 
 void FrameStream::Finish(const grpc::Status& status) {
-  std::lock_guard lock(mutex_);
+  auto lock = Lock();
   FinishLocked(status);
 }
 
@@ -254,8 +250,39 @@ void FrameStream::FinishLocked(const grpc::Status& status) {
   pending_.reset();
   if (!write_in_flight_ && sink_ != nullptr) {
     finished_ = true;
-    sink_->FinishStream(status);
+    outbox_.push_back({SinkCall::Kind::kFinish, nullptr, status});
   }
+}
+
+bool FrameStream::PostToPool(std::function<void()> task) {
+  // This stream's own lane: it takes its turn beside every other stream and
+  // every user's unary calls, however many of those are queued.
+  return service_->render_pool
+      ->Submit(Job{.lane = StrCat("stream:", reinterpret_cast<uintptr_t>(this)),
+                   .run = std::move(task)})
+      .ok();
+}
+
+void FrameStream::Flush() {
+  std::unique_lock lock(mutex_);
+  if (flushing_) return;
+  flushing_ = true;
+  while (!outbox_.empty() && sink_ != nullptr) {
+    const SinkCall call = std::move(outbox_.front());
+    outbox_.pop_front();
+    // The sink stays valid: OnDone (and Detach) can only follow the Finish
+    // made here, and nothing is decided after a Finish.
+    FrameSink* sink = sink_;
+    lock.unlock();
+    switch (call.kind) {
+      case SinkCall::Kind::kWrite: sink->WriteFrame(call.frame); break;
+      case SinkCall::Kind::kRead: sink->ReadNext(); break;
+      case SinkCall::Kind::kFinish: sink->FinishStream(call.status); break;
+    }
+    lock.lock();
+  }
+  outbox_.clear();
+  flushing_ = false;
 }
 
 void FrameStream::Detach() {
@@ -263,6 +290,7 @@ void FrameStream::Detach() {
     std::lock_guard lock(mutex_);
     sink_ = nullptr;
     pending_.reset();
+    outbox_.clear();
   }
   session_->RemoveObserver(observer_token_);
 }

@@ -13,6 +13,13 @@
 // when events arrive, not when they are applied, so that under load the
 // queue wait does not turn a moving client's frames into stills.
 //
+// Calls on the sink (StartWrite, StartRead, Finish) are decided under the
+// stream's mutex but made after it is released: each decision is appended to
+// an outbox, and whichever thread finds the outbox idle drains it in order
+// (docs/THREADS.md). So no lock is held across a gRPC call, a reaction that
+// gRPC runs inline from StartWrite cannot deadlock, and the calls keep the
+// order in which they were decided (nothing after Finish).
+//
 // Lifetime: the pool's tasks hold the FrameStream (shared_ptr), never the
 // reactor; the reactor calls Detach() from OnDone, after which the stream
 // makes no call on it.
@@ -20,6 +27,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -79,6 +87,8 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   FrameStream(ServiceContext* service, std::shared_ptr<Session> session,
               StreamSettings settings, FrameSink* sink, const Options& options);
   void ApplyQueued();
+  // Runs `task` on the render pool in this stream's lane; false when refused.
+  bool PostToPool(std::function<void()> task);
   void ScheduleLocked();
   void RenderNow(std::chrono::steady_clock::time_point queued_at);
   void DeliverLocked(std::unique_ptr<v2::Frame> frame);
@@ -89,14 +99,42 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   bool ClientActiveLocked() const;
   void FinishLocked(const grpc::Status& status);
 
+  // A call on the sink, decided under mutex_ and made by Flush() without it.
+  struct SinkCall {
+    enum class Kind { kWrite, kRead, kFinish } kind;
+    const v2::Frame* frame = nullptr;  // kWrite: owned by current_
+    grpc::Status status;               // kFinish
+  };
+  // mutex_, released by its destructor, which then flushes the outbox.
+  class Guard {
+   public:
+    explicit Guard(FrameStream* stream) : stream_(stream), lock_(stream->mutex_) {}
+    ~Guard() {
+      lock_.unlock();
+      stream_->Flush();
+    }
+    Guard(const Guard&) = delete;
+    Guard& operator=(const Guard&) = delete;
+
+   private:
+    FrameStream* stream_;
+    std::unique_lock<std::mutex> lock_;
+  };
+  Guard Lock() { return Guard(this); }
+  // Makes the outbox's calls in order, unless another thread (or this one,
+  // further up the stack) is already doing so.
+  void Flush();
+
   ServiceContext* service_;
   std::shared_ptr<Session> session_;
   Options options_;
   int64_t observer_token_ = 0;
 
-  // Recursive: gRPC may run a reaction inline from StartWrite or Finish.
-  mutable std::recursive_mutex mutex_;
+  // Guards everything below; never held across a call on the sink.
+  mutable std::mutex mutex_;
   FrameSink* sink_;  // null once detached
+  std::deque<SinkCall> outbox_;
+  bool flushing_ = false;
   StreamSettings settings_;
   bool want_vertices_ = false;
   uint64_t stream_sequence_ = 0;

@@ -5,8 +5,10 @@
 namespace vpm::service {
 
 InteractReactor::InteractReactor(ServiceContext* service, grpc::CallbackServerContext* context)
-    : FrameStreamReactor(service, context, "Interact") {
-  if (Status admitted = Admit(*context); !admitted.ok()) {
+    : FrameStreamReactor(service, context, "Interact") {}
+
+void InteractReactor::Begin() {
+  if (Status admitted = Admit(); !admitted.ok()) {
     FinishStream(ToGrpcStatus(admitted));
     return;
   }
@@ -43,24 +45,23 @@ void InteractReactor::Start(const v2::InteractRequest& first) {
                               "session_id: required on the first message of Interact"));
     return;
   }
-  auto session = service_->sessions->Get(first.session_id(), user(), SessionRole::kOwner);
-  if (!session.ok()) {
-    FinishStream(ToGrpcStatus(session.status()));
-    return;
-  }
-  // Settings on the first event shape the first frame too.
-  auto settings = ToStreamSettings(
-      first.event().has_settings() ? first.event().settings() : v2::RenderSettings(),
-      (*session)->volume().volume, service_->options.max_frame_side);
-  if (!settings.ok()) {
-    FinishStream(ToGrpcStatus(settings.status()));
-    return;
-  }
-  auto stream = FrameStream::Create(service_, *session, *std::move(settings), this,
-                                    {.per_stream_sequence = true});
-  StartStream(stream);
-  if (first.has_event()) stream->EnqueueEvent(first.event());
-  stream->ReadNext();
+  // The next read starts only once the stream exists, so `first` is a copy
+  // that the pool task owns.
+  auto make = [this, first]() -> Result<std::shared_ptr<FrameStream>> {
+    ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
+                     service_->sessions->Get(first.session_id(), user(), SessionRole::kOwner));
+    // Settings on the first event shape the first frame too.
+    ASSIGN_OR_RETURN(StreamSettings settings,
+                     ToStreamSettings(first.event().has_settings() ? first.event().settings()
+                                                                   : v2::RenderSettings(),
+                                      session->volume().volume, service_->options.max_frame_side));
+    return FrameStream::Create(service_, session, std::move(settings), this,
+                               {.per_stream_sequence = true});
+  };
+  StartOnPool(std::move(make), [first](FrameStream& stream) {
+    if (first.has_event()) stream.EnqueueEvent(first.event());
+    stream.ReadNext();
+  });
 }
 
 }  // namespace vpm::service

@@ -23,6 +23,7 @@ class InteractReactor
   void ReadNext() override { StartRead(&request_); }
 
  private:
+  void Begin() override;
   void Start(const v2::InteractRequest& first);
 
   v2::InteractRequest request_;

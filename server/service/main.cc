@@ -1,9 +1,13 @@
 // vpm-server: the vpm gRPC service (see `vpm-server --help`). Stops on
-// SIGTERM or SIGINT: health turns NOT_SERVING, streams finish, calls get
-// --shutdown-grace-s seconds. `vpm-server --hash-token NAME` reads a token
-// on stdin and prints the users-file line for it (users_file.h).
+// SIGTERM or SIGINT: health turns NOT_SERVING for --drain-s seconds while
+// calls on existing sessions go on (a second signal cuts the drain short),
+// then streams finish and calls get --shutdown-grace-s seconds.
+// `vpm-server --hash-token NAME` reads a token on stdin and prints the
+// users-file line for it (users_file.h).
+#include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <ctime>
 #include <iostream>
 #include <iterator>
 #include <string>
@@ -58,7 +62,19 @@ int main(int argc, char** argv) {
   std::fflush(stdout);
   int signal = 0;
   sigwait(&signals, &signal);
-  std::printf("vpm-server: signal %d, draining (%.1f s grace)\n", signal, options.shutdown_grace_s);
+  if (options.drain_s > 0) {
+    std::printf("vpm-server: signal %d, health NOT_SERVING for %.1f s (drain), new sessions "
+                "refused\n", signal, options.drain_s);
+    std::fflush(stdout);
+    (*server)->BeginDrain();
+    const double whole = std::floor(options.drain_s);
+    const timespec drain{static_cast<time_t>(whole),
+                         static_cast<long>((options.drain_s - whole) * 1e9)};
+    if (sigtimedwait(&signals, nullptr, &drain) > 0) {
+      std::printf("vpm-server: second signal, drain cut short\n");
+    }
+  }
+  std::printf("vpm-server: signal %d, stopping (%.1f s grace)\n", signal, options.shutdown_grace_s);
   std::fflush(stdout);
   (*server)->Shutdown(std::chrono::milliseconds(int64_t(options.shutdown_grace_s * 1000)));
   std::printf("vpm-server: stopped; %.0f streams opened, %.0f released, %.0f frames, %.0f superseded\n",

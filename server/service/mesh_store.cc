@@ -115,7 +115,7 @@ Result<std::shared_ptr<const MeshEntry>> MeshStore::Add(std::shared_ptr<MeshEntr
   // Another call may have built the same mesh meanwhile: one copy is kept.
   if (auto held = FindLocked(entry->key)) return held;
   RETURN_IF_ERROR(MakeRoomLocked());
-  entry->id = StrCat("mesh-", next_id_++);
+  entry->id = StrCat(options_.id_prefix, next_id_++);
   meshes_.emplace(entry->id, Held{entry, ++tick_});
   ChangedLocked();
   return std::shared_ptr<const MeshEntry>(entry);

@@ -38,6 +38,7 @@ class MeshStore {
     const gpu::GpuContext* context = nullptr;  // step 1 on the GPU; outlives the store
     int64_t max_meshes = 64;
     std::function<void(int64_t count)> on_change;  // metrics: meshes held, after each change
+    std::string id_prefix = "mesh-";               // ids: id_prefix + 1, 2, ...
   };
   static Result<std::unique_ptr<MeshStore>> Create(const Options& options);
 

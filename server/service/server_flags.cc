@@ -33,6 +33,13 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "host + GPU bytes of all volumes held")->capture_default_str();
   app.add_option("--max-upload-bytes", o->max_upload_bytes, "size of one uploaded file")
       ->capture_default_str();
+  app.add_option("--max-upload-memory-bytes", o->max_upload_memory_bytes,
+                 "bytes of all uploads in flight (held in memory until complete); "
+                 "an upload whose declared size would pass it is refused")
+      ->capture_default_str();
+  app.add_option("--upload-idle-s", o->upload_idle_s,
+                 "an upload that sends no chunk for this long is ended, seconds")
+      ->capture_default_str();
   app.add_option("--max-meshes", o->max_meshes, "meshes held at once")->capture_default_str();
   app.add_option("--max-sessions", o->max_sessions, "sessions open at once")
       ->capture_default_str();
@@ -40,9 +47,14 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "sessions one user owns at once (0: no cap but --max-sessions)")
       ->capture_default_str();
   app.add_option("--max-streams-per-user,--max-streams-per-client", o->max_streams_per_user,
-                 "Interact + Watch streams per user (0: no cap)")->capture_default_str();
+                 "Interact, Watch and UploadVolume streams per user (0: no cap)")
+      ->capture_default_str();
   app.add_option("--idle-session-s", o->idle_session_s,
                  "close sessions without calls or viewers for this long, seconds (0: never)")
+      ->capture_default_str();
+  app.add_option("--idle-watched-session-s", o->idle_watched_session_s,
+                 "close sessions that are watched but get no event, camera move or call for "
+                 "this long, seconds; their Watch streams end (0: never)")
       ->capture_default_str();
   app.add_option("--max-frame-side", o->max_frame_side, "largest frame width or height, pixels")
       ->capture_default_str();
@@ -56,11 +68,23 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
       ->capture_default_str();
   app.add_option("--request-threads", o->request_threads,
                  "workers for loads, mesh builds and session set-up")->capture_default_str();
+  app.add_option("--max-queued-per-user,--max-queued-per-client", o->max_queued_per_user,
+                 "unary calls one user (or frames one stream) may have waiting per worker "
+                 "pool; past it: RESOURCE_EXHAUSTED with a retry hint (0: no cap)")
+      ->capture_default_str();
+  app.add_option("--max-queued", o->max_queued,
+                 "calls waiting per worker pool, all users (0: no cap)")->capture_default_str();
   app.add_option("--still-delay-ms", o->still_delay_ms,
                  "idle time after a drag before the full-quality still frame")
       ->capture_default_str();
+  app.add_option("--drain-s", o->drain_s,
+                 "on SIGTERM/SIGINT, report NOT_SERVING to health checks for this long first, "
+                 "while calls on existing sessions go on and new volumes, meshes and sessions "
+                 "are refused (UNAVAILABLE): a balancer takes the replica out of rotation "
+                 "before it stops (longer than its health-check fall time)")
+      ->capture_default_str();
   app.add_option("--shutdown-grace-s", o->shutdown_grace_s,
-                 "on SIGTERM/SIGINT, calls get this long before they are cancelled")
+                 "after the drain, streams end and calls get this long before they are cancelled")
       ->capture_default_str();
   app.add_option("--vulkan-device", o->vulkan_device,
                  "GPU by index or name substring (default: env VPM_VULKAN_DEVICE, else automatic)");

@@ -26,11 +26,14 @@ struct ServerOptions {
   int64_t max_volumes = 16;
   int64_t max_volume_bytes = int64_t{8} << 30;   // host + GPU bytes of every volume held
   int64_t max_upload_bytes = int64_t{1} << 30;   // one uploaded file
+  int64_t max_upload_memory_bytes = int64_t{2} << 30;  // all uploads in flight, in memory
+  double upload_idle_s = 60;                     // an upload with no chunk this long fails
   int64_t max_meshes = 64;
   int64_t max_sessions = 32;
   int64_t max_sessions_per_user = 16;            // sessions one user owns (0: no cap)
-  int64_t max_streams_per_user = 8;              // Interact + Watch streams per user
+  int64_t max_streams_per_user = 8;              // Interact, Watch + upload streams per user
   double idle_session_s = 900;                   // evict sessions idle this long (0: never)
+  double idle_watched_session_s = 3600;          // ... watched, but driven by nobody (0: never)
   int max_frame_side = 2048;                     // pixels
 
   // Transport.
@@ -41,8 +44,11 @@ struct ServerOptions {
   // Work.
   int render_threads = 2;                        // frame and event workers
   int request_threads = 2;                       // unary workers (load, mesh builds)
+  int64_t max_queued_per_user = 64;              // jobs one user (or stream) may have waiting per pool
+  int64_t max_queued = 1024;                     // jobs waiting per pool, all users
   double still_delay_ms = 150;                   // idle time before a still frame
-  double shutdown_grace_s = 5;                   // SIGTERM: streams get this long
+  double drain_s = 0;                            // SIGTERM: NOT_SERVING this long first
+  double shutdown_grace_s = 5;                   // then streams get this long
 
   std::string vulkan_device;                     // VPM_VULKAN_DEVICE-style selector
 };

@@ -5,6 +5,7 @@
 #include <atomic>
 
 #include "server/raycast/volume_renderer.h"
+#include "server/service/byte_budget.h"
 #include "server/service/mesh_store.h"
 #include "server/service/server_options.h"
 #include "server/service/service_metrics.h"
@@ -28,7 +29,20 @@ struct ServiceContext {
   WorkerPool* render_pool = nullptr;   // events and frames
   WorkerPool* request_pool = nullptr;  // unary work
   StreamRegistry* streams = nullptr;
+  ByteBudget* upload_memory = nullptr;  // bytes of uploads in flight
+  // Health says NOT_SERVING (VpmServer::BeginDrain): calls on what exists go
+  // on, calls that would create volumes, meshes or sessions are refused.
+  std::atomic<bool> leaving{false};
+  // Shutting down: new streams are refused too.
   std::atomic<bool> draining{false};
+
+  // UNAVAILABLE while leaving, for the calls that create state.
+  Status AcceptingNewWork() const {
+    if (!leaving) return absl::OkStatus();
+    return absl::UnavailableError(
+        "this vpm-server replica is draining before it stops: it takes no new volumes, meshes "
+        "or sessions; retry (a balancer sends the retry to another replica)");
+  }
 };
 
 }  // namespace vpm::service

@@ -59,6 +59,11 @@ Result<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(const Options& op
                      .Name("vpm_dropped_jobs_total")
                      .Help("Queued calls dropped before they ran: cancelled, or past their deadline")
                      .Register(r);
+  m->evicted_ = &prometheus::BuildCounter()
+                     .Name("vpm_volumes_evicted_total")
+                     .Help("Idle volumes evicted (least recently used) to make room; read again on use")
+                     .Register(r)
+                     .Add({});
   m->volume_bytes_ = &prometheus::BuildGauge().Name("vpm_volume_bytes")
                           .Help("Host and GPU bytes of the volumes held").Register(r).Add({});
   m->user_sessions_ = &prometheus::BuildGauge().Name("vpm_user_sessions")
@@ -155,6 +160,7 @@ void ServiceMetrics::DroppedJob(const std::string& method, const std::string& re
   dropped_->Add({{"method", method}, {"reason", reason}}).Increment();
   ++dropped_total_;
 }
+void ServiceMetrics::VolumeEvicted() { evicted_->Increment(); }
 void ServiceMetrics::StreamOpened() { streams_opened_->Increment(); }
 void ServiceMetrics::StreamClosed() { streams_closed_->Increment(); }
 

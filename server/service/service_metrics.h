@@ -5,8 +5,10 @@
 //   vpm_frame_stage_ms{stage}               fem, warp, render, encode, queue, total
 //   vpm_frames_total, vpm_frames_superseded_total
 //   vpm_sessions, vpm_volumes, vpm_volume_bytes, vpm_meshes
-//   vpm_user_sessions{user}, vpm_user_streams{user}  sessions owned, Interact + Watch streams
-//   vpm_dropped_jobs_total{method,reason}  queued calls dropped: cancelled, deadline
+//   vpm_user_sessions{user}, vpm_user_streams{user}  sessions owned; Interact, Watch, uploads
+//   vpm_dropped_jobs_total{method,reason}  queued calls dropped: cancelled, deadline,
+//                                          queue_full, shutdown, idle (uploads)
+//   vpm_volumes_evicted_total               idle volumes evicted to make room
 //   vpm_streams_opened_total, vpm_streams_closed_total (equal when idle)
 //   vpm_open_streams                       frame streams registered now
 //   vpm_upload_temp_files                  uploads' temporary files on disk now
@@ -55,12 +57,14 @@ class ServiceMetrics {
   void Meshes(int64_t count);
   // A queued call dropped before it ran; reason "cancelled" or "deadline".
   void DroppedJob(const std::string& method, const std::string& reason);
+  void VolumeEvicted();
   void StreamOpened();
   void StreamClosed();
 
   // Counters for tests and the shutdown log.
   double streams_opened() const { return streams_opened_->Value(); }
   int64_t dropped_jobs() const { return dropped_total_.load(); }
+  double volumes_evicted() const { return evicted_->Value(); }
   // Finished calls of `method` with status `code` ("OK", "DEADLINE_EXCEEDED", ...),
   // of every user, or of `user` when given.
   double requests(const std::string& method, const std::string& code,
@@ -92,6 +96,7 @@ class ServiceMetrics {
   prometheus::Gauge* volume_bytes_ = nullptr;
   prometheus::Gauge* meshes_ = nullptr;
   prometheus::Family<prometheus::Counter>* dropped_ = nullptr;
+  prometheus::Counter* evicted_ = nullptr;
   std::atomic<int64_t> dropped_total_{0};
   prometheus::Family<prometheus::Gauge>* user_sessions_ = nullptr;
   prometheus::Family<prometheus::Gauge>* user_streams_ = nullptr;

@@ -32,7 +32,7 @@ Result<std::shared_ptr<Session>> SessionManager::Open(const std::string& owner,
     }
     ++opening_;
     ++opening_per_user_[owner];
-    id = StrCat("ses-", next_id_++);
+    id = StrCat(options_.id_prefix, next_id_++);
   }
   auto session = Session::Create(id, owner, *options_.context, *options_.renderer,
                                  std::move(volume), std::move(mesh), options_.session);
@@ -82,12 +82,14 @@ std::vector<std::shared_ptr<Session>> SessionManager::List(std::string_view user
 }
 
 int SessionManager::EvictIdle() {
-  if (options_.idle_session_s <= 0) return 0;
+  auto idle_past = [](double idle_s, double limit_s) { return limit_s > 0 && idle_s > limit_s; };
   std::vector<std::shared_ptr<Session>> evicted;
   {
     std::lock_guard lock(mutex_);
     for (auto it = sessions_.begin(); it != sessions_.end();) {
-      if (it->second->viewers() == 0 && it->second->idle_s() > options_.idle_session_s) {
+      const Session& s = *it->second;
+      if (idle_past(s.idle_s(), s.viewers() == 0 ? options_.idle_session_s
+                                                 : options_.idle_watched_session_s)) {
         evicted.push_back(it->second);
         it = sessions_.erase(it);
       } else {

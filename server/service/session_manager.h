@@ -1,6 +1,8 @@
 // The open sessions: created on a volume and mesh by a user (their owner),
 // looked up by id for a user in a role (session_access.h), closed by their
-// owner or evicted after idle_session_s without calls or viewers.
+// owner, or evicted: after idle_session_s without calls or viewers (the
+// last stream ended), or after idle_watched_session_s watched but driven by
+// nobody (no event, camera move or call naming it).
 #pragma once
 
 #include <functional>
@@ -20,12 +22,14 @@ class SessionManager {
     const gpu::GpuContext* context = nullptr;  // outlive the manager
     VolumeRenderer* renderer = nullptr;
     int64_t max_sessions = 32;
-    int64_t max_sessions_per_user = 16;  // 0: only max_sessions
-    double idle_session_s = 900;  // 0: never evict
+    int64_t max_sessions_per_user = 16;    // 0: only max_sessions
+    double idle_session_s = 900;           // no viewer; 0: never evict
+    double idle_watched_session_s = 3600;  // viewers but no driver; 0: never
     Session::Options session;
     // Metrics: sessions open, and per owner (users whose count fell to zero
     // are reported with 0 once).
     std::function<void(int64_t open, const std::map<std::string, int64_t>& per_user)> on_change;
+    std::string id_prefix = "ses-";  // ids are id_prefix + 1, 2, ...
   };
   static Result<std::unique_ptr<SessionManager>> Create(const Options& options);
 

@@ -3,7 +3,9 @@
 #include <cctype>
 #include <filesystem>
 #include <fstream>
-#include <random>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
 
 #include "server/service/grpc_status.h"
 #include "server/service/proto_convert.h"
@@ -31,18 +33,86 @@ bool IsHex64(const std::string& s) {
 
 }  // namespace
 
+UploadVolumeReactor* UploadVolumeReactor::Make(ServiceContext* service,
+                                               grpc::CallbackServerContext* context,
+                                               v2::VolumeInfo* response) {
+  std::shared_ptr<UploadVolumeReactor> reactor(new UploadVolumeReactor(service, context, response));
+  reactor->self_ = reactor;
+  reactor->Begin();
+  return reactor.get();
+}
+
 UploadVolumeReactor::UploadVolumeReactor(ServiceContext* service,
                                          grpc::CallbackServerContext* context,
                                          v2::VolumeInfo* response)
-    : service_(service), response_(response) {
+    : service_(service), context_(context), response_(response) {
   service_->metrics->StreamOpened();
-  Result<std::string> user = service_->auth->Authenticate(*context);
-  if (!user.ok()) {
-    FinishOnce(user.status());
+}
+
+void UploadVolumeReactor::Begin() {
+  // The caller's user (the volume's owner), draining, new work, then a
+  // stream slot of this user (held until OnDone).
+  Result<std::string> user = service_->auth->Authenticate(*context_);
+  Status admitted = user.status();
+  if (admitted.ok()) user_ = *std::move(user);
+  if (admitted.ok() && service_->draining) {
+    admitted = absl::UnavailableError("the server is shutting down");
+  }
+  if (admitted.ok()) admitted = service_->AcceptingNewWork();
+  if (admitted.ok()) admitted = service_->streams->Acquire(user_);
+  if (!admitted.ok()) {
+    FinishOnce(admitted);
     return;
   }
-  user_ = *std::move(user);
+  slot_held_ = true;
+  {
+    std::lock_guard lock(mutex_);
+    last_message_at_ = std::chrono::steady_clock::now();
+  }
+  ArmIdleTimer(std::chrono::milliseconds(int64_t(service_->options.upload_idle_s * 1000)));
+  ReadNext();
+}
+
+void UploadVolumeReactor::ReadNext() {
+  {
+    std::lock_guard lock(mutex_);
+    if (finished_) return;
+    reading_ = true;
+  }
   StartRead(&request_);
+  std::optional<grpc::Status> deferred;
+  {
+    std::lock_guard lock(mutex_);
+    reading_ = false;
+    deferred.swap(deferred_finish_);
+  }
+  if (deferred) Finish(*deferred);
+}
+
+void UploadVolumeReactor::ArmIdleTimer(std::chrono::milliseconds delay) {
+  if (service_->options.upload_idle_s <= 0) return;
+  std::weak_ptr<UploadVolumeReactor> weak = weak_from_this();
+  service_->request_pool->PostAfter(std::max(delay, std::chrono::milliseconds(1)), [weak] {
+    if (auto self = weak.lock()) self->CheckIdle();
+  });
+}
+
+void UploadVolumeReactor::CheckIdle() {
+  const auto limit = std::chrono::milliseconds(int64_t(service_->options.upload_idle_s * 1000));
+  std::chrono::steady_clock::duration idle;
+  {
+    std::lock_guard lock(mutex_);
+    if (finished_ || completing_) return;
+    idle = std::chrono::steady_clock::now() - last_message_at_;
+  }
+  if (idle < limit) {
+    ArmIdleTimer(std::chrono::duration_cast<std::chrono::milliseconds>(limit - idle));
+    return;
+  }
+  service_->metrics->DroppedJob("UploadVolume", "idle");
+  FinishOnce(absl::DeadlineExceededError(StrCat("upload: no message for ",
+                                                service_->options.upload_idle_s,
+                                                " s (--upload-idle-s); send chunks steadily")));
 }
 
 Status UploadVolumeReactor::TakeHeader(const v2::UploadVolumeRequest::Header& header) {
@@ -69,6 +139,8 @@ Status UploadVolumeReactor::TakeHeader(const v2::UploadVolumeRequest::Header& he
     return absl::InvalidArgumentError("header.sha256_hex: must be 64 hexadecimal digits");
   }
   RETURN_IF_ERROR(service_->volumes->CheckRoom(0));
+  RETURN_IF_ERROR(service_->upload_memory->Reserve(header.total_bytes(), "upload in memory"));
+  reserved_bytes_ = header.total_bytes();
   file_name_ = name;
   total_bytes_ = header.total_bytes();
   sha256_hex_ = header.sha256_hex();
@@ -98,6 +170,13 @@ Status UploadVolumeReactor::TakeChunk(const std::string& chunk) {
 }
 
 void UploadVolumeReactor::OnReadDone(bool ok) {
+  {
+    // A read that ends after the call was finished (cancelled, timed out)
+    // decides nothing.
+    std::lock_guard lock(mutex_);
+    if (finished_) return;
+    last_message_at_ = std::chrono::steady_clock::now();
+  }
   if (!ok) {
     if (!have_header_) {
       FinishOnce(absl::InvalidArgumentError("header: the stream ended before a header"));
@@ -109,12 +188,13 @@ void UploadVolumeReactor::OnReadDone(bool ok) {
       return;
     }
     {
-      // From here Complete() owns the call: it alone finishes it (OnCancel
-      // must not, or OnDone could free this while Complete runs).
+      // From here Complete() owns the call: it alone finishes it, and the
+      // task holds the reactor.
       std::lock_guard lock(mutex_);
+      if (finished_) return;
       completing_ = true;
     }
-    if (!service_->request_pool->Post([this] { Complete(); })) {
+    if (!service_->request_pool->Post([self = shared_from_this()] { self->Complete(); })) {
       FinishOnce(absl::UnavailableError("the server is shutting down"));
     }
     return;
@@ -133,7 +213,7 @@ void UploadVolumeReactor::OnReadDone(bool ok) {
     FinishOnce(status);
     return;
   }
-  StartRead(&request_);
+  ReadNext();
 }
 
 void UploadVolumeReactor::Complete() {
@@ -145,11 +225,14 @@ void UploadVolumeReactor::Complete() {
     }
     namespace fs = std::filesystem;
     std::error_code error;
-    const fs::path dir = fs::temp_directory_path() /
-                         StrCat("vpm-upload-", std::random_device{}(), "-", std::random_device{}());
-    if (!fs::create_directory(dir, error)) {
-      return absl::InternalError(StrCat("upload: cannot make a temporary folder: ", error.message()));
+    // mkdtemp: a fresh folder of mode 0700, so no other local user can read
+    // or swap the patient's file while it is parsed.
+    std::string pattern = (fs::temp_directory_path() / "vpm-upload-XXXXXX").string();
+    if (mkdtemp(pattern.data()) == nullptr) {
+      return absl::InternalError(StrCat("upload: cannot make a temporary folder: ",
+                                        std::strerror(errno)));
     }
+    const fs::path dir = pattern;
     service_->metrics->TempFiles(+1);
     const fs::path path = dir / file_name_;
     Status status = [&]() -> Status {
@@ -185,19 +268,25 @@ void UploadVolumeReactor::OnCancel() {
 }
 
 void UploadVolumeReactor::FinishOnce(const Status& status) {
+  const grpc::Status g = ToGrpcStatus(status);
   {
     std::lock_guard lock(mutex_);
     if (finished_) return;
     finished_ = true;
+    service_->metrics->Request("UploadVolume", StatusCodeName(g.error_code()), user_);
+    if (reading_) {
+      deferred_finish_ = g;  // ReadNext makes it once StartRead returns
+      return;
+    }
   }
-  const grpc::Status g = ToGrpcStatus(status);
-  service_->metrics->Request("UploadVolume", StatusCodeName(g.error_code()), user_);
   Finish(g);
 }
 
 void UploadVolumeReactor::OnDone() {
+  if (reserved_bytes_ > 0) service_->upload_memory->Release(reserved_bytes_);
+  if (slot_held_) service_->streams->Release(user_);
   service_->metrics->StreamClosed();
-  delete this;
+  std::shared_ptr<UploadVolumeReactor> last = std::move(self_);  // may free this
 }
 
 }  // namespace vpm::service

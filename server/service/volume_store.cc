@@ -1,5 +1,7 @@
 #include "server/service/volume_store.h"
 
+#include <atomic>
+
 #include "server/service/resolve_data_path.h"
 #include "server/io/read_volume.h"
 
@@ -19,19 +21,77 @@ Result<std::unique_ptr<VolumeStore>> VolumeStore::Create(const Options& options)
   return std::unique_ptr<VolumeStore>(new VolumeStore(options));
 }
 
+namespace {
+
+// A use counter, not a clock: two uses within one clock tick still order.
+int64_t NextUse() {
+  static std::atomic<int64_t> uses{0};
+  return ++uses;
+}
+
+// A volume no session uses and whose source can be read again.
+bool Evictable(const VolumeEntry& entry) {
+  return entry.sessions.load() == 0 && !entry.load_key.empty();
+}
+
+}  // namespace
+
 Status VolumeStore::CheckRoom(int64_t extra_bytes) const {
   std::lock_guard lock(mutex_);
-  if (static_cast<int64_t>(volumes_.size()) >= options_.max_volumes) {
-    return absl::ResourceExhaustedError(
-        StrCat("the server holds its maximum of ", options_.max_volumes,
-               " volumes; delete one first"));
+  int64_t count = 0, bytes = 0;  // what cannot be evicted
+  for (const auto& [id, entry] : volumes_) {
+    if (!Evictable(*entry)) {
+      ++count;
+      bytes += entry->bytes;
+    }
   }
-  if (total_bytes_ + extra_bytes > options_.max_bytes) {
+  if (count >= options_.max_volumes || bytes + extra_bytes > options_.max_bytes) {
     return absl::ResourceExhaustedError(
-        StrCat("volume bytes: ", total_bytes_, " held + ", extra_bytes, " would pass the cap of ",
-               options_.max_bytes));
+        StrCat("the server's volumes are all in use (", count, " of at most ",
+               options_.max_volumes, ", ", bytes, " of ", options_.max_bytes,
+               " bytes, held by sessions or uploads); close a session or delete a volume"));
   }
   return absl::OkStatus();
+}
+
+Status VolumeStore::MakeRoomLocked(int64_t extra_bytes, std::vector<std::string>* evicted) {
+  auto fits = [&] {
+    return static_cast<int64_t>(volumes_.size()) < options_.max_volumes &&
+           total_bytes_ + extra_bytes <= options_.max_bytes;
+  };
+  while (!fits()) {
+    auto lru = volumes_.end();
+    for (auto it = volumes_.begin(); it != volumes_.end(); ++it) {
+      if (Evictable(*it->second) &&
+          (lru == volumes_.end() || it->second->last_used < lru->second->last_used)) {
+        lru = it;
+      }
+    }
+    if (lru == volumes_.end()) {
+      std::string held;
+      for (const auto& [id, entry] : volumes_) {
+        held += StrCat(held.empty() ? "" : ", ", id, " (",
+                       entry->load_key.empty() ? "an upload"
+                                               : StrCat(entry->sessions.load(), " session(s)"),
+                       ", ", entry->bytes, " bytes)");
+      }
+      return absl::ResourceExhaustedError(
+          StrCat("volume caps (", options_.max_volumes, " volumes, ", options_.max_bytes,
+                 " bytes) reached and nothing is idle: ", held,
+                 "; close a session or delete a volume"));
+    }
+    evicted_[lru->first] = Evicted{lru->second->load_key, lru->second->volume.source()};
+    evicted->push_back(lru->first);
+    total_bytes_ -= lru->second->bytes;
+    ++evictions_;
+    volumes_.erase(lru);
+  }
+  return absl::OkStatus();
+}
+
+void VolumeStore::ReportEvicted(const std::vector<std::string>& evicted) const {
+  if (!options_.on_evict) return;
+  for (const std::string& id : evicted) options_.on_evict(id);
 }
 
 std::shared_ptr<VolumeEntry> VolumeStore::FindLoadedLocked(const std::string& load_key) const {
@@ -41,6 +101,14 @@ std::shared_ptr<VolumeEntry> VolumeStore::FindLoadedLocked(const std::string& lo
   return nullptr;
 }
 
+Result<Volume> VolumeStore::ReadSource(const std::string& load_key,
+                                       const std::string& source) const {
+  const std::string read_from = load_key.starts_with("file:") ? load_key.substr(5) : load_key;
+  ASSIGN_OR_RETURN(Volume volume, ReadVolume(read_from, options_.read_limits));
+  volume.set_source(source);
+  return volume;
+}
+
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
                                                        const std::string& user) {
   if (source.starts_with("raw:")) {
@@ -48,22 +116,20 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
         "source: raw: sources are not served; upload the file instead");
   }
   std::string key(source);
-  std::string read_from(source);  // phantom spec, or the resolved file path
   if (!source.starts_with("phantom:")) {
     ASSIGN_OR_RETURN(std::filesystem::path path, ResolveDataPath(options_.data_root, source));
-    read_from = path.string();
-    key = "file:" + read_from;
+    key = "file:" + path.string();
   }
   {
     std::lock_guard lock(mutex_);
     if (auto loaded = FindLoadedLocked(key)) {
+      loaded->last_used = NextUse();
       loaded_by_[loaded->id].insert(user);
       return loaded;
     }
   }
   RETURN_IF_ERROR(CheckRoom(0));
-  ASSIGN_OR_RETURN(Volume volume, ReadVolume(read_from, options_.read_limits));
-  volume.set_source(std::string(source));
+  ASSIGN_OR_RETURN(Volume volume, ReadSource(key, std::string(source)));
   return Add(std::move(volume), std::move(key), user);
 }
 
@@ -75,46 +141,73 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::AddFile(const std::filesystem:
   return Add(std::move(volume), "", owner);
 }
 
-// `load_key` empty: an upload owned by `user`; else a shared volume `user`
-// loaded.
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string load_key,
-                                                      const std::string& user) {
+                                                      const std::string& user, std::string id) {
   const int64_t bytes = volume.geometry().voxel_count() * int64_t{sizeof(float)} * 2;
   RETURN_IF_ERROR(CheckRoom(bytes));
   ASSIGN_OR_RETURN(GpuVolume gpu, GpuVolume::Upload(*options_.context, volume));
-  std::lock_guard lock(mutex_);
-  // A load of the same source that landed while this one read wins.
-  if (auto loaded = FindLoadedLocked(load_key)) {
-    loaded_by_[loaded->id].insert(user);
-    return loaded;
+  std::vector<std::string> evicted;
+  std::shared_ptr<VolumeEntry> entry;
+  Status room;
+  {
+    std::lock_guard lock(mutex_);
+    // A load of the same source that landed while this one read wins.
+    if (auto loaded = FindLoadedLocked(load_key)) {
+      if (!user.empty()) loaded_by_[loaded->id].insert(user);
+      return loaded;
+    }
+    room = MakeRoomLocked(bytes, &evicted);
+    if (room.ok()) {
+      if (id.empty()) {
+        id = StrCat(options_.id_prefix, next_id_++);
+      } else {
+        evicted_.erase(id);
+      }
+      entry = std::make_shared<VolumeEntry>(id, std::move(volume), std::move(gpu), bytes);
+      entry->forget_gpu = options_.forget_gpu;
+      if (load_key.empty()) {
+        entry->owner = user;
+      } else if (!user.empty()) {
+        loaded_by_[id].insert(user);
+      }
+      entry->load_key = std::move(load_key);
+      entry->last_used = NextUse();
+      volumes_.emplace(id, entry);
+      total_bytes_ += bytes;
+    }
+    NotifyLocked();
   }
-  // Checked again: another load may have landed while this one read.
-  if (static_cast<int64_t>(volumes_.size()) >= options_.max_volumes ||
-      total_bytes_ + bytes > options_.max_bytes) {
-    return absl::ResourceExhaustedError("volume caps reached while loading; delete a volume");
-  }
-  std::string id = StrCat("vol-", next_id_++);
-  auto entry = std::make_shared<VolumeEntry>(id, std::move(volume), std::move(gpu), bytes);
-  entry->forget_gpu = options_.forget_gpu;
-  if (load_key.empty()) {
-    entry->owner = user;
-  } else {
-    loaded_by_[id].insert(user);
-  }
-  entry->load_key = std::move(load_key);
-  volumes_.emplace(id, entry);
-  total_bytes_ += bytes;
-  NotifyLocked();
+  // Evictions made before a refusal stand too (their volumes were idle).
+  ReportEvicted(evicted);
+  if (!room.ok()) return room;
   return entry;
 }
 
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::Get(std::string_view id,
-                                                      std::string_view user) const {
-  std::lock_guard lock(mutex_);
-  auto it = volumes_.find(id);
-  if (it == volumes_.end()) return absl::NotFoundError(StrCat("volume_id: no volume '", id, "'"));
-  RETURN_IF_ERROR(CheckVolumeAccess(*it->second, user));
-  return it->second;
+                                                      std::string_view user) {
+  Evicted again;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = volumes_.find(id);
+    if (it != volumes_.end()) {
+      RETURN_IF_ERROR(CheckVolumeAccess(*it->second, user));
+      it->second->last_used = NextUse();
+      return it->second;
+    }
+    auto gone = evicted_.find(id);
+    if (gone == evicted_.end()) {
+      return absl::NotFoundError(StrCat("volume_id: no volume '", id, "'"));
+    }
+    again = gone->second;
+  }
+  // Evicted while idle (a shared volume: anyone may read it): read it again
+  // under its id, its loaders kept.
+  {
+    std::lock_guard lock(mutex_);
+    if (auto loaded = FindLoadedLocked(again.load_key)) return loaded;  // reloaded meanwhile
+  }
+  ASSIGN_OR_RETURN(Volume volume, ReadSource(again.load_key, again.source));
+  return Add(std::move(volume), again.load_key, "", std::string(id));
 }
 
 std::vector<std::shared_ptr<VolumeEntry>> VolumeStore::List(std::string_view user) const {
@@ -126,31 +219,43 @@ std::vector<std::shared_ptr<VolumeEntry>> VolumeStore::List(std::string_view use
   return out;
 }
 
+Status VolumeStore::CheckSoleLoaderLocked(std::string_view id, const std::string& user) const {
+  auto it = loaded_by_.find(id);
+  const bool loaded_it = it != loaded_by_.end() && it->second.contains(user);
+  if (loaded_it && it->second.size() == 1) return absl::OkStatus();
+  return absl::PermissionDeniedError(
+      StrCat("volume '", id, "' is shared: ",
+             loaded_it ? "other users loaded it too" : "you did not load it",
+             "; only a user who alone loaded it may delete it"));
+}
+
 Status VolumeStore::Delete(std::string_view id, const std::string& user) {
   std::lock_guard lock(mutex_);
+  if (evicted_.contains(id)) {  // only shared volumes are evicted
+    RETURN_IF_ERROR(CheckSoleLoaderLocked(id, user));
+    evicted_.erase(evicted_.find(id));
+    loaded_by_.erase(loaded_by_.find(id));
+    return absl::OkStatus();
+  }
   auto it = volumes_.find(id);
   if (it == volumes_.end()) return absl::NotFoundError(StrCat("volume_id: no volume '", id, "'"));
   RETURN_IF_ERROR(CheckVolumeAccess(*it->second, user));
-  if (it->second->owner.empty()) {
-    const std::set<std::string>& loaders = loaded_by_[it->first];
-    if (!loaders.contains(user) || loaders.size() > 1) {
-      return absl::PermissionDeniedError(
-          StrCat("volume '", id, "' is shared: ",
-                 loaders.contains(user) ? "other users loaded it too"
-                                        : "you did not load it",
-                 "; only a user who alone loaded it may delete it"));
-    }
-  }
+  if (it->second->owner.empty()) RETURN_IF_ERROR(CheckSoleLoaderLocked(id, user));
   if (it->second->sessions.load() > 0) {
     return absl::FailedPreconditionError(StrCat("volume '", id, "' is used by ",
                                                 it->second->sessions.load(),
                                                 " session(s); close them first"));
   }
   total_bytes_ -= it->second->bytes;
-  loaded_by_.erase(it->first);
+  if (auto loaders = loaded_by_.find(id); loaders != loaded_by_.end()) loaded_by_.erase(loaders);
   volumes_.erase(it);
   NotifyLocked();
   return absl::OkStatus();
+}
+
+int64_t VolumeStore::evictions() const {
+  std::lock_guard lock(mutex_);
+  return evictions_;
 }
 
 int64_t VolumeStore::total_bytes() const {

@@ -4,6 +4,9 @@
 #include "server/service/users_file.h"
 #include "server/service/loopback_address.h"
 
+#include <cstdio>
+#include <random>
+
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
 
@@ -54,6 +57,14 @@ Result<TokenAuth> MakeAuth(const ServerOptions& o) {
   return TokenAuth::Create(auth);
 }
 
+// 8 hex digits from the OS's random source.
+std::string RandomIdTag() {
+  std::random_device random;
+  char tag[9];
+  std::snprintf(tag, sizeof tag, "%08x", static_cast<unsigned>(random()));
+  return tag;
+}
+
 }  // namespace
 
 Result<std::unique_ptr<VpmServer>> VpmServer::Create(const ServerOptions& options,
@@ -84,8 +95,10 @@ Status VpmServer::Start() {
     gpu_ = own_gpu_.get();
   }
   ASSIGN_OR_RETURN(renderer_, VolumeRenderer::Create(*gpu_, {}));
-  ASSIGN_OR_RETURN(request_pool_, WorkerPool::Create({o.request_threads, "request"}));
-  ASSIGN_OR_RETURN(render_pool_, WorkerPool::Create({o.render_threads, "render"}));
+  const FairJobQueue::Limits queue_limits{o.max_queued_per_user, o.max_queued};
+  ASSIGN_OR_RETURN(request_pool_,
+                   WorkerPool::Create({o.request_threads, "request", queue_limits}));
+  ASSIGN_OR_RETURN(render_pool_, WorkerPool::Create({o.render_threads, "render", queue_limits}));
   VolumeStore::Options volume_options;
   volume_options.context = gpu_;
   volume_options.data_root = o.data_root;
@@ -95,25 +108,37 @@ Status VpmServer::Start() {
     m->Volumes(bytes, count);
   };
   volume_options.forget_gpu = [r = renderer_.get()](const GpuVolume* v) { r->ForgetVolume(v); };
+  id_tag_ = RandomIdTag();
+  volume_options.id_prefix = StrCat("vol-", id_tag_, "-");
+  volume_options.on_evict = [this](const std::string& id) {
+    metrics_->VolumeEvicted();
+    if (meshes_) meshes_->ForgetVolume(id);
+  };
   ASSIGN_OR_RETURN(volumes_, VolumeStore::Create(volume_options));
-  ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes, [m = metrics_.get()](
-                                                   int64_t count) { m->Meshes(count); }}));
+  ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes,
+                                               [m = metrics_.get()](int64_t count) {
+                                                 m->Meshes(count);
+                                               },
+                                               StrCat("mesh-", id_tag_, "-")}));
   SessionManager::Options session_options;
   session_options.context = gpu_;
   session_options.renderer = renderer_.get();
   session_options.max_sessions = o.max_sessions;
   session_options.idle_session_s = o.idle_session_s;
+  session_options.idle_watched_session_s = o.idle_watched_session_s;
   session_options.session.still_delay_ms = o.still_delay_ms;
   session_options.max_sessions_per_user = o.max_sessions_per_user;
   session_options.on_change = [m = metrics_.get()](
                                   int64_t open, const std::map<std::string, int64_t>& per_user) {
     m->Sessions(open, per_user);
   };
+  session_options.id_prefix = StrCat("ses-", id_tag_, "-");
   ASSIGN_OR_RETURN(sessions_, SessionManager::Create(session_options));
   streams_ = std::make_unique<StreamRegistry>(
       o.max_streams_per_user,
       [m = metrics_.get()](const std::string& user, int64_t n) { m->UserStreams(user, n); });
   metrics_->SetOpenStreamsSource([s = streams_.get()] { return s->open_streams(); });
+  upload_memory_ = std::make_unique<ByteBudget>(o.max_upload_memory_bytes);
 
   context_.options = o;
   context_.gpu = gpu_;
@@ -126,6 +151,7 @@ Status VpmServer::Start() {
   context_.render_pool = render_pool_.get();
   context_.request_pool = request_pool_.get();
   context_.streams = streams_.get();
+  context_.upload_memory = upload_memory_.get();
   service_ = std::make_unique<VpmService>(&context_);
 
   grpc::EnableDefaultHealthCheckService(true);
@@ -159,6 +185,11 @@ void VpmServer::ReapIdleSessions() {
   }
 }
 
+void VpmServer::BeginDrain() {
+  context_.leaving = true;
+  if (server_) server_->GetHealthCheckService()->SetServingStatus(false);
+}
+
 void VpmServer::Shutdown(std::chrono::milliseconds grace) {
   {
     std::lock_guard lock(mutex_);
@@ -167,13 +198,23 @@ void VpmServer::Shutdown(std::chrono::milliseconds grace) {
   }
   stop_.notify_all();
   if (server_) {
+    context_.leaving = true;
     context_.draining = true;
     server_->GetHealthCheckService()->SetServingStatus(false);
     streams_->FinishAll(grpc::Status(grpc::UNAVAILABLE, "the server is shutting down"));
-    server_->Shutdown(std::chrono::system_clock::now() + grace);
   }
-  if (render_pool_) render_pool_->Shutdown();
-  if (request_pool_) request_pool_->Shutdown();
+  // Queued work runs until the grace period ends; what is left then is
+  // dropped (each call answered UNAVAILABLE, counted), so that the process
+  // exits within the grace period but for a job already running.
+  const auto deadline = std::chrono::steady_clock::now() + grace;
+  if (render_pool_) render_pool_->Shutdown(deadline);
+  if (request_pool_) request_pool_->Shutdown(deadline);
+  if (server_) {
+    const auto left = std::max(deadline - std::chrono::steady_clock::now(),
+                               std::chrono::steady_clock::duration::zero());
+    server_->Shutdown(std::chrono::system_clock::now() +
+                      std::chrono::duration_cast<std::chrono::system_clock::duration>(left));
+  }
   if (sessions_) sessions_->CloseAll();
   if (reaper_.joinable()) reaper_.join();
   // /metrics may still be scraped; the registry goes before the metrics.

@@ -33,10 +33,19 @@ class VpmServer {
   ~VpmServer();  // Shutdown(0)
 
   int port() const { return port_; }
+  // Random per server start, in every volume, mesh and session id
+  // ("ses-TAG-1"): behind a balancer an id from one replica (or from before
+  // a restart) is NOT_FOUND on another, never someone else's session.
+  const std::string& id_tag() const { return id_tag_; }
   ServiceContext& context() { return context_; }
   ServiceMetrics& metrics() { return *metrics_; }
 
-  // Drains: health turns NOT_SERVING, streams finish with UNAVAILABLE, new
+  // The first step of a graceful stop (--drain-s): health turns NOT_SERVING,
+  // so balancers and readiness probes take the replica out of rotation,
+  // while every call on what exists goes on (streams, events, renders) and
+  // calls that would create volumes, meshes or sessions get UNAVAILABLE.
+  void BeginDrain();
+  // Stops: health turns NOT_SERVING, streams finish with UNAVAILABLE, new
   // calls are refused, and calls still running after `grace` are cancelled.
   // Idempotent.
   void Shutdown(std::chrono::milliseconds grace);
@@ -59,10 +68,12 @@ class VpmServer {
   std::unique_ptr<MeshStore> meshes_;
   std::unique_ptr<SessionManager> sessions_;
   std::unique_ptr<StreamRegistry> streams_;
+  std::unique_ptr<ByteBudget> upload_memory_;
   ServiceContext context_;
   std::unique_ptr<VpmService> service_;
   std::unique_ptr<grpc::Server> server_;
   int port_ = 0;
+  std::string id_tag_;
 
   std::mutex mutex_;
   std::condition_variable stop_;

@@ -1,5 +1,6 @@
 #include "server/service/vpm_service.h"
 
+#include "server/common/clock.h"
 #include "server/service/grpc_status.h"
 #include "server/service/interact_reactor.h"
 #include "server/service/proto_convert.h"
@@ -12,34 +13,79 @@ grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context
                                             const char* method, WorkerPool* pool,
                                             std::function<Status(const std::string& user)> fn) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  Result<std::string> user = service_->auth->Authenticate(*context);
-  if (!user.ok()) {
-    Done(reactor, method, user.status(), "");
-  } else if (pool == nullptr) {
-    Done(reactor, method, fn(*user), *user);
-  } else if (!pool->Post([this, context, reactor, method, fn = std::move(fn), user = *user] {
-               // Work nobody waits for any more is dropped before it starts:
-               // a cancelled or expired call must not delay the calls behind it.
-               if (Status gone = CallGone(*context); !gone.ok()) {
-                 service_->metrics->DroppedJob(method, gone.code() == absl::StatusCode::kCancelled
-                                                           ? "cancelled"
-                                                           : "deadline");
-                 Done(reactor, method, gone, user);
-                 return;
-               }
-               Done(reactor, method, fn(user), user);
-             })) {
-    Done(reactor, method, absl::UnavailableError("the server is shutting down"), *user);
+  Result<std::string> authenticated = service_->auth->Authenticate(*context);
+  if (!authenticated.ok()) {
+    Done(reactor, method, authenticated.status(), "");
+    return reactor;
+  }
+  const std::string user = *std::move(authenticated);
+  if (pool == nullptr) {
+    Done(reactor, method, fn(user), user);
+    return reactor;
+  }
+  // Dropped unrun, answered with `why`.
+  auto dropped = [this, reactor, method, user](const Status& why) {
+    service_->metrics->DroppedJob(method, why.code() == absl::StatusCode::kCancelled ? "cancelled"
+                                          : why.code() == absl::StatusCode::kDeadlineExceeded
+                                              ? "deadline"
+                                              : "shutdown");
+    Done(reactor, method, why, user);
+  };
+  // Purged to make room (gone), or still queued at shutdown.
+  auto drop = [context, dropped] {
+    Status gone = CallGone(*context);
+    dropped(gone.ok() ? absl::UnavailableError("the server shut down before this call's turn")
+                      : gone);
+  };
+  const std::string lane = StrCat("unary:", FairShareKey(user));
+  Status queued = pool->Submit(Job{
+      .lane = lane,
+      .run =
+          [this, context, reactor, method, fn = std::move(fn), dropped, user] {
+            // Work nobody waits for any more is dropped before it starts: a
+            // cancelled or expired call, or one whose deadline would pass
+            // before a typical job here finishes, must not delay the calls
+            // behind it.
+            if (Status gone = CallGone(*context, 0.5 * run_times_.MeanMs(method)); !gone.ok()) {
+              return dropped(gone);
+            }
+            const auto start = std::chrono::steady_clock::now();
+            Status status = fn(user);
+            run_times_.Add(method, MsSince(start));
+            Done(reactor, method, status, user);
+          },
+      .gone = [context] { return !CallGone(*context).ok(); },
+      .drop = drop,
+  });
+  if (absl::IsResourceExhausted(queued)) {
+    // gRPC's retry pushback trailer, and the same hint in words.
+    const int64_t retry_ms = pool->RetryAfterMs(lane);
+    context->AddTrailingMetadata("grpc-retry-pushback-ms", std::to_string(retry_ms));
+    service_->metrics->DroppedJob(method, "queue_full");
+    Done(reactor, method,
+         absl::ResourceExhaustedError(StrCat(queued.message(), "; retry after about ", retry_ms,
+                                             " ms")),
+         user);
+  } else if (!queued.ok()) {
+    Done(reactor, method, queued, user);
   }
   return reactor;
 }
 
-Status VpmService::CallGone(grpc::CallbackServerContext& context) {
+std::string VpmService::FairShareKey(const std::string& user) { return user; }
+
+Status VpmService::CallGone(grpc::CallbackServerContext& context, double need_ms) {
   if (context.IsCancelled()) {
     return absl::CancelledError("the call was cancelled before its turn on the server");
   }
-  if (std::chrono::system_clock::now() > context.deadline()) {
+  const auto now = std::chrono::system_clock::now();
+  if (now > context.deadline()) {
     return absl::DeadlineExceededError("the call's deadline passed while it waited in the queue");
+  }
+  if (now + std::chrono::microseconds(int64_t(need_ms * 1000)) > context.deadline()) {
+    return absl::DeadlineExceededError(StrCat("the call's deadline would pass before it could "
+                                              "finish (a job here takes about ",
+                                              int64_t(2 * need_ms), " ms)"));
   }
   return absl::OkStatus();
 }
@@ -77,9 +123,12 @@ Result<std::shared_ptr<const MeshEntry>> VpmService::FindMesh(std::string_view m
 grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* context,
                                                  const v2::LoadVolumeRequest* request,
                                                  v2::VolumeInfo* response) {
-  return Unary(context, "LoadVolume", service_->request_pool, [=, this](const std::string& user) -> Status {
+  return Unary(context, "LoadVolume", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
+    RETURN_IF_ERROR(service_->AcceptingNewWork());
     if (request->source().empty()) return absl::InvalidArgumentError("source: required");
-    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry, service_->volumes->Load(request->source(), user));
+    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
+                     service_->volumes->Load(request->source(), user));
     FillVolumeInfo(*entry, response);
     return absl::OkStatus();
   });
@@ -87,13 +136,15 @@ grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* co
 
 grpc::ServerReadReactor<v2::UploadVolumeRequest>* VpmService::UploadVolume(
     grpc::CallbackServerContext* context, v2::VolumeInfo* response) {
-  return new UploadVolumeReactor(service_, context, response);
+  return UploadVolumeReactor::Make(service_, context, response);
 }
 
 grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* context,
                                                 const v2::GetVolumeRequest* request,
                                                 v2::VolumeInfo* response) {
-  return Unary(context, "GetVolume", nullptr, [=, this](const std::string& user) -> Status {
+  // On a pool: an evicted volume is read again.
+  return Unary(context, "GetVolume", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
                      service_->volumes->Get(request->volume_id(), user));
     FillVolumeInfo(*entry, response);
@@ -115,7 +166,8 @@ grpc::ServerUnaryReactor* VpmService::ListVolumes(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* context,
                                                    const v2::DeleteVolumeRequest* request,
                                                    v2::DeleteVolumeResponse*) {
-  return Unary(context, "DeleteVolume", nullptr, [=, this](const std::string& user) -> Status {
+  return Unary(context, "DeleteVolume", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(service_->volumes->Delete(request->volume_id(), user));
     service_->meshes->ForgetVolume(request->volume_id());
     return absl::OkStatus();
@@ -125,7 +177,9 @@ grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* 
 grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* context,
                                                 const v2::BuildMeshRequest* request,
                                                 v2::MeshInfo* response) {
-  return Unary(context, "BuildMesh", service_->request_pool, [=, this](const std::string& user) -> Status {
+  return Unary(context, "BuildMesh", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
+    RETURN_IF_ERROR(service_->AcceptingNewWork());
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
                      service_->volumes->Get(request->volume_id(), user));
     ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(request->params()));
@@ -139,7 +193,8 @@ grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* con
 grpc::ServerUnaryReactor* VpmService::GetMesh(grpc::CallbackServerContext* context,
                                               const v2::GetMeshRequest* request,
                                               v2::GetMeshResponse* response) {
-  return Unary(context, "GetMesh", nullptr, [=, this](const std::string& user) -> Status {
+  return Unary(context, "GetMesh", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh, FindMesh(request->mesh_id(), user));
     FillMeshInfo(*mesh, response->mutable_info());
     if (request->include_geometry()) FillMeshGeometry(mesh->mesh, response);
@@ -150,7 +205,9 @@ grpc::ServerUnaryReactor* VpmService::GetMesh(grpc::CallbackServerContext* conte
 grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* context,
                                                  const v2::RefineMeshRequest* request,
                                                  v2::MeshInfo* response) {
-  return Unary(context, "RefineMesh", service_->request_pool, [=, this](const std::string& user) -> Status {
+  return Unary(context, "RefineMesh", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
+    RETURN_IF_ERROR(service_->AcceptingNewWork());
     if (!request->has_point_mm()) return absl::InvalidArgumentError("point_mm: required");
     RETURN_IF_ERROR(FindMesh(request->mesh_id(), user).status());
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
@@ -173,7 +230,9 @@ grpc::ServerUnaryReactor* VpmService::DeleteMesh(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* context,
                                                   const v2::OpenSessionRequest* request,
                                                   v2::SessionInfo* response) {
-  return Unary(context, "OpenSession", service_->request_pool, [=, this](const std::string& user) -> Status {
+  return Unary(context, "OpenSession", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
+    RETURN_IF_ERROR(service_->AcceptingNewWork());
     std::shared_ptr<const MeshEntry> mesh;
     if (!request->mesh_id().empty()) {
       ASSIGN_OR_RETURN(mesh, FindMesh(request->mesh_id(), user));
@@ -200,7 +259,7 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* VpmService::CloseSession(grpc::CallbackServerContext* context,
                                                    const v2::CloseSessionRequest* request,
                                                    v2::CloseSessionResponse*) {
-  return Unary(context, "CloseSession", nullptr, [=, this](const std::string& user) {
+  return Unary(context, "CloseSession", service_->request_pool, [=, this](const std::string& user) {
     return service_->sessions->Close(request->session_id(), user);
   });
 }
@@ -248,18 +307,19 @@ grpc::ServerUnaryReactor* VpmService::ShareSession(grpc::CallbackServerContext* 
 
 grpc::ServerBidiReactor<v2::InteractRequest, v2::Frame>* VpmService::Interact(
     grpc::CallbackServerContext* context) {
-  return new InteractReactor(service_, context);
+  return InteractReactor::Make<InteractReactor>(service_, context);
 }
 
 grpc::ServerWriteReactor<v2::Frame>* VpmService::Watch(grpc::CallbackServerContext* context,
                                                        const v2::WatchRequest* request) {
-  return new WatchReactor(service_, context, *request);
+  return WatchReactor::Make<WatchReactor>(service_, context, *request);
 }
 
 grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* context,
                                                  const v2::ManipulateRequest* request,
                                                  v2::ManipulateResponse* response) {
-  return Unary(context, "Manipulate", service_->render_pool, [=, this](const std::string& user) -> Status {
+  return Unary(context, "Manipulate", service_->render_pool,
+               [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
     const v2::ClientEvent& event = request->event();
@@ -281,7 +341,8 @@ grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* context,
                                                 const v2::SetCameraRequest* request,
                                                 v2::SetCameraResponse*) {
-  return Unary(context, "SetCamera", nullptr, [=, this](const std::string& user) -> Status {
+  return Unary(context, "SetCamera", service_->render_pool,
+               [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
     return session->SetCamera(request->camera());
@@ -291,7 +352,8 @@ grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* con
 grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* context,
                                              const v2::RenderRequest* request,
                                              v2::Frame* response) {
-  return Unary(context, "Render", service_->render_pool, [=, this](const std::string& user) -> Status {
+  return Unary(context, "Render", service_->render_pool,
+               [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id(), user, SessionRole::kViewer));
     ASSIGN_OR_RETURN(StreamSettings settings,

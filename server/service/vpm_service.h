@@ -6,6 +6,10 @@
 // reactors in their own files. Every call is counted by method and code.
 #pragma once
 
+#include <map>
+#include <mutex>
+#include <string>
+
 #include <grpcpp/grpcpp.h>
 
 #include "server/service/service_context.h"
@@ -70,8 +74,34 @@ class VpmService final : public v2::Vpm::CallbackService {
                                   std::function<Status(const std::string& user)> fn);
   void Done(grpc::ServerUnaryReactor* reactor, const char* method, const Status& status,
             const std::string& user);
-  // Cancelled or DeadlineExceeded when the client no longer waits for the call.
-  static Status CallGone(grpc::CallbackServerContext& context);
+  // How long each method's work takes (moving average, ms), so that a call
+  // whose deadline leaves less than half of that is not started.
+  class RunTimes {
+   public:
+    void Add(const char* method, double ms) {
+      std::lock_guard lock(mutex_);
+      double& mean = mean_ms_[method];
+      mean = mean == 0.0 ? ms : 0.9 * mean + 0.1 * ms;
+    }
+    double MeanMs(const char* method) const {
+      std::lock_guard lock(mutex_);
+      auto it = mean_ms_.find(method);
+      return it == mean_ms_.end() ? 0.0 : it->second;
+    }
+
+   private:
+    mutable std::mutex mutex_;
+    std::map<std::string, double, std::less<>> mean_ms_;
+  };
+  RunTimes run_times_;
+
+  // Cancelled or DeadlineExceeded when the client no longer waits for the
+  // call: cancelled, past its deadline, or with less than `need_ms` left.
+  static Status CallGone(grpc::CallbackServerContext& context, double need_ms = 0.0);
+  // Whose fair share a unary call counts against: the caller's user (behind
+  // a gateway or a balancer every user shares one peer address, so a share
+  // per address would be one share for all).
+  static std::string FairShareKey(const std::string& user);
   // shared_with only for the owner.
   void FillSessionInfo(const Session& session, const std::string& user,
                        v2::SessionInfo* info) const;

@@ -6,25 +6,28 @@ namespace vpm::service {
 
 WatchReactor::WatchReactor(ServiceContext* service, grpc::CallbackServerContext* context,
                            const v2::WatchRequest& request)
-    : FrameStreamReactor(service, context, "Watch") {
-  auto start = [&]() -> Result<std::shared_ptr<FrameStream>> {
-    RETURN_IF_ERROR(Admit(*context));
-    if (request.session_id().empty()) {
-      return absl::InvalidArgumentError("session_id: required");
-    }
-    ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
-                     service_->sessions->Get(request.session_id(), user(), SessionRole::kViewer));
-    ASSIGN_OR_RETURN(StreamSettings settings,
-                     ToStreamSettings(request.settings(), session->volume().volume,
-                                      service_->options.max_frame_side));
-    return FrameStream::Create(service_, session, std::move(settings), this, {});
-  };
-  auto stream = start();
-  if (!stream.ok()) {
-    FinishStream(ToGrpcStatus(stream.status()));
+    : FrameStreamReactor(service, context, "Watch"), request_(request) {}
+
+void WatchReactor::Begin() {
+  if (Status admitted = Admit(); !admitted.ok()) {
+    FinishStream(ToGrpcStatus(admitted));
     return;
   }
-  StartStream(*std::move(stream));
+  if (request_.session_id().empty()) {
+    FinishStream(grpc::Status(grpc::INVALID_ARGUMENT, "session_id: required"));
+    return;
+  }
+  StartOnPool(
+      [this]() -> Result<std::shared_ptr<FrameStream>> {
+        ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
+                         service_->sessions->Get(request_.session_id(), user(),
+                                                 SessionRole::kViewer));
+        ASSIGN_OR_RETURN(StreamSettings settings,
+                         ToStreamSettings(request_.settings(), session->volume().volume,
+                                          service_->options.max_frame_side));
+        return FrameStream::Create(service_, session, std::move(settings), this, {});
+      },
+      [](FrameStream&) {});
 }
 
 }  // namespace vpm::service

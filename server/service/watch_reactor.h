@@ -16,6 +16,11 @@ class WatchReactor : public FrameStreamReactor<grpc::ServerWriteReactor<v2::Fram
  public:
   WatchReactor(ServiceContext* service, grpc::CallbackServerContext* context,
                const v2::WatchRequest& request);
+
+ private:
+  void Begin() override;
+
+  const v2::WatchRequest& request_;  // gRPC's, valid until OnDone
 };
 
 }  // namespace vpm::service

@@ -1,6 +1,21 @@
 #include "server/service/worker_pool.h"
 
+#include <algorithm>
+#include <cmath>
+
+#include "server/common/clock.h"
+
 namespace vpm::service {
+namespace {
+
+void DropAll(std::vector<Job>& jobs) {
+  for (Job& job : jobs) {
+    if (job.drop) job.drop();
+  }
+  jobs.clear();
+}
+
+}  // namespace
 
 Result<std::unique_ptr<WorkerPool>> WorkerPool::Create(const Options& options) {
   if (options.threads < 1 || options.threads > 256) {
@@ -12,22 +27,29 @@ Result<std::unique_ptr<WorkerPool>> WorkerPool::Create(const Options& options) {
   return pool;
 }
 
-WorkerPool::~WorkerPool() { Shutdown(); }
+WorkerPool::~WorkerPool() { Shutdown(std::chrono::steady_clock::now()); }
 
-bool WorkerPool::Post(std::function<void()> task) {
+Status WorkerPool::Submit(Job job) {
+  std::vector<Job> dropped;
+  Status status;
   {
     std::lock_guard lock(mutex_);
-    if (stopping_) return false;
-    tasks_.push_back(std::move(task));
+    if (!accepting_) return absl::UnavailableError("the server is shutting down");
+    status = queue_.Push(std::move(job), &dropped);
   }
-  wake_.notify_one();
-  return true;
+  if (status.ok()) wake_.notify_one();
+  DropAll(dropped);
+  return status;
+}
+
+bool WorkerPool::Post(std::function<void()> task) {
+  return Submit(Job{.lane = "", .run = std::move(task)}).ok();
 }
 
 bool WorkerPool::PostAfter(std::chrono::milliseconds delay, std::function<void()> task) {
   {
     std::lock_guard lock(mutex_);
-    if (stopping_) return false;
+    if (!accepting_) return false;
     delayed_.emplace(std::chrono::steady_clock::now() + delay, std::move(task));
   }
   wake_.notify_all();
@@ -36,21 +58,39 @@ bool WorkerPool::PostAfter(std::chrono::milliseconds delay, std::function<void()
 
 int64_t WorkerPool::queued() const {
   std::lock_guard lock(mutex_);
-  return static_cast<int64_t>(tasks_.size() + delayed_.size());
+  return queue_.size() + static_cast<int64_t>(delayed_.size());
 }
 
-void WorkerPool::Shutdown() {
+int64_t WorkerPool::RetryAfterMs(const std::string& lane) const {
+  std::lock_guard lock(mutex_);
+  const double jobs = double(queue_.lane_size(lane)) + 1.0;
+  return std::max<int64_t>(1, std::llround(jobs * mean_job_ms_ / options_.threads));
+}
+
+double WorkerPool::mean_job_ms() const {
+  std::lock_guard lock(mutex_);
+  return mean_job_ms_;
+}
+
+int64_t WorkerPool::Shutdown(std::chrono::steady_clock::time_point deadline) {
+  std::vector<Job> left;
   {
-    std::lock_guard lock(mutex_);
-    if (stopping_ && threads_.empty()) return;
-    stopping_ = true;
+    std::unique_lock lock(mutex_);
+    if (stopping_ && threads_.empty()) return 0;
+    accepting_ = false;
     delayed_.clear();
+    idle_.wait_until(lock, deadline, [this] { return queue_.size() == 0 && running_ == 0; });
+    left = queue_.TakeAll();
+    stopping_ = true;
   }
+  const int64_t dropped = static_cast<int64_t>(left.size());
+  DropAll(left);
   wake_.notify_all();
   for (std::thread& t : threads_) {
     if (t.joinable()) t.join();
   }
   threads_.clear();
+  return dropped;
 }
 
 void WorkerPool::Run() {
@@ -58,15 +98,22 @@ void WorkerPool::Run() {
   while (true) {
     const auto now = std::chrono::steady_clock::now();
     while (!delayed_.empty() && delayed_.begin()->first <= now) {
-      tasks_.push_back(std::move(delayed_.begin()->second));
+      std::vector<Job> dropped;  // lane "" has no cap: nothing is refused
+      (void)queue_.Push(Job{.lane = "", .run = std::move(delayed_.begin()->second)}, &dropped);
       delayed_.erase(delayed_.begin());
     }
-    if (!tasks_.empty()) {
-      std::function<void()> task = std::move(tasks_.front());
-      tasks_.pop_front();
+    Job job;
+    if (!stopping_ && queue_.Pop(&job)) {
+      ++running_;
       lock.unlock();
-      task();
+      const auto start = std::chrono::steady_clock::now();
+      job.run();
+      const double ms = MsSince(start);
+      job = Job{};  // release what the job held before taking the lock
       lock.lock();
+      --running_;
+      mean_job_ms_ = 0.9 * mean_job_ms_ + 0.1 * ms;
+      if (queue_.size() == 0 && running_ == 0) idle_.notify_all();
       continue;
     }
     if (stopping_) return;

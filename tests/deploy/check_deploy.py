@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """What can be checked of docker/ without a Docker engine: the Dockerfiles'
 bases, apt-get packages (Debian 12 has them), COPY sources, binaries and
-runtime libraries; the compose, Envoy and Kubernetes files (YAML, session
-hashing, replicas, gRPC health checks and probes).
+runtime libraries; the HAProxy configuration (`haproxy -c`, session hashing,
+the grpc.health.v1 check); the compose and Kubernetes files (YAML,
+replicas, the balancer, gRPC health checks and probes, drain times).
 
   check_deploy.py --repo DIR --build-dir DIR               the check
   check_deploy.py --repo DIR --build-dir DIR --self-test   breaks copies of
@@ -19,10 +20,11 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
+import balancer_checks  # noqa: E402
 import image_checks  # noqa: E402
 import manifest_checks  # noqa: E402
 
-DOCKERFILES = ("Dockerfile", "Dockerfile.gateway")
+DOCKERFILES = ("Dockerfile", "Dockerfile.gateway", "Dockerfile.balancer")
 SERVER_DOCKERFILE = "Dockerfile"
 
 
@@ -52,10 +54,12 @@ def run_checks(repo, docker_dir, binary_dir):
         problems += image_checks.check_runtime_libraries(image, binary_dir)
     problems += check_health_probe(images[DOCKERFILES.index(SERVER_DOCKERFILE)], binary_dir)
     stage_names = {os.path.normpath(i.path): {s.name for s in i.stages} for i in images}
+    haproxy = os.path.join(docker_dir, "haproxy.cfg")
+    problems += balancer_checks.check_haproxy(haproxy)
+    out_ms = balancer_checks.out_of_rotation_ms(haproxy) if os.path.exists(haproxy) else None
     problems += manifest_checks.check_compose(os.path.join(docker_dir, "compose.yaml"),
-                                              docker_dir, stage_names)
-    problems += manifest_checks.check_envoy(os.path.join(docker_dir, "envoy.yaml"))
-    problems += manifest_checks.check_k8s(os.path.join(docker_dir, "k8s"))
+                                              docker_dir, stage_names, out_ms)
+    problems += manifest_checks.check_k8s(os.path.join(docker_dir, "k8s"), out_ms)
     return problems
 
 
@@ -73,15 +77,32 @@ BREAKAGES = [
     ("Dockerfile.gateway", '"/opt/vpm/client/web/gateway.js"', '"/opt/vpm/client/web/main.js"',
      "no COPY puts"),
     ("Dockerfile.gateway.dockerignore", "!client/web\n", "", "excluded by"),
-    ("envoy.yaml", "header_name: x-vpm-session", "header_name: x-session", "does not hash on"),
-    ("envoy.yaml", "lb_policy: RING_HASH", "lb_policy: ROUND_ROBIN", "does not hash consistently"),
-    ("envoy.yaml", "grpc_health_check:", "http_health_check:", "no grpc_health_check"),
+    ("Dockerfile.balancer", "install -y -q --no-install-recommends haproxy",
+     "install -y -q --no-install-recommends haproxy-nosuch", "no Debian 12 candidate"),
+    ("Dockerfile.balancer", "COPY docker/haproxy.cfg /etc/haproxy/vpm.cfg",
+     "COPY haproxy.cfg /etc/haproxy/vpm.cfg", "not in the repository"),
+    ("haproxy.cfg", "balance hdr(x-vpm-session)", "balance hdr(x-session)", "does not hash on"),
+    ("haproxy.cfg", "hash-type consistent", "hash-type map-based", "is not consistent"),
+    ("haproxy.cfg", "default-server proto h2", "default-server", "needs `proto h2`"),
+    ("haproxy.cfg", "bind \"${VPM_BALANCER_LISTEN-:50051}\" proto h2",
+     "bind \"${VPM_BALANCER_LISTEN-:50051}\"", "does not speak HTTP/2"),
+    ("haproxy.cfg", "436865636b", "436865636c", "is '/grpc.health.v1.Health/Checl'"),
+    ("haproxy.cfg", "min-recv 0 binary 00000700000000000100000000020801",
+     "min-recv 0 binary 00000700000000000100000000020802", "expects the SERVING answer"),
+    ("haproxy.cfg", "timeout check 2s", "timeout check 2s\n    timeout chek 2s", "haproxy -c"),
+    ("compose.yaml", '"--drain-s", "5"', '"--drain-s", "2"', "is not longer than"),
+    ("compose.yaml", "VPM_SERVERS: vpm-server:50051", "VPM_SERVERS: vpm-servers:50051",
+     "VPM_SERVERS"),
     ("compose.yaml", "replicas: 2", "replicas: 1", "fewer than 2 replicas"),
     ("compose.yaml", "target: runtime", "target: runtme", "is not a stage"),
     ("k8s/vpm-server.yaml", "readinessProbe:\n            grpc:", "readinessProbe:\n            tcpSocket:",
      "no gRPC readinessProbe"),
     ("k8s/vpm-server.yaml", "clusterIP: None", "clusterIP: 10.0.0.10", "no headless Service"),
     ("k8s/web-gateway.yaml", "vpm-grpc:50051", "vpm-grpcs:50051", "is not a Service here"),
+    ("k8s/vpm-server.yaml", "terminationGracePeriodSeconds: 20",
+     "terminationGracePeriodSeconds: 12", "s to stop is not more than"),
+    ("k8s/balancer.yaml", "image: vpm-balancer:latest", "image: haproxy:latest",
+     "no balancer Deployment"),
 ]
 
 
@@ -129,7 +150,7 @@ def main():
     for p in problems:
         print("PROBLEM:", p)
     if not problems:
-        print("docker/: Dockerfiles, compose, Envoy and Kubernetes files check out")
+        print("docker/: Dockerfiles, HAProxy, compose and Kubernetes files check out")
     return 1 if problems else 0
 
 

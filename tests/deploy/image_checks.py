@@ -14,7 +14,7 @@ ALLOWED_BASES = {"debian:12", "debian:12-slim"}
 BASE_IMAGE_PACKAGES = {"libc6", "libgcc-s1", "libstdc++6", "zlib1g", "liblzma5"}
 # Opened with dlopen, so ldd does not list it: a server image needs them.
 VULKAN_RUNTIME = {"libvulkan1", "mesa-vulkan-drivers"}
-PATH_DIRS = ("/usr/local/bin", "/usr/bin", "/bin")
+PATH_DIRS = ("/usr/local/bin", "/usr/bin", "/bin", "/usr/sbin", "/sbin")
 
 
 class Image:

@@ -1,16 +1,20 @@
-"""Checks of docker/compose.yaml, docker/envoy.yaml and docker/k8s/*.yaml:
-they parse as YAML and have the structure the scale-out depends on (two
-server replicas, session hashing on x-vpm-session, gRPC health checks and
-probes, names that refer to each other). Each check returns problems."""
+"""Checks of docker/compose.yaml and docker/k8s/*.yaml: they parse as YAML
+and have the structure the scale-out depends on (two server replicas behind
+the HAProxy balancer built from docker/Dockerfile.balancer, gRPC health
+checks and probes, a drain longer than the balancer takes to notice it,
+names that refer to each other). docker/haproxy.cfg itself:
+balancer_checks.py. Each check returns problems."""
 
 import glob
 import os
 
 import yaml
 
-SESSION_HEADER = "x-vpm-session"
-SERVER_NAME = "vpm-server"  # compose service, k8s headless Service, Envoy upstream
+from balancer_checks import check_drain
+
+SERVER_NAME = "vpm-server"  # compose service, k8s headless Service, the balancer's DNS name
 GRPC_PORT = 50051
+BALANCER_DOCKERFILE = "Dockerfile.balancer"
 
 
 def load(path):
@@ -38,58 +42,13 @@ def _server_target(args):
     return None
 
 
-def envoy_upstreams(envoy):
-    """{cluster name: cluster} of Envoy's static clusters."""
-    return {c["name"]: c for c in envoy.get("static_resources", {}).get("clusters", [])}
+def _built_from(service, dockerfile):
+    return str(service.get("build", {}).get("dockerfile", "")).endswith(dockerfile)
 
 
-def check_envoy(path):
-    envoy, problems = load(path), []
-    clusters = envoy_upstreams(envoy)
-    listeners = envoy.get("static_resources", {}).get("listeners", [])
-    ports = [l["address"]["socket_address"]["port_value"] for l in listeners]
-    if GRPC_PORT not in ports:
-        problems.append(f"{path}: no listener on {GRPC_PORT} (listeners on {ports})")
-    routes = [r for l in listeners for fc in l.get("filter_chains", [])
-              for f in fc.get("filters", [])
-              for vh in f.get("typed_config", {}).get("route_config", {}).get("virtual_hosts", [])
-              for r in vh.get("routes", [])]
-    if not routes:
-        problems.append(f"{path}: no routes")
-    for route in routes:
-        target = route.get("route", {})
-        headers = [h.get("header", {}).get("header_name") for h in target.get("hash_policy", [])]
-        if SESSION_HEADER not in headers:
-            problems.append(f"{path}: route {route.get('match')} does not hash on {SESSION_HEADER}")
-        cluster = clusters.get(target.get("cluster"))
-        if cluster is None:
-            problems.append(f"{path}: route to unknown cluster {target.get('cluster')!r}")
-            continue
-        problems += _check_cluster(path, cluster)
-    return problems
-
-
-def _check_cluster(path, cluster):
-    problems, name = [], cluster["name"]
-    if cluster.get("lb_policy") not in ("RING_HASH", "MAGLEV"):
-        problems.append(f"{path}: cluster {name}: lb_policy {cluster.get('lb_policy')} does not "
-                        "hash consistently (RING_HASH or MAGLEV)")
-    if not any("grpc_health_check" in h for h in cluster.get("health_checks", [])):
-        problems.append(f"{path}: cluster {name}: no grpc_health_check")
-    options = cluster.get("typed_extension_protocol_options", {})
-    if "http2_protocol_options" not in str(options):
-        problems.append(f"{path}: cluster {name}: upstream is not HTTP/2 (gRPC needs it)")
-    addresses = [e["endpoint"]["address"]["socket_address"]
-                 for group in cluster.get("load_assignment", {}).get("endpoints", [])
-                 for e in group.get("lb_endpoints", [])]
-    if {(a["address"], a["port_value"]) for a in addresses} != {(SERVER_NAME, GRPC_PORT)}:
-        problems.append(f"{path}: cluster {name}: endpoints {addresses}, expected the DNS name "
-                        f"{SERVER_NAME}:{GRPC_PORT} (every replica behind one name)")
-    return problems
-
-
-def check_compose(path, docker_dir, stage_names):
-    """`stage_names`: {Dockerfile path: set of its stage names}."""
+def check_compose(path, docker_dir, stage_names, out_ms):
+    """`stage_names`: {Dockerfile path: set of its stage names}; `out_ms`:
+    how long the balancer may take to take a draining replica out."""
     compose, problems = load(path), []
     services = compose.get("services", {})
     server = services.get(SERVER_NAME)
@@ -98,28 +57,37 @@ def check_compose(path, docker_dir, stage_names):
     if int(server.get("deploy", {}).get("replicas", 1)) < 2:
         problems.append(f"{path}: {SERVER_NAME} has fewer than 2 replicas")
     if "ports" in server:
-        problems.append(f"{path}: {SERVER_NAME} publishes ports: clients must come through Envoy")
+        problems.append(f"{path}: {SERVER_NAME} publishes ports: clients must come through the "
+                        "balancer")
     if server.get("healthcheck", {}).get("test", [None, None, None])[1:3] != ["vpm", "health"]:
         problems.append(f"{path}: {SERVER_NAME}'s healthcheck is not `vpm health`")
     if _listen_port(server.get("command", [])) != GRPC_PORT:
         problems.append(f"{path}: {SERVER_NAME} does not --listen on {GRPC_PORT}")
+    stop = server.get("stop_grace_period")
+    stop_s = float(str(stop).rstrip("s")) if stop is not None else 10.0
+    problems += check_drain(f"{path}: {SERVER_NAME}", server.get("command", []), stop_s, out_ms)
     for name, service in services.items():
         problems += _check_build(path, docker_dir, name, service, stage_names)
         for volume in service.get("volumes", []):
             host = volume.split(":", 1)[0]
             if host.startswith("./") and not os.path.exists(os.path.join(docker_dir, host)):
                 problems.append(f"{path}: {name} mounts {host}, which does not exist")
-    envoys = [n for n, s in services.items() if "envoy" in s.get("image", "")]
-    if not envoys:
-        problems.append(f"{path}: no Envoy service")
+    balancers = [n for n, s in services.items() if _built_from(s, BALANCER_DOCKERFILE)]
+    if not balancers:
+        problems.append(f"{path}: no balancer service (built from {BALANCER_DOCKERFILE})")
+    for name in balancers:
+        servers = services[name].get("environment", {}).get("VPM_SERVERS")
+        if servers != f"{SERVER_NAME}:{GRPC_PORT}":
+            problems.append(f"{path}: {name}: VPM_SERVERS is {servers!r}, not the service "
+                            f"{SERVER_NAME}:{GRPC_PORT}")
     gateways = [(n, s) for n, s in services.items() if "Dockerfile.gateway" in
                 str(s.get("build", {}).get("dockerfile", ""))]
     if not gateways:
         problems.append(f"{path}: no web gateway service (built from Dockerfile.gateway)")
     for name, gateway in gateways:
         target = _server_target(gateway.get("command", []))
-        if target is None or target[0] not in envoys or target[1] != GRPC_PORT:
-            problems.append(f"{path}: {name} --server {target} is not Envoy's {GRPC_PORT}")
+        if target is None or target[0] not in balancers or target[1] != GRPC_PORT:
+            problems.append(f"{path}: {name} --server {target} is not the balancer's {GRPC_PORT}")
     return problems
 
 
@@ -148,7 +116,7 @@ def _port_number(container, port):
                 None)
 
 
-def check_k8s(k8s_dir):
+def check_k8s(k8s_dir, out_ms):
     docs, problems = [], []
     for path in sorted(glob.glob(os.path.join(k8s_dir, "*.yaml"))):
         docs += [(path, d) for d in load_all(path)]
@@ -163,7 +131,13 @@ def check_k8s(k8s_dir):
     if not servers:
         return problems + [f"{k8s_dir}: no {SERVER_NAME} Deployment or StatefulSet"]
     for path, server in servers:
-        problems += _check_server_workload(path, server, services)
+        problems += _check_server_workload(path, server, services, out_ms)
+    balancers = [(p, d) for p, d in workloads for c in _containers(d)
+                 if "vpm-balancer" in c.get("image", "")]
+    if not balancers:
+        problems.append(f"{k8s_dir}: no balancer Deployment (image vpm-balancer)")
+    for path, balancer in balancers:
+        problems += _check_balancer_workload(path, balancer, services)
     gateway_args = [c.get("args", []) for _, d in workloads for c in _containers(d)
                     if "vpm-web" in c.get("image", "")]
     if not gateway_args:
@@ -175,13 +149,33 @@ def check_k8s(k8s_dir):
     return problems
 
 
-def _check_server_workload(path, server, services):
+def _check_balancer_workload(path, balancer, services):
+    problems = []
+    for container in _containers(balancer):
+        env = {e["name"]: e.get("value", "") for e in container.get("env", [])}
+        servers = env.get("VPM_SERVERS", "")
+        if not servers.startswith(f"{SERVER_NAME}.") or not servers.endswith(f":{GRPC_PORT}"):
+            problems.append(f"{path}: VPM_SERVERS {servers!r} is not the headless Service "
+                            f"{SERVER_NAME}.NAMESPACE...:{GRPC_PORT}")
+    labels = balancer["spec"]["template"]["metadata"].get("labels", {})
+    fronts = [s for s in services.values()
+              if s["spec"].get("selector") and not s["spec"]["selector"].items() - labels.items()
+              and any(p.get("port") == GRPC_PORT for p in s["spec"].get("ports", []))]
+    if not fronts:
+        problems.append(f"{path}: no Service on {GRPC_PORT} selects the balancer pods")
+    return problems
+
+
+def _check_server_workload(path, server, services, out_ms):
     problems = []
     if int(server["spec"].get("replicas", 1)) < 2:
         problems.append(f"{path}: {SERVER_NAME} has fewer than 2 replicas")
     for container in _containers(server):
         if _listen_port(container.get("args", [])) != GRPC_PORT:
             problems.append(f"{path}: {container['name']} does not --listen on {GRPC_PORT}")
+        stop_s = server["spec"]["template"]["spec"].get("terminationGracePeriodSeconds", 30)
+        problems += check_drain(f"{path}: {container['name']}", container.get("args", []),
+                                stop_s, out_ms)
         for probe in ("readinessProbe", "livenessProbe"):
             grpc = container.get(probe, {}).get("grpc")
             if grpc is None:
@@ -191,7 +185,7 @@ def _check_server_workload(path, server, services):
     headless = services.get(SERVER_NAME)
     if headless is None or headless["spec"].get("clusterIP") != "None":
         problems.append(f"{path}: no headless Service {SERVER_NAME} (clusterIP: None) for "
-                        "Envoy to find every replica")
+                        "the balancer to find every replica")
     elif headless["spec"].get("selector", {}).items() - \
             server["spec"]["template"]["metadata"].get("labels", {}).items():
         problems.append(f"{path}: Service {SERVER_NAME} does not select the server pods")

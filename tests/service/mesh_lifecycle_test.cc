@@ -78,11 +78,13 @@ TEST_F(MeshLifecycleTest, ThousandBuildsOnOneVolumeAreNeverRefused) {
   const v2::VolumeInfo volume = LoadPhantom();
   v2::BuildMeshRequest build = SmallBuild(volume.volume_id());
   int refused = 0;
+  std::string first_id;
   for (int i = 0; i < 1000; ++i) {
     *build.mutable_params()->mutable_refine_at_mm() =
         V(10.0 + (i % 40) * 9.0, 10.0 + (i / 40) * 14.0, 150.0);
     v2::MeshInfo mesh;
     const grpc::Status status = Build(build, &mesh);
+    if (i == 0) first_id = mesh.mesh_id();
     if (!status.ok()) {
       ++refused;
       ADD_FAILURE() << "call " << i << ": " << status.error_message();
@@ -92,7 +94,8 @@ TEST_F(MeshLifecycleTest, ThousandBuildsOnOneVolumeAreNeverRefused) {
   EXPECT_EQ(refused, 0);
   // The first mesh, least recently used, was evicted.
   v2::GetMeshRequest get;
-  get.set_mesh_id("mesh-1");
+  ASSERT_FALSE(first_id.empty());
+  get.set_mesh_id(first_id);
   v2::GetMeshResponse got;
   auto context = Context();
   EXPECT_EQ(stub_->GetMesh(context.get(), get, &got).error_code(), grpc::NOT_FOUND);

@@ -1,8 +1,9 @@
 // Sessions, Render, Manipulate, SetCamera, Interact and Watch: status codes,
 // frames, a client that cancels mid-stream, a slow reader, shutdown during a
-// stream, the per-client stream cap.
+// stream, the drain before a stop, the per-client stream cap.
 #include <thread>
 
+#include "grpc/health/v1/health.grpc.pb.h"
 #include "server/raycast/frame_encoder.h"
 #include "tests/service/service_test_util.h"
 
@@ -394,6 +395,85 @@ TEST_F(SessionTest, Shutdown_FinishesOpenStreamsWithUnavailable) {
   EXPECT_EQ(reader->Finish().error_code(), grpc::UNAVAILABLE);
   stopper.join();
   EXPECT_EQ(server_->metrics().streams_opened(), server_->metrics().streams_closed());
+}
+
+// BeginDrain (vpm-server --drain-s): health answers NOT_SERVING at once,
+// while the session's stream, events and renders go on; calls that would
+// create a volume, mesh or session get UNAVAILABLE saying why. The stop
+// that follows ends the stream with UNAVAILABLE.
+TEST_F(SessionTest, Drain_NotServingWhileTheSessionGoesOn) {
+  auto health = grpc::health::v1::Health::NewStub(channel_);
+  auto Check = [&] {
+    grpc::health::v1::HealthCheckResponse response;
+    auto context = Context("");
+    const grpc::Status status = health->Check(context.get(), {}, &response);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return response.status();
+  };
+  ASSERT_EQ(Check(), grpc::health::v1::HealthCheckResponse::SERVING);
+  auto watch_context = Context();
+  const v2::WatchRequest request = SmallWatch();
+  auto reader = stub_->Watch(watch_context.get(), request);
+  v2::Frame frame;
+  ASSERT_TRUE(reader->Read(&frame));
+
+  server_->BeginDrain();
+  EXPECT_EQ(Check(), grpc::health::v1::HealthCheckResponse::NOT_SERVING);
+  // The session goes on: a grab and a drag are taken, and the stream shows them.
+  v2::ManipulateResponse manipulated;
+  ASSERT_TRUE(Manipulate(Grab(Centre(volume_), 1), &manipulated).ok());
+  ASSERT_TRUE(Manipulate(Drag(5, 2), &manipulated).ok());
+  bool shown = false;
+  while (!shown && reader->Read(&frame)) shown = frame.last_sequence() >= 2;
+  EXPECT_TRUE(shown) << "no frame of the drag while draining";
+  v2::RenderRequest render;
+  render.set_session_id(session_.session_id());
+  *render.mutable_settings() = Small();
+  v2::Frame still;
+  auto rc = Context();
+  EXPECT_TRUE(stub_->Render(rc.get(), render, &still).ok());
+  v2::ListSessionsResponse list;
+  auto lc = Context();
+  EXPECT_TRUE(stub_->ListSessions(lc.get(), {}, &list).ok());
+  // Nothing new is made here any more.
+  v2::OpenSessionRequest open;
+  open.set_volume_id(volume_.volume_id());
+  v2::SessionInfo info;
+  auto oc = Context();
+  const grpc::Status refused = stub_->OpenSession(oc.get(), open, &info);
+  EXPECT_EQ(refused.error_code(), grpc::UNAVAILABLE);
+  EXPECT_NE(refused.error_message().find("draining"), std::string::npos) << refused.error_message();
+  v2::LoadVolumeRequest load;
+  load.set_source("phantom:abdomen?size=32");
+  v2::VolumeInfo loaded;
+  auto vc = Context();
+  EXPECT_EQ(stub_->LoadVolume(vc.get(), load, &loaded).error_code(), grpc::UNAVAILABLE);
+  v2::BuildMeshRequest build;
+  build.set_volume_id(volume_.volume_id());
+  v2::MeshInfo mesh;
+  auto bc = Context();
+  EXPECT_EQ(stub_->BuildMesh(bc.get(), build, &mesh).error_code(), grpc::UNAVAILABLE);
+
+  std::thread stopper([&] { server_->Shutdown(std::chrono::milliseconds(3000)); });
+  while (reader->Read(&frame)) {
+  }
+  EXPECT_EQ(reader->Finish().error_code(), grpc::UNAVAILABLE);
+  stopper.join();
+}
+
+// Ids carry the server's random tag: behind a balancer, a session id from
+// one replica never names another replica's session.
+TEST_F(SessionTest, Ids_CarryTheServersTag) {
+  const std::string& tag = server_->id_tag();
+  ASSERT_EQ(tag.size(), 8u);
+  EXPECT_EQ(tag.find_first_not_of("0123456789abcdef"), std::string::npos) << tag;
+  EXPECT_EQ(session_.session_id(), "ses-" + tag + "-1");
+  EXPECT_EQ(volume_.volume_id(), "vol-" + tag + "-1");
+  EXPECT_EQ(session_.mesh_id(), "mesh-" + tag + "-1");
+  auto other = VpmServer::Create(SmallServerOptions(), SharedGpu());
+  ASSERT_TRUE(other.ok()) << other.status();
+  EXPECT_NE((*other)->id_tag(), tag);
+  (*other)->Shutdown(std::chrono::milliseconds(0));
 }
 
 TEST_F(SessionTest, CloseSession_EndsItsStreams) {

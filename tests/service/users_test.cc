@@ -335,8 +335,18 @@ TEST_F(UsersTest, StreamCapIsPerUser) {
     ASSERT_TRUE(readers.back()->Read(&frame));
   }
   EXPECT_EQ(Watch(kAlice, alices.session_id()).error_code(), grpc::RESOURCE_EXHAUSTED);
+  // An upload is a stream of its user too.
+  const std::vector<uint8_t> nifti = NiftiBytes();
+  const std::string sha = Sha256::HexOf(nifti);
+  v2::VolumeInfo uploaded;
+  const grpc::Status refused = Upload(nifti, int64_t(nifti.size()), sha, 64 << 10,
+                                      &uploaded, true, kAlice);
+  EXPECT_EQ(refused.error_code(), grpc::RESOURCE_EXHAUSTED) << refused.error_message();
   // Bob's streams are counted apart.
   EXPECT_TRUE(Watch(kBob, bobs.session_id()).ok());
+  const grpc::Status bobs_upload = Upload(nifti, int64_t(nifti.size()), sha,
+                                          64 << 10, &uploaded, true, kBob);
+  EXPECT_TRUE(bobs_upload.ok()) << bobs_upload.error_message();
   const std::string metrics = server_->metrics().Scrape();
   EXPECT_NE(metrics.find("vpm_user_streams{user=\"alice\"} 2"), std::string::npos) << metrics;
   for (size_t i = 0; i < readers.size(); ++i) {

@@ -28,7 +28,7 @@ export function testPaths(argv) {
 
 // Resolves once a line of the child's stdout or stderr matches `pattern`
 // (with the match); rejects when the child exits first or after timeoutMs.
-function waitForLine(child, pattern, what, timeoutMs, logFile) {
+export function waitForLine(child, pattern, what, timeoutMs, logFile) {
   const log = fs.createWriteStream(logFile);
   return new Promise((resolve, reject) => {
     let seen = '';
@@ -55,7 +55,7 @@ function waitForLine(child, pattern, what, timeoutMs, logFile) {
 
 const children = new Set();
 
-function track(child) {
+export function track(child) {
   children.add(child);
   child.on('exit', () => children.delete(child));
   return child;
@@ -88,16 +88,18 @@ export function writeUsersFile(file, users) {
 }
 
 // vpm-server on 127.0.0.1:port (0: ephemeral) with `token` (its user
-// `default`) and more flags `args`; resolves with {child, port, address}.
+// `default`) and any further `args`; resolves with {child, port, address,
+// metricsPort} (metricsPort with `--metrics-listen` among the args).
 export async function startServer({ build, out, token, port = 0, logName = 'server.log',
                                     args = [] }) {
   const binary = path.join(build, 'server', 'service', 'vpm-server');
   if (!fs.existsSync(binary)) throw new Error(`${binary} is missing: build the vpm-server target`);
   const child = track(spawn(binary, ['--listen', `127.0.0.1:${port}`, ...args], {
     env: { ...process.env, VPM_TOKEN: token }, stdio: ['ignore', 'pipe', 'pipe'] }));
-  const m = await waitForLine(child, /vpm-server listening on port (\d+)/, 'vpm-server', 30000,
-                              path.join(out, logName));
-  return { child, port: Number(m[1]), address: `127.0.0.1:${m[1]}` };
+  const m = await waitForLine(child, /vpm-server listening on port (\d+)( metrics on port (\d+))?/,
+                              'vpm-server', 30000, path.join(out, logName));
+  return { child, port: Number(m[1]), address: `127.0.0.1:${m[1]}`,
+           metricsPort: m[3] ? Number(m[3]) : null };
 }
 
 // The gateway on 127.0.0.1:port (0: ephemeral), talking to `serverAddress`;

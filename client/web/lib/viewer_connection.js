@@ -31,7 +31,7 @@ import { explainError } from './explain_error.js';
 import { packFrame } from './frame_packet.js';
 import { toProtoSettings } from './render_settings.js';
 import { parseMessage } from './validate_message.js';
-import { GrpcStatus, isServerDown, statusName } from './vpm_client.js';
+import { GrpcStatus, isServerDown, statusName, streamError } from './vpm_client.js';
 
 // Stream restarts after an event error that get no frame before failing
 // again: past this many the gateway waits for the browser's next event.
@@ -375,7 +375,8 @@ export class ViewerConnection {
       this.deliver(frame);
     });
     call.on('error', (err) => {
-      if (gen === this.streamGen) this.onStreamError(err, framed);
+      // Streams the gateway cancels are replaced first (streamGen moved on).
+      if (gen === this.streamGen) this.onStreamError(streamError(err), framed);
     });
     call.on('end', () => {
       if (gen === this.streamGen) this.call = null;

@@ -61,7 +61,7 @@ export class VpmClient {
   }
 
   // affinity: a key for `x-vpm-session`, on which a consistent-hash router
-  // (Envoy in docker/) picks the replica; every call of one browser tab
+  // (HAProxy in docker/) picks the replica; every call of one browser tab
   // carries the same key, so its volume, mesh, session and stream stay on
   // one server.
   // as: {token, affinity}: the user's bearer token ('' for a server
@@ -104,6 +104,22 @@ export class VpmClient {
 export function statusName(code) {
   const name = Object.keys(grpc.status).find((k) => grpc.status[k] === code);
   return name ?? `code ${code}`;
+}
+
+// The error of a stream the gateway did not cancel itself. A balancer that
+// loses the vpm-server replica behind a stream resets it (grpc-js: CANCELLED
+// "Call cancelled") or ends it without gRPC trailers (UNKNOWN "No status
+// received"): either is returned as UNAVAILABLE saying so; other errors
+// unchanged.
+export function streamError(err) {
+  const cut = err?.code === grpc.status.CANCELLED ||
+    (err?.code === grpc.status.UNKNOWN && /No status received/.test(err?.details ?? ''));
+  if (!cut) return err;
+  return Object.assign(new Error('replica lost'), {
+    code: grpc.status.UNAVAILABLE,
+    details: 'the stream ended without a status: the vpm-server replica behind the balancer ' +
+             'went away',
+  });
 }
 
 // True for errors that mean "the server is not there", as opposed to a call

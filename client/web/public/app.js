@@ -137,6 +137,12 @@ const handlers = {
   opened(m) {
     const sameVolume = state.camera && m.volume.source === state.volume?.source;
     Object.assign(state, { volume: m.volume, mesh: m.mesh, session: m.session, opening: false });
+    // Ids belong to one vpm-server replica: a reopen (the session lost with
+    // its replica, the gateway back) loads the volume again from its source,
+    // wherever the balancer sends it. An upload has no source to reload.
+    if (state.intent?.volume_id && !m.volume.source.startsWith('upload:')) {
+      state.intent = { source: m.volume.source };
+    }
     if (!sameVolume) state.camera = new OrbitCamera(m.volume);
     state.lastGrabMm = null;
     $('refine-grab').disabled = true;

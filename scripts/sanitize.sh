@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# make asan / make tsan: builds the service, render and FEM tests with a
+# sanitizer in build-asan or build-tsan and runs them; any report fails.
+#   address: AddressSanitizer + UndefinedBehaviorSanitizer (leaks checked)
+#   thread:  ThreadSanitizer
+# Which tests: the in-process service tests (streams, queues, uploads,
+# eviction, the render storm), the FEM tests, and the ray caster's tests
+# (GPU on lavapipe against the CPU reference). The other suites run
+# unsanitized in `make test`.
+set -euo pipefail
+mode="${1:?usage: scripts/sanitize.sh address|thread}"
+cd "$(dirname "$0")/.."
+case "$mode" in
+  address) dir=build-asan ;;
+  thread) dir=build-tsan ;;
+  *) echo "sanitize.sh: mode '$mode': use address or thread" >&2; exit 2 ;;
+esac
+service_tests=(service_basics_test service_session_test mesh_lifecycle_test cancellation_test
+               render_storm_test fair_job_queue_test resource_lifecycle_test)
+targets=("${service_tests[@]}" fem_test raycast_test)
+# -O1: the sanitizers' own advice; no -g2 to keep compiles short.
+cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DVPM_SANITIZE="$mode" >/dev/null
+start=$(date +%s)
+cmake --build "$dir" -j "$(nproc)" --target "${targets[@]}"
+echo "sanitize.sh: $mode build took $(( $(date +%s) - start )) s"
+supp="$PWD/scripts/sanitizer-suppressions"
+# Reports from code that is not ours (the Vulkan driver, gRPC's core) are
+# suppressed by library name only: scripts/sanitizer-suppressions/*.
+export ASAN_OPTIONS="detect_leaks=1:halt_on_error=1:abort_on_error=1"
+export LSAN_OPTIONS="suppressions=$supp/lsan.supp:print_suppressions=0"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$supp/tsan.supp"
+regex="^($(IFS='|'; echo "ServiceTest|SessionTest|UploadTest|DataRootTest|MeshLifecycleTest|CancellationTest|RenderStormTest|FairJobQueue|WorkerPool|ResourceLifecycleTest"))\.|^(Fem|Stiff|Polar|Patch|Uniaxial|LargeRotation|Heterogeneity|Constrained|FixedDofs|InversionBarrier|Interpolate|Raycast|Render|Clip|Slice|Camera|Overlay|FrameEncoder|Pick|VolumeMipWindow)"
+start=$(date +%s)
+(cd "$dir" && ctest -j "$(nproc)" --timeout 900 --output-on-failure -R "$regex")
+echo "sanitize.sh: $mode tests took $(( $(date +%s) - start )) s"

@@ -1,0 +1,102 @@
+// FairJobQueue: lanes take turns, caps refuse with a message, gone jobs are
+// purged (and handed back to drop) before anything is refused; WorkerPool
+// shutdown drops what is still queued at its deadline.
+#include "server/service/fair_job_queue.h"
+
+#include <atomic>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "server/service/worker_pool.h"
+
+namespace vpm::service {
+namespace {
+
+Job Tagged(const std::string& lane, std::vector<std::string>* log, std::string tag,
+           bool gone = false) {
+  return Job{.lane = lane,
+             .run = [log, tag] { log->push_back(tag); },
+             .gone = [gone] { return gone; },
+             .drop = [log, tag] { log->push_back("drop " + tag); }};
+}
+
+TEST(FairJobQueue, LanesTakeTurnsWhateverTheirBacklog) {
+  FairJobQueue queue({});
+  std::vector<std::string> log;
+  std::vector<Job> dropped;
+  for (int i = 0; i < 5; ++i) ASSERT_TRUE(queue.Push(Tagged("storm", &log, "s"), &dropped).ok());
+  ASSERT_TRUE(queue.Push(Tagged("stream", &log, "i1"), &dropped).ok());
+  ASSERT_TRUE(queue.Push(Tagged("stream", &log, "i2"), &dropped).ok());
+  Job job;
+  while (queue.Pop(&job)) job.run();
+  EXPECT_EQ(log, (std::vector<std::string>{"s", "i1", "s", "i2", "s", "s", "s"}));
+  EXPECT_EQ(queue.size(), 0);
+  EXPECT_EQ(queue.lanes(), 0);
+}
+
+TEST(FairJobQueue, FullLaneIsRefusedButPurgesGoneJobsFirst) {
+  FairJobQueue queue({.max_per_lane = 2, .max_total = 3});
+  std::vector<std::string> log;
+  std::vector<Job> dropped;
+  ASSERT_TRUE(queue.Push(Tagged("a", &log, "a1", /*gone=*/true), &dropped).ok());
+  ASSERT_TRUE(queue.Push(Tagged("a", &log, "a2"), &dropped).ok());
+  // Full lane: a1 is gone, so it is purged and a3 fits.
+  ASSERT_TRUE(queue.Push(Tagged("a", &log, "a3"), &dropped).ok());
+  ASSERT_EQ(dropped.size(), 1u);
+  dropped[0].drop();
+  EXPECT_EQ(log, std::vector<std::string>{"drop a1"});
+  dropped.clear();
+  // Nothing gone now: refused, with the cap in the message.
+  Status refused = queue.Push(Tagged("a", &log, "a4"), &dropped);
+  EXPECT_TRUE(absl::IsResourceExhausted(refused));
+  EXPECT_NE(refused.message().find("cap is 2"), std::string::npos) << refused;
+  // The whole queue's cap.
+  ASSERT_TRUE(queue.Push(Tagged("b", &log, "b1"), &dropped).ok());
+  refused = queue.Push(Tagged("c", &log, "c1"), &dropped);
+  EXPECT_TRUE(absl::IsResourceExhausted(refused));
+  EXPECT_NE(refused.message().find("cap is 3"), std::string::npos) << refused;
+  EXPECT_EQ(queue.size(), 3);
+  EXPECT_EQ(queue.TakeAll().size(), 3u);
+}
+
+TEST(WorkerPool, ShutdownRunsTheQueueUntilItsDeadlineThenDropsTheRest) {
+  auto pool = WorkerPool::Create({.threads = 1, .name = "test"});
+  ASSERT_TRUE(pool.ok());
+  std::atomic<int> ran{0}, dropped{0};
+  std::atomic<bool> release{false};
+  // A job that holds the only worker until released.
+  ASSERT_TRUE((*pool)->Post([&] {
+    while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ++ran;
+  }));
+  for (int i = 0; i < 10; ++i) {
+    ASSERT_TRUE((*pool)
+                    ->Submit(Job{.lane = "x", .run = [&] { ++ran; }, .drop = [&] { ++dropped; }})
+                    .ok());
+  }
+  std::thread releaser([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    release = true;
+  });
+  const auto start = std::chrono::steady_clock::now();
+  const int64_t n = (*pool)->Shutdown(start + std::chrono::milliseconds(100));
+  releaser.join();
+  EXPECT_EQ(n, 10);
+  EXPECT_EQ(dropped.load(), 10);
+  EXPECT_EQ(ran.load(), 1);  // the running job finished; none of the queued ran
+  // After shutdown, nothing is taken.
+  EXPECT_TRUE(absl::IsUnavailable((*pool)->Submit(Job{.lane = "x", .run = [] {}})));
+}
+
+TEST(WorkerPool, ShutdownWithTimeLeftRunsEverythingQueued) {
+  auto pool = WorkerPool::Create({.threads = 2, .name = "test"});
+  ASSERT_TRUE(pool.ok());
+  std::atomic<int> ran{0};
+  for (int i = 0; i < 50; ++i) ASSERT_TRUE((*pool)->Post([&] { ++ran; }));
+  EXPECT_EQ((*pool)->Shutdown(std::chrono::steady_clock::now() + std::chrono::seconds(10)), 0);
+  EXPECT_EQ(ran.load(), 50);
+}
+
+}  // namespace
+}  // namespace vpm::service

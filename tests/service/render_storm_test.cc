@@ -1,0 +1,173 @@
+// A storm of Render calls that nobody waits for does not starve an Interact
+// stream: 2,000 Render calls with 1 ms deadlines arrive while one client
+// drags; the drag keeps at least 80% of the frame rate it has alone, and at
+// most a handful of the expired renders run. The stream takes its turn in
+// its own lane of the render pool (fair_job_queue.h); expired calls are
+// purged or dropped unrun, and a full lane answers RESOURCE_EXHAUSTED with a
+// retry hint at once.
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <thread>
+#include <vector>
+
+#include "tests/service/service_test_util.h"
+
+namespace vpm::service::testing {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+class RenderStormTest : public ServiceTest {
+ protected:
+  // Frames received by a closed-loop drag (one drag event per frame read)
+  // during `seconds`, on `stream` that is already grabbing.
+  static int DragFor(grpc::ClientReaderWriter<v2::InteractRequest, v2::Frame>* stream,
+                     double seconds, uint64_t* sequence) {
+    int frames = 0;
+    const auto end = Clock::now() + std::chrono::duration<double>(seconds);
+    v2::Frame frame;
+    while (Clock::now() < end) {
+      v2::InteractRequest drag;
+      drag.mutable_event()->set_sequence(++*sequence);
+      *drag.mutable_event()->mutable_drag()->mutable_offset_mm() =
+          V(3.0 * std::sin(0.3 * double(*sequence)), 0, 0);
+      if (!stream->Write(drag) || !stream->Read(&frame)) break;
+      ++frames;
+    }
+    return frames;
+  }
+};
+
+TEST_F(RenderStormTest, ExpiredRenderStormKeepsTheDragAtEightyPercent) {
+  const v2::VolumeInfo volume = LoadPhantom();
+  const v2::SessionInfo session = OpenSession(volume.volume_id());
+  v2::RenderSettings small;
+  small.set_width(96);
+  small.set_height(96);
+
+  auto context = Context();
+  auto stream = stub_->Interact(context.get());
+  v2::InteractRequest first;
+  first.set_session_id(session.session_id());
+  first.mutable_event()->set_sequence(1);
+  *first.mutable_event()->mutable_settings() = small;
+  *first.mutable_event()->mutable_grab()->mutable_point_mm() = Centre(volume);
+  ASSERT_TRUE(stream->Write(first));
+  v2::Frame frame;
+  ASSERT_TRUE(stream->Read(&frame));
+  uint64_t sequence = 1;
+  DragFor(stream.get(), 0.5, &sequence);  // warm up
+
+  // The storm: 2,000 calls over about 4 s, each with a 1 ms deadline, from a
+  // second channel (another connection of the same client address).
+  auto storm_channel = grpc::CreateChannel("127.0.0.1:" + std::to_string(server_->port()),
+                                           grpc::InsecureChannelCredentials());
+  auto storm_stub = v2::Vpm::NewStub(storm_channel);
+  constexpr int kCalls = 2000;
+  std::atomic<bool> storming{false};
+  std::atomic<int> answered{0}, ok{0}, expired{0}, exhausted{0};
+  std::vector<std::unique_ptr<grpc::ClientContext>> contexts(kCalls);
+  std::vector<v2::Frame> frames(kCalls);
+  v2::RenderRequest request;
+  request.set_session_id(session.session_id());
+  *request.mutable_settings() = small;
+  const double rendered_before = server_->metrics().requests("Render", "OK");
+  std::thread storm([&] {
+    storming = true;
+    for (int i = 0; i < kCalls; ++i) {
+      contexts[i] = Context();
+      contexts[i]->set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(1));
+      storm_stub->async()->Render(contexts[i].get(), &request, &frames[i],
+                                  [&](grpc::Status status) {
+                                    ok += status.ok();
+                                    expired += status.error_code() == grpc::DEADLINE_EXCEEDED;
+                                    exhausted += status.error_code() == grpc::RESOURCE_EXHAUSTED;
+                                    if (!status.ok() &&
+                                        status.error_code() != grpc::DEADLINE_EXCEEDED &&
+                                        status.error_code() != grpc::RESOURCE_EXHAUSTED) {
+                                      std::printf("unexpected: %d %s\n", status.error_code(),
+                                                  status.error_message().c_str());
+                                    }
+                                    ++answered;
+                                  });
+      std::this_thread::sleep_for(std::chrono::microseconds(2000));
+    }
+    storming = false;
+  });
+
+  // "In the storm" while it runs, "alone" right after it, for as long.
+  while (!storming) std::this_thread::yield();
+  int storm_frames = 0;
+  const auto storm_start = Clock::now();
+  while (storming) storm_frames += DragFor(stream.get(), 0.25, &sequence);
+  const double storm_s = std::chrono::duration<double>(Clock::now() - storm_start).count();
+  storm.join();
+  const auto wait_end = Clock::now() + std::chrono::seconds(30);
+  while (answered < kCalls && Clock::now() < wait_end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(answered.load(), kCalls);
+  const double alone_s = std::min(storm_s, 4.0);
+  const int alone_frames = DragFor(stream.get(), alone_s, &sequence);
+
+  const double fps_alone = alone_frames / alone_s;
+  const double fps_storm = storm_frames / storm_s;
+  const double rendered = server_->metrics().requests("Render", "OK") - rendered_before;
+  std::printf("drag alone %.1f fps, in the storm %.1f fps (%.0f%%); of %d expired renders: "
+              "%d deadline, %d refused (queue full), %d ran (server counted %.0f)\n",
+              fps_alone, fps_storm, 100.0 * fps_storm / fps_alone, kCalls, expired.load(),
+              exhausted.load(), ok.load(), rendered);
+  EXPECT_GE(fps_storm, 0.8 * fps_alone);
+  EXPECT_LE(rendered, 20) << "expired renders that ran";
+  EXPECT_EQ(expired + exhausted + ok, kCalls);
+
+  stream->WritesDone();
+  while (stream->Read(&frame)) {
+  }
+  EXPECT_TRUE(stream->Finish().ok());
+}
+
+// A client that floods one pool gets RESOURCE_EXHAUSTED with gRPC's retry
+// pushback trailer once its lane is full, and the calls it had queued still
+// run.
+TEST_F(RenderStormTest, FullLaneIsRefusedWithARetryHint) {
+  const v2::VolumeInfo volume = LoadPhantom();
+  const v2::SessionInfo session = OpenSession(volume.volume_id());
+  v2::RenderRequest request;
+  request.set_session_id(session.session_id());
+  request.mutable_settings()->set_width(64);
+  request.mutable_settings()->set_height(64);
+  constexpr int kCalls = 200;  // past the default lane cap of 64
+  std::vector<std::unique_ptr<grpc::ClientContext>> contexts(kCalls);
+  std::vector<v2::Frame> frames(kCalls);
+  std::atomic<int> answered{0}, ok{0}, exhausted{0}, hinted{0};
+  for (int i = 0; i < kCalls; ++i) {
+    contexts[i] = Context();
+    grpc::ClientContext* c = contexts[i].get();
+    stub_->async()->Render(c, &request, &frames[i], [&, c](grpc::Status status) {
+      ok += status.ok();
+      if (status.error_code() == grpc::RESOURCE_EXHAUSTED) {
+        ++exhausted;
+        const auto& trailers = c->GetServerTrailingMetadata();
+        auto it = trailers.find("grpc-retry-pushback-ms");
+        hinted += it != trailers.end() && std::stoll(std::string(it->second.data(),
+                                                                  it->second.size())) > 0 &&
+                  status.error_message().find("retry after") != std::string::npos;
+      }
+      ++answered;
+    });
+  }
+  const auto end = Clock::now() + std::chrono::seconds(120);
+  while (answered < kCalls && Clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(answered.load(), kCalls);
+  EXPECT_GT(exhausted.load(), 0);
+  EXPECT_EQ(hinted.load(), exhausted.load());
+  EXPECT_GE(ok.load(), 64);
+  EXPECT_EQ(ok + exhausted, kCalls);
+}
+
+}  // namespace
+}  // namespace vpm::service::testing
