@@ -372,8 +372,17 @@ int main(int raw_argc, char** raw_argv) {
         best.gpu_total_ms, best.wall_ms, best.cpu_ms, best.cpu_ms / best.gpu_total_ms,
         best.gpu_cpu_time_ms, best.cpu_cpu_time_ms, best.cpu_cpu_time_ms / best.gpu_cpu_time_ms,
         best.mean_err, best.max_err);
-    std::printf("%-36s GPU map copy %.1f, occupancy %.1f, upscale %.1f ms (min each)\n", "",
-                best.gpu_map_copy_ms, best.gpu_occupancy_ms, best.gpu_upscale_ms);
+    // Samples taken (one more frame, counting): the rate the cast achieved,
+    // against the machine's limit (docs/BENCHMARKS.md, "Ray casting").
+    RenderRequest counting = r;
+    counting.settings.count_samples = true;
+    const Frame counted = bench::Check(renderer.Render(counting), "render");
+    const double pixels = double(counted.render_width) * counted.render_height;
+    std::printf("%-36s GPU map copy %.1f, occupancy %.1f, upscale %.1f ms (min each); "
+                "%.1f samples/pixel, %.0f M samples/s in the cast (%.0f M/s of CPU time)\n",
+                "", best.gpu_map_copy_ms, best.gpu_occupancy_ms, best.gpu_upscale_ms,
+                double(counted.samples) / pixels, double(counted.samples) / best.gpu_raycast_ms * 1e-3,
+                double(counted.samples) / best.gpu_cpu_time_ms * 1e-3);
     std::string file = c.name;
     for (char& ch : file) ch = std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
     WritePng(png_dir, file, best.frame);
