@@ -156,6 +156,7 @@ def mip_property(width, level, value_range):
 # --- VTK rendering ----------------------------------------------------------
 
 MAPPERS = ["FixedPoint", "GPU", "Smart", "Smart 0.5 mm"]
+CORES = os.cpu_count() or 2
 
 
 def make_mapper(kind, step_mm):
@@ -218,25 +219,28 @@ class VtkScene:
         self.renderer.ResetCameraClippingRange()
 
     def frame(self):
-        """Renders and reads back; returns (ms, RGB array rows bottom-up)."""
-        t0 = time.perf_counter()
+        """Renders and reads back; returns (wall ms, process CPU ms / cores,
+        RGB array rows bottom-up)."""
+        c0, t0 = time.process_time(), time.perf_counter()
         self.window.Render()
         self.grab.Modified()
         self.grab.Update()
         ms = (time.perf_counter() - t0) * 1e3
+        cpu = (time.process_time() - c0) * 1e3 / CORES
         out = self.grab.GetOutput()
         rgb = numpy_support.vtk_to_numpy(out.GetPointData().GetScalars())
-        return ms, rgb.reshape(self.size, self.size, -1)[:, :, :3].copy()
+        return ms, cpu, rgb.reshape(self.size, self.size, -1)[:, :, :3].copy()
 
     def measure(self, reps, update_rate, warmup):
+        """(min wall ms, min CPU ms / cores, last frame)."""
         self.window.SetDesiredUpdateRate(update_rate)
         for _ in range(warmup):
             self.frame()
-        best, rgb = math.inf, None
+        best, best_cpu, rgb = math.inf, math.inf, None
         for _ in range(reps):
-            ms, rgb = self.frame()
-            best = min(best, ms)
-        return best, rgb
+            ms, cpu, rgb = self.frame()
+            best, best_cpu = min(best, ms), min(best_cpu, cpu)
+        return best, best_cpu, rgb
 
 
 # --- images -----------------------------------------------------------------
@@ -277,10 +281,15 @@ VPM_ROWS = {("mip", "still"): "still MIP", ("mip", "interactive"): "interactive 
             ("composite", "interactive"): "interactive DVR custom"}
 
 
-def run_vpm(args, volume_path, size, png_dir):
+def run_vpm(args, volume_path, size, png_dir, with_map):
+    """render_bench's rows; with_map: through an identity backward map (the
+    cost of a deformed volume), else without (DeformableScene's undeformed
+    frames)."""
     filt = "|".join(v + "$" for v in VPM_ROWS.values())
     cmd = [os.path.join(args.build, "bench", "render_bench"), "--no-reference", "--map-held",
-           "--step", str(args.step), "--render-tf", args.tf, volume_path, png_dir, filt, str(size)]
+           "--step", str(args.step), "--render-tf", args.tf]
+    cmd += [] if with_map else ["--no-map"]
+    cmd += [volume_path, png_dir, filt, str(size)]
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
     camera, window, rows = None, None, {}
     for line in out.splitlines():
@@ -294,8 +303,7 @@ def run_vpm(args, volume_path, size, png_dir):
             for name in VPM_ROWS.values():
                 if line.startswith(name + " ") and re.match(r"\s+\d+x\d+", line[len(name):]):
                     fields = line[len(name):].split()
-                    rows[name] = {"wall": float(fields[3]), "gpu": float(fields[2]),
-                                  "cpu_time": float(fields[7])}
+                    rows[name] = (float(fields[3]), float(fields[7]))  # wall, CPU / 2
     if camera is None or window is None or len(rows) != len(VPM_ROWS):
         sys.exit("peer_vtk: could not read render_bench's output:\n" + out)
     return camera, window, rows
@@ -313,6 +321,7 @@ def main():
     ap.add_argument("--step", type=float, default=1.0, help="sample step, mm")
     ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--mappers", default=",".join(MAPPERS))
+    ap.add_argument("--modes", default="mip,composite")
     args = ap.parse_args()
     mappers = [m for m in args.mappers.split(",") if m]
     for m in mappers:
@@ -339,20 +348,22 @@ def main():
     for size in [int(s) for s in args.sizes.split(",")]:
         png_dir = os.path.join(args.out, f"vpm_{size}")
         os.makedirs(png_dir, exist_ok=True)
-        camera, window, rows = run_vpm(args, volume_path, size, png_dir)
-        for (mode, quality), name in VPM_ROWS.items():
-            rgb = read_png(os.path.join(png_dir, name.replace(" ", "_") + ".png"))
-            entry = results.setdefault((mode, quality, size), {})
-            if quality == "still":
-                stills[("vpm", mode, size)] = rgb
-                entry["vpm"] = (rows[name]["wall"], None)
-            else:
-                entry["vpm"] = (rows[name]["wall"], psnr(rgb, stills[("vpm", mode, size)]))
+        for renderer, with_map in (("vpm", False), ("vpm map", True)):
+            camera, window, rows = run_vpm(args, volume_path, size, png_dir, with_map)
+            for (mode, quality), name in VPM_ROWS.items():
+                rgb = read_png(os.path.join(png_dir, name.replace(" ", "_") + ".png"))
+                entry = results.setdefault((mode, quality, size), {})
+                db = None
+                if quality == "still":
+                    stills[(renderer, mode, size)] = rgb
+                else:
+                    db = psnr(rgb, stills[(renderer, mode, size)])
+                entry[renderer] = (rows[name][0], rows[name][1], db)
         scene = VtkScene(image, size, camera)
         props = {"mip": mip_property(window["width"], window["level"], value_range),
                  "composite": composite_property(preset, True)}
         for kind in mappers:
-            for mode in ("mip", "composite"):
+            for mode in args.modes.split(","):
                 for quality in ("still", "interactive"):
                     mapper = make_mapper(kind, args.step)
                     if mode == "mip":
@@ -364,22 +375,27 @@ def main():
                     rate = 15.0 if quality == "interactive" else 0.0001
                     # Interactive: VTK adapts its sample distances to the
                     # time of the frames before, so it gets frames to settle.
-                    ms, rgb = scene.measure(args.reps, rate, 8 if quality == "interactive" else 1)
+                    ms, cpu, rgb = scene.measure(args.reps, rate,
+                                                 8 if quality == "interactive" else 1)
                     tag = f"vtk_{kind.replace(' ', '').replace('.', '')}_{mode}_{quality}_{size}"
                     write_png(os.path.join(args.out, tag + ".png"), rgb)
                     entry = results[(mode, quality, size)]
                     if quality == "still":
                         stills[(kind, mode, size)] = rgb
-                        entry[kind] = (ms, None)
+                        entry[kind] = (ms, cpu, None)
                     else:
-                        entry[kind] = (ms, psnr(rgb, stills[(kind, mode, size)]))
+                        entry[kind] = (ms, cpu, psnr(rgb, stills[(kind, mode, size)]))
             del mapper
-        for mode in ("mip", "composite"):
+        for mode in args.modes.split(","):
             if ("GPU", mode, size) in stills:
                 cross.append((mode, size, psnr(stills[("vpm", mode, size)],
                                                stills[("GPU", mode, size)])))
 
-    print_table(results, mappers)
+    print("\nWall ms per frame (min of %d), image read back:" % args.reps)
+    print_table(results, mappers, 0)
+    print("\nProcess CPU ms per frame / %d cores (min of %d): what the frame costs the "
+          "machine, less disturbed by other load:" % (CORES, args.reps))
+    print_table(results, mappers, 1)
     for mode, size, db in cross:
         print(f"vpm vs VTK GPU, still {mode} {size}^2: PSNR {db:.1f} dB (same camera, step, "
               f"window or transfer function; frames in {args.out})")
@@ -387,29 +403,32 @@ def main():
     print(f"# load at the end: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
 
 
-def print_table(results, mappers):
-    head = ["frame", "size", "vpm ms"] + [f"VTK {m} ms" for m in mappers]
+def print_table(results, mappers, column):
+    """One row per frame kind; column 0: wall ms, 1: CPU ms / cores."""
+    renderers = ["vpm", "vpm map"] + mappers
+    names = {"vpm": "vpm", "vpm map": "vpm through a map"}
+    head = ["frame", "size"] + [f"{names.get(r, 'VTK ' + r)} ms" for r in renderers]
     head += ["fastest VTK / vpm"]
     smart = [m for m in mappers if m.startswith("Smart")]
     head += [f"{m} / vpm" for m in smart]
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
-    for (mode, quality, size), entry in sorted(results.items(),
-                                               key=lambda kv: (kv[0][1] != "still", kv[0][0], kv[0][2])):
+    order = lambda kv: (kv[0][1] != "still", kv[0][0] != "mip", kv[0][2])
+    for (mode, quality, size), entry in sorted(results.items(), key=order):
         def cell(r):
             if r not in entry:
                 return "-"
-            ms, db = entry[r]
+            ms, db = entry[r][column], entry[r][2]
             return f"{ms:.1f}" if db is None else f"{ms:.1f} ({db:.1f} dB)"
-        vpm_ms = entry["vpm"][0]
-        vtk_ms = [entry[m][0] for m in mappers if m in entry and m != "Smart 0.5 mm"]
-        row = [f"{quality} {'MIP' if mode == 'mip' else 'composite'}", f"{size}^2", cell("vpm")]
-        row += [cell(m) for m in mappers]
-        row.append(f"{min(vtk_ms) / vpm_ms:.2f}" if vtk_ms else "-")
-        row += [f"{entry[m][0] / vpm_ms:.2f}" if m in entry else "-" for m in smart]
+        vpm_ms = entry["vpm"][column]
+        same_step = [entry[m][column] for m in mappers if m in entry and m != "Smart 0.5 mm"]
+        row = [f"{quality} {'MIP' if mode == 'mip' else 'composite'}", f"{size}^2"]
+        row += [cell(r) for r in renderers]
+        row.append(f"{min(same_step) / vpm_ms:.2f}" if same_step else "-")
+        row += [f"{entry[m][column] / vpm_ms:.2f}" if m in entry else "-" for m in smart]
         print("| " + " | ".join(row) + " |")
-    print("(interactive: ms (PSNR against the same renderer's still frame); fastest VTK: "
-          "FixedPoint, GPU and Smart at the same step)")
+    print("(interactive: ms (PSNR against the same renderer's still frame, dB); fastest VTK: "
+          "of FixedPoint, GPU and Smart at the same step)")
 
 
 if __name__ == "__main__":

@@ -13,6 +13,8 @@
 //   --no-reference: GPU only, no CPU reference (bench/peer_vtk.py);
 //   --map-held: every row keeps the map unchanged (its occupancy is computed
 //   once and reused, as while orbiting or for a still after a drag);
+//   --no-map: every row without the map (what DeformableScene renders while
+//   nothing is deformed);
 //   PNG_DIR: where to write the frames ("" for nowhere); FILTER: only the
 //   rows whose name contains it, or one of several separated by '|' (a part
 //   ending in '$' must end the name: "still MIP$|still DVR ct-bone$");
@@ -184,6 +186,7 @@ int main(int raw_argc, char** raw_argv) {
   std::optional<MipWindow> window;
   bool reference = true;
   bool map_held = false;
+  bool no_map = false;
   std::vector<char*> positional{raw_argv[0]};
   for (int i = 1; i < raw_argc; ++i) {
     const std::string arg = raw_argv[i];
@@ -198,6 +201,8 @@ int main(int raw_argc, char** raw_argv) {
       reference = false;
     } else if (arg == "--map-held") {
       map_held = true;
+    } else if (arg == "--no-map") {
+      no_map = true;
     } else {
       positional.push_back(raw_argv[i]);
     }
@@ -323,7 +328,8 @@ int main(int raw_argc, char** raw_argv) {
     r.width = r.height = size;
     r.volume = &gpu_volume;
     r.volume_image = volume_image;
-    r.backward_map = c.map ? &map : nullptr;
+    const bool use_map = c.map && !no_map;
+    r.backward_map = use_map ? &map : nullptr;
     // 0: the occupancy is recomputed every frame, as while dragging.
     r.backward_map_version =
         map_held || c.name.find("map unchanged") != std::string::npos ? 1 : 0;
@@ -353,7 +359,7 @@ int main(int raw_argc, char** raw_argv) {
       c0 = ProcessCpuMs();
       const auto& minmax =
           c.quality == RenderQuality::kStill ? still_minmax : interactive_minmax;
-      cpu = bench::Check(RenderReference(r, volume, c.map ? &host_map : nullptr, 2, &minmax),
+      cpu = bench::Check(RenderReference(r, volume, use_map ? &host_map : nullptr, 2, &minmax),
                          "reference");
       best.cpu_cpu_time_ms = std::min(best.cpu_cpu_time_ms, (ProcessCpuMs() - c0) / 2.0);
       best.cpu_ms = std::min(best.cpu_ms, cpu.timings.occupancy_ms + cpu.timings.raycast_ms +
