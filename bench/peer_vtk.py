@@ -387,18 +387,19 @@ def main():
                         entry[kind] = (ms, cpu, psnr(rgb, stills[(kind, mode, size)]))
             del mapper
         for mode in args.modes.split(","):
-            if ("GPU", mode, size) in stills:
-                cross.append((mode, size, psnr(stills[("vpm", mode, size)],
-                                               stills[("GPU", mode, size)])))
+            for kind in mappers:
+                cross.append((mode, size, kind, psnr(stills[("vpm", mode, size)],
+                                                     stills[(kind, mode, size)])))
 
     print("\nWall ms per frame (min of %d), image read back:" % args.reps)
     print_table(results, mappers, 0)
     print("\nProcess CPU ms per frame / %d cores (min of %d): what the frame costs the "
           "machine, less disturbed by other load:" % (CORES, args.reps))
     print_table(results, mappers, 1)
-    for mode, size, db in cross:
-        print(f"vpm vs VTK GPU, still {mode} {size}^2: PSNR {db:.1f} dB (same camera, step, "
-              f"window or transfer function; frames in {args.out})")
+    print(f"\nPSNR of each VTK still against vpm's (same camera, step, window or transfer "
+          f"function; the frames are in {args.out}):")
+    for mode, size, kind, db in cross:
+        print(f"  still {mode} {size}^2, VTK {kind}: {db:.1f} dB")
     load = os.getloadavg()
     print(f"# load at the end: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
 
