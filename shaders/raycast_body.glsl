@@ -314,6 +314,8 @@ struct BrickWalk {
   ivec3 b;
   vec3 t_next;
   float t_enter;
+  ivec3 step_b;  // the sign of dir per axis
+  vec3 t_delta;  // brick size / |dir| per axis: mm of ray per brick
 };
 
 // inv_dir: 1 / dir with no zero components (main), whose signs pick the faces.
@@ -323,28 +325,29 @@ BrickWalk walk_start(vec3 eye, vec3 dir, vec3 inv_dir, float t_near) {
   vec3 face = vec3(w.b + ivec3(greaterThan(inv_dir, vec3(0.0)))) * g_brick_mm;
   w.t_next = (face - eye) * inv_dir;
   w.t_enter = t_near;
+  w.step_b = ivec3(sign(inv_dir));
+  w.t_delta = g_brick_mm * abs(inv_dir);
   return w;
 }
 
 float walk_exit(BrickWalk w) { return min(w.t_next.x, min(w.t_next.y, w.t_next.z)); }
 
 // Into the next brick across the face the ray leaves by (x before y before
-// z on a tie). step_b: the sign of dir per axis; t_delta: brick size /
-// |dir| per axis (mm of ray per brick).
-void walk_step(inout BrickWalk w, ivec3 step_b, vec3 t_delta) {
+// z on a tie).
+void walk_step(inout BrickWalk w) {
   bool ax = w.t_next.x <= w.t_next.y && w.t_next.x <= w.t_next.z;
   bool ay = !ax && w.t_next.y <= w.t_next.z;
   bvec3 m = bvec3(ax, ay, !ax && !ay);
   w.t_enter = walk_exit(w);
-  w.b += ivec3(m) * step_b;
-  w.t_next += vec3(m) * t_delta;
+  w.b += ivec3(m) * w.step_b;
+  w.t_next += vec3(m) * w.t_delta;
 }
 
 // Walks on to the first brick that holds a sample (index >= k) and whose
 // occupancy is above threshold; sets k to that brick's first sample. False
 // when the ray ends first.
-bool walk_to_occupied(inout BrickWalk w, inout int k, float threshold, ivec3 step_b,
-                      vec3 t_delta, float t_near, float t_far, float step) {
+bool walk_to_occupied(inout BrickWalk w, inout int k, float threshold, float t_near,
+                      float t_far, float step) {
   for (;;) {
     if (w.t_enter > t_far) return false;
     int first = max(k, int(ceil((w.t_enter - t_near) / step)));
@@ -355,8 +358,22 @@ bool walk_to_occupied(inout BrickWalk w, inout int k, float threshold, ivec3 ste
       k = first;
       return true;
     }
-    walk_step(w, step_b, t_delta);
+    walk_step(w);
   }
+}
+
+// The next segment from sample k: with skipping, walks to the next brick
+// that holds a sample and is above threshold, and the segment ends where
+// the ray leaves it; without, the rest of the ray. Sets k to the segment's
+// first sample and t_end; false when the ray has no sample left.
+bool next_segment(inout BrickWalk w, inout int k, float threshold, bool skipping,
+                  float t_near, float t_far, float step, out float t_end) {
+  t_end = t_far;
+  if (skipping) {
+    if (!walk_to_occupied(w, k, threshold, t_near, t_far, step)) return false;
+    t_end = min(walk_exit(w), t_far);
+  }
+  return t_near + float(k) * step <= t_end;
 }
 
 vec4 lut_at(float v) {
@@ -459,21 +476,13 @@ void main() {
   float ray_max = kNoValue;
   float black = p.window.x, white = p.window.z;
   BrickWalk w = walk_start(eye, dir, inv_dir, t_near);
-  ivec3 step_b = ivec3(sign(inv_dir));
-  vec3 t_delta = g_brick_mm * abs(inv_dir);
   bool done = false;
-  for (;;) {
-    // A segment: the samples of the next brick that can raise the maximum
-    // (and show above the window); without skipping, the whole ray.
-    float t_end = t_far;
-    if (skipping) {
-      if (!walk_to_occupied(w, k, max(ray_max, black), step_b, t_delta, t_near, t_far, step)) {
-        break;
-      }
-      t_end = min(walk_exit(w), t_far);
-    }
+  // Segments: the samples of the next brick that can raise the maximum (and
+  // show above the window); without skipping, the whole ray.
+  for (float t_end;
+       !done && next_segment(w, k, max(ray_max, black), skipping, t_near, t_far, step, t_end);
+       walk_step(w)) {
     float t = t_near + float(k) * step;
-    if (t > t_end) break;
     vec3 x = eye + t * dir;
     for (;;) {
       ++taken;
@@ -487,8 +496,7 @@ void main() {
       if (t > t_end) break;
       x = eye + t * dir;
     }
-    if (done || !skipping) break;
-    walk_step(w, step_b, t_delta);
+    if (!skipping) break;
   }
   vec3 rgb = vec3(clamp((ray_max - p.window.x) * p.window.y, 0.0, 1.0));
 #else
@@ -498,17 +506,11 @@ void main() {
   if (kCellGradient) {
     // Segments of the brick walk, as in the MIP loop.
     BrickWalk walk = walk_start(eye, dir, inv_dir, t_near);
-    ivec3 step_b = ivec3(sign(inv_dir));
-    vec3 t_delta = g_brick_mm * abs(inv_dir);
     bool done = false;
-    for (;;) {
-      float t_end = t_far;
-      if (skipping) {
-        if (!walk_to_occupied(walk, k, 0.0, step_b, t_delta, t_near, t_far, step)) break;
-        t_end = min(walk_exit(walk), t_far);
-      }
+    for (float t_end;
+         !done && next_segment(walk, k, 0.0, skipping, t_near, t_far, step, t_end);
+         walk_step(walk)) {
       float t = t_near + float(k) * step;
-      if (t > t_end) break;
       vec3 x = eye + t * dir;
       for (;;) {
         ++taken;
@@ -532,8 +534,7 @@ void main() {
         if (t > t_end) break;
         x = eye + t * dir;
       }
-      if (done || !skipping) break;
-      walk_step(walk, step_b, t_delta);
+      if (!skipping) break;
     }
   }
   int phase = 0;       // 0: the next sample; 1..6: gradient taps around x_shade
