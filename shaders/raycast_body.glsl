@@ -362,6 +362,14 @@ bool walk_to_occupied(inout BrickWalk w, inout int k, float threshold, float t_n
   }
 }
 
+// Sample k of a segment that ends at t_end: x, and false once past the end.
+bool segment_sample(int k, float t_near, float step, float t_end, vec3 eye, vec3 dir,
+                    out vec3 x) {
+  float t = t_near + float(k) * step;
+  x = eye + t * dir;
+  return t <= t_end;
+}
+
 // The next segment from sample k: with skipping, walks to the next brick
 // that holds a sample and is above threshold, and the segment ends where
 // the ray leaves it; without, the rest of the ray. Sets k to the segment's
@@ -482,9 +490,9 @@ void main() {
   for (float t_end;
        !done && next_segment(w, k, max(ray_max, black), skipping, t_near, t_far, step, t_end);
        walk_step(w)) {
-    float t = t_near + float(k) * step;
-    vec3 x = eye + t * dir;
-    for (;;) {
+    vec3 x;
+    for (bool in_segment = segment_sample(k, t_near, step, t_end, eye, dir, x); in_segment;
+         in_segment = segment_sample(k, t_near, step, t_end, eye, dir, x)) {
       ++taken;
       ray_max = max(ray_max, deformed_value(x));
       ++k;
@@ -492,9 +500,6 @@ void main() {
         done = true;
         break;
       }
-      t = t_near + float(k) * step;
-      if (t > t_end) break;
-      x = eye + t * dir;
     }
     if (!skipping) break;
   }
@@ -510,9 +515,9 @@ void main() {
     for (float t_end;
          !done && next_segment(walk, k, 0.0, skipping, t_near, t_far, step, t_end);
          walk_step(walk)) {
-      float t = t_near + float(k) * step;
-      vec3 x = eye + t * dir;
-      for (;;) {
+      vec3 x;
+      for (bool in_segment = segment_sample(k, t_near, step, t_end, eye, dir, x); in_segment;
+           in_segment = segment_sample(k, t_near, step, t_end, eye, dir, x)) {
         ++taken;
         vec3 grad;
         vec4 c = lut_at(deformed_value_and_gradient(x, grad));
@@ -530,9 +535,6 @@ void main() {
             break;
           }
         }
-        t = t_near + float(k) * step;
-        if (t > t_end) break;
-        x = eye + t * dir;
       }
       if (!skipping) break;
     }
