@@ -491,8 +491,8 @@ void main() {
        !done && next_segment(w, k, max(ray_max, black), skipping, t_near, t_far, step, t_end);
        walk_step(w)) {
     vec3 x;
-    for (bool in_segment = segment_sample(k, t_near, step, t_end, eye, dir, x); in_segment;
-         in_segment = segment_sample(k, t_near, step, t_end, eye, dir, x)) {
+    segment_sample(k, t_near, step, t_end, eye, dir, x);  // next_segment: in the segment
+    for (;;) {
       ++taken;
       ray_max = max(ray_max, deformed_value(x));
       ++k;
@@ -500,6 +500,7 @@ void main() {
         done = true;
         break;
       }
+      if (!segment_sample(k, t_near, step, t_end, eye, dir, x)) break;
     }
     if (!skipping) break;
   }
@@ -516,8 +517,8 @@ void main() {
          !done && next_segment(walk, k, 0.0, skipping, t_near, t_far, step, t_end);
          walk_step(walk)) {
       vec3 x;
-      for (bool in_segment = segment_sample(k, t_near, step, t_end, eye, dir, x); in_segment;
-           in_segment = segment_sample(k, t_near, step, t_end, eye, dir, x)) {
+      segment_sample(k, t_near, step, t_end, eye, dir, x);  // next_segment: in the segment
+      for (;;) {
         ++taken;
         vec3 grad;
         vec4 c = lut_at(deformed_value_and_gradient(x, grad));
@@ -535,6 +536,7 @@ void main() {
             break;
           }
         }
+        if (!segment_sample(k, t_near, step, t_end, eye, dir, x)) break;
       }
       if (!skipping) break;
     }
