@@ -15,12 +15,15 @@ ImageSampleDistance 1; vpm's still quality at --step 1. Interactive: VTK's
 level of detail at DesiredUpdateRate 15 (the rate vtkRenderWindowInteractor
 asks for while the mouse moves; AutoAdjustSampleDistances on, as VTK
 defaults it), against vpm's interactive quality (half resolution, upscaled);
-each with its PSNR against its own still frame. "VTK Smart 0.5 mm": the
-Smart mapper at half the step, as Slicer and ParaView users render stills.
-Times are wall ms per frame, the minimum over --reps, with the image read
-back (vpm's `wall`; VTK: Render() and glReadPixels). Camera and geometry:
-the "vpm vs VTK" lines give the PSNR between vpm's still frames and VTK
-GPU's, and the PNGs of both are written to --out for looking at.
+each with its PSNR against its own still frame. "VTK Smart defaults": the
+Smart mapper as ParaView and Slicer users get it, VTK choosing its own
+step from the spacing. vpm renders without the map (what DeformableScene
+does while nothing is deformed) and, in its own column, through an
+identity map (what a deformed volume costs). Times: wall ms per frame, the
+minimum over --reps, with the image read back (vpm's `wall`; VTK: Render()
+and glReadPixels), and process CPU ms per frame / cores, less disturbed by
+other load. Camera and geometry: the PSNR of each VTK still against vpm's
+is printed, and the PNGs of all are written to --out for looking at.
 
 Run under a virtual X server (VTK's OpenGL mappers need a context):
     bench/setup_peer.sh      # python3-vtk9, xvfb (apt; bench-only)
@@ -155,7 +158,10 @@ def mip_property(width, level, value_range):
 
 # --- VTK rendering ----------------------------------------------------------
 
-MAPPERS = ["FixedPoint", "GPU", "Smart", "Smart 0.5 mm"]
+# "Smart 1 mm": the Smart mapper at the same step; "Smart defaults": as
+# ParaView and Slicer users get it, VTK choosing its own step from the
+# spacing (finer than 1 mm for stills).
+MAPPERS = ["FixedPoint", "GPU", "Smart 1 mm", "Smart defaults"]
 CORES = os.cpu_count() or 2
 
 
@@ -169,7 +175,8 @@ def make_mapper(kind, step_mm):
     else:
         m = vtk.vtkSmartVolumeMapper()
         m.SetRequestedRenderModeToDefault()
-        step_mm = 0.5 if kind == "Smart 0.5 mm" else step_mm
+        if kind == "Smart defaults":
+            return m
     m.SetSampleDistance(step_mm)
     return m
 
@@ -179,8 +186,11 @@ def set_quality(mapper, kind, interactive, step_mm):
     Interactive: VTK's own level of detail (AutoAdjustSampleDistances)."""
     if kind.startswith("Smart"):
         # The Smart mapper switches itself by the window's DesiredUpdateRate
-        # against its InteractiveUpdateRate (1): above, auto-adjusted.
-        mapper.SetInteractiveAdjustSampleDistances(1)
+        # against its InteractiveUpdateRate (1): above, auto-adjusted
+        # (InteractiveAdjustSampleDistances, on by default); below, its
+        # AutoAdjustSampleDistances (on by default: VTK's own step).
+        if kind == "Smart 1 mm":
+            mapper.SetAutoAdjustSampleDistances(0)
         return
     mapper.SetAutoAdjustSampleDistances(1 if interactive else 0)
     if not interactive:
@@ -410,7 +420,7 @@ def print_table(results, mappers, column):
     names = {"vpm": "vpm", "vpm map": "vpm through a map"}
     head = ["frame", "size"] + [f"{names.get(r, 'VTK ' + r)} ms" for r in renderers]
     head += ["fastest VTK / vpm"]
-    smart = [m for m in mappers if m.startswith("Smart")]
+    smart = [m for m in mappers if m == "Smart defaults"]
     head += [f"{m} / vpm" for m in smart]
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
@@ -422,7 +432,7 @@ def print_table(results, mappers, column):
             ms, db = entry[r][column], entry[r][2]
             return f"{ms:.1f}" if db is None else f"{ms:.1f} ({db:.1f} dB)"
         vpm_ms = entry["vpm"][column]
-        same_step = [entry[m][column] for m in mappers if m in entry and m != "Smart 0.5 mm"]
+        same_step = [entry[m][column] for m in mappers if m in entry and m != "Smart defaults"]
         row = [f"{quality} {'MIP' if mode == 'mip' else 'composite'}", f"{size}^2"]
         row += [cell(r) for r in renderers]
         row.append(f"{min(same_step) / vpm_ms:.2f}" if same_step else "-")
