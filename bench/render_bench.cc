@@ -3,9 +3,18 @@
 // frame in one run (runs alternate, minimum of 5 each), with empty-space skipping on and off, still 512x512 and
 // interactive (512x512 shown, 256x256 cast), texel-buffer and sampler3D
 // volume reads; then JPEG (quality 85) and PNG encoding of the still frame.
-// Usage: render_bench [--render-tf FILE] [SOURCE] [PNG_DIR] [FILTER] [SIZE]
-//   --render-tf: adds the row "still DVR custom", DVR with the transfer
-//   function of FILE (ParaView .json[#NAME] or Slicer .vp);
+// Usage: render_bench [--render-tf FILE] [--step MM] [--window W L]
+//                     [--no-reference] [SOURCE] [PNG_DIR] [FILTER] [SIZE]
+//   --render-tf: adds the rows "still DVR custom" and "interactive DVR
+//   custom", DVR with the transfer function of FILE (ParaView .json[#NAME]
+//   or Slicer .vp);
+//   --step: the sample step of every row, still and interactive (mm; default:
+//   each quality's own); --window: the MIP window (default: the volume's);
+//   --no-reference: GPU only, no CPU reference (bench/peer_vtk.py);
+//   --map-held: every row keeps the map unchanged (its occupancy is computed
+//   once and reused, as while orbiting or for a still after a drag);
+//   --no-map: every row without the map (what DeformableScene renders while
+//   nothing is deformed);
 //   PNG_DIR: where to write the frames ("" for nowhere); FILTER: only the
 //   rows whose name contains it, or one of several separated by '|' (a part
 //   ending in '$' must end the name: "still MIP$|still DVR ct-bone$");
@@ -28,6 +37,7 @@
 #include "server/io/read_render_transfer_function.h"
 #include "server/io/read_volume.h"
 #include "server/raycast/render_preset_from_tf.h"
+#include "server/raycast/volume_mip_window.h"
 
 using namespace vpm;
 
@@ -159,12 +169,40 @@ Difference Compare(const Frame& a, const Frame& b) {
 
 }  // namespace
 
+double ParseNumber(const char* text, const char* flag) {
+  char* end = nullptr;
+  const double v = std::strtod(text, &end);
+  if (end == text || *end != '\0' || !std::isfinite(v)) {
+    std::fprintf(stderr, "render_bench: %s takes a number, not '%s'\n", flag, text);
+    std::exit(2);
+  }
+  return v;
+}
+
 int main(int raw_argc, char** raw_argv) {
-  std::string render_tf;  // --render-tf FILE, anywhere; the rest are positional
+  // Flags anywhere; the rest are positional.
+  std::string render_tf;
+  double step_mm = 0.0;
+  std::optional<MipWindow> window;
+  bool reference = true;
+  bool map_held = false;
+  bool no_map = false;
   std::vector<char*> positional{raw_argv[0]};
   for (int i = 1; i < raw_argc; ++i) {
-    if (std::string(raw_argv[i]) == "--render-tf" && i + 1 < raw_argc) {
+    const std::string arg = raw_argv[i];
+    if (arg == "--render-tf" && i + 1 < raw_argc) {
       render_tf = raw_argv[++i];
+    } else if (arg == "--step" && i + 1 < raw_argc) {
+      step_mm = ParseNumber(raw_argv[++i], "--step");
+    } else if (arg == "--window" && i + 2 < raw_argc) {
+      const double width = ParseNumber(raw_argv[++i], "--window");
+      window = MipWindow{.level = ParseNumber(raw_argv[++i], "--window"), .width = width};
+    } else if (arg == "--no-reference") {
+      reference = false;
+    } else if (arg == "--map-held") {
+      map_held = true;
+    } else if (arg == "--no-map") {
+      no_map = true;
     } else {
       positional.push_back(raw_argv[i]);
     }
@@ -211,6 +249,8 @@ int main(int raw_argc, char** raw_argv) {
   if (custom) {
     cases.push_back({"still DVR custom", RenderMode::kDvr, kCustomPreset, RenderQuality::kStill,
                      true});
+    cases.push_back({"interactive DVR custom", RenderMode::kDvr, kCustomPreset,
+                     RenderQuality::kInteractive, true});
   }
   for (bool skip : {true, false}) {
     const char* s = skip ? "" : ", no skip";
@@ -261,6 +301,18 @@ int main(int raw_argc, char** raw_argv) {
               source.c_str(), (long long)volume.dims()[0], (long long)volume.dims()[1],
               (long long)volume.dims()[2], context->device_name().c_str(), reps,
               m, m, m, create_ms);
+  // What a peer renderer needs to draw the same frames (bench/peer_vtk.py).
+  {
+    const Camera camera = Camera::ForVolume(volume.geometry());
+    const glm::dvec3 eye = camera.Eye(), target = camera.Target(), up = camera.Up();
+    const MipWindow w = window.value_or(VolumeMipWindow(volume));
+    std::printf("camera: eye_mm %.6f %.6f %.6f target_mm %.6f %.6f %.6f up %.6f %.6f %.6f "
+                "fov_deg %.6f\n",
+                eye.x, eye.y, eye.z, target.x, target.y, target.z, up.x, up.y, up.z,
+                camera.pose().fov_deg);
+    std::printf("mip window: width %.6f level %.6f; step: %s\n", w.width, w.level,
+                step_mm > 0.0 ? (std::to_string(step_mm) + " mm").c_str() : "each quality's own");
+  }
   std::printf("%-36s %9s %7s %7s %7s %7s %7s | %7s %7s %7s | %8s %7s\n", "frame (as shown)",
               "cast", "GPU ms", "GPU all", "wall", "CPU ms", "CPU/GPU", "GPU t/2", "CPU t/2",
               "CPU/GPU", "err mean", "max/255");
@@ -276,9 +328,13 @@ int main(int raw_argc, char** raw_argv) {
     r.width = r.height = size;
     r.volume = &gpu_volume;
     r.volume_image = volume_image;
-    r.backward_map = c.map ? &map : nullptr;
+    const bool use_map = c.map && !no_map;
+    r.backward_map = use_map ? &map : nullptr;
     // 0: the occupancy is recomputed every frame, as while dragging.
-    r.backward_map_version = c.name.find("map unchanged") != std::string::npos ? 1 : 0;
+    r.backward_map_version =
+        map_held || c.name.find("map unchanged") != std::string::npos ? 1 : 0;
+    r.mip_window = window;
+    if (step_mm > 0.0) r.settings.step_mm = step_mm;
     r.settings.empty_space_skipping = c.skipping;
     r.settings.shading = c.shading;
     r.settings.interactive_cell_gradient = r.settings.still_cell_gradient = c.cell_gradient;
@@ -299,15 +355,17 @@ int main(int raw_argc, char** raw_argv) {
       best.gpu_upscale_ms = std::min(best.gpu_upscale_ms, f.timings.upscale_ms);
       best.wall_ms = std::min(best.wall_ms, f.timings.wall_ms);
       best.frame = std::move(f);
+      if (!reference) continue;
       c0 = ProcessCpuMs();
       const auto& minmax =
           c.quality == RenderQuality::kStill ? still_minmax : interactive_minmax;
-      cpu = bench::Check(RenderReference(r, volume, c.map ? &host_map : nullptr, 2, &minmax),
+      cpu = bench::Check(RenderReference(r, volume, use_map ? &host_map : nullptr, 2, &minmax),
                          "reference");
       best.cpu_cpu_time_ms = std::min(best.cpu_cpu_time_ms, (ProcessCpuMs() - c0) / 2.0);
       best.cpu_ms = std::min(best.cpu_ms, cpu.timings.occupancy_ms + cpu.timings.raycast_ms +
                                               cpu.timings.upscale_ms);
     }
+    if (!reference) best.mean_err = best.max_err = best.cpu_ms = best.cpu_cpu_time_ms = NAN;
     for (size_t i = 0; i < cpu.rgba.size(); ++i) {
       if (i % 4 == 3) continue;
       const double d = std::abs(double(cpu.rgba[i]) - double(best.frame.rgba[i]));
@@ -320,8 +378,17 @@ int main(int raw_argc, char** raw_argv) {
         best.gpu_total_ms, best.wall_ms, best.cpu_ms, best.cpu_ms / best.gpu_total_ms,
         best.gpu_cpu_time_ms, best.cpu_cpu_time_ms, best.cpu_cpu_time_ms / best.gpu_cpu_time_ms,
         best.mean_err, best.max_err);
-    std::printf("%-36s GPU map copy %.1f, occupancy %.1f, upscale %.1f ms (min each)\n", "",
-                best.gpu_map_copy_ms, best.gpu_occupancy_ms, best.gpu_upscale_ms);
+    // Samples taken (one more frame, counting): the rate the cast achieved,
+    // against the machine's limit (docs/BENCHMARKS.md, "Ray casting").
+    RenderRequest counting = r;
+    counting.settings.count_samples = true;
+    const Frame counted = bench::Check(renderer.Render(counting), "render");
+    const double pixels = double(counted.render_width) * counted.render_height;
+    std::printf("%-36s GPU map copy %.1f, occupancy %.1f, upscale %.1f ms (min each); "
+                "%.1f samples/pixel, %.0f M samples/s in the cast (%.0f M/s of CPU time)\n",
+                "", best.gpu_map_copy_ms, best.gpu_occupancy_ms, best.gpu_upscale_ms,
+                double(counted.samples) / pixels, double(counted.samples) / best.gpu_raycast_ms * 1e-3,
+                double(counted.samples) / best.gpu_cpu_time_ms * 1e-3);
     std::string file = c.name;
     for (char& ch : file) ch = std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
     WritePng(png_dir, file, best.frame);

@@ -6,11 +6,20 @@ build=${1:-build}
 mkdir -p out
 {
   echo "# vpm benchmarks, $(date -u +%Y-%m-%dT%H:%MZ), $(nproc) cores"
-  for b in gradient_bench mesh_build_bench fem_bench warp_bench render_bench drag_loop_bench; do
+  for b in gradient_bench mesh_build_bench fem_bench warp_bench render_bench sample_rate_bench drag_loop_bench; do
     if [ -x "$build/bench/$b" ]; then
       echo; echo "## $b"; "$build/bench/$b"
     else
       echo; echo "## $b: not built"
     fi
   done
+  # vpm against VTK's mappers (bench/peer_vtk.py): needs Debian's VTK and a
+  # virtual X server, installed by bench/setup_peer.sh, not by make test.
+  echo; echo "## peer_vtk"
+  if /usr/bin/python3 -c "import vtk" 2>/dev/null && command -v xvfb-run >/dev/null; then
+    xvfb-run -a -s "-screen 0 1280x1024x24" /usr/bin/python3 bench/peer_vtk.py \
+      --build "$build" --out out/peer
+  else
+    echo "skipped: VTK's Python bindings or xvfb-run missing (run bench/setup_peer.sh)"
+  fi
 } 2>&1 | tee out/bench.txt

@@ -2,6 +2,8 @@
 # Installs the Debian 12 packages vpm needs to build, test and run.
 # Idempotent: asks dpkg which packages are missing and installs only those.
 # Needs root (or sudo) only when something is missing.
+# `install-deps.sh --only PKG...` installs those packages instead of vpm's
+# list, the same way (bench/setup_peer.sh uses it for bench-only packages).
 set -euo pipefail
 
 packages=(
@@ -35,6 +37,10 @@ packages=(
 # are already on the PATH (a machine may carry a newer Node.js of its own).
 if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
   packages+=(nodejs npm)
+fi
+if [ "${1:-}" = "--only" ]; then
+  shift
+  packages=("$@")
 fi
 
 missing=()

@@ -54,7 +54,9 @@ layout(binding = 1) uniform samplerBuffer u_map;  // RGBA32F, grid points x fast
 // storage-buffer loads are not inlined.
 layout(std140, binding = 2) restrict readonly buffer Params { RaycastParams p; };
 layout(std140, binding = 3) uniform Lut { vec4 entries[VPM_RENDER_LUT_ENTRIES]; } u_lut;
-layout(std430, binding = 4) readonly buffer Occupancy { float occupancy[]; };
+// Per brick (R32F), as a uniform texel buffer: one gather per fetch on
+// lavapipe.
+layout(binding = 4) uniform samplerBuffer u_occupancy;
 layout(std430, binding = 5) writeonly buffer Pixels { uint pixels[]; };
 layout(std430, binding = 6) buffer Stats { uint samples_taken; };
 
@@ -290,11 +292,96 @@ int next_sample(float t_exit, float t_near, float step, int k) {
 // first sample in a brick above the threshold, or past t_far.
 void skip_empty_bricks(inout int k, inout float t, inout vec3 x, float threshold, vec3 eye,
                        vec3 dir, vec3 inv_dir, float t_near, float t_far, float step) {
-  while (t <= t_far && occupancy[brick_index(x)] <= threshold) {
+  while (t <= t_far && texelFetch(u_occupancy, brick_index(x)).r <= threshold) {
     k = next_sample(brick_exit(x, eye, inv_dir), t_near, step, k);
     t = t_near + float(k) * step;
     x = eye + t * dir;
   }
+}
+
+// The brick walk (MIP and cell-gradient DVR): a 3D DDA over the brick grid
+// along the ray. b: the brick the ray is in, entered at t_enter; t_next: the
+// ray parameter of its next face per axis (the brick is left at the least).
+// The ray is cut into segments, the samples of one occupied brick each,
+// taken in an inner loop with no brick test; between segments the walk
+// steps over empty bricks, and over bricks the ray crosses between two
+// samples, one brick per iteration and no sample. On lavapipe every
+// iteration pays for all the code of its loop body, so the brick code runs
+// once per brick instead of once per sample (docs/RENDERING.md, "Empty-space
+// skipping"). The CPU reference (raycast_cpu.cc) walks the same bricks with
+// the same arithmetic.
+struct BrickWalk {
+  ivec3 b;
+  vec3 t_next;
+  float t_enter;
+  ivec3 step_b;  // the sign of dir per axis
+  vec3 t_delta;  // brick size / |dir| per axis: mm of ray per brick
+};
+
+// inv_dir: 1 / dir with no zero components (main), whose signs pick the faces.
+BrickWalk walk_start(vec3 eye, vec3 dir, vec3 inv_dir, float t_near) {
+  BrickWalk w;
+  w.b = brick_of(eye + t_near * dir);
+  vec3 face = vec3(w.b + ivec3(greaterThan(inv_dir, vec3(0.0)))) * g_brick_mm;
+  w.t_next = (face - eye) * inv_dir;
+  w.t_enter = t_near;
+  w.step_b = ivec3(sign(inv_dir));
+  w.t_delta = g_brick_mm * abs(inv_dir);
+  return w;
+}
+
+float walk_exit(BrickWalk w) { return min(w.t_next.x, min(w.t_next.y, w.t_next.z)); }
+
+// Into the next brick across the face the ray leaves by (x before y before
+// z on a tie).
+void walk_step(inout BrickWalk w) {
+  bool ax = w.t_next.x <= w.t_next.y && w.t_next.x <= w.t_next.z;
+  bool ay = !ax && w.t_next.y <= w.t_next.z;
+  bvec3 m = bvec3(ax, ay, !ax && !ay);
+  w.t_enter = walk_exit(w);
+  w.b += ivec3(m) * w.step_b;
+  w.t_next += vec3(m) * w.t_delta;
+}
+
+// Walks on to the first brick that holds a sample (index >= k) and whose
+// occupancy is above threshold; sets k to that brick's first sample. False
+// when the ray ends first.
+bool walk_to_occupied(inout BrickWalk w, inout int k, float threshold, float t_near,
+                      float t_far, float step) {
+  for (;;) {
+    if (w.t_enter > t_far) return false;
+    int first = max(k, int(ceil((w.t_enter - t_near) / step)));
+    float t_first = t_near + float(first) * step;
+    ivec3 b = clamp(w.b, ivec3(0), g_bricks - 1);
+    if (t_first <= min(walk_exit(w), t_far) &&
+        texelFetch(u_occupancy, b.x + g_bricks.x * (b.y + g_bricks.y * b.z)).r > threshold) {
+      k = first;
+      return true;
+    }
+    walk_step(w);
+  }
+}
+
+// Sample k of a segment that ends at t_end: x, and false once past the end.
+bool segment_sample(int k, float t_near, float step, float t_end, vec3 eye, vec3 dir,
+                    out vec3 x) {
+  float t = t_near + float(k) * step;
+  x = eye + t * dir;
+  return t <= t_end;
+}
+
+// The next segment from sample k: with skipping, walks to the next brick
+// that holds a sample and is above threshold, and the segment ends where
+// the ray leaves it; without, the rest of the ray. Sets k to the segment's
+// first sample and t_end; false when the ray has no sample left.
+bool next_segment(inout BrickWalk w, inout int k, float threshold, bool skipping,
+                  float t_near, float t_far, float step, out float t_end) {
+  t_end = t_far;
+  if (skipping) {
+    if (!walk_to_occupied(w, k, threshold, t_near, t_far, step)) return false;
+    t_end = min(walk_exit(w), t_far);
+  }
+  return t_near + float(k) * step <= t_end;
 }
 
 vec4 lut_at(float v) {
@@ -396,19 +483,26 @@ void main() {
   bool early = has_flag(VPM_RAYCAST_EARLY_TERMINATION);
   float ray_max = kNoValue;
   float black = p.window.x, white = p.window.z;
-  for (;;) {
-    float t = t_near + float(k) * step;
-    vec3 x = eye + t * dir;
-    // Bricks that cannot raise the maximum (or show above the window).
-    if (skipping) {
-      skip_empty_bricks(k, t, x, max(ray_max, black), eye, dir, inv_dir, t_near, t_far,
-                        step);
+  BrickWalk w = walk_start(eye, dir, inv_dir, t_near);
+  bool done = false;
+  // Segments: the samples of the next brick that can raise the maximum (and
+  // show above the window); without skipping, the whole ray.
+  for (float t_end;
+       !done && next_segment(w, k, max(ray_max, black), skipping, t_near, t_far, step, t_end);
+       walk_step(w)) {
+    vec3 x;
+    segment_sample(k, t_near, step, t_end, eye, dir, x);  // next_segment: in the segment
+    for (;;) {
+      ++taken;
+      ray_max = max(ray_max, deformed_value(x));
+      ++k;
+      if (early && ray_max >= white) {
+        done = true;
+        break;
+      }
+      if (!segment_sample(k, t_near, step, t_end, eye, dir, x)) break;
     }
-    if (t > t_far) break;
-    ++taken;
-    ray_max = max(ray_max, deformed_value(x));
-    if (early && ray_max >= white) break;
-    ++k;
+    if (!skipping) break;
   }
   vec3 rgb = vec3(clamp((ray_max - p.window.x) * p.window.y, 0.0, 1.0));
 #else
@@ -416,25 +510,35 @@ void main() {
   bool early = has_flag(VPM_RAYCAST_EARLY_TERMINATION);
   vec4 acc = vec4(0.0);
   if (kCellGradient) {
-    for (;;) {
-      float t = t_near + float(k) * step;
-      vec3 x = eye + t * dir;
-      if (skipping) skip_empty_bricks(k, t, x, 0.0, eye, dir, inv_dir, t_near, t_far, step);
-      if (t > t_far) break;
-      ++taken;
-      vec3 grad;
-      vec4 c = lut_at(deformed_value_and_gradient(x, grad));
-      float w = (1.0 - acc.a) * c.a;
-      if (shading) {
-        c.rgb = w > kShadeMinWeight ? shade(c.rgb, grad, dir)
-                                    : min(c.rgb * (g_shading.x + g_shading.y), vec3(1.0));
+    // Segments of the brick walk, as in the MIP loop.
+    BrickWalk walk = walk_start(eye, dir, inv_dir, t_near);
+    bool done = false;
+    for (float t_end;
+         !done && next_segment(walk, k, 0.0, skipping, t_near, t_far, step, t_end);
+         walk_step(walk)) {
+      vec3 x;
+      segment_sample(k, t_near, step, t_end, eye, dir, x);  // next_segment: in the segment
+      for (;;) {
+        ++taken;
+        vec3 grad;
+        vec4 c = lut_at(deformed_value_and_gradient(x, grad));
+        float w = (1.0 - acc.a) * c.a;
+        if (shading) {
+          c.rgb = w > kShadeMinWeight ? shade(c.rgb, grad, dir)
+                                      : min(c.rgb * (g_shading.x + g_shading.y), vec3(1.0));
+        }
+        ++k;
+        if (c.a > 0.0) {
+          acc.rgb += w * c.rgb;
+          acc.a += w;
+          if (early && acc.a > kOpaque) {
+            done = true;
+            break;
+          }
+        }
+        if (!segment_sample(k, t_near, step, t_end, eye, dir, x)) break;
       }
-      if (c.a > 0.0) {
-        acc.rgb += w * c.rgb;
-        acc.a += w;
-        if (early && acc.a > kOpaque) break;
-      }
-      ++k;
+      if (!skipping) break;
     }
   }
   int phase = 0;       // 0: the next sample; 1..6: gradient taps around x_shade

@@ -223,6 +223,52 @@ class Caster {
     return std::min(t.x, std::min(t.y, t.z));
   }
 
+  // The brick walk of raycast_body.glsl (walk_start, walk_exit, walk_step,
+  // walk_to_occupied): the same arithmetic, so the same bricks and samples.
+  struct BrickWalk {
+    ivec3 b;
+    vec3 t_next;
+    float t_enter;
+  };
+
+  BrickWalk WalkStart(vec3 eye, vec3 dir, vec3 inv_dir, float t_near) const {
+    BrickWalk w;
+    w.b = BrickOf(eye + t_near * dir);
+    const vec3 face = vec3(w.b + ivec3(glm::greaterThan(inv_dir, vec3(0.0f)))) * brick_size_;
+    w.t_next = (face - eye) * inv_dir;
+    w.t_enter = t_near;
+    return w;
+  }
+
+  static float WalkExit(const BrickWalk& w) {
+    return std::min(w.t_next.x, std::min(w.t_next.y, w.t_next.z));
+  }
+
+  static void WalkStep(BrickWalk& w, ivec3 step_b, vec3 t_delta) {
+    const bool ax = w.t_next.x <= w.t_next.y && w.t_next.x <= w.t_next.z;
+    const bool ay = !ax && w.t_next.y <= w.t_next.z;
+    const glm::bvec3 m(ax, ay, !ax && !ay);
+    w.t_enter = WalkExit(w);
+    w.b += ivec3(m) * step_b;
+    w.t_next += vec3(m) * t_delta;
+  }
+
+  bool WalkToOccupied(BrickWalk& w, int& k, float threshold, ivec3 step_b, vec3 t_delta,
+                      float t_near, float t_far, float step) const {
+    for (;;) {
+      if (w.t_enter > t_far) return false;
+      const int first = std::max(k, int(std::ceil((w.t_enter - t_near) / step)));
+      const float t_first = t_near + float(first) * step;
+      const ivec3 b = glm::clamp(w.b, ivec3(0), nb_ - 1);
+      if (t_first <= std::min(WalkExit(w), t_far) &&
+          in_.occupancy[b.x + nb_.x * (b.y + nb_.y * b.z)] > threshold) {
+        k = first;
+        return true;
+      }
+      WalkStep(w, step_b, t_delta);
+    }
+  }
+
   const gpu::RaycastParams& p_;
   const RaycastCpuInputs& in_;
   const float* values_;
@@ -259,7 +305,52 @@ uint32_t Caster::Pixel(int px, int py, int64_t& taken) const {
   float ray_max = kNoValue;
   vec4 acc(0.0f);
   int k = 0;
-  for (;;) {
+  // One sample k at x: true when the ray is done (early termination).
+  const auto sample = [&](vec3 x) {
+    ++taken;
+    vec3 cell_gradient(0.0f);
+    const float v = cell ? DeformedValueAndGradient(x, cell_gradient) : DeformedValue(x);
+    if (mip) {
+      ray_max = std::max(ray_max, v);
+      return early && ray_max >= p_.window.z;  // white: no later sample shows
+    }
+    const vec4 c = LutAt(v);
+    if (c.a <= 0.0f) return false;
+    vec3 rgb = vec3(c);
+    if (shading) {
+      rgb = (1.0f - acc.a) * c.a > kShadeMinWeight
+                ? Shade(rgb, cell ? cell_gradient : TapGradient(x), dir)
+                : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(1.0f));
+    }
+    const float w = (1.0f - acc.a) * c.a;
+    acc += vec4(w * rgb, w);
+    return early && acc.a > kOpaque;
+  };
+  if (mip || cell) {
+    // Segments of the brick walk (raycast_body.glsl): the samples of one
+    // occupied brick, then the walk to the next.
+    BrickWalk walk = WalkStart(eye, dir, inv_dir, t_near);
+    const ivec3 step_b(inv_dir.x < 0.0f ? -1 : 1, inv_dir.y < 0.0f ? -1 : 1,
+                       inv_dir.z < 0.0f ? -1 : 1);
+    const vec3 t_delta = brick_size_ * glm::abs(inv_dir);
+    for (bool done = false; !done;) {
+      float t_end = t_far;
+      if (skipping) {
+        const float threshold = mip ? std::max(ray_max, p_.window.x) : 0.0f;
+        if (!WalkToOccupied(walk, k, threshold, step_b, t_delta, t_near, t_far, step)) break;
+        t_end = std::min(WalkExit(walk), t_far);
+      }
+      for (float t = t_near + float(k) * step; t <= t_end; t = t_near + float(k) * step) {
+        done = sample(eye + t * dir);
+        ++k;
+        if (done) break;
+      }
+      if (!skipping) break;
+      WalkStep(walk, step_b, t_delta);
+    }
+    k = -1;  // the per-sample loop below is for the tap gradient
+  }
+  for (; k >= 0;) {
     const float t = t_near + float(k) * step;
     if (t > t_far) break;
     const vec3 x = eye + t * dir;
@@ -273,26 +364,7 @@ uint32_t Caster::Pixel(int px, int py, int64_t& taken) const {
         continue;
       }
     }
-    ++taken;
-    vec3 cell_gradient(0.0f);
-    const float v = cell ? DeformedValueAndGradient(x, cell_gradient) : DeformedValue(x);
-    if (mip) {
-      ray_max = std::max(ray_max, v);
-      if (early && ray_max >= p_.window.z) break;  // white: no later sample shows
-    } else {
-      const vec4 c = LutAt(v);
-      if (c.a > 0.0f) {
-        vec3 rgb = vec3(c);
-        if (shading) {
-          rgb = (1.0f - acc.a) * c.a > kShadeMinWeight
-                    ? Shade(rgb, cell ? cell_gradient : TapGradient(x), dir)
-                    : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(1.0f));
-        }
-        const float w = (1.0f - acc.a) * c.a;
-        acc += vec4(w * rgb, w);
-        if (early && acc.a > kOpaque) break;
-      }
-    }
+    if (sample(x)) break;
     ++k;
   }
   const vec3 rgb = mip ? vec3(std::clamp((ray_max - p_.window.x) * p_.window.y, 0.0f, 1.0f))

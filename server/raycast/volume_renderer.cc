@@ -78,7 +78,7 @@ Status VolumeRenderer::Init() {
                        cell_gradient ? " (cell gradient)" : ""),
         .spirv = RaycastSpirv(sampled, mip, map),
         .bindings = {volume_read, volume_read, DT::eStorageBuffer, DT::eUniformBuffer,
-                     DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
+                     DT::eUniformTexelBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
         .push_constant_bytes = 0,
         .local_size = {8, 8, 1}};
     if (cell_gradient) spec.specialization = {1u};
@@ -142,6 +142,20 @@ Status VolumeRenderer::EnsureMapTexels(size_t points) {
         context_->device(), vk::BufferViewCreateInfo({}, map_texels_->handle(),
                                                      vk::Format::eR32G32B32A32Sfloat, 0,
                                                      VK_WHOLE_SIZE));
+  });
+}
+
+Status VolumeRenderer::EnsureOccupancy(size_t bricks) {
+  if (occupancy_ && occupancy_->size_bytes() >= bricks * sizeof(float)) return absl::OkStatus();
+  occupancy_key_.reset();
+  occupancy_view_ = nullptr;
+  occupancy_.reset();
+  RETURN_IF_ERROR(EnsureBuffer(occupancy_, bricks * sizeof(float),
+                               BU::eStorageBuffer | BU::eUniformTexelBuffer));
+  return gpu::CatchVulkan("creating the occupancy's texel view", [&] {
+    occupancy_view_ = vk::raii::BufferView(
+        context_->device(), vk::BufferViewCreateInfo({}, occupancy_->handle(),
+                                                     vk::Format::eR32Sfloat, 0, VK_WHOLE_SIZE));
   });
 }
 
@@ -259,7 +273,7 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
   const gpu::KernelArg map_arg =
       sampled ? gpu::KernelArg(map) : gpu::KernelArg(map_view);
   const std::array<gpu::KernelArg, 7> args{
-      volume_arg, map_arg, &*params_, &*lut_, &*occupancy_, &*pixels_, &*stats_};
+      volume_arg, map_arg, &*params_, &*lut_, *occupancy_view_, &*pixels_, &*stats_};
   const gpu::ComputeKernel& raycast = (p.image.z & kRaycastCellGradient) != 0
                                           ? *cell_gradient_kernels_[has_map]
                                           : *raycast_kernels_[mip][has_map];
@@ -299,8 +313,7 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   const size_t render_pixels = size_t(setup.render_width) * setup.render_height;
   const size_t out_pixels = size_t(request.width) * request.height;
   const bool upscale = render_pixels != out_pixels;
-  if (!occupancy_ || occupancy_->size_bytes() < bricks * sizeof(float)) occupancy_key_.reset();
-  RETURN_IF_ERROR(EnsureBuffer(occupancy_, bricks * sizeof(float), BU::eStorageBuffer));
+  RETURN_IF_ERROR(EnsureOccupancy(bricks));
   RETURN_IF_ERROR(EnsureBuffer(pixels_, render_pixels * 4, BU::eStorageBuffer));
   // A view of the caller's copy of the map, when it gives one: created per
   // frame (microseconds), so that it never outlives the buffer.

@@ -84,6 +84,7 @@ class VolumeRenderer {
   Status EnsureBuffer(std::optional<gpu::GpuBuffer>& buffer, vk::DeviceSize bytes,
                       vk::BufferUsageFlags usage);
   Status EnsureMapTexels(size_t points);
+  Status EnsureOccupancy(size_t bricks);
   Status RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
                      const RaycastSetup& setup, const gpu::GpuBuffer& minmax, bool upscale,
                      bool occupancy_current, vk::BufferView map_view);
@@ -105,7 +106,11 @@ class VolumeRenderer {
   std::optional<gpu::GpuBuffer> lut_;             // RenderLutBlock, uniform
   std::optional<gpu::GpuBuffer> nonzero_prefix_;  // int per entry + 1, storage
   std::optional<gpu::GpuBuffer> stats_;           // sample counter, storage
-  std::optional<gpu::GpuBuffer> occupancy_;       // float per brick, storage
+  // Float per brick: written as storage, read by the ray casters through a
+  // uniform texel view (a gather on lavapipe, where a storage-buffer load
+  // at a per-lane index is a loop over the lanes).
+  std::optional<gpu::GpuBuffer> occupancy_;
+  vk::raii::BufferView occupancy_view_{nullptr};  // after the buffer it views
   std::optional<gpu::GpuBuffer> pixels_;          // ray-cast RGBA8, storage
   std::optional<gpu::GpuBuffer> upscaled_;        // interactive output, storage
   std::vector<BrickGrid> brick_grids_;

@@ -113,6 +113,10 @@ class DeformableScene {
   const FemModel& fem() const { return *fem_; }
   std::vector<glm::dvec3> Positions() const { return fem_->Positions(); }
   const BackwardMap& backward_map() const { return *map_; }  // stale until SyncMap (deferred)
+  // True while every FEM displacement is exactly 0 (before any drag, after a
+  // release), as of the last map update: frames are then cast without the
+  // map, which is the identity there (the same picture, a third less work).
+  bool map_is_identity() const { return map_identity_; }
 
  private:
   DeformableScene() = default;
@@ -135,6 +139,7 @@ class DeformableScene {
   uint64_t map_version_ = 0;
   bool defer_map_update_ = false;
   bool map_stale_ = false;  // deferred mode: FEM moved since the last map update
+  bool map_identity_ = true;  // every displacement 0 at the last map update
 };
 
 }  // namespace vpm

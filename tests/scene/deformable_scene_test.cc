@@ -107,5 +107,37 @@ TEST_F(DeformableSceneTest, DeferredMapGivesTheSameFramesAsImmediateUpdates) {
   EXPECT_EQ(testing::CompareRgba(b->rgba, rest->rgba).max_abs, 0.0);
 }
 
+// Undeformed frames skip the map (the identity there) and show exactly what
+// a cast through it shows; a drag brings the map back, a release removes it.
+TEST_F(DeformableSceneTest, UndeformedFramesSkipTheIdentityMap) {
+  auto scene = Scene(false);
+  ASSERT_TRUE(scene);
+  EXPECT_TRUE(scene->map_is_identity());
+  auto rest = scene->Render(View());
+  ASSERT_TRUE(rest.ok()) << rest.status();
+  RenderRequest through_map;
+  through_map.camera = View().camera;
+  through_map.preset = View().preset;
+  through_map.width = through_map.height = 64;
+  through_map.volume = &case_->gpu_volume;
+  through_map.backward_map = &scene->backward_map().image();
+  auto mapped = case_->renderer->Render(through_map);
+  ASSERT_TRUE(mapped.ok()) << mapped.status();
+  EXPECT_EQ(testing::CompareRgba(rest->rgba, mapped->rgba).max_abs, 0.0);
+
+  ASSERT_TRUE(scene->Grab(Centre(), 12.0).ok());
+  EXPECT_TRUE(scene->map_is_identity()) << "a grab alone moves nothing";
+  ASSERT_TRUE(scene->Drag({0.0, 1.0, 4.0}).ok());
+  EXPECT_FALSE(scene->map_is_identity());
+  auto dragged = scene->Render(View());
+  ASSERT_TRUE(dragged.ok());
+  EXPECT_GT(testing::CompareRgba(dragged->rgba, rest->rgba).max_abs, 0.1);
+  ASSERT_TRUE(scene->Release().ok());
+  EXPECT_TRUE(scene->map_is_identity());
+  auto released = scene->Render(View());
+  ASSERT_TRUE(released.ok());
+  EXPECT_EQ(testing::CompareRgba(released->rgba, rest->rgba).max_abs, 0.0);
+}
+
 }  // namespace
 }  // namespace vpm
