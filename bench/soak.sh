@@ -12,8 +12,15 @@
 #   - fairness: the slowest session's fps against the average, per level.
 #
 # Usage: bench/soak.sh [BUILD_DIR] [DURATION_S] [SOURCE]
+#        bench/soak.sh --churn MINUTES [BUILD_DIR] [SOURCE]
 # Writes out/soak.json (the vpm-load report) and out/soak-server.log.
 set -euo pipefail
+# bench/soak.sh --churn MINUTES [BUILD_DIR] [SOURCE]: the churn soak
+# (bench/soak_churn.py: 16 users, sessions opening and closing, uploads,
+# cancelled calls, Watch clients killed, one user hammering Render).
+if [ "${1:-}" = "--churn" ]; then
+  exec /usr/bin/python3 "$(dirname "$0")/soak_churn.py" "${3:-build}" "${2:?--churn MINUTES}" ${4:+"$4"}
+fi
 build=${1:-build}
 duration=${2:-10}
 source=${3:-phantom:abdomen?size=128}

@@ -25,13 +25,18 @@ start=$(date +%s)
 cmake --build "$dir" -j "$(nproc)" --target "${targets[@]}"
 echo "sanitize.sh: $mode build took $(( $(date +%s) - start )) s"
 supp="$PWD/scripts/sanitizer-suppressions"
-# Reports from code that is not ours (the Vulkan driver, gRPC's core) are
-# suppressed by library name only: scripts/sanitizer-suppressions/*.
+# Reports from code that is not ours and not instrumented (Mesa's lavapipe
+# and its LLVM JIT, the Khronos validation layer, gRPC, Abseil, upb,
+# libgcc's unwinder) are suppressed by library name only, never a vpm
+# frame: scripts/sanitizer-suppressions/*.
 export ASAN_OPTIONS="detect_leaks=1:halt_on_error=1:abort_on_error=1"
 export LSAN_OPTIONS="suppressions=$supp/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$supp/tsan.supp"
 regex="^($(IFS='|'; echo "ServiceTest|SessionTest|UploadTest|DataRootTest|MeshLifecycleTest|CancellationTest|RenderStormTest|FairJobQueue|WorkerPool|ResourceLifecycleTest"))\.|^(Fem|Stiff|Polar|Patch|Uniaxial|LargeRotation|Heterogeneity|Constrained|FixedDofs|InversionBarrier|Interpolate|Raycast|Render|Clip|Slice|Camera|Overlay|FrameEncoder|Pick|VolumeMipWindow)"
 start=$(date +%s)
-(cd "$dir" && ctest -j "$(nproc)" --timeout 900 --output-on-failure -R "$regex")
+# The render storm's frame-rate check measures speed, which a sanitizer
+# slows ten- to fifty-fold; its other test (the full lane) runs.
+(cd "$dir" && ctest -j "$(nproc)" --timeout 900 --output-on-failure -R "$regex" \
+  -E "RenderStormTest.ExpiredRenderStormKeepsTheDragAtEightyPercent")
 echo "sanitize.sh: $mode tests took $(( $(date +%s) - start )) s"

@@ -1,0 +1,214 @@
+#!/usr/bin/env python3
+"""The churn soak (bench/soak.sh --churn MINUTES; a benchmark, not a test).
+
+One vpm-server on loopback with a users file of 16 users, driven for
+MINUTES by 16 client loops, one per user, each a sequence of `vpm`
+processes:
+  - 12 planners: `vpm play` of a short drag script on a fresh session
+    (opened and closed by play), over and over; every fourth play is
+    interrupted with SIGINT halfway (a cancelled stream);
+  - 1 uploader: `vpm volume upload` of a NIfTI file, then `volume delete`;
+  - 1 watcher: opens a session, starts `vpm watch` and kills it with
+    SIGKILL after 1-3 s, closes the session;
+  - 1 hammer: `vpm snapshot` in a tight loop, one in three with a 5 ms
+    deadline (DEADLINE_EXCEEDED expected);
+  - 1 pair baseline: before the churn, 2 planners alone for 20 s give the
+    reference frame rate.
+Prints: unexpected errors (goal 0), aggregate fps of the planners against
+the 2-session baseline, p50/p99 event-to-frame latency per planner, and the
+server's RSS, threads and open file descriptors at start, middle and end
+(goal: flat within 10%).
+
+usage: bench/soak.sh --churn MINUTES [BUILD_DIR] [SOURCE]
+       (soak_churn.py BUILD_DIR MINUTES [SOURCE])
+"""
+import json, os, random, signal, subprocess, sys, tempfile, threading, time
+
+build, minutes = sys.argv[1], float(sys.argv[2])
+source = sys.argv[3] if len(sys.argv) > 3 else "phantom:abdomen?size=96"
+vpm = os.path.join(build, "client/vpm")
+server_bin = os.path.join(build, "server/service/vpm-server")
+work = tempfile.mkdtemp(prefix="vpm-soak-")
+users = [f"user{i:02d}" for i in range(16)]
+tokens = {u: os.urandom(16).hex() for u in users}
+lines = []
+for u in users:
+    out = subprocess.run([server_bin, "--hash-token", u], input=tokens[u], capture_output=True,
+                         text=True, check=True).stdout.strip()
+    lines.append(out)
+with open(os.path.join(work, "users"), "w") as f:
+    f.write("\n".join(lines) + "\n")
+log = open(os.path.join(work, "server.log"), "w")
+server = subprocess.Popen([server_bin, "--listen", "127.0.0.1:0", "--users", os.path.join(work, "users"),
+                           "--max-sessions", "64", "--max-sessions-per-user", "4"],
+                          stdout=log, stderr=subprocess.STDOUT)
+port = None
+for _ in range(400):
+    text = open(os.path.join(work, "server.log")).read()
+    if "listening on port" in text:
+        port = text.split("listening on port")[1].split()[0]
+        break
+    time.sleep(0.05)
+if port is None:
+    sys.exit("vpm-server did not start: " + open(os.path.join(work, "server.log")).read())
+addr = f"127.0.0.1:{port}"
+
+def proc_stats():
+    status = open(f"/proc/{server.pid}/status").read()
+    rss = int([l for l in status.splitlines() if l.startswith("VmRSS:")][0].split()[1])
+    threads = int([l for l in status.splitlines() if l.startswith("Threads:")][0].split()[1])
+    fds = len(os.listdir(f"/proc/{server.pid}/fd"))
+    return {"rss_mib": rss / 1024, "threads": threads, "fds": fds}
+
+script = os.path.join(work, "drag.json")
+with open(script, "w") as f:
+    json.dump({"volume": source, "settings": {"width": 256, "height": 256}, "interval_ms": 33,
+               "steps": [{"camera": {"azimuth_deg": 0, "elevation_deg": 10}},
+                         {"grab": {"landmark": "left_renal_artery"}},
+                         {"drag": {"to_mm": [0, 0, 12], "steps": 40}},
+                         {"release": {}}]}, f)
+upload_file = os.path.join(work, "upload.nii")
+subprocess.run([vpm, "volume", "export", "phantom:abdomen?size=48", upload_file],
+               check=True, capture_output=True)
+
+lock = threading.Lock()
+errors, expected, reports = [], {}, {u: [] for u in users}
+
+def run(user, args, timeout=120, expect=()):
+    env = dict(os.environ, VPM_TOKEN=tokens[user])
+    p = subprocess.run([vpm, "--server", addr] + args, env=env, capture_output=True, text=True,
+                       timeout=timeout)
+    if p.returncode != 0:
+        text = (p.stderr or p.stdout).strip().splitlines()
+        text = text[-1] if text else f"exit {p.returncode}"
+        with lock:
+            if any(e in text for e in expect):
+                expected[text.split(":")[0]] = expected.get(text.split(":")[0], 0) + 1
+            else:
+                errors.append(f"{user} {' '.join(args[:2])}: {text}")
+    return p
+
+def play(user, interrupt=False):
+    report = os.path.join(work, f"{user}-{time.monotonic_ns()}.json")
+    if not interrupt:
+        run(user, ["play", script, "--report", report])
+        if os.path.exists(report):
+            with lock:
+                reports[user].append(json.load(open(report)))
+        return
+    env = dict(os.environ, VPM_TOKEN=tokens[user])
+    p = subprocess.Popen([vpm, "--server", addr, "play", script], env=env,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(random.uniform(0.3, 1.5))
+    p.send_signal(signal.SIGINT)
+    p.wait()
+    with lock:
+        expected["interrupted play"] = expected.get("interrupted play", 0) + 1
+
+def planner(user, end, counter):
+    n = 0
+    while time.monotonic() < end:
+        n += 1
+        play(user, interrupt=(n % 4 == 0 and counter is not None))
+
+def uploader(user, end):
+    while time.monotonic() < end:
+        p = run(user, ["volume", "upload", upload_file])
+        vid = next((w for w in p.stdout.split() if w.startswith("vol-")), None)
+        if vid:
+            run(user, ["volume", "delete", vid])
+
+def open_session(user):
+    p = run(user, ["volume", "load", source])
+    vid = next((w for w in p.stdout.split() if w.startswith("vol-")), None)
+    return run(user, ["session", "open", "--volume-id", vid]) if vid else p
+
+def watcher(user, end):
+    while time.monotonic() < end:
+        p = open_session(user)
+        sid = next((w for w in p.stdout.split() if w.startswith("ses-")), None)
+        if not sid:
+            time.sleep(1)
+            continue
+        env = dict(os.environ, VPM_TOKEN=tokens[user])
+        w = subprocess.Popen([vpm, "--server", addr, "watch", "--session", sid, "--frames", "100000"],
+                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        time.sleep(random.uniform(1, 3))
+        w.send_signal(signal.SIGKILL)
+        w.wait()
+        with lock:
+            expected["killed watch"] = expected.get("killed watch", 0) + 1
+        run(user, ["session", "close", sid])
+
+def hammer(user, end):
+    p = open_session(user)
+    sid = next((w for w in p.stdout.split() if w.startswith("ses-")), None)
+    n = 0
+    while sid and time.monotonic() < end:
+        n += 1
+        short = n % 3 == 0
+        run(user, (["--deadline-s", "0.005"] if short else []) +
+            ["snapshot", "--session", sid, "--size", "256", "256", "--out",
+             os.path.join(work, "hammer.jpg")],
+            expect=("DEADLINE_EXCEEDED", "RESOURCE_EXHAUSTED") if short else ("RESOURCE_EXHAUSTED",))
+    if sid:
+        run(user, ["session", "close", sid])
+
+def fps_of(user_list, seconds):
+    frames = sum(r["frames"] for u in user_list for r in reports[u])
+    return frames / seconds
+
+# Baseline: 2 planners alone.
+base_s = 20
+end = time.monotonic() + base_s
+threads = [threading.Thread(target=planner, args=(u, end, None)) for u in users[:2]]
+[t.start() for t in threads]
+[t.join() for t in threads]
+base_fps = fps_of(users[:2], base_s)
+base_lat = [r["latency_ms"] for u in users[:2] for r in reports[u]]
+for u in users:
+    reports[u] = []
+time.sleep(2)
+
+stats = {"start": proc_stats()}
+churn_s = minutes * 60
+end = time.monotonic() + churn_s
+threads = [threading.Thread(target=planner, args=(u, end, 0)) for u in users[:12]]
+threads += [threading.Thread(target=uploader, args=(users[12], end)),
+            threading.Thread(target=watcher, args=(users[13], end)),
+            threading.Thread(target=hammer, args=(users[14], end)),
+            threading.Thread(target=planner, args=(users[15], end, 0))]
+[t.start() for t in threads]
+time.sleep(churn_s / 2)
+stats["middle"] = proc_stats()
+[t.join() for t in threads]
+time.sleep(3)
+stats["end"] = proc_stats()
+server.send_signal(signal.SIGTERM)
+code = server.wait(timeout=30)
+
+planners = users[:12] + [users[15]]
+print(f"churn soak: 16 users, {minutes:g} min, {source}")
+print(f"unexpected errors: {len(errors)}")
+for e in errors[:20]:
+    print("  ", e)
+print("expected outcomes:", ", ".join(f"{k} {v}" for k, v in sorted(expected.items())) or "none")
+print(f"aggregate fps of the planners: {fps_of(planners, churn_s):.1f} "
+      f"(2 planners alone: {base_fps:.1f})")
+print(f"{'user':>8} {'plays':>6} {'fps':>6} {'p50 ms':>8} {'p99 ms':>8}")
+for u in planners:
+    rs = reports[u]
+    if not rs:
+        print(f"{u:>8} {0:>6}")
+        continue
+    fps = sum(r["frames"] for r in rs) / churn_s
+    p50 = sorted(r["latency_ms"].get("p50", 0) for r in rs)[len(rs) // 2]
+    p99 = max(r["latency_ms"].get("p99", 0) for r in rs)
+    print(f"{u:>8} {len(rs):>6} {fps:>6.1f} {p50:>8.1f} {p99:>8.1f}")
+print(f"{'':>8} {'RSS MiB':>8} {'threads':>8} {'fds':>6}")
+for k in ("start", "middle", "end"):
+    s = stats[k]
+    print(f"{k:>8} {s['rss_mib']:>8.1f} {s['threads']:>8} {s['fds']:>6}")
+growth = stats["end"]["rss_mib"] / stats["start"]["rss_mib"] - 1
+print(f"RSS end vs start: {100 * growth:+.1f}% (goal within 10%); server exit code {code}")
+sys.exit(1 if errors else 0)
