@@ -32,7 +32,7 @@ export VPM_TOKEN="$token"
 # Sessions are closed by vpm-load; idle eviction and the session cap are set
 # so that neither interferes with the sweep.
 "$server" --listen 127.0.0.1:0 --metrics-listen 127.0.0.1:0 --max-sessions 64 \
-  --max-streams-per-client 64 > out/soak-server.log 2>&1 &
+  --max-streams-per-user 64 > out/soak-server.log 2>&1 &
 pid=$!
 trap 'kill -TERM $pid 2>/dev/null || true; wait $pid 2>/dev/null || true' EXIT
 port=""

@@ -26,8 +26,8 @@ import json, os, random, signal, subprocess, sys, tempfile, threading, time
 
 build, minutes = sys.argv[1], float(sys.argv[2])
 source = sys.argv[3] if len(sys.argv) > 3 else "phantom:abdomen?size=96"
-vpm = os.path.join(build, "client/vpm")
-server_bin = os.path.join(build, "server/service/vpm-server")
+vpm = os.path.join(build, "client", "vpm")
+server_bin = os.path.join(build, "server", "service", "vpm-server")
 work = tempfile.mkdtemp(prefix="vpm-soak-")
 users = [f"user{i:02d}" for i in range(16)]
 tokens = {u: os.urandom(16).hex() for u in users}

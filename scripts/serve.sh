@@ -4,8 +4,11 @@
 #   scripts/serve.sh [BUILD_DIR]
 # Environment: VPM_WEB_LISTEN   the gateway's HOST:PORT (default 127.0.0.1:8080)
 #              VPM_LISTEN       vpm-server's HOST:PORT (default 127.0.0.1:0, a free port)
-#              VPM_TOKEN        the server's token (default: a random one; only
-#                               the gateway needs it, the browser never sees it)
+#              VPM_TOKEN        the server's token (default: a random one); the
+#                               gateway's viewer token too: the printed URL carries
+#                               it once (?token=), and the gateway swaps it at once
+#                               for a sign-in cookie and drops it from the address
+#              VPM_USERS        a users file (vpm-server --hash-token) for both, when set
 #              VPM_DATA_ROOT    passed to vpm-server --data-root when set
 # Logs: out/serve-server.log, out/serve-gateway.log.
 set -euo pipefail
@@ -20,7 +23,12 @@ gateway_log="$root/out/serve-gateway.log"
 export VPM_TOKEN=${VPM_TOKEN:-$(head -c 16 /dev/urandom | od -An -tx1 | tr -d ' \n')}
 
 server_args=(--listen "${VPM_LISTEN:-127.0.0.1:0}")
+gateway_args=()
 [ -n "${VPM_DATA_ROOT:-}" ] && server_args+=(--data-root "$VPM_DATA_ROOT")
+if [ -n "${VPM_USERS:-}" ]; then
+  server_args+=(--users "$VPM_USERS")
+  gateway_args+=(--users "$VPM_USERS")
+fi
 server_pid="" gateway_pid=""
 # Each process in its own process group: Ctrl-C reaches this script only,
 # which stops both in order (gateway first) with SIGTERM.
@@ -56,12 +64,13 @@ host=${host%:*}
 [ "$host" = "0.0.0.0" ] && host=127.0.0.1
 
 node "$root/client/web/gateway.js" --listen "${VPM_WEB_LISTEN:-127.0.0.1:8080}" \
-  --server "$host:$port" > "$gateway_log" 2>&1 &
+  --server "$host:$port" "${gateway_args[@]}" > "$gateway_log" 2>&1 &
 gateway_pid=$!
-url=$(wait_for "$gateway_log" 's/^vpm-web listening on \(http:[^ ]*\).*/\1/p' "$gateway_pid" "the gateway")
+url=$(wait_for "$gateway_log" 's/^vpm-web listening on \(https*:[^ ]*\).*/\1/p' "$gateway_pid" "the gateway")
 
 echo "vpm-server on $host:$port (log $server_log)"
-echo "web viewer:  $url   (log $gateway_log)"
+echo "web viewer:  $url?token=$VPM_TOKEN"
+echo "             (signs this browser in as 'viewer'; log $gateway_log)"
 echo "Open the URL, pick phantom:abdomen?size=128 and press Open. Ctrl-C stops both."
 wait -n "$server_pid" "$gateway_pid" || true
 echo "serve: vpm-server or the gateway exited on its own; see $server_log and $gateway_log" >&2

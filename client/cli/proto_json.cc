@@ -9,7 +9,8 @@ using nlohmann::json;
 
 json VolumeJson(const v2::VolumeInfo& v) {
   json j{{"volume_id", v.volume_id()}, {"source", v.source()}, {"bytes", v.bytes()},
-         {"sessions", v.sessions()}, {"min_value", v.min_value()}, {"max_value", v.max_value()}};
+         {"sessions", v.sessions()}, {"min_value", v.min_value()}, {"max_value", v.max_value()},
+         {"owner", v.owner()}};
   j["dims"] = std::vector<int64_t>(v.dims().begin(), v.dims().end());
   j["spacing_mm"] = {v.spacing_mm().x(), v.spacing_mm().y(), v.spacing_mm().z()};
   for (const auto& l : v.landmarks()) {
@@ -29,7 +30,9 @@ json MeshJson(const v2::MeshInfo& m) {
 
 json SessionJson(const v2::SessionInfo& s) {
   return {{"session_id", s.session_id()}, {"volume_id", s.volume_id()},
-          {"mesh_id", s.mesh_id()}, {"viewers", s.viewers()}, {"idle_s", s.idle_s()}};
+          {"mesh_id", s.mesh_id()},       {"viewers", s.viewers()},
+          {"idle_s", s.idle_s()},         {"owner", s.owner()},
+          {"shared_with", std::vector<std::string>(s.shared_with().begin(), s.shared_with().end())}};
 }
 
 void PrintJson(const json& j) { std::cout << j.dump(2) << "\n"; }

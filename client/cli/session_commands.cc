@@ -18,7 +18,8 @@ using nlohmann::json;
 
 void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code) {
   struct Args {
-    std::string volume_id, mesh_id, session_id, out, out_dir;
+    std::string volume_id, mesh_id, session_id, out, out_dir, user;
+    bool revoke = false;
     std::vector<double> camera, grab, drag, pull;
     std::vector<int> size{512, 512};
     bool release = false;
@@ -55,6 +56,32 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
     request.set_session_id(a->session_id);
     v2::CloseSessionResponse response;
     return FromGrpc(s.stub().CloseSession(s.Context().get(), request, &response));
+  }));
+
+  CLI::App* get = session->add_subcommand("get", "GetSession");
+  get->add_option("ID", a->session_id)->required();
+  get->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
+    v2::GetSessionRequest request;
+    request.set_session_id(a->session_id);
+    v2::SessionInfo info;
+    RETURN_IF_ERROR(FromGrpc(s.stub().GetSession(s.Context().get(), request, &info)));
+    PrintJson(SessionJson(info));
+    return absl::OkStatus();
+  }));
+  CLI::App* share = session->add_subcommand(
+      "share", "ShareSession: let another user watch the session (never deform it)");
+  share->add_option("ID", a->session_id)->required();
+  share->add_option("--with", a->user, "the user's name on the server")->required();
+  share->add_flag("--revoke", a->revoke, "no longer let that user watch");
+  share->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
+    v2::ShareSessionRequest request;
+    request.set_session_id(a->session_id);
+    request.set_user(a->user);
+    request.set_revoke(a->revoke);
+    v2::SessionInfo info;
+    RETURN_IF_ERROR(FromGrpc(s.stub().ShareSession(s.Context().get(), request, &info)));
+    PrintJson(SessionJson(info));
+    return absl::OkStatus();
   }));
 
   CLI::App* snapshot = app.add_subcommand("snapshot", "server: Render one still frame");
@@ -146,9 +173,12 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
       }
       ++n;
     }
-    context->TryCancel();
+    // Cancelled by us only once the frames asked for came; a stream the
+    // server ended early (PERMISSION_DENIED, NOT_FOUND, ...) keeps its status.
+    const bool got_all = n == a->frames;
+    if (got_all) context->TryCancel();
     grpc::Status status = reader->Finish();
-    return status.error_code() == grpc::CANCELLED ? absl::OkStatus() : FromGrpc(status);
+    return got_all && status.error_code() == grpc::CANCELLED ? absl::OkStatus() : FromGrpc(status);
   }));
 }
 

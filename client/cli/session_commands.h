@@ -1,4 +1,4 @@
-// The session commands of a vpm-server: `vpm session open|list|close`,
+// The session commands of a vpm-server: `vpm session open|list|get|share|close`,
 // `vpm snapshot` (Render one still frame), `vpm manipulate` (one grab, drag,
 // pull or release), `vpm set-camera` and `vpm watch` (a session's frames).
 #pragma once

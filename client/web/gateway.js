@@ -1,40 +1,93 @@
 #!/usr/bin/env node
-// vpm-web: the thin web viewer's gateway. Serves the page (public/) over
-// HTTP and bridges each browser tab's WebSocket (/ws) to vpm-server's
-// Interact stream (lib/viewer_connection.js). The server's token comes from
-// VPM_TOKEN and stays here: the browser never sees it.
+// vpm-web: the web viewer's gateway, fit to face the internet. Serves the
+// page (public/) over HTTP or HTTPS to signed-in browsers and bridges each
+// tab's WebSocket (/ws) to vpm-server (lib/viewer_connection.js), calling
+// the server as the signed-in user (that user's token as the bearer).
 //
 //   node gateway.js [--listen HOST:PORT] [--server HOST:PORT] [--proto FILE]
-//                   [--allowed-host NAME ...]
+//                   [--users FILE] [--viewer-token TOKEN | --viewer-token-file FILE]
+//                   [--allowed-host NAME ...] [--allowed-origin ORIGIN ...]
+//                   [--tls-cert PEM --tls-key PEM]
+//                   [--server-tls-ca PEM [--server-tls-cert PEM --server-tls-key PEM]]
+//                   [--session-hours H] [--cookie-key-file FILE] [--max-tabs-per-user N]
+//
+// Who may sign in (lib/users.js): the users of --users (vpm-server's users
+// file: each signs in with their own token) and the viewer token
+// (--viewer-token-file, --viewer-token, $VPM_VIEWER_TOKEN, else $VPM_TOKEN:
+// the user `viewer`). Sign-in and the sealed cookie (--cookie-key-file):
+// lib/sign_ins.js; the HTTP
+// routes: lib/http_handler.js. The WebSocket upgrade needs a signed-in
+// cookie, an Origin from --allowed-origin (default: this gateway's own
+// origin under each allowed host) and an allowed Host (--allowed-host;
+// localhost, 127.0.0.1 and ::1 always): a page on another site, or one whose
+// name an attacker points at this machine (DNS rebinding), is refused.
 //
 // --listen defaults to $VPM_WEB_LISTEN or 127.0.0.1:8080 (port 0 picks a
 // free one); --server to $VPM_SERVER or 127.0.0.1:50051. Prints
-// "vpm-web listening on http://HOST:PORT/" once ready. GET /healthz answers
-// 200 while the gateway runs (whether or not vpm-server is up).
-//
-// Every other request, the WebSocket upgrade included, must name an allowed
-// host in its Host header (--allowed-host, repeatable, or the comma list in
-// $VPM_WEB_ALLOWED_HOSTS; localhost, 127.0.0.1 and ::1 always): a page on
-// another site whose name an attacker points at this machine (DNS
-// rebinding) sends its own name as Host and is refused with 421.
+// "vpm-web listening on http(s)://HOST:PORT/" once ready. GET /healthz
+// answers 200 while the gateway runs (whether or not vpm-server is up). No
+// input ends the process: a request or message that fails closes that one
+// connection with a message.
+import crypto from 'node:crypto';
+import fs from 'node:fs';
 import http from 'node:http';
+import https from 'node:https';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { parseArgs } from 'node:util';
 
 import { WebSocketServer } from 'ws';
 
+import { hostName, makeRequestHandler } from './lib/http_handler.js';
+import { MeshRefs } from './lib/mesh_refs.js';
+import { ProtoShape } from './lib/proto_shape.js';
+import { SignIns } from './lib/sign_ins.js';
 import { staticHandler } from './lib/static_files.js';
+import { Users } from './lib/users.js';
 import { ViewerConnection } from './lib/viewer_connection.js';
 import { kDefaultProtoPath, VpmClient } from './lib/vpm_client.js';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 const kMaxControlMessageBytes = 64 * 1024;  // browser -> gateway JSON
 
+const kUsage = `usage: node gateway.js [--listen HOST:PORT] [--server HOST:PORT] [--proto vpm.proto]
+  [--users FILE] [--viewer-token TOKEN | --viewer-token-file FILE]
+  [--allowed-host NAME ...] [--allowed-origin ORIGIN ...]
+  [--tls-cert PEM --tls-key PEM] [--server-tls-ca PEM [--server-tls-cert PEM --server-tls-key PEM]]
+  [--session-hours 12] [--cookie-key-file FILE] [--max-tabs-per-user 8]
+ --users: vpm-server's users file (NAME TOKEN-SHA256 lines); each user signs in with their token,
+   which the gateway forwards to vpm-server as theirs
+ --viewer-token(-file): one more token that signs in as the user 'viewer' (default:
+   VPM_VIEWER_TOKEN, else VPM_TOKEN); forwarded to vpm-server likewise
+ --allowed-host: a name browsers use to reach the gateway (localhost, 127.0.0.1 and ::1 always
+   are; also VPM_WEB_ALLOWED_HOSTS=a,b); --allowed-origin: an origin (scheme://host:port) whose
+   pages may open the WebSocket (default: this gateway under each allowed host)
+ --tls-cert/--tls-key: serve HTTPS and WSS; --server-tls-ca: vpm-server uses TLS (its CA),
+   --server-tls-cert/--server-tls-key: and wants a client certificate (mutual TLS)
+ --cookie-key-file: a secret (16 bytes or more; or VPM_WEB_COOKIE_KEY) that seals the sign-in
+   cookies; give every gateway replica the same one, and sign-ins survive restarts (default:
+   random per process)
+ VPM_WEB_LISTEN and VPM_SERVER set the defaults of --listen and --server
+`;
+
 function splitHostPort(value, flag) {
   const m = /^(.*):(\d+)$/.exec(value);
   if (!m || Number(m[2]) > 65535) throw new Error(`${flag}: '${value}' is not HOST:PORT`);
   return { host: m[1].replace(/^\[(.*)\]$/, '$1'), port: Number(m[2]) };
+}
+
+function readFile(file, flag) {
+  try {
+    return fs.readFileSync(file);
+  } catch (e) {
+    throw new Error(`${flag} ${file}: ${e.code === 'ENOENT' ? 'no such file' : e.message}`);
+  }
+}
+
+function positive(value, flag) {
+  const n = Number(value);
+  if (!Number.isFinite(n) || n <= 0) throw new Error(`${flag}: '${value}' is not a positive number`);
+  return n;
 }
 
 function parseOptions(argv) {
@@ -44,17 +97,24 @@ function parseOptions(argv) {
       listen: { type: 'string', default: process.env.VPM_WEB_LISTEN || '127.0.0.1:8080' },
       server: { type: 'string', default: process.env.VPM_SERVER || '127.0.0.1:50051' },
       proto: { type: 'string', default: kDefaultProtoPath },
+      users: { type: 'string' },
+      'viewer-token': { type: 'string' },
+      'viewer-token-file': { type: 'string' },
       'allowed-host': { type: 'string', multiple: true, default: [] },
+      'allowed-origin': { type: 'string', multiple: true, default: [] },
+      'tls-cert': { type: 'string' },
+      'tls-key': { type: 'string' },
+      'server-tls-ca': { type: 'string' },
+      'server-tls-cert': { type: 'string' },
+      'server-tls-key': { type: 'string' },
+      'session-hours': { type: 'string', default: '12' },
+      'cookie-key-file': { type: 'string' },
+      'max-tabs-per-user': { type: 'string', default: '8' },
       help: { type: 'boolean', default: false },
     },
   });
   if (values.help) {
-    process.stdout.write('usage: node gateway.js [--listen HOST:PORT] [--server HOST:PORT] ' +
-                         '[--proto vpm.proto] [--allowed-host NAME ...]\n' +
-                         '  the token for vpm-server comes from VPM_TOKEN; ' +
-                         'VPM_WEB_LISTEN and VPM_SERVER set the defaults of --listen and --server;\n' +
-                         '  --allowed-host: a name browsers use to reach the gateway (localhost, ' +
-                         '127.0.0.1 and ::1 always are; also VPM_WEB_ALLOWED_HOSTS=a,b)\n');
+    process.stdout.write(kUsage);
     process.exit(0);
   }
   splitHostPort(values.server, '--server');
@@ -63,66 +123,160 @@ function parseOptions(argv) {
   for (const name of [...values['allowed-host'], ...fromEnv]) {
     if (name.trim()) allowedHosts.add(name.trim().toLowerCase().replace(/^\[(.*)\]$/, '$1'));
   }
-  return { ...values, allowedHosts, listen: splitHostPort(values.listen, '--listen') };
-}
-
-// The host name of a Host header ("name:port", "[v6]:port"), lower case;
-// null when it does not parse.
-function hostName(header) {
-  if (typeof header !== 'string' || header === '') return null;
-  try {
-    return new URL(`http://${header}/`).hostname.toLowerCase().replace(/^\[(.*)\]$/, '$1');
-  } catch {
-    return null;
+  const allowedOrigins = new Set();
+  for (const origin of values['allowed-origin']) {
+    let parsed;
+    try {
+      parsed = new URL(origin);
+    } catch {
+      throw new Error(`--allowed-origin: '${origin}' is not scheme://host[:port]`);
+    }
+    if (parsed.origin === 'null' || parsed.origin !== origin.replace(/\/$/, '').toLowerCase()) {
+      throw new Error(`--allowed-origin: '${origin}' is not scheme://host[:port] (no path)`);
+    }
+    allowedOrigins.add(parsed.origin);
   }
-}
-
-// Only pages served by this gateway may open its WebSocket: another site in
-// the same browser must not drive the server with the gateway's token.
-function sameOrigin(info) {
-  const { origin } = info;
-  if (!origin) return true;  // not a browser (e.g. a script)
-  try {
-    return new URL(origin).host === info.req.headers.host;
-  } catch {
-    return false;
+  if (Boolean(values['tls-cert']) !== Boolean(values['tls-key'])) {
+    throw new Error('TLS needs both --tls-cert and --tls-key');
   }
+  const tls = values['tls-cert']
+    ? { cert: readFile(values['tls-cert'], '--tls-cert'), key: readFile(values['tls-key'], '--tls-key') }
+    : null;
+  if (Boolean(values['server-tls-cert']) !== Boolean(values['server-tls-key'])) {
+    throw new Error('mutual TLS needs both --server-tls-cert and --server-tls-key');
+  }
+  if (values['server-tls-cert'] && !values['server-tls-ca']) {
+    throw new Error('--server-tls-cert needs --server-tls-ca');
+  }
+  const serverTls = values['server-tls-ca'] ? {
+    ca: readFile(values['server-tls-ca'], '--server-tls-ca'),
+    cert: values['server-tls-cert'] ? readFile(values['server-tls-cert'], '--server-tls-cert') : null,
+    key: values['server-tls-key'] ? readFile(values['server-tls-key'], '--server-tls-key') : null,
+  } : null;
+  if (values['viewer-token'] && values['viewer-token-file']) {
+    throw new Error('give one of --viewer-token and --viewer-token-file');
+  }
+  const viewerToken = values['viewer-token-file']
+    ? readFile(values['viewer-token-file'], '--viewer-token-file').toString('utf8').trim()
+    : (values['viewer-token'] ?? process.env.VPM_VIEWER_TOKEN ?? process.env.VPM_TOKEN ?? '');
+  if (values['viewer-token-file'] && !viewerToken) {
+    throw new Error(`--viewer-token-file ${values['viewer-token-file']}: empty`);
+  }
+  let cookieKey;
+  const secret = values['cookie-key-file']
+    ? readFile(values['cookie-key-file'], '--cookie-key-file')
+    : (process.env.VPM_WEB_COOKIE_KEY ? Buffer.from(process.env.VPM_WEB_COOKIE_KEY) : null);
+  if (secret) {
+    if (secret.length < 16) throw new Error('the cookie key: at least 16 bytes of secret');
+    cookieKey = crypto.createHash('sha256').update(secret).digest();
+  }
+  return {
+    ...values, allowedHosts, allowedOrigins, tls, serverTls, cookieKey,
+    users: Users.fromFile(values.users, viewerToken),
+    sessionHours: positive(values['session-hours'], '--session-hours'),
+    maxTabsPerUser: positive(values['max-tabs-per-user'], '--max-tabs-per-user'),
+    listen: splitHostPort(values.listen, '--listen'),
+  };
 }
 
 function main() {
   let options;
+  let client;
   try {
     options = parseOptions(process.argv.slice(2));
+    client = new VpmClient({ address: options.server, protoPath: options.proto,
+                             tls: options.serverTls });
   } catch (e) {
     process.stderr.write(`vpm-web: ${e.message}\n`);
     process.exit(2);
   }
-  const client = new VpmClient({
-    address: options.server, token: process.env.VPM_TOKEN ?? '', protoPath: options.proto });
   const log = (line) => process.stderr.write(`vpm-web: ${line}\n`);
-  const serveFile = staticHandler(path.join(here, 'public'));
+  const shape = new ProtoShape(client.definition);
+  const signIns = new SignIns({ users: options.users, key: options.cookieKey,
+                                maxAgeS: options.sessionHours * 3600, secure: Boolean(options.tls) });
+  const scheme = options.tls ? 'https' : 'http';
+  let port = 0;  // once listening
   const allowedHost = (req) => options.allowedHosts.has(hostName(req.headers.host));
-  const server = http.createServer((req, res) => {
-    if (req.url === '/healthz') {
-      res.writeHead(200, { 'Content-Type': 'text/plain' }).end('ok\n');
-    } else if (!allowedHost(req)) {
-      res.writeHead(421, { 'Content-Type': 'text/plain' })
-        .end(`vpm-web: '${hostName(req.headers.host) ?? ''}' is not an allowed host ` +
-             '(start the gateway with --allowed-host NAME)\n');
+  // This gateway under each allowed host, and every --allowed-origin.
+  const allowedOrigin = (origin) => {
+    if (typeof origin !== 'string' || origin.length > 300) return false;
+    let parsed;
+    try {
+      parsed = new URL(origin);
+    } catch {
+      return false;
+    }
+    if (options.allowedOrigins.has(parsed.origin)) return true;
+    const originPort = Number(parsed.port || (parsed.protocol === 'https:' ? 443 : 80));
+    return parsed.protocol === `${scheme}:` && originPort === port &&
+      options.allowedHosts.has(parsed.hostname.replace(/^\[(.*)\]$/, '$1'));
+  };
+  const handler = makeRequestHandler({
+    signIns, serveFile: staticHandler(path.join(here, 'public')), allowedHost, allowedOrigin,
+    tls: Boolean(options.tls), log });
+  const server = options.tls ? https.createServer({ ...options.tls }, handler)
+                             : http.createServer(handler);
+  server.headersTimeout = 10000;
+  server.requestTimeout = 30000;
+  server.keepAliveTimeout = 5000;
+  server.on('clientError', (err, socket) => {
+    if (socket.writable && err.code !== 'ECONNRESET') {
+      socket.end('HTTP/1.1 400 Bad Request\r\nConnection: close\r\n\r\n');
     } else {
-      serveFile(req, res);
+      socket.destroy();
     }
   });
-  const wss = new WebSocketServer({
-    server, path: '/ws', maxPayload: kMaxControlMessageBytes,
-    verifyClient: (info) => allowedHost(info.req) && sameOrigin(info) });
-  wss.on('connection', (ws) => new ViewerConnection({ ws, client, log }));
+  if (options.tls) server.on('tlsClientError', () => {});
+
+  const tabsOf = new Map();  // user -> open tabs
+  const meshRefs = new MeshRefs();
+  const wss = new WebSocketServer({ noServer: true, maxPayload: kMaxControlMessageBytes });
+  const refuse = (socket, status, reason) => {
+    socket.end(`HTTP/1.1 ${status} ${reason}\r\nConnection: close\r\n` +
+               `Content-Type: text/plain\r\nContent-Length: ${reason.length + 1}\r\n\r\n${reason}\n`);
+  };
+  server.on('upgrade', (req, socket, head) => {
+    socket.on('error', () => {});
+    try {
+      let pathname = null;
+      try {
+        pathname = new URL(req.url, 'http://gateway').pathname;
+      } catch { /* refused below */ }
+      if (pathname !== '/ws') return refuse(socket, 404, 'Not Found');
+      if (!allowedHost(req)) return refuse(socket, 421, 'Misdirected Request');
+      if (!allowedOrigin(req.headers.origin)) return refuse(socket, 403, 'Forbidden');
+      const signIn = signIns.fromRequest(req);
+      if (!signIn) return refuse(socket, 401, 'Unauthorized');
+      if ((tabsOf.get(signIn.user) ?? 0) >= options.maxTabsPerUser) {
+        return refuse(socket, 429, 'Too Many Requests');
+      }
+      return wss.handleUpgrade(req, socket, head, (ws) => {
+        tabsOf.set(signIn.user, (tabsOf.get(signIn.user) ?? 0) + 1);
+        signIns.addSocket(signIn.id, ws);
+        ws.on('close', () => {
+          const left = (tabsOf.get(signIn.user) ?? 1) - 1;
+          if (left > 0) tabsOf.set(signIn.user, left);
+          else tabsOf.delete(signIn.user);
+        });
+        try {
+          new ViewerConnection({ ws, client, shape, meshRefs, token: signIn.token, log });  // eslint-disable-line no-new
+        } catch (e) {
+          log(`closing a connection after an unexpected error: ${e?.stack ?? e}`);
+          ws.close(1011, 'internal error');
+        }
+      });
+    } catch (e) {
+      log(`upgrade failed: ${e?.stack ?? e}`);
+      return socket.destroy();
+    }
+  });
 
   server.listen(options.listen.port, options.listen.host, () => {
-    const { address, port } = server.address();
+    const { address } = server.address();
+    port = server.address().port;
     const host = address.includes(':') ? `[${address}]` : address;
-    process.stdout.write(`vpm-web listening on http://${host}:${port}/ ` +
-                         `(vpm-server ${options.server})\n`);
+    process.stdout.write(`vpm-web listening on ${scheme}://${host}:${port}/ ` +
+                         `(vpm-server ${options.server}${options.serverTls ? ', TLS' : ''})\n`);
   });
   server.on('error', (e) => {
     log(`cannot listen on ${options.listen.host}:${options.listen.port}: ${e.message}`);
@@ -136,6 +290,7 @@ function main() {
       client.close();
       process.exit(0);
     });
+    server.closeAllConnections?.();
     setTimeout(() => process.exit(0), 2000).unref();
   };
   process.on('SIGINT', stop);

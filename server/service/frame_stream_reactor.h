@@ -1,8 +1,8 @@
 // What the Interact and Watch reactors share around their FrameStream:
 // write-done forwarding, cancellation, finishing exactly once (counted by
-// method and status code), the admission checks of a new stream (token,
-// draining, the per-client stream cap) and, when gRPC is done with the call,
-// the release of everything the stream held (a test counts that every
+// method, status code and user), the admission checks of a new stream (the
+// caller's user, draining, the per-user stream cap) and, when gRPC is done
+// with the call, the release of everything the stream held (a test counts that every
 // stream opened is closed).
 //
 // `Reactor` is grpc::ServerBidiReactor<In, v2::Frame> or
@@ -59,7 +59,7 @@ class FrameStreamReactor : public Reactor,
       s->Detach();
       service_->streams->Unregister(registry_token_);
     }
-    if (slot_held_) service_->streams->Release(peer_);
+    if (slot_held_) service_->streams->Release(user_);
     service_->metrics->StreamClosed();
     std::shared_ptr<FrameStreamReactor> last = std::move(self_);  // may free this
   }
@@ -70,7 +70,7 @@ class FrameStreamReactor : public Reactor,
       if (finished_) return;
       finished_ = true;
     }
-    service_->metrics->Request(method_, StatusCodeName(status.error_code()));
+    service_->metrics->Request(method_, StatusCodeName(status.error_code()), user_);
     this->Finish(status);
   }
 
@@ -100,15 +100,16 @@ class FrameStreamReactor : public Reactor,
   // `method`: the RPC's name in metrics ("Interact", "Watch").
   FrameStreamReactor(ServiceContext* service, grpc::CallbackServerContext* context,
                      const char* method)
-      : service_(service), context_(context), peer_(context->peer()), method_(method) {
+      : service_(service), context_(context), method_(method) {
     service_->metrics->StreamOpened();
   }
 
-  // Token, draining, then a stream slot for this client (held until OnDone).
+  // The caller's user, draining, then a stream slot for this user (held
+  // until OnDone). Runs in Begin, before any other reaction reads user_.
   Status Admit() {
-    RETURN_IF_ERROR(service_->auth->Check(*context_));
+    ASSIGN_OR_RETURN(user_, service_->auth->Authenticate(*context_));
     if (service_->draining) return absl::UnavailableError("the server is shutting down");
-    RETURN_IF_ERROR(service_->streams->Acquire(peer_));
+    RETURN_IF_ERROR(service_->streams->Acquire(user_));
     slot_held_ = true;
     return absl::OkStatus();
   }
@@ -132,11 +133,14 @@ class FrameStreamReactor : public Reactor,
     return stream_;
   }
 
+  // The caller, once Admit succeeded (empty before).
+  const std::string& user() const { return user_; }
+
   ServiceContext* const service_;
   grpc::CallbackServerContext* const context_;  // valid until OnDone
 
  private:
-  const std::string peer_;
+  std::string user_;
   const char* const method_;
   bool slot_held_ = false;
   int64_t registry_token_ = 0;

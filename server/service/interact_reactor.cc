@@ -48,7 +48,8 @@ void InteractReactor::Start(const v2::InteractRequest& first) {
   // The next read starts only once the stream exists, so `first` is a copy
   // that the pool task owns.
   auto make = [this, first]() -> Result<std::shared_ptr<FrameStream>> {
-    ASSIGN_OR_RETURN(std::shared_ptr<Session> session, service_->sessions->Get(first.session_id()));
+    ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
+                     service_->sessions->Get(first.session_id(), user(), SessionRole::kOwner));
     // Settings on the first event shape the first frame too.
     ASSIGN_OR_RETURN(StreamSettings settings,
                      ToStreamSettings(first.event().has_settings() ? first.event().settings()

@@ -2,21 +2,43 @@
 // SIGTERM or SIGINT: health turns NOT_SERVING for --drain-s seconds while
 // calls on existing sessions go on (a second signal cuts the drain short),
 // then streams finish and calls get --shutdown-grace-s seconds.
+// `vpm-server --hash-token NAME` reads a token on stdin and prints the
+// users-file line for it (users_file.h).
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <ctime>
+#include <iostream>
+#include <iterator>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
 #include "server/service/server_flags.h"
+#include "server/service/users_file.h"
 #include "server/service/vpm_server.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"vpm-server: volume proxy meshes, FEM deformation and ray-cast frames over gRPC"};
   vpm::service::ServerOptions options;
   vpm::service::AddServerFlags(app, &options);
+  std::string hash_token_user;
+  app.add_option("--hash-token", hash_token_user,
+                 "print the --users line of user NAME, the token read from stdin "
+                 "(one line; the newline is dropped), and exit");
   CLI11_PARSE(app, argc, argv);
+  if (!hash_token_user.empty()) {
+    std::string token(std::istreambuf_iterator<char>(std::cin), {});
+    while (!token.empty() && (token.back() == '\n' || token.back() == '\r')) token.pop_back();
+    auto line = vpm::service::UsersFileLine(hash_token_user, token);
+    if (!line.ok()) {
+      std::fprintf(stderr, "vpm-server: --hash-token: %s\n",
+                   std::string(line.status().message()).c_str());
+      return 2;
+    }
+    std::printf("%s\n", line->c_str());
+    return 0;
+  }
   vpm::service::ApplyEnvironment(&options);
 
   // Signals are taken synchronously by sigwait on this thread: no handler

@@ -34,6 +34,7 @@ void FillVolumeInfo(const VolumeEntry& entry, v2::VolumeInfo* info) {
   }
   info->set_bytes(entry.bytes);
   info->set_sessions(entry.sessions.load());
+  info->set_owner(entry.owner);
 }
 
 void FillMeshInfo(const MeshEntry& entry, v2::MeshInfo* info) {

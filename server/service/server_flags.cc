@@ -8,8 +8,15 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--listen", o->listen, "HOST:PORT to serve gRPC on (port 0: any free port)")
       ->capture_default_str();
   app.add_option("--token", o->token,
-                 "bearer token every call but health and reflection must carry "
-                 "(authorization: Bearer TOKEN); default: env VPM_TOKEN");
+                 "bearer token of the user 'default': every call but health and reflection "
+                 "carries a user's token (authorization: Bearer TOKEN); default: env VPM_TOKEN "
+                 "(visible in ps: prefer --token-file or --users)");
+  app.add_option("--token-file", o->token_file,
+                 "read the user 'default''s token from this file (surrounding whitespace "
+                 "dropped) instead of --token");
+  app.add_option("--users", o->users_file,
+                 "users file: one 'NAME TOKEN-SHA256' a line, '#' comments "
+                 "(vpm-server --hash-token NAME writes a line); with or without --token");
   app.add_flag("--no-auth", o->no_auth,
                "serve without a token; only on a loopback --listen address");
   app.add_option("--data-root", o->data_root,
@@ -36,8 +43,12 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--max-meshes", o->max_meshes, "meshes held at once")->capture_default_str();
   app.add_option("--max-sessions", o->max_sessions, "sessions open at once")
       ->capture_default_str();
-  app.add_option("--max-streams-per-client", o->max_streams_per_client,
-                 "Interact + Watch streams per client address (0: no cap)")->capture_default_str();
+  app.add_option("--max-sessions-per-user", o->max_sessions_per_user,
+                 "sessions one user owns at once (0: no cap but --max-sessions)")
+      ->capture_default_str();
+  app.add_option("--max-streams-per-user,--max-streams-per-client", o->max_streams_per_user,
+                 "Interact, Watch and UploadVolume streams per user (0: no cap)")
+      ->capture_default_str();
   app.add_option("--idle-session-s", o->idle_session_s,
                  "close sessions without calls or viewers for this long, seconds (0: never)")
       ->capture_default_str();
@@ -57,11 +68,12 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
       ->capture_default_str();
   app.add_option("--request-threads", o->request_threads,
                  "workers for loads, mesh builds and session set-up")->capture_default_str();
-  app.add_option("--max-queued-per-client", o->max_queued_per_client,
-                 "calls one client may have waiting per worker pool; past it: "
-                 "RESOURCE_EXHAUSTED with a retry hint (0: no cap)")->capture_default_str();
+  app.add_option("--max-queued-per-user,--max-queued-per-client", o->max_queued_per_user,
+                 "unary calls one user (or frames one stream) may have waiting per worker "
+                 "pool; past it: RESOURCE_EXHAUSTED with a retry hint (0: no cap)")
+      ->capture_default_str();
   app.add_option("--max-queued", o->max_queued,
-                 "calls waiting per worker pool, all clients (0: no cap)")->capture_default_str();
+                 "calls waiting per worker pool, all users (0: no cap)")->capture_default_str();
   app.add_option("--still-delay-ms", o->still_delay_ms,
                  "idle time after a drag before the full-quality still frame")
       ->capture_default_str();
@@ -79,7 +91,7 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
 }
 
 void ApplyEnvironment(ServerOptions* o) {
-  if (o->token.empty()) {
+  if (o->token.empty() && o->token_file.empty()) {
     if (const char* token = std::getenv("VPM_TOKEN")) o->token = token;
   }
 }

@@ -8,7 +8,7 @@
 namespace vpm::service {
 
 void AddServerFlags(CLI::App& app, ServerOptions* options);
-// The token from VPM_TOKEN when --token was not given.
+// The token from VPM_TOKEN when neither --token nor --token-file was given.
 void ApplyEnvironment(ServerOptions* options);
 
 }  // namespace vpm::service

@@ -9,7 +9,9 @@ namespace vpm::service {
 
 struct ServerOptions {
   std::string listen = "127.0.0.1:50051";  // HOST:PORT; port 0 picks a free one
-  std::string token;                       // bearer token (or env VPM_TOKEN)
+  std::string token;                       // the user `default`'s bearer token (or env VPM_TOKEN)
+  std::string token_file;                  // or read from this file (not on the command line)
+  std::string users_file;                  // one `NAME TOKEN-SHA256` a line (users_file.h)
   bool no_auth = false;                    // explicitly off, for local use only
   std::string data_root;                   // LoadVolume paths resolve under it
   std::string metrics_listen;              // HOST:PORT for Prometheus, empty: off
@@ -28,7 +30,8 @@ struct ServerOptions {
   double upload_idle_s = 60;                     // an upload with no chunk this long fails
   int64_t max_meshes = 64;
   int64_t max_sessions = 32;
-  int64_t max_streams_per_client = 8;            // Interact + Watch streams per peer address
+  int64_t max_sessions_per_user = 16;            // sessions one user owns (0: no cap)
+  int64_t max_streams_per_user = 8;              // Interact, Watch + upload streams per user
   double idle_session_s = 900;                   // evict sessions idle this long (0: never)
   double idle_watched_session_s = 3600;          // ... watched, but driven by nobody (0: never)
   int max_frame_side = 2048;                     // pixels
@@ -41,8 +44,8 @@ struct ServerOptions {
   // Work.
   int render_threads = 2;                        // frame and event workers
   int request_threads = 2;                       // unary workers (load, mesh builds)
-  int64_t max_queued_per_client = 64;           // jobs one client may have waiting per pool
-  int64_t max_queued = 1024;                     // jobs waiting per pool, all clients
+  int64_t max_queued_per_user = 64;              // jobs one user (or stream) may have waiting per pool
+  int64_t max_queued = 1024;                     // jobs waiting per pool, all users
   double still_delay_ms = 150;                   // idle time before a still frame
   double drain_s = 0;                            // SIGTERM: NOT_SERVING this long first
   double shutdown_grace_s = 5;                   // then streams get this long

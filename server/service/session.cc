@@ -12,9 +12,10 @@ namespace {
 
 }  // namespace
 
-Session::Session(std::string id, std::shared_ptr<VolumeEntry> volume,
+Session::Session(std::string id, std::string owner, std::shared_ptr<VolumeEntry> volume,
                  std::shared_ptr<const MeshEntry> mesh, const Options& options)
     : id_(std::move(id)),
+      access_(std::move(owner)),
       volume_(std::move(volume)),
       mesh_(std::move(mesh)),
       options_(options),
@@ -25,12 +26,14 @@ Session::Session(std::string id, std::shared_ptr<VolumeEntry> volume,
 
 Session::~Session() { volume_->sessions.fetch_sub(1); }
 
-Result<std::shared_ptr<Session>> Session::Create(std::string id, const gpu::GpuContext& context,
+Result<std::shared_ptr<Session>> Session::Create(std::string id, std::string owner,
+                                                 const gpu::GpuContext& context,
                                                  VolumeRenderer& renderer,
                                                  std::shared_ptr<VolumeEntry> volume,
                                                  std::shared_ptr<const MeshEntry> mesh,
                                                  const Options& options) {
-  std::shared_ptr<Session> session(new Session(std::move(id), volume, mesh, options));
+  std::shared_ptr<Session> session(
+      new Session(std::move(id), std::move(owner), volume, mesh, options));
   std::lock_guard gpu_lock(volume->gpu_mutex);
   // Events update FEM only; each frame brings the backward map up to date
   // once, however many steps came since (a slow stream or a busy server

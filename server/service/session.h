@@ -16,6 +16,7 @@
 #include "server/scene/deformable_scene.h"
 #include "server/service/mesh_store.h"
 #include "server/service/proto_convert.h"
+#include "server/service/session_access.h"
 #include "server/service/volume_store.h"
 #include "vpm/v2/vpm.pb.h"
 
@@ -34,7 +35,9 @@ class Session {
     double still_delay_ms = 150;  // a frame is interactive this long after a drag
   };
   // The scene is built here (FEM set-up): call from a worker, not a callback.
-  static Result<std::shared_ptr<Session>> Create(std::string id, const gpu::GpuContext& context,
+  // `owner`: the user who opens it (session_access.h).
+  static Result<std::shared_ptr<Session>> Create(std::string id, std::string owner,
+                                                 const gpu::GpuContext& context,
                                                  VolumeRenderer& renderer,
                                                  std::shared_ptr<VolumeEntry> volume,
                                                  std::shared_ptr<const MeshEntry> mesh,
@@ -42,6 +45,9 @@ class Session {
   ~Session();
 
   const std::string& id() const { return id_; }
+  // Its owner and the users it is shared with.
+  SessionAccess& access() { return access_; }
+  const SessionAccess& access() const { return access_; }
   const VolumeEntry& volume() const { return *volume_; }
   const MeshEntry& mesh() const { return *mesh_; }
 
@@ -87,7 +93,7 @@ class Session {
   double idle_s() const;
 
  private:
-  Session(std::string id, std::shared_ptr<VolumeEntry> volume,
+  Session(std::string id, std::string owner, std::shared_ptr<VolumeEntry> volume,
           std::shared_ptr<const MeshEntry> mesh, const Options& options);
   Result<AppliedEvent> ApplyLocked(const v2::ClientEvent& event, const SceneView* view);
   Result<glm::dvec3> GrabPoint(const v2::Grab& grab, const SceneView* view) const;
@@ -95,6 +101,7 @@ class Session {
   void Notify(bool closed);
 
   const std::string id_;
+  SessionAccess access_;
   std::shared_ptr<VolumeEntry> volume_;
   std::shared_ptr<const MeshEntry> mesh_;
   Options options_;

@@ -9,7 +9,8 @@ Result<std::unique_ptr<SessionManager>> SessionManager::Create(const Options& op
   return std::unique_ptr<SessionManager>(new SessionManager(options));
 }
 
-Result<std::shared_ptr<Session>> SessionManager::Open(std::shared_ptr<VolumeEntry> volume,
+Result<std::shared_ptr<Session>> SessionManager::Open(const std::string& owner,
+                                                      std::shared_ptr<VolumeEntry> volume,
                                                       std::shared_ptr<const MeshEntry> mesh) {
   std::string id;
   {
@@ -19,28 +20,42 @@ Result<std::shared_ptr<Session>> SessionManager::Open(std::shared_ptr<VolumeEntr
                                                  options_.max_sessions,
                                                  " sessions; close one first"));
     }
+    if (options_.max_sessions_per_user > 0) {
+      int64_t owned = opening_per_user_[owner];
+      for (const auto& [other_id, session] : sessions_) owned += session->access().IsOwner(owner);
+      if (owned >= options_.max_sessions_per_user) {
+        if (opening_per_user_[owner] == 0) opening_per_user_.erase(owner);
+        return absl::ResourceExhaustedError(StrCat("user '", owner, "' holds the maximum of ",
+                                                   options_.max_sessions_per_user,
+                                                   " sessions per user; close one first"));
+      }
+    }
     ++opening_;
+    ++opening_per_user_[owner];
     id = StrCat(options_.id_prefix, next_id_++);
   }
-  auto session = Session::Create(id, *options_.context, *options_.renderer, std::move(volume),
-                                 std::move(mesh), options_.session);
+  auto session = Session::Create(id, owner, *options_.context, *options_.renderer,
+                                 std::move(volume), std::move(mesh), options_.session);
   std::lock_guard lock(mutex_);
   --opening_;
+  if (--opening_per_user_[owner] <= 0) opening_per_user_.erase(owner);
   if (!session.ok()) return session.status();
   sessions_.emplace(id, *session);
   NotifyLocked();
   return *session;
 }
 
-Result<std::shared_ptr<Session>> SessionManager::Get(std::string_view id) const {
+Result<std::shared_ptr<Session>> SessionManager::Get(std::string_view id, std::string_view user,
+                                                     SessionRole role) const {
   std::lock_guard lock(mutex_);
   auto it = sessions_.find(id);
   if (it == sessions_.end()) return absl::NotFoundError(StrCat("session_id: no session '", id, "'"));
+  RETURN_IF_ERROR(it->second->access().Check(user, role, id));
   it->second->Touch();
   return it->second;
 }
 
-Status SessionManager::Close(std::string_view id) {
+Status SessionManager::Close(std::string_view id, std::string_view user) {
   std::shared_ptr<Session> session;
   {
     std::lock_guard lock(mutex_);
@@ -48,6 +63,7 @@ Status SessionManager::Close(std::string_view id) {
     if (it == sessions_.end()) {
       return absl::NotFoundError(StrCat("session_id: no session '", id, "'"));
     }
+    RETURN_IF_ERROR(it->second->access().Check(user, SessionRole::kOwner, id));
     session = it->second;
     sessions_.erase(it);
     NotifyLocked();
@@ -56,10 +72,12 @@ Status SessionManager::Close(std::string_view id) {
   return absl::OkStatus();
 }
 
-std::vector<std::shared_ptr<Session>> SessionManager::List() const {
+std::vector<std::shared_ptr<Session>> SessionManager::List(std::string_view user) const {
   std::lock_guard lock(mutex_);
   std::vector<std::shared_ptr<Session>> out;
-  for (const auto& [id, session] : sessions_) out.push_back(session);
+  for (const auto& [id, session] : sessions_) {
+    if (session->access().Check(user, SessionRole::kViewer, id).ok()) out.push_back(session);
+  }
   return out;
 }
 
@@ -95,7 +113,15 @@ void SessionManager::CloseAll() {
 }
 
 void SessionManager::NotifyLocked() const {
-  if (options_.on_change) options_.on_change(static_cast<int64_t>(sessions_.size()));
+  if (!options_.on_change) return;
+  std::map<std::string, int64_t> per_user;
+  for (auto& [user, count] : reported_) per_user[user] = 0;
+  for (const auto& [id, session] : sessions_) ++per_user[session->access().owner()];
+  options_.on_change(static_cast<int64_t>(sessions_.size()), per_user);
+  reported_.clear();
+  for (const auto& [user, count] : per_user) {
+    if (count > 0) reported_[user] = count;
+  }
 }
 
 }  // namespace vpm::service

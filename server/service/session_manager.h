@@ -1,7 +1,8 @@
-// The open sessions: created on a volume and mesh, looked up by id, closed
-// by a client, or evicted: after idle_session_s without calls or viewers
-// (the last stream ended), or after idle_watched_session_s watched but
-// driven by nobody (no event, camera move or call naming it).
+// The open sessions: created on a volume and mesh by a user (their owner),
+// looked up by id for a user in a role (session_access.h), closed by their
+// owner, or evicted: after idle_session_s without calls or viewers (the
+// last stream ended), or after idle_watched_session_s watched but driven by
+// nobody (no event, camera move or call naming it).
 #pragma once
 
 #include <functional>
@@ -21,21 +22,28 @@ class SessionManager {
     const gpu::GpuContext* context = nullptr;  // outlive the manager
     VolumeRenderer* renderer = nullptr;
     int64_t max_sessions = 32;
+    int64_t max_sessions_per_user = 16;    // 0: only max_sessions
     double idle_session_s = 900;           // no viewer; 0: never evict
     double idle_watched_session_s = 3600;  // viewers but no driver; 0: never
     Session::Options session;
-    std::function<void(int64_t open)> on_change;  // metrics
+    // Metrics: sessions open, and per owner (users whose count fell to zero
+    // are reported with 0 once).
+    std::function<void(int64_t open, const std::map<std::string, int64_t>& per_user)> on_change;
     std::string id_prefix = "ses-";  // ids are id_prefix + 1, 2, ...
   };
   static Result<std::unique_ptr<SessionManager>> Create(const Options& options);
 
   // Builds the scene (FEM set-up): call from a worker. ResourceExhausted
-  // past max_sessions.
-  Result<std::shared_ptr<Session>> Open(std::shared_ptr<VolumeEntry> volume,
+  // past max_sessions or the owner's max_sessions_per_user.
+  Result<std::shared_ptr<Session>> Open(const std::string& owner,
+                                        std::shared_ptr<VolumeEntry> volume,
                                         std::shared_ptr<const MeshEntry> mesh);
-  Result<std::shared_ptr<Session>> Get(std::string_view id) const;  // NotFound; touches it
-  Status Close(std::string_view id);                                 // NotFound
-  std::vector<std::shared_ptr<Session>> List() const;
+  // NotFound; PermissionDenied unless `user` has `role`; touches it.
+  Result<std::shared_ptr<Session>> Get(std::string_view id, std::string_view user,
+                                       SessionRole role) const;
+  Status Close(std::string_view id, std::string_view user);  // as Get for the owner
+  // The sessions `user` owns or views.
+  std::vector<std::shared_ptr<Session>> List(std::string_view user) const;
   // Closes sessions idle past the limit with no viewer; returns how many.
   int EvictIdle();
   void CloseAll();
@@ -48,6 +56,8 @@ class SessionManager {
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<Session>, std::less<>> sessions_;
   int64_t opening_ = 0;  // reserved places while scenes are built
+  std::map<std::string, int64_t> opening_per_user_;
+  mutable std::map<std::string, int64_t> reported_;  // per owner, as last reported
   int64_t next_id_ = 1;
 };
 

@@ -6,27 +6,27 @@
 
 namespace vpm::service {
 
-std::string StreamRegistry::ClientOf(const std::string& peer) {
-  const size_t colon = peer.rfind(':');
-  return colon == std::string::npos ? peer : peer.substr(0, colon);
-}
-
-Status StreamRegistry::Acquire(const std::string& peer) {
+Status StreamRegistry::Acquire(const std::string& user) {
   std::lock_guard lock(mutex_);
-  int64_t& count = per_client_[ClientOf(peer)];
-  if (max_per_client_ > 0 && count >= max_per_client_) {
-    if (count == 0) per_client_.erase(ClientOf(peer));
+  int64_t& count = per_user_[user];
+  if (max_per_user_ > 0 && count >= max_per_user_) {
+    if (count == 0) per_user_.erase(user);
     return absl::ResourceExhaustedError(
-        StrCat("this client holds its maximum of ", max_per_client_, " streams"));
+        StrCat("user '", user, "' holds the maximum of ", max_per_user_,
+               " Interact and Watch streams per user; end one first"));
   }
   ++count;
+  if (on_change_) on_change_(user, count);
   return absl::OkStatus();
 }
 
-void StreamRegistry::Release(const std::string& peer) {
+void StreamRegistry::Release(const std::string& user) {
   std::lock_guard lock(mutex_);
-  auto it = per_client_.find(ClientOf(peer));
-  if (it != per_client_.end() && --it->second <= 0) per_client_.erase(it);
+  auto it = per_user_.find(user);
+  if (it == per_user_.end()) return;
+  const int64_t left = --it->second;
+  if (left <= 0) per_user_.erase(it);
+  if (on_change_) on_change_(user, left > 0 ? left : 0);
 }
 
 int64_t StreamRegistry::Register(std::weak_ptr<FrameStream> stream) {

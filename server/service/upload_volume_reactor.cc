@@ -45,17 +45,21 @@ UploadVolumeReactor* UploadVolumeReactor::Make(ServiceContext* service,
 UploadVolumeReactor::UploadVolumeReactor(ServiceContext* service,
                                          grpc::CallbackServerContext* context,
                                          v2::VolumeInfo* response)
-    : service_(service), context_(context), peer_(context->peer()), response_(response) {
+    : service_(service), context_(context), response_(response) {
   service_->metrics->StreamOpened();
 }
 
 void UploadVolumeReactor::Begin() {
-  Status admitted = service_->auth->Check(*context_);
+  // The caller's user (the volume's owner), draining, new work, then a
+  // stream slot of this user (held until OnDone).
+  Result<std::string> user = service_->auth->Authenticate(*context_);
+  Status admitted = user.status();
+  if (admitted.ok()) user_ = *std::move(user);
   if (admitted.ok() && service_->draining) {
     admitted = absl::UnavailableError("the server is shutting down");
   }
   if (admitted.ok()) admitted = service_->AcceptingNewWork();
-  if (admitted.ok()) admitted = service_->streams->Acquire(peer_);
+  if (admitted.ok()) admitted = service_->streams->Acquire(user_);
   if (!admitted.ok()) {
     FinishOnce(admitted);
     return;
@@ -229,6 +233,7 @@ void UploadVolumeReactor::Complete() {
                                         std::strerror(errno)));
     }
     const fs::path dir = pattern;
+    service_->metrics->TempFiles(+1);
     const fs::path path = dir / file_name_;
     Status status = [&]() -> Status {
       {
@@ -238,11 +243,12 @@ void UploadVolumeReactor::Complete() {
       }
       std::vector<uint8_t>().swap(bytes_);
       ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
-                       service_->volumes->AddFile(path, StrCat("upload:", file_name_)));
+                       service_->volumes->AddFile(path, StrCat("upload:", file_name_), user_));
       FillVolumeInfo(*entry, response_);
       return absl::OkStatus();
     }();
     fs::remove_all(dir, error);
+    service_->metrics->TempFiles(-1);
     // A file that no reader accepts is a malformed upload.
     if (!status.ok() && status.code() != absl::StatusCode::kResourceExhausted &&
         status.code() != absl::StatusCode::kInternal) {
@@ -267,7 +273,7 @@ void UploadVolumeReactor::FinishOnce(const Status& status) {
     std::lock_guard lock(mutex_);
     if (finished_) return;
     finished_ = true;
-    service_->metrics->Request("UploadVolume", StatusCodeName(g.error_code()));
+    service_->metrics->Request("UploadVolume", StatusCodeName(g.error_code()), user_);
     if (reading_) {
       deferred_finish_ = g;  // ReadNext makes it once StartRead returns
       return;
@@ -278,7 +284,7 @@ void UploadVolumeReactor::FinishOnce(const Status& status) {
 
 void UploadVolumeReactor::OnDone() {
   if (reserved_bytes_ > 0) service_->upload_memory->Release(reserved_bytes_);
-  if (slot_held_) service_->streams->Release(peer_);
+  if (slot_held_) service_->streams->Release(user_);
   service_->metrics->StreamClosed();
   std::shared_ptr<UploadVolumeReactor> last = std::move(self_);  // may free this
 }

@@ -3,9 +3,10 @@
 // (the last may be shorter). Size and chunk rules are checked as chunks
 // arrive; the checksum at the end; the file is then read on the request pool
 // (never in a callback) from a private temporary folder, which is removed.
+// The volume belongs to the caller's user.
 // Errors: UNAUTHENTICATED; INVALID_ARGUMENT for a missing or bad header, a
 // bad chunk size, more bytes than declared, a truncated stream or a checksum
-// mismatch; RESOURCE_EXHAUSTED past the upload or volume caps, the client's
+// mismatch; RESOURCE_EXHAUSTED past the upload or volume caps, the user's
 // stream cap (an upload counts as a stream) or the server's memory budget
 // for uploads in flight (the declared size is reserved at the header);
 // DEADLINE_EXCEEDED when no message arrives for --upload-idle-s.
@@ -63,10 +64,10 @@ class UploadVolumeReactor : public grpc::ServerReadReactor<v2::UploadVolumeReque
 
   ServiceContext* service_;
   grpc::CallbackServerContext* context_;
-  std::string peer_;
   v2::VolumeInfo* response_;
+  std::string user_;  // the caller: the volume's owner (set in Begin)
   std::shared_ptr<UploadVolumeReactor> self_;  // from Make until OnDone
-  bool slot_held_ = false;                     // a stream slot of this client
+  bool slot_held_ = false;                     // a stream slot of this user
   int64_t reserved_bytes_ = 0;                 // in service_->upload_memory
   v2::UploadVolumeRequest request_;
   bool have_header_ = false;

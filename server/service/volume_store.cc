@@ -7,6 +7,12 @@
 
 namespace vpm::service {
 
+Status CheckVolumeAccess(const VolumeEntry& volume, std::string_view user) {
+  if (volume.owner.empty() || volume.owner == user) return absl::OkStatus();
+  return absl::PermissionDeniedError(
+      StrCat("volume_id: volume '", volume.id, "' was uploaded by another user"));
+}
+
 Result<std::unique_ptr<VolumeStore>> VolumeStore::Create(const Options& options) {
   if (options.context == nullptr) return absl::InvalidArgumentError("VolumeStore: no GPU context");
   if (options.max_volumes < 1 || options.max_bytes < 1) {
@@ -103,7 +109,8 @@ Result<Volume> VolumeStore::ReadSource(const std::string& load_key,
   return volume;
 }
 
-Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source) {
+Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
+                                                       const std::string& user) {
   if (source.starts_with("raw:")) {
     return absl::InvalidArgumentError(
         "source: raw: sources are not served; upload the file instead");
@@ -117,24 +124,25 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source) 
     std::lock_guard lock(mutex_);
     if (auto loaded = FindLoadedLocked(key)) {
       loaded->last_used = NextUse();
+      loaded_by_[loaded->id].insert(user);
       return loaded;
     }
   }
   RETURN_IF_ERROR(CheckRoom(0));
   ASSIGN_OR_RETURN(Volume volume, ReadSource(key, std::string(source)));
-  return Add(std::move(volume), std::move(key));
+  return Add(std::move(volume), std::move(key), user);
 }
 
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::AddFile(const std::filesystem::path& path,
-                                                          std::string source) {
+                                                          std::string source, std::string owner) {
   RETURN_IF_ERROR(CheckRoom(0));
   ASSIGN_OR_RETURN(Volume volume, ReadVolume(path.string(), options_.read_limits));
   volume.set_source(std::move(source));
-  return Add(std::move(volume), "");
+  return Add(std::move(volume), "", owner);
 }
 
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string load_key,
-                                                      std::string id) {
+                                                      const std::string& user, std::string id) {
   const int64_t bytes = volume.geometry().voxel_count() * int64_t{sizeof(float)} * 2;
   RETURN_IF_ERROR(CheckRoom(bytes));
   ASSIGN_OR_RETURN(GpuVolume gpu, GpuVolume::Upload(*options_.context, volume));
@@ -144,7 +152,10 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string
   {
     std::lock_guard lock(mutex_);
     // A load of the same source that landed while this one read wins.
-    if (auto loaded = FindLoadedLocked(load_key)) return loaded;
+    if (auto loaded = FindLoadedLocked(load_key)) {
+      if (!user.empty()) loaded_by_[loaded->id].insert(user);
+      return loaded;
+    }
     room = MakeRoomLocked(bytes, &evicted);
     if (room.ok()) {
       if (id.empty()) {
@@ -154,6 +165,11 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string
       }
       entry = std::make_shared<VolumeEntry>(id, std::move(volume), std::move(gpu), bytes);
       entry->forget_gpu = options_.forget_gpu;
+      if (load_key.empty()) {
+        entry->owner = user;
+      } else if (!user.empty()) {
+        loaded_by_[id].insert(user);
+      }
       entry->load_key = std::move(load_key);
       entry->last_used = NextUse();
       volumes_.emplace(id, entry);
@@ -167,12 +183,14 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string
   return entry;
 }
 
-Result<std::shared_ptr<VolumeEntry>> VolumeStore::Get(std::string_view id) {
+Result<std::shared_ptr<VolumeEntry>> VolumeStore::Get(std::string_view id,
+                                                      std::string_view user) {
   Evicted again;
   {
     std::lock_guard lock(mutex_);
     auto it = volumes_.find(id);
     if (it != volumes_.end()) {
+      RETURN_IF_ERROR(CheckVolumeAccess(*it->second, user));
       it->second->last_used = NextUse();
       return it->second;
     }
@@ -182,33 +200,54 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Get(std::string_view id) {
     }
     again = gone->second;
   }
-  // Evicted while idle: read it again under its id.
+  // Evicted while idle (a shared volume: anyone may read it): read it again
+  // under its id, its loaders kept.
   {
     std::lock_guard lock(mutex_);
     if (auto loaded = FindLoadedLocked(again.load_key)) return loaded;  // reloaded meanwhile
   }
   ASSIGN_OR_RETURN(Volume volume, ReadSource(again.load_key, again.source));
-  return Add(std::move(volume), again.load_key, std::string(id));
+  return Add(std::move(volume), again.load_key, "", std::string(id));
 }
 
-std::vector<std::shared_ptr<VolumeEntry>> VolumeStore::List() const {
+std::vector<std::shared_ptr<VolumeEntry>> VolumeStore::List(std::string_view user) const {
   std::lock_guard lock(mutex_);
   std::vector<std::shared_ptr<VolumeEntry>> out;
-  for (const auto& [id, entry] : volumes_) out.push_back(entry);
+  for (const auto& [id, entry] : volumes_) {
+    if (CheckVolumeAccess(*entry, user).ok()) out.push_back(entry);
+  }
   return out;
 }
 
-Status VolumeStore::Delete(std::string_view id) {
+Status VolumeStore::CheckSoleLoaderLocked(std::string_view id, const std::string& user) const {
+  auto it = loaded_by_.find(id);
+  const bool loaded_it = it != loaded_by_.end() && it->second.contains(user);
+  if (loaded_it && it->second.size() == 1) return absl::OkStatus();
+  return absl::PermissionDeniedError(
+      StrCat("volume '", id, "' is shared: ",
+             loaded_it ? "other users loaded it too" : "you did not load it",
+             "; only a user who alone loaded it may delete it"));
+}
+
+Status VolumeStore::Delete(std::string_view id, const std::string& user) {
   std::lock_guard lock(mutex_);
-  if (evicted_.erase(std::string(id)) > 0) return absl::OkStatus();
+  if (evicted_.contains(id)) {  // only shared volumes are evicted
+    RETURN_IF_ERROR(CheckSoleLoaderLocked(id, user));
+    evicted_.erase(evicted_.find(id));
+    loaded_by_.erase(loaded_by_.find(id));
+    return absl::OkStatus();
+  }
   auto it = volumes_.find(id);
   if (it == volumes_.end()) return absl::NotFoundError(StrCat("volume_id: no volume '", id, "'"));
+  RETURN_IF_ERROR(CheckVolumeAccess(*it->second, user));
+  if (it->second->owner.empty()) RETURN_IF_ERROR(CheckSoleLoaderLocked(id, user));
   if (it->second->sessions.load() > 0) {
     return absl::FailedPreconditionError(StrCat("volume '", id, "' is used by ",
                                                 it->second->sessions.load(),
                                                 " session(s); close them first"));
   }
   total_bytes_ -= it->second->bytes;
+  if (auto loaders = loaded_by_.find(id); loaders != loaded_by_.end()) loaded_by_.erase(loaders);
   volumes_.erase(it);
   NotifyLocked();
   return absl::OkStatus();

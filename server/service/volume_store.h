@@ -7,6 +7,14 @@
 // first; their ids stay valid, and the next Get reads them again. Only when
 // nothing can be evicted is a load refused, with a message saying what
 // holds the room.
+//
+// Ownership: an uploaded volume belongs to the user who uploaded it; every
+// other user gets PermissionDenied on it (it is not even listed). A volume
+// loaded from the data root or a phantom is shared read-only: every user
+// may read, list, mesh and open sessions on it (each could load the same
+// source anyway), and a user may delete it only when no other user loaded
+// it too (and, as for every volume, no session uses it). Its loaders are
+// remembered across an eviction.
 #pragma once
 
 #include <atomic>
@@ -15,6 +23,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -33,6 +42,9 @@ struct VolumeEntry {
   // What LoadVolume loaded it from ("phantom:SPEC" or "file:" + the resolved
   // path); empty for uploads. A second load of the same key shares it.
   std::string load_key;
+  // The uploader; empty for a shared volume (loaded from the data root or a
+  // phantom).
+  std::string owner;
   std::atomic<int32_t> sessions{0}; // sessions using it
   std::atomic<int64_t> last_used{0};  // a use counter, for LRU eviction
   // The scene may add a 3D image to `gpu` (export); guarded by this.
@@ -47,6 +59,10 @@ struct VolumeEntry {
     if (forget_gpu) forget_gpu(&gpu);
   }
 };
+
+// PermissionDenied unless `user` may use `volume`: its owner, or anyone for
+// a shared volume.
+Status CheckVolumeAccess(const VolumeEntry& volume, std::string_view user);
 
 class VolumeStore {
  public:
@@ -70,17 +86,22 @@ class VolumeStore {
   // the same file) returns the volume held, not a second copy: delete it to
   // read the file again. Errors: those of ResolveDataPath and ReadVolume;
   // InvalidArgument for raw: sources; ResourceExhausted past max_volumes or
-  // max_bytes.
-  Result<std::shared_ptr<VolumeEntry>> Load(std::string_view source);
+  // max_bytes. `user` is recorded as one of its loaders.
+  Result<std::shared_ptr<VolumeEntry>> Load(std::string_view source, const std::string& user);
   // A volume read from `path` (an upload's temporary file); `source` is what
-  // GetVolume reports.
+  // GetVolume reports; `owner` the uploader.
   Result<std::shared_ptr<VolumeEntry>> AddFile(const std::filesystem::path& path,
-                                               std::string source);
-  // NotFound; an evicted volume is read again (the errors of Load).
-  Result<std::shared_ptr<VolumeEntry>> Get(std::string_view id);
-  std::vector<std::shared_ptr<VolumeEntry>> List() const;
-  // NotFound; FailedPrecondition while a session uses it.
-  Status Delete(std::string_view id);
+                                               std::string source, std::string owner);
+  // NotFound; PermissionDenied for another user's upload; an evicted volume
+  // is read again (the errors of Load).
+  Result<std::shared_ptr<VolumeEntry>> Get(std::string_view id, std::string_view user);
+  // The volumes `user` may use.
+  std::vector<std::shared_ptr<VolumeEntry>> List(std::string_view user) const;
+  // NotFound; PermissionDenied for another user's upload, or a shared
+  // volume that `user` did not load or that another user loaded too;
+  // FailedPrecondition while a session uses it. An evicted volume is
+  // forgotten (the same permission rules).
+  Status Delete(std::string_view id, const std::string& user);
   // ResourceExhausted when one more volume of `extra_bytes` would pass a cap
   // even after evicting every idle volume (which this does not do).
   Status CheckRoom(int64_t extra_bytes) const;
@@ -89,9 +110,12 @@ class VolumeStore {
 
  private:
   explicit VolumeStore(Options options) : options_(std::move(options)) {}
-  // `id`: empty for a new one, else the id of an evicted volume read again.
+  // `load_key` empty: an upload owned by `user`; else a shared volume
+  // `user` loaded (empty `user`: an evicted volume read again, its loaders
+  // kept). `id`: empty for a new one, else the id of an evicted volume read
+  // again.
   Result<std::shared_ptr<VolumeEntry>> Add(Volume volume, std::string load_key,
-                                           std::string id = {});
+                                           const std::string& user, std::string id = {});
   Result<Volume> ReadSource(const std::string& load_key, const std::string& source) const;
   std::shared_ptr<VolumeEntry> FindLoadedLocked(const std::string& load_key) const;
   // Evicts idle volumes, least recently used first, until one more of
@@ -99,6 +123,9 @@ class VolumeStore {
   // ResourceExhausted naming what holds the room.
   Status MakeRoomLocked(int64_t extra_bytes, std::vector<std::string>* evicted);
   void ReportEvicted(const std::vector<std::string>& evicted) const;
+  // PermissionDenied unless `user` may delete the shared volume `id`: the
+  // only user who loaded it.
+  Status CheckSoleLoaderLocked(std::string_view id, const std::string& user) const;
   void NotifyLocked() const;
 
   Options options_;
@@ -109,6 +136,8 @@ class VolumeStore {
     std::string source;
   };
   std::map<std::string, Evicted, std::less<>> evicted_;  // by id
+  // The users who loaded each shared volume (held or evicted), by id.
+  std::map<std::string, std::set<std::string>, std::less<>> loaded_by_;
   int64_t evictions_ = 0;
   int64_t total_bytes_ = 0;
   int64_t next_id_ = 1;

@@ -1,6 +1,7 @@
 #include "server/service/vpm_server.h"
 
 #include "server/common/read_text_file.h"
+#include "server/service/users_file.h"
 #include "server/service/loopback_address.h"
 
 #include <cstdio>
@@ -33,6 +34,29 @@ Result<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(const ServerOpt
   return grpc::SslServerCredentials(ssl);
 }
 
+// The users of --users, --token / --token-file / VPM_TOKEN, or --no-auth.
+Result<TokenAuth> MakeAuth(const ServerOptions& o) {
+  TokenAuth::Options auth;
+  auth.disabled = o.no_auth;
+  auth.token = o.token;
+  if (!o.token_file.empty()) {
+    if (!o.token.empty()) {
+      return absl::InvalidArgumentError("give one of --token and --token-file, not both");
+    }
+    ASSIGN_OR_RETURN(std::string text, ReadTextFile(o.token_file, "--token-file"));
+    const size_t first = text.find_first_not_of(" \t\r\n");
+    const size_t last = text.find_last_not_of(" \t\r\n");
+    if (first == std::string::npos) {
+      return absl::InvalidArgumentError(StrCat("--token-file ", o.token_file, ": empty"));
+    }
+    auth.token = text.substr(first, last - first + 1);
+  }
+  if (!o.users_file.empty()) {
+    ASSIGN_OR_RETURN(auth.users, ReadUsersFile(o.users_file));
+  }
+  return TokenAuth::Create(auth);
+}
+
 // 8 hex digits from the OS's random source.
 std::string RandomIdTag() {
   std::random_device random;
@@ -60,7 +84,7 @@ Status VpmServer::Start() {
                "(127.0.0.1:PORT, [::1]:PORT, localhost:PORT or unix:PATH), not --listen ",
                o.listen, "; give --token (or VPM_TOKEN) to listen there"));
   }
-  ASSIGN_OR_RETURN(TokenAuth auth, TokenAuth::Create({o.token, o.no_auth}));
+  ASSIGN_OR_RETURN(TokenAuth auth, MakeAuth(o));
   auth_.emplace(std::move(auth));
   ASSIGN_OR_RETURN(auto credentials, MakeCredentials(o));
   ASSIGN_OR_RETURN(metrics_, ServiceMetrics::Create({o.metrics_listen}));
@@ -71,7 +95,7 @@ Status VpmServer::Start() {
     gpu_ = own_gpu_.get();
   }
   ASSIGN_OR_RETURN(renderer_, VolumeRenderer::Create(*gpu_, {}));
-  const FairJobQueue::Limits queue_limits{o.max_queued_per_client, o.max_queued};
+  const FairJobQueue::Limits queue_limits{o.max_queued_per_user, o.max_queued};
   ASSIGN_OR_RETURN(request_pool_,
                    WorkerPool::Create({o.request_threads, "request", queue_limits}));
   ASSIGN_OR_RETURN(render_pool_, WorkerPool::Create({o.render_threads, "render", queue_limits}));
@@ -103,10 +127,17 @@ Status VpmServer::Start() {
   session_options.idle_session_s = o.idle_session_s;
   session_options.idle_watched_session_s = o.idle_watched_session_s;
   session_options.session.still_delay_ms = o.still_delay_ms;
-  session_options.on_change = [m = metrics_.get()](int64_t open) { m->Sessions(open); };
+  session_options.max_sessions_per_user = o.max_sessions_per_user;
+  session_options.on_change = [m = metrics_.get()](
+                                  int64_t open, const std::map<std::string, int64_t>& per_user) {
+    m->Sessions(open, per_user);
+  };
   session_options.id_prefix = StrCat("ses-", id_tag_, "-");
   ASSIGN_OR_RETURN(sessions_, SessionManager::Create(session_options));
-  streams_ = std::make_unique<StreamRegistry>(o.max_streams_per_client);
+  streams_ = std::make_unique<StreamRegistry>(
+      o.max_streams_per_user,
+      [m = metrics_.get()](const std::string& user, int64_t n) { m->UserStreams(user, n); });
+  metrics_->SetOpenStreamsSource([s = streams_.get()] { return s->open_streams(); });
   upload_memory_ = std::make_unique<ByteBudget>(o.max_upload_memory_bytes);
 
   context_.options = o;
@@ -186,6 +217,8 @@ void VpmServer::Shutdown(std::chrono::milliseconds grace) {
   }
   if (sessions_) sessions_->CloseAll();
   if (reaper_.joinable()) reaper_.join();
+  // /metrics may still be scraped; the registry goes before the metrics.
+  if (metrics_) metrics_->SetOpenStreamsSource(nullptr);
 }
 
 void VpmServer::Wait() {

@@ -11,23 +11,25 @@ namespace vpm::service {
 
 grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context,
                                             const char* method, WorkerPool* pool,
-                                            std::function<Status()> fn) {
+                                            std::function<Status(const std::string& user)> fn) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-  if (Status auth = service_->auth->Check(*context); !auth.ok()) {
-    Done(reactor, method, auth);
+  Result<std::string> authenticated = service_->auth->Authenticate(*context);
+  if (!authenticated.ok()) {
+    Done(reactor, method, authenticated.status(), "");
     return reactor;
   }
+  const std::string user = *std::move(authenticated);
   if (pool == nullptr) {
-    Done(reactor, method, fn());
+    Done(reactor, method, fn(user), user);
     return reactor;
   }
   // Dropped unrun, answered with `why`.
-  auto dropped = [this, reactor, method](const Status& why) {
+  auto dropped = [this, reactor, method, user](const Status& why) {
     service_->metrics->DroppedJob(method, why.code() == absl::StatusCode::kCancelled ? "cancelled"
                                           : why.code() == absl::StatusCode::kDeadlineExceeded
                                               ? "deadline"
                                               : "shutdown");
-    Done(reactor, method, why);
+    Done(reactor, method, why, user);
   };
   // Purged to make room (gone), or still queued at shutdown.
   auto drop = [context, dropped] {
@@ -35,11 +37,11 @@ grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context
     dropped(gone.ok() ? absl::UnavailableError("the server shut down before this call's turn")
                       : gone);
   };
-  const std::string lane = StrCat("unary:", FairShareKey(*context));
+  const std::string lane = StrCat("unary:", FairShareKey(user));
   Status queued = pool->Submit(Job{
       .lane = lane,
       .run =
-          [this, context, reactor, method, fn = std::move(fn), dropped] {
+          [this, context, reactor, method, fn = std::move(fn), dropped, user] {
             // Work nobody waits for any more is dropped before it starts: a
             // cancelled or expired call, or one whose deadline would pass
             // before a typical job here finishes, must not delay the calls
@@ -48,9 +50,9 @@ grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context
               return dropped(gone);
             }
             const auto start = std::chrono::steady_clock::now();
-            Status status = fn();
+            Status status = fn(user);
             run_times_.Add(method, MsSince(start));
-            Done(reactor, method, status);
+            Done(reactor, method, status, user);
           },
       .gone = [context] { return !CallGone(*context).ok(); },
       .drop = drop,
@@ -62,16 +64,15 @@ grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context
     service_->metrics->DroppedJob(method, "queue_full");
     Done(reactor, method,
          absl::ResourceExhaustedError(StrCat(queued.message(), "; retry after about ", retry_ms,
-                                             " ms")));
+                                             " ms")),
+         user);
   } else if (!queued.ok()) {
-    Done(reactor, method, queued);
+    Done(reactor, method, queued, user);
   }
   return reactor;
 }
 
-std::string VpmService::FairShareKey(const grpc::CallbackServerContext& context) {
-  return StreamRegistry::ClientOf(context.peer());
-}
+std::string VpmService::FairShareKey(const std::string& user) { return user; }
 
 Status VpmService::CallGone(grpc::CallbackServerContext& context, double need_ms) {
   if (context.IsCancelled()) {
@@ -90,27 +91,44 @@ Status VpmService::CallGone(grpc::CallbackServerContext& context, double need_ms
 }
 
 void VpmService::Done(grpc::ServerUnaryReactor* reactor, const char* method,
-                      const Status& status) {
+                      const Status& status, const std::string& user) {
   const grpc::Status g = ToGrpcStatus(status);
-  service_->metrics->Request(method, StatusCodeName(g.error_code()));
+  service_->metrics->Request(method, StatusCodeName(g.error_code()), user);
   reactor->Finish(g);
 }
 
-void VpmService::FillSessionInfo(const Session& session, v2::SessionInfo* info) const {
+void VpmService::FillSessionInfo(const Session& session, const std::string& user,
+                                 v2::SessionInfo* info) const {
   info->set_session_id(session.id());
   info->set_volume_id(session.volume().id);
   info->set_mesh_id(session.mesh().id);
   info->set_viewers(session.viewers());
   info->set_idle_s(session.idle_s());
+  info->set_owner(session.access().owner());
+  if (session.access().IsOwner(user)) {
+    for (const std::string& viewer : session.access().viewers()) info->add_shared_with(viewer);
+  }
+}
+
+Result<std::shared_ptr<const MeshEntry>> VpmService::FindMesh(std::string_view mesh_id,
+                                                             const std::string& user) const {
+  ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh, service_->meshes->Get(mesh_id));
+  if (!CheckVolumeAccess(*mesh->volume, user).ok()) {
+    return absl::PermissionDeniedError(
+        StrCat("mesh_id: mesh '", mesh_id, "' is on a volume another user uploaded"));
+  }
+  return mesh;
 }
 
 grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* context,
                                                  const v2::LoadVolumeRequest* request,
                                                  v2::VolumeInfo* response) {
-  return Unary(context, "LoadVolume", service_->request_pool, [=, this]() -> Status {
+  return Unary(context, "LoadVolume", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     if (request->source().empty()) return absl::InvalidArgumentError("source: required");
-    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry, service_->volumes->Load(request->source()));
+    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
+                     service_->volumes->Load(request->source(), user));
     FillVolumeInfo(*entry, response);
     return absl::OkStatus();
   });
@@ -125,9 +143,10 @@ grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* con
                                                 const v2::GetVolumeRequest* request,
                                                 v2::VolumeInfo* response) {
   // On a pool: an evicted volume is read again.
-  return Unary(context, "GetVolume", service_->request_pool, [=, this]() -> Status {
+  return Unary(context, "GetVolume", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
-                     service_->volumes->Get(request->volume_id()));
+                     service_->volumes->Get(request->volume_id(), user));
     FillVolumeInfo(*entry, response);
     return absl::OkStatus();
   });
@@ -136,8 +155,8 @@ grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* con
 grpc::ServerUnaryReactor* VpmService::ListVolumes(grpc::CallbackServerContext* context,
                                                   const v2::ListVolumesRequest*,
                                                   v2::ListVolumesResponse* response) {
-  return Unary(context, "ListVolumes", nullptr, [=, this]() -> Status {
-    for (const auto& entry : service_->volumes->List()) {
+  return Unary(context, "ListVolumes", nullptr, [=, this](const std::string& user) -> Status {
+    for (const auto& entry : service_->volumes->List(user)) {
       FillVolumeInfo(*entry, response->add_volumes());
     }
     return absl::OkStatus();
@@ -147,8 +166,9 @@ grpc::ServerUnaryReactor* VpmService::ListVolumes(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* context,
                                                    const v2::DeleteVolumeRequest* request,
                                                    v2::DeleteVolumeResponse*) {
-  return Unary(context, "DeleteVolume", service_->request_pool, [=, this]() -> Status {
-    RETURN_IF_ERROR(service_->volumes->Delete(request->volume_id()));
+  return Unary(context, "DeleteVolume", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
+    RETURN_IF_ERROR(service_->volumes->Delete(request->volume_id(), user));
     service_->meshes->ForgetVolume(request->volume_id());
     return absl::OkStatus();
   });
@@ -157,10 +177,11 @@ grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* 
 grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* context,
                                                 const v2::BuildMeshRequest* request,
                                                 v2::MeshInfo* response) {
-  return Unary(context, "BuildMesh", service_->request_pool, [=, this]() -> Status {
+  return Unary(context, "BuildMesh", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
-                     service_->volumes->Get(request->volume_id()));
+                     service_->volumes->Get(request->volume_id(), user));
     ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(request->params()));
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
                      service_->meshes->Build(volume, params));
@@ -172,9 +193,9 @@ grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* con
 grpc::ServerUnaryReactor* VpmService::GetMesh(grpc::CallbackServerContext* context,
                                               const v2::GetMeshRequest* request,
                                               v2::GetMeshResponse* response) {
-  return Unary(context, "GetMesh", service_->request_pool, [=, this]() -> Status {
-    ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
-                     service_->meshes->Get(request->mesh_id()));
+  return Unary(context, "GetMesh", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
+    ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh, FindMesh(request->mesh_id(), user));
     FillMeshInfo(*mesh, response->mutable_info());
     if (request->include_geometry()) FillMeshGeometry(mesh->mesh, response);
     return absl::OkStatus();
@@ -184,9 +205,11 @@ grpc::ServerUnaryReactor* VpmService::GetMesh(grpc::CallbackServerContext* conte
 grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* context,
                                                  const v2::RefineMeshRequest* request,
                                                  v2::MeshInfo* response) {
-  return Unary(context, "RefineMesh", service_->request_pool, [=, this]() -> Status {
+  return Unary(context, "RefineMesh", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     if (!request->has_point_mm()) return absl::InvalidArgumentError("point_mm: required");
+    RETURN_IF_ERROR(FindMesh(request->mesh_id(), user).status());
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
                      service_->meshes->Refine(request->mesh_id(), FromProto(request->point_mm())));
     FillMeshInfo(*mesh, response);
@@ -197,7 +220,9 @@ grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::DeleteMesh(grpc::CallbackServerContext* context,
                                                  const v2::DeleteMeshRequest* request,
                                                  v2::DeleteMeshResponse*) {
-  return Unary(context, "DeleteMesh", service_->request_pool, [=, this]() -> Status {
+  return Unary(context, "DeleteMesh", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
+    RETURN_IF_ERROR(FindMesh(request->mesh_id(), user).status());
     return service_->meshes->Delete(request->mesh_id());
   });
 }
@@ -205,11 +230,12 @@ grpc::ServerUnaryReactor* VpmService::DeleteMesh(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* context,
                                                   const v2::OpenSessionRequest* request,
                                                   v2::SessionInfo* response) {
-  return Unary(context, "OpenSession", service_->request_pool, [=, this]() -> Status {
+  return Unary(context, "OpenSession", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     std::shared_ptr<const MeshEntry> mesh;
     if (!request->mesh_id().empty()) {
-      ASSIGN_OR_RETURN(mesh, service_->meshes->Get(request->mesh_id()));
+      ASSIGN_OR_RETURN(mesh, FindMesh(request->mesh_id(), user));
       if (!request->volume_id().empty() && mesh->volume->id != request->volume_id()) {
         return absl::InvalidArgumentError(StrCat("mesh_id: '", request->mesh_id(),
                                                  "' was built on volume '", mesh->volume->id,
@@ -220,12 +246,12 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
         return absl::InvalidArgumentError("volume_id: required (or a mesh_id)");
       }
       ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
-                       service_->volumes->Get(request->volume_id()));
+                       service_->volumes->Get(request->volume_id(), user));
       ASSIGN_OR_RETURN(mesh, service_->meshes->Build(volume, MeshParams{}));
     }
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
-                     service_->sessions->Open(mesh->volume, mesh));
-    FillSessionInfo(*session, response);
+                     service_->sessions->Open(user, mesh->volume, mesh));
+    FillSessionInfo(*session, user, response);
     return absl::OkStatus();
   });
 }
@@ -233,17 +259,48 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* VpmService::CloseSession(grpc::CallbackServerContext* context,
                                                    const v2::CloseSessionRequest* request,
                                                    v2::CloseSessionResponse*) {
-  return Unary(context, "CloseSession", service_->request_pool,
-               [=, this] { return service_->sessions->Close(request->session_id()); });
+  return Unary(context, "CloseSession", service_->request_pool, [=, this](const std::string& user) {
+    return service_->sessions->Close(request->session_id(), user);
+  });
 }
 
 grpc::ServerUnaryReactor* VpmService::ListSessions(grpc::CallbackServerContext* context,
                                                    const v2::ListSessionsRequest*,
                                                    v2::ListSessionsResponse* response) {
-  return Unary(context, "ListSessions", nullptr, [=, this]() -> Status {
-    for (const auto& session : service_->sessions->List()) {
-      FillSessionInfo(*session, response->add_sessions());
+  return Unary(context, "ListSessions", nullptr, [=, this](const std::string& user) -> Status {
+    for (const auto& session : service_->sessions->List(user)) {
+      FillSessionInfo(*session, user, response->add_sessions());
     }
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::GetSession(grpc::CallbackServerContext* context,
+                                                 const v2::GetSessionRequest* request,
+                                                 v2::SessionInfo* response) {
+  return Unary(context, "GetSession", nullptr, [=, this](const std::string& user) -> Status {
+    ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
+                     service_->sessions->Get(request->session_id(), user, SessionRole::kViewer));
+    FillSessionInfo(*session, user, response);
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::ShareSession(grpc::CallbackServerContext* context,
+                                                   const v2::ShareSessionRequest* request,
+                                                   v2::SessionInfo* response) {
+  return Unary(context, "ShareSession", nullptr, [=, this](const std::string& user) -> Status {
+    ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
+                     service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
+    if (!service_->auth->HasUser(request->user())) {
+      return absl::InvalidArgumentError(
+          StrCat("user: '", request->user(), "' is not a user of this server"));
+    }
+    if (request->user() == user) {
+      return absl::InvalidArgumentError("user: a session is always its owner's");
+    }
+    session->access().Share(request->user(), !request->revoke());
+    FillSessionInfo(*session, user, response);
     return absl::OkStatus();
   });
 }
@@ -261,9 +318,10 @@ grpc::ServerWriteReactor<v2::Frame>* VpmService::Watch(grpc::CallbackServerConte
 grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* context,
                                                  const v2::ManipulateRequest* request,
                                                  v2::ManipulateResponse* response) {
-  return Unary(context, "Manipulate", service_->render_pool, [=, this]() -> Status {
+  return Unary(context, "Manipulate", service_->render_pool,
+               [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
-                     service_->sessions->Get(request->session_id()));
+                     service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
     const v2::ClientEvent& event = request->event();
     if (event.event_case() == v2::ClientEvent::EVENT_NOT_SET) {
       return absl::InvalidArgumentError("event: required (camera, grab, drag, pull or release)");
@@ -283,9 +341,10 @@ grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* context,
                                                 const v2::SetCameraRequest* request,
                                                 v2::SetCameraResponse*) {
-  return Unary(context, "SetCamera", service_->render_pool, [=, this]() -> Status {
+  return Unary(context, "SetCamera", service_->render_pool,
+               [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
-                     service_->sessions->Get(request->session_id()));
+                     service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
     return session->SetCamera(request->camera());
   });
 }
@@ -293,9 +352,10 @@ grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* con
 grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* context,
                                              const v2::RenderRequest* request,
                                              v2::Frame* response) {
-  return Unary(context, "Render", service_->render_pool, [=, this]() -> Status {
+  return Unary(context, "Render", service_->render_pool,
+               [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
-                     service_->sessions->Get(request->session_id()));
+                     service_->sessions->Get(request->session_id(), user, SessionRole::kViewer));
     ASSIGN_OR_RETURN(StreamSettings settings,
                      ToStreamSettings(request->settings(), session->volume().volume,
                                       service_->options.max_frame_side));

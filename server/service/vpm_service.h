@@ -1,4 +1,6 @@
-// vpm.v2.Vpm on gRPC's callback API. Unary calls check the token, then run
+// vpm.v2.Vpm on gRPC's callback API. Unary calls authenticate the caller
+// (token_auth.h: every call knows its user, for ownership checks and
+// per-user metrics), then run
 // cheap lookups inline and anything heavy (reads, mesh builds, FEM, frames)
 // on a worker pool, finishing the call from there; streaming calls are
 // reactors in their own files. Every call is counted by method and code.
@@ -47,6 +49,11 @@ class VpmService final : public v2::Vpm::CallbackService {
   grpc::ServerUnaryReactor* ListSessions(grpc::CallbackServerContext*,
                                          const v2::ListSessionsRequest*,
                                          v2::ListSessionsResponse*) override;
+  grpc::ServerUnaryReactor* GetSession(grpc::CallbackServerContext*, const v2::GetSessionRequest*,
+                                       v2::SessionInfo*) override;
+  grpc::ServerUnaryReactor* ShareSession(grpc::CallbackServerContext*,
+                                         const v2::ShareSessionRequest*,
+                                         v2::SessionInfo*) override;
   grpc::ServerBidiReactor<v2::InteractRequest, v2::Frame>* Interact(
       grpc::CallbackServerContext*) override;
   grpc::ServerWriteReactor<v2::Frame>* Watch(grpc::CallbackServerContext*,
@@ -59,12 +66,14 @@ class VpmService final : public v2::Vpm::CallbackService {
                                    v2::Frame*) override;
 
  private:
-  // Checks the token, then runs `fn` inline (pool == nullptr) or on `pool`,
-  // and finishes the call with its status.
+  // Authenticates the caller, then runs `fn` with the caller's user name
+  // inline (pool == nullptr) or on `pool`, and finishes the call with its
+  // status.
   grpc::ServerUnaryReactor* Unary(grpc::CallbackServerContext* context, const char* method,
-                                  WorkerPool* pool, std::function<Status()> fn);
-  void Done(grpc::ServerUnaryReactor* reactor, const char* method, const Status& status);
-  // Cancelled or DeadlineExceeded when the client no longer waits for the call.
+                                  WorkerPool* pool,
+                                  std::function<Status(const std::string& user)> fn);
+  void Done(grpc::ServerUnaryReactor* reactor, const char* method, const Status& status,
+            const std::string& user);
   // How long each method's work takes (moving average, ms), so that a call
   // whose deadline leaves less than half of that is not started.
   class RunTimes {
@@ -86,11 +95,19 @@ class VpmService final : public v2::Vpm::CallbackService {
   };
   RunTimes run_times_;
 
-  // Cancelled, past its deadline, or with less than `need_ms` left.
+  // Cancelled or DeadlineExceeded when the client no longer waits for the
+  // call: cancelled, past its deadline, or with less than `need_ms` left.
   static Status CallGone(grpc::CallbackServerContext& context, double need_ms = 0.0);
-  // Whose fair share a call counts against (the client address).
-  static std::string FairShareKey(const grpc::CallbackServerContext& context);
-  void FillSessionInfo(const Session& session, v2::SessionInfo* info) const;
+  // Whose fair share a unary call counts against: the caller's user (behind
+  // a gateway or a balancer every user shares one peer address, so a share
+  // per address would be one share for all).
+  static std::string FairShareKey(const std::string& user);
+  // shared_with only for the owner.
+  void FillSessionInfo(const Session& session, const std::string& user,
+                       v2::SessionInfo* info) const;
+  // NotFound; PermissionDenied for a mesh on another user's upload.
+  Result<std::shared_ptr<const MeshEntry>> FindMesh(std::string_view mesh_id,
+                                                   const std::string& user) const;
 
   ServiceContext* service_;
 };

@@ -20,7 +20,8 @@ void WatchReactor::Begin() {
   StartOnPool(
       [this]() -> Result<std::shared_ptr<FrameStream>> {
         ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
-                         service_->sessions->Get(request_.session_id()));
+                         service_->sessions->Get(request_.session_id(), user(),
+                                                 SessionRole::kViewer));
         ASSIGN_OR_RETURN(StreamSettings settings,
                          ToStreamSettings(request_.settings(), session->volume().volume,
                                           service_->options.max_frame_side));

@@ -14,7 +14,7 @@
 import assert from 'node:assert/strict';
 
 import {
-  canvasGrey, launchBrowser, runScenario, settled, startGateway,
+  canvasGrey, launchBrowser, runScenario, settled, signInWithForm, startGateway,
 } from '../web/harness.mjs';
 import {
   exited, framesSince, kToken, makeDataRoot, replicaOf, sleep, startBalancer, startReplicas,
@@ -25,13 +25,16 @@ const { build, source, out } = testPaths(process.argv, 'failover_web');
 const step = (text) => console.log(`balancer_failover_web: ${text}`);
 const kMaxGapMs = 2500;
 
-// A tab with the data root's volume open from the loaded list; every text
-// the page shows in #message is kept in window.messages.
+// A tab (a browser context of its own, signed in with the gateway's token)
+// with the data root's volume open from the loaded list; every text the
+// page shows in #message is kept in window.messages.
 async function openTab(browser, url) {
-  const page = await browser.newPage({ viewport: { width: 900, height: 800 } });
+  // bypassCSP: the string predicates of settled() are evaluated in the
+  // page, which the gateway's Content-Security-Policy would refuse.
+  const page = await browser.newPage({ viewport: { width: 900, height: 800 }, bypassCSP: true });
   const errors = [];
   page.on('pageerror', (e) => errors.push(e.message));
-  await page.goto(url);
+  await signInWithForm(page, url, kToken);
   await page.evaluate(() => {
     window.messages = [];
     const m = document.getElementById('message');

@@ -2,7 +2,7 @@
 // are evicted least recently used (and read again when named), a volume in
 // use never is, and a refusal says what holds the room; sessions watched but
 // driven by nobody are closed after --idle-watched-session-s; uploads count
-// against the client's stream cap and the server's upload memory budget,
+// against the user's stream cap and the server's upload memory budget,
 // and an upload that goes quiet ends with DEADLINE_EXCEEDED.
 #include <thread>
 
@@ -147,8 +147,8 @@ TEST_F(ResourceLifecycleTest, QuietUploadEndsWithDeadlineExceededAndFreesItsBudg
   EXPECT_EQ(truncated.error_code(), grpc::INVALID_ARGUMENT) << truncated.error_message();
 }
 
-TEST_F(ResourceLifecycleTest, UploadsCountAgainstTheClientsStreamCap) {
-  // SmallServerOptions: 4 streams per client. Four quiet uploads hold them.
+TEST_F(ResourceLifecycleTest, UploadsCountAgainstTheUsersStreamCap) {
+  // SmallServerOptions: 4 streams per user. Four quiet uploads hold them.
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
   std::vector<std::unique_ptr<grpc::ClientWriter<v2::UploadVolumeRequest>>> writers;
   std::vector<v2::VolumeInfo> infos(5);

@@ -227,36 +227,7 @@ TEST_F(DataRootTest, LoadVolume_RefusesTraversalAndSymlinkEscape) {
   EXPECT_EQ(Load("cases/missing.nii.gz"), grpc::NOT_FOUND);
 }
 
-class UploadTest : public ServiceTest {
- protected:
-  std::vector<uint8_t> NiftiBytes() {
-    auto volume = ReadVolume("phantom:abdomen?size=40", {});
-    EXPECT_TRUE(volume.ok());
-    auto bytes = EncodeNifti(*volume);
-    EXPECT_TRUE(bytes.ok());
-    return *bytes;
-  }
-  // Sends the header then `bytes` in chunks of `chunk` bytes.
-  grpc::Status Upload(const std::vector<uint8_t>& bytes, int64_t declared, const std::string& sha,
-                      size_t chunk, v2::VolumeInfo* info, bool header = true) {
-    auto context = Context();
-    auto writer = stub_->UploadVolume(context.get(), info);
-    if (header) {
-      v2::UploadVolumeRequest h;
-      h.mutable_header()->set_file_name("case.nii");
-      h.mutable_header()->set_total_bytes(declared);
-      h.mutable_header()->set_sha256_hex(sha);
-      if (!writer->Write(h)) return writer->Finish();
-    }
-    for (size_t at = 0; at < bytes.size(); at += chunk) {
-      v2::UploadVolumeRequest c;
-      c.set_chunk(bytes.data() + at, std::min(chunk, bytes.size() - at));
-      if (!writer->Write(c)) break;
-    }
-    writer->WritesDone();
-    return writer->Finish();
-  }
-};
+using UploadTest = ServiceTest;
 
 TEST_F(UploadTest, UploadVolume_AcceptsChunkedFileWithChecksum) {
   const std::vector<uint8_t> bytes = NiftiBytes();

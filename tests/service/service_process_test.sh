@@ -49,9 +49,10 @@ make_ca ca && make_ca rogue-ca &&
 # --- server control
 port=""
 metrics_port=""
+auth_flags=(--token secret)
 start_server() {  # extra flags...
   : > "$tmp/server.log"
-  "$server_bin" --listen 127.0.0.1:0 --metrics-listen 127.0.0.1:0 --token secret \
+  "$server_bin" --listen 127.0.0.1:0 --metrics-listen 127.0.0.1:0 "${auth_flags[@]}" \
     --data-root "$tmp/data" --shutdown-grace-s 2 "$@" > "$tmp/server.log" 2>&1 &
   server_pid=$!
   port=""
@@ -222,6 +223,44 @@ expect_error "mutual TLS with a certificate from another CA" UNAVAILABLE -- \
 expect_error "client key without certificate" INVALID_ARGUMENT -- \
   --server "$addr" --tls-ca "$tmp/ca.pem" --tls-key "$tmp/client.key" volume list
 stop_server
+
+# --- users: a users file written by --hash-token, the default user's token
+# from a file (never on the command line), and a session shared to watch.
+alice_line=$(printf 'alice-token\n' | "$server_bin" --hash-token alice)
+[ "$alice_line" = "alice $(printf 'alice-token' | sha256sum | cut -d' ' -f1)" ] &&
+  pass "--hash-token prints NAME SHA256(token)" || fail "--hash-token printed '$alice_line'"
+{ echo "# planners"; echo "$alice_line"; printf 'bob-token' | "$server_bin" --hash-token bob; } \
+  > "$tmp/users.txt"
+printf 'file-token\n' > "$tmp/token"
+auth_flags=(--users "$tmp/users.txt" --token-file "$tmp/token")
+start_server
+addr="127.0.0.1:$port"
+grep -q -- "file-token" "/proc/$server_pid/cmdline" && fail "the token shows in ps" ||
+  pass "--token-file: the token is not on the command line"
+expect_ok "the --token-file user" -- --server "$addr" --token file-token volume list
+expect_ok "alice loads" -- --server "$addr" --token alice-token volume load "phantom:abdomen?size=32"
+volume_id=$(python3 -c 'import json,sys; print(json.load(sys.stdin)["volume_id"])' < "$tmp/out")
+expect_ok "alice opens a session" -- --server "$addr" --token alice-token session open --volume-id "$volume_id"
+session_id=$(python3 -c 'import json,sys; print(json.load(sys.stdin)["session_id"])' < "$tmp/out")
+expect_error "bob cannot watch alice's session" PERMISSION_DENIED -- \
+  --server "$addr" --token bob-token watch --session "$session_id" --frames 1
+expect_ok "alice shares it with bob" -- --server "$addr" --token alice-token session share "$session_id" --with bob
+grep -q '"bob"' "$tmp/out" || fail "session share did not list bob: $(cat "$tmp/out")"
+expect_ok "bob watches it" -- --server "$addr" --token bob-token watch --session "$session_id" --frames 1
+expect_error "bob cannot deform it" PERMISSION_DENIED -- \
+  --server "$addr" --token bob-token manipulate --session "$session_id" --release
+expect_error "a user unknown to the server" INVALID_ARGUMENT -- \
+  --server "$addr" --token alice-token session share "$session_id" --with mallory
+stop_server
+auth_flags=(--token secret)
+printf 'alice nothex\n' > "$tmp/bad-users.txt"
+if "$server_bin" --listen 127.0.0.1:0 --users "$tmp/bad-users.txt" > "$tmp/bad.log" 2>&1; then
+  fail "vpm-server started with a malformed users file"
+elif grep -q "line 1" "$tmp/bad.log"; then
+  pass "a malformed users file is refused naming the line"
+else
+  fail "unclear users file error: $(cat "$tmp/bad.log")"
+fi
 
 # --- a server with bad TLS flags refuses to start, with a message
 if "$server_bin" --listen 127.0.0.1:0 --token secret --tls-cert "$tmp/server.pem" \

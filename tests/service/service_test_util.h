@@ -12,6 +12,8 @@
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include "server/io/read_volume.h"
+#include "server/io/write_nifti.h"
 #include "server/service/vpm_server.h"
 #include "vpm/v2/vpm.grpc.pb.h"
 
@@ -26,7 +28,7 @@ inline ServerOptions SmallServerOptions() {
   o.token = kToken;
   o.max_volumes = 4;
   o.max_sessions = 3;
-  o.max_streams_per_client = 4;
+  o.max_streams_per_user = 4;
   o.still_delay_ms = 100;
   o.max_frame_side = 512;
   return o;
@@ -66,21 +68,53 @@ class ServiceTest : public ::testing::Test {
     return context;
   }
 
-  v2::VolumeInfo LoadPhantom(const std::string& source = kPhantom) {
+  v2::VolumeInfo LoadPhantom(const std::string& source = kPhantom,
+                             const std::string& token = kToken) {
     v2::LoadVolumeRequest request;
     request.set_source(source);
     v2::VolumeInfo info;
-    auto context = Context();
+    auto context = Context(token);
     grpc::Status status = stub_->LoadVolume(context.get(), request, &info);
     EXPECT_TRUE(status.ok()) << status.error_message();
     return info;
   }
 
-  v2::SessionInfo OpenSession(const std::string& volume_id) {
+  // A NIfTI file of a small phantom, as a client would upload it.
+  static std::vector<uint8_t> NiftiBytes() {
+    auto volume = ReadVolume("phantom:abdomen?size=40", {});
+    EXPECT_TRUE(volume.ok());
+    auto bytes = EncodeNifti(*volume);
+    EXPECT_TRUE(bytes.ok());
+    return *bytes;
+  }
+  // UploadVolume as `token`'s user: the header, then `bytes` in chunks of
+  // `chunk` bytes.
+  grpc::Status Upload(const std::vector<uint8_t>& bytes, int64_t declared, const std::string& sha,
+                      size_t chunk, v2::VolumeInfo* info, bool header = true,
+                      const std::string& token = kToken) {
+    auto context = Context(token);
+    auto writer = stub_->UploadVolume(context.get(), info);
+    if (header) {
+      v2::UploadVolumeRequest h;
+      h.mutable_header()->set_file_name("case.nii");
+      h.mutable_header()->set_total_bytes(declared);
+      h.mutable_header()->set_sha256_hex(sha);
+      if (!writer->Write(h)) return writer->Finish();
+    }
+    for (size_t at = 0; at < bytes.size(); at += chunk) {
+      v2::UploadVolumeRequest c;
+      c.set_chunk(bytes.data() + at, std::min(chunk, bytes.size() - at));
+      if (!writer->Write(c)) break;
+    }
+    writer->WritesDone();
+    return writer->Finish();
+  }
+
+  v2::SessionInfo OpenSession(const std::string& volume_id, const std::string& token = kToken) {
     v2::OpenSessionRequest request;
     request.set_volume_id(volume_id);
     v2::SessionInfo info;
-    auto context = Context();
+    auto context = Context(token);
     grpc::Status status = stub_->OpenSession(context.get(), request, &info);
     EXPECT_TRUE(status.ok()) << status.error_message();
     return info;

@@ -1,109 +1,154 @@
 // The gateway (client/web/gateway.js) against a stand-in server
-// (fake_vpm_server.mjs), through a WebSocket as the page uses it: the token
-// and a per-tab affinity key on every call, reuse of a loaded volume,
-// frames in the binary format, an event error reopening the stream with the
-// camera and settings replayed, the session closed with the tab, and what
-// the HTTP side refuses.
+// (fake_vpm_server.mjs), through a WebSocket as the page uses it: sign-in
+// (form, ?token=, cookie flags, sign-out, throttling), the signed-in user's
+// token and a per-tab affinity key on every call, what the WebSocket upgrade
+// refuses (no cookie, foreign or missing Origin, foreign Host), security
+// headers, reuse of a loaded volume, frames in the binary format, an event
+// error reopening the stream with the camera and settings replayed, the
+// session closed and the mesh deleted with the tab, watching a shared
+// session, malformed messages, and TLS on both sides.
 // Usage: node --test gateway.test.mjs (SOURCE is found from this file).
 import assert from 'node:assert/strict';
-import { spawn } from 'node:child_process';
+import { execFileSync } from 'node:child_process';
+import crypto from 'node:crypto';
+import fs from 'node:fs';
 import http from 'node:http';
-import { createRequire } from 'node:module';
+import os from 'node:os';
 import path from 'node:path';
 import { after, before, test } from 'node:test';
 import { fileURLToPath } from 'node:url';
 
 import { startFakeServer } from './fake_vpm_server.mjs';
+import { connect as connectTo, request, signIn, startGatewayProcess } from './gateway_client.mjs';
 
 const source = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
-const WebSocket = createRequire(path.join(source, 'client', 'web', 'package.json'))('ws');
-const kToken = 'test-token-123';
+const kAlice = 'alice-token-123';
+const kBob = 'bob-token-456';
+const kViewer = 'viewer-token-789';
+const sha256 = (s) => crypto.createHash('sha256').update(s).digest('hex');
 
+let tmp;
 let fake;
 let gateway;
 let base;  // http://127.0.0.1:PORT
+let alice;  // Cookie header values
+let bob;
 
 before(async () => {
+  tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'vpm-gateway-test-'));
+  fs.writeFileSync(path.join(tmp, 'users.txt'),
+                   `# planners\nalice ${sha256(kAlice)}\nbob ${sha256(kBob)}\n`);
+  fs.writeFileSync(path.join(tmp, 'viewer-token'), `${kViewer}\n`);
   fake = await startFakeServer(source);
-  gateway = spawn(process.execPath, [path.join(source, 'client', 'web', 'gateway.js'),
-                                     '--listen', '127.0.0.1:0', '--server', fake.address],
-                  { env: { ...process.env, VPM_TOKEN: kToken }, stdio: ['ignore', 'pipe', 'inherit'] });
-  base = await new Promise((resolve, reject) => {
-    let seen = '';
-    gateway.stdout.on('data', (chunk) => {
-      seen += chunk;
-      const m = /vpm-web listening on (http:\/\/\S+?)\/ /.exec(seen);
-      if (m) resolve(m[1]);
-    });
-    gateway.on('exit', (code) => reject(new Error(`gateway exited ${code}: ${seen}`)));
-  });
+  ({ child: gateway, base } = await startGatewayProcess({ source, args: [
+    '--server', fake.address, '--users', path.join(tmp, 'users.txt'),
+    '--viewer-token-file', path.join(tmp, 'viewer-token')] }));
+  alice = await signIn(base, kAlice);
+  bob = await signIn(base, kBob);
 });
 
 after(() => {
   gateway?.kill('SIGTERM');
   fake?.stop();
+  fs.rmSync(tmp, { recursive: true, force: true });
 });
 
-// A WebSocket client that queues what arrives: JSON messages and frames
-// (header, image bytes) unpacked as the page does.
-async function connect(headers = {}) {
-  const ws = new WebSocket(`${base.replace('http', 'ws')}/ws`, { headers });
-  const inbox = [];
-  const waiters = [];
-  ws.on('message', (data, isBinary) => {
-    let item;
-    if (isBinary) {
-      const n = data.readUInt32LE(0);
-      item = { type: 'frame', header: JSON.parse(data.subarray(4, 4 + n).toString()),
-               image: data.subarray(4 + n) };
-    } else {
-      item = JSON.parse(data.toString());
-    }
-    inbox.push(item);
-    for (const w of waiters.splice(0)) w();
-  });
-  await new Promise((resolve, reject) => {
-    ws.on('open', resolve);
-    ws.on('error', reject);
-  });
-  // Resolves with the first queued item matching pred (removing it).
-  const next = async (pred, timeoutMs = 5000) => {
-    const deadline = Date.now() + timeoutMs;
-    for (;;) {
-      const i = inbox.findIndex(pred);
-      if (i >= 0) return inbox.splice(i, 1)[0];
-      if (Date.now() > deadline) {
-        throw new Error(`nothing matching ${pred} in ${JSON.stringify(inbox).slice(0, 500)}`);
-      }
-      await new Promise((r) => {
-        waiters.push(r);
-        setTimeout(r, 100);
-      });
-    }
-  };
-  const send = (m) => ws.send(JSON.stringify(m));
-  return { ws, next, send };
-}
-
+const connect = (options = { cookie: alice }) => connectTo(source, base, options);
 const callsSince = (n) => fake.calls.slice(n);
+const waitFor = async (what, pred, timeoutMs = 5000) => {
+  const deadline = Date.now() + timeoutMs;
+  while (!pred()) {
+    assert.ok(Date.now() < deadline, what);
+    await new Promise((r) => setTimeout(r, 50));
+  }
+};
 
-test('Gateway_SendsTokenAndOneAffinityKeyPerTab', async () => {
+test('Gateway_SignInSetsAStrictHttpOnlyCookie', async () => {
+  const page = await request(base, '/');
+  assert.equal(page.status, 303);
+  assert.equal(page.headers.location, '/login');
+  const form = await request(base, '/login');
+  assert.equal(form.status, 200);
+  assert.match(form.body, /<form id="login" method="post" action="\/login">/);
+  const wrong = await request(base, '/login', {
+    method: 'POST', body: 'token=nope', headers: { 'Content-Type': 'application/x-www-form-urlencoded' } });
+  assert.equal(wrong.status, 401);
+  assert.ok(!wrong.headers['set-cookie']);
+  const ok = await request(base, '/login', {
+    method: 'POST', body: `token=${kAlice}`,
+    headers: { 'Content-Type': 'application/x-www-form-urlencoded' } });
+  assert.equal(ok.status, 303);
+  const cookie = ok.headers['set-cookie'][0];
+  assert.match(cookie, /^vpm_session=[A-Za-z0-9_-]{60,}; Path=\/; HttpOnly; SameSite=Strict; Max-Age=43200$/);
+  assert.ok(!cookie.includes(kAlice));
+  const who = await request(base, '/whoami', { headers: { Cookie: cookie.split(';')[0] } });
+  assert.deepEqual(JSON.parse(who.body), { user: 'alice' });
+  assert.equal((await request(base, '/', { headers: { Cookie: cookie.split(';')[0] } })).status, 200);
+  // A form posted from another site is refused before the token is looked at.
+  const foreign = await request(base, '/login', {
+    method: 'POST', body: `token=${kAlice}`,
+    headers: { 'Content-Type': 'application/x-www-form-urlencoded', Origin: 'http://evil.example' } });
+  assert.equal(foreign.status, 403);
+});
+
+test('Gateway_TokenInTheAddressIsExchangedAtOnceAndRedirectedAway', async () => {
+  const r = await request(base, `/index.html?token=${kViewer}&x=1`);
+  assert.equal(r.status, 303);
+  assert.equal(r.headers.location, '/index.html?x=1');
+  assert.equal(r.headers['referrer-policy'], 'no-referrer');
+  const cookie = r.headers['set-cookie'][0].split(';')[0];
+  const who = await request(base, '/whoami', { headers: { Cookie: cookie } });
+  assert.deepEqual(JSON.parse(who.body), { user: 'viewer' });
+  assert.equal((await request(base, '/?token=wrong')).status, 401);
+});
+
+test('Gateway_SendsTheSignedInUsersTokenAndOneAffinityKeyPerTab', async () => {
   const start = fake.calls.length;
-  const a = await connect();
+  const a = await connect({ cookie: alice });
   await a.next((m) => m.type === 'volumes');
   a.send({ type: 'open', source: 'phantom:loaded', settings: { width: 4, height: 4 } });
   await a.next((m) => m.type === 'opened');
   await a.next((m) => m.type === 'frame');
-  const b = await connect();
+  const b = await connect({ cookie: bob });
   await b.next((m) => m.type === 'volumes');
   const calls = callsSince(start).filter((c) => c.method !== 'Interact.event');
   assert.ok(calls.length >= 5);
-  for (const c of calls) assert.equal(c.authorization, `Bearer ${kToken}`, c.method);
-  const keys = new Set(calls.map((c) => c.affinity));
+  const keys = new Map();  // affinity -> authorization
+  for (const c of calls) {
+    assert.ok(c.affinity, `${c.method} has no x-vpm-session key`);
+    if (!keys.has(c.affinity)) keys.set(c.affinity, new Set());
+    keys.get(c.affinity).add(c.authorization);
+  }
   assert.equal(keys.size, 2, 'one x-vpm-session key per tab');
-  assert.ok(![...keys].some((k) => !k), 'every call has a key');
+  assert.deepEqual([...keys.values()].map((s) => [...s]).sort(),
+                   [[`Bearer ${kAlice}`], [`Bearer ${kBob}`]]);
   a.ws.close();
   b.ws.close();
+});
+
+test('Gateway_UpgradeNeedsCookieOriginAndHost', async () => {
+  await assert.rejects(connect({ cookie: undefined }), /401/);
+  await assert.rejects(connect({ cookie: 'vpm_session=forged' }), /401/);
+  await assert.rejects(connect({ cookie: alice, origin: 'http://elsewhere.example' }), /403/);
+  await assert.rejects(connect({ cookie: alice, origin: null }), /403/);
+  const port = new URL(base).port;
+  // The gateway's own origin under another allowed name is fine.
+  const t = await connect({ cookie: alice, origin: `http://localhost:${port}` });
+  t.ws.close();
+  // DNS rebinding: a foreign name that resolves here, sent as Host and Origin.
+  await assert.rejects(connect({ cookie: alice, origin: `http://rebind.example:${port}`,
+                                 headers: { Host: `rebind.example:${port}` } }), /421/);
+});
+
+test('Gateway_EveryResponseCarriesSecurityHeaders', async () => {
+  for (const target of ['/login', '/', '/app.js', '/no-such', '/healthz']) {
+    const r = await request(base, target, { headers: { Cookie: alice } });
+    assert.match(r.headers['content-security-policy'], /frame-ancestors 'none'/, target);
+    assert.match(r.headers['content-security-policy'], /script-src 'self'/, target);
+    assert.equal(r.headers['x-frame-options'], 'DENY', target);
+    assert.equal(r.headers['x-content-type-options'], 'nosniff', target);
+    assert.equal(r.headers['referrer-policy'], 'same-origin', target);
+  }
 });
 
 test('Gateway_ReusesALoadedVolumeAndLoadsANewSource', async () => {
@@ -162,65 +207,159 @@ test('Gateway_EventErrorReportsAndReopensTheStreamWithCameraAndSettings', async 
   t.ws.close();
 });
 
-test('Gateway_ClosesTheSessionWhenTheTabGoes', async () => {
+test('Gateway_ClosesTheSessionAndDeletesItsMeshWhenTheTabGoes', async () => {
   const t = await connect();
   t.send({ type: 'open', source: 'phantom:loaded' });
   const opened = await t.next((m) => m.type === 'opened');
+  const start = fake.calls.length;
   t.ws.close();
-  const deadline = Date.now() + 5000;
-  while (!fake.calls.some((c) => c.method === 'CloseSession' &&
-                                 c.request.session_id === opened.session.session_id)) {
-    assert.ok(Date.now() < deadline, 'CloseSession was not called');
-    await new Promise((r) => setTimeout(r, 50));
-  }
+  await waitFor('CloseSession then DeleteMesh', () => {
+    const calls = callsSince(start);
+    const closed = calls.findIndex((c) => c.method === 'CloseSession' &&
+                                          c.request.session_id === opened.session.session_id);
+    const deleted = calls.findIndex((c) => c.method === 'DeleteMesh' &&
+                                           c.request.mesh_id === opened.mesh.mesh_id);
+    return closed >= 0 && deleted > closed;
+  });
 });
 
-test('Gateway_RefusesForeignOriginsAndFilesOutsideThePage', async () => {
-  await assert.rejects(connect({ Origin: 'http://elsewhere.example' }), /401/);
-  const t = await connect({ Origin: base });
-  t.ws.close();
+test('Gateway_WatchesOnlySessionsSharedWithTheUser', async () => {
+  const a = await connect({ cookie: alice });
+  a.send({ type: 'open', source: 'phantom:loaded' });
+  const opened = await a.next((m) => m.type === 'opened');
+  const b = await connect({ cookie: bob });
+  b.send({ type: 'watch', session_id: opened.session.session_id });
+  const refused = await b.next((m) => m.type === 'error');
+  assert.equal(refused.code, 'PERMISSION_DENIED');
+  fake.share(opened.session.session_id, kBob);
+  b.send({ type: 'watch', session_id: opened.session.session_id });
+  await b.next((m) => m.type === 'opened' && m.watching === true);
+  await b.next((m) => m.type === 'frame');
+  b.send({ type: 'event', event: { sequence: 1, drag: { offset_mm: { x: 1, y: 0, z: 0 } } } });
+  assert.match((await b.next((m) => m.type === 'error')).message, /shared with you to watch/);
+  const start = fake.calls.length;
+  b.ws.close();
+  await new Promise((r) => setTimeout(r, 300));
+  assert.ok(!callsSince(start).some((c) => c.method === 'CloseSession'),
+            'a viewer leaving closes nothing of the owner');
+  a.ws.close();
+});
+
+test('Gateway_SignOutClosesThatBrowsersTabs', async () => {
+  const cookie = await signIn(base, kBob);
+  const t = await connect({ cookie });
+  await t.next((m) => m.type === 'volumes');
+  const out = await request(base, '/logout', { method: 'POST', headers: { Cookie: cookie } });
+  assert.equal(out.status, 303);
+  assert.match(out.headers['set-cookie'][0], /Max-Age=0/);
+  assert.equal((await t.closed).code, 4001);
+  await assert.rejects(connect({ cookie }), /401/);
+  assert.equal((await request(base, '/logout', { method: 'GET' })).status, 405);
+});
+
+test('Gateway_RefusesFilesOutsideThePage', async () => {
   for (const [url, status] of [['/', 200], ['/app.js', 200], ['/healthz', 200],
                                ['/%2e%2e/gateway.js', 404], ['/../package.json', 404],
                                ['/.hidden', 404], ['/%', 400], ['/%zz', 400]]) {
-    const r = await fetch(base + url);
+    const r = await request(base, url, { headers: { Cookie: alice } });
     assert.equal(r.status, status, url);
   }
-  assert.equal((await fetch(base + '/', { method: 'POST' })).status, 405);
+  assert.equal((await request(base, '/', { method: 'POST', headers: { Cookie: alice } })).status, 405);
 });
 
 // DNS rebinding: a page on a foreign name that resolves to the gateway sends
 // that name as Host (and as Origin, so same-origin alone would pass).
 test('Gateway_RefusesHostsNotAllowed', async () => {
   const port = new URL(base).port;
-  const evil = `rebind.example:${port}`;
-  // The status of GET `path` sent to the gateway with this Host header
-  // (fetch does not let a test set Host).
-  const statusWithHost = (path, host) => new Promise((resolve, reject) => {
-    http.get({ host: '127.0.0.1', port, path, headers: { Host: host } },
+  const statusWithHost = (target, host) => new Promise((resolve, reject) => {
+    http.get({ host: '127.0.0.1', port, path: target, headers: { Host: host, Cookie: alice } },
              (res) => { res.resume(); resolve(res.statusCode); }).on('error', reject);
   });
-  assert.equal(await statusWithHost('/', evil), 421);
-  await assert.rejects(connect({ Host: evil, Origin: `http://${evil}` }), /Unexpected server response/);
+  assert.equal(await statusWithHost('/', `rebind.example:${port}`), 421);
+  assert.equal(await statusWithHost('/login', `rebind.example:${port}`), 421);
   assert.equal(await statusWithHost('/', `localhost:${port}`), 200);
-  assert.equal(await statusWithHost('/healthz', evil), 200);  // probes reach the pod by its address
+  assert.equal(await statusWithHost('/healthz', `rebind.example:${port}`), 200);  // probes
 });
 
 test('Gateway_RejectsMalformedMessages', async () => {
   const t = await connect();
   t.ws.send('not json');
-  assert.match((await t.next((m) => m.type === 'error')).message, /bad message/);
+  assert.match((await t.next((m) => m.type === 'error')).message, /bad message: not JSON/);
   t.send({ type: 'event', event: { sequence: 1, grab: { pick: true } } });
   assert.match((await t.next((m) => m.type === 'error')).message, /open a volume first/);
   t.send({ type: 'nonsense' });
   assert.match((await t.next((m) => m.type === 'error')).message, /unknown message type/);
-  // JSON that is not an object, and an event that is not one: each an error
-  // on this connection, which stays open.
-  for (const text of ['null', '[]', '"open"', '42', '{"type":"event","event":null}',
-                      '{"type":"refine","point_mm":null}']) {
+  const cases = [
+    ['null', /JSON object/], ['[]', /JSON object/], ['"open"', /JSON object/], ['42', /JSON object/],
+    ['{"type":"event","event":null}', /event: an object/],
+    ['{"type":"refine","point_mm":null}', /point_mm: an object/],
+    ['{"type":"refine","point_mm":{"x":"1","y":0,"z":0}}', /point_mm\.x: a finite number/],
+    ['{"type":"open"}', /one of source and volume_id/],
+    ['{"type":"open","source":7}', /source: a string/],
+    ['{"type":"open","source":"phantom:abdomen","settings":{"mode":"x"}}', /settings\.mode: one of/],
+    ['{"type":"open","source":"phantom:abdomen","settings":{"width":1e300}}', /settings\.width: an integer/],
+    ['{"type":"event","event":{"sequence":-1,"camera":{}}}', /event\.sequence: an integer/],
+    ['{"type":"event","event":{"sequence":1}}', /exactly one of/],
+    ['{"type":"event","event":{"camera":{"azimuth_deg":1},"drag":{}}}', /exactly one of/],
+    ['{"type":"event","event":{"camera":{"nope":1}}}', /no field 'nope'/],
+    ['{"type":"watch"}', /session_id required/],
+  ];
+  for (const [text, expect] of cases) {
     t.ws.send(text);
-    await t.next((m) => m.type === 'error');
+    assert.match((await t.next((m) => m.type === 'error')).message, expect, text);
   }
   t.send({ type: 'list' });
+  await t.next((m) => m.type === 'volumes');
+  t.ws.close();
+});
+
+test('Gateway_TlsOnBothSides', async () => {
+  // A self-signed certificate for 127.0.0.1, for the gateway and the server.
+  const key = path.join(tmp, 'tls.key');
+  const cert = path.join(tmp, 'tls.pem');
+  execFileSync('openssl', ['req', '-x509', '-newkey', 'ec', '-pkeyopt', 'ec_paramgen_curve:P-256',
+                           '-nodes', '-days', '1', '-subj', '/CN=127.0.0.1', '-addext',
+                           'subjectAltName=IP:127.0.0.1,DNS:localhost', '-keyout', key, '-out', cert],
+               { stdio: 'ignore' });
+  const ca = fs.readFileSync(cert);
+  const tlsFake = await startFakeServer(source, { tls: { cert: ca, key: fs.readFileSync(key) } });
+  const { child, base: tlsBase } = await startGatewayProcess({ source, args: [
+    '--server', tlsFake.address, '--server-tls-ca', cert, '--tls-cert', cert, '--tls-key', key,
+    '--users', path.join(tmp, 'users.txt')] });
+  try {
+    assert.match(tlsBase, /^https:/);
+    const cookie = await signIn(tlsBase, kAlice, { ca });
+    const r = await request(tlsBase, '/login', { ca });
+    assert.match(r.headers['strict-transport-security'], /max-age=/);
+    const t = await connectTo(source, tlsBase, { cookie, ca });
+    t.send({ type: 'open', source: 'phantom:loaded' });
+    await t.next((m) => m.type === 'opened');
+    await t.next((m) => m.type === 'frame');
+    assert.ok(tlsFake.calls.some((c) => c.method === 'OpenSession' &&
+                                        c.authorization === `Bearer ${kAlice}`));
+    t.ws.close();
+    // The Secure flag under TLS.
+    const form = await request(tlsBase, '/login', {
+      method: 'POST', ca, body: `token=${kAlice}`,
+      headers: { 'Content-Type': 'application/x-www-form-urlencoded' } });
+    assert.match(form.headers['set-cookie'][0], /; Secure$/);
+  } finally {
+    child.kill('SIGTERM');
+    tlsFake.stop();
+  }
+});
+
+// Last: it locks this address out of signing in for a minute.
+test('Gateway_ThrottlesFailedSignIns', async () => {
+  const statuses = [];
+  for (let i = 0; i < 12; ++i) {
+    statuses.push((await request(base, '/login', {
+      method: 'POST', body: 'token=guess', headers: { 'Content-Type': 'application/x-www-form-urlencoded' } })).status);
+  }
+  assert.ok(statuses.slice(0, 5).every((s) => s === 401), statuses.join(','));
+  assert.equal(statuses.at(-1), 429);
+  // Browsers already signed in carry on.
+  const t = await connect({ cookie: alice });
   await t.next((m) => m.type === 'volumes');
   t.ws.close();
 });

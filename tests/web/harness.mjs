@@ -80,9 +80,16 @@ export function stopChild(child) {
 
 export const randomToken = () => crypto.randomBytes(16).toString('hex');
 
-// vpm-server on 127.0.0.1:port (0: ephemeral) with `token` and any further
-// `args`; resolves with {child, port, address, metricsPort} (metricsPort
-// with `--metrics-listen` among the args).
+// A users file (vpm-server's --users format) for {name: token}; returns its path.
+export function writeUsersFile(file, users) {
+  const sha256 = (t) => crypto.createHash('sha256').update(t).digest('hex');
+  fs.writeFileSync(file, Object.entries(users).map(([n, t]) => `${n} ${sha256(t)}\n`).join(''));
+  return file;
+}
+
+// vpm-server on 127.0.0.1:port (0: ephemeral) with `token` (its user
+// `default`) and any further `args`; resolves with {child, port, address,
+// metricsPort} (metricsPort with `--metrics-listen` among the args).
 export async function startServer({ build, out, token, port = 0, logName = 'server.log',
                                     args = [] }) {
   const binary = path.join(build, 'server', 'service', 'vpm-server');
@@ -95,17 +102,34 @@ export async function startServer({ build, out, token, port = 0, logName = 'serv
            metricsPort: m[3] ? Number(m[3]) : null };
 }
 
-// The gateway on 127.0.0.1:port (0: ephemeral), talking to `serverAddress`
-// with `token`; resolves with {child, url, port}.
+// The gateway on 127.0.0.1:port (0: ephemeral), talking to `serverAddress`;
+// `token` is its viewer token (VPM_TOKEN: a browser signs in with it and the
+// gateway forwards it to the server); `args`: more flags. Sign-ins are sealed
+// with a key kept in `out`, so they survive a restart of the gateway.
+// Resolves with {child, url, port}.
 export async function startGateway({ source, out, serverAddress, token, port = 0,
-                                     logName = 'gateway.log' }) {
+                                     logName = 'gateway.log', args = [] }) {
+  const keyFile = path.join(out, 'gateway-cookie.key');
+  if (!fs.existsSync(keyFile)) fs.writeFileSync(keyFile, crypto.randomBytes(32), { mode: 0o600 });
   const child = track(spawn(process.execPath, [
     path.join(source, 'client', 'web', 'gateway.js'),
-    '--listen', `127.0.0.1:${port}`, '--server', serverAddress], {
+    '--listen', `127.0.0.1:${port}`, '--server', serverAddress, '--cookie-key-file', keyFile,
+    ...args], {
     env: { ...process.env, VPM_TOKEN: token }, stdio: ['ignore', 'pipe', 'pipe'] }));
   const m = await waitForLine(child, /vpm-web listening on (http:\/\/\S+:(\d+)\/)/, 'the gateway',
                               15000, path.join(out, logName));
   return { child, url: m[1], port: Number(m[2]) };
+}
+
+// Signs `page` in at the gateway `url` through the sign-in form (where the
+// gateway sends a browser without a cookie) and waits for the viewer.
+export async function signInWithForm(page, url, token) {
+  await page.goto(url);
+  await page.waitForSelector('#login', { timeout: 10000 });
+  await page.fill('#token', token);
+  await Promise.all([page.waitForURL((u) => !u.pathname.startsWith('/login'), { timeout: 10000 }),
+                     page.click('#sign-in')]);
+  await page.waitForSelector('#frame', { timeout: 10000 });
 }
 
 // A port nothing listens on (bound, then released).

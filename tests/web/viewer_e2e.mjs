@@ -1,17 +1,22 @@
 // End to end in headless Chromium: vpm-server and the gateway on ephemeral
-// ports, the page opens the 128^3 phantom at 256 x 256, the first frame is
+// ports with two users, alice signs in through the form (HttpOnly,
+// SameSite=Strict cookie), the page opens the 128^3 phantom at 256 x 256,
+// the first frame is
 // not blank, an orbit drag changes it, a grab-and-drag deforms the tissue
 // (the server reports max_displacement_mm > 0 and the still frame while
 // holding differs from the one before), release brings it back, refine,
-// zoom and MIP work, the token never reaches the browser, stopping the
-// server shows a clear message, and restarting it brings the view back.
+// zoom and MIP work, the token never reaches the browser, a second browser
+// without a cookie (sent to sign in, WebSocket refused) or signed in as bob
+// (PERMISSION_DENIED) cannot reach alice's session, stopping the server
+// shows a clear message, and restarting it brings the view back.
 // Usage: node viewer_e2e.mjs --build BUILD --source SOURCE
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
 
 import {
-  canvasGrey, launchBrowser, meanAbsDiff, randomToken, settled, startGateway, startServer,
+  canvasGrey, launchBrowser, meanAbsDiff, randomToken, settled, signInWithForm, startGateway,
+  startServer, writeUsersFile,
   runScenario, stopChild, testPaths,
 } from './harness.mjs';
 
@@ -22,7 +27,9 @@ const kMinOrbitDiff = 2;   // a 30-degree turn moves most of the image
 const kMinGrabDiff = 0.2;  // a local deformation moves a small area
 
 const { build, source, out } = testPaths(process.argv);
-const token = randomToken();
+const token = randomToken();  // the viewer token (and the server's user `default`)
+const aliceToken = randomToken();
+const bobToken = randomToken();
 const figures = {};
 const step = (text) => console.log(`web_e2e: ${text}`);
 
@@ -32,13 +39,66 @@ async function dragOnCanvas(page, from, to, steps) {
   await page.mouse.move(to[0], to[1], { steps });
 }
 
+// Opens a WebSocket to the gateway from `page` (its cookies, its origin),
+// sends `message` once open and resolves with the first JSON reply, or
+// {refused: true} when the upgrade is refused.
+function rawSocket(page, message) {
+  return page.evaluate((m) => new Promise((resolve) => {
+    const ws = new WebSocket(`ws://${location.host}/ws`);
+    const replies = [];
+    ws.onopen = () => ws.send(JSON.stringify(m));
+    ws.onmessage = (e) => {
+      if (typeof e.data !== 'string') return;
+      const r = JSON.parse(e.data);
+      if (r.type === 'error' || r.type === 'opened') {
+        resolve(r);
+        ws.close();
+      }
+      replies.push(r);
+    };
+    ws.onclose = () => resolve({ refused: true, replies });
+    setTimeout(() => resolve({ timeout: true, replies }), 15000);
+  }), message);
+}
+
+// Alice's session is out of reach of a browser with no cookie and of Bob's.
+async function checkIsolation(browser, url, aliceSession) {
+  const anonymous = await browser.newContext();
+  const a = await anonymous.newPage();
+  const landed = await a.goto(url);
+  assert.equal(new URL(a.url()).pathname, '/login', 'no cookie, yet not sent to sign in');
+  assert.match(landed.headers()['content-security-policy'] ?? '', /frame-ancestors 'none'/);
+  assert.ok(!(await a.content()).includes(aliceSession));
+  const noCookie = await rawSocket(a, { type: 'watch', session_id: aliceSession });
+  assert.ok(noCookie.refused, `a browser without a cookie opened the WebSocket: ${JSON.stringify(noCookie)}`);
+  step('a second browser without a cookie: sent to /login, WebSocket refused');
+  await anonymous.close();
+
+  const bobs = await browser.newContext();
+  const b = await bobs.newPage();
+  await signInWithForm(b, url, bobToken);
+  await b.waitForFunction(() => document.getElementById('user').textContent === 'bob');
+  const watch = await rawSocket(b, { type: 'watch', session_id: aliceSession });
+  assert.equal(watch.code, 'PERMISSION_DENIED', JSON.stringify(watch));
+  step(`bob's browser asks to watch alice's ${aliceSession}: ${watch.message}`);
+  const sessions = await b.evaluate(() => fetch('/whoami').then((r) => r.json()));
+  assert.deepEqual(sessions, { user: 'bob' });
+  await bobs.close();
+}
+
 async function main() {
-  const server = await startServer({ build, out, token });
-  const gateway = await startGateway({ source, out, serverAddress: server.address, token });
+  // Alice and Bob are users of both the server and the gateway.
+  const usersFile = writeUsersFile(path.join(out, 'users.txt'), { alice: aliceToken, bob: bobToken });
+  const server = await startServer({ build, out, token, args: ['--users', usersFile] });
+  const gateway = await startGateway({ source, out, serverAddress: server.address, token,
+                                       args: ['--users', usersFile] });
   step(`vpm-server ${server.address}, gateway ${gateway.url}`);
 
   const browser = await launchBrowser(source);
-  const page = await browser.newPage({ viewport: { width: 1000, height: 900 } });
+  // bypassCSP: the tests' waitForFunction predicates are strings, which the
+  // page's Content-Security-Policy (no eval) would refuse; the page itself
+  // runs under it in checkIsolation's browsers.
+  const page = await browser.newPage({ viewport: { width: 1000, height: 900 }, bypassCSP: true });
   const pageErrors = [];
   page.on('pageerror', (e) => pageErrors.push(e.message));
   const console_ = fs.createWriteStream(path.join(out, 'browser_console.log'));
@@ -46,11 +106,17 @@ async function main() {
   // Everything the gateway sends the browser, to check the token stays out.
   let tokenSeen = false;
   page.on('websocket', (ws) => ws.on('framereceived', ({ payload }) => {
-    if (String(payload).includes(token)) tokenSeen = true;
+    if (String(payload).includes(aliceToken)) tokenSeen = true;
   }));
 
   const t0 = performance.now();
-  await page.goto(gateway.url);
+  // A browser without a cookie lands on the sign-in form; Alice signs in.
+  await signInWithForm(page, gateway.url, aliceToken);
+  await page.waitForFunction(() => document.getElementById('user').textContent === 'alice');
+  const cookies = await page.context().cookies();
+  assert.equal(cookies.length, 1);
+  assert.ok(cookies[0].httpOnly && cookies[0].sameSite === 'Strict', JSON.stringify(cookies));
+  step('signed in as alice through the form (HttpOnly, SameSite=Strict cookie)');
   await page.waitForSelector('#server-state[data-state="up"]', { timeout: 15000 });
   step('page loaded, gateway reports vpm-server up');
 
@@ -191,7 +257,12 @@ async function main() {
 
   figures.latency_ms = await page.evaluate(() => window.vpmViewer.stats.latencyMs);
   assert.ok(!tokenSeen, 'the token reached the browser');
-  assert.ok(!(await page.content()).includes(token), 'the token is in the page');
+  assert.ok(!(await page.content()).includes(aliceToken), 'the token is in the page');
+  assert.ok(!(await page.evaluate(() => document.cookie)).includes('vpm_session'),
+            'the page script can read the sign-in cookie');
+
+  await checkIsolation(browser, gateway.url,
+                       await page.evaluate(() => window.vpmViewer.session.session_id));
   assert.deepEqual(pageErrors, [], 'the page threw');
 
   // The server goes away: the page says so.
@@ -206,7 +277,8 @@ async function main() {
   // gone (NOT_FOUND), and the page reopens the same source by itself.
   const framesBefore = await page.evaluate(() => window.vpmViewer.framesReceived);
   const tRestart = performance.now();
-  await startServer({ build, out, token, port: server.port, logName: 'server_restarted.log' });
+  await startServer({ build, out, token, port: server.port, logName: 'server_restarted.log',
+                     args: ['--users', usersFile] });
   await page.waitForFunction((n) => window.vpmViewer.framesReceived > n, framesBefore,
                              { timeout: 60000, polling: 100 });
   await settled(page, '!h.interactive', 60000);

@@ -4,6 +4,8 @@
 # fixes it, then runs one scenario:
 #   viewer, server_down   end to end in headless Chromium (SCENARIO_e2e.mjs)
 #   gateway               the gateway against a stand-in server (gateway.test.mjs)
+#   gateway_fuzz          10,500 malformed HTTP requests and WebSocket frames (gateway_fuzz.mjs)
+#   gateway_cycles        open/close cycles through the gateway on a real server (gateway_cycles.mjs)
 # Usage: web_e2e.sh BUILD_DIR SOURCE_DIR SCENARIO
 set -euo pipefail
 build=$1
@@ -16,7 +18,13 @@ command -v node >/dev/null 2>&1 || fail "node is not installed: run scripts/inst
 if [ "$scenario" = gateway ]; then
   exec node --test "$source/tests/web/gateway.test.mjs"
 fi
+if [ "$scenario" = gateway_fuzz ]; then
+  exec node "$source/tests/web/gateway_fuzz.mjs"
+fi
+[ -x "$build/server/service/vpm-server" ] || fail "$build/server/service/vpm-server is not built"
+if [ "$scenario" = gateway_cycles ]; then
+  exec node "$source/tests/web/gateway_cycles.mjs" --build "$build" --source "$source"
+fi
 chromium=${VPM_CHROMIUM:-/usr/bin/chromium}
 [ -x "$chromium" ] || fail "$chromium is missing: run scripts/install-deps.sh (Debian's chromium)"
-[ -x "$build/server/service/vpm-server" ] || fail "$build/server/service/vpm-server is not built"
 exec node "$source/tests/web/${scenario}_e2e.mjs" --build "$build" --source "$source"

@@ -14,8 +14,11 @@ export function explainError(err, what, address) {
     case GrpcStatus.DEADLINE_EXCEEDED:
       return `${prefix}vpm-server at ${address} did not answer in time.`;
     case GrpcStatus.UNAUTHENTICATED:
-      return `vpm-server refused the gateway's token (${details}). ` +
-        'Start the gateway with VPM_TOKEN set to the server\'s token.';
+      return `vpm-server does not know the token you signed in with (${details}). ` +
+        'The gateway\'s users must be users of vpm-server too: the same --users file, or a ' +
+        'viewer token (VPM_TOKEN) equal to the server\'s --token.';
+    case GrpcStatus.PERMISSION_DENIED:
+      return `${prefix}not yours: ${details}`;
     default:
       return `${what} failed: ${statusName(err?.code)}: ${details}`;
   }

@@ -1,13 +1,20 @@
-// One browser tab: its WebSocket, the session it opened on vpm-server and
-// the Interact stream that carries its events and frames.
+// One browser tab of a signed-in user: its WebSocket, the session it opened
+// on vpm-server (as that user: every call carries the user's token) and the
+// Interact stream that carries its events and frames. When the tab goes,
+// its session is closed and the meshes it built are deleted (one a session
+// of another tab still uses stays: the server refuses to delete it).
 //
-// Browser -> gateway, JSON text messages:
+// Browser -> gateway, JSON text messages (validate_message.js checks each;
+// a bad one is answered with an error and changes nothing):
 //   {type: 'list'}                               -> {type: 'volumes', volumes}
 //   {type: 'open', source | volume_id, settings, camera}
 //        LoadVolume (or reuse of a loaded volume with the same source),
-//        BuildMesh, OpenSession, then Interact -> progress..., {type: 'opened'}
+//        BuildMesh (the server returns its mesh of equal parameters),
+//        OpenSession, then Interact -> progress..., {type: 'opened'}
 //   {type: 'event', event: ClientEvent}          written to the Interact stream
 //   {type: 'refine', point_mm}                   RefineMesh + a session on the new mesh
+//   {type: 'watch', session_id, settings}        Watch another user's session
+//        that its owner shared with this user (frames only; events refused)
 // Gateway -> browser:
 //   binary: one frame (lib/frame_packet.js)
 //   {type: 'hello'|'server'|'volumes'|'progress'|'opened'|'refined'|'stream'|
@@ -23,17 +30,25 @@ import { Backoff } from '../public/backoff.js';
 import { explainError } from './explain_error.js';
 import { packFrame } from './frame_packet.js';
 import { toProtoSettings } from './render_settings.js';
+import { parseMessage } from './validate_message.js';
 import { GrpcStatus, isServerDown, statusName, streamError } from './vpm_client.js';
 
 // Stream restarts after an event error that get no frame before failing
 // again: past this many the gateway waits for the browser's next event.
 const kMaxBarrenRestarts = 3;
+// DeleteMesh attempts after FAILED_PRECONDITION (100 ms doubling: 3.1 s in all).
+const kDeleteMeshRetries = 5;
 
 export class ViewerConnection {
-  // ws: a `ws` WebSocket; client: a VpmClient; log: (line) => void.
-  constructor({ ws, client, log = () => {} }) {
-    Object.assign(this, { ws, client, log });
-    this.affinity = crypto.randomUUID();  // x-vpm-session of every call of this tab
+  // ws: a `ws` WebSocket; client: a VpmClient; shape: a ProtoShape of the
+  // client's proto; meshRefs: the gateway's MeshRefs; token: the signed-in
+  // user's token ('' for a server without auth); log: (line) => void.
+  constructor({ ws, client, shape, meshRefs, token = '', log = () => {} }) {
+    Object.assign(this, { ws, client, shape, meshRefs, log });
+    // Every call of this tab: the user's token and one x-vpm-session key.
+    this.as = { token, affinity: crypto.randomUUID() };
+    this.watching = false;  // the session is another user's, shared to watch
+    this.builtMeshes = new Map();  // mesh id -> {volumeId, holds}: built or refined here
     this.volume = null;
     this.mesh = null;
     this.session = null;
@@ -54,18 +69,28 @@ export class ViewerConnection {
 
     // An error nothing else caught ends this connection only, with a message;
     // the gateway and every other tab carry on.
-    ws.on('message', (data, isBinary) => this.onMessage(data, isBinary).catch((e) => {
+    const unexpected = (e) => {
       this.log(`closing a connection after an unexpected error: ${e?.stack ?? e}`);
       this.send({ type: 'error', what: 'gateway', message: `internal error: ${e?.message ?? e}` });
       this.ws.close(1011, 'internal error');
-    }));
+    };
+    ws.on('message', (data, isBinary) => {
+      try {
+        this.onMessage(data, isBinary).catch(unexpected);
+      } catch (e) {
+        unexpected(e);
+      }
+    });
+    // A frame ws cannot accept (bad UTF-8, too large, bad opcode): ws closes
+    // the socket with the matching code after this.
+    ws.on('error', (e) => this.log(`WebSocket error: ${e.message}`));
     ws.on('close', () => this.onClose());
     this.send({ type: 'hello', server: client.address });
     this.probe();
   }
 
   rpc(method, request) {
-    return this.client.call(method, request, this.affinity);
+    return this.client.call(method, request, this.as);
   }
 
   send(message) {
@@ -82,11 +107,7 @@ export class ViewerConnection {
   async onMessage(data, isBinary) {
     let message;
     try {
-      if (isBinary) throw new Error('binary messages are not accepted');
-      message = JSON.parse(data.toString('utf8'));
-      if (message === null || typeof message !== 'object' || Array.isArray(message)) {
-        throw new Error('a message is a JSON object with a "type"');
-      }
+      message = parseMessage(this.shape, data, isBinary);
     } catch (e) {
       this.send({ type: 'error', what: 'message', message: `bad message: ${e.message}` });
       return;
@@ -94,10 +115,10 @@ export class ViewerConnection {
     switch (message.type) {
       case 'list': return this.listVolumes();
       case 'open': return this.open(message);
+      case 'watch': return this.watch(message);
       case 'event': return this.event(message.event);
       case 'refine': return this.refine(message.point_mm);
-      default:
-        this.send({ type: 'error', what: 'message', message: `unknown message type '${message.type}'` });
+      default: throw new Error(`message type ${message.type} passed the check`);
     }
   }
 
@@ -157,8 +178,7 @@ export class ViewerConnection {
   async open({ source, volume_id: volumeId, settings, camera }) {
     const op = ++this.openOp;
     this.stopStream();
-    this.closeSession(this.session);
-    this.session = null;
+    this.releaseSession();
     if (settings) this.settings = settings;
     this.camera = camera ?? null;
     const what = volumeId ? `Opening volume ${volumeId}` : `Loading ${source}`;
@@ -168,18 +188,64 @@ export class ViewerConnection {
                               : await this.loadOrReuse(source);
       if (op !== this.openOp) return;
       this.send({ type: 'progress', step: 'mesh', text: 'Building the proxy mesh ...' });
-      const mesh = await this.rpc('BuildMesh', { volume_id: volume.volume_id });
+      let mesh = await this.buildMesh(volume);
       if (op !== this.openOp) return;
       this.send({ type: 'progress', step: 'session', text: 'Opening a session ...' });
-      const session = await this.rpc('OpenSession', {
-        volume_id: volume.volume_id, mesh_id: mesh.mesh_id });
+      let session;
+      try {
+        session = await this.rpc('OpenSession', { volume_id: volume.volume_id, mesh_id: mesh.mesh_id });
+      } catch (err) {
+        // Another tab deleted the (shared) mesh between our BuildMesh and
+        // this call: build it again, once.
+        if (err?.code !== GrpcStatus.NOT_FOUND || !/mesh/.test(err.details ?? '')) throw err;
+        mesh = await this.buildMesh(volume);
+        session = await this.rpc('OpenSession', { volume_id: volume.volume_id, mesh_id: mesh.mesh_id });
+      }
       if (op !== this.openOp || this.closed) {
-        this.closeSession(session);
+        this.closeSession(session, mesh);
         return;
       }
-      Object.assign(this, { volume, mesh, session });
+      Object.assign(this, { volume, mesh, session, watching: false });
       this.serverUpAgain();
       this.send({ type: 'opened', volume, mesh, session });
+      this.startStream();
+    } catch (err) {
+      if (op === this.openOp) this.fail(what, err);
+    }
+  }
+
+  async buildMesh(volume) {
+    await this.meshRefs.quiet(volume.volume_id);
+    const done = this.meshRefs.build(volume.volume_id);
+    try {
+      const mesh = await this.rpc('BuildMesh', { volume_id: volume.volume_id });
+      this.holdMesh(mesh);
+      return mesh;
+    } finally {
+      done();
+    }
+  }
+
+  // This tab uses `mesh` (a hold per BuildMesh or RefineMesh answer).
+  holdMesh(mesh) {
+    this.meshRefs.hold(mesh.mesh_id);
+    const mine = this.builtMeshes.get(mesh.mesh_id) ?? { volumeId: mesh.volume_id, holds: 0 };
+    mine.holds += 1;
+    this.builtMeshes.set(mesh.mesh_id, mine);
+  }
+
+  // Watches a session another user shared with this one: frames only.
+  async watch({ session_id: sessionId, settings }) {
+    const op = ++this.openOp;
+    this.stopStream();
+    this.releaseSession();
+    if (settings) this.settings = settings;
+    const what = `Watching session ${sessionId}`;
+    try {
+      const session = await this.rpc('GetSession', { session_id: sessionId });
+      if (op !== this.openOp || this.closed) return;
+      Object.assign(this, { session, volume: null, mesh: null, watching: true });
+      this.send({ type: 'opened', session, watching: true });
       this.startStream();
     } catch (err) {
       if (op === this.openOp) this.fail(what, err);
@@ -196,37 +262,96 @@ export class ViewerConnection {
   // RefineMesh makes a new mesh (meshes are immutable), so the view moves to
   // a new session on it; the old session and its deformation are closed.
   async refine(pointMm) {
-    if (!this.session) {
-      this.send({ type: 'error', what: 'Refine', message: 'Refine: open a volume first.' });
+    if (!this.session || this.watching) {
+      this.send({ type: 'error', what: 'Refine',
+                  message: `Refine: ${this.watching ? 'a watched session is its owner\'s to change'
+                                                     : 'open a volume first'}.` });
       return;
     }
     const op = ++this.openOp;
     const what = 'Refining the mesh';
     try {
       this.send({ type: 'progress', step: 'refine', text: `${what} ...` });
+      await this.meshRefs.quiet(this.volume.volume_id);
+      const done = this.meshRefs.build(this.volume.volume_id);
       const mesh = await this.rpc('RefineMesh', {
-        mesh_id: this.mesh.mesh_id, point_mm: pointMm });
+        mesh_id: this.mesh.mesh_id, point_mm: pointMm }).finally(done);
+      this.holdMesh({ ...mesh, volume_id: this.volume.volume_id });
       if (op !== this.openOp) return;
       const session = await this.rpc('OpenSession', {
         volume_id: this.volume.volume_id, mesh_id: mesh.mesh_id });
       if (op !== this.openOp || this.closed) {
-        this.closeSession(session);
+        this.closeSession(session, mesh);
         return;
       }
-      const old = this.session;
+      const [oldSession, oldMesh] = [this.session, this.mesh];
       Object.assign(this, { mesh, session });
       this.send({ type: 'refined', mesh, session, point_mm: pointMm });
       this.startStream();
-      this.closeSession(old);
+      this.closeSession(oldSession, oldMesh);
     } catch (err) {
       if (op === this.openOp) this.fail(what, err);
     }
   }
 
-  closeSession(session) {
-    if (!session) return;
-    this.rpc('CloseSession', { session_id: session.session_id })
-      .catch((err) => this.log(`CloseSession ${session.session_id}: ${err.details ?? err}`));
+  // Closes this tab's session (a watched one is its owner's to close) and
+  // forgets it.
+  releaseSession() {
+    if (this.watching) {
+      this.closeSession(null);
+    } else {
+      this.closeSession(this.session, this.mesh);
+    }
+    Object.assign(this, { session: null, watching: false });
+  }
+
+  // CloseSession, then DeleteMesh of `mesh` if this tab built it and no
+  // longer shows it (every mesh it built once the tab is gone) and no other
+  // tab of this gateway uses it: the server would evict an unused mesh at
+  // its cap anyway, but deleting it now brings the server's mesh count back
+  // to where it was before the tab came.
+  closeSession(session, mesh = null) {
+    const closing = session
+      ? this.rpc('CloseSession', { session_id: session.session_id })
+        .catch((err) => this.log(`CloseSession ${session.session_id}: ${err.details ?? err}`))
+      : Promise.resolve();
+    closing.then(() => {
+      if (this.closed) return this.releaseMeshes([...this.builtMeshes.keys()]);
+      if (mesh && mesh.mesh_id !== this.mesh?.mesh_id) return this.releaseMeshes([mesh.mesh_id]);
+      return undefined;
+    });
+  }
+
+  // Drops this tab's holds on `ids` and deletes those nobody here uses. A
+  // closed session keeps its mesh pinned on the server until its stream has
+  // finished (a moment after CloseSession answers): FAILED_PRECONDITION is
+  // tried again a few times while still unused here, then left to the
+  // server's eviction (another gateway's tab may be using it).
+  releaseMeshes(ids) {
+    const doomed = [];
+    for (const id of ids) {
+      const mine = this.builtMeshes.get(id);
+      if (!mine) continue;
+      this.builtMeshes.delete(id);
+      for (let i = 0; i < mine.holds; ++i) this.meshRefs.release(id);
+      doomed.push({ id, volumeId: mine.volumeId });
+    }
+    const attempt = ({ id, volumeId }, left, delayMs) => {
+      if (this.meshRefs.inUse(id, volumeId)) return undefined;
+      const deleting = this.rpc('DeleteMesh', { mesh_id: id });
+      this.meshRefs.deleteStarted(volumeId, deleting);
+      return deleting.catch((err) => {
+        if (err?.code === GrpcStatus.FAILED_PRECONDITION && left > 0) {
+          return new Promise((r) => setTimeout(r, delayMs))
+            .then(() => attempt({ id, volumeId }, left - 1, 2 * delayMs));
+        }
+        if (err?.code !== GrpcStatus.FAILED_PRECONDITION && err?.code !== GrpcStatus.NOT_FOUND) {
+          this.log(`DeleteMesh ${id}: ${err.details ?? err}`);
+        }
+        return undefined;
+      });
+    };
+    return Promise.all(doomed.map((m) => attempt(m, kDeleteMeshRetries, 100)));
   }
 
   // ------------------------------------------------------------ the stream
@@ -234,7 +359,10 @@ export class ViewerConnection {
   startStream() {
     this.stopStream();
     const gen = ++this.streamGen;
-    const call = this.client.interact(this.affinity);
+    const call = this.watching
+      ? this.client.watch({ session_id: this.session.session_id,
+                            settings: toProtoSettings(this.settings) }, this.as)
+      : this.client.interact(this.as);
     this.call = call;
     let framed = false;
     call.on('data', (frame) => {
@@ -253,10 +381,12 @@ export class ViewerConnection {
     call.on('end', () => {
       if (gen === this.streamGen) this.call = null;
     });
-    const sequence = this.lastSequence;
-    call.write({ session_id: this.session.session_id,
-                 event: { sequence, settings: toProtoSettings(this.settings) } });
-    if (this.camera) call.write({ event: { sequence, camera: this.camera } });
+    if (!this.watching) {
+      const sequence = this.lastSequence;
+      call.write({ session_id: this.session.session_id,
+                   event: { sequence, settings: toProtoSettings(this.settings) } });
+      if (this.camera) call.write({ event: { sequence, camera: this.camera } });
+    }
     this.send({ type: 'stream', state: 'open', session_id: this.session.session_id });
   }
 
@@ -291,8 +421,11 @@ export class ViewerConnection {
   }
 
   event(event) {
-    if (!event || typeof event !== 'object') {
-      this.send({ type: 'error', what: 'Event', message: 'event: missing' });
+    if (this.watching) {
+      if (!event.settings && !event.camera) {
+        this.send({ type: 'error', what: 'Event',
+                    message: 'This session is shared with you to watch; only its owner changes it.' });
+      }
       return;
     }
     this.lastSequence = Math.max(this.lastSequence, Number(event.sequence) || 0);
@@ -344,7 +477,6 @@ export class ViewerConnection {
     this.openOp += 1;
     clearTimeout(this.probeTimer);
     this.stopStream();
-    this.closeSession(this.session);
-    this.session = null;
+    this.releaseSession();
   }
 }

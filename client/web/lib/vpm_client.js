@@ -1,7 +1,9 @@
 // The gateway's side of the vpm API: loads the project's own
 // proto/vpm/v2/vpm.proto with @grpc/proto-loader and wraps the unary calls
-// as promises. The token travels as `authorization: Bearer TOKEN` metadata on
-// every call; it never leaves the gateway.
+// as promises. Each call carries the token of the signed-in user it is made
+// for as `authorization: Bearer TOKEN` metadata, so the server knows who is
+// calling; the token never goes back to a browser. TLS towards the server
+// when given a CA (and, for mutual TLS, a client certificate and key).
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 
@@ -42,36 +44,41 @@ const kDeadlineMs = {
   RefineMesh: 120000,
   OpenSession: 120000,
   CloseSession: 5000,
+  DeleteMesh: 5000,
 };
 
 export class VpmClient {
-  // address: HOST:PORT of vpm-server; token: the bearer token ('' for a
-  // server started with --no-auth); protoPath: vpm.proto.
-  constructor({ address, token = '', protoPath = kDefaultProtoPath }) {
-    const definition = protoLoader.loadSync(protoPath, kLoaderOptions);
-    const { Vpm } = grpc.loadPackageDefinition(definition).vpm.v2;
+  // address: HOST:PORT of vpm-server; protoPath: vpm.proto; tls: null for
+  // plaintext, else {ca, cert, key} (PEM Buffers; cert and key for mutual
+  // TLS, may be null).
+  constructor({ address, protoPath = kDefaultProtoPath, tls = null }) {
+    this.definition = protoLoader.loadSync(protoPath, kLoaderOptions);
+    const { Vpm } = grpc.loadPackageDefinition(this.definition).vpm.v2;
     this.address = address;
-    this.token = token;
-    this.stub = new Vpm(address, grpc.credentials.createInsecure(), kChannelOptions);
+    const credentials = tls ? grpc.credentials.createSsl(tls.ca, tls.key ?? null, tls.cert ?? null)
+                            : grpc.credentials.createInsecure();
+    this.stub = new Vpm(address, credentials, kChannelOptions);
   }
 
   // affinity: a key for `x-vpm-session`, on which a consistent-hash router
   // (HAProxy in docker/) picks the replica; every call of one browser tab
   // carries the same key, so its volume, mesh, session and stream stay on
   // one server.
-  metadata(affinity) {
+  // as: {token, affinity}: the user's bearer token ('' for a server
+  // started with --no-auth) and the tab's affinity key.
+  metadata({ token = '', affinity = '' } = {}) {
     const md = new grpc.Metadata();
-    if (this.token) md.set('authorization', `Bearer ${this.token}`);
+    if (token) md.set('authorization', `Bearer ${token}`);
     if (affinity) md.set('x-vpm-session', affinity);
     return md;
   }
 
-  // One unary call: resolves with the response, rejects with the gRPC error
-  // (err.code, err.details).
-  call(method, request, affinity = '') {
+  // One unary call as `as` (metadata()): resolves with the response,
+  // rejects with the gRPC error (err.code, err.details).
+  call(method, request, as = {}) {
     const deadline = new Date(Date.now() + (kDeadlineMs[method] ?? 30000));
     return new Promise((resolve, reject) => {
-      this.stub[method](request, this.metadata(affinity), { deadline }, (err, response) => {
+      this.stub[method](request, this.metadata(as), { deadline }, (err, response) => {
         if (err) reject(err);
         else resolve(response);
       });
@@ -79,8 +86,13 @@ export class VpmClient {
   }
 
   // The bidirectional Interact stream (events in, frames out).
-  interact(affinity = '') {
-    return this.stub.Interact(this.metadata(affinity));
+  interact(as = {}) {
+    return this.stub.Interact(this.metadata(as));
+  }
+
+  // The Watch stream of a session (frames out): for a viewer it is shared with.
+  watch(request, as = {}) {
+    return this.stub.Watch(request, this.metadata(as));
   }
 
   close() {

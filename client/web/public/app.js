@@ -56,10 +56,27 @@ const socket = new GatewaySocket({
     setServerState('down', 'gateway unreachable');
     showMessage(`${wasUp ? 'Lost the connection to' : 'Cannot reach'} the web gateway at ` +
                 `${location.host}; retrying in ${(delayMs / 1000).toFixed(1)} s.`, 'error');
+    checkSignedIn();
   },
   onMessage,
   onFrame,
 });
+
+// The gateway refuses the WebSocket of a browser that is not signed in (or
+// whose sign-in ended): back to the sign-in form then.
+async function checkSignedIn() {
+  try {
+    const r = await fetch('/whoami', { cache: 'no-store' });
+    if (r.status === 401) {
+      location.assign('/login');
+      return;
+    }
+    if (r.ok) $('user').textContent = (await r.json()).user;
+  } catch {
+    // The gateway is down: the socket keeps retrying.
+  }
+}
+checkSignedIn();
 
 // ------------------------------------------------------------ events out
 

@@ -1,0 +1,92 @@
+// The messages a browser tab may send the gateway, checked before anything
+// acts on them: a JSON object with a known `type` and fields of the right
+// types (events against the proto's ClientEvent, proto_shape.js). Throws an
+// Error with a message for the page.
+import { toProtoSettings } from './render_settings.js';
+
+const kEventKinds = ['camera', 'settings', 'grab', 'drag', 'pull', 'release'];
+const kMaxIdChars = 128;
+const kMaxSourceChars = 2048;
+
+function optionalString(message, key, max) {
+  const v = message[key];
+  if (v === undefined) return;
+  if (typeof v !== 'string' || v.length === 0 || v.length > max) {
+    throw new Error(`${key}: a string of 1 to ${max} characters`);
+  }
+}
+
+function vec3(shape, value, path) {
+  shape.check('Vec3', value, path);
+  for (const axis of ['x', 'y', 'z']) {
+    if (typeof value[axis] !== 'number') throw new Error(`${path}.${axis}: required`);
+  }
+}
+
+// The page's settings (mode 'dvr' | 'mip', encoding 'jpeg' | 'png') as the
+// proto's RenderSettings; throws when they are not.
+export function checkSettings(shape, settings, path) {
+  if (settings === undefined) return;
+  if (settings === null || typeof settings !== 'object' || Array.isArray(settings)) {
+    throw new Error(`${path}: an object`);
+  }
+  for (const [key, names] of [['mode', ['dvr', 'mip']], ['encoding', ['jpeg', 'png']]]) {
+    if (settings[key] !== undefined && !names.includes(settings[key])) {
+      throw new Error(`${path}.${key}: one of ${names.join(', ')}`);
+    }
+  }
+  shape.check('RenderSettings', toProtoSettings(settings), path);
+}
+
+// data: the WebSocket message (Buffer); isBinary: its opcode. Returns the
+// parsed message.
+export function parseMessage(shape, data, isBinary) {
+  if (isBinary) throw new Error('binary messages are not accepted');
+  let message;
+  try {
+    message = JSON.parse(data.toString('utf8'));
+  } catch (e) {
+    throw new Error(`not JSON (${e.message})`);
+  }
+  if (message === null || typeof message !== 'object' || Array.isArray(message)) {
+    throw new Error('a message is a JSON object with a "type"');
+  }
+  switch (message.type) {
+    case 'list':
+      return message;
+    case 'open':
+      optionalString(message, 'source', kMaxSourceChars);
+      optionalString(message, 'volume_id', kMaxIdChars);
+      if ((message.source === undefined) === (message.volume_id === undefined)) {
+        throw new Error('open: give one of source and volume_id');
+      }
+      checkSettings(shape, message.settings, 'settings');
+      if (message.camera !== undefined && message.camera !== null) {
+        shape.check('Camera', message.camera, 'camera');
+      }
+      return message;
+    case 'watch':
+      optionalString(message, 'session_id', kMaxIdChars);
+      if (message.session_id === undefined) throw new Error('watch: session_id required');
+      checkSettings(shape, message.settings, 'settings');
+      return message;
+    case 'event': {
+      const { event } = message;
+      if (event === null || typeof event !== 'object' || Array.isArray(event)) {
+        throw new Error('event: an object');
+      }
+      const kinds = kEventKinds.filter((k) => event[k] !== undefined);
+      if (kinds.length !== 1) {
+        throw new Error(`event: exactly one of ${kEventKinds.join(', ')} (got ${kinds.length})`);
+      }
+      checkSettings(shape, event.settings, 'event.settings');
+      shape.check('ClientEvent', { ...event, settings: undefined }, 'event');
+      return message;
+    }
+    case 'refine':
+      vec3(shape, message.point_mm, 'point_mm');
+      return message;
+    default:
+      throw new Error(`unknown message type '${String(message.type).slice(0, 32)}'`);
+  }
+}

@@ -1,0 +1,436 @@
+// Users and ownership: the users file and its errors, --token-file, every
+// call knowing its user, sessions and uploads belonging to their creator
+// (PERMISSION_DENIED for anyone else), sharing a session to watch, shared
+// volumes of the data root and phantoms, per-user stream caps and per-user
+// metrics.
+#include <fstream>
+
+#include "server/common/sha256.h"
+#include "server/service/users_file.h"
+#include "tests/service/service_test_util.h"
+
+namespace vpm::service::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr char kAlice[] = "alice-secret-token";
+constexpr char kBob[] = "bob-secret-token";
+constexpr char kCarol[] = "carol-secret-token";
+
+std::string WriteFile(const fs::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+TEST(UsersFile, ParsesNamesHashesCommentsAndBlankLines) {
+  const std::string text = "# the planners\n\nalice " + HashToken(kAlice) + "\r\n" +
+                           "  bob\t" + HashToken(kBob) + "  \n";
+  auto users = ParseUsersFile(text, "users.txt");
+  ASSERT_TRUE(users.ok()) << users.status();
+  ASSERT_EQ(users->size(), 2u);
+  EXPECT_EQ((*users)[0].name, "alice");
+  EXPECT_EQ((*users)[0].token_sha256_hex, HashToken(kAlice));
+  EXPECT_EQ((*users)[1].name, "bob");
+}
+
+TEST(UsersFile, HashIsTheSha256OfTheToken) {
+  // FIPS 180-2's "abc" example.
+  EXPECT_EQ(HashToken("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  auto line = UsersFileLine("alice", "abc");
+  ASSERT_TRUE(line.ok());
+  EXPECT_EQ(*line, "alice ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_FALSE(UsersFileLine("al ice", "abc").ok());
+  EXPECT_FALSE(UsersFileLine("alice", "").ok());
+}
+
+TEST(UsersFile, BadLinesNameTheLineAndTheFault) {
+  const std::string hash = HashToken(kAlice);
+  struct Case {
+    std::string text;
+    std::string expect;  // in the message
+  };
+  const std::vector<Case> cases = {
+      {"alice\n", "line 1: 1 fields, not 2"},
+      {"# ok\nalice " + hash + " extra\n", "line 2: 3 fields"},
+      {"alice " + std::string(kAlice) + "\n", "64 hexadecimal digits"},
+      {"alice " + hash.substr(1) + "\n", "64 hexadecimal digits"},
+      {"al/ice " + hash + "\n", "only letters, digits"},
+      {"alice " + hash + "\nalice " + HashToken(kBob) + "\n", "line 2: user 'alice' given twice"},
+      {"alice " + hash + "\nbob " + hash + "\n", "line 2: user 'bob' has the token of an earlier"},
+      {"# nobody\n\n", "no users"},
+  };
+  for (const Case& c : cases) {
+    auto users = ParseUsersFile(c.text, "users.txt");
+    ASSERT_FALSE(users.ok()) << c.text;
+    EXPECT_EQ(users.status().code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_NE(users.status().message().find(c.expect), std::string::npos)
+        << users.status().message() << " should say " << c.expect;
+    EXPECT_NE(users.status().message().find("users.txt"), std::string::npos);
+  }
+}
+
+class UsersTest : public ServiceTest {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("vpm-users-test-" + std::to_string(getpid()));
+    fs::create_directories(dir_);
+    users_file_ = WriteFile(dir_ / "users.txt", "alice " + HashToken(kAlice) + "\nbob " +
+                                                    HashToken(kBob) + "\ncarol " +
+                                                    HashToken(kCarol) + "\n");
+    ServerOptions o = SmallServerOptions();
+    o.token.clear();
+    o.users_file = users_file_;
+    o.max_sessions = 6;
+    o.max_streams_per_user = 2;
+    StartServer(o);
+  }
+  void TearDown() override {
+    ServiceTest::TearDown();
+    fs::remove_all(dir_);
+  }
+
+  grpc::Status Manipulate(const std::string& token, const std::string& session_id) {
+    v2::ManipulateRequest request;
+    request.set_session_id(session_id);
+    request.mutable_event()->mutable_camera()->set_azimuth_deg(30);
+    v2::ManipulateResponse response;
+    return stub_->Manipulate(Context(token).get(), request, &response);
+  }
+  grpc::Status GetSession(const std::string& token, const std::string& session_id,
+                          v2::SessionInfo* info) {
+    v2::GetSessionRequest request;
+    request.set_session_id(session_id);
+    return stub_->GetSession(Context(token).get(), request, info);
+  }
+  grpc::Status Share(const std::string& token, const std::string& session_id,
+                     const std::string& user, bool revoke = false) {
+    v2::ShareSessionRequest request;
+    request.set_session_id(session_id);
+    request.set_user(user);
+    request.set_revoke(revoke);
+    v2::SessionInfo info;
+    return stub_->ShareSession(Context(token).get(), request, &info);
+  }
+  // A Watch as `token`'s user: the status it ends with after `frames`
+  // frames (or before the first), OK when it delivered them.
+  grpc::Status Watch(const std::string& token, const std::string& session_id, int frames = 1) {
+    v2::WatchRequest request;
+    request.set_session_id(session_id);
+    request.mutable_settings()->set_width(64);
+    request.mutable_settings()->set_height(64);
+    auto context = Context(token);
+    auto reader = stub_->Watch(context.get(), request);
+    v2::Frame frame;
+    for (int i = 0; i < frames; ++i) {
+      if (!reader->Read(&frame)) return reader->Finish();
+    }
+    context->TryCancel();
+    reader->Finish();
+    return grpc::Status::OK;
+  }
+  grpc::Status Interact(const std::string& token, const std::string& session_id) {
+    auto context = Context(token);
+    auto stream = stub_->Interact(context.get());
+    v2::InteractRequest first;
+    first.set_session_id(session_id);
+    stream->Write(first);
+    v2::Frame frame;
+    if (stream->Read(&frame)) {
+      context->TryCancel();
+      stream->Finish();
+      return grpc::Status::OK;
+    }
+    return stream->Finish();
+  }
+
+  fs::path dir_;
+  std::string users_file_;
+};
+
+TEST_F(UsersTest, EveryUserSignsInWithTheirOwnTokenAndNoOtherToken) {
+  v2::ListVolumesResponse response;
+  EXPECT_TRUE(stub_->ListVolumes(Context(kAlice).get(), {}, &response).ok());
+  EXPECT_TRUE(stub_->ListVolumes(Context(kBob).get(), {}, &response).ok());
+  EXPECT_EQ(stub_->ListVolumes(Context(kToken).get(), {}, &response).error_code(),
+            grpc::UNAUTHENTICATED);  // no --token: no user `default`
+  EXPECT_EQ(stub_->ListVolumes(Context(HashToken(kAlice)).get(), {}, &response).error_code(),
+            grpc::UNAUTHENTICATED);  // the hash is not the token
+  EXPECT_EQ(server_->metrics().requests("ListVolumes", "OK", "alice"), 1);
+  EXPECT_EQ(server_->metrics().requests("ListVolumes", "OK", "bob"), 1);
+  EXPECT_EQ(server_->metrics().requests("ListVolumes", "UNAUTHENTICATED", "unauthenticated"), 2);
+}
+
+TEST_F(UsersTest, AnotherUsersSessionIsPermissionDenied) {
+  const v2::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const v2::SessionInfo session = OpenSession(volume.volume_id(), kAlice);
+  EXPECT_EQ(session.owner(), "alice");
+  v2::SessionInfo info;
+  EXPECT_TRUE(GetSession(kAlice, session.session_id(), &info).ok());
+  EXPECT_TRUE(Manipulate(kAlice, session.session_id()).ok());
+
+  EXPECT_EQ(Manipulate(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
+  EXPECT_EQ(GetSession(kBob, session.session_id(), &info).error_code(), grpc::PERMISSION_DENIED);
+  EXPECT_EQ(Watch(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
+  EXPECT_EQ(Interact(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
+  v2::SetCameraRequest camera;
+  camera.set_session_id(session.session_id());
+  v2::SetCameraResponse camera_response;
+  EXPECT_EQ(stub_->SetCamera(Context(kBob).get(), camera, &camera_response).error_code(),
+            grpc::PERMISSION_DENIED);
+  v2::RenderRequest render;
+  render.set_session_id(session.session_id());
+  v2::Frame frame;
+  EXPECT_EQ(stub_->Render(Context(kBob).get(), render, &frame).error_code(),
+            grpc::PERMISSION_DENIED);
+  v2::CloseSessionRequest close;
+  close.set_session_id(session.session_id());
+  v2::CloseSessionResponse close_response;
+  EXPECT_EQ(stub_->CloseSession(Context(kBob).get(), close, &close_response).error_code(),
+            grpc::PERMISSION_DENIED);
+  EXPECT_EQ(Share(kBob, session.session_id(), "bob").error_code(), grpc::PERMISSION_DENIED);
+
+  v2::ListSessionsResponse listed;
+  ASSERT_TRUE(stub_->ListSessions(Context(kBob).get(), {}, &listed).ok());
+  EXPECT_EQ(listed.sessions_size(), 0);
+  ASSERT_TRUE(stub_->ListSessions(Context(kAlice).get(), {}, &listed).ok());
+  EXPECT_EQ(listed.sessions_size(), 1);
+
+  // Alice's session survived all of it.
+  EXPECT_TRUE(Watch(kAlice, session.session_id()).ok());
+  EXPECT_GE(server_->metrics().requests("Manipulate", "PERMISSION_DENIED", "bob"), 1);
+  const std::string metrics = server_->metrics().Scrape();
+  EXPECT_NE(metrics.find("vpm_user_sessions{user=\"alice\"} 1"), std::string::npos) << metrics;
+  EXPECT_NE(metrics.find("vpm_requests_total{code=\"PERMISSION_DENIED\",method=\"Manipulate\","
+                         "user=\"bob\"} 1"),
+            std::string::npos)
+      << metrics;
+}
+
+TEST_F(UsersTest, SharingLetsAViewerWatchButNotDeform) {
+  const v2::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const v2::SessionInfo session = OpenSession(volume.volume_id(), kAlice);
+  EXPECT_EQ(Share(kAlice, session.session_id(), "nobody").error_code(), grpc::INVALID_ARGUMENT);
+  EXPECT_EQ(Share(kAlice, session.session_id(), "alice").error_code(), grpc::INVALID_ARGUMENT);
+  ASSERT_TRUE(Share(kAlice, session.session_id(), "bob").ok());
+
+  v2::SessionInfo info;
+  ASSERT_TRUE(GetSession(kBob, session.session_id(), &info).ok());
+  EXPECT_EQ(info.owner(), "alice");
+  EXPECT_EQ(info.shared_with_size(), 0);  // the list is the owner's to see
+  ASSERT_TRUE(GetSession(kAlice, session.session_id(), &info).ok());
+  ASSERT_EQ(info.shared_with_size(), 1);
+  EXPECT_EQ(info.shared_with(0), "bob");
+
+  EXPECT_TRUE(Watch(kBob, session.session_id()).ok());
+  v2::RenderRequest render;
+  render.set_session_id(session.session_id());
+  render.mutable_settings()->set_width(64);
+  render.mutable_settings()->set_height(64);
+  v2::Frame frame;
+  EXPECT_TRUE(stub_->Render(Context(kBob).get(), render, &frame).ok());
+  EXPECT_EQ(Manipulate(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
+  EXPECT_EQ(Interact(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
+  // Carol was not asked.
+  EXPECT_EQ(Watch(kCarol, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
+
+  ASSERT_TRUE(Share(kAlice, session.session_id(), "bob", /*revoke=*/true).ok());
+  EXPECT_EQ(Watch(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
+}
+
+TEST_F(UsersTest, UploadedVolumesBelongToTheUploader) {
+  const std::vector<uint8_t> bytes = NiftiBytes();
+  v2::VolumeInfo volume;
+  ASSERT_TRUE(Upload(bytes, int64_t(bytes.size()), Sha256::HexOf(bytes), 64 << 10, &volume, true,
+                     kAlice)
+                  .ok());
+  EXPECT_EQ(volume.owner(), "alice");
+
+  v2::GetVolumeRequest get;
+  get.set_volume_id(volume.volume_id());
+  v2::VolumeInfo info;
+  EXPECT_EQ(stub_->GetVolume(Context(kBob).get(), get, &info).error_code(),
+            grpc::PERMISSION_DENIED);
+  v2::ListVolumesResponse listed;
+  ASSERT_TRUE(stub_->ListVolumes(Context(kBob).get(), {}, &listed).ok());
+  EXPECT_EQ(listed.volumes_size(), 0);
+  v2::BuildMeshRequest build;
+  build.set_volume_id(volume.volume_id());
+  v2::MeshInfo mesh;
+  EXPECT_EQ(stub_->BuildMesh(Context(kBob).get(), build, &mesh).error_code(),
+            grpc::PERMISSION_DENIED);
+  v2::OpenSessionRequest open;
+  open.set_volume_id(volume.volume_id());
+  v2::SessionInfo session;
+  EXPECT_EQ(stub_->OpenSession(Context(kBob).get(), open, &session).error_code(),
+            grpc::PERMISSION_DENIED);
+
+  // Alice's mesh on it is out of Bob's reach too.
+  ASSERT_TRUE(stub_->BuildMesh(Context(kAlice).get(), build, &mesh).ok());
+  v2::GetMeshRequest get_mesh;
+  get_mesh.set_mesh_id(mesh.mesh_id());
+  v2::GetMeshResponse got_mesh;
+  EXPECT_EQ(stub_->GetMesh(Context(kBob).get(), get_mesh, &got_mesh).error_code(),
+            grpc::PERMISSION_DENIED);
+  v2::DeleteMeshRequest delete_mesh;
+  delete_mesh.set_mesh_id(mesh.mesh_id());
+  v2::DeleteMeshResponse deleted_mesh;
+  EXPECT_EQ(stub_->DeleteMesh(Context(kBob).get(), delete_mesh, &deleted_mesh).error_code(),
+            grpc::PERMISSION_DENIED);
+
+  v2::DeleteVolumeRequest del;
+  del.set_volume_id(volume.volume_id());
+  v2::DeleteVolumeResponse deleted;
+  EXPECT_EQ(stub_->DeleteVolume(Context(kBob).get(), del, &deleted).error_code(),
+            grpc::PERMISSION_DENIED);
+  EXPECT_TRUE(stub_->DeleteVolume(Context(kAlice).get(), del, &deleted).ok());
+}
+
+TEST_F(UsersTest, SharedVolumesAreReadByAllAndDeletedOnlyByTheirSoleLoader) {
+  const v2::VolumeInfo by_alice = LoadPhantom(kPhantom, kAlice);
+  EXPECT_EQ(by_alice.owner(), "");
+  // Bob reads and uses it without loading it...
+  v2::GetVolumeRequest get;
+  get.set_volume_id(by_alice.volume_id());
+  v2::VolumeInfo info;
+  EXPECT_TRUE(stub_->GetVolume(Context(kBob).get(), get, &info).ok());
+  const v2::SessionInfo bobs = OpenSession(by_alice.volume_id(), kBob);
+  EXPECT_EQ(bobs.owner(), "bob");
+  v2::CloseSessionRequest close;
+  close.set_session_id(bobs.session_id());
+  v2::CloseSessionResponse closed;
+  ASSERT_TRUE(stub_->CloseSession(Context(kBob).get(), close, &closed).ok());
+  // ...but may not delete what he did not load.
+  v2::DeleteVolumeRequest del;
+  del.set_volume_id(by_alice.volume_id());
+  v2::DeleteVolumeResponse deleted;
+  EXPECT_EQ(stub_->DeleteVolume(Context(kBob).get(), del, &deleted).error_code(),
+            grpc::PERMISSION_DENIED);
+  // Once Bob loads it too, neither may delete it alone.
+  const v2::VolumeInfo by_bob = LoadPhantom(kPhantom, kBob);
+  EXPECT_EQ(by_bob.volume_id(), by_alice.volume_id());
+  EXPECT_EQ(stub_->DeleteVolume(Context(kAlice).get(), del, &deleted).error_code(),
+            grpc::PERMISSION_DENIED);
+  // A phantom Carol alone loaded is hers to delete.
+  const v2::VolumeInfo by_carol = LoadPhantom("phantom:abdomen?size=40", kCarol);
+  del.set_volume_id(by_carol.volume_id());
+  EXPECT_TRUE(stub_->DeleteVolume(Context(kCarol).get(), del, &deleted).ok());
+}
+
+TEST_F(UsersTest, StreamCapIsPerUser) {
+  const v2::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const v2::SessionInfo alices = OpenSession(volume.volume_id(), kAlice);
+  const v2::SessionInfo bobs = OpenSession(volume.volume_id(), kBob);
+  // Alice fills her two stream slots (every user here shares one address).
+  std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
+  std::vector<std::unique_ptr<grpc::ClientReader<v2::Frame>>> readers;
+  v2::WatchRequest request;
+  request.set_session_id(alices.session_id());
+  request.mutable_settings()->set_width(64);
+  request.mutable_settings()->set_height(64);
+  for (int i = 0; i < 2; ++i) {
+    contexts.push_back(Context(kAlice));
+    readers.push_back(stub_->Watch(contexts.back().get(), request));
+    v2::Frame frame;
+    ASSERT_TRUE(readers.back()->Read(&frame));
+  }
+  EXPECT_EQ(Watch(kAlice, alices.session_id()).error_code(), grpc::RESOURCE_EXHAUSTED);
+  // An upload is a stream of its user too.
+  const std::vector<uint8_t> nifti = NiftiBytes();
+  const std::string sha = Sha256::HexOf(nifti);
+  v2::VolumeInfo uploaded;
+  const grpc::Status refused = Upload(nifti, int64_t(nifti.size()), sha, 64 << 10,
+                                      &uploaded, true, kAlice);
+  EXPECT_EQ(refused.error_code(), grpc::RESOURCE_EXHAUSTED) << refused.error_message();
+  // Bob's streams are counted apart.
+  EXPECT_TRUE(Watch(kBob, bobs.session_id()).ok());
+  const grpc::Status bobs_upload = Upload(nifti, int64_t(nifti.size()), sha,
+                                          64 << 10, &uploaded, true, kBob);
+  EXPECT_TRUE(bobs_upload.ok()) << bobs_upload.error_message();
+  const std::string metrics = server_->metrics().Scrape();
+  EXPECT_NE(metrics.find("vpm_user_streams{user=\"alice\"} 2"), std::string::npos) << metrics;
+  for (size_t i = 0; i < readers.size(); ++i) {
+    contexts[i]->TryCancel();
+    readers[i]->Finish();
+  }
+}
+
+TEST_F(UsersTest, SessionCapIsPerUser) {
+  server_->Shutdown(std::chrono::milliseconds(2000));
+  ServerOptions o = SmallServerOptions();
+  o.token.clear();
+  o.users_file = users_file_;
+  o.max_sessions = 6;
+  o.max_sessions_per_user = 2;
+  StartServer(o);
+  const v2::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  OpenSession(volume.volume_id(), kAlice);
+  OpenSession(volume.volume_id(), kAlice);
+  v2::OpenSessionRequest open;
+  open.set_volume_id(volume.volume_id());
+  v2::SessionInfo info;
+  grpc::Status third = stub_->OpenSession(Context(kAlice).get(), open, &info);
+  EXPECT_EQ(third.error_code(), grpc::RESOURCE_EXHAUSTED);
+  EXPECT_NE(third.error_message().find("per user"), std::string::npos) << third.error_message();
+  EXPECT_TRUE(stub_->OpenSession(Context(kBob).get(), open, &info).ok());
+}
+
+TEST(UsersServer, StartupErrorsAreClear) {
+  const fs::path dir = fs::temp_directory_path() / ("vpm-users-start-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  auto start = [&](ServerOptions o) { return VpmServer::Create(o, SharedGpu()).status(); };
+  ServerOptions o = SmallServerOptions();
+  o.token.clear();
+
+  o.users_file = WriteFile(dir / "bad.txt", "alice " + HashToken(kAlice) + "\nbob not-a-hash\n");
+  Status bad = start(o);
+  EXPECT_EQ(bad.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(bad.message().find("line 2"), std::string::npos) << bad;
+
+  o.users_file = (dir / "missing.txt").string();
+  EXPECT_NE(start(o).message().find("cannot read"), std::string::npos);
+
+  o.users_file = WriteFile(dir / "users.txt", "alice " + HashToken(kAlice) + "\n");
+  o.no_auth = true;
+  EXPECT_NE(start(o).message().find("--no-auth and --users"), std::string::npos);
+  o.no_auth = false;
+
+  o.token = kAlice;  // the default user may not reuse a user's token
+  EXPECT_NE(start(o).message().find("token of user 'alice'"), std::string::npos);
+  o.token.clear();
+
+  o.users_file.clear();
+  o.token_file = WriteFile(dir / "empty-token", " \n");
+  EXPECT_NE(start(o).message().find("empty"), std::string::npos);
+  o.token_file = WriteFile(dir / "token", "file-token\n");
+  o.token = "also-given";
+  EXPECT_NE(start(o).message().find("not both"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(UsersServer, TokenFileGivesTheDefaultUsersToken) {
+  const fs::path dir = fs::temp_directory_path() / ("vpm-token-file-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  ServerOptions o = SmallServerOptions();
+  o.token.clear();
+  o.token_file = WriteFile(dir / "token", "  file-token\n");
+  auto server = VpmServer::Create(o, SharedGpu());
+  ASSERT_TRUE(server.ok()) << server.status();
+  auto stub = v2::Vpm::NewStub(grpc::CreateChannel(
+      "127.0.0.1:" + std::to_string((*server)->port()), grpc::InsecureChannelCredentials()));
+  v2::ListVolumesResponse response;
+  auto context = [](const std::string& token) {
+    auto c = std::make_unique<grpc::ClientContext>();
+    c->AddMetadata("authorization", "Bearer " + token);
+    return c;
+  };
+  EXPECT_TRUE(stub->ListVolumes(context("file-token").get(), {}, &response).ok());
+  EXPECT_EQ(stub->ListVolumes(context("  file-token").get(), {}, &response).error_code(),
+            grpc::UNAUTHENTICATED);
+  EXPECT_EQ((*server)->metrics().requests("ListVolumes", "OK", "default"), 1);
+  (*server)->Shutdown(std::chrono::milliseconds(1000));
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace vpm::service::testing
