@@ -1,6 +1,8 @@
 #include "server/mesh/tetrahedralize.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -13,6 +15,7 @@
 #include <CGAL/Triangulation_vertex_base_with_info_3.h>
 
 #include "server/common/clock.h"
+#include "server/mesh/improve_tets_by_flips.h"
 #include "server/mesh/tet_quality.h"
 
 namespace vpm {
@@ -136,8 +139,13 @@ Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm) {
       continue;
     }
     if (o == CGAL::NEGATIVE) std::swap(t[2], t[3]);
-    tets.push_back(CanonicalRotation(t));
+    tets.push_back(t);
   }
+  std::vector<glm::dvec3> points_mm(mesh.vertices.size());
+  for (size_t v = 0; v < points_mm.size(); ++v) points_mm[v] = mesh.vertices[v].position_mm;
+  const FlipStats flips = ImproveTetsByFlips(points_mm, tets);
+  if (std::getenv("VPM_FLIP_DEBUG")) std::fprintf(stderr, "flips: %lld face, %lld edge, %d passes, %.3f -> %.3f deg\n", (long long)flips.face_flips, (long long)flips.edge_removals, flips.passes, flips.min_dihedral_before_deg, flips.min_dihedral_after_deg);
+  for (Tet& t : tets) t = CanonicalRotation(t);
   std::sort(tets.begin(), tets.end());
 
   // The hull must be the box: the tet volumes add up to the box volume.
