@@ -1,8 +1,6 @@
 #include "server/mesh/tetrahedralize.h"
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -143,8 +141,9 @@ Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm) {
   }
   std::vector<glm::dvec3> points_mm(mesh.vertices.size());
   for (size_t v = 0; v < points_mm.size(); ++v) points_mm[v] = mesh.vertices[v].position_mm;
-  const FlipStats flips = ImproveTetsByFlips(points_mm, tets);
-  if (std::getenv("VPM_FLIP_DEBUG")) std::fprintf(stderr, "flips: %lld face, %lld edge, %d passes, %.3f -> %.3f deg\n", (long long)flips.face_flips, (long long)flips.edge_removals, flips.passes, flips.min_dihedral_before_deg, flips.min_dihedral_after_deg);
+  // Delaunay keeps the slivers of cospherical lattice rows; flips remove
+  // most (improve_tets_by_flips.h, docs/MESH.md "Tet quality").
+  ImproveTetsByFlips(points_mm, tets);
   for (Tet& t : tets) t = CanonicalRotation(t);
   std::sort(tets.begin(), tets.end());
 
