@@ -11,6 +11,7 @@ Result<VertexKind> KindOf(v2::VertexKind kind) {
     case v2::VERTEX_KIND_LATTICE: return VertexKind::kLattice;
     case v2::VERTEX_KIND_ANCHOR: return VertexKind::kAnchor;
     case v2::VERTEX_KIND_REFINED: return VertexKind::kRefined;
+    case v2::VERTEX_KIND_BOUNDARY: return VertexKind::kBoundary;
     default: return absl::DataLossError(StrCat("server sent a vertex of unknown kind ", kind));
   }
 }
@@ -22,6 +23,8 @@ MeshStats StatsOf(const v2::MeshStats& s) {
   out.kept_lattice = s.kept_lattice();
   out.anchors = s.anchors();
   out.refined = s.refined();
+  out.boundary = s.boundary();
+  out.boundary_ms = s.boundary_ms();
   out.hard = s.hard();
   out.tets = s.tets();
   out.h_mm = s.h_mm();

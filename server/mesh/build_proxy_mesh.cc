@@ -4,6 +4,7 @@
 #include <chrono>
 
 #include "server/common/clock.h"
+#include "server/mesh/boundary_vertices.h"
 #include "server/mesh/refine_at_point.h"
 #include "server/mesh/tetrahedralize.h"
 
@@ -102,6 +103,13 @@ Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& 
   }
   mesh.stats.refine_ms = MsSince(t0);
   t0 = SteadyClock::now();
+  const BoundaryParams bp{.min_cell_mm = 0.5 * base.stats.h_mm};
+  const std::vector<MeshVertex> boundary =
+      BoundaryVertices(mesh.vertices, volume.geometry(), bp);
+  mesh.stats.boundary = static_cast<int64_t>(boundary.size());
+  mesh.vertices.insert(mesh.vertices.end(), boundary.begin(), boundary.end());
+  mesh.stats.boundary_ms = MsSince(t0);
+  t0 = SteadyClock::now();
   RETURN_IF_ERROR(ClassifyHardness(volume, base.stats.R_mm, params.classify, mesh.vertices));
   mesh.stats.hard = std::count_if(mesh.vertices.begin(), mesh.vertices.end(),
                                   [](const MeshVertex& v) { return v.hard; });
@@ -111,7 +119,8 @@ Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& 
   mesh.stats.tetrahedralize_ms = MsSince(t0);
   mesh.stats.tets = static_cast<int64_t>(mesh.tets.size());
   mesh.stats.total_ms = mesh.stats.evaluate_ms + mesh.stats.decimate_ms + mesh.stats.refine_ms +
-                        mesh.stats.classify_ms + mesh.stats.tetrahedralize_ms;
+                        mesh.stats.boundary_ms + mesh.stats.classify_ms +
+                        mesh.stats.tetrahedralize_ms;
   return mesh;
 }
 

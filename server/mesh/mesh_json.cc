@@ -82,6 +82,7 @@ json StatsToJson(const MeshStats& s, const TetQuality& q) {
           {"kept_lattice", s.kept_lattice},
           {"anchors", s.anchors},
           {"refined", s.refined},
+          {"boundary", s.boundary},
           {"hard", s.hard},
           {"tets", s.tets},
           {"h_mm", s.h_mm},
@@ -97,11 +98,12 @@ json StatsToJson(const MeshStats& s, const TetQuality& q) {
 
 Result<VertexKind> KindFromName(const json& value, const FieldReader& where) {
   if (value.is_string()) {
-    for (VertexKind kind : {VertexKind::kLattice, VertexKind::kAnchor, VertexKind::kRefined}) {
+    for (VertexKind kind : {VertexKind::kLattice, VertexKind::kAnchor, VertexKind::kRefined,
+                            VertexKind::kBoundary}) {
       if (value.get<std::string>() == VertexKindName(kind)) return kind;
     }
   }
-  return where.Error("kind", "must be \"lattice\", \"anchor\" or \"refined\"");
+  return where.Error("kind", "must be \"lattice\", \"anchor\", \"refined\" or \"boundary\"");
 }
 
 Status ReadVertices(const json& array, std::vector<MeshVertex>& vertices) {
@@ -182,6 +184,10 @@ Status ReadStats(const json& object, MeshStats& s, TetQuality& q) {
   ASSIGN_OR_RETURN(s.kept_lattice, r.Int("kept_lattice", 0));
   ASSIGN_OR_RETURN(s.anchors, r.Int("anchors", 0));
   ASSIGN_OR_RETURN(s.refined, r.Int("refined", 0));
+  // Files from before boundary vertices (tests/data/meshes) have none.
+  if (object.contains("boundary")) {
+    ASSIGN_OR_RETURN(s.boundary, r.Int("boundary", 0));
+  }
   ASSIGN_OR_RETURN(s.hard, r.Int("hard", 0));
   ASSIGN_OR_RETURN(s.tets, r.Int("tets", 0));
   ASSIGN_OR_RETURN(s.h_mm, r.Double("h_mm"));

@@ -16,8 +16,11 @@ enum class VertexKind {
   kLattice,  // a step-2 survivor of the regular lattice
   kAnchor,   // one of the 8 corners of the image box
   kRefined,  // a step-4 vertex around the manipulation point
+  kBoundary,  // on a face of the image box, added so that no tet there is a
+              // sliver (boundary_vertices.h)
 };
-const char* VertexKindName(VertexKind kind);  // "lattice", "anchor", "refined"
+// "lattice", "anchor", "refined", "boundary"
+const char* VertexKindName(VertexKind kind);
 
 struct MeshVertex {
   glm::dvec3 position_mm{0.0};  // physical voxel space
@@ -46,6 +49,7 @@ struct MeshStats {
   int64_t kept_lattice = 0;              // step-2 survivors (anchors excluded)
   int64_t anchors = 0;
   int64_t refined = 0;
+  int64_t boundary = 0;  // on the box faces (boundary_vertices.h)
   int64_t hard = 0;
   int64_t tets = 0;
   double h_mm = 0.0;  // largest lattice step
@@ -54,6 +58,7 @@ struct MeshStats {
   double decimate_ms = 0.0;
   double classify_ms = 0.0;
   double refine_ms = 0.0;
+  double boundary_ms = 0.0;
   double tetrahedralize_ms = 0.0;
   double total_ms = 0.0;
 };

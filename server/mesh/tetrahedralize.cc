@@ -13,6 +13,7 @@
 #include <CGAL/Triangulation_vertex_base_with_info_3.h>
 
 #include "server/common/clock.h"
+#include "server/mesh/improve_tets_by_flips.h"
 #include "server/mesh/tet_quality.h"
 
 namespace vpm {
@@ -136,8 +137,14 @@ Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm) {
       continue;
     }
     if (o == CGAL::NEGATIVE) std::swap(t[2], t[3]);
-    tets.push_back(CanonicalRotation(t));
+    tets.push_back(t);
   }
+  std::vector<glm::dvec3> points_mm(mesh.vertices.size());
+  for (size_t v = 0; v < points_mm.size(); ++v) points_mm[v] = mesh.vertices[v].position_mm;
+  // Delaunay keeps the slivers of cospherical lattice rows; flips remove
+  // most (improve_tets_by_flips.h, docs/MESH.md "Tet quality").
+  ImproveTetsByFlips(points_mm, tets);
+  for (Tet& t : tets) t = CanonicalRotation(t);
   std::sort(tets.begin(), tets.end());
 
   // The hull must be the box: the tet volumes add up to the box volume.

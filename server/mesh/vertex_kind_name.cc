@@ -12,6 +12,8 @@ const char* VertexKindName(VertexKind kind) {
       return "anchor";
     case VertexKind::kRefined:
       return "refined";
+    case VertexKind::kBoundary:
+      return "boundary";
   }
   return "unknown";
 }

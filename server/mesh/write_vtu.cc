@@ -18,6 +18,8 @@ int KindCode(VertexKind kind) {
       return 1;
     case VertexKind::kRefined:
       return 2;
+    case VertexKind::kBoundary:
+      return 3;
   }
   return -1;
 }

@@ -115,7 +115,8 @@ TEST_F(RefineTest, NewPointReplacesThePreviousRefinement) {
                          [](const MeshVertex& v) { return v.kind == VertexKind::kRefined; });
   };
   EXPECT_EQ(count_refined(*second), second->stats.refined);
-  EXPECT_EQ(second->vertices.size(), base_->vertices.size() + second->stats.refined);
+  EXPECT_EQ(second->vertices.size(),
+            base_->vertices.size() + second->stats.refined + second->stats.boundary);
   for (const auto& v : second->vertices) {
     if (v.kind == VertexKind::kRefined) {
       EXPECT_LE(PointDistance(v.position_mm, *params.refine_at_mm), 1.5 * base_->stats.h_mm + 1e-9);
@@ -131,7 +132,11 @@ TEST(BuildProxyMesh, KeepsTargetAnchorsAndTetsCoverTheBox) {
   params.target = 100;
   auto mesh = BuildProxyMesh(volume, params);
   ASSERT_TRUE(mesh.ok()) << mesh.status();
-  EXPECT_EQ(mesh->vertices.size(), 100u);
+  // The target counts steps 1-4; the boundary vertices come on top.
+  EXPECT_EQ(mesh->vertices.size(), 100u + mesh->stats.boundary);
+  EXPECT_EQ(std::count_if(mesh->vertices.begin(), mesh->vertices.end(),
+                          [](const MeshVertex& v) { return v.kind == VertexKind::kBoundary; }),
+            mesh->stats.boundary);
   EXPECT_EQ(mesh->stats.anchors, 8);
   EXPECT_EQ(mesh->stats.kept_lattice, 92);
   EXPECT_GT(mesh->stats.hard, 0);  // the bone rod
