@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <string>
 
+#include "server/volume/volume.h"
+
 namespace vpm::service {
 
 struct ServerOptions {
@@ -22,7 +24,8 @@ struct ServerOptions {
 
   // Limits.
   int64_t max_volumes = 16;
-  int64_t max_volume_bytes = int64_t{8} << 30;   // host + GPU bytes of every volume held
+  int64_t max_volume_bytes = kDefaultMaxVolumeBytes;  // one volume's values (host; again on the GPU)
+  int64_t max_total_volume_bytes = int64_t{8} << 30;  // host + GPU bytes of every volume held
   int64_t max_upload_bytes = int64_t{1} << 30;   // one uploaded file
   int64_t max_meshes = 64;
   int64_t max_sessions = 32;

@@ -5,6 +5,7 @@
 #include <atomic>
 
 #include "server/raycast/volume_renderer.h"
+#include "server/service/load_progress_registry.h"
 #include "server/service/mesh_store.h"
 #include "server/service/server_options.h"
 #include "server/service/service_metrics.h"
@@ -28,6 +29,7 @@ struct ServiceContext {
   WorkerPool* render_pool = nullptr;   // events and frames
   WorkerPool* request_pool = nullptr;  // unary work
   StreamRegistry* streams = nullptr;
+  LoadProgressRegistry* load_progress = nullptr;  // GetLoadProgress
   std::atomic<bool> draining{false};
 };
 

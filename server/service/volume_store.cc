@@ -35,7 +35,8 @@ std::shared_ptr<VolumeEntry> VolumeStore::FindLoadedLocked(const std::string& lo
   return nullptr;
 }
 
-Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source) {
+Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
+                                                       const ProgressFn& progress) {
   if (source.starts_with("raw:")) {
     return absl::InvalidArgumentError(
         "source: raw: sources are not served; upload the file instead");
@@ -52,9 +53,10 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source) 
     if (auto loaded = FindLoadedLocked(key)) return loaded;
   }
   RETURN_IF_ERROR(CheckRoom(0));
-  ASSIGN_OR_RETURN(Volume volume, ReadVolume(read_from, options_.read_limits));
+  ASSIGN_OR_RETURN(Volume volume, ReadVolume(read_from, options_.read_limits,
+                                             SubProgress(progress, 0.0, 0.85)));
   volume.set_source(std::string(source));
-  return Add(std::move(volume), std::move(key));
+  return Add(std::move(volume), std::move(key), SubProgress(progress, 0.85, 1.0));
 }
 
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::AddFile(const std::filesystem::path& path,
@@ -65,10 +67,12 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::AddFile(const std::filesystem:
   return Add(std::move(volume), "");
 }
 
-Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string load_key) {
-  const int64_t bytes = volume.geometry().voxel_count() * int64_t{sizeof(float)} * 2;
+Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string load_key,
+                                                      const ProgressFn& upload_progress) {
+  // Host values + the GPU's texel buffer, both as the volume holds them.
+  const int64_t bytes = volume.value_bytes() * 2;
   RETURN_IF_ERROR(CheckRoom(bytes));
-  ASSIGN_OR_RETURN(GpuVolume gpu, GpuVolume::Upload(*options_.context, volume));
+  ASSIGN_OR_RETURN(GpuVolume gpu, GpuVolume::Upload(*options_.context, volume, upload_progress));
   std::lock_guard lock(mutex_);
   // A load of the same source that landed while this one read wins.
   if (auto loaded = FindLoadedLocked(load_key)) return loaded;

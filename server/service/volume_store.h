@@ -61,7 +61,9 @@ class VolumeStore {
   // read the file again. Errors: those of ResolveDataPath and ReadVolume;
   // InvalidArgument for raw: sources; ResourceExhausted past max_volumes or
   // max_bytes.
-  Result<std::shared_ptr<VolumeEntry>> Load(std::string_view source);
+  // `progress` hears the read (0..0.85) and the upload (0.85..1).
+  Result<std::shared_ptr<VolumeEntry>> Load(std::string_view source,
+                                            const ProgressFn& progress = {});
   // A volume read from `path` (an upload's temporary file); `source` is what
   // GetVolume reports.
   Result<std::shared_ptr<VolumeEntry>> AddFile(const std::filesystem::path& path,
@@ -76,7 +78,8 @@ class VolumeStore {
 
  private:
   explicit VolumeStore(Options options) : options_(std::move(options)) {}
-  Result<std::shared_ptr<VolumeEntry>> Add(Volume volume, std::string load_key);
+  Result<std::shared_ptr<VolumeEntry>> Add(Volume volume, std::string load_key,
+                                           const ProgressFn& upload_progress = {});
   std::shared_ptr<VolumeEntry> FindLoadedLocked(const std::string& load_key) const;
   void NotifyLocked() const;
 

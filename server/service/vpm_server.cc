@@ -66,7 +66,8 @@ Status VpmServer::Start() {
   volume_options.context = gpu_;
   volume_options.data_root = o.data_root;
   volume_options.max_volumes = o.max_volumes;
-  volume_options.max_bytes = o.max_volume_bytes;
+  volume_options.max_bytes = o.max_total_volume_bytes;
+  volume_options.read_limits.max_volume_bytes = o.max_volume_bytes;
   volume_options.on_change = [m = metrics_.get()](int64_t bytes, int64_t count) {
     m->Volumes(bytes, count);
   };
@@ -83,6 +84,7 @@ Status VpmServer::Start() {
   session_options.on_change = [m = metrics_.get()](int64_t open) { m->Sessions(open); };
   ASSIGN_OR_RETURN(sessions_, SessionManager::Create(session_options));
   streams_ = std::make_unique<StreamRegistry>(o.max_streams_per_client);
+  load_progress_ = std::make_unique<LoadProgressRegistry>();
 
   context_.options = o;
   context_.gpu = gpu_;
@@ -95,6 +97,7 @@ Status VpmServer::Start() {
   context_.render_pool = render_pool_.get();
   context_.request_pool = request_pool_.get();
   context_.streams = streams_.get();
+  context_.load_progress = load_progress_.get();
   service_ = std::make_unique<VpmService>(&context_);
 
   grpc::EnableDefaultHealthCheckService(true);
