@@ -65,6 +65,15 @@ bool IsIntegerType(VoxelType type) {
   return type != VoxelType::kFloat32 && type != VoxelType::kFloat64;
 }
 
+// The int16 offset for values in `r`, if they are int16 material.
+std::optional<int32_t> ExactOffset(const IntegerRange& r) {
+  if (!r.integers || !(std::abs(r.lo) <= double(kMaxExactInt16Value)) ||
+      !(std::abs(r.hi) <= double(kMaxExactInt16Value))) {
+    return std::nullopt;
+  }
+  return Int16OffsetFor(static_cast<int64_t>(r.lo), static_cast<int64_t>(r.hi));
+}
+
 std::string WhyFloat(const IntegerRange& r) {
   if (!r.integers) return "stored as float32: the rescaled values are not integers";
   return StrCat("stored as float32: values ", r.lo, " to ", r.hi,
@@ -97,11 +106,7 @@ Result<VoxelValues> ConvertVoxels(std::span<const uint8_t> bytes, VoxelType type
     WithIntegerType(type, [&](auto tag) {
       range = ScanRange<decltype(tag)>(bytes.data(), endian, count, slope, intercept);
     });
-    const std::optional<int32_t> offset =
-        range.integers && std::abs(range.lo) <= double(kMaxExactInt16Value) &&
-                std::abs(range.hi) <= double(kMaxExactInt16Value)
-            ? Int16OffsetFor(static_cast<int64_t>(range.lo), static_cast<int64_t>(range.hi))
-            : std::nullopt;
+    const std::optional<int32_t> offset = ExactOffset(range);
     if (offset) {
       RETURN_IF_ERROR(ValidateGeometry(geometry, limits, VoxelEncoding::kInt16));
       std::vector<int16_t> stored(static_cast<size_t>(count));
@@ -132,24 +137,21 @@ Result<Volume> VolumeFromStoredVoxels(std::span<const uint8_t> bytes, VoxelType 
   return volume;
 }
 
+std::optional<int32_t> IntegerRangeOfFloats::Offset() const {
+  return ExactOffset(IntegerRange{integers_, lo_, hi_});
+}
+
+std::string IntegerRangeOfFloats::WhyFloat() const {
+  return vpm::WhyFloat(IntegerRange{integers_, lo_, hi_});
+}
+
 Result<VoxelValues> FloatsToVoxels(std::vector<float> values, const VolumeGeometry& geometry,
                                    const VolumeLimits& limits, std::string* float_note) {
-  IntegerRange range;
-  for (float v : values) {
-    range.lo = std::min<double>(range.lo, v);
-    range.hi = std::max<double>(range.hi, v);
-    if (v != std::floor(v)) {  // NaN and infinities fail here too
-      range.integers = false;
-      break;
-    }
-  }
-  const std::optional<int32_t> offset =
-      range.integers && !values.empty() && std::abs(range.lo) <= double(kMaxExactInt16Value) &&
-              std::abs(range.hi) <= double(kMaxExactInt16Value)
-          ? Int16OffsetFor(static_cast<int64_t>(range.lo), static_cast<int64_t>(range.hi))
-          : std::nullopt;
+  IntegerRangeOfFloats range;
+  for (float v : values) range.Add(v);
+  const std::optional<int32_t> offset = range.Offset();
   if (!offset) {
-    if (float_note != nullptr) *float_note = WhyFloat(range);
+    if (float_note != nullptr) *float_note = range.WhyFloat();
     RETURN_IF_ERROR(ValidateGeometry(geometry, limits, VoxelEncoding::kFloat32));
     return VoxelValues::Float(std::move(values));
   }

@@ -2,7 +2,10 @@
 // or float, server/volume/voxel_values.h).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 
@@ -34,6 +37,24 @@ Result<Volume> VolumeFromStoredVoxels(std::span<const uint8_t> bytes, VoxelType 
                                       Endian endian, const VolumeGeometry& geometry,
                                       const VolumeLimits& limits, std::string_view name,
                                       double slope = 1.0, double intercept = 0.0);
+
+// Whether float values seen one by one (Add) are int16 material: all
+// integers within 65,536 consecutive integers and +-2^24 (Offset), and if
+// not, why (WhyFloat, for the notes).
+class IntegerRangeOfFloats {
+ public:
+  void Add(float v) {
+    lo_ = std::min<double>(lo_, v);
+    hi_ = std::max<double>(hi_, v);
+    integers_ = integers_ && v == std::floor(v);  // NaN and infinities fail here
+  }
+  std::optional<int32_t> Offset() const;
+  std::string WhyFloat() const;
+
+ private:
+  bool integers_ = true;
+  double lo_ = INFINITY, hi_ = -INFINITY;
+};
 
 // Float values (a decoded DICOM stack) as int16 + offset when every one is
 // an integer within 65,536 consecutive integers and +-2^24, else as they

@@ -58,8 +58,8 @@ Result<std::vector<NamedSlice>> DecodeSeries(const std::filesystem::path& folder
       if (voxels * 2 > limits.max_volume_bytes) {
         return absl::ResourceExhaustedError(
             StrCat(folder.string(), ": the slices hold over ", voxels, " voxels (", voxels * 2,
-                   " bytes as int16), over the volume budget of ", limits.max_volume_bytes,
-                   " bytes (--max-volume-bytes)"));
+                   " bytes as int16), over the cap of ", limits.max_volume_bytes,
+                   " bytes on one volume (--max-volume-bytes)"));
       }
       const std::string name = path.filename().string();
       slices.push_back({frames->size() == 1 ? name : StrCat(name, " frame ", f + 1),
@@ -200,20 +200,11 @@ Result<Volume> StackAsStored(std::vector<NamedSlice>& slices, const glm::dmat3& 
   // int16 when every slice holds integers that fit with one offset (CT in
   // HU after the rescale): the stack is built slice by slice, each slice's
   // floats freed as it goes in.
-  double lo = INFINITY, hi = -INFINITY;
-  bool integers = true;
+  IntegerRangeOfFloats range;
   for (const NamedSlice& s : slices) {
-    for (float v : s.slice.values) {
-      lo = std::min<double>(lo, v);
-      hi = std::max<double>(hi, v);
-      integers = integers && v == std::floor(v);
-    }
+    for (float v : s.slice.values) range.Add(v);
   }
-  const std::optional<int32_t> offset =
-      integers && std::abs(lo) <= double(kMaxExactInt16Value) &&
-              std::abs(hi) <= double(kMaxExactInt16Value)
-          ? Int16OffsetFor(static_cast<int64_t>(lo), static_cast<int64_t>(hi))
-          : std::nullopt;
+  const std::optional<int32_t> offset = range.Offset();
   if (!offset) {
     std::vector<float> values;
     values.reserve(static_cast<size_t>(g.voxel_count()));

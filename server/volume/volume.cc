@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 namespace vpm {
@@ -9,8 +10,10 @@ namespace vpm {
 std::string DescribeVolumeSize(const VolumeGeometry& g, VoxelEncoding encoding) {
   const double mib = double(g.dims[0]) * double(g.dims[1]) * double(g.dims[2]) *
                      double(VoxelEncodingBytes(encoding)) / (1 << 20);
+  char size[32];
+  std::snprintf(size, sizeof(size), "%.1f", mib);
   return StrCat(g.dims[0], "x", g.dims[1], "x", g.dims[2], " ", VoxelEncodingName(encoding),
-                " voxels (", std::round(mib * 10.0) / 10.0, " MiB)");
+                " voxels (", size, " MiB)");
 }
 
 Status ValidateGeometry(const VolumeGeometry& g, const VolumeLimits& limits,
@@ -25,8 +28,8 @@ Status ValidateGeometry(const VolumeGeometry& g, const VolumeLimits& limits,
     }
     if (g.dims[a] > max_voxels) {
       return absl::ResourceExhaustedError(
-          StrCat("dimension ", kAxis[a], " is ", g.dims[a], " voxels: over the volume budget of ",
-                 limits.max_volume_bytes, " bytes (--max-volume-bytes)"));
+          StrCat("dimension ", kAxis[a], " is ", g.dims[a], " voxels: over the cap of ",
+                 limits.max_volume_bytes, " bytes on one volume (--max-volume-bytes)"));
     }
     const double s = g.spacing_mm[a];
     if (!std::isfinite(s) || s <= 0.0) {
@@ -44,8 +47,8 @@ Status ValidateGeometry(const VolumeGeometry& g, const VolumeLimits& limits,
     return absl::ResourceExhaustedError(StrCat(
         "volume of ", DescribeVolumeSize(g, encoding), " needs ",
         fits_int64 ? StrCat(g.voxel_count() * bytes_per_voxel) : std::string("over 2^62"),
-        " bytes, over the volume budget of ", limits.max_volume_bytes,
-        " bytes (--max-volume-bytes)"));
+        " bytes, over the cap of ", limits.max_volume_bytes,
+        " bytes on one volume (--max-volume-bytes)"));
   }
   // Direction: columns must be unit length and mutually orthogonal (1e-3
   // tolerance absorbs the rounding of headers that store 6 decimals).

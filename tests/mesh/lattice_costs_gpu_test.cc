@@ -117,7 +117,9 @@ TEST_F(GpuTest, GpuVolume_ReadsVolumesPastOneVoxelPerTexelLimit) {
   const Volume v = *Volume::Create(g, *VoxelValues::Int16(std::move(stored), 0), limits);
   // Past the limit wherever it is 2^27 (lavapipe, NVIDIA); a device with a
   // larger one still reads the whole volume correctly below.
-  if (limit <= (uint64_t{1} << 27)) ASSERT_GT(uint64_t(v.geometry().voxel_count()), limit);
+  if (limit <= (uint64_t{1} << 27)) {
+    ASSERT_GT(uint64_t(v.geometry().voxel_count()), limit);
+  }
   auto gpu_volume = GpuVolume::Upload(context(), v);
   ASSERT_TRUE(gpu_volume.ok()) << gpu_volume.status();
   auto op = LatticeCostsGpu::Create(context());
@@ -128,13 +130,16 @@ TEST_F(GpuTest, GpuVolume_ReadsVolumesPastOneVoxelPerTexelLimit) {
   auto gpu = op->Evaluate(*gpu_volume, *lattice, tf);
   ASSERT_TRUE(gpu.ok()) << gpu.status();
   const LatticeCosts cpu = EvaluateLatticeCostsCpu(v, *lattice, tf);
-  double top_ci = 0.0;
+  // Only the last slab (voxels past 2^27) holds edges, 1060 HU along y and
+  // along z: the largest gradient, 530 * sqrt(2) HU/mm where they meet,
+  // comes from there alone.
+  double g_max = 0.0;
   for (int64_t id = 0; id < lattice->size(); ++id) {
-    ASSERT_NEAR(gpu->ci(Footprint::kPoint)[id], cpu.ci(Footprint::kPoint)[id], 1e-5) << id;
     ASSERT_NEAR(gpu->ci(Footprint::kCell)[id], cpu.ci(Footprint::kCell)[id], 1e-5) << id;
-    top_ci = std::max(top_ci, double(gpu->ci(Footprint::kPoint)[id]));
+    ASSERT_NEAR(gpu->g(Footprint::kCell)[id], cpu.g(Footprint::kCell)[id], 1e-3) << id;
+    g_max = std::max(g_max, double(gpu->g(Footprint::kCell)[id]));
   }
-  EXPECT_GT(top_ci, 0.5);  // the last slab's soft tissue is seen
+  EXPECT_NEAR(g_max, 530.0 * std::sqrt(2.0), 1.0);
 }
 
 }  // namespace
