@@ -46,7 +46,7 @@ layout(binding = 0) uniform sampler3D u_volume;
 layout(binding = 1) uniform sampler3D u_map;
 #include "voxel_encoding.glsl"
 #else
-layout(binding = 0) uniform isamplerBuffer u_volume;  // 4 voxels per texel
+layout(binding = 0) uniform isamplerBuffer u_volume;  // R32_SINT, volume_access.glsl
 layout(binding = 1) uniform samplerBuffer u_map;  // RGBA32F, grid points x fastest
 #include "volume_access.glsl"
 #endif

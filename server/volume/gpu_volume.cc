@@ -9,32 +9,29 @@ namespace {
 // host-visible memory needs a staging buffer of one slab, not of the volume.
 constexpr int64_t kUploadSlabBytes = int64_t{64} << 20;
 
-vk::Format TexelFormat(VoxelEncoding encoding) {
-  return encoding == VoxelEncoding::kInt16 ? vk::Format::eR16G16B16A16Sint
-                                           : vk::Format::eR32G32B32A32Sint;
-}
 
 }  // namespace
 
 Result<GpuVolume> GpuVolume::Upload(const gpu::GpuContext& context, const Volume& volume,
                                     const ProgressFn& progress) {
   const uint64_t voxels = static_cast<uint64_t>(volume.geometry().voxel_count());
-  const uint64_t texels = (voxels + kVoxelsPerTexel - 1) / kVoxelsPerTexel;
+  const uint64_t per_texel = VoxelsPerTexel(volume.encoding());
+  const uint64_t texels = (voxels + per_texel - 1) / per_texel;
   const uint64_t max_texels = context.limits().maxTexelBufferElements;
   if (texels > max_texels) {
     return absl::ResourceExhaustedError(
         StrCat("volume of ", DescribeVolumeSize(volume.geometry(), volume.encoding()), " needs ",
-               texels, " texels of ", kVoxelsPerTexel,
-               " voxels, over this device's texel-buffer limit of ", max_texels, " (",
-               max_texels * kVoxelsPerTexel, " voxels)"));
+               texels, " texels of ", per_texel,
+               " voxel(s), over this device's texel-buffer limit of ", max_texels, " (",
+               max_texels * per_texel, " ", VoxelEncodingName(volume.encoding()), " voxels)"));
   }
-  const vk::Format format = TexelFormat(volume.encoding());
+  const vk::Format format = vk::Format::eR32Sint;
   const auto features = context.physical_device().getFormatProperties(format).bufferFeatures;
   if (!(features & vk::FormatFeatureFlagBits::eUniformTexelBuffer)) {
     return absl::FailedPreconditionError(StrCat("this device cannot read ", vk::to_string(format),
                                                 " texel buffers (a Vulkan mandatory format)"));
   }
-  const uint64_t texel_bytes = kVoxelsPerTexel * uint64_t(volume.voxels().bytes_per_voxel());
+  constexpr uint64_t texel_bytes = 4;
   ASSIGN_OR_RETURN(gpu::GpuBuffer buffer,
                    gpu::GpuBuffer::Create(context, texels * texel_bytes,
                                           vk::BufferUsageFlagBits::eUniformTexelBuffer));
@@ -44,7 +41,7 @@ Result<GpuVolume> GpuVolume::Upload(const gpu::GpuContext& context, const Volume
     RETURN_IF_ERROR(buffer.Upload(bytes.subspan(offset, n), offset));
     if (progress) progress(double(offset + n) / double(bytes.size()), "uploading");
   }
-  // The last texel's unused channels (voxels past the end) are never read.
+  // An odd int16 count leaves the last texel's high half unset: never read.
   vk::raii::BufferView view{nullptr};
   RETURN_IF_ERROR(gpu::CatchVulkan("creating the volume's texel view", [&] {
     view = vk::raii::BufferView(context.device(),

@@ -1,13 +1,15 @@
 // A volume resident on the GPU, plus its geometry. Its values stay as the
-// host holds them (server/volume/voxel_values.h: int16 + offset, or float),
-// 4 voxels per texel of a uniform texel buffer, x fastest: RGBA16_SINT for
-// int16 volumes (2 bytes per voxel), RGBA32_SINT holding the float bits for
-// float volumes. Kernels read it as `uniform isamplerBuffer` through
-// shaders/volume_access.glsl, specialized for the encoding (Specialize):
-// a uniform texel buffer reads about twice as fast as a 3D image or a
-// storage buffer on lavapipe (docs/LAVAPIPE.md), and 4 voxels per texel
-// keep a 512 x 512 x 1,024 CT under the limit of 2^27 texels that lavapipe
-// and NVIDIA's drivers set (maxTexelBufferElements; checked at upload).
+// host holds them (server/volume/voxel_values.h: int16 + offset, or float)
+// in a uniform texel buffer of R32_SINT texels, x fastest: 2 int16 voxels
+// per texel (2 bytes per voxel), or one float's bits. Kernels read it as
+// `uniform isamplerBuffer` through shaders/volume_access.glsl, specialized
+// for the encoding (Specialize): a uniform texel buffer reads about twice as
+// fast as a 3D image or a storage buffer on lavapipe (docs/LAVAPIPE.md), and
+// 2 int16 voxels per texel keep a 512 x 512 x 1,024 CT (2^28 voxels) within
+// the limit of 2^27 texels that lavapipe and NVIDIA's drivers set
+// (maxTexelBufferElements; checked at upload). The default budget of
+// 512 MiB (volume.h) fits that limit in both encodings: 2^28 int16 or 2^27
+// float voxels.
 // The 3D image with its trilinear sampler is made on first request, for the
 // kernels that want hardware filtering (R16_UNORM of stored + 32768 for
 // int16, R32F for float; shaders/voxel_encoding.glsl decodes both).
@@ -26,8 +28,10 @@ namespace vpm {
 
 class GpuVolume {
  public:
-  // Voxels per texel of the texel buffer.
-  static constexpr int64_t kVoxelsPerTexel = 4;
+  // Voxels per R32_SINT texel of the texel buffer: 2 for int16, 1 for float.
+  static int64_t VoxelsPerTexel(VoxelEncoding encoding) {
+    return encoding == VoxelEncoding::kInt16 ? 2 : 1;
+  }
 
   // ResourceExhausted when the volume needs more texels than the device's
   // maxTexelBufferElements; FailedPrecondition when the device lacks the

@@ -442,8 +442,8 @@ TEST_F(RaycastTest, Sampler3DVariant_MatchesCpuReference) {
 }
 
 // The sphere-rod volume rounded to integers, held as int16 (offset 0 and
-// 30000) and as float: the GPU reads RGBA16_SINT or RGBA32_SINT texels and
-// decodes both to the same floats, so every frame is bit for bit the same;
+// 30000) and as float: the GPU reads R32_SINT texels of 2 int16 voxels or
+// of one float's bits and decodes both to the same floats, so every frame is bit for bit the same;
 // the int16 frames match the CPU reference within the tolerances above, the
 // sampler3D's R16_UNORM image within its own.
 TEST_F(RaycastTest, Int16Volume_SameFramesAsFloatAndCpu) {

@@ -1,6 +1,6 @@
 // Volumes held as int16 + offset (server/volume/voxel_values.h): the values
 // read back exactly, the byte budget, and the GPU kernels (gradient, TF)
-// reading RGBA16_SINT texels give the very floats they give for a float
+// reading R32_SINT texels of 2 int16 voxels give the very floats they give for a float
 // volume of the same values, and match the CPU reference as before.
 #include <cmath>
 #include <cstdint>
@@ -89,18 +89,19 @@ TEST(Int16Volume, CpuGradientEqualsFloatVolumes) {
   EXPECT_EQ(GradientMagnitude(t.int16, 2), GradientMagnitude(t.floats, 2));
 }
 
-// The GPU reads RGBA16_SINT texels (4 voxels each) for int16 and RGBA32_SINT
-// for float: both decode to the same floats, so the outputs are bit-equal,
+// The GPU reads R32_SINT texels of 2 int16 voxels, or of one float's bits:
+// both decode to the same floats, so the outputs are bit-equal,
 // and within the float tolerance (1e-5 of the largest) of the CPU reference.
 TEST_F(GpuTest, GradientMagnitudeGpu_Int16EqualsFloatAndCpu) {
   for (int32_t offset : {0, 40000}) {
-    const TwinVolumes t = MakeTwins({37, 29, 23}, offset);  // 24679 voxels: not a multiple of 4
+    const TwinVolumes t = MakeTwins({37, 29, 23}, offset);  // 24679 voxels: odd
     auto op = GradientMagnitudeGpu::Create(context());
     ASSERT_TRUE(op.ok()) << op.status();
     auto gpu16 = GpuVolume::Upload(context(), t.int16);
     auto gpu32 = GpuVolume::Upload(context(), t.floats);
     ASSERT_TRUE(gpu16.ok() && gpu32.ok());
-    EXPECT_EQ(gpu16->buffer_bytes(), (24679 + 3) / 4 * 8);
+    EXPECT_EQ(gpu16->buffer_bytes(), (24679 + 1) / 2 * 4);
+    EXPECT_EQ(gpu32->buffer_bytes(), 24679 * 4);
     auto a = op->Run(*gpu16);
     auto b = op->Run(*gpu32);
     ASSERT_TRUE(a.ok() && b.ok()) << a.status() << b.status();
