@@ -16,6 +16,7 @@
 #include "server/scene/deformable_scene.h"
 #include "server/raycast/frame_encoder.h"
 #include "server/io/read_volume.h"
+#include "server/phantom/phantom_abdomen.h"
 
 using namespace vpm;
 
@@ -138,8 +139,14 @@ int main(int argc, char** argv) {
   auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
   auto gpu_volume = bench::Check(GpuVolume::Upload(*context, volume), "upload");
   auto renderer = bench::Check(VolumeRenderer::Create(*context, {}), "renderer");
+  // A file made from the phantom (bench/make_ct_nifti.cc) carries no
+  // landmarks: the phantom's own, placed in this volume's world geometry.
+  std::vector<Landmark> landmarks = volume.landmarks();
+  if (landmarks.empty()) {
+    landmarks = phantom::AbdomenLandmarks(phantom::MakeAbdomenAnatomy(), volume.geometry());
+  }
   glm::dvec3 grab(0.0);
-  for (const Landmark& l : volume.landmarks()) {
+  for (const Landmark& l : landmarks) {
     if (l.name == "left_renal_artery") grab = l.position_mm;
   }
   std::printf("drag loop: %s, grab left_renal_artery, drag 12 mm in 10 steps, device '%s'\n",

@@ -169,6 +169,11 @@ int main(int argc, char** argv) {
     return 1;
   }
   auto volume = bench::Check(ReadVolume(source, {}), "reading the volume");
+  if (volume.voxels().floats().empty()) {
+    std::fprintf(stderr, "sample_rate_bench: %s is held as int16; give a float source "
+                         "(the phantom)\n", source.c_str());
+    return 2;
+  }
   const Rays rays = MakeRays(volume, size);
   const int dims[3] = {int(volume.dims()[0]), int(volume.dims()[1]), int(volume.dims()[2])};
   const glm::vec3 inv_spacing = 1.0f / glm::vec3(volume.geometry().spacing_mm);
@@ -189,7 +194,7 @@ int main(int argc, char** argv) {
           int pixel[8];
           for (int l = 0; l < 8; ++l) pixel[l] = (by * 2 + l / 4) * size + bx * 4 + l % 4;
           float out[8];
-          taken += MipBlock(volume.values().data(), dims, inv_spacing, rays, pixel, step, out);
+          taken += MipBlock(volume.voxels().floats().data(), dims, inv_spacing, rays, pixel, step, out);
           for (int l = 0; l < 8; ++l) image[pixel[l]] = out[l];
         }
       }
@@ -220,7 +225,7 @@ int main(int argc, char** argv) {
 
   std::printf("machine limits, %s %lldx%lldx%lld (float32, %.0f MiB), %d threads\n",
               source.c_str(), (long long)dims[0], (long long)dims[1], (long long)dims[2],
-              double(volume.values().size() * 4) / double(1 << 20), threads);
+              double(volume.voxels().floats().size() * 4) / double(1 << 20), threads);
   std::printf("| measure | wall | CPU time / %d |\n|---|---|---|\n", threads);
   std::printf("| MIP %dx%d, 1 mm, no skipping, AVX2 gathers: ms | %.1f | %.1f |\n", size, size,
               mip_ms, mip_cpu_ms);

@@ -165,13 +165,13 @@ ErrorRow CompareToExact(const Volume& coarse, const Volume& exact,
     for (int64_t j = 0; j < g.dims[1]; ++j) {
       for (int64_t i = 0; i < g.dims[0]; ++i) {
         const int64_t n = exact.LinearIndex(i, j, k);
-        const double e = double(coarse.values()[n]) - exact.values()[n];
+        const double e = double(coarse.voxels().floats()[n]) - exact.voxels().floats()[n];
         const glm::dvec3 d_exact(exact_map.values[n]);
         const glm::dvec3 d_coarse(coarse_map.Sample(g.IndexToPhysical(glm::dvec3(i, j, k))));
         const double mm = glm::length(d_coarse - d_exact);
         a.max_hu = std::max(a.max_hu, std::abs(e));
         a.max_mm = std::max(a.max_mm, mm);
-        if (exact.values()[n] > -500.0f) a.body2 += e * e, ++a.body;
+        if (exact.voxels().floats()[n] > -500.0f) a.body2 += e * e, ++a.body;
         if (glm::length(d_exact) > 0.01) {
           a.moved2 += e * e, a.mm2 += mm * mm;
           a.moved_mm.push_back(float(mm));
@@ -212,7 +212,7 @@ std::pair<int64_t, int64_t> CountOver1Hu(const Volume& a, const Volume& b) {
     for (int64_t j = 0; j < d[1]; ++j)
       for (int64_t i = 0; i < d[0]; ++i) {
         const int64_t n = a.LinearIndex(i, j, k);
-        if (std::abs(a.values()[n] - b.values()[n]) <= 1.0f) continue;
+        if (std::abs(a.voxels().floats()[n] - b.voxels().floats()[n]) <= 1.0f) continue;
         ++over;
         if (i == 0 || j == 0 || k == 0 || i == d[0] - 1 || j == d[1] - 1 || k == d[2] - 1) {
           ++on_face;
@@ -239,7 +239,7 @@ int main(int argc, char** argv) {
 
   auto gpu_volume = bench::Check(GpuVolume::Upload(*context, s.volume), "upload");
   const gpu::GpuImage3D* image = bench::Check(gpu_volume.Image(*context, s.volume), "image");
-  auto out = bench::Check(gpu::GpuBuffer::Create(*context, s.volume.values().size() * 4,
+  auto out = bench::Check(gpu::GpuBuffer::Create(*context, s.volume.voxels().floats().size() * 4,
                                                  vk::BufferUsageFlagBits::eStorageBuffer),
                           "out");
   auto by_texel = bench::Check(VolumeWarper::Create(*context), "warper");
@@ -280,8 +280,8 @@ int main(int argc, char** argv) {
   });
   std::printf("%-52s %10.2f\n", "CPU exact warp (2 threads)", cpu_exact_ms);
   std::printf("GPU vs CPU max |J| difference: coarse %.4f HU, exact %.4f HU\n",
-              MaxAbsDiff(warped_coarse.values(), cpu_warp->values()),
-              MaxAbsDiff(warped_exact.values(), cpu_exact->values()));
+              MaxAbsDiff(warped_coarse.voxels().floats(), cpu_warp->voxels().floats()),
+              MaxAbsDiff(warped_exact.voxels().floats(), cpu_exact->voxels().floats()));
   for (const auto& [name, gpu, cpu] :
        {std::tuple{"coarse", &warped_coarse, &*cpu_warp}, {"exact", &warped_exact, &*cpu_exact}}) {
     const auto [over, on_face] = CountOver1Hu(*gpu, *cpu);

@@ -8,9 +8,11 @@
 #include "shader_interface.glsl"
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
-layout(binding = 0) uniform samplerBuffer u_volume;
+layout(binding = 0) uniform isamplerBuffer u_volume;
 layout(std430, binding = 1) writeonly buffer MinMax { vec2 minmax[]; };
 layout(push_constant) uniform Push { BrickMinMaxPush pc; };
+
+#include "volume_access.glsl"
 
 void main() {
   ivec3 nb = pc.bricks.xyz;
@@ -25,7 +27,7 @@ void main() {
     for (int y = lo.y; y <= hi.y; ++y) {
       int row = n.x * (y + n.y * z);
       for (int x = lo.x; x <= hi.x; ++x) {
-        float v = texelFetch(u_volume, row + x).r;
+        float v = voxel_linear(row + x);
         vmin = min(vmin, v);
         vmax = max(vmax, v);
       }

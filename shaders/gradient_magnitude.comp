@@ -5,7 +5,7 @@
 #include "shader_interface.glsl"
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
-layout(binding = 0) uniform samplerBuffer u_volume;
+layout(binding = 0) uniform isamplerBuffer u_volume;
 layout(std430, binding = 1) writeonly buffer Out { float gradient[]; };
 layout(push_constant) uniform Push { GradientPush pc; };
 

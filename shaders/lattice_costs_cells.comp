@@ -8,7 +8,7 @@
 #include "shader_interface.glsl"
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
-layout(binding = 0) uniform samplerBuffer u_volume;
+layout(binding = 0) uniform isamplerBuffer u_volume;
 layout(std140, binding = 1) uniform TransferFunctionBlock {
   vec4 points[VPM_MAX_TF_POINTS];
   ivec4 count;

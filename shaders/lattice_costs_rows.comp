@@ -13,7 +13,7 @@
 #include "shader_interface.glsl"
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
-layout(binding = 0) uniform samplerBuffer u_volume;
+layout(binding = 0) uniform isamplerBuffer u_volume;
 layout(std140, binding = 1) uniform TransferFunctionBlock {
   vec4 points[VPM_MAX_TF_POINTS];
   ivec4 count;
@@ -23,6 +23,7 @@ layout(push_constant) uniform Push { LatticeCostsPush pc; };
 
 #include "lattice_cells.glsl"
 #include "transfer_function.glsl"
+#include "volume_access.glsl"
 
 void main() {
   // Dispatches wider than the 65535-group limit fold into y.
@@ -47,15 +48,15 @@ void main() {
   int z_hi = dims.x * (y + dims.y * min(z + 1, dims.z - 1));
   vec3 inv2s = pc.inv_two_spacing.xyz;
 
-  float left = texelFetch(u_volume, here + max(rx.x - 1, 0)).r;
-  float value = texelFetch(u_volume, here + rx.x).r;
+  float left = voxel_linear(here + max(rx.x - 1, 0));
+  float value = voxel_linear(here + rx.x);
   float sum = 0.0;
   float max_g2 = 0.0;  // max of |grad|^2; the cell pass takes one sqrt
   for (int x = rx.x; x < rx.y; ++x) {
-    float right = texelFetch(u_volume, here + min(x + 1, dims.x - 1)).r;
+    float right = voxel_linear(here + min(x + 1, dims.x - 1));
     float gx_ = (right - left) * inv2s.x;
-    float gy = (texelFetch(u_volume, y_hi + x).r - texelFetch(u_volume, y_lo + x).r) * inv2s.y;
-    float gz = (texelFetch(u_volume, z_hi + x).r - texelFetch(u_volume, z_lo + x).r) * inv2s.z;
+    float gy = (voxel_linear(y_hi + x) - voxel_linear(y_lo + x)) * inv2s.y;
+    float gz = (voxel_linear(z_hi + x) - voxel_linear(z_lo + x)) * inv2s.z;
     sum += transfer_cost(value);
     max_g2 = max(max_g2, gx_ * gx_ + gy * gy + gz * gz);
     left = value;

@@ -44,9 +44,11 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #ifdef VPM_RAYCAST_SAMPLED
 layout(binding = 0) uniform sampler3D u_volume;
 layout(binding = 1) uniform sampler3D u_map;
+#include "voxel_encoding.glsl"
 #else
-layout(binding = 0) uniform samplerBuffer u_volume;
+layout(binding = 0) uniform isamplerBuffer u_volume;  // R32_SINT, volume_access.glsl
 layout(binding = 1) uniform samplerBuffer u_map;  // RGBA32F, grid points x fastest
+#include "volume_access.glsl"
 #endif
 // A storage buffer, not a uniform block: lavapipe 22.3 inlines uniform-block
 // values that steer branches into a freshly compiled shader at every
@@ -131,6 +133,17 @@ vec3 extent_mm() { return g_extent_mm; }
   T c011 = texelFetch(tex, base + sz + sy).SW;           \
   T c111 = texelFetch(tex, base + sz + sy + 1).SW
 
+// The same 8 voxel corners of the volume (volume_access.glsl's voxel_linear).
+#define VPM_FETCH_VOXEL_CELL()                           \
+  float c000 = voxel_linear(base);                       \
+  float c100 = voxel_linear(base + 1);                   \
+  float c010 = voxel_linear(base + sy);                  \
+  float c110 = voxel_linear(base + sy + 1);              \
+  float c001 = voxel_linear(base + sz);                  \
+  float c101 = voxel_linear(base + sz + 1);              \
+  float c011 = voxel_linear(base + sz + sy);             \
+  float c111 = voxel_linear(base + sz + sy + 1)
+
 // The same corners through a per-point fetch function (fetch(ivec3 index)).
 #define VPM_FETCH_CELL_AT(T, fetch, i0)                  \
   T c000 = fetch(i0);                                    \
@@ -158,7 +171,7 @@ vec3 extent_mm() { return g_extent_mm; }
 // I at continuous index u in [0, n - 1].
 float source_at(vec3 u) {
 #ifdef VPM_RAYCAST_SAMPLED
-  return textureLod(u_volume, (u + 0.5) / vec3(p.dims.xyz), 0.0).r;
+  return decode_image_voxel(textureLod(u_volume, (u + 0.5) / vec3(p.dims.xyz), 0.0).r);
 #else
   // Lerps in the order x, y, z, each a + (b - a) * f, as the CPU reference.
   ivec3 n = g_dims;
@@ -166,7 +179,7 @@ float source_at(vec3 u) {
   vec3 f = u - vec3(i0);
   int sy = n.x, sz = n.x * n.y;
   int base = i0.x + sy * i0.y + sz * i0.z;
-  VPM_FETCH_CELL(float, u_volume, r);
+  VPM_FETCH_VOXEL_CELL();
   VPM_TRILINEAR_XY(float, f);
   return c0 + (c1 - c0) * f.z;
 #endif
@@ -204,9 +217,9 @@ float deformed_value(vec3 x) {
 // Texels for the cell gradient: volume voxel i, map point g (displacement).
 float volume_texel(ivec3 i) {
 #ifdef VPM_RAYCAST_SAMPLED
-  return texelFetch(u_volume, i, 0).r;
+  return decode_image_voxel(texelFetch(u_volume, i, 0).r);
 #else
-  return texelFetch(u_volume, i.x + g_dims.x * (i.y + g_dims.y * i.z)).r;
+  return voxel_linear(i.x + g_dims.x * (i.y + g_dims.y * i.z));
 #endif
 }
 

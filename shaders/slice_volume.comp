@@ -11,7 +11,7 @@
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 layout(binding = 0) uniform sampler3D u_map;
-layout(binding = 1) uniform samplerBuffer u_volume;
+layout(binding = 1) uniform isamplerBuffer u_volume;
 layout(std430, binding = 2) writeonly buffer Out { float values[]; };
 layout(push_constant) uniform Push { SliceVolumePush pc; };
 

@@ -2,14 +2,16 @@
 // trilinear interpolation, the arithmetic of SampleTrilinear
 // (server/volume/sample_trilinear.h): bit-exact at integer indices. Shared
 // by warp_volume_texel.comp and slice_volume.comp; the including shader
-// declares `uniform samplerBuffer u_volume` and push constants `pc` whose
-// `dims.xyz` are the volume's voxels.
+// declares `uniform isamplerBuffer u_volume` (volume_access.glsl) and push
+// constants `pc` whose `dims.xyz` are the volume's voxels.
 #ifndef VPM_SOURCE_TEXEL_TRILINEAR_GLSL
 #define VPM_SOURCE_TEXEL_TRILINEAR_GLSL
 
+#include "volume_access.glsl"
+
 float source_at(ivec3 p, ivec3 dims) {
   p = min(p, dims - 1);
-  return texelFetch(u_volume, p.x + dims.x * (p.y + dims.y * p.z)).r;
+  return voxel_at(p, dims);
 }
 
 // I at a continuous index, clamped to [0, n - 1] per axis (section 0).

@@ -11,8 +11,10 @@ layout(binding = 1) uniform sampler3D u_source;
 layout(std430, binding = 2) writeonly buffer Out { float warped[]; };
 layout(push_constant) uniform Push { WarpVolumePush pc; };
 
+#include "voxel_encoding.glsl"
+
 float sample_source(vec3 index) {
-  return textureLod(u_source, (index + 0.5) / vec3(pc.dims.xyz), 0.0).r;
+  return decode_image_voxel(textureLod(u_source, (index + 0.5) / vec3(pc.dims.xyz), 0.0).r);
 }
 
 #include "warp_volume.glsl"

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "client/cli/command_status.h"
+#include "client/cli/volume_flags.h"
 #include "client/cli/gpu_backend.h"
 #include "client/cli/mesh_flags.h"
 #include "server/measures/compare_meshes.h"
@@ -25,6 +26,7 @@ struct CompareArgs {
   std::vector<double> drag{StandardDrag{}.offset_mm.x, StandardDrag{}.offset_mm.y,
                            StandardDrag{}.offset_mm.z};
   double grab_radius_factor = StandardDrag{}.grab_radius_factor;
+  VolumeFlags volume_flags;
 };
 
 void PrintDeformation(const std::vector<DeformationMeasure>& rows, const StandardDrag& drag) {
@@ -89,7 +91,7 @@ Status WriteJson(const std::vector<MeshComparisonRow>& rows, const std::string& 
 }
 
 Status Run(const CompareArgs& args) {
-  ASSIGN_OR_RETURN(Volume volume, ReadVolume(args.source, VolumeLimits{}));
+  ASSIGN_OR_RETURN(Volume volume, ReadVolumeForCli(args.source, args.volume_flags));
   ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(args.mesh, volume));
   ASSIGN_OR_RETURN(auto gpu, GpuBackend::Open(args.backend, volume));
   ASSIGN_OR_RETURN(auto rows, CompareMeshes(volume, params, gpu ? gpu->mesh_gpu() : MeshGpu{}));
@@ -120,6 +122,7 @@ void AddCompareMeshesCommand(CLI::App& app, int* exit_code) {
       "compare-meshes", "Compare a regular lattice with the optimized meshes (same budget)");
   cmd->add_option("--volume", args->source, "a file, a DICOM folder or phantom:NAME")->required();
   AddMeshFlags(cmd, &args->mesh);
+  AddVolumeFlags(cmd, &args->volume_flags);
   cmd->add_option("--json", args->json_out, "also write the table as JSON");
   cmd->add_flag("!--no-deformation", args->deformation,
                 "skip the deformation measures (FEM on each mesh and on the dense reference)");

@@ -15,7 +15,8 @@ void AddBackendFlag(CLI::App* app, std::string* backend) {
 }
 
 Result<std::unique_ptr<GpuBackend>> GpuBackend::Open(const std::string& backend,
-                                                     const Volume& volume) {
+                                                     const Volume& volume,
+                                                     const ProgressFn& upload_progress) {
   if (backend == "cpu") return std::unique_ptr<GpuBackend>();
   auto b = std::make_unique<GpuBackend>();
   auto context = gpu::GpuContext::Create({});
@@ -27,7 +28,7 @@ Result<std::unique_ptr<GpuBackend>> GpuBackend::Open(const std::string& backend,
   }
   b->context_ = std::move(*context);
   const auto t0 = std::chrono::steady_clock::now();
-  ASSIGN_OR_RETURN(GpuVolume gpu_volume, GpuVolume::Upload(*b->context_, volume));
+  ASSIGN_OR_RETURN(GpuVolume gpu_volume, GpuVolume::Upload(*b->context_, volume, upload_progress));
   b->upload_ms_ =
       MsSince(t0);
   b->volume_.emplace(std::move(gpu_volume));

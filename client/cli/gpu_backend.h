@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "server/common/progress.h"
 #include "server/common/status.h"
 #include "server/gpu/gpu_context.h"
 #include "server/mesh/build_proxy_mesh.h"
@@ -20,7 +21,8 @@ namespace vpm::cli {
 class GpuBackend {
  public:
   // Null result (no backend) means "use the CPU".
-  static Result<std::unique_ptr<GpuBackend>> Open(const std::string& backend, const Volume& volume);
+  static Result<std::unique_ptr<GpuBackend>> Open(const std::string& backend, const Volume& volume,
+                                                  const ProgressFn& upload_progress = {});
 
   MeshGpu mesh_gpu() const { return {&*volume_, &*lattice_costs_}; }
   const gpu::GpuContext& context() const { return *context_; }

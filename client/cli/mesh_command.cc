@@ -6,7 +6,9 @@
 #include "client/cli/command_status.h"
 #include "client/cli/gpu_backend.h"
 #include "client/cli/mesh_flags.h"
+#include "client/cli/progress_bar.h"
 #include "client/cli/remote_pipeline.h"
+#include "client/cli/volume_flags.h"
 #include "server/mesh/mesh_json.h"
 #include "server/mesh/write_vtu.h"
 #include "server/io/read_volume.h"
@@ -18,6 +20,7 @@ struct MeshArgs {
   std::string source;
   MeshFlags mesh;
   std::string json_out, vtu_out, backend = "auto";
+  VolumeFlags volume_flags;
 };
 
 // `evaluated_on`: where step 1 ran ("GPU", "CPU reference", "server").
@@ -55,11 +58,21 @@ Result<ProxyMesh> BuildOnServer(const ServerFlags& server, const MeshArgs& args)
 }
 
 Result<ProxyMesh> BuildOffline(const MeshArgs& args) {
-  ASSIGN_OR_RETURN(Volume volume, ReadVolume(args.source, VolumeLimits{}));
+  // The bar: reading 0..0.5, upload 0.5..0.6, steps 1-2 0.6..0.9, the rest.
+  ProgressBar bar(StrCat("meshing ", args.source), ProgressWanted(args.volume_flags.progress));
+  const ProgressFn progress = bar.Reporter();
+  ASSIGN_OR_RETURN(Volume volume, ReadVolumeForCli(args.source, args.volume_flags,
+                                                   SubProgress(progress, 0.0, 0.5)));
   ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(args.mesh, volume));
-  ASSIGN_OR_RETURN(auto gpu, GpuBackend::Open(args.backend, volume));
-  ASSIGN_OR_RETURN(ProxyMesh mesh,
-                   BuildProxyMesh(volume, params, gpu ? gpu->mesh_gpu() : MeshGpu{}));
+  ASSIGN_OR_RETURN(auto gpu,
+                   GpuBackend::Open(args.backend, volume, SubProgress(progress, 0.5, 0.6)));
+  progress(0.6, "steps 1-2");
+  ASSIGN_OR_RETURN(DecimatedLattice base,
+                   DecimateLattice(volume, params, gpu ? gpu->mesh_gpu() : MeshGpu{}));
+  progress(0.9, "steps 3-4, tets");
+  ASSIGN_OR_RETURN(ProxyMesh mesh, FinishProxyMesh(volume, base, params));
+  progress(1.0, "done");
+  bar.Finish();
   PrintSummary(mesh, gpu.get(), gpu ? "GPU" : "CPU reference");
   return mesh;
 }
@@ -86,6 +99,7 @@ void AddMeshCommand(CLI::App& app, const ServerFlags* server, int* exit_code) {
   cmd->add_option("--volume", args->source,
                   "a file, a DICOM folder, phantom:NAME or raw:PATH?...")->required();
   AddMeshFlags(cmd, &args->mesh);
+  AddVolumeFlags(cmd, &args->volume_flags);
   cmd->add_option("--json", args->json_out, "write vertices, tets and stats as JSON");
   cmd->add_option("--vtu", args->vtu_out, "write a VTK unstructured grid (ParaView, Slicer)");
   AddBackendFlag(cmd, &args->backend);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "client/cli/progress_bar.h"
 #include "server/common/clock.h"
 #include "server/mesh/build_proxy_mesh.h"
 #include "server/mesh/lattice_costs_gpu.h"
@@ -96,13 +97,18 @@ Result<SceneView> MakeView(const RenderArgs& args, const Volume& volume) {
 Result<std::unique_ptr<OfflineScene>> PrepareOfflineScene(const RenderArgs& args) {
   auto out = std::make_unique<OfflineScene>();
   auto t0 = std::chrono::steady_clock::now();
-  ASSIGN_OR_RETURN(Volume volume, ReadVolume(args.source, VolumeLimits{}));
+  ProgressBar bar(StrCat("loading ", args.source), ProgressWanted(args.volume_flags.progress));
+  const ProgressFn progress = bar.Reporter();
+  ASSIGN_OR_RETURN(Volume volume, ReadVolumeForCli(args.source, args.volume_flags,
+                                                   SubProgress(progress, 0.0, 0.8)));
   out->volume.emplace(std::move(volume));
   ASSIGN_OR_RETURN(out->grab, GrabPoint(args, *out->volume));
   out->load_ms = MsSince(t0);
   ASSIGN_OR_RETURN(out->context, gpu::GpuContext::Create({}));
   t0 = std::chrono::steady_clock::now();
-  ASSIGN_OR_RETURN(GpuVolume gpu_volume, GpuVolume::Upload(*out->context, *out->volume));
+  ASSIGN_OR_RETURN(GpuVolume gpu_volume, GpuVolume::Upload(*out->context, *out->volume,
+                                                           SubProgress(progress, 0.8, 1.0)));
+  bar.Finish();
   out->gpu_volume.emplace(std::move(gpu_volume));
   out->upload_ms = MsSince(t0);
   t0 = std::chrono::steady_clock::now();

@@ -13,6 +13,7 @@
 
 #include "client/cli/clip_flags.h"
 #include "client/cli/mesh_flags.h"
+#include "client/cli/volume_flags.h"
 #include "server/common/status.h"
 #include "server/gpu/gpu_context.h"
 #include "server/mesh/proxy_mesh.h"
@@ -37,6 +38,7 @@ struct RenderArgs {
   bool overlay = false;
   int jpeg_quality = 90;
   ClipFlags clip;
+  VolumeFlags volume_flags;
 };
 
 // The grab and drag flags (--grab, --grab-landmark, --grab-radius, --drag,

@@ -1,5 +1,9 @@
 #include "client/cli/remote_pipeline.h"
 
+#include <chrono>
+#include <fstream>
+#include <future>
+
 #include "proto/enum_names.h"
 #include "proto/vec3_convert.h"
 
@@ -40,12 +44,40 @@ MeshStats StatsOf(const v2::MeshStats& s) {
 
 }  // namespace
 
+// 32 hex digits from /dev/urandom: a progress_id no other client picks.
+std::string RandomProgressId() {
+  std::ifstream in("/dev/urandom", std::ios::binary);
+  unsigned char bytes[16] = {};
+  in.read(reinterpret_cast<char*>(bytes), sizeof(bytes));
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string id;
+  for (unsigned char b : bytes) id += {kHex[b >> 4], kHex[b & 15]};
+  return id;
+}
+
 Result<v2::VolumeInfo> LoadVolumeOnServer(const ServerConnection& server,
-                                          const std::string& source) {
+                                          const std::string& source, const ProgressFn& progress) {
   v2::LoadVolumeRequest request;
   request.set_source(source);
-  v2::VolumeInfo info;
-  RETURN_IF_ERROR(FromGrpc(server.stub().LoadVolume(server.Context().get(), request, &info)));
+  if (progress) request.set_progress_id(RandomProgressId());
+  auto load = std::async(std::launch::async, [&server, request] {
+    v2::VolumeInfo info;
+    const grpc::Status status = server.stub().LoadVolume(server.Context().get(), request, &info);
+    return std::make_pair(status, info);
+  });
+  while (progress &&
+         load.wait_for(std::chrono::milliseconds(100)) != std::future_status::ready) {
+    v2::GetLoadProgressRequest poll;
+    poll.set_progress_id(request.progress_id());
+    v2::LoadProgress state;
+    // NotFound until the server starts the load: keep polling.
+    if (server.stub().GetLoadProgress(server.Context().get(), poll, &state).ok()) {
+      progress(state.fraction(), state.stage());
+    }
+  }
+  auto [status, info] = load.get();
+  RETURN_IF_ERROR(FromGrpc(status));
+  if (progress) progress(1.0, "done");
   return info;
 }
 

@@ -11,14 +11,18 @@
 
 #include "client/cli/mesh_flags.h"
 #include "client/cli/server_connection.h"
+#include "server/common/progress.h"
 #include "server/common/status.h"
 #include "server/mesh/proxy_mesh.h"
 
 namespace vpm::cli {
 
 // LoadVolume: `source` is a path under the server's data root or phantom:NAME.
+// With `progress`, the load carries a random progress_id and this polls
+// GetLoadProgress every 100 ms while it runs, reporting what it says.
 Result<v2::VolumeInfo> LoadVolumeOnServer(const ServerConnection& server,
-                                          const std::string& source);
+                                          const std::string& source,
+                                          const ProgressFn& progress = {});
 
 // The mesh flags as the API's MeshParams; --refine-at-landmark is resolved
 // with the landmarks the server reports for `volume` (NOT_FOUND if absent).

@@ -6,7 +6,9 @@
 #include <memory>
 #include <vector>
 
+#include "client/cli/progress_bar.h"
 #include "client/cli/proto_json.h"
+#include "client/cli/remote_pipeline.h"
 #include "client/cli/server_flags.h"
 #include "server/common/sha256.h"
 
@@ -45,14 +47,22 @@ Status Upload(const ServerConnection& server, const std::string& path) {
 
 void AddRemoteVolumeCommands(CLI::App& app, const ServerFlags* flags, int* exit_code) {
   CLI::App* volume = app.get_subcommand("volume");
-  auto source = std::make_shared<std::string>();
-  CLI::App* load = volume->add_subcommand("load", "server: LoadVolume (data-root path or phantom:)");
-  load->add_option("SOURCE", *source, "path under the server's data root, or phantom:NAME")->required();
-  load->callback(WithServer(flags, exit_code, [source](const ServerConnection& s) -> Status {
-    v2::LoadVolumeRequest request;
-    request.set_source(*source);
-    v2::VolumeInfo info;
-    RETURN_IF_ERROR(FromGrpc(s.stub().LoadVolume(s.Context().get(), request, &info)));
+  struct LoadArgs {
+    std::string source;
+    bool progress = false;
+  };
+  auto load_args = std::make_shared<LoadArgs>();
+  CLI::App* load = volume->add_subcommand(
+      "load", "server: LoadVolume (data-root path or phantom:), with its progress");
+  load->add_option("SOURCE", load_args->source,
+                   "path under the server's data root, or phantom:NAME")->required();
+  load->add_flag("--progress", load_args->progress,
+                 "draw the progress bar (GetLoadProgress) even when stderr is not a terminal");
+  load->callback(WithServer(flags, exit_code, [load_args](const ServerConnection& s) -> Status {
+    ProgressBar bar(StrCat("loading ", load_args->source), ProgressWanted(load_args->progress));
+    ASSIGN_OR_RETURN(v2::VolumeInfo info,
+                     LoadVolumeOnServer(s, load_args->source, bar.Reporter()));
+    bar.Finish();
     PrintJson(VolumeJson(info));
     return absl::OkStatus();
   }));

@@ -221,6 +221,7 @@ void AddRenderCommand(CLI::App& app, const ServerFlags* server, int* exit_code) 
   cmd->add_option("--volume", a->source, "a file, a DICOM folder or phantom:NAME")->required();
   cmd->add_option("--mesh-json", a->mesh_json, "a mesh written by `vpm mesh --json`");
   AddMeshFlags(cmd, &a->mesh);
+  AddVolumeFlags(cmd, &a->volume_flags);
   cmd->add_option("--camera", a->camera,
                   "AZ EL DIST: degrees from the anterior view, DIST mm (0: fit)")
       ->expected(3);

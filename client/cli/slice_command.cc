@@ -108,6 +108,7 @@ void AddSliceCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--volume", a->scene.source, "a file, a DICOM folder or phantom:NAME")->required();
   cmd->add_option("--mesh-json", a->scene.mesh_json, "a mesh written by `vpm mesh --json`");
   AddMeshFlags(cmd, &a->scene.mesh);
+  AddVolumeFlags(cmd, &a->scene.volume_flags);
   AddGrabFlags(cmd, &a->scene);
   cmd->add_option("--plane", a->plane, "axial, coronal, sagittal or oblique")
       ->check(CLI::IsMember({"axial", "coronal", "sagittal", "oblique"}))

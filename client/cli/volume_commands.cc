@@ -10,6 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include "client/cli/command_status.h"
+#include "client/cli/progress_bar.h"
+#include "client/cli/volume_flags.h"
 #include "server/io/list_dicom_series.h"
 #include "server/io/parse_dicom_source.h"
 #include "server/io/read_volume.h"
@@ -36,6 +38,8 @@ nlohmann::json VolumeInfoJson(const Volume& v) {
           {"direction_columns_lps", {Vec(g.direction[0]), Vec(g.direction[1]), Vec(g.direction[2])}},
           {"extent_mm", Vec(g.extent_mm())},
           {"value_range", {v.min_value(), v.max_value()}},
+          {"voxel_encoding", VoxelEncodingName(v.encoding())},
+          {"value_bytes", v.value_bytes()},
           {"non_finite_voxels_replaced", v.non_finite_count()},
           {"notes", v.notes()},
           {"landmarks", landmarks}};
@@ -93,6 +97,8 @@ void PrintInfo(const Volume& v) {
   }
   std::cout << std::setprecision(1) << "values      " << v.min_value() << " .. " << v.max_value()
             << "\n";
+  std::cout << "held as     " << VoxelEncodingName(v.encoding()) << ", " << v.value_bytes()
+            << " bytes (host; the same again on the GPU)\n";
   for (const std::string& note : v.notes()) std::cout << "note        " << note << "\n";
   if (v.non_finite_count() > 0) {
     std::cout << "warning     " << v.non_finite_count()
@@ -111,7 +117,11 @@ void AddVolumeCommands(CLI::App& app, int* exit_code) {
   CLI::App* volume = app.add_subcommand("volume", "Inspect and convert volumes");
   volume->require_subcommand(1);
 
-  struct InfoArgs { std::string source; bool json = false; };
+  struct InfoArgs {
+    std::string source;
+    bool json = false;
+    VolumeFlags volume_flags;
+  };
   auto info_args = std::make_shared<InfoArgs>();
   CLI::App* info = volume->add_subcommand("info", "Print geometry, value range and landmarks");
   info->add_option("source", info_args->source,
@@ -119,8 +129,13 @@ void AddVolumeCommands(CLI::App& app, int* exit_code) {
                    "phantom:NAME or raw:PATH?dims=..&type=..&spacing=..")
       ->required();
   info->add_flag("--json", info_args->json, "print JSON instead of text");
+  AddVolumeFlags(info, &info_args->volume_flags);
   info->callback([info_args, exit_code] {
-    auto v = ReadVolume(info_args->source, VolumeLimits{});
+    Result<Volume> v = [&] {
+      ProgressBar bar(StrCat("loading ", info_args->source),
+                      ProgressWanted(info_args->volume_flags.progress));
+      return ReadVolumeForCli(info_args->source, info_args->volume_flags, bar.Reporter());
+    }();
     if (!v.ok()) {
       *exit_code = ExitWith(v.status());
       return;
@@ -136,18 +151,32 @@ void AddVolumeCommands(CLI::App& app, int* exit_code) {
     }
   });
 
-  struct ExportArgs { std::string source, out; };
+  struct ExportArgs {
+    std::string source, out;
+    VolumeFlags volume_flags;
+  };
   auto export_args = std::make_shared<ExportArgs>();
   CLI::App* exp = volume->add_subcommand("export", "Write any readable source as NIfTI");
   exp->add_option("source", export_args->source, "as for `vpm volume info`")->required();
   exp->add_option("out", export_args->out, "output .nii or .nii.gz")->required();
+  AddVolumeFlags(exp, &export_args->volume_flags);
   exp->callback([export_args, exit_code] {
-    auto v = ReadVolume(export_args->source, VolumeLimits{});
+    // The bar: reading 0..0.7, writing the rest.
+    ProgressBar bar(StrCat("exporting ", export_args->source),
+                    ProgressWanted(export_args->volume_flags.progress));
+    const ProgressFn progress = bar.Reporter();
+    auto v = ReadVolumeForCli(export_args->source, export_args->volume_flags,
+                              SubProgress(progress, 0.0, 0.7));
     if (!v.ok()) {
+      bar.Finish();
       *exit_code = ExitWith(v.status());
       return;
     }
-    *exit_code = ExitWith(WriteNifti(*v, export_args->out));
+    progress(0.7, "writing");
+    const Status written = WriteNifti(*v, export_args->out);
+    if (written.ok()) progress(1.0, "done");
+    bar.Finish();
+    *exit_code = ExitWith(written);
     if (*exit_code == 0) std::cout << "wrote " << export_args->out << "\n";
   });
 }

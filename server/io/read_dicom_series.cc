@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "server/common/prefix_status.h"
+#include "server/io/convert_voxels.h"
 #include "server/io/folder_read_budget.h"
 #include "server/io/list_dicom_series.h"
 #include "server/io/read_dicom_slice.h"
@@ -37,16 +39,27 @@ Result<std::vector<NamedSlice>> DecodeSeries(const std::filesystem::path& folder
   FolderReadBudget budget(folder, limits);
   std::vector<NamedSlice> slices;
   int64_t voxels = 0;
-  for (const std::filesystem::path& path : series.files) {
+  // Progress by files, not by each file's bytes.
+  VolumeLimits file_limits = limits;
+  file_limits.read_progress = nullptr;
+  for (size_t file = 0; file < series.files.size(); ++file) {
+    const std::filesystem::path& path = series.files[file];
+    if (limits.read_progress != nullptr && *limits.read_progress) {
+      (*limits.read_progress)(double(file) / double(series.files.size()), "reading DICOM");
+    }
     ASSIGN_OR_RETURN(const std::vector<uint8_t> bytes, budget.Read(path));
-    Result<std::vector<DicomSlice>> frames = ParseDicomFrames(bytes, limits, DicomDecode::kPixels);
+    Result<std::vector<DicomSlice>> frames =
+        ParseDicomFrames(bytes, file_limits, DicomDecode::kPixels);
     if (!frames.ok()) return PrefixStatus(frames.status(), path.string());
     for (size_t f = 0; f < frames->size(); ++f) {
       DicomSlice& slice = (*frames)[f];
       voxels += slice.rows * slice.columns;
-      if (voxels > limits.max_voxels) {
-        return absl::ResourceExhaustedError(StrCat(folder.string(), ": the slices hold over ",
-                                                   limits.max_voxels, " voxels (the cap)"));
+      // The budget as int16, the least a volume of these slices takes.
+      if (voxels * 2 > limits.max_volume_bytes) {
+        return absl::ResourceExhaustedError(
+            StrCat(folder.string(), ": the slices hold over ", voxels, " voxels (", voxels * 2,
+                   " bytes as int16), over the cap of ", limits.max_volume_bytes,
+                   " bytes on one volume (--max-volume-bytes)"));
       }
       const std::string name = path.filename().string();
       slices.push_back({frames->size() == 1 ? name : StrCat(name, " frame ", f + 1),
@@ -184,13 +197,36 @@ Result<Volume> StackAsStored(std::vector<NamedSlice>& slices, const glm::dmat3& 
   g.origin_mm = base.position_mm;
   g.direction = frame;
   RETURN_IF_ERROR(ValidateGeometry(g, limits));
-  std::vector<float> values;
-  values.reserve(static_cast<size_t>(g.voxel_count()));
+  // int16 when every slice holds integers that fit with one offset (CT in
+  // HU after the rescale): the stack is built slice by slice, each slice's
+  // floats freed as it goes in.
+  IntegerRangeOfFloats range;
+  for (const NamedSlice& s : slices) {
+    for (float v : s.slice.values) range.Add(v);
+  }
+  const std::optional<int32_t> offset = range.Offset();
+  if (!offset) {
+    std::vector<float> values;
+    values.reserve(static_cast<size_t>(g.voxel_count()));
+    for (NamedSlice& s : slices) {
+      values.insert(values.end(), s.slice.values.begin(), s.slice.values.end());
+      s.slice.values = {};
+    }
+    std::string note;
+    ASSIGN_OR_RETURN(VoxelValues voxels, FloatsToVoxels(std::move(values), g, limits, &note));
+    ASSIGN_OR_RETURN(Volume volume, Volume::Create(g, std::move(voxels), limits));
+    if (!note.empty()) volume.add_note(std::move(note));
+    return volume;
+  }
+  RETURN_IF_ERROR(ValidateGeometry(g, limits, VoxelEncoding::kInt16));
+  std::vector<int16_t> stored;
+  stored.reserve(static_cast<size_t>(g.voxel_count()));
   for (NamedSlice& s : slices) {
-    values.insert(values.end(), s.slice.values.begin(), s.slice.values.end());
+    for (float v : s.slice.values) stored.push_back(static_cast<int16_t>(int32_t(v) - *offset));
     s.slice.values = {};
   }
-  return Volume::Create(g, std::move(values), limits);
+  ASSIGN_OR_RETURN(VoxelValues voxels, VoxelValues::Int16(std::move(stored), *offset));
+  return Volume::Create(g, std::move(voxels), limits);
 }
 
 Result<Volume> Resample(const std::vector<NamedSlice>& slices, const glm::dmat3& frame,

@@ -26,10 +26,19 @@ Result<std::vector<uint8_t>> ReadFileBytes(const std::filesystem::path& path,
   std::ifstream in(path, std::ios::binary);
   if (!in) return absl::NotFoundError(StrCat(name, ": cannot open"));
   std::vector<uint8_t> bytes(static_cast<size_t>(size));
-  in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size));
-  if (static_cast<uintmax_t>(in.gcount()) != size) {
-    return absl::InvalidArgumentError(
-        StrCat(name, ": read ", in.gcount(), " of ", size, " bytes (file changed?)"));
+  // In chunks, so that a progress bar moves while a large file comes in.
+  constexpr uintmax_t kChunk = uintmax_t{16} << 20;
+  for (uintmax_t done = 0; done < size;) {
+    const uintmax_t n = std::min(kChunk, size - done);
+    in.read(reinterpret_cast<char*>(bytes.data() + done), static_cast<std::streamsize>(n));
+    if (static_cast<uintmax_t>(in.gcount()) != n) {
+      return absl::InvalidArgumentError(StrCat(name, ": read ", done + in.gcount(), " of ", size,
+                                               " bytes (file changed?)"));
+    }
+    done += n;
+    if (limits.read_progress != nullptr && *limits.read_progress) {
+      (*limits.read_progress)(double(done) / double(size), "reading");
+    }
   }
   return bytes;
 }

@@ -7,6 +7,7 @@
 #include "server/io/gzip_stream.h"
 #include "server/io/metaimage_header.h"
 #include "server/common/prefix_status.h"
+#include "server/io/convert_voxels.h"
 #include "server/io/voxel_type.h"
 
 namespace vpm {
@@ -104,13 +105,7 @@ Result<Volume> DecodeMetaImage(std::span<const uint8_t> bytes, std::string_view 
   std::vector<uint8_t> inflated;
   ASSIGN_OR_RETURN(const std::span<const uint8_t> stored,
                    LocateData(header, data, detached, data_bytes, described, limits, inflated));
-  ASSIGN_OR_RETURN(std::vector<float> values,
-                   ConvertVoxelsToFloat(stored, header.type, header.endian, voxels));
-  file_bytes = {};
-  inflated = {};
-  ASSIGN_OR_RETURN(Volume volume, Volume::Create(geometry, std::move(values), limits));
-  volume.set_source(std::string(name));
-  return volume;
+  return VolumeFromStoredVoxels(stored, header.type, header.endian, geometry, limits, name);
 }
 
 }  // namespace

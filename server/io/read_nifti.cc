@@ -8,6 +8,7 @@
 #include "server/io/nifti_header.h"
 #include "server/common/prefix_status.h"
 #include "server/io/read_file_bytes.h"
+#include "server/io/convert_voxels.h"
 #include "server/io/voxel_type.h"
 
 namespace vpm {
@@ -44,14 +45,9 @@ Result<Volume> DecodeNifti(std::span<const uint8_t> bytes, std::string_view name
         StrCat(described, " but the file holds ", bytes.size(), " bytes (truncated)"));
   }
   const auto [slope, intercept] = NiftiScaling(header);
-  ASSIGN_OR_RETURN(
-      std::vector<float> values,
-      ConvertVoxelsToFloat(bytes.subspan(static_cast<size_t>(header.vox_offset)), header.voxel_type,
-                           header.endian, voxels, slope, intercept));
-  inflated = {};
-  ASSIGN_OR_RETURN(Volume volume, Volume::Create(geometry, std::move(values), limits));
-  volume.set_source(std::string(name));
-  return volume;
+  return VolumeFromStoredVoxels(bytes.subspan(static_cast<size_t>(header.vox_offset)),
+                                header.voxel_type, header.endian, geometry, limits, name, slope,
+                                intercept);
 }
 
 }  // namespace

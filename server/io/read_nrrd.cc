@@ -11,6 +11,7 @@
 #include "server/io/header_text.h"
 #include "server/io/nrrd_header.h"
 #include "server/common/prefix_status.h"
+#include "server/io/convert_voxels.h"
 #include "server/io/voxel_type.h"
 
 namespace vpm {
@@ -143,8 +144,9 @@ Result<std::vector<float>> ParseAsciiValues(std::span<const uint8_t> data, int64
   return values;
 }
 
-Result<std::vector<float>> DecodeData(const NrrdHeader& h, std::span<const uint8_t> data,
-                                      const VolumeGeometry& g, const VolumeLimits& limits) {
+Result<VoxelValues> DecodeData(const NrrdHeader& h, std::span<const uint8_t> data,
+                               const VolumeGeometry& g, const VolumeLimits& limits,
+                               std::string* float_note) {
   const int64_t voxels = g.voxel_count();
   const int64_t data_bytes = voxels * VoxelTypeSize(h.type);
   const std::string described = StrCat("header says ", DescribeVoxelData(g.dims, h.type));
@@ -154,7 +156,14 @@ Result<std::vector<float>> DecodeData(const NrrdHeader& h, std::span<const uint8
         StrCat("data ends within the ", h.line_skip, " lines to skip (truncated)"));
   }
   data = *after_lines;
-  if (h.encoding == NrrdEncoding::kAscii) return ParseAsciiValues(data, voxels);
+  if (h.encoding == NrrdEncoding::kAscii) {
+    ASSIGN_OR_RETURN(std::vector<float> values, ParseAsciiValues(data, voxels));
+    if (h.type == VoxelType::kFloat32 || h.type == VoxelType::kFloat64) {
+      RETURN_IF_ERROR(ValidateGeometry(g, limits, VoxelEncoding::kFloat32));
+      return VoxelValues::Float(std::move(values));
+    }
+    return FloatsToVoxels(std::move(values), g, limits, float_note);
+  }
   std::vector<uint8_t> inflated;
   if (h.encoding == NrrdEncoding::kGzip) {
     Result<std::vector<uint8_t>> all = InflateExactly(data, h.byte_skip + data_bytes, limits);
@@ -171,7 +180,7 @@ Result<std::vector<float>> DecodeData(const NrrdHeader& h, std::span<const uint8
     }
     data = data.subspan(static_cast<size_t>(skip));
   }
-  return ConvertVoxelsToFloat(data, h.type, h.endian, voxels);
+  return ConvertVoxels(data, h.type, h.endian, g, limits, 1.0, 0.0, float_note);
 }
 
 Result<Volume> DecodeNrrd(std::span<const uint8_t> bytes, std::string_view name,
@@ -195,10 +204,12 @@ Result<Volume> DecodeNrrd(std::span<const uint8_t> bytes, std::string_view name,
     ASSIGN_OR_RETURN(detached, loader(header.data_file));
     data = detached;
   }
-  ASSIGN_OR_RETURN(std::vector<float> values, DecodeData(header, data, geometry, limits));
+  std::string note;
+  ASSIGN_OR_RETURN(VoxelValues values, DecodeData(header, data, geometry, limits, &note));
   detached = {};
   ASSIGN_OR_RETURN(Volume volume, Volume::Create(geometry, std::move(values), limits));
   volume.set_source(std::string(name));
+  if (!note.empty()) volume.add_note(std::move(note));
   return volume;
 }
 

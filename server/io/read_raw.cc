@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "server/common/prefix_status.h"
+#include "server/io/convert_voxels.h"
 #include "server/io/read_file_bytes.h"
 
 namespace vpm {
@@ -39,13 +40,8 @@ Result<Volume> DecodeRaw(std::span<const uint8_t> bytes, std::string_view name,
                                                    " bytes, ", size - expected,
                                                    " more (wrong dims, type or offset?)"));
   }
-  ASSIGN_OR_RETURN(
-      std::vector<float> values,
-      ConvertVoxelsToFloat(bytes.subspan(static_cast<size_t>(options.header_offset_bytes)),
-                           options.type, options.endian, geometry.voxel_count()));
-  ASSIGN_OR_RETURN(Volume volume, Volume::Create(geometry, std::move(values), limits));
-  volume.set_source(std::string(name));
-  return volume;
+  return VolumeFromStoredVoxels(bytes.subspan(static_cast<size_t>(options.header_offset_bytes)),
+                                options.type, options.endian, geometry, limits, name);
 }
 
 }  // namespace

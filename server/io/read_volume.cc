@@ -42,9 +42,17 @@ Result<Volume> ReadByKind(std::string_view source, const VolumeLimits& limits) {
 
 }  // namespace
 
-Result<Volume> ReadVolume(std::string_view source, const VolumeLimits& limits) {
-  ASSIGN_OR_RETURN(Volume volume, ReadByKind(source, limits));
+Result<Volume> ReadVolume(std::string_view source, const VolumeLimits& limits,
+                          const ProgressFn& progress) {
+  const ProgressFn monotone = MonotoneProgress(progress);
+  // Reading takes most of a load; decoding and converting the rest.
+  const ProgressFn reading = SubProgress(monotone, 0.0, 0.8);
+  VolumeLimits with_progress = limits;
+  if (reading) with_progress.read_progress = &reading;
+  if (monotone) monotone(0.0, "reading");
+  ASSIGN_OR_RETURN(Volume volume, ReadByKind(source, with_progress));
   volume.set_source(std::string(source));
+  if (monotone) monotone(1.0, "read");
   return volume;
 }
 

@@ -3,6 +3,7 @@
 
 #include <string_view>
 
+#include "server/common/progress.h"
 #include "server/common/status.h"
 #include "server/volume/volume.h"
 
@@ -25,6 +26,10 @@ inline constexpr std::string_view kVolumeSourceForms =
 // Extensions are matched case-insensitively. Every reader checks `limits`
 // before allocating. The volume's source() is set to `source`. Errors: those
 // of the reader; InvalidArgument listing the forms above for anything else.
-Result<Volume> ReadVolume(std::string_view source, const VolumeLimits& limits);
+// `progress` (optional) hears fractions from 0 to 1, never decreasing:
+// 0..0.8 while the file (or the folder's files) is read, 1 once the volume
+// is made; nothing more after an error.
+Result<Volume> ReadVolume(std::string_view source, const VolumeLimits& limits,
+                          const ProgressFn& progress = {});
 
 }  // namespace vpm

@@ -103,7 +103,9 @@ Result<Volume> ResampleShearedStack(const ShearedStack& stack, double slice_spac
   g.spacing_mm = {pitch.x, pitch.y, slice_spacing_mm};
   g.direction = stack.frame;
   g.origin_mm = stack.frame * glm::dvec3(low.x, low.y, z_first);
-  RETURN_IF_ERROR(ValidateGeometry(g, limits));  // the voxel cap, before allocating
+  // The budget, before allocating: float, since resampled values are not
+  // integers (the volume's notes say so).
+  RETURN_IF_ERROR(ValidateGeometry(g, limits, VoxelEncoding::kFloat32));
   std::vector<float> values(static_cast<size_t>(g.voxel_count()));
 
   const int64_t nx = g.dims[0], ny = g.dims[1];
@@ -142,7 +144,9 @@ Result<Volume> ResampleShearedStack(const ShearedStack& stack, double slice_spac
       }
     }
   });
-  return Volume::Create(g, std::move(values), limits);
+  ASSIGN_OR_RETURN(Volume volume, Volume::Create(g, std::move(values), limits));
+  volume.add_note("stored as float32: resampled values are not integers");
+  return volume;
 }
 
 }  // namespace vpm

@@ -13,6 +13,7 @@ namespace vpm {
 namespace {
 
 constexpr int64_t kVoxOffset = 352;  // 348-byte header + 4-byte extension flag
+constexpr int16_t kDatatypeInt16 = 4;
 constexpr int16_t kDatatypeFloat32 = 16;
 constexpr int16_t kXformScannerAnat = 1;
 constexpr uint8_t kUnitsMm = 2;
@@ -46,7 +47,9 @@ Result<std::vector<uint8_t>> EncodeNifti(const Volume& volume) {
     }
   }
   const int64_t voxels = g.voxel_count();
-  std::vector<uint8_t> out(static_cast<size_t>(kVoxOffset + 4 * voxels), 0);
+  const VoxelValues& values = volume.voxels();
+  const int64_t bytes_per_voxel = values.bytes_per_voxel();
+  std::vector<uint8_t> out(static_cast<size_t>(kVoxOffset + bytes_per_voxel * voxels), 0);
   Put<int32_t>(out, 0, static_cast<int32_t>(kNifti1HeaderBytes));
   out[38] = 'r';  // "regular", as nifti_clib writes
   const int16_t dim[8] = {3,
@@ -58,11 +61,13 @@ Result<std::vector<uint8_t>> EncodeNifti(const Volume& volume) {
                           1,
                           1};
   for (int n = 0; n < 8; ++n) Put<int16_t>(out, 40 + 2 * n, dim[n]);
-  Put<int16_t>(out, 70, kDatatypeFloat32);
-  Put<int16_t>(out, 72, 32);
+  Put<int16_t>(out, 70, values.is_int16() ? kDatatypeInt16 : kDatatypeFloat32);
+  Put<int16_t>(out, 72, static_cast<int16_t>(8 * bytes_per_voxel));
   Put<float>(out, 108, static_cast<float>(kVoxOffset));
-  Put<float>(out, 112, 1.0f);  // scl_slope: values are stored as they are
-  Put<float>(out, 116, 0.0f);
+  // scl_slope 1, scl_inter the int16 offset (an integer under 2^24: exact
+  // in the header's float), so readers see the values exactly.
+  Put<float>(out, 112, 1.0f);
+  Put<float>(out, 116, static_cast<float>(values.int16_offset()));
   out[123] = kUnitsMm;
   Put<float>(out, 124, volume.max_value());  // cal_max / cal_min: display window
   Put<float>(out, 128, volume.min_value());
@@ -70,8 +75,13 @@ Result<std::vector<uint8_t>> EncodeNifti(const Volume& volume) {
   std::memcpy(out.data() + 148, kDescription, sizeof(kDescription));
   PutOrientation(out, GeometryToNiftiOrientation(g));
   std::memcpy(out.data() + 344, "n+1\0", 4);
-  const std::span<const float> values = volume.values();
-  for (int64_t n = 0; n < voxels; ++n) Put<float>(out, kVoxOffset + 4 * n, values[n]);
+  if (values.is_int16()) {
+    const std::span<const int16_t> stored = values.int16s();
+    for (int64_t n = 0; n < voxels; ++n) Put<int16_t>(out, kVoxOffset + 2 * n, stored[n]);
+  } else {
+    const std::span<const float> floats = values.floats();
+    for (int64_t n = 0; n < voxels; ++n) Put<float>(out, kVoxOffset + 4 * n, floats[n]);
+  }
   return out;
 }
 

@@ -10,8 +10,9 @@
 
 namespace vpm {
 
-// The bytes of a NIfTI-1 .nii holding `volume`: little-endian float32 voxels
-// (the values exactly), spacing in pixdim, and the geometry converted to RAS
+// The bytes of a NIfTI-1 .nii holding `volume`: little-endian voxels as the
+// volume holds them, int16 (with scl_inter = the offset) or float32 (the
+// values exactly, either way), spacing in pixdim, and the geometry converted to RAS
 // twice, as sform and as qform (both code 1, scanner anatomical), so that
 // readers using either see the same space. InvalidArgument when a dimension
 // exceeds NIfTI-1's 32767.

@@ -28,19 +28,20 @@ Result<ReconstructionError> MeasureReconstructionError(const Volume& volume, con
     values[v] = SampleTrilinear(volume, positions[v]);
   }
   const int64_t nx = volume.dims()[0], ny = volume.dims()[1];
-  const auto voxels = volume.values();
+  const VoxelValues& voxels = volume.voxels();
   std::vector<SliceSums> slices(static_cast<size_t>(volume.dims()[2]));
   const TfPositiveSet tf_positive(tf);
   auto visit = [&](const VoxelRun& run) {
-    const float* row = voxels.data() + nx * (run.j + ny * run.k);
+    const int64_t row = nx * (run.j + ny * run.k);
     double squared_all = 0.0, squared_tf_positive = 0.0;
     int64_t tf_positive_count = 0;
     for (int64_t i = run.i_begin; i < run.i_end; ++i) {
       const double interpolated =
           run.value_begin + run.value_step * static_cast<double>(i - run.i_begin);
-      const double error = static_cast<double>(row[i]) - interpolated;
+      const float value = voxels[row + i];
+      const double error = static_cast<double>(value) - interpolated;
       squared_all += error * error;
-      if (tf_positive.Contains(row[i])) {
+      if (tf_positive.Contains(value)) {
         squared_tf_positive += error * error;
         ++tf_positive_count;
       }

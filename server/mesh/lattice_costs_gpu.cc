@@ -103,6 +103,8 @@ Result<LatticeCosts> LatticeCostsGpu::Evaluate(const GpuVolume& volume, const La
   }
   ASSIGN_OR_RETURN(gpu::GpuBuffer ubo, UploadTransferFunction(*context_, tf));
   ASSIGN_OR_RETURN(const Kernels* kernels, KernelsFor(int(tf.points().size())));
+  ASSIGN_OR_RETURN(const gpu::ComputeKernel rows, volume.KernelFor(*context_, kernels->rows));
+  ASSIGN_OR_RETURN(const gpu::ComputeKernel cells, volume.KernelFor(*context_, kernels->cells));
   ASSIGN_OR_RETURN(gpu::GpuBuffer partials,
                    gpu::GpuBuffer::Create(*context_, partial_count * sizeof(glm::vec2),
                                           vk::BufferUsageFlagBits::eStorageBuffer));
@@ -122,9 +124,9 @@ Result<LatticeCosts> LatticeCostsGpu::Evaluate(const GpuVolume& volume, const La
     push.chunk = glm::ivec4(c.z0, c.z1, c.cz0, c.cz1);
     // The batch puts a full compute barrier between dispatches: the cell
     // pass reads what the row pass wrote, the next row pass overwrites it.
-    RETURN_IF_ERROR(batch.Dispatch(kernels->rows, {volume.texel_view(), &ubo, &partials}, push,
+    RETURN_IF_ERROR(batch.Dispatch(rows, {volume.texel_view(), &ubo, &partials}, push,
                                    Groups(uint64_t(g[0]) * d[1] * (c.z1 - c.z0)), "rows"));
-    RETURN_IF_ERROR(batch.Dispatch(kernels->cells, {volume.texel_view(), &ubo, &partials, &out},
+    RETURN_IF_ERROR(batch.Dispatch(cells, {volume.texel_view(), &ubo, &partials, &out},
                                    push, Groups(uint64_t(g[0]) * g[1] * (c.cz1 - c.cz0)), "cells"));
   }
   ASSIGN_OR_RETURN(auto timings, batch.SubmitAndWait());

@@ -90,11 +90,13 @@ vec3 MapDisplacement(const HostBackwardMap& map, vec3 x, vec3 extent, vec3 m) {
   return c0 + (c1 - c0) * f.z;
 }
 
-// One frame's ray caster: raycast_body.glsl, function by function.
+// One frame's ray caster: raycast_body.glsl, function by function. Voxels:
+// Int16Voxels or FloatVoxels (voxel_values.h), the decode of volume_access.glsl.
+template <typename Voxels>
 class Caster {
  public:
-  Caster(const gpu::RaycastParams& p, const RaycastCpuInputs& in)
-      : p_(p), in_(in), values_(in.volume->values().data()) {
+  Caster(const gpu::RaycastParams& p, const RaycastCpuInputs& in, Voxels voxels)
+      : p_(p), in_(in), values_(voxels) {
     n_ = ivec3(p.dims);
     spacing_ = vec3(p.spacing_mm);
     extent_ = vec3(n_ - 1) * spacing_;
@@ -114,11 +116,15 @@ class Caster {
     const ivec3 i0 = glm::min(ivec3(glm::floor(u)), n_ - 2);
     const vec3 f = u - vec3(i0);
     const int64_t sy = n_.x, sz = int64_t(n_.x) * n_.y;
-    const float* b = values_ + i0.x + sy * i0.y + sz * i0.z;
-    const float c00 = b[0] + (b[1] - b[0]) * f.x;
-    const float c10 = b[sy] + (b[sy + 1] - b[sy]) * f.x;
-    const float c01 = b[sz] + (b[sz + 1] - b[sz]) * f.x;
-    const float c11 = b[sz + sy] + (b[sz + sy + 1] - b[sz + sy]) * f.x;
+    const int64_t n = i0.x + sy * i0.y + sz * i0.z;
+    const float v000 = values_[n], v100 = values_[n + 1];
+    const float v010 = values_[n + sy], v110 = values_[n + sy + 1];
+    const float v001 = values_[n + sz], v101 = values_[n + sz + 1];
+    const float v011 = values_[n + sz + sy], v111 = values_[n + sz + sy + 1];
+    const float c00 = v000 + (v100 - v000) * f.x;
+    const float c10 = v010 + (v110 - v010) * f.x;
+    const float c01 = v001 + (v101 - v001) * f.x;
+    const float c11 = v011 + (v111 - v011) * f.x;
     const float c0 = c00 + (c10 - c00) * f.y;
     const float c1 = c01 + (c11 - c01) * f.y;
     return c0 + (c1 - c0) * f.z;
@@ -137,9 +143,10 @@ class Caster {
     const ivec3 i0 = glm::min(ivec3(glm::floor(u)), n_ - 2);
     const vec3 f = u - vec3(i0);
     const int64_t sy = n_.x, sz = int64_t(n_.x) * n_.y;
-    const float* b = values_ + i0.x + sy * i0.y + sz * i0.z;
-    const float c[8] = {b[0],  b[1],      b[sy],      b[sy + 1],
-                        b[sz], b[sz + 1], b[sz + sy], b[sz + sy + 1]};
+    const int64_t n = i0.x + sy * i0.y + sz * i0.z;
+    const float c[8] = {values_[n],      values_[n + 1],      values_[n + sy],
+                        values_[n + sy + 1], values_[n + sz],  values_[n + sz + 1],
+                        values_[n + sz + sy], values_[n + sz + sy + 1]};
     const TrilinearWithPartials<float> t = InterpolateCell(c, f);
     grad_u = vec3(t.d_dx, t.d_dy, t.d_dz);
     return t.value;
@@ -271,13 +278,14 @@ class Caster {
 
   const gpu::RaycastParams& p_;
   const RaycastCpuInputs& in_;
-  const float* values_;
+  Voxels values_;
   ivec3 n_, nb_;
   vec3 spacing_, extent_, brick_size_, inv_spacing_, inv_brick_;
   int flags_ = 0;
 };
 
-uint32_t Caster::Pixel(int px, int py, int64_t& taken) const {
+template <typename Voxels>
+uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
   const vec2 ndc(2.0f * (float(px) + 0.5f) / float(p_.image.x) - 1.0f,
                  1.0f - 2.0f * (float(py) + 0.5f) / float(p_.image.y));
   const vec3 eye(p_.eye_mm);
@@ -457,12 +465,14 @@ std::vector<uint32_t> RaycastCpu(const gpu::RaycastParams& params, const Raycast
                                  int threads, int64_t* samples) {
   const int w = params.image.x, h = params.image.y;
   std::vector<uint32_t> pixels(size_t(w) * h);
-  const Caster caster(params, in);
   std::atomic<int64_t> total{0};
-  ForRows(h, threads, [&](int y) {
-    int64_t taken = 0;
-    for (int x = 0; x < w; ++x) pixels[size_t(y) * w + x] = caster.Pixel(x, y, taken);
-    total += taken;
+  in.volume->voxels().Visit([&](auto voxels) {
+    const Caster caster(params, in, voxels);
+    ForRows(h, threads, [&](int y) {
+      int64_t taken = 0;
+      for (int x = 0; x < w; ++x) pixels[size_t(y) * w + x] = caster.Pixel(x, y, taken);
+      total += taken;
+    });
   });
   if (samples != nullptr) *samples = total;
   return pixels;

@@ -86,10 +86,11 @@ Result<std::vector<float>> SliceSampler::Sample(const GpuVolume& volume,
       .step_u_mm = glm::vec4(glm::vec3(grid.step_u_mm), 0.0f),
       .step_v_mm = glm::vec4(glm::vec3(grid.step_v_mm), 0.0f),
       .image = glm::ivec4(grid.width, grid.height, 0, 0)};
+  ASSIGN_OR_RETURN(const gpu::ComputeKernel kernel, volume.KernelFor(*context_, kernel_));
   ASSIGN_OR_RETURN(gpu::ComputeBatch batch, gpu::ComputeBatch::Begin(*context_, 1));
   RETURN_IF_ERROR(batch.Dispatch(
-      kernel_, {&map_image, volume.texel_view(), &out}, push,
-      kernel_.GroupsFor({uint32_t(grid.width), uint32_t(grid.height), 1}), "slice_volume"));
+      kernel, {&map_image, volume.texel_view(), &out}, push,
+      kernel.GroupsFor({uint32_t(grid.width), uint32_t(grid.height), 1}), "slice_volume"));
   ASSIGN_OR_RETURN(const auto timings, batch.SubmitAndWait());
   if (gpu_ms != nullptr) *gpu_ms = timings.front().gpu_ms;
   std::vector<float> values(pixels);

@@ -8,12 +8,14 @@ namespace vpm {
 bool IsCtInHu(const Volume& volume) { return volume.min_value() < kCtAirCeilingHu; }
 
 std::vector<float> SampleVolumeValues(const Volume& volume, double floor) {
-  const auto values = volume.values();
-  const size_t stride = std::max<size_t>(1, values.size() >> 20);
+  const VoxelValues& values = volume.voxels();
+  const int64_t count = values.size();
+  const int64_t stride = std::max<int64_t>(1, count >> 20);
   std::vector<float> sample;
-  sample.reserve(values.size() / stride + 1);
-  for (size_t n = 0; n < values.size(); n += stride) {
-    if (values[n] > floor) sample.push_back(values[n]);
+  sample.reserve(static_cast<size_t>(count / stride + 1));
+  for (int64_t n = 0; n < count; n += stride) {
+    const float v = values[n];
+    if (v > floor) sample.push_back(v);
   }
   return sample;
 }

@@ -193,7 +193,8 @@ Result<const gpu::GpuBuffer*> VolumeRenderer::BrickMinMax(const GpuVolume& volum
   const gpu::BrickMinMaxPush push{
       .dims = glm::ivec4(int(g.dims[0]), int(g.dims[1]), int(g.dims[2]), 0),
       .bricks = glm::ivec4(nb[0], nb[1], nb[2], brick_voxels)};
-  RETURN_IF_ERROR(batch.Dispatch(*minmax_kernel_, {volume.texel_view(), &minmax}, push,
+  ASSIGN_OR_RETURN(const gpu::ComputeKernel kernel, volume.KernelFor(*context_, *minmax_kernel_));
+  RETURN_IF_ERROR(batch.Dispatch(kernel, {volume.texel_view(), &minmax}, push,
                                  {GroupCount(bricks, 64), 1, 1}, "brick_minmax"));
   RETURN_IF_ERROR(batch.SubmitAndWait().status());
   if (brick_grids_.size() >= kMaxCachedBrickGrids) brick_grids_.erase(brick_grids_.begin());
@@ -274,9 +275,10 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
       sampled ? gpu::KernelArg(map) : gpu::KernelArg(map_view);
   const std::array<gpu::KernelArg, 7> args{
       volume_arg, map_arg, &*params_, &*lut_, *occupancy_view_, &*pixels_, &*stats_};
-  const gpu::ComputeKernel& raycast = (p.image.z & kRaycastCellGradient) != 0
-                                          ? *cell_gradient_kernels_[has_map]
-                                          : *raycast_kernels_[mip][has_map];
+  ASSIGN_OR_RETURN(const gpu::ComputeKernel raycast,
+                   request.volume->KernelFor(*context_, (p.image.z & kRaycastCellGradient) != 0
+                                                            ? *cell_gradient_kernels_[has_map]
+                                                            : *raycast_kernels_[mip][has_map]));
   RETURN_IF_ERROR(batch.Dispatch(
       raycast, args, {},
       {GroupCount(setup.render_width, 8), GroupCount(setup.render_height, 8), 1}, "raycast"));

@@ -33,6 +33,7 @@ void FillVolumeInfo(const VolumeEntry& entry, v2::VolumeInfo* info) {
     out->set_description(l.description);
   }
   info->set_bytes(entry.bytes);
+  info->set_voxel_encoding(VoxelEncodingName(volume.encoding()));
   info->set_sessions(entry.sessions.load());
   info->set_owner(entry.owner);
 }

@@ -30,6 +30,12 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "CA (PEM) that client certificates must chain to: mutual TLS");
   app.add_option("--max-volumes", o->max_volumes, "volumes held at once")->capture_default_str();
   app.add_option("--max-volume-bytes", o->max_volume_bytes,
+                 "bytes of one volume's values (2 per voxel for integer sources, 4 for "
+                 "float; held on the host and again on the GPU), checked before reading; "
+                 "the default fits a 512 x 512 x 1,024 int16 CT")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-total-volume-bytes", o->max_total_volume_bytes,
                  "host + GPU bytes of all volumes held")->capture_default_str();
   app.add_option("--max-upload-bytes", o->max_upload_bytes, "size of one uploaded file")
       ->capture_default_str();

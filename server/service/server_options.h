@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <string>
 
+#include "server/volume/volume.h"
+
 namespace vpm::service {
 
 struct ServerOptions {
@@ -24,7 +26,8 @@ struct ServerOptions {
 
   // Limits.
   int64_t max_volumes = 16;
-  int64_t max_volume_bytes = int64_t{8} << 30;   // host + GPU bytes of every volume held
+  int64_t max_volume_bytes = kDefaultMaxVolumeBytes;  // one volume's values (host; again on the GPU)
+  int64_t max_total_volume_bytes = int64_t{8} << 30;  // host + GPU bytes of every volume held
   int64_t max_upload_bytes = int64_t{1} << 30;   // one uploaded file
   int64_t max_upload_memory_bytes = int64_t{2} << 30;  // all uploads in flight, in memory
   double upload_idle_s = 60;                     // an upload with no chunk this long fails

@@ -6,6 +6,7 @@
 
 #include "server/raycast/volume_renderer.h"
 #include "server/service/byte_budget.h"
+#include "server/service/load_progress_registry.h"
 #include "server/service/mesh_store.h"
 #include "server/service/server_options.h"
 #include "server/service/service_metrics.h"
@@ -34,6 +35,7 @@ struct ServiceContext {
   // on, calls that would create volumes, meshes or sessions are refused.
   std::atomic<bool> leaving{false};
   // Shutting down: new streams are refused too.
+  LoadProgressRegistry* load_progress = nullptr;  // GetLoadProgress
   std::atomic<bool> draining{false};
 
   // UNAVAILABLE while leaving, for the calls that create state.

@@ -101,16 +101,17 @@ std::shared_ptr<VolumeEntry> VolumeStore::FindLoadedLocked(const std::string& lo
   return nullptr;
 }
 
-Result<Volume> VolumeStore::ReadSource(const std::string& load_key,
-                                       const std::string& source) const {
+Result<Volume> VolumeStore::ReadSource(const std::string& load_key, const std::string& source,
+                                       const ProgressFn& progress) const {
   const std::string read_from = load_key.starts_with("file:") ? load_key.substr(5) : load_key;
-  ASSIGN_OR_RETURN(Volume volume, ReadVolume(read_from, options_.read_limits));
+  ASSIGN_OR_RETURN(Volume volume, ReadVolume(read_from, options_.read_limits, progress));
   volume.set_source(source);
   return volume;
 }
 
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
-                                                       const std::string& user) {
+                                                       const std::string& user,
+                                                       const ProgressFn& progress) {
   if (source.starts_with("raw:")) {
     return absl::InvalidArgumentError(
         "source: raw: sources are not served; upload the file instead");
@@ -129,8 +130,9 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
     }
   }
   RETURN_IF_ERROR(CheckRoom(0));
-  ASSIGN_OR_RETURN(Volume volume, ReadSource(key, std::string(source)));
-  return Add(std::move(volume), std::move(key), user);
+  ASSIGN_OR_RETURN(Volume volume,
+                   ReadSource(key, std::string(source), SubProgress(progress, 0.0, 0.85)));
+  return Add(std::move(volume), std::move(key), user, {}, SubProgress(progress, 0.85, 1.0));
 }
 
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::AddFile(const std::filesystem::path& path,
@@ -142,10 +144,12 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::AddFile(const std::filesystem:
 }
 
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string load_key,
-                                                      const std::string& user, std::string id) {
-  const int64_t bytes = volume.geometry().voxel_count() * int64_t{sizeof(float)} * 2;
+                                                      const std::string& user, std::string id,
+                                                      const ProgressFn& upload_progress) {
+  // Host values + the GPU's texel buffer, both as the volume holds them.
+  const int64_t bytes = volume.value_bytes() * 2;
   RETURN_IF_ERROR(CheckRoom(bytes));
-  ASSIGN_OR_RETURN(GpuVolume gpu, GpuVolume::Upload(*options_.context, volume));
+  ASSIGN_OR_RETURN(GpuVolume gpu, GpuVolume::Upload(*options_.context, volume, upload_progress));
   std::vector<std::string> evicted;
   std::shared_ptr<VolumeEntry> entry;
   Status room;

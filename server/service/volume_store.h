@@ -86,8 +86,10 @@ class VolumeStore {
   // the same file) returns the volume held, not a second copy: delete it to
   // read the file again. Errors: those of ResolveDataPath and ReadVolume;
   // InvalidArgument for raw: sources; ResourceExhausted past max_volumes or
-  // max_bytes. `user` is recorded as one of its loaders.
-  Result<std::shared_ptr<VolumeEntry>> Load(std::string_view source, const std::string& user);
+  // max_bytes. `user` is recorded as one of its loaders. `progress` hears
+  // the read (0..0.85) and the upload (0.85..1).
+  Result<std::shared_ptr<VolumeEntry>> Load(std::string_view source, const std::string& user,
+                                            const ProgressFn& progress = {});
   // A volume read from `path` (an upload's temporary file); `source` is what
   // GetVolume reports; `owner` the uploader.
   Result<std::shared_ptr<VolumeEntry>> AddFile(const std::filesystem::path& path,
@@ -113,10 +115,12 @@ class VolumeStore {
   // `load_key` empty: an upload owned by `user`; else a shared volume
   // `user` loaded (empty `user`: an evicted volume read again, its loaders
   // kept). `id`: empty for a new one, else the id of an evicted volume read
-  // again.
+  // again. `upload_progress` hears the upload to the GPU.
   Result<std::shared_ptr<VolumeEntry>> Add(Volume volume, std::string load_key,
-                                           const std::string& user, std::string id = {});
-  Result<Volume> ReadSource(const std::string& load_key, const std::string& source) const;
+                                           const std::string& user, std::string id = {},
+                                           const ProgressFn& upload_progress = {});
+  Result<Volume> ReadSource(const std::string& load_key, const std::string& source,
+                            const ProgressFn& progress = {}) const;
   std::shared_ptr<VolumeEntry> FindLoadedLocked(const std::string& load_key) const;
   // Evicts idle volumes, least recently used first, until one more of
   // `extra_bytes` fits (appending their ids to `evicted`); else

@@ -103,7 +103,8 @@ Status VpmServer::Start() {
   volume_options.context = gpu_;
   volume_options.data_root = o.data_root;
   volume_options.max_volumes = o.max_volumes;
-  volume_options.max_bytes = o.max_volume_bytes;
+  volume_options.max_bytes = o.max_total_volume_bytes;
+  volume_options.read_limits.max_volume_bytes = o.max_volume_bytes;
   volume_options.on_change = [m = metrics_.get()](int64_t bytes, int64_t count) {
     m->Volumes(bytes, count);
   };
@@ -139,6 +140,7 @@ Status VpmServer::Start() {
       [m = metrics_.get()](const std::string& user, int64_t n) { m->UserStreams(user, n); });
   metrics_->SetOpenStreamsSource([s = streams_.get()] { return s->open_streams(); });
   upload_memory_ = std::make_unique<ByteBudget>(o.max_upload_memory_bytes);
+  load_progress_ = std::make_unique<LoadProgressRegistry>();
 
   context_.options = o;
   context_.gpu = gpu_;
@@ -152,6 +154,7 @@ Status VpmServer::Start() {
   context_.request_pool = request_pool_.get();
   context_.streams = streams_.get();
   context_.upload_memory = upload_memory_.get();
+  context_.load_progress = load_progress_.get();
   service_ = std::make_unique<VpmService>(&context_);
 
   grpc::EnableDefaultHealthCheckService(true);

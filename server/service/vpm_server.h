@@ -69,6 +69,7 @@ class VpmServer {
   std::unique_ptr<SessionManager> sessions_;
   std::unique_ptr<StreamRegistry> streams_;
   std::unique_ptr<ByteBudget> upload_memory_;
+  std::unique_ptr<LoadProgressRegistry> load_progress_;
   ServiceContext context_;
   std::unique_ptr<VpmService> service_;
   std::unique_ptr<grpc::Server> server_;

@@ -127,9 +127,36 @@ grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* co
                [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     if (request->source().empty()) return absl::InvalidArgumentError("source: required");
-    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
-                     service_->volumes->Load(request->source(), user));
-    FillVolumeInfo(*entry, response);
+    const std::string& progress_id = request->progress_id();
+    LoadProgressRegistry* registry = service_->load_progress;
+    if (progress_id.empty() || registry == nullptr) {
+      ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
+                       service_->volumes->Load(request->source(), user));
+      FillVolumeInfo(*entry, response);
+      return absl::OkStatus();
+    }
+    RETURN_IF_ERROR(registry->Start(progress_id));
+    Result<std::shared_ptr<VolumeEntry>> entry =
+        service_->volumes->Load(request->source(), user, registry->Reporter(progress_id));
+    registry->Finish(progress_id, entry.status());
+    RETURN_IF_ERROR(entry.status());
+    FillVolumeInfo(**entry, response);
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::GetLoadProgress(grpc::CallbackServerContext* context,
+                                                      const v2::GetLoadProgressRequest* request,
+                                                      v2::LoadProgress* response) {
+  return Unary(context, "GetLoadProgress", nullptr, [=, this](const std::string&) -> Status {
+    if (service_->load_progress == nullptr) return absl::UnimplementedError("no load progress");
+    ASSIGN_OR_RETURN(const LoadProgressState state,
+                     service_->load_progress->Get(request->progress_id()));
+    response->set_fraction(state.fraction);
+    response->set_stage(state.stage);
+    response->set_done(state.done);
+    response->set_error_code(static_cast<int32_t>(state.status.code()));
+    response->set_error_message(std::string(state.status.message()));
     return absl::OkStatus();
   });
 }

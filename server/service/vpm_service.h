@@ -25,6 +25,9 @@ class VpmService final : public v2::Vpm::CallbackService {
                                        v2::VolumeInfo*) override;
   grpc::ServerReadReactor<v2::UploadVolumeRequest>* UploadVolume(grpc::CallbackServerContext*,
                                                                  v2::VolumeInfo*) override;
+  grpc::ServerUnaryReactor* GetLoadProgress(grpc::CallbackServerContext*,
+                                            const v2::GetLoadProgressRequest*,
+                                            v2::LoadProgress*) override;
   grpc::ServerUnaryReactor* GetVolume(grpc::CallbackServerContext*, const v2::GetVolumeRequest*,
                                       v2::VolumeInfo*) override;
   grpc::ServerUnaryReactor* ListVolumes(grpc::CallbackServerContext*,

@@ -8,10 +8,12 @@ namespace vpm {
 namespace {
 
 // One z slab; interior voxels skip the clamping of GradientMagnitudeAt.
-void GradientSlab(const Volume& v, int64_t k_begin, int64_t k_end, float* out) {
+// Voxels: Int16Voxels or FloatVoxels.
+template <typename Voxels>
+void GradientSlab(const Volume& v, const Voxels& data, int64_t k_begin, int64_t k_end,
+                  float* out) {
   const auto [nx, ny, nz] = v.dims();
   const glm::dvec3& s = v.spacing_mm();
-  const float* data = v.values().data();
   for (int64_t k = k_begin; k < k_end; ++k) {
     for (int64_t j = 0; j < ny; ++j) {
       const bool interior_jk = j > 0 && j < ny - 1 && k > 0 && k < nz - 1;
@@ -34,10 +36,13 @@ void GradientSlab(const Volume& v, int64_t k_begin, int64_t k_end, float* out) {
 }  // namespace
 
 std::vector<float> GradientMagnitude(const Volume& volume, int threads) {
-  std::vector<float> out(volume.values().size());
+  std::vector<float> out(static_cast<size_t>(volume.geometry().voxel_count()));
   const int64_t nz = volume.dims()[2];
-  ParallelChunks(threads, nz,
-                 [&](int64_t k0, int64_t k1, int) { GradientSlab(volume, k0, k1, out.data()); });
+  volume.voxels().Visit([&](const auto& voxels) {
+    ParallelChunks(threads, nz, [&](int64_t k0, int64_t k1, int) {
+      GradientSlab(volume, voxels, k0, k1, out.data());
+    });
+  });
   return out;
 }
 

@@ -30,7 +30,8 @@ Status GradientMagnitudeGpu::Record(gpu::ComputeBatch& batch, const GpuVolume& v
       .dims = glm::ivec4(e[0], e[1], e[2], 0),
       .inv_two_spacing = glm::vec4(float(1.0 / (2.0 * s.x)), float(1.0 / (2.0 * s.y)),
                                    float(1.0 / (2.0 * s.z)), 0.0f)};
-  return batch.Dispatch(kernel_, {volume.texel_view(), &out}, push, kernel_.GroupsFor(e),
+  ASSIGN_OR_RETURN(const gpu::ComputeKernel kernel, volume.KernelFor(*context_, kernel_));
+  return batch.Dispatch(kernel, {volume.texel_view(), &out}, push, kernel.GroupsFor(e),
                         "gradient_magnitude");
 }
 

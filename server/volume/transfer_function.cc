@@ -24,11 +24,12 @@ double Percentile(std::vector<float>& sorted, double p) {
 
 TransferFunction ResolvePercentiles(const Volume& volume) {
   // A strided sample of at most ~1M voxels is plenty for percentiles.
-  const auto values = volume.values();
-  const size_t stride = std::max<size_t>(1, values.size() / (1u << 20));
+  const VoxelValues& values = volume.voxels();
+  const int64_t count = values.size();
+  const int64_t stride = std::max<int64_t>(1, count / (1 << 20));
   std::vector<float> sample;
-  sample.reserve(values.size() / stride + 1);
-  for (size_t n = 0; n < values.size(); n += stride) sample.push_back(values[n]);
+  sample.reserve(static_cast<size_t>(count / stride + 1));
+  for (int64_t n = 0; n < count; n += stride) sample.push_back(values[n]);
   std::sort(sample.begin(), sample.end());
   std::vector<TfPoint> points;
   double last = -INFINITY;

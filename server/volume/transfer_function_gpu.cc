@@ -59,8 +59,9 @@ Status TransferFunctionGpu::Record(gpu::ComputeBatch& batch, const GpuVolume& vo
     return absl::InvalidArgumentError("transfer function buffers too small for the volume");
   }
   gpu::VoxelMapPush push{.dims = glm::ivec4(e[0], e[1], e[2], 0)};
-  return batch.Dispatch(kernel_, {volume.texel_view(), &tf_block, &out}, push, kernel_.GroupsFor(e),
-                        "transfer_function");
+  ASSIGN_OR_RETURN(const gpu::ComputeKernel kernel, volume.KernelFor(*context_, kernel_));
+  return batch.Dispatch(kernel, {volume.texel_view(), &tf_block, &out}, push,
+                        kernel.GroupsFor(e), "transfer_function");
 }
 
 Result<std::vector<float>> TransferFunctionGpu::Run(const GpuVolume& volume,

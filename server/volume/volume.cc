@@ -2,21 +2,34 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 namespace vpm {
 
-Status ValidateGeometry(const VolumeGeometry& g, const VolumeLimits& limits) {
+std::string DescribeVolumeSize(const VolumeGeometry& g, VoxelEncoding encoding) {
+  const double mib = double(g.dims[0]) * double(g.dims[1]) * double(g.dims[2]) *
+                     double(VoxelEncodingBytes(encoding)) / (1 << 20);
+  char size[32];
+  std::snprintf(size, sizeof(size), "%.1f", mib);
+  return StrCat(g.dims[0], "x", g.dims[1], "x", g.dims[2], " ", VoxelEncodingName(encoding),
+                " voxels (", size, " MiB)");
+}
+
+Status ValidateGeometry(const VolumeGeometry& g, const VolumeLimits& limits,
+                        VoxelEncoding encoding) {
   static constexpr const char* kAxis[3] = {"x", "y", "z"};
+  const int64_t bytes_per_voxel = VoxelEncodingBytes(encoding);
+  const int64_t max_voxels = std::max<int64_t>(limits.max_volume_bytes / bytes_per_voxel, 0);
   for (int a = 0; a < 3; ++a) {
     if (g.dims[a] <= 0) {
       return absl::InvalidArgumentError(
           StrCat("dimension ", kAxis[a], " is ", g.dims[a], "; it must be positive"));
     }
-    if (g.dims[a] > limits.max_voxels) {
-      return absl::ResourceExhaustedError(StrCat("dimension ", kAxis[a], " is ", g.dims[a],
-                                                       ", over the cap of ", limits.max_voxels,
-                                                       " voxels"));
+    if (g.dims[a] > max_voxels) {
+      return absl::ResourceExhaustedError(
+          StrCat("dimension ", kAxis[a], " is ", g.dims[a], " voxels: over the cap of ",
+                 limits.max_volume_bytes, " bytes on one volume (--max-volume-bytes)"));
     }
     const double s = g.spacing_mm[a];
     if (!std::isfinite(s) || s <= 0.0) {
@@ -27,17 +40,15 @@ Status ValidateGeometry(const VolumeGeometry& g, const VolumeLimits& limits) {
       return absl::InvalidArgumentError(StrCat("origin ", kAxis[a], " is not finite"));
     }
   }
-  // Overflow-safe product check against the voxel cap.
-  if (g.dims[0] > limits.max_voxels / g.dims[1] ||
-      g.dims[0] * g.dims[1] > limits.max_voxels / g.dims[2]) {
-    return absl::ResourceExhaustedError(
-        StrCat("volume of ", g.dims[0], "x", g.dims[1], "x", g.dims[2],
-                     " voxels is over the cap of ", limits.max_voxels, " voxels"));
-  }
-  if (g.voxel_count() * int64_t{sizeof(float)} > limits.max_bytes) {
-    return absl::ResourceExhaustedError(StrCat("volume needs ", g.voxel_count() * 4,
-                                                     " bytes, over the cap of ",
-                                                     limits.max_bytes, " bytes"));
+  // Overflow-safe product check against the budget.
+  if (g.dims[0] > max_voxels / g.dims[1] || g.dims[0] * g.dims[1] > max_voxels / g.dims[2]) {
+    const bool fits_int64 = g.dims[0] <= (int64_t{1} << 62) / g.dims[1] &&
+                            g.dims[0] * g.dims[1] <= (int64_t{1} << 62) / g.dims[2];
+    return absl::ResourceExhaustedError(StrCat(
+        "volume of ", DescribeVolumeSize(g, encoding), " needs ",
+        fits_int64 ? StrCat(g.voxel_count() * bytes_per_voxel) : std::string("over 2^62"),
+        " bytes, over the cap of ", limits.max_volume_bytes,
+        " bytes on one volume (--max-volume-bytes)"));
   }
   // Direction: columns must be unit length and mutually orthogonal (1e-3
   // tolerance absorbs the rounding of headers that store 6 decimals).
@@ -54,21 +65,34 @@ Status ValidateGeometry(const VolumeGeometry& g, const VolumeLimits& limits) {
   return absl::OkStatus();
 }
 
-Volume::Volume(VolumeGeometry geometry, std::vector<float> values)
+Volume::Volume(VolumeGeometry geometry, VoxelValues values)
     : geometry_(geometry), values_(std::move(values)) {}
 
 Result<Volume> Volume::Create(VolumeGeometry geometry, std::vector<float> values,
                               const VolumeLimits& limits) {
-  RETURN_IF_ERROR(ValidateGeometry(geometry, limits));
-  if (static_cast<int64_t>(values.size()) != geometry.voxel_count()) {
-    return absl::InvalidArgumentError(StrCat("volume has ", values.size(),
-                                                   " values, expected ", geometry.voxel_count()));
+  return Create(geometry, VoxelValues::Float(std::move(values)), limits);
+}
+
+Result<Volume> Volume::Create(VolumeGeometry geometry, VoxelValues values,
+                              const VolumeLimits& limits) {
+  RETURN_IF_ERROR(ValidateGeometry(geometry, limits, values.encoding()));
+  if (values.size() != geometry.voxel_count()) {
+    return absl::InvalidArgumentError(
+        StrCat("volume has ", values.size(), " values, expected ", geometry.voxel_count()));
   }
   Volume volume(geometry, std::move(values));
+  if (volume.values_.is_int16()) {
+    const auto stored = volume.values_.int16s();
+    const auto [lo, hi] = std::minmax_element(stored.begin(), stored.end());
+    const int32_t offset = volume.values_.int16_offset();
+    volume.min_value_ = static_cast<float>(int32_t{*lo} + offset);
+    volume.max_value_ = static_cast<float>(int32_t{*hi} + offset);
+    return volume;
+  }
   float lo = std::numeric_limits<float>::infinity();
   float hi = -std::numeric_limits<float>::infinity();
   int64_t non_finite = 0;
-  for (float v : volume.values_) {
+  for (float v : volume.values_.floats()) {
     if (!std::isfinite(v)) {
       ++non_finite;
       continue;
@@ -76,11 +100,11 @@ Result<Volume> Volume::Create(VolumeGeometry geometry, std::vector<float> values
     lo = std::min(lo, v);
     hi = std::max(hi, v);
   }
-  if (non_finite == static_cast<int64_t>(volume.values_.size())) lo = hi = 0.0f;
+  if (non_finite == volume.values_.size()) lo = hi = 0.0f;
   // NaN or infinite voxels would poison every mean and gradient downstream;
   // they become the smallest finite value (the background) and are counted.
   if (non_finite > 0) {
-    for (float& v : volume.values_) {
+    for (float& v : volume.values_.mutable_floats()) {
       if (!std::isfinite(v)) v = lo;
     }
   }

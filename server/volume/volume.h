@@ -15,7 +15,9 @@
 
 #include <glm/glm.hpp>
 
+#include "server/common/progress.h"
 #include "server/common/status.h"
+#include "server/volume/voxel_values.h"
 
 namespace vpm {
 
@@ -50,27 +52,52 @@ struct Landmark {
   std::string description;
 };
 
+// The default budget of one volume's values in memory: a 512 x 512 x 1,024
+// int16 CT (or a 512^3 float volume).
+inline constexpr int64_t kDefaultMaxVolumeBytes = int64_t{512} << 20;
+
 // Caps that protect the process from absurd inputs. Readers check them before
 // allocating.
 struct VolumeLimits {
-  int64_t max_voxels = int64_t{512} * 512 * 512;
+  // Bytes of the volume's values as held (2 per voxel for int16, 4 for
+  // float), on the host and again on the device (`--max-volume-bytes`).
+  int64_t max_volume_bytes = kDefaultMaxVolumeBytes;
   int64_t max_bytes = int64_t{4} << 30;  // bytes read or inflated from a source
+  // Where readers report how far they have read (the fraction of the file
+  // or of the folder's files); not owned, may be null. ReadVolume sets it.
+  const ProgressFn* read_progress = nullptr;
 };
 
-// Checks dims, spacing, direction and the voxel cap; the message names what is wrong.
-Status ValidateGeometry(const VolumeGeometry& geometry, const VolumeLimits& limits);
+// No budget: for volumes derived from one that passed its own (a warp).
+inline VolumeLimits UnboundedVolumeLimits() {
+  return {.max_volume_bytes = int64_t{1} << 62, .max_bytes = int64_t{1} << 62};
+}
+
+// Checks dims, spacing, direction and the byte budget for values held as
+// `encoding` (default int16, the smallest: whether any volume of this
+// geometry can fit); the message names what is wrong, the size and the budget.
+Status ValidateGeometry(const VolumeGeometry& geometry, const VolumeLimits& limits,
+                        VoxelEncoding encoding = VoxelEncoding::kInt16);
+// "512x512x900 int16 voxels (471.9 MiB)", for messages.
+std::string DescribeVolumeSize(const VolumeGeometry& geometry, VoxelEncoding encoding);
 
 class Volume {
  public:
   // `values` has geometry.voxel_count() floats, x fastest: index i + nx*(j + ny*k).
   static Result<Volume> Create(VolumeGeometry geometry, std::vector<float> values,
                                const VolumeLimits& limits = {});
+  // The same with values held as int16 + offset or float (voxel_values.h).
+  static Result<Volume> Create(VolumeGeometry geometry, VoxelValues values,
+                               const VolumeLimits& limits = {});
 
   const VolumeGeometry& geometry() const { return geometry_; }
   const std::array<int64_t, 3>& dims() const { return geometry_.dims; }
   const glm::dvec3& spacing_mm() const { return geometry_.spacing_mm; }
-  std::span<const float> values() const { return values_; }
-  std::span<float> mutable_values() { return values_; }
+  // The values as held; read them with voxels()[n] or voxels().Visit(...).
+  const VoxelValues& voxels() const { return values_; }
+  VoxelEncoding encoding() const { return values_.encoding(); }
+  // Bytes of the values in memory (2 or 4 per voxel).
+  int64_t value_bytes() const { return values_.size() * values_.bytes_per_voxel(); }
 
   int64_t LinearIndex(int64_t i, int64_t j, int64_t k) const {
     return i + geometry_.dims[0] * (j + geometry_.dims[1] * k);
@@ -83,7 +110,8 @@ class Volume {
   float min_value() const { return min_value_; }
   float max_value() const { return max_value_; }
   // Count of NaN or infinite voxels found on creation; they were replaced by
-  // min_value() (the background), so that no NaN reaches the algorithm.
+  // min_value() (the background), so that no NaN reaches the algorithm
+  // (always 0 for int16 values).
   int64_t non_finite_count() const { return non_finite_count_; }
 
   const std::vector<Landmark>& landmarks() const { return landmarks_; }
@@ -98,10 +126,10 @@ class Volume {
   void add_note(std::string note) { notes_.push_back(std::move(note)); }
 
  private:
-  Volume(VolumeGeometry geometry, std::vector<float> values);
+  Volume(VolumeGeometry geometry, VoxelValues values);
 
   VolumeGeometry geometry_;
-  std::vector<float> values_;
+  VoxelValues values_;
   float min_value_ = 0.0f;
   float max_value_ = 0.0f;
   int64_t non_finite_count_ = 0;

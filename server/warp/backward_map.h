@@ -37,7 +37,7 @@ class BackwardMap {
  public:
   struct Options {
     // M grid points per axis, each >= 2; 0 on every axis: the default,
-    // DefaultBackwardMapDims (ceil(n / 4)); the volume's dims: the exact map
+    // DefaultBackwardMapDims (ceil(n / 4), at most 64); the volume's dims: the exact map
     // (one point per voxel centre).
     std::array<int64_t, 3> map_dims{0, 0, 0};
     double eps = kBackwardMapEps;  // barycentric tolerance

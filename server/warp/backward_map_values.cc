@@ -7,7 +7,9 @@ namespace vpm {
 
 std::array<int64_t, 3> DefaultBackwardMapDims(const std::array<int64_t, 3>& volume_dims) {
   std::array<int64_t, 3> m;
-  for (int a = 0; a < 3; ++a) m[a] = std::max<int64_t>((volume_dims[a] + 3) / 4, 2);
+  for (int a = 0; a < 3; ++a) {
+    m[a] = std::clamp<int64_t>((volume_dims[a] + 3) / 4, 2, kMaxDefaultMapPointsPerAxis);
+  }
   return m;
 }
 

@@ -17,7 +17,14 @@ namespace vpm {
 // small enough to move nothing visibly (1e-5 of a tet's size).
 inline constexpr double kBackwardMapEps = 1e-5;
 
-// The default map resolution: ceil(n / 4) grid points per axis, at least 2.
+// At most this many default map grid points per axis: the map follows the
+// mesh (a lattice step h of extent / 20 by default), not the voxel count, so
+// that a 512 x 512 x 900 CT's drags cost what the 256^3 phantom's do
+// (docs/BENCHMARKS.md, "Full-size volumes"); 64 is the phantom's own.
+inline constexpr int64_t kMaxDefaultMapPointsPerAxis = 64;
+
+// The default map resolution: ceil(n / 4) grid points per axis, at least 2
+// and at most kMaxDefaultMapPointsPerAxis.
 std::array<int64_t, 3> DefaultBackwardMapDims(const std::array<int64_t, 3>& volume_dims);
 
 struct BackwardMapValues {

@@ -43,9 +43,8 @@ Status VolumeWarper::Record(gpu::ComputeBatch& batch, const GpuVolume& volume,
         StrCat("warp: output buffer holds ", out.size_bytes(), " bytes, needs ", bytes));
   }
   const bool sampler = options_.source_read == SourceRead::kSampler;
-  if (sampler && (source_image == nullptr || source_image->extent() != e ||
-                  source_image->format() != vk::Format::eR32Sfloat)) {
-    return absl::InvalidArgumentError("warp: the sampler path needs the volume's R32F 3D image");
+  if (sampler && (source_image == nullptr || source_image->extent() != e)) {
+    return absl::InvalidArgumentError("warp: the sampler path needs the volume's 3D image");
   }
   const glm::dvec3& s = g.spacing_mm;
   const auto& m = map.dims();
@@ -57,8 +56,9 @@ Status VolumeWarper::Record(gpu::ComputeBatch& batch, const GpuVolume& volume,
       .map_dims = glm::vec4(float(m[0]), float(m[1]), float(m[2]), 0.0f)};
   const gpu::KernelArg source =
       sampler ? gpu::KernelArg(source_image) : gpu::KernelArg(volume.texel_view());
-  return batch.Dispatch(kernel_, {&map.image(), source, &out}, push, kernel_.GroupsFor(e),
-                        kernel_.spec().name);
+  ASSIGN_OR_RETURN(const gpu::ComputeKernel kernel, volume.KernelFor(*context_, kernel_));
+  return batch.Dispatch(kernel, {&map.image(), source, &out}, push, kernel.GroupsFor(e),
+                        kernel.spec().name);
 }
 
 Result<Volume> VolumeWarper::Warp(GpuVolume& volume, const Volume& source, const BackwardMap& map,
@@ -79,7 +79,10 @@ Result<Volume> VolumeWarper::Warp(GpuVolume& volume, const Volume& source, const
   ASSIGN_OR_RETURN(const auto timings, batch.SubmitAndWait());
   if (gpu_ms != nullptr) *gpu_ms = timings.front().gpu_ms;
   RETURN_IF_ERROR(out.DownloadSpan(std::span<float>(values)));
-  ASSIGN_OR_RETURN(Volume warped, Volume::Create(source.geometry(), std::move(values)));
+  // Float, whatever the source's encoding: interpolated values are not
+  // integers. The source passed its budget; its warp is not capped again.
+  ASSIGN_OR_RETURN(Volume warped, Volume::Create(source.geometry(), std::move(values),
+                                                 UnboundedVolumeLimits()));
   warped.set_source(source.source() + " (warped)");
   return warped;
 }

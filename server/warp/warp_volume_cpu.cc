@@ -24,7 +24,7 @@ Result<Volume> Resample(const Volume& source, int threads, const RestOf& rest_of
       }
     }
   });
-  ASSIGN_OR_RETURN(Volume warped, Volume::Create(g, std::move(values)));
+  ASSIGN_OR_RETURN(Volume warped, Volume::Create(g, std::move(values), UnboundedVolumeLimits()));
   warped.set_source(source.source() + " (warped)");
   return warped;
 }

@@ -141,3 +141,47 @@ TEST(VpmCli, MeshWorksOnARealMriWithTheMriPreset) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(VpmCli, OfflineCommandsTakeTheVolumeBudget) {
+  // The phantom is float: 48^3 * 4 bytes; one byte less is refused, naming both.
+  const CliRun over =
+      Vpm("volume info 'phantom:abdomen?size=48' --max-volume-bytes " +
+          std::to_string(48 * 48 * 48 * 4 - 1));
+  EXPECT_EQ(over.exit_code, 1) << over.output;
+  EXPECT_NE(over.output.find("RESOURCE_EXHAUSTED"), std::string::npos) << over.output;
+  EXPECT_NE(over.output.find("--max-volume-bytes"), std::string::npos) << over.output;
+  EXPECT_NE(over.output.find(std::to_string(48 * 48 * 48 * 4 - 1)), std::string::npos)
+      << over.output;
+  const CliRun fits = Vpm("volume info 'phantom:abdomen?size=48' --json --max-volume-bytes " +
+                          std::to_string(48 * 48 * 48 * 4));
+  ASSERT_EQ(fits.exit_code, 0) << fits.output;
+  const auto info = nlohmann::json::parse(fits.output.substr(fits.output.find('{')));
+  EXPECT_EQ(info["voxel_encoding"], "float32");
+  EXPECT_EQ(info["value_bytes"], 48 * 48 * 48 * 4);
+}
+
+TEST(VpmCli, ExportOfAnInt16VolumeStaysInt16) {
+  // An int16 raw file through export and back: int16, the same values.
+  const std::string raw = TempPath("ct16.raw");
+  {
+    std::ofstream out(raw, std::ios::binary);
+    for (int n = 0; n < 4 * 3 * 2; ++n) {
+      const int16_t v = static_cast<int16_t>(n * 100 - 1024);
+      out.write(reinterpret_cast<const char*>(&v), sizeof(v));
+    }
+  }
+  const std::string nii = TempPath("ct16.nii");
+  const CliRun exported = Vpm("volume export 'raw:" + raw +
+                              "?dims=4,3,2&type=int16&spacing=1,1,2' " + nii + " --progress");
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  const CliRun run = Vpm("volume info " + nii + " --json");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto info = nlohmann::json::parse(run.output.substr(run.output.find('{')));
+  EXPECT_EQ(info["voxel_encoding"], "int16");
+  EXPECT_EQ(info["value_range"], nlohmann::json({-1024.0, 1276.0}));
+  EXPECT_EQ(std::filesystem::file_size(nii), 352u + 24 * 2);
+}
+
+}  // namespace

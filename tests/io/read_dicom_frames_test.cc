@@ -131,7 +131,7 @@ TEST(DicomFrames, SharedRescaleAndBadFrameCounts) {
   auto bytes = ReadFileBytes(dir / "enhanced.dcm", {});
   ASSERT_TRUE(bytes.ok());
   VolumeLimits limits;
-  limits.max_voxels = 20;  // 2 frames of 12
+  limits.max_volume_bytes = 20 * 2;  // 2 frames of 12
   auto capped = ParseDicomFrames(*bytes, limits);
   EXPECT_EQ(capped.status().code(), absl::StatusCode::kResourceExhausted) << capped.status();
 }

@@ -128,7 +128,7 @@ TEST(DicomJpeg2000, ReadsLosslessAndLossySyntaxesBitExact) {
     EXPECT_EQ(v->dims(), (std::array<int64_t, 3>{6, 5, 3}));
     for (int k = 0; k < 3; ++k) {
       const std::vector<int32_t> expected = Samples(k, 30);
-      for (int n = 0; n < 30; ++n) EXPECT_EQ(v->values()[k * 30 + n], expected[n]) << k << " " << n;
+      for (int n = 0; n < 30; ++n) EXPECT_EQ(v->voxels()[k * 30 + n], expected[n]) << k << " " << n;
     }
   }
 }

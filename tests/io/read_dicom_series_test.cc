@@ -92,7 +92,7 @@ TEST(DicomSeriesReader, HandlesBitDepthsAndSignedness) {
     ASSERT_TRUE(WriteDicomSlice(dir / "one.dcm", s));
     auto v = ReadDicomSeries(dir, {});
     ASSERT_TRUE(v.ok()) << v.status();
-    EXPECT_EQ(v->values()[0], c.expected) << c.bits_allocated << "/" << c.bits_stored;
+    EXPECT_EQ(v->voxels()[0], c.expected) << c.bits_allocated << "/" << c.bits_stored;
   }
 }
 
@@ -353,7 +353,7 @@ TEST(DicomSeriesReader, RejectsEmptyAndMissingFolders) {
 TEST(DicomSeriesReader, RejectsSeriesOverCaps) {
   const auto dir = WriteSeries(DicomSliceSpec{}, 4, 1.0, glm::dvec3(0.0));
   VolumeLimits limits;
-  limits.max_voxels = 30;  // 12 voxels per slice
+  limits.max_volume_bytes = 30 * 2;  // 12 voxels per slice
   ExpectError(ReadDicomSeries(dir, limits), absl::StatusCode::kResourceExhausted, "cap");
   limits = {};
   limits.max_bytes = 1000;  // each file is several hundred bytes

@@ -62,8 +62,8 @@ TEST(MetaImageReader, ReadsAttachedWithTransformOffsetSpacing) {
       "AnatomicalOrientation = RAI\n");
   auto v = ReadFile("x.mha", Attached(header, Shorts({-1024, 0, 50, 3000})));
   ASSERT_TRUE(v.ok()) << v.status();
-  EXPECT_EQ(v->values()[0], -1024.0f);
-  EXPECT_EQ(v->values()[3], 3000.0f);
+  EXPECT_EQ(v->voxels()[0], -1024.0f);
+  EXPECT_EQ(v->voxels()[3], 3000.0f);
   EXPECT_EQ(v->geometry().direction[0], glm::dvec3(0, 1, 0));
   EXPECT_EQ(v->geometry().direction[1], glm::dvec3(-1, 0, 0));
   EXPECT_EQ(v->geometry().origin_mm, glm::dvec3(-5, 6.5, 7));
@@ -76,7 +76,7 @@ TEST(MetaImageReader, ReadsCompressedBigEndian) {
                  "BinaryDataByteOrderMSB = True");
   auto v = ReadFile("c.mha", Attached(header, Zlib(Shorts({1, 2, 3, -4}, true))));
   ASSERT_TRUE(v.ok()) << v.status();
-  EXPECT_EQ(v->values()[3], -4.0f);
+  EXPECT_EQ(v->voxels()[3], -4.0f);
 }
 
 TEST(MetaImageReader, ReadsDetachedWithHeaderSize) {
@@ -88,7 +88,7 @@ TEST(MetaImageReader, ReadsDetachedWithHeaderSize) {
   auto v = ReadMetaImage(dir / "v.mhd", {});
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_EQ(v->dims(), (std::array<int64_t, 3>{3, 1, 1}));
-  EXPECT_EQ(v->values()[2], 30.0f);
+  EXPECT_EQ(v->voxels()[2], 30.0f);
 }
 
 TEST(MetaImageReader, ReadsAllElementTypes) {
@@ -113,7 +113,7 @@ TEST(MetaImageReader, ReadsAllElementTypes) {
   for (const Case& c : cases) {
     auto v = ReadFile("t.mha", Attached(Header("", c.type, "1 1 1"), c.bytes));
     ASSERT_TRUE(v.ok()) << c.type << ": " << v.status();
-    EXPECT_EQ(v->values()[0], c.value) << c.type;
+    EXPECT_EQ(v->voxels()[0], c.value) << c.type;
   }
 }
 

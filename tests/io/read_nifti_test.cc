@@ -83,11 +83,11 @@ TEST(NiftiReader, AppliesSlopeAndIntercept) {
   h.scl_inter = -1024.0f;
   auto v = ReadBytes(File1(h, Int16Data({0, 1, 512, -3})), "ct.nii");
   ASSERT_TRUE(v.ok()) << v.status();
-  ASSERT_EQ(v->values().size(), 4u);
-  EXPECT_EQ(v->values()[0], -1024.0f);
-  EXPECT_EQ(v->values()[1], -1022.0f);
-  EXPECT_EQ(v->values()[2], 0.0f);
-  EXPECT_EQ(v->values()[3], -1030.0f);
+  ASSERT_EQ(v->voxels().size(), 4);
+  EXPECT_EQ(v->voxels()[0], -1024.0f);
+  EXPECT_EQ(v->voxels()[1], -1022.0f);
+  EXPECT_EQ(v->voxels()[2], 0.0f);
+  EXPECT_EQ(v->voxels()[3], -1030.0f);
 }
 
 TEST(NiftiReader, IgnoresZeroSlope) {
@@ -96,8 +96,8 @@ TEST(NiftiReader, IgnoresZeroSlope) {
   h.scl_inter = 100.0f;
   auto v = ReadBytes(File1(h, Int16Data({7, -7})), "raw_values.nii");
   ASSERT_TRUE(v.ok()) << v.status();
-  EXPECT_EQ(v->values()[0], 7.0f);
-  EXPECT_EQ(v->values()[1], -7.0f);
+  EXPECT_EQ(v->voxels()[0], 7.0f);
+  EXPECT_EQ(v->voxels()[1], -7.0f);
 }
 
 TEST(NiftiReader, NoTransformUsesPixdimInRas) {
@@ -211,7 +211,7 @@ TEST(NiftiReader, ReadsNifti2) {
   auto v = ReadNifti(dir / "two.nii", {});
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_EQ(v->dims(), (std::array<int64_t, 3>{2, 1, 2}));
-  EXPECT_EQ(v->values()[3], -2.0f);
+  EXPECT_EQ(v->voxels()[3], -2.0f);
   EXPECT_EQ(v->geometry().direction, glm::dmat3(1.0));
   EXPECT_EQ(v->spacing_mm(), glm::dvec3(0.25, 0.5, 4.0));
   EXPECT_EQ(v->geometry().origin_mm, glm::dvec3(0, 0, -100));
@@ -243,8 +243,8 @@ TEST(NiftiReader, ReadsBigEndianFile) {
   testing::AppendScalar(bytes, int16_t{-2}, true);
   auto v = ReadBytes(bytes, "be.nii");
   ASSERT_TRUE(v.ok()) << v.status();
-  EXPECT_EQ(v->values()[0], 300.0f);
-  EXPECT_EQ(v->values()[1], -2.0f);
+  EXPECT_EQ(v->voxels()[0], 300.0f);
+  EXPECT_EQ(v->voxels()[1], -2.0f);
 }
 
 TEST(NiftiReader, ReadsGzippedFile) {
@@ -253,7 +253,7 @@ TEST(NiftiReader, ReadsGzippedFile) {
   ASSERT_TRUE(gz.ok());
   auto v = ReadBytes(*gz, "small.nii.gz");
   ASSERT_TRUE(v.ok()) << v.status();
-  EXPECT_EQ(v->values()[3], 4.0f);
+  EXPECT_EQ(v->voxels()[3], 4.0f);
 }
 
 TEST(NiftiReader, ReplacesNonFiniteVoxelsByMinimum) {
@@ -265,7 +265,7 @@ TEST(NiftiReader, ReplacesNonFiniteVoxelsByMinimum) {
   auto v = ReadBytes(File1(h, data), "nan.nii");
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_EQ(v->non_finite_count(), 1);
-  EXPECT_EQ(v->values()[1], -2.0f);
+  EXPECT_EQ(v->voxels()[1], -2.0f);
 }
 
 // ---- Bad input ----
@@ -335,7 +335,7 @@ TEST(NiftiReader, RejectsAbsurdDimsBeforeAllocating) {
               "over the cap");
   h = Header1(600, 600, 600, DT_UINT8, 8);
   VolumeLimits small;
-  small.max_voxels = 1000;
+  small.max_volume_bytes = 1000 * 2;  // 1000 int16 voxels
   ExpectError(ReadBytes(File1(h, {1}), "capped.nii", small), absl::StatusCode::kResourceExhausted,
               "cap");
 }
@@ -424,6 +424,78 @@ TEST(NiftiReader, RejectsFileOverByteCap) {
   limits.max_bytes = 1000;
   ExpectError(ReadBytes(File1(h, std::vector<uint8_t>(4096, 0)), "big.nii", limits),
               absl::StatusCode::kResourceExhausted, "cap of 1000 bytes");
+}
+
+}  // namespace
+}  // namespace vpm
+
+namespace vpm {
+namespace {
+
+std::vector<uint8_t> Uint16Data(const std::vector<uint16_t>& values) {
+  std::vector<uint8_t> out;
+  for (uint16_t v : values) testing::AppendScalar(out, v);
+  return out;
+}
+
+TEST(NiftiReader, KeepsIntegerSourcesAsInt16) {
+  nifti_1_header h = Header1(2, 2, 1, DT_INT16, 16);
+  h.scl_slope = 1.0f;
+  h.scl_inter = -1024.0f;
+  auto v = ReadBytes(File1(h, Int16Data({0, 1, 4095, -3})), "ct.nii");
+  ASSERT_TRUE(v.ok()) << v.status();
+  EXPECT_EQ(v->encoding(), VoxelEncoding::kInt16);
+  EXPECT_EQ(v->value_bytes(), 4 * 2);
+  EXPECT_EQ(v->voxels().ToFloats(), (std::vector<float>{-1024, -1023, 3071, -1027}));
+  // Through the general conversion (a slope of 2): int16 too.
+  h.scl_slope = 2.0f;
+  v = ReadBytes(File1(h, Int16Data({0, 1, 4095, -3})), "ct2.nii");
+  ASSERT_TRUE(v.ok()) << v.status();
+  EXPECT_EQ(v->encoding(), VoxelEncoding::kInt16);
+  EXPECT_EQ(v->voxels().ToFloats(), (std::vector<float>{-1024, -1022, 7166, -1030}));
+  EXPECT_TRUE(v->notes().empty());
+}
+
+TEST(NiftiReader, KeepsFullRangeUint16AsInt16WithOffset) {
+  nifti_1_header h = Header1(3, 1, 1, DT_UINT16, 16);
+  auto v = ReadBytes(File1(h, Uint16Data({0, 65535, 40000})), "mri.nii");
+  ASSERT_TRUE(v.ok()) << v.status();
+  EXPECT_EQ(v->encoding(), VoxelEncoding::kInt16);
+  EXPECT_EQ(v->voxels().int16_offset(), 32768);
+  EXPECT_EQ(v->voxels().ToFloats(), (std::vector<float>{0, 65535, 40000}));
+}
+
+TEST(NiftiReader, KeepsFloatWhenRescaledValuesAreNotIntegersAndSaysSo) {
+  nifti_1_header h = Header1(2, 1, 1, DT_INT16, 16);
+  h.scl_slope = 0.5f;
+  auto v = ReadBytes(File1(h, Int16Data({3, 4})), "scaled.nii");
+  ASSERT_TRUE(v.ok()) << v.status();
+  EXPECT_EQ(v->encoding(), VoxelEncoding::kFloat32);
+  EXPECT_EQ(v->voxels().ToFloats(), (std::vector<float>{1.5f, 2.0f}));
+  ASSERT_EQ(v->notes().size(), 1u);
+  EXPECT_NE(v->notes()[0].find("float32"), std::string::npos) << v->notes()[0];
+  // Float sources stay float without a note.
+  h = Header1(2, 1, 1, DT_FLOAT32, 32);
+  std::vector<uint8_t> data;
+  testing::AppendScalar(data, 1.0f);
+  testing::AppendScalar(data, 2.0f);
+  v = ReadBytes(File1(h, data), "float.nii");
+  ASSERT_TRUE(v.ok()) << v.status();
+  EXPECT_EQ(v->encoding(), VoxelEncoding::kFloat32);
+  EXPECT_TRUE(v->notes().empty());
+}
+
+TEST(NiftiReader, BudgetCountsTwoBytesPerInt16Voxel) {
+  nifti_1_header h = Header1(10, 10, 10, DT_INT16, 16);
+  VolumeLimits limits;
+  limits.max_volume_bytes = 2000;  // exactly 1000 int16 voxels
+  EXPECT_TRUE(ReadBytes(File1(h, std::vector<uint8_t>(2000, 0)), "fits.nii", limits).ok());
+  h = Header1(10, 10, 10, DT_FLOAT32, 32);
+  const Result<Volume> floats =
+      ReadBytes(File1(h, std::vector<uint8_t>(4000, 0)), "float.nii", limits);
+  EXPECT_EQ(floats.status().code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_NE(floats.status().message().find("--max-volume-bytes"), std::string_view::npos)
+      << floats.status();
 }
 
 }  // namespace

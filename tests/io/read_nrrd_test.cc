@@ -55,8 +55,8 @@ TEST(NrrdReader, ReadsAttachedRawAndConvertsRasToLps) {
   auto v = ReadFile("ras.nrrd", Attached(kRasHeader, Int16Le({1, -2, 3, 400})));
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_EQ(v->dims(), (std::array<int64_t, 3>{2, 2, 1}));
-  EXPECT_EQ(v->values()[1], -2.0f);
-  EXPECT_EQ(v->values()[3], 400.0f);
+  EXPECT_EQ(v->voxels()[1], -2.0f);
+  EXPECT_EQ(v->voxels()[3], 400.0f);
   EXPECT_EQ(v->spacing_mm(), glm::dvec3(0.5, 2.0, 3.0));
   EXPECT_EQ(v->geometry().direction[0], glm::dvec3(0, -1, 0));  // RAS +y = LPS -y
   EXPECT_EQ(v->geometry().direction[1], glm::dvec3(1, 0, 0));   // RAS -x = LPS +x
@@ -73,8 +73,8 @@ TEST(NrrdReader, ReadsGzipBigEndianWithLps) {
   ASSERT_TRUE(gz.ok());
   auto v = ReadFile("lps.nrrd", Attached(header, *gz));
   ASSERT_TRUE(v.ok()) << v.status();
-  EXPECT_EQ(v->values()[0], -1000.0f);
-  EXPECT_EQ(v->values()[2], 1000.0f);
+  EXPECT_EQ(v->voxels()[0], -1000.0f);
+  EXPECT_EQ(v->voxels()[2], 1000.0f);
   EXPECT_EQ(v->geometry().origin_mm, glm::dvec3(-1, -2, -3));
   EXPECT_EQ(v->geometry().direction, glm::dmat3(1.0));
 }
@@ -92,7 +92,7 @@ TEST(NrrdReader, ReadsDetachedHeaderWithSpacingsAndSkips) {
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_EQ(v->dims(), (std::array<int64_t, 3>{2, 2, 1}));
   EXPECT_EQ(v->spacing_mm(), glm::dvec3(0.25, 4.0, 1.0));
-  EXPECT_EQ(v->values()[2], -3.5f);
+  EXPECT_EQ(v->voxels()[2], -3.5f);
 }
 
 TEST(NrrdReader, ReadsAllIntegerTypesAndAscii) {
@@ -120,13 +120,13 @@ TEST(NrrdReader, ReadsAllIntegerTypesAndAscii) {
                                             "encoding: raw\n");
     auto v = ReadFile("t.nrrd", Attached(header, c.data));
     ASSERT_TRUE(v.ok()) << c.type << ": " << v.status();
-    EXPECT_EQ(v->values()[1], c.last) << c.type;
+    EXPECT_EQ(v->voxels()[1], c.last) << c.type;
   }
   auto v = ReadFile("a.nrrd", Attached("NRRD0004\ntype: float\ndimension: 2\nsizes: 3 1\n"
                                        "encoding: ascii\n",
                                        ToBytes("1.5 -2\n 3e2\n")));
   ASSERT_TRUE(v.ok()) << v.status();
-  EXPECT_EQ(v->values()[2], 300.0f);
+  EXPECT_EQ(v->voxels()[2], 300.0f);
 }
 
 // ---- Bad input ----

@@ -43,8 +43,8 @@ TEST(RawReader, ReadsLittleAndBigEndianAfterOffset) {
   auto b = ReadRaw(dir / "b.raw", o, {});
   ASSERT_TRUE(b.ok()) << b.status();
   for (auto* v : {&*l, &*b}) {
-    EXPECT_EQ(v->values()[1], -2.0f);
-    EXPECT_EQ(v->values()[3], -32768.0f);
+    EXPECT_EQ(v->voxels()[1], -2.0f);
+    EXPECT_EQ(v->voxels()[3], -32768.0f);
     EXPECT_EQ(v->spacing_mm(), glm::dvec3(0.5, 1.0, 2.0));
     EXPECT_EQ(v->geometry().direction, glm::dmat3(1.0));
   }

@@ -50,7 +50,7 @@ TEST(ResampleShearedStack, KeepsAnUnshearedEvenStackBitForBit) {
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_EQ(v->dims(), (std::array<int64_t, 3>{6, 5, 3}));
   for (int64_t k = 0; k < 3; ++k) {
-    for (int64_t n = 0; n < 30; ++n) EXPECT_EQ(v->values()[k * 30 + n], f.values[k][n]);
+    for (int64_t n = 0; n < 30; ++n) EXPECT_EQ(v->voxels()[k * 30 + n], f.values[k][n]);
   }
   EXPECT_NEAR(glm::distance(v->geometry().origin_mm, f.stack.frame * glm::dvec3(1, 2, 3)), 0.0,
               1e-12);
@@ -114,7 +114,7 @@ TEST(ResampleShearedStack, ChecksTheCapOnTheLargerGridAndRejectsBadInput) {
   for (int k = 0; k < 4; ++k) positions.push_back({0.0, 3.0 * k, 1.0 * k});
   StackFixture f(glm::dmat3(1.0), positions);
   VolumeLimits limits;
-  limits.max_voxels = 4 * 30;  // the slices fit, the sheared box (6 x 17 x 4) does not
+  limits.max_volume_bytes = 4 * 30 * 4;  // float  // the slices fit, the sheared box (6 x 17 x 4) does not
   auto v = ResampleShearedStack(f.stack, 1.0, 0.0f, limits);
   ASSERT_FALSE(v.ok());
   EXPECT_EQ(v.status().code(), absl::StatusCode::kResourceExhausted) << v.status();

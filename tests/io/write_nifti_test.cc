@@ -41,9 +41,9 @@ void ExpectRoundTrip(const VolumeGeometry& g, const std::string& file_name) {
   auto read = ReadNifti(path, {});
   ASSERT_TRUE(read.ok()) << read.status();
   testing::ExpectGeometryNear(read->geometry(), g, 1e-5);
-  ASSERT_EQ(read->values().size(), original.values().size());
-  for (size_t n = 0; n < original.values().size(); ++n) {
-    ASSERT_EQ(read->values()[n], original.values()[n]) << "voxel " << n;
+  ASSERT_EQ(read->voxels().size(), original.voxels().size());
+  for (size_t n = 0; n < size_t(original.voxels().size()); ++n) {
+    ASSERT_EQ(read->voxels()[n], original.voxels()[n]) << "voxel " << n;
   }
 }
 

@@ -92,9 +92,9 @@ TEST(ReconstructionError, IsPositiveForASphereAndMatchesTheInterpolatedVolume) {
   int64_t positive_count = 0;
   for (size_t n = 0; n < interpolated->size(); ++n) {
     ASSERT_FALSE(std::isnan((*interpolated)[n])) << n;
-    const double e = volume.values()[n] - static_cast<double>((*interpolated)[n]);
+    const double e = volume.voxels().floats()[n] - static_cast<double>((*interpolated)[n]);
     all += e * e;
-    if (tf.Evaluate(volume.values()[n]) > 0.0) {
+    if (tf.Evaluate(volume.voxels().floats()[n]) > 0.0) {
       positive += e * e;
       ++positive_count;
     }
@@ -125,7 +125,7 @@ TEST(ReconstructionError, InterpolationIsExactAtTheVertices) {
   for (const MeshVertex& v : mesh.vertices) {
     const glm::ivec3 i(v.position_mm);
     const int64_t n = volume.LinearIndex(i.x, i.y, i.z);
-    EXPECT_FLOAT_EQ((*interpolated)[n], volume.values()[n]);
+    EXPECT_FLOAT_EQ((*interpolated)[n], volume.voxels().floats()[n]);
   }
 }
 

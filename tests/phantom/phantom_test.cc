@@ -223,7 +223,7 @@ TEST(Phantom, RejectsBadSpecsWithTheRightCode) {
         << c.spec << ": " << v.status();
   }
   VolumeLimits tiny;
-  tiny.max_voxels = 1000;
+  tiny.max_volume_bytes = 1000 * 4;  // 1000 float voxels
   EXPECT_EQ(MakePhantom("abdomen?size=16", tiny).status().code(),
             absl::StatusCode::kResourceExhausted);
 }
@@ -237,25 +237,25 @@ TEST(Phantom, SameSpecGivesIdenticalBytesWhateverTheThreadCount) {
   spec.threads = 3;
   const Volume three = MakeOrDie(spec);
   const Volume again = MakeOrDie("abdomen?dims=45,38,33");
-  ASSERT_EQ(one.values().size(), three.values().size());
-  EXPECT_EQ(std::memcmp(one.values().data(), three.values().data(), one.values().size_bytes()), 0);
-  EXPECT_EQ(std::memcmp(one.values().data(), again.values().data(), one.values().size_bytes()), 0);
+  ASSERT_EQ(one.voxels().floats().size(), three.voxels().floats().size());
+  EXPECT_EQ(std::memcmp(one.voxels().floats().data(), three.voxels().floats().data(), one.voxels().floats().size_bytes()), 0);
+  EXPECT_EQ(std::memcmp(one.voxels().floats().data(), again.voxels().floats().data(), one.voxels().floats().size_bytes()), 0);
 }
 
 TEST(Phantom, SeedChangesOnlyTheNoise) {
   const Volume a = MakeOrDie("abdomen?size=40&seed=1");
   const Volume b = MakeOrDie("abdomen?size=40&seed=2");
   double sum2 = 0.0;
-  for (size_t n = 0; n < a.values().size(); ++n) {
-    const double d = a.values()[n] - b.values()[n];
+  for (size_t n = 0; n < a.voxels().floats().size(); ++n) {
+    const double d = a.voxels().floats()[n] - b.voxels().floats()[n];
     sum2 += d * d;
   }
   // The difference of two independent N(0, 10^2) fields has sigma 10 * sqrt(2).
-  EXPECT_NEAR(std::sqrt(sum2 / static_cast<double>(a.values().size())), 10.0 * std::sqrt(2.0), 0.5);
+  EXPECT_NEAR(std::sqrt(sum2 / static_cast<double>(a.voxels().floats().size())), 10.0 * std::sqrt(2.0), 0.5);
   const Volume quiet_a = MakeOrDie("abdomen?size=40&seed=1&noise=0");
   const Volume quiet_b = MakeOrDie("abdomen?size=40&seed=2&noise=0");
   EXPECT_EQ(
-      std::memcmp(quiet_a.values().data(), quiet_b.values().data(), quiet_a.values().size_bytes()),
+      std::memcmp(quiet_a.voxels().floats().data(), quiet_b.voxels().floats().data(), quiet_a.voxels().floats().size_bytes()),
       0);
 }
 
@@ -366,7 +366,7 @@ TEST(Phantom, BoneExceedsThresholdButNoVesselOrKidneyDoes) {
   const Volume v = MakeOrDie("abdomen?size=96");
   const VolumeGeometry& g = v.geometry();
   int64_t bone = 0;
-  for (float x : v.values()) bone += x >= 250.0f;
+  for (float x : v.voxels().floats()) bone += x >= 250.0f;
   EXPECT_GT(bone, v.geometry().voxel_count() / 200);  // over 0.5% of the box is bone
   EXPECT_GT(MeanNear(v, LandmarkMm(v, "vertebral_body"), 6.0), 250.0);
 

@@ -441,6 +441,65 @@ TEST_F(RaycastTest, Sampler3DVariant_MatchesCpuReference) {
   ExpectClose(*gpu, RenderCpu(r, &host), 2.0 / 255, 24.0 / 255, "sampler3D, cell gradient");
 }
 
+// The sphere-rod volume rounded to integers, held as int16 (offset 0 and
+// 30000) and as float: the GPU reads R32_SINT texels of 2 int16 voxels or
+// of one float's bits and decodes both to the same floats, so every frame is bit for bit the same;
+// the int16 frames match the CPU reference within the tolerances above, the
+// sampler3D's R16_UNORM image within its own.
+TEST_F(RaycastTest, Int16Volume_SameFramesAsFloatAndCpu) {
+  HostBackwardMap host;
+  auto map = MakeMap(9, 6.0, &host);
+  ASSERT_TRUE(map.ok()) << map.status();
+  for (int32_t offset : {0, 30000}) {
+    std::vector<float> rounded = volume_->voxels().ToFloats();
+    std::vector<int16_t> stored(rounded.size());
+    for (size_t n = 0; n < rounded.size(); ++n) {
+      rounded[n] = std::round(rounded[n]) + float(offset);
+      stored[n] = static_cast<int16_t>(int32_t(rounded[n]) - offset);
+    }
+    const Volume floats = *Volume::Create(volume_->geometry(), rounded);
+    const Volume int16 = *Volume::Create(volume_->geometry(), *VoxelValues::Int16(stored, offset));
+    auto gpu16 = GpuVolume::Upload(context(), int16);
+    auto gpu32 = GpuVolume::Upload(context(), floats);
+    ASSERT_TRUE(gpu16.ok() && gpu32.ok());
+    for (RenderMode mode : {RenderMode::kDvr, RenderMode::kMip}) {
+      for (bool interactive : {false, true}) {
+        SCOPED_TRACE(::testing::Message() << "offset " << offset << " mode " << int(mode)
+                                          << (interactive ? " interactive" : " still"));
+        RenderRequest r = Request(mode);
+        r.preset = *MakeRenderPreset(mode == RenderMode::kDvr ? "ct-soft-tissue" : "ct-vessels",
+                                     floats);
+        if (interactive) {
+          r.quality = RenderQuality::kInteractive;
+          r.backward_map = &*map;
+        }
+        r.volume = &*gpu16;
+        const Frame a = RenderGpu(r);
+        r.volume = &*gpu32;
+        const Frame b = RenderGpu(r);
+        EXPECT_GT(LitPixels(a), 300);
+        EXPECT_EQ(a.rgba, b.rgba);
+        auto cpu = RenderReference(r, int16, interactive ? &host : nullptr, 2);
+        ASSERT_TRUE(cpu.ok()) << cpu.status();
+        ExpectClose(a, *cpu, 1.0 / 255, 8.0 / 255, "int16 GPU vs CPU");
+      }
+    }
+    auto renderer = VolumeRenderer::Create(context(), {.volume_access = VolumeAccess::kSampler3D});
+    ASSERT_TRUE(renderer.ok()) << renderer.status();
+    auto image = gpu16->Image(context(), int16);
+    ASSERT_TRUE(image.ok()) << image.status();
+    EXPECT_EQ((*image)->format(), vk::Format::eR16Unorm);
+    RenderRequest r = Request(RenderMode::kMip);
+    r.volume = &*gpu16;
+    r.volume_image = *image;
+    auto gpu = (*renderer)->Render(r);
+    ASSERT_TRUE(gpu.ok()) << gpu.status();
+    auto cpu = RenderReference(r, int16, nullptr, 2);
+    ASSERT_TRUE(cpu.ok()) << cpu.status();
+    ExpectClose(*gpu, *cpu, 2.0 / 255, 24.0 / 255, "int16 sampler3D");
+  }
+}
+
 // A crop box and a plane, through a deforming map: the GPU keeps the same
 // interval of each ray as the CPU reference (tolerances as above).
 TEST_F(RaycastTest, CropAndClip_GpuMatchesCpuReference) {

@@ -99,7 +99,7 @@ class SliceGpuTest : public testing::GpuTest {};
 TEST_F(SliceGpuTest, GpuMatchesCpuThroughADeformingMap) {
   Volume source = testing::MakeSphereRodVolume(40);
   VolumeGeometry g = Oblique(source.geometry());
-  auto volume = Volume::Create(g, std::vector<float>(source.values().begin(), source.values().end()));
+  auto volume = Volume::Create(g, std::vector<float>(source.voxels().floats().begin(), source.voxels().floats().end()));
   ASSERT_TRUE(volume.ok());
   auto gpu = GpuVolume::Upload(context(), *volume);
   ASSERT_TRUE(gpu.ok()) << gpu.status();

@@ -26,7 +26,7 @@ TEST(VolumeMipWindow, PhantomSpansBodyTissueAboveAir) {
   ASSERT_TRUE(phantom.ok()) << phantom.status();
   ASSERT_TRUE(IsCtInHu(*phantom));
   std::vector<float> body;
-  for (float v : phantom->values()) {
+  for (float v : phantom->voxels().floats()) {
     if (v > kCtAirCeilingHu) body.push_back(v);
   }
   const double black = SortedPercentile(body, 1.0);

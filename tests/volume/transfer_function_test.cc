@@ -71,7 +71,7 @@ TEST_F(GpuTest, TransferFunctionGpu_MatchesCpuReference) {
     ASSERT_TRUE(gpu.ok()) << gpu.status();
     double max_err = 0.0;
     for (size_t n = 0; n < gpu->size(); ++n) {
-      max_err = std::max(max_err, std::abs((*gpu)[n] - tf->Evaluate(v.values()[n])));
+      max_err = std::max(max_err, std::abs((*gpu)[n] - tf->Evaluate(v.voxels().floats()[n])));
     }
     EXPECT_LE(max_err, 1e-5) << preset;
   }

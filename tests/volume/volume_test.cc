@@ -53,7 +53,7 @@ TEST(Volume, RejectsBadGeometry) {
             absl::StatusCode::kInvalidArgument);
   g = SmallGeometry();
   g.dims = {0, 3, 2};
-  EXPECT_EQ(Volume::Create(g, {}).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(Volume::Create(g, std::vector<float>{}).status().code(), absl::StatusCode::kInvalidArgument);
   g = SmallGeometry();
   g.direction[0] = glm::dvec3(2, 0, 0);
   EXPECT_EQ(Volume::Create(g, std::vector<float>(24)).status().code(),
@@ -66,7 +66,7 @@ TEST(Volume, RejectsOverCapWithoutOverflow) {
   VolumeGeometry g = SmallGeometry();
   g.dims = {int64_t{1} << 40, int64_t{1} << 40, int64_t{1} << 40};
   VolumeLimits limits;
-  limits.max_voxels = int64_t{1} << 62;
+  limits.max_volume_bytes = int64_t{1} << 62;
   EXPECT_EQ(ValidateGeometry(g, limits).code(), absl::StatusCode::kResourceExhausted);
   g.dims = {1024, 1024, 1024};
   EXPECT_EQ(ValidateGeometry(g, VolumeLimits{}).code(), absl::StatusCode::kResourceExhausted);
@@ -81,7 +81,7 @@ TEST(Volume, ReplacesNonFiniteWithBackgroundAndCountsThem) {
   ASSERT_TRUE(v.ok());
   EXPECT_EQ(v->non_finite_count(), 2);
   EXPECT_EQ(v->At(3, 0, 0), -2.0f);
-  EXPECT_EQ(v->values()[7], -2.0f);
+  EXPECT_EQ(v->voxels()[7], -2.0f);
 }
 
 }  // namespace

@@ -56,6 +56,8 @@ TEST(BackwardMapDims, DefaultIsAQuarterRoundedUpAndAtLeastTwo) {
   EXPECT_EQ(DefaultBackwardMapDims({256, 256, 256}), (std::array<int64_t, 3>{64, 64, 64}));
   EXPECT_EQ(DefaultBackwardMapDims({37, 29, 5}), (std::array<int64_t, 3>{10, 8, 2}));
   EXPECT_EQ(DefaultBackwardMapDims({2, 3, 9}), (std::array<int64_t, 3>{2, 2, 3}));
+  // A full-size CT: the map follows the mesh, not the slice count.
+  EXPECT_EQ(DefaultBackwardMapDims({512, 512, 900}), (std::array<int64_t, 3>{64, 64, 64}));
 }
 
 TEST_F(GpuTest, BackwardMap_NewMapAndIdentityDeformationAreZero) {

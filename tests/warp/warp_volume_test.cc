@@ -59,8 +59,8 @@ double FilterTolerance(const gpu::GpuContext& context, double lavapipe_hu) {
 
 double MaxAbsDiff(const Volume& a, const Volume& b) {
   double worst = 0.0;
-  for (size_t n = 0; n < a.values().size(); ++n) {
-    worst = std::max(worst, double(std::abs(a.values()[n] - b.values()[n])));
+  for (int64_t n = 0; n < a.voxels().size(); ++n) {
+    worst = std::max(worst, double(std::abs(a.voxels()[n] - b.voxels()[n])));
   }
   return worst;
 }
@@ -168,6 +168,39 @@ TEST_F(GpuTest, VolumeWarper_MatchesCpuReferenceOnRandomDeformation) {
   }
 }
 
+// The body volume rounded to integer HU, as int16 and as float: the texel
+// warp of both is the same, bit for bit, and matches the CPU arithmetic; the
+// sampler reads the int16 volume's R16_UNORM image within 65535 * 2^-24 HU
+// per voxel of the float one (plus the filter's tolerance).
+TEST_F(GpuTest, VolumeWarper_Int16SourceWarpsLikeFloat) {
+  const Volume body = MakeBodyVolume({37, 29, 23}, {0.8, 1.1, 2.5});
+  std::vector<float> rounded = body.voxels().ToFloats();
+  std::vector<int16_t> stored(rounded.size());
+  for (size_t n = 0; n < rounded.size(); ++n) {
+    rounded[n] = std::round(rounded[n]);
+    stored[n] = static_cast<int16_t>(rounded[n]);
+  }
+  const Volume floats = *Volume::Create(body.geometry(), rounded);
+  const Volume int16 = *Volume::Create(body.geometry(), *VoxelValues::Int16(stored, 0));
+  const WarpMesh mesh = RandomWarpMesh(60, body.geometry().extent_mm(), 21);
+  const std::vector<glm::dvec3> deformed = RandomlyMoved(mesh, 1.5, 22);
+  for (SourceRead read : kReads) {
+    SCOPED_TRACE(Name(read));
+    BackwardMapValues map;
+    const Volume a = GpuWarp(context(), int16, mesh, deformed, {0, 0, 0}, read, &map);
+    const Volume b = GpuWarp(context(), floats, mesh, deformed, {0, 0, 0}, read);
+    EXPECT_GT(MaxAbsDiff(a, int16), 100.0);  // it did move
+    if (read == SourceRead::kTexelBuffer) {
+      EXPECT_EQ(MaxAbsDiff(a, b), 0.0);
+    } else {
+      EXPECT_LE(MaxAbsDiff(a, b), FilterTolerance(context(), 0.01));
+    }
+    auto cpu = WarpVolumeCpu(int16, map);
+    ASSERT_TRUE(cpu.ok()) << cpu.status();
+    EXPECT_LE(MaxAbsDiff(a, *cpu), FilterTolerance(context(), 0.02));
+  }
+}
+
 TEST(WarpVolumeCpu, ExactWarpEqualsWarpThroughAFullResolutionMap) {
   const Volume source = MakeBodyVolume({20, 18, 14}, {1.0, 1.2, 1.5});
   const glm::dvec3 extent = source.geometry().extent_mm();
@@ -189,7 +222,7 @@ TEST_F(GpuTest, VolumeWarper_KeepsTheSourceGeometryForExport) {
   VolumeGeometry g = source.geometry();
   g.origin_mm = {-12.5, 40.0, 7.25};
   g.direction = glm::dmat3(glm::dvec3(0, 1, 0), glm::dvec3(-1, 0, 0), glm::dvec3(0, 0, 1));
-  source = *Volume::Create(g, std::vector<float>(source.values().begin(), source.values().end()));
+  source = *Volume::Create(g, std::vector<float>(source.voxels().floats().begin(), source.voxels().floats().end()));
   source.set_source("phantom:test");
   const WarpMesh mesh = RandomWarpMesh(10, g.extent_mm(), 2);
   const Volume warped = GpuWarp(context(), source, mesh, RandomlyMoved(mesh, 1.0, 3), {0, 0, 0},
@@ -217,7 +250,7 @@ TEST_F(GpuTest, VolumeWarper_RejectsAMapOfAnotherVolumeAndShortOutput) {
   EXPECT_EQ(warper->Record(*batch, *gpu_volume, nullptr, *own_map, *small).code(),
             absl::StatusCode::kInvalidArgument);
   auto sampler = VolumeWarper::Create(context(), {.source_read = SourceRead::kSampler});
-  auto big = gpu::GpuBuffer::Create(context(), source.values().size() * 4,
+  auto big = gpu::GpuBuffer::Create(context(), source.voxels().floats().size() * 4,
                                     vk::BufferUsageFlagBits::eStorageBuffer);
   ASSERT_TRUE(sampler.ok() && big.ok());
   EXPECT_EQ(sampler->Record(*batch, *gpu_volume, nullptr, *own_map, *big).code(),
