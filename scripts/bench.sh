@@ -13,4 +13,6 @@ mkdir -p out
       echo; echo "## $b: not built"
     fi
   done
+  # A 512 x 512 x 900 int16 CT (450 MiB under $VPM_BENCH_DIR, made once).
+  echo; echo "## full_size.sh"; bench/full_size.sh "$build" 2
 } 2>&1 | tee out/bench.txt
