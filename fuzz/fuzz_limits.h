@@ -11,7 +11,7 @@ namespace vpm::fuzz {
 // Small caps keep every input fast and make "over the cap" paths reachable.
 inline VolumeLimits FuzzLimits() {
   VolumeLimits limits;
-  limits.max_voxels = int64_t{1} << 20;
+  limits.max_volume_bytes = int64_t{4} << 20;  // 2^20 float voxels
   limits.max_bytes = int64_t{16} << 20;
   return limits;
 }
@@ -21,9 +21,11 @@ inline VolumeLimits FuzzLimits() {
 inline void CheckVolume(const Result<Volume>& volume) {
   if (!volume.ok()) return;
   const VolumeGeometry& g = volume->geometry();
-  if (!ValidateGeometry(g, FuzzLimits()).ok()) __builtin_trap();
-  if (static_cast<int64_t>(volume->values().size()) != g.voxel_count()) __builtin_trap();
-  for (float v : volume->values()) {
+  if (!ValidateGeometry(g, FuzzLimits(), volume->encoding()).ok()) __builtin_trap();
+  const VoxelValues& voxels = volume->voxels();
+  if (voxels.size() != g.voxel_count()) __builtin_trap();
+  for (int64_t n = 0; n < voxels.size(); ++n) {
+    const float v = voxels[n];
     if (!(v >= volume->min_value() && v <= volume->max_value())) __builtin_trap();
   }
 }

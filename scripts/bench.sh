@@ -22,4 +22,6 @@ mkdir -p out
   else
     echo "skipped: VTK's Python bindings or xvfb-run missing (run bench/setup_peer.sh)"
   fi
+  # A 512 x 512 x 900 int16 CT (450 MiB under $VPM_BENCH_DIR, made once).
+  echo; echo "## full_size.sh"; bench/full_size.sh "$build" 2
 } 2>&1 | tee out/bench.txt

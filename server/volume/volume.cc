@@ -83,10 +83,16 @@ Result<Volume> Volume::Create(VolumeGeometry geometry, VoxelValues values,
   Volume volume(geometry, std::move(values));
   if (volume.values_.is_int16()) {
     const auto stored = volume.values_.int16s();
-    const auto [lo, hi] = std::minmax_element(stored.begin(), stored.end());
+    // A plain loop, not std::minmax_element: it vectorizes (perf showed
+    // minmax_element at 12% of `vpm mesh` on a 512 x 512 x 900 CT).
+    int16_t lo = stored[0], hi = stored[0];
+    for (const int16_t s : stored) {
+      lo = std::min(lo, s);
+      hi = std::max(hi, s);
+    }
     const int32_t offset = volume.values_.int16_offset();
-    volume.min_value_ = static_cast<float>(int32_t{*lo} + offset);
-    volume.max_value_ = static_cast<float>(int32_t{*hi} + offset);
+    volume.min_value_ = static_cast<float>(int32_t{lo} + offset);
+    volume.max_value_ = static_cast<float>(int32_t{hi} + offset);
     return volume;
   }
   float lo = std::numeric_limits<float>::infinity();

@@ -62,8 +62,11 @@ TEST(VpmCli, VolumeInfoSaysATiltedDicomSeriesWasResampledAndListsSeries) {
   const auto info = nlohmann::json::parse(run.output.substr(run.output.find('{')));
   // 512 rows grow to 600 to hold the 18.5 degree shear of 54 slices.
   EXPECT_EQ(info["dims"], nlohmann::json({512, 600, 54}));
-  ASSERT_EQ(info["notes"].size(), 1u) << info["notes"];
-  EXPECT_NE(info["notes"][0].get<std::string>().find("gantry tilt 18.5 deg"), std::string::npos);
+  // The resampling note, and why the resampled values are float.
+  ASSERT_EQ(info["notes"].size(), 2u) << info["notes"];
+  EXPECT_NE(info["notes"].dump().find("gantry tilt 18.5 deg"), std::string::npos);
+  EXPECT_NE(info["notes"].dump().find("stored as float32"), std::string::npos);
+  EXPECT_EQ(info["voxel_encoding"], "float32");
   ASSERT_EQ(info["dicom_series"].size(), 1u);
   EXPECT_EQ(info["dicom_series"][0]["images"], 54);
   EXPECT_EQ(info["dicom_series"][0]["modality"], "CT");

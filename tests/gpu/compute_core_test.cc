@@ -91,7 +91,7 @@ class ComputeBatchTest : public GpuTest {
     ubo_.emplace(std::move(*ubo));
     view_ = vk::raii::BufferView(context().device(),
                                  vk::BufferViewCreateInfo({}, volume_->handle(),
-                                                          vk::Format::eR32Sfloat, 0, VK_WHOLE_SIZE));
+                                                          vk::Format::eR32Sint, 0, VK_WHOLE_SIZE));
     texels_ = *view_;
   }
   std::optional<gpu::ComputeKernel> kernel_;

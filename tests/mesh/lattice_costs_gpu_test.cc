@@ -9,6 +9,7 @@
 #include "server/mesh/lattice_costs_gpu.h"
 #include "tests/gpu/gpu_test_context.h"
 #include "tests/mesh/mesh_test_volumes.h"
+#include "tests/volume/int16_twin.h"
 
 namespace vpm {
 namespace {
@@ -68,14 +69,7 @@ using testing::GpuTest;
 // CPU reference within the tolerances above.
 TEST_F(GpuTest, LatticeCostsGpu_Int16VolumeEqualsFloatVolume) {
   const Volume body = testing::MakeBodyVolume({50, 41, 33}, {0.9, 1.2, 1.6});
-  std::vector<float> rounded = body.voxels().ToFloats();
-  std::vector<int16_t> stored(rounded.size());
-  for (size_t n = 0; n < rounded.size(); ++n) {
-    rounded[n] = std::round(rounded[n]);
-    stored[n] = static_cast<int16_t>(rounded[n]);
-  }
-  const Volume floats = *Volume::Create(body.geometry(), rounded);
-  const Volume int16 = *Volume::Create(body.geometry(), *VoxelValues::Int16(stored, 0));
+  const auto [int16, floats] = testing::MakeInt16Twin(body);
   auto gpu16 = GpuVolume::Upload(context(), int16);
   auto gpu32 = GpuVolume::Upload(context(), floats);
   ASSERT_TRUE(gpu16.ok() && gpu32.ok());

@@ -22,6 +22,7 @@
 #include "server/phantom/phantom.h"
 #include "tests/gpu/gpu_test_context.h"
 #include "tests/raycast/render_test_util.h"
+#include "tests/volume/int16_twin.h"
 
 namespace vpm {
 namespace {
@@ -451,14 +452,7 @@ TEST_F(RaycastTest, Int16Volume_SameFramesAsFloatAndCpu) {
   auto map = MakeMap(9, 6.0, &host);
   ASSERT_TRUE(map.ok()) << map.status();
   for (int32_t offset : {0, 30000}) {
-    std::vector<float> rounded = volume_->voxels().ToFloats();
-    std::vector<int16_t> stored(rounded.size());
-    for (size_t n = 0; n < rounded.size(); ++n) {
-      rounded[n] = std::round(rounded[n]) + float(offset);
-      stored[n] = static_cast<int16_t>(int32_t(rounded[n]) - offset);
-    }
-    const Volume floats = *Volume::Create(volume_->geometry(), rounded);
-    const Volume int16 = *Volume::Create(volume_->geometry(), *VoxelValues::Int16(stored, offset));
+    const auto [int16, floats] = testing::MakeInt16Twin(*volume_, offset);
     auto gpu16 = GpuVolume::Upload(context(), int16);
     auto gpu32 = GpuVolume::Upload(context(), floats);
     ASSERT_TRUE(gpu16.ok() && gpu32.ok());

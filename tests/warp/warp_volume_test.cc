@@ -11,6 +11,7 @@
 #include "server/warp/warp_volume_cpu.h"
 #include "tests/gpu/gpu_test_context.h"
 #include "tests/mesh/mesh_test_volumes.h"
+#include "tests/volume/int16_twin.h"
 #include "tests/warp/warp_test_util.h"
 
 namespace vpm {
@@ -174,14 +175,7 @@ TEST_F(GpuTest, VolumeWarper_MatchesCpuReferenceOnRandomDeformation) {
 // per voxel of the float one (plus the filter's tolerance).
 TEST_F(GpuTest, VolumeWarper_Int16SourceWarpsLikeFloat) {
   const Volume body = MakeBodyVolume({37, 29, 23}, {0.8, 1.1, 2.5});
-  std::vector<float> rounded = body.voxels().ToFloats();
-  std::vector<int16_t> stored(rounded.size());
-  for (size_t n = 0; n < rounded.size(); ++n) {
-    rounded[n] = std::round(rounded[n]);
-    stored[n] = static_cast<int16_t>(rounded[n]);
-  }
-  const Volume floats = *Volume::Create(body.geometry(), rounded);
-  const Volume int16 = *Volume::Create(body.geometry(), *VoxelValues::Int16(stored, 0));
+  const auto [int16, floats] = testing::MakeInt16Twin(body);
   const WarpMesh mesh = RandomWarpMesh(60, body.geometry().extent_mm(), 21);
   const std::vector<glm::dvec3> deformed = RandomlyMoved(mesh, 1.5, 22);
   for (SourceRead read : kReads) {
