@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "server/common/clock.h"
+#include "server/mesh/boundary_vertices.h"
 #include "server/mesh/tetrahedralize.h"
 
 namespace vpm {
@@ -43,6 +44,7 @@ Result<MeshComparisonRow> Measure(const Volume& volume, const TransferFunction& 
   MeshComparisonRow row;
   row.name = std::move(name);
   row.vertices = static_cast<int64_t>(mesh.vertices.size());
+  row.boundary_vertices = mesh.stats.boundary;
   row.tets = static_cast<int64_t>(mesh.tets.size());
   row.quality = mesh.quality;
   row.build_ms = build_ms;
@@ -68,6 +70,12 @@ Result<ProxyMesh> BuildRegularMesh(const Volume& volume, int64_t target) {
                              .kind = VertexKind::kLattice,
                              .voxel = lattice.Voxel(id)});
   }
+  // The same box-face vertices as the built meshes, so that the rows differ
+  // by their interior vertices only.
+  const std::vector<MeshVertex> boundary =
+      BoundaryVertices(mesh.vertices, volume.geometry(), {.min_cell_mm = 0.5 * lattice.h_mm()});
+  mesh.stats.boundary = static_cast<int64_t>(boundary.size());
+  mesh.vertices.insert(mesh.vertices.end(), boundary.begin(), boundary.end());
   RETURN_IF_ERROR(Tetrahedralize(mesh, volume.geometry().extent_mm()));
   return mesh;
 }

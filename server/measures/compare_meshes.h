@@ -15,7 +15,8 @@ namespace vpm {
 struct MeshComparisonRow {
   std::string name;             // "regular", "cell/spread", ...
   bool is_default = false;      // the default configuration (MeshParams{}: cell, spread)
-  int64_t vertices = 0;
+  int64_t vertices = 0;          // all, the boundary ones included
+  int64_t boundary_vertices = 0;  // on the box faces, beyond the budget
   int64_t tets = 0;
   ReconstructionError reconstruction;
   EmptySphere largest_empty_sphere;  // the spread measure, inside the body
@@ -24,7 +25,8 @@ struct MeshComparisonRow {
 };
 
 // A mesh whose vertices are a regular lattice of at most target - 8 vertices
-// (the largest such G with the proportions of the image box) plus the 8 anchors.
+// (the largest such G with the proportions of the image box) plus the 8
+// anchors, and boundary vertices on the faces as BuildProxyMesh adds them.
 Result<ProxyMesh> BuildRegularMesh(const Volume& volume, int64_t target);
 
 // Rows: regular, then cell/spread, cell/paper, point/spread, point/paper built

@@ -137,8 +137,11 @@ Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm) {
       continue;
     }
     if (o == CGAL::NEGATIVE) std::swap(t[2], t[3]);
-    tets.push_back(t);
+    tets.push_back(CanonicalRotation(t));
   }
+  // Sorted before the flips too, so that they see the tets in an order that
+  // depends on the positions only, not on CGAL's cell order.
+  std::sort(tets.begin(), tets.end());
   std::vector<glm::dvec3> points_mm(mesh.vertices.size());
   for (size_t v = 0; v < points_mm.size(); ++v) points_mm[v] = mesh.vertices[v].position_mm;
   // Delaunay keeps the slivers of cospherical lattice rows; flips remove

@@ -9,8 +9,9 @@
 namespace vpm {
 
 // Fills mesh.tets with the 3D Delaunay tetrahedralization of the vertex
-// positions, then improved by flips (ImproveTetsByFlips: no longer Delaunay,
-// the same vertices and hull, slivers removed where a flip can), mesh.quality with MeasureTetQuality, and mesh.stats.tets and
+// positions improved by flips (ImproveTetsByFlips: no longer Delaunay; the
+// same vertices and hull, slivers removed where a flip can), mesh.quality
+// with MeasureTetQuality, and mesh.stats.tets and
 // mesh.stats.tetrahedralize_ms.
 //
 // Inputs:
