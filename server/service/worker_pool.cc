@@ -67,11 +67,6 @@ int64_t WorkerPool::RetryAfterMs(const std::string& lane) const {
   return std::max<int64_t>(1, std::llround(jobs * mean_job_ms_ / options_.threads));
 }
 
-double WorkerPool::mean_job_ms() const {
-  std::lock_guard lock(mutex_);
-  return mean_job_ms_;
-}
-
 int64_t WorkerPool::Shutdown(std::chrono::steady_clock::time_point deadline) {
   std::vector<Job> left;
   {

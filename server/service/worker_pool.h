@@ -49,8 +49,6 @@ class WorkerPool {
   // A client refused for a full lane should wait about this long (ms): the
   // lane's queue times the mean job time, over the threads.
   int64_t RetryAfterMs(const std::string& lane) const;
-  // Moving average of how long a job runs here, ms.
-  double mean_job_ms() const;
 
  private:
   explicit WorkerPool(const Options& options) : options_(options), queue_(options.limits) {}
