@@ -16,8 +16,9 @@ processes:
     reference frame rate.
 Prints: unexpected errors (goal 0), aggregate fps of the planners against
 the 2-session baseline, p50/p99 event-to-frame latency per planner, and the
-server's RSS, threads and open file descriptors at start, middle and end
-(goal: flat within 10%).
+server's RSS, threads and open file descriptors before the churn, at its
+start (a tenth in, warm), middle and end, and idle after it (goal: start,
+middle and end flat within 10%).
 
 usage: bench/soak.sh --churn MINUTES [BUILD_DIR] [SOURCE]
        (soak_churn.py BUILD_DIR MINUTES [SOURCE])
@@ -82,8 +83,9 @@ def run(user, args, timeout=120, expect=()):
         text = (p.stderr or p.stdout).strip().splitlines()
         text = text[-1] if text else f"exit {p.returncode}"
         with lock:
-            if any(e in text for e in expect):
-                expected[text.split(":")[0]] = expected.get(text.split(":")[0], 0) + 1
+            code = next((e for e in expect if e in text), None)
+            if code:
+                expected[code] = expected.get(code, 0) + 1
             else:
                 errors.append(f"{user} {' '.join(args[:2])}: {text}")
     return p
@@ -105,6 +107,13 @@ def play(user, interrupt=False):
     with lock:
         expected["interrupted play"] = expected.get("interrupted play", 0) + 1
 
+def field(p, key):
+    """`key` of the JSON object a `vpm` command printed, or None."""
+    try:
+        return json.loads(p.stdout).get(key)
+    except (ValueError, AttributeError):
+        return None
+
 def planner(user, end, counter):
     n = 0
     while time.monotonic() < end:
@@ -114,19 +123,19 @@ def planner(user, end, counter):
 def uploader(user, end):
     while time.monotonic() < end:
         p = run(user, ["volume", "upload", upload_file])
-        vid = next((w for w in p.stdout.split() if w.startswith("vol-")), None)
+        vid = field(p, "volume_id")
         if vid:
             run(user, ["volume", "delete", vid])
 
 def open_session(user):
     p = run(user, ["volume", "load", source])
-    vid = next((w for w in p.stdout.split() if w.startswith("vol-")), None)
+    vid = field(p, "volume_id")
     return run(user, ["session", "open", "--volume-id", vid]) if vid else p
 
 def watcher(user, end):
     while time.monotonic() < end:
         p = open_session(user)
-        sid = next((w for w in p.stdout.split() if w.startswith("ses-")), None)
+        sid = field(p, "session_id")
         if not sid:
             time.sleep(1)
             continue
@@ -142,7 +151,7 @@ def watcher(user, end):
 
 def hammer(user, end):
     p = open_session(user)
-    sid = next((w for w in p.stdout.split() if w.startswith("ses-")), None)
+    sid = field(p, "session_id")
     n = 0
     while sid and time.monotonic() < end:
         n += 1
@@ -170,7 +179,7 @@ for u in users:
     reports[u] = []
 time.sleep(2)
 
-stats = {"start": proc_stats()}
+stats = {"before": proc_stats()}
 churn_s = minutes * 60
 end = time.monotonic() + churn_s
 threads = [threading.Thread(target=planner, args=(u, end, 0)) for u in users[:12]]
@@ -179,11 +188,18 @@ threads += [threading.Thread(target=uploader, args=(users[12], end)),
             threading.Thread(target=hammer, args=(users[14], end)),
             threading.Thread(target=planner, args=(users[15], end, 0))]
 [t.start() for t in threads]
-time.sleep(churn_s / 2)
+# Under load: "start" once the churn is warm (a tenth in: every user's
+# volumes, meshes and pools exist), "middle", "end" (just before the loops
+# stop); then "idle" once every client is gone.
+time.sleep(churn_s / 10)
+stats["start"] = proc_stats()
+time.sleep(churn_s * 4 / 10)
 stats["middle"] = proc_stats()
+time.sleep(max(0.0, end - time.monotonic() - 2))
+stats["end"] = proc_stats()
 [t.join() for t in threads]
 time.sleep(3)
-stats["end"] = proc_stats()
+stats["idle"] = proc_stats()
 server.send_signal(signal.SIGTERM)
 code = server.wait(timeout=30)
 
@@ -206,9 +222,10 @@ for u in planners:
     p99 = max(r["latency_ms"].get("p99", 0) for r in rs)
     print(f"{u:>8} {len(rs):>6} {fps:>6.1f} {p50:>8.1f} {p99:>8.1f}")
 print(f"{'':>8} {'RSS MiB':>8} {'threads':>8} {'fds':>6}")
-for k in ("start", "middle", "end"):
+for k in ("before", "start", "middle", "end", "idle"):
     s = stats[k]
     print(f"{k:>8} {s['rss_mib']:>8.1f} {s['threads']:>8} {s['fds']:>6}")
 growth = stats["end"]["rss_mib"] / stats["start"]["rss_mib"] - 1
-print(f"RSS end vs start: {100 * growth:+.1f}% (goal within 10%); server exit code {code}")
+print(f"RSS end vs start, both under load: {100 * growth:+.1f}% (goal within 10%); "
+      f"server exit code {code}")
 sys.exit(1 if errors else 0)

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "client/cli/interrupt.h"
 #include "client/cli/script_player.h"
 #include "proto/enum_names.h"
 #include "client/cli/server_flags.h"
@@ -69,6 +70,8 @@ void Append(const PlayResult& segment, double offset_ms, PlayResult* all) {
 
 Status Play(const ServerConnection& s, const std::string& script_path, std::string session_id,
             const std::string& out_dir, std::string report_path) {
+  // Ctrl-C stops the script, and the session opened here is still closed.
+  CatchInterrupts();
   ASSIGN_OR_RETURN(json script_json, ReadJsonFile(script_path));
   const std::string source = script_json.value("volume", "phantom:abdomen?size=64");
   v2::VolumeInfo volume;

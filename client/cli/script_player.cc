@@ -9,6 +9,7 @@
 #include <mutex>
 #include <thread>
 
+#include "client/cli/interrupt.h"
 #include "proto/enum_names.h"
 #include "server/common/clock.h"
 
@@ -235,8 +236,9 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
       const ScriptEvent& e = script.events[i];
       if (!ok) break;
       const bool catching_up = static_cast<int64_t>(i) < options.resume_at;
-      if (!catching_up) {
-        std::this_thread::sleep_for(std::chrono::microseconds(int64_t(e.wait_ms * 1000)));
+      if (!catching_up &&
+          !SleepUnlessInterrupted(std::chrono::microseconds(int64_t(e.wait_ms * 1000)))) {
+        break;
       }
       v2::InteractRequest request;
       *request.mutable_event() = e.event;
@@ -245,8 +247,17 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
       ok = send(request, ++sequence);
       if (ok) result.script_events_written = static_cast<int64_t>(i) + 1;
     }
-  } while (ok && options.duration_s > 0 &&
+  } while (ok && !Interrupted() && options.duration_s > 0 &&
            MsBetween(start, SteadyClock::now()) < options.duration_s * 1000);
+  if (Interrupted()) {
+    // Ctrl-C: the stream is cancelled, nothing waits for a still frame.
+    context->TryCancel();
+    reader.join();
+    (void)stream->Finish();
+    result.status = absl::CancelledError("interrupted (SIGINT/SIGTERM)");
+    result.duration_ms = MsBetween(start, SteadyClock::now());
+    return result;
+  }
   if (ok && grabbed) {
     v2::InteractRequest release;
     release.mutable_event()->mutable_release();

@@ -163,6 +163,40 @@ EOF2
 }
 streams_balanced && pass "killed client: stream released (opened == closed)" ||
   fail "killed client's stream not released"
+# Ctrl-C on `vpm play`: it stops, says so, and closes the session it opened
+# (one that a killed client leaves holds a per-user session slot until the
+# idle timeout).
+sessions_now() {
+  "$vpm" --server "$addr" --token secret session list |
+    python3 -c 'import json,sys; print(len(json.load(sys.stdin)))'
+}
+sessions_before=$(sessions_now)
+python3 - "$tmp/long.json" <<'EOF2'
+import json, sys
+json.dump({"volume": "phantom:abdomen?size=48", "settings": {"width": 64, "height": 64},
+           "interval_ms": 50, "steps": [{"grab": {"landmark": "left_renal_artery"}},
+                                        {"drag": {"to_mm": [0, 0, 12], "steps": 400}}]},
+          open(sys.argv[1], "w"))
+EOF2
+"$vpm" --server "$addr" --token secret play "$tmp/long.json" > "$tmp/play.out" 2> "$tmp/play.err" &
+play_pid=$!
+for _ in $(seq 1 200); do grep -q 'session' "$tmp/play.out" && break; sleep 0.05; done
+sleep 1
+kill -INT "$play_pid"
+play_status=""
+for _ in $(seq 1 100); do
+  if ! kill -0 "$play_pid" 2>/dev/null; then wait "$play_pid"; play_status=$?; break; fi
+  sleep 0.05
+done
+if [ -z "$play_status" ]; then
+  fail "vpm play ignored SIGINT for 5 s"; kill -KILL "$play_pid"
+elif [ "$play_status" -eq 0 ] || ! grep -q "interrupted" "$tmp/play.err"; then
+  fail "interrupted play: status $play_status, stderr: $(cat "$tmp/play.err")"
+elif [ "$(sessions_now)" != "$sessions_before" ]; then
+  fail "interrupted play left its session open ($(sessions_now) sessions, $sessions_before before)"
+else
+  pass "interrupted play: CANCELLED, its session closed"
+fi
 # The offline commands with --server: the same mesh as offline, a frame
 # rendered after a drag.
 src="phantom:abdomen?size=48"
