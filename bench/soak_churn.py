@@ -73,13 +73,16 @@ subprocess.run([vpm, "volume", "export", "phantom:abdomen?size=48", upload_file]
                check=True, capture_output=True)
 
 lock = threading.Lock()
-errors, expected, reports = [], {}, {u: [] for u in users}
+errors, expected, done, reports = [], {}, {}, {u: [] for u in users}
 
 def run(user, args, timeout=120, expect=()):
     env = dict(os.environ, VPM_TOKEN=tokens[user])
     p = subprocess.run([vpm, "--server", addr] + args, env=env, capture_output=True, text=True,
                        timeout=timeout)
-    if p.returncode != 0:
+    if p.returncode == 0:
+        with lock:
+            done[" ".join(args[:2])] = done.get(" ".join(args[:2]), 0) + 1
+    else:
         text = (p.stderr or p.stdout).strip().splitlines()
         text = text[-1] if text else f"exit {p.returncode}"
         with lock:
@@ -208,6 +211,7 @@ print(f"churn soak: 16 users, {minutes:g} min, {source}")
 print(f"unexpected errors: {len(errors)}")
 for e in errors[:20]:
     print("  ", e)
+print("completed calls:", ", ".join(f"{k.split(' /')[0]} {v}" for k, v in sorted(done.items())))
 print("expected outcomes:", ", ".join(f"{k} {v}" for k, v in sorted(expected.items())) or "none")
 print(f"aggregate fps of the planners: {fps_of(planners, churn_s):.1f} "
       f"(2 planners alone: {base_fps:.1f})")
