@@ -80,8 +80,10 @@ def run(user, args, timeout=120, expect=()):
     p = subprocess.run([vpm, "--server", addr] + args, env=env, capture_output=True, text=True,
                        timeout=timeout)
     if p.returncode == 0:
+        words = args[2:] if args[0].startswith("--") else args  # past --deadline-s S
+        what = words[0] if words[0] in ("play", "snapshot") else " ".join(words[:2])
         with lock:
-            done[" ".join(args[:2])] = done.get(" ".join(args[:2]), 0) + 1
+            done[what] = done.get(what, 0) + 1
     else:
         text = (p.stderr or p.stdout).strip().splitlines()
         text = text[-1] if text else f"exit {p.returncode}"
@@ -211,7 +213,7 @@ print(f"churn soak: 16 users, {minutes:g} min, {source}")
 print(f"unexpected errors: {len(errors)}")
 for e in errors[:20]:
     print("  ", e)
-print("completed calls:", ", ".join(f"{k.split(' /')[0]} {v}" for k, v in sorted(done.items())))
+print("completed calls:", ", ".join(f"{k} {v}" for k, v in sorted(done.items())))
 print("expected outcomes:", ", ".join(f"{k} {v}" for k, v in sorted(expected.items())) or "none")
 print(f"aggregate fps of the planners: {fps_of(planners, churn_s):.1f} "
       f"(2 planners alone: {base_fps:.1f})")
