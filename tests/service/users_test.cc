@@ -3,7 +3,10 @@
 // (PERMISSION_DENIED for anyone else), sharing a session to watch, shared
 // volumes of the data root and phantoms, per-user stream caps and per-user
 // metrics.
+#include <atomic>
+#include <cstdio>
 #include <fstream>
+#include <thread>
 
 #include "server/common/sha256.h"
 #include "server/service/users_file.h"
@@ -353,6 +356,50 @@ TEST_F(UsersTest, StreamCapIsPerUser) {
     contexts[i]->TryCancel();
     readers[i]->Finish();
   }
+}
+
+// Fair shares are per user: a burst of Alice's Render calls fills her lane
+// of the render pool, and Bob's one call is taken in turn with it, not after
+// it. Counted, not timed: how many of Alice's calls finished while Bob's
+// waited (all those still queued with one queue for everybody; the few in
+// the workers' hands with a lane per user).
+TEST_F(UsersTest, OneUsersRenderBurstDoesNotQueueAnotherUser) {
+  const v2::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const v2::SessionInfo alices = OpenSession(volume.volume_id(), kAlice);
+  const v2::SessionInfo bobs = OpenSession(volume.volume_id(), kBob);
+  v2::RenderRequest request;
+  request.mutable_settings()->set_width(512);
+  request.mutable_settings()->set_height(512);
+  request.set_session_id(alices.session_id());
+  constexpr int kBurst = 40;  // under the lane cap of 64
+  std::atomic<int> alice_done{0}, alice_ok{0};
+  std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
+  std::vector<v2::Frame> frames(kBurst);
+  for (int i = 0; i < kBurst; ++i) {
+    contexts.push_back(Context(kAlice));
+    stub_->async()->Render(contexts.back().get(), &request, &frames[i],
+                           [&](grpc::Status status) {
+                             alice_ok += status.ok();
+                             ++alice_done;
+                           });
+  }
+  // Her calls are queued once the first has come back.
+  while (alice_done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  request.set_session_id(bobs.session_id());
+  v2::Frame bobs_frame;
+  const int done_when_bob_asked = alice_done.load();
+  const grpc::Status bob = stub_->Render(Context(kBob).get(), request, &bobs_frame);
+  const int done_when_bob_got = alice_done.load();
+  ASSERT_TRUE(bob.ok()) << bob.error_message();
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (alice_done < kBurst && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  std::printf("Alice's renders finished: %d of %d when Bob asked, %d when he got his frame\n",
+              done_when_bob_asked, kBurst, done_when_bob_got);
+  EXPECT_EQ(alice_ok.load(), kBurst);
+  ASSERT_LE(done_when_bob_asked, kBurst / 2) << "the burst ran out before Bob asked: no test";
+  EXPECT_LE(done_when_bob_got - done_when_bob_asked, 6);
 }
 
 TEST_F(UsersTest, SessionCapIsPerUser) {
