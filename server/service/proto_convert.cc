@@ -34,6 +34,7 @@ void FillVolumeInfo(const VolumeEntry& entry, v2::VolumeInfo* info) {
   }
   info->set_bytes(entry.bytes);
   info->set_voxel_encoding(VoxelEncodingName(volume.encoding()));
+  for (const std::string& note : volume.notes()) info->add_notes(note);
   info->set_sessions(entry.sessions.load());
   info->set_owner(entry.owner);
 }

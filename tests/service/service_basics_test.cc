@@ -217,6 +217,27 @@ TEST_F(DataRootTest, LoadVolume_ReadsInsideTheRoot) {
   EXPECT_EQ(list.volumes_size(), 1);
 }
 
+// What the reader corrected reaches the client: the repo's real tilted CT
+// series (tests/data/ct-philips-tilt) says it was resampled.
+TEST_F(ServiceTest, LoadVolume_ReportsTheReadersCorrections) {
+  server_->Shutdown(std::chrono::milliseconds(2000));
+  ServerOptions options = SmallServerOptions();
+  options.data_root = (fs::path(std::getenv("VPM_SOURCE_DIR")) / "tests" / "data").string();
+  StartServer(options);
+  const v2::VolumeInfo info = LoadPhantom("ct-philips-tilt");
+  std::string notes;
+  for (const std::string& note : info.notes()) notes += note + "\n";
+  EXPECT_NE(notes.find("gantry tilt 18.5 deg"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("resampled"), std::string::npos) << notes;
+  v2::GetVolumeRequest get;
+  get.set_volume_id(info.volume_id());
+  v2::VolumeInfo again;
+  ASSERT_TRUE(stub_->GetVolume(Context().get(), get, &again).ok());
+  EXPECT_EQ(again.notes_size(), info.notes_size());
+  // A phantom has nothing to report.
+  EXPECT_EQ(LoadPhantom().notes_size(), 0);
+}
+
 TEST_F(DataRootTest, LoadVolume_RefusesTraversalAndSymlinkEscape) {
   EXPECT_EQ(Load("../vpm-outside-" + std::to_string(::getpid()) + "/secret.nii.gz"),
             grpc::INVALID_ARGUMENT);
