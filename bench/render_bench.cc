@@ -234,8 +234,8 @@ int main(int raw_argc, char** raw_argv) {
   const double create_ms = MsSince(t0);
   auto sampled_renderer = bench::Check(
       VolumeRenderer::Create(*context, {.volume_access = VolumeAccess::kSampler3D}), "renderer");
-  const auto still_minmax = BrickMinMaxCpu(volume, kStillBrickVoxels);
-  const auto interactive_minmax = BrickMinMaxCpu(volume, kInteractiveBrickVoxels);
+  const auto still_minmax = BrickMinMaxCpu(volume, BrickVoxels(RenderQuality::kStill, volume.geometry()));
+  const auto interactive_minmax = BrickMinMaxCpu(volume, BrickVoxels(RenderQuality::kInteractive, volume.geometry()));
 
   std::optional<RenderPreset> custom;
   if (!render_tf.empty()) {

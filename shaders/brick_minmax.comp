@@ -1,8 +1,9 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// Min and max of the source volume over each brick of w^3 cells (w =
-// pc.bricks.w: 4 for still frames, 8 for interactive ones): brick b spans
-// voxels [w b, min(w b + w, n - 1)] per axis, boundary layers shared,
+// Min and max of the source volume over each brick of wx x wy x wz cells
+// (w = pc.brick_voxels.xyz, about 6 mm for still frames and 12 mm for
+// interactive ones, RenderBrickVoxels): brick b spans voxels
+// [w b, min(w b + w, n - 1)] per axis, boundary layers shared,
 // so every trilinear sample at an index inside the brick reads only voxels
 // it covers. One invocation per brick; built once per volume.
 #include "shader_interface.glsl"
@@ -20,8 +21,9 @@ void main() {
   if (index >= nb.x * nb.y * nb.z) return;
   ivec3 b = ivec3(index % nb.x, (index / nb.x) % nb.y, index / (nb.x * nb.y));
   ivec3 n = pc.dims.xyz;
-  ivec3 lo = b * pc.bricks.w;
-  ivec3 hi = min(lo + pc.bricks.w, n - 1);
+  ivec3 w = pc.brick_voxels.xyz;
+  ivec3 lo = b * w;
+  ivec3 hi = min(lo + w, n - 1);
   float vmin = 3.0e38, vmax = -3.0e38;
   for (int z = lo.z; z <= hi.z; ++z) {
     for (int y = lo.y; y <= hi.y; ++y) {

@@ -24,8 +24,9 @@ void main() {
   ivec3 b = ivec3(index % nb.x, (index / nb.x) % nb.y, index / (nb.x * nb.y));
   ivec3 n = pc.dims.xyz;
   vec3 s = pc.spacing_mm.xyz;
-  vec3 lo_mm = vec3(b * pc.bricks.w) * s;
-  vec3 hi_mm = vec3(min((b + 1) * pc.bricks.w, n - 1)) * s;
+  ivec3 w = pc.brick_voxels.xyz;
+  vec3 lo_mm = vec3(b * w) * s;
+  vec3 hi_mm = vec3(min((b + 1) * w, n - 1)) * s;
   vec3 dmin = vec3(0.0), dmax = vec3(0.0);
   if (pc.flags.y != 0) {
     ivec3 m = ivec3(pc.map_dims.xyz);
@@ -45,13 +46,13 @@ void main() {
   // Source indices the brick's samples reach, u in [u_lo, u_hi] (voxels);
   // a trilinear read at u takes voxels floor(u) .. ceil(u) with non-zero
   // weight, so the source bricks covering voxels floor(u_lo) .. ceil(u_hi)
-  // (brick s covers [w s, w s + w]) hold every value a sample can take.
+  // (brick s covers [w s, w s + w] per axis) hold every value a sample can take.
   // Without displacement u_hi is the brick's own upper face: its own
   // source brick suffices, not the next one as well.
-  vec3 u_lo = clamp(vec3(b * pc.bricks.w) + dmin / s, vec3(0.0), vec3(n - 1));
-  vec3 u_hi = clamp(vec3(min((b + 1) * pc.bricks.w, n - 1)) + dmax / s, vec3(0.0), vec3(n - 1));
-  ivec3 s_lo = clamp(ivec3(floor(u_lo / float(pc.bricks.w))), ivec3(0), nb - 1);
-  ivec3 s_hi = clamp(ivec3(ceil(u_hi / float(pc.bricks.w))) - 1, s_lo, nb - 1);
+  vec3 u_lo = clamp(vec3(b * w) + dmin / s, vec3(0.0), vec3(n - 1));
+  vec3 u_hi = clamp(vec3(min((b + 1) * w, n - 1)) + dmax / s, vec3(0.0), vec3(n - 1));
+  ivec3 s_lo = clamp(ivec3(floor(u_lo / vec3(w))), ivec3(0), nb - 1);
+  ivec3 s_hi = clamp(ivec3(ceil(u_hi / vec3(w))) - 1, s_lo, nb - 1);
   float vmin = 3.0e38, vmax = -3.0e38;
   for (int z = s_lo.z; z <= s_hi.z; ++z)
     for (int y = s_lo.y; y <= s_hi.y; ++y)

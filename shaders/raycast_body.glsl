@@ -17,8 +17,8 @@
 //
 // Per ray: intersect the image box [0, extent_mm]; samples at
 // t_k = t_near + k * step; each reads the deformed volume J(x) = I(X(x)), X
-// from the backward map. Bricks of w^3 cells (w = p.bricks.w: 4 still, 8
-// interactive) that the occupancy pass marked
+// from the backward map. Bricks of wx x wy x wz cells (p.brick_voxels: about
+// 6 mm still, 12 mm interactive, whatever the spacing) that the occupancy pass marked
 // empty (DVR: zero opacity over every value the brick can show; MIP: nothing
 // above the running maximum or the window's black) are jumped over to the
 // first sample grid point past them, so skipping never moves a sample. DVR
@@ -91,12 +91,12 @@ float g_gradient_half;  // p.gradient.x, value/mm
 
 void set_globals() {
   g_inv_spacing = 1.0 / p.spacing_mm.xyz;
-  g_inv_brick = 1.0 / (p.spacing_mm.xyz * float(p.bricks.w));
+  g_inv_brick = 1.0 / (p.spacing_mm.xyz * vec3(p.brick_voxels.xyz));
   g_extent_mm = vec3(p.dims.xyz - 1) * p.spacing_mm.xyz;
   g_last_index = vec3(p.dims.xyz - 1);
   g_dims = p.dims.xyz;
   g_bricks = p.bricks.xyz;
-  g_brick_mm = p.spacing_mm.xyz * float(p.bricks.w);
+  g_brick_mm = p.spacing_mm.xyz * vec3(p.brick_voxels.xyz);
   g_map_last = p.map_dims.xyz - 1.0;
   g_map_dims = ivec3(p.map_dims.xyz);
   g_to_grid = g_map_last / g_extent_mm;

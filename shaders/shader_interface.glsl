@@ -30,13 +30,15 @@ struct LatticeCostsPush {
 #define VPM_RAYCAST_MAX_CLIP_PLANES 16
 
 struct BrickMinMaxPush {
-  ivec4 dims;    // (nx, ny, nz, 0) voxels
-  ivec4 bricks;  // (bx, by, bz, brick_voxels)
+  ivec4 dims;          // (nx, ny, nz, 0) voxels
+  ivec4 bricks;        // (bx, by, bz, 0) bricks
+  ivec4 brick_voxels;  // (wx, wy, wz, 0) voxels per brick side
 };
 
 struct BrickOccupancyPush {
   ivec4 dims;        // (nx, ny, nz, 0) voxels
-  ivec4 bricks;      // (bx, by, bz, brick_voxels)
+  ivec4 bricks;        // (bx, by, bz, 0) bricks
+  ivec4 brick_voxels;  // (wx, wy, wz, 0) voxels per brick side
   vec4 spacing_mm;   // (sx, sy, sz, 0)
   vec4 lut;          // (value_lo, entries per value unit, entry count, 0)
   ivec4 flags;       // (mode: 0 DVR / 1 MIP, has_map, 0, 0)
@@ -51,7 +53,8 @@ struct RaycastParams {
   ivec4 dims;       // (nx, ny, nz, mode: 0 DVR / 1 MIP) voxels
   vec4 spacing_mm;  // (sx, sy, sz, 0)
   ivec4 image;      // (width, height, flags, 0) pixels
-  ivec4 bricks;     // (bx, by, bz, brick_voxels)
+  ivec4 bricks;     // (bx, by, bz, 0) bricks
+  ivec4 brick_voxels;  // (wx, wy, wz, 0) voxels per brick side
   vec4 lut;         // (value_lo, entries per value unit, entry count, 0)
   vec4 window;      // MIP (value of black, 1 / window width, value of white, 0)
   vec4 background;  // rgb in [0, 1]

@@ -43,24 +43,26 @@ struct TransferFunctionBlock {
 static_assert(sizeof(TransferFunctionBlock) == 528);
 
 // Ray casting (server/raycast). brick_minmax.comp: one invocation per brick
-// of brick_voxels^3 cells (bricks share their boundary voxel layer).
+// of wx x wy x wz cells (bricks share their boundary voxel layer).
 struct BrickMinMaxPush {
-  glm::ivec4 dims;    // (nx, ny, nz, 0) voxels
-  glm::ivec4 bricks;  // (bx, by, bz, brick_voxels)
+  glm::ivec4 dims;          // (nx, ny, nz, 0) voxels
+  glm::ivec4 bricks;        // (bx, by, bz, 0) bricks
+  glm::ivec4 brick_voxels;  // (wx, wy, wz, 0) voxels per brick side
 };
-static_assert(sizeof(BrickMinMaxPush) == 32);
+static_assert(sizeof(BrickMinMaxPush) == 48);
 
 // brick_occupancy.comp: per brick of the deformed space, whether (DVR) or up
 // to what value (MIP) the source region it samples can contribute.
 struct BrickOccupancyPush {
   glm::ivec4 dims;        // (nx, ny, nz, 0) voxels
-  glm::ivec4 bricks;      // (bx, by, bz, brick_voxels)
+  glm::ivec4 bricks;        // (bx, by, bz, 0) bricks
+  glm::ivec4 brick_voxels;  // (wx, wy, wz, 0) voxels per brick side
   glm::vec4 spacing_mm;   // (sx, sy, sz, 0)
   glm::vec4 lut;          // (value_lo, entries per value unit, entry count, 0)
   glm::ivec4 flags;       // (mode: 0 DVR / 1 MIP, has_map, 0, 0)
   glm::vec4 map_dims;     // (Mx, My, Mz, 0) backward-map grid points
 };
-static_assert(sizeof(BrickOccupancyPush) == 96);
+static_assert(sizeof(BrickOccupancyPush) == 112);
 
 // raycast_*.comp (the body in raycast_body.glsl): uniform block RaycastParams (std140).
 // Ray of pixel (px, py): eye + t * normalize(forward + ndc.x * right + ndc.y * up),
@@ -79,7 +81,8 @@ struct RaycastParams {
   glm::ivec4 dims;       // (nx, ny, nz, mode: 0 DVR / 1 MIP) voxels
   glm::vec4 spacing_mm;  // (sx, sy, sz, 0)
   glm::ivec4 image;      // (width, height, flags, 0) pixels
-  glm::ivec4 bricks;     // (bx, by, bz, brick_voxels)
+  glm::ivec4 bricks;     // (bx, by, bz, 0) bricks
+  glm::ivec4 brick_voxels;  // (wx, wy, wz, 0) voxels per brick side
   glm::vec4 lut;         // (value_lo, entries per value unit, entry count, 0)
   glm::vec4 window;      // MIP (value of black, 1 / window width, value of white, 0)
   glm::vec4 background;  // rgb in [0, 1]
@@ -91,7 +94,7 @@ struct RaycastParams {
   // w offset d (mm), keeps dot(n, x) >= d (server/raycast/clip_region.h).
   glm::vec4 clip_planes[kRaycastMaxClipPlanes];
 };
-static_assert(sizeof(RaycastParams) == 240 + 16 * kRaycastMaxClipPlanes);
+static_assert(sizeof(RaycastParams) == 256 + 16 * kRaycastMaxClipPlanes);
 
 // Uniform block RenderLutBlock (std140): colour (rgb) and opacity for the
 // frame's step (a) at value_lo + i / (entries per value unit).

@@ -82,6 +82,11 @@ std::string WhyFloat(const IntegerRange& r) {
 
 }  // namespace
 
+bool StoredAsInt16AsIs(VoxelType type, Endian endian, double slope, double intercept) {
+  return type == VoxelType::kInt16 && endian == HostEndian() && slope == 1.0 &&
+         intercept == std::floor(intercept) && std::abs(intercept) <= 32768.0;
+}
+
 Result<VoxelValues> ConvertVoxels(std::span<const uint8_t> bytes, VoxelType type, Endian endian,
                                   const VolumeGeometry& geometry, const VolumeLimits& limits,
                                   double slope, double intercept, std::string* float_note) {
@@ -94,8 +99,7 @@ Result<VoxelValues> ConvertVoxels(std::span<const uint8_t> bytes, VoxelType type
   }
   // The common CT file: int16 in the machine's byte order, no rescale (or
   // an integer one that keeps the range): the stored bytes as they are.
-  if (type == VoxelType::kInt16 && endian == HostEndian() && slope == 1.0 &&
-      intercept == std::floor(intercept) && std::abs(intercept) <= 32768.0) {
+  if (StoredAsInt16AsIs(type, endian, slope, intercept)) {
     RETURN_IF_ERROR(ValidateGeometry(geometry, limits, VoxelEncoding::kInt16));
     std::vector<int16_t> stored(static_cast<size_t>(count));
     std::memcpy(stored.data(), bytes.data(), stored.size() * sizeof(int16_t));

@@ -31,6 +31,12 @@ Result<VoxelValues> ConvertVoxels(std::span<const uint8_t> bytes, VoxelType type
                                   double slope = 1.0, double intercept = 0.0,
                                   std::string* float_note = nullptr);
 
+// Whether ConvertVoxels keeps voxels of this type, byte order and scaling
+// as the file stores them (int16 in the machine's byte order, slope 1, an
+// integer intercept within +-32768, which becomes the int16 offset): then a
+// reader may read them straight into the volume's int16 storage.
+bool StoredAsInt16AsIs(VoxelType type, Endian endian, double slope, double intercept);
+
 // A volume of `geometry` from voxels as a file stores them (ConvertVoxels),
 // with its source set to `name` and the float note, if any, among its notes.
 Result<Volume> VolumeFromStoredVoxels(std::span<const uint8_t> bytes, VoxelType type,

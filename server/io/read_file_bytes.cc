@@ -23,14 +23,23 @@ Result<std::vector<uint8_t>> ReadFileBytes(const std::filesystem::path& path,
     return absl::ResourceExhaustedError(StrCat(
         name, ": file of ", size, " bytes is over the cap of ", limits.max_bytes, " bytes"));
   }
+  std::vector<uint8_t> bytes(static_cast<size_t>(size));
+  RETURN_IF_ERROR(ReadFileRangeInto(path, 0, bytes, limits));
+  return bytes;
+}
+
+Status ReadFileRangeInto(const std::filesystem::path& path, int64_t offset,
+                         std::span<uint8_t> out, const VolumeLimits& limits) {
+  const std::string name = path.string();
   std::ifstream in(path, std::ios::binary);
   if (!in) return absl::NotFoundError(StrCat(name, ": cannot open"));
-  std::vector<uint8_t> bytes(static_cast<size_t>(size));
+  if (offset > 0) in.seekg(static_cast<std::streamoff>(offset));
+  const uintmax_t size = out.size();
   // In chunks, so that a progress bar moves while a large file comes in.
   constexpr uintmax_t kChunk = uintmax_t{16} << 20;
   for (uintmax_t done = 0; done < size;) {
     const uintmax_t n = std::min(kChunk, size - done);
-    in.read(reinterpret_cast<char*>(bytes.data() + done), static_cast<std::streamsize>(n));
+    in.read(reinterpret_cast<char*>(out.data() + done), static_cast<std::streamsize>(n));
     if (static_cast<uintmax_t>(in.gcount()) != n) {
       return absl::InvalidArgumentError(StrCat(name, ": read ", done + in.gcount(), " of ", size,
                                                " bytes (file changed?)"));
@@ -40,7 +49,7 @@ Result<std::vector<uint8_t>> ReadFileBytes(const std::filesystem::path& path,
       (*limits.read_progress)(double(done) / double(size), "reading");
     }
   }
-  return bytes;
+  return absl::OkStatus();
 }
 
 Result<std::vector<uint8_t>> ReadFilePrefix(const std::filesystem::path& path, int64_t count) {

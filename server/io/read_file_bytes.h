@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -19,6 +20,14 @@ namespace vpm {
 // larger than limits.max_bytes. Messages start with the path.
 Result<std::vector<uint8_t>> ReadFileBytes(const std::filesystem::path& path,
                                            const VolumeLimits& limits);
+
+// Fills `out` with the bytes at [offset, offset + out.size()) of the file at
+// `path`, in 16 MiB chunks (limits.read_progress moves, as ReadFileBytes'):
+// a reader that knows where the voxels lie reads them straight into the
+// volume's storage. NotFound when it cannot be opened, InvalidArgument when
+// the file ends first.
+Status ReadFileRangeInto(const std::filesystem::path& path, int64_t offset,
+                         std::span<uint8_t> out, const VolumeLimits& limits);
 
 // Up to the first `count` bytes of the file at `path` (fewer when it is
 // shorter): a cheap look at a magic number. NotFound when it cannot be opened.

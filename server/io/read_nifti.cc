@@ -1,6 +1,8 @@
 #include "server/io/read_nifti.h"
 
+#include <optional>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "server/io/gzip_stream.h"
@@ -50,6 +52,46 @@ Result<Volume> DecodeNifti(std::span<const uint8_t> bytes, std::string_view name
                                 intercept);
 }
 
+// An uncompressed file of int16 voxels as the machine stores them (the
+// usual CT): the voxels read straight into the volume's storage, without the
+// whole file in memory first and a copy (on a 512 x 512 x 900 CT: 450 MiB
+// less at the peak, and a copy of as much saved). nullopt for any other
+// file, and for one whose header or size is wrong: DecodeNifti then reads
+// it and reports what is wrong.
+Result<std::optional<Volume>> ReadInt16NiftiInPlace(const std::filesystem::path& path,
+                                                    const VolumeLimits& limits) {
+  const Result<std::vector<uint8_t>> prefix = ReadFilePrefix(path, kNifti2HeaderBytes);
+  if (!prefix.ok() || LooksLikeGzip(*prefix)) return std::nullopt;
+  const Result<NiftiHeader> header = ParseNiftiHeader(*prefix);
+  if (!header.ok()) return std::nullopt;
+  const auto [slope, intercept] = NiftiScaling(*header);
+  if (!StoredAsInt16AsIs(header->voxel_type, header->endian, slope, intercept)) {
+    return std::nullopt;
+  }
+  const Result<VolumeGeometry> geometry = NiftiHeaderGeometry(*header);
+  if (!geometry.ok() || !ValidateGeometry(*geometry, limits, VoxelEncoding::kInt16).ok()) {
+    return std::nullopt;
+  }
+  const int64_t data_bytes = geometry->voxel_count() * int64_t{sizeof(int16_t)};
+  std::error_code ec;
+  const uintmax_t file_size = std::filesystem::file_size(path, ec);
+  if (ec || file_size > uintmax_t(limits.max_bytes) || header->vox_offset < 0 ||
+      uintmax_t(header->vox_offset) + uintmax_t(data_bytes) > file_size) {
+    return std::nullopt;
+  }
+  std::vector<int16_t> stored(static_cast<size_t>(geometry->voxel_count()));
+  RETURN_IF_ERROR(ReadFileRangeInto(
+      path, header->vox_offset,
+      std::span<uint8_t>(reinterpret_cast<uint8_t*>(stored.data()), size_t(data_bytes)), limits));
+  Result<VoxelValues> values =
+      VoxelValues::Int16(std::move(stored), static_cast<int32_t>(intercept));
+  if (!values.ok()) return PrefixStatus(values.status(), path.string());
+  Result<Volume> volume = Volume::Create(*geometry, std::move(*values), limits);
+  if (!volume.ok()) return PrefixStatus(volume.status(), path.string());
+  volume->set_source(path.string());
+  return std::optional<Volume>(std::move(*volume));
+}
+
 }  // namespace
 
 Result<Volume> ReadNiftiFromMemory(std::span<const uint8_t> bytes, std::string_view name,
@@ -60,6 +102,8 @@ Result<Volume> ReadNiftiFromMemory(std::span<const uint8_t> bytes, std::string_v
 }
 
 Result<Volume> ReadNifti(const std::filesystem::path& path, const VolumeLimits& limits) {
+  ASSIGN_OR_RETURN(std::optional<Volume> in_place, ReadInt16NiftiInPlace(path, limits));
+  if (in_place) return std::move(*in_place);
   ASSIGN_OR_RETURN(const std::vector<uint8_t> bytes, ReadFileBytes(path, limits));
   return ReadNiftiFromMemory(bytes, path.string(), limits);
 }

@@ -33,6 +33,10 @@ class LatticeCostsGpu {
   Result<LatticeCosts> Evaluate(const GpuVolume& volume, const Lattice& lattice,
                                 const TransferFunction& tf, double* gpu_ms = nullptr) const;
 
+  // True on a CPU device (lavapipe), where EvaluateLatticeCostsRows
+  // (lattice_costs_rows.h) is faster than these kernels on the same cores.
+  bool runs_on_cpu() const { return context_->is_cpu_device(); }
+
  private:
   // The two kernels, specialized for a transfer function of `tf_points`
   // points (docs/MESH.md: the TF loop unrolls).

@@ -102,7 +102,7 @@ class Caster {
     extent_ = vec3(n_ - 1) * spacing_;
     flags_ = p.image.z;
     nb_ = ivec3(p.bricks);
-    brick_size_ = spacing_ * float(p.bricks.w);
+    brick_size_ = spacing_ * vec3(ivec3(p.brick_voxels));
     inv_spacing_ = 1.0f / spacing_;
     inv_brick_ = 1.0f / brick_size_;
   }
@@ -382,8 +382,8 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
 
 }  // namespace
 
-std::vector<glm::vec2> BrickMinMaxCpu(const Volume& volume, int brick_voxels) {
-  const int64_t w = brick_voxels;
+std::vector<glm::vec2> BrickMinMaxCpu(const Volume& volume, glm::ivec3 brick_voxels) {
+  const glm::i64vec3 w(brick_voxels);
   const auto nb = BrickGridDims(volume.dims(), brick_voxels);
   const auto& n = volume.dims();
   std::vector<glm::vec2> out(static_cast<size_t>(nb[0]) * nb[1] * nb[2]);
@@ -391,12 +391,12 @@ std::vector<glm::vec2> BrickMinMaxCpu(const Volume& volume, int brick_voxels) {
     for (int by = 0; by < nb[1]; ++by)
       for (int bx = 0; bx < nb[0]; ++bx) {
         float lo = 3.0e38f, hi = -3.0e38f;
-        const int64_t z1 = std::min<int64_t>(bz * w + w, n[2] - 1);
-        const int64_t y1 = std::min<int64_t>(by * w + w, n[1] - 1);
-        const int64_t x1 = std::min<int64_t>(bx * w + w, n[0] - 1);
-        for (int64_t z = bz * w; z <= z1; ++z)
-          for (int64_t y = by * w; y <= y1; ++y)
-            for (int64_t x = bx * w; x <= x1; ++x) {
+        const int64_t z1 = std::min<int64_t>(bz * w.z + w.z, n[2] - 1);
+        const int64_t y1 = std::min<int64_t>(by * w.y + w.y, n[1] - 1);
+        const int64_t x1 = std::min<int64_t>(bx * w.x + w.x, n[0] - 1);
+        for (int64_t z = bz * w.z; z <= z1; ++z)
+          for (int64_t y = by * w.y; y <= y1; ++y)
+            for (int64_t x = bx * w.x; x <= x1; ++x) {
               const float v = volume.At(x, y, z);
               lo = std::min(lo, v);
               hi = std::max(hi, v);
@@ -407,10 +407,10 @@ std::vector<glm::vec2> BrickMinMaxCpu(const Volume& volume, int brick_voxels) {
 }
 
 std::vector<float> BrickOccupancyCpu(std::span<const glm::vec2> minmax,
-                                     const VolumeGeometry& geometry, int brick_voxels,
+                                     const VolumeGeometry& geometry, glm::ivec3 brick_voxels,
                                      RenderMode mode, const RenderLut& lut,
                                      const HostBackwardMap* map) {
-  const int w = brick_voxels;
+  const ivec3 w = brick_voxels;
   const auto nba = BrickGridDims(geometry.dims, brick_voxels);
   const ivec3 nb(nba[0], nba[1], nba[2]);
   const ivec3 n(int(geometry.dims[0]), int(geometry.dims[1]), int(geometry.dims[2]));
@@ -441,8 +441,8 @@ std::vector<float> BrickOccupancyCpu(std::span<const glm::vec2> minmax,
     const vec3 u_lo = glm::clamp(vec3(b * w) + dmin / s, vec3(0.0f), vec3(n - 1));
     const vec3 u_hi =
         glm::clamp(vec3(glm::min((b + 1) * w, n - 1)) + dmax / s, vec3(0.0f), vec3(n - 1));
-    const ivec3 s_lo = glm::clamp(ivec3(glm::floor(u_lo / float(w))), ivec3(0), nb - 1);
-    const ivec3 s_hi = glm::clamp(ivec3(glm::ceil(u_hi / float(w))) - 1, s_lo, nb - 1);
+    const ivec3 s_lo = glm::clamp(ivec3(glm::floor(u_lo / vec3(w))), ivec3(0), nb - 1);
+    const ivec3 s_hi = glm::clamp(ivec3(glm::ceil(u_hi / vec3(w))) - 1, s_lo, nb - 1);
     float vmin = 3.0e38f, vmax = -3.0e38f;
     for (int z = s_lo.z; z <= s_hi.z; ++z)
       for (int y = s_lo.y; y <= s_hi.y; ++y)
@@ -521,13 +521,14 @@ Result<Frame> RenderReference(const RenderRequest& request, const Volume& volume
   frame.render_width = setup.render_width;
   frame.render_height = setup.render_height;
   frame.step_mm = setup.step_mm;
-  const int brick_voxels = setup.params.bricks.w;
+  const ivec3 brick_voxels(setup.params.brick_voxels);
   const auto nb = BrickGridDims(g.dims, brick_voxels);
   frame.total_bricks = int64_t(nb[0]) * nb[1] * nb[2];
   if (brick_minmax != nullptr && int64_t(brick_minmax->size()) != frame.total_bricks) {
     return absl::InvalidArgumentError(
-        StrCat("brick_minmax holds ", brick_minmax->size(), " bricks; bricks of ", brick_voxels,
-               " voxels make ", frame.total_bricks));
+        StrCat("brick_minmax holds ", brick_minmax->size(), " bricks; bricks of ",
+               brick_voxels.x, " x ", brick_voxels.y, " x ", brick_voxels.z, " voxels make ",
+               frame.total_bricks));
   }
   std::vector<float> occupancy;
   auto t0 = std::chrono::steady_clock::now();

@@ -27,15 +27,15 @@ struct HostBackwardMap {
   std::vector<glm::vec4> texels;
 };
 
-// Min and max of `volume` per brick of `brick_voxels` voxels per side
-// (BrickGridDims bricks, x fastest), as brick_minmax.comp.
-std::vector<glm::vec2> BrickMinMaxCpu(const Volume& volume, int brick_voxels);
+// Min and max of `volume` per brick of `brick_voxels` voxels per side (x,
+// y, z; BrickGridDims bricks, x fastest), as brick_minmax.comp.
+std::vector<glm::vec2> BrickMinMaxCpu(const Volume& volume, glm::ivec3 brick_voxels);
 
 // Occupancy per brick of deformed space, as brick_occupancy.comp: DVR 1/0,
 // MIP the reachable max. `minmax`: BrickMinMaxCpu for the same brick size;
 // `map` may be null (no deformation).
 std::vector<float> BrickOccupancyCpu(std::span<const glm::vec2> minmax,
-                                     const VolumeGeometry& geometry, int brick_voxels,
+                                     const VolumeGeometry& geometry, glm::ivec3 brick_voxels,
                                      RenderMode mode, const RenderLut& lut,
                                      const HostBackwardMap* map);
 
@@ -58,7 +58,7 @@ std::vector<uint32_t> UpscaleCpu(std::span<const uint32_t> source, int source_wi
 // A whole frame on the CPU, as VolumeRenderer::Render: the request's GPU
 // handles are ignored; `volume` is the source and `map` (optional) the
 // backward map. `brick_minmax` may hold BrickMinMaxCpu(volume,
-// BrickVoxels(request.quality)) to save its cost (InvalidArgument when its
+// BrickVoxels(request.quality, volume.geometry())) to save its cost (InvalidArgument when its
 // size is not that brick grid's); timings are wall clock (occupancy_ms, raycast_ms, upscale_ms).
 Result<Frame> RenderReference(const RenderRequest& request, const Volume& volume,
                               const HostBackwardMap* map, int threads = 2,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace vpm {
 namespace {
@@ -31,24 +32,48 @@ Status CheckSettings(const RaycastSettings& s) {
 
 }  // namespace
 
-int BrickVoxels(RenderQuality quality) {
-  return quality == RenderQuality::kInteractive ? kInteractiveBrickVoxels : kStillBrickVoxels;
+glm::ivec3 BrickVoxels(RenderQuality quality, const VolumeGeometry& geometry) {
+  const double mm = quality == RenderQuality::kInteractive ? kInteractiveBrickMm : kStillBrickMm;
+  glm::ivec3 w;
+  for (int a = 0; a < 3; ++a) {
+    const double voxels = std::round(mm / geometry.spacing_mm[a]);
+    const double most = double(std::max<int64_t>(1, geometry.dims[a] - 1));
+    w[a] = int(std::clamp(std::isfinite(voxels) ? voxels : 1.0, 1.0, most));
+  }
+  return w;
 }
 
-std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims, int brick_voxels) {
+std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims, glm::ivec3 brick_voxels) {
   std::array<int, 3> b{};
   for (int a = 0; a < 3; ++a) {
-    b[a] = std::max<int>(1, int((dims[a] - 1 + brick_voxels - 1) / brick_voxels));
+    const int64_t w = std::max(1, brick_voxels[a]);
+    b[a] = std::max<int>(1, int((dims[a] - 1 + w - 1) / w));
   }
   return b;
 }
 
+double InteractiveStepMm(const Camera& camera, int render_width, int render_height,
+                         const VolumeGeometry& geometry) {
+  const glm::dvec3& s = geometry.spacing_mm;
+  const double floor_mm = kInteractiveStepFactor * std::min({s.x, s.y, s.z});
+  const Camera::Pose& pose = camera.pose();
+  const double shorter = double(std::max(1, std::min(render_width, render_height)));
+  const double footprint_mm =
+      2.0 * pose.distance_mm * std::tan(0.5 * pose.fov_deg * std::numbers::pi / 180.0) / shorter;
+  const double ceiling_mm = glm::length(geometry.extent_mm()) / kInteractiveMinSamplesPerRay;
+  const double step = std::min(kInteractiveStepPerPixel * footprint_mm, ceiling_mm);
+  return std::isfinite(step) ? std::max(floor_mm, step) : floor_mm;
+}
+
 double RequestStepMm(const RenderRequest& request, const VolumeGeometry& geometry) {
   if (request.settings.step_mm > 0.0) return request.settings.step_mm;
+  if (request.quality == RenderQuality::kInteractive) {
+    return InteractiveStepMm(request.camera, (request.width + 1) / 2, (request.height + 1) / 2,
+                             geometry);
+  }
   const glm::dvec3& s = geometry.spacing_mm;
-  const double factor = request.quality == RenderQuality::kInteractive ? kInteractiveStepFactor
-                        : request.mode == RenderMode::kMip   ? kStillMipStepFactor
-                                                             : request.preset.still_step_factor;
+  const double factor = request.mode == RenderMode::kMip ? kStillMipStepFactor
+                                                         : request.preset.still_step_factor;
   return factor * std::min({s.x, s.y, s.z});
 }
 
@@ -100,7 +125,7 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
       request.mode == RenderMode::kDvr) {
     flags |= kRaycastCellGradient;
   }
-  const int brick_voxels = BrickVoxels(request.quality);
+  const glm::ivec3 brick_voxels = BrickVoxels(request.quality, geometry);
   const auto bricks = BrickGridDims(geometry.dims, brick_voxels);
   gpu::RaycastParams& p = setup.params;
   p.eye_mm = Vec4(rays.eye_mm, step);
@@ -111,7 +136,8 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
                       request.mode == RenderMode::kMip ? 1 : 0);
   p.spacing_mm = Vec4(geometry.spacing_mm);
   p.image = glm::ivec4(setup.render_width, setup.render_height, flags, 0);
-  p.bricks = glm::ivec4(bricks[0], bricks[1], bricks[2], brick_voxels);
+  p.bricks = glm::ivec4(bricks[0], bricks[1], bricks[2], 0);
+  p.brick_voxels = glm::ivec4(brick_voxels, 0);
   p.window = glm::vec4(float(window.level - 0.5 * window.width), float(1.0 / window.width),
                        float(window.level + 0.5 * window.width), 0.0f);
   p.background = Vec4(s.background);

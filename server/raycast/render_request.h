@@ -32,18 +32,26 @@ enum class RenderMode { kDvr, kMip };
 enum class RenderQuality { kStill, kInteractive };
 
 inline constexpr int kMaxFrameSide = 4096;
-// Empty-space-skipping bricks, voxels per side: 4 (4^3 cells) for still
-// frames, 8 for interactive ones. The occupancy pass, rerun whenever the map
-// changes (every drag step), reads some 27 map points per brick: 4^3 bricks
-// (262k for 256^3) cost it 17 ms per interactive frame, 8^3 bricks 3.6 ms,
-// while the interactive cast (half size, step 1.0) lost about 1 ms to the
-// coarser skipping; the still cast loses more (docs/RENDERING.md).
-inline constexpr int kStillBrickVoxels = 4;
-inline constexpr int kInteractiveBrickVoxels = 8;
-// MIP stills: a maximum along the ray, 47 dB against step 0.5 on the
-// phantom (docs/RENDERING.md); DVR stills take the preset's factor.
+// Empty-space-skipping bricks are sized in mm, not voxels, so that a ray
+// crosses as many bricks (and the occupancy pass, rerun whenever the map
+// changes, visits as many) on a 512 x 512 x 900 CT of 0.74 x 0.74 x 0.27 mm
+// as on the 256^3 phantom of 1.48 x 1.48 x 0.95 mm: the skip costs the same
+// per pixel whatever the slice count. Per axis, w = round(brick mm /
+// spacing) voxels, at least 1 (BrickVoxels). On the phantom: 4 x 4 x 6
+// voxels still, 8 x 8 x 13 interactive (docs/RENDERING.md, "Empty-space
+// skipping", for the measurements behind both sizes).
+inline constexpr double kStillBrickMm = 6.0;
+inline constexpr double kInteractiveBrickMm = 12.0;
 inline constexpr double kStillMipStepFactor = 1.0;
+// Interactive frames step by what the screen can show, not by the voxels:
+// half the footprint of one ray-cast pixel at the orbit centre
+// (kInteractiveStepPerPixel, Nyquist for what a pixel resolves), at least
+// kInteractiveStepFactor x the smallest spacing and at most the box diagonal
+// / kInteractiveMinSamplesPerRay (InteractiveStepMm; docs/RENDERING.md,
+// "Quality modes").
 inline constexpr double kInteractiveStepFactor = 1.0;
+inline constexpr double kInteractiveStepPerPixel = 0.5;
+inline constexpr double kInteractiveMinSamplesPerRay = 256;
 // Longest ray, in samples, a request may ask for (the box diagonal / step):
 // bounds a frame's work on any device (a GPU watchdog kills long dispatches).
 inline constexpr double kMaxSamplesPerRay = 32768;
@@ -132,13 +140,15 @@ struct Frame {
   FrameTimings timings;
 };
 
-// Voxels per brick side for a quality: kStillBrickVoxels or
-// kInteractiveBrickVoxels.
-int BrickVoxels(RenderQuality quality);
+// Voxels per brick side along x, y, z for a quality on a volume of this
+// geometry: round(kStillBrickMm or kInteractiveBrickMm / spacing), clamped
+// to [1, max(1, n - 1)].
+glm::ivec3 BrickVoxels(RenderQuality quality, const VolumeGeometry& geometry);
 
 // Brick grid of a volume: ceil((n - 1) / w) bricks per axis (at least 1) for
-// bricks of w voxels per side; brick b spans voxels [w b, min(w b + w, n - 1)].
-std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims, int brick_voxels);
+// bricks of w voxels per side (per axis); brick b spans voxels
+// [w b, min(w b + w, n - 1)].
+std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims, glm::ivec3 brick_voxels);
 
 struct RaycastSetup {
   gpu::RaycastParams params{};
@@ -160,5 +170,13 @@ glm::vec4 LutParams(const RenderLut& lut);
 
 // The step a request will use (validated by PrepareRaycast).
 double RequestStepMm(const RenderRequest& request, const VolumeGeometry& geometry);
+
+// The interactive step (mm) for a camera casting render_width x
+// render_height rays (half the requested frame): max(kInteractiveStepFactor
+// x smallest spacing, min(kInteractiveStepPerPixel x pixel footprint at the
+// orbit centre, diagonal / kInteractiveMinSamplesPerRay)), the footprint
+// being 2 distance tan(fov / 2) / the shorter side.
+double InteractiveStepMm(const Camera& camera, int render_width, int render_height,
+                         const VolumeGeometry& geometry);
 
 }  // namespace vpm

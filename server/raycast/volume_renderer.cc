@@ -175,7 +175,7 @@ void VolumeRenderer::ForgetVolume(const GpuVolume* volume) {
 }
 
 Result<const gpu::GpuBuffer*> VolumeRenderer::BrickMinMax(const GpuVolume& volume,
-                                                          int brick_voxels) {
+                                                          glm::ivec3 brick_voxels) {
   const vk::Buffer handle = volume.buffer().handle();
   for (auto it = brick_grids_.begin(); it != brick_grids_.end(); ++it) {
     if (it->volume == &volume && it->brick_voxels == brick_voxels) {
@@ -192,7 +192,8 @@ Result<const gpu::GpuBuffer*> VolumeRenderer::BrickMinMax(const GpuVolume& volum
   ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 1));
   const gpu::BrickMinMaxPush push{
       .dims = glm::ivec4(int(g.dims[0]), int(g.dims[1]), int(g.dims[2]), 0),
-      .bricks = glm::ivec4(nb[0], nb[1], nb[2], brick_voxels)};
+      .bricks = glm::ivec4(nb[0], nb[1], nb[2], 0),
+      .brick_voxels = glm::ivec4(brick_voxels, 0)};
   ASSIGN_OR_RETURN(const gpu::ComputeKernel kernel, volume.KernelFor(*context_, *minmax_kernel_));
   RETURN_IF_ERROR(batch.Dispatch(kernel, {volume.texel_view(), &minmax}, push,
                                  {GroupCount(bricks, 64), 1, 1}, "brick_minmax"));
@@ -260,6 +261,7 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
     const gpu::BrickOccupancyPush push{
         .dims = glm::ivec4(glm::ivec3(p.dims), 0),
         .bricks = p.bricks,
+        .brick_voxels = p.brick_voxels,
         .spacing_mm = p.spacing_mm,
         .lut = p.lut,
         .flags = glm::ivec4(p.dims.w, has_map ? 1 : 0, 0, 0),
@@ -308,7 +310,7 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   RETURN_IF_ERROR(PrepareLut(request.preset, setup.step_mm));
   setup.params.lut = lut_params_;
   ASSIGN_OR_RETURN(const gpu::GpuBuffer* minmax,
-                   BrickMinMax(*request.volume, setup.params.bricks.w));
+                   BrickMinMax(*request.volume, glm::ivec3(setup.params.brick_voxels)));
 
   const gpu::RaycastParams& p = setup.params;
   const size_t bricks = size_t(p.bricks.x) * p.bricks.y * p.bricks.z;
@@ -344,7 +346,7 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   // map's content is known unchanged only through backward_map_version.
   const OccupancyKey key{request.volume,      request.volume->buffer().handle(),
                          request.mode,        lut_generation_,
-                         p.bricks.w,          request.backward_map,
+                         glm::ivec3(p.brick_voxels), request.backward_map,
                          request.backward_map_version};
   const bool cacheable = request.backward_map == nullptr || request.backward_map_version != 0;
   const bool occupancy_current = cacheable && occupancy_key_ == key;

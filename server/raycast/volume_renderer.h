@@ -59,7 +59,7 @@ class VolumeRenderer {
     vk::Buffer volume_buffer;
     RenderMode mode;
     uint64_t lut_generation;
-    int brick_voxels;
+    glm::ivec3 brick_voxels;
     const gpu::GpuImage3D* map;
     uint64_t map_version;
     bool operator==(const OccupancyKey&) const = default;
@@ -67,7 +67,7 @@ class VolumeRenderer {
 
   struct BrickGrid {
     const GpuVolume* volume;
-    int brick_voxels;                 // per side
+    glm::ivec3 brick_voxels;          // per side, x y z
     vk::Buffer buffer;                // the volume's texel buffer, to detect reuse
     std::array<uint32_t, 3> extent;
     gpu::GpuBuffer minmax;            // vec2 per brick
@@ -79,7 +79,7 @@ class VolumeRenderer {
   Status CheckGpuInputs(const RenderRequest& request) const;
   // The volume's brick min-max grid for bricks of `brick_voxels` per side,
   // computed on first use and cached.
-  Result<const gpu::GpuBuffer*> BrickMinMax(const GpuVolume& volume, int brick_voxels);
+  Result<const gpu::GpuBuffer*> BrickMinMax(const GpuVolume& volume, glm::ivec3 brick_voxels);
   Status PrepareLut(const RenderPreset& preset, double step_mm);
   Status EnsureBuffer(std::optional<gpu::GpuBuffer>& buffer, vk::DeviceSize bytes,
                       vk::BufferUsageFlags usage);

@@ -500,3 +500,44 @@ TEST(NiftiReader, BudgetCountsTwoBytesPerInt16Voxel) {
 
 }  // namespace
 }  // namespace vpm
+
+namespace vpm {
+namespace {
+
+// An uncompressed int16 file is read straight into the volume's storage
+// (ReadNifti's in-place path); the volume equals the one decoded from the
+// file's bytes in memory: values, offset, geometry, source. A file cut short
+// inside its voxels still fails as truncated (the in-place path leaves it to
+// the decoder).
+TEST(NiftiReader, Int16FileReadInPlaceEqualsDecodedFromMemory) {
+  nifti_1_header h = Header1(3, 2, 2, DT_INT16, 16);
+  h.scl_slope = 1.0f;
+  h.scl_inter = -1024.0f;
+  h.pixdim[1] = 0.75f;
+  h.pixdim[3] = 2.5f;
+  const std::vector<uint8_t> bytes =
+      File1(h, Int16Data({0, 1, 4095, -3, 7, 8, 9, 10, 11, 12, -32768, 32767}));
+  const auto path = testing::MakeTempDir() / "inplace.nii";
+  testing::WriteBytes(path, bytes);
+  auto file = ReadNifti(path, {});
+  auto memory = ReadNiftiFromMemory(bytes, path.string(), {});
+  ASSERT_TRUE(file.ok()) << file.status();
+  ASSERT_TRUE(memory.ok()) << memory.status();
+  EXPECT_EQ(file->encoding(), VoxelEncoding::kInt16);
+  EXPECT_EQ(file->voxels().int16_offset(), -1024);
+  EXPECT_EQ(file->voxels().ToFloats(), memory->voxels().ToFloats());
+  EXPECT_EQ(file->geometry().dims, memory->geometry().dims);
+  EXPECT_EQ(file->geometry().spacing_mm, memory->geometry().spacing_mm);
+  EXPECT_EQ(file->geometry().origin_mm, memory->geometry().origin_mm);
+  EXPECT_EQ(file->geometry().direction, memory->geometry().direction);
+  EXPECT_EQ(file->min_value(), -32768.0f - 1024.0f);
+  EXPECT_EQ(file->max_value(), 32767.0f - 1024.0f);
+  EXPECT_EQ(file->source(), memory->source());
+  testing::WriteBytes(path, std::vector<uint8_t>(bytes.begin(), bytes.end() - 3));
+  const Result<Volume> cut = ReadNifti(path, {});
+  EXPECT_EQ(cut.status().code(), absl::StatusCode::kInvalidArgument) << cut.status();
+  EXPECT_NE(cut.status().message().find("truncated"), std::string_view::npos) << cut.status();
+}
+
+}  // namespace
+}  // namespace vpm
