@@ -4,7 +4,8 @@
 // refined at the left renal artery, and for ~1,000 and ~5,000 vertices.
 //   drag_loop_bench [SOURCE] [--max-load-steps N] [--min-load-fraction F]
 //                   [--intermediate-newton N] [--no-barrier] [--max-vertices N]
-// (bench/fem_flags.h)
+//                   [--steps]
+// (bench/fem_flags.h); --steps prints every step's FEM work and stage times.
 #include <cstdio>
 #include <string>
 #include <utility>
@@ -38,18 +39,27 @@ struct Breakdown {
   int64_t moved = 0, processed = 0;
 };
 
+// Where the wall time of a step goes, summed over the steps (ms), and the
+// FEM solver's work (counts summed over the steps).
+struct Split {
+  double forces = 0.0, factor = 0.0, pcg_other = 0.0, fem_other = 0.0;  // FEM parts
+  double map = 0.0, frame = 0.0, jpeg = 0.0;
+  int64_t newton = 0, cg = 0, load_steps = 0, forced = 0;
+};
+
 struct Row {
   double fem = 1e300, map = 1e300, interactive = 1e300, still = 1e300, encode = 1e300;
   double fem_sum = 0.0, fem_max = 0.0;  // over the steps: FEM grows as tets invert
   int steps = 0;
   Breakdown parts;
+  Split split;
   double loop_fps = 0.0;
   int64_t vertices = 0, inverted = 0;
 };
 
 Row RunCase(const Case& c, const Volume& volume, const gpu::GpuContext& context,
             GpuVolume& gpu_volume, VolumeRenderer& renderer, const glm::dvec3& grab,
-            const SolverOptions& solver) {
+            const SolverOptions& solver, bool print_steps) {
   MeshParams params;
   params.grid = c.grid;
   params.target = c.target;
@@ -83,7 +93,19 @@ Row RunCase(const Case& c, const Volume& volume, const gpu::GpuContext& context,
     row.fem_max = std::max(row.fem_max, step.fem_ms);
     row.map = std::min(row.map, step.warp_ms);
     row.inverted = step.inverted_tets;
+    const SolveStats& solve = step.solve;
+    Split& split = row.split;
+    split.forces += solve.assembly_ms;
+    split.factor += solve.precondition_ms;
+    split.pcg_other += solve.solve_ms - solve.precondition_ms;
+    split.fem_other += step.fem_ms - solve.total_ms();
+    split.map += step.warp_ms;
+    split.newton += solve.newton_iterations;
+    split.cg += solve.cg_iterations;
+    split.load_steps += solve.load_steps;
+    split.forced += solve.forced_inversion ? 1 : 0;
     auto frame = bench::Check(scene->Render(interactive), "render");
+    split.frame += frame.timings.wall_ms;
     row.interactive = std::min(row.interactive, frame.timings.wall_ms);
     Breakdown& b = row.parts;
     const FrameTimings& ft = frame.timings;
@@ -104,7 +126,17 @@ Row RunCase(const Case& c, const Volume& volume, const gpu::GpuContext& context,
     b.processed = step.processed_tets;
     const auto t0 = std::chrono::steady_clock::now();
     auto jpeg = bench::Check(EncodeJpeg(frame.rgba, frame.width, frame.height, 85), "jpeg");
-    row.encode = std::min(row.encode, MsSince(t0));
+    const double jpeg_ms = MsSince(t0);
+    row.encode = std::min(row.encode, jpeg_ms);
+    split.jpeg += jpeg_ms;
+    if (print_steps) {
+      std::printf("  step %2d: FEM %7.2f ms (forces %6.2f, factor solves %6.2f, K v + PCG %6.2f; "
+                  "%2d Newton, %3d CG, %2d load steps%s), map %6.2f, frame %6.2f, JPEG %5.2f\n",
+                  s, step.fem_ms, solve.assembly_ms, solve.precondition_ms,
+                  solve.solve_ms - solve.precondition_ms, solve.newton_iterations,
+                  solve.cg_iterations, solve.load_steps, solve.forced_inversion ? ", forced" : "",
+                  step.warp_ms, frame.timings.wall_ms, jpeg_ms);
+    }
   }
   row.loop_fps = steps / (MsSince(t_loop) / 1000.0);
   // Orbiting between drag steps: same map, so the brick occupancy is reused.
@@ -126,9 +158,12 @@ Row RunCase(const Case& c, const Volume& volume, const gpu::GpuContext& context,
 int main(int argc, char** argv) {
   std::string source = "phantom:abdomen";
   bench::FemFlags flags;
+  bool print_steps = false;
   for (int i = 1; i < argc; ++i) {
     if (bench::ParseFemFlag(argc, argv, i, flags)) continue;
-    if (std::string(argv[i]) == "--no-barrier") {
+    if (std::string(argv[i]) == "--steps") {
+      print_steps = true;
+    } else if (std::string(argv[i]) == "--no-barrier") {
       flags.solver.inversion_barrier = false;
     } else {
       source = argv[i];
@@ -166,7 +201,8 @@ int main(int argc, char** argv) {
                         Case{"24^3 -> 1000 + refine", {24, 24, 24}, 1000},
                         Case{"40^3 -> 5000 + refine", {40, 40, 40}, 5000}}) {
     if (c.target > flags.max_vertices) continue;
-    const Row r = RunCase(c, volume, *context, gpu_volume, *renderer, grab, solver);
+    if (print_steps) std::printf("%s:\n", c.name);
+    const Row r = RunCase(c, volume, *context, gpu_volume, *renderer, grab, solver, print_steps);
     std::printf("%-22s %6lld %8.2f %9.2f %8.2f %8.2f %13.1f %11.1f %8.2f %9.1f %9lld\n", c.name,
                 static_cast<long long>(r.vertices), r.fem, r.fem_sum / r.steps, r.fem_max, r.map,
                 r.interactive, r.still, r.encode, r.loop_fps, static_cast<long long>(r.inverted));
@@ -184,6 +220,24 @@ int main(int argc, char** argv) {
                 "%8.2f %8.2f\n",
                 name, static_cast<long long>(b.moved), static_cast<long long>(b.processed),
                 b.map_gpu, b.clear, b.claim, b.write, b.map_copy, b.texels, b.occupancy, b.cast, b.upscale, b.frame_gpu, b.readback, b.orbit);
+  }
+  std::printf("\nwhere the wall time of a step goes, mean over the steps (ms): FEM = forces "
+              "(rotations, elastic forces) + factor solves (preconditioner) + K v and the rest of "
+              "PCG + other; then the map update, the interactive frame and its JPEG; per step "
+              "also the mean Newton and CG iterations and load steps, and the steps with a "
+              "forced inversion\n");
+  std::printf("%-22s %8s %8s %8s %8s %8s %8s %8s %8s %8s %6s %6s %6s %6s\n", "mesh", "forces",
+              "factor", "Kv+PCG", "FEM etc", "FEM", "map", "frame", "JPEG", "total", "newton",
+              "CG", "loads", "forced");
+  for (const auto& [name, r] : rows) {
+    const Split& p = r.split;
+    const double n = r.steps;
+    const double fem = p.forces + p.factor + p.pcg_other + p.fem_other;
+    std::printf("%-22s %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %6.1f %6.1f %6.1f "
+                "%6lld\n",
+                name, p.forces / n, p.factor / n, p.pcg_other / n, p.fem_other / n, fem / n,
+                p.map / n, p.frame / n, p.jpeg / n, (fem + p.map + p.frame + p.jpeg) / n,
+                p.newton / n, p.cg / n, p.load_steps / n, static_cast<long long>(p.forced));
   }
   return 0;
 }

@@ -122,9 +122,11 @@ Eigen::VectorXd CorotationalSolver::TangentSolve(const Eigen::VectorXd& rhs,
   const LinearMap apply_k = [this](const Eigen::VectorXd& v, Eigen::VectorXd& y) {
     ApplyCorotatedStiffness(elements_, frames_, v, y, ElementThreads());
   };
-  const LinearMap precondition = [this, with_handles](const Eigen::VectorXd& r,
-                                                      Eigen::VectorXd& z) {
+  const LinearMap precondition = [this, with_handles, &stats](const Eigen::VectorXd& r,
+                                                              Eigen::VectorXd& z) {
+    const auto t_factor = SteadyClock::now();
     factor_.Apply(r, with_handles, z);
+    stats.precondition_ms += MsSince(t_factor);
   };
   Eigen::VectorXd update;
   const PcgStats pcg = ProjectedPcg(apply_k, precondition, constrained, rhs, options_.cg_tolerance,

@@ -90,6 +90,7 @@ enum class HandleMode { kPrescribed, kFree };
 struct SolveStats {
   double assembly_ms = 0.0;  // rotations and elastic forces, all evaluations
   double solve_ms = 0.0;     // PCG (preconditioner and matrix-free products)
+  double precondition_ms = 0.0;  // the factor solves inside solve_ms
   int newton_iterations = 0;
   int cg_iterations = 0;  // summed over Newton iterations
   int load_steps = 0;     // parts the prescribed jump was applied in

@@ -20,7 +20,8 @@ std::atomic<uint64_t> next_map_version{1};
 SceneStepTimings FromSolve(const SolveStats& solve, std::chrono::steady_clock::time_point t0) {
   return {.fem_ms = MsSince(t0),
           .max_displacement_mm = solve.max_displacement_mm,
-          .converged = solve.converged};
+          .converged = solve.converged,
+          .solve = solve};
 }
 
 }  // namespace

@@ -39,6 +39,7 @@ struct SceneStepTimings {
   double max_displacement_mm = 0.0;
   int64_t inverted_tets = 0;  // after the FEM step (Drag, Pull, Release), not set by SyncMap
   bool converged = true;
+  SolveStats solve;  // the FEM solve's own counts and times (Drag, Pull)
 };
 
 struct SceneView {
