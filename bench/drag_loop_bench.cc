@@ -8,6 +8,7 @@
 // (bench/fem_flags.h); --steps prints every step's FEM work and stage times.
 #include <cstdio>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -55,39 +56,89 @@ struct Row {
   Split split;
   double loop_fps = 0.0;
   int64_t vertices = 0, inverted = 0;
+  double grab_ms = 0.0, precondition_ms = 0.0;  // grab (handles into the factor), one M^-1 r
+  int64_t handles = 0;
 };
 
-Row RunCase(const Case& c, const Volume& volume, const gpu::GpuContext& context,
+SceneView InteractiveView(const Volume& volume) {
+  return {.camera = Camera::ForVolume(volume.geometry()),
+          .preset = bench::Check(MakeRenderPreset("ct-soft-tissue", volume), "preset"),
+          .quality = RenderQuality::kInteractive,
+          .width = 256,
+          .height = 256};
+}
+
+// The demo's drag: the left renal artery 12 mm cranially in 10 steps
+// (section 3 makes some of its refined vertices hard: docs/MESH.md).
+constexpr int kSteps = 10;
+glm::dvec3 DragOffset(int step) { return glm::dvec3(0.0, 0.0, 1.2 * step); }
+
+// The drag loop with the map updated once per frame (the server's sessions),
+// in order (each step's FEM, then its map update, frame and JPEG) or
+// overlapped: the FEM of step N+1 runs on this thread while step N's frame
+// is cast and encoded on another (DeformableScene::PrepareRender). Returns
+// the loop's frames per second.
+double RunDeferredLoop(const ProxyMesh& mesh, const Volume& volume,
+                       const gpu::GpuContext& context, GpuVolume& gpu_volume,
+                       VolumeRenderer& renderer, const glm::dvec3& grab,
+                       const SolverOptions& solver, bool overlap) {
+  DeformableScene::Options options;
+  options.fem.solver = solver;
+  options.defer_map_update = true;
+  auto scene = bench::Check(
+      DeformableScene::Create(context, volume, gpu_volume, renderer, mesh, options), "scene");
+  bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
+  const SceneView view = InteractiveView(volume);
+  auto render_and_encode = [&](const RenderRequest& request) {
+    const Frame frame = bench::Check(scene->RenderPrepared(request), "render");
+    bench::Check(EncodeJpeg(frame.rgba, frame.width, frame.height, 85), "jpeg");
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  bench::Check(scene->Drag(DragOffset(1)), "drag");
+  for (int s = 1; s <= kSteps; ++s) {
+    const RenderRequest request = bench::Check(scene->PrepareRender(view), "prepare");
+    if (!overlap || s == kSteps) {
+      render_and_encode(request);
+      if (s < kSteps) bench::Check(scene->Drag(DragOffset(s + 1)), "drag");
+      continue;
+    }
+    std::thread frame_thread(render_and_encode, std::cref(request));
+    bench::Check(scene->Drag(DragOffset(s + 1)), "drag");
+    frame_thread.join();
+  }
+  return kSteps / (MsSince(t0) / 1000.0);
+}
+
+Row RunCase(const ProxyMesh& mesh, const Volume& volume, const gpu::GpuContext& context,
             GpuVolume& gpu_volume, VolumeRenderer& renderer, const glm::dvec3& grab,
             const SolverOptions& solver, bool print_steps) {
-  MeshParams params;
-  params.grid = c.grid;
-  params.target = c.target;
-  params.refine_at_mm = grab;
-  auto costs = bench::Check(LatticeCostsGpu::Create(context), "kernel");
-  auto mesh = bench::Check(BuildProxyMesh(volume, params, {&gpu_volume, &costs}), "mesh");
   DeformableScene::Options options;
   options.fem.solver = solver;
   auto scene = bench::Check(
       DeformableScene::Create(context, volume, gpu_volume, renderer, mesh, options), "scene");
-  bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
-  SceneView interactive{.camera = Camera::ForVolume(volume.geometry()),
-                        .preset = bench::Check(MakeRenderPreset("ct-soft-tissue", volume), "preset"),
-                        .quality = RenderQuality::kInteractive,
-                        .width = 256,
-                        .height = 256};
+  const auto t_grab = std::chrono::steady_clock::now();
+  const GrabInfo grabbed = bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
+  Row row;
+  row.grab_ms = MsSince(t_grab);
+  row.handles = static_cast<int64_t>(grabbed.handles.size());
+  {
+    // One preconditioner application with the handles held (per PCG
+    // iteration), min of 50.
+    const ConstrainedFactor& factor = scene->fem().solver().factor();
+    Eigen::VectorXd r = Eigen::VectorXd::Ones(3 * static_cast<int64_t>(mesh.vertices.size()));
+    Eigen::VectorXd z;
+    row.precondition_ms = bench::MinMs(50, [&] { factor.Apply(r, true, z); });
+  }
+  SceneView interactive = InteractiveView(volume);
   SceneView still = interactive;
   still.quality = RenderQuality::kStill;
   still.width = still.height = 512;
-  Row row;
   row.vertices = static_cast<int64_t>(mesh.vertices.size());
-  const int steps = 10;
+  const int steps = kSteps;
   row.steps = steps;
   const auto t_loop = std::chrono::steady_clock::now();
   for (int s = 1; s <= steps; ++s) {
-    // The demo's drag: the left renal artery 12 mm cranially in 10 steps
-    // (section 3 makes some of its refined vertices hard: docs/MESH.md).
-    auto step = bench::Check(scene->Drag(glm::dvec3(0.0, 0.0, 1.2 * s)), "drag");
+    auto step = bench::Check(scene->Drag(DragOffset(s)), "drag");
     row.fem = std::min(row.fem, step.fem_ms);
     row.fem_sum += step.fem_ms;
     row.fem_max = std::max(row.fem_max, step.fem_ms);
@@ -197,12 +248,21 @@ int main(int argc, char** argv) {
               "FEM mean", "FEM max", "map", "frame 256^2", "still 512^2", "JPEG", "loop fps",
               "inverted");
   std::vector<std::pair<const char*, Row>> rows;
+  std::vector<std::pair<const char*, ProxyMesh>> meshes;
   for (const Case& c : {Case{"20^3 -> 250 + refine", {20, 20, 20}, 250},
                         Case{"24^3 -> 1000 + refine", {24, 24, 24}, 1000},
                         Case{"40^3 -> 5000 + refine", {40, 40, 40}, 5000}}) {
     if (c.target > flags.max_vertices) continue;
     if (print_steps) std::printf("%s:\n", c.name);
-    const Row r = RunCase(c, volume, *context, gpu_volume, *renderer, grab, solver, print_steps);
+    MeshParams params;
+    params.grid = c.grid;
+    params.target = c.target;
+    params.refine_at_mm = grab;
+    auto costs = bench::Check(LatticeCostsGpu::Create(*context), "kernel");
+    meshes.emplace_back(c.name,
+                        bench::Check(BuildProxyMesh(volume, params, {&gpu_volume, &costs}), "mesh"));
+    const Row r = RunCase(meshes.back().second, volume, *context, gpu_volume, *renderer, grab,
+                          solver, print_steps);
     std::printf("%-22s %6lld %8.2f %9.2f %8.2f %8.2f %13.1f %11.1f %8.2f %9.1f %9lld\n", c.name,
                 static_cast<long long>(r.vertices), r.fem, r.fem_sum / r.steps, r.fem_max, r.map,
                 r.interactive, r.still, r.encode, r.loop_fps, static_cast<long long>(r.inverted));
@@ -238,6 +298,29 @@ int main(int argc, char** argv) {
                 name, p.forces / n, p.factor / n, p.pcg_other / n, p.fem_other / n, fem / n,
                 p.map / n, p.frame / n, p.jpeg / n, (fem + p.map + p.frame + p.jpeg) / n,
                 p.newton / n, p.cg / n, p.load_steps / n, static_cast<long long>(p.forced));
+  }
+  std::printf("\nthe grab's handles in the preconditioner (--handle-factor %s): grab ms, one "
+              "application ms (min of 50)\n",
+              solver.handle_factor == HandleFactor::kRefactor ? "refactor" : "capacitance");
+  std::printf("%-22s %8s %8s %10s\n", "mesh", "handles", "grab", "M^-1 r");
+  for (const auto& [name, r] : rows) {
+    std::printf("%-22s %8lld %8.2f %10.3f\n", name, static_cast<long long>(r.handles), r.grab_ms,
+                r.precondition_ms);
+  }
+  std::printf("\noverlap: the loop with the map updated once per frame, in order (FEM, map, "
+              "frame, JPEG) and with the FEM of step N+1 running while frame N is cast and "
+              "encoded (loop fps, best of 3)\n");
+  std::printf("%-22s %10s %10s %8s\n", "mesh", "in order", "overlap", "gain");
+  for (const auto& [name, mesh] : meshes) {
+    double fps[2] = {0.0, 0.0};
+    for (int r = 0; r < 3; ++r) {
+      for (int overlap = 0; overlap < 2; ++overlap) {
+        fps[overlap] = std::max(fps[overlap],
+                                RunDeferredLoop(mesh, volume, *context, gpu_volume, *renderer,
+                                                grab, solver, overlap == 1));
+      }
+    }
+    std::printf("%-22s %10.1f %10.1f %7.2fx\n", name, fps[0], fps[1], fps[1] / fps[0]);
   }
   return 0;
 }

@@ -48,7 +48,8 @@ Result<CorotationalSolver> CorotationalSolver::Create(
       AssembleStiffness(solver.elements_, CorotatedFrames{}, static_cast<int64_t>(rest_mm.size()));
   solver.setup_assembly_ms_ = MsSince(t0);
   const auto t1 = SteadyClock::now();
-  ASSIGN_OR_RETURN(solver.factor_, ConstrainedFactor::Create(rest_stiffness, fixed_dofs));
+  ASSIGN_OR_RETURN(solver.factor_, ConstrainedFactor::Create(rest_stiffness, fixed_dofs,
+                                                                options.handle_factor));
   solver.setup_factor_ms_ = MsSince(t1);
   solver.fixed_ = fixed_dofs;
   for (size_t d = 0; d < fixed_dofs.size(); ++d) {

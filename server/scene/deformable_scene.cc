@@ -130,6 +130,16 @@ ClipRegion DeformableScene::ViewClip(const SceneView& view) const {
 }
 
 Result<Frame> DeformableScene::Render(const SceneView& view, SceneStepTimings* map_update) {
+  ASSIGN_OR_RETURN(const RenderRequest request, PrepareRender(view, map_update));
+  return RenderPrepared(request);
+}
+
+Result<Frame> DeformableScene::RenderPrepared(const RenderRequest& request) const {
+  return renderer_->Render(request);
+}
+
+Result<RenderRequest> DeformableScene::PrepareRender(const SceneView& view,
+                                                     SceneStepTimings* map_update) {
   ASSIGN_OR_RETURN(SceneStepTimings sync, SyncMap());
   if (map_update != nullptr) *map_update = sync;
   RenderRequest request;
@@ -158,7 +168,7 @@ Result<Frame> DeformableScene::Render(const SceneView& view, SceneStepTimings* m
       request.overlay.drag = DragArrow{*grab_point_mm_, *grab_point_mm_ + drag_offset_mm_};
     }
   }
-  return renderer_->Render(request);
+  return request;
 }
 
 Result<SliceFrame> DeformableScene::RenderSlice(const SliceView& view) {

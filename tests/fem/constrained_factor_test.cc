@@ -79,6 +79,49 @@ TEST(ConstrainedFactor, ExtraConstraintsGiveTheExactSubBlockInverse) {
   EXPECT_LT((z - DenseReference(dense, setup.fixed, r)).norm(), 1e-9 * expected.norm());
 }
 
+// The two ways of taking the handles (a capacitance correction of the base
+// factor, a numeric refactorization with the handles decoupled) give the
+// same inverse, before and after the handle set changes.
+TEST(ConstrainedFactor, RefactoredAndCapacitanceHandlesAgree) {
+  const Problem setup = MakeProblem();
+  auto refactor = ConstrainedFactor::Create(setup.k, setup.fixed, HandleFactor::kRefactor);
+  auto capacitance = ConstrainedFactor::Create(setup.k, setup.fixed, HandleFactor::kCapacitance);
+  ASSERT_TRUE(refactor.ok()) << refactor.status();
+  ASSERT_TRUE(capacitance.ok()) << capacitance.status();
+  const Eigen::MatrixXd dense(setup.k);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::VectorXd r(setup.k.rows());
+  for (int64_t i = 0; i < r.size(); ++i) r[i] = g(rng);
+  for (int64_t first : {3, 8}) {
+    std::vector<int32_t> extra;
+    std::vector<uint8_t> constrained = setup.fixed;
+    for (int64_t d = first; d < r.size() && extra.size() < 20; d += 11) {
+      if (setup.fixed[d]) continue;
+      extra.push_back(static_cast<int32_t>(d));
+      constrained[d] = 1;
+    }
+    ASSERT_TRUE(refactor->SetExtraFixed(extra).ok());
+    ASSERT_TRUE(capacitance->SetExtraFixed(extra).ok());
+    Eigen::VectorXd z_refactor, z_capacitance;
+    refactor->Apply(r, true, z_refactor);
+    capacitance->Apply(r, true, z_capacitance);
+    const Eigen::VectorXd expected = DenseReference(dense, constrained, r);
+    EXPECT_LT((z_refactor - expected).norm(), 1e-9 * expected.norm());
+    EXPECT_LT((z_refactor - z_capacitance).norm(), 1e-9 * expected.norm());
+    for (int32_t d : extra) EXPECT_EQ(z_refactor[d], 0.0);
+    // Without the handles: the base factor, untouched by the refactorization.
+    refactor->Apply(r, false, z_refactor);
+    const Eigen::VectorXd base = DenseReference(dense, setup.fixed, r);
+    EXPECT_LT((z_refactor - base).norm(), 1e-9 * base.norm());
+  }
+  ASSERT_TRUE(refactor->SetExtraFixed({}).ok());
+  Eigen::VectorXd z;
+  refactor->Apply(r, true, z);
+  const Eigen::VectorXd base = DenseReference(dense, setup.fixed, r);
+  EXPECT_LT((z - base).norm(), 1e-9 * base.norm());
+}
+
 TEST(ConstrainedFactor, RejectsFreeRigidMotionsAndBadExtraDofs) {
   const Problem setup = MakeProblem();
   const std::vector<uint8_t> nothing_fixed(setup.fixed.size(), 0);
