@@ -29,6 +29,15 @@ Problem MakeProblem() {
   return {AssembleStiffness(elements, {}, mesh.vertices.size()), *FixedDofs(mesh, extent)};
 }
 
+// n standard normal entries.
+Eigen::VectorXd RandomVector(int64_t n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::VectorXd r(n);
+  for (int64_t i = 0; i < n; ++i) r[i] = g(rng);
+  return r;
+}
+
 // z = K_SS^-1 r_S by a dense solve, 0 outside S.
 Eigen::VectorXd DenseReference(const Eigen::MatrixXd& k, const std::vector<uint8_t>& constrained,
                                const Eigen::VectorXd& r) {
@@ -53,10 +62,7 @@ TEST(ConstrainedFactor, ExtraConstraintsGiveTheExactSubBlockInverse) {
   auto factor = ConstrainedFactor::Create(setup.k, setup.fixed);
   ASSERT_TRUE(factor.ok()) << factor.status();
   const Eigen::MatrixXd dense(setup.k);
-  std::mt19937 rng(1);
-  std::normal_distribution<double> g(0.0, 1.0);
-  Eigen::VectorXd r(setup.k.rows());
-  for (int64_t i = 0; i < r.size(); ++i) r[i] = g(rng);
+  const Eigen::VectorXd r = RandomVector(setup.k.rows(), 1);
   Eigen::VectorXd z;
   factor->Apply(r, false, z);
   Eigen::VectorXd expected = DenseReference(dense, setup.fixed, r);
@@ -89,10 +95,7 @@ TEST(ConstrainedFactor, RefactoredAndCapacitanceHandlesAgree) {
   ASSERT_TRUE(refactor.ok()) << refactor.status();
   ASSERT_TRUE(capacitance.ok()) << capacitance.status();
   const Eigen::MatrixXd dense(setup.k);
-  std::mt19937 rng(3);
-  std::normal_distribution<double> g(0.0, 1.0);
-  Eigen::VectorXd r(setup.k.rows());
-  for (int64_t i = 0; i < r.size(); ++i) r[i] = g(rng);
+  const Eigen::VectorXd r = RandomVector(setup.k.rows(), 3);
   for (int64_t first : {3, 8}) {
     std::vector<int32_t> extra;
     std::vector<uint8_t> constrained = setup.fixed;
