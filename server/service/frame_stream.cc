@@ -176,6 +176,7 @@ void FrameStream::StillCheck() {
   if (!last_interactive_ || render_scheduled_ || finish_) return;
   if (session_->RecentlyChanged() || ClientActiveLocked()) {
     // Events still coming: look again later.
+    still_deferrals_ = 0;
     std::weak_ptr<FrameStream> weak = weak_from_this();
     service_->render_pool->PostAfter(
         std::chrono::milliseconds(int64_t(service_->options.still_delay_ms) + 5), [weak] {
