@@ -4,9 +4,11 @@
 // refined at the left renal artery, and for ~1,000 and ~5,000 vertices.
 //   drag_loop_bench [SOURCE] [--max-load-steps N] [--min-load-fraction F]
 //                   [--intermediate-newton N] [--no-barrier] [--max-vertices N]
-// (bench/fem_flags.h)
+//                   [--steps]
+// (bench/fem_flags.h); --steps prints every step's FEM work and stage times.
 #include <cstdio>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -38,52 +40,123 @@ struct Breakdown {
   int64_t moved = 0, processed = 0;
 };
 
+// Where the wall time of a step goes, summed over the steps (ms), and the
+// FEM solver's work (counts summed over the steps).
+struct Split {
+  double forces = 0.0, factor = 0.0, pcg_other = 0.0, fem_other = 0.0;  // FEM parts
+  double map = 0.0, frame = 0.0, jpeg = 0.0;
+  int64_t newton = 0, cg = 0, load_steps = 0, forced = 0;
+};
+
 struct Row {
   double fem = 1e300, map = 1e300, interactive = 1e300, still = 1e300, encode = 1e300;
   double fem_sum = 0.0, fem_max = 0.0;  // over the steps: FEM grows as tets invert
   int steps = 0;
   Breakdown parts;
+  Split split;
   double loop_fps = 0.0;
   int64_t vertices = 0, inverted = 0;
+  double grab_ms = 0.0, precondition_ms = 0.0;  // grab (handles into the factor), one M^-1 r
+  int64_t handles = 0;
 };
 
-Row RunCase(const Case& c, const Volume& volume, const gpu::GpuContext& context,
+SceneView InteractiveView(const Volume& volume) {
+  return {.camera = Camera::ForVolume(volume.geometry()),
+          .preset = bench::Check(MakeRenderPreset("ct-soft-tissue", volume), "preset"),
+          .quality = RenderQuality::kInteractive,
+          .width = 256,
+          .height = 256};
+}
+
+// The demo's drag: the left renal artery 12 mm cranially in 10 steps
+// (section 3 makes some of its refined vertices hard: docs/MESH.md).
+constexpr int kSteps = 10;
+glm::dvec3 DragOffset(int step) { return glm::dvec3(0.0, 0.0, 1.2 * step); }
+
+// The drag loop with the map updated once per frame (the server's sessions),
+// in order (each step's FEM, then its map update, frame and JPEG) or
+// overlapped: the FEM of step N+1 runs on this thread while step N's frame
+// is cast and encoded on another (DeformableScene::PrepareRender). Returns
+// the loop's frames per second.
+double RunDeferredLoop(const ProxyMesh& mesh, const Volume& volume,
+                       const gpu::GpuContext& context, GpuVolume& gpu_volume,
+                       VolumeRenderer& renderer, const glm::dvec3& grab,
+                       const SolverOptions& solver, bool overlap) {
+  DeformableScene::Options options;
+  options.fem.solver = solver;
+  options.defer_map_update = true;
+  auto scene = bench::Check(
+      DeformableScene::Create(context, volume, gpu_volume, renderer, mesh, options), "scene");
+  bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
+  const SceneView view = InteractiveView(volume);
+  auto render_and_encode = [&](const RenderRequest& request) {
+    const Frame frame = bench::Check(scene->RenderPrepared(request), "render");
+    bench::Check(EncodeJpeg(frame.rgba, frame.width, frame.height, 85), "jpeg");
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  bench::Check(scene->Drag(DragOffset(1)), "drag");
+  for (int s = 1; s <= kSteps; ++s) {
+    const RenderRequest request = bench::Check(scene->PrepareRender(view), "prepare");
+    if (!overlap || s == kSteps) {
+      render_and_encode(request);
+      if (s < kSteps) bench::Check(scene->Drag(DragOffset(s + 1)), "drag");
+      continue;
+    }
+    std::thread frame_thread(render_and_encode, std::cref(request));
+    bench::Check(scene->Drag(DragOffset(s + 1)), "drag");
+    frame_thread.join();
+  }
+  return kSteps / (MsSince(t0) / 1000.0);
+}
+
+Row RunCase(const ProxyMesh& mesh, const Volume& volume, const gpu::GpuContext& context,
             GpuVolume& gpu_volume, VolumeRenderer& renderer, const glm::dvec3& grab,
-            const SolverOptions& solver) {
-  MeshParams params;
-  params.grid = c.grid;
-  params.target = c.target;
-  params.refine_at_mm = grab;
-  auto costs = bench::Check(LatticeCostsGpu::Create(context), "kernel");
-  auto mesh = bench::Check(BuildProxyMesh(volume, params, {&gpu_volume, &costs}), "mesh");
+            const SolverOptions& solver, bool print_steps) {
   DeformableScene::Options options;
   options.fem.solver = solver;
   auto scene = bench::Check(
       DeformableScene::Create(context, volume, gpu_volume, renderer, mesh, options), "scene");
-  bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
-  SceneView interactive{.camera = Camera::ForVolume(volume.geometry()),
-                        .preset = bench::Check(MakeRenderPreset("ct-soft-tissue", volume), "preset"),
-                        .quality = RenderQuality::kInteractive,
-                        .width = 256,
-                        .height = 256};
+  const auto t_grab = std::chrono::steady_clock::now();
+  const GrabInfo grabbed = bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
+  Row row;
+  row.grab_ms = MsSince(t_grab);
+  row.handles = static_cast<int64_t>(grabbed.handles.size());
+  {
+    // One preconditioner application with the handles held (per PCG
+    // iteration), min of 50.
+    const ConstrainedFactor& factor = scene->fem().solver().factor();
+    Eigen::VectorXd r = Eigen::VectorXd::Ones(3 * static_cast<int64_t>(mesh.vertices.size()));
+    Eigen::VectorXd z;
+    row.precondition_ms = bench::MinMs(50, [&] { factor.Apply(r, true, z); });
+  }
+  SceneView interactive = InteractiveView(volume);
   SceneView still = interactive;
   still.quality = RenderQuality::kStill;
   still.width = still.height = 512;
-  Row row;
   row.vertices = static_cast<int64_t>(mesh.vertices.size());
-  const int steps = 10;
+  const int steps = kSteps;
   row.steps = steps;
   const auto t_loop = std::chrono::steady_clock::now();
   for (int s = 1; s <= steps; ++s) {
-    // The demo's drag: the left renal artery 12 mm cranially in 10 steps
-    // (section 3 makes some of its refined vertices hard: docs/MESH.md).
-    auto step = bench::Check(scene->Drag(glm::dvec3(0.0, 0.0, 1.2 * s)), "drag");
+    auto step = bench::Check(scene->Drag(DragOffset(s)), "drag");
     row.fem = std::min(row.fem, step.fem_ms);
     row.fem_sum += step.fem_ms;
     row.fem_max = std::max(row.fem_max, step.fem_ms);
     row.map = std::min(row.map, step.warp_ms);
     row.inverted = step.inverted_tets;
+    const SolveStats& solve = step.solve;
+    Split& split = row.split;
+    split.forces += solve.assembly_ms;
+    split.factor += solve.precondition_ms;
+    split.pcg_other += solve.solve_ms - solve.precondition_ms;
+    split.fem_other += step.fem_ms - solve.total_ms();
+    split.map += step.warp_ms;
+    split.newton += solve.newton_iterations;
+    split.cg += solve.cg_iterations;
+    split.load_steps += solve.load_steps;
+    split.forced += solve.forced_inversion ? 1 : 0;
     auto frame = bench::Check(scene->Render(interactive), "render");
+    split.frame += frame.timings.wall_ms;
     row.interactive = std::min(row.interactive, frame.timings.wall_ms);
     Breakdown& b = row.parts;
     const FrameTimings& ft = frame.timings;
@@ -104,7 +177,17 @@ Row RunCase(const Case& c, const Volume& volume, const gpu::GpuContext& context,
     b.processed = step.processed_tets;
     const auto t0 = std::chrono::steady_clock::now();
     auto jpeg = bench::Check(EncodeJpeg(frame.rgba, frame.width, frame.height, 85), "jpeg");
-    row.encode = std::min(row.encode, MsSince(t0));
+    const double jpeg_ms = MsSince(t0);
+    row.encode = std::min(row.encode, jpeg_ms);
+    split.jpeg += jpeg_ms;
+    if (print_steps) {
+      std::printf("  step %2d: FEM %7.2f ms (forces %6.2f, factor solves %6.2f, K v + PCG %6.2f; "
+                  "%2d Newton, %3d CG, %2d load steps%s), map %6.2f, frame %6.2f, JPEG %5.2f\n",
+                  s, step.fem_ms, solve.assembly_ms, solve.precondition_ms,
+                  solve.solve_ms - solve.precondition_ms, solve.newton_iterations,
+                  solve.cg_iterations, solve.load_steps, solve.forced_inversion ? ", forced" : "",
+                  step.warp_ms, frame.timings.wall_ms, jpeg_ms);
+    }
   }
   row.loop_fps = steps / (MsSince(t_loop) / 1000.0);
   // Orbiting between drag steps: same map, so the brick occupancy is reused.
@@ -126,9 +209,12 @@ Row RunCase(const Case& c, const Volume& volume, const gpu::GpuContext& context,
 int main(int argc, char** argv) {
   std::string source = "phantom:abdomen";
   bench::FemFlags flags;
+  bool print_steps = false;
   for (int i = 1; i < argc; ++i) {
     if (bench::ParseFemFlag(argc, argv, i, flags)) continue;
-    if (std::string(argv[i]) == "--no-barrier") {
+    if (std::string(argv[i]) == "--steps") {
+      print_steps = true;
+    } else if (std::string(argv[i]) == "--no-barrier") {
       flags.solver.inversion_barrier = false;
     } else {
       source = argv[i];
@@ -162,11 +248,21 @@ int main(int argc, char** argv) {
               "FEM mean", "FEM max", "map", "frame 256^2", "still 512^2", "JPEG", "loop fps",
               "inverted");
   std::vector<std::pair<const char*, Row>> rows;
+  std::vector<std::pair<const char*, ProxyMesh>> meshes;
   for (const Case& c : {Case{"20^3 -> 250 + refine", {20, 20, 20}, 250},
                         Case{"24^3 -> 1000 + refine", {24, 24, 24}, 1000},
                         Case{"40^3 -> 5000 + refine", {40, 40, 40}, 5000}}) {
     if (c.target > flags.max_vertices) continue;
-    const Row r = RunCase(c, volume, *context, gpu_volume, *renderer, grab, solver);
+    if (print_steps) std::printf("%s:\n", c.name);
+    MeshParams params;
+    params.grid = c.grid;
+    params.target = c.target;
+    params.refine_at_mm = grab;
+    auto costs = bench::Check(LatticeCostsGpu::Create(*context), "kernel");
+    meshes.emplace_back(c.name,
+                        bench::Check(BuildProxyMesh(volume, params, {&gpu_volume, &costs}), "mesh"));
+    const Row r = RunCase(meshes.back().second, volume, *context, gpu_volume, *renderer, grab,
+                          solver, print_steps);
     std::printf("%-22s %6lld %8.2f %9.2f %8.2f %8.2f %13.1f %11.1f %8.2f %9.1f %9lld\n", c.name,
                 static_cast<long long>(r.vertices), r.fem, r.fem_sum / r.steps, r.fem_max, r.map,
                 r.interactive, r.still, r.encode, r.loop_fps, static_cast<long long>(r.inverted));
@@ -184,6 +280,47 @@ int main(int argc, char** argv) {
                 "%8.2f %8.2f\n",
                 name, static_cast<long long>(b.moved), static_cast<long long>(b.processed),
                 b.map_gpu, b.clear, b.claim, b.write, b.map_copy, b.texels, b.occupancy, b.cast, b.upscale, b.frame_gpu, b.readback, b.orbit);
+  }
+  std::printf("\nwhere the wall time of a step goes, mean over the steps (ms): FEM = forces "
+              "(rotations, elastic forces) + factor solves (preconditioner) + K v and the rest of "
+              "PCG + other; then the map update, the interactive frame and its JPEG; per step "
+              "also the mean Newton and CG iterations and load steps, and the steps with a "
+              "forced inversion\n");
+  std::printf("%-22s %8s %8s %8s %8s %8s %8s %8s %8s %8s %6s %6s %6s %6s\n", "mesh", "forces",
+              "factor", "Kv+PCG", "FEM etc", "FEM", "map", "frame", "JPEG", "total", "newton",
+              "CG", "loads", "forced");
+  for (const auto& [name, r] : rows) {
+    const Split& p = r.split;
+    const double n = r.steps;
+    const double fem = p.forces + p.factor + p.pcg_other + p.fem_other;
+    std::printf("%-22s %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %6.1f %6.1f %6.1f "
+                "%6lld\n",
+                name, p.forces / n, p.factor / n, p.pcg_other / n, p.fem_other / n, fem / n,
+                p.map / n, p.frame / n, p.jpeg / n, (fem + p.map + p.frame + p.jpeg) / n,
+                p.newton / n, p.cg / n, p.load_steps / n, static_cast<long long>(p.forced));
+  }
+  std::printf("\nthe grab's handles in the preconditioner (--handle-factor %s): grab ms, one "
+              "application ms (min of 50)\n",
+              solver.handle_factor == HandleFactor::kRefactor ? "refactor" : "capacitance");
+  std::printf("%-22s %8s %8s %10s\n", "mesh", "handles", "grab", "M^-1 r");
+  for (const auto& [name, r] : rows) {
+    std::printf("%-22s %8lld %8.2f %10.3f\n", name, static_cast<long long>(r.handles), r.grab_ms,
+                r.precondition_ms);
+  }
+  std::printf("\noverlap: the loop with the map updated once per frame, in order (FEM, map, "
+              "frame, JPEG) and with the FEM of step N+1 running while frame N is cast and "
+              "encoded (loop fps, best of 3)\n");
+  std::printf("%-22s %10s %10s %8s\n", "mesh", "in order", "overlap", "gain");
+  for (const auto& [name, mesh] : meshes) {
+    double fps[2] = {0.0, 0.0};
+    for (int r = 0; r < 3; ++r) {
+      for (int overlap = 0; overlap < 2; ++overlap) {
+        fps[overlap] = std::max(fps[overlap],
+                                RunDeferredLoop(mesh, volume, *context, gpu_volume, *renderer,
+                                                grab, solver, overlap == 1));
+      }
+    }
+    std::printf("%-22s %10.1f %10.1f %7.2fx\n", name, fps[0], fps[1], fps[1] / fps[0]);
   }
   return 0;
 }

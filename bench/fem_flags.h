@@ -17,7 +17,7 @@ struct FemFlags {
 
 // Reads the flag at argv[i] (and its value, advancing i) when it is one of
 //   --max-load-steps N  --min-load-fraction F  --intermediate-newton N
-//   --max-vertices N
+//   --max-vertices N  --handle-factor refactor|capacitance
 // into `flags`; false for any other argument.
 inline bool ParseFemFlag(int argc, char** argv, int& i, FemFlags& flags) {
   if (i + 1 >= argc) return false;
@@ -27,6 +27,10 @@ inline bool ParseFemFlag(int argc, char** argv, int& i, FemFlags& flags) {
     flags.solver.min_load_fraction = std::atof(argv[++i]);
   } else if (std::strcmp(argv[i], "--intermediate-newton") == 0) {
     flags.solver.intermediate_newton_iterations = std::atoi(argv[++i]);
+  } else if (std::strcmp(argv[i], "--handle-factor") == 0) {
+    flags.solver.handle_factor = std::strcmp(argv[++i], "capacitance") == 0
+                                     ? HandleFactor::kCapacitance
+                                     : HandleFactor::kRefactor;
   } else if (std::strcmp(argv[i], "--max-vertices") == 0) {
     flags.max_vertices = std::atoll(argv[++i]);
   } else {

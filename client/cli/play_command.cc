@@ -162,11 +162,12 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
   }
   RETURN_IF_ERROR(result.status);
   RETURN_IF_ERROR(write_status);
-  std::vector<double> latency, render, fem, warp, encode, intervals;
+  std::vector<double> frame_latency, render, fem, warp, encode, intervals;
+  const std::vector<double>& latency = result.event_latency_ms;
   int64_t bytes = 0, interactive = 0;
   for (size_t i = 0; i < result.frames.size(); ++i) {
     const FrameRecord& f = result.frames[i];
-    if (f.latency_ms >= 0) latency.push_back(f.latency_ms);
+    if (f.latency_ms >= 0) frame_latency.push_back(f.latency_ms);
     render.push_back(f.timings.render_ms());
     fem.push_back(f.timings.fem_ms());
     warp.push_back(f.timings.warp_ms());
@@ -188,6 +189,7 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
               {"bytes_per_frame", result.frames.empty() ? 0 : bytes / int64_t(result.frames.size())},
               {"superseded", result.frames.empty() ? 0 : result.frames.back().superseded},
               {"latency_ms", Summarize(latency)},
+              {"frame_latency_ms", Summarize(frame_latency)},
               {"frame_interval_ms", Summarize(intervals)},
               {"server_render_ms", Summarize(render)},
               {"server_fem_ms", Summarize(fem)},

@@ -180,6 +180,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
   std::condition_variable got_final;
   std::map<uint64_t, SteadyClock::time_point> sent_at;
   uint64_t last_sequence = 0;
+  uint64_t shown_sequence = 0;  // the newest event a frame has shown
   bool final_seen = false;
   bool sending_done = false;
 
@@ -201,6 +202,11 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
         std::lock_guard lock(mutex);
         auto it = sent_at.find(frame.last_sequence());
         if (it != sent_at.end()) record.latency_ms = MsBetween(it->second, now);
+        for (auto e = sent_at.upper_bound(shown_sequence);
+             e != sent_at.end() && e->first <= frame.last_sequence(); ++e) {
+          result.event_latency_ms.push_back(MsBetween(e->second, now));
+        }
+        shown_sequence = std::max(shown_sequence, frame.last_sequence());
         if (result.first_frame_ms < 0) result.first_frame_ms = record.received_ms;
         result.frames.push_back(record);
         if (sending_done && frame.last_sequence() == last_sequence && !frame.interactive()) {

@@ -48,7 +48,10 @@ nlohmann::json DefaultScriptJson();
 
 struct FrameRecord {
   double received_ms = 0;     // since the stream started
-  double latency_ms = -1;     // from sending last_sequence's event to receipt
+  // From sending last_sequence's event to receipt, for every frame (a still
+  // that shows an event again counts too; PlayResult::event_latency_ms
+  // counts each event once).
+  double latency_ms = -1;
   uint64_t last_sequence = 0;
   bool interactive = false;
   int64_t bytes = 0;
@@ -59,6 +62,10 @@ struct FrameRecord {
 struct PlayResult {
   Status status;  // a stream cut by a balancer reads UNAVAILABLE (FromStreamEnd)
   std::vector<FrameRecord> frames;
+  // Event to frame: per event, from sending it to the first frame that shows
+  // it (last_sequence >= its sequence), ms. An event that a newer one
+  // replaced in the server's queue counts until the frame of the newer one.
+  std::vector<double> event_latency_ms;
   double first_frame_ms = -1;  // time to first frame
   double duration_ms = 0;
   int64_t events_sent = 0;

@@ -94,17 +94,18 @@ Result<json> RunLevel(const cli::ServerConnection& s, const json& script_json, i
   v2::DeleteVolumeResponse deleted;
   (void)s.stub().DeleteVolume(s.Context().get(), del, &deleted);
 
-  std::vector<double> latency, first, fps, jitter;
+  std::vector<double> latency, frame_latency, first, fps, jitter;
   int64_t frames = 0, bytes = 0, superseded = 0;
   double duration = 0;
   for (const cli::PlayResult& r : results) {
     codes[absl::StatusCodeToString(r.status.code())]++;
     std::vector<double> intervals;
     for (size_t i = 0; i < r.frames.size(); ++i) {
-      if (r.frames[i].latency_ms >= 0) latency.push_back(r.frames[i].latency_ms);
+      if (r.frames[i].latency_ms >= 0) frame_latency.push_back(r.frames[i].latency_ms);
       bytes += r.frames[i].bytes;
       if (i > 0) intervals.push_back(r.frames[i].received_ms - r.frames[i - 1].received_ms);
     }
+    latency.insert(latency.end(), r.event_latency_ms.begin(), r.event_latency_ms.end());
     frames += int64_t(r.frames.size());
     if (!r.frames.empty()) superseded += int64_t(r.frames.back().superseded);
     if (r.first_frame_ms >= 0) first.push_back(r.first_frame_ms);
@@ -119,6 +120,7 @@ Result<json> RunLevel(const cli::ServerConnection& s, const json& script_json, i
              {"duration_s", duration},
              {"rate_fps", duration > 0 ? double(frames) / duration : 0.0},
              {"latency_ms", cli::Summarize(latency)},
+             {"frame_latency_ms", cli::Summarize(frame_latency)},
              {"histogram", Histogram(latency)},
              {"status_codes", codes},
              {"time_to_first_frame_ms", cli::Summarize(first)},
@@ -139,9 +141,16 @@ void PrintLevel(const json& l) {
     std::printf("  Fastest:      %.1f ms\n  Slowest:      %.1f ms\n  Average:      %.1f ms\n",
                 lat["fastest"].get<double>(), lat["slowest"].get<double>(),
                 lat["average"].get<double>());
-    std::printf("  Latency distribution (event to frame):\n");
+    std::printf("  Latency distribution (event to the first frame showing it, %zu events):\n",
+                lat["count"].get<size_t>());
     for (const char* p : {"p50", "p90", "p95", "p99"}) {
       std::printf("    %s: %.1f ms\n", p, lat[p].get<double>());
+    }
+    const json& per_frame = l["frame_latency_ms"];
+    if (per_frame["count"].get<size_t>() > 0) {
+      std::printf("  Per frame, stills that show an event again included: p50 %.1f ms, p99 %.1f "
+                  "ms\n",
+                  per_frame["p50"].get<double>(), per_frame["p99"].get<double>());
     }
     std::printf("  Histogram:\n");
     int64_t max_count = 1;

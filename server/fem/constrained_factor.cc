@@ -15,7 +15,8 @@ constexpr double kMinRelativePivot = 1e-12;
 }  // namespace
 
 Result<ConstrainedFactor> ConstrainedFactor::Create(const Eigen::SparseMatrix<double>& stiffness,
-                                                    const std::vector<uint8_t>& fixed) {
+                                                    const std::vector<uint8_t>& fixed,
+                                                    HandleFactor handle_factor) {
   const int64_t n = stiffness.rows();
   if (stiffness.cols() != n || static_cast<int64_t>(fixed.size()) != n) {
     return absl::InvalidArgumentError(StrCat("stiffness is ", stiffness.rows(), " by ",
@@ -56,6 +57,8 @@ Result<ConstrainedFactor> ConstrainedFactor::Create(const Eigen::SparseMatrix<do
   factor.factor_nonzeros_ = factor.ldlt_->matrixL().nestedExpression().nonZeros() + m;
   factor.rc_.resize(m);
   factor.yc_.resize(m);
+  factor.handle_factor_ = handle_factor;
+  if (handle_factor == HandleFactor::kRefactor) factor.free_block_ = std::move(free_block);
   return factor;
 }
 
@@ -76,6 +79,7 @@ Status ConstrainedFactor::SetExtraFixed(const std::vector<int32_t>& dofs) {
   }
   const auto m = static_cast<int64_t>(free_dofs_.size());
   const auto h = static_cast<int64_t>(extra.size());
+  if (handle_factor_ == HandleFactor::kRefactor) return RefactorDecoupled(std::move(extra));
   Eigen::MatrixXd selector = Eigen::MatrixXd::Zero(m, h);
   for (int64_t j = 0; j < h; ++j) selector(extra[j], j) = 1.0;
   w_ = h > 0 ? Eigen::MatrixXd(ldlt_->solve(selector)) : Eigen::MatrixXd(m, 0);
@@ -87,6 +91,32 @@ Status ConstrainedFactor::SetExtraFixed(const std::vector<int32_t>& dofs) {
   return absl::OkStatus();
 }
 
+Status ConstrainedFactor::RefactorDecoupled(std::vector<int32_t> extra) {
+  if (extra.empty()) {
+    extra_compact_.clear();
+    return absl::OkStatus();
+  }
+  std::vector<uint8_t> is_extra(free_dofs_.size(), 0);
+  for (int32_t i : extra) is_extra[i] = 1;
+  Eigen::SparseMatrix<double> decoupled = free_block_;
+  for (int64_t col = 0; col < decoupled.outerSize(); ++col) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(decoupled, col); it; ++it) {
+      if (it.row() != col && (is_extra[it.row()] || is_extra[col])) it.valueRef() = 0.0;
+    }
+  }
+  if (!handle_ldlt_) {
+    handle_ldlt_ = std::make_unique<Ldlt>();
+    handle_ldlt_->analyzePattern(decoupled);
+  }
+  handle_ldlt_->factorize(decoupled);
+  if (handle_ldlt_->info() != Eigen::Success) {
+    extra_compact_.clear();
+    return absl::FailedPreconditionError("the stiffness with the handles fixed did not factor");
+  }
+  extra_compact_ = std::move(extra);
+  return absl::OkStatus();
+}
+
 void ConstrainedFactor::Apply(const Eigen::VectorXd& r, bool with_extra, Eigen::VectorXd& z) const {
   const auto m = static_cast<int64_t>(free_dofs_.size());
   for (int64_t i = 0; i < m; ++i) rc_[i] = r[free_dofs_[i]];
@@ -94,8 +124,14 @@ void ConstrainedFactor::Apply(const Eigen::VectorXd& r, bool with_extra, Eigen::
   if (extra) {
     for (int32_t i : extra_compact_) rc_[i] = 0.0;
   }
-  yc_ = ldlt_->solve(rc_);
-  if (extra) {
+  if (extra && handle_factor_ == HandleFactor::kRefactor) {
+    // H is decoupled and its right-hand side 0, so z_H comes out 0.
+    yc_ = handle_ldlt_->solve(rc_);
+    for (int32_t i : extra_compact_) yc_[i] = 0.0;
+  } else {
+    yc_ = ldlt_->solve(rc_);
+  }
+  if (extra && handle_factor_ == HandleFactor::kCapacitance) {
     Eigen::VectorXd y_h(extra_compact_.size());
     for (size_t j = 0; j < extra_compact_.size(); ++j) y_h[j] = yc_[extra_compact_[j]];
     yc_.noalias() -= w_ * (capacitance_inverse_ * y_h);

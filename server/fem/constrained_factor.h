@@ -8,7 +8,15 @@
 //   y = K_BB^-1 [r_S; 0],  W = K_BB^-1 E_H,  C = E_H^T W = (K_BB^-1)_HH,
 //   z = y - W C^-1 y_H   (then z_H = 0 and K_SS z_S = r_S).
 // Setting H costs |H| solves with the factor; each application one solve
-// plus a #B by |H| product.
+// plus a #B by |H| product (HandleFactor::kCapacitance).
+//
+// Or (HandleFactor::kRefactor) a second factor of K_BB with H's rows and
+// columns decoupled (off-diagonal entries 0, the pattern kept), whose
+// symbolic analysis is made once and whose numeric factorization is redone
+// per H: setting H costs one numeric factorization, each application one
+// solve. Both give the same z to round-off (ConstrainedFactor tests);
+// bench/drag_loop_bench.cc --handle-factor measures which is faster.
+enum class HandleFactor { kCapacitance, kRefactor };
 #pragma once
 
 #include <cstdint>
@@ -32,11 +40,14 @@ class ConstrainedFactor {
   // definite (constraints leave a rigid motion free), InvalidArgument on a
   // size mismatch.
   static Result<ConstrainedFactor> Create(const Eigen::SparseMatrix<double>& stiffness,
-                                          const std::vector<uint8_t>& fixed);
+                                          const std::vector<uint8_t>& fixed,
+                                          HandleFactor handle_factor = HandleFactor::kRefactor);
 
   // Replaces the extra constrained DOFs H (indices into the n DOFs, each
   // free in `fixed`, no repeats); empty clears them. Fails (InvalidArgument)
-  // on a bad index, leaving the previous set.
+  // on a bad index, leaving the previous set; FailedPrecondition when the
+  // decoupled factor fails (kRefactor; not expected: a principal block of a
+  // positive definite matrix is positive definite).
   Status SetExtraFixed(const std::vector<int32_t>& dofs);
 
   // z = K_SS^-1 r_S on S = free DOFs minus (with_extra ? H : none), 0 on
@@ -52,11 +63,17 @@ class ConstrainedFactor {
 
  private:
   using Ldlt = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>;
+  Status RefactorDecoupled(std::vector<int32_t> extra);  // kRefactor's SetExtraFixed
 
   std::vector<int32_t> free_dofs_;  // compact index -> DOF
   std::vector<int32_t> compact_;    // DOF -> compact index, -1 if fixed
   std::unique_ptr<Ldlt> ldlt_;
   int64_t factor_nonzeros_ = 0;
+  HandleFactor handle_factor_ = HandleFactor::kRefactor;
+  // kRefactor: the free block, and its factor with H decoupled (symbolic
+  // analysis at the first SetExtraFixed, numeric at each).
+  Eigen::SparseMatrix<double> free_block_;
+  std::unique_ptr<Ldlt> handle_ldlt_;
   std::vector<int32_t> extra_compact_;   // H as compact indices
   Eigen::MatrixXd w_;                    // #B by |H|
   Eigen::MatrixXd capacitance_inverse_;  // C^-1, |H| by |H|

@@ -48,7 +48,8 @@ Result<CorotationalSolver> CorotationalSolver::Create(
       AssembleStiffness(solver.elements_, CorotatedFrames{}, static_cast<int64_t>(rest_mm.size()));
   solver.setup_assembly_ms_ = MsSince(t0);
   const auto t1 = SteadyClock::now();
-  ASSIGN_OR_RETURN(solver.factor_, ConstrainedFactor::Create(rest_stiffness, fixed_dofs));
+  ASSIGN_OR_RETURN(solver.factor_, ConstrainedFactor::Create(rest_stiffness, fixed_dofs,
+                                                                options.handle_factor));
   solver.setup_factor_ms_ = MsSince(t1);
   solver.fixed_ = fixed_dofs;
   for (size_t d = 0; d < fixed_dofs.size(); ++d) {
@@ -122,9 +123,11 @@ Eigen::VectorXd CorotationalSolver::TangentSolve(const Eigen::VectorXd& rhs,
   const LinearMap apply_k = [this](const Eigen::VectorXd& v, Eigen::VectorXd& y) {
     ApplyCorotatedStiffness(elements_, frames_, v, y, ElementThreads());
   };
-  const LinearMap precondition = [this, with_handles](const Eigen::VectorXd& r,
-                                                      Eigen::VectorXd& z) {
+  const LinearMap precondition = [this, with_handles, &stats](const Eigen::VectorXd& r,
+                                                              Eigen::VectorXd& z) {
+    const auto t_factor = SteadyClock::now();
     factor_.Apply(r, with_handles, z);
+    stats.precondition_ms += MsSince(t_factor);
   };
   Eigen::VectorXd update;
   const PcgStats pcg = ProjectedPcg(apply_k, precondition, constrained, rhs, options_.cg_tolerance,

@@ -7,9 +7,10 @@
 // clamped rotation-derivative term, i.e. projected Newton; rotations
 // refreshed between iterations), each solved inexactly by PCG. The
 // preconditioner is the rest stiffness (R = I), factored once at Create with
-// SimplicialLDLT; extra prescribed DOFs (handles) reuse that factor through a
-// capacitance correction (ConstrainedFactor), so nothing is refactored per
-// grab or per step. Solves warm-start from the previous displacement; when
+// SimplicialLDLT; extra prescribed DOFs (handles) reuse its symbolic
+// analysis in a numeric refactorization per grab (or, optionally, the factor
+// itself through a capacitance correction: ConstrainedFactor), so nothing is
+// refactored per step. Solves warm-start from the previous displacement; when
 // the previous solve had the same handles and mode, the first iteration uses
 // its tangent and residual linearised to the new load instead of a fresh
 // force evaluation.
@@ -78,6 +79,12 @@ struct SolverOptions {
   // One left the path so far from equilibrium that the next predictor could
   // only take slivers of the jump (forced inversions); 2 keeps it feasible.
   int intermediate_newton_iterations = 2;
+  // How the preconditioner takes the grab's handles (constrained_factor.h):
+  // a numeric refactorization per grab on the symbolic analysis made once
+  // (one plain solve per PCG iteration), or the factor without them plus a
+  // capacitance correction (a dense #free by #handle-DOF product per
+  // iteration). drag_loop_bench --handle-factor measures both.
+  HandleFactor handle_factor = HandleFactor::kRefactor;
 };
 
 // Below this many tets the element loops run on one thread (a split costs
@@ -90,6 +97,7 @@ enum class HandleMode { kPrescribed, kFree };
 struct SolveStats {
   double assembly_ms = 0.0;  // rotations and elastic forces, all evaluations
   double solve_ms = 0.0;     // PCG (preconditioner and matrix-free products)
+  double precondition_ms = 0.0;  // the factor solves inside solve_ms
   int newton_iterations = 0;
   int cg_iterations = 0;  // summed over Newton iterations
   int load_steps = 0;     // parts the prescribed jump was applied in

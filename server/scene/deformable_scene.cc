@@ -20,7 +20,8 @@ std::atomic<uint64_t> next_map_version{1};
 SceneStepTimings FromSolve(const SolveStats& solve, std::chrono::steady_clock::time_point t0) {
   return {.fem_ms = MsSince(t0),
           .max_displacement_mm = solve.max_displacement_mm,
-          .converged = solve.converged};
+          .converged = solve.converged,
+          .solve = solve};
 }
 
 }  // namespace
@@ -129,6 +130,16 @@ ClipRegion DeformableScene::ViewClip(const SceneView& view) const {
 }
 
 Result<Frame> DeformableScene::Render(const SceneView& view, SceneStepTimings* map_update) {
+  ASSIGN_OR_RETURN(const RenderRequest request, PrepareRender(view, map_update));
+  return RenderPrepared(request);
+}
+
+Result<Frame> DeformableScene::RenderPrepared(const RenderRequest& request) const {
+  return renderer_->Render(request);
+}
+
+Result<RenderRequest> DeformableScene::PrepareRender(const SceneView& view,
+                                                     SceneStepTimings* map_update) {
   ASSIGN_OR_RETURN(SceneStepTimings sync, SyncMap());
   if (map_update != nullptr) *map_update = sync;
   RenderRequest request;
@@ -157,7 +168,7 @@ Result<Frame> DeformableScene::Render(const SceneView& view, SceneStepTimings* m
       request.overlay.drag = DragArrow{*grab_point_mm_, *grab_point_mm_ + drag_offset_mm_};
     }
   }
-  return renderer_->Render(request);
+  return request;
 }
 
 Result<SliceFrame> DeformableScene::RenderSlice(const SliceView& view) {

@@ -39,6 +39,7 @@ struct SceneStepTimings {
   double max_displacement_mm = 0.0;
   int64_t inverted_tets = 0;  // after the FEM step (Drag, Pull, Release), not set by SyncMap
   bool converged = true;
+  SolveStats solve;  // the FEM solve's own counts and times (Drag, Pull)
 };
 
 struct SceneView {
@@ -98,8 +99,22 @@ class DeformableScene {
   ClipRegion ViewClip(const SceneView& view) const;
 
   // map_update (optional): the timings of the map update this frame needed
-  // (deferred mode), zeros when the map was current.
+  // (deferred mode), zeros when the map was current. = PrepareRender, then
+  // RenderPrepared.
   Result<Frame> Render(const SceneView& view, SceneStepTimings* map_update = nullptr);
+  // A frame in two halves, so that the FEM of the next event can run while
+  // this frame renders (the server's sessions, drag_loop_bench's overlap
+  // row). PrepareRender brings the map up to date and copies everything the
+  // frame needs from the scene into the request (camera, clip, overlay, the
+  // map's image and version); RenderPrepared runs the GPU work and reads
+  // nothing of the scene but the map and the volume. Between the two, in
+  // deferred mode, Grab, Drag, Pull and Release may run on another thread
+  // (they change FEM state only and mark the map stale); SyncMap, Render,
+  // PrepareRender, RenderSlice and WarpedVolume must wait for
+  // RenderPrepared to return, as they write or read the map.
+  Result<RenderRequest> PrepareRender(const SceneView& view,
+                                      SceneStepTimings* map_update = nullptr);
+  Result<Frame> RenderPrepared(const RenderRequest& request) const;
   // A slice of the deformed volume through the same backward map as the 3D
   // frames (deferred mode: brought up to date first).
   Result<SliceFrame> RenderSlice(const SliceView& view);

@@ -139,7 +139,9 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
     want_vertices = want_vertices_;
     want_vertices_ = false;
     sequence = stream_sequence_;  // events applied before this render starts
-    interactive = !force_still_ && (session_changing || ClientActiveLocked());
+    // A client that became active since the still was asked for gets an
+    // interactive frame first; the still check comes again after it.
+    interactive = ClientActiveLocked() || (!force_still_ && session_changing);
     force_still_ = false;
   }
   auto frame = session_->Render({&settings, std::nullopt, interactive, want_vertices});
@@ -174,6 +176,7 @@ void FrameStream::StillCheck() {
   if (!last_interactive_ || render_scheduled_ || finish_) return;
   if (session_->RecentlyChanged() || ClientActiveLocked()) {
     // Events still coming: look again later.
+    still_deferrals_ = 0;
     std::weak_ptr<FrameStream> weak = weak_from_this();
     service_->render_pool->PostAfter(
         std::chrono::milliseconds(int64_t(service_->options.still_delay_ms) + 5), [weak] {
@@ -181,6 +184,18 @@ void FrameStream::StillCheck() {
         });
     return;
   }
+  // Interactive work first: while other jobs wait for the render pool
+  // (other streams' events and frames), the still waits a little, at most
+  // kMaxStillDeferrals times, rather than hold the renderer ahead of them.
+  if (service_->render_pool->queued() > 0 && still_deferrals_ < kMaxStillDeferrals) {
+    ++still_deferrals_;
+    std::weak_ptr<FrameStream> weak = weak_from_this();
+    service_->render_pool->PostAfter(kStillDeferral, [weak] {
+      if (auto self = weak.lock()) self->StillCheck();
+    });
+    return;
+  }
+  still_deferrals_ = 0;
   force_still_ = true;
   dirty_ = true;
   ScheduleLocked();

@@ -9,7 +9,9 @@
 // interactive (cheap) while the client interacts: this stream's events keep
 // arriving, or the session changed (camera, grab, drag, ...: from any
 // client) within still_delay_ms; a still, full-quality frame follows once
-// both have been idle that long. Whether the client is active is judged by
+// both have been idle that long, and while no other job waits for the render
+// pool (for at most kMaxStillDeferrals x kStillDeferral longer): a still
+// cannot be interrupted once cast, so it goes after interactive work. Whether the client is active is judged by
 // when events arrive, not when they are applied, so that under load the
 // queue wait does not turn a moving client's frames into stills.
 //
@@ -25,6 +27,7 @@
 // makes no call on it.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -146,6 +149,10 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   // client's frames into stills).
   std::chrono::steady_clock::time_point last_event_at_{};
   bool force_still_ = false;
+  // Still checks put off because other jobs waited for the pool.
+  int still_deferrals_ = 0;
+  static constexpr int kMaxStillDeferrals = 10;
+  static constexpr std::chrono::milliseconds kStillDeferral{10};
   bool render_scheduled_ = false;
   bool dirty_ = false;
   bool last_interactive_ = false;

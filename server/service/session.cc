@@ -188,7 +188,11 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
   const bool interactive = request.interactive;
   view.quality = interactive ? RenderQuality::kInteractive : RenderQuality::kStill;
   v2::Frame out;
-  Frame frame;
+  // The map stays as this frame's request saw it until the frame is cast;
+  // the scene itself is free meanwhile, so the next event's FEM runs while
+  // this frame renders (DeformableScene::PrepareRender).
+  std::unique_lock frame_lock(frame_mutex_);
+  RenderRequest prepared;
   {
     // The state is read under the scene lock, so the frame shows exactly
     // the events it reports.
@@ -201,11 +205,13 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
       last_view_ = view;
       if (grab_point_) *out.mutable_grab_point_mm() = ToProto(*grab_point_);
     }
-    ASSIGN_OR_RETURN(frame, scene_->Render(view, &map_update));
+    ASSIGN_OR_RETURN(prepared, scene_->PrepareRender(view, &map_update));
     if (request.want_vertices) {
       for (const glm::dvec3& p : scene_->Positions()) *out.add_vertices_mm() = ToProto(p);
     }
   }
+  ASSIGN_OR_RETURN(const Frame frame, scene_->RenderPrepared(prepared));
+  frame_lock.unlock();
   const double render_ms = MsSince(t0) - map_update.warp_ms;
   const auto t1 = std::chrono::steady_clock::now();
   const StreamSettings& s = *request.settings;

@@ -1,7 +1,8 @@
 // One deformation case that clients attach to: a shared volume, a mesh, the
 // DeformableScene (FEM + backward map) and the camera every viewer shares.
 // Render settings belong to each stream. Thread-safe: scene work is
-// serialised by a mutex; state changes bump a version and notify the
+// serialised by a mutex, frames by another, so that the FEM of an event
+// runs while a frame renders; state changes bump a version and notify the
 // attached streams, which render on the worker pool.
 #pragma once
 
@@ -106,6 +107,11 @@ class Session {
   std::shared_ptr<const MeshEntry> mesh_;
   Options options_;
 
+  // Lock order: frame_mutex_, scene_mutex_, state_mutex_. Whatever reads or
+  // writes the backward map (frames: PrepareRender to RenderPrepared) holds
+  // frame_mutex_; the scene's FEM and CPU state are under scene_mutex_
+  // alone, so an event's FEM runs while a frame renders.
+  std::mutex frame_mutex_;
   std::mutex scene_mutex_;  // the scene is single-threaded
   std::unique_ptr<DeformableScene> scene_;
 

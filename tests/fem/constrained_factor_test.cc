@@ -29,6 +29,15 @@ Problem MakeProblem() {
   return {AssembleStiffness(elements, {}, mesh.vertices.size()), *FixedDofs(mesh, extent)};
 }
 
+// n standard normal entries.
+Eigen::VectorXd RandomVector(int64_t n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::VectorXd r(n);
+  for (int64_t i = 0; i < n; ++i) r[i] = g(rng);
+  return r;
+}
+
 // z = K_SS^-1 r_S by a dense solve, 0 outside S.
 Eigen::VectorXd DenseReference(const Eigen::MatrixXd& k, const std::vector<uint8_t>& constrained,
                                const Eigen::VectorXd& r) {
@@ -53,10 +62,7 @@ TEST(ConstrainedFactor, ExtraConstraintsGiveTheExactSubBlockInverse) {
   auto factor = ConstrainedFactor::Create(setup.k, setup.fixed);
   ASSERT_TRUE(factor.ok()) << factor.status();
   const Eigen::MatrixXd dense(setup.k);
-  std::mt19937 rng(1);
-  std::normal_distribution<double> g(0.0, 1.0);
-  Eigen::VectorXd r(setup.k.rows());
-  for (int64_t i = 0; i < r.size(); ++i) r[i] = g(rng);
+  const Eigen::VectorXd r = RandomVector(setup.k.rows(), 1);
   Eigen::VectorXd z;
   factor->Apply(r, false, z);
   Eigen::VectorXd expected = DenseReference(dense, setup.fixed, r);
@@ -77,6 +83,46 @@ TEST(ConstrainedFactor, ExtraConstraintsGiveTheExactSubBlockInverse) {
   // Without them again.
   factor->Apply(r, false, z);
   EXPECT_LT((z - DenseReference(dense, setup.fixed, r)).norm(), 1e-9 * expected.norm());
+}
+
+// The two ways of taking the handles (a capacitance correction of the base
+// factor, a numeric refactorization with the handles decoupled) give the
+// same inverse, before and after the handle set changes.
+TEST(ConstrainedFactor, RefactoredAndCapacitanceHandlesAgree) {
+  const Problem setup = MakeProblem();
+  auto refactor = ConstrainedFactor::Create(setup.k, setup.fixed, HandleFactor::kRefactor);
+  auto capacitance = ConstrainedFactor::Create(setup.k, setup.fixed, HandleFactor::kCapacitance);
+  ASSERT_TRUE(refactor.ok()) << refactor.status();
+  ASSERT_TRUE(capacitance.ok()) << capacitance.status();
+  const Eigen::MatrixXd dense(setup.k);
+  const Eigen::VectorXd r = RandomVector(setup.k.rows(), 3);
+  for (int64_t first : {3, 8}) {
+    std::vector<int32_t> extra;
+    std::vector<uint8_t> constrained = setup.fixed;
+    for (int64_t d = first; d < r.size() && extra.size() < 20; d += 11) {
+      if (setup.fixed[d]) continue;
+      extra.push_back(static_cast<int32_t>(d));
+      constrained[d] = 1;
+    }
+    ASSERT_TRUE(refactor->SetExtraFixed(extra).ok());
+    ASSERT_TRUE(capacitance->SetExtraFixed(extra).ok());
+    Eigen::VectorXd z_refactor, z_capacitance;
+    refactor->Apply(r, true, z_refactor);
+    capacitance->Apply(r, true, z_capacitance);
+    const Eigen::VectorXd expected = DenseReference(dense, constrained, r);
+    EXPECT_LT((z_refactor - expected).norm(), 1e-9 * expected.norm());
+    EXPECT_LT((z_refactor - z_capacitance).norm(), 1e-9 * expected.norm());
+    for (int32_t d : extra) EXPECT_EQ(z_refactor[d], 0.0);
+    // Without the handles: the base factor, untouched by the refactorization.
+    refactor->Apply(r, false, z_refactor);
+    const Eigen::VectorXd base = DenseReference(dense, setup.fixed, r);
+    EXPECT_LT((z_refactor - base).norm(), 1e-9 * base.norm());
+  }
+  ASSERT_TRUE(refactor->SetExtraFixed({}).ok());
+  Eigen::VectorXd z;
+  refactor->Apply(r, true, z);
+  const Eigen::VectorXd base = DenseReference(dense, setup.fixed, r);
+  EXPECT_LT((z - base).norm(), 1e-9 * base.norm());
 }
 
 TEST(ConstrainedFactor, RejectsFreeRigidMotionsAndBadExtraDofs) {

@@ -2,8 +2,11 @@
 // every step (offline tools, benchmarks) or deferred to the next frame (the
 // server's sessions). Deferring must change when the work happens, never
 // the picture: after the same events both scenes show the same frame, and a
-// burst of steps costs one map update.
+// burst of steps costs one map update. Casting a prepared frame while the
+// next step's FEM runs must not change either frame.
 #include "server/scene/deformable_scene.h"
+
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -137,6 +140,39 @@ TEST_F(DeformableSceneTest, UndeformedFramesSkipTheIdentityMap) {
   auto released = scene->Render(View());
   ASSERT_TRUE(released.ok());
   EXPECT_EQ(testing::CompareRgba(released->rgba, rest->rgba).max_abs, 0.0);
+}
+
+// Overlap: the next step's FEM runs while a prepared frame is cast. The
+// frame shows the state it was prepared from, exactly as one rendered in
+// order, and the next frame shows the step that ran meanwhile.
+TEST_F(DeformableSceneTest, FemDuringAPreparedFrameChangesNeitherFrame) {
+  auto in_order = Scene(true);
+  auto overlapped = Scene(true);
+  ASSERT_TRUE(in_order && overlapped);
+  for (DeformableScene* scene : {in_order.get(), overlapped.get()}) {
+    ASSERT_TRUE(scene->Grab(Centre(), 12.0).ok());
+    ASSERT_TRUE(scene->Drag({0.0, 1.0, 2.0}).ok());
+  }
+  auto first = in_order->Render(View());
+  ASSERT_TRUE(first.ok()) << first.status();
+  ASSERT_TRUE(in_order->Drag({0.0, 1.0, 5.0}).ok());
+  auto second = in_order->Render(View());
+  ASSERT_TRUE(second.ok()) << second.status();
+  ASSERT_GT(testing::CompareRgba(first->rgba, second->rgba).max_abs, 0.1)
+      << "the second step should show";
+
+  auto request = overlapped->PrepareRender(View());
+  ASSERT_TRUE(request.ok()) << request.status();
+  Result<Frame> cast = absl::InternalError("not cast");
+  std::thread caster([&] { cast = overlapped->RenderPrepared(*request); });
+  auto step = overlapped->Drag({0.0, 1.0, 5.0});
+  caster.join();
+  ASSERT_TRUE(step.ok()) << step.status();
+  ASSERT_TRUE(cast.ok()) << cast.status();
+  EXPECT_EQ(testing::CompareRgba(cast->rgba, first->rgba).max_abs, 0.0);
+  auto next = overlapped->Render(View());
+  ASSERT_TRUE(next.ok()) << next.status();
+  EXPECT_EQ(testing::CompareRgba(next->rgba, second->rgba).max_abs, 0.0);
 }
 
 }  // namespace
