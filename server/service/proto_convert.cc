@@ -82,6 +82,26 @@ v2::VertexKind KindToProto(VertexKind kind) {
 
 }  // namespace
 
+Status ToSliceRequests(const v2::RenderSettings& in, const Volume& volume, int max_side,
+                       std::vector<SliceRequest>* out) {
+  if (in.slices_size() > kMaxSlicesPerFrame) {
+    return absl::InvalidArgumentError(StrCat("settings.slices: ", in.slices_size(),
+                                             " slices; at most ", kMaxSlicesPerFrame));
+  }
+  for (int i = 0; i < in.slices_size(); ++i) {
+    ASSIGN_OR_RETURN(SliceRequest slice, ToSliceRequest(in.slices(i), volume, max_side,
+                                                        StrCat("settings.slices[", i, "]")));
+    for (const SliceRequest& earlier : *out) {
+      if (earlier.view == slice.view) {
+        return absl::InvalidArgumentError(
+            StrCat("settings.slices[", i, "].view: '", slice.view, "' is used twice"));
+      }
+    }
+    out->push_back(std::move(slice));
+  }
+  return absl::OkStatus();
+}
+
 void FillMeshGeometry(const ProxyMesh& mesh, v2::GetMeshResponse* response) {
   for (const MeshVertex& v : mesh.vertices) {
     v2::MeshVertex* out = response->add_vertices();
@@ -218,6 +238,7 @@ Result<StreamSettings> ToStreamSettings(const v2::RenderSettings& in, const Volu
         StrCat("settings.jpeg_quality: ", in.jpeg_quality(), " is outside 1..100 (0: 85)"));
   }
   out.jpeg_quality = in.jpeg_quality() == 0 ? 85 : in.jpeg_quality();
+  RETURN_IF_ERROR(ToSliceRequests(in, volume, max_side, &out.slices));
   return out;
 }
 

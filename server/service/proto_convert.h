@@ -9,6 +9,7 @@
 #include "server/mesh/build_proxy_mesh.h"
 #include "server/scene/deformable_scene.h"
 #include "server/service/mesh_store.h"
+#include "server/service/slice_request.h"
 #include "server/service/volume_store.h"
 #include "vpm/v2/vpm.pb.h"
 
@@ -27,11 +28,17 @@ struct StreamSettings {
   SceneView view;  // camera filled in per frame
   bool png = false;
   int jpeg_quality = 85;
+  std::vector<SliceRequest> slices;  // RenderSettings.slices: with every frame
 };
 // InvalidArgument names the field ("settings.width: ..."); max_side caps
 // width and height.
 Result<StreamSettings> ToStreamSettings(const v2::RenderSettings& settings, const Volume& volume,
                                         int max_side);
+
+// RenderSettings.slices (at most kMaxSlicesPerFrame, each view tag once),
+// appended to `out`.
+Status ToSliceRequests(const v2::RenderSettings& settings, const Volume& volume, int max_side,
+                       std::vector<SliceRequest>* out);
 
 // The absolute pose of `camera` on `volume`'s default camera.
 Result<Camera> ToCamera(const v2::Camera& camera, const VolumeGeometry& geometry);
