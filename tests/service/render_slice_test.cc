@@ -12,6 +12,7 @@
 // pixels on the phantom's sharpest edges differ by a few levels.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "server/raycast/frame_encoder.h"
 #include "server/raycast/slice_image.h"
@@ -169,6 +170,9 @@ TEST_F(RenderSliceTest, RenderSlice_MatchesTheCpuReferenceOfTheDeformedVolume) {
       sum_rest += std::abs(int(reference[4 * i]) - int(at_rest[4 * i]));
       if (d > 12) ++far;
     }
+    std::printf("%s %dx%d: mean |grey difference| %.3f, %lld of %lld pixels over 12; drag moved the reference by %.3f\n",
+                c.name, grid->width, grid->height, sum / pixels, static_cast<long long>(far),
+                static_cast<long long>(pixels), sum_rest / pixels);
     EXPECT_LT(sum / pixels, 1.5);
     EXPECT_LE(far, pixels / 100);
     // The reference itself moved: the drag shows in the slice.
