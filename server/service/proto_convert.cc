@@ -82,6 +82,25 @@ v2::VertexKind KindToProto(VertexKind kind) {
 
 }  // namespace
 
+Result<FrameEncoding> ToFrameEncoding(v2::Encoding encoding, int32_t jpeg_quality,
+                                      std::string_view prefix) {
+  FrameEncoding out;
+  switch (encoding) {
+    case v2::ENCODING_UNSPECIFIED:
+    case v2::ENCODING_JPEG: out.png = false; break;
+    case v2::ENCODING_PNG: out.png = true; break;
+    default:
+      return absl::InvalidArgumentError(
+          StrCat(prefix, "encoding: ", encoding, " is not an Encoding"));
+  }
+  if (jpeg_quality < 0 || jpeg_quality > 100) {
+    return absl::InvalidArgumentError(
+        StrCat(prefix, "jpeg_quality: ", jpeg_quality, " is outside 1..100 (0: 85)"));
+  }
+  out.jpeg_quality = jpeg_quality == 0 ? 85 : jpeg_quality;
+  return out;
+}
+
 Status ToSliceRequests(const v2::RenderSettings& in, const Volume& volume, int max_side,
                        std::vector<SliceRequest>* out) {
   if (in.slices_size() > kMaxSlicesPerFrame) {
@@ -225,19 +244,10 @@ Result<StreamSettings> ToStreamSettings(const v2::RenderSettings& in, const Volu
     return absl::InvalidArgumentError(StrCat("settings.crop/clip: ", clip.message()));
   }
   out.view.view_cut = in.view_cut();
-  switch (in.encoding()) {
-    case v2::ENCODING_UNSPECIFIED:
-    case v2::ENCODING_JPEG: out.png = false; break;
-    case v2::ENCODING_PNG: out.png = true; break;
-    default:
-      return absl::InvalidArgumentError(
-          StrCat("settings.encoding: ", in.encoding(), " is not an Encoding"));
-  }
-  if (in.jpeg_quality() < 0 || in.jpeg_quality() > 100) {
-    return absl::InvalidArgumentError(
-        StrCat("settings.jpeg_quality: ", in.jpeg_quality(), " is outside 1..100 (0: 85)"));
-  }
-  out.jpeg_quality = in.jpeg_quality() == 0 ? 85 : in.jpeg_quality();
+  ASSIGN_OR_RETURN(const FrameEncoding encoding,
+                   ToFrameEncoding(in.encoding(), in.jpeg_quality(), "settings."));
+  out.png = encoding.png;
+  out.jpeg_quality = encoding.jpeg_quality;
   RETURN_IF_ERROR(ToSliceRequests(in, volume, max_side, &out.slices));
   return out;
 }

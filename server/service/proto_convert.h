@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include "proto/vec3_convert.h"
 #include "server/common/status.h"
@@ -28,12 +29,30 @@ struct StreamSettings {
   SceneView view;  // camera filled in per frame
   bool png = false;
   int jpeg_quality = 85;
-  std::vector<SliceRequest> slices;  // RenderSettings.slices: with every frame
+  std::vector<SliceRequest> slices;  // A frame's encoding from the wire's fields: InvalidArgument naming
+// `prefix` + "encoding" or "jpeg_quality" (0: 85).
+struct FrameEncoding {
+  bool png = false;
+  int jpeg_quality = 85;
+};
+Result<FrameEncoding> ToFrameEncoding(v2::Encoding encoding, int32_t jpeg_quality,
+                                      std::string_view prefix);
+
+// RenderSettings.slices: with every frame
 };
 // InvalidArgument names the field ("settings.width: ..."); max_side caps
 // width and height.
 Result<StreamSettings> ToStreamSettings(const v2::RenderSettings& settings, const Volume& volume,
                                         int max_side);
+
+// A frame's encoding from the wire's fields: InvalidArgument naming
+// `prefix` + "encoding" or "jpeg_quality" (0: 85).
+struct FrameEncoding {
+  bool png = false;
+  int jpeg_quality = 85;
+};
+Result<FrameEncoding> ToFrameEncoding(v2::Encoding encoding, int32_t jpeg_quality,
+                                      std::string_view prefix);
 
 // RenderSettings.slices (at most kMaxSlicesPerFrame, each view tag once),
 // appended to `out`.

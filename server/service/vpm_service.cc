@@ -418,21 +418,10 @@ grpc::ServerUnaryReactor* VpmService::RenderSlice(grpc::CallbackServerContext* c
     ASSIGN_OR_RETURN(SliceRequest slice,
                      ToSliceRequest(request->slice(), session->volume().volume,
                                     service_->options.max_frame_side, "slice"));
-    bool png = false;
-    switch (request->encoding()) {
-      case v2::ENCODING_UNSPECIFIED:
-      case v2::ENCODING_JPEG: break;
-      case v2::ENCODING_PNG: png = true; break;
-      default:
-        return absl::InvalidArgumentError(
-            StrCat("encoding: ", request->encoding(), " is not an Encoding"));
-    }
-    if (request->jpeg_quality() < 0 || request->jpeg_quality() > 100) {
-      return absl::InvalidArgumentError(
-          StrCat("jpeg_quality: ", request->jpeg_quality(), " is outside 1..100 (0: 85)"));
-    }
-    const int quality = request->jpeg_quality() == 0 ? 85 : request->jpeg_quality();
-    ASSIGN_OR_RETURN(*response, session->RenderSlice(slice, png, quality));
+    ASSIGN_OR_RETURN(const FrameEncoding encoding,
+                     ToFrameEncoding(request->encoding(), request->jpeg_quality(), ""));
+    ASSIGN_OR_RETURN(*response,
+                     session->RenderSlice(slice, encoding.png, encoding.jpeg_quality));
     response->set_frame_number(1);
     service_->metrics->FrameSent(response->timings());
     return absl::OkStatus();

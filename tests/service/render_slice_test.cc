@@ -250,6 +250,15 @@ TEST_F(RenderSliceTest, RenderSlice_BadInputGetsClearStatusesAndTheServerGoesOn)
   }
   v2::Frame frame;
   EXPECT_EQ(RenderSlice(Axial(0), &frame, "ses-404").error_code(), grpc::NOT_FOUND);
+  v2::RenderSliceRequest quality;
+  quality.set_session_id(session_.session_id());
+  *quality.mutable_slice() = landmark;
+  quality.mutable_slice()->clear_at_landmark();
+  quality.set_jpeg_quality(101);
+  auto qc = Context();
+  grpc::Status refused = stub_->RenderSlice(qc.get(), quality, &frame);
+  EXPECT_EQ(refused.error_code(), grpc::INVALID_ARGUMENT);
+  EXPECT_NE(refused.error_message().find("jpeg_quality"), std::string::npos);
   // A landmark of the phantom places the plane; the server is still there.
   ASSERT_GT(volume_.landmarks_size(), 0);
   landmark.set_at_landmark(volume_.landmarks(0).name());

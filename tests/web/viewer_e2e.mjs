@@ -116,7 +116,7 @@ async function checkSlicesAndCuts(page) {
   await page.check('input[name="tool"][value="grab"]');
   const coronalBox = await page.locator('#slice-coronal').boundingBox();
   const c = [coronalBox.x + coronalBox.width / 2, coronalBox.y + coronalBox.height / 2];
-  await dragOnCanvas(page, c, [c[0] + 30, c[1] - 20], 8);
+  await dragOnCanvas(page, c, [c[0] + 12, c[1] - 8], 8);
   h = await settled(page, '!h.interactive && h.max_displacement_mm > 0', 60000);
   const grabbed = await canvasGrey(page, 'slice-coronal');
   const sliceGrabDiff = meanAbsDiff(windowed, grabbed);
