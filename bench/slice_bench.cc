@@ -45,7 +45,7 @@ int main(int argc, char** argv) {
   DeformableScene::Options options;
   options.defer_map_update = true;  // as the server's sessions
   auto scene = bench::Check(
-      DeformableScene::Create(*context, volume, gpu_volume, renderer, mesh, options), "scene");
+      DeformableScene::Create(*context, volume, gpu_volume, *renderer, mesh, options), "scene");
   bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
   bench::Check(scene->Drag(glm::dvec3(0.0, 0.0, 12.0)), "drag");
   bench::Check(scene->SyncMap(), "map");
