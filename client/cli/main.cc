@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
   vpm::cli::AddMeshCommand(app, &server_flags, &exit_code);
   vpm::cli::AddCompareMeshesCommand(app, &exit_code);
   vpm::cli::AddRenderCommand(app, &server_flags, &exit_code);
-  vpm::cli::AddSliceCommand(app, &exit_code);
+  vpm::cli::AddSliceCommand(app, &server_flags, &exit_code);
   vpm::cli::AddRemoteVolumeCommands(app, &server_flags, &exit_code);
   vpm::cli::AddRemoteMeshCommands(app, &server_flags, &exit_code);
   vpm::cli::AddSessionCommands(app, &server_flags, &exit_code);

@@ -1,11 +1,15 @@
 #include "client/cli/slice_command.h"
 
+#include <cctype>
 #include <cstdio>
 #include <memory>
 #include <string_view>
 
 #include "client/cli/command_status.h"
 #include "client/cli/offline_scene.h"
+#include "client/cli/server_flags.h"
+#include "proto/enum_names.h"
+#include "proto/vec3_convert.h"
 #include "server/common/write_file.h"
 #include "server/raycast/frame_encoder.h"
 
@@ -14,6 +18,7 @@ namespace {
 
 struct SliceArgs {
   RenderArgs scene;
+  std::string session_id;  // with --server: RenderSlice on this session
   std::string plane = "axial";
   std::vector<double> at;  // empty or one number (mm, world)
   std::string at_landmark;
@@ -99,13 +104,62 @@ Status RunSlice(const SliceArgs& args) {
   return absl::OkStatus();
 }
 
+// With --server: RenderSlice of a session's current deformation; the plane
+// as offline (without --at: through the grabbed tissue, else the centre).
+Status RunRemoteSlice(const SliceArgs& args, const ServerConnection& server) {
+  if (args.session_id.empty()) {
+    return absl::InvalidArgumentError("with --server, slice needs --session ID");
+  }
+  if (!args.scene.source.empty()) {
+    return absl::InvalidArgumentError(
+        "with --server, slice shows a session (--session): --volume is offline only");
+  }
+  v2::RenderSliceRequest request;
+  request.set_session_id(args.session_id);
+  v2::SliceSpec* spec = request.mutable_slice();
+  std::string enum_name = "SLICE_ORIENTATION_" + args.plane;
+  for (char& c : enum_name) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  v2::SliceOrientation orientation = v2::SLICE_ORIENTATION_UNSPECIFIED;
+  if (!v2::SliceOrientation_Parse(enum_name, &orientation)) {
+    return absl::InvalidArgumentError(StrCat("--plane ", args.plane, ": not a plane"));
+  }
+  spec->set_orientation(orientation);
+  if (!args.at.empty()) spec->set_at_mm(args.at[0]);
+  spec->set_at_landmark(args.at_landmark);
+  if (args.normal.size() == 3) {
+    *spec->mutable_normal() = ToProto(glm::dvec3(args.normal[0], args.normal[1], args.normal[2]));
+  }
+  if (args.window.size() == 2) {
+    spec->mutable_window()->set_width(args.window[0]);
+    spec->mutable_window()->set_level(args.window[1]);
+  }
+  spec->set_pixel_mm(args.pixel_mm);
+  spec->set_overlay(args.scene.overlay);
+  request.set_encoding(EncodingForFile(args.scene.out));
+  request.set_jpeg_quality(args.scene.jpeg_quality);
+  v2::Frame frame;
+  RETURN_IF_ERROR(FromGrpc(server.stub().RenderSlice(server.Context().get(), request, &frame)));
+  RETURN_IF_ERROR(WriteFile(args.scene.out, frame.image()));
+  const v2::SliceGeometry& g = frame.slice();
+  std::printf("%s slice at %.3f mm along (%.3f, %.3f, %.3f); window W %.0f L %.0f",
+              args.plane.c_str(), g.offset_mm(), g.world_normal().x(), g.world_normal().y(),
+              g.world_normal().z(), g.window().width(), g.window().level());
+  if (g.cut_tets() >= 0) std::printf("; the plane cuts %lld tets", static_cast<long long>(g.cut_tets()));
+  std::printf("\nwrote %s (%dx%d, %.3f mm per pixel, %zu bytes; render %.1f ms)\n",
+              args.scene.out.c_str(), frame.width(), frame.height(), g.pixel_mm(),
+              frame.image().size(), frame.timings().render_ms());
+  return absl::OkStatus();
+}
+
 }  // namespace
 
-void AddSliceCommand(CLI::App& app, int* exit_code) {
+void AddSliceCommand(CLI::App& app, const ServerFlags* server_flags, int* exit_code) {
   auto a = std::make_shared<SliceArgs>();
   CLI::App* cmd = app.add_subcommand(
       "slice", "A slice of the volume, optionally after a drag (axial, coronal, sagittal, oblique)");
-  cmd->add_option("--volume", a->scene.source, "a file, a DICOM folder or phantom:NAME")->required();
+  cmd->add_option("--volume", a->scene.source,
+                  "a file, a DICOM folder or phantom:NAME (offline; required without --server)");
+  cmd->add_option("--session", a->session_id, "with --server: slice this session (RenderSlice)");
   cmd->add_option("--mesh-json", a->scene.mesh_json, "a mesh written by `vpm mesh --json`");
   AddMeshFlags(cmd, &a->scene.mesh);
   AddVolumeFlags(cmd, &a->scene.volume_flags);
@@ -128,7 +182,19 @@ void AddSliceCommand(CLI::App& app, int* exit_code) {
                 "outline the tets the plane cuts and mark the grabbed tissue");
   cmd->add_option("--jpeg-quality", a->scene.jpeg_quality, "1..100")->capture_default_str();
   cmd->add_option("--out", a->scene.out, "slice.png or slice.jpg")->required();
-  cmd->callback([a, exit_code] { *exit_code = ExitWith(RunSlice(*a)); });
+  cmd->callback([a, server_flags, exit_code] {
+    if (!server_flags->address.empty()) {
+      WithServer(server_flags, exit_code,
+                 [a](const ServerConnection& s) { return RunRemoteSlice(*a, s); })();
+      return;
+    }
+    if (a->scene.source.empty()) {
+      *exit_code = ExitWith(absl::InvalidArgumentError(
+          "slice needs --volume SOURCE (or --server ADDR --session ID)"));
+      return;
+    }
+    *exit_code = ExitWith(RunSlice(*a));
+  });
 }
 
 }  // namespace vpm::cli

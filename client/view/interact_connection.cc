@@ -1,6 +1,8 @@
 #include "client/view/interact_connection.h"
 
 #include <cstdio>
+#include <span>
+#include <string_view>
 
 namespace vpm::view {
 namespace {
@@ -271,6 +273,14 @@ void InteractConnection::ReadFrames(
     ShownFrame shown;
     shown.image = std::move(*image);
     frame.clear_image();
+    for (v2::SliceImage& slice : *frame.mutable_slices()) {
+      const std::string_view bytes = slice.image();
+      const std::span<const uint8_t> data(reinterpret_cast<const uint8_t*>(bytes.data()),
+                                          bytes.size());
+      auto decoded = slice.encoding() == v2::ENCODING_PNG ? DecodePng(data) : DecodeJpeg(data);
+      if (decoded.ok()) shown.slices.push_back(*std::move(decoded));
+      slice.clear_image();
+    }
     shown.info = frame;
     bool reconnected;
     std::string session_id;
@@ -293,11 +303,12 @@ void InteractConnection::ReadFrames(
     if (options_.log_frames) {
       // rtt_ms -1: the frame shows no event that an earlier frame did not.
       std::printf(
-          "frame %llu %dx%d seq %llu %s max_displacement_mm %.3f total_ms %.1f rtt_ms %.1f\n",
+          "frame %llu %dx%d seq %llu %s max_displacement_mm %.3f total_ms %.1f rtt_ms %.1f "
+          "slices %d\n",
           static_cast<unsigned long long>(frame.frame_number()), frame.width(), frame.height(),
           static_cast<unsigned long long>(frame.last_sequence()),
           frame.interactive() ? "interactive" : "still", frame.max_displacement_mm(),
-          frame.timings().total_ms(), latency_ms.value_or(-1.0));
+          frame.timings().total_ms(), latency_ms.value_or(-1.0), frame.slices_size());
       std::fflush(stdout);
     }
     wake_();

@@ -33,6 +33,7 @@ struct ConnectionOptions {
 // The newest frame, decoded.
 struct ShownFrame {
   DecodedImage image;                // RGBA8, row 0 at the top
+  std::vector<DecodedImage> slices;  // Frame.slices, decoded, in order
   v2::Frame info;                    // the frame without its image bytes
   std::optional<double> latency_ms;  // event sent -> this frame, when it shows a new event
   double fps = 0;                    // frames per second received

@@ -33,6 +33,7 @@ std::span<const KeyBinding> KeyBindings() {
       {{"4"}, Action::kPresetMriT1, "DVR preset mri-t1"},
       {{"M"}, Action::kMip, "maximum intensity projection (MIP)"},
       {{"O"}, Action::kToggleOverlay, "proxy-mesh overlay on/off"},
+      {{"L"}, Action::kToggleSlices, "slices on/off: 3D, axial, coronal, sagittal (2 x 2)"},
       {{"R"}, Action::kRefineHere, "refine the mesh at the cursor (new session)"},
       {{"V", "Home"}, Action::kResetView, "reset the view"},
       {{"X"}, Action::kResetDeformation, "reset the deformation (let go)"},

@@ -20,6 +20,7 @@ enum class Action {
   kPresetMriT1,
   kMip,
   kToggleOverlay,
+  kToggleSlices,
   kRefineHere,
   kResetView,
   kResetDeformation,

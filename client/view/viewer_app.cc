@@ -132,6 +132,7 @@ void ViewerApp::OnAction(Action action) {
       SendSettings();
       Notice(settings_.mode() == v2::RENDER_MODE_MIP ? "MIP" : "DVR");
       break;
+    case Action::kToggleSlices: ToggleSlices(); break;
     case Action::kToggleOverlay:
       settings_.set_overlay(!settings_.overlay());
       SendSettings();
@@ -283,10 +284,33 @@ void ViewerApp::PollConnection() {
   }
   if (std::optional<ShownFrame> frame = connection_->TakeFrame()) {
     window_->SetFrame(frame->image);
+    const SDL_Rect before = window_->FrameArea();
+    window_->SetSlices(frame->slices);
+    // Slices came or went: the 3D frame's cell changed size, ask for it.
+    if (window_->FrameArea().w != before.w || window_->FrameArea().h != before.h) {
+      resize_at_ = SteadyClock::now();
+    }
     frame_info_ = std::move(frame->info);
     fps_ = frame->fps;
     if (frame->latency_ms) latency_ms_ = frame->latency_ms;
   }
+}
+
+void ViewerApp::ToggleSlices() {
+  if (settings_.slices_size() > 0) {
+    settings_.clear_slices();
+    Notice("slices off");
+  } else {
+    for (auto [view, orientation] : {std::pair{"axial", v2::SLICE_ORIENTATION_AXIAL},
+                                     std::pair{"coronal", v2::SLICE_ORIENTATION_CORONAL},
+                                     std::pair{"sagittal", v2::SLICE_ORIENTATION_SAGITTAL}}) {
+      v2::SliceSpec* spec = settings_.add_slices();
+      spec->set_view(view);
+      spec->set_orientation(orientation);
+    }
+    Notice("slices: axial, coronal, sagittal through the grabbed tissue");
+  }
+  SendSettings();
 }
 
 void ViewerApp::Paint() {

@@ -35,6 +35,8 @@ class ViewerApp {
   void StartPull(int window_x, int window_y);
   void LetGo();
   void RefineAtCursor();
+  // Three slices (axial, coronal, sagittal) with every frame, or none.
+  void ToggleSlices();
   void SaveScreenshot();
   void PollConnection();
   void Paint();

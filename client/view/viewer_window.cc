@@ -35,6 +35,7 @@ Result<std::unique_ptr<ViewerWindow>> ViewerWindow::Create(const std::string& ti
 ViewerWindow::~ViewerWindow() {
   text_.reset();
   if (frame_ != nullptr) SDL_DestroyTexture(frame_);
+  for (const SliceTexture& s : slices_) SDL_DestroyTexture(s.texture);
   if (renderer_ != nullptr) SDL_DestroyRenderer(renderer_);
   if (window_ != nullptr) SDL_DestroyWindow(window_);
 }
@@ -53,19 +54,51 @@ void ViewerWindow::SetFrame(const DecodedImage& image) {
   SDL_UpdateTexture(frame_, nullptr, image.rgba.data(), image.width * 4);
 }
 
-SDL_Rect ViewerWindow::FrameArea() const {
+void ViewerWindow::SetSlices(const std::vector<DecodedImage>& slices) {
+  const size_t n = std::min<size_t>(slices.size(), 3);
+  while (slices_.size() > n) {
+    SDL_DestroyTexture(slices_.back().texture);
+    slices_.pop_back();
+  }
+  slices_.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    SliceTexture& s = slices_[i];
+    const DecodedImage& image = slices[i];
+    if (s.texture == nullptr || s.width != image.width || s.height != image.height) {
+      if (s.texture != nullptr) SDL_DestroyTexture(s.texture);
+      s.texture = SDL_CreateTexture(renderer_, SDL_PIXELFORMAT_ABGR8888,
+                                    SDL_TEXTUREACCESS_STREAMING, image.width, image.height);
+      s.width = image.width;
+      s.height = image.height;
+      if (s.texture == nullptr) continue;
+      SDL_SetTextureScaleMode(s.texture, SDL_ScaleModeLinear);
+    }
+    SDL_UpdateTexture(s.texture, nullptr, image.rgba.data(), image.width * 4);
+  }
+}
+
+SDL_Rect ViewerWindow::ImageArea() const {
   int w = 0, h = 0;
   SDL_GetRendererOutputSize(renderer_, &w, &h);
   return {0, 0, w, std::max(1, h - StatusBarHeight())};
 }
 
-SDL_Rect ViewerWindow::FrameRect() const {
-  const SDL_Rect area = FrameArea();
-  if (frame_width_ <= 0 || frame_height_ <= 0) return area;
-  const double scale = std::min(double(area.w) / frame_width_, double(area.h) / frame_height_);
-  const int w = std::max(1, int(frame_width_ * scale + 0.5));
-  const int h = std::max(1, int(frame_height_ * scale + 0.5));
+SDL_Rect ViewerWindow::FrameArea() const {
+  const SDL_Rect all = ImageArea();
+  if (slices_.empty()) return all;
+  return {0, 0, std::max(1, all.w / 2), std::max(1, all.h / 2)};
+}
+
+SDL_Rect ViewerWindow::Fit(const SDL_Rect& area, int width, int height) {
+  if (width <= 0 || height <= 0) return area;
+  const double scale = std::min(double(area.w) / width, double(area.h) / height);
+  const int w = std::max(1, int(width * scale + 0.5));
+  const int h = std::max(1, int(height * scale + 0.5));
   return {area.x + (area.w - w) / 2, area.y + (area.h - h) / 2, w, h};
+}
+
+SDL_Rect ViewerWindow::FrameRect() const {
+  return Fit(FrameArea(), frame_width_, frame_height_);
 }
 
 std::optional<SDL_Point> ViewerWindow::ToFramePixel(int window_x, int window_y) const {
@@ -85,7 +118,16 @@ void ViewerWindow::Paint(const PaintInputs& in) {
     const SDL_Rect dst = FrameRect();
     SDL_RenderCopy(renderer_, frame_, nullptr, &dst);
   }
-  const SDL_Rect area = FrameArea();
+  const SDL_Rect cell = FrameArea();
+  for (size_t i = 0; i < slices_.size(); ++i) {
+    if (slices_[i].texture == nullptr) continue;
+    // Cells 1, 2, 3 of the 2 x 2 grid: top right, bottom left, bottom right.
+    const int k = int(i) + 1;
+    const SDL_Rect area{(k % 2) * cell.w, (k / 2) * cell.h, cell.w, cell.h};
+    const SDL_Rect dst = Fit(area, slices_[i].width, slices_[i].height);
+    SDL_RenderCopy(renderer_, slices_[i].texture, nullptr, &dst);
+  }
+  const SDL_Rect area = ImageArea();
   SDL_Rect bar{0, area.h, area.w, StatusBarHeight()};
   SDL_SetRenderDrawColor(renderer_, 32, 32, 40, 255);
   SDL_RenderFillRect(renderer_, &bar);

@@ -36,9 +36,13 @@ class ViewerWindow {
 
   // Replaces the frame shown (RGBA8, row 0 at the top).
   void SetFrame(const DecodedImage& image);
+  // The slices shown beside it (at most 3): with any, the window is a 2 x 2
+  // grid, the frame top left and the slices in the other cells in order.
+  void SetSlices(const std::vector<DecodedImage>& slices);
   void Paint(const PaintInputs& in);
 
-  // The frame area (window minus the status bar), window pixels.
+  // The frame area (window minus the status bar; its top-left quarter
+  // while slices show), window pixels.
   SDL_Rect FrameArea() const;
   // Where the current frame is drawn (aspect kept, centred in the area).
   SDL_Rect FrameRect() const;
@@ -59,8 +63,18 @@ class ViewerWindow {
   SDL_Window* window_ = nullptr;
   SDL_Renderer* renderer_ = nullptr;
   std::unique_ptr<TextRenderer> text_;
+  // `texture` (w x h pixels) scaled into `area`, aspect kept, centred.
+  static SDL_Rect Fit(const SDL_Rect& area, int w, int h);
+  // The whole area under the window's frames (window minus the status bar).
+  SDL_Rect ImageArea() const;
+
   SDL_Texture* frame_ = nullptr;
   int frame_width_ = 0, frame_height_ = 0;  // pixels of the frame texture
+  struct SliceTexture {
+    SDL_Texture* texture = nullptr;
+    int width = 0, height = 0;
+  };
+  std::vector<SliceTexture> slices_;
 };
 
 }  // namespace vpm::view

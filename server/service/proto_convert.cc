@@ -83,6 +83,45 @@ v2::VertexKind KindToProto(VertexKind kind) {
 
 }  // namespace
 
+Result<FrameEncoding> ToFrameEncoding(v2::Encoding encoding, int32_t jpeg_quality,
+                                      std::string_view prefix) {
+  FrameEncoding out;
+  switch (encoding) {
+    case v2::ENCODING_UNSPECIFIED:
+    case v2::ENCODING_JPEG: out.png = false; break;
+    case v2::ENCODING_PNG: out.png = true; break;
+    default:
+      return absl::InvalidArgumentError(
+          StrCat(prefix, "encoding: ", encoding, " is not an Encoding"));
+  }
+  if (jpeg_quality < 0 || jpeg_quality > 100) {
+    return absl::InvalidArgumentError(
+        StrCat(prefix, "jpeg_quality: ", jpeg_quality, " is outside 1..100 (0: 85)"));
+  }
+  out.jpeg_quality = jpeg_quality == 0 ? 85 : jpeg_quality;
+  return out;
+}
+
+Status ToSliceRequests(const v2::RenderSettings& in, const Volume& volume, int max_side,
+                       std::vector<SliceRequest>* out) {
+  if (in.slices_size() > kMaxSlicesPerFrame) {
+    return absl::InvalidArgumentError(StrCat("settings.slices: ", in.slices_size(),
+                                             " slices; at most ", kMaxSlicesPerFrame));
+  }
+  for (int i = 0; i < in.slices_size(); ++i) {
+    ASSIGN_OR_RETURN(SliceRequest slice, ToSliceRequest(in.slices(i), volume, max_side,
+                                                        StrCat("settings.slices[", i, "]")));
+    for (const SliceRequest& earlier : *out) {
+      if (earlier.view == slice.view) {
+        return absl::InvalidArgumentError(
+            StrCat("settings.slices[", i, "].view: '", slice.view, "' is used twice"));
+      }
+    }
+    out->push_back(std::move(slice));
+  }
+  return absl::OkStatus();
+}
+
 void FillMeshGeometry(const ProxyMesh& mesh, v2::GetMeshResponse* response) {
   for (const MeshVertex& v : mesh.vertices) {
     v2::MeshVertex* out = response->add_vertices();
@@ -206,19 +245,11 @@ Result<StreamSettings> ToStreamSettings(const v2::RenderSettings& in, const Volu
     return absl::InvalidArgumentError(StrCat("settings.crop/clip: ", clip.message()));
   }
   out.view.view_cut = in.view_cut();
-  switch (in.encoding()) {
-    case v2::ENCODING_UNSPECIFIED:
-    case v2::ENCODING_JPEG: out.png = false; break;
-    case v2::ENCODING_PNG: out.png = true; break;
-    default:
-      return absl::InvalidArgumentError(
-          StrCat("settings.encoding: ", in.encoding(), " is not an Encoding"));
-  }
-  if (in.jpeg_quality() < 0 || in.jpeg_quality() > 100) {
-    return absl::InvalidArgumentError(
-        StrCat("settings.jpeg_quality: ", in.jpeg_quality(), " is outside 1..100 (0: 85)"));
-  }
-  out.jpeg_quality = in.jpeg_quality() == 0 ? 85 : in.jpeg_quality();
+  ASSIGN_OR_RETURN(const FrameEncoding encoding,
+                   ToFrameEncoding(in.encoding(), in.jpeg_quality(), "settings."));
+  out.png = encoding.png;
+  out.jpeg_quality = encoding.jpeg_quality;
+  RETURN_IF_ERROR(ToSliceRequests(in, volume, max_side, &out.slices));
   return out;
 }
 

@@ -193,6 +193,7 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
   // this frame renders (DeformableScene::PrepareRender).
   std::unique_lock frame_lock(frame_mutex_);
   RenderRequest prepared;
+  std::vector<SliceFrame> slices;  // settings.slices, of the same state
   {
     // The state is read under the scene lock, so the frame shows exactly
     // the events it reports.
@@ -206,6 +207,9 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
       if (grab_point_) *out.mutable_grab_point_mm() = ToProto(*grab_point_);
     }
     ASSIGN_OR_RETURN(prepared, scene_->PrepareRender(view, &map_update));
+    // Slices are cheap (a few ms): cast here, under the scene lock, from the
+    // map this frame uses.
+    ASSIGN_OR_RETURN(slices, RenderSlicesLocked(request.settings->slices));
     if (request.want_vertices) {
       for (const glm::dvec3& p : scene_->Positions()) *out.add_vertices_mm() = ToProto(p);
     }
@@ -220,6 +224,11 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
                          : EncodeJpeg(frame.rgba, frame.width, frame.height,
                                       interactive ? std::min(s.jpeg_quality, 75) : s.jpeg_quality));
   out.set_image(bytes.data(), bytes.size());
+  for (size_t i = 0; i < slices.size(); ++i) {
+    ASSIGN_OR_RETURN(*out.add_slices(),
+                     EncodeSliceImage(slices[i], s.slices[i], volume_->volume.geometry(), s.png,
+                                      interactive ? std::min(s.jpeg_quality, 75) : s.jpeg_quality));
+  }
   out.set_encoding(s.png ? v2::ENCODING_PNG : v2::ENCODING_JPEG);
   out.set_width(frame.width);
   out.set_height(frame.height);
@@ -232,6 +241,52 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
   timings->set_render_ms(render_ms);
   timings->set_encode_ms(MsSince(t1));
   timings->set_total_ms(MsSince(t0));
+  return out;
+}
+
+Result<std::vector<SliceFrame>> Session::RenderSlicesLocked(
+    const std::vector<SliceRequest>& requests) {
+  std::vector<SliceFrame> frames;
+  for (const SliceRequest& request : requests) {
+    const SliceView view =
+        PlaceSlice(request, volume_->volume.geometry(), scene_->GrabbedTissueMm());
+    ASSIGN_OR_RETURN(SliceFrame frame, scene_->RenderSlice(view));
+    frames.push_back(std::move(frame));
+  }
+  return frames;
+}
+
+Result<v2::Frame> Session::RenderSlice(const SliceRequest& request, bool png, int jpeg_quality) {
+  if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
+  const auto t0 = std::chrono::steady_clock::now();
+  v2::Frame out;
+  SliceFrame frame;
+  {
+    // The slice may update the map (SyncMap), which a frame being cast
+    // outside the scene lock reads: frame lock first (session.h).
+    std::lock_guard frame_lock(frame_mutex_);
+    std::lock_guard scene_lock(scene_mutex_);
+    {
+      std::lock_guard lock(state_mutex_);
+      out.set_last_sequence(last_sequence_);
+      out.set_max_displacement_mm(last_step_.max_displacement_mm);
+      if (grab_point_) *out.mutable_grab_point_mm() = ToProto(*grab_point_);
+    }
+    ASSIGN_OR_RETURN(std::vector<SliceFrame> frames, RenderSlicesLocked({request}));
+    frame = std::move(frames.front());
+  }
+  const double render_ms = MsSince(t0);
+  const auto t1 = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(v2::SliceImage image,
+                   EncodeSliceImage(frame, request, volume_->volume.geometry(), png, jpeg_quality));
+  out.set_image(std::move(*image.mutable_image()));
+  out.set_encoding(image.encoding());
+  out.set_width(image.width());
+  out.set_height(image.height());
+  *out.mutable_slice() = std::move(*image.mutable_geometry());
+  out.mutable_timings()->set_render_ms(render_ms);
+  out.mutable_timings()->set_encode_ms(MsSince(t1));
+  out.mutable_timings()->set_total_ms(MsSince(t0));
   return out;
 }
 

@@ -72,6 +72,9 @@ class Session {
     bool want_vertices = false;
   };
   Result<v2::Frame> Render(const FrameRequest& request);
+  // One slice of the current state (RenderSlice): the Frame's image is the
+  // slice, Frame.slice where it lies.
+  Result<v2::Frame> RenderSlice(const SliceRequest& request, bool png, int jpeg_quality);
 
   // True while the last change (camera, grab, drag, pull, release,
   // settings; from any client) is younger than still_delay_ms: frames are
@@ -99,6 +102,8 @@ class Session {
   Result<AppliedEvent> ApplyLocked(const v2::ClientEvent& event, const SceneView* view);
   Result<glm::dvec3> GrabPoint(const v2::Grab& grab, const SceneView* view) const;
   void Changed(uint64_t sequence, bool deformed, const SceneStepTimings* step);
+  // The slices `requests` place now; the caller holds scene_mutex_.
+  Result<std::vector<SliceFrame>> RenderSlicesLocked(const std::vector<SliceRequest>& requests);
   void Notify(bool closed);
 
   const std::string id_;

@@ -1,6 +1,9 @@
 #include "server/service/vpm_service.h"
 
+#include "proto/render_tf_convert.h"
 #include "server/common/clock.h"
+#include "server/io/read_paraview_preset.h"
+#include "server/io/read_slicer_volume_property.h"
 #include "server/service/grpc_status.h"
 #include "server/service/interact_reactor.h"
 #include "server/service/proto_convert.h"
@@ -8,6 +11,13 @@
 #include "server/service/watch_reactor.h"
 
 namespace vpm::service {
+namespace {
+
+// A transfer function's file text (ReadTransferFunction): ParaView's whole
+// preset list is about 1 MiB.
+constexpr size_t kMaxTransferFunctionTextBytes = size_t{1} << 20;
+
+}  // namespace
 
 grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context,
                                             const char* method, WorkerPool* pool,
@@ -394,6 +404,59 @@ grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* contex
     ASSIGN_OR_RETURN(*response, session->Render(frame_request));
     response->set_frame_number(1);
     service_->metrics->FrameSent(response->timings());
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::RenderSlice(grpc::CallbackServerContext* context,
+                                                  const v2::RenderSliceRequest* request,
+                                                  v2::Frame* response) {
+  return Unary(context, "RenderSlice", service_->render_pool,
+               [=, this](const std::string& user) -> Status {
+    ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
+                     service_->sessions->Get(request->session_id(), user, SessionRole::kViewer));
+    ASSIGN_OR_RETURN(SliceRequest slice,
+                     ToSliceRequest(request->slice(), session->volume().volume,
+                                    service_->options.max_frame_side, "slice"));
+    ASSIGN_OR_RETURN(const FrameEncoding encoding,
+                     ToFrameEncoding(request->encoding(), request->jpeg_quality(), ""));
+    ASSIGN_OR_RETURN(*response,
+                     session->RenderSlice(slice, encoding.png, encoding.jpeg_quality));
+    response->set_frame_number(1);
+    service_->metrics->FrameSent(response->timings());
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::ReadTransferFunction(
+    grpc::CallbackServerContext* context, const v2::ReadTransferFunctionRequest* request,
+    v2::RenderTransferFunction* response) {
+  return Unary(context, "ReadTransferFunction", service_->request_pool,
+               [=](const std::string&) -> Status {
+    const std::string& name = request->file_name();
+    const std::string what = StrCat("file '", name.substr(0, 128), "'");
+    if (request->text().size() > kMaxTransferFunctionTextBytes) {
+      return absl::InvalidArgumentError(StrCat(what, ": ", request->text().size(),
+                                               " bytes; at most ",
+                                               kMaxTransferFunctionTextBytes));
+    }
+    RenderTransferFunction tf;
+    if (name.ends_with(".json") && !name.ends_with(".vp.json")) {
+      ASSIGN_OR_RETURN(tf, ParseParaviewPreset(request->text(), request->preset(), what));
+    } else if (name.ends_with(".vp")) {
+      if (!request->preset().empty()) {
+        return absl::InvalidArgumentError(
+            StrCat(what, ": preset picks a ParaView preset; a Slicer .vp holds one property"));
+      }
+      const std::string stem = name.substr(0, name.size() - 3);
+      ASSIGN_OR_RETURN(tf, ParseSlicerVolumeProperty(request->text(),
+                                                     stem.substr(stem.find_last_of("/\\") + 1),
+                                                     what));
+    } else {
+      return absl::InvalidArgumentError(
+          StrCat(what, ": name a ParaView preset file (.json) or a 3D Slicer volume property (.vp)"));
+    }
+    *response = ToProto(tf);
     return absl::OkStatus();
   });
 }

@@ -67,6 +67,11 @@ class VpmService final : public v2::Vpm::CallbackService {
                                       v2::SetCameraResponse*) override;
   grpc::ServerUnaryReactor* Render(grpc::CallbackServerContext*, const v2::RenderRequest*,
                                    v2::Frame*) override;
+  grpc::ServerUnaryReactor* RenderSlice(grpc::CallbackServerContext*,
+                                        const v2::RenderSliceRequest*, v2::Frame*) override;
+  grpc::ServerUnaryReactor* ReadTransferFunction(grpc::CallbackServerContext*,
+                                                 const v2::ReadTransferFunctionRequest*,
+                                                 v2::RenderTransferFunction*) override;
 
  private:
   // Authenticates the caller, then runs `fn` with the caller's user name

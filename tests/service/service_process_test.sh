@@ -138,6 +138,16 @@ grep -q "/dev/full" "$tmp/err" || fail "snapshot error does not name the file: $
 expect_error "snapshot into a missing folder" NOT_FOUND -- \
   --server "$addr" --token secret snapshot --session "$session_id" --size 64 64 \
   --out "$tmp/no/such/folder/frame.jpg"
+# vpm slice against the session (RenderSlice): a PNG, and bad planes refused.
+expect_ok "remote slice" -- --server "$addr" --token secret slice --session "$session_id" \
+  --plane coronal --window 400 40 --out "$tmp/slice.png"
+head -c 8 "$tmp/slice.png" | od -An -c | grep -q "P   N   G" || fail "remote slice wrote no PNG"
+grep -q "coronal slice at" "$tmp/out" || fail "remote slice printed: $(cat "$tmp/out")"
+expect_error "remote slice outside the volume" INVALID_ARGUMENT -- --server "$addr" --token secret \
+  slice --session "$session_id" --plane axial --at 100000 --out "$tmp/slice2.png"
+grep -q "misses the volume" "$tmp/err" || fail "slice outside: unclear error: $(cat "$tmp/err")"
+expect_error "remote slice of an unknown session" NOT_FOUND -- --server "$addr" --token secret \
+  slice --session ses-404 --plane axial --out "$tmp/slice3.png"
 expect_error "watch frames into a folder under a file" FAILED_PRECONDITION -- \
   --server "$addr" --token secret watch --session "$session_id" --frames 1 --out-dir /dev/full/frames
 stdbuf -oL "$vpm" --server "$addr" --token secret watch --session "$session_id" --frames 1000 \

@@ -10,6 +10,7 @@
 #   - grab mode (g) + a left drag deforms the volume (the server's
 #     max_displacement_mm in the frames vpm-view logs) and releasing lets go,
 #   - S saves a PNG screenshot,
+#   - L shows three slices beside the 3D frame (2 x 2) and hides them,
 #   - resizing the window brings frames of the new size,
 #   - killing the server shows a red "connection lost" banner, and a server
 #     restarted on the same port is reconnected to and streams again,
@@ -100,7 +101,7 @@ window=$(timeout 30 xdotool search --sync --name '^vpm-view' | head -1)
 frames() { grep -c '^frame ' "$tmp/view.out"; }
 more_frames_than() { [ "$(frames)" -gt "$1" ]; }
 connects_at_least() { [ "$(grep -c 'vpm-view: connected' "$tmp/view.err")" -ge "$1" ]; }
-# Frame log fields: frame N WxH seq S still|interactive max_displacement_mm D total_ms T rtt_ms R
+# Frame log fields: frame N WxH seq S still|interactive max_displacement_mm D total_ms T rtt_ms R slices K
 last_displacement() { awk '$1 == "frame" { d = $8 } END { print d + 0 }' "$tmp/view.out"; }
 displaced_more_than() { gt "$(last_displacement)" "$1"; }
 # Waits for frames after the first N and then for the stream to go quiet
@@ -199,6 +200,26 @@ png=$(sed -n 's/^screenshot //p' "$tmp/view.out" | tail -1)
 if [ -n "$png" ] && [ -s "$png" ] && [ "$(identify -format %m "$png" 2>/dev/null)" = PNG ] &&
    gt "$(stddev "$png")" 0.05; then pass "S saved $(identify -format '%wx%h' "$png") PNG $(basename "$png")"
 else fail "S did not save a PNG screenshot ($png)"; fi
+
+# 6b. L: three slices with every frame, drawn in a 2 x 2 grid (the 3D
+# frame top left, at half size); L again: back to the 3D frame alone.
+n=$(frames)
+key l
+wait_for 60 grep -q ' slices 3$' "$tmp/view.out" || fail "L brought no frames with 3 slices"
+settle "$n"
+shot slices
+half="$((frame_w / 2))x$((frame_h / 2))"
+import -window "$window" "$tmp/slices-all.png"
+convert "$tmp/slices-all.png" -crop "${half}+$((frame_w / 2))+$((frame_h / 2))" +repage "$tmp/slice-br.png"
+sd=$(stddev "$tmp/slice-br.png")
+if gt "$sd" 0.05 && grep -q "^frame [0-9]* $half .* slices 3$" "$tmp/view.out"; then
+  pass "L shows 3 slices beside a $half 3D frame (bottom-right cell stddev $sd)"
+else fail "L: bottom-right slice cell stddev $sd; frames: $(tail -1 "$tmp/view.out")"; fi
+n=$(frames)
+key l
+wait_for 60 grep -q "^frame [0-9]* ${frame_w}x${frame_h} .* slices 0$" "$tmp/view.out" ||
+  fail "L again did not bring back ${frame_w}x${frame_h} frames without slices"
+settle "$n"
 
 # 7. Resizing the window asks for frames of the new size (the frame area is
 # the window less the status bar).

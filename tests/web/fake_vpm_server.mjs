@@ -3,6 +3,9 @@
 // records each call's method, request and metadata, and streams one small
 // frame per Interact event. A grab with pixel_x < 0 fails the stream with
 // OUT_OF_RANGE, as the real server does for a pick outside the volume.
+// Frames carry one small slice per RenderSettings.slices entry of the
+// stream's settings; ReadTransferFunction answers a two-point function named
+// after the file, or INVALID_ARGUMENT for text 'bad'.
 // Sessions belong to the bearer token that opened them: GetSession and Watch
 // with another token are PERMISSION_DENIED unless the session was shared
 // (share(sessionId, token)). With tls = {cert, key} it serves TLS.
@@ -69,6 +72,12 @@ export async function startFakeServer(source, { tls = null } = {}) {
       return {};
     }),
     DeleteMesh: unary('DeleteMesh', () => ({})),
+    ReadTransferFunction: unary('ReadTransferFunction', (r) => {
+      if (r.text === 'bad') throw { code: grpc.status.INVALID_ARGUMENT, details: `file '${r.file_name}': line 7: not a number` };
+      return { name: r.file_name.replace(/\.[a-z]+$/, ''),
+               colors: [{ value: 0, r: 0, g: 0, b: 0 }, { value: 100, r: 1, g: 1, b: 1 }],
+               opacities: [{ value: 0, opacity_per_mm: 0 }, { value: 100, opacity_per_mm: 0.5 }] };
+    }),
     GetSession: unary('GetSession', (r, call) => {
       const refused = mayWatch(call);
       if (refused) throw refused;
@@ -87,16 +96,25 @@ export async function startFakeServer(source, { tls = null } = {}) {
       record('Interact', call);
       let sequence = 0;
       let frames = 0;
+      let slices = [];
       call.on('data', (request) => {
         calls.push({ method: 'Interact.event', request });
         const event = request.event ?? {};
+        if (event.settings) slices = event.settings.slices ?? [];
         if (event.grab && event.grab.pixel_x < 0) {
           call.emit('error', { code: grpc.status.OUT_OF_RANGE,
                                details: 'grab.pixel: outside the last frame' });
           return;
         }
         sequence = Math.max(sequence, Number(event.sequence) || 0);
-        call.write(frame(++frames, sequence, { max_displacement_mm: event.drag ? 1.5 : 0 }));
+        call.write(frame(++frames, sequence, {
+          max_displacement_mm: event.drag ? 1.5 : 0,
+          slices: slices.map((spec, i) => ({
+            view: spec.view, image: Buffer.from([0xff, 0xd8, i, 0xff, 0xd9]),
+            encoding: 'ENCODING_JPEG', width: 3, height: 2,
+            geometry: { orientation: spec.orientation, pixel_mm: 1, offset_mm: spec.at_mm ?? 5,
+                        min_offset_mm: 0, max_offset_mm: 10, origin_mm: { x: 0, y: 0, z: 5 },
+                        step_u_mm: { x: 1, y: 0, z: 0 }, step_v_mm: { x: 0, y: 1, z: 0 } } })) }));
       });
       call.on('end', () => call.end());
     },

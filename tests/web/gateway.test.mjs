@@ -183,6 +183,64 @@ test('Gateway_FramesCarryHeaderAndImage', async () => {
   t.ws.close();
 });
 
+test('Gateway_FramesCarryTheSlicesAskedForAfterTheImage', async () => {
+  const t = await connect();
+  const slices = [{ view: 'axial', orientation: 'SLICE_ORIENTATION_AXIAL', at_mm: 4 },
+                  { view: 'coronal', orientation: 'SLICE_ORIENTATION_CORONAL',
+                    window: { width: 400, level: 40 } }];
+  t.send({ type: 'open', source: 'phantom:loaded', settings: { width: 4, height: 4, slices } });
+  await t.next((m) => m.type === 'opened');
+  const f = await t.next((m) => m.type === 'frame' && m.header.slices.length === 2);
+  assert.equal(f.header.bytes, f.image.length);
+  assert.deepEqual(f.header.slices.map((s) => s.view), ['axial', 'coronal']);
+  assert.deepEqual(f.slices.map((b) => b[2]), [0, 1]);  // each slice's own bytes, in order
+  assert.equal(f.rest, 0);
+  assert.equal(f.header.slices[0].geometry.offset_mm, 4);
+  assert.deepEqual(f.header.slices[0].geometry.step_u_mm, [1, 0, 0]);
+  // Four slices are refused by the gateway, naming the field.
+  t.send({ type: 'event', event: { sequence: 2, settings: { slices: [...slices, ...slices] } } });
+  assert.match((await t.next((m) => m.type === 'error')).message, /settings\.slices: at most 3/);
+  t.send({ type: 'event', event: { sequence: 3, settings: {
+    slices: [{ view: 'axial', orientation: 'SLICE_ORIENTATION_SIDEWAYS' }] } } });
+  assert.match((await t.next((m) => m.type === 'error')).message, /orientation: one of/);
+  t.send({ type: 'event', event: { sequence: 4, settings: {
+    slices: [{ view: 'axial', orientation: 'SLICE_ORIENTATION_AXIAL', at_mm: 'x' }] } } });
+  assert.match((await t.next((m) => m.type === 'error')).message, /at_mm: a finite number/);
+  t.ws.close();
+});
+
+test('Gateway_UploadedTransferFunctionIsReadByTheServerAndRendersWithIt', async () => {
+  const t = await connect();
+  t.send({ type: 'open', source: 'phantom:loaded', settings: { width: 4, height: 4 } });
+  await t.next((m) => m.type === 'opened');
+  await t.next((m) => m.type === 'frame');
+  const start = fake.calls.length;
+  t.send({ type: 'tf', file_name: 'MyBone.vp', text: '1\n1\n' });
+  const read = await t.next((m) => m.type === 'tf');
+  assert.deepEqual([read.name, read.colors, read.opacities], ['MyBone', 2, 2]);
+  const call = callsSince(start).find((c) => c.method === 'ReadTransferFunction');
+  assert.equal(call.request.file_name, 'MyBone.vp');
+  t.send({ type: 'event', event: { sequence: 5, settings: { width: 4, height: 4, uploaded_tf: true,
+                                                             preset: 'ct-bone' } } });
+  await t.next((m) => m.type === 'frame' && m.header.last_sequence === 5);
+  const event = callsSince(start).filter((c) => c.method === 'Interact.event').at(-1);
+  assert.equal(event.request.event.settings.render_tf.name, 'MyBone');
+  assert.equal(event.request.event.settings.preset, '');  // the upload replaces the preset
+  t.send({ type: 'tf', file_name: 'broken.vp', text: 'bad' });
+  assert.match((await t.next((m) => m.type === 'error')).message,
+               /INVALID_ARGUMENT: file 'broken\.vp': line 7/);
+  for (const [message, expect] of [
+    [{ type: 'tf', file_name: 'a.png', text: 'x' }, /ending in \.json/],
+    [{ type: 'tf', file_name: 'a.vp', text: 'x'.repeat(60001) }, /at most 60000/],
+    [{ type: 'tf', file_name: 'a.vp' }, /tf: text/],
+    [{ type: 'event', event: { sequence: 6, settings: { uploaded_tf: 'yes' } } }, /uploaded_tf: true or false/],
+  ]) {
+    t.send(message);
+    assert.match((await t.next((m) => m.type === 'error')).message, expect);
+  }
+  t.ws.close();
+});
+
 test('Gateway_EventErrorReportsAndReopensTheStreamWithCameraAndSettings', async () => {
   const t = await connect();
   t.send({ type: 'open', source: 'phantom:loaded', settings: { width: 4, height: 4, mode: 'mip' } });

@@ -73,8 +73,11 @@ export async function connect(source, base, { cookie, origin = base, headers = {
     let item;
     if (isBinary) {
       const n = data.readUInt32LE(0);
-      item = { type: 'frame', header: JSON.parse(data.subarray(4, 4 + n).toString()),
-               image: data.subarray(4 + n) };
+      const header = JSON.parse(data.subarray(4, 4 + n).toString());
+      let at = 4 + n + header.bytes;
+      item = { type: 'frame', header, image: data.subarray(4 + n, at),
+               slices: (header.slices ?? []).map((s) => data.subarray(at, (at += s.bytes))),
+               rest: data.length - at };
     } else {
       item = JSON.parse(data.toString());
     }

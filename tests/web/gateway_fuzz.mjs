@@ -200,6 +200,19 @@ function randomMessage() {
     () => ({ type: 'event', event: { sequence: int(100), grab: { pick: true, pixel_x: int(10) - 2, pixel_y: 1 } } }),
     () => ({ type: 'refine', point_mm: pick([vec(), junk()]) }),
     () => ({ type: 'watch', session_id: pick(['ses-1', 'ses-999', '', 7]), settings: junk() }),
+    () => ({ type: 'event', event: { sequence: int(100), settings: {
+      slices: pick([junk(), Array.from({ length: int(6) }, () => ({
+        view: pick(['axial', '', 'x'.repeat(50), 7]),
+        orientation: pick(['SLICE_ORIENTATION_AXIAL', 'SLICE_ORIENTATION_OBLIQUE', 'AXIAL', 3, null]),
+        at_mm: pick([undefined, 1, -1e308, 'a', null]), normal: pick([undefined, vec(), junk()]),
+        window: pick([undefined, { width: pick([0, -1, 400, 'a']), level: 40 }, junk()]),
+        pixel_mm: pick([undefined, 0, -1, 1e-9, 1e308]), [pick(['bogus', 'overlay'])]: junk() }))]),
+      uploaded_tf: pick([undefined, true, false, 'yes', junk()]),
+      crop: pick([undefined, junk(), { lo_mm: vec(), hi_mm: vec() }]),
+      clip: pick([undefined, junk(), [{ normal: vec(), offset_mm: pick([1, 'a']) }]]) } } }),
+    () => ({ type: 'tf', file_name: pick(['a.vp', 'a.json', 'a.png', '', 'x'.repeat(300), 7, null]),
+             text: pick(['1\n1\n', 'bad', '', 'x'.repeat(60001), 5, null, junk()]),
+             preset: pick([undefined, 'Bones', '', 7, 'x'.repeat(300)]) }),
   ])();
 }
 

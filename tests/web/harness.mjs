@@ -154,9 +154,9 @@ export async function launchBrowser(source) {
 
 // The frame canvas as grey levels (0..255, one per pixel) with its mean and
 // variance.
-export async function canvasGrey(page) {
-  return page.evaluate(() => {
-    const c = document.getElementById('frame');
+export async function canvasGrey(page, id = 'frame') {
+  return page.evaluate((canvasId) => {
+    const c = document.getElementById(canvasId);
     const rgba = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
     const grey = new Array(rgba.length / 4);
     let sum = 0, sum2 = 0;
@@ -168,7 +168,7 @@ export async function canvasGrey(page) {
     }
     const mean = sum / grey.length;
     return { grey, mean, variance: sum2 / grey.length - mean * mean };
-  });
+  }, id);
 }
 
 // Mean absolute grey difference between two canvasGrey results.

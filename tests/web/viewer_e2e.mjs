@@ -61,6 +61,112 @@ function rawSocket(page, message) {
   }), message);
 }
 
+// Slice pixels change by at least this much (mean |grey difference|) when
+// a slice scrolls 5 mm, its window changes or its tissue is dragged.
+const kMinSliceDiff = 1;
+// Slicer's CT-Bone volume property, as Slicer saves it.
+const kCtBoneVp = '1\n1\n0.9\n0.1\n0.2\n10\n' +
+  '8 -3024 0 -16.4458 0 641.385 0.715686 3071 0.705882\n4 0 1 255 1\n' +
+  '16 -3024 0 0 0 -16.4458 0.729412 0.254902 0.301961 641.385 0.905882 0.815686 0.552941 ' +
+  '3071 1 1 1\n';
+
+// The 2 x 2 layout: three slices show and are not blank, the wheel scrolls
+// one, the window changes it, a grab on a slice deforms the tissue there;
+// then the crop box, the clip plane and an uploaded Slicer .vp each change
+// the 3D frame.
+async function checkSlicesAndCuts(page) {
+  await page.check('#slices');
+  let h = await settled(page, '!h.interactive && h.slices.length === 3');
+  assert.deepEqual(h.slices.map((s) => s.view), ['axial', 'coronal', 'sagittal']);
+  const grey = {};
+  for (const view of ['axial', 'coronal', 'sagittal']) {
+    grey[view] = await canvasGrey(page, `slice-${view}`);
+    step(`${view} slice ${h.slices.find((s) => s.view === view).width}x` +
+         `${h.slices.find((s) => s.view === view).height}: variance ${grey[view].variance.toFixed(1)}`);
+    assert.ok(grey[view].variance > kMinVariance, `the ${view} slice looks blank`);
+  }
+  await page.screenshot({ path: path.join(out, 'web_viewer_slices.png') });
+
+  // The wheel over the axial slice: 5 notches of one pixel size each.
+  const at = h.slices[0].geometry.offset_mm;
+  const axialBox = await page.locator('#slice-axial').boundingBox();
+  await page.mouse.move(axialBox.x + axialBox.width / 2, axialBox.y + axialBox.height / 2);
+  for (let i = 0; i < 5; ++i) {
+    await page.mouse.wheel(0, 100);
+    await page.waitForTimeout(40);
+  }
+  h = await settled(page, `!h.interactive && h.slices[0].geometry.offset_mm > ${at} + 2`);
+  const scrolled = await canvasGrey(page, 'slice-axial');
+  const scrollDiff = meanAbsDiff(grey.axial, scrolled);
+  step(`wheel on the axial slice: ${at.toFixed(1)} -> ${h.slices[0].geometry.offset_mm.toFixed(1)} mm, ` +
+       `mean |grey difference| ${scrollDiff.toFixed(2)}`);
+  assert.ok(scrollDiff > kMinSliceDiff, `scrolling did not change the axial slice (${scrollDiff})`);
+  assert.match(await page.textContent('#at-axial'), /mm/);
+
+  // Window: W 1500 shows the soft tissue greyer.
+  await page.fill('#window-width', '1500');
+  await page.dispatchEvent('#window-width', 'change');
+  h = await settled(page, '!h.interactive && h.slices[1].geometry.window.width === 1500');
+  const windowed = await canvasGrey(page, 'slice-coronal');
+  const windowDiff = meanAbsDiff(grey.coronal, windowed);
+  step(`window W 1500: coronal mean |grey difference| ${windowDiff.toFixed(2)}`);
+  assert.ok(windowDiff > kMinSliceDiff, `the window did not change the slice (${windowDiff})`);
+
+  // Grab on the coronal slice and drag within its plane.
+  await page.check('input[name="tool"][value="grab"]');
+  const coronalBox = await page.locator('#slice-coronal').boundingBox();
+  const c = [coronalBox.x + coronalBox.width / 2, coronalBox.y + coronalBox.height / 2];
+  await dragOnCanvas(page, c, [c[0] + 12, c[1] - 8], 8);
+  h = await settled(page, '!h.interactive && h.max_displacement_mm > 0', 60000);
+  const grabbed = await canvasGrey(page, 'slice-coronal');
+  const sliceGrabDiff = meanAbsDiff(windowed, grabbed);
+  step(`grab on the coronal slice: max_displacement_mm ${h.max_displacement_mm.toFixed(2)}, ` +
+       `mean |grey difference| ${sliceGrabDiff.toFixed(2)}`);
+  assert.ok(sliceGrabDiff > kMinGrabDiff, `the slice grab did not show (${sliceGrabDiff})`);
+  await page.screenshot({ path: path.join(out, 'web_viewer_slice_grab.png') });
+  await page.mouse.up();
+  await settled(page, '!h.interactive');
+  await page.check('input[name="tool"][value="orbit"]');
+
+  // The crop box, the clip plane and an uploaded transfer function.
+  let before3d = await canvasGrey(page);
+  await page.check('#crop');
+  const [x0, x1] = await page.evaluate(() => [Number(document.getElementById('crop-x0').value),
+                                              Number(document.getElementById('crop-x1').value)]);
+  await page.fill('#crop-x1', String(((x0 + x1) / 2).toFixed(1)));
+  await page.dispatchEvent('#crop-x1', 'change');
+  await settled(page, '!h.interactive');
+  let after3d = await canvasGrey(page);
+  const cropDiff = meanAbsDiff(before3d, after3d);
+  step(`crop to half the x range: 3D mean |grey difference| ${cropDiff.toFixed(2)}`);
+  assert.ok(cropDiff > kMinOrbitDiff, `the crop box did not change the frame (${cropDiff})`);
+  await page.uncheck('#crop');
+  await settled(page, '!h.interactive');
+  before3d = await canvasGrey(page);
+  await page.selectOption('#clip-side', 'P');
+  await settled(page, '!h.interactive');
+  after3d = await canvasGrey(page);
+  const clipDiff = meanAbsDiff(before3d, after3d);
+  step(`clip plane (keep posterior of the centre): mean |grey difference| ${clipDiff.toFixed(2)}`);
+  assert.ok(clipDiff > kMinOrbitDiff, `the clip plane did not change the frame (${clipDiff})`);
+  await page.selectOption('#clip-side', '');
+  await settled(page, '!h.interactive');
+  before3d = await canvasGrey(page);
+  await page.setInputFiles('#tf-file', { name: 'MyBone.vp', mimeType: 'text/plain',
+                                         buffer: Buffer.from(kCtBoneVp) });
+  await page.waitForFunction(() => document.getElementById('render').value === 'dvr:uploaded',
+                             null, { timeout: 15000 });
+  await settled(page, '!h.interactive');
+  after3d = await canvasGrey(page);
+  const tfDiff = meanAbsDiff(before3d, after3d);
+  step(`uploaded Slicer .vp (${await page.evaluate(() => window.vpmViewer.uploadedTf.name)}): ` +
+       `mean |grey difference| ${tfDiff.toFixed(2)}`);
+  assert.ok(tfDiff > kMinOrbitDiff, `the uploaded transfer function did not change the frame (${tfDiff})`);
+  await page.screenshot({ path: path.join(out, 'web_viewer_uploaded_tf.png') });
+  await page.uncheck('#slices');
+  await settled(page, '!h.interactive && h.slices.length === 0');
+}
+
 // Alice's session is out of reach of a browser with no cookie and of Bob's.
 async function checkIsolation(browser, url, aliceSession) {
   const anonymous = await browser.newContext();
@@ -254,6 +360,8 @@ async function main() {
   step(`MIP: mean |grey difference| ${mipDiff.toFixed(2)}`);
   assert.ok(mipDiff > kMinOrbitDiff, `MIP did not change the frame (${mipDiff})`);
   await page.screenshot({ path: path.join(out, 'web_viewer_mip.png') });
+  await page.selectOption('#render', 'dvr:ct-vessels');
+  await checkSlicesAndCuts(page);
 
   figures.latency_ms = await page.evaluate(() => window.vpmViewer.stats.latencyMs);
   assert.ok(!tokenSeen, 'the token reached the browser');

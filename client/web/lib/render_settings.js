@@ -7,12 +7,20 @@ const kEncodings = { jpeg: 'ENCODING_JPEG', png: 'ENCODING_PNG' };
 // naming the field, as it refused an unknown name before.
 const kUnknown = 999;
 
-// The page's settings object as a vpm.v2.RenderSettings.
-export function toProtoSettings(settings) {
+// The page's settings object as a vpm.v2.RenderSettings. `uploaded_tf:
+// true` asks for the transfer function this tab uploaded (`uploadedTf`, a
+// RenderTransferFunction the gateway holds: too large to travel with every
+// settings message) in place of the preset.
+export function toProtoSettings(settings, uploadedTf = null) {
   if (!settings || typeof settings !== 'object') return {};
   const out = { ...settings };
+  delete out.uploaded_tf;
   if (settings.mode !== undefined) out.mode = kModes[settings.mode] ?? kUnknown;
   if (settings.encoding !== undefined) out.encoding = kEncodings[settings.encoding] ?? kUnknown;
+  if (settings.uploaded_tf === true && uploadedTf) {
+    out.render_tf = uploadedTf;
+    delete out.preset;
+  }
   return out;
 }
 

@@ -7,6 +7,11 @@ import { toProtoSettings } from './render_settings.js';
 const kEventKinds = ['camera', 'settings', 'grab', 'drag', 'pull', 'release'];
 const kMaxIdChars = 128;
 const kMaxSourceChars = 2048;
+const kMaxSlices = 3;
+// A transfer-function file's text travels in one WebSocket message (ws
+// accepts 64 KiB): one exported preset, not ParaView's whole list.
+export const kMaxTfTextChars = 60000;
+const kMaxTfNameChars = 256;
 
 function optionalString(message, key, max) {
   const v = message[key];
@@ -34,6 +39,12 @@ export function checkSettings(shape, settings, path) {
     if (settings[key] !== undefined && !names.includes(settings[key])) {
       throw new Error(`${path}.${key}: one of ${names.join(', ')}`);
     }
+  }
+  if (settings.uploaded_tf !== undefined && typeof settings.uploaded_tf !== 'boolean') {
+    throw new Error(`${path}.uploaded_tf: true or false`);
+  }
+  if (Array.isArray(settings.slices) && settings.slices.length > kMaxSlices) {
+    throw new Error(`${path}.slices: at most ${kMaxSlices}`);
   }
   shape.check('RenderSettings', toProtoSettings(settings), path);
 }
@@ -86,6 +97,17 @@ export function parseMessage(shape, data, isBinary) {
     case 'refine':
       vec3(shape, message.point_mm, 'point_mm');
       return message;
+    case 'tf': {
+      optionalString(message, 'file_name', kMaxTfNameChars);
+      optionalString(message, 'preset', kMaxTfNameChars);
+      if (message.file_name === undefined || !/\.(json|vp)$/.test(message.file_name)) {
+        throw new Error('tf: file_name ending in .json (ParaView) or .vp (3D Slicer) required');
+      }
+      if (typeof message.text !== 'string' || message.text.length > kMaxTfTextChars) {
+        throw new Error(`tf: text, the file's contents, at most ${kMaxTfTextChars} characters`);
+      }
+      return message;
+    }
     default:
       throw new Error(`unknown message type '${String(message.type).slice(0, 32)}'`);
   }

@@ -15,10 +15,13 @@
 //   {type: 'refine', point_mm}                   RefineMesh + a session on the new mesh
 //   {type: 'watch', session_id, settings}        Watch another user's session
 //        that its owner shared with this user (frames only; events refused)
+//   {type: 'tf', file_name, text, preset}        ReadTransferFunction (a ParaView
+//        .json or Slicer .vp the user picked) -> {type: 'tf', name, colors,
+//        opacities}; settings with `uploaded_tf: true` then render with it
 // Gateway -> browser:
 //   binary: one frame (lib/frame_packet.js)
 //   {type: 'hello'|'server'|'volumes'|'progress'|'opened'|'refined'|'stream'|
-//          'session_lost'|'error', ...}
+//          'session_lost'|'tf'|'error', ...}
 // The camera is the session's on the server, render settings the stream's:
 // the gateway remembers the last of each the browser sent and replays them
 // on every new stream, so reconnecting and refining keep the view. Replays
@@ -53,6 +56,7 @@ export class ViewerConnection {
     this.mesh = null;
     this.session = null;
     this.settings = null;   // last RenderSettings the browser sent
+    this.uploadedTf = null; // RenderTransferFunction of the browser's last 'tf'
     this.camera = null;     // last Camera the browser sent
     this.lastSequence = 0;  // newest event sequence the browser sent
     this.call = null;       // the Interact call
@@ -118,6 +122,7 @@ export class ViewerConnection {
       case 'watch': return this.watch(message);
       case 'event': return this.event(message.event);
       case 'refine': return this.refine(message.point_mm);
+      case 'tf': return this.readTransferFunction(message);
       default: throw new Error(`message type ${message.type} passed the check`);
     }
   }
@@ -354,6 +359,27 @@ export class ViewerConnection {
     return Promise.all(doomed.map((m) => attempt(m, kDeleteMeshRetries, 100)));
   }
 
+  // The server reads the file with the readers of `vpm render --render-tf`;
+  // this tab's settings may then ask for it (uploaded_tf).
+  async readTransferFunction({ file_name: fileName, text, preset }) {
+    try {
+      const tf = await this.rpc('ReadTransferFunction', { file_name: fileName, text, preset });
+      this.uploadedTf = tf;
+      this.send({ type: 'tf', name: tf.name, colors: tf.colors.length,
+                  opacities: tf.opacities.length });
+      // A stream already rendering with an earlier upload takes this one.
+      if (this.settings?.uploaded_tf && this.call && !this.watching) {
+        this.call.write({ event: { sequence: this.lastSequence, settings: this.protoSettings() } });
+      }
+    } catch (err) {
+      this.fail(`Reading ${fileName}`, err);
+    }
+  }
+
+  protoSettings(settings = this.settings) {
+    return toProtoSettings(settings, this.uploadedTf);
+  }
+
   // ------------------------------------------------------------ the stream
 
   startStream() {
@@ -361,7 +387,7 @@ export class ViewerConnection {
     const gen = ++this.streamGen;
     const call = this.watching
       ? this.client.watch({ session_id: this.session.session_id,
-                            settings: toProtoSettings(this.settings) }, this.as)
+                            settings: this.protoSettings() }, this.as)
       : this.client.interact(this.as);
     this.call = call;
     let framed = false;
@@ -384,7 +410,7 @@ export class ViewerConnection {
     if (!this.watching) {
       const sequence = this.lastSequence;
       call.write({ session_id: this.session.session_id,
-                   event: { sequence, settings: toProtoSettings(this.settings) } });
+                   event: { sequence, settings: this.protoSettings() } });
       if (this.camera) call.write({ event: { sequence, camera: this.camera } });
     }
     this.send({ type: 'stream', state: 'open', session_id: this.session.session_id });
@@ -446,7 +472,7 @@ export class ViewerConnection {
       this.startStream();
       if (event.settings || event.camera) return;  // replayed by startStream
     }
-    this.call.write({ event: event.settings ? { ...event, settings: toProtoSettings(event.settings) }
+    this.call.write({ event: event.settings ? { ...event, settings: this.protoSettings(event.settings) }
                                             : event });
   }
 

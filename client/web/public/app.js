@@ -3,9 +3,11 @@
 // server call happens in the gateway. `window.vpmViewer` exposes the state
 // (frames, last frame header, peak displacement, errors) to tests.
 import { OrbitCamera } from './camera.js';
+import { CutControls } from './cut_controls.js';
 import { FrameStats } from './frame_stats.js';
 import { GatewaySocket } from './gateway_socket.js';
 import { PointerTools } from './pointer_tools.js';
+import { SliceViews } from './slice_views.js';
 
 const $ = (id) => document.getElementById(id);
 const canvas = $('frame');
@@ -29,6 +31,7 @@ const state = {
   peakDisplacementMm: 0,
   lastGrabMm: null,
   errors: [],           // {what, message}
+  uploadedTf: null,     // {name, colors, opacities} once the gateway read a file
   stats,
 };
 window.vpmViewer = state;
@@ -90,7 +93,10 @@ function sendEvent(event) {
 function settings() {
   const [mode, preset] = $('render').value.split(':');
   const side = Number($('frame-size').value);
-  return { mode, preset, width: side, height: side, overlay: $('overlay').checked };
+  const out = { mode, preset, width: side, height: side, overlay: $('overlay').checked,
+                slices: slices.specs(), ...cuts.settings() };
+  if (preset === 'uploaded') Object.assign(out, { preset: undefined, uploaded_tf: true });
+  return out;
 }
 
 function openVolume() {
@@ -104,6 +110,32 @@ function refineAt(pointMm) {
   if (!state.session) return showMessage('Open a volume first.', 'error');
   socket.send({ type: 'refine', point_mm: pointMm });
 }
+
+const slices = new SliceViews({
+  canvases: { axial: $('slice-axial'), coronal: $('slice-coronal'), sagittal: $('slice-sagittal') },
+  labels: { axial: $('at-axial'), coronal: $('at-coronal'), sagittal: $('at-sagittal') },
+  tool: () => tools.tool,
+  send: sendEvent,
+  onChange: () => settingsChanged(),
+  onWindow({ width, level }) {
+    $('window-width').value = Math.round(width);
+    $('window-level').value = Math.round(level);
+  },
+  onGrab(pointMm) {
+    state.lastGrabMm = pointMm;
+    $('refine-grab').disabled = false;
+  },
+});
+state.slices = slices;
+
+const cuts = new CutControls({
+  crop: $('crop'),
+  cropLo: ['x0', 'y0', 'z0'].map((k) => $(`crop-${k}`)),
+  cropHi: ['x1', 'y1', 'z1'].map((k) => $(`crop-${k}`)),
+  clipSide: $('clip-side'),
+  clipAt: $('clip-at'),
+  clipLabel: $('clip-label'),
+}, () => settingsChanged());
 
 const tools = new PointerTools({
   canvas,
@@ -143,7 +175,11 @@ const handlers = {
     if (state.intent?.volume_id && !m.volume.source.startsWith('upload:')) {
       state.intent = { source: m.volume.source };
     }
-    if (!sameVolume) state.camera = new OrbitCamera(m.volume);
+    if (!sameVolume) {
+      state.camera = new OrbitCamera(m.volume);
+      slices.reset();
+      cuts.setVolume(m.volume);
+    }
     state.lastGrabMm = null;
     $('refine-grab').disabled = true;
     setServerState('up', `vpm-server ${state.gatewayServer ?? ''}`);
@@ -163,10 +199,24 @@ const handlers = {
     showMessage(m.message, 'info');
     if (state.intent && !state.opening) openVolume();
   },
+  tf(m) {
+    state.uploadedTf = m;
+    let option = $('render').querySelector('option[value="dvr:uploaded"]');
+    if (!option) {
+      option = document.createElement('option');
+      option.value = 'dvr:uploaded';
+      $('render').append(option);
+    }
+    option.textContent = `Uploaded: ${m.name || 'transfer function'}`;
+    $('render').value = 'dvr:uploaded';
+    showMessage(`Read ${m.name}: ${m.colors} colour and ${m.opacities} opacity points.`, 'info');
+    settingsChanged();
+  },
   error(m) {
     state.errors.push({ what: m.what, message: m.message });
     if (m.what !== 'Interaction') state.opening = false;
     tools.cancelGrab();
+    slices.cancelGrab();
     showMessage(m.message, 'error');
   },
 };
@@ -214,12 +264,13 @@ function onFrame(frame) {
 async function drawNext() {
   drawing = true;
   while (waiting) {
-    const { header, image } = waiting;
+    const { header, image, slices: sliceImages } = waiting;
     waiting = null;
     try {
       const bitmap = await createImageBitmap(image);
       context.drawImage(bitmap, 0, 0, canvas.width, canvas.height);
       bitmap.close();
+      await slices.draw(sliceImages);
       state.framesDrawn += 1;
       showStatus(header);
     } catch (e) {
@@ -261,6 +312,39 @@ for (const input of document.querySelectorAll('input[name="tool"]')) {
 const settingsChanged = () => state.session && sendEvent({ settings: settings() });
 $('render').addEventListener('change', settingsChanged);
 $('overlay').addEventListener('change', settingsChanged);
+$('slices').addEventListener('change', () => {
+  slices.enabled = $('slices').checked;
+  $('views').dataset.layout = slices.enabled ? 'grid' : 'single';
+  settingsChanged();
+});
+const windowChanged = () => {
+  const [width, level] = [Number($('window-width').value), Number($('window-level').value)];
+  if (!(width > 0) || !Number.isFinite(level)) {
+    showMessage('The window needs a width above 0 and a level (HU).', 'error');
+    return;
+  }
+  slices.window = { width, level };
+  settingsChanged();
+};
+$('window-width').addEventListener('change', windowChanged);
+$('window-level').addEventListener('change', windowChanged);
+$('slice-overlay').addEventListener('change', () => {
+  slices.overlay = $('slice-overlay').checked;
+  settingsChanged();
+});
+// A transfer function from the tools users have: the gateway hands the text
+// to vpm-server, which reads it as `vpm render --render-tf` does.
+const kMaxTfFileBytes = 60000;
+$('tf-file').addEventListener('change', async () => {
+  const file = $('tf-file').files[0];
+  if (!file) return;
+  if (file.size > kMaxTfFileBytes) {
+    showMessage(`${file.name} is ${(file.size / 1024).toFixed(0)} KiB; export one preset ` +
+                `(at most ${kMaxTfFileBytes / 1000} kB).`, 'error');
+    return;
+  }
+  socket.send({ type: 'tf', file_name: file.name, text: await file.text() });
+});
 $('frame-size').addEventListener('change', () => {
   if (state.session) applyFrameSize();
   settingsChanged();

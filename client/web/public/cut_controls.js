@@ -1,0 +1,100 @@
+// What the 3D view shows of the volume (RenderSettings.crop and .clip, world
+// LPS mm): a crop box, one range per world axis, and one clip plane that
+// keeps the side of a world axis beyond a position. Both start from the
+// open volume's world box (VolumeInfo: origin, direction, dims, spacing).
+const kAxes = ['x', 'y', 'z'];
+// The clip plane's choices: keep what lies towards this patient direction.
+const kClipSides = {
+  L: [1, 0, 0], R: [-1, 0, 0], P: [0, 1, 0], A: [0, -1, 0], S: [0, 0, 1], I: [0, 0, -1],
+};
+
+// The volume's world box: [lo, hi] per axis, mm.
+export function worldBox(volume) {
+  const d = volume.direction?.length === 9 ? volume.direction : [1, 0, 0, 0, 1, 0, 0, 0, 1];
+  const s = volume.spacing_mm ?? { x: 1, y: 1, z: 1 };
+  const o = volume.origin_lps_mm ?? { x: 0, y: 0, z: 0 };
+  const extent = [0, 1, 2].map((a) => (Number(volume.dims[a]) - 1) * [s.x, s.y, s.z][a]);
+  const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+  for (let c = 0; c < 8; ++c) {
+    const p = [c & 1 ? extent[0] : 0, c & 2 ? extent[1] : 0, c & 4 ? extent[2] : 0];
+    for (let r = 0; r < 3; ++r) {
+      const w = [o.x, o.y, o.z][r] + d[r] * p[0] + d[3 + r] * p[1] + d[6 + r] * p[2];
+      lo[r] = Math.min(lo[r], w);
+      hi[r] = Math.max(hi[r], w);
+    }
+  }
+  return { lo, hi };
+}
+
+export class CutControls {
+  // elements: {crop (checkbox), cropLo: [3 inputs], cropHi: [3 inputs],
+  // clipSide (select: '' or a key of kClipSides), clipAt (range input),
+  // clipLabel}; onChange(): the settings changed.
+  constructor(elements, onChange) {
+    Object.assign(this, { e: elements, onChange });
+    this.box = null;
+    const inputs = [elements.crop, ...elements.cropLo, ...elements.cropHi, elements.clipAt];
+    for (const input of inputs) input.addEventListener('change', () => this.changed());
+    // Moving the slider: at most one settings event per animation frame.
+    elements.clipAt.addEventListener('input', () => {
+      if (this.inputPending) return;
+      this.inputPending = true;
+      requestAnimationFrame(() => {
+        this.inputPending = false;
+        this.changed();
+      });
+    });
+    elements.clipSide.addEventListener('change', () => {
+      this.placeClipRange();
+      this.changed();
+    });
+  }
+
+  // A new volume: the box and the clip range follow its world box.
+  setVolume(volume) {
+    this.box = worldBox(volume);
+    kAxes.forEach((_, a) => {
+      for (const [inputs, values] of [[this.e.cropLo, this.box.lo], [this.e.cropHi, this.box.hi]]) {
+        Object.assign(inputs[a], { min: this.box.lo[a].toFixed(1), max: this.box.hi[a].toFixed(1),
+                                   value: values[a].toFixed(1) });
+      }
+    });
+    this.placeClipRange();
+  }
+
+  placeClipRange() {
+    const side = kClipSides[this.e.clipSide.value];
+    if (!this.box || !side) return;
+    const a = side.findIndex((v) => v !== 0);
+    Object.assign(this.e.clipAt, { min: this.box.lo[a], max: this.box.hi[a], step: 0.5,
+                                   value: (this.box.lo[a] + this.box.hi[a]) / 2 });
+  }
+
+  changed() {
+    const side = this.e.clipSide.value;
+    this.e.clipLabel.textContent = side ? `${Number(this.e.clipAt.value).toFixed(1)} mm` : '';
+    this.onChange();
+  }
+
+  // The crop and clip fields of RenderSettings ({} when both are off).
+  settings() {
+    const out = {};
+    if (this.box && this.e.crop.checked) {
+      const read = (inputs) => inputs.map((i) => Number(i.value));
+      const [lo, hi] = [read(this.e.cropLo), read(this.e.cropHi)];
+      if (lo.every(Number.isFinite) && hi.every(Number.isFinite)) {
+        const vec = (v) => ({ x: v[0], y: v[1], z: v[2] });
+        out.crop = { lo_mm: vec(lo.map((v, a) => Math.min(v, hi[a]))),
+                     hi_mm: vec(hi.map((v, a) => Math.max(v, lo[a]))) };
+      }
+    }
+    const n = kClipSides[this.e.clipSide.value];
+    const at = Number(this.e.clipAt.value);
+    if (this.box && n && Number.isFinite(at)) {
+      // Keeps dot(n, x) >= offset: the plane at `at` on its axis.
+      const a = n.findIndex((v) => v !== 0);
+      out.clip = [{ normal: { x: n[0], y: n[1], z: n[2] }, offset_mm: n[a] * at }];
+    }
+    return out;
+  }
+}
