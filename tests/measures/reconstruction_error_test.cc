@@ -2,6 +2,7 @@
 #include "server/common/clock.h"
 #include "server/measures/reconstruction_error.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -157,26 +158,26 @@ TEST(ReconstructionError, CountsVoxelsOutsideTheMesh) {
   EXPECT_EQ(error->voxels_outside_mesh, 20 * 20 * 10);
 }
 
-// Timing for the report: 256^3 voxels, about 1000 vertices.
-TEST(ReconstructionError, TimingOn256CubedVoxels) {
+// 256^3 voxels at typical vertex counts: every voxel inside the mesh, and
+// one or two threads give the same error. Its time is not asserted (a
+// test's time follows the machine's load; speed belongs in bench/).
+TEST(ReconstructionError, On256CubedVoxelsThreadsAgree) {
   const Volume volume = SphereVolume({256, 256, 256});
   const glm::dvec3 extent = volume.geometry().extent_mm();
   for (int g : {6, 10, 20}) {
     const ProxyMesh mesh = MeshOver(volume, LatticeMesh(g, extent));
+    double rmse[2] = {0, 0};
     for (int threads : {1, 2}) {
-      const auto start = std::chrono::steady_clock::now();
       auto error = MeasureReconstructionError(volume, mesh, SphereTf(), {threads});
-      const double ms =
-          MsSince(start);
       ASSERT_TRUE(error.ok());
-      std::printf(
-          "ReconstructionError 256^3, %5zu vertices %6zu tets, %d thread(s): %8.1f ms"
-          " (rmse %.3f, tf>0 %.3f)\n",
-          mesh.vertices.size(), mesh.tets.size(), threads, ms, error->rmse_all,
-          error->rmse_tf_positive);
+      std::printf("ReconstructionError 256^3, %5zu vertices %6zu tets, %d thread(s): rmse %.3f, "
+                  "tf>0 %.3f\n",
+                  mesh.vertices.size(), mesh.tets.size(), threads, error->rmse_all,
+                  error->rmse_tf_positive);
       EXPECT_EQ(error->voxels_outside_mesh, 0);
-      EXPECT_LT(ms, 20000.0);
+      rmse[threads - 1] = error->rmse_all;
     }
+    EXPECT_NEAR(rmse[0], rmse[1], 1e-9 * std::max(1.0, rmse[0]));
   }
 }
 

@@ -170,7 +170,10 @@ TEST(Tetrahedralize, RejectsAHullSmallerThanTheBox) {
 }
 
 // Timings for the report; the bound only catches gross regressions.
-TEST(Tetrahedralize, TimingOnTypicalVertexCounts) {
+// Typical vertex counts, random and lattice (degenerate: cospherical
+// points), each a valid cover of the box. How long they take is measured by
+// bench/mesh_build_bench, not here.
+TEST(Tetrahedralize, TypicalVertexCountsGiveValidCovers) {
   const glm::dvec3 extent(255.0, 255.0, 180.0);
   struct Case {
     const char* name;
@@ -184,14 +187,9 @@ TEST(Tetrahedralize, TimingOnTypicalVertexCounts) {
   cases.push_back({"lattice 10^3+8", LatticeMesh(10, extent)});
   cases.push_back({"lattice 20^3+8", LatticeMesh(20, extent)});
   for (Case& c : cases) {
-    const auto start = std::chrono::steady_clock::now();
     ASSERT_TRUE(Tetrahedralize(c.mesh, extent).ok());
-    const double ms =
-        MsSince(start);
-    std::printf("Tetrahedralize %-16s %6zu vertices %7zu tets %8.2f ms  min dihedral %.2f deg\n",
-                c.name, c.mesh.vertices.size(), c.mesh.tets.size(), ms,
-                c.mesh.quality.min_dihedral_deg);
-    EXPECT_LT(ms, 5000.0);
+    std::printf("Tetrahedralize %-16s %6zu vertices %7zu tets  min dihedral %.2f deg\n", c.name,
+                c.mesh.vertices.size(), c.mesh.tets.size(), c.mesh.quality.min_dihedral_deg);
     ExpectValidCover(c.mesh, extent);
   }
 }
