@@ -36,12 +36,13 @@ struct GrabInfo {
 //   point_mm        3, mm; radius_mm > 0
 // Output: the deformable vertices within radius_mm of point_mm (distance <=
 // radius) that are not next to a fixed vertex, and always the nearest
-// deformable vertex within the radius (docs/FEM.md, "Grabs": a handle next to
-// a fixed vertex would make their tets wholly prescribed, and a drag past
-// the fixed vertex inverts them whatever the solver does); the others are
-// counted in left_free_next_to_fixed. If no deformable vertex and no vertex
-// at all lies within the radius, the kNearestHandleCount nearest deformable
-// vertices (used_nearest = true, ties by smaller index).
+// deformable vertex within the radius (docs/FEM.md, "Manipulation": a
+// handle next to a fixed vertex would make their tets wholly prescribed,
+// and a drag past the fixed vertex inverts them whatever the solver does);
+// the others are counted in left_free_next_to_fixed. If no deformable
+// vertex and no vertex at all lies within the radius, the
+// kNearestHandleCount nearest deformable vertices (used_nearest = true,
+// ties by smaller index).
 // Errors: InvalidArgument for a non-finite point or radius <= 0 (or not
 // finite), or flags of the wrong length; OutOfRange for a point outside the
 // box (1e-6 relative slack); FailedPrecondition when the radius holds only

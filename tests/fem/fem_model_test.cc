@@ -64,7 +64,7 @@ TEST(FemModel, GrabFallsBackToTheNearestDeformableVertices) {
   EXPECT_TRUE(model->Drag(glm::dvec3(0.0, 0.0, 1.0)).ok());
 }
 
-// docs/FEM.md, "Grabs": a deformable vertex that shares a tet with a fixed
+// docs/FEM.md, "Manipulation": a deformable vertex that shares a tet with a fixed
 // one is left free (a handle there would make the tet wholly prescribed, and
 // a drag past the fixed vertex inverts it whatever the solver does), except
 // the nearest deformable vertex, which is always taken.

@@ -110,7 +110,7 @@ void ExpectTwelveMmDragStaysBounded(const Volume& volume, MeshParams params,
 // with the point footprint the artery's contrast makes hard vertices inside
 // the grab ball; when the grab took the soft vertices beside them as handles
 // this drag threw a vertex 27.3 mm and inverted 7 tets (docs/FEM.md,
-// "Grabs").
+// "Manipulation").
 TEST(DragValidity, SmallPhantomPointMeshTwelveMmDragMovesNothingPastTheDrag) {
   auto volume = MakePhantom("abdomen?size=48", VolumeLimits{});
   ASSERT_TRUE(volume.ok()) << volume.status();
