@@ -32,16 +32,24 @@ Status CheckGrab(const glm::dvec3& box_extent_mm, const glm::dvec3& point_mm, do
 
 Result<GrabInfo> FindHandles(const std::vector<glm::dvec3>& positions_mm,
                              const std::vector<uint8_t>& deformable,
-                             const std::vector<uint8_t>& next_to_fixed,
+                             const std::vector<std::vector<int32_t>>& fixed_neighbours,
                              const glm::dvec3& box_extent_mm, const glm::dvec3& point_mm,
                              double radius_mm) {
   RETURN_IF_ERROR(CheckGrab(box_extent_mm, point_mm, radius_mm));
   if (deformable.size() != positions_mm.size()) {
     return absl::InvalidArgumentError("one deformable flag per vertex needed");
   }
-  if (!next_to_fixed.empty() && next_to_fixed.size() != positions_mm.size()) {
-    return absl::InvalidArgumentError("one next-to-fixed flag per vertex needed (or none)");
+  if (!fixed_neighbours.empty() && fixed_neighbours.size() != positions_mm.size()) {
+    return absl::InvalidArgumentError("one fixed-neighbour list per vertex needed (or none)");
   }
+  const auto next_to_fixed_within = [&](size_t v) {
+    if (fixed_neighbours.empty()) return false;
+    for (int32_t f : fixed_neighbours[v]) {
+      if (f < 0 || static_cast<size_t>(f) >= positions_mm.size()) continue;
+      if (glm::distance(positions_mm[f], point_mm) <= radius_mm) return true;
+    }
+    return false;
+  };
   GrabInfo info;
   std::vector<std::pair<double, int32_t>> candidates;  // (distance, vertex), deformable only
   std::pair<double, int32_t> nearest_within{radius_mm, -1};
@@ -54,7 +62,7 @@ Result<GrabInfo> FindHandles(const std::vector<glm::dvec3>& positions_mm,
       if (nearest_within.second < 0 || std::make_pair(distance, vertex) < nearest_within) {
         nearest_within = {distance, vertex};
       }
-      if (!next_to_fixed.empty() && next_to_fixed[v]) {
+      if (next_to_fixed_within(v)) {
         ++info.left_free_next_to_fixed;
       } else {
         info.handles.push_back(vertex);

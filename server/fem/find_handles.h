@@ -21,7 +21,7 @@ struct GrabInfo {
   bool used_nearest = false;     // the radius held no deformable vertex
   int64_t fixed_within = 0;      // fixed vertices (hard, anchors) within the radius: they stay
   int64_t left_free_next_to_fixed = 0;  // deformable, within the radius, next to a fixed
-                                        // vertex: left free (not the nearest)
+                                        // vertex within it: left free (not the nearest)
   std::string message;           // what happened, for the user
   double setup_ms = 0.0;         // preparing the solver for these handles
 };
@@ -30,12 +30,13 @@ struct GrabInfo {
 //   positions_mm    #V by 3, mm (the current, possibly deformed, positions)
 //   deformable      #V flags: 1 if the vertex may be a handle (not hard, not
 //                   an anchor, at least one free DOF)
-//   next_to_fixed   #V flags: 1 if the vertex shares a tet with a fixed
-//                   vertex (hard, anchor: every DOF fixed); empty = none
+//   fixed_neighbours #V lists: the fixed vertices (hard, anchor: every DOF
+//                   fixed) that share a tet with the vertex; empty = none
 //   box_extent_mm   3, the image box [0, extent], mm
 //   point_mm        3, mm; radius_mm > 0
 // Output: the deformable vertices within radius_mm of point_mm (distance <=
-// radius) that are not next to a fixed vertex, and always the nearest
+// radius) that share no tet with a fixed vertex within the radius, and
+// always the nearest
 // deformable vertex within the radius (docs/FEM.md, "Manipulation": a
 // handle next to a fixed vertex would make their tets wholly prescribed,
 // and a drag past the fixed vertex inverts them whatever the solver does);
@@ -49,7 +50,7 @@ struct GrabInfo {
 // fixed vertices, or the mesh has no deformable vertex.
 Result<GrabInfo> FindHandles(const std::vector<glm::dvec3>& positions_mm,
                              const std::vector<uint8_t>& deformable,
-                             const std::vector<uint8_t>& next_to_fixed,
+                             const std::vector<std::vector<int32_t>>& fixed_neighbours,
                              const glm::dvec3& box_extent_mm, const glm::dvec3& point_mm,
                              double radius_mm);
 

@@ -64,10 +64,11 @@ TEST(FemModel, GrabFallsBackToTheNearestDeformableVertices) {
   EXPECT_TRUE(model->Drag(glm::dvec3(0.0, 0.0, 1.0)).ok());
 }
 
-// docs/FEM.md, "Manipulation": a deformable vertex that shares a tet with a fixed
-// one is left free (a handle there would make the tet wholly prescribed, and
-// a drag past the fixed vertex inverts it whatever the solver does), except
-// the nearest deformable vertex, which is always taken.
+// docs/FEM.md, "Manipulation": a deformable vertex that shares a tet with a
+// fixed one inside the grab radius is left free (a handle there would make
+// the tet wholly prescribed, and a drag past the fixed vertex inverts it
+// whatever the solver does), except the nearest deformable vertex, which is
+// always taken.
 TEST(FemModel, GrabLeavesVerticesNextToAFixedOneFreeButTakesTheNearest) {
   ProxyMesh mesh = GridMesh({6, 6, 6}, kExtent);
   const int32_t hard = 3 + 7 * (3 + 7 * 3);  // (15, 15, 15)
@@ -108,6 +109,14 @@ TEST(FemModel, GrabLeavesVerticesNextToAFixedOneFreeButTakesTheNearest) {
       EXPECT_FALSE(std::binary_search(grab->handles.begin(), grab->handles.end(), v)) << v;
     }
   }
+  // A fixed vertex outside the radius frees nothing: (25, 15, 15) with
+  // 5.01 mm holds (20, 15, 15), next to the hard vertex 10 mm away.
+  auto outside = model->Grab(glm::dvec3(25.0, 15.0, 15.0), 5.01);
+  ASSERT_TRUE(outside.ok()) << outside.status();
+  EXPECT_EQ(outside->fixed_within, 0);
+  EXPECT_EQ(outside->left_free_next_to_fixed, 0);
+  EXPECT_EQ(outside->handles.size(), 7u);  // (25, 15, 15) and its 6 neighbours (one on a face)
+  EXPECT_TRUE(std::binary_search(outside->handles.begin(), outside->handles.end(), nearest));
 }
 
 TEST(FemModel, GrabRejectsBadInputWithClearCodes) {
