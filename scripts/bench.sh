@@ -6,7 +6,7 @@ build=${1:-build}
 mkdir -p out
 {
   echo "# vpm benchmarks, $(date -u +%Y-%m-%dT%H:%MZ), $(nproc) cores"
-  for b in gradient_bench mesh_build_bench fem_bench warp_bench render_bench sample_rate_bench drag_loop_bench render_storm_bench slice_bench; do
+  for b in gradient_bench mesh_build_bench fem_bench grab_drag_bench warp_bench render_bench sample_rate_bench drag_loop_bench render_storm_bench slice_bench; do
     if [ -x "$build/bench/$b" ]; then
       echo; echo "## $b"; "$build/bench/$b"
     else

@@ -70,7 +70,7 @@ void PrintTable(const std::vector<MeshComparisonRow>& rows) {
                 r.quality.min_dihedral_deg, r.build_ms, "");
   }
   std::printf(
-      "* default (cell footprint, spread). RMSE in volume units (HU); empty R: largest "
+      "* default (point footprint, spread). RMSE in volume units (HU); empty R: largest "
       "empty sphere centred in the body (TF > 0); min dih: smallest dihedral angle, deg\n");
 }
 

@@ -16,7 +16,7 @@ namespace vpm::cli {
 struct MeshFlags {
   std::vector<int64_t> grid{20, 20, 20};
   int64_t target = 250;
-  std::string footprint = "cell";
+  std::string footprint = "point";
   std::string density_mode = "spread";
   double wg = 1.0, wd = 0.5, radius_factor = 2.0;
   std::string tf = "ct-soft-tissue";

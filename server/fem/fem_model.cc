@@ -16,6 +16,29 @@ bool Finite(const glm::dvec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
+// #V lists: the vertices whose every DOF is fixed that share a tet with
+// the vertex, ascending.
+std::vector<std::vector<int32_t>> FixedNeighbours(const std::vector<std::array<int32_t, 4>>& tets,
+                                                  const std::vector<uint8_t>& fixed_dofs) {
+  const auto all_fixed = [&](int32_t v) {
+    return fixed_dofs[3 * v] && fixed_dofs[3 * v + 1] && fixed_dofs[3 * v + 2];
+  };
+  std::vector<std::vector<int32_t>> out(fixed_dofs.size() / 3);
+  for (const auto& tet : tets) {
+    for (int32_t f : tet) {
+      if (!all_fixed(f)) continue;
+      for (int32_t v : tet) {
+        if (v != f) out[v].push_back(f);
+      }
+    }
+  }
+  for (auto& list : out) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+  return out;
+}
+
 }  // namespace
 
 Result<FemModel> FemModel::Create(const ProxyMesh& mesh, const glm::dvec3& box_extent_mm,
@@ -48,6 +71,7 @@ Result<FemModel> FemModel::Create(const ProxyMesh& mesh, const glm::dvec3& box_e
     model.deformable_[v] =
         !mesh.vertices[v].hard && mesh.vertices[v].kind != VertexKind::kAnchor && any_free;
   }
+  model.fixed_neighbours_ = FixedNeighbours(model.tets_, fixed);
   const double soft = young.empty() ? 0.0 : *std::min_element(young.begin(), young.end());
   for (double e : young) model.setup_.hard_tets += e > soft;
   model.setup_.assembly_ms = model.solver_.setup_assembly_ms();
@@ -59,7 +83,8 @@ Result<FemModel> FemModel::Create(const ProxyMesh& mesh, const glm::dvec3& box_e
 
 Result<GrabInfo> FemModel::Grab(const glm::dvec3& point_mm, double radius_mm) {
   ASSIGN_OR_RETURN(GrabInfo info,
-                   FindHandles(Positions(), deformable_, box_extent_mm_, point_mm, radius_mm));
+                   FindHandles(Positions(), deformable_, fixed_neighbours_, box_extent_mm_,
+                               point_mm, radius_mm));
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<int32_t> dofs;
   for (int32_t v : info.handles) {

@@ -48,7 +48,9 @@ class FemModel {
                                  const FemOptions& options = {});
 
   // Takes the handles for point_mm (3, mm) and radius_mm (> 0) among the
-  // current positions (FindHandles); replaces any earlier grab and keeps the
+  // current positions (FindHandles: deformable vertices that share no tet
+  // with a fixed one inside the radius, and the nearest deformable vertex);
+  // replaces any earlier grab and keeps the
   // current deformation, to which later drags are relative.
   Result<GrabInfo> Grab(const glm::dvec3& point_mm, double radius_mm);
 
@@ -89,6 +91,7 @@ class FemModel {
   std::vector<std::array<int32_t, 4>> tets_;
   glm::dvec3 box_extent_mm_{0.0};
   std::vector<uint8_t> deformable_;
+  std::vector<std::vector<int32_t>> fixed_neighbours_;  // #V: fully fixed vertices sharing a tet
   CorotationalSolver solver_;
   FemSetupStats setup_;
   bool grabbed_ = false;

@@ -32,29 +32,61 @@ Status CheckGrab(const glm::dvec3& box_extent_mm, const glm::dvec3& point_mm, do
 
 Result<GrabInfo> FindHandles(const std::vector<glm::dvec3>& positions_mm,
                              const std::vector<uint8_t>& deformable,
+                             const std::vector<std::vector<int32_t>>& fixed_neighbours,
                              const glm::dvec3& box_extent_mm, const glm::dvec3& point_mm,
                              double radius_mm) {
   RETURN_IF_ERROR(CheckGrab(box_extent_mm, point_mm, radius_mm));
   if (deformable.size() != positions_mm.size()) {
     return absl::InvalidArgumentError("one deformable flag per vertex needed");
   }
+  if (!fixed_neighbours.empty() && fixed_neighbours.size() != positions_mm.size()) {
+    return absl::InvalidArgumentError("one fixed-neighbour list per vertex needed (or none)");
+  }
+  const auto next_to_fixed_within = [&](size_t v) {
+    if (fixed_neighbours.empty()) return false;
+    for (int32_t f : fixed_neighbours[v]) {
+      if (f < 0 || static_cast<size_t>(f) >= positions_mm.size()) continue;
+      if (glm::distance(positions_mm[f], point_mm) <= radius_mm) return true;
+    }
+    return false;
+  };
   GrabInfo info;
   std::vector<std::pair<double, int32_t>> candidates;  // (distance, vertex), deformable only
+  std::pair<double, int32_t> nearest_within{radius_mm, -1};
   for (size_t v = 0; v < positions_mm.size(); ++v) {
     const double distance = glm::distance(positions_mm[v], point_mm);
+    const auto vertex = static_cast<int32_t>(v);
     if (deformable[v]) {
-      candidates.emplace_back(distance, static_cast<int32_t>(v));
-      if (distance <= radius_mm) info.handles.push_back(static_cast<int32_t>(v));
+      candidates.emplace_back(distance, vertex);
+      if (distance > radius_mm) continue;
+      if (nearest_within.second < 0 || std::make_pair(distance, vertex) < nearest_within) {
+        nearest_within = {distance, vertex};
+      }
+      if (next_to_fixed_within(v)) {
+        ++info.left_free_next_to_fixed;
+      } else {
+        info.handles.push_back(vertex);
+      }
     } else if (distance <= radius_mm) {
       ++info.fixed_within;
     }
   }
-  if (!info.handles.empty()) {
+  if (nearest_within.second >= 0) {
+    const int32_t nearest = nearest_within.second;
+    if (!std::binary_search(info.handles.begin(), info.handles.end(), nearest)) {
+      info.handles.insert(std::lower_bound(info.handles.begin(), info.handles.end(), nearest),
+                          nearest);
+      --info.left_free_next_to_fixed;
+    }
     info.message = StrCat("grabbed ", info.handles.size(), " vertices within ", radius_mm, " mm");
     if (info.fixed_within > 0) {
       info.message += StrCat("; ", info.fixed_within,
-                             " fixed (hard) vertices within the radius stay in place, so the "
-                             "tissue between them and the handles is strained hardest");
+                             " fixed (hard) vertices within the radius stay in place");
+    }
+    if (info.left_free_next_to_fixed > 0) {
+      info.message += StrCat("; ", info.left_free_next_to_fixed,
+                             " deformable vertices next to them are left free, so that no tet "
+                             "is crushed between a handle and a fixed vertex");
     }
     return info;
   }

@@ -30,10 +30,9 @@ namespace vpm {
 struct MeshParams {
   std::array<int64_t, 3> grid{20, 20, 20};  // G
   int64_t target = 250;                      // kept vertices, 8 anchors included
-  // docs/ALGORITHM.md section 1: point is the intended default (lower
-  // tissue RMSE); it stays cell while a 12 mm drag of a small point mesh
-  // still moves a vertex 27 mm (see there).
-  Footprint footprint = Footprint::kCell;
+  // docs/ALGORITHM.md section 1: point is the default (lower tissue RMSE
+  // on three of four volumes measured); cell stays selectable.
+  Footprint footprint = Footprint::kPoint;
   DensityMode density_mode = DensityMode::kSpread;
   double wg = 1.0;
   double wd = 0.5;

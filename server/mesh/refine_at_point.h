@@ -27,7 +27,7 @@ struct RefineParams {
   glm::dvec3 point_mm{0.0};  // m, physical voxel space
   double roi_radius_mm = 0;  // default 1.5 h
   int64_t refine_count = 150;
-  Footprint footprint = Footprint::kCell;
+  Footprint footprint = Footprint::kPoint;
 };
 
 // Returns the accepted vertices (kind kRefined, lattice_id -1, cost = Ci*Cg),

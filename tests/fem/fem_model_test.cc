@@ -64,6 +64,61 @@ TEST(FemModel, GrabFallsBackToTheNearestDeformableVertices) {
   EXPECT_TRUE(model->Drag(glm::dvec3(0.0, 0.0, 1.0)).ok());
 }
 
+// docs/FEM.md, "Manipulation": a deformable vertex that shares a tet with a
+// fixed one inside the grab radius is left free (a handle there would make
+// the tet wholly prescribed, and a drag past the fixed vertex inverts it
+// whatever the solver does), except the nearest deformable vertex, which is
+// always taken.
+TEST(FemModel, GrabLeavesVerticesNextToAFixedOneFreeButTakesTheNearest) {
+  ProxyMesh mesh = GridMesh({6, 6, 6}, kExtent);
+  const int32_t hard = 3 + 7 * (3 + 7 * 3);  // (15, 15, 15)
+  mesh.vertices[hard].hard = true;
+  auto model = FemModel::Create(mesh, kExtent);
+  ASSERT_TRUE(model.ok()) << model.status();
+  const glm::dvec3 point(20.5, 15.0, 15.0);
+  const double radius = 10.01;
+  auto grab = model->Grab(point, radius);
+  ASSERT_TRUE(grab.ok()) << grab.status();
+  EXPECT_EQ(grab->fixed_within, 1);
+  std::vector<uint8_t> next_to_hard(mesh.vertices.size(), 0);
+  for (const auto& tet : model->tets()) {
+    if (std::find(tet.begin(), tet.end(), hard) == tet.end()) continue;
+    for (int32_t v : tet) next_to_hard[v] = v != hard;
+  }
+  const int32_t nearest = 4 + 7 * (3 + 7 * 3);  // (20, 15, 15), an edge away from the hard one
+  ASSERT_TRUE(next_to_hard[nearest]);
+  int64_t within = 0, left_free = 0;
+  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+    if (!model->deformable()[v] || glm::distance(mesh.vertices[v].position_mm, point) > radius) {
+      continue;
+    }
+    ++within;
+    const bool handle = std::binary_search(grab->handles.begin(), grab->handles.end(), v);
+    EXPECT_EQ(handle, v == static_cast<size_t>(nearest) || !next_to_hard[v]) << v;
+    left_free += !handle;
+  }
+  EXPECT_GT(left_free, 0);
+  EXPECT_EQ(grab->left_free_next_to_fixed, left_free);
+  EXPECT_EQ(static_cast<int64_t>(grab->handles.size()), within - left_free);
+  EXPECT_NE(grab->message.find("left free"), std::string::npos) << grab->message;
+  // Only the nearest handle shares tets with the hard vertex.
+  for (const auto& tet : model->tets()) {
+    if (std::find(tet.begin(), tet.end(), hard) == tet.end()) continue;
+    for (int32_t v : tet) {
+      if (v == nearest) continue;
+      EXPECT_FALSE(std::binary_search(grab->handles.begin(), grab->handles.end(), v)) << v;
+    }
+  }
+  // A fixed vertex outside the radius frees nothing: (25, 15, 15) with
+  // 5.01 mm holds (20, 15, 15), next to the hard vertex 10 mm away.
+  auto outside = model->Grab(glm::dvec3(25.0, 15.0, 15.0), 5.01);
+  ASSERT_TRUE(outside.ok()) << outside.status();
+  EXPECT_EQ(outside->fixed_within, 0);
+  EXPECT_EQ(outside->left_free_next_to_fixed, 0);
+  EXPECT_EQ(outside->handles.size(), 7u);  // (25, 15, 15) and its 6 neighbours (one on a face)
+  EXPECT_TRUE(std::binary_search(outside->handles.begin(), outside->handles.end(), nearest));
+}
+
 TEST(FemModel, GrabRejectsBadInputWithClearCodes) {
   ProxyMesh mesh = GridMesh({6, 6, 6}, kExtent);
   mesh.vertices[3 + 7 * (3 + 7 * 3)].hard = true;  // the centre (15, 15, 15)
