@@ -172,7 +172,7 @@ TEST(Tetrahedralize, RejectsAHullSmallerThanTheBox) {
 // Timings for the report; the bound only catches gross regressions.
 // Typical vertex counts, random and lattice (degenerate: cospherical
 // points), each a valid cover of the box. How long they take is measured by
-// bench/mesh_build_bench, not here.
+// bench/mesh_build_bench.cc, not here.
 TEST(Tetrahedralize, TypicalVertexCountsGiveValidCovers) {
   const glm::dvec3 extent(255.0, 255.0, 180.0);
   struct Case {
