@@ -206,7 +206,14 @@ stats["end"] = proc_stats()
 time.sleep(3)
 stats["idle"] = proc_stats()
 server.send_signal(signal.SIGTERM)
-code = server.wait(timeout=30)
+try:
+    code = server.wait(timeout=30)
+except subprocess.TimeoutExpired:
+    # Still running 30 s after SIGTERM (its grace is 5 s): an error, reported
+    # with the figures, and the server killed.
+    errors.append("vpm-server did not exit within 30 s of SIGTERM (killed)")
+    server.kill()
+    code = server.wait()
 
 planners = users[:12] + [users[15]]
 print(f"churn soak: 16 users, {minutes:g} min, {source}")
