@@ -21,6 +21,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "bench/bench_util.h"
+#include "client/cli/closed_loop_drag.h"
 #include "server/gpu/gpu_context.h"
 #include "server/service/vpm_server.h"
 #include "vpm/v2/vpm.grpc.pb.h"
@@ -41,18 +42,7 @@ std::unique_ptr<grpc::ClientContext> Context(int deadline_ms = 600000) {
 
 // Frames a closed-loop drag receives in `seconds` (the stream is grabbing).
 int DragFor(Stream* stream, double seconds, uint64_t* sequence) {
-  int frames = 0;
-  const auto end = Clock::now() + std::chrono::duration<double>(seconds);
-  vpm::v2::Frame frame;
-  while (Clock::now() < end) {
-    vpm::v2::InteractRequest drag;
-    drag.mutable_event()->set_sequence(++*sequence);
-    auto* offset = drag.mutable_event()->mutable_drag()->mutable_offset_mm();
-    offset->set_x(3.0 * std::sin(0.3 * double(*sequence)));
-    if (!stream->Write(drag) || !stream->Read(&frame)) break;
-    ++frames;
-  }
-  return frames;
+  return vpm::cli::DragFor(stream, seconds, sequence).frames;
 }
 
 struct Row {

@@ -41,13 +41,16 @@ with open(os.path.join(work, "users"), "w") as f:
     f.write("\n".join(lines) + "\n")
 log = open(os.path.join(work, "server.log"), "w")
 server = subprocess.Popen([server_bin, "--listen", "127.0.0.1:0", "--users", os.path.join(work, "users"),
-                           "--max-sessions", "64", "--max-sessions-per-user", "4"],
+                           "--max-sessions", "64", "--max-sessions-per-user", "4",
+                           "--metrics-listen", "127.0.0.1:0"],
                           stdout=log, stderr=subprocess.STDOUT)
-port = None
+port = metrics_port = None
 for _ in range(400):
     text = open(os.path.join(work, "server.log")).read()
     if "listening on port" in text:
         port = text.split("listening on port")[1].split()[0]
+        if "metrics on port" in text:
+            metrics_port = text.split("metrics on port")[1].split()[0].rstrip(",;)")
         break
     time.sleep(0.05)
 if port is None:
@@ -59,7 +62,27 @@ def proc_stats():
     rss = int([l for l in status.splitlines() if l.startswith("VmRSS:")][0].split()[1])
     threads = int([l for l in status.splitlines() if l.startswith("Threads:")][0].split()[1])
     fds = len(os.listdir(f"/proc/{server.pid}/fd"))
-    return {"rss_mib": rss / 1024, "threads": threads, "fds": fds}
+    stats = {"rss_mib": rss / 1024, "threads": threads, "fds": fds}
+    stats.update(server_metrics())
+    return stats
+
+def server_metrics():
+    """Streams opened and closed, open streams, sessions (the server's /metrics)."""
+    wanted = {"vpm_streams_opened_total": "opened", "vpm_streams_closed_total": "closed",
+              "vpm_open_streams": "open", "vpm_sessions": "sessions"}
+    if metrics_port is None:
+        return {}
+    try:
+        import urllib.request
+        text = urllib.request.urlopen(f"http://127.0.0.1:{metrics_port}/metrics", timeout=5).read()
+    except OSError:
+        return {}
+    out = {}
+    for line in text.decode().splitlines():
+        name = line.split("{")[0].split(" ")[0]
+        if name in wanted:
+            out[wanted[name]] = out.get(wanted[name], 0) + float(line.split()[-1])
+    return out
 
 script = os.path.join(work, "drag.json")
 with open(script, "w") as f:
@@ -205,6 +228,10 @@ stats["end"] = proc_stats()
 [t.join() for t in threads]
 time.sleep(3)
 stats["idle"] = proc_stats()
+idle = stats["idle"]
+if "opened" in idle and idle["opened"] != idle["closed"]:
+    errors.append(f"idle, every client gone: {idle['opened'] - idle['closed']:.0f} streams "
+                  "opened were never closed (a reactor that never finished)")
 server.send_signal(signal.SIGTERM)
 try:
     code = server.wait(timeout=30)
@@ -234,10 +261,14 @@ for u in planners:
     p50 = sorted(r["latency_ms"].get("p50", 0) for r in rs)[len(rs) // 2]
     p99 = max(r["latency_ms"].get("p99", 0) for r in rs)
     print(f"{u:>8} {len(rs):>6} {fps:>6.1f} {p50:>8.1f} {p99:>8.1f}")
-print(f"{'':>8} {'RSS MiB':>8} {'threads':>8} {'fds':>6}")
+print(f"{'':>8} {'RSS MiB':>8} {'threads':>8} {'fds':>6} {'streams opened/closed/open':>27} "
+      f"{'sessions':>8}")
 for k in ("before", "start", "middle", "end", "idle"):
     s = stats[k]
-    print(f"{k:>8} {s['rss_mib']:>8.1f} {s['threads']:>8} {s['fds']:>6}")
+    streams = (f"{s.get('opened', -1):.0f}/{s.get('closed', -1):.0f}/{s.get('open', -1):.0f}"
+               if "opened" in s else "-")
+    print(f"{k:>8} {s['rss_mib']:>8.1f} {s['threads']:>8} {s['fds']:>6} {streams:>27} "
+          f"{s.get('sessions', -1):>8.0f}")
 growth = stats["end"]["rss_mib"] / stats["start"]["rss_mib"] - 1
 print(f"RSS end vs start, both under load: {100 * growth:+.1f}% (goal within 10%); "
       f"server exit code {code}")

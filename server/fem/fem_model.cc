@@ -5,16 +5,13 @@
 #include <cmath>
 
 #include "server/common/clock.h"
+#include "server/common/finite_vec3.h"
 #include "server/fem/fixed_dofs.h"
 #include "server/fem/flat_tets.h"
 #include "server/mesh/tet_quality.h"
 
 namespace vpm {
 namespace {
-
-bool Finite(const glm::dvec3& v) {
-  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
 
 // #V lists: the vertices whose every DOF is fixed that share a tet with
 // the vertex, ascending.
@@ -82,9 +79,8 @@ Result<FemModel> FemModel::Create(const ProxyMesh& mesh, const glm::dvec3& box_e
 }
 
 Result<GrabInfo> FemModel::Grab(const glm::dvec3& point_mm, double radius_mm) {
-  ASSIGN_OR_RETURN(GrabInfo info,
-                   FindHandles(Positions(), deformable_, fixed_neighbours_, box_extent_mm_,
-                               point_mm, radius_mm));
+  ASSIGN_OR_RETURN(GrabInfo info, FindHandles(Positions(), deformable_, fixed_neighbours_,
+                                              box_extent_mm_, point_mm, radius_mm));
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<int32_t> dofs;
   for (int32_t v : info.handles) {
@@ -93,8 +89,7 @@ Result<GrabInfo> FemModel::Grab(const glm::dvec3& point_mm, double radius_mm) {
     }
   }
   RETURN_IF_ERROR(solver_.SetHandles(dofs));
-  info.setup_ms =
-      MsSince(t0);
+  info.setup_ms = MsSince(t0);
   handle_dofs_ = std::move(dofs);
   displacement_at_grab_ = solver_.displacement_mm();
   grab_ = info;
@@ -111,7 +106,7 @@ Status FemModel::CheckGrabbed(const char* action) const {
 
 Result<SolveStats> FemModel::Drag(const glm::dvec3& offset_mm) {
   RETURN_IF_ERROR(CheckGrabbed("drag"));
-  if (!Finite(offset_mm)) return absl::InvalidArgumentError("drag offset must be finite");
+  if (!IsFinite(offset_mm)) return absl::InvalidArgumentError("drag offset must be finite");
   // Fixed DOFs are 0 in every state, so the grab-time state prescribes them.
   Eigen::VectorXd prescribed = displacement_at_grab_;
   for (int32_t d : handle_dofs_) prescribed[d] = displacement_at_grab_[d] + offset_mm[d % 3];
@@ -121,7 +116,7 @@ Result<SolveStats> FemModel::Drag(const glm::dvec3& offset_mm) {
 
 Result<SolveStats> FemModel::Pull(const glm::dvec3& force_n) {
   RETURN_IF_ERROR(CheckGrabbed("pull"));
-  if (!Finite(force_n)) return absl::InvalidArgumentError("pull force must be finite");
+  if (!IsFinite(force_n)) return absl::InvalidArgumentError("pull force must be finite");
   const Eigen::VectorXd prescribed = Eigen::VectorXd::Zero(3 * vertex_count());
   Eigen::VectorXd force = Eigen::VectorXd::Zero(3 * vertex_count());
   const double share = 1.0 / static_cast<double>(grab_.handles.size());

@@ -2,12 +2,10 @@
 
 #include <cmath>
 
+#include "server/common/finite_vec3.h"
+
 namespace vpm {
 namespace {
-
-bool Finite(const glm::dvec3& v) {
-  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
 
 // The half space dot(n, x) >= d of world space, in physical space: x = o + D p
 // gives dot(D^T n, p) >= d - dot(n, o); D is orthonormal, so D^T n stays unit.
@@ -15,8 +13,7 @@ glm::dvec4 ToPhysical(const glm::dvec3& normal_world, double offset_mm,
                       const VolumeGeometry& geometry) {
   const glm::dvec3 n = glm::normalize(normal_world);
   const double d = offset_mm / glm::length(normal_world);
-  return glm::dvec4(glm::transpose(geometry.direction) * n,
-                    d - glm::dot(n, geometry.origin_mm));
+  return glm::dvec4(glm::transpose(geometry.direction) * n, d - glm::dot(n, geometry.origin_mm));
 }
 
 // ClipRayInterval in float or double; `parallel`: |dot(n, dir)| below which
@@ -49,7 +46,7 @@ Status ValidateClipRegion(const ClipRegion& region) {
   if (region.crop) {
     count += 6;
     const CropBox& box = *region.crop;
-    if (!Finite(box.lo_mm) || !Finite(box.hi_mm)) {
+    if (!IsFinite(box.lo_mm) || !IsFinite(box.hi_mm)) {
       return absl::InvalidArgumentError("crop box: corners must be finite numbers (mm)");
     }
     for (int a = 0; a < 3; ++a) {
@@ -62,7 +59,7 @@ Status ValidateClipRegion(const ClipRegion& region) {
   }
   for (size_t i = 0; i < region.planes.size(); ++i) {
     const ClipPlane& plane = region.planes[i];
-    if (!Finite(plane.normal) || !std::isfinite(plane.offset_mm)) {
+    if (!IsFinite(plane.normal) || !std::isfinite(plane.offset_mm)) {
       return absl::InvalidArgumentError(
           StrCat("clip plane ", i + 1, ": normal and offset must be finite numbers"));
     }
@@ -71,8 +68,8 @@ Status ValidateClipRegion(const ClipRegion& region) {
     }
   }
   if (count > kMaxClipPlanes) {
-    return absl::InvalidArgumentError(StrCat(count, " clip planes (a crop box counts 6): at most ",
-                                             kMaxClipPlanes));
+    return absl::InvalidArgumentError(
+        StrCat(count, " clip planes (a crop box counts 6): at most ", kMaxClipPlanes));
   }
   return absl::OkStatus();
 }
@@ -94,8 +91,8 @@ std::vector<glm::dvec4> ClipPlanesInPhysical(const ClipRegion& region,
   return out;
 }
 
-void ClipRayInterval(std::span<const glm::vec4> planes, const glm::vec3& eye,
-                     const glm::vec3& dir, float& t_near, float& t_far) {
+void ClipRayInterval(std::span<const glm::vec4> planes, const glm::vec3& eye, const glm::vec3& dir,
+                     float& t_near, float& t_far) {
   ClipInterval(planes, eye, dir, 1e-20f, t_near, t_far);
 }
 

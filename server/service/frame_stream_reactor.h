@@ -48,10 +48,22 @@ class FrameStreamReactor : public Reactor,
     if (auto s = stream()) s->OnWriteDone(ok);
   }
   void OnCancel() override {
-    if (auto s = stream()) {
+    // Decided under the lock that StartStream takes: either the stream is
+    // installed (and finishes the call), or the call is finished here and
+    // no stream will ever be started on it. (Read and decided apart, a
+    // stream started between the two would write to a finished call, which
+    // then never completes and holds the server's shutdown.)
+    std::shared_ptr<FrameStream> s;
+    bool finish_here = false;
+    {
+      std::lock_guard lock(mutex_);
+      s = stream_;
+      if (!s && !finished_) finish_here = finished_ = true;
+    }
+    if (s) {
       s->Finish(grpc::Status::CANCELLED);
-    } else {
-      FinishStream(grpc::Status::CANCELLED);
+    } else if (finish_here) {
+      FinishClaimed(grpc::Status::CANCELLED);
     }
   }
   void OnDone() override {
@@ -70,8 +82,7 @@ class FrameStreamReactor : public Reactor,
       if (finished_) return;
       finished_ = true;
     }
-    service_->metrics->Request(method_, StatusCodeName(status.error_code()), user_);
-    this->Finish(status);
+    FinishClaimed(status);
   }
 
  protected:
@@ -126,6 +137,12 @@ class FrameStreamReactor : public Reactor,
     }
     stream->Attach();
     return true;
+  }
+
+  // Counts and finishes the call; the caller has set finished_.
+  void FinishClaimed(const grpc::Status& status) {
+    service_->metrics->Request(method_, StatusCodeName(status.error_code()), user_);
+    this->Finish(status);
   }
 
   std::shared_ptr<FrameStream> stream() const {

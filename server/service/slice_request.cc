@@ -5,14 +5,11 @@
 #include <limits>
 
 #include "proto/vec3_convert.h"
+#include "server/common/finite_vec3.h"
 #include "server/raycast/frame_encoder.h"
 
 namespace vpm::service {
 namespace {
-
-bool Finite(const glm::dvec3& v) {
-  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
 
 Result<SliceOrientation> OrientationFromProto(v2::SliceOrientation o, std::string_view path) {
   switch (o) {
@@ -79,7 +76,7 @@ Status PlacePoint(const v2::SliceSpec& spec, const Volume& volume, std::string_v
   }
   if (spec.has_point_lps_mm()) {
     const glm::dvec3 p = FromProto(spec.point_lps_mm());
-    if (!Finite(p)) {
+    if (!IsFinite(p)) {
       return absl::InvalidArgumentError(StrCat(path, ".point_lps_mm: not finite"));
     }
     out->point_world_mm = p;
@@ -101,7 +98,7 @@ Result<SliceRequest> ToSliceRequest(const v2::SliceSpec& spec, const Volume& vol
   RETURN_IF_ERROR(PlacePoint(spec, volume, path, &out));
   if (out.orientation == SliceOrientation::kOblique) {
     const glm::dvec3 n = FromProto(spec.normal());
-    if (!Finite(n) || !(glm::length(n) > 1e-9)) {
+    if (!IsFinite(n) || !(glm::length(n) > 1e-9)) {
       return absl::InvalidArgumentError(
           StrCat(path, ".normal: an oblique plane needs a finite, non-zero normal (world LPS)"));
     }

@@ -194,9 +194,16 @@ void UploadVolumeReactor::OnReadDone(bool ok) {
       if (finished_) return;
       completing_ = true;
     }
-    if (!service_->request_pool->Post([self = shared_from_this()] { self->Complete(); })) {
-      FinishOnce(absl::UnavailableError("the server is shutting down"));
-    }
+    // A job dropped unrun (the server stopping) still answers the call:
+    // OnCancel leaves a completing upload to this job.
+    auto self = shared_from_this();
+    Status queued = service_->request_pool->Submit(Job{
+        .lane = "",
+        .run = [self] { self->Complete(); },
+        .drop = [self] {
+          self->FinishOnce(absl::UnavailableError("the server shut down before the upload's turn"));
+        }});
+    if (!queued.ok()) FinishOnce(queued);
     return;
   }
   Status status;

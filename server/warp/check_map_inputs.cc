@@ -2,14 +2,9 @@
 
 #include <cmath>
 
+#include "server/common/finite_vec3.h"
+
 namespace vpm {
-namespace {
-
-bool Finite(const glm::dvec3& p) {
-  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-}
-
-}  // namespace
 
 Status CheckMapMesh(std::span<const glm::dvec3> rest_mm, std::span<const glm::dvec3> deformed_mm,
                     std::span<const std::array<int32_t, 4>> tets) {
@@ -22,9 +17,9 @@ Status CheckMapMesh(std::span<const glm::dvec3> rest_mm, std::span<const glm::dv
     return absl::InvalidArgumentError("backward map: more than 2^31 - 1 vertices or tets");
   }
   for (size_t v = 0; v < rest_mm.size(); ++v) {
-    if (!Finite(rest_mm[v]) || !Finite(deformed_mm[v])) {
+    if (!IsFinite(rest_mm[v]) || !IsFinite(deformed_mm[v])) {
       return absl::InvalidArgumentError(StrCat("backward map: vertex ", v, " has a non-finite ",
-                                               Finite(rest_mm[v]) ? "deformed" : "rest",
+                                               IsFinite(rest_mm[v]) ? "deformed" : "rest",
                                                " position"));
     }
   }

@@ -17,6 +17,7 @@
 #include <thread>
 #include <vector>
 
+#include "client/cli/closed_loop_drag.h"
 #include "tests/service/service_test_util.h"
 
 namespace vpm::service::testing {
@@ -24,30 +25,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-class RenderStormTest : public ServiceTest {
- protected:
-  // A closed-loop drag (one drag event per frame read) for `seconds` on
-  // `stream`, which is already grabbing. Returns the frames received;
-  // `longest_wait_s` grows to the longest wait for one frame.
-  static int DragFor(grpc::ClientReaderWriter<v2::InteractRequest, v2::Frame>* stream,
-                     double seconds, uint64_t* sequence, double* longest_wait_s) {
-    int frames = 0;
-    const auto end = Clock::now() + std::chrono::duration<double>(seconds);
-    v2::Frame frame;
-    while (Clock::now() < end) {
-      v2::InteractRequest drag;
-      drag.mutable_event()->set_sequence(++*sequence);
-      *drag.mutable_event()->mutable_drag()->mutable_offset_mm() =
-          V(3.0 * std::sin(0.3 * double(*sequence)), 0, 0);
-      const auto sent = Clock::now();
-      if (!stream->Write(drag) || !stream->Read(&frame)) break;
-      *longest_wait_s = std::max(*longest_wait_s,
-                                 std::chrono::duration<double>(Clock::now() - sent).count());
-      ++frames;
-    }
-    return frames;
-  }
-};
+using RenderStormTest = ServiceTest;
 
 TEST_F(RenderStormTest, ExpiredRenderStormRunsAlmostNoneAndNeverStallsTheDrag) {
   const v2::VolumeInfo volume = LoadPhantom();
@@ -67,8 +45,7 @@ TEST_F(RenderStormTest, ExpiredRenderStormRunsAlmostNoneAndNeverStallsTheDrag) {
   v2::Frame frame;
   ASSERT_TRUE(stream->Read(&frame));
   uint64_t sequence = 1;
-  double warm_up_wait_s = 0;
-  DragFor(stream.get(), 0.5, &sequence, &warm_up_wait_s);
+  cli::DragFor(stream.get(), 0.5, &sequence);
 
   // The storm: 2,000 calls over about 4 s, each with a 1 ms deadline, from a
   // second channel (another connection of the same client address).
@@ -111,7 +88,11 @@ TEST_F(RenderStormTest, ExpiredRenderStormRunsAlmostNoneAndNeverStallsTheDrag) {
   while (!storming) std::this_thread::yield();
   int storm_frames = 0;
   double longest_wait_s = 0;
-  while (storming) storm_frames += DragFor(stream.get(), 0.25, &sequence, &longest_wait_s);
+  while (storming) {
+    const cli::ClosedLoopDrag drag = cli::DragFor(stream.get(), 0.25, &sequence);
+    storm_frames += drag.frames;
+    longest_wait_s = std::max(longest_wait_s, drag.longest_wait_s);
+  }
   storm.join();
   const auto wait_end = Clock::now() + std::chrono::seconds(30);
   while (answered < kCalls && Clock::now() < wait_end) {
