@@ -82,6 +82,9 @@ def server_metrics():
         name = line.split("{")[0].split(" ")[0]
         if name in wanted:
             out[wanted[name]] = out.get(wanted[name], 0) + float(line.split()[-1])
+        elif name == "vpm_unary_calls_in_flight" and float(line.split()[-1]) != 0:
+            method = line.split('method="')[1].split('"')[0]
+            out.setdefault("unary_in_flight", {})[method] = float(line.split()[-1])
     return out
 
 script = os.path.join(work, "drag.json")
@@ -108,8 +111,12 @@ def run(user, args, timeout=120, expect=()):
         with lock:
             done[what] = done.get(what, 0) + 1
     else:
-        text = (p.stderr or p.stdout).strip().splitlines()
-        text = text[-1] if text else f"exit {p.returncode}"
+        lines = (p.stderr or p.stdout).strip().splitlines()
+        text = lines[-1] if lines else f"exit {p.returncode}"
+        # A play that lost its session says why first ("session S lost (CODE: why)").
+        lost = [l for l in lines if " lost (" in l]
+        if lost and lost[0] != text:
+            text += f" [{lost[0]}]"
         with lock:
             code = next((e for e in expect if e in text), None)
             if code:
@@ -232,6 +239,10 @@ idle = stats["idle"]
 if "opened" in idle and idle["opened"] != idle["closed"]:
     errors.append(f"idle, every client gone: {idle['opened'] - idle['closed']:.0f} streams "
                   "opened were never closed (a reactor that never finished)")
+if idle.get("unary_in_flight"):
+    errors.append(f"idle, every client gone: unary calls never answered: {idle['unary_in_flight']}")
+if idle.get("sessions", 0) > 0:
+    errors.append(f"idle, every client gone: {idle['sessions']:.0f} sessions left open")
 server.send_signal(signal.SIGTERM)
 try:
     code = server.wait(timeout=30)

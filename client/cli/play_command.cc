@@ -55,7 +55,8 @@ Result<std::string> Reopen(const ServerConnection& s, const std::string& source)
   }
 }
 
-// Appends a segment's frames (times shifted by offset_ms) and counts.
+// Appends a segment's frames (times shifted by offset_ms), event latencies
+// and counts.
 void Append(const PlayResult& segment, double offset_ms, PlayResult* all) {
   for (FrameRecord f : segment.frames) {
     f.received_ms += offset_ms;
@@ -65,6 +66,8 @@ void Append(const PlayResult& segment, double offset_ms, PlayResult* all) {
     all->first_frame_ms = segment.first_frame_ms + offset_ms;
   }
   all->events_sent += segment.events_sent;
+  all->event_latency_ms.insert(all->event_latency_ms.end(), segment.event_latency_ms.begin(),
+                               segment.event_latency_ms.end());
   all->status = segment.status;
 }
 
@@ -154,11 +157,16 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
   result.duration_ms = MsBetween(play_start, SteadyClock::now());
   session_id = options.session_id;
   if (opened_here) {
-    // The session this command opened goes with it, whatever the outcome.
-    v2::CloseSessionRequest close;
-    close.set_session_id(session_id);
-    v2::CloseSessionResponse closed;
-    (void)s.stub().CloseSession(s.Context().get(), close, &closed);
+    // The sessions this command opened go with it, whatever the outcome:
+    // every one, not only the last (a session given up as lost may still
+    // exist, on this replica or another; closing one that is gone is
+    // NOT_FOUND, which changes nothing).
+    for (const std::string& id : sessions) {
+      v2::CloseSessionRequest close;
+      close.set_session_id(id);
+      v2::CloseSessionResponse closed;
+      (void)s.stub().CloseSession(s.Context().get(), close, &closed);
+    }
   }
   RETURN_IF_ERROR(result.status);
   RETURN_IF_ERROR(write_status);

@@ -16,8 +16,8 @@ Status FairJobQueue::Push(Job&& job, std::vector<Job>* dropped) {
   auto full = [&] {
     auto it = lanes_.find(job.lane);
     const int64_t in_lane = it == lanes_.end() ? 0 : static_cast<int64_t>(it->second.size());
-    return (limits_.max_per_lane > 0 && in_lane >= limits_.max_per_lane) ||
-           (limits_.max_total > 0 && size_ >= limits_.max_total);
+    return job.capped && ((limits_.max_per_lane > 0 && in_lane >= limits_.max_per_lane) ||
+                          (limits_.max_total > 0 && size_ >= limits_.max_total));
   };
   if (full()) {
     for (auto it = lanes_.begin(); it != lanes_.end();) {

@@ -2,7 +2,10 @@
 // user for that user's unary calls), and the lanes take turns, so one
 // client's burst of calls waits behind its own lane and never starves
 // another's stream. Bounded: a lane and the whole queue have caps, and a
-// job refused there gets a retry hint. Jobs whose caller is gone (cancelled,
+// job refused there gets a retry hint. The server's own work for what it
+// has already admitted (a stream's events and frames, its still check, an
+// upload's completion) is bounded by the streams that exist and is never
+// refused for room: refusing it would leave an admitted call unanswered. Jobs whose caller is gone (cancelled,
 // past its deadline) are purged to make room before anything is refused.
 // Not thread-safe: the pool holds its mutex around every call.
 #pragma once
@@ -29,6 +32,9 @@ struct Job {
   // Optional: called (without the lock) instead of `run` when the job is
   // dropped: purged as gone, or still queued when the pool stops.
   std::function<void()> drop;
+  // False for the server's own work on admitted calls: counted, never
+  // refused by the caps (callers' requests keep the default, true).
+  bool capped = true;
 };
 
 class FairJobQueue {

@@ -274,7 +274,8 @@ bool FrameStream::PostToPool(std::function<void()> task) {
   // every user's unary calls, however many of those are queued.
   return service_->render_pool
       ->Submit(Job{.lane = StrCat("stream:", reinterpret_cast<uintptr_t>(this)),
-                   .run = std::move(task)})
+                   .run = std::move(task),
+                   .capped = false})
       .ok();
 }
 

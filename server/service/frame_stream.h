@@ -90,7 +90,9 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   FrameStream(ServiceContext* service, std::shared_ptr<Session> session,
               StreamSettings settings, FrameSink* sink, const Options& options);
   void ApplyQueued();
-  // Runs `task` on the render pool in this stream's lane; false when refused.
+  // Runs `task` on the render pool in this stream's lane (uncapped: an
+  // admitted stream's work is never refused for room); false only once the
+  // pool is shutting down.
   bool PostToPool(std::function<void()> task);
   void ScheduleLocked();
   void RenderNow(std::chrono::steady_clock::time_point queued_at);

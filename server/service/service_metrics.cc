@@ -72,6 +72,8 @@ Result<std::unique_ptr<ServiceMetrics>> ServiceMetrics::Create(const Options& op
                           .Help("Interact and Watch streams by user").Register(r);
   m->open_streams_ = &prometheus::BuildGauge().Name("vpm_open_streams")
                           .Help("Frame streams registered now").Register(r).Add({});
+  m->unary_in_flight_ = &prometheus::BuildGauge().Name("vpm_unary_calls_in_flight")
+                             .Help("Unary calls started and not yet answered").Register(r);
   m->temp_files_ = &prometheus::BuildGauge().Name("vpm_upload_temp_files")
                         .Help("Temporary files of uploads on disk now").Register(r).Add({});
   m->threads_ = &prometheus::BuildGauge().Name("vpm_process_threads")
@@ -100,6 +102,11 @@ void ServiceMetrics::Request(const std::string& method, const char* code,
   const prometheus::Labels labels{{"method", method}, {"code", code}, {"user", UserLabel(user)}};
   requests_->Add(labels).Increment();
   if (std::string_view(code) != "OK") errors_->Add(labels).Increment();
+}
+
+void ServiceMetrics::UnaryInFlight(const char* method, int delta) {
+  unary_in_flight_->Add({{"method", method}}).Increment(delta);
+  unary_in_flight_total_ += delta;
 }
 
 double ServiceMetrics::requests(const std::string& method, const std::string& code,

@@ -11,6 +11,8 @@
 //   vpm_volumes_evicted_total               idle volumes evicted to make room
 //   vpm_streams_opened_total, vpm_streams_closed_total (equal when idle)
 //   vpm_open_streams                       frame streams registered now
+//   vpm_unary_calls_in_flight{method}      unary calls started and not yet answered
+//                                          (0 when idle: each is answered once)
 //   vpm_upload_temp_files                  uploads' temporary files on disk now
 //   vpm_process_threads, vpm_process_open_fds, vpm_process_resident_bytes
 //                                          read from /proc/self at each scrape
@@ -60,6 +62,8 @@ class ServiceMetrics {
   void VolumeEvicted();
   void StreamOpened();
   void StreamClosed();
+  // A unary call started (+1) or was answered (-1).
+  void UnaryInFlight(const char* method, int delta);
 
   // Counters for tests and the shutdown log.
   double streams_opened() const { return streams_opened_->Value(); }
@@ -70,6 +74,8 @@ class ServiceMetrics {
   double requests(const std::string& method, const std::string& code,
                   const std::string& user = "") const;
   double streams_closed() const { return streams_closed_->Value(); }
+  // Unary calls started and not yet answered, all methods.
+  int64_t unary_in_flight() const { return unary_in_flight_total_.load(); }
   double superseded() const { return superseded_->Value(); }
   double frames() const { return frames_->Value(); }
   // The text exposition format, as /metrics serves it (gauges read at
@@ -101,6 +107,8 @@ class ServiceMetrics {
   prometheus::Family<prometheus::Gauge>* user_sessions_ = nullptr;
   prometheus::Family<prometheus::Gauge>* user_streams_ = nullptr;
   prometheus::Gauge* open_streams_ = nullptr;
+  prometheus::Family<prometheus::Gauge>* unary_in_flight_ = nullptr;
+  std::atomic<int64_t> unary_in_flight_total_{0};
   prometheus::Gauge* temp_files_ = nullptr;
   prometheus::Gauge* threads_ = nullptr;
   prometheus::Gauge* open_fds_ = nullptr;

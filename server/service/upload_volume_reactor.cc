@@ -202,7 +202,8 @@ void UploadVolumeReactor::OnReadDone(bool ok) {
         .run = [self] { self->Complete(); },
         .drop = [self] {
           self->FinishOnce(absl::UnavailableError("the server shut down before the upload's turn"));
-        }});
+        },
+        .capped = false});
     if (!queued.ok()) FinishOnce(queued);
     return;
   }

@@ -23,6 +23,7 @@ grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context
                                             const char* method, WorkerPool* pool,
                                             std::function<Status(const std::string& user)> fn) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  service_->metrics->UnaryInFlight(method, +1);  // -1 in Done
   Result<std::string> authenticated = service_->auth->Authenticate(*context);
   if (!authenticated.ok()) {
     Done(reactor, method, authenticated.status(), "");
@@ -104,6 +105,7 @@ void VpmService::Done(grpc::ServerUnaryReactor* reactor, const char* method,
                       const Status& status, const std::string& user) {
   const grpc::Status g = ToGrpcStatus(status);
   service_->metrics->Request(method, StatusCodeName(g.error_code()), user);
+  service_->metrics->UnaryInFlight(method, -1);
   reactor->Finish(g);
 }
 

@@ -43,7 +43,7 @@ Status WorkerPool::Submit(Job job) {
 }
 
 bool WorkerPool::Post(std::function<void()> task) {
-  return Submit(Job{.lane = "", .run = std::move(task)}).ok();
+  return Submit(Job{.lane = "", .run = std::move(task), .capped = false}).ok();
 }
 
 bool WorkerPool::PostAfter(std::chrono::milliseconds delay, std::function<void()> task) {
@@ -93,8 +93,12 @@ void WorkerPool::Run() {
   while (true) {
     const auto now = std::chrono::steady_clock::now();
     while (!delayed_.empty() && delayed_.begin()->first <= now) {
-      std::vector<Job> dropped;  // lane "" has no cap: nothing is refused
-      (void)queue_.Push(Job{.lane = "", .run = std::move(delayed_.begin()->second)}, &dropped);
+      // Uncapped: a due task is never refused (a lost still check would
+      // leave its stream without its still frame for good).
+      std::vector<Job> dropped;
+      const Status pushed = queue_.Push(
+          Job{.lane = "", .run = std::move(delayed_.begin()->second), .capped = false}, &dropped);
+      (void)pushed;  // uncapped: always OK
       delayed_.erase(delayed_.begin());
     }
     Job job;

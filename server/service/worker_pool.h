@@ -38,7 +38,8 @@ class WorkerPool {
   // Queues `job`. Unavailable once shutting down; ResourceExhausted when its
   // lane or the pool is full (RetryAfterMs() says when to come back).
   Status Submit(Job job);
-  // A job in lane "" without drop handling; false once shutting down or full.
+  // The server's own task (uncapped, lane "", no drop handling): false
+  // only once shutting down. Delayed tasks are queued the same way when due.
   bool Post(std::function<void()> task);
   bool PostAfter(std::chrono::milliseconds delay, std::function<void()> task);
   // Stops taking jobs, runs the queue until `deadline`, drops what is left

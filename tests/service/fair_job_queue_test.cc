@@ -98,5 +98,56 @@ TEST(WorkerPool, ShutdownWithTimeLeftRunsEverythingQueued) {
   EXPECT_EQ(ran.load(), 50);
 }
 
+// The server's own work on admitted calls (capped = false) is never refused:
+// a refused still check or stream start would leave an admitted call
+// without its answer. It still counts in the queue's size, so callers'
+// requests meet the caps sooner.
+TEST(FairJobQueue, OwnWorkIsNeverRefusedByTheCaps) {
+  FairJobQueue queue({.max_per_lane = 2, .max_total = 3});
+  std::vector<std::string> log;
+  std::vector<Job> dropped;
+  for (int i = 0; i < 10; ++i) {
+    ASSERT_TRUE(queue.Push(Job{.lane = "", .run = [] {}, .capped = false}, &dropped).ok());
+  }
+  EXPECT_EQ(queue.size(), 10);
+  EXPECT_TRUE(absl::IsResourceExhausted(queue.Push(Tagged("user", &log, "u"), &dropped)));
+  EXPECT_TRUE(dropped.empty());
+}
+
+// Delayed tasks and Post()s run however many callers' jobs fill the queue
+// (lane "" was capped like a caller's lane, and due tasks beyond the cap
+// were lost).
+TEST(WorkerPool, DueTasksRunWhenTheQueueIsFull) {
+  auto pool = WorkerPool::Create(
+      {.threads = 1, .name = "test", .limits = {.max_per_lane = 4, .max_total = 8}});
+  ASSERT_TRUE(pool.ok());
+  std::atomic<bool> holding{false}, release{false};
+  std::atomic<int> ran{0};
+  ASSERT_TRUE((*pool)->Post([&] {
+    holding = true;
+    while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }));
+  while (!holding) std::this_thread::yield();
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_TRUE((*pool)->Submit(Job{.lane = "a", .run = [&] { ++ran; }}).ok());
+    ASSERT_TRUE((*pool)->Submit(Job{.lane = "b", .run = [&] { ++ran; }}).ok());
+  }
+  EXPECT_TRUE(absl::IsResourceExhausted((*pool)->Submit(Job{.lane = "c", .run = [] {}})));
+  for (int i = 0; i < 20; ++i) {
+    ASSERT_TRUE((*pool)->Post([&] { ++ran; }));
+    ASSERT_TRUE((*pool)->PostAfter(std::chrono::milliseconds(1), [&] { ++ran; }));
+  }
+  // The delayed tasks fall due while the worker is held and the queue full.
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  release = true;
+  // (Shutdown drops delayed tasks: wait for them to run first.)
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (ran < 8 + 20 + 20 && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  EXPECT_EQ(ran.load(), 8 + 20 + 20);
+  EXPECT_EQ((*pool)->queued(), 0);
+}
+
 }  // namespace
 }  // namespace vpm::service

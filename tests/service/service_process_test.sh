@@ -207,6 +207,35 @@ elif [ "$(sessions_now)" != "$sessions_before" ]; then
 else
   pass "interrupted play: CANCELLED, its session closed"
 fi
+# A whole play: its report counts a latency for every event it sent (event
+# to the first frame that shows it), and it closes its session.
+python3 - "$tmp/short.json" <<'EOF2'
+import json, sys
+json.dump({"volume": "phantom:abdomen?size=48", "settings": {"width": 64, "height": 64},
+           "interval_ms": 20, "steps": [{"grab": {"landmark": "left_renal_artery"}},
+                                        {"drag": {"to_mm": [0, 0, 6], "steps": 10}},
+                                        {"release": {}}]},
+          open(sys.argv[1], "w"))
+EOF2
+if ! "$vpm" --server "$addr" --token secret play "$tmp/short.json" --report "$tmp/play.json" \
+    > "$tmp/play.out" 2> "$tmp/play.err"; then
+  fail "vpm play: $(cat "$tmp/play.err")"
+elif ! python3 - "$tmp/play.json" <<'EOF2'
+import json, sys
+r = json.load(open(sys.argv[1]))
+lat = r["latency_ms"]
+# settings + grab + 10 drags + release = 13 events, each shown by some frame
+if lat["count"] != r["events"] or r["events"] != 13 or not lat["p50"] > 0:
+    print(f"events {r['events']}, latencies {lat}")
+    sys.exit(1)
+EOF2
+then
+  fail "vpm play report: an event latency is missing"
+elif [ "$(sessions_now)" != "$sessions_before" ]; then
+  fail "vpm play left its session open"
+else
+  pass "vpm play: a latency per event in its report, its session closed"
+fi
 # The offline commands with --server: the same mesh as offline, a frame
 # rendered after a drag.
 src="phantom:abdomen?size=48"
