@@ -92,14 +92,23 @@ void WorkerPool::Run() {
   std::unique_lock lock(mutex_);
   while (true) {
     const auto now = std::chrono::steady_clock::now();
+    std::vector<Job> purged;
     while (!delayed_.empty() && delayed_.begin()->first <= now) {
       // Uncapped: a due task is never refused (a lost still check would
-      // leave its stream without its still frame for good).
-      std::vector<Job> dropped;
+      // leave its stream without its still frame for good), and it purges
+      // nothing. (When lane "" was capped, a due task met a full queue,
+      // purged the gone callers' jobs and never dropped them: their calls
+      // were never answered, and gRPC's shutdown waited for them forever.)
       const Status pushed = queue_.Push(
-          Job{.lane = "", .run = std::move(delayed_.begin()->second), .capped = false}, &dropped);
+          Job{.lane = "", .run = std::move(delayed_.begin()->second), .capped = false}, &purged);
       (void)pushed;  // uncapped: always OK
       delayed_.erase(delayed_.begin());
+    }
+    if (!purged.empty()) {  // never, as above; were it to happen, each is answered
+      lock.unlock();
+      DropAll(purged);
+      lock.lock();
+      continue;
     }
     Job job;
     if (!stopping_ && queue_.Pop(&job)) {
