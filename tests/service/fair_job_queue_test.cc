@@ -128,6 +128,12 @@ TEST(WorkerPool, DueTasksRunWhenTheQueueIsFull) {
     while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }));
   while (!holding) std::this_thread::yield();
+  // A failed assertion below still releases the worker (or the pool's
+  // destructor would wait for it forever).
+  struct ReleaseOnExit {
+    std::atomic<bool>* flag;
+    ~ReleaseOnExit() { *flag = true; }
+  } release_on_exit{&release};
   for (int i = 0; i < 4; ++i) {
     ASSERT_TRUE((*pool)->Submit(Job{.lane = "a", .run = [&] { ++ran; }}).ok());
     ASSERT_TRUE((*pool)->Submit(Job{.lane = "b", .run = [&] { ++ran; }}).ok());
@@ -147,6 +153,48 @@ TEST(WorkerPool, DueTasksRunWhenTheQueueIsFull) {
   }
   EXPECT_EQ(ran.load(), 8 + 20 + 20);
   EXPECT_EQ((*pool)->queued(), 0);
+}
+
+// Every job submitted is run or dropped (its call answered), whatever falls
+// due meanwhile: the churn soak's shutdown hang was gone callers' jobs that a
+// due delayed task purged from a full queue and nobody dropped.
+TEST(WorkerPool, EveryJobIsRunOrDroppedWhileDelayedTasksFallDue) {
+  auto pool = WorkerPool::Create(
+      {.threads = 1, .name = "test", .limits = {.max_per_lane = 2, .max_total = 4}});
+  ASSERT_TRUE(pool.ok());
+  std::atomic<bool> holding{false}, release{false};
+  std::atomic<int> ran{0}, dropped{0}, delayed_ran{0};
+  ASSERT_TRUE((*pool)->Post([&] {
+    holding = true;
+    while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }));
+  while (!holding) std::this_thread::yield();
+  // A failed assertion below still releases the worker (or the pool's
+  // destructor would wait for it forever).
+  struct ReleaseOnExit {
+    std::atomic<bool>* flag;
+    ~ReleaseOnExit() { *flag = true; }
+  } release_on_exit{&release};
+  // Two callers' jobs whose callers are gone (cancelled while queued).
+  for (const char* lane : {"a", "b"}) {
+    ASSERT_TRUE((*pool)
+                    ->Submit(Job{.lane = lane,
+                                 .run = [&] { ++ran; },
+                                 .gone = [] { return true; },
+                                 .drop = [&] { ++dropped; }})
+                    .ok());
+  }
+  for (int i = 0; i < 6; ++i) {
+    ASSERT_TRUE((*pool)->PostAfter(std::chrono::milliseconds(1), [&] { ++delayed_ran; }));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  release = true;
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while ((delayed_ran < 6 || ran + dropped < 2) && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  EXPECT_EQ(delayed_ran.load(), 6);
+  EXPECT_EQ(ran + dropped, 2) << "a job neither run nor dropped: its call is never answered";
 }
 
 }  // namespace
