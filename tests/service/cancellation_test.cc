@@ -2,12 +2,12 @@
 // Render calls whose deadlines pass in the queue does not occupy the render
 // workers, and the server answers the next call at once.
 #include <condition_variable>
-#include <future>
 #include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
 
+#include "tests/service/held_worker.h"
 #include "tests/service/service_test_util.h"
 
 namespace vpm::service::testing {
@@ -20,33 +20,6 @@ class CancellationTest : public ServiceTest {
     options.render_threads = 1;  // one queue, served in order
     StartServer(options);
   }
-};
-
-// Holds one worker of a pool busy until Release() (or destruction, so a
-// failed assertion never leaves the server unable to stop).
-class HeldWorker {
- public:
-  explicit HeldWorker(WorkerPool& pool) : released_(release_.get_future().share()) {
-    auto holding = std::make_shared<std::promise<void>>();
-    std::future<void> held = holding->get_future();
-    posted_ = pool.Post([released = released_, holding] {
-      holding->set_value();
-      released.wait();
-    });
-    if (posted_) held.wait();
-  }
-  ~HeldWorker() { Release(); }
-  bool posted() const { return posted_; }
-  void Release() {
-    if (!done_) release_.set_value();
-    done_ = true;
-  }
-
- private:
-  std::promise<void> release_;
-  std::shared_future<void> released_;
-  bool posted_ = false;
-  bool done_ = false;
 };
 
 TEST_F(CancellationTest, RendersPastTheirDeadlineAreDroppedBeforeTheyRun) {

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "server/service/worker_pool.h"
+#include "tests/service/held_worker.h"
 
 namespace vpm::service {
 namespace {
@@ -121,19 +122,9 @@ TEST(WorkerPool, DueTasksRunWhenTheQueueIsFull) {
   auto pool = WorkerPool::Create(
       {.threads = 1, .name = "test", .limits = {.max_per_lane = 4, .max_total = 8}});
   ASSERT_TRUE(pool.ok());
-  std::atomic<bool> holding{false}, release{false};
   std::atomic<int> ran{0};
-  ASSERT_TRUE((*pool)->Post([&] {
-    holding = true;
-    while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }));
-  while (!holding) std::this_thread::yield();
-  // A failed assertion below still releases the worker (or the pool's
-  // destructor would wait for it forever).
-  struct ReleaseOnExit {
-    std::atomic<bool>* flag;
-    ~ReleaseOnExit() { *flag = true; }
-  } release_on_exit{&release};
+  testing::HeldWorker worker(**pool);
+  ASSERT_TRUE(worker.posted());
   for (int i = 0; i < 4; ++i) {
     ASSERT_TRUE((*pool)->Submit(Job{.lane = "a", .run = [&] { ++ran; }}).ok());
     ASSERT_TRUE((*pool)->Submit(Job{.lane = "b", .run = [&] { ++ran; }}).ok());
@@ -145,7 +136,7 @@ TEST(WorkerPool, DueTasksRunWhenTheQueueIsFull) {
   }
   // The delayed tasks fall due while the worker is held and the queue full.
   std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  release = true;
+  worker.Release();
   // (Shutdown drops delayed tasks: wait for them to run first.)
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while (ran < 8 + 20 + 20 && std::chrono::steady_clock::now() < end) {
@@ -162,19 +153,9 @@ TEST(WorkerPool, EveryJobIsRunOrDroppedWhileDelayedTasksFallDue) {
   auto pool = WorkerPool::Create(
       {.threads = 1, .name = "test", .limits = {.max_per_lane = 2, .max_total = 4}});
   ASSERT_TRUE(pool.ok());
-  std::atomic<bool> holding{false}, release{false};
   std::atomic<int> ran{0}, dropped{0}, delayed_ran{0};
-  ASSERT_TRUE((*pool)->Post([&] {
-    holding = true;
-    while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }));
-  while (!holding) std::this_thread::yield();
-  // A failed assertion below still releases the worker (or the pool's
-  // destructor would wait for it forever).
-  struct ReleaseOnExit {
-    std::atomic<bool>* flag;
-    ~ReleaseOnExit() { *flag = true; }
-  } release_on_exit{&release};
+  testing::HeldWorker worker(**pool);
+  ASSERT_TRUE(worker.posted());
   // Two callers' jobs whose callers are gone (cancelled while queued).
   for (const char* lane : {"a", "b"}) {
     ASSERT_TRUE((*pool)
@@ -188,7 +169,7 @@ TEST(WorkerPool, EveryJobIsRunOrDroppedWhileDelayedTasksFallDue) {
     ASSERT_TRUE((*pool)->PostAfter(std::chrono::milliseconds(1), [&] { ++delayed_ran; }));
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  release = true;
+  worker.Release();
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while ((delayed_ran < 6 || ran + dropped < 2) && std::chrono::steady_clock::now() < end) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
