@@ -128,7 +128,11 @@ void WorkerPool::Run() {
     if (delayed_.empty()) {
       wake_.wait(lock);
     } else {
-      wake_.wait_until(lock, delayed_.begin()->first);
+      // A copy: wait_until reads its time point again after waking, when
+      // the node holding it may be gone (Shutdown clears delayed_; ASan
+      // found the use after free).
+      const std::chrono::steady_clock::time_point next = delayed_.begin()->first;
+      wake_.wait_until(lock, next);
     }
   }
 }
