@@ -4,7 +4,7 @@
 // refined at the left renal artery, and for ~1,000 and ~5,000 vertices.
 //   drag_loop_bench [SOURCE] [--max-load-steps N] [--min-load-fraction F]
 //                   [--intermediate-newton N] [--no-barrier] [--max-vertices N]
-//                   [--steps]
+//                   [--steps] [--map-tolerance MM]
 // (bench/fem_flags.h); --steps prints every step's FEM work and stage times.
 #include <cstdio>
 #include <string>
@@ -78,12 +78,17 @@ glm::dvec3 DragOffset(int step) { return glm::dvec3(0.0, 0.0, 1.2 * step); }
 // overlapped: the FEM of step N+1 runs on this thread while step N's frame
 // is cast and encoded on another (DeformableScene::PrepareRender). Returns
 // the loop's frames per second.
+// --map-tolerance MM: the backward map's move tolerance (default: the
+// interactive map's, InteractiveMapOptions; 0: exact).
+double g_map_tolerance_mm = InteractiveMapOptions().move_tolerance_mm;
+
 double RunDeferredLoop(const ProxyMesh& mesh, const Volume& volume,
                        const gpu::GpuContext& context, GpuVolume& gpu_volume,
                        VolumeRenderer& renderer, const glm::dvec3& grab,
                        const SolverOptions& solver, bool overlap) {
   DeformableScene::Options options;
   options.fem.solver = solver;
+  options.map.move_tolerance_mm = g_map_tolerance_mm;
   options.defer_map_update = true;
   auto scene = bench::Check(
       DeformableScene::Create(context, volume, gpu_volume, renderer, mesh, options), "scene");
@@ -114,6 +119,7 @@ Row RunCase(const ProxyMesh& mesh, const Volume& volume, const gpu::GpuContext& 
             const SolverOptions& solver, bool print_steps) {
   DeformableScene::Options options;
   options.fem.solver = solver;
+  options.map.move_tolerance_mm = g_map_tolerance_mm;
   auto scene = bench::Check(
       DeformableScene::Create(context, volume, gpu_volume, renderer, mesh, options), "scene");
   const auto t_grab = std::chrono::steady_clock::now();
@@ -216,6 +222,8 @@ int main(int argc, char** argv) {
       print_steps = true;
     } else if (std::string(argv[i]) == "--no-barrier") {
       flags.solver.inversion_barrier = false;
+    } else if (std::string(argv[i]) == "--map-tolerance" && i + 1 < argc) {
+      g_map_tolerance_mm = std::atof(argv[++i]);
     } else {
       source = argv[i];
     }

@@ -24,6 +24,9 @@ minimum over --reps, with the image read back (vpm's `wall`; VTK: Render()
 and glReadPixels), and process CPU ms per frame / cores, less disturbed by
 other load. Camera and geometry: the PSNR of each VTK still against vpm's
 is printed, and the PNGs of all are written to --out for looking at.
+--int16 rounds the volume to int16, as CT scanners store Hounsfield units,
+and gives both the same int16 values (vpm holds 2 bytes per voxel, VTK a
+vtkShortArray).
 
 Run under a virtual X server (VTK's OpenGL mappers need a context):
     bench/setup_peer.sh      # python3-vtk9, xvfb (apt; bench-only)
@@ -78,15 +81,36 @@ def read_nifti(path):
     return data, tuple(float(s) for s in pixdim[1:4])
 
 
+def write_int16_nifti(source, path):
+    """The float NIfTI-1 `source` rounded to int16 (clipped to its range), as
+    a CT scanner stores Hounsfield units: same header, datatype 4. Returns
+    the values as an int16 array (z, y, x)."""
+    with open(source, "rb") as f:
+        header = bytearray(f.read(352))
+        vox_offset = int(struct.unpack("<f", header[108:112])[0])
+        f.seek(0)
+        extra = f.read(vox_offset)[352:]
+    data, _ = read_nifti(source)
+    rounded = np.clip(np.round(data), -32768, 32767).astype("<i2")
+    header[70:72] = struct.pack("<h", 4)    # datatype: int16
+    header[72:74] = struct.pack("<h", 16)   # bitpix
+    header[112:120] = struct.pack("<2f", 1.0, 0.0)  # no scaling
+    with open(path, "wb") as f:
+        f.write(bytes(header) + extra + rounded.tobytes())
+    return rounded
+
+
 def vtk_image(data, spacing):
     """vtkImageData in vpm's physical voxel space: voxel (i, j, k) at
-    (i, j, k) * spacing mm, origin 0 (docs/ALGORITHM.md section 0)."""
+    (i, j, k) * spacing mm, origin 0 (docs/ALGORITHM.md section 0); float32
+    or int16 values as given."""
     nz, ny, nx = data.shape
     image = vtk.vtkImageData()
     image.SetDimensions(nx, ny, nz)
     image.SetSpacing(*spacing)
     image.SetOrigin(0.0, 0.0, 0.0)
-    scalars = numpy_support.numpy_to_vtk(data.ravel(), deep=True, array_type=vtk.VTK_FLOAT)
+    array_type = vtk.VTK_SHORT if data.dtype == np.int16 else vtk.VTK_FLOAT
+    scalars = numpy_support.numpy_to_vtk(data.ravel(), deep=True, array_type=array_type)
     scalars.SetName("values")
     image.GetPointData().SetScalars(scalars)
     return image
@@ -329,6 +353,9 @@ def main():
     ap.add_argument("--out", default="out/peer", help="frames and the exported volume")
     ap.add_argument("--sizes", default="256,512")
     ap.add_argument("--step", type=float, default=1.0, help="sample step, mm")
+    ap.add_argument("--int16", action="store_true",
+                    help="round the volume to int16, as CT scanners store it, for both "
+                         "(vpm then holds 2 bytes per voxel, VTK a vtkShortArray)")
     ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--mappers", default=",".join(MAPPERS))
     ap.add_argument("--modes", default="mip,composite")
@@ -344,12 +371,18 @@ def main():
                         args.source, volume_path], check=True, stdout=subprocess.DEVNULL)
     data, spacing = read_nifti(volume_path)
     image = vtk_image(data, spacing)
+    if args.int16:
+        int16_path = os.path.join(args.out, "volume_int16.nii")
+        rounded = write_int16_nifti(volume_path, int16_path)
+        volume_path = int16_path
+        data = rounded.astype(np.float32)
+        image = vtk_image(rounded, spacing)
     value_range = (float(data.min()), float(data.max()))
     preset = read_paraview_preset(args.tf)
     load = os.getloadavg()
     print(f"# peer benchmark: {args.source} {data.shape[2]}x{data.shape[1]}x{data.shape[0]}, "
           f"spacing {spacing[0]:.4f} {spacing[1]:.4f} {spacing[2]:.4f} mm, step {args.step} mm, "
-          f"composite: {args.tf}; VTK {vtk.vtkVersion.GetVTKVersion()}; "
+          f"{'int16' if args.int16 else 'float32'} voxels, composite: {args.tf}; VTK {vtk.vtkVersion.GetVTKVersion()}; "
           f"{os.cpu_count()} cores; load {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
 
     results = {}  # (mode, quality, size) -> {renderer: (ms, psnr or None)}

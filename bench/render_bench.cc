@@ -218,6 +218,7 @@ int main(int raw_argc, char** raw_argv) {
   auto volume = bench::Check(ReadVolume(source, {}), "reading the volume");
   auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
   auto gpu_volume = bench::Check(GpuVolume::Upload(*context, volume), "upload");
+  std::printf("volume: %s voxels\n", VoxelEncodingName(volume.encoding()));
   const gpu::GpuImage3D* volume_image = bench::Check(gpu_volume.Image(*context, volume), "image");
 
   // Identity backward map at the warp's default resolution, ceil(n / 4) per

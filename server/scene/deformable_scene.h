@@ -58,10 +58,20 @@ struct SceneView {
   bool view_cut = false;
 };
 
+// The interactive backward map: Update keeps the vertices that moved less
+// than 0.05 mm (1/20 of a voxel of a 1 mm CT) since the map was last built
+// where they were, so a drag step redoes the tets around the grab, not the
+// whole mesh that FEM moves a little everywhere (docs/WARP.md).
+inline BackwardMap::Options InteractiveMapOptions() {
+  BackwardMap::Options options;
+  options.move_tolerance_mm = 0.05;
+  return options;
+}
+
 class DeformableScene {
  public:
   struct Options {
-    BackwardMap::Options map;
+    BackwardMap::Options map = InteractiveMapOptions();
     FemOptions fem;
     // false: Drag, Pull and Release update the backward map at once (their
     // timings include it). true: they solve FEM only and mark the map stale;

@@ -114,7 +114,7 @@ Result<BackwardMap> BackwardMap::Create(const gpu::GpuContext& context,
                                    vk::BufferUsageFlagBits::eUniformTexelBuffer));
     values.push_back(std::move(slab));
   }
-  BackwardMap map(context, geometry, dims, options.eps, options.full_rebuild_moved_fraction,
+  BackwardMap map(context, geometry, dims, options,
                   Device{std::move(kernel), std::move(write_kernel), std::move(image),
                          std::move(owner), std::move(values), slab_points});
   for (auto* buffer : {&map.tets_buffer_, &map.deformed_buffer_, &map.previous_buffer_,
@@ -242,6 +242,27 @@ Result<BackwardMap::UpdateStats> BackwardMap::Apply(std::span<const glm::dvec3> 
   stats.full_rebuild =
       scope == Scope::kAll || !state_.valid || rest_mm.size() != state_.rest_mm.size() ||
       !std::equal(tets.begin(), tets.end(), state_.tets.begin(), state_.tets.end());
+  // Update with a tolerance: vertices that moved less keep the positions of
+  // the previous update, and the rest of this update sees those.
+  std::vector<glm::dvec3> held_rest, held_deformed;
+  if (!stats.full_rebuild && scope == Scope::kChanged && move_tolerance_mm_ > 0.0) {
+    held_rest.assign(rest_mm.begin(), rest_mm.end());
+    held_deformed.assign(deformed_mm.begin(), deformed_mm.end());
+    const auto within = [&](const glm::dvec3& a, const glm::dvec3& b) {
+      const glm::dvec3 d = glm::abs(a - b);
+      return std::max(d.x, std::max(d.y, d.z)) <= move_tolerance_mm_;
+    };
+    for (size_t v = 0; v < held_rest.size(); ++v) {
+      if ((rest_mm[v] != state_.rest_mm[v] || deformed_mm[v] != state_.deformed_mm[v]) &&
+          within(rest_mm[v], state_.rest_mm[v]) && within(deformed_mm[v], state_.deformed_mm[v])) {
+        held_rest[v] = state_.rest_mm[v];
+        held_deformed[v] = state_.deformed_mm[v];
+        ++stats.held_vertices;
+      }
+    }
+    rest_mm = held_rest;
+    deformed_mm = held_deformed;
+  }
   std::vector<int32_t> moved;
   if (stats.full_rebuild) {
     moved.resize(tets.size());

@@ -48,12 +48,19 @@ class BackwardMap {
     // this fraction of the tets moved: the same map, cheaper than clearing
     // nearly every tet (docs/WARP.md). 1: never (tests of the clear pass).
     double full_rebuild_moved_fraction = 0.5;
+    // Update only: a vertex whose rest and deformed positions are each
+    // within this distance (mm, per axis) of those the map was last built
+    // with keeps them; the map is then exactly that of a mesh whose vertices
+    // lie within the tolerance of the given ones, and a drag step redoes the
+    // tets near the grab instead of nearly all (docs/WARP.md). 0: exact.
+    double move_tolerance_mm = 0.0;
   };
 
   struct UpdateStats {
     bool full_rebuild = false;
     int64_t moved_tets = 0;      // tets whose corners changed (or listed by the caller)
     int64_t processed_tets = 0;  // rasterized: the moved ones and those whose boxes meet theirs
+    int64_t held_vertices = 0;   // moved by less than move_tolerance_mm: kept where they were
     double gpu_ms = 0.0;         // GPU time of the passes (timestamps; -1 without)
     std::vector<gpu::DispatchTiming> passes;  // clear (updates only), claim, write
     double copy_ms = 0.0;  // wall time of the copy of the changed box into the image
@@ -82,7 +89,10 @@ class BackwardMap {
   // boxes meet their previous boxes. UpdateListed trusts the caller's
   // `moved_tets` (indices into tets) instead: a tet not listed must have
   // the rest and deformed positions of the previous update. Rebuild redoes
-  // every tet. All three give the same map.
+  // every tet. All three give the same map (Update: with
+  // Options::move_tolerance_mm 0).
+  // UpdateStats::held_vertices counts the vertices Update kept at their
+  // previous positions (within the tolerance).
   // Errors (InvalidArgument: sizes, indices out of range, non-finite
   // positions) are returned before anything is uploaded or dispatched; the
   // map then keeps its previous content.
@@ -139,13 +149,13 @@ class BackwardMap {
   };
 
   BackwardMap(const gpu::GpuContext& context, const VolumeGeometry& geometry,
-              std::array<int64_t, 3> dims, double eps, double full_rebuild_moved_fraction,
-              Device device)
+              std::array<int64_t, 3> dims, const Options& options, Device device)
       : context_(&context),
         geometry_(geometry),
         dims_(dims),
-        eps_(eps),
-        full_rebuild_moved_fraction_(full_rebuild_moved_fraction),
+        eps_(options.eps),
+        full_rebuild_moved_fraction_(options.full_rebuild_moved_fraction),
+        move_tolerance_mm_(options.move_tolerance_mm),
         device_(std::move(device)) {}
 
   Result<UpdateStats> Apply(std::span<const glm::dvec3> rest_mm,
@@ -185,6 +195,7 @@ class BackwardMap {
   std::array<int64_t, 3> dims_;
   double eps_;
   double full_rebuild_moved_fraction_;
+  double move_tolerance_mm_;
   Device device_;
   // Grown on demand; created (1 element) with the map so every binding is
   // valid. previous_buffer_ holds the deformed positions of the last update

@@ -236,6 +236,56 @@ TEST_F(GpuTest, BackwardMap_UpdateMovingMostTetsRebuildsTheSameMap) {
   }
 }
 
+// With a move tolerance (the interactive map, DeformableScene), vertices
+// that moved less than it since the map last took them keep their old
+// positions: the map equals, bit for bit, the rebuild of the mesh at the
+// positions it holds (tracked here independently), the far vertices' small
+// moves do not list their tets, and a vertex that drifts past the tolerance
+// over several steps is taken up.
+TEST_F(GpuTest, BackwardMap_MoveToleranceHoldsSmallMovesOnly) {
+  const VolumeGeometry g = Geometry({40, 36, 30}, {1.0, 1.1, 1.3});
+  const glm::dvec3 e = g.extent_mm();
+  const WarpMesh mesh = RandomWarpMesh(150, e, 7);
+  const double tolerance = 0.05;
+  auto created = BackwardMap::Create(
+      context(), g, {.full_rebuild_moved_fraction = 1.0, .move_tolerance_mm = tolerance});
+  ASSERT_TRUE(created.ok()) << created.status();
+  BackwardMap map = std::move(*created);
+  ASSERT_TRUE(map.Update(mesh.rest_mm, mesh.rest_mm, mesh.tets).ok());
+  std::vector<glm::dvec3> held = mesh.rest_mm;  // what the map should hold
+  for (int s = 1; s <= 4; ++s) {
+    SCOPED_TRACE(::testing::Message() << "step " << s);
+    // A drag around one point, and everywhere a drift of 0.02 mm per step
+    // per axis (past the tolerance at the third step).
+    const auto dragged = Dragged(mesh, e * 0.3, 0.25 * e.x, {0.8 * s, -0.4 * s, 0.6 * s});
+    std::vector<glm::dvec3> step = dragged;
+    for (size_t v = 0; v < step.size(); ++v) {
+      if (!mesh.anchor[v]) step[v] += glm::dvec3(0.02 * s, -0.02 * s, 0.01 * s);
+    }
+    int64_t expect_held = 0;
+    for (size_t v = 0; v < step.size(); ++v) {
+      const glm::dvec3 d = glm::abs(step[v] - held[v]);
+      if (step[v] == held[v]) continue;
+      if (std::max(d.x, std::max(d.y, d.z)) <= tolerance) {
+        ++expect_held;
+      } else {
+        held[v] = step[v];
+      }
+    }
+    auto stats = map.Update(mesh.rest_mm, step, mesh.tets);
+    ASSERT_TRUE(stats.ok()) << stats.status();
+    EXPECT_FALSE(stats->full_rebuild);
+    EXPECT_EQ(stats->held_vertices, expect_held);
+    if (s % 3 != 0) {
+      EXPECT_GT(stats->held_vertices, 0);
+      EXPECT_LT(stats->processed_tets, static_cast<int64_t>(mesh.tets.size()));
+    }
+    BackwardMap full = MakeMap(context(), g, {0, 0, 0});
+    ASSERT_TRUE(full.Rebuild(mesh.rest_mm, held, mesh.tets).ok());
+    EXPECT_TRUE(BitwiseEqual(Download(map), Download(full)));
+  }
+}
+
 // Values split over 3 slabs of whole z slices (as maps over 8M points are
 // on lavapipe) give the single-buffer map bit for bit, also incrementally;
 // too many slabs are refused.
