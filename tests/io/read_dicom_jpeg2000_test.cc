@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include "server/io/decode_jpeg2000.h"
+#include "server/io/jpeg2000_frames.h"
 #include "server/io/read_dicom_series.h"
 #include "tests/io/dicom_test_util.h"
 #include "tests/io/io_test_util.h"
@@ -131,6 +132,134 @@ TEST(DicomJpeg2000, ReadsLosslessAndLossySyntaxesBitExact) {
       for (int n = 0; n < 30; ++n) EXPECT_EQ(v->voxels()[k * 30 + n], expected[n]) << k << " " << n;
     }
   }
+}
+
+// A three-frame Enhanced CT (z = 0, 1.5, 3 mm) written twice: natively,
+// and in JPEG 2000 lossless with each frame's codestream cut into
+// `pieces[f]` fragments of even length, with or without a Basic Offset
+// Table. Stored values: Samples(f, 30), 6 x 5 pixels.
+constexpr int kFrameColumns = 6, kFrameRows = 5;
+
+std::vector<testing::EnhancedFrame> ThreeFrames() {
+  return {{{0, 0, 0.0}}, {{0, 0, 1.5}}, {{0, 0, 3.0}}};
+}
+
+void WriteNativeFrames(const std::filesystem::path& path) {
+  DicomSliceSpec s;
+  s.rows = kFrameRows;
+  s.columns = kFrameColumns;
+  DcmFileFormat file;
+  DcmDataset& ds = *file.getDataset();
+  ASSERT_TRUE(testing::FillEnhancedCt(ds, s, ThreeFrames(), false));
+  std::vector<Uint16> pixels;
+  for (int f = 0; f < 3; ++f) {
+    for (int32_t v : Samples(f, kFrameColumns * kFrameRows)) pixels.push_back(static_cast<Uint16>(v));
+  }
+  ds.putAndInsertUint16Array(DCM_PixelData, pixels.data(), pixels.size());
+  ASSERT_TRUE(file.saveFile(path.c_str(), EXS_LittleEndianExplicit).good());
+}
+
+void WriteFragmentedJ2kFrames(const std::filesystem::path& path, const std::vector<int>& pieces,
+                              bool offset_table) {
+  DicomSliceSpec s;
+  s.rows = kFrameRows;
+  s.columns = kFrameColumns;
+  DcmFileFormat file;
+  DcmDataset& ds = *file.getDataset();
+  ASSERT_TRUE(testing::FillEnhancedCt(ds, s, ThreeFrames(), false));
+  std::vector<std::vector<uint8_t>> fragments;
+  std::vector<Uint32> offsets;
+  Uint32 at = 0;
+  for (int f = 0; f < 3; ++f) {
+    std::vector<uint8_t> stream = EncodeJ2k(Samples(f, kFrameColumns * kFrameRows), kFrameColumns,
+                                            kFrameRows);
+    if (stream.size() % 2 != 0) stream.push_back(0);  // fragments have even length
+    offsets.push_back(at);
+    const size_t piece = (stream.size() / pieces[f] + 1) & ~size_t{1};
+    for (size_t from = 0; from < stream.size(); from += piece) {
+      fragments.emplace_back(stream.begin() + from,
+                             stream.begin() + std::min(stream.size(), from + piece));
+      at += 8 + static_cast<Uint32>(fragments.back().size());
+    }
+  }
+  ASSERT_EQ(fragments.size(), size_t(pieces[0] + pieces[1] + pieces[2]));
+  auto* sequence = new DcmPixelSequence(DCM_PixelSequenceTag);
+  auto* table = new DcmPixelItem(DCM_PixelItemTag);
+  if (offset_table) {  // little-endian uint32s (this machine's order, checked below)
+    table->putUint8Array(reinterpret_cast<const Uint8*>(offsets.data()), 4 * offsets.size());
+  }
+  sequence->insert(table);
+  for (const auto& fragment : fragments) {
+    auto* item = new DcmPixelItem(DCM_PixelItemTag);
+    item->putUint8Array(fragment.data(), static_cast<unsigned long>(fragment.size()));
+    sequence->insert(item);
+  }
+  auto* pixels = new DcmPixelData(DCM_PixelData);
+  pixels->putOriginalRepresentation(EXS_JPEG2000LosslessOnly, nullptr, sequence);
+  ds.insert(pixels, true);
+  ASSERT_TRUE(file.saveFile(path.c_str(), EXS_JPEG2000LosslessOnly).good()) << path;
+}
+
+TEST(DicomJpeg2000, FramesSpanningSeveralFragmentsEqualTheUncompressedFrames) {
+  const uint32_t one = 1;
+  ASSERT_EQ(*reinterpret_cast<const uint8_t*>(&one), 1) << "the test writes offsets little-endian";
+  const auto native_dir = MakeTempDir() / "native";
+  std::filesystem::create_directories(native_dir);
+  WriteNativeFrames(native_dir / "frames.dcm");
+  auto native = ReadDicomSeries(native_dir, {});
+  ASSERT_TRUE(native.ok()) << native.status();
+  ASSERT_EQ(native->dims(), (std::array<int64_t, 3>{kFrameColumns, kFrameRows, 3}));
+  // 3 + 1 + 2 and 2 + 2 + 4 fragments; with and without offsets.
+  for (const auto& pieces : {std::vector<int>{3, 1, 2}, std::vector<int>{2, 2, 4}}) {
+    for (bool offset_table : {true, false}) {
+      const auto dir = MakeTempDir() / StrCat("j2k-", pieces[0], pieces[1], pieces[2], "-",
+                                              offset_table ? "bot" : "nobot");
+      std::filesystem::create_directories(dir);
+      WriteFragmentedJ2kFrames(dir / "frames.dcm", pieces, offset_table);
+      auto v = ReadDicomSeries(dir, {});
+      ASSERT_TRUE(v.ok()) << dir << ": " << v.status();
+      ASSERT_EQ(v->dims(), native->dims());
+      int64_t differing = 0;
+      for (int64_t n = 0; n < v->geometry().voxel_count(); ++n) {
+        differing += v->voxels()[n] != native->voxels()[n];
+      }
+      EXPECT_EQ(differing, 0) << dir;
+      EXPECT_FLOAT_EQ(v->At(2, 1, 2), Samples(2, 30)[1 * kFrameColumns + 2] - 1024.0f);
+    }
+  }
+}
+
+TEST(DicomJpeg2000, SplitsFragmentsByOffsetsOrMarkersAndRefusesWhatDoesNotFit) {
+  // Two tiny "codestreams": SOC SIZ ... EOC, split over fragments.
+  const std::vector<uint8_t> a1{0xff, 0x4f, 0xff, 0x51, 1, 2}, a2{3, 4, 0xff, 0xd9};
+  const std::vector<uint8_t> b1{0xff, 0x4f, 0xff, 0x51, 5, 6, 0xff, 0xd9};
+  const std::vector<std::span<const uint8_t>> fragments{a1, a2, b1};
+  auto by_markers = Jpeg2000FrameCodestreams({}, fragments, 2);
+  ASSERT_TRUE(by_markers.ok()) << by_markers.status();
+  EXPECT_EQ((*by_markers)[0].size(), 10u);
+  EXPECT_EQ((*by_markers)[1], b1);
+  // Offsets: frame 1 starts at item 2 = (8 + 6) + (8 + 4) = 26 bytes.
+  const std::vector<uint8_t> table{0, 0, 0, 0, 26, 0, 0, 0};
+  auto by_table = Jpeg2000FrameCodestreams(table, fragments, 2);
+  ASSERT_TRUE(by_table.ok()) << by_table.status();
+  EXPECT_EQ(*by_table, *by_markers);
+  const std::vector<uint8_t> off_start{0, 0, 0, 0, 20, 0, 0, 0};
+  auto bad_table = Jpeg2000FrameCodestreams(off_start, fragments, 2);
+  EXPECT_EQ(bad_table.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(bad_table.status().message().find("entry 1 (20 bytes)"), absl::string_view::npos)
+      << bad_table.status();
+  // Four frames asked of three fragments: two codestreams found.
+  auto short_count = Jpeg2000FrameCodestreams({}, fragments, 4);
+  EXPECT_EQ(short_count.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(short_count.status().message().find("2 codestreams"), absl::string_view::npos)
+      << short_count.status();
+  // A fragment starting with SOC SIZ inside an unfinished codestream (no EOC
+  // yet) belongs to it.
+  const std::vector<uint8_t> c2{0xff, 0x4f, 0xff, 0x51, 0xff, 0xd9};
+  const std::vector<std::span<const uint8_t>> inner{a1, c2, b1};
+  auto joined = Jpeg2000FrameCodestreams({}, inner, 2);
+  ASSERT_TRUE(joined.ok()) << joined.status();
+  EXPECT_EQ((*joined)[0].size(), 12u);
 }
 
 TEST(DicomJpeg2000, RejectsCorruptOrMismatchedCodestreams) {
