@@ -85,6 +85,28 @@ std::vector<uint8_t> EncodeJ2k(const std::vector<int32_t>& samples, int columns,
   return writer.bytes;
 }
 
+// Encapsulated PixelData: item 0 the Basic Offset Table (`offset_table`,
+// empty or little-endian uint32s), then one item per fragment (padded to
+// an even length).
+void PutEncapsulated(DcmDataset& ds, const std::vector<uint8_t>& offset_table,
+                     const std::vector<std::vector<uint8_t>>& fragments, E_TransferSyntax syntax) {
+  auto* sequence = new DcmPixelSequence(DCM_PixelSequenceTag);
+  auto* table = new DcmPixelItem(DCM_PixelItemTag);
+  if (!offset_table.empty()) {
+    table->putUint8Array(offset_table.data(), static_cast<unsigned long>(offset_table.size()));
+  }
+  sequence->insert(table);
+  for (std::vector<uint8_t> even : fragments) {
+    if (even.size() % 2 != 0) even.push_back(0);  // fragments have even length
+    auto* item = new DcmPixelItem(DCM_PixelItemTag);
+    item->putUint8Array(even.data(), static_cast<unsigned long>(even.size()));
+    sequence->insert(item);
+  }
+  auto* pixels = new DcmPixelData(DCM_PixelData);
+  pixels->putOriginalRepresentation(syntax, nullptr, sequence);
+  ds.insert(pixels, true);
+}
+
 // A CT slice whose PixelData is `codestream`, encapsulated in `syntax`.
 void WriteJpeg2000Slice(const std::filesystem::path& path, DicomSliceSpec s,
                         const std::vector<uint8_t>& codestream, E_TransferSyntax syntax) {
@@ -92,16 +114,7 @@ void WriteJpeg2000Slice(const std::filesystem::path& path, DicomSliceSpec s,
   DcmFileFormat file;
   DcmDataset& ds = *file.getDataset();
   testing::FillDicomSlice(ds, s);
-  auto* sequence = new DcmPixelSequence(DCM_PixelSequenceTag);
-  sequence->insert(new DcmPixelItem(DCM_PixelItemTag));  // empty basic offset table
-  auto* fragment = new DcmPixelItem(DCM_PixelItemTag);
-  std::vector<uint8_t> even = codestream;
-  if (even.size() % 2 != 0) even.push_back(0);  // fragments have even length
-  fragment->putUint8Array(even.data(), static_cast<unsigned long>(even.size()));
-  sequence->insert(fragment);
-  auto* pixels = new DcmPixelData(DCM_PixelData);
-  pixels->putOriginalRepresentation(syntax, nullptr, sequence);
-  ds.insert(pixels, true);
+  PutEncapsulated(ds, {}, {codestream}, syntax);  // an empty offset table, one fragment
   ASSERT_TRUE(file.saveFile(path.c_str(), syntax).good()) << path;
 }
 
@@ -140,17 +153,18 @@ TEST(DicomJpeg2000, ReadsLosslessAndLossySyntaxesBitExact) {
 // Table. Stored values: Samples(f, 30), 6 x 5 pixels.
 constexpr int kFrameColumns = 6, kFrameRows = 5;
 
-std::vector<testing::EnhancedFrame> ThreeFrames() {
-  return {{{0, 0, 0.0}}, {{0, 0, 1.5}}, {{0, 0, 3.0}}};
-}
-
-void WriteNativeFrames(const std::filesystem::path& path) {
+// The three frames' Enhanced CT attributes, without PixelData.
+bool FillThreeFrames(DcmDataset& ds) {
   DicomSliceSpec s;
   s.rows = kFrameRows;
   s.columns = kFrameColumns;
+  return testing::FillEnhancedCt(ds, s, {{{0, 0, 0.0}}, {{0, 0, 1.5}}, {{0, 0, 3.0}}}, false);
+}
+
+void WriteNativeFrames(const std::filesystem::path& path) {
   DcmFileFormat file;
   DcmDataset& ds = *file.getDataset();
-  ASSERT_TRUE(testing::FillEnhancedCt(ds, s, ThreeFrames(), false));
+  ASSERT_TRUE(FillThreeFrames(ds));
   std::vector<Uint16> pixels;
   for (int f = 0; f < 3; ++f) {
     for (int32_t v : Samples(f, kFrameColumns * kFrameRows)) pixels.push_back(static_cast<Uint16>(v));
@@ -161,12 +175,9 @@ void WriteNativeFrames(const std::filesystem::path& path) {
 
 void WriteFragmentedJ2kFrames(const std::filesystem::path& path, const std::vector<int>& pieces,
                               bool offset_table) {
-  DicomSliceSpec s;
-  s.rows = kFrameRows;
-  s.columns = kFrameColumns;
   DcmFileFormat file;
   DcmDataset& ds = *file.getDataset();
-  ASSERT_TRUE(testing::FillEnhancedCt(ds, s, ThreeFrames(), false));
+  ASSERT_TRUE(FillThreeFrames(ds));
   std::vector<std::vector<uint8_t>> fragments;
   std::vector<Uint32> offsets;
   Uint32 at = 0;
@@ -183,26 +194,15 @@ void WriteFragmentedJ2kFrames(const std::filesystem::path& path, const std::vect
     }
   }
   ASSERT_EQ(fragments.size(), size_t(pieces[0] + pieces[1] + pieces[2]));
-  auto* sequence = new DcmPixelSequence(DCM_PixelSequenceTag);
-  auto* table = new DcmPixelItem(DCM_PixelItemTag);
-  if (offset_table) {  // little-endian uint32s (this machine's order, checked below)
-    table->putUint8Array(reinterpret_cast<const Uint8*>(offsets.data()), 4 * offsets.size());
+  std::vector<uint8_t> table;
+  for (Uint32 o : offset_table ? offsets : std::vector<Uint32>{}) {
+    for (int b = 0; b < 4; ++b) table.push_back(static_cast<uint8_t>(o >> (8 * b)));  // little-endian
   }
-  sequence->insert(table);
-  for (const auto& fragment : fragments) {
-    auto* item = new DcmPixelItem(DCM_PixelItemTag);
-    item->putUint8Array(fragment.data(), static_cast<unsigned long>(fragment.size()));
-    sequence->insert(item);
-  }
-  auto* pixels = new DcmPixelData(DCM_PixelData);
-  pixels->putOriginalRepresentation(EXS_JPEG2000LosslessOnly, nullptr, sequence);
-  ds.insert(pixels, true);
+  PutEncapsulated(ds, table, fragments, EXS_JPEG2000LosslessOnly);
   ASSERT_TRUE(file.saveFile(path.c_str(), EXS_JPEG2000LosslessOnly).good()) << path;
 }
 
 TEST(DicomJpeg2000, FramesSpanningSeveralFragmentsEqualTheUncompressedFrames) {
-  const uint32_t one = 1;
-  ASSERT_EQ(*reinterpret_cast<const uint8_t*>(&one), 1) << "the test writes offsets little-endian";
   const auto native_dir = MakeTempDir() / "native";
   std::filesystem::create_directories(native_dir);
   WriteNativeFrames(native_dir / "frames.dcm");
