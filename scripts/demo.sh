@@ -40,13 +40,25 @@ echo "== vpm slice: coronal through the dragged artery, before and after, cut te
   --drag 0 0 20 --plane coronal --overlay --out out/slice_after.png | tail -1
 echo
 echo "== a real scanner's CT: the gantry-tilted Philips series (tests/data/ct-philips-tilt)"
-"$vpm" volume info tests/data/ct-philips-tilt
-"$vpm" render --volume tests/data/ct-philips-tilt --grid 20 20 18 --grab 123 145 64 \
-  --out out/ct_before.png | tail -1
-"$vpm" render --volume tests/data/ct-philips-tilt --grid 20 20 18 --grab 123 145 64 \
-  --drag 0 0 10 --out out/ct_after.png | tail -1
-"$vpm" slice --volume tests/data/ct-philips-tilt --grid 20 20 18 --grab 123 145 64 \
-  --drag 0 0 10 --plane sagittal --overlay --out out/ct_slice_after.png | tail -1
+# A skull phantom (interior dark in any window) with plastic inserts: grab
+# the central plastic insert and drag it 10 mm superior (physical mm).
+ct=tests/data/ct-philips-tilt
+ct_mesh=(--grid 20 20 18 --grab 123 145 64)
+"$vpm" volume info "$ct"
+ct_before=$("$vpm" render --volume "$ct" "${ct_mesh[@]}" --out out/ct_before.png)
+echo "$ct_before" | tail -1
+"$vpm" render --volume "$ct" "${ct_mesh[@]}" --drag 0 0 10 --out out/ct_after.png | tail -1
+ct_pixel=$(echo "$ct_before" | sed -n 's/^grab point at pixel (\([0-9.-]*\), \([0-9.-]*\))$/\1 \2/p')
+# shellcheck disable=SC2086
+python3 scripts/region_difference.py out/ct_before.png out/ct_after.png $ct_pixel 40
+for plane in coronal sagittal; do
+  "$vpm" slice --volume "$ct" "${ct_mesh[@]}" --plane $plane \
+    --out out/ct_${plane}_before.png | tail -1
+  "$vpm" slice --volume "$ct" "${ct_mesh[@]}" --drag 0 0 10 --plane $plane \
+    --out out/ct_${plane}_after.png | tail -1
+done
+"$vpm" slice --volume "$ct" "${ct_mesh[@]}" --drag 0 0 10 --plane sagittal --overlay \
+  --out out/ct_sagittal_after_overlay.png | tail -1
 echo
 echo "== vpm compare-meshes (same vertex budget; section-6 measures)"
 "$vpm" compare-meshes --volume phantom:abdomen --json out/compare-meshes.json
@@ -59,7 +71,8 @@ echo "  mesh.json, mesh.vtu          the proxy mesh (ParaView, 3D Slicer)"
 echo "  before*.png, after*.png      frames before and after the drag (overlay: deformable"
 echo "                               vertices yellow, hard blue, handles and drag arrow)"
 echo "  slice_before/after.png       coronal slices through the grab (cut tets outlined)"
-echo "  ct_*.png                     the tilted head CT: before/after frames, a sagittal slice"
+echo "  ct_before/after.png          the tilted head CT: 3D frames before and after a 10 mm drag"
+echo "  ct_{coronal,sagittal}_*.png  its slices through the grab, before and after"
 echo "  deformed.nii.gz              the deformed volume, source geometry"
 echo "  compare-meshes.json          section-6 reconstruction measures"
 echo "  phantom_abdomen.nii.gz       the phantom itself"

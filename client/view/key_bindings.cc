@@ -34,6 +34,11 @@ std::span<const KeyBinding> KeyBindings() {
       {{"M"}, Action::kMip, "maximum intensity projection (MIP)"},
       {{"O"}, Action::kToggleOverlay, "proxy-mesh overlay on/off"},
       {{"L"}, Action::kToggleSlices, "slices on/off: 3D, axial, coronal, sagittal (2 x 2)"},
+      {{"B"}, Action::kToggleCropMode, "crop box on/off: left drag on a face moves it"},
+      {{"C"}, Action::kToggleClipPlane, "clip plane facing you through the centre on/off"},
+      {{"PageUp"}, Action::kScrollForward,
+       "slice under the cursor +1 pixel (Shift 5); on 3D: clip plane 1 mm deeper"},
+      {{"PageDown"}, Action::kScrollBack, "slice under the cursor -1 pixel; on 3D: clip plane back"},
       {{"R"}, Action::kRefineHere, "refine the mesh at the cursor (new session)"},
       {{"V", "Home"}, Action::kResetView, "reset the view"},
       {{"X"}, Action::kResetDeformation, "reset the deformation (let go)"},
@@ -60,6 +65,10 @@ std::span<const MouseBinding> MouseBindings() {
       {"G, left press", "grab the point under the cursor"},
       {"G, left drag", "pull the grabbed point"},
       {"G, left release", "let go (hold Shift: keep the pull)"},
+      {"wheel on a slice", "scroll it: up +1 pixel along its normal (Shift 5)"},
+      {"G, left on a slice", "grab there and drag within the slice's plane"},
+      {"B, left drag", "on a box face: move it; elsewhere orbit"},
+      {"C, Shift+left drag", "move the clip plane (up: deeper)"},
   };
   return kBindings;
 }

@@ -79,6 +79,22 @@ glm::dvec3 ViewCamera::DragOffsetMm(double dx_px, double dy_px, int frame_width,
   return mm * (dx_px * camera_.Right() - dy_px * camera_.Up());
 }
 
+double ViewCamera::MotionAlongMm(const glm::dvec3& direction_mm, double dx_px, double dy_px,
+                                 int frame_width, int frame_height) const {
+  const double length = glm::length(direction_mm);
+  if (!(length > 0.0)) return 0.0;
+  const glm::dvec3 n = direction_mm / length;
+  const double mm = MmPerPixel(frame_width, frame_height);
+  // 1 mm along n moves its image by s / mm pixels (right, down).
+  const glm::dvec2 s{glm::dot(n, camera_.Right()), -glm::dot(n, camera_.Up())};
+  const double s2 = glm::dot(s, s);
+  if (s2 < 0.04) {
+    const double away = glm::dot(n, camera_.Forward()) >= 0.0 ? 1.0 : -1.0;
+    return -dy_px * mm * away;
+  }
+  return mm * glm::dot(glm::dvec2{dx_px, dy_px}, s) / s2;
+}
+
 std::optional<glm::dvec3> ViewCamera::PickPoint(int px, int py, int frame_width,
                                                 int frame_height) const {
   if (px < 0 || py < 0 || px >= frame_width || py >= frame_height) return std::nullopt;

@@ -57,6 +57,14 @@ class ViewCamera {
   // through the orbit centre that faces the camera), or empty when that
   // point is outside the volume's box and the server would refuse it.
   std::optional<glm::dvec3> PickPoint(int px, int py, int frame_width, int frame_height) const;
+  // How far (mm, signed) a point at the orbit centre's depth moves along
+  // `direction_mm` (physical, any length > 0) to follow a screen motion of
+  // (dx, dy) pixels (right, down): the motion's component along the
+  // direction's image on screen. When the direction points almost along the
+  // view (its image is under a fifth of its length), dragging up moves it
+  // away from the viewer instead. Used to drag crop faces and clip planes.
+  double MotionAlongMm(const glm::dvec3& direction_mm, double dx_px, double dy_px,
+                       int frame_width, int frame_height) const;
 
  private:
   VolumeGeometry geometry_;

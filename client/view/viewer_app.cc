@@ -1,10 +1,12 @@
 #include "client/view/viewer_app.h"
 
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 
+#include "client/view/slice_panes.h"
 #include "client/view/status_text.h"
 #include "proto/enum_names.h"
 
@@ -100,7 +102,10 @@ void ViewerApp::HandleEvent(const SDL_Event& e) {
       break;
     case SDL_MOUSEWHEEL:
       if (camera_ && e.wheel.y != 0) {
-        camera_->Zoom(e.wheel.direction == SDL_MOUSEWHEEL_FLIPPED ? -e.wheel.y : e.wheel.y);
+        const int clicks = e.wheel.direction == SDL_MOUSEWHEEL_FLIPPED ? -e.wheel.y : e.wheel.y;
+        const double step = (SDL_GetModState() & KMOD_SHIFT) ? 5.0 : 1.0;
+        if (ScrollSliceAt(last_x_, last_y_, clicks * step)) break;
+        camera_->Zoom(clicks);
         SendCamera();
       }
       break;
@@ -133,6 +138,19 @@ void ViewerApp::OnAction(Action action) {
       Notice(settings_.mode() == v2::RENDER_MODE_MIP ? "MIP" : "DVR");
       break;
     case Action::kToggleSlices: ToggleSlices(); break;
+    case Action::kToggleCropMode: ToggleCropMode(); break;
+    case Action::kToggleClipPlane: ToggleClipPlane(); break;
+    case Action::kScrollForward:
+    case Action::kScrollBack: {
+      const double sign = action == Action::kScrollForward ? 1.0 : -1.0;
+      const double step = (SDL_GetModState() & KMOD_SHIFT) ? 5.0 : 1.0;
+      int x = 0, y = 0;
+      SDL_GetMouseState(&x, &y);
+      if (!ScrollSliceAt(x, y, sign * step) && settings_.clip_size() > 0) {
+        MoveClipPlane(sign * step);
+      }
+      break;
+    }
     case Action::kToggleOverlay:
       settings_.set_overlay(!settings_.overlay());
       SendSettings();
@@ -156,7 +174,25 @@ void ViewerApp::OnButtonDown(const SDL_MouseButtonEvent& b) {
   last_y_ = b.y;
   if (gesture_ != Gesture::kNone) return;
   if (b.button == SDL_BUTTON_LEFT) {
+    if (const std::optional<SlicePixel> on_slice = window_->ToSlicePixel(b.x, b.y)) {
+      // Slices are driven by the wheel and, in grab mode, by a pull.
+      if (grab_mode_) StartSlicePull(*on_slice);
+      return;
+    }
     if (grab_mode_) return StartPull(b.x, b.y);
+    if ((SDL_GetModState() & KMOD_SHIFT) && settings_.clip_size() > 0) {
+      gesture_ = Gesture::kClipPlane;
+      drag_clip_start_ = settings_.clip(0);
+      pull_from_x_ = b.x, pull_from_y_ = b.y;
+      return;
+    }
+    if (const std::optional<BoxFace> face = FaceAt(b.x, b.y)) {
+      gesture_ = Gesture::kCropFace;
+      drag_face_ = *face;
+      drag_box_start_ = crop_box_;
+      pull_from_x_ = b.x, pull_from_y_ = b.y;
+      return;
+    }
     gesture_ = Gesture::kOrbit;
   } else if (b.button == SDL_BUTTON_MIDDLE || b.button == SDL_BUTTON_RIGHT) {
     gesture_ = Gesture::kPan;
@@ -168,7 +204,7 @@ void ViewerApp::OnButtonUp(const SDL_MouseButtonEvent& b) {
                         ? (b.button == SDL_BUTTON_MIDDLE || b.button == SDL_BUTTON_RIGHT)
                         : b.button == SDL_BUTTON_LEFT;
   if (!ends) return;
-  if (gesture_ == Gesture::kPull) {
+  if (gesture_ == Gesture::kPull || gesture_ == Gesture::kSlicePull) {
     if (SDL_GetModState() & KMOD_SHIFT) {
       Notice("pull kept: X lets go");
     } else {
@@ -182,9 +218,38 @@ void ViewerApp::OnMotion(const SDL_MouseMotionEvent& m) {
   const double dx = m.x - last_x_, dy = m.y - last_y_;
   last_x_ = m.x;
   last_y_ = m.y;
+  if (gesture_ == Gesture::kNone && crop_mode_) hover_face_ = FaceAt(m.x, m.y);
   if (!camera_ || gesture_ == Gesture::kNone) return;
   const double scale = FramePixelsPerWindowPixel();
   const int fw = settings_.width(), fh = settings_.height();
+  const double from_dx = (m.x - pull_from_x_) * scale, from_dy = (m.y - pull_from_y_) * scale;
+  if (gesture_ == Gesture::kSlicePull && grabbed_) {
+    const glm::dvec3 offset =
+        SliceDragOffsetMm(pull_slice_, (m.x - pull_from_x_) * pull_slice_scale_,
+                          (m.y - pull_from_y_) * pull_slice_scale_);
+    v2::ClientEvent event;
+    event.mutable_drag()->mutable_offset_mm()->set_x(offset.x);
+    event.mutable_drag()->mutable_offset_mm()->set_y(offset.y);
+    event.mutable_drag()->mutable_offset_mm()->set_z(offset.z);
+    connection_->Send(event);
+    return;
+  }
+  if (gesture_ == Gesture::kCropFace && geometry_) {
+    const double delta = FaceDragMm(*camera_, *geometry_, drag_face_, from_dx, from_dy,
+                                    window_->frame_width(), window_->frame_height());
+    crop_box_ = MoveBoxFace(drag_box_start_, drag_face_, delta, VolumeWorldBox(*geometry_));
+    *settings_.mutable_crop() = CropBoxToProto(crop_box_);
+    SendSettings();
+    return;
+  }
+  if (gesture_ == Gesture::kClipPlane && geometry_) {
+    const double delta = ClipDragMm(*camera_, *geometry_, drag_clip_start_, from_dx, from_dy,
+                                    window_->frame_width(), window_->frame_height());
+    *settings_.mutable_clip(0) =
+        vpm::view::MoveClipPlane(drag_clip_start_, delta, VolumeWorldBox(*geometry_));
+    SendSettings();
+    return;
+  }
   if (gesture_ == Gesture::kOrbit) {
     camera_->Orbit(dx, dy);
     SendCamera();
@@ -269,7 +334,7 @@ void ViewerApp::PollConnection() {
     // A new stream: the server holds no grab of ours any more.
     stream_generation_ = state.stream_generation;
     grabbed_ = false;
-    if (gesture_ == Gesture::kPull) gesture_ = Gesture::kNone;
+    if (gesture_ == Gesture::kPull || gesture_ == Gesture::kSlicePull) gesture_ = Gesture::kNone;
   }
   if (state.volume && state.volume->volume_id() != volume_id_) {
     volume_id_ = state.volume->volume_id();
@@ -279,6 +344,8 @@ void ViewerApp::PollConnection() {
     } else if (!camera_) {
       // A restarted server gives the same volume a new id: the view stays.
       camera_.emplace(*geometry);
+      geometry_ = *geometry;
+      crop_box_ = VolumeWorldBox(*geometry);
       SendCamera();
     }
   }
@@ -313,6 +380,94 @@ void ViewerApp::ToggleSlices() {
   SendSettings();
 }
 
+const v2::SliceGeometry* ViewerApp::SliceGeometryOf(int index) const {
+  if (!frame_info_ || index < 0 || index >= frame_info_->slices_size()) return nullptr;
+  return &frame_info_->slices(index).geometry();
+}
+
+bool ViewerApp::ScrollSliceAt(int window_x, int window_y, double notches) {
+  const std::optional<SlicePixel> at = window_->ToSlicePixel(window_x, window_y);
+  const v2::SliceGeometry* g = at ? SliceGeometryOf(at->index) : nullptr;
+  if (g == nullptr) return false;
+  // The pane shows Frame.slices(i), the answer to settings_.slices(i) by its view tag.
+  const std::string& view = frame_info_->slices(at->index).view();
+  for (v2::SliceSpec& spec : *settings_.mutable_slices()) {
+    if (spec.view() != view) continue;
+    const double from = spec.has_at_mm() ? spec.at_mm() : g->offset_mm();
+    spec.set_at_mm(ScrolledSliceOffset(*g, from, notches));
+    SendSettings();
+    Notice(StrCat(view, " at ", std::round(spec.at_mm() * 10.0) / 10.0, " mm"));
+    return true;
+  }
+  return false;
+}
+
+void ViewerApp::StartSlicePull(const SlicePixel& at) {
+  const v2::SliceGeometry* g = SliceGeometryOf(at.index);
+  if (g == nullptr || !geometry_) return;
+  if (grabbed_) LetGo();
+  const glm::dvec3 point = SlicePointMm(*g, at.x, at.y);
+  const glm::dvec3 extent = geometry_->extent_mm();
+  for (int a = 0; a < 3; ++a) {
+    if (!(point[a] >= 0.0 && point[a] <= extent[a])) {
+      return Notice("nothing to grab there: the point is outside the volume");
+    }
+  }
+  v2::ClientEvent event;
+  v2::Vec3* p = event.mutable_grab()->mutable_point_mm();
+  p->set_x(point.x);
+  p->set_y(point.y);
+  p->set_z(point.z);
+  connection_->Send(event);
+  grabbed_ = true;
+  gesture_ = Gesture::kSlicePull;
+  pull_slice_ = *g;
+  pull_slice_scale_ = at.pixels_per_window_pixel;
+  pull_from_x_ = last_x_;  // the press (OnButtonDown)
+  pull_from_y_ = last_y_;
+}
+
+void ViewerApp::ToggleCropMode() {
+  if (!geometry_) return Notice("crop: no volume yet");
+  crop_mode_ = !crop_mode_;
+  hover_face_.reset();
+  if (crop_mode_) {
+    *settings_.mutable_crop() = CropBoxToProto(crop_box_);
+    Notice("crop box: drag a face to move it (B again: off)");
+  } else {
+    settings_.clear_crop();
+    Notice("crop box off");
+  }
+  SendSettings();
+}
+
+void ViewerApp::ToggleClipPlane() {
+  if (!camera_ || !geometry_) return Notice("clip: no volume yet");
+  if (settings_.clip_size() > 0) {
+    settings_.clear_clip();
+    Notice("clip plane off");
+  } else {
+    *settings_.add_clip() = ClipPlaneFacingCamera(*camera_, *geometry_);
+    Notice("clip plane: Shift+drag or PageUp/PageDown move it");
+  }
+  SendSettings();
+}
+
+void ViewerApp::MoveClipPlane(double delta_mm) {
+  if (!geometry_ || settings_.clip_size() == 0) return;
+  *settings_.mutable_clip(0) =
+      vpm::view::MoveClipPlane(settings_.clip(0), delta_mm, VolumeWorldBox(*geometry_));
+  SendSettings();
+}
+
+std::optional<BoxFace> ViewerApp::FaceAt(int window_x, int window_y) const {
+  if (!crop_mode_ || !camera_ || !geometry_) return std::nullopt;
+  const std::optional<SDL_Point> px = window_->ToFramePixel(window_x, window_y);
+  if (!px) return std::nullopt;
+  return PickBoxFace(*camera_, *geometry_, crop_box_, px->x, px->y, window_->frame_width(),
+                     window_->frame_height());
+}
+
 void ViewerApp::Paint() {
   PaintInputs in;
   const ConnectionState state = connection_->state();
@@ -322,6 +477,11 @@ void ViewerApp::Paint() {
   in.show_help = show_help_;
   if (!state.connected) in.message = state.message;
   if (SteadyClock::now() < notice_until_) in.notice = notice_;
+  if (crop_mode_ && camera_ && geometry_) {
+    in.frame_lines = BoxOutline(*camera_, *geometry_, crop_box_,
+                                gesture_ == Gesture::kCropFace ? drag_face_ : hover_face_,
+                                window_->frame_width(), window_->frame_height());
+  }
   window_->Paint(in);
 }
 
@@ -336,6 +496,28 @@ void ViewerApp::SendSettings() {
   v2::ClientEvent event;
   *event.mutable_settings() = settings_;
   connection_->Send(event);
+  if (flags_.connection.log_frames) {
+    // For tests: what the viewer asked for, world mm.
+    std::string line = "settings crop";
+    if (settings_.has_crop()) {
+      const v2::CropBox& c = settings_.crop();
+      for (const v2::Vec3& v : {c.lo_mm(), c.hi_mm()}) {
+        line += StrCat(" ", v.x(), " ", v.y(), " ", v.z());
+      }
+    } else {
+      line += " none";
+    }
+    line += " clip";
+    for (const v2::ClipPlane& c : settings_.clip()) line += StrCat(" ", c.offset_mm());
+    if (settings_.clip_size() == 0) line += " none";
+    line += " at";
+    for (const v2::SliceSpec& spec : settings_.slices()) {
+      line += spec.has_at_mm() ? StrCat(" ", spec.view(), "=", spec.at_mm())
+                               : StrCat(" ", spec.view(), "=auto");
+    }
+    std::printf("%s\n", line.c_str());
+    std::fflush(stdout);
+  }
 }
 
 void ViewerApp::Notice(std::string text) {

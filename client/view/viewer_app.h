@@ -11,6 +11,8 @@
 
 #include <SDL.h>
 
+#include "client/view/clip_plane_drag.h"
+#include "client/view/crop_box_drag.h"
 #include "client/view/interact_connection.h"
 #include "client/view/key_bindings.h"
 #include "client/view/view_camera.h"
@@ -37,6 +39,19 @@ class ViewerApp {
   void RefineAtCursor();
   // Three slices (axial, coronal, sagittal) with every frame, or none.
   void ToggleSlices();
+  // Slices: scroll the one under the window point by `notches` pixels;
+  // false when no slice is there.
+  bool ScrollSliceAt(int window_x, int window_y, double notches);
+  // Grab mode, a press on a slice: grab the point of its plane there.
+  void StartSlicePull(const SlicePixel& at);
+  // The geometry of slice `index` in the newest frame, if it has one.
+  const v2::SliceGeometry* SliceGeometryOf(int index) const;
+  // Crop box (B) and clip plane (C).
+  void ToggleCropMode();
+  void ToggleClipPlane();
+  void MoveClipPlane(double delta_mm);
+  // The crop face under the window point, in crop mode.
+  std::optional<BoxFace> FaceAt(int window_x, int window_y) const;
   void SaveScreenshot();
   void PollConnection();
   void Paint();
@@ -58,11 +73,23 @@ class ViewerApp {
   v2::RenderSettings settings_;
   uint64_t stream_generation_ = 0;
 
-  enum class Gesture { kNone, kOrbit, kPan, kPull };
+  enum class Gesture { kNone, kOrbit, kPan, kPull, kSlicePull, kCropFace, kClipPlane };
   Gesture gesture_ = Gesture::kNone;
   int last_x_ = 0, last_y_ = 0;        // window pixels of the previous motion
   int pull_from_x_ = 0, pull_from_y_ = 0;  // window pixels where the grab started
+  // kSlicePull: the slice's geometry at the press and its image pixels per
+  // window pixel; kCropFace: the face and the box at the press; kClipPlane:
+  // the plane at the press.
+  v2::SliceGeometry pull_slice_;
+  double pull_slice_scale_ = 1.0;
+  BoxFace drag_face_;
+  WorldBox drag_box_start_;
+  v2::ClipPlane drag_clip_start_;
   bool grab_mode_ = false;
+  bool crop_mode_ = false;                 // the crop box applies and its faces drag
+  WorldBox crop_box_;                      // world mm; the volume's box at first
+  std::optional<BoxFace> hover_face_;      // highlighted in the outline
+  std::optional<VolumeGeometry> geometry_;
   bool grabbed_ = false;  // the server holds a grab of ours
   bool show_help_ = false;
 

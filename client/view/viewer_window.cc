@@ -111,6 +111,45 @@ std::optional<SDL_Point> ViewerWindow::ToFramePixel(int window_x, int window_y) 
                    int(double(window_y - r.y) * frame_height_ / r.h)};
 }
 
+SDL_Rect ViewerWindow::SliceRect(size_t i) const {
+  const SDL_Rect cell = FrameArea();
+  // Cells 1, 2, 3 of the 2 x 2 grid: top right, bottom left, bottom right.
+  const int k = int(i) + 1;
+  const SDL_Rect area{(k % 2) * cell.w, (k / 2) * cell.h, cell.w, cell.h};
+  return Fit(area, slices_[i].width, slices_[i].height);
+}
+
+std::optional<SlicePixel> ViewerWindow::ToSlicePixel(int window_x, int window_y) const {
+  for (size_t i = 0; i < slices_.size(); ++i) {
+    if (slices_[i].texture == nullptr) continue;
+    const SDL_Rect r = SliceRect(i);
+    if (window_x < r.x || window_y < r.y || window_x >= r.x + r.w || window_y >= r.y + r.h) {
+      continue;
+    }
+    const double scale = double(slices_[i].width) / r.w;
+    return SlicePixel{int(i), (window_x - r.x + 0.5) * scale, (window_y - r.y + 0.5) * scale,
+                      scale};
+  }
+  return std::nullopt;
+}
+
+void ViewerWindow::PaintFrameLines(const std::vector<ScreenSegment>& lines) {
+  if (lines.empty() || frame_width_ <= 0 || frame_height_ <= 0) return;
+  const SDL_Rect r = FrameRect();
+  const double sx = double(r.w) / frame_width_, sy = double(r.h) / frame_height_;
+  SDL_RenderSetClipRect(renderer_, &r);
+  for (bool face : {false, true}) {  // the highlighted face on top
+    if (face) SDL_SetRenderDrawColor(renderer_, 255, 220, 0, 255);
+    else SDL_SetRenderDrawColor(renderer_, 200, 200, 200, 200);
+    for (const ScreenSegment& l : lines) {
+      if (l.on_face != face) continue;
+      SDL_RenderDrawLineF(renderer_, float(r.x + l.a.x * sx), float(r.y + l.a.y * sy),
+                          float(r.x + l.b.x * sx), float(r.y + l.b.y * sy));
+    }
+  }
+  SDL_RenderSetClipRect(renderer_, nullptr);
+}
+
 void ViewerWindow::Paint(const PaintInputs& in) {
   SDL_SetRenderDrawColor(renderer_, 0, 0, 0, 255);
   SDL_RenderClear(renderer_);
@@ -118,13 +157,10 @@ void ViewerWindow::Paint(const PaintInputs& in) {
     const SDL_Rect dst = FrameRect();
     SDL_RenderCopy(renderer_, frame_, nullptr, &dst);
   }
-  const SDL_Rect cell = FrameArea();
+  PaintFrameLines(in.frame_lines);
   for (size_t i = 0; i < slices_.size(); ++i) {
     if (slices_[i].texture == nullptr) continue;
-    // Cells 1, 2, 3 of the 2 x 2 grid: top right, bottom left, bottom right.
-    const int k = int(i) + 1;
-    const SDL_Rect area{(k % 2) * cell.w, (k / 2) * cell.h, cell.w, cell.h};
-    const SDL_Rect dst = Fit(area, slices_[i].width, slices_[i].height);
+    const SDL_Rect dst = SliceRect(i);
     SDL_RenderCopy(renderer_, slices_[i].texture, nullptr, &dst);
   }
   const SDL_Rect area = ImageArea();

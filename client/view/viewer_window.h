@@ -9,6 +9,7 @@
 
 #include <SDL.h>
 
+#include "client/view/crop_box_drag.h"
 #include "client/view/text_renderer.h"
 #include "server/common/status.h"
 #include "server/raycast/frame_encoder.h"
@@ -23,6 +24,18 @@ struct PaintInputs {
   bool show_help = false;
   std::string message;  // shown in a red banner when not empty (connection lost, errors)
   std::string notice;   // shown briefly in a grey banner (screenshot saved, ...)
+  // Lines over the 3D frame, frame pixels (the crop box's outline): on_face
+  // ones (the face the pointer is on) yellow, the others light grey.
+  std::vector<ScreenSegment> frame_lines;
+};
+
+// A point on a slice pane: which slice (0..2, in Frame.slices order), where
+// on its image (continuous pixels, row 0 at the top) and how many image
+// pixels one window pixel spans there.
+struct SlicePixel {
+  int index = 0;
+  double x = 0.0, y = 0.0;
+  double pixels_per_window_pixel = 1.0;
 };
 
 class ViewerWindow {
@@ -48,6 +61,8 @@ class ViewerWindow {
   SDL_Rect FrameRect() const;
   // Window pixel -> pixel of the current frame; empty outside it.
   std::optional<SDL_Point> ToFramePixel(int window_x, int window_y) const;
+  // Window pixel -> point of the slice shown under it; empty elsewhere.
+  std::optional<SlicePixel> ToSlicePixel(int window_x, int window_y) const;
   int frame_width() const { return frame_width_; }
   int frame_height() const { return frame_height_; }
 
@@ -59,6 +74,9 @@ class ViewerWindow {
   ViewerWindow() = default;
   void PaintBanner(const std::string& text, SDL_Color fill, int y);
   void PaintHelp();
+  void PaintFrameLines(const std::vector<ScreenSegment>& lines);
+  // Where slice i is drawn (cells 1..3 of the 2 x 2 grid, aspect kept).
+  SDL_Rect SliceRect(size_t i) const;
 
   SDL_Window* window_ = nullptr;
   SDL_Renderer* renderer_ = nullptr;

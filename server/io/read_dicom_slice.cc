@@ -22,6 +22,7 @@
 #include "server/common/prefix_status.h"
 #include "server/io/check_dicom_structure.h"
 #include "server/io/decode_jpeg2000.h"
+#include "server/io/jpeg2000_frames.h"
 #include "server/io/header_text.h"
 #include "server/io/voxel_type.h"
 
@@ -298,8 +299,8 @@ bool IsJpeg2000(E_TransferSyntax xfer) {
   return xfer == EXS_JPEG2000LosslessOnly || xfer == EXS_JPEG2000;
 }
 
-// The codestream of each frame: one fragment per frame, or all fragments of
-// a single-frame image joined (an encoder may split one codestream).
+// The codestream of each frame (jpeg2000_frames.h: one fragment or several
+// a frame, by the Basic Offset Table or by the codestreams' markers).
 Result<std::vector<std::vector<uint8_t>>> Jpeg2000Codestreams(DcmDataset& ds, int64_t frames) {
   DcmElement* element = nullptr;
   DcmPixelSequence* sequence = nullptr;
@@ -311,23 +312,18 @@ Result<std::vector<std::vector<uint8_t>>> Jpeg2000Codestreams(DcmDataset& ds, in
       sequence == nullptr || sequence->card() < 2) {
     return absl::InvalidArgumentError("JPEG 2000 PixelData has no fragments");
   }
-  const int64_t fragments = static_cast<int64_t>(sequence->card()) - 1;  // item 0: offset table
-  if (fragments != frames && frames != 1) {
-    return absl::UnimplementedError(StrCat("JPEG 2000 with ", fragments, " fragments for ", frames,
-                                           " frames is not supported"));
-  }
-  std::vector<std::vector<uint8_t>> out(static_cast<size_t>(frames));
-  for (int64_t n = 0; n < fragments; ++n) {
+  // Item 0: the Basic Offset Table (may be empty); then the fragments.
+  std::vector<std::span<const uint8_t>> items;
+  for (unsigned long n = 0; n < sequence->card(); ++n) {
     DcmPixelItem* item = nullptr;
     Uint8* data = nullptr;
-    if (sequence->getItem(item, static_cast<unsigned long>(n + 1)).bad() || item == nullptr ||
-        item->getUint8Array(data).bad()) {
-      return absl::InvalidArgumentError("JPEG 2000 fragment cannot be read");
+    if (sequence->getItem(item, n).bad() || item == nullptr || item->getUint8Array(data).bad()) {
+      return absl::InvalidArgumentError(StrCat("JPEG 2000 fragment ", n, " cannot be read"));
     }
-    std::vector<uint8_t>& frame = out[frames == 1 ? 0 : n];
-    if (data != nullptr) frame.insert(frame.end(), data, data + item->getLength());
+    items.emplace_back(data, data == nullptr ? 0 : item->getLength());
   }
-  return out;
+  const std::vector<std::span<const uint8_t>> fragments(items.begin() + 1, items.end());
+  return Jpeg2000FrameCodestreams(items[0], fragments, frames);
 }
 
 // JPEG 2000 frames through OpenJPEG; decoded samples are the stored values.

@@ -46,17 +46,21 @@ Result<DecimatedLattice> DecimateLattice(const Volume& volume, const MeshParams&
   ASSIGN_OR_RETURN(TransferFunction tf, TransferFunction::FromSpec(params.tf, volume));
   auto t0 = SteadyClock::now();
   LatticeCosts costs;
+  const char* evaluated_on = kStep1OnCpuReference;
   if (gpu.lattice_costs != nullptr && gpu.lattice_costs->runs_on_cpu()) {
     // Lavapipe: the same cores run native rows about 15x faster than the
     // kernels (lattice_costs_rows.h).
     costs = EvaluateLatticeCostsRows(volume, lattice, tf);
+    evaluated_on = kStep1OnCpuRows;
   } else if (gpu.volume != nullptr && gpu.lattice_costs != nullptr) {
     ASSIGN_OR_RETURN(costs, gpu.lattice_costs->Evaluate(*gpu.volume, lattice, tf));
+    evaluated_on = kStep1OnGpu;
   } else {
     costs = EvaluateLatticeCostsCpu(volume, lattice, tf);
   }
   MeshStats stats;
   stats.evaluate_ms = MsSince(t0);
+  stats.evaluated_on = evaluated_on;
   t0 = SteadyClock::now();
   const auto& g = costs.g(params.footprint);
   DecimationInput input{.ci = costs.ci(params.footprint), .cg = NormalizeGradientCost(g)};

@@ -43,6 +43,11 @@ struct TetQuality {
 };
 
 // Counts, scales and stage timings of one build (the `stats` of --json).
+// Where step 1 (the lattice costs) ran: MeshStats.evaluated_on.
+inline constexpr char kStep1OnGpu[] = "GPU kernels";
+inline constexpr char kStep1OnCpuRows[] = "CPU rows, the Vulkan device being a CPU";
+inline constexpr char kStep1OnCpuReference[] = "CPU reference";
+
 struct MeshStats {
   std::array<int32_t, 3> grid{0, 0, 0};  // lattice G
   int64_t lattice_vertices = 0;          // Gx*Gy*Gz
@@ -55,6 +60,7 @@ struct MeshStats {
   double h_mm = 0.0;  // largest lattice step
   double R_mm = 0.0;  // density radius
   double evaluate_ms = 0.0;
+  std::string evaluated_on;  // one of kStep1On*; empty when not known (a mesh read back)
   double decimate_ms = 0.0;
   double classify_ms = 0.0;
   double refine_ms = 0.0;

@@ -132,6 +132,31 @@ TEST(VpmCli, MeshWritesJsonWithTheDocumentedFields) {
   EXPECT_TRUE(std::filesystem::file_size(vtu) > 1000);
 }
 
+// The summary names where step 1 ran: `--backend cpu` the CPU reference;
+// `auto` on lavapipe (llvmpipe, a CPU device) the native CPU rows, never
+// "GPU"; on a GPU the kernels, with the device's name.
+TEST(VpmCli, MeshSummarySaysWhereStep1Ran) {
+  const std::string flags = " mesh --volume 'phantom:abdomen?size=48' --grid 10 10 10 --target 80";
+  const CliRun cpu = Vpm(flags + " --backend cpu");
+  ASSERT_EQ(cpu.exit_code, 0) << cpu.output;
+  EXPECT_NE(cpu.output.find("(CPU reference)"), std::string::npos) << cpu.output;
+  const CliRun automatic = Vpm(flags + " --backend auto");
+  ASSERT_EQ(automatic.exit_code, 0) << automatic.output;
+  const size_t at = automatic.output.find("\nevaluate ");
+  ASSERT_NE(at, std::string::npos) << automatic.output;
+  const std::string line =
+      automatic.output.substr(at + 1, automatic.output.find('\n', at + 1) - at - 1);
+  if (line.find("Vulkan device") == std::string::npos) {
+    EXPECT_NE(line.find("(CPU reference)"), std::string::npos) << line;  // no device opened
+  } else if (line.find("llvmpipe") != std::string::npos) {
+    EXPECT_NE(line.find("(CPU rows, the Vulkan device being a CPU; Vulkan device llvmpipe"),
+              std::string::npos) << line;
+    EXPECT_EQ(line.find("GPU"), std::string::npos) << line;
+  } else {
+    EXPECT_NE(line.find("(GPU kernels; Vulkan device "), std::string::npos) << line;
+  }
+}
+
 // Debian's mricron-data (installed by scripts/install-deps.sh) ships the
 // Colin27 T1 template: a real MRI in NIfTI with a RAS sform.
 TEST(VpmCli, MeshWorksOnARealMriWithTheMriPreset) {

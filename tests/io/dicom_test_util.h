@@ -131,6 +131,70 @@ inline void FillDicomSlice(DcmDataset& ds, const DicomSliceSpec& s) {
 }
 
 // Writes `s` as a DICOM Part 10 file; false on failure.
+// One frame of an Enhanced CT (FillEnhancedCt).
+struct EnhancedFrame {
+  glm::dvec3 position_mm{0.0};
+  double intercept = -1024.0;  // written per frame when `per_frame_rescale`
+};
+
+// An Enhanced CT dataset of `frames` without PixelData (the caller adds it,
+// native or encapsulated; `s` gives rows and columns): PixelSpacing,
+// SliceThickness and ImageOrientationPatient in the shared functional
+// groups and ImagePositionPatient (and, when asked, the rescale) per frame.
+// Top-level geometry attributes are absent, as in the standard's enhanced
+// IODs. NumberOfFrames is `number_of_frames`, else the frame count. False
+// when DCMTK refuses an item.
+inline bool FillEnhancedCt(DcmDataset& ds, DicomSliceSpec& s,
+                           const std::vector<EnhancedFrame>& frames, bool per_frame_rescale,
+                           const std::string& number_of_frames = "") {
+  s.sop_class_uid = UID_EnhancedCTImageStorage;
+  s.with_position = false;
+  s.with_pixel_data = false;
+  FillDicomSlice(ds, s);
+  ds.findAndDeleteElement(DCM_PixelSpacing);
+  ds.findAndDeleteElement(DCM_ImageOrientationPatient);
+  ds.findAndDeleteElement(DCM_RescaleIntercept);
+  ds.findAndDeleteElement(DCM_RescaleSlope);
+  ds.putAndInsertString(DCM_NumberOfFrames, number_of_frames.empty()
+                                                ? std::to_string(frames.size()).c_str()
+                                                : number_of_frames.c_str());
+  DcmItem *shared = nullptr, *measures = nullptr, *orientation = nullptr, *transform = nullptr;
+  if (ds.findOrCreateSequenceItem(DCM_SharedFunctionalGroupsSequence, shared, -2).bad() ||
+      shared->findOrCreateSequenceItem(DCM_PixelMeasuresSequence, measures, -2).bad() ||
+      shared->findOrCreateSequenceItem(DCM_PlaneOrientationSequence, orientation, -2).bad()) {
+    return false;
+  }
+  measures->putAndInsertString(DCM_PixelSpacing, "0.75\\0.5");
+  measures->putAndInsertString(DCM_SliceThickness, "2");
+  orientation->putAndInsertString(DCM_ImageOrientationPatient, "1\\0\\0\\0\\1\\0");
+  if (!per_frame_rescale) {
+    if (shared->findOrCreateSequenceItem(DCM_PixelValueTransformationSequence, transform, -2)
+            .bad()) {
+      return false;
+    }
+    transform->putAndInsertString(DCM_RescaleSlope, "1");
+    transform->putAndInsertString(DCM_RescaleIntercept, "-1024");
+  }
+  for (const EnhancedFrame& frame : frames) {
+    DcmItem *group = nullptr, *position = nullptr;
+    if (ds.findOrCreateSequenceItem(DCM_PerFrameFunctionalGroupsSequence, group, -2).bad() ||
+        group->findOrCreateSequenceItem(DCM_PlanePositionSequence, position, -2).bad()) {
+      return false;
+    }
+    const glm::dvec3& p = frame.position_mm;
+    position->putAndInsertString(DCM_ImagePositionPatient, DicomNumbers({p.x, p.y, p.z}).c_str());
+    if (per_frame_rescale) {
+      if (group->findOrCreateSequenceItem(DCM_PixelValueTransformationSequence, transform, -2)
+              .bad()) {
+        return false;
+      }
+      transform->putAndInsertString(DCM_RescaleSlope, "1");
+      transform->putAndInsertString(DCM_RescaleIntercept, DicomNumbers({frame.intercept}).c_str());
+    }
+  }
+  return true;
+}
+
 inline bool WriteDicomSlice(const std::filesystem::path& path, const DicomSliceSpec& s) {
   static const bool registered = [] {
     DcmRLEEncoderRegistration::registerCodecs();

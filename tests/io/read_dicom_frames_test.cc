@@ -21,67 +21,18 @@ using ::vpm::testing::DicomNumbers;
 using ::vpm::testing::DicomSliceSpec;
 using ::vpm::testing::MakeTempDir;
 
-struct Frame {
-  glm::dvec3 position_mm{0.0};
-  double intercept = -1024.0;  // written per frame when `per_frame_rescale`
-};
+using Frame = ::vpm::testing::EnhancedFrame;
 
 // An Enhanced CT image of `frames` (stored value of pixel n in frame f:
-// 100 f + n) with PixelSpacing, SliceThickness and ImageOrientationPatient in
-// the shared functional groups and ImagePositionPatient (and, when asked,
-// the rescale) per frame. Top-level geometry attributes are absent, as in
-// the standard's enhanced IODs.
+// 100 f + n), testing::FillEnhancedCt, native pixel data.
 void WriteEnhancedCt(const std::filesystem::path& path, const std::vector<Frame>& frames,
                      bool per_frame_rescale, const std::string& number_of_frames = "") {
   DicomSliceSpec s;
-  s.sop_class_uid = UID_EnhancedCTImageStorage;
-  s.with_position = false;
-  s.with_pixel_data = false;
   DcmFileFormat file;
   DcmDataset& ds = *file.getDataset();
-  testing::FillDicomSlice(ds, s);
-  ds.findAndDeleteElement(DCM_PixelSpacing);
-  ds.findAndDeleteElement(DCM_ImageOrientationPatient);
-  ds.findAndDeleteElement(DCM_RescaleIntercept);
-  ds.findAndDeleteElement(DCM_RescaleSlope);
-  ds.putAndInsertString(DCM_NumberOfFrames, number_of_frames.empty()
-                                                ? std::to_string(frames.size()).c_str()
-                                                : number_of_frames.c_str());
-  DcmItem* shared = nullptr;
-  ASSERT_TRUE(ds.findOrCreateSequenceItem(DCM_SharedFunctionalGroupsSequence, shared, -2).good());
-  DcmItem* measures = nullptr;
-  ASSERT_TRUE(shared->findOrCreateSequenceItem(DCM_PixelMeasuresSequence, measures, -2).good());
-  measures->putAndInsertString(DCM_PixelSpacing, "0.75\\0.5");
-  measures->putAndInsertString(DCM_SliceThickness, "2");
-  DcmItem* orientation = nullptr;
-  ASSERT_TRUE(
-      shared->findOrCreateSequenceItem(DCM_PlaneOrientationSequence, orientation, -2).good());
-  orientation->putAndInsertString(DCM_ImageOrientationPatient, "1\\0\\0\\0\\1\\0");
-  DcmItem* transform = nullptr;
-  if (!per_frame_rescale) {
-    ASSERT_TRUE(
-        shared->findOrCreateSequenceItem(DCM_PixelValueTransformationSequence, transform, -2)
-            .good());
-    transform->putAndInsertString(DCM_RescaleSlope, "1");
-    transform->putAndInsertString(DCM_RescaleIntercept, "-1024");
-  }
+  ASSERT_TRUE(testing::FillEnhancedCt(ds, s, frames, per_frame_rescale, number_of_frames));
   std::vector<Uint16> pixels;
   for (size_t f = 0; f < frames.size(); ++f) {
-    DcmItem* group = nullptr;
-    ASSERT_TRUE(
-        ds.findOrCreateSequenceItem(DCM_PerFrameFunctionalGroupsSequence, group, -2).good());
-    DcmItem* position = nullptr;
-    ASSERT_TRUE(group->findOrCreateSequenceItem(DCM_PlanePositionSequence, position, -2).good());
-    const glm::dvec3& p = frames[f].position_mm;
-    position->putAndInsertString(DCM_ImagePositionPatient, DicomNumbers({p.x, p.y, p.z}).c_str());
-    if (per_frame_rescale) {
-      ASSERT_TRUE(
-          group->findOrCreateSequenceItem(DCM_PixelValueTransformationSequence, transform, -2)
-              .good());
-      transform->putAndInsertString(DCM_RescaleSlope, "1");
-      transform->putAndInsertString(DCM_RescaleIntercept,
-                                    DicomNumbers({frames[f].intercept}).c_str());
-    }
     for (int n = 0; n < s.rows * s.columns; ++n) pixels.push_back(static_cast<Uint16>(100 * f + n));
   }
   ds.putAndInsertUint16Array(DCM_PixelData, pixels.data(), pixels.size());

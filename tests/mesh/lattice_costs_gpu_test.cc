@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "server/mesh/build_proxy_mesh.h"
 #include "server/mesh/lattice_costs.h"
 #include "server/mesh/lattice_costs_gpu.h"
 #include "tests/gpu/gpu_test_context.h"
@@ -91,6 +92,27 @@ TEST_F(GpuTest, LatticeCostsGpu_Int16VolumeEqualsFloatVolume) {
       ASSERT_NEAR(a->g(f)[id], cpu.g(f)[id], 1e-5 * g_max) << id;
     }
   }
+}
+
+// The mesh's stats say where step 1 ran: on a CPU device (lavapipe) the
+// native rows, not the Vulkan kernels; on a GPU the kernels; without a
+// device the CPU reference. `vpm mesh` prints this label.
+TEST_F(GpuTest, DecimateLattice_SaysWhereStep1Ran) {
+  const Volume body = testing::MakeBodyVolume({40, 36, 30}, {1.0, 1.0, 1.5});
+  auto gpu_volume = GpuVolume::Upload(context(), body);
+  ASSERT_TRUE(gpu_volume.ok()) << gpu_volume.status();
+  auto op = LatticeCostsGpu::Create(context());
+  ASSERT_TRUE(op.ok()) << op.status();
+  MeshParams params;
+  params.grid = {10, 9, 8};
+  params.target = 80;
+  auto on_device = DecimateLattice(body, params, MeshGpu{&*gpu_volume, &*op});
+  auto reference = DecimateLattice(body, params);
+  ASSERT_TRUE(on_device.ok() && reference.ok());
+  EXPECT_EQ(on_device->stats.evaluated_on,
+            context().is_cpu_device() ? kStep1OnCpuRows : kStep1OnGpu)
+      << context().device_name();
+  EXPECT_EQ(reference->stats.evaluated_on, kStep1OnCpuReference);
 }
 
 // A volume of more voxels than the texel-buffer limit of one voxel per

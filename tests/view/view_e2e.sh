@@ -10,7 +10,11 @@
 #   - grab mode (g) + a left drag deforms the volume (the server's
 #     max_displacement_mm in the frames vpm-view logs) and releasing lets go,
 #   - S saves a PNG screenshot,
-#   - L shows three slices beside the 3D frame (2 x 2) and hides them,
+#   - L shows three slices beside the 3D frame (2 x 2) and hides them; the
+#     wheel over a slice scrolls it in equal steps, and grab mode on a slice
+#     grabs and drags the tissue on its plane,
+#   - B (crop box): dragging the face under the cursor moves it and changes
+#     the frame; C (clip plane) cuts the front away and PageUp moves it 1 mm,
 #   - resizing the window brings frames of the new size,
 #   - killing the server shows a red "connection lost" banner, and a server
 #     restarted on the same port is reconnected to and streams again,
@@ -215,11 +219,82 @@ sd=$(stddev "$tmp/slice-br.png")
 if gt "$sd" 0.05 && grep -q "^frame [0-9]* $half .* slices 3$" "$tmp/view.out"; then
   pass "L shows 3 slices beside a $half 3D frame (bottom-right cell stddev $sd)"
 else fail "L: bottom-right slice cell stddev $sd; frames: $(tail -1 "$tmp/view.out")"; fi
+
+# 6c. The wheel over the axial slice (top right) scrolls it: three notches
+# ask for three planes one pixel size apart, and the slice image changes.
+cell() { convert "$1" -crop "${half}+$2+$3" +repage "$4"; }
+cell "$tmp/slices-all.png" $((frame_w / 2)) 0 "$tmp/axial-before.png"
+n=$(frames)
+xdotool mousemove --window "$window" $((frame_w * 3 / 4)) $((frame_h / 4)); sleep 0.3
+xdotool click --repeat 3 --delay 150 4
+wait_for 30 bash -c "[ \$(grep -c 'axial=[-0-9]' '$tmp/view.out') -ge 3 ]" ||
+  fail "three wheel notches over the axial slice did not set three axial positions"
+settle "$n"
+import -window "$window" "$tmp/scrolled-all.png"
+cell "$tmp/scrolled-all.png" $((frame_w / 2)) 0 "$tmp/axial-after.png"
+steps=$(grep -o 'axial=[-0-9.e+]*' "$tmp/view.out" | cut -d= -f2 | tail -3 |
+        awk 'NR > 1 { printf "%.4f ", $1 - p } { p = $1 }')
+d=$(changed_pixels "$tmp/axial-before.png" "$tmp/axial-after.png")
+if echo "$steps" | awk '{ exit !($1 > 0 && ($1 - $2) < 1e-3 && ($2 - $1) < 1e-3) }' && [ "$d" -gt 100 ]; then
+  pass "wheel scrolled the axial slice in equal steps ($steps mm; $d pixels changed)"
+else fail "wheel over the axial slice: steps '$steps' mm, $d pixels changed"; fi
+
+# 6d. Grab mode on a slice: pressing on the coronal slice (bottom left)
+# grabs the tissue on its plane, dragging pulls it within the plane.
+key g
+n=$(frames)
+drag 1 $((frame_w / 4)) $((frame_h * 3 / 4)) 24 -16 6
+if wait_for 60 displaced_more_than 5; then
+  pass "grab and drag on the coronal slice deformed the volume (max_displacement_mm $(last_displacement))"
+else fail "grab on the coronal slice: max_displacement_mm $(last_displacement), expected > 5"; fi
+xdotool mouseup 1
+settle "$n"
+key g
 n=$(frames)
 key l
 wait_for 60 grep -q "^frame [0-9]* ${frame_w}x${frame_h} .* slices 0$" "$tmp/view.out" ||
   fail "L again did not bring back ${frame_w}x${frame_h} frames without slices"
 settle "$n"
+
+# 6e. B: the crop box, the volume's box at first. From the reset view (it
+# looks along an axis), dragging the face under the centre 40 px up pushes
+# it into the volume: the box sent changes and so does the frame.
+n=$(frames); key v; settle "$n"
+n=$(frames); key b
+wait_for 15 grep -q '^settings crop [-0-9]' "$tmp/view.out" || fail "B sent no crop box"
+settle "$n"
+shot crop0
+box0=$(grep '^settings crop [-0-9]' "$tmp/view.out" | tail -1 | cut -d' ' -f3-8)
+n=$(frames)
+drag 1 $((frame_w / 2)) $((frame_h / 2)) 0 -40 8; xdotool mouseup 1
+settle "$n"
+shot crop1
+box1=$(grep '^settings crop [-0-9]' "$tmp/view.out" | tail -1 | cut -d' ' -f3-8)
+moved=$(echo "$box0 $box1" | awk '{ m = 0; for (i = 1; i <= 6; ++i) { d = $(i + 6) - $i; if (d < 0) d = -d; if (d > m) m = d } print m }')
+d=$(changed_pixels "$tmp/crop0.png" "$tmp/crop1.png")
+if gt "$moved" 10 && [ "$d" -gt 1000 ]; then
+  pass "dragging a crop face moved it $moved mm ($box0 -> $box1) and changed $d pixels"
+else fail "crop face drag: moved $moved mm ($box0 -> $box1), $d pixels changed"; fi
+n=$(frames); key b
+wait_for 15 bash -c "tail -1 <(grep '^settings' '$tmp/view.out') | grep -q '^settings crop none'" ||
+  fail "B again did not clear the crop box"
+settle "$n"
+
+# 6f. C: a clip plane facing the camera through the centre cuts the front
+# away; PageUp moves it 1 mm deeper; C again removes it.
+n=$(frames); key c
+wait_for 15 grep -q ' clip [-0-9]' "$tmp/view.out" || fail "C sent no clip plane"
+settle "$n"
+shot clip
+d=$(changed_pixels "$tmp/crop0.png" "$tmp/clip.png")
+xdotool mousemove --window "$window" $((frame_w / 2)) $((frame_h / 2))
+n=$(frames); key Page_Up; settle "$n"
+offsets=$(grep -o ' clip [-0-9.e+]*' "$tmp/view.out" | tail -2 | awk '{ printf "%s ", $2 }')
+step=$(echo "$offsets" | awk '{ print $2 - $1 }')
+if [ "$d" -gt 1000 ] && gt "$step" 0.999 && gt 1.001 "$step"; then
+  pass "C cut the front away ($d pixels changed), PageUp moved the plane $step mm ($offsets)"
+else fail "clip plane: $d pixels changed, PageUp step $step mm ($offsets)"; fi
+n=$(frames); key c; settle "$n"
 
 # 7. Resizing the window asks for frames of the new size (the frame area is
 # the window less the status bar).

@@ -5,7 +5,7 @@
 // not blank, an orbit drag changes it, a grab-and-drag deforms the tissue
 // (the server reports max_displacement_mm > 0 and the still frame while
 // holding differs from the one before), release brings it back, refine,
-// zoom and MIP work, the token never reaches the browser, a second browser
+// zoom and MIP work, the Crop tool drags a face of the crop box, the token never reaches the browser, a second browser
 // without a cookie (sent to sign in, WebSocket refused) or signed in as bob
 // (PERMISSION_DENIED) cannot reach alice's session, stopping the server
 // shows a clear message, and restarting it brings the view back.
@@ -167,6 +167,56 @@ async function checkSlicesAndCuts(page) {
   await settled(page, '!h.interactive && h.slices.length === 0');
 }
 
+// The Crop tool: from the reset view (which looks posterior, along world
+// +y), pressing on the 3D view's centre picks the box's anterior face (y
+// low) and dragging up (soft-tissue preset) pushes it away from the viewer: the crop the page
+// sends has lo.y moved by the drag times the orbit-centre scale, nothing
+// else moved, and the frame changes. `sentCrops`: every crop sent, in order.
+async function checkCropDrag(page, sentCrops) {
+  await page.selectOption('#render', 'dvr:ct-soft-tissue');  // the skin: cut into, it changes
+  await page.click('#reset-view');
+  await settled(page, '!h.interactive');
+  const before3d = await canvasGrey(page);
+  // The fields back to the volume's world box (their min and max).
+  const box = await page.evaluate(() => {
+    for (const k of ['x0', 'y0', 'z0']) document.getElementById(`crop-${k}`).value = document.getElementById(`crop-${k}`).min;
+    for (const k of ['x1', 'y1', 'z1']) document.getElementById(`crop-${k}`).value = document.getElementById(`crop-${k}`).max;
+    const get = (k) => Number(document.getElementById(`crop-${k}`).value);
+    return { lo: ['x0', 'y0', 'z0'].map(get), hi: ['x1', 'y1', 'z1'].map(get) };
+  });
+  await page.check('input[name="tool"][value="crop"]');
+  const r = await page.locator('#frame').boundingBox();
+  const centre = [r.x + r.width / 2, r.y + r.height / 2];
+  const dragCss = 160;  // ~155 mm: well into the abdomen (its skin lies ~80 mm inside the box)
+  const sentBefore = sentCrops.length;
+  await dragOnCanvas(page, centre, [centre[0], centre[1] - dragCss], 8);
+  await page.mouse.up();
+  await settled(page, '!h.interactive');
+  const after3d = await canvasGrey(page);
+  assert.ok(sentCrops.length > sentBefore, 'dragging a crop face sent no crop box');
+  const crop = sentCrops[sentCrops.length - 1];
+  const lo = [crop.lo_mm.x, crop.lo_mm.y, crop.lo_mm.z], hi = [crop.hi_mm.x, crop.hi_mm.y, crop.hi_mm.z];
+  const { mm, framePx } = await page.evaluate((css) => {
+    const canvas = document.getElementById('frame');
+    const px = (css * canvas.width) / canvas.getBoundingClientRect().width;
+    return { mm: window.vpmViewer.camera.mmPerPixel(canvas.width, canvas.height), framePx: px };
+  }, dragCss);
+  const want = box.lo[1] + framePx * mm;
+  const cropDiff = meanAbsDiff(before3d, after3d);
+  step(`Crop tool: dragged the anterior face ${dragCss} CSS px up: crop y0 ${box.lo[1].toFixed(1)} -> ` +
+       `${lo[1].toFixed(1)} mm (expected ${want.toFixed(1)}), 3D mean |grey difference| ${cropDiff.toFixed(2)}`);
+  assert.ok(Math.abs(lo[1] - want) <= 1.5 * mm + 0.1, `crop y0 ${lo[1]}, expected ${want}`);
+  assert.ok(lo[1] > box.lo[1] + 10, 'the anterior face moved less than 10 mm');
+  for (const [a, v] of [[0, lo[0]], [2, lo[2]]]) assert.ok(Math.abs(v - box.lo[a]) < 0.06, `lo[${a}] moved`);
+  for (let a = 0; a < 3; ++a) assert.ok(Math.abs(hi[a] - box.hi[a]) < 0.06, `hi[${a}] moved`);
+  assert.ok(cropDiff > kMinOrbitDiff, `the dragged crop face did not change the frame (${cropDiff})`);
+  await page.screenshot({ path: path.join(out, 'web_viewer_crop_drag.png') });
+  await page.check('input[name="tool"][value="orbit"]');
+  await page.uncheck('#crop');
+  await page.dispatchEvent('#crop', 'change');
+  await settled(page, '!h.interactive');
+}
+
 // Alice's session is out of reach of a browser with no cookie and of Bob's.
 async function checkIsolation(browser, url, aliceSession) {
   const anonymous = await browser.newContext();
@@ -213,6 +263,14 @@ async function main() {
   let tokenSeen = false;
   page.on('websocket', (ws) => ws.on('framereceived', ({ payload }) => {
     if (String(payload).includes(aliceToken)) tokenSeen = true;
+  }));
+  // Every crop box the page sends (settings events), for the Crop tool check.
+  const sentCrops = [];
+  page.on('websocket', (ws) => ws.on('framesent', ({ payload }) => {
+    try {
+      const crop = JSON.parse(String(payload))?.event?.settings?.crop;
+      if (crop) sentCrops.push(crop);
+    } catch { /* not JSON: not a settings event */ }
   }));
 
   const t0 = performance.now();
@@ -362,6 +420,7 @@ async function main() {
   await page.screenshot({ path: path.join(out, 'web_viewer_mip.png') });
   await page.selectOption('#render', 'dvr:ct-vessels');
   await checkSlicesAndCuts(page);
+  await checkCropDrag(page, sentCrops);
 
   figures.latency_ms = await page.evaluate(() => window.vpmViewer.stats.latencyMs);
   assert.ok(!tokenSeen, 'the token reached the browser');

@@ -147,6 +147,8 @@ const tools = new PointerTools({
     $('refine-grab').disabled = false;
   },
   onRefused: (text) => showMessage(text, 'error'),
+  onCropPress: (x, y, width, height) => cuts.pressFace(state.camera, x, y, width, height),
+  onCropDrag: (dx, dy, width, height) => cuts.dragFace(state.camera, dx, dy, width, height),
 });
 
 // ------------------------------------------------------------ messages in

@@ -2,6 +2,10 @@
 // LPS mm): a crop box, one range per world axis, and one clip plane that
 // keeps the side of a world axis beyond a position. Both start from the
 // open volume's world box (VolumeInfo: origin, direction, dims, spacing).
+// With the Crop tool, dragging a face of the box in the 3D view moves it
+// (crop_drag.js) and the number fields follow.
+import { faceDragMm, moveBoxFace, pickBoxFace } from './crop_drag.js';
+
 const kAxes = ['x', 'y', 'z'];
 // The clip plane's choices: keep what lies towards this patient direction.
 const kClipSides = {
@@ -52,6 +56,7 @@ export class CutControls {
 
   // A new volume: the box and the clip range follow its world box.
   setVolume(volume) {
+    this.volume = volume;
     this.box = worldBox(volume);
     kAxes.forEach((_, a) => {
       for (const [inputs, values] of [[this.e.cropLo, this.box.lo], [this.e.cropHi, this.box.hi]]) {
@@ -70,6 +75,44 @@ export class CutControls {
                                    value: (this.box.lo[a] + this.box.hi[a]) / 2 });
   }
 
+  // The crop box the fields hold ({lo, hi}, world mm), or null.
+  cropBox() {
+    if (!this.box) return null;
+    const read = (inputs) => inputs.map((i) => Number(i.value));
+    const [lo, hi] = [read(this.e.cropLo), read(this.e.cropHi)];
+    if (!lo.every(Number.isFinite) || !hi.every(Number.isFinite)) return null;
+    return { lo: lo.map((v, a) => Math.min(v, hi[a])), hi: hi.map((v, a) => Math.max(v, lo[a])) };
+  }
+
+  // The Crop tool pressed frame pixel (px, py): true when it is on a face
+  // of the box, which the following dragFace calls move.
+  pressFace(camera, px, py, width, height) {
+    const box = this.cropBox();
+    const face = box && pickBoxFace(camera, this.volume, box, px, py, width, height);
+    this.faceDrag = face ? { face, start: box } : null;
+    return Boolean(face);
+  }
+
+  // The pointer moved (dx, dy) frame pixels from the press: the face moves
+  // along its normal, the fields follow, the crop turns on; settings go at
+  // most once per animation frame.
+  dragFace(camera, dx, dy, width, height) {
+    const d = this.faceDrag;
+    if (!d) return;
+    const delta = faceDragMm(camera, this.volume, d.face, dx, dy, width, height);
+    const moved = moveBoxFace(d.start, d.face, delta, this.box);
+    const inputs = d.face.high ? this.e.cropHi : this.e.cropLo;
+    const values = d.face.high ? moved.hi : moved.lo;
+    inputs[d.face.axis].value = values[d.face.axis].toFixed(1);
+    this.e.crop.checked = true;
+    if (this.inputPending) return;
+    this.inputPending = true;
+    requestAnimationFrame(() => {
+      this.inputPending = false;
+      this.changed();
+    });
+  }
+
   changed() {
     const side = this.e.clipSide.value;
     this.e.clipLabel.textContent = side ? `${Number(this.e.clipAt.value).toFixed(1)} mm` : '';
@@ -79,14 +122,10 @@ export class CutControls {
   // The crop and clip fields of RenderSettings ({} when both are off).
   settings() {
     const out = {};
-    if (this.box && this.e.crop.checked) {
-      const read = (inputs) => inputs.map((i) => Number(i.value));
-      const [lo, hi] = [read(this.e.cropLo), read(this.e.cropHi)];
-      if (lo.every(Number.isFinite) && hi.every(Number.isFinite)) {
-        const vec = (v) => ({ x: v[0], y: v[1], z: v[2] });
-        out.crop = { lo_mm: vec(lo.map((v, a) => Math.min(v, hi[a]))),
-                     hi_mm: vec(hi.map((v, a) => Math.max(v, lo[a]))) };
-      }
+    const box = this.e.crop.checked ? this.cropBox() : null;
+    if (box) {
+      const vec = (v) => ({ x: v[0], y: v[1], z: v[2] });
+      out.crop = { lo_mm: vec(box.lo), hi_mm: vec(box.hi) };
     }
     const n = kClipSides[this.e.clipSide.value];
     const at = Number(this.e.clipAt.value);

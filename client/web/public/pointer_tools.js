@@ -3,7 +3,10 @@
 //   grab tool:  press grabs the pixel (Grab{pick}: the server casts the same
 //               ray), moving drags (Drag offsets in mm from the screen motion
 //               and the camera), releasing lets go (Release);
-//   refine tool: a click refines the mesh at the picked point.
+//   refine tool: a click refines the mesh at the picked point;
+//   crop tool:  pressing on a face of the crop box and dragging moves the
+//               face along its normal (onCropPress, onCropDrag); pressing
+//               off the box orbits.
 // Camera and drag events are sent at most once per animation frame (the
 // server coalesces them too); the last one is flushed on release.
 const kOrbitDegPerPixel = 0.4;   // canvas pixels of the frame's full size
@@ -12,9 +15,12 @@ const kZoomPerWheelUnit = 0.0015;
 export class PointerTools {
   // canvas: the frame canvas (its width/height are the frame's full size);
   // camera(): the OrbitCamera or null; send(event) -> sequence;
-  // onRefine(point_mm); onGrab(point_mm | null); onRefused(text).
-  constructor({ canvas, camera, send, onRefine, onGrab, onRefused }) {
-    Object.assign(this, { canvas, camera, send, onRefine, onGrab, onRefused });
+  // onRefine(point_mm); onGrab(point_mm | null); onRefused(text);
+  // onCropPress(x, y, width, height) -> true when on a face;
+  // onCropDrag(dx, dy, width, height): frame pixels from the press.
+  constructor({ canvas, camera, send, onRefine, onGrab, onRefused, onCropPress, onCropDrag }) {
+    Object.assign(this, { canvas, camera, send, onRefine, onGrab, onRefused, onCropPress,
+                          onCropDrag });
     this.tool = 'orbit';
     this.gesture = null;  // {kind, startX, startY, lastX, lastY}
     this.queued = null;   // the newest camera or drag event waiting for a frame
@@ -53,8 +59,10 @@ export class PointerTools {
       this.send({ grab: { pick: true, pixel_x: x, pixel_y: y } });
       this.onGrab({ x: point[0], y: point[1], z: point[2] });
     }
+    let kind = this.tool;
+    if (kind === 'crop') kind = this.onCropPress(x, y, width, height) ? 'crop' : 'orbit';
     this.canvas.setPointerCapture(e.pointerId);
-    this.gesture = { kind: this.tool, startX: x, startY: y, lastX: x, lastY: y };
+    this.gesture = { kind, startX: x, startY: y, lastX: x, lastY: y };
   }
 
   move(e) {
@@ -65,6 +73,8 @@ export class PointerTools {
     if (g.kind === 'orbit') {
       camera.orbit(-(x - g.lastX) * kOrbitDegPerPixel, (y - g.lastY) * kOrbitDegPerPixel);
       this.queue({ camera: camera.toProto() });
+    } else if (g.kind === 'crop') {
+      this.onCropDrag(x - g.startX, y - g.startY, this.canvas.width, this.canvas.height);
     } else {
       const [dx, dy] = [x - g.startX, y - g.startY];
       const o = camera.dragOffsetMm(dx, dy, this.canvas.width, this.canvas.height);
