@@ -35,8 +35,19 @@ inline void ExplainInvertedTets(const FemModel& model, const Volume& volume,
                : face                                                ? 'B'
                                                                      : 'F';
     }
-    std::printf("  inverted %s at %.1f mm from the grab\n", kinds.c_str(),
-                glm::distance(centre, grab));
+    // The fixed vertex nearest the tet (rest positions): a free vertex
+    // squeezed between handles and a fixed one has no room to give.
+    double nearest_fixed = 1e300;
+    glm::dvec3 fixed_at(0.0);
+    for (size_t v = 0; v < x.size(); ++v) {
+      if (model.deformable()[v]) continue;
+      const double d = glm::distance(model.rest_positions_mm()[v], centre);
+      if (d < nearest_fixed) nearest_fixed = d, fixed_at = model.rest_positions_mm()[v] - grab;
+    }
+    std::printf("  inverted %s at %.1f mm from the grab; nearest fixed vertex %.1f mm from it, "
+                "at grab + (%.1f, %.1f, %.1f) mm\n",
+                kinds.c_str(), glm::distance(centre, grab), nearest_fixed, fixed_at.x,
+                fixed_at.y, fixed_at.z);
   }
 }
 

@@ -14,6 +14,8 @@
 // Usage: mesh_validity_bench [--max-load-steps N] [--intermediate-newton N]
 //                            [--steiner DEG] [VOLUME [TF]]...
 //   (default: phantom:abdomen?size=128)
+//   --min-load-fraction F, --measuring-load-steps N: SolverOptions of both
+//   settings and max_load_steps of the measuring one
 //   --steiner DEG: MeshParams::steiner_min_dihedral_deg (default 5; 0: no
 //   Steiner points, the mesh of flips alone)
 //   MESH_VALIDITY_EXPLAIN=1 prints what each inverted tet is made of.
@@ -36,6 +38,7 @@ using namespace vpm;
 namespace {
 
 const Volume* explain_volume = nullptr;
+int measuring_load_steps = 0;  // 0: MeasurementFemOptions' own
 
 struct DragResult {
   int64_t inverted = 0;
@@ -53,6 +56,10 @@ DragResult RunDrag(const ProxyMesh& mesh, const glm::dvec3& extent, const glm::d
     const SolveStats s =
         bench::Check(model.Drag(drag * (static_cast<double>(i) / increments)), "drag");
     r.forced |= s.forced_inversion;
+    if (s.forced_inversion && std::getenv("MESH_VALIDITY_EXPLAIN") != nullptr) {
+      std::printf("  increment %d/%d forced after %d load steps, %d Newton iterations\n", i,
+                  increments, s.load_steps, s.newton_iterations);
+    }
     r.step_ms += s.total_ms() / increments;
   }
   r.inverted = model.CountInvertedTets();
@@ -90,7 +97,9 @@ void Row(const Volume& volume, const std::string& tf, Footprint footprint, const
   const double h = mesh.stats.h_mm;
   FemOptions interactive;
   interactive.solver = live;
-  const FemOptions measuring = MeasurementFemOptions();
+  FemOptions measuring = MeasurementFemOptions();
+  if (measuring_load_steps > 0) measuring.solver.max_load_steps = measuring_load_steps;
+  measuring.solver.min_load_fraction = live.min_load_fraction;
   std::string cells;
   double step_ms = 0.0;
   for (const FemOptions* options : std::initializer_list<const FemOptions*>{&interactive, &measuring}) {
@@ -120,6 +129,10 @@ int main(int argc, char** argv) {
       live.max_load_steps = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--intermediate-newton") == 0 && i + 1 < argc) {
       live.intermediate_newton_iterations = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--min-load-fraction") == 0 && i + 1 < argc) {
+      live.min_load_fraction = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--measuring-load-steps") == 0 && i + 1 < argc) {
+      measuring_load_steps = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--steiner") == 0 && i + 1 < argc) {
       steiner_deg = std::atof(argv[++i]);
     } else if (i + 1 < argc && std::strchr(argv[i + 1], ':') == nullptr &&

@@ -51,6 +51,7 @@ Result<Solved> Solve(const Volume& volume, const ProxyMesh& mesh, const std::str
   Solved out;
   out.row.name = name;
   out.row.vertices = static_cast<int64_t>(mesh.vertices.size());
+  out.row.min_dihedral_deg = mesh.quality.min_dihedral_deg;
   // Validity first: the 1.5 h drag in the same direction.
   ASSIGN_OR_RETURN(GrabInfo grab, fem.Grab(grab_mm, radius_mm));
   out.row.handles = static_cast<int64_t>(grab.handles.size());
