@@ -7,7 +7,7 @@
 
 #include "server/mesh/build_proxy_mesh.h"
 #include "server/mesh/tetrahedralize.h"
-#include "server/phantom/phantom.h"
+#include "tests/mesh/mesh_test_volumes.h"
 
 namespace vpm {
 namespace {
@@ -73,27 +73,25 @@ TEST(SliverSteinerPoints, RejectNonPositiveParams) {
             absl::StatusCode::kInvalidArgument);
 }
 
-// The phantom's meshes refined at the standard drag's landmark, as the
-// server builds them: every tet at 5 degrees or more, and the vertices of
-// the mesh without Steiner points kept, in order, at the same positions.
-TEST(SliverSteinerPoints, PhantomRefinedMeshesHaveNoTetUnderFiveDegrees) {
-  auto volume = MakePhantom("abdomen?size=128", VolumeLimits{});
-  ASSERT_TRUE(volume.ok()) << volume.status();
+// Meshes refined at a point, as the server builds them, on the synthetic
+// body (the phantom, the MRI and the CT: tests/measures/drag_validity_test.cc):
+// every tet at 5 degrees or more, and the vertices of the mesh without
+// Steiner points kept, in order, at the same positions.
+TEST(SliverSteinerPoints, RefinedMeshesHaveNoTetUnderFiveDegreesAndKeepTheirVertices) {
+  const Volume volume = testing::MakeBodyVolume({90, 75, 60});
   for (Footprint footprint : {Footprint::kPoint, Footprint::kCell}) {
     SCOPED_TRACE(FootprintName(footprint));
     MeshParams params;
     params.footprint = footprint;
-    for (const Landmark& l : volume->landmarks()) {
-      if (l.name == "left_kidney_center") params.refine_at_mm = l.position_mm;
-    }
-    ASSERT_TRUE(params.refine_at_mm.has_value());
-    auto mesh = BuildProxyMesh(*volume, params);
+    params.refine_at_mm = volume.geometry().extent_mm() * glm::dvec3(0.6, 0.5, 0.5);
+    auto mesh = BuildProxyMesh(volume, params);
     ASSERT_TRUE(mesh.ok()) << mesh.status();
     params.steiner_min_dihedral_deg = 0.0;
-    auto plain = BuildProxyMesh(*volume, params);
+    auto plain = BuildProxyMesh(volume, params);
     ASSERT_TRUE(plain.ok()) << plain.status();
     EXPECT_LT(plain->quality.min_dihedral_deg, 5.0) << "flips alone already reach 5 degrees";
     EXPECT_GE(mesh->quality.min_dihedral_deg, 5.0);
+    EXPECT_GT(mesh->stats.steiner, 0);
     EXPECT_EQ(mesh->stats.steiner, static_cast<int64_t>(mesh->vertices.size() -
                                                         plain->vertices.size()));
     for (size_t v = 0; v < plain->vertices.size(); ++v) {
