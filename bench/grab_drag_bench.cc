@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "bench/bench_util.h"
+#include "bench/explain_inverted_tets.h"
 #include "server/fem/fem_model.h"
 #include "server/io/read_volume.h"
 #include "server/mesh/build_proxy_mesh.h"
@@ -53,32 +54,6 @@ glm::dvec3 GrabPoint(const Case& c, const Volume& volume) {
   return c.grab_mm.value_or(volume.geometry().extent_mm() * 0.5);
 }
 
-// Per inverted tet: how many of its vertices are handles (H), fixed (X),
-// on a box face (B) or free (F), and its centroid's distance from the grab.
-void Explain(const FemModel& model, const Volume& volume, const glm::dvec3& grab) {
-  const std::vector<glm::dvec3> x = model.Positions();
-  const auto& handles = model.grab().handles;
-  const glm::dvec3 extent = volume.geometry().extent_mm();
-  for (const auto& tet : model.tets()) {
-    const glm::dvec3 a = x[tet[1]] - x[tet[0]], b = x[tet[2]] - x[tet[0]], c = x[tet[3]] - x[tet[0]];
-    if (glm::dot(a, glm::cross(b, c)) > 0.0) continue;
-    std::string kinds;
-    glm::dvec3 centre(0.0);
-    for (int32_t v : tet) {
-      const glm::dvec3 p = model.rest_positions_mm()[v];
-      centre += 0.25 * p;
-      bool face = false;
-      for (int i = 0; i < 3; ++i) face |= p[i] < 1e-6 * extent[i] || p[i] > extent[i] * (1 - 1e-6);
-      kinds += std::binary_search(handles.begin(), handles.end(), v) ? 'H'
-               : !model.deformable()[v]                              ? 'X'
-               : face                                                ? 'B'
-                                                                     : 'F';
-    }
-    std::printf("  inverted %s at %.1f mm from the grab\n", kinds.c_str(),
-                glm::distance(centre, grab));
-  }
-}
-
 void Row(const Case& c, const Volume& volume, Footprint footprint, double radius_factor,
          double drag_mm, int increments) {
   MeshParams params;
@@ -100,7 +75,7 @@ void Row(const Case& c, const Volume& volume, Footprint footprint, double radius
         bench::Check(model.Drag(glm::dvec3(0.0, 0.0, drag_mm * fraction)), "drag");
     forced |= s.forced_inversion;
   }
-  if (std::getenv("GRAB_DRAG_EXPLAIN") != nullptr) Explain(model, volume, grab);
+  if (std::getenv("GRAB_DRAG_EXPLAIN") != nullptr) bench::ExplainInvertedTets(model, volume, grab);
   double max_u = 0.0;
   for (const glm::dvec3& u : model.Displacements()) max_u = std::max(max_u, glm::length(u));
   std::printf("%-14s %-6s %5zu %6.1f %7zu %6lld %6lld %9.2f %7.3f %5lld %6s\n", c.name.c_str(),

@@ -53,10 +53,13 @@ void StageTable(const Volume& volume, const gpu::GpuContext& context, const GpuV
   std::printf("%-32s %10.2f\n", "decimate (step 2)", min_of(&MeshStats::decimate_ms));
   std::printf("%-32s %10.2f\n", "refine (step 4)", min_of(&MeshStats::refine_ms));
   std::printf("%-32s %10.2f\n", "classify (step 3)", min_of(&MeshStats::classify_ms));
+  std::printf("%-32s %10.2f\n", "boundary vertices", min_of(&MeshStats::boundary_ms));
   std::printf("%-32s %10.2f\n", "tetrahedralize", min_of(&MeshStats::tetrahedralize_ms));
+  std::printf("%-32s %10.2f\n", "Steiner points (rounds)", min_of(&MeshStats::steiner_ms));
   std::printf("%-32s %10.2f\n", "whole build (GPU step 1)", min_of(&MeshStats::total_ms));
-  std::printf("vertices %zu, tets %zu, hard %lld\n", mesh.vertices.size(), mesh.tets.size(),
-              (long long)mesh.stats.hard);
+  std::printf("vertices %zu (%lld Steiner), tets %zu, hard %lld, min dihedral %.2f deg\n",
+              mesh.vertices.size(), (long long)mesh.stats.steiner, mesh.tets.size(),
+              (long long)mesh.stats.hard, mesh.quality.min_dihedral_deg);
 }
 
 // FNV-1a over a decimation's removal order, kept set, kept costs (bits) and

@@ -12,8 +12,13 @@
 // standard drag), else the centre of the image box.
 //
 // Usage: mesh_validity_bench [--max-load-steps N] [--intermediate-newton N]
-//                            [VOLUME [TF]]...
+//                            [--steiner DEG] [VOLUME [TF]]...
 //   (default: phantom:abdomen?size=128)
+//   --min-load-fraction F, --measuring-load-steps N: SolverOptions of both
+//   settings and max_load_steps of the measuring one
+//   --steiner DEG: MeshParams::steiner_min_dihedral_deg (default 5; 0: no
+//   Steiner points, the mesh of flips alone)
+//   MESH_VALIDITY_EXPLAIN=1 prints what each inverted tet is made of.
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -22,6 +27,7 @@
 #include <vector>
 
 #include "bench/bench_util.h"
+#include "bench/explain_inverted_tets.h"
 #include "server/fem/fem_model.h"
 #include "server/io/read_volume.h"
 #include "server/measures/deformation_measures.h"
@@ -30,6 +36,9 @@
 using namespace vpm;
 
 namespace {
+
+const Volume* explain_volume = nullptr;
+int measuring_load_steps = 0;  // 0: MeasurementFemOptions' own
 
 struct DragResult {
   int64_t inverted = 0;
@@ -47,9 +56,16 @@ DragResult RunDrag(const ProxyMesh& mesh, const glm::dvec3& extent, const glm::d
     const SolveStats s =
         bench::Check(model.Drag(drag * (static_cast<double>(i) / increments)), "drag");
     r.forced |= s.forced_inversion;
+    if (s.forced_inversion && std::getenv("MESH_VALIDITY_EXPLAIN") != nullptr) {
+      std::printf("  increment %d/%d forced after %d load steps, %d Newton iterations\n", i,
+                  increments, s.load_steps, s.newton_iterations);
+    }
     r.step_ms += s.total_ms() / increments;
   }
   r.inverted = model.CountInvertedTets();
+  if (r.inverted > 0 && std::getenv("MESH_VALIDITY_EXPLAIN") != nullptr) {
+    bench::ExplainInvertedTets(model, *explain_volume, grab);
+  }
   return r;
 }
 
@@ -60,8 +76,11 @@ glm::dvec3 GrabPoint(const Volume& volume) {
   return volume.geometry().extent_mm() * 0.5;
 }
 
-void Row(const Volume& volume, const std::string& tf, Footprint footprint, const SolverOptions& live) {
+void Row(const Volume& volume, const std::string& tf, Footprint footprint, const SolverOptions& live,
+         double steiner_deg) {
+  explain_volume = &volume;
   MeshParams params;
+  params.steiner_min_dihedral_deg = steiner_deg;
   params.footprint = footprint;
   if (!tf.empty()) params.tf = tf;
   const glm::dvec3 grab = GrabPoint(volume);
@@ -78,7 +97,9 @@ void Row(const Volume& volume, const std::string& tf, Footprint footprint, const
   const double h = mesh.stats.h_mm;
   FemOptions interactive;
   interactive.solver = live;
-  const FemOptions measuring = MeasurementFemOptions();
+  FemOptions measuring = MeasurementFemOptions();
+  if (measuring_load_steps > 0) measuring.solver.max_load_steps = measuring_load_steps;
+  measuring.solver.min_load_fraction = live.min_load_fraction;
   std::string cells;
   double step_ms = 0.0;
   for (const FemOptions* options : std::initializer_list<const FemOptions*>{&interactive, &measuring}) {
@@ -91,8 +112,9 @@ void Row(const Volume& volume, const std::string& tf, Footprint footprint, const
     }
     cells += "|";
   }
-  std::printf("%-34s %-6s %5zu %6zu %8.2f  |%s %9.1f %9.2f\n", volume.source().c_str(),
-              FootprintName(footprint), mesh.vertices.size(), mesh.tets.size(),
+  std::printf("%-34s %-6s %5zu %5lld %6zu %8.2f  |%s %9.1f %9.2f\n", volume.source().c_str(),
+              FootprintName(footprint), mesh.vertices.size(),
+              static_cast<long long>(mesh.stats.steiner), mesh.tets.size(),
               mesh.quality.min_dihedral_deg, cells.c_str(), build_ms, step_ms);
 }
 
@@ -100,12 +122,19 @@ void Row(const Volume& volume, const std::string& tf, Footprint footprint, const
 
 int main(int argc, char** argv) {
   SolverOptions live;
+  double steiner_deg = MeshParams{}.steiner_min_dihedral_deg;
   std::vector<std::pair<std::string, std::string>> volumes;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--max-load-steps") == 0 && i + 1 < argc) {
       live.max_load_steps = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--intermediate-newton") == 0 && i + 1 < argc) {
       live.intermediate_newton_iterations = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--min-load-fraction") == 0 && i + 1 < argc) {
+      live.min_load_fraction = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--measuring-load-steps") == 0 && i + 1 < argc) {
+      measuring_load_steps = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--steiner") == 0 && i + 1 < argc) {
+      steiner_deg = std::atof(argv[++i]);
     } else if (i + 1 < argc && std::strchr(argv[i + 1], ':') == nullptr &&
                std::strchr(argv[i + 1], '/') == nullptr && std::strncmp(argv[i + 1], "--", 2)) {
       volumes.emplace_back(argv[i], argv[i + 1]);
@@ -118,11 +147,11 @@ int main(int argc, char** argv) {
   std::printf("inverted tets after a drag of 0.5 h / 1 h / 1.5 h (f: forced by the drag); "
               "interactive: %d load steps, 10 increments; measuring: at once\n",
               live.max_load_steps);
-  std::printf("%-34s %-6s %5s %6s %8s  | %-16s| %-16s| %9s %9s\n", "volume", "foot", "verts",
-              "tets", "min dih", "interactive", "measuring", "build ms", "step ms");
+  std::printf("%-34s %-6s %5s %5s %6s %8s  | %-16s| %-16s| %9s %9s\n", "volume", "foot",
+              "verts", "stein", "tets", "min dih", "interactive", "measuring", "build ms", "step ms");
   for (const auto& [source, tf] : volumes) {
     const Volume volume = bench::Check(ReadVolume(source, VolumeLimits{}), "read");
-    for (Footprint f : {Footprint::kPoint, Footprint::kCell}) Row(volume, tf, f, live);
+    for (Footprint f : {Footprint::kPoint, Footprint::kCell}) Row(volume, tf, f, live, steiner_deg);
   }
   return 0;
 }

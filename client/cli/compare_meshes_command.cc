@@ -35,14 +35,14 @@ void PrintDeformation(const std::vector<DeformationMeasure>& rows, const Standar
       "dense-lattice reference over body voxels (every 4th per axis)\n",
       drag.landmark.c_str(), drag.grab_radius_factor, drag.offset_mm.x, drag.offset_mm.y,
       drag.offset_mm.z);
-  std::printf("%-10s %6s %8s %10s %10s %12s %11s %12s %9s  %s\n", "mesh", "verts", "handles",
-              "RMS mm", "max mm", "bone max %", "inverted", "inv @1.5h", "FEM ms",
-              "worst bone voxel (mm)");
+  std::printf("%-10s %6s %8s %8s %10s %10s %12s %11s %12s %9s  %s\n", "mesh", "verts",
+              "handles", "min dih", "RMS mm", "max mm", "bone max %", "inverted", "inv @1.5h",
+              "FEM ms", "worst bone voxel (mm)");
   for (const auto& r : rows) {
     std::printf(
-        "%-10s %6lld %8lld %10.3f %10.3f %12.2f %11lld %12lld %9.1f  (%.0f, %.0f, %.0f)%s\n",
+        "%-10s %6lld %8lld %8.2f %10.3f %10.3f %12.2f %11lld %12lld %9.1f  (%.0f, %.0f, %.0f)%s\n",
         r.name.c_str(), static_cast<long long>(r.vertices), static_cast<long long>(r.handles),
-        r.rms_error_mm, r.max_error_mm, 100.0 * r.bone_max_fraction,
+        r.min_dihedral_deg, r.rms_error_mm, r.max_error_mm, 100.0 * r.bone_max_fraction,
         static_cast<long long>(r.inverted_at_drag), static_cast<long long>(r.inverted_at_1_5h),
         r.solve_ms, r.bone_worst_mm.x, r.bone_worst_mm.y, r.bone_worst_mm.z,
         r.converged ? "" : " (not converged)");
@@ -50,8 +50,9 @@ void PrintDeformation(const std::vector<DeformationMeasure>& rows, const Standar
   for (const auto& r : rows) {
     if (r.forced_at_drag || r.forced_at_1_5h) {
       std::printf(
-          "%s: the prescribed drag (%s) flattens a tet by itself (handles and a fixed vertex "
-          "in one tet); the inverted tets are forced by the mesh, not the material\n",
+          "%s: the solver found no feasible load step for the drag (%s) and forced it "
+          "(docs/FEM.md, \"Forced inversions\": handles and a fixed vertex in one tet, or "
+          "tets crushed beside the handles)\n",
           r.name.c_str(),
           r.forced_at_drag ? (r.forced_at_1_5h ? "the standard one and 1.5 h" : "the standard one")
                            : "1.5 h");
@@ -60,12 +61,12 @@ void PrintDeformation(const std::vector<DeformationMeasure>& rows, const Standar
 }
 
 void PrintTable(const std::vector<MeshComparisonRow>& rows) {
-  std::printf("%-14s %6s %6s %12s %14s %12s %10s %10s\n", "mesh", "verts", "tets", "RMSE all",
-              "RMSE TF>0", "empty R mm", "min dih", "build ms");
+  std::printf("%-14s %6s %8s %6s %12s %14s %12s %10s %10s\n", "mesh", "verts", "steiner",
+              "tets", "RMSE all", "RMSE TF>0", "empty R mm", "min dih", "build ms");
   for (const auto& r : rows) {
-    std::printf("%-14s %6lld %6lld %12.2f %14.2f %12.2f %10.2f %10.1f%s\n",
+    std::printf("%-14s %6lld %8lld %6lld %12.2f %14.2f %12.2f %10.2f %10.1f%s\n",
                 (r.name + (r.is_default ? "*" : "")).c_str(), static_cast<long long>(r.vertices),
-                static_cast<long long>(r.tets), r.reconstruction.rmse_all,
+                static_cast<long long>(r.steiner_vertices), static_cast<long long>(r.tets), r.reconstruction.rmse_all,
                 r.reconstruction.rmse_tf_positive, r.largest_empty_sphere.radius_mm,
                 r.quality.min_dihedral_deg, r.build_ms, "");
   }
@@ -80,6 +81,7 @@ Status WriteJson(const std::vector<MeshComparisonRow>& rows, const std::string& 
     out.push_back({{"mesh", r.name},
                    {"default", r.is_default},
                    {"vertices", r.vertices},
+                   {"steiner_vertices", r.steiner_vertices},
                    {"tets", r.tets},
                    {"rmse_all", r.reconstruction.rmse_all},
                    {"rmse_tf_positive", r.reconstruction.rmse_tf_positive},

@@ -29,9 +29,11 @@ void PrintSummary(const ProxyMesh& mesh, const GpuBackend* gpu, const std::strin
   std::printf("lattice %dx%dx%d = %lld vertices, h = %.2f mm, R = %.2f mm\n", s.grid[0],
               s.grid[1], s.grid[2], static_cast<long long>(s.lattice_vertices), s.h_mm, s.R_mm);
   std::printf(
-      "kept %lld lattice + %lld anchors + %lld refined + %lld boundary = %zu vertices, %lld hard\n",
+      "kept %lld lattice + %lld anchors + %lld refined + %lld boundary + %lld steiner = %zu "
+      "vertices, %lld hard\n",
       static_cast<long long>(s.kept_lattice), static_cast<long long>(s.anchors),
-      static_cast<long long>(s.refined), static_cast<long long>(s.boundary), mesh.vertices.size(),
+      static_cast<long long>(s.refined), static_cast<long long>(s.boundary),
+      static_cast<long long>(s.steiner), mesh.vertices.size(),
               static_cast<long long>(s.hard));
   std::printf("tets %zu, min dihedral %.2f deg, min radius ratio %.3f, removed flat %lld\n",
               mesh.tets.size(), mesh.quality.min_dihedral_deg, mesh.quality.min_radius_ratio,
@@ -39,10 +41,12 @@ void PrintSummary(const ProxyMesh& mesh, const GpuBackend* gpu, const std::strin
   std::printf("%-18s %9s\n", "stage", "ms");
   if (gpu != nullptr) std::printf("%-18s %9.2f\n", "upload (once)", gpu->upload_ms());
   std::printf("%-18s %9.2f  (%s)\n", "evaluate", s.evaluate_ms, evaluated_on.c_str());
-  std::printf("%-18s %9.2f\n%-18s %9.2f\n%-18s %9.2f\n%-18s %9.2f\n%-18s %9.2f\n%-18s %9.2f\n",
-              "decimate", s.decimate_ms, "refine", s.refine_ms, "boundary", s.boundary_ms,
-              "classify", s.classify_ms, "tetrahedralize", s.tetrahedralize_ms, "total",
-              s.total_ms);
+  std::printf(
+      "%-18s %9.2f\n%-18s %9.2f\n%-18s %9.2f\n%-18s %9.2f\n%-18s %9.2f\n%-18s %9.2f\n%-18s "
+      "%9.2f\n",
+      "decimate", s.decimate_ms, "refine", s.refine_ms, "boundary", s.boundary_ms, "classify",
+      s.classify_ms, "tetrahedralize", s.tetrahedralize_ms, "steiner", s.steiner_ms, "total",
+      s.total_ms);
 }
 
 Result<ProxyMesh> BuildOnServer(const ServerFlags& server, const MeshArgs& args) {

@@ -41,6 +41,11 @@ void AddMeshFlags(CLI::App* app, MeshFlags* f) {
       ->capture_default_str();
   app->add_option("--refine-count", f->refine_count, "most refinement vertices")
       ->capture_default_str();
+  app->add_option("--steiner-min-dihedral", f->steiner_min_dihedral,
+                  "add Steiner points until every tet's smallest dihedral angle reaches this "
+                  "(degrees; 0: none, the tets of Delaunay and flips alone)")
+      ->check(CLI::Range(0.0, 15.0))
+      ->capture_default_str();
 }
 
 Result<MeshParams> ToMeshParams(const MeshFlags& f, const Volume& volume) {
@@ -78,6 +83,7 @@ Result<MeshParams> ToMeshParams(const MeshFlags& f, const Volume& volume) {
   }
   p.roi_radius_factor = f.roi_factor;
   p.refine_count = f.refine_count;
+  p.steiner_min_dihedral_deg = f.steiner_min_dihedral;
   return p;
 }
 

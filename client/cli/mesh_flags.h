@@ -25,6 +25,7 @@ struct MeshFlags {
   std::string refine_at_landmark; // or a landmark of the volume (phantoms have them)
   double roi_factor = 1.5;
   int64_t refine_count = 150;
+  double steiner_min_dihedral = 5.0;  // degrees; 0: no Steiner points
 };
 
 void AddMeshFlags(CLI::App* app, MeshFlags* flags);

@@ -16,6 +16,7 @@ Result<VertexKind> KindOf(v2::VertexKind kind) {
     case v2::VERTEX_KIND_ANCHOR: return VertexKind::kAnchor;
     case v2::VERTEX_KIND_REFINED: return VertexKind::kRefined;
     case v2::VERTEX_KIND_BOUNDARY: return VertexKind::kBoundary;
+    case v2::VERTEX_KIND_STEINER: return VertexKind::kSteiner;
     default: return absl::DataLossError(StrCat("server sent a vertex of unknown kind ", kind));
   }
 }
@@ -29,6 +30,8 @@ MeshStats StatsOf(const v2::MeshStats& s) {
   out.refined = s.refined();
   out.boundary = s.boundary();
   out.boundary_ms = s.boundary_ms();
+  out.steiner = s.steiner();
+  out.steiner_ms = s.steiner_ms();
   out.hard = s.hard();
   out.tets = s.tets();
   out.h_mm = s.h_mm();

@@ -45,6 +45,7 @@ Result<MeshComparisonRow> Measure(const Volume& volume, const TransferFunction& 
   row.name = std::move(name);
   row.vertices = static_cast<int64_t>(mesh.vertices.size());
   row.boundary_vertices = mesh.stats.boundary;
+  row.steiner_vertices = mesh.stats.steiner;
   row.tets = static_cast<int64_t>(mesh.tets.size());
   row.quality = mesh.quality;
   row.build_ms = build_ms;

@@ -17,6 +17,7 @@ struct MeshComparisonRow {
   bool is_default = false;      // the default configuration (MeshParams{}: cell, spread)
   int64_t vertices = 0;          // all, the boundary ones included
   int64_t boundary_vertices = 0;  // on the box faces, beyond the budget
+  int64_t steiner_vertices = 0;   // against slivers, beyond the budget
   int64_t tets = 0;
   ReconstructionError reconstruction;
   EmptySphere largest_empty_sphere;  // the spread measure, inside the body

@@ -38,6 +38,7 @@ struct DeformationMeasure {
   std::string name;  // "regular", "step 2", "step 4", "reference"
   int64_t vertices = 0;
   int64_t handles = 0;
+  double min_dihedral_deg = 0.0;  // smallest dihedral angle of the rest mesh, degrees
   double rms_error_mm = 0.0;  // vs the reference, over sampled body voxels
   double max_error_mm = 0.0;
   double bone_max_fraction = 0.0;  // max bone-voxel displacement / |drag|

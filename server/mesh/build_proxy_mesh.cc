@@ -7,6 +7,7 @@
 #include "server/mesh/boundary_vertices.h"
 #include "server/mesh/lattice_costs_rows.h"
 #include "server/mesh/refine_at_point.h"
+#include "server/mesh/sliver_steiner_points.h"
 #include "server/mesh/tetrahedralize.h"
 
 namespace vpm {
@@ -119,17 +120,31 @@ Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& 
   mesh.vertices.insert(mesh.vertices.end(), boundary.begin(), boundary.end());
   mesh.stats.boundary_ms = MsSince(t0);
   t0 = SteadyClock::now();
+  RETURN_IF_ERROR(Tetrahedralize(mesh, volume.geometry().extent_mm()));
+  const double tetrahedralize_ms = MsSince(t0);
+  t0 = SteadyClock::now();
+  if (params.steiner_min_dihedral_deg > 0.0) {
+    // Steiner points only where a tet stays under the target after flips;
+    // h/6 apart at least, half the refinement spacing (docs/MESH.md).
+    const SteinerParams sp{.target_min_dihedral_deg = params.steiner_min_dihedral_deg,
+                           .min_spacing_mm = base.stats.h_mm / 6.0};
+    ASSIGN_OR_RETURN(const SteinerStats steiner,
+                     AddSliverSteinerPoints(mesh, volume.geometry(), sp));
+    mesh.stats.steiner = steiner.added;
+  }
+  mesh.stats.steiner_ms = MsSince(t0);
+  mesh.stats.tetrahedralize_ms = tetrahedralize_ms;  // the Steiner rounds' own are in steiner_ms
+  t0 = SteadyClock::now();
+  // Step 3 after the tetrahedralization: it reads positions only, and the
+  // Steiner points need classifying like the rest.
   RETURN_IF_ERROR(ClassifyHardness(volume, base.stats.R_mm, params.classify, mesh.vertices));
   mesh.stats.hard = std::count_if(mesh.vertices.begin(), mesh.vertices.end(),
                                   [](const MeshVertex& v) { return v.hard; });
   mesh.stats.classify_ms = MsSince(t0);
-  t0 = SteadyClock::now();
-  RETURN_IF_ERROR(Tetrahedralize(mesh, volume.geometry().extent_mm()));
-  mesh.stats.tetrahedralize_ms = MsSince(t0);
   mesh.stats.tets = static_cast<int64_t>(mesh.tets.size());
   mesh.stats.total_ms = mesh.stats.evaluate_ms + mesh.stats.decimate_ms + mesh.stats.refine_ms +
                         mesh.stats.boundary_ms + mesh.stats.classify_ms +
-                        mesh.stats.tetrahedralize_ms;
+                        mesh.stats.tetrahedralize_ms + mesh.stats.steiner_ms;
   return mesh;
 }
 

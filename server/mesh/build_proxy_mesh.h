@@ -42,6 +42,9 @@ struct MeshParams {
   std::optional<glm::dvec3> refine_at_mm;    // step 4 point, physical voxel space
   double roi_radius_factor = 1.5;            // roi radius = factor * h
   int64_t refine_count = 150;
+  // Steiner points until every tet's smallest dihedral angle reaches this,
+  // degrees; 0 turns them off (sliver_steiner_points.h, docs/MESH.md).
+  double steiner_min_dihedral_deg = 5.0;
 };
 
 // Where step 1 runs; both null means the CPU reference.
@@ -63,7 +66,8 @@ struct DecimatedLattice {
 Result<DecimatedLattice> DecimateLattice(const Volume& volume, const MeshParams& params,
                                          const MeshGpu& gpu = {});
 
-// Steps 4, 3 and the tetrahedralization on top of `base`; refine_at_mm of
+// Step 4, the boundary vertices, the tetrahedralization with its Steiner
+// points, then step 3 over every vertex, on top of `base`; refine_at_mm of
 // `params` (if any) replaces any earlier refinement.
 Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& base,
                                   const MeshParams& params);

@@ -83,6 +83,7 @@ json StatsToJson(const MeshStats& s, const TetQuality& q) {
           {"anchors", s.anchors},
           {"refined", s.refined},
           {"boundary", s.boundary},
+          {"steiner", s.steiner},
           {"hard", s.hard},
           {"tets", s.tets},
           {"h_mm", s.h_mm},
@@ -99,11 +100,11 @@ json StatsToJson(const MeshStats& s, const TetQuality& q) {
 Result<VertexKind> KindFromName(const json& value, const FieldReader& where) {
   if (value.is_string()) {
     for (VertexKind kind : {VertexKind::kLattice, VertexKind::kAnchor, VertexKind::kRefined,
-                            VertexKind::kBoundary}) {
+                            VertexKind::kBoundary, VertexKind::kSteiner}) {
       if (value.get<std::string>() == VertexKindName(kind)) return kind;
     }
   }
-  return where.Error("kind", "must be \"lattice\", \"anchor\", \"refined\" or \"boundary\"");
+  return where.Error("kind", "must be \"lattice\", \"anchor\", \"refined\", \"boundary\" or \"steiner\"");
 }
 
 Status ReadVertices(const json& array, std::vector<MeshVertex>& vertices) {
@@ -187,6 +188,10 @@ Status ReadStats(const json& object, MeshStats& s, TetQuality& q) {
   // Files from before boundary vertices (tests/data/meshes) have none.
   if (object.contains("boundary")) {
     ASSIGN_OR_RETURN(s.boundary, r.Int("boundary", 0));
+  }
+  // Files from before Steiner points have none.
+  if (object.contains("steiner")) {
+    ASSIGN_OR_RETURN(s.steiner, r.Int("steiner", 0));
   }
   ASSIGN_OR_RETURN(s.hard, r.Int("hard", 0));
   ASSIGN_OR_RETURN(s.tets, r.Int("tets", 0));

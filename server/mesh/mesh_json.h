@@ -1,11 +1,12 @@
 // The proxy mesh as JSON (the `vpm mesh --json` output, read back by
 // `vpm render --mesh-json`).
 //
-// {"vertices": [{"lattice_id": int, "kind": "lattice|anchor|refined",
+// {"vertices": [{"lattice_id": int, "kind": "lattice|anchor|refined|boundary|steiner",
 //                "position_mm": [x, y, z], "hard": bool, "cost": double}, ...],
 //  "tets": [[a, b, c, d], ...],
 //  "stats": {"grid": [gx, gy, gz], "lattice_vertices", "kept_lattice",
-//            "anchors", "refined", "hard", "tets", "h_mm", "R_mm",
+//            "anchors", "refined", "boundary", "steiner" (both optional on
+//            reading), "hard", "tets", "h_mm", "R_mm",
 //            "evaluate_ms", "decimate_ms", "classify_ms", "refine_ms",
 //            "tetrahedralize_ms", "total_ms",
 //            "quality": {"min_dihedral_deg", "mean_min_dihedral_deg",

@@ -18,8 +18,10 @@ enum class VertexKind {
   kRefined,  // a step-4 vertex around the manipulation point
   kBoundary,  // on a face of the image box, added so that no tet there is a
               // sliver (boundary_vertices.h)
+  kSteiner,   // added where no flip could mend a tet under 5 degrees
+              // (sliver_steiner_points.h)
 };
-// "lattice", "anchor", "refined", "boundary"
+// "lattice", "anchor", "refined", "boundary", "steiner"
 const char* VertexKindName(VertexKind kind);
 
 struct MeshVertex {
@@ -55,6 +57,7 @@ struct MeshStats {
   int64_t anchors = 0;
   int64_t refined = 0;
   int64_t boundary = 0;  // on the box faces (boundary_vertices.h)
+  int64_t steiner = 0;   // against slivers (sliver_steiner_points.h)
   int64_t hard = 0;
   int64_t tets = 0;
   double h_mm = 0.0;  // largest lattice step
@@ -65,6 +68,7 @@ struct MeshStats {
   double classify_ms = 0.0;
   double refine_ms = 0.0;
   double boundary_ms = 0.0;
+  double steiner_ms = 0.0;  // Steiner rounds, their tetrahedralizations included
   double tetrahedralize_ms = 0.0;
   double total_ms = 0.0;
 };

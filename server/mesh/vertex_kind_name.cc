@@ -14,6 +14,8 @@ const char* VertexKindName(VertexKind kind) {
       return "refined";
     case VertexKind::kBoundary:
       return "boundary";
+    case VertexKind::kSteiner:
+      return "steiner";
   }
   return "unknown";
 }

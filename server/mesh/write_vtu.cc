@@ -20,6 +20,8 @@ int KindCode(VertexKind kind) {
       return 2;
     case VertexKind::kBoundary:
       return 3;
+    case VertexKind::kSteiner:
+      return 4;
   }
   return -1;
 }

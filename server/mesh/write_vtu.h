@@ -15,8 +15,8 @@ namespace vpm {
 //   Cells       #T VTK_TETRA (type 10), connectivity Int64, offsets Int64
 //   PointData   hard        UInt8  1 = non-deformable (step 3)
 //               cost        Float64 MeshVertex::cost
-//               kind        Int32  0 = lattice, 1 = anchor, 2 = refined
-//                           (the order of VertexKind)
+//               kind        Int32  0 = lattice, 1 = anchor, 2 = refined,
+//                           3 = boundary, 4 = steiner (the order of VertexKind)
 //               lattice_id  Int64  -1 for anchors and refined vertices
 // Doubles carry 17 significant digits. Fails on I/O errors, naming the file.
 Status WriteVtu(const ProxyMesh& mesh, const std::string& path);

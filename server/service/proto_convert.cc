@@ -50,6 +50,8 @@ void FillMeshInfo(const MeshEntry& entry, v2::MeshInfo* info) {
   s->set_refined(mesh.stats.refined);
   s->set_boundary(mesh.stats.boundary);
   s->set_boundary_ms(mesh.stats.boundary_ms);
+  s->set_steiner(mesh.stats.steiner);
+  s->set_steiner_ms(mesh.stats.steiner_ms);
   s->set_h_mm(mesh.stats.h_mm);
   s->set_r_mm(mesh.stats.R_mm);
   s->set_min_dihedral_deg(mesh.quality.min_dihedral_deg);
@@ -77,6 +79,7 @@ v2::VertexKind KindToProto(VertexKind kind) {
     case VertexKind::kAnchor: return v2::VERTEX_KIND_ANCHOR;
     case VertexKind::kRefined: return v2::VERTEX_KIND_REFINED;
     case VertexKind::kBoundary: return v2::VERTEX_KIND_BOUNDARY;
+    case VertexKind::kSteiner: return v2::VERTEX_KIND_STEINER;
   }
   return v2::VERTEX_KIND_UNSPECIFIED;
 }

@@ -115,11 +115,12 @@ TEST(VpmCli, MeshWritesJsonWithTheDocumentedFields) {
                           "tetrahedralize_ms", "h_mm", "R_mm"}) {
     EXPECT_TRUE(stats.contains(key)) << key;
   }
-  int anchors = 0, refined = 0, boundary = 0;
+  int anchors = 0, refined = 0, boundary = 0, steiner = 0;
   for (const auto& v : mesh["vertices"]) {
     anchors += v["kind"] == "anchor";
     refined += v["kind"] == "refined";
     boundary += v["kind"] == "boundary";
+    steiner += v["kind"] == "steiner";
     if (v["kind"] != "lattice") {
       EXPECT_EQ(v["lattice_id"], -1);
     }
@@ -127,7 +128,8 @@ TEST(VpmCli, MeshWritesJsonWithTheDocumentedFields) {
   EXPECT_EQ(anchors, 8);
   EXPECT_GT(refined, 0);
   EXPECT_EQ(boundary, mesh["stats"]["boundary"]);
-  EXPECT_EQ(mesh["vertices"].size(), 120u + refined + boundary);
+  EXPECT_EQ(steiner, mesh["stats"]["steiner"]);
+  EXPECT_EQ(mesh["vertices"].size(), 120u + refined + boundary + steiner);
   EXPECT_GT(mesh["tets"].size(), 120u);
   EXPECT_TRUE(std::filesystem::file_size(vtu) > 1000);
 }
@@ -166,7 +168,8 @@ TEST(VpmCli, MeshWorksOnARealMriWithTheMriPreset) {
   const CliRun run = Vpm("mesh --volume " + colin + " --tf mri-t1 --json " + json);
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const auto mesh = ReadJson(json);
-  EXPECT_EQ(mesh["vertices"].size(), 250u + mesh["stats"]["boundary"].get<size_t>());
+  EXPECT_EQ(mesh["vertices"].size(), 250u + mesh["stats"]["boundary"].get<size_t>() +
+                                         mesh["stats"]["steiner"].get<size_t>());
   EXPECT_GT(mesh["tets"].size(), 250u);
 }
 
