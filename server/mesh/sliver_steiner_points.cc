@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "server/mesh/lattice.h"
 #include "server/mesh/tet_quality.h"
 #include "server/mesh/tetrahedralize.h"
 
@@ -35,15 +36,6 @@ double NearestDistance(const std::vector<glm::dvec3>& points, const glm::dvec3& 
   double best = std::numeric_limits<double>::infinity();
   for (const glm::dvec3& q : points) best = std::min(best, glm::distance(p, q));
   return best;
-}
-
-std::array<int64_t, 3> NearestVoxel(const VolumeGeometry& geometry, const glm::dvec3& p) {
-  std::array<int64_t, 3> voxel{};
-  for (int a = 0; a < 3; ++a) {
-    const double index = std::floor(p[a] / geometry.spacing_mm[a] + 0.5);
-    voxel[a] = std::clamp<int64_t>(static_cast<int64_t>(index), 0, geometry.dims[a] - 1);
-  }
-  return voxel;
 }
 
 // `p` clamped into the box [0, extent], then put on any face it lies within
