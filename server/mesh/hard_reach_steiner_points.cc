@@ -1,8 +1,7 @@
 #include "server/mesh/hard_reach_steiner_points.h"
 
 #include <algorithm>
-#include <cmath>
-#include <limits>
+#include <utility>
 #include <vector>
 
 #include "server/mesh/steiner_point.h"
@@ -11,17 +10,19 @@
 namespace vpm {
 namespace {
 
-// Per hard-to-non-hard edge longer than max_reach (each edge once): its
-// length and the point max_reach from the hard end. Longest first.
+// An edge from a hard vertex to a non-hard one within the radius, longer
+// than max_reach: its length and the point max_reach from the hard end.
 struct LongEdge {
   double length_mm;
   glm::dvec3 point_mm;
 };
 
+// Every such edge once, longest first (ties: vertex indices); longest_mm:
+// the longest hard-to-non-hard edge within the radius, however long.
 std::vector<LongEdge> LongHardEdges(const ProxyMesh& mesh, const HardReachParams& params,
                                     double& longest_mm) {
   const double max_reach = params.max_reach_mm;
-  std::vector<std::pair<int32_t, int32_t>> seen;
+  std::vector<std::pair<int32_t, int32_t>> ends;
   std::vector<LongEdge> edges;
   longest_mm = 0.0;
   for (const auto& tet : mesh.tets) {
@@ -34,7 +35,7 @@ std::vector<LongEdge> LongHardEdges(const ProxyMesh& mesh, const HardReachParams
         const double length = glm::distance(a.position_mm, b.position_mm);
         longest_mm = std::max(longest_mm, length);
         if (length <= max_reach) continue;
-        seen.emplace_back(tet[i], tet[j]);
+        ends.emplace_back(tet[i], tet[j]);
         edges.push_back(
             {length, a.position_mm + (max_reach / length) * (b.position_mm - a.position_mm)});
       }
@@ -45,11 +46,11 @@ std::vector<LongEdge> LongHardEdges(const ProxyMesh& mesh, const HardReachParams
   for (size_t k = 0; k < order.size(); ++k) order[k] = k;
   std::sort(order.begin(), order.end(), [&](size_t x, size_t y) {
     if (edges[x].length_mm != edges[y].length_mm) return edges[x].length_mm > edges[y].length_mm;
-    return seen[x] < seen[y];
+    return ends[x] < ends[y];
   });
   std::vector<LongEdge> unique;
   for (size_t k = 0; k < order.size(); ++k) {
-    if (k > 0 && seen[order[k]] == seen[order[k - 1]]) continue;
+    if (k > 0 && ends[order[k]] == ends[order[k - 1]]) continue;
     unique.push_back(edges[order[k]]);
   }
   return unique;

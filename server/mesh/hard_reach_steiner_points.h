@@ -44,7 +44,9 @@ struct HardReachParams {
 struct HardReachStats {
   int rounds = 0;
   int64_t added = 0;
-  double longest_before_mm = 0.0;  // longest hard to non-hard edge, mm
+  // The longest edge from a hard vertex to a non-hard one within the
+  // radius, before and after, mm.
+  double longest_before_mm = 0.0;
   double longest_after_mm = 0.0;
 };
 
