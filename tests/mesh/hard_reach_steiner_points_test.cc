@@ -9,9 +9,12 @@
 #include "server/mesh/build_proxy_mesh.h"
 #include "server/mesh/steiner_point.h"
 #include "server/mesh/tetrahedralize.h"
+#include "tests/mesh/steiner_vertex_checks.h"
 
 namespace vpm {
 namespace {
+
+using testing::ExpectSteinerVertex;
 
 // A 100 mm box (2 mm voxels) of soft tissue (40) under a bone slab (700)
 // at z >= 90 mm.
@@ -96,17 +99,8 @@ TEST(HardReachSteinerPoints, ShortenEveryHardEdgeNearThePointWithoutMovingAVerte
   std::vector<MeshVertex> reclassified = mesh.vertices;
   ASSERT_TRUE(ClassifyHardness(volume, kR, {}, reclassified).ok());
   for (size_t v = before.size(); v < mesh.vertices.size(); ++v) {
-    const MeshVertex& s = mesh.vertices[v];
-    EXPECT_EQ(s.kind, VertexKind::kSteiner);
-    EXPECT_EQ(s.lattice_id, -1);
-    EXPECT_EQ(s.hard, reclassified[v].hard) << "vertex " << v << " is not classified";
-    for (int a = 0; a < 3; ++a) {
-      EXPECT_GE(s.position_mm[a], 0.0);
-      EXPECT_LE(s.position_mm[a], 100.0);
-    }
-    for (size_t u = 0; u < v; ++u) {
-      EXPECT_GE(glm::distance(s.position_mm, mesh.vertices[u].position_mm), 2.0);
-    }
+    ExpectSteinerVertex(mesh, v, 100.0, 2.0);
+    EXPECT_EQ(mesh.vertices[v].hard, reclassified[v].hard) << "vertex " << v << " is not classified";
   }
 }
 

@@ -8,9 +8,12 @@
 #include "server/mesh/build_proxy_mesh.h"
 #include "server/mesh/tetrahedralize.h"
 #include "tests/mesh/mesh_test_volumes.h"
+#include "tests/mesh/steiner_vertex_checks.h"
 
 namespace vpm {
 namespace {
+
+using testing::ExpectSteinerVertex;
 
 VolumeGeometry Box100() {
   VolumeGeometry g;
@@ -50,16 +53,7 @@ TEST(SliverSteinerPoints, LiftTheSmallestAngleWithoutMovingAVertex) {
     EXPECT_EQ(mesh.vertices[v].position_mm, before[v].position_mm) << "vertex " << v;
   }
   for (size_t v = before.size(); v < mesh.vertices.size(); ++v) {
-    const MeshVertex& s = mesh.vertices[v];
-    EXPECT_EQ(s.kind, VertexKind::kSteiner);
-    EXPECT_EQ(s.lattice_id, -1);
-    for (int a = 0; a < 3; ++a) {
-      EXPECT_GE(s.position_mm[a], 0.0);
-      EXPECT_LE(s.position_mm[a], 100.0);
-    }
-    for (size_t u = 0; u < v; ++u) {
-      EXPECT_GE(glm::distance(s.position_mm, mesh.vertices[u].position_mm), 2.0);
-    }
+    ExpectSteinerVertex(mesh, v, 100.0, 2.0);
   }
 }
 
