@@ -74,7 +74,7 @@ const kCtBoneVp = '1\n1\n0.9\n0.1\n0.2\n10\n' +
 // one, the window changes it, a grab on a slice deforms the tissue there;
 // then the crop box, the clip plane and an uploaded Slicer .vp each change
 // the 3D frame.
-async function checkSlicesAndCuts(page) {
+async function checkSlicesAndCuts(page, sentClips) {
   await page.check('#slices');
   let h = await settled(page, '!h.interactive && h.slices.length === 3');
   assert.deepEqual(h.slices.map((s) => s.view), ['axial', 'coronal', 'sagittal']);
@@ -176,8 +176,23 @@ async function checkSlicesAndCuts(page) {
   const clipDiff = meanAbsDiff(before3d, after3d);
   step(`clip plane (keep posterior of the centre): mean |grey difference| ${clipDiff.toFixed(2)}`);
   assert.ok(clipDiff > kMinOrbitDiff, `the clip plane did not change the frame (${clipDiff})`);
+  // Several planes: keep the posterior one, place a superior one; both go
+  // in one settings event and the frame changes again; Clear drops them.
+  await page.click('#clip-add');
+  await page.selectOption('#clip-side', 'S');
+  await settled(page, '!h.interactive');
+  const twoPlanes = sentClips[sentClips.length - 1];
+  const twoDiff = meanAbsDiff(after3d, await canvasGrey(page));
+  step(`two clip planes (${await page.textContent('#clip-kept')}): ` +
+       `${twoPlanes.length} sent, mean |grey difference| from one plane ${twoDiff.toFixed(2)}`);
+  assert.equal(twoPlanes.length, 2, `two clip planes expected, sent ${JSON.stringify(twoPlanes)}`);
+  assert.deepEqual(twoPlanes.map((c) => [c.normal.x, c.normal.y, c.normal.z]), [[0, 1, 0], [0, 0, 1]]);
+  assert.ok(twoDiff > kMinOrbitDiff, `the second clip plane did not change the frame (${twoDiff})`);
+  await page.screenshot({ path: path.join(out, 'web_viewer_two_clips.png') });
+  await page.click('#clip-clear');
   await page.selectOption('#clip-side', '');
   await settled(page, '!h.interactive');
+  assert.equal(sentClips[sentClips.length - 1].length, 0, 'Clear planes left a plane');
   before3d = await canvasGrey(page);
   await page.setInputFiles('#tf-file', { name: 'MyBone.vp', mimeType: 'text/plain',
                                          buffer: Buffer.from(kCtBoneVp) });
@@ -293,10 +308,12 @@ async function main() {
   }));
   // Every crop box the page sends (settings events), for the Crop tool check.
   const sentCrops = [];
+  const sentClips = [];  // the clip planes of every settings event
   page.on('websocket', (ws) => ws.on('framesent', ({ payload }) => {
     try {
-      const crop = JSON.parse(String(payload))?.event?.settings?.crop;
-      if (crop) sentCrops.push(crop);
+      const settings = JSON.parse(String(payload))?.event?.settings;
+      if (settings?.crop) sentCrops.push(settings.crop);
+      if (settings) sentClips.push(settings.clip ?? []);
     } catch { /* not JSON: not a settings event */ }
   }));
 
@@ -446,7 +463,7 @@ async function main() {
   assert.ok(mipDiff > kMinOrbitDiff, `MIP did not change the frame (${mipDiff})`);
   await page.screenshot({ path: path.join(out, 'web_viewer_mip.png') });
   await page.selectOption('#render', 'dvr:ct-vessels');
-  await checkSlicesAndCuts(page);
+  await checkSlicesAndCuts(page, sentClips);
   await checkCropDrag(page, sentCrops);
 
   figures.latency_ms = await page.evaluate(() => window.vpmViewer.stats.latencyMs);

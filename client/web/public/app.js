@@ -135,6 +135,9 @@ const cuts = new CutControls({
   clipSide: $('clip-side'),
   clipAt: $('clip-at'),
   clipLabel: $('clip-label'),
+  clipAdd: $('clip-add'),
+  clipKept: $('clip-kept'),
+  clipClear: $('clip-clear'),
 }, () => settingsChanged());
 
 const tools = new PointerTools({

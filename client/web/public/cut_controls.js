@@ -11,6 +11,10 @@ const kAxes = ['x', 'y', 'z'];
 const kClipSides = {
   L: [1, 0, 0], R: [-1, 0, 0], P: [0, 1, 0], A: [0, -1, 0], S: [0, 0, 1], I: [0, 0, -1],
 };
+const kClipSideNames = { L: 'left of', R: 'right of', P: 'posterior of', A: 'anterior of',
+                         S: 'superior of', I: 'inferior of' };
+// The ray caster takes 16 planes, a crop box counting 6 (kMaxClipPlanes).
+export const kMaxClipPlanes = 10;
 
 // The volume's world box: [lo, hi] per axis, mm.
 export function worldBox(volume) {
@@ -33,7 +37,9 @@ export function worldBox(volume) {
 export class CutControls {
   // elements: {crop (checkbox), cropLo: [3 inputs], cropHi: [3 inputs],
   // clipSide (select: '' or a key of kClipSides), clipAt (range input),
-  // clipLabel}; onChange(): the settings changed.
+  // clipLabel, clipAdd (button: keep the plane, place another), clipKept
+  // (output: the kept planes), clipClear (button)}; onChange(): the
+  // settings changed. Kept planes and the one being placed all cut.
   constructor(elements, onChange) {
     Object.assign(this, { e: elements, onChange });
     this.box = null;
@@ -52,12 +58,51 @@ export class CutControls {
       this.placeClipRange();
       this.changed();
     });
+    this.keptClips = [];  // [{plane: ClipPlane message, label}]
+    elements.clipAdd.addEventListener('click', () => this.keepClip());
+    elements.clipClear.addEventListener('click', () => {
+      this.keptClips = [];
+      this.showKept();
+      this.changed();
+    });
+    this.showKept();
+  }
+
+  // The plane being placed ({normal, offset_mm}, world mm), or null.
+  currentClip() {
+    const n = kClipSides[this.e.clipSide.value];
+    const at = Number(this.e.clipAt.value);
+    if (!this.box || !n || !Number.isFinite(at)) return null;
+    // Keeps dot(n, x) >= offset: the plane at `at` on its axis.
+    const a = n.findIndex((v) => v !== 0);
+    return { normal: { x: n[0], y: n[1], z: n[2] }, offset_mm: n[a] * at };
+  }
+
+  // Add plane: the plane being placed is kept, the side goes back to
+  // "everything" for the next one.
+  keepClip() {
+    const plane = this.currentClip();
+    if (!plane || this.keptClips.length + 1 >= kMaxClipPlanes) return;
+    const label = `${kClipSideNames[this.e.clipSide.value]} ${Number(this.e.clipAt.value).toFixed(1)}`;
+    this.keptClips.push({ plane, label });
+    this.e.clipSide.value = '';
+    this.showKept();
+    this.changed();
+  }
+
+  showKept() {
+    const n = this.keptClips.length;
+    this.e.clipKept.textContent = n ? `kept: ${this.keptClips.map((k) => k.label).join('; ')} mm` : '';
+    this.e.clipClear.hidden = n === 0;
+    this.e.clipAdd.disabled = n + 1 >= kMaxClipPlanes;
   }
 
   // A new volume: the box and the clip range follow its world box.
   setVolume(volume) {
     this.volume = volume;
     this.box = worldBox(volume);
+    this.keptClips = [];
+    this.showKept();
     kAxes.forEach((_, a) => {
       for (const [inputs, values] of [[this.e.cropLo, this.box.lo], [this.e.cropHi, this.box.hi]]) {
         Object.assign(inputs[a], { min: this.box.lo[a].toFixed(1), max: this.box.hi[a].toFixed(1),
@@ -134,13 +179,8 @@ export class CutControls {
       const vec = (v) => ({ x: v[0], y: v[1], z: v[2] });
       out.crop = { lo_mm: vec(box.lo), hi_mm: vec(box.hi) };
     }
-    const n = kClipSides[this.e.clipSide.value];
-    const at = Number(this.e.clipAt.value);
-    if (this.box && n && Number.isFinite(at)) {
-      // Keeps dot(n, x) >= offset: the plane at `at` on its axis.
-      const a = n.findIndex((v) => v !== 0);
-      out.clip = [{ normal: { x: n[0], y: n[1], z: n[2] }, offset_mm: n[a] * at }];
-    }
+    const clip = [...this.keptClips.map((k) => k.plane), this.currentClip()].filter(Boolean);
+    if (clip.length) out.clip = clip;
     return out;
   }
 }
