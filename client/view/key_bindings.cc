@@ -35,7 +35,8 @@ std::span<const KeyBinding> KeyBindings() {
       {{"O"}, Action::kToggleOverlay, "proxy-mesh overlay on/off"},
       {{"L"}, Action::kToggleSlices, "slices on/off: 3D, axial, coronal, sagittal (2 x 2)"},
       {{"B"}, Action::kToggleCropMode, "crop box on/off: left drag on a face moves it"},
-      {{"C"}, Action::kToggleClipPlane, "clip plane facing you through the centre on/off"},
+      {{"C"}, Action::kToggleClipPlane, "clip plane facing you through the centre on/off (all)"},
+      {{"P"}, Action::kAddClipPlane, "add a clip plane facing you (the newest one moves)"},
       {{"PageUp"}, Action::kScrollForward,
        "slice under the cursor +1 pixel (Shift 5); on 3D: clip plane 1 mm deeper"},
       {{"PageDown"}, Action::kScrollBack, "slice under the cursor -1 pixel; on 3D: clip plane back"},
@@ -68,7 +69,7 @@ std::span<const MouseBinding> MouseBindings() {
       {"wheel on a slice", "scroll it: up +1 pixel along its normal (Shift 5)"},
       {"G, left on a slice", "grab there and drag within the slice's plane"},
       {"B, left drag", "on a box face: move it; elsewhere orbit"},
-      {"C, Shift+left drag", "move the clip plane (up: deeper)"},
+      {"C, Shift+left drag", "move the newest clip plane (up: deeper)"},
   };
   return kBindings;
 }

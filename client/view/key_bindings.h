@@ -23,6 +23,7 @@ enum class Action {
   kToggleSlices,
   kToggleCropMode,
   kToggleClipPlane,
+  kAddClipPlane,
   kScrollForward,
   kScrollBack,
   kRefineHere,

@@ -140,6 +140,7 @@ void ViewerApp::OnAction(Action action) {
     case Action::kToggleSlices: ToggleSlices(); break;
     case Action::kToggleCropMode: ToggleCropMode(); break;
     case Action::kToggleClipPlane: ToggleClipPlane(); break;
+    case Action::kAddClipPlane: AddClipPlane(); break;
     case Action::kScrollForward:
     case Action::kScrollBack: {
       const double sign = action == Action::kScrollForward ? 1.0 : -1.0;
@@ -182,7 +183,7 @@ void ViewerApp::OnButtonDown(const SDL_MouseButtonEvent& b) {
     if (grab_mode_) return StartPull(b.x, b.y);
     if ((SDL_GetModState() & KMOD_SHIFT) && settings_.clip_size() > 0) {
       gesture_ = Gesture::kClipPlane;
-      drag_clip_start_ = settings_.clip(0);
+      drag_clip_start_ = settings_.clip(settings_.clip_size() - 1);
       pull_from_x_ = b.x, pull_from_y_ = b.y;
       return;
     }
@@ -245,7 +246,7 @@ void ViewerApp::OnMotion(const SDL_MouseMotionEvent& m) {
   if (gesture_ == Gesture::kClipPlane && geometry_) {
     const double delta = ClipDragMm(*camera_, *geometry_, drag_clip_start_, from_dx, from_dy,
                                     window_->frame_width(), window_->frame_height());
-    *settings_.mutable_clip(0) =
+    *settings_.mutable_clip(settings_.clip_size() - 1) =
         vpm::view::MoveClipPlane(drag_clip_start_, delta, VolumeWorldBox(*geometry_));
     SendSettings();
     return;
@@ -445,7 +446,7 @@ void ViewerApp::ToggleClipPlane() {
   if (!camera_ || !geometry_) return Notice("clip: no volume yet");
   if (settings_.clip_size() > 0) {
     settings_.clear_clip();
-    Notice("clip plane off");
+    Notice("clip planes off");
   } else {
     *settings_.add_clip() = ClipPlaneFacingCamera(*camera_, *geometry_);
     Notice("clip plane: Shift+drag or PageUp/PageDown move it");
@@ -453,10 +454,24 @@ void ViewerApp::ToggleClipPlane() {
   SendSettings();
 }
 
+// Another plane facing the camera through the orbit centre; the moves act on
+// the newest. The ray caster takes 16 planes, a crop box counting 6.
+void ViewerApp::AddClipPlane() {
+  constexpr int kMaxClipPlanes = 10;
+  if (!camera_ || !geometry_) return Notice("clip: no volume yet");
+  if (settings_.clip_size() >= kMaxClipPlanes) {
+    return Notice(StrCat("clip: at most ", kMaxClipPlanes, " planes"));
+  }
+  *settings_.add_clip() = ClipPlaneFacingCamera(*camera_, *geometry_);
+  Notice(StrCat("clip plane ", settings_.clip_size(), ": Shift+drag or PageUp/PageDown move it"));
+  SendSettings();
+}
+
 void ViewerApp::MoveClipPlane(double delta_mm) {
   if (!geometry_ || settings_.clip_size() == 0) return;
-  *settings_.mutable_clip(0) =
-      vpm::view::MoveClipPlane(settings_.clip(0), delta_mm, VolumeWorldBox(*geometry_));
+  const int newest = settings_.clip_size() - 1;
+  *settings_.mutable_clip(newest) =
+      vpm::view::MoveClipPlane(settings_.clip(newest), delta_mm, VolumeWorldBox(*geometry_));
   SendSettings();
 }
 

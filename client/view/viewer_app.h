@@ -49,6 +49,7 @@ class ViewerApp {
   // Crop box (B) and clip plane (C).
   void ToggleCropMode();
   void ToggleClipPlane();
+  void AddClipPlane();
   void MoveClipPlane(double delta_mm);
   // The crop face under the window point, in crop mode.
   std::optional<BoxFace> FaceAt(int window_x, int window_y) const;

@@ -14,7 +14,8 @@
 #     wheel over a slice scrolls it in equal steps, and grab mode on a slice
 #     grabs and drags the tissue on its plane,
 #   - B (crop box): dragging the face under the cursor moves it and changes
-#     the frame; C (clip plane) cuts the front away and PageUp moves it 1 mm,
+#     the frame; C (clip plane) cuts the front away and PageUp moves it 1 mm;
+#     P adds a second plane after an orbit and PageUp moves only that one,
 #   - resizing the window brings frames of the new size,
 #   - killing the server shows a red "connection lost" banner, and a server
 #     restarted on the same port is reconnected to and streams again,
@@ -294,6 +295,23 @@ step=$(echo "$offsets" | awk '{ print $2 - $1 }')
 if [ "$d" -gt 1000 ] && gt "$step" 0.999 && gt 1.001 "$step"; then
   pass "C cut the front away ($d pixels changed), PageUp moved the plane $step mm ($offsets)"
 else fail "clip plane: $d pixels changed, PageUp step $step mm ($offsets)"; fi
+# P adds a second plane facing the orbited camera: both are sent and cut,
+# and PageUp moves the newest only.
+shot clip1
+n=$(frames); drag 1 $((frame_w / 2)) $((frame_h / 2)) 60 0 6; xdotool mouseup 1; settle "$n"
+n=$(frames); key p
+wait_for 15 bash -c "tail -1 <(grep '^settings' '$tmp/view.out') | grep -q ' clip [-0-9.e+]* [-0-9.e+]* at'" ||
+  fail "P sent no second clip plane: $(grep '^settings' "$tmp/view.out" | tail -1)"
+settle "$n"
+shot clip2
+d=$(changed_pixels "$tmp/clip1.png" "$tmp/clip2.png")
+before=$(grep '^settings' "$tmp/view.out" | tail -1 | grep -o ' clip [-0-9.e+]* [-0-9.e+]*')
+n=$(frames); key Page_Up; settle "$n"
+after=$(grep '^settings' "$tmp/view.out" | tail -1 | grep -o ' clip [-0-9.e+]* [-0-9.e+]*')
+moved=$(echo "$before $after" | awk '{ printf "%g %g", $5 - $2, $6 - $3 }')
+if [ "$d" -gt 1000 ] && [ "${moved% *}" = 0 ] && gt "${moved#* }" 0.999 && gt 1.001 "${moved#* }"; then
+  pass "P added a second clip plane (orbit + plane: $d pixels changed); PageUp moved the newest only ($before -> $after)"
+else fail "second clip plane: $d pixels changed, offsets $before -> $after"; fi
 n=$(frames); key c; settle "$n"
 
 # 7. Resizing the window asks for frames of the new size (the frame area is
