@@ -40,8 +40,19 @@ Result<CorotationalSolver> CorotationalSolver::Create(
       !(options.update_tolerance > 0.0) || !(options.cg_tolerance > 0.0)) {
     return absl::InvalidArgumentError("solver iteration limits and tolerances must be > 0");
   }
+  if (options.event_stop_newton_iterations < 0 ||
+      (options.event_newton_budget != 0 &&
+       options.event_newton_budget <
+           options.intermediate_newton_iterations + options.event_stop_newton_iterations)) {
+    return absl::InvalidArgumentError(
+        StrCat("event_newton_budget (", options.event_newton_budget,
+               ") must be 0 (unbounded) or at least intermediate_newton_iterations (",
+               options.intermediate_newton_iterations, ") + event_stop_newton_iterations (",
+               options.event_stop_newton_iterations, ")"));
+  }
   CorotationalSolver solver;
   solver.options_ = options;
+  solver.budget_ = EventBudget(options.event_newton_budget, options.event_stop_newton_iterations);
   const auto t0 = SteadyClock::now();
   ASSIGN_OR_RETURN(solver.elements_, MakeTetElements(rest_mm, tets, young_n_per_mm2, poisson));
   const Eigen::SparseMatrix<double> rest_stiffness =
@@ -64,6 +75,7 @@ Status CorotationalSolver::SetHandles(const std::vector<int32_t>& handle_dofs) {
   RETURN_IF_ERROR(factor_.SetExtraFixed(handle_dofs));
   handles_ = handle_dofs;
   linearized_ = false;
+  budget_.Clear();
   return absl::OkStatus();
 }
 
@@ -74,6 +86,7 @@ void CorotationalSolver::Reset() {
   frames_.twisted.clear();
   frames_.barrier.clear();
   linearized_ = false;
+  budget_.Clear();
 }
 
 Status CorotationalSolver::CheckLoad(const Eigen::VectorXd& prescribed_mm,
@@ -198,6 +211,9 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
   if (with_handles) constrained.insert(constrained.end(), handles_.begin(), handles_.end());
   const Eigen::VectorXd start = displacement_;
   SolveStats stats;
+  budget_.BeginSolve(prescribed_mm, force_n, constrained);
+  double first_jump_mm = -1.0;  // the prescribed motion asked for
+  bool carried = false;         // the budget stopped short of the target
   // Elements whose every DOF is prescribed: their shape is the load's, and
   // no step size can change it, so the barrier does not limit the steps.
   std::vector<uint8_t> prescribed_elements;
@@ -217,9 +233,26 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
   for (;;) {
     Eigen::VectorXd jump = Eigen::VectorXd::Zero(displacement_.size());
     for (int32_t d : constrained) jump[d] = prescribed_mm[d] - displacement_[d];
+    stats.remaining_mm = MaxVertexNorm(jump);
+    if (first_jump_mm < 0.0) first_jump_mm = stats.remaining_mm;
+    // Per-event bound: after a partial load step, the rest of the jump waits
+    // for the next Solve unless a further partial step fits; the iterations
+    // left bring the state at the fraction reached towards equilibrium.
+    if (stats.load_steps > 0 && !budget_.RoomForLoadStep(stats.newton_iterations,
+                                                         options_.intermediate_newton_iterations)) {
+      carried = true;
+      const int used = stats.newton_iterations;
+      const Status status =
+          Equilibrate(force_n, constrained, with_handles, start,
+                      MaxVertexNorm(displacement_ - start), used,
+                      budget_.IterationsFor(used, options_.max_newton_iterations), stats);
+      if (!status.ok()) return status;
+      break;
+    }
     const Eigen::VectorXd step_start = displacement_;
     const int first_iteration = stats.newton_iterations;
     ++stats.load_steps;
+    budget_.CountLoadStep();
     const bool warm = linearized_ && linearized_mode_ == mode;
     double alpha = 1.0;
     if (warm || options_.inversion_barrier) {
@@ -237,7 +270,7 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
       stats.assembly_ms += MsSince(t0);
       const Eigen::VectorXd direction = jump + TangentSolve(rhs, constrained, with_handles, stats);
       if (options_.inversion_barrier) {
-        alpha = stats.load_steps <= options_.max_load_steps
+        alpha = budget_.load_steps() <= options_.max_load_steps
                     ? FeasibleStepFraction(elements_, displacement_, direction, kFeasibleKeep,
                                            options_.min_load_fraction, prescribed_elements)
                     : 0.0;
@@ -266,7 +299,9 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
     const Status status = Equilibrate(
         force_n, constrained, with_handles, start, MaxVertexNorm(displacement_ - step_start),
         first_iteration,
-        alpha == 1.0 ? options_.max_newton_iterations : options_.intermediate_newton_iterations,
+        budget_.IterationsFor(first_iteration, alpha == 1.0
+                                                   ? options_.max_newton_iterations
+                                                   : options_.intermediate_newton_iterations),
         stats);
     if (!status.ok()) return status;
     if (alpha == 1.0) break;
@@ -278,6 +313,13 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
   linearized_ = true;
   linearized_mode_ = mode;
   linearized_force_ = force_n;
+  budget_.EndSolve(!carried);
+  if (carried) {
+    stats.converged = false;
+    stats.target_fraction = first_jump_mm > 0.0 ? 1.0 - stats.remaining_mm / first_jump_mm : 1.0;
+  } else {
+    stats.remaining_mm = 0.0;
+  }
   stats.max_displacement_mm = MaxVertexNorm(displacement_);
   return stats;
 }
