@@ -102,10 +102,12 @@ struct SolverOptions {
   int event_stop_newton_iterations = 4;
 };
 
-// The interactive scene's per-event bound (InteractiveFemOptions): 8 Newton
-// iterations hold the worst drag step of drag_loop_bench at 1,300 vertices
-// to about 3 times the mean, 4 partial load steps (docs/FEM.md,
-// "Per-event work bound").
+// The interactive scene's per-event bound (InteractiveFemOptions): at most 4
+// partial load steps and 4 iterations where a step stops short. In
+// drag_loop_bench at 1,318 vertices the unbounded worst step took 24 Newton
+// iterations (12 load steps), 3.9x the mean FEM step; with 12 the worst is
+// 2.0-2.3x, and 8 (tried, 2 kept) settled the lag in twice the iterations
+// (docs/FEM.md, "Per-event work bound").
 inline constexpr int kInteractiveEventNewtonBudget = 12;
 
 // Below this many tets the element loops run on one thread (a split costs
