@@ -14,12 +14,22 @@
 namespace vpm::bench {
 
 // Per inverted tet: how many of its vertices are handles (H), fixed (X), on a
-// box face (B) or free (F), and its centroid's distance from the grab, mm.
+// box face (B), free but in a tet stiffer than the softest (S: a tet with a
+// hard vertex, E_hard; such a vertex barely moves) or free (F), and its
+// centroid's distance from the grab, mm.
 inline void ExplainInvertedTets(const FemModel& model, const Volume& volume,
                                 const glm::dvec3& grab) {
   const std::vector<glm::dvec3> x = model.Positions();
   const auto& handles = model.grab().handles;
   const glm::dvec3 extent = volume.geometry().extent_mm();
+  // Per vertex: the largest shear modulus of its tets, N/mm^2.
+  const auto& elements = model.solver().elements();
+  std::vector<double> stiffest(x.size(), 0.0);
+  double softest = 1e300;
+  for (const auto& e : elements) {
+    softest = std::min(softest, e.mu_n_per_mm2);
+    for (int32_t v : e.vertices) stiffest[v] = std::max(stiffest[v], e.mu_n_per_mm2);
+  }
   for (const auto& tet : model.tets()) {
     const glm::dvec3 a = x[tet[1]] - x[tet[0]], b = x[tet[2]] - x[tet[0]], c = x[tet[3]] - x[tet[0]];
     if (glm::dot(a, glm::cross(b, c)) > 0.0) continue;
@@ -33,6 +43,7 @@ inline void ExplainInvertedTets(const FemModel& model, const Volume& volume,
       kinds += std::binary_search(handles.begin(), handles.end(), v) ? 'H'
                : !model.deformable()[v]                              ? 'X'
                : face                                                ? 'B'
+               : stiffest[v] > softest                               ? 'S'
                                                                      : 'F';
     }
     // The fixed vertex nearest the tet (rest positions): a free vertex
@@ -49,6 +60,27 @@ inline void ExplainInvertedTets(const FemModel& model, const Volume& volume,
                 kinds.c_str(), glm::distance(centre, grab), nearest_fixed, fixed_at.x,
                 fixed_at.y, fixed_at.z);
   }
+  // The free vertices held by hard tets near the grab (within 1.5 times the
+  // farthest inverted tet's distance): the tissue between them and the
+  // handles takes all the shear.
+  double reach = 0.0;
+  for (const auto& tet : model.tets()) {
+    const glm::dvec3 a = x[tet[1]] - x[tet[0]], b = x[tet[2]] - x[tet[0]], c = x[tet[3]] - x[tet[0]];
+    if (glm::dot(a, glm::cross(b, c)) > 0.0) continue;
+    glm::dvec3 centre(0.0);
+    for (int32_t v : tet) centre += 0.25 * model.rest_positions_mm()[v];
+    reach = std::max(reach, 1.5 * glm::distance(centre, grab));
+  }
+  int held = 0;
+  double held_moved = 0.0;
+  for (size_t v = 0; v < x.size(); ++v) {
+    if (!model.deformable()[v] || !(stiffest[v] > softest)) continue;
+    if (glm::distance(model.rest_positions_mm()[v], grab) > reach) continue;
+    ++held;
+    held_moved = std::max(held_moved, glm::distance(x[v], model.rest_positions_mm()[v]));
+  }
+  std::printf("  %d free vertices in hard tets within %.1f mm of the grab (S), moved at most "
+              "%.2f mm\n", held, reach, held_moved);
 }
 
 }  // namespace vpm::bench

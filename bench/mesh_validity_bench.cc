@@ -12,13 +12,21 @@
 // standard drag), else the centre of the image box.
 //
 // Usage: mesh_validity_bench [--max-load-steps N] [--intermediate-newton N]
-//                            [--steiner DEG] [VOLUME [TF]]...
+//                            [--steiner DEG] [--hard-reach F]
+//                            [--hard-reach-radius F] [VOLUME [TF]]...
 //   (default: phantom:abdomen?size=128)
 //   --min-load-fraction F, --measuring-load-steps N: SolverOptions of both
 //   settings and max_load_steps of the measuring one
 //   --steiner DEG: MeshParams::steiner_min_dihedral_deg (default 5; 0: no
 //   Steiner points, the mesh of flips alone)
-//   MESH_VALIDITY_EXPLAIN=1 prints what each inverted tet is made of.
+//   --hard-reach F, --hard-reach-radius F: MeshParams::hard_reach_factor
+//   and hard_reach_radius_factor (defaults 2 and 2; --hard-reach 0: no
+//   Steiner points on long hard edges, the mesh before issue 16 point 3)
+//   --hard-factor F: FemMaterial::hard_factor of both settings (default
+//   1e4; 1 makes the tets touching bone as soft as the rest, bone vertices
+//   staying fixed)
+//   MESH_VALIDITY_EXPLAIN=1 prints what each inverted tet is made of
+//   (bench/explain_inverted_tets.h).
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -39,6 +47,9 @@ namespace {
 
 const Volume* explain_volume = nullptr;
 int measuring_load_steps = 0;  // 0: MeasurementFemOptions' own
+double hard_reach = MeshParams{}.hard_reach_factor;
+double hard_factor = FemMaterial{}.hard_factor;
+double hard_reach_radius = MeshParams{}.hard_reach_radius_factor;
 
 struct DragResult {
   int64_t inverted = 0;
@@ -81,6 +92,8 @@ void Row(const Volume& volume, const std::string& tf, Footprint footprint, const
   explain_volume = &volume;
   MeshParams params;
   params.steiner_min_dihedral_deg = steiner_deg;
+  params.hard_reach_factor = hard_reach;
+  params.hard_reach_radius_factor = hard_reach_radius;
   params.footprint = footprint;
   if (!tf.empty()) params.tf = tf;
   const glm::dvec3 grab = GrabPoint(volume);
@@ -97,7 +110,9 @@ void Row(const Volume& volume, const std::string& tf, Footprint footprint, const
   const double h = mesh.stats.h_mm;
   FemOptions interactive;
   interactive.solver = live;
+  interactive.material.hard_factor = hard_factor;
   FemOptions measuring = MeasurementFemOptions();
+  measuring.material.hard_factor = hard_factor;
   if (measuring_load_steps > 0) measuring.solver.max_load_steps = measuring_load_steps;
   measuring.solver.min_load_fraction = live.min_load_fraction;
   std::string cells;
@@ -133,6 +148,12 @@ int main(int argc, char** argv) {
       live.min_load_fraction = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--measuring-load-steps") == 0 && i + 1 < argc) {
       measuring_load_steps = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--hard-factor") == 0 && i + 1 < argc) {
+      hard_factor = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--hard-reach") == 0 && i + 1 < argc) {
+      hard_reach = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--hard-reach-radius") == 0 && i + 1 < argc) {
+      hard_reach_radius = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--steiner") == 0 && i + 1 < argc) {
       steiner_deg = std::atof(argv[++i]);
     } else if (i + 1 < argc && std::strchr(argv[i + 1], ':') == nullptr &&

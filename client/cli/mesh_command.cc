@@ -23,7 +23,8 @@ struct MeshArgs {
   VolumeFlags volume_flags;
 };
 
-// `evaluated_on`: where step 1 ran (MeshStats.evaluated_on, "server").
+// `evaluated_on`: where step 1 ran (MeshStats.evaluated_on; "server: ..." for a
+// mesh the server built).
 void PrintSummary(const ProxyMesh& mesh, const GpuBackend* gpu, const std::string& evaluated_on) {
   const MeshStats& s = mesh.stats;
   std::printf("lattice %dx%dx%d = %lld vertices, h = %.2f mm, R = %.2f mm\n", s.grid[0],
@@ -57,7 +58,10 @@ Result<ProxyMesh> BuildOnServer(const ServerFlags& server, const MeshArgs& args)
   ASSIGN_OR_RETURN(RemoteMesh remote, BuildMeshOnServer(connection, args.source, args.mesh));
   std::printf("server %s: volume %s, mesh %s\n", server.address.c_str(),
               remote.volume.volume_id().c_str(), remote.info.mesh_id().c_str());
-  PrintSummary(remote.mesh, nullptr, "server");
+  PrintSummary(remote.mesh, nullptr,
+               remote.mesh.stats.evaluated_on.empty()
+                   ? std::string("server, which did not say where")
+                   : StrCat("server: ", remote.mesh.stats.evaluated_on));
   return std::move(remote.mesh);
 }
 

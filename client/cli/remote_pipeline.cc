@@ -42,6 +42,7 @@ MeshStats StatsOf(const v2::MeshStats& s) {
   out.refine_ms = s.refine_ms();
   out.tetrahedralize_ms = s.tetrahedralize_ms();
   out.total_ms = s.total_ms();
+  out.evaluated_on = s.evaluated_on();
   return out;
 }
 

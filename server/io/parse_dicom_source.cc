@@ -9,7 +9,7 @@
 namespace vpm {
 namespace {
 
-constexpr std::string_view kSyntax = "FOLDER[?series=UID|N][&spacing=MM]";
+constexpr std::string_view kDicomSyntax = "FOLDER[?series=UID|N][&spacing=MM]";
 
 bool IsFolder(std::string_view path) {
   std::error_code ec;
@@ -18,7 +18,7 @@ bool IsFolder(std::string_view path) {
 
 Status Bad(std::string_view folder, std::string_view what) {
   return absl::InvalidArgumentError(StrCat("DICOM source ", std::string(folder), ": ",
-                                           std::string(what), " (syntax: ", std::string(kSyntax),
+                                           std::string(what), " (syntax: ", std::string(kDicomSyntax),
                                            ")"));
 }
 

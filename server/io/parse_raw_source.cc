@@ -10,12 +10,12 @@
 namespace vpm {
 namespace {
 
-constexpr std::string_view kSyntax =
+constexpr std::string_view kRawSyntax =
     "raw:PATH?dims=X,Y,Z&type=int16&spacing=A,B,C[&endian=little|big][&offset=N]";
 
 Status Bad(std::string_view what) {
   return absl::InvalidArgumentError(
-      StrCat("raw source: ", std::string(what), " (syntax: ", std::string(kSyntax), ")"));
+      StrCat("raw source: ", std::string(what), " (syntax: ", std::string(kRawSyntax), ")"));
 }
 
 Status ParseParam(std::string_view key, std::string_view value, RawOptions& options) {

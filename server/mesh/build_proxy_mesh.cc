@@ -5,6 +5,7 @@
 
 #include "server/common/clock.h"
 #include "server/mesh/boundary_vertices.h"
+#include "server/mesh/hard_reach_steiner_points.h"
 #include "server/mesh/lattice_costs_rows.h"
 #include "server/mesh/refine_at_point.h"
 #include "server/mesh/sliver_steiner_points.h"
@@ -123,6 +124,17 @@ Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& 
   RETURN_IF_ERROR(Tetrahedralize(mesh, volume.geometry().extent_mm()));
   const double tetrahedralize_ms = MsSince(t0);
   t0 = SteadyClock::now();
+  if (params.hard_reach_factor > 0.0 && params.refine_at_mm) {
+    // Before the sliver points, which then mend the tets these leave.
+    const double h = base.stats.h_mm;
+    const HardReachParams hp{.max_reach_mm = params.hard_reach_factor * h,
+                             .center_mm = *params.refine_at_mm,
+                             .radius_mm = params.hard_reach_radius_factor * h,
+                             .min_spacing_mm = h / 6.0};
+    ASSIGN_OR_RETURN(const HardReachStats reach,
+                     AddHardReachSteinerPoints(mesh, volume, base.stats.R_mm, params.classify, hp));
+    mesh.stats.steiner += reach.added;
+  }
   if (params.steiner_min_dihedral_deg > 0.0) {
     // Steiner points only where a tet stays under the target after flips;
     // h/6 apart at least, half the refinement spacing (docs/MESH.md).
@@ -130,7 +142,7 @@ Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& 
                            .min_spacing_mm = base.stats.h_mm / 6.0};
     ASSIGN_OR_RETURN(const SteinerStats steiner,
                      AddSliverSteinerPoints(mesh, volume.geometry(), sp));
-    mesh.stats.steiner = steiner.added;
+    mesh.stats.steiner += steiner.added;
   }
   mesh.stats.steiner_ms = MsSince(t0);
   mesh.stats.tetrahedralize_ms = tetrahedralize_ms;  // the Steiner rounds' own are in steiner_ms

@@ -45,6 +45,14 @@ struct MeshParams {
   // Steiner points until every tet's smallest dihedral angle reaches this,
   // degrees; 0 turns them off (sliver_steiner_points.h, docs/MESH.md).
   double steiner_min_dihedral_deg = 5.0;
+  // Steiner points so that no edge from a hard vertex to a soft one within
+  // hard_reach_radius_factor * h of refine_at_mm is longer than
+  // hard_reach_factor * h (hard_reach_steiner_points.h, docs/MESH.md): tets
+  // touching bone are hard, and longer ones held brain tissue near the grab
+  // still. 0 turns them off; without refine_at_mm there are none. The
+  // radius 2 h is what a handle can reach: grab radius h/2, drag 1.5 h.
+  double hard_reach_factor = 2.0;
+  double hard_reach_radius_factor = 2.0;
 };
 
 // Where step 1 runs; both null means the CPU reference.

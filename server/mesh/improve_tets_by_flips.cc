@@ -13,22 +13,22 @@ namespace vpm {
 namespace {
 
 using Tet = std::array<int32_t, 4>;
-using Face = std::array<int32_t, 3>;  // sorted vertex indices
+using TriKey = std::array<int32_t, 3>;  // sorted vertex indices
 
 // A flip must raise the smallest angle by more than this (degrees), so that
 // round-off cannot make two triangulations flip back and forth.
 constexpr double kMinGainDeg = 1e-9;
 
-struct FaceHash {
-  size_t operator()(const Face& f) const {
+struct TriKeyHash {
+  size_t operator()(const TriKey& f) const {
     uint64_t h = 1469598103934665603ull;
     for (int32_t v : f) h = (h ^ static_cast<uint32_t>(v)) * 1099511628211ull;
     return static_cast<size_t>(h);
   }
 };
 
-Face SortedFace(int32_t a, int32_t b, int32_t c) {
-  Face f{a, b, c};
+TriKey SortedFace(int32_t a, int32_t b, int32_t c) {
+  TriKey f{a, b, c};
   std::sort(f.begin(), f.end());
   return f;
 }
@@ -94,7 +94,7 @@ class FlipMesh {
       const Tet& tt = tets_[t];
       const int32_t d = tt[i];
       // The face oriented so that d lies on its positive side.
-      Face f{tt[(i + 1) % 4], tt[(i + 2) % 4], tt[(i + 3) % 4]};
+      TriKey f{tt[(i + 1) % 4], tt[(i + 2) % 4], tt[(i + 3) % 4]};
       if (i % 2 == 0) std::swap(f[1], f[2]);
       int32_t e = -1;
       for (int32_t v : tets_[u]) {
@@ -145,7 +145,7 @@ class FlipMesh {
     }
   }
 
-  static Face FaceOpposite(const Tet& t, int i) {
+  static TriKey FaceOpposite(const Tet& t, int i) {
     return SortedFace(t[(i + 1) % 4], t[(i + 2) % 4], t[(i + 3) % 4]);
   }
 
@@ -246,7 +246,7 @@ class FlipMesh {
   std::vector<Tet> tets_;
   std::vector<uint8_t> alive_;
   std::vector<double> quality_;
-  std::unordered_map<Face, std::array<int32_t, 2>, FaceHash> faces_;
+  std::unordered_map<TriKey, std::array<int32_t, 2>, TriKeyHash> faces_;
 };
 
 double SmallestQuality(const FlipMesh& mesh) {

@@ -19,7 +19,8 @@ enum class VertexKind {
   kBoundary,  // on a face of the image box, added so that no tet there is a
               // sliver (boundary_vertices.h)
   kSteiner,   // added where no flip could mend a tet under 5 degrees
-              // (sliver_steiner_points.h)
+              // (sliver_steiner_points.h) or on a long edge from a hard
+              // vertex near the refinement point (hard_reach_steiner_points.h)
 };
 // "lattice", "anchor", "refined", "boundary", "steiner"
 const char* VertexKindName(VertexKind kind);
@@ -57,7 +58,7 @@ struct MeshStats {
   int64_t anchors = 0;
   int64_t refined = 0;
   int64_t boundary = 0;  // on the box faces (boundary_vertices.h)
-  int64_t steiner = 0;   // against slivers (sliver_steiner_points.h)
+  int64_t steiner = 0;   // against slivers and long hard edges (kSteiner)
   int64_t hard = 0;
   int64_t tets = 0;
   double h_mm = 0.0;  // largest lattice step

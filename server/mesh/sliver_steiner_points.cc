@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "server/mesh/steiner_point.h"
 #include "server/mesh/tet_quality.h"
 #include "server/mesh/tetrahedralize.h"
 
@@ -29,33 +30,6 @@ std::optional<glm::dvec3> Circumcentre(const glm::dvec3& a, const glm::dvec3& b,
     return std::nullopt;
   }
   return centre;
-}
-
-double NearestDistance(const std::vector<glm::dvec3>& points, const glm::dvec3& p) {
-  double best = std::numeric_limits<double>::infinity();
-  for (const glm::dvec3& q : points) best = std::min(best, glm::distance(p, q));
-  return best;
-}
-
-std::array<int64_t, 3> NearestVoxel(const VolumeGeometry& geometry, const glm::dvec3& p) {
-  std::array<int64_t, 3> voxel{};
-  for (int a = 0; a < 3; ++a) {
-    const double index = std::floor(p[a] / geometry.spacing_mm[a] + 0.5);
-    voxel[a] = std::clamp<int64_t>(static_cast<int64_t>(index), 0, geometry.dims[a] - 1);
-  }
-  return voxel;
-}
-
-// `p` clamped into the box [0, extent], then put on any face it lies within
-// `snap` of: a vertex in a thin layer under a face makes flat tets with the
-// vertices on that face.
-glm::dvec3 SnapToBox(const glm::dvec3& p, const glm::dvec3& extent, double snap) {
-  glm::dvec3 q = glm::clamp(p, glm::dvec3(0.0), extent);
-  for (int a = 0; a < 3; ++a) {
-    if (q[a] < snap) q[a] = 0.0;
-    if (q[a] > extent[a] - snap) q[a] = extent[a];
-  }
-  return q;
 }
 
 // The tets under the target, worst first (ties: tet order), with their

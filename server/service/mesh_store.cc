@@ -50,6 +50,10 @@ Result<std::shared_ptr<const MeshEntry>> MeshStore::Build(std::shared_ptr<Volume
     std::lock_guard lock(costs_mutex_);
     ASSIGN_OR_RETURN(DecimatedLattice base,
                      DecimateLattice(volume->volume, params, {&volume->gpu, &*costs_}));
+    // Clients print where step 1 ran (MeshStats.evaluated_on): name the device.
+    if (base.stats.evaluated_on != kStep1OnCpuReference) {
+      base.stats.evaluated_on += StrCat("; Vulkan device ", options_.context->device_name());
+    }
     entry->base = std::make_shared<const DecimatedLattice>(std::move(base));
   }
   ASSIGN_OR_RETURN(entry->mesh, FinishProxyMesh(volume->volume, *entry->base, params));

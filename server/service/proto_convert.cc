@@ -69,6 +69,7 @@ void FillMeshInfo(const MeshEntry& entry, v2::MeshInfo* info) {
   s->set_mean_radius_ratio(mesh.quality.mean_radius_ratio);
   s->set_removed_zero_volume(mesh.quality.removed_zero_volume);
   s->set_total_ms(mesh.stats.total_ms);
+  s->set_evaluated_on(mesh.stats.evaluated_on);
 }
 
 namespace {

@@ -17,7 +17,7 @@ using gpu::BackwardMapTetWork;
 
 constexpr int kPassClear = 0;
 constexpr int kPassClaim = 1;
-constexpr uint32_t kLocalSize = 16;       // backward_map.comp: lanes per tet
+constexpr uint32_t kMapLocalSize = 16;       // backward_map.comp: lanes per tet
 constexpr uint32_t kWriteLocalSize = 64;  // backward_map_write.comp: points per workgroup
 constexpr uint32_t kNoOwner = 0xFFFFFFFFu;
 constexpr vk::Format kMapFormat = vk::Format::eR32G32B32A32Sfloat;
@@ -87,7 +87,7 @@ Result<BackwardMap> BackwardMap::Create(const gpu::GpuContext& context,
                     .bindings = {DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer,
                                  DT::eStorageBuffer, DT::eStorageBuffer},
                     .push_constant_bytes = sizeof(gpu::BackwardMapPush),
-                    .local_size = {kLocalSize, 1, 1}}));
+                    .local_size = {kMapLocalSize, 1, 1}}));
   ASSIGN_OR_RETURN(
       gpu::ComputeKernel write_kernel,
       gpu::ComputeKernel::Create(
@@ -203,10 +203,10 @@ BackwardMap::Plan BackwardMap::PlanWork(std::span<const glm::dvec3> deformed_mm,
     if (both.empty()) continue;
     const glm::ivec3 size = both.hi - both.lo + 1;
     constexpr int64_t kLaneIterations = 30000;  // of the 65,535
-    // A slice's rows shared by the kLocalSize lanes, each row its points plus
+    // A slice's rows shared by the kMapLocalSize lanes, each row its points plus
     // row_range's few loop steps.
     const int64_t per_slice =
-        (int64_t(size.y) + kLocalSize - 1) / kLocalSize * (int64_t(size.x) + 8);
+        (int64_t(size.y) + kMapLocalSize - 1) / kMapLocalSize * (int64_t(size.x) + 8);
     const int slab = static_cast<int>(std::max<int64_t>(1, kLaneIterations / per_slice));
     for (int z0 = both.lo.z; z0 <= both.hi.z; z0 += slab) {
       const int z1 = std::min(z0 + slab - 1, both.hi.z);

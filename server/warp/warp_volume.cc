@@ -7,7 +7,7 @@
 namespace vpm {
 namespace {
 
-constexpr uint32_t kLocalSize = 64;
+constexpr uint32_t kWarpLocalSize = 64;
 
 }  // namespace
 
@@ -23,7 +23,7 @@ Result<VolumeWarper> VolumeWarper::Create(const gpu::GpuContext& context, const 
                                  .bindings = {vk::DescriptorType::eCombinedImageSampler,
                                               source_binding, vk::DescriptorType::eStorageBuffer},
                                  .push_constant_bytes = sizeof(gpu::WarpVolumePush),
-                                 .local_size = {kLocalSize, 1, 1}}));
+                                 .local_size = {kWarpLocalSize, 1, 1}}));
   return VolumeWarper(context, options, std::move(kernel));
 }
 

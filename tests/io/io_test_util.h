@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "server/common/status.h"
 #include "server/volume/volume.h"
 
 namespace vpm::testing {
@@ -53,6 +54,14 @@ void AppendScalar(std::vector<uint8_t>& out, T value, bool big_endian = false) {
 
 inline std::vector<uint8_t> ToBytes(const std::string& text) {
   return std::vector<uint8_t>(text.begin(), text.end());
+}
+
+// `v` failed with `code` and a message containing `fragment`.
+inline void ExpectError(const Result<Volume>& v, absl::StatusCode code,
+                        const std::string& fragment) {
+  ASSERT_FALSE(v.ok());
+  EXPECT_EQ(v.status().code(), code) << v.status();
+  EXPECT_NE(v.status().message().find(fragment), absl::string_view::npos) << v.status();
 }
 
 // A rotated, anisotropic, offset geometry: i -> +y, j -> -x, k -> +z (LPS).

@@ -19,7 +19,7 @@ std::vector<uint8_t> Shorts(const std::vector<int16_t>& values, bool big_endian 
   return out;
 }
 
-std::vector<uint8_t> Attached(const std::string& header, const std::vector<uint8_t>& data) {
+std::vector<uint8_t> AttachedMetaImage(const std::string& header, const std::vector<uint8_t>& data) {
   std::vector<uint8_t> out = ToBytes(header);
   out.insert(out.end(), data.begin(), data.end());
   return out;
@@ -34,16 +34,10 @@ std::vector<uint8_t> Zlib(const std::vector<uint8_t>& data) {
   return out;
 }
 
-Result<Volume> ReadFile(const std::string& name, const std::vector<uint8_t>& bytes) {
+Result<Volume> ReadMetaImageFile(const std::string& name, const std::vector<uint8_t>& bytes) {
   const auto path = MakeTempDir() / name;
   WriteBytes(path, bytes);
   return ReadMetaImage(path, {});
-}
-
-void ExpectError(const Result<Volume>& v, absl::StatusCode code, const std::string& fragment) {
-  ASSERT_FALSE(v.ok());
-  EXPECT_EQ(v.status().code(), code) << v.status();
-  EXPECT_NE(v.status().message().find(fragment), absl::string_view::npos) << v.status();
 }
 
 std::string Header(const std::string& extra, const std::string& type = "MET_SHORT",
@@ -60,7 +54,7 @@ TEST(MetaImageReader, ReadsAttachedWithTransformOffsetSpacing) {
   const std::string header = Header(
       "TransformMatrix = 0 1 0 -1 0 0 0 0 1\nOffset = -5 6.5 7\nElementSpacing = 0.5 0.75 2\n"
       "AnatomicalOrientation = RAI\n");
-  auto v = ReadFile("x.mha", Attached(header, Shorts({-1024, 0, 50, 3000})));
+  auto v = ReadMetaImageFile("x.mha", AttachedMetaImage(header, Shorts({-1024, 0, 50, 3000})));
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_EQ(v->voxels()[0], -1024.0f);
   EXPECT_EQ(v->voxels()[3], 3000.0f);
@@ -74,7 +68,7 @@ TEST(MetaImageReader, ReadsCompressedBigEndian) {
   std::string header = Header("CompressedData = True\n");
   header.replace(header.find("BinaryDataByteOrderMSB = False"), 30,
                  "BinaryDataByteOrderMSB = True");
-  auto v = ReadFile("c.mha", Attached(header, Zlib(Shorts({1, 2, 3, -4}, true))));
+  auto v = ReadMetaImageFile("c.mha", AttachedMetaImage(header, Zlib(Shorts({1, 2, 3, -4}, true))));
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_EQ(v->voxels()[3], -4.0f);
 }
@@ -111,7 +105,7 @@ TEST(MetaImageReader, ReadsAllElementTypes) {
                         {"MET_FLOAT", f32, 2.5f},
                         {"MET_DOUBLE", f64, -8.25f}};
   for (const Case& c : cases) {
-    auto v = ReadFile("t.mha", Attached(Header("", c.type, "1 1 1"), c.bytes));
+    auto v = ReadMetaImageFile("t.mha", AttachedMetaImage(Header("", c.type, "1 1 1"), c.bytes));
     ASSERT_TRUE(v.ok()) << c.type << ": " << v.status();
     EXPECT_EQ(v->voxels()[0], c.value) << c.type;
   }
@@ -125,32 +119,32 @@ TEST(MetaImageReader, RejectsMissingFile) {
 }
 
 TEST(MetaImageReader, RejectsTruncatedData) {
-  ExpectError(ReadFile("t.mha", Attached(Header(""), {1, 2, 3})),
+  ExpectError(ReadMetaImageFile("t.mha", AttachedMetaImage(Header(""), {1, 2, 3})),
               absl::StatusCode::kInvalidArgument,
               "t.mha: header says 2x2x1 int16 (8 bytes of data) but the file holds 3 bytes");
-  ExpectError(ReadFile("nohdr.mha", ToBytes("NDims = 3\nDimSize = 1 1 1\n")),
+  ExpectError(ReadMetaImageFile("nohdr.mha", ToBytes("NDims = 3\nDimSize = 1 1 1\n")),
               absl::StatusCode::kInvalidArgument, "no ElementDataFile");
 }
 
 TEST(MetaImageReader, RejectsNonMetaImageText) {
-  ExpectError(ReadFile("png.mha", {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'}),
+  ExpectError(ReadMetaImageFile("png.mha", {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'}),
               absl::StatusCode::kInvalidArgument, "not \"Key = Value\"");
 }
 
 TEST(MetaImageReader, RejectsBadDims) {
-  ExpectError(ReadFile("z.mha", Attached(Header("", "MET_UCHAR", "2 0 1"), {})),
+  ExpectError(ReadMetaImageFile("z.mha", AttachedMetaImage(Header("", "MET_UCHAR", "2 0 1"), {})),
               absl::StatusCode::kInvalidArgument, "dimension y is 0");
-  ExpectError(ReadFile("n.mha", Attached(Header("", "MET_UCHAR", "2 2 -1"), {})),
+  ExpectError(ReadMetaImageFile("n.mha", AttachedMetaImage(Header("", "MET_UCHAR", "2 2 -1"), {})),
               absl::StatusCode::kInvalidArgument, "dimension z is -1");
-  ExpectError(ReadFile("h.mha", Attached(Header("", "MET_UCHAR", "99999 99999 99999"), {})),
+  ExpectError(ReadMetaImageFile("h.mha", AttachedMetaImage(Header("", "MET_UCHAR", "99999 99999 99999"), {})),
               absl::StatusCode::kResourceExhausted, "cap");
-  ExpectError(ReadFile("c.mha", Attached(Header("", "MET_UCHAR", "2 2"), {})),
+  ExpectError(ReadMetaImageFile("c.mha", AttachedMetaImage(Header("", "MET_UCHAR", "2 2"), {})),
               absl::StatusCode::kInvalidArgument, "DimSize lists 2");
 }
 
 TEST(MetaImageReader, RejectsBadSpacing) {
   for (const char* spacing : {"1 0 1", "1 -1 1", "1 nan 1"}) {
-    ExpectError(ReadFile("s.mha", Attached(Header(StrCat("ElementSpacing = ", spacing, "\n"),
+    ExpectError(ReadMetaImageFile("s.mha", AttachedMetaImage(Header(StrCat("ElementSpacing = ", spacing, "\n"),
                                                   "MET_UCHAR", "1 1 1"),
                                            {0})),
                 absl::StatusCode::kInvalidArgument, "spacing y");
@@ -159,29 +153,29 @@ TEST(MetaImageReader, RejectsBadSpacing) {
 
 TEST(MetaImageReader, RejectsNonOrthonormalTransform) {
   ExpectError(
-      ReadFile(
+      ReadMetaImageFile(
           "o.mha",
-          Attached(Header("TransformMatrix = 1 0 0 1 1 0 0 0 1\n", "MET_UCHAR", "1 1 1"), {0})),
+          AttachedMetaImage(Header("TransformMatrix = 1 0 0 1 1 0 0 0 1\n", "MET_UCHAR", "1 1 1"), {0})),
       absl::StatusCode::kInvalidArgument, "not orthonormal");
 }
 
 TEST(MetaImageReader, RejectsUnknownAndUnsupportedTypes) {
-  ExpectError(ReadFile("u.mha", Attached(Header("", "FLOAT", "1 1 1"), {0, 0, 0, 0})),
+  ExpectError(ReadMetaImageFile("u.mha", AttachedMetaImage(Header("", "FLOAT", "1 1 1"), {0, 0, 0, 0})),
               absl::StatusCode::kInvalidArgument, "unknown ElementType");
-  ExpectError(ReadFile("a.mha", Attached(Header("", "MET_FLOAT_ARRAY", "1 1 1"), {0, 0, 0, 0})),
+  ExpectError(ReadMetaImageFile("a.mha", AttachedMetaImage(Header("", "MET_FLOAT_ARRAY", "1 1 1"), {0, 0, 0, 0})),
               absl::StatusCode::kUnimplemented, "MET_FLOAT_ARRAY");
-  ExpectError(ReadFile("ch.mha", Attached(Header("ElementNumberOfChannels = 3\n"), {})),
+  ExpectError(ReadMetaImageFile("ch.mha", AttachedMetaImage(Header("ElementNumberOfChannels = 3\n"), {})),
               absl::StatusCode::kUnimplemented, "ElementNumberOfChannels");
-  ExpectError(ReadFile("l.mha", ToBytes("NDims = 3\nDimSize = 1 1 1\nElementType = MET_UCHAR\n"
+  ExpectError(ReadMetaImageFile("l.mha", ToBytes("NDims = 3\nDimSize = 1 1 1\nElementType = MET_UCHAR\n"
                                         "ElementDataFile = LIST\n")),
               absl::StatusCode::kUnimplemented, "LIST");
 }
 
 TEST(MetaImageReader, RejectsCompressedDataPastDeclaredSize) {
   const std::string header = Header("CompressedData = True\n", "MET_UCHAR", "2 2 2");
-  ExpectError(ReadFile("bomb.mha", Attached(header, Zlib(std::vector<uint8_t>(50000, 1)))),
+  ExpectError(ReadMetaImageFile("bomb.mha", AttachedMetaImage(header, Zlib(std::vector<uint8_t>(50000, 1)))),
               absl::StatusCode::kInvalidArgument, "zlib data inflates past the declared size");
-  ExpectError(ReadFile("corrupt.mha", Attached(header, {1, 2, 3, 4, 5})),
+  ExpectError(ReadMetaImageFile("corrupt.mha", AttachedMetaImage(header, {1, 2, 3, 4, 5})),
               absl::StatusCode::kInvalidArgument, "corrupt");
 }
 

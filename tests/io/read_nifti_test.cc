@@ -270,12 +270,6 @@ TEST(NiftiReader, ReplacesNonFiniteVoxelsByMinimum) {
 
 // ---- Bad input ----
 
-void ExpectError(const Result<Volume>& v, absl::StatusCode code, const std::string& fragment) {
-  ASSERT_FALSE(v.ok());
-  EXPECT_EQ(v.status().code(), code) << v.status();
-  EXPECT_NE(v.status().message().find(fragment), absl::string_view::npos) << v.status();
-}
-
 TEST(NiftiReader, RejectsMissingFile) {
   ExpectError(ReadNifti(MakeTempDir() / "absent.nii", {}), absl::StatusCode::kNotFound,
               "absent.nii");

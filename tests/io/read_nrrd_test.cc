@@ -18,23 +18,17 @@ std::vector<uint8_t> Int16Le(const std::vector<int16_t>& values, bool big_endian
   return out;
 }
 
-std::vector<uint8_t> Attached(const std::string& header, const std::vector<uint8_t>& data) {
+std::vector<uint8_t> AttachedNrrd(const std::string& header, const std::vector<uint8_t>& data) {
   std::vector<uint8_t> out = ToBytes(header + "\n");
   out.insert(out.end(), data.begin(), data.end());
   return out;
 }
 
-Result<Volume> ReadFile(const std::string& name, const std::vector<uint8_t>& bytes,
+Result<Volume> ReadNrrdFile(const std::string& name, const std::vector<uint8_t>& bytes,
                         const VolumeLimits& limits = {}) {
   const auto path = MakeTempDir() / name;
   WriteBytes(path, bytes);
   return ReadNrrd(path, limits);
-}
-
-void ExpectError(const Result<Volume>& v, absl::StatusCode code, const std::string& fragment) {
-  ASSERT_FALSE(v.ok());
-  EXPECT_EQ(v.status().code(), code) << v.status();
-  EXPECT_NE(v.status().message().find(fragment), absl::string_view::npos) << v.status();
 }
 
 const char kRasHeader[] =
@@ -52,7 +46,7 @@ const char kRasHeader[] =
     "meta key:=ignored value\n";
 
 TEST(NrrdReader, ReadsAttachedRawAndConvertsRasToLps) {
-  auto v = ReadFile("ras.nrrd", Attached(kRasHeader, Int16Le({1, -2, 3, 400})));
+  auto v = ReadNrrdFile("ras.nrrd", AttachedNrrd(kRasHeader, Int16Le({1, -2, 3, 400})));
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_EQ(v->dims(), (std::array<int64_t, 3>{2, 2, 1}));
   EXPECT_EQ(v->voxels()[1], -2.0f);
@@ -71,7 +65,7 @@ TEST(NrrdReader, ReadsGzipBigEndianWithLps) {
       "endian: big\nencoding: gzip\n";
   auto gz = GzipCompress(Int16Le({-1000, 0, 1000}, true));
   ASSERT_TRUE(gz.ok());
-  auto v = ReadFile("lps.nrrd", Attached(header, *gz));
+  auto v = ReadNrrdFile("lps.nrrd", AttachedNrrd(header, *gz));
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_EQ(v->voxels()[0], -1000.0f);
   EXPECT_EQ(v->voxels()[2], 1000.0f);
@@ -118,11 +112,11 @@ TEST(NrrdReader, ReadsAllIntegerTypesAndAscii) {
     const std::string header = StrCat("NRRD0004\ntype: ", c.type,
                                             "\ndimension: 2\nsizes: 2 1\nendian: little\n"
                                             "encoding: raw\n");
-    auto v = ReadFile("t.nrrd", Attached(header, c.data));
+    auto v = ReadNrrdFile("t.nrrd", AttachedNrrd(header, c.data));
     ASSERT_TRUE(v.ok()) << c.type << ": " << v.status();
     EXPECT_EQ(v->voxels()[1], c.last) << c.type;
   }
-  auto v = ReadFile("a.nrrd", Attached("NRRD0004\ntype: float\ndimension: 2\nsizes: 3 1\n"
+  auto v = ReadNrrdFile("a.nrrd", AttachedNrrd("NRRD0004\ntype: float\ndimension: 2\nsizes: 3 1\n"
                                        "encoding: ascii\n",
                                        ToBytes("1.5 -2\n 3e2\n")));
   ASSERT_TRUE(v.ok()) << v.status();
@@ -136,38 +130,38 @@ TEST(NrrdReader, RejectsMissingFile) {
 }
 
 TEST(NrrdReader, RejectsWrongMagic) {
-  ExpectError(ReadFile("m.nrrd", ToBytes("NRRD9999\ntype: short\n\n")),
+  ExpectError(ReadNrrdFile("m.nrrd", ToBytes("NRRD9999\ntype: short\n\n")),
               absl::StatusCode::kInvalidArgument, "wrong magic");
 }
 
 TEST(NrrdReader, RejectsTruncatedData) {
-  ExpectError(ReadFile("short.nrrd", Attached(kRasHeader, {1, 2, 3})),
+  ExpectError(ReadNrrdFile("short.nrrd", AttachedNrrd(kRasHeader, {1, 2, 3})),
               absl::StatusCode::kInvalidArgument,
               "short.nrrd: header says 2x2x1 int16 (8 bytes of data)");
-  ExpectError(ReadFile("short.nrrd", Attached(kRasHeader, {1, 2, 3})),
+  ExpectError(ReadNrrdFile("short.nrrd", AttachedNrrd(kRasHeader, {1, 2, 3})),
               absl::StatusCode::kInvalidArgument, "(truncated)");
 }
 
 TEST(NrrdReader, RejectsTruncatedHeader) {
-  ExpectError(ReadFile("h.nrrd", ToBytes("NRRD0004\ntype: short\ndimension: 3\n")),
+  ExpectError(ReadNrrdFile("h.nrrd", ToBytes("NRRD0004\ntype: short\ndimension: 3\n")),
               absl::StatusCode::kInvalidArgument, "blank line");
 }
 
 TEST(NrrdReader, RejectsBadDims) {
   std::string h = kRasHeader;
   h.replace(h.find("sizes: 2 2 1"), 12, "sizes: 2 0 1");
-  ExpectError(ReadFile("zero.nrrd", Attached(h, {})), absl::StatusCode::kInvalidArgument,
+  ExpectError(ReadNrrdFile("zero.nrrd", AttachedNrrd(h, {})), absl::StatusCode::kInvalidArgument,
               "dimension y is 0");
   h = kRasHeader;
   h.replace(h.find("sizes: 2 2 1"), 12, "sizes: 2 -5 1");
-  ExpectError(ReadFile("neg.nrrd", Attached(h, {})), absl::StatusCode::kInvalidArgument,
+  ExpectError(ReadNrrdFile("neg.nrrd", AttachedNrrd(h, {})), absl::StatusCode::kInvalidArgument,
               "dimension y is -5");
   h = kRasHeader;
   h.replace(h.find("sizes: 2 2 1"), 12, "sizes: 100000 100000 100000");
-  ExpectError(ReadFile("huge.nrrd", Attached(h, {})), absl::StatusCode::kResourceExhausted, "cap");
+  ExpectError(ReadNrrdFile("huge.nrrd", AttachedNrrd(h, {})), absl::StatusCode::kResourceExhausted, "cap");
   h = kRasHeader;
   h.replace(h.find("sizes: 2 2 1"), 12, "sizes: 2 2");
-  ExpectError(ReadFile("count.nrrd", Attached(h, {})), absl::StatusCode::kInvalidArgument,
+  ExpectError(ReadNrrdFile("count.nrrd", AttachedNrrd(h, {})), absl::StatusCode::kInvalidArgument,
               "sizes lists 2 axes");
 }
 
@@ -176,51 +170,51 @@ TEST(NrrdReader, RejectsBadSpacing) {
     const std::string header =
         StrCat("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 1 1 1\nspacings: ", spacings,
                      "\nencoding: raw\n");
-    ExpectError(ReadFile("s.nrrd", Attached(header, {0})), absl::StatusCode::kInvalidArgument,
+    ExpectError(ReadNrrdFile("s.nrrd", AttachedNrrd(header, {0})), absl::StatusCode::kInvalidArgument,
                 "spacing y");
   }
   std::string h = kRasHeader;
   h.replace(h.find("(-2,0,0)"), 8, "(0,0,0)");
-  ExpectError(ReadFile("d.nrrd", Attached(h, Int16Le({1, 2, 3, 4}))),
+  ExpectError(ReadNrrdFile("d.nrrd", AttachedNrrd(h, Int16Le({1, 2, 3, 4}))),
               absl::StatusCode::kInvalidArgument, "length 0");
 }
 
 TEST(NrrdReader, RejectsNonOrthonormalDirections) {
   std::string h = kRasHeader;
   h.replace(h.find("(-2,0,0)"), 8, "(-2,1,0)");
-  ExpectError(ReadFile("skew.nrrd", Attached(h, Int16Le({1, 2, 3, 4}))),
+  ExpectError(ReadNrrdFile("skew.nrrd", AttachedNrrd(h, Int16Le({1, 2, 3, 4}))),
               absl::StatusCode::kInvalidArgument, "not orthonormal");
 }
 
 TEST(NrrdReader, RejectsUnknownAndUnsupportedTypes) {
-  ExpectError(ReadFile("t.nrrd", Attached("NRRD0004\ntype: quaternion\ndimension: 2\nsizes: 1 1\n"
+  ExpectError(ReadNrrdFile("t.nrrd", AttachedNrrd("NRRD0004\ntype: quaternion\ndimension: 2\nsizes: 1 1\n"
                                           "encoding: raw\n",
                                           {0})),
               absl::StatusCode::kInvalidArgument, "unknown type");
-  ExpectError(ReadFile("b.nrrd", Attached("NRRD0004\ntype: block\ndimension: 2\nsizes: 1 1\n"
+  ExpectError(ReadNrrdFile("b.nrrd", AttachedNrrd("NRRD0004\ntype: block\ndimension: 2\nsizes: 1 1\n"
                                           "encoding: raw\n",
                                           {0})),
               absl::StatusCode::kUnimplemented, "block");
-  ExpectError(ReadFile("z.nrrd", Attached("NRRD0004\ntype: uchar\ndimension: 2\nsizes: 1 1\n"
+  ExpectError(ReadNrrdFile("z.nrrd", AttachedNrrd("NRRD0004\ntype: uchar\ndimension: 2\nsizes: 1 1\n"
                                           "encoding: bzip2\n",
                                           {0})),
               absl::StatusCode::kUnimplemented, "bzip2");
-  ExpectError(ReadFile("e.nrrd", Attached("NRRD0004\ntype: short\ndimension: 2\nsizes: 1 1\n"
+  ExpectError(ReadNrrdFile("e.nrrd", AttachedNrrd("NRRD0004\ntype: short\ndimension: 2\nsizes: 1 1\n"
                                           "encoding: raw\n",
                                           {0, 0})),
               absl::StatusCode::kInvalidArgument, "endian is missing");
 }
 
 TEST(NrrdReader, RejectsVectorAnd4DDataAsUnimplemented) {
-  ExpectError(ReadFile("4d.nrrd", Attached("NRRD0004\ntype: uchar\ndimension: 4\nsizes: 1 1 1 2\n"
+  ExpectError(ReadNrrdFile("4d.nrrd", AttachedNrrd("NRRD0004\ntype: uchar\ndimension: 4\nsizes: 1 1 1 2\n"
                                            "encoding: raw\n",
                                            {0, 0})),
               absl::StatusCode::kUnimplemented, "dimension is 4");
-  ExpectError(ReadFile("rgb.nrrd", Attached("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 3 1 1\n"
+  ExpectError(ReadNrrdFile("rgb.nrrd", AttachedNrrd("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 3 1 1\n"
                                             "kinds: RGB-color domain domain\nencoding: raw\n",
                                             {0, 0, 0})),
               absl::StatusCode::kUnimplemented, "RGB-color");
-  ExpectError(ReadFile("sp.nrrd", Attached("NRRD0004\ntype: uchar\ndimension: 2\nsizes: 1 1\n"
+  ExpectError(ReadNrrdFile("sp.nrrd", AttachedNrrd("NRRD0004\ntype: uchar\ndimension: 2\nsizes: 1 1\n"
                                            "space: scanner-xyz\nencoding: raw\n",
                                            {0})),
               absl::StatusCode::kUnimplemented, "scanner-xyz");
@@ -230,7 +224,7 @@ TEST(NrrdReader, RejectsGzipInflatingPastDeclaredSize) {
   auto gz = GzipCompress(std::vector<uint8_t>(100000, 0));
   ASSERT_TRUE(gz.ok());
   const std::string header = "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: gzip\n";
-  ExpectError(ReadFile("bomb.nrrd", Attached(header, *gz)), absl::StatusCode::kInvalidArgument,
+  ExpectError(ReadNrrdFile("bomb.nrrd", AttachedNrrd(header, *gz)), absl::StatusCode::kInvalidArgument,
               "gzip inflates past the declared size");
 }
 
@@ -252,11 +246,11 @@ TEST(NrrdReader, RejectsDetachedFileOutsideFolder) {
 }
 
 TEST(NrrdReader, RejectsDuplicateAndMalformedFields) {
-  ExpectError(ReadFile("dup.nrrd", Attached("NRRD0004\ntype: uchar\ntype: short\n", {})),
+  ExpectError(ReadNrrdFile("dup.nrrd", AttachedNrrd("NRRD0004\ntype: uchar\ntype: short\n", {})),
               absl::StatusCode::kInvalidArgument, "appears twice");
-  ExpectError(ReadFile("bad.nrrd", Attached("NRRD0004\nsizes: 2 x\n", {})),
+  ExpectError(ReadNrrdFile("bad.nrrd", AttachedNrrd("NRRD0004\nsizes: 2 x\n", {})),
               absl::StatusCode::kInvalidArgument, "not an integer");
-  ExpectError(ReadFile("vec.nrrd", Attached("NRRD0004\nspace origin: (1,2\n", {})),
+  ExpectError(ReadNrrdFile("vec.nrrd", AttachedNrrd("NRRD0004\nspace origin: (1,2\n", {})),
               absl::StatusCode::kInvalidArgument, "space origin");
 }
 

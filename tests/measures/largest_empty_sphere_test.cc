@@ -23,7 +23,7 @@ Volume Uniform(float value) {
                     [value](int64_t, int64_t, int64_t) { return value; });
 }
 
-ProxyMesh Lattice(const Volume& volume, const std::function<bool(int, int, int)>& keep = nullptr) {
+ProxyMesh VolumeLatticeMesh(const Volume& volume, const std::function<bool(int, int, int)>& keep = nullptr) {
   const glm::dvec3 extent = volume.geometry().extent_mm();
   ProxyMesh mesh = LatticeMesh(5, extent, keep);
   EXPECT_TRUE(Tetrahedralize(mesh, extent).ok());
@@ -37,7 +37,7 @@ const TransferFunction& PositiveAbove50() {
 
 TEST(LargestEmptySphere, FullLatticeGivesHalfTheCellDiagonal) {
   const Volume volume = Uniform(100.0f);
-  const ProxyMesh mesh = Lattice(volume);
+  const ProxyMesh mesh = VolumeLatticeMesh(volume);
   auto sphere = LargestEmptySphere(mesh, volume, PositiveAbove50());
   ASSERT_TRUE(sphere.ok()) << sphere.status();
   EXPECT_NEAR(sphere->radius_mm, kCellMm * std::sqrt(3.0) / 2.0, 1e-9);
@@ -52,9 +52,9 @@ TEST(LargestEmptySphere, FullLatticeGivesHalfTheCellDiagonal) {
 
 TEST(LargestEmptySphere, GrowsWhenABlockOfVerticesIsRemoved) {
   const Volume volume = Uniform(100.0f);
-  const double full = LargestEmptySphere(Lattice(volume), volume, PositiveAbove50())->radius_mm;
+  const double full = LargestEmptySphere(VolumeLatticeMesh(volume), volume, PositiveAbove50())->radius_mm;
   // Remove the 2x2x2 block around the cell corner at lattice (1.5, 1.5, 1.5).
-  const ProxyMesh holed = Lattice(volume, [](int a, int b, int c) {
+  const ProxyMesh holed = VolumeLatticeMesh(volume, [](int a, int b, int c) {
     return !(a >= 1 && a <= 2 && b >= 1 && b <= 2 && c >= 1 && c <= 2);
   });
   auto sphere = LargestEmptySphere(holed, volume, PositiveAbove50());
@@ -70,7 +70,7 @@ TEST(LargestEmptySphere, OnlyCentresInsideTheBodyCount) {
   const Volume volume = MakeVolume({41, 41, 41}, {1.0, 1.0, 1.0}, [](int64_t i, int64_t, int64_t) {
     return i < 12 ? 100.0f : -1000.0f;
   });
-  const ProxyMesh holed = Lattice(volume, [](int a, int b, int c) {
+  const ProxyMesh holed = VolumeLatticeMesh(volume, [](int a, int b, int c) {
     return !(a >= 2 && a <= 3 && b >= 1 && b <= 2 && c >= 1 && c <= 2);
   });
   auto sphere = LargestEmptySphere(holed, volume, PositiveAbove50());
@@ -85,7 +85,7 @@ TEST(LargestEmptySphere, BoundarySamplesCatchSpheresCentredOutsideTheCircumcentr
   const Volume volume = MakeVolume({41, 41, 41}, {1.0, 1.0, 1.0}, [](int64_t, int64_t j, int64_t) {
     return j == 20 ? 100.0f : -1000.0f;
   });
-  const ProxyMesh mesh = Lattice(volume);
+  const ProxyMesh mesh = VolumeLatticeMesh(volume);
   auto circumcentres = LargestEmptySphere(mesh, volume, PositiveAbove50());
   ASSERT_TRUE(circumcentres.ok());
   auto sampled = LargestEmptySphere(mesh, volume, PositiveAbove50(), {2});

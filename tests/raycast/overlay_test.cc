@@ -7,7 +7,7 @@
 namespace vpm {
 namespace {
 
-VolumeGeometry Box() {
+VolumeGeometry OverlayBox() {
   VolumeGeometry g;
   g.dims = {101, 101, 101};
   g.spacing_mm = {1.0, 1.0, 1.0};
@@ -34,7 +34,7 @@ TEST(Overlay, DrawsMeshVerticesByKindAndTheDrag) {
   overlay.point_radius_px = 5.0;  // centre pixels fully covered, no edge blending
   const int w = 200, h = 200;
   std::vector<uint8_t> rgba(size_t(w) * h * 4, 0);
-  const Camera cam = Camera::ForVolume(Box());
+  const Camera cam = Camera::ForVolume(OverlayBox());
   DrawOverlay(overlay, cam, w, h, rgba);
   EXPECT_TRUE(PixelIs(rgba, w, *cam.Project({30, 50, 50}, w, h), kDeformableRgb));
   EXPECT_TRUE(PixelIs(rgba, w, *cam.Project({70, 50, 50}, w, h), kHardRgb));

@@ -241,6 +241,10 @@ fi
 src="phantom:abdomen?size=48"
 expect_ok "vpm --server mesh" -- --server "$addr" --token secret mesh --volume "$src" \
   --grid 10 10 10 --target 60 --refine-at-landmark left_renal_artery --json "$tmp/remote.json"
+# The summary says where the server ran step 1 and on which device.
+grep -E -q '^evaluate .*\(server: (GPU kernels|CPU rows, the Vulkan device being a CPU); Vulkan device .+\)$' "$tmp/out" &&
+  pass "vpm --server mesh names where step 1 ran" ||
+  fail "vpm --server mesh summary: $(grep evaluate "$tmp/out")"
 expect_ok "vpm mesh offline" -- mesh --volume "$src" --grid 10 10 10 --target 60 \
   --refine-at-landmark left_renal_artery --json "$tmp/offline.json"
 python3 - "$tmp/remote.json" "$tmp/offline.json" <<'EOF2' && pass "server mesh == offline mesh" ||

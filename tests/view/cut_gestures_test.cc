@@ -12,7 +12,7 @@
 namespace vpm::view {
 namespace {
 
-constexpr int kW = 200, kH = 160;  // frame pixels
+constexpr int kCutW = 200, kCutH = 160;  // frame pixels
 
 // A 64 x 48 x 40 volume, rotated 90 degrees about the world z axis and
 // mirrored in z, away from the world origin: world and physical differ.
@@ -30,7 +30,7 @@ VolumeGeometry Rotated() {
 std::optional<BoxFace> NearestFaceByBruteForce(const ViewCamera& c, const VolumeGeometry& g,
                                                const WorldBox& box, int px, int py,
                                                glm::dvec3* hit) {
-  const CameraRays rays = c.camera().Rays(kW, kH);
+  const CameraRays rays = c.camera().Rays(kCutW, kCutH);
   const glm::dvec3 eye = g.PhysicalToWorld(rays.eye_mm);
   const glm::dvec3 dir = g.direction * rays.Direction(px, py);
   double best = std::numeric_limits<double>::infinity();
@@ -74,11 +74,11 @@ TEST(CropBoxDrag, PickedFaceIsTheNearestOneTheRayMeets) {
   for (double azimuth : {0.0, 40.0, 135.0, 250.0}) {
     ViewCamera c(g);
     c.Orbit(azimuth / -kOrbitDegPerPixel, 30.0);
-    for (int py = 0; py < kH; py += 8) {
-      for (int px = 0; px < kW; px += 8) {
+    for (int py = 0; py < kCutH; py += 8) {
+      for (int px = 0; px < kCutW; px += 8) {
         glm::dvec3 hit(0.0);
         const std::optional<BoxFace> want = NearestFaceByBruteForce(c, g, box, px, py, &hit);
-        const std::optional<BoxFace> got = PickBoxFace(c, g, box, px, py, kW, kH);
+        const std::optional<BoxFace> got = PickBoxFace(c, g, box, px, py, kCutW, kCutH);
         ASSERT_EQ(got.has_value(), want.has_value()) << azimuth << " " << px << "," << py;
         if (!got) {
           ++misses;
@@ -88,7 +88,7 @@ TEST(CropBoxDrag, PickedFaceIsTheNearestOneTheRayMeets) {
         EXPECT_EQ(got->axis, want->axis);
         EXPECT_EQ(got->high, want->high);
         // The face point under the pixel projects onto the pixel's centre.
-        const auto q = c.camera().Project(g.WorldToPhysical(hit), kW, kH);
+        const auto q = c.camera().Project(g.WorldToPhysical(hit), kCutW, kCutH);
         ASSERT_TRUE(q.has_value());
         EXPECT_NEAR(q->x, px + 0.5, 1e-6);
         EXPECT_NEAR(q->y, py + 0.5, 1e-6);
@@ -98,7 +98,7 @@ TEST(CropBoxDrag, PickedFaceIsTheNearestOneTheRayMeets) {
   EXPECT_GT(hits, 100);
   EXPECT_GT(misses, 100);
   ViewCamera c(g);
-  EXPECT_FALSE(PickBoxFace(c, g, box, -1, 0, kW, kH).has_value());  // not a frame pixel
+  EXPECT_FALSE(PickBoxFace(c, g, box, -1, 0, kCutW, kCutH).has_value());  // not a frame pixel
 }
 
 TEST(CropBoxDrag, MovingAFaceKeepsItInsideTheLimitsAndOffTheOppositeFace) {
@@ -124,16 +124,16 @@ TEST(CropBoxDrag, AFaceFollowsTheMouseAlongItsImageOnScreen) {
       glm::dvec3 world_axis(0.0);
       world_axis[axis] = 1.0;
       const glm::dvec3 n = glm::transpose(g.direction) * world_axis;  // physical
-      const auto p0 = c.camera().Project(target, kW, kH);
-      const auto p1 = c.camera().Project(target + n, kW, kH);
+      const auto p0 = c.camera().Project(target, kCutW, kCutH);
+      const auto p1 = c.camera().Project(target + n, kCutW, kCutH);
       ASSERT_TRUE(p0 && p1);
       const glm::dvec2 image = glm::dvec2(*p1) - glm::dvec2(*p0);  // pixels per mm
-      if (glm::length(image) < 0.5 / c.MmPerPixel(kW, kH)) continue;  // nearly along the view
+      if (glm::length(image) < 0.5 / c.MmPerPixel(kCutW, kCutH)) continue;  // nearly along the view
       // 3 pixels along the face's image, plus 2 across it (ignored).
       const glm::dvec2 along = glm::normalize(image), across{-along.y, along.x};
       const glm::dvec2 mouse = 3.0 * along + 2.0 * across;
-      const double t = FaceDragMm(c, g, {axis, true}, mouse.x, mouse.y, kW, kH);
-      const auto moved = c.camera().Project(target + t * n, kW, kH);
+      const double t = FaceDragMm(c, g, {axis, true}, mouse.x, mouse.y, kCutW, kCutH);
+      const auto moved = c.camera().Project(target + t * n, kCutW, kCutH);
       ASSERT_TRUE(moved);
       const glm::dvec2 d = glm::dvec2(*moved) - glm::dvec2(*p0);
       EXPECT_NEAR(glm::dot(d, along), 3.0, 0.05) << azimuth << " axis " << axis;
@@ -153,8 +153,8 @@ TEST(CropBoxDrag, AFaceAlongTheViewMovesAwayWhenDraggedUp) {
     if (std::abs(forward_world[a]) > std::abs(forward_world[axis])) axis = a;
   }
   ASSERT_GT(std::abs(forward_world[axis]), 0.98);  // the default view looks along an axis
-  const double t = FaceDragMm(c, g, {axis, false}, 0.0, -10.0, kW, kH);
-  EXPECT_NEAR(std::abs(t), 10.0 * c.MmPerPixel(kW, kH), 1e-9);
+  const double t = FaceDragMm(c, g, {axis, false}, 0.0, -10.0, kCutW, kCutH);
+  EXPECT_NEAR(std::abs(t), 10.0 * c.MmPerPixel(kCutW, kCutH), 1e-9);
   EXPECT_GT(t * forward_world[axis], 0.0);  // away from the viewer
 }
 
@@ -163,19 +163,19 @@ TEST(CropBoxDrag, OutlineHasTwelveProjectedEdgesAndFourOnTheHighlightedFace) {
   ViewCamera c(g);
   c.Orbit(30, 15);
   const WorldBox box = VolumeWorldBox(g);
-  const std::vector<ScreenSegment> lines = BoxOutline(c, g, box, BoxFace{1, true}, kW, kH);
+  const std::vector<ScreenSegment> lines = BoxOutline(c, g, box, BoxFace{1, true}, kCutW, kCutH);
   ASSERT_EQ(lines.size(), 12u);
   int on_face = 0;
   for (const ScreenSegment& l : lines) on_face += l.on_face;
   EXPECT_EQ(on_face, 4);
   // The first edge runs from the (lo, lo, lo) corner along world x.
-  const auto a = c.camera().Project(g.WorldToPhysical(box.lo), kW, kH);
-  const auto b = c.camera().Project(g.WorldToPhysical({box.hi.x, box.lo.y, box.lo.z}), kW, kH);
+  const auto a = c.camera().Project(g.WorldToPhysical(box.lo), kCutW, kCutH);
+  const auto b = c.camera().Project(g.WorldToPhysical({box.hi.x, box.lo.y, box.lo.z}), kCutW, kCutH);
   ASSERT_TRUE(a && b);
   EXPECT_NEAR(lines[0].a.x, a->x, 1e-9);
   EXPECT_NEAR(lines[0].b.y, b->y, 1e-9);
   EXPECT_FALSE(lines[0].on_face);  // y = lo: not on the y-high face
-  EXPECT_TRUE(BoxOutline(c, g, box, std::nullopt, kW, kH)[0].on_face == false);
+  EXPECT_TRUE(BoxOutline(c, g, box, std::nullopt, kCutW, kCutH)[0].on_face == false);
 }
 
 TEST(ClipPlaneDrag, FacingPlanePassesThroughTheTargetAndCutsTheEyeSide) {
@@ -208,9 +208,9 @@ TEST(ClipPlaneDrag, DraggingUpCutsDeeperIntoAPlaneFacingTheCamera) {
   ViewCamera c(g);
   c.Orbit(-30, 10);
   const v2::ClipPlane plane = ClipPlaneFacingCamera(c, g);
-  const double mm = c.MmPerPixel(kW, kH);
-  EXPECT_NEAR(ClipDragMm(c, g, plane, 3.0, -10.0, kW, kH), 10.0 * mm, 1e-9);
-  EXPECT_NEAR(ClipDragMm(c, g, plane, 0.0, 4.0, kW, kH), -4.0 * mm, 1e-9);
+  const double mm = c.MmPerPixel(kCutW, kCutH);
+  EXPECT_NEAR(ClipDragMm(c, g, plane, 3.0, -10.0, kCutW, kCutH), 10.0 * mm, 1e-9);
+  EXPECT_NEAR(ClipDragMm(c, g, plane, 0.0, 4.0, kCutW, kCutH), -4.0 * mm, 1e-9);
 }
 
 }  // namespace

@@ -10,8 +10,8 @@ const here = path.dirname(fileURLToPath(import.meta.url));
 const pub = (f) => pathToFileURL(path.join(here, '../../client/web/public', f)).href;
 const { OrbitCamera } = await import(pub('camera.js'));
 const { worldBox } = await import(pub('cut_controls.js'));
-const { directionToPhysical, faceDragMm, moveBoxFace, physicalToWorld, pickBoxFace } =
-  await import(pub('crop_drag.js'));
+const { boxOutlineSegments, directionToPhysical, faceDragMm, moveBoxFace, physicalToWorld,
+        pickBoxFace, worldToPhysical } = await import(pub('crop_drag.js'));
 
 const W = 200, H = 160;
 // Rotated 90 degrees about world z and mirrored in z, away from the origin.
@@ -111,4 +111,42 @@ test('CropDrag_FacesStayInsideTheLimitsAndOffTheOppositeFace', () => {
   assert.equal(moveBoxFace(start, { axis: 2, high: false }, -40, limits).lo[2], 0);
   assert.equal(moveBoxFace(start, { axis: 0, high: false }, 500, limits, 2).lo[0], 88);
   assert.deepEqual(start.lo, [10, 10, 10], 'the start box is left alone');
+});
+
+// The outline drawn over the frame: camera.projectToPixel against the
+// independent projection above and against the pixel's own ray; 12 edges
+// whose ends are the box corners' images; the whole box in view at the
+// fitted distance.
+test('CropOutline_EdgesAreTheImagesOfTheBoxCorners', () => {
+  for (const [az, el] of [[0, 0], [35, 20], [-120, -50]]) {
+    const c = new OrbitCamera(volume);
+    c.orbit(az, el);
+    for (const [px, py] of [[0.5, 0.5], [W / 2, H / 3], [W - 3, H - 7]]) {
+      const onRay = c.eye().map((e, a) => e + 250 * c.rayDirection(px, py, W, H)[a]);
+      const back = c.projectToPixel(onRay, W, H);
+      assert.ok(Math.abs(back[0] - (px + 0.5)) < 1e-6 && Math.abs(back[1] - (py + 0.5)) < 1e-6,
+                `pixel ${px},${py} projects back to ${back}`);
+      const ref = project(c, onRay);
+      assert.ok(Math.abs(ref[0] - back[0]) < 1e-6 && Math.abs(ref[1] - back[1]) < 1e-6);
+    }
+    assert.equal(c.projectToPixel(c.eye().map((e, a) => e - 10 * c.forward()[a]), W, H), null);
+    const box = worldBox(volume);
+    const segments = boxOutlineSegments(c, volume, box, W, H);
+    assert.equal(segments.length, 12);
+    const corners = [];
+    for (let k = 0; k < 8; ++k) {
+      const w = [0, 1, 2].map((a) => ((k >> a) & 1 ? box.hi[a] : box.lo[a]));
+      const p = worldToPhysical(volume, w);
+      const round = physicalToWorld(volume, p);
+      assert.ok(round.every((v, a) => Math.abs(v - w[a]) < 1e-9), 'world -> physical -> world');
+      corners.push(project(c, p));
+    }
+    for (const [x0, y0, x1, y1] of segments) {
+      for (const [x, y] of [[x0, y0], [x1, y1]]) {
+        assert.ok(corners.some(([cx, cy]) => Math.abs(cx - x) < 1e-6 && Math.abs(cy - y) < 1e-6));
+        if (az === 0 && el === 0) assert.ok(x >= 0 && x <= W && y >= 0 && y <= H, `${x},${y} in view`);
+      }
+      assert.ok(Math.hypot(x1 - x0, y1 - y0) > 1, 'an edge is a segment, not a point');
+    }
+  }
 });

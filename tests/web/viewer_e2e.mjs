@@ -140,6 +140,33 @@ async function checkSlicesAndCuts(page) {
   const cropDiff = meanAbsDiff(before3d, after3d);
   step(`crop to half the x range: 3D mean |grey difference| ${cropDiff.toFixed(2)}`);
   assert.ok(cropDiff > kMinOrbitDiff, `the crop box did not change the frame (${cropDiff})`);
+  // The box's outline is drawn over the frame: its edges' midpoints in view
+  // are the outline's yellow (255, 210, 0).
+  const outline = await page.evaluate(() => {
+    const c = document.getElementById('frame');
+    const rgba = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    const edges = window.vpmViewer.cropOutline ?? [];
+    let inView = 0, yellow = 0;
+    for (const [x0, y0, x1, y1] of edges) {
+      const [x, y] = [Math.round((x0 + x1) / 2), Math.round((y0 + y1) / 2)];
+      if (x < 1 || y < 1 || x >= c.width - 1 || y >= c.height - 1) continue;
+      inView += 1;
+      let hit = false;
+      for (let dy = -1; dy <= 1; ++dy) {
+        for (let dx = -1; dx <= 1; ++dx) {
+          const i = 4 * ((y + dy) * c.width + x + dx);
+          hit ||= rgba[i] > 240 && Math.abs(rgba[i + 1] - 210) < 12 && rgba[i + 2] < 15;
+        }
+      }
+      if (hit) yellow += 1;
+    }
+    return { edges: edges.length, inView, yellow };
+  });
+  step(`crop outline: ${outline.edges} edges, ${outline.yellow} of ${outline.inView} midpoints in view drawn`);
+  assert.equal(outline.edges, 12, 'the crop box outline has 12 edges');
+  assert.ok(outline.inView >= 4 && outline.yellow === outline.inView,
+            `the crop outline is not drawn (${JSON.stringify(outline)})`);
+  await page.screenshot({ path: path.join(out, 'web_viewer_crop.png') });
   await page.uncheck('#crop');
   await settled(page, '!h.interactive');
   before3d = await canvasGrey(page);

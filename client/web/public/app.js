@@ -272,6 +272,7 @@ async function drawNext() {
       const bitmap = await createImageBitmap(image);
       context.drawImage(bitmap, 0, 0, canvas.width, canvas.height);
       bitmap.close();
+      drawCropOutline(header);
       await slices.draw(sliceImages);
       state.framesDrawn += 1;
       showStatus(header);
@@ -280,6 +281,27 @@ async function drawNext() {
     }
   }
   drawing = false;
+}
+
+// The crop box's edges over the 3D frame, in the frame's own camera (the
+// header's size; the canvas may show it scaled).
+function drawCropOutline(header) {
+  state.cropOutline = [];  // canvas pixels, for tests
+  if (!state.camera) return;
+  const segments = cuts.outline(state.camera, header.width, header.height);
+  if (!segments.length) return;
+  const sx = canvas.width / header.width, sy = canvas.height / header.height;
+  context.save();
+  context.strokeStyle = 'rgb(255, 210, 0)';
+  context.lineWidth = 2;
+  context.beginPath();
+  for (const [x0, y0, x1, y1] of segments) {
+    context.moveTo(x0 * sx, y0 * sy);
+    context.lineTo(x1 * sx, y1 * sy);
+    state.cropOutline.push([x0 * sx, y0 * sy, x1 * sx, y1 * sy]);
+  }
+  context.stroke();
+  context.restore();
 }
 
 function showStatus(h) {

@@ -119,6 +119,21 @@ export class OrbitCamera {
                                              scale(this.up(), ny * tanHalf * height / shorter))));
   }
 
+  // Frame position [px, py] (pixels, row 0 at the top, pixel centres at
+  // +0.5) of physical point pMm; null when it is not in front of the eye.
+  // The inverse of rayDirection (Camera::Project).
+  projectToPixel(pMm, width, height) {
+    const eye = this.eye();
+    const v = add(pMm, scale(eye, -1));
+    const depth = dot(v, this.forward());
+    if (!(depth > 1e-6)) return null;
+    const tanHalf = Math.tan(0.5 * kFovDeg * kDegToRad);
+    const shorter = Math.max(1, Math.min(width, height));
+    const nx = dot(v, this.right()) / (depth * tanHalf * width / shorter);
+    const ny = dot(v, this.up()) / (depth * tanHalf * height / shorter);
+    return [((nx + 1) * width) / 2, ((1 - ny) * height) / 2];
+  }
+
   // The point a pick of pixel (px, py) grabs (Session::GrabPoint): the
   // pixel's ray meets the plane through the orbit centre facing the camera.
   pickPointMm(px, py, width, height) {

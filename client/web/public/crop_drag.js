@@ -29,6 +29,31 @@ export function directionToPhysical(volume, w) {
   return directionColumns(volume).map((c) => dot(c, w));
 }
 
+// Physical position of world point w: D^T (w - origin).
+export function worldToPhysical(volume, w) {
+  const o = volume.origin_lps_mm ?? { x: 0, y: 0, z: 0 };
+  return directionToPhysical(volume, [w[0] - o.x, w[1] - o.y, w[2] - o.z]);
+}
+
+// The crop box's 12 edges as frame segments [x0, y0, x1, y1] (pixels, row 0
+// at the top), for drawing its outline over the frame; an edge with an end
+// behind the eye is left out.
+export function boxOutlineSegments(camera, volume, box, width, height) {
+  const corner = (c) => camera.projectToPixel(
+    worldToPhysical(volume, [0, 1, 2].map((a) => (c >> a) & 1 ? box.hi[a] : box.lo[a])),
+    width, height);
+  const pixels = Array.from({ length: 8 }, (_, c) => corner(c));
+  const segments = [];
+  for (let c = 0; c < 8; ++c) {
+    for (let a = 0; a < 3; ++a) {
+      const d = c | (1 << a);
+      if (d === c || !pixels[c] || !pixels[d]) continue;
+      segments.push([...pixels[c], ...pixels[d]]);
+    }
+  }
+  return segments;
+}
+
 // {axis, high} of the face through which the ray of pixel (px, py) enters
 // `box` (leaves it, when the eye is inside), or null when it misses.
 export function pickBoxFace(camera, volume, box, px, py, width, height) {

@@ -4,7 +4,7 @@
 // open volume's world box (VolumeInfo: origin, direction, dims, spacing).
 // With the Crop tool, dragging a face of the box in the 3D view moves it
 // (crop_drag.js) and the number fields follow.
-import { faceDragMm, moveBoxFace, pickBoxFace } from './crop_drag.js';
+import { boxOutlineSegments, faceDragMm, moveBoxFace, pickBoxFace } from './crop_drag.js';
 
 const kAxes = ['x', 'y', 'z'];
 // The clip plane's choices: keep what lies towards this patient direction.
@@ -111,6 +111,13 @@ export class CutControls {
       this.inputPending = false;
       this.changed();
     });
+  }
+
+  // The crop box's outline on a width x height frame (segments of
+  // boxOutlineSegments), or [] when the crop is off.
+  outline(camera, width, height) {
+    const box = this.e.crop.checked ? this.cropBox() : null;
+    return box && this.volume ? boxOutlineSegments(camera, this.volume, box, width, height) : [];
   }
 
   changed() {
