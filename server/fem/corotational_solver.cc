@@ -20,6 +20,14 @@ constexpr double kRoundOffResidual = 1e-13;
 // element's volume ratio below the onset (FeasibleStepFraction).
 constexpr double kFeasibleKeep = 0.2;
 
+// The fraction of a jump of jump_mm (largest vertex norm) that a forced
+// step applies when it may move a vertex at most limit_mm: all of it unless
+// that exceeds the limit by more than round-off (an unbounded drag's jump is
+// its target's move up to round-off).
+double ForcedFraction(double jump_mm, double limit_mm) {
+  return jump_mm > limit_mm * (1.0 + 1e-9) && limit_mm > 0.0 ? limit_mm / jump_mm : 1.0;
+}
+
 }  // namespace
 
 Result<CorotationalSolver> CorotationalSolver::Create(
@@ -211,7 +219,7 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
   if (with_handles) constrained.insert(constrained.end(), handles_.begin(), handles_.end());
   const Eigen::VectorXd start = displacement_;
   SolveStats stats;
-  budget_.BeginSolve(prescribed_mm, force_n, constrained);
+  budget_.BeginSolve(prescribed_mm, force_n, constrained, displacement_);
   double first_jump_mm = -1.0;  // the prescribed motion asked for
   bool carried = false;         // the budget stopped short of the target
   // Elements whose every DOF is prescribed: their shape is the load's, and
@@ -255,6 +263,7 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
     budget_.CountLoadStep();
     const bool warm = linearized_ && linearized_mode_ == mode;
     double alpha = 1.0;
+    double forced_fraction = 1.0;  // of the jump, when the step is forced
     if (warm || options_.inversion_barrier) {
       // Predictor, without evaluating forces: the prescribed DOFs take the
       // jump and the free ones follow through the last tangent, with the
@@ -270,9 +279,15 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
       stats.assembly_ms += MsSince(t0);
       const Eigen::VectorXd direction = jump + TangentSolve(rhs, constrained, with_handles, stats);
       if (options_.inversion_barrier) {
+        // The least fraction worth a load step is of one event's share: of
+        // a lagging drag's longer jump it would give up sooner than an
+        // unbounded drag does.
+        const double min_fraction =
+            options_.min_load_fraction *
+            ForcedFraction(stats.remaining_mm, budget_.forced_step_limit_mm());
         alpha = budget_.load_steps() <= options_.max_load_steps
                     ? FeasibleStepFraction(elements_, displacement_, direction, kFeasibleKeep,
-                                           options_.min_load_fraction, prescribed_elements)
+                                           min_fraction, prescribed_elements)
                     : 0.0;
         if (alpha == 0.0) {
           // No feasible part (or no load steps left): the prescribed motion
@@ -282,6 +297,7 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
           // (inversion_barrier.h) and the caller counts them.
           stats.forced_inversion = true;
           alpha = 1.0;
+          forced_fraction = ForcedFraction(stats.remaining_mm, budget_.forced_step_limit_mm());
         }
       }
       // A forced step moves only the prescribed DOFs: the free ones stay at
@@ -291,7 +307,13 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
       // threw free vertices over 100 mm for a 20 mm drag (a vertex 115 mm,
       // 81 tets inverted) and Newton never came back from there
       // (CorotationalSolver.ForcedDragMovesNothingFurtherThanTheHandles).
-      displacement_ += stats.forced_inversion ? jump : Eigen::VectorXd(alpha * direction);
+      // A lagging drag's jump holds the lag too; a forced step applies at
+      // most one event's share of it (EventBudget::forced_step_limit_mm), as
+      // an unbounded drag would, and the rest stays carried: forcing a 5.7 mm
+      // lag at once inverted more tets than the unbounded drag's 3 mm steps
+      // (FemEventBudget.LockedDragInEventsForcesNoMoreThanTheUnboundedDrag).
+      displacement_ += stats.forced_inversion ? Eigen::VectorXd(forced_fraction * jump)
+                                              : Eigen::VectorXd(alpha * direction);
     } else {
       displacement_ += jump;
     }
@@ -304,6 +326,11 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
                                                    : options_.intermediate_newton_iterations),
         stats);
     if (!status.ok()) return status;
+    if (forced_fraction < 1.0) {
+      carried = true;
+      stats.remaining_mm *= 1.0 - forced_fraction;
+      break;
+    }
     if (alpha == 1.0) break;
     // The last update's linearised residual starts the next load step.
     linearized_ = true;

@@ -71,7 +71,9 @@ struct SolverOptions {
   int max_load_steps = 32;
   // A load step shorter than this fraction of the rest of the jump means the
   // prescribed motion itself is crushing an element: the rest is applied at
-  // once (SolveStats::forced_inversion). In (0, 1].
+  // once (SolveStats::forced_inversion). In (0, 1]. Where a bounded drag
+  // lags, both the fraction and the forced step are of one event's share of
+  // the jump (EventBudget::forced_step_limit_mm), not of the whole lag.
   double min_load_fraction = 1.0 / 64.0;
   // Newton iterations after a partial load step (one that is not the last):
   // the next step's predictor starts from its linearised residual, so the
@@ -127,7 +129,9 @@ struct SolveStats {
   // Newton updates shortened to keep every element's volume ratio positive.
   int shortened_updates = 0;
   // The prescribed motion could not be reached without flattening an
-  // element, and was applied regardless (it may leave inverted elements).
+  // element, and was applied regardless (it may leave inverted elements);
+  // at most one event's share of it where a bounded drag lags (the rest
+  // carried: target_fraction < 1).
   bool forced_inversion = false;
   // |f_ext - f_int| on the free DOFs / (|f_int| + |f_ext|) over all DOFs,
   // dimensionless, at the state the last Newton update started from (the

@@ -16,7 +16,16 @@
 // left unreached, so that Solves repeated towards the same target (events
 // once the pointer stops, or a settle pass) share SolverOptions::
 // max_load_steps as one unbounded Solve would, and end exactly at the target
-// (at the latest by a forced step) instead of creeping towards it.
+// (at the latest by forced steps) instead of creeping towards it.
+//
+// A forced step (the barrier finds no feasible fraction, or the load steps
+// towards a target ran out) moves the prescribed DOFs without the barrier's
+// protection, and the more it moves them at once the more tets it inverts.
+// Unbounded, each Solve reaches its target, so a forced step applies at most
+// one event's jump. Bounded, the jump of a lagging drag holds the lag too, so
+// EventBudget also keeps the forced-step limit: the largest target move of
+// the Solves since the target was last reached (one event's share of the
+// motion); the rest stays carried, and later Solves force it share by share.
 #pragma once
 
 #include <cstdint>
@@ -35,11 +44,11 @@ class EventBudget {
       : newton_iterations_(newton_iterations), stop_iterations_(stop_iterations) {}
 
   // Starts a Solve towards prescribed_mm (3*#V, read on `constrained`) with
-  // external forces force_n (3*#V, N): the load steps carried from earlier
-  // Solves are kept when the last Solve left this same load unreached, else
-  // dropped.
+  // external forces force_n (3*#V, N) from displacement_mm (3*#V, the state
+  // before the Solve): the load steps carried from earlier Solves are kept
+  // when the last Solve left this same load unreached, else dropped.
   void BeginSolve(const Eigen::VectorXd& prescribed_mm, const Eigen::VectorXd& force_n,
-                  const std::vector<int32_t>& constrained);
+                  const std::vector<int32_t>& constrained, const Eigen::VectorXd& displacement_mm);
   // One more load step towards the current load.
   void CountLoadStep() { ++load_steps_; }
   // Load steps towards the current load, earlier Solves' included.
@@ -54,8 +63,14 @@ class EventBudget {
   // Ends the Solve: reached (the prescribed DOFs are at the target) drops
   // the carried count; otherwise the load is kept for the next BeginSolve.
   void EndSolve(bool reached);
-  // Forgets any carried load (new handles, reset).
+  // Forgets any carried load and the last target (new handles, reset).
   void Clear();
+  // The most a forced step may move a vertex's prescribed DOFs in this Solve,
+  // mm: the largest move of the target (largest vertex norm of the change in
+  // prescribed_mm on the constrained DOFs) among this Solve and the earlier
+  // ones since the target was last reached. The first Solve after Clear (or
+  // after the constrained DOFs changed) moves the target from the state.
+  double forced_step_limit_mm() const { return forced_step_limit_mm_; }
 
   int newton_iterations() const { return newton_iterations_; }
 
@@ -68,6 +83,11 @@ class EventBudget {
   Eigen::VectorXd carried_prescribed_;
   Eigen::VectorXd carried_force_;
   bool carrying_ = false;
+  // The last Solve's target (prescribed_mm, 3*#V, mm) and constrained DOFs,
+  // kept after it is reached: the next target's move is measured from it.
+  Eigen::VectorXd last_prescribed_;
+  std::vector<int32_t> last_constrained_;
+  double forced_step_limit_mm_ = 0.0;
 };
 
 }  // namespace vpm

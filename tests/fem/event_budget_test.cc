@@ -5,12 +5,15 @@
 // the unbounded solve's, with no tet inverted.
 #include "server/fem/event_budget.h"
 
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
 #include "server/common/status.h"
 
 #include "server/fem/fem_model.h"
 #include "tests/fem/fem_test_meshes.h"
+#include "tests/fem/pinned_phantom_mesh.h"
 #include "tests/mesh/mesh_test_volumes.h"
 
 namespace vpm {
@@ -37,28 +40,28 @@ TEST(FemEventBudget, LoadStepsCarryOnlyTowardsTheSameUnreachedLoad) {
   Eigen::VectorXd prescribed = Eigen::VectorXd::Zero(6);
   prescribed[4] = 1.5;
   const Eigen::VectorXd force = Eigen::VectorXd::Zero(6);
-  budget.BeginSolve(prescribed, force, constrained);
+  budget.BeginSolve(prescribed, force, constrained, Eigen::VectorXd::Zero(6));
   budget.CountLoadStep();
   budget.CountLoadStep();
   budget.EndSolve(/*reached=*/false);
   // The same target again (a settle pass): the count goes on.
-  budget.BeginSolve(prescribed, force, constrained);
+  budget.BeginSolve(prescribed, force, constrained, Eigen::VectorXd::Zero(6));
   EXPECT_EQ(budget.load_steps(), 2);
   budget.CountLoadStep();
   budget.EndSolve(false);
   // A value on a DOF that is not constrained does not make a new load.
   prescribed[1] = 7.0;
-  budget.BeginSolve(prescribed, force, constrained);
+  budget.BeginSolve(prescribed, force, constrained, Eigen::VectorXd::Zero(6));
   EXPECT_EQ(budget.load_steps(), 3);
   budget.EndSolve(false);
   // The pointer moved: a new load.
   prescribed[4] = 1.6;
-  budget.BeginSolve(prescribed, force, constrained);
+  budget.BeginSolve(prescribed, force, constrained, Eigen::VectorXd::Zero(6));
   EXPECT_EQ(budget.load_steps(), 0);
   budget.CountLoadStep();
   budget.EndSolve(/*reached=*/true);
   // Reached: nothing is carried, even towards the same target.
-  budget.BeginSolve(prescribed, force, constrained);
+  budget.BeginSolve(prescribed, force, constrained, Eigen::VectorXd::Zero(6));
   EXPECT_EQ(budget.load_steps(), 0);
 }
 
@@ -216,6 +219,95 @@ TEST(FemEventBudget, DragInIncrementsWithTheInteractiveBoundCatchesUpAndInvertsN
   constexpr double kInteractiveToleranceMm = 0.1;
   EXPECT_LT(LargestDistance(bounded.displacements, unbounded.displacements),
             kInteractiveToleranceMm);
+}
+
+// The forced-drag case (forced_drag_test.cc), 30 mm: on the pinned phantom
+// mesh the handles at the left renal artery lock against hard vertices
+// from about 12 mm on, and the drag is forced bounded or not. Bounded, it
+// lags behind the pointer; a forced step must still apply no more than one
+// event's share of the motion, as the unbounded drag does (each event forces
+// at most its own jump). Forcing the whole lag at once (up to 5.7 mm for
+// 3 mm events) inverted 11 tets against 9; one share at a time, 9. (In 20
+// events of 1.5 mm, 9 against 8 either way: the forced steps start from
+// other states than the unbounded drag's and invert one tet more.)
+struct LockedDrag {
+  int64_t inverted = -1;
+  bool forced = false;
+  bool lagged = false;  // some event stopped short of its offset
+  double handle_error_mm = -1.0;  // after settling, largest |handle - drag|
+};
+
+LockedDrag RunLockedDrag(const FemOptions& options, int events) {
+  LockedDrag out;
+  const ProxyMesh mesh = testing::PinnedPhantomMesh();
+  EXPECT_EQ(mesh.vertices.size(), 250u);
+  auto model = FemModel::Create(mesh, testing::BoxExtent(mesh), options);
+  EXPECT_TRUE(model.ok()) << model.status();
+  if (!model.ok()) return out;
+  const auto grab = model->Grab(testing::kPinnedGrabMm, mesh.stats.h_mm);
+  EXPECT_TRUE(grab.ok()) << grab.status();
+  if (!grab.ok()) return out;
+  const glm::dvec3 drag_mm(0.0, 0.0, 30.0);
+  const auto check = [&](const Result<SolveStats>& stats) {
+    EXPECT_TRUE(stats.ok()) << stats.status();
+    if (!stats.ok()) return;
+    out.forced |= stats->forced_inversion;
+    out.lagged |= stats->target_fraction < 1.0;
+  };
+  for (int i = 1; i <= events; ++i) {
+    check(model->Drag(drag_mm * (static_cast<double>(i) / events)));
+  }
+  // As many as DeformableScene::Settle's bound for a still frame.
+  constexpr int kSettleSolves = 16;
+  for (int i = 0; i < kSettleSolves && !model->settled(); ++i) check(model->Settle());
+  EXPECT_TRUE(model->settled());
+  const auto u = model->Displacements();
+  out.handle_error_mm = 0.0;
+  for (int32_t h : grab->handles) {
+    out.handle_error_mm = std::max(out.handle_error_mm, glm::distance(u[h], drag_mm));
+  }
+  out.inverted = model->CountInvertedTets();
+  return out;
+}
+
+TEST(FemEventBudget, LockedDragInEventsForcesNoMoreThanTheUnboundedDrag) {
+  constexpr int kEvents = 10;
+  const LockedDrag unbounded = RunLockedDrag(FemOptions(), kEvents);
+  const LockedDrag bounded = RunLockedDrag(InteractiveFemOptions(), kEvents);
+  ASSERT_TRUE(unbounded.forced) << "the drag no longer locks; the case tests nothing";
+  EXPECT_TRUE(bounded.lagged) << "the bounded drag no longer lags; the case tests nothing";
+  EXPECT_NEAR(bounded.handle_error_mm, 0.0, 1e-9);
+  EXPECT_LE(bounded.inverted, unbounded.inverted);
+}
+
+TEST(FemEventBudget, ForcedStepLimitIsTheLargestTargetMoveSinceReached) {
+  EventBudget budget(12, 4);
+  const std::vector<int32_t> constrained = {3, 4, 5};  // vertex 1
+  const Eigen::VectorXd rest = Eigen::VectorXd::Zero(6);
+  Eigen::VectorXd prescribed = Eigen::VectorXd::Zero(6);
+  // The first Solve after Clear: the move from the state (3-4-5 mm).
+  prescribed.segment<3>(3) << 3.0, 4.0, 0.0;
+  budget.BeginSolve(prescribed, rest, constrained, rest);
+  EXPECT_DOUBLE_EQ(budget.forced_step_limit_mm(), 5.0);
+  budget.EndSolve(/*reached=*/false);
+  // Lagging: a smaller move keeps the largest since the target was reached,
+  // and so does a settle pass (no move).
+  prescribed[5] = 1.0;
+  budget.BeginSolve(prescribed, rest, constrained, rest);
+  EXPECT_DOUBLE_EQ(budget.forced_step_limit_mm(), 5.0);
+  budget.EndSolve(false);
+  budget.BeginSolve(prescribed, rest, constrained, rest);
+  EXPECT_DOUBLE_EQ(budget.forced_step_limit_mm(), 5.0);
+  budget.EndSolve(/*reached=*/true);
+  // Reached: the next move alone.
+  prescribed[5] = 3.0;
+  budget.BeginSolve(prescribed, rest, constrained, rest);
+  EXPECT_DOUBLE_EQ(budget.forced_step_limit_mm(), 2.0);
+  budget.EndSolve(true);
+  // New handles: measured from the state again.
+  budget.Clear();
+  budget.BeginSolve(prescribed, rest, constrained, prescribed);
+  EXPECT_DOUBLE_EQ(budget.forced_step_limit_mm(), 0.0);
 }
 
 }  // namespace
