@@ -233,7 +233,7 @@ TEST(FemEventBudget, DragInIncrementsWithTheInteractiveBoundCatchesUpAndInvertsN
 struct LockedDrag {
   int64_t inverted = -1;
   bool forced = false;
-  bool lagged = false;  // some event stopped short of its offset
+  bool lagged = false;            // some event stopped short of its offset
   double handle_error_mm = -1.0;  // after settling, largest |handle - drag|
 };
 

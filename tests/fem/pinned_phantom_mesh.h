@@ -7,8 +7,8 @@
 #include <cstdlib>
 #include <string>
 
-#include <glm/glm.hpp>
 #include <gtest/gtest.h>
+#include <glm/glm.hpp>
 
 #include "server/mesh/mesh_json.h"
 #include "server/mesh/proxy_mesh.h"
