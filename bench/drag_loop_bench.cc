@@ -4,8 +4,13 @@
 // refined at the left renal artery, and for ~1,000 and ~5,000 vertices.
 //   drag_loop_bench [SOURCE] [--max-load-steps N] [--min-load-fraction F]
 //                   [--intermediate-newton N] [--no-barrier] [--max-vertices N]
-//                   [--steps] [--map-tolerance MM]
+//                   [--steps] [--map-tolerance MM] [--event-newton-budget N]
 // (bench/fem_flags.h); --steps prints every step's FEM work and stage times.
+// The FEM runs with the interactive scene's settings (InteractiveFemOptions:
+// at most kInteractiveEventNewtonBudget Newton iterations per step, the rest
+// of the motion carried; --event-newton-budget 0 for unbounded steps). After
+// the 10th step the drag is settled (DeformableScene::Settle), as before a
+// still frame, and the inverted tets are counted there, at 12 mm.
 #include <cstdio>
 #include <string>
 #include <thread>
@@ -46,6 +51,11 @@ struct Split {
   double forces = 0.0, factor = 0.0, pcg_other = 0.0, fem_other = 0.0;  // FEM parts
   double map = 0.0, frame = 0.0, jpeg = 0.0;
   int64_t newton = 0, cg = 0, load_steps = 0, forced = 0;
+  int64_t short_steps = 0;          // steps that stopped short of their offset
+  double least_fraction = 1.0;      // the smallest SolveStats::target_fraction
+  double largest_lag_mm = 0.0;      // the largest SolveStats::remaining_mm
+  double settle_ms = 0.0;           // settling after the 10th step: FEM wall
+  int64_t settle_newton = 0;        // and its Newton iterations
 };
 
 struct Row {
@@ -161,6 +171,9 @@ Row RunCase(const ProxyMesh& mesh, const Volume& volume, const gpu::GpuContext& 
     split.cg += solve.cg_iterations;
     split.load_steps += solve.load_steps;
     split.forced += solve.forced_inversion ? 1 : 0;
+    split.short_steps += solve.target_fraction < 1.0 ? 1 : 0;
+    split.least_fraction = std::min(split.least_fraction, solve.target_fraction);
+    split.largest_lag_mm = std::max(split.largest_lag_mm, solve.remaining_mm);
     auto frame = bench::Check(scene->Render(interactive), "render");
     split.frame += frame.timings.wall_ms;
     row.interactive = std::min(row.interactive, frame.timings.wall_ms);
@@ -188,14 +201,34 @@ Row RunCase(const ProxyMesh& mesh, const Volume& volume, const gpu::GpuContext& 
     split.jpeg += jpeg_ms;
     if (print_steps) {
       std::printf("  step %2d: FEM %7.2f ms (forces %6.2f, factor solves %6.2f, K v + PCG %6.2f; "
-                  "%2d Newton, %3d CG, %2d load steps%s), map %6.2f, frame %6.2f, JPEG %5.2f\n",
+                  "%2d Newton, %3d CG, %2d load steps%s; reached %.3f, %.2f mm to go), map %6.2f, "
+                  "frame %6.2f, JPEG %5.2f\n",
                   s, step.fem_ms, solve.assembly_ms, solve.precondition_ms,
                   solve.solve_ms - solve.precondition_ms, solve.newton_iterations,
                   solve.cg_iterations, solve.load_steps, solve.forced_inversion ? ", forced" : "",
-                  step.warp_ms, frame.timings.wall_ms, jpeg_ms);
+                  solve.target_fraction, solve.remaining_mm, step.warp_ms, frame.timings.wall_ms,
+                  jpeg_ms);
     }
   }
   row.loop_fps = steps / (MsSince(t_loop) / 1000.0);
+  // The pointer stops at 12 mm: finish the drag (as before a still frame)
+  // and count the inverted tets there.
+  // One solve at a time, as DeformableScene::Settle(kSettleSolves) would.
+  for (int i = 0; i < kSettleSolves && !scene->settled(); ++i) {
+    const SceneStepTimings settled = bench::Check(scene->Settle(1), "settle");
+    const SolveStats& solve = settled.solve;
+    row.split.settle_ms += settled.fem_ms;
+    row.split.settle_newton += solve.newton_iterations;
+    row.inverted = settled.inverted_tets;
+    if (print_steps) {
+      std::printf("  settle %d: FEM %7.2f ms (%2d Newton, %3d CG, %2d load steps%s; reached %.3f, "
+                  "%.2f mm to go), %lld inverted\n",
+                  i + 1, settled.fem_ms, solve.newton_iterations, solve.cg_iterations,
+                  solve.load_steps, solve.forced_inversion ? ", forced" : "",
+                  solve.target_fraction, solve.remaining_mm,
+                  static_cast<long long>(settled.inverted_tets));
+    }
+  }
   // Orbiting between drag steps: same map, so the brick occupancy is reused.
   SceneView orbit = interactive;
   for (int r = 0; r < 3; ++r) {
@@ -215,6 +248,7 @@ Row RunCase(const ProxyMesh& mesh, const Volume& volume, const gpu::GpuContext& 
 int main(int argc, char** argv) {
   std::string source = "phantom:abdomen";
   bench::FemFlags flags;
+  flags.solver = InteractiveFemOptions().solver;
   bool print_steps = false;
   for (int i = 1; i < argc; ++i) {
     if (bench::ParseFemFlag(argc, argv, i, flags)) continue;
@@ -229,6 +263,14 @@ int main(int argc, char** argv) {
     }
   }
   const SolverOptions& solver = flags.solver;
+  if (solver.event_newton_budget > 0 &&
+      solver.event_newton_budget <
+          solver.intermediate_newton_iterations + solver.event_stop_newton_iterations) {
+    std::fprintf(stderr,
+                 "--event-newton-budget must be 0 or >= --intermediate-newton + "
+                 "--event-stop-newton\n");
+    return 2;
+  }
   auto volume = bench::Check(ReadVolume(source, {}), "reading the volume");
   auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
   auto gpu_volume = bench::Check(GpuVolume::Upload(*context, volume), "upload");
@@ -247,9 +289,11 @@ int main(int argc, char** argv) {
               source.c_str(), context->device_name().c_str());
   std::printf(
       "FEM: inversion barrier %s, at most %d load steps, min load fraction %g, %d Newton "
-      "iterations after a partial load step\n",
+      "iterations after a partial load step, at most %d Newton iterations per step (0: "
+      "unbounded), %d of them kept for equilibrium where a step stops short\n",
       solver.inversion_barrier ? "on" : "off", solver.max_load_steps, solver.min_load_fraction,
-      solver.intermediate_newton_iterations);
+      solver.intermediate_newton_iterations, solver.event_newton_budget,
+      solver.event_stop_newton_iterations);
   std::printf("per step, best of the 10 steps (ms; FEM also mean and worst); loop fps = 10 steps "
               "/ their whole wall time (FEM + map + interactive frame + JPEG)\n");
   std::printf("%-22s %6s %8s %9s %8s %8s %13s %11s %8s %9s %9s\n", "mesh", "verts", "FEM",
@@ -306,6 +350,19 @@ int main(int argc, char** argv) {
                 name, p.forces / n, p.factor / n, p.pcg_other / n, p.fem_other / n, fem / n,
                 p.map / n, p.frame / n, p.jpeg / n, (fem + p.map + p.frame + p.jpeg) / n,
                 p.newton / n, p.cg / n, p.load_steps / n, static_cast<long long>(p.forced));
+  }
+  std::printf("\nthe per-event bound (--event-newton-budget %d): FEM worst / mean, steps that "
+              "stopped short of their offset, the least fraction reached, the largest lag (mm), "
+              "then the settle after step 10 (FEM ms, Newton iterations)\n",
+              solver.event_newton_budget);
+  std::printf("%-22s %10s %6s %9s %8s %10s %8s\n", "mesh", "worst/mean", "short", "reached",
+              "lag mm", "settle ms", "newton");
+  for (const auto& [name, r] : rows) {
+    const Split& p = r.split;
+    std::printf("%-22s %10.2f %6lld %9.3f %8.2f %10.2f %8lld\n", name,
+                r.fem_max / (r.fem_sum / r.steps), static_cast<long long>(p.short_steps),
+                p.least_fraction, p.largest_lag_mm, p.settle_ms,
+                static_cast<long long>(p.settle_newton));
   }
   std::printf("\nthe grab's handles in the preconditioner (--handle-factor %s): grab ms, one "
               "application ms (min of 50)\n",

@@ -18,6 +18,7 @@ struct FemFlags {
 // Reads the flag at argv[i] (and its value, advancing i) when it is one of
 //   --max-load-steps N  --min-load-fraction F  --intermediate-newton N
 //   --max-vertices N  --handle-factor refactor|capacitance
+//   --event-newton-budget N (0: unbounded)  --event-stop-newton N
 // into `flags`; false for any other argument.
 inline bool ParseFemFlag(int argc, char** argv, int& i, FemFlags& flags) {
   if (i + 1 >= argc) return false;
@@ -31,6 +32,10 @@ inline bool ParseFemFlag(int argc, char** argv, int& i, FemFlags& flags) {
     flags.solver.handle_factor = std::strcmp(argv[++i], "capacitance") == 0
                                      ? HandleFactor::kCapacitance
                                      : HandleFactor::kRefactor;
+  } else if (std::strcmp(argv[i], "--event-newton-budget") == 0) {
+    flags.solver.event_newton_budget = std::atoi(argv[++i]);
+  } else if (std::strcmp(argv[i], "--event-stop-newton") == 0) {
+    flags.solver.event_stop_newton_iterations = std::atoi(argv[++i]);
   } else if (std::strcmp(argv[i], "--max-vertices") == 0) {
     flags.max_vertices = std::atoll(argv[++i]);
   } else {

@@ -20,6 +20,14 @@ constexpr double kRoundOffResidual = 1e-13;
 // element's volume ratio below the onset (FeasibleStepFraction).
 constexpr double kFeasibleKeep = 0.2;
 
+// The fraction of a jump of jump_mm (largest vertex norm) that a forced
+// step applies when it may move a vertex at most limit_mm: all of it unless
+// that exceeds the limit by more than round-off (an unbounded drag's jump is
+// its target's move up to round-off).
+double ForcedFraction(double jump_mm, double limit_mm) {
+  return jump_mm > limit_mm * (1.0 + 1e-9) && limit_mm > 0.0 ? limit_mm / jump_mm : 1.0;
+}
+
 }  // namespace
 
 Result<CorotationalSolver> CorotationalSolver::Create(
@@ -40,8 +48,19 @@ Result<CorotationalSolver> CorotationalSolver::Create(
       !(options.update_tolerance > 0.0) || !(options.cg_tolerance > 0.0)) {
     return absl::InvalidArgumentError("solver iteration limits and tolerances must be > 0");
   }
+  if (options.event_stop_newton_iterations < 0 ||
+      (options.event_newton_budget != 0 &&
+       options.event_newton_budget <
+           options.intermediate_newton_iterations + options.event_stop_newton_iterations)) {
+    return absl::InvalidArgumentError(
+        StrCat("event_newton_budget (", options.event_newton_budget,
+               ") must be 0 (unbounded) or at least intermediate_newton_iterations (",
+               options.intermediate_newton_iterations, ") + event_stop_newton_iterations (",
+               options.event_stop_newton_iterations, ")"));
+  }
   CorotationalSolver solver;
   solver.options_ = options;
+  solver.budget_ = EventBudget(options.event_newton_budget, options.event_stop_newton_iterations);
   const auto t0 = SteadyClock::now();
   ASSIGN_OR_RETURN(solver.elements_, MakeTetElements(rest_mm, tets, young_n_per_mm2, poisson));
   const Eigen::SparseMatrix<double> rest_stiffness =
@@ -64,6 +83,7 @@ Status CorotationalSolver::SetHandles(const std::vector<int32_t>& handle_dofs) {
   RETURN_IF_ERROR(factor_.SetExtraFixed(handle_dofs));
   handles_ = handle_dofs;
   linearized_ = false;
+  budget_.Clear();
   return absl::OkStatus();
 }
 
@@ -74,6 +94,7 @@ void CorotationalSolver::Reset() {
   frames_.twisted.clear();
   frames_.barrier.clear();
   linearized_ = false;
+  budget_.Clear();
 }
 
 Status CorotationalSolver::CheckLoad(const Eigen::VectorXd& prescribed_mm,
@@ -198,6 +219,9 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
   if (with_handles) constrained.insert(constrained.end(), handles_.begin(), handles_.end());
   const Eigen::VectorXd start = displacement_;
   SolveStats stats;
+  budget_.BeginSolve(prescribed_mm, force_n, constrained, displacement_);
+  double first_jump_mm = -1.0;  // the prescribed motion asked for
+  bool carried = false;         // the budget stopped short of the target
   // Elements whose every DOF is prescribed: their shape is the load's, and
   // no step size can change it, so the barrier does not limit the steps.
   std::vector<uint8_t> prescribed_elements;
@@ -217,11 +241,29 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
   for (;;) {
     Eigen::VectorXd jump = Eigen::VectorXd::Zero(displacement_.size());
     for (int32_t d : constrained) jump[d] = prescribed_mm[d] - displacement_[d];
+    stats.remaining_mm = MaxVertexNorm(jump);
+    if (first_jump_mm < 0.0) first_jump_mm = stats.remaining_mm;
+    // Per-event bound: after a partial load step, the rest of the jump waits
+    // for the next Solve unless a further partial step fits; the iterations
+    // left bring the state at the fraction reached towards equilibrium.
+    if (stats.load_steps > 0 && !budget_.RoomForLoadStep(stats.newton_iterations,
+                                                         options_.intermediate_newton_iterations)) {
+      carried = true;
+      const int used = stats.newton_iterations;
+      const Status status =
+          Equilibrate(force_n, constrained, with_handles, start,
+                      MaxVertexNorm(displacement_ - start), used,
+                      budget_.IterationsFor(used, options_.max_newton_iterations), stats);
+      if (!status.ok()) return status;
+      break;
+    }
     const Eigen::VectorXd step_start = displacement_;
     const int first_iteration = stats.newton_iterations;
     ++stats.load_steps;
+    budget_.CountLoadStep();
     const bool warm = linearized_ && linearized_mode_ == mode;
     double alpha = 1.0;
+    double forced_fraction = 1.0;  // of the jump, when the step is forced
     if (warm || options_.inversion_barrier) {
       // Predictor, without evaluating forces: the prescribed DOFs take the
       // jump and the free ones follow through the last tangent, with the
@@ -237,9 +279,15 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
       stats.assembly_ms += MsSince(t0);
       const Eigen::VectorXd direction = jump + TangentSolve(rhs, constrained, with_handles, stats);
       if (options_.inversion_barrier) {
-        alpha = stats.load_steps <= options_.max_load_steps
+        // The least fraction worth a load step is of one event's share: of
+        // a lagging drag's longer jump it would give up sooner than an
+        // unbounded drag does.
+        const double min_fraction =
+            options_.min_load_fraction *
+            ForcedFraction(stats.remaining_mm, budget_.forced_step_limit_mm());
+        alpha = budget_.load_steps() <= options_.max_load_steps
                     ? FeasibleStepFraction(elements_, displacement_, direction, kFeasibleKeep,
-                                           options_.min_load_fraction, prescribed_elements)
+                                           min_fraction, prescribed_elements)
                     : 0.0;
         if (alpha == 0.0) {
           // No feasible part (or no load steps left): the prescribed motion
@@ -249,6 +297,7 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
           // (inversion_barrier.h) and the caller counts them.
           stats.forced_inversion = true;
           alpha = 1.0;
+          forced_fraction = ForcedFraction(stats.remaining_mm, budget_.forced_step_limit_mm());
         }
       }
       // A forced step moves only the prescribed DOFs: the free ones stay at
@@ -258,7 +307,13 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
       // threw free vertices over 100 mm for a 20 mm drag (a vertex 115 mm,
       // 81 tets inverted) and Newton never came back from there
       // (CorotationalSolver.ForcedDragMovesNothingFurtherThanTheHandles).
-      displacement_ += stats.forced_inversion ? jump : Eigen::VectorXd(alpha * direction);
+      // A lagging drag's jump holds the lag too; a forced step applies at
+      // most one event's share of it (EventBudget::forced_step_limit_mm), as
+      // an unbounded drag would, and the rest stays carried: forcing a 5.7 mm
+      // lag at once inverted more tets than the unbounded drag's 3 mm steps
+      // (FemEventBudget.LockedDragInEventsForcesNoMoreThanTheUnboundedDrag).
+      displacement_ += stats.forced_inversion ? Eigen::VectorXd(forced_fraction * jump)
+                                              : Eigen::VectorXd(alpha * direction);
     } else {
       displacement_ += jump;
     }
@@ -266,9 +321,16 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
     const Status status = Equilibrate(
         force_n, constrained, with_handles, start, MaxVertexNorm(displacement_ - step_start),
         first_iteration,
-        alpha == 1.0 ? options_.max_newton_iterations : options_.intermediate_newton_iterations,
+        budget_.IterationsFor(first_iteration, alpha == 1.0
+                                                   ? options_.max_newton_iterations
+                                                   : options_.intermediate_newton_iterations),
         stats);
     if (!status.ok()) return status;
+    if (forced_fraction < 1.0) {
+      carried = true;
+      stats.remaining_mm *= 1.0 - forced_fraction;
+      break;
+    }
     if (alpha == 1.0) break;
     // The last update's linearised residual starts the next load step.
     linearized_ = true;
@@ -278,6 +340,13 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
   linearized_ = true;
   linearized_mode_ = mode;
   linearized_force_ = force_n;
+  budget_.EndSolve(!carried);
+  if (carried) {
+    stats.converged = false;
+    stats.target_fraction = first_jump_mm > 0.0 ? 1.0 - stats.remaining_mm / first_jump_mm : 1.0;
+  } else {
+    stats.remaining_mm = 0.0;
+  }
   stats.max_displacement_mm = MaxVertexNorm(displacement_);
   return stats;
 }

@@ -26,6 +26,7 @@
 #include "server/common/status.h"
 #include "server/fem/constrained_factor.h"
 #include "server/fem/corotated_forces.h"
+#include "server/fem/event_budget.h"
 #include "server/fem/tet_element.h"
 
 namespace vpm {
@@ -70,7 +71,9 @@ struct SolverOptions {
   int max_load_steps = 32;
   // A load step shorter than this fraction of the rest of the jump means the
   // prescribed motion itself is crushing an element: the rest is applied at
-  // once (SolveStats::forced_inversion). In (0, 1].
+  // once (SolveStats::forced_inversion). In (0, 1]. Where a bounded drag
+  // lags, both the fraction and the forced step are of one event's share of
+  // the jump (EventBudget::forced_step_limit_mm), not of the whole lag.
   double min_load_fraction = 1.0 / 64.0;
   // Newton iterations after a partial load step (one that is not the last):
   // the next step's predictor starts from its linearised residual, so the
@@ -85,7 +88,29 @@ struct SolverOptions {
   // capacitance correction (a dense #free by #handle-DOF product per
   // iteration). drag_loop_bench --handle-factor measures both.
   HandleFactor handle_factor = HandleFactor::kRefactor;
+  // Per-event work bound (event_budget.h): at most this many Newton
+  // iterations (SolveStats::newton_iterations) per Solve; a jump that needs
+  // more load steps stops at the fraction reached and the rest is carried to
+  // the next Solve (SolveStats::target_fraction). 0: unbounded, every Solve
+  // reaches its target (a single Solve's default; the interactive scene sets
+  // kInteractiveEventNewtonBudget). Else at least
+  // intermediate_newton_iterations + event_stop_newton_iterations.
+  int event_newton_budget = 0;
+  // Of event_newton_budget, the Newton iterations kept for equilibrium at
+  // the fraction reached when a Solve stops short: without them the next
+  // event starts from the last partial step's (intermediate) state, and
+  // the feasible load steps shrink event after event until the rest is
+  // forced (drag_loop_bench, docs/FEM.md "Per-event work bound").
+  int event_stop_newton_iterations = 4;
 };
+
+// The interactive scene's per-event bound (InteractiveFemOptions): at most 4
+// partial load steps and 4 iterations where a step stops short. In
+// drag_loop_bench at 1,318 vertices the unbounded worst step took 24 Newton
+// iterations (12 load steps), 3.9x the mean FEM step; with 12 the worst is
+// 2.0-2.3x, and 8 (tried, 2 kept) settled the lag in twice the iterations
+// (docs/FEM.md, "Per-event work bound").
+inline constexpr int kInteractiveEventNewtonBudget = 12;
 
 // Below this many tets the element loops run on one thread (a split costs
 // thread start-ups of ~20-50 us against loops of < 1 ms).
@@ -104,7 +129,9 @@ struct SolveStats {
   // Newton updates shortened to keep every element's volume ratio positive.
   int shortened_updates = 0;
   // The prescribed motion could not be reached without flattening an
-  // element, and was applied regardless (it may leave inverted elements).
+  // element, and was applied regardless (it may leave inverted elements);
+  // at most one event's share of it where a bounded drag lags (the rest
+  // carried: target_fraction < 1).
   bool forced_inversion = false;
   // |f_ext - f_int| on the free DOFs / (|f_int| + |f_ext|) over all DOFs,
   // dimensionless, at the state the last Newton update started from (the
@@ -112,6 +139,14 @@ struct SolveStats {
   // reduces it further).
   double residual = 0.0;
   double max_displacement_mm = 0.0;  // largest vertex displacement
+  // Of the prescribed motion asked for (target - start on the prescribed
+  // DOFs; every DOF moves by the same fraction), the part reached, in
+  // [0, 1]; below 1 only with SolverOptions::event_newton_budget, the rest
+  // (largest vertex distance still to go: remaining_mm, mm) carried to the
+  // next Solve.
+  double target_fraction = 1.0;
+  double remaining_mm = 0.0;
+  // Converged at the target: false too when the target is not reached.
   bool converged = false;
   double total_ms() const { return assembly_ms + solve_ms; }
 };
@@ -195,6 +230,7 @@ class CorotationalSolver {
   std::vector<int32_t> fixed_list_;
   std::vector<int32_t> handles_;
   ConstrainedFactor factor_;
+  EventBudget budget_;
   Eigen::VectorXd displacement_;
   CorotatedFrames frames_;
   Eigen::VectorXd forces_;    // elastic forces at the last evaluation

@@ -94,6 +94,9 @@ Result<GrabInfo> FemModel::Grab(const glm::dvec3& point_mm, double radius_mm) {
   displacement_at_grab_ = solver_.displacement_mm();
   grab_ = info;
   grabbed_ = true;
+  last_was_pull_ = false;
+  last_load_ = glm::dvec3(0.0);
+  settled_ = true;
   return info;
 }
 
@@ -110,8 +113,20 @@ Result<SolveStats> FemModel::Drag(const glm::dvec3& offset_mm) {
   // Fixed DOFs are 0 in every state, so the grab-time state prescribes them.
   Eigen::VectorXd prescribed = displacement_at_grab_;
   for (int32_t d : handle_dofs_) prescribed[d] = displacement_at_grab_[d] + offset_mm[d % 3];
-  return solver_.Solve(prescribed, Eigen::VectorXd::Zero(prescribed.size()),
-                       HandleMode::kPrescribed);
+  last_was_pull_ = false;
+  last_load_ = offset_mm;
+  return Settled(solver_.Solve(prescribed, Eigen::VectorXd::Zero(prescribed.size()),
+                               HandleMode::kPrescribed));
+}
+
+Result<SolveStats> FemModel::Settle() {
+  RETURN_IF_ERROR(CheckGrabbed("settle"));
+  return last_was_pull_ ? Pull(last_load_) : Drag(last_load_);
+}
+
+Result<SolveStats> FemModel::Settled(Result<SolveStats> stats) {
+  settled_ = stats.ok() && stats->converged && stats->target_fraction == 1.0;
+  return stats;
 }
 
 Result<SolveStats> FemModel::Pull(const glm::dvec3& force_n) {
@@ -123,7 +138,9 @@ Result<SolveStats> FemModel::Pull(const glm::dvec3& force_n) {
   for (int32_t v : grab_.handles) {
     for (int i = 0; i < 3; ++i) force[3 * v + i] = force_n[i] * share;
   }
-  return solver_.Solve(prescribed, force, HandleMode::kFree);
+  last_was_pull_ = true;
+  last_load_ = force_n;
+  return Settled(solver_.Solve(prescribed, force, HandleMode::kFree));
 }
 
 void FemModel::Release() {
@@ -132,6 +149,7 @@ void FemModel::Release() {
   grab_ = GrabInfo{};
   handle_dofs_.clear();
   displacement_at_grab_.setZero(3 * vertex_count());
+  settled_ = true;
   // The handles' capacitance is dropped too; clearing cannot fail.
   (void)solver_.SetHandles({});
 }

@@ -29,6 +29,16 @@ struct FemOptions {
   SolverOptions solver;
 };
 
+// The interactive scene's settings (DeformableScene): the solver's
+// interactive tolerances with the per-event work bound
+// (kInteractiveEventNewtonBudget; docs/FEM.md, "Per-event work bound"). A
+// Drag may then stop short of its offset; later Drags or Settle go on.
+inline FemOptions InteractiveFemOptions() {
+  FemOptions options;
+  options.solver.event_newton_budget = kInteractiveEventNewtonBudget;
+  return options;
+}
+
 struct FemSetupStats {
   double assembly_ms = 0.0;  // elements and the rest stiffness
   double factor_ms = 0.0;    // SimplicialLDLT of its free block
@@ -63,6 +73,15 @@ class FemModel {
   // on each, and solves. FailedPrecondition before a Grab.
   Result<SolveStats> Pull(const glm::dvec3& force_n);
 
+  // Solves the last Drag or Pull again: with a per-event bound
+  // (SolverOptions::event_newton_budget) it goes on where that solve
+  // stopped (the rest of the motion, then convergence). FailedPrecondition
+  // before a Grab; with no Drag or Pull since the Grab, a Drag by 0.
+  Result<SolveStats> Settle();
+  // The last Drag, Pull or Settle reached its target and converged (true
+  // after a Grab or Release).
+  bool settled() const { return settled_; }
+
   // Back to rest (every displacement exactly 0); drops the handles.
   void Release();
 
@@ -86,6 +105,8 @@ class FemModel {
  private:
   FemModel() = default;
   Status CheckGrabbed(const char* action) const;
+  // Records whether `stats` (a Drag or Pull) reached and converged; passes it on.
+  Result<SolveStats> Settled(Result<SolveStats> stats);
 
   std::vector<glm::dvec3> rest_mm_;
   std::vector<std::array<int32_t, 4>> tets_;
@@ -98,6 +119,10 @@ class FemModel {
   GrabInfo grab_;
   std::vector<int32_t> handle_dofs_;      // free DOFs of the handles
   Eigen::VectorXd displacement_at_grab_;  // 3*#V, mm
+  // The last load (Settle repeats it) and whether it was reached.
+  bool last_was_pull_ = false;
+  glm::dvec3 last_load_{0.0};  // drag offset, mm, or pull force, N
+  bool settled_ = true;
 };
 
 }  // namespace vpm

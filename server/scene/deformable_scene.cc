@@ -105,6 +105,16 @@ Result<SceneStepTimings> DeformableScene::Pull(const glm::dvec3& force_n) {
   return AfterStep(timings);
 }
 
+Result<SceneStepTimings> DeformableScene::Settle(int max_solves) {
+  if (fem_->settled() || !fem_->grabbed()) return SceneStepTimings{};
+  const auto t0 = std::chrono::steady_clock::now();
+  SolveStats last;
+  for (int i = 0; i < max_solves && !fem_->settled(); ++i) {
+    ASSIGN_OR_RETURN(last, fem_->Settle());
+  }
+  return AfterStep(FromSolve(last, t0));
+}
+
 Result<SceneStepTimings> DeformableScene::Release() {
   const auto t0 = std::chrono::steady_clock::now();
   fem_->Release();

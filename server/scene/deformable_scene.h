@@ -68,11 +68,19 @@ inline BackwardMap::Options InteractiveMapOptions() {
   return options;
 }
 
+// Settle's bound for a still frame: the load steps towards one target are
+// shared across solves (SolverOptions::max_load_steps, 32: at most 8 solves
+// of 4 partial load steps before the rest is forced), plus a few solves to
+// converge.
+inline constexpr int kSettleSolves = 16;
+
 class DeformableScene {
  public:
   struct Options {
     BackwardMap::Options map = InteractiveMapOptions();
-    FemOptions fem;
+    // Bounded per event: a Drag may stop short of its offset and the next
+    // one (or Settle) goes on (docs/FEM.md, "Per-event work bound").
+    FemOptions fem = InteractiveFemOptions();
     // false: Drag, Pull and Release update the backward map at once (their
     // timings include it). true: they solve FEM only and mark the map stale;
     // the next Render (or SyncMap) updates it once for every step since, so
@@ -96,6 +104,12 @@ class DeformableScene {
   // Prescribed handle displacement from the grab (mm), or a total force (N).
   Result<SceneStepTimings> Drag(const glm::dvec3& offset_mm);
   Result<SceneStepTimings> Pull(const glm::dvec3& force_n);
+  // Once the pointer stops: repeats the last Drag or Pull (FemModel::Settle)
+  // until it has reached its target and converged, at most max_solves times
+  // (each within the per-event bound). fem_ms: the wall of all of them;
+  // solve: the last one's stats; nothing to do: all zero.
+  Result<SceneStepTimings> Settle(int max_solves);
+  bool settled() const { return fem_->settled(); }
   // Back to rest; the map becomes the identity again (deferred mode: at the
   // next Render).
   Result<SceneStepTimings> Release();

@@ -206,6 +206,10 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
       last_view_ = view;
       if (grab_point_) *out.mutable_grab_point_mm() = ToProto(*grab_point_);
     }
+    // A still comes once the pointer has stopped: the drag the per-event
+    // bound left short of its offset is finished first (docs/FEM.md,
+    // "Per-event work bound"), so the still shows where the pointer is.
+    if (!interactive) RETURN_IF_ERROR(scene_->Settle(kSettleSolves).status());
     ASSIGN_OR_RETURN(prepared, scene_->PrepareRender(view, &map_update));
     // Slices are cheap (a few ms): cast here, under the scene lock, from the
     // map this frame uses.

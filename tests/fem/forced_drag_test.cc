@@ -4,36 +4,18 @@
 // forced step). Nothing may then move much further than the handles: the
 // predictor's extrapolation through near-singular barrier terms once threw
 // a vertex 115 mm for this 20 mm drag (81 tets inverted).
-#include <cstdlib>
-#include <string>
-
 #include <gtest/gtest.h>
 
 #include "server/fem/fem_model.h"
-#include "server/mesh/mesh_json.h"
+#include "tests/fem/pinned_phantom_mesh.h"
 
 namespace vpm {
 namespace {
 
-// tests/data/meshes/README.md: the unrefined 250-vertex cell mesh of
-// phantom:abdomen (256^3), pinned as it was built before sliver removal.
-ProxyMesh PinnedPhantomMesh() {
-  const char* root = std::getenv("VPM_SOURCE_DIR");
-  const std::string path =
-      std::string(root ? root : ".") + "/tests/data/meshes/phantom-abdomen-cell-250.json";
-  auto mesh = ReadMeshJson(path);
-  EXPECT_TRUE(mesh.ok()) << mesh.status();
-  return mesh.ok() ? *std::move(mesh) : ProxyMesh{};
-}
+using testing::BoxExtent;
+using testing::PinnedPhantomMesh;
 
-glm::dvec3 BoxExtent(const ProxyMesh& mesh) {
-  glm::dvec3 extent(0.0);
-  for (const MeshVertex& v : mesh.vertices) extent = glm::max(extent, v.position_mm);
-  return extent;
-}
-
-// left_renal_artery of phantom:abdomen (`vpm volume info phantom:abdomen`), mm.
-const glm::dvec3 kGrabMm(233.47, 217.07, 130.93);
+const glm::dvec3 kGrabMm = testing::kPinnedGrabMm;
 const glm::dvec3 kDragMm(0.0, 0.0, 20.0);
 // The handles move exactly |drag|; the tissue around them may bulge a little
 // further (a near-incompressible material bulges: 15% at the first 2 mm),
