@@ -4,6 +4,7 @@
 // volumes of the data root and phantoms, per-user stream caps and per-user
 // metrics.
 #include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <thread>
@@ -132,6 +133,19 @@ class UsersTest : public ServiceTest {
     reader->Finish();
     return grpc::Status::OK;
   }
+  // Waits (up to 20 s) until the server has released every stream slot of
+  // `user`: a cancelled stream frees its slot when the server's OnDone runs,
+  // which a sanitizer can delay past the client's Finish; a new stream of a
+  // user at the cap of 2 would then be RESOURCE_EXHAUSTED.
+  bool UserStreamsReleased(const std::string& user) {
+    const std::string zero = "vpm_user_streams{user=\"" + user + "\"} 0";
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (server_->metrics().Scrape().find(zero) == std::string::npos) {
+      if (std::chrono::steady_clock::now() > end) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return true;
+  }
   grpc::Status Interact(const std::string& token, const std::string& session_id) {
     auto context = Context(token);
     auto stream = stub_->Interact(context.get());
@@ -238,6 +252,7 @@ TEST_F(UsersTest, SharingLetsAViewerWatchButNotDeform) {
   EXPECT_EQ(Watch(kCarol, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
 
   ASSERT_TRUE(Share(kAlice, session.session_id(), "bob", /*revoke=*/true).ok());
+  ASSERT_TRUE(UserStreamsReleased("bob")) << server_->metrics().Scrape();
   EXPECT_EQ(Watch(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
 }
 
