@@ -133,6 +133,16 @@ Result<std::unique_ptr<OfflineScene>> PrepareOfflineScene(const RenderArgs& args
     if (!args.drag.empty()) {
       ASSIGN_OR_RETURN(glm::dvec3 offset, Vec3Of(args.drag, "--drag"));
       ASSIGN_OR_RETURN(out->step, out->scene->Drag(offset));
+      // A drag event's FEM work is bounded (docs/FEM.md, "Per-event work bound"):
+      // a long drag in one event stops short and the rest is carried. The
+      // offline commands render a still, so the drag is finished first, as a
+      // session does before its still frames.
+      ASSIGN_OR_RETURN(SceneStepTimings settled, out->scene->Settle(kSettleSolves));
+      if (settled.max_displacement_mm > 0.0) {
+        settled.fem_ms += out->step.fem_ms;
+        settled.warp_ms += out->step.warp_ms;
+        out->step = settled;
+      }
     } else if (!args.pull.empty()) {
       ASSIGN_OR_RETURN(glm::dvec3 force, Vec3Of(args.pull, "--pull"));
       ASSIGN_OR_RETURN(out->step, out->scene->Pull(force));
