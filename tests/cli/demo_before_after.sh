@@ -2,9 +2,10 @@
 # The demo's before and after frames (make demo: the left renal artery of the
 # phantom grabbed and dragged 20 mm cranially, the default view cut) must
 # differ clearly around the grab: mean |after - before| over R, G, B in the
-# 40 x 40 pixels around the grab point at least 6/255. Measured 2026-11-24:
-# 13.4/255 with the view cut, 1.0/255 without it (--cut off: the drag hides
-# under the skin); whole frame 0.5 and 0.3 (docs/RENDERING.md, "Seeing inside").
+# 40 x 40 pixels around the grab point at least 6/255. Measured 2026-11-25:
+# 11.3/255 with the view cut (whole frame 0.4); 2026-11-24: 1.0/255 without
+# it (--cut off: the drag hides under the skin; docs/RENDERING.md, "Seeing
+# inside").
 set -euo pipefail
 build=$1
 source_dir=$2
@@ -36,8 +37,8 @@ python3 "$source_dir/scripts/region_difference.py" "$out/before_skin.png" "$out/
 
 # The real tilted CT as make demo drags it (the central insert 10 mm
 # superior): the 3D frames differ around the grab by at least 5/255 (80 x 80
-# pixels; measured 10.3/255), the coronal slices through it by at least 8/255
-# (measured 17.0/255; README, "A real scanner's CT in the demo").
+# pixels; measured 9.7/255), the coronal slices through it by at least 8/255
+# (measured 16.8/255; README, "A real scanner's CT in the demo").
 ct="$source_dir/tests/data/ct-philips-tilt"
 ct_mesh=(--grid 20 20 18 --grab 123 145 64)
 ct_before=$("$vpm" render --volume "$ct" "${ct_mesh[@]}" --out "$out/ct_before.png")
