@@ -86,12 +86,7 @@ Result<HardReachStats> AddHardReachSteinerPoints(ProxyMesh& mesh, const Volume& 
       }
     }
     if (taken.empty()) break;
-    for (const glm::dvec3& q : taken) {
-      mesh.vertices.push_back({.position_mm = q,
-                               .lattice_id = -1,
-                               .kind = VertexKind::kSteiner,
-                               .voxel = NearestVoxel(geometry, q)});
-    }
+    AppendSteinerVertices(mesh, geometry, taken);
     RETURN_IF_ERROR(Tetrahedralize(mesh, extent));
     RETURN_IF_ERROR(ClassifyHardness(volume, R_mm, classify, mesh.vertices));
     stats.added += static_cast<int64_t>(taken.size());

@@ -93,12 +93,7 @@ Result<SteinerStats> AddSliverSteinerPoints(ProxyMesh& mesh, const VolumeGeometr
     const std::vector<glm::dvec3> added =
         RoundCandidates(p, mesh.tets, bad, extent, params.min_spacing_mm);
     if (added.empty()) break;
-    for (const glm::dvec3& q : added) {
-      mesh.vertices.push_back({.position_mm = q,
-                               .lattice_id = -1,
-                               .kind = VertexKind::kSteiner,
-                               .voxel = NearestVoxel(geometry, q)});
-    }
+    AppendSteinerVertices(mesh, geometry, added);
     RETURN_IF_ERROR(Tetrahedralize(mesh, extent));
     stats.added += static_cast<int64_t>(added.size());
     stats.rounds = round + 1;

@@ -12,6 +12,7 @@
 #include <glm/glm.hpp>
 
 #include "server/mesh/lattice.h"  // NearestVoxel
+#include "server/mesh/proxy_mesh.h"
 #include "server/volume/volume.h"
 
 namespace vpm {
@@ -33,6 +34,18 @@ inline glm::dvec3 SnapToBox(const glm::dvec3& p, const glm::dvec3& extent, doubl
     if (q[a] > extent[a] - snap) q[a] = extent[a];
   }
   return q;
+}
+
+// Appends a Steiner vertex (no lattice id, on its nearest voxel) at each of
+// `points` (mm); the caller tetrahedralizes again.
+inline void AppendSteinerVertices(ProxyMesh& mesh, const VolumeGeometry& geometry,
+                                  const std::vector<glm::dvec3>& points) {
+  for (const glm::dvec3& q : points) {
+    mesh.vertices.push_back({.position_mm = q,
+                             .lattice_id = -1,
+                             .kind = VertexKind::kSteiner,
+                             .voxel = NearestVoxel(geometry, q)});
+  }
 }
 
 }  // namespace vpm
