@@ -32,7 +32,7 @@ struct SceneStepTimings {
   double fem_ms = 0.0;   // wall: FEM solve (or release)
   double warp_ms = 0.0;  // wall: backward-map upload, update and wait
   double map_gpu_ms = 0.0;   // GPU: the map's passes (timestamps), part of warp_ms
-  double map_copy_ms = 0.0;  // wall: copying the map's changed box into its image
+  double map_copy_ms = 0.0;  // GPU: copying the map's changed box into its image
   std::vector<gpu::DispatchTiming> map_passes;  // GPU: clear (updates), claim, write
   int64_t moved_tets = 0;
   int64_t processed_tets = 0;  // moved plus those whose boxes meet them
