@@ -1,0 +1,147 @@
+#include "server/fem/ldlt_panels.h"
+
+#include <algorithm>
+
+namespace vpm {
+namespace {
+
+using Factor = Eigen::SparseMatrix<double>;
+
+// Row indices of column j of L (strictly lower, ascending) and their values.
+struct Column {
+  const int* rows = nullptr;
+  const double* values = nullptr;
+  int64_t count = 0;
+};
+
+Column ColumnOf(const Factor& l, int64_t j) {
+  const int64_t begin = l.outerIndexPtr()[j];
+  const int64_t count = l.innerNonZeroPtr() != nullptr ? l.innerNonZeroPtr()[j]
+                                                        : l.outerIndexPtr()[j + 1] - begin;
+  return {l.innerIndexPtr() + begin, l.valuePtr() + begin, count};
+}
+
+// The entries of `c` with row > last.
+Column Below(const Column& c, int64_t last) {
+  const int* start = std::upper_bound(c.rows, c.rows + c.count, static_cast<int>(last));
+  const int64_t skipped = start - c.rows;
+  return {start, c.values + skipped, c.count - skipped};
+}
+
+bool SameRows(const Column& a, const Column& b) {
+  return a.count == b.count && std::equal(a.rows, a.rows + a.count, b.rows);
+}
+
+}  // namespace
+
+LdltPanels::LdltPanels(const Ldlt& ldlt) {
+  const Factor& l = ldlt.matrixL().nestedExpression();
+  const int64_t m = l.cols();
+  inverse_diagonal_ = ldlt.vectorD().cwiseInverse();
+  p_ = ldlt.permutationP();
+  p_inverse_ = ldlt.permutationPinv();
+  scratch_.resize(m);
+  for (int64_t j = 0; j < m;) {
+    // Grow the panel while every column has the rows of the first below it.
+    int k = 1;
+    while (k < kMaxPanelColumns && j + k < m) {
+      const int64_t last = j + k;  // the candidate panel's last column
+      const Column first = Below(ColumnOf(l, j), last);
+      bool same = true;
+      for (int c = 1; c <= k && same; ++c) {
+        same = SameRows(first, Below(ColumnOf(l, j + c), last));
+      }
+      if (!same) break;
+      ++k;
+    }
+    Panel panel;
+    panel.first_column = static_cast<int32_t>(j);
+    panel.columns = k;
+    panel.first_row = static_cast<int64_t>(rows_.size());
+    panel.first_value = static_cast<int64_t>(values_.size());
+    const Column below = Below(ColumnOf(l, j), j + k - 1);
+    panel.row_count = static_cast<int32_t>(below.count);
+    rows_.insert(rows_.end(), below.rows, below.rows + below.count);
+    values_.resize(values_.size() + size_t(k) * k + size_t(below.count) * k, 0.0);
+    double* triangle = values_.data() + panel.first_value;
+    double* rows = triangle + k * k;
+    for (int c = 0; c < k; ++c) {
+      const Column column = ColumnOf(l, j + c);
+      int64_t r = 0;
+      for (int64_t e = 0; e < column.count; ++e) {
+        const int64_t row = column.rows[e];
+        if (row <= j + k - 1) {
+          triangle[(row - j) * k + c] = column.values[e];
+        } else {
+          rows[r++ * k + c] = column.values[e];  // rows in `below`'s order
+        }
+      }
+    }
+    panels_.push_back(panel);
+    j += k;
+  }
+}
+
+template <int K>
+void LdltPanels::Forward(const Panel& panel, double* x) const {
+  const double* triangle = values_.data() + panel.first_value;
+  const double* values = triangle + K * K;
+  double* xs = x + panel.first_column;
+  for (int c = 0; c < K; ++c) {
+    for (int r = c + 1; r < K; ++r) xs[r] -= triangle[r * K + c] * xs[c];
+  }
+  double v[K];
+  for (int c = 0; c < K; ++c) v[c] = xs[c];
+  const int32_t* rows = rows_.data() + panel.first_row;
+  for (int32_t i = 0; i < panel.row_count; ++i) {
+    double sum = 0.0;
+    for (int c = 0; c < K; ++c) sum += values[i * K + c] * v[c];
+    x[rows[i]] -= sum;
+  }
+}
+
+template <int K>
+void LdltPanels::Backward(const Panel& panel, double* x) const {
+  const double* triangle = values_.data() + panel.first_value;
+  const double* values = triangle + K * K;
+  double sums[K] = {};
+  const int32_t* rows = rows_.data() + panel.first_row;
+  for (int32_t i = 0; i < panel.row_count; ++i) {
+    const double xi = x[rows[i]];
+    for (int c = 0; c < K; ++c) sums[c] += values[i * K + c] * xi;
+  }
+  double* xs = x + panel.first_column;
+  for (int c = 0; c < K; ++c) xs[c] -= sums[c];
+  for (int c = K - 1; c >= 0; --c) {
+    for (int r = c + 1; r < K; ++r) xs[c] -= triangle[r * K + c] * xs[r];
+  }
+}
+
+void LdltPanels::Solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+  scratch_.noalias() = p_ * b;
+  double* y = scratch_.data();
+  // One instantiation per panel width, so the k-loops unroll.
+  auto dispatch = [&](const Panel& panel, auto run) {
+    switch (panel.columns) {
+      case 1: run(std::integral_constant<int, 1>{}); break;
+      case 2: run(std::integral_constant<int, 2>{}); break;
+      case 3: run(std::integral_constant<int, 3>{}); break;
+      case 4: run(std::integral_constant<int, 4>{}); break;
+      case 5: run(std::integral_constant<int, 5>{}); break;
+      case 6: run(std::integral_constant<int, 6>{}); break;
+      case 7: run(std::integral_constant<int, 7>{}); break;
+      default: run(std::integral_constant<int, 8>{}); break;
+    }
+  };
+  static_assert(kMaxPanelColumns == 8, "one case per panel width");
+  for (const Panel& panel : panels_) {
+    dispatch(panel, [&](auto k) { Forward<decltype(k)::value>(panel, y); });
+  }
+  scratch_.array() *= inverse_diagonal_.array();
+  for (auto it = panels_.rbegin(); it != panels_.rend(); ++it) {
+    dispatch(*it, [&](auto k) { Backward<decltype(k)::value>(*it, y); });
+  }
+  x.noalias() = p_inverse_ * scratch_;
+}
+
+}  // namespace vpm
