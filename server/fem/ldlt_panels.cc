@@ -1,6 +1,8 @@
 #include "server/fem/ldlt_panels.h"
 
 #include <algorithm>
+#include <type_traits>
+#include <utility>
 
 namespace vpm {
 namespace {
@@ -26,6 +28,12 @@ Column Below(const Column& c, int64_t last) {
   const int* start = std::upper_bound(c.rows, c.rows + c.count, static_cast<int>(last));
   const int64_t skipped = start - c.rows;
   return {start, c.values + skipped, c.count - skipped};
+}
+
+// run(std::integral_constant<int, k>{}) for k = width, one of Ks + 1.
+template <typename Run, int... Ks>
+void WithWidth(int width, const Run& run, std::integer_sequence<int, Ks...>) {
+  ((width == Ks + 1 ? (run(std::integral_constant<int, Ks + 1>{}), true) : false) || ...);
 }
 
 bool SameRows(const Column& a, const Column& b) {
@@ -121,19 +129,9 @@ void LdltPanels::Solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
   scratch_.noalias() = p_ * b;
   double* y = scratch_.data();
   // One instantiation per panel width, so the k-loops unroll.
-  auto dispatch = [&](const Panel& panel, auto run) {
-    switch (panel.columns) {
-      case 1: run(std::integral_constant<int, 1>{}); break;
-      case 2: run(std::integral_constant<int, 2>{}); break;
-      case 3: run(std::integral_constant<int, 3>{}); break;
-      case 4: run(std::integral_constant<int, 4>{}); break;
-      case 5: run(std::integral_constant<int, 5>{}); break;
-      case 6: run(std::integral_constant<int, 6>{}); break;
-      case 7: run(std::integral_constant<int, 7>{}); break;
-      default: run(std::integral_constant<int, 8>{}); break;
-    }
+  auto dispatch = [](const Panel& panel, auto run) {
+    WithWidth(panel.columns, run, std::make_integer_sequence<int, kMaxPanelColumns>{});
   };
-  static_assert(kMaxPanelColumns == 8, "one case per panel width");
   for (const Panel& panel : panels_) {
     dispatch(panel, [&](auto k) { Forward<decltype(k)::value>(panel, y); });
   }
