@@ -295,6 +295,7 @@ Result<BackwardMap::UpdateStats> BackwardMap::Apply(std::span<const glm::dvec3> 
   }
   Plan plan = PlanWork(deformed_mm, tets, stats.full_rebuild, moved);
   stats.processed_tets = plan.listed_tets;
+  if (stats.full_rebuild || !plan.work.empty()) stats.changed = plan.changed;
 
   state_.valid = false;  // until the GPU holds what the host state says
   if (stats.full_rebuild || !plan.work.empty()) {

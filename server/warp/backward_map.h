@@ -61,6 +61,10 @@ class BackwardMap {
     int64_t moved_tets = 0;      // tets whose corners changed (or listed by the caller)
     int64_t processed_tets = 0;  // rasterized: the moved ones and those whose boxes meet theirs
     int64_t held_vertices = 0;   // moved by less than move_tolerance_mm: kept where they were
+    // The grid points whose values the update may have changed (the whole
+    // grid on a rebuild; empty when none): every other point kept its value
+    // bit for bit.
+    GridBox changed;
     double gpu_ms = 0.0;         // GPU time of the passes (timestamps; -1 without)
     std::vector<gpu::DispatchTiming> passes;  // clear (updates only), claim, write
     // GPU time of the copy of the changed box into the image (timestamps;
