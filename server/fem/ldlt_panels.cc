@@ -81,7 +81,7 @@ LdltPanels::LdltPanels(const Ldlt& ldlt) {
         if (row <= j + k - 1) {
           triangle[(row - j) * k + c] = column.values[e];
         } else {
-          rows[r++ * k + c] = column.values[e];  // rows in `below`'s order
+          rows[c * below.count + r++] = column.values[e];  // rows in `below`'s order
         }
       }
     }
@@ -90,21 +90,45 @@ LdltPanels::LdltPanels(const Ldlt& ldlt) {
   }
 }
 
+// Both passes do Eigen's floating-point operations in Eigen's order
+// (SparseCore/TriangularSolver.h), so the result is Eigen's bit for bit (a
+// structural zero inside a panel subtracts a signed 0):
+// forward, each x[i] takes x[i] - L(i, j) x_j column by column, ascending,
+// skipping the columns whose x_j is 0; backward, each x_j starts from y_j
+// and takes - L(r, j) x_r row by row, ascending (the panel's own rows
+// first). Only the memory traffic changes: forward, a row below the panel
+// is loaded and stored once for its k columns; backward, the panel's row
+// indices and values are read from one contiguous block per column.
 template <int K>
 void LdltPanels::Forward(const Panel& panel, double* x) const {
   const double* triangle = values_.data() + panel.first_value;
   const double* values = triangle + K * K;
   double* xs = x + panel.first_column;
   for (int c = 0; c < K; ++c) {
-    for (int r = c + 1; r < K; ++r) xs[r] -= triangle[r * K + c] * xs[c];
+    if (xs[c] == 0.0) continue;
+    for (int r = c + 1; r < K; ++r) xs[r] -= xs[c] * triangle[r * K + c];
   }
   double v[K];
-  for (int c = 0; c < K; ++c) v[c] = xs[c];
+  bool any_zero = false;
+  for (int c = 0; c < K; ++c) {
+    v[c] = xs[c];
+    any_zero = any_zero || v[c] == 0.0;
+  }
   const int32_t* rows = rows_.data() + panel.first_row;
+  if (!any_zero) {
+    for (int32_t i = 0; i < panel.row_count; ++i) {
+      double xi = x[rows[i]];
+      for (int c = 0; c < K; ++c) xi -= v[c] * values[c * panel.row_count + i];
+      x[rows[i]] = xi;
+    }
+    return;
+  }
   for (int32_t i = 0; i < panel.row_count; ++i) {
-    double sum = 0.0;
-    for (int c = 0; c < K; ++c) sum += values[i * K + c] * v[c];
-    x[rows[i]] -= sum;
+    double xi = x[rows[i]];
+    for (int c = 0; c < K; ++c) {
+      if (v[c] != 0.0) xi -= v[c] * values[c * panel.row_count + i];
+    }
+    x[rows[i]] = xi;
   }
 }
 
@@ -112,16 +136,14 @@ template <int K>
 void LdltPanels::Backward(const Panel& panel, double* x) const {
   const double* triangle = values_.data() + panel.first_value;
   const double* values = triangle + K * K;
-  double sums[K] = {};
   const int32_t* rows = rows_.data() + panel.first_row;
-  for (int32_t i = 0; i < panel.row_count; ++i) {
-    const double xi = x[rows[i]];
-    for (int c = 0; c < K; ++c) sums[c] += values[i * K + c] * xi;
-  }
   double* xs = x + panel.first_column;
-  for (int c = 0; c < K; ++c) xs[c] -= sums[c];
   for (int c = K - 1; c >= 0; --c) {
-    for (int r = c + 1; r < K; ++r) xs[c] -= triangle[r * K + c] * xs[r];
+    double tmp = xs[c];
+    for (int r = c + 1; r < K; ++r) tmp -= triangle[r * K + c] * xs[r];
+    const double* column = values + c * panel.row_count;
+    for (int32_t i = 0; i < panel.row_count; ++i) tmp -= column[i] * x[rows[i]];
+    xs[c] = tmp;
   }
 }
 

@@ -2,11 +2,15 @@
 // into panels: runs of up to kMaxPanelColumns consecutive columns of L whose
 // rows below the run are the same. AMD orders the 3 DOFs of a vertex
 // together (they have one adjacency), so most columns of the FEM factor
-// fall into panels of 3 or more; per row of a panel the solve then loads one
-// row index and x entry for k values instead of k of each, which is what
-// Eigen's column-by-column triangular solves are bound by (a float L, half
-// the bytes, bought nothing: docs/BENCHMARKS.md). Same operations on the
-// same values as Eigen's solve, summed in another order: equal to round-off.
+// fall into panels of 3 or more. The forward solve then loads and stores a
+// row below a panel once for its k columns instead of k times, and the
+// backward solve reads each column's rows from one contiguous block. The
+// same floating-point operations as Eigen's solve in the same order: the
+// same result bit for bit (up to the sign of a zero where L has no entry
+// inside a panel), so the FEM takes exactly the path it took with Eigen's
+// solve. The backward solve stays one dependent chain of subtractions per
+// column, as Eigen's; summing a panel's columns together halves the solve
+// again but changes its rounding (docs/BENCHMARKS.md, "Drag loop").
 #pragma once
 
 #include <cstdint>
@@ -52,8 +56,8 @@ class LdltPanels {
   std::vector<Panel> panels_;
   std::vector<int32_t> rows_;
   // Per panel: the strictly lower k x k triangle within the panel (row-major,
-  // dense, zeros where L has none), then per row below the panel its k
-  // values (row-major).
+  // dense, zeros where L has none), then the rows below the panel column by
+  // column (row_count values per column).
   std::vector<double> values_;
   Eigen::VectorXd inverse_diagonal_;  // 1 / D
   Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> p_, p_inverse_;
