@@ -290,10 +290,11 @@ int main(int argc, char** argv) {
   std::printf(
       "FEM: inversion barrier %s, at most %d load steps, min load fraction %g, %d Newton "
       "iterations after a partial load step, at most %d Newton iterations per step (0: "
-      "unbounded), %d of them kept for equilibrium where a step stops short\n",
+      "unbounded), %d of them kept for equilibrium where a step stops short, unbounded once "
+      "the drag lags over %g event shares (0: never)\n",
       solver.inversion_barrier ? "on" : "off", solver.max_load_steps, solver.min_load_fraction,
       solver.intermediate_newton_iterations, solver.event_newton_budget,
-      solver.event_stop_newton_iterations);
+      solver.event_stop_newton_iterations, solver.event_max_lag_shares);
   std::printf("per step, best of the 10 steps (ms; FEM also mean and worst); loop fps = 10 steps "
               "/ their whole wall time (FEM + map + interactive frame + JPEG)\n");
   std::printf("%-22s %6s %8s %9s %8s %8s %13s %11s %8s %9s %9s\n", "mesh", "verts", "FEM",

@@ -58,9 +58,15 @@ Result<CorotationalSolver> CorotationalSolver::Create(
                options.intermediate_newton_iterations, ") + event_stop_newton_iterations (",
                options.event_stop_newton_iterations, ")"));
   }
+  if (!(options.event_max_lag_shares >= 0.0) || !std::isfinite(options.event_max_lag_shares)) {
+    return absl::InvalidArgumentError(StrCat("event_max_lag_shares (",
+                                             options.event_max_lag_shares,
+                                             ") must be finite and >= 0 (0: no limit)"));
+  }
   CorotationalSolver solver;
   solver.options_ = options;
-  solver.budget_ = EventBudget(options.event_newton_budget, options.event_stop_newton_iterations);
+  solver.budget_ = EventBudget(options.event_newton_budget, options.event_stop_newton_iterations,
+                               options.event_max_lag_shares);
   const auto t0 = SteadyClock::now();
   ASSIGN_OR_RETURN(solver.elements_, MakeTetElements(rest_mm, tets, young_n_per_mm2, poisson));
   const Eigen::SparseMatrix<double> rest_stiffness =

@@ -102,6 +102,17 @@ struct SolverOptions {
   // the feasible load steps shrink event after event until the rest is
   // forced (drag_loop_bench, docs/FEM.md "Per-event work bound").
   int event_stop_newton_iterations = 4;
+  // The most a bounded drag may lag, in event shares (EventBudget::
+  // forced_step_limit_mm, the largest target move since the target was
+  // last reached): a Solve that starts further behind its last target than
+  // this many shares runs unbounded and catches up, as an unbounded Solve
+  // would. Where the handles lock against hard vertices, each bounded event
+  // reaches a few percent of its jump and the lag grew to 4.5 mm on the
+  // 6,426-vertex mesh, which the settle then forced in shares: 73 inverted
+  // tets against 17 unbounded (docs/FEM.md, "Per-event work bound"). 0: no
+  // limit (the interactive scene sets kInteractiveMaxLagShares). Only with
+  // event_newton_budget.
+  double event_max_lag_shares = 0.0;
 };
 
 // The interactive scene's per-event bound (InteractiveFemOptions): at most 4
@@ -111,6 +122,8 @@ struct SolverOptions {
 // 2.0-2.3x, and 8 (tried, 2 kept) settled the lag in twice the iterations
 // (docs/FEM.md, "Per-event work bound").
 inline constexpr int kInteractiveEventNewtonBudget = 12;
+// The interactive scene's lag limit (SolverOptions::event_max_lag_shares).
+inline constexpr double kInteractiveMaxLagShares = 2.0;
 
 // Below this many tets the element loops run on one thread (a split costs
 // thread start-ups of ~20-50 us against loops of < 1 ms).

@@ -35,12 +35,17 @@ void EventBudget::BeginSolve(const Eigen::VectorXd& prescribed_mm, const Eigen::
   // With no earlier target for these DOFs, the move is the jump itself.
   const bool comparable =
       last_constrained_ == constrained && last_prescribed_.size() == prescribed_mm.size();
+  // The lag: what the last Solve left of its target.
+  lag_mm_ = carrying_ && comparable
+                ? LargestVertexMove(last_prescribed_, displacement_mm, constrained)
+                : 0.0;
   const double move_mm = LargestVertexMove(
       prescribed_mm, comparable ? last_prescribed_ : displacement_mm, constrained);
   // While a lag is carried, it holds the moves of every Solve since the
   // target was last reached; a forced step may apply the largest of them.
   forced_step_limit_mm_ =
       carrying_ && comparable ? std::max(forced_step_limit_mm_, move_mm) : move_mm;
+  catching_up_ = max_lag_shares_ > 0.0 && lag_mm_ > max_lag_shares_ * forced_step_limit_mm_;
   last_prescribed_ = prescribed_mm;
   last_constrained_ = constrained;
   carried_prescribed_ = std::move(target);
@@ -49,11 +54,11 @@ void EventBudget::BeginSolve(const Eigen::VectorXd& prescribed_mm, const Eigen::
 }
 
 bool EventBudget::RoomForLoadStep(int used, int intermediate) const {
-  return newton_iterations_ == 0 || used + intermediate + stop_iterations_ <= newton_iterations_;
+  return unbounded() || used + intermediate + stop_iterations_ <= newton_iterations_;
 }
 
 int EventBudget::IterationsFor(int used, int limit) const {
-  return newton_iterations_ == 0 ? limit : std::min(limit, newton_iterations_ - used);
+  return unbounded() ? limit : std::min(limit, newton_iterations_ - used);
 }
 
 void EventBudget::EndSolve(bool reached) {
@@ -69,6 +74,8 @@ void EventBudget::Clear() {
   last_prescribed_.resize(0);
   last_constrained_.clear();
   forced_step_limit_mm_ = 0.0;
+  lag_mm_ = 0.0;
+  catching_up_ = false;
 }
 
 }  // namespace vpm

@@ -40,8 +40,14 @@ class EventBudget {
   // newton_iterations: per Solve, 0: unbounded; stop_iterations: of those,
   // kept for bringing the state to equilibrium where a Solve stops short
   // (SolverOptions::event_newton_budget, event_stop_newton_iterations).
-  explicit EventBudget(int newton_iterations = 0, int stop_iterations = 0)
-      : newton_iterations_(newton_iterations), stop_iterations_(stop_iterations) {}
+  // max_lag_shares: a Solve that starts more than this many event shares
+  // (forced_step_limit_mm) behind its last target runs unbounded
+  // (SolverOptions::event_max_lag_shares; 0: never).
+  explicit EventBudget(int newton_iterations = 0, int stop_iterations = 0,
+                       double max_lag_shares = 0.0)
+      : newton_iterations_(newton_iterations),
+        stop_iterations_(stop_iterations),
+        max_lag_shares_(max_lag_shares) {}
 
   // Starts a Solve towards prescribed_mm (3*#V, read on `constrained`) with
   // external forces force_n (3*#V, N) from displacement_mm (3*#V, the state
@@ -73,10 +79,20 @@ class EventBudget {
   double forced_step_limit_mm() const { return forced_step_limit_mm_; }
 
   int newton_iterations() const { return newton_iterations_; }
+  // How far the state's prescribed DOFs were from the last Solve's target
+  // when this Solve began (largest vertex norm, mm; 0 when that target was
+  // reached or is not comparable).
+  double lag_mm() const { return lag_mm_; }
+  // Whether this Solve runs without the Newton budget: none is set, or the
+  // lag is over max_lag_shares event shares.
+  bool unbounded() const { return newton_iterations_ == 0 || catching_up_; }
 
  private:
   int newton_iterations_ = 0;
   int stop_iterations_ = 0;
+  double max_lag_shares_ = 0.0;
+  double lag_mm_ = 0.0;
+  bool catching_up_ = false;
   int load_steps_ = 0;
   // The unreached load: prescribed values on the constrained DOFs (in the
   // order given), the external forces. Empty when none is carried.

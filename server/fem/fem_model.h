@@ -36,6 +36,7 @@ struct FemOptions {
 inline FemOptions InteractiveFemOptions() {
   FemOptions options;
   options.solver.event_newton_budget = kInteractiveEventNewtonBudget;
+  options.solver.event_max_lag_shares = kInteractiveMaxLagShares;
   return options;
 }
 

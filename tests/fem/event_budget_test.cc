@@ -6,6 +6,8 @@
 #include "server/fem/event_budget.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -308,6 +310,76 @@ TEST(FemEventBudget, ForcedStepLimitIsTheLargestTargetMoveSinceReached) {
   budget.Clear();
   budget.BeginSolve(prescribed, rest, constrained, prescribed);
   EXPECT_DOUBLE_EQ(budget.forced_step_limit_mm(), 0.0);
+}
+
+TEST(FemEventBudget, DragLaggingOverTheLimitRunsUnboundedUntilCaughtUp) {
+  EventBudget budget(12, 4, /*max_lag_shares=*/2.0);
+  const std::vector<int32_t> constrained = {3, 4, 5};  // vertex 1
+  const Eigen::VectorXd none = Eigen::VectorXd::Zero(6);
+  Eigen::VectorXd prescribed = Eigen::VectorXd::Zero(6);
+  Eigen::VectorXd state = Eigen::VectorXd::Zero(6);
+  // Events of 1 mm each; the handles reach 0.5 mm of the first.
+  prescribed[3] = 1.0;
+  budget.BeginSolve(prescribed, none, constrained, state);
+  EXPECT_FALSE(budget.unbounded());
+  EXPECT_FALSE(budget.RoomForLoadStep(7, 2));
+  budget.EndSolve(/*reached=*/false);
+  state[3] = 0.5;
+  // Behind by 0.5 mm (half a share): still bounded.
+  prescribed[3] = 2.0;
+  budget.BeginSolve(prescribed, none, constrained, state);
+  EXPECT_DOUBLE_EQ(budget.lag_mm(), 0.5);
+  EXPECT_FALSE(budget.unbounded());
+  budget.EndSolve(false);
+  state[3] = 0.8;
+  // Behind by 1.2 mm against the last target, then 2.2 mm: over 2 shares.
+  prescribed[3] = 3.0;
+  budget.BeginSolve(prescribed, none, constrained, state);
+  EXPECT_DOUBLE_EQ(budget.lag_mm(), 2.0 - 0.8);
+  EXPECT_FALSE(budget.unbounded());
+  budget.EndSolve(false);
+  prescribed[3] = 4.0;
+  budget.BeginSolve(prescribed, none, constrained, state);
+  EXPECT_DOUBLE_EQ(budget.lag_mm(), 3.0 - 0.8);
+  EXPECT_TRUE(budget.unbounded());
+  EXPECT_TRUE(budget.RoomForLoadStep(1000, 2));
+  EXPECT_EQ(budget.IterationsFor(1000, 30), 30);
+  budget.EndSolve(/*reached=*/true);
+  // Caught up: the next event is bounded again.
+  state[3] = 4.0;
+  prescribed[3] = 5.0;
+  budget.BeginSolve(prescribed, none, constrained, state);
+  EXPECT_DOUBLE_EQ(budget.lag_mm(), 0.0);
+  EXPECT_FALSE(budget.unbounded());
+  EXPECT_EQ(budget.IterationsFor(6, 30), 6);
+}
+
+TEST(FemEventBudget, NoLagLimitKeepsEveryBoundedSolveBounded) {
+  EventBudget budget(12, 4);  // max_lag_shares 0: no limit
+  const std::vector<int32_t> constrained = {3, 4, 5};
+  const Eigen::VectorXd none = Eigen::VectorXd::Zero(6);
+  Eigen::VectorXd prescribed = Eigen::VectorXd::Zero(6);
+  for (int event = 1; event <= 10; ++event) {
+    prescribed[3] = double(event);
+    budget.BeginSolve(prescribed, none, constrained, none);  // the handles never move
+    EXPECT_FALSE(budget.unbounded()) << "event " << event;
+    budget.EndSolve(false);
+  }
+  EXPECT_DOUBLE_EQ(budget.lag_mm(), 9.0);
+}
+
+TEST(FemEventBudget, NegativeOrNanLagLimitIsInvalidArgument) {
+  const Volume volume = testing::MakeBodyVolume();
+  auto mesh = testing::CentreRefinedMesh(volume);
+  ASSERT_TRUE(mesh.ok()) << mesh.status();
+  FemOptions options = InteractiveFemOptions();
+  EXPECT_DOUBLE_EQ(options.solver.event_max_lag_shares, kInteractiveMaxLagShares);
+  for (double bad : {-1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    options.solver.event_max_lag_shares = bad;
+    EXPECT_EQ(FemModel::Create(*mesh, volume.geometry().extent_mm(), options).status().code(),
+              absl::StatusCode::kInvalidArgument)
+        << bad;
+  }
 }
 
 }  // namespace
