@@ -4,7 +4,7 @@
 // refined at the left renal artery, and for ~1,000 and ~5,000 vertices.
 //   drag_loop_bench [SOURCE] [--max-load-steps N] [--min-load-fraction F]
 //                   [--intermediate-newton N] [--no-barrier] [--max-vertices N]
-//                   [--steps] [--map-tolerance MM] [--event-newton-budget N]
+//                   [--steps] [--map-tolerance MM] [--event-newton-budget N] [--threads N]
 // (bench/fem_flags.h); --steps prints every step's FEM work and stage times.
 // The FEM runs with the interactive scene's settings (InteractiveFemOptions:
 // at most kInteractiveEventNewtonBudget Newton iterations per step, the rest

@@ -19,7 +19,7 @@ struct FemFlags {
 //   --max-load-steps N  --min-load-fraction F  --intermediate-newton N
 //   --max-vertices N  --handle-factor refactor|capacitance
 //   --event-newton-budget N (0: unbounded)  --event-stop-newton N
-//   --event-max-lag SHARES (0: no limit)
+//   --event-max-lag SHARES (0: no limit)  --threads N (SolverOptions::threads)
 // into `flags`; false for any other argument.
 inline bool ParseFemFlag(int argc, char** argv, int& i, FemFlags& flags) {
   if (i + 1 >= argc) return false;
@@ -39,6 +39,8 @@ inline bool ParseFemFlag(int argc, char** argv, int& i, FemFlags& flags) {
     flags.solver.event_stop_newton_iterations = std::atoi(argv[++i]);
   } else if (std::strcmp(argv[i], "--event-max-lag") == 0) {
     flags.solver.event_max_lag_shares = std::atof(argv[++i]);
+  } else if (std::strcmp(argv[i], "--threads") == 0) {
+    flags.solver.threads = std::atoi(argv[++i]);
   } else if (std::strcmp(argv[i], "--max-vertices") == 0) {
     flags.max_vertices = std::atoll(argv[++i]);
   } else {

@@ -120,7 +120,7 @@ void PrintUpdates(const UpdateTimes& t, const Dims& m, size_t tets) {
   for (const auto& pass : st.passes) {
     std::printf("%-52s %10s %10.2f\n", StrCat("  of which ", pass.label).c_str(), "", pass.gpu_ms);
   }
-  std::printf("%-52s %10.2f\n", "  of which copy into the image (submit + wait)", st.copy_ms);
+  std::printf("%-52s %10.2f\n", "  of which copy into the image (GPU, same submit)", st.copy_ms);
 }
 
 // Wall (submit + wait) and kernel time of one warp into `out`.

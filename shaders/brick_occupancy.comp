@@ -19,9 +19,13 @@ layout(push_constant) uniform Push { BrickOccupancyPush pc; };
 
 void main() {
   ivec3 nb = pc.bricks.xyz;
-  int index = int(gl_GlobalInvocationID.x);
-  if (index >= nb.x * nb.y * nb.z) return;
-  ivec3 b = ivec3(index % nb.x, (index / nb.x) % nb.y, index / (nb.x * nb.y));
+  // The pass covers the box of bricks from pc.box_lo.xyz (all bricks, or
+  // those whose map cells a map update changed).
+  ivec3 box = ivec3(pc.flags.zw, pc.box_lo.w);
+  int local = int(gl_GlobalInvocationID.x);
+  if (local >= box.x * box.y * box.z) return;
+  ivec3 b = pc.box_lo.xyz + ivec3(local % box.x, (local / box.x) % box.y, local / (box.x * box.y));
+  int index = b.x + nb.x * (b.y + nb.y * b.z);
   ivec3 n = pc.dims.xyz;
   vec3 s = pc.spacing_mm.xyz;
   ivec3 w = pc.brick_voxels.xyz;

@@ -41,8 +41,9 @@ struct BrickOccupancyPush {
   ivec4 brick_voxels;  // (wx, wy, wz, 0) voxels per brick side
   vec4 spacing_mm;   // (sx, sy, sz, 0)
   vec4 lut;          // (value_lo, entries per value unit, entry count, 0)
-  ivec4 flags;       // (mode: 0 DVR / 1 MIP, has_map, 0, 0)
+  ivec4 flags;       // (mode: 0 DVR / 1 MIP, has_map, box bricks along x, along y)
   vec4 map_dims;     // (Mx, My, Mz, 0) backward-map grid points
+  ivec4 box_lo;      // (x, y, z, box bricks along z): the bricks the pass updates
 };
 
 struct RaycastParams {

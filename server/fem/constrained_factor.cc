@@ -54,6 +54,7 @@ Result<ConstrainedFactor> ConstrainedFactor::Create(const Eigen::SparseMatrix<do
         "the constrained stiffness is singular: the fixed DOFs leave a rigid motion free "
         "(fix at least 3 non-collinear vertices, or the box corners)");
   }
+  factor.panels_ = LdltPanels(*factor.ldlt_);
   factor.factor_nonzeros_ = factor.ldlt_->matrixL().nestedExpression().nonZeros() + m;
   factor.rc_.resize(m);
   factor.yc_.resize(m);
@@ -113,6 +114,7 @@ Status ConstrainedFactor::RefactorDecoupled(std::vector<int32_t> extra) {
     extra_compact_.clear();
     return absl::FailedPreconditionError("the stiffness with the handles fixed did not factor");
   }
+  handle_panels_ = LdltPanels(*handle_ldlt_);
   extra_compact_ = std::move(extra);
   return absl::OkStatus();
 }
@@ -126,10 +128,10 @@ void ConstrainedFactor::Apply(const Eigen::VectorXd& r, bool with_extra, Eigen::
   }
   if (extra && handle_factor_ == HandleFactor::kRefactor) {
     // H is decoupled and its right-hand side 0, so z_H comes out 0.
-    yc_ = handle_ldlt_->solve(rc_);
+    handle_panels_.Solve(rc_, yc_);
     for (int32_t i : extra_compact_) yc_[i] = 0.0;
   } else {
-    yc_ = ldlt_->solve(rc_);
+    panels_.Solve(rc_, yc_);
   }
   if (extra && handle_factor_ == HandleFactor::kCapacitance) {
     Eigen::VectorXd y_h(extra_compact_.size());

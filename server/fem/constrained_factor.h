@@ -28,6 +28,7 @@ enum class HandleFactor { kCapacitance, kRefactor };
 #include <Eigen/SparseCore>
 
 #include "server/common/status.h"
+#include "server/fem/ldlt_panels.h"
 
 namespace vpm {
 
@@ -68,12 +69,14 @@ class ConstrainedFactor {
   std::vector<int32_t> free_dofs_;  // compact index -> DOF
   std::vector<int32_t> compact_;    // DOF -> compact index, -1 if fixed
   std::unique_ptr<Ldlt> ldlt_;
+  LdltPanels panels_;  // ldlt_'s solve, by panels (ldlt_panels.h)
   int64_t factor_nonzeros_ = 0;
   HandleFactor handle_factor_ = HandleFactor::kRefactor;
   // kRefactor: the free block, and its factor with H decoupled (symbolic
   // analysis at the first SetExtraFixed, numeric at each).
   Eigen::SparseMatrix<double> free_block_;
   std::unique_ptr<Ldlt> handle_ldlt_;
+  LdltPanels handle_panels_;  // handle_ldlt_'s solve, by panels
   std::vector<int32_t> extra_compact_;   // H as compact indices
   Eigen::MatrixXd w_;                    // #B by |H|
   Eigen::MatrixXd capacitance_inverse_;  // C^-1, |H| by |H|

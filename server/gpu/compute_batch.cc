@@ -204,6 +204,39 @@ Status ComputeBatch::CopyImageToBuffer(const GpuImage3D& image, const GpuBuffer&
   });
 }
 
+Status ComputeBatch::CopyBufferToImage(
+    std::span<const std::pair<const GpuBuffer*, vk::BufferImageCopy>> regions,
+    const GpuImage3D& image, std::string label) {
+  if (submitted_) return absl::FailedPreconditionError("compute batch already submitted");
+  if (labels_.size() >= max_dispatches_) {
+    return absl::ResourceExhaustedError(
+        StrCat("compute batch holds at most ", max_dispatches_, " dispatches"));
+  }
+  for (const auto& [buffer, region] : regions) {
+    if (!(buffer->usage() & vk::BufferUsageFlagBits::eTransferSrc)) {
+      return absl::InvalidArgumentError("copying a buffer into an image needs transfer-source usage");
+    }
+  }
+  return CatchVulkan("recording a buffer-to-image copy", [&] {
+    BarrierIfNeeded();
+    const uint32_t q = static_cast<uint32_t>(labels_.size());
+    if (*query_pool_) {
+      commands_->writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *query_pool_, 2 * q);
+    }
+    // The copy writes the image in TRANSFER_DST_OPTIMAL.
+    constexpr auto kDst = vk::ImageLayout::eTransferDstOptimal;
+    ImageLayoutBarrier(*commands_, image.image(), vk::ImageLayout::eGeneral, kDst);
+    for (const auto& [buffer, region] : regions) {
+      commands_->copyBufferToImage(buffer->handle(), image.image(), kDst, region);
+    }
+    ImageLayoutBarrier(*commands_, image.image(), kDst, vk::ImageLayout::eGeneral);
+    if (*query_pool_) {
+      commands_->writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *query_pool_, 2 * q + 1);
+    }
+    labels_.push_back(std::move(label));
+  });
+}
+
 Result<std::vector<DispatchTiming>> ComputeBatch::SubmitAndWait() {
   if (submitted_) return absl::FailedPreconditionError("compute batch already submitted");
   submitted_ = true;

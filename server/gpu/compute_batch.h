@@ -12,6 +12,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -59,6 +60,14 @@ class ComputeBatch {
   // (transfer-destination usage, at least image.size_bytes()), tightly
   // packed, x fastest; timed and counted like a dispatch.
   Status CopyImageToBuffer(const GpuImage3D& image, const GpuBuffer& buffer, std::string label);
+
+  // Copies `regions` of `buffers` (one buffer per region, transfer-source
+  // usage) into `image` (kept in GENERAL layout; what lies outside the
+  // regions is preserved), after the work recorded before; timed and counted
+  // like a dispatch. Recorded here rather than in a submit of its own, it
+  // saves a submit and a wait (BackwardMap's update).
+  Status CopyBufferToImage(std::span<const std::pair<const GpuBuffer*, vk::BufferImageCopy>> regions,
+                           const GpuImage3D& image, std::string label);
 
   // Submits everything recorded, waits, and returns one timing per dispatch.
   Result<std::vector<DispatchTiming>> SubmitAndWait();

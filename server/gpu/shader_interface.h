@@ -59,10 +59,15 @@ struct BrickOccupancyPush {
   glm::ivec4 brick_voxels;  // (wx, wy, wz, 0) voxels per brick side
   glm::vec4 spacing_mm;   // (sx, sy, sz, 0)
   glm::vec4 lut;          // (value_lo, entries per value unit, entry count, 0)
-  glm::ivec4 flags;       // (mode: 0 DVR / 1 MIP, has_map, 0, 0)
+  // (mode: 0 DVR / 1 MIP, has_map, box bricks along x, box bricks along y)
+  glm::ivec4 flags;
   glm::vec4 map_dims;     // (Mx, My, Mz, 0) backward-map grid points
+  // (x, y, z, box bricks along z): the box of bricks the pass updates starts
+  // at brick (x, y, z); the others keep their occupancy (a map update that
+  // changed part of the map, VolumeRenderer).
+  glm::ivec4 box_lo;
 };
-static_assert(sizeof(BrickOccupancyPush) == 112);
+static_assert(sizeof(BrickOccupancyPush) == 128);
 
 // raycast_*.comp (the body in raycast_body.glsl): uniform block RaycastParams (std140).
 // Ray of pixel (px, py): eye + t * normalize(forward + ndc.x * right + ndc.y * up),

@@ -104,6 +104,15 @@ struct RenderRequest {
   // (bump it with every update), so the renderer may reuse its per-frame
   // brick occupancy. 0: unknown, recomputed every frame.
   uint64_t backward_map_version = 0;
+  // Optional, with backward_map_version: the map's version before its last
+  // update, and the box of grid points (inclusive, (0, 0, 0) .. (Mx-1, My-1,
+  // Mz-1); empty when lo > hi) outside which that update left every value.
+  // A renderer whose occupancy is of that previous version then redoes only
+  // the bricks whose map cells meet the box (the same occupancy: a brick
+  // reads only the map points of the cells it overlaps). 0: unknown.
+  uint64_t backward_map_previous_version = 0;
+  glm::ivec3 backward_map_changed_lo{0};
+  glm::ivec3 backward_map_changed_hi{-1};
   // Optional: the map's values as a buffer with uniform-texel usage, vec4
   // per grid point, x fastest (BackwardMap::values_buffer()). The
   // texel-buffer ray casters then read it in place instead of copying the
@@ -137,6 +146,10 @@ struct Frame {
   int64_t occupied_bricks = -1;  // bricks the occupancy pass kept (skipping on)
   int64_t total_bricks = 0;
   bool occupancy_reused = false;  // the occupancy of an earlier frame still held
+  // Bricks whose occupancy this frame computed: total_bricks, fewer after a
+  // map update that changed part of the map (backward_map_previous_version),
+  // 0 when reused or without skipping.
+  int64_t occupancy_bricks_computed = 0;
   FrameTimings timings;
 };
 

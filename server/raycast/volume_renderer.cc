@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 
 #include "server/common/clock.h"
@@ -238,16 +239,48 @@ Status VolumeRenderer::CheckGpuInputs(const RenderRequest& request) const {
   return absl::OkStatus();
 }
 
+// Per axis a brick reads the
+// points of the map cells it overlaps, floor(its lowest voxel's mm * to_grid)
+// .. floor(its highest's) + 1, computed as the kernel does but in double and
+// widened by a point each way, so that float rounding cannot leave a brick
+// out (an extra brick gets the same occupancy again).
+VolumeRenderer::BrickBox VolumeRenderer::BricksMeetingMapBox(const gpu::RaycastParams& p,
+                                                             const std::array<int, 3>& map_dims,
+                                                             const glm::ivec3& lo,
+                                                             const glm::ivec3& hi) {
+  BrickBox box;
+  for (int a = 0; a < 3; ++a) {
+    const int n = p.dims[a], w = p.brick_voxels[a], m = map_dims[a];
+    const double s = p.spacing_mm[a];
+    const double to_grid = double(m - 1) / (double(std::max(n - 1, 1)) * s);
+    int first = p.bricks[a], last = -1;
+    for (int b = 0; b < p.bricks[a]; ++b) {
+      const double lo_mm = double(b * w) * s;
+      const double hi_mm = double(std::min((b + 1) * w, n - 1)) * s;
+      const int g_lo = std::clamp(int(std::floor(lo_mm * to_grid)), 0, m - 1);
+      const int g_hi = std::clamp(int(std::floor(hi_mm * to_grid)) + 1, 0, m - 1);
+      if (g_lo <= hi[a] + 1 && g_hi >= lo[a] - 1) {
+        first = std::min(first, b);
+        last = b;
+      }
+    }
+    if (last < first) return {};
+    box.lo[a] = first;
+    box.size[a] = last - first + 1;
+  }
+  return box;
+}
+
 Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
                                    const RaycastSetup& setup, const gpu::GpuBuffer& minmax,
-                                   bool upscale, bool occupancy_current,
+                                   bool upscale, const BrickBox& occupancy_box,
                                    vk::BufferView map_view) {
   const gpu::RaycastParams& p = setup.params;
   const gpu::GpuImage3D* map = request.backward_map ? request.backward_map : &*identity_map_;
   const bool sampled = options_.volume_access == VolumeAccess::kSampler3D;
   const bool mip = request.mode == RenderMode::kMip;
   const bool has_map = request.backward_map != nullptr;
-  const bool occupancy = request.settings.empty_space_skipping && !occupancy_current;
+  const bool occupancy = request.settings.empty_space_skipping && !occupancy_box.empty();
   if (request.settings.count_samples) RETURN_IF_ERROR(batch.Fill(*stats_, 0));
   // The map's texel copy serves the occupancy pass and the texel-buffer ray
   // casters.
@@ -257,16 +290,18 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
     RETURN_IF_ERROR(batch.CopyImageToBuffer(*map, *map_texels_, "map_copy"));
   }
   if (occupancy) {
-    const int bricks = p.bricks.x * p.bricks.y * p.bricks.z;
+    const glm::ivec3& box = occupancy_box.size;
+    const int bricks = box.x * box.y * box.z;
     const gpu::BrickOccupancyPush push{
         .dims = glm::ivec4(glm::ivec3(p.dims), 0),
         .bricks = p.bricks,
         .brick_voxels = p.brick_voxels,
         .spacing_mm = p.spacing_mm,
         .lut = p.lut,
-        .flags = glm::ivec4(p.dims.w, has_map ? 1 : 0, 0, 0),
+        .flags = glm::ivec4(p.dims.w, has_map ? 1 : 0, box.x, box.y),
         .map_dims = glm::vec4(glm::vec3(map->extent()[0], map->extent()[1], map->extent()[2]),
-                              0.0f)};
+                              0.0f),
+        .box_lo = glm::ivec4(occupancy_box.lo, box.z)};
     RETURN_IF_ERROR(batch.Dispatch(*occupancy_kernel_,
                                    {&minmax, map_view, &*nonzero_prefix_, &*occupancy_},
                                    push, {GroupCount(bricks, 64), 1, 1}, "occupancy"));
@@ -350,13 +385,27 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
                          request.backward_map_version};
   const bool cacheable = request.backward_map == nullptr || request.backward_map_version != 0;
   const bool occupancy_current = cacheable && occupancy_key_ == key;
+  BrickBox occupancy_box{glm::ivec3(0), glm::ivec3(p.bricks)};
+  if (occupancy_current) {
+    occupancy_box = {};
+  } else if (cacheable && request.backward_map != nullptr && occupancy_key_ &&
+             request.backward_map_previous_version != 0) {
+    // The occupancy of the map's previous version: only the bricks whose
+    // map cells the update changed.
+    OccupancyKey previous = key;
+    previous.map_version = request.backward_map_previous_version;
+    if (*occupancy_key_ == previous) {
+      occupancy_box = BricksMeetingMapBox(p, map_dims, request.backward_map_changed_lo,
+                                          request.backward_map_changed_hi);
+    }
+  }
   occupancy_key_.reset();  // until this frame's pass has run
   if (upscale) RETURN_IF_ERROR(EnsureBuffer(upscaled_, out_pixels * 4, BU::eStorageBuffer));
   RETURN_IF_ERROR(params_->Upload(std::as_bytes(std::span<const gpu::RaycastParams>(&p, 1))));
 
   ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 5));
   RETURN_IF_ERROR(
-      RecordFrame(batch, request, setup, *minmax, upscale, occupancy_current, *map_view));
+      RecordFrame(batch, request, setup, *minmax, upscale, occupancy_box, *map_view));
   ASSIGN_OR_RETURN(const auto timings, batch.SubmitAndWait());
   if (request.settings.empty_space_skipping && cacheable) occupancy_key_ = key;
 
@@ -368,6 +417,10 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   frame.step_mm = setup.step_mm;
   frame.total_bricks = int64_t(bricks);
   frame.occupancy_reused = request.settings.empty_space_skipping && occupancy_current;
+  if (request.settings.empty_space_skipping && !occupancy_box.empty()) {
+    frame.occupancy_bricks_computed =
+        int64_t(occupancy_box.size.x) * occupancy_box.size.y * occupancy_box.size.z;
+  }
   for (const auto& t : timings) {
     if (t.label == "occupancy") frame.timings.occupancy_ms = t.gpu_ms;
     if (t.label == "map_copy") frame.timings.map_copy_ms = t.gpu_ms;

@@ -85,9 +85,21 @@ class VolumeRenderer {
                       vk::BufferUsageFlags usage);
   Status EnsureMapTexels(size_t points);
   Status EnsureOccupancy(size_t bricks);
+  // The bricks whose occupancy a frame recomputes: from lo, size per axis
+  // (a zero size: none, the cached occupancy holds).
+  struct BrickBox {
+    glm::ivec3 lo{0};
+    glm::ivec3 size{0};
+    bool empty() const { return size.x <= 0 || size.y <= 0 || size.z <= 0; }
+  };
+  // The bricks whose occupancy (brick_occupancy.comp) reads a map grid
+  // point of the box lo..hi (inclusive); map_dims: M per axis.
+  static BrickBox BricksMeetingMapBox(const gpu::RaycastParams& p,
+                                      const std::array<int, 3>& map_dims, const glm::ivec3& lo,
+                                      const glm::ivec3& hi);
   Status RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
                      const RaycastSetup& setup, const gpu::GpuBuffer& minmax, bool upscale,
-                     bool occupancy_current, vk::BufferView map_view);
+                     const BrickBox& occupancy_box, vk::BufferView map_view);
 
   const gpu::GpuContext* context_;
   Options options_;

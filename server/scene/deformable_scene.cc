@@ -55,10 +55,14 @@ Result<GrabInfo> DeformableScene::Grab(const glm::dvec3& point_mm, double radius
 Result<SceneStepTimings> DeformableScene::UpdateMap(SceneStepTimings timings) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<glm::dvec3> deformed = fem_->Positions();
+  const uint64_t previous_version = map_version_;
   map_version_ = 0;  // unknown until the update has succeeded
+  map_previous_version_ = 0;
   ASSIGN_OR_RETURN(BackwardMap::UpdateStats stats,
                    map_->Update(fem_->rest_positions_mm(), deformed, fem_->tets()));
   map_version_ = next_map_version.fetch_add(1);
+  map_previous_version_ = previous_version;
+  map_changed_ = stats.changed;
   const std::vector<glm::dvec3> u = fem_->Displacements();
   map_identity_ = std::all_of(u.begin(), u.end(),
                               [](const glm::dvec3& d) { return d == glm::dvec3(0.0); });
@@ -168,6 +172,9 @@ Result<RenderRequest> DeformableScene::PrepareRender(const SceneView& view,
     // Frames between drag steps (orbit, zoom, preset of the same mode) reuse
     // the brick occupancy, and the ray caster reads the map's own buffer.
     request.backward_map_version = map_version_;
+    request.backward_map_previous_version = map_previous_version_;
+    request.backward_map_changed_lo = map_changed_.lo;
+    request.backward_map_changed_hi = map_changed_.hi;
     request.backward_map_texels = map_->values_buffer();
   }
   if (view.overlay) {

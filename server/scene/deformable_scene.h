@@ -32,7 +32,7 @@ struct SceneStepTimings {
   double fem_ms = 0.0;   // wall: FEM solve (or release)
   double warp_ms = 0.0;  // wall: backward-map upload, update and wait
   double map_gpu_ms = 0.0;   // GPU: the map's passes (timestamps), part of warp_ms
-  double map_copy_ms = 0.0;  // wall: copying the map's changed box into its image
+  double map_copy_ms = 0.0;  // GPU: copying the map's changed box into its image
   std::vector<gpu::DispatchTiming> map_passes;  // GPU: clear (updates), claim, write
   int64_t moved_tets = 0;
   int64_t processed_tets = 0;  // moved plus those whose boxes meet them
@@ -176,6 +176,11 @@ class DeformableScene {
   // Changes with every map update (0 while one is in progress): frames with
   // the same version see the same map (RenderRequest::backward_map_version).
   uint64_t map_version_ = 0;
+  // The version before the last update (0: none or unknown) and the grid
+  // points that update changed: the renderer redoes only the brick
+  // occupancy there (RenderRequest::backward_map_previous_version).
+  uint64_t map_previous_version_ = 0;
+  GridBox map_changed_;
   bool defer_map_update_ = false;
   bool map_stale_ = false;  // deferred mode: FEM moved since the last map update
   bool map_identity_ = true;  // every displacement 0 at the last map update

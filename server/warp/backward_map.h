@@ -61,9 +61,15 @@ class BackwardMap {
     int64_t moved_tets = 0;      // tets whose corners changed (or listed by the caller)
     int64_t processed_tets = 0;  // rasterized: the moved ones and those whose boxes meet theirs
     int64_t held_vertices = 0;   // moved by less than move_tolerance_mm: kept where they were
+    // The grid points whose values the update may have changed (the whole
+    // grid on a rebuild; empty when none): every other point kept its value
+    // bit for bit.
+    GridBox changed;
     double gpu_ms = 0.0;         // GPU time of the passes (timestamps; -1 without)
     std::vector<gpu::DispatchTiming> passes;  // clear (updates only), claim, write
-    double copy_ms = 0.0;  // wall time of the copy of the changed box into the image
+    // GPU time of the copy of the changed box into the image (timestamps;
+    // recorded in the passes' submit), not in `passes` nor gpu_ms.
+    double copy_ms = 0.0;
   };
 
   // `geometry`: the volume the map belongs to (at least 2 voxels per axis).
@@ -185,10 +191,11 @@ class BackwardMap {
                 std::span<const std::array<int32_t, 4>> tets, bool full,
                 std::span<const int32_t> moved, std::span<const gpu::BackwardMapTetWork> work);
   // Records the passes (full: a fill instead of the clear pass), then the
-  // write pass over `changed`, submits, and copies `changed` into the image.
+  // write pass over `changed` and the copy of `changed` into the image, and
+  // submits them at once.
   Result<std::vector<gpu::DispatchTiming>> Run(bool full, uint32_t listed, uint32_t moved,
                                                const GridBox& changed);
-  Status CopyToImage(const GridBox& box);
+  Status RecordCopyToImage(gpu::ComputeBatch& batch, const GridBox& box) const;
 
   const gpu::GpuContext* context_;
   VolumeGeometry geometry_;

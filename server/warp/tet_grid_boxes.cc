@@ -35,28 +35,64 @@ GridBox TetGridBox(const std::array<glm::dvec3, 4>& corners, const glm::dvec3& s
 
 std::vector<int32_t> TetsMeetingBoxes(std::span<const GridBox> tet_boxes,
                                       std::span<const GridBox> region) {
-  std::vector<GridBox> boxes;
   GridBox bound;
   for (const GridBox& box : region) {
     if (box.empty()) continue;
-    boxes.push_back(box);
     bound = bound.empty() ? box : GridBox{glm::min(bound.lo, box.lo), glm::max(bound.hi, box.hi)};
   }
-  // Sorted by lo.x, so the scan for one tet stops at the first box that
-  // starts beyond it.
-  std::sort(boxes.begin(), boxes.end(),
-            [](const GridBox& a, const GridBox& b) { return a.lo.x < b.lo.x; });
   std::vector<int32_t> tets;
+  if (bound.empty()) return tets;
+  // The region's boxes binned into at most kCellsPerAxis^3 cells of their
+  // bounding box (CSR: cell_start, box_of), so a tet tests only the boxes of
+  // the cells it covers. Scanning every region box per tet (sorted by lo.x)
+  // took 3-7 ms of a drag step's map update: 7,681 tets against 1,000-2,400
+  // moved tets' boxes on the 1,326-vertex drag of drag_loop_bench.
+  constexpr int kCellsPerAxis = 16;
+  const glm::ivec3 extent = bound.hi - bound.lo + 1;
+  const glm::ivec3 cell_size = (extent + kCellsPerAxis - 1) / kCellsPerAxis;
+  const glm::ivec3 cells = (extent + cell_size - 1) / cell_size;
+  auto cell_of = [&](const glm::ivec3& p) { return (p - bound.lo) / cell_size; };
+  auto cell_index = [&](int x, int y, int z) { return x + cells.x * (y + cells.y * z); };
+  std::vector<int32_t> cell_start(size_t(cells.x) * cells.y * cells.z + 1, 0);
+  auto for_each_cell = [&](const GridBox& box, const auto& visit) {
+    const glm::ivec3 lo = cell_of(glm::max(box.lo, bound.lo));
+    const glm::ivec3 hi = cell_of(glm::min(box.hi, bound.hi));
+    for (int z = lo.z; z <= hi.z; ++z) {
+      for (int y = lo.y; y <= hi.y; ++y) {
+        for (int x = lo.x; x <= hi.x; ++x) {
+          if (!visit(cell_index(x, y, z))) return;
+        }
+      }
+    }
+  };
+  for (const GridBox& box : region) {
+    if (box.empty()) continue;
+    for_each_cell(box, [&](int c) {
+      ++cell_start[c + 1];
+      return true;
+    });
+  }
+  for (size_t c = 1; c < cell_start.size(); ++c) cell_start[c] += cell_start[c - 1];
+  std::vector<int32_t> box_of(cell_start.back());
+  std::vector<int32_t> fill(cell_start.begin(), cell_start.end() - 1);
+  for (size_t r = 0; r < region.size(); ++r) {
+    if (region[r].empty()) continue;
+    for_each_cell(region[r], [&](int c) {
+      box_of[fill[c]++] = static_cast<int32_t>(r);
+      return true;
+    });
+  }
   for (size_t t = 0; t < tet_boxes.size(); ++t) {
     const GridBox& box = tet_boxes[t];
     if (box.empty() || !Meet(box, bound)) continue;
-    for (const GridBox& other : boxes) {
-      if (other.lo.x > box.hi.x) break;
-      if (Meet(box, other)) {
-        tets.push_back(static_cast<int32_t>(t));
-        break;
+    bool meets = false;
+    for_each_cell(box, [&](int c) {
+      for (int32_t i = cell_start[c]; i < cell_start[c + 1] && !meets; ++i) {
+        meets = Meet(box, region[box_of[i]]);
       }
-    }
+      return !meets;
+    });
+    if (meets) tets.push_back(static_cast<int32_t>(t));
   }
   return tets;
 }

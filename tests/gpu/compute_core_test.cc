@@ -2,6 +2,7 @@
 // refuses to record when its invariants do not hold.
 #include <numeric>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -57,6 +58,50 @@ TEST_F(GpuTest, GpuImage3D_RoundTripsTexels) {
   EXPECT_EQ(in, out);
   EXPECT_EQ(image->Upload(std::as_bytes(std::span(in).subspan(1))).code(),
             absl::StatusCode::kInvalidArgument);
+}
+
+// A box of a buffer (rows of the image's width) lands at the box in the
+// image; the texels outside it keep their values.
+TEST_F(GpuTest, ComputeBatch_CopyBufferToImageWritesTheBoxOnly) {
+  const std::array<uint32_t, 3> e = {13, 7, 5};
+  auto image = gpu::GpuImage3D::Create(context(), e, vk::Format::eR32Sfloat);
+  ASSERT_TRUE(image.ok()) << image.status();
+  std::vector<float> before(e[0] * e[1] * e[2]);
+  for (size_t n = 0; n < before.size(); ++n) before[n] = -1.0f - static_cast<float>(n);
+  ASSERT_TRUE(image->Upload(std::as_bytes(std::span(before))).ok());
+  std::vector<float> source(before.size());
+  std::iota(source.begin(), source.end(), 100.0f);
+  auto buffer = gpu::GpuBuffer::Create(context(), source.size() * sizeof(float),
+                                       vk::BufferUsageFlagBits::eStorageBuffer);
+  ASSERT_TRUE(buffer.ok()) << buffer.status();
+  ASSERT_TRUE(buffer->UploadSpan(std::span<const float>(source)).ok());
+  const glm::ivec3 lo(2, 1, 1), size(5, 4, 3);
+  const size_t first = lo.x + e[0] * (lo.y + e[1] * lo.z);
+  const std::pair<const gpu::GpuBuffer*, vk::BufferImageCopy> region{
+      &*buffer, vk::BufferImageCopy(first * sizeof(float), e[0], e[1],
+                                    {vk::ImageAspectFlagBits::eColor, 0, 0, 1},
+                                    {lo.x, lo.y, lo.z},
+                                    {uint32_t(size.x), uint32_t(size.y), uint32_t(size.z)})};
+  auto batch = gpu::ComputeBatch::Begin(context(), 1);
+  ASSERT_TRUE(batch.ok());
+  ASSERT_TRUE(batch->CopyBufferToImage(std::span(&region, 1), *image, "copy").ok());
+  auto timings = batch->SubmitAndWait();
+  ASSERT_TRUE(timings.ok()) << timings.status();
+  ASSERT_EQ(timings->size(), 1u);
+  EXPECT_EQ((*timings)[0].label, "copy");
+  std::vector<float> after(before.size());
+  ASSERT_TRUE(image->Download(std::as_writable_bytes(std::span(after))).ok());
+  for (uint32_t z = 0; z < e[2]; ++z) {
+    for (uint32_t y = 0; y < e[1]; ++y) {
+      for (uint32_t x = 0; x < e[0]; ++x) {
+        const size_t n = x + e[0] * (y + e[1] * z);
+        const glm::ivec3 p(x, y, z);
+        const bool inside = glm::all(glm::greaterThanEqual(p, lo)) &&
+                            glm::all(glm::lessThan(p, lo + size));
+        EXPECT_EQ(after[n], inside ? source[n] : before[n]) << x << " " << y << " " << z;
+      }
+    }
+  }
 }
 
 TEST_F(GpuTest, GpuImage3D_RejectsAbsurdExtent) {

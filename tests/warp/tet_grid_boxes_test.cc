@@ -3,6 +3,7 @@
 #include "server/warp/tet_grid_boxes.h"
 
 #include <random>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -55,30 +56,42 @@ TEST(TetGridBox, IsEmptyForATetOutsideTheGrid) {
   EXPECT_TRUE(TetGridBox(c, {1, 1, 1}, {10, 10, 10}, 1e-5).empty());
 }
 
+// Brute force against the binned search, on few and many region boxes,
+// small and large (a large box spans many of the search's cells).
 TEST(TetsMeetingBoxes, MatchesBruteForce) {
   std::mt19937 rng(5);
-  std::uniform_int_distribution<int> u(0, 40), len(0, 8);
-  auto random_box = [&] {
-    GridBox b;
-    b.lo = {u(rng), u(rng), u(rng)};
-    b.hi = b.lo + glm::ivec3(len(rng), len(rng), len(rng)) - (u(rng) < 3 ? 9 : 0);
-    return b;
-  };
-  std::vector<GridBox> tets(500), region(30);
-  for (auto& b : tets) b = random_box();
-  for (auto& b : region) b = random_box();
-  std::vector<int32_t> expected;
-  for (size_t t = 0; t < tets.size(); ++t) {
-    for (const GridBox& r : region) {
-      if (!tets[t].empty() && !r.empty() && glm::all(glm::lessThanEqual(tets[t].lo, r.hi)) &&
-          glm::all(glm::lessThanEqual(r.lo, tets[t].hi))) {
-        expected.push_back(static_cast<int32_t>(t));
-        break;
+  for (const auto& [region_count, max_len] : {std::pair{30, 8}, std::pair{300, 8},
+                                              std::pair{1, 30}, std::pair{200, 40}}) {
+    std::uniform_int_distribution<int> u(0, 40), len(0, max_len);
+    auto random_box = [&] {
+      GridBox b;
+      b.lo = {u(rng), u(rng), u(rng)};
+      b.hi = b.lo + glm::ivec3(len(rng), len(rng), len(rng)) - (u(rng) < 3 ? max_len + 1 : 0);
+      return b;
+    };
+    std::vector<GridBox> tets(500), region(region_count);
+    for (auto& b : tets) b = random_box();
+    for (auto& b : region) b = random_box();
+    std::vector<int32_t> expected;
+    for (size_t t = 0; t < tets.size(); ++t) {
+      for (const GridBox& r : region) {
+        if (!tets[t].empty() && !r.empty() && glm::all(glm::lessThanEqual(tets[t].lo, r.hi)) &&
+            glm::all(glm::lessThanEqual(r.lo, tets[t].hi))) {
+          expected.push_back(static_cast<int32_t>(t));
+          break;
+        }
       }
     }
+    EXPECT_GT(expected.size(), 10u) << region_count << " region boxes";
+    EXPECT_LT(expected.size(), tets.size()) << region_count << " region boxes";
+    EXPECT_EQ(TetsMeetingBoxes(tets, region), expected) << region_count << " region boxes";
   }
-  EXPECT_GT(expected.size(), 10u);
-  EXPECT_EQ(TetsMeetingBoxes(tets, region), expected);
+}
+
+TEST(TetsMeetingBoxes, IsEmptyForAnEmptyRegion) {
+  const std::vector<GridBox> tets = {GridBox{{0, 0, 0}, {3, 3, 3}}};
+  EXPECT_TRUE(TetsMeetingBoxes(tets, {}).empty());
+  EXPECT_TRUE(TetsMeetingBoxes(tets, std::vector<GridBox>{GridBox{}}).empty());
 }
 
 }  // namespace
