@@ -9,6 +9,7 @@
 #include "server/fem/assemble_stiffness.h"
 #include "server/fem/fixed_dofs.h"
 #include "tests/fem/fem_test_meshes.h"
+#include "tests/fem/random_vector.h"
 
 namespace vpm {
 namespace {
@@ -27,15 +28,6 @@ Problem MakeProblem() {
   const std::vector<double> moduli(mesh.tets.size(), 0.005);
   const auto elements = *MakeTetElements(RestPositions(mesh), mesh.tets, moduli, 0.45);
   return {AssembleStiffness(elements, {}, mesh.vertices.size()), *FixedDofs(mesh, extent)};
-}
-
-// n standard normal entries.
-Eigen::VectorXd RandomVector(int64_t n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0.0, 1.0);
-  Eigen::VectorXd r(n);
-  for (int64_t i = 0; i < n; ++i) r[i] = g(rng);
-  return r;
 }
 
 // z = K_SS^-1 r_S by a dense solve, 0 outside S.
@@ -62,7 +54,7 @@ TEST(ConstrainedFactor, ExtraConstraintsGiveTheExactSubBlockInverse) {
   auto factor = ConstrainedFactor::Create(setup.k, setup.fixed);
   ASSERT_TRUE(factor.ok()) << factor.status();
   const Eigen::MatrixXd dense(setup.k);
-  const Eigen::VectorXd r = RandomVector(setup.k.rows(), 1);
+  const Eigen::VectorXd r = testing::RandomNormalVector(setup.k.rows(), 1);
   Eigen::VectorXd z;
   factor->Apply(r, false, z);
   Eigen::VectorXd expected = DenseReference(dense, setup.fixed, r);
@@ -95,7 +87,7 @@ TEST(ConstrainedFactor, RefactoredAndCapacitanceHandlesAgree) {
   ASSERT_TRUE(refactor.ok()) << refactor.status();
   ASSERT_TRUE(capacitance.ok()) << capacitance.status();
   const Eigen::MatrixXd dense(setup.k);
-  const Eigen::VectorXd r = RandomVector(setup.k.rows(), 3);
+  const Eigen::VectorXd r = testing::RandomNormalVector(setup.k.rows(), 3);
   for (int64_t first : {3, 8}) {
     std::vector<int32_t> extra;
     std::vector<uint8_t> constrained = setup.fixed;

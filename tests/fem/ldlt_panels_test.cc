@@ -9,19 +9,12 @@
 #include "server/fem/assemble_stiffness.h"
 #include "server/fem/fixed_dofs.h"
 #include "tests/fem/fem_test_meshes.h"
+#include "tests/fem/random_vector.h"
 
 namespace vpm {
 namespace {
 
 using Ldlt = LdltPanels::Ldlt;
-
-Eigen::VectorXd NormalVector(int64_t n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0.0, 1.0);
-  Eigen::VectorXd r(n);
-  for (int64_t i = 0; i < n; ++i) r[i] = g(rng);
-  return r;
-}
 
 // Relative difference of the panel solve from Eigen's, max over a few
 // right-hand sides.
@@ -32,7 +25,7 @@ double WorstRelativeDifference(const Eigen::SparseMatrix<double>& a) {
   EXPECT_EQ(panels.size(), a.rows());
   double worst = 0.0;
   for (unsigned seed = 1; seed <= 3; ++seed) {
-    const Eigen::VectorXd b = NormalVector(a.rows(), seed);
+    const Eigen::VectorXd b = testing::RandomNormalVector(a.rows(), seed);
     const Eigen::VectorXd expected = ldlt.solve(b);
     Eigen::VectorXd x;
     panels.Solve(b, x);
