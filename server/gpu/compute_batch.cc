@@ -98,11 +98,7 @@ Status ComputeBatch::Dispatch(const ComputeKernel& kernel, std::span<const Kerne
                               std::span<const std::byte> push_constants,
                               std::array<uint32_t, 3> groups, std::string label) {
   const KernelSpec& spec = kernel.spec();
-  if (submitted_) return absl::FailedPreconditionError("compute batch already submitted");
-  if (labels_.size() >= max_dispatches_) {
-    return absl::ResourceExhaustedError(
-        StrCat("compute batch holds at most ", max_dispatches_, " dispatches"));
-  }
+  RETURN_IF_ERROR(CheckRoom());
   RETURN_IF_ERROR(CheckArgs(kernel, args));
   if (push_constants.size() != spec.push_constant_bytes) {
     return absl::InvalidArgumentError(StrCat("kernel ", spec.name, ": push constants of ",
@@ -169,34 +165,27 @@ Status ComputeBatch::Fill(const GpuBuffer& buffer, uint32_t word) {
   });
 }
 
-Status ComputeBatch::CopyImageToBuffer(const GpuImage3D& image, const GpuBuffer& buffer,
-                                       std::string label) {
+Status ComputeBatch::CheckRoom() const {
   if (submitted_) return absl::FailedPreconditionError("compute batch already submitted");
   if (labels_.size() >= max_dispatches_) {
     return absl::ResourceExhaustedError(
         StrCat("compute batch holds at most ", max_dispatches_, " dispatches"));
   }
-  if (!(buffer.usage() & vk::BufferUsageFlagBits::eTransferDst) ||
-      buffer.size_bytes() < image.size_bytes()) {
-    return absl::InvalidArgumentError(StrCat(
-        "copying a 3D image of ", image.size_bytes(), " bytes needs a transfer-destination ",
-        "buffer at least as large; got ", buffer.size_bytes(), " bytes"));
-  }
-  return CatchVulkan("recording an image-to-buffer copy", [&] {
+  return absl::OkStatus();
+}
+
+Status ComputeBatch::RecordImageCopy(const char* what, const GpuImage3D& image,
+                                     vk::ImageLayout copy_layout, std::string label,
+                                     const std::function<void()>& copy) {
+  return CatchVulkan(what, [&] {
     BarrierIfNeeded();
     const uint32_t q = static_cast<uint32_t>(labels_.size());
     if (*query_pool_) {
       commands_->writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *query_pool_, 2 * q);
     }
-    const auto& e = image.extent();
-    const vk::BufferImageCopy region(0, 0, 0, {vk::ImageAspectFlagBits::eColor, 0, 0, 1},
-                                     {0, 0, 0}, vk::Extent3D(e[0], e[1], e[2]));
-    // The image lives in GENERAL; the copy reads it in TRANSFER_SRC_OPTIMAL
-    // (what the validation layer asks for, and what a GPU may copy fastest).
-    constexpr auto kSrc = vk::ImageLayout::eTransferSrcOptimal;
-    ImageLayoutBarrier(*commands_, image.image(), vk::ImageLayout::eGeneral, kSrc);
-    commands_->copyImageToBuffer(image.image(), kSrc, buffer.handle(), region);
-    ImageLayoutBarrier(*commands_, image.image(), kSrc, vk::ImageLayout::eGeneral);
+    ImageLayoutBarrier(*commands_, image.image(), vk::ImageLayout::eGeneral, copy_layout);
+    copy();
+    ImageLayoutBarrier(*commands_, image.image(), copy_layout, vk::ImageLayout::eGeneral);
     if (*query_pool_) {
       commands_->writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *query_pool_, 2 * q + 1);
     }
@@ -204,36 +193,41 @@ Status ComputeBatch::CopyImageToBuffer(const GpuImage3D& image, const GpuBuffer&
   });
 }
 
+Status ComputeBatch::CopyImageToBuffer(const GpuImage3D& image, const GpuBuffer& buffer,
+                                       std::string label) {
+  RETURN_IF_ERROR(CheckRoom());
+  if (!(buffer.usage() & vk::BufferUsageFlagBits::eTransferDst) ||
+      buffer.size_bytes() < image.size_bytes()) {
+    return absl::InvalidArgumentError(StrCat(
+        "copying a 3D image of ", image.size_bytes(), " bytes needs a transfer-destination ",
+        "buffer at least as large; got ", buffer.size_bytes(), " bytes"));
+  }
+  // The image lives in GENERAL; the copy reads it in TRANSFER_SRC_OPTIMAL
+  // (what the validation layer asks for, and what a GPU may copy fastest).
+  constexpr auto kSrc = vk::ImageLayout::eTransferSrcOptimal;
+  return RecordImageCopy("recording an image-to-buffer copy", image, kSrc, std::move(label), [&] {
+    const auto& e = image.extent();
+    const vk::BufferImageCopy region(0, 0, 0, {vk::ImageAspectFlagBits::eColor, 0, 0, 1},
+                                     {0, 0, 0}, vk::Extent3D(e[0], e[1], e[2]));
+    commands_->copyImageToBuffer(image.image(), kSrc, buffer.handle(), region);
+  });
+}
+
 Status ComputeBatch::CopyBufferToImage(
     std::span<const std::pair<const GpuBuffer*, vk::BufferImageCopy>> regions,
     const GpuImage3D& image, std::string label) {
-  if (submitted_) return absl::FailedPreconditionError("compute batch already submitted");
-  if (labels_.size() >= max_dispatches_) {
-    return absl::ResourceExhaustedError(
-        StrCat("compute batch holds at most ", max_dispatches_, " dispatches"));
-  }
+  RETURN_IF_ERROR(CheckRoom());
   for (const auto& [buffer, region] : regions) {
     if (!(buffer->usage() & vk::BufferUsageFlagBits::eTransferSrc)) {
       return absl::InvalidArgumentError("copying a buffer into an image needs transfer-source usage");
     }
   }
-  return CatchVulkan("recording a buffer-to-image copy", [&] {
-    BarrierIfNeeded();
-    const uint32_t q = static_cast<uint32_t>(labels_.size());
-    if (*query_pool_) {
-      commands_->writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *query_pool_, 2 * q);
-    }
-    // The copy writes the image in TRANSFER_DST_OPTIMAL.
-    constexpr auto kDst = vk::ImageLayout::eTransferDstOptimal;
-    ImageLayoutBarrier(*commands_, image.image(), vk::ImageLayout::eGeneral, kDst);
+  // The copy writes the image in TRANSFER_DST_OPTIMAL.
+  constexpr auto kDst = vk::ImageLayout::eTransferDstOptimal;
+  return RecordImageCopy("recording a buffer-to-image copy", image, kDst, std::move(label), [&] {
     for (const auto& [buffer, region] : regions) {
       commands_->copyBufferToImage(buffer->handle(), image.image(), kDst, region);
     }
-    ImageLayoutBarrier(*commands_, image.image(), kDst, vk::ImageLayout::eGeneral);
-    if (*query_pool_) {
-      commands_->writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *query_pool_, 2 * q + 1);
-    }
-    labels_.push_back(std::move(label));
   });
 }
 

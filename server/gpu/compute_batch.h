@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -75,7 +76,15 @@ class ComputeBatch {
  private:
   ComputeBatch() = default;
   Status CheckArgs(const ComputeKernel& kernel, std::span<const KernelArg> args) const;
+  // FailedPrecondition once submitted; ResourceExhausted when max_dispatches
+  // timed commands are already recorded.
+  Status CheckRoom() const;
   void BarrierIfNeeded();
+  // Records a timed copy between `image` and buffers (`what` names it in
+  // errors): the image moves from GENERAL to `copy_layout`, `copy` records
+  // the copy commands, and the image goes back to GENERAL.
+  Status RecordImageCopy(const char* what, const GpuImage3D& image, vk::ImageLayout copy_layout,
+                         std::string label, const std::function<void()>& copy);
 
   const GpuContext* context_ = nullptr;
   uint32_t max_dispatches_ = 0;
