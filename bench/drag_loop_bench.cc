@@ -4,7 +4,8 @@
 // refined at the left renal artery, and for ~1,000 and ~5,000 vertices.
 //   drag_loop_bench [SOURCE] [--max-load-steps N] [--min-load-fraction F]
 //                   [--intermediate-newton N] [--no-barrier] [--max-vertices N]
-//                   [--steps] [--map-tolerance MM] [--event-newton-budget N] [--threads N]
+//                   [--steps] [--map-tolerance MM] [--event-newton-budget N]
+//                   [--event-stop-newton N] [--event-max-lag SHARES] [--threads N]
 // (bench/fem_flags.h); --steps prints every step's FEM work and stage times.
 // The FEM runs with the interactive scene's settings (InteractiveFemOptions:
 // at most kInteractiveEventNewtonBudget Newton iterations per step, the rest
@@ -263,12 +264,8 @@ int main(int argc, char** argv) {
     }
   }
   const SolverOptions& solver = flags.solver;
-  if (solver.event_newton_budget > 0 &&
-      solver.event_newton_budget <
-          solver.intermediate_newton_iterations + solver.event_stop_newton_iterations) {
-    std::fprintf(stderr,
-                 "--event-newton-budget must be 0 or >= --intermediate-newton + "
-                 "--event-stop-newton\n");
+  if (const Status status = CheckSolverOptions(solver); !status.ok()) {
+    std::fprintf(stderr, "drag_loop_bench: %s\n", std::string(status.message()).c_str());
     return 2;
   }
   auto volume = bench::Check(ReadVolume(source, {}), "reading the volume");

@@ -30,17 +30,7 @@ double ForcedFraction(double jump_mm, double limit_mm) {
 
 }  // namespace
 
-Result<CorotationalSolver> CorotationalSolver::Create(
-    const std::vector<glm::dvec3>& rest_mm, const std::vector<std::array<int32_t, 4>>& tets,
-    const std::vector<double>& young_n_per_mm2, double poisson,
-    const std::vector<uint8_t>& fixed_dofs, const SolverOptions& options) {
-  if (fixed_dofs.size() != 3 * rest_mm.size()) {
-    return absl::InvalidArgumentError(StrCat("got ", fixed_dofs.size(), " DOF flags for ",
-                                             rest_mm.size(), " vertices (need 3 per vertex)"));
-  }
-  if (!(poisson > -1.0 && poisson < 0.5)) {
-    return absl::InvalidArgumentError(StrCat("poisson must lie in (-1, 0.5), got ", poisson));
-  }
+Status CheckSolverOptions(const SolverOptions& options) {
   if (options.max_newton_iterations < 1 || options.max_cg_iterations < 1 || options.threads < 1 ||
       options.adaptive_twist_after < 0 || options.max_load_steps < 1 ||
       options.intermediate_newton_iterations < 1 ||
@@ -63,6 +53,21 @@ Result<CorotationalSolver> CorotationalSolver::Create(
                                              options.event_max_lag_shares,
                                              ") must be finite and >= 0 (0: no limit)"));
   }
+  return absl::OkStatus();
+}
+
+Result<CorotationalSolver> CorotationalSolver::Create(
+    const std::vector<glm::dvec3>& rest_mm, const std::vector<std::array<int32_t, 4>>& tets,
+    const std::vector<double>& young_n_per_mm2, double poisson,
+    const std::vector<uint8_t>& fixed_dofs, const SolverOptions& options) {
+  if (fixed_dofs.size() != 3 * rest_mm.size()) {
+    return absl::InvalidArgumentError(StrCat("got ", fixed_dofs.size(), " DOF flags for ",
+                                             rest_mm.size(), " vertices (need 3 per vertex)"));
+  }
+  if (!(poisson > -1.0 && poisson < 0.5)) {
+    return absl::InvalidArgumentError(StrCat("poisson must lie in (-1, 0.5), got ", poisson));
+  }
+  RETURN_IF_ERROR(CheckSolverOptions(options));
   CorotationalSolver solver;
   solver.options_ = options;
   solver.budget_ = EventBudget(options.event_newton_budget, options.event_stop_newton_iterations,

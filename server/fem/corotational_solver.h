@@ -164,6 +164,11 @@ struct SolveStats {
   double total_ms() const { return assembly_ms + solve_ms; }
 };
 
+// InvalidArgument naming the first setting out of range (iteration limits,
+// tolerances, the per-event bound); what CorotationalSolver::Create checks,
+// for callers that want to refuse bad settings before building a mesh.
+Status CheckSolverOptions(const SolverOptions& options);
+
 class CorotationalSolver {
  public:
   // Builds elements, assembles the rest stiffness and factors its free block.
