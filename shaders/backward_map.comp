@@ -20,16 +20,21 @@
 // now claims it with a smaller index, so the owners come out as in a full
 // rebuild (docs/WARP.md has the argument).
 //
-// One workgroup of 16 per listed tet (a tet of the 64^3 map spans some 20-40
-// rows; workgroups of 64 left most lanes idle and cost 1.3-2x the time of
-// 16, measured with drag_loop_bench); its invocations take the rows (y, z)
+// 16 lanes per listed tet (a tet of the 64^3 map spans some 20-40 rows;
+// 64 lanes per tet left most of them idle and cost 1.3-2x the time of 16,
+// measured with drag_loop_bench), 4 tets per workgroup (one tet per group
+// cost lavapipe a group's set-up per tet: clear + claim 3.7-3.9 -> 3.5-3.6
+// ms per drag step on the 1,326-vertex mesh); a tet's 16 lanes take the rows (y, z)
 // of the tet's box in turn, and each row only the x range where the four
 // weights, linear in x along the row, can be >= -eps (widened by one point;
 // the per-point test decides). The clear pass walks the same ranges from the
 // previous positions, so it visits every point the tet claimed then.
 #include "shader_interface.glsl"
 
-layout(local_size_x = 16, local_size_y = 1, local_size_z = 1) in;
+// kLanesPerTet lanes per tet, kTetsPerGroup tets per workgroup.
+const uint kLanesPerTet = 16;
+const uint kTetsPerGroup = 4;
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 layout(std430, binding = 0) readonly buffer Tets { uvec4 tets[]; };
 layout(std430, binding = 1) readonly buffer Deformed { vec4 deformed[]; };  // mm
 layout(std430, binding = 2) readonly buffer Work { BackwardMapTetWork work[]; };
@@ -124,7 +129,9 @@ void claim_row(uint t, TetFrame f, int y, int z, ivec2 range) {
 
 void main() {
   int pass = pc.map_dims.w;
-  uint slot = gl_WorkGroupID.x + gl_NumWorkGroups.x * gl_WorkGroupID.y;
+  uint group = gl_WorkGroupID.x + gl_NumWorkGroups.x * gl_WorkGroupID.y;
+  uint slot = group * kTetsPerGroup + gl_LocalInvocationID.x / kLanesPerTet;
+  uint lane = gl_LocalInvocationID.x % kLanesPerTet;
   if (slot >= (pass == kClear ? pc.work.y : pc.work.x)) return;
   BackwardMapTetWork job = work[slot];
   uint t = uint(job.old_lo.w);
@@ -137,7 +144,7 @@ void main() {
   if (!f.usable) return;
   uint rows_y = uint(hi.y - lo.y + 1);
   uint rows = rows_y * uint(hi.z - lo.z + 1);
-  for (uint r = gl_LocalInvocationID.x; r < rows; r += gl_WorkGroupSize.x) {
+  for (uint r = lane; r < rows; r += kLanesPerTet) {
     int y = lo.y + int(r % rows_y);
     int z = lo.z + int(r / rows_y);
     ivec2 range = row_range(f, y, z, lo.x, hi.x);

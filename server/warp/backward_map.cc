@@ -21,6 +21,7 @@ using gpu::BackwardMapTetWork;
 constexpr int kPassClear = 0;
 constexpr int kPassClaim = 1;
 constexpr uint32_t kMapLocalSize = 16;       // backward_map.comp: lanes per tet
+constexpr uint32_t kMapTetsPerGroup = 4;     // backward_map.comp: tets per workgroup
 constexpr uint32_t kWriteLocalSize = 64;  // backward_map_write.comp: points per workgroup
 constexpr uint32_t kNoOwner = 0xFFFFFFFFu;
 constexpr vk::Format kMapFormat = vk::Format::eR32G32B32A32Sfloat;
@@ -91,7 +92,7 @@ Result<BackwardMap> BackwardMap::Create(const gpu::GpuContext& context,
                     .bindings = {DT::eStorageBuffer, DT::eStorageBuffer, DT::eStorageBuffer,
                                  DT::eStorageBuffer, DT::eStorageBuffer},
                     .push_constant_bytes = sizeof(gpu::BackwardMapPush),
-                    .local_size = {kMapLocalSize, 1, 1}}));
+                    .local_size = {kMapLocalSize * kMapTetsPerGroup, 1, 1}}));
   ASSIGN_OR_RETURN(
       gpu::ComputeKernel write_kernel,
       gpu::ComputeKernel::Create(
@@ -365,12 +366,14 @@ Result<std::vector<gpu::DispatchTiming>> BackwardMap::Run(bool full, uint32_t li
   const uint32_t max_groups_x = context_->limits().maxComputeWorkGroupCount[0];
   auto dispatch = [&](int pass, uint32_t tets, const char* label) {
     push.map_dims.w = pass;
-    // One workgroup per tet, folded into 2D past the x limit.
-    const uint32_t gx = std::min(tets, max_groups_x);
+    // One workgroup per kMapTetsPerGroup tets, folded into 2D past the x
+    // limit.
+    const uint32_t groups = (tets + kMapTetsPerGroup - 1) / kMapTetsPerGroup;
+    const uint32_t gx = std::min(groups, max_groups_x);
     return batch.Dispatch(kernel(),
                           {&*tets_buffer_, &*deformed_buffer_, &*work_buffer_, &device_.owner,
                            &*previous_buffer_},
-                          push, {gx, (tets + gx - 1) / gx, 1}, label);
+                          push, {gx, (groups + gx - 1) / gx, 1}, label);
   };
   if (full) RETURN_IF_ERROR(batch.Fill(device_.owner, kNoOwner));
   if (moved > 0) RETURN_IF_ERROR(dispatch(kPassClear, moved, "backward_map clear"));
