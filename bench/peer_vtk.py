@@ -14,8 +14,11 @@ Still: VTK with AutoAdjustSampleDistances off, SampleDistance 1 mm,
 ImageSampleDistance 1; vpm's still quality at --step 1. Interactive: VTK's
 level of detail at DesiredUpdateRate 15 (the rate vtkRenderWindowInteractor
 asks for while the mouse moves; AutoAdjustSampleDistances on, as VTK
-defaults it), against vpm's interactive quality (half resolution, upscaled);
-each with its PSNR against its own still frame. "VTK Smart defaults": the
+defaults it), against vpm's interactive quality (half resolution, upscaled)
+and, in a column of its own, vpm's still quality at full resolution and a
+coarser step (--coarse-step x --step, 1.5 mm by default: what VTK's LOD does
+where its frame budget allows); each with its PSNR against its own still
+frame (vpm's at --step). "VTK Smart defaults": the
 Smart mapper as ParaView and Slicer users get it, VTK choosing its own
 step from the spacing. vpm renders without the map (what DeformableScene
 does while nothing is deformed) and, in its own column, through an
@@ -310,18 +313,19 @@ def write_png(path, rgb):
 
 # --- vpm --------------------------------------------------------------------
 
+COARSE = "vpm coarse"  # the results' key for vpm at full resolution, coarse step
 VPM_ROWS = {("mip", "still"): "still MIP", ("mip", "interactive"): "interactive MIP",
             ("composite", "still"): "still DVR custom",
             ("composite", "interactive"): "interactive DVR custom"}
 
 
-def run_vpm(args, volume_path, size, png_dir, with_map):
+def run_vpm(args, volume_path, size, png_dir, with_map, step=None):
     """render_bench's rows; with_map: through an identity backward map (the
     cost of a deformed volume), else without (DeformableScene's undeformed
-    frames)."""
+    frames); step: every row's step (mm), default --step."""
     filt = "|".join(v + "$" for v in VPM_ROWS.values())
     cmd = [os.path.join(args.build, "bench", "render_bench"), "--no-reference", "--map-held",
-           "--step", str(args.step), "--render-tf", args.tf]
+           "--step", str(step or args.step), "--render-tf", args.tf]
     cmd += [] if with_map else ["--no-map"]
     cmd += [volume_path, png_dir, filt, str(size)]
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
@@ -356,6 +360,9 @@ def main():
     ap.add_argument("--int16", action="store_true",
                     help="round the volume to int16, as CT scanners store it, for both "
                          "(vpm then holds 2 bytes per voxel, VTK a vtkShortArray)")
+    ap.add_argument("--coarse-step", type=float, default=1.5,
+                    help="the interactive rows' extra vpm column: full resolution at this "
+                         "times --step (vpm's still quality, no map)")
     ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--mappers", default=",".join(MAPPERS))
     ap.add_argument("--modes", default="mip,composite")
@@ -402,6 +409,18 @@ def main():
                 else:
                     db = psnr(rgb, stills[(renderer, mode, size)])
                 entry[renderer] = (rows[name][0], rows[name][1], db)
+        # Full resolution at a coarser step, in place of half resolution:
+        # vpm's still frames at --coarse-step x --step, each with its PSNR
+        # against vpm's still at --step, shown in the interactive rows.
+        coarse_dir = os.path.join(args.out, f"vpm_{size}_coarse")
+        os.makedirs(coarse_dir, exist_ok=True)
+        _, _, rows = run_vpm(args, volume_path, size, coarse_dir, False,
+                             args.coarse_step * args.step)
+        for mode in ("mip", "composite"):
+            name = VPM_ROWS[(mode, "still")]
+            rgb = read_png(os.path.join(coarse_dir, name.replace(" ", "_") + ".png"))
+            results[(mode, "interactive", size)][COARSE] = (
+                rows[name][0], rows[name][1], psnr(rgb, stills[("vpm", mode, size)]))
         scene = VtkScene(image, size, camera)
         props = {"mip": mip_property(window["width"], window["level"], value_range),
                  "composite": composite_property(preset, True)}
@@ -449,8 +468,9 @@ def main():
 
 def print_table(results, mappers, column):
     """One row per frame kind; column 0: wall ms, 1: CPU ms / cores."""
-    renderers = ["vpm", "vpm map"] + mappers
-    names = {"vpm": "vpm", "vpm map": "vpm through a map"}
+    renderers = ["vpm", "vpm map", COARSE] + mappers
+    names = {"vpm": "vpm", "vpm map": "vpm through a map",
+             COARSE: "vpm full resolution, coarse step"}
     head = ["frame", "size"] + [f"{names.get(r, 'VTK ' + r)} ms" for r in renderers]
     head += ["fastest VTK / vpm"]
     smart = [m for m in mappers if m == "Smart defaults"]
@@ -472,7 +492,8 @@ def print_table(results, mappers, column):
         row += [f"{entry[m][column] / vpm_ms:.2f}" if m in entry else "-" for m in smart]
         print("| " + " | ".join(row) + " |")
     print("(interactive: ms (PSNR against the same renderer's still frame, dB); fastest VTK: "
-          "of FixedPoint, GPU and Smart at the same step)")
+          "of FixedPoint, GPU and Smart at the same step; vpm full resolution, coarse step: "
+          "vpm's still quality at --coarse-step x the step, no map, against vpm's still)")
 
 
 if __name__ == "__main__":
