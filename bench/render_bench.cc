@@ -4,7 +4,8 @@
 // interactive (512x512 shown, 256x256 cast), texel-buffer and sampler3D
 // volume reads; then JPEG (quality 85) and PNG encoding of the still frame.
 // Usage: render_bench [--render-tf FILE] [--step MM] [--window W L]
-//                     [--no-reference] [SOURCE] [PNG_DIR] [FILTER] [SIZE]
+//                     [--no-reference] [--map-held] [--no-map] [--band-rays N]
+//                     [SOURCE] [PNG_DIR] [FILTER] [SIZE]
 //   --render-tf: adds the rows "still DVR custom" and "interactive DVR
 //   custom", DVR with the transfer function of FILE (ParaView .json[#NAME]
 //   or Slicer .vp);
@@ -14,7 +15,8 @@
 //   --map-held: every row keeps the map unchanged (its occupancy is computed
 //   once and reused, as while orbiting or for a still after a drag);
 //   --no-map: every row without the map (what DeformableScene renders while
-//   nothing is deformed);
+//   nothing is deformed); --band-rays N: still frames cast in bands of about
+//   N rays, one submit each (default kStillBandRays; 0: one submit);
 //   PNG_DIR: where to write the frames ("" for nowhere); FILTER: only the
 //   rows whose name contains it, or one of several separated by '|' (a part
 //   ending in '$' must end the name: "still MIP$|still DVR ct-bone$");
@@ -187,6 +189,7 @@ int main(int raw_argc, char** raw_argv) {
   bool reference = true;
   bool map_held = false;
   bool no_map = false;
+  int64_t band_rays = kStillBandRays;
   std::vector<char*> positional{raw_argv[0]};
   for (int i = 1; i < raw_argc; ++i) {
     const std::string arg = raw_argv[i];
@@ -203,6 +206,8 @@ int main(int raw_argc, char** raw_argv) {
       map_held = true;
     } else if (arg == "--no-map") {
       no_map = true;
+    } else if (arg == "--band-rays" && i + 1 < raw_argc) {
+      band_rays = int64_t(ParseNumber(raw_argv[++i], "--band-rays"));
     } else {
       positional.push_back(raw_argv[i]);
     }
@@ -231,10 +236,13 @@ int main(int raw_argc, char** raw_argv) {
   if (!map.Upload(std::as_bytes(std::span<const glm::vec4>(host_map.texels))).ok()) return 1;
 
   auto t0 = std::chrono::steady_clock::now();
-  auto texel_renderer = bench::Check(VolumeRenderer::Create(*context, {}), "renderer");
+  auto texel_renderer = bench::Check(
+      VolumeRenderer::Create(*context, {.still_band_rays = band_rays}), "renderer");
   const double create_ms = MsSince(t0);
   auto sampled_renderer = bench::Check(
-      VolumeRenderer::Create(*context, {.volume_access = VolumeAccess::kSampler3D}), "renderer");
+      VolumeRenderer::Create(*context, {.volume_access = VolumeAccess::kSampler3D,
+                                        .still_band_rays = band_rays}),
+      "renderer");
   const auto still_minmax = BrickMinMaxCpu(volume, BrickVoxels(RenderQuality::kStill, volume.geometry()));
   const auto interactive_minmax = BrickMinMaxCpu(volume, BrickVoxels(RenderQuality::kInteractive, volume.geometry()));
 

@@ -63,6 +63,8 @@ layout(std430, binding = 5) writeonly buffer Pixels { uint pixels[]; };
 layout(std430, binding = 6) buffer Stats { uint samples_taken; };
 
 layout(constant_id = 0) const bool kCellGradient = false;
+// Which rows of tiles this dispatch casts: a still frame is cast in bands.
+layout(push_constant) uniform Band { RaycastBandPush band; };
 
 const float kOpaque = 0.99;
 // A sample whose weight in the pixel, (1 - A) a, is under 1/256 is not worth
@@ -460,7 +462,9 @@ ivec2 pixel_of_invocation() {
   uint i = gl_LocalInvocationIndex;  // 0..63
   uint lane = i & 7u, vector = i >> 3;
   uvec2 local = uvec2((vector & 1u) * 4u + (lane & 3u), (vector >> 1) * 2u + (lane >> 2));
-  return ivec2(gl_WorkGroupID.xy * 8u + local);
+  // Band b of n takes the rows of tiles b, b + n, b + 2n, ...
+  uvec2 tile = uvec2(gl_WorkGroupID.x, gl_WorkGroupID.y * uint(band.rows.y) + uint(band.rows.x));
+  return ivec2(tile * 8u + local);
 }
 
 void main() {

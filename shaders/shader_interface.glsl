@@ -66,6 +66,10 @@ struct RaycastParams {
   vec4 clip_planes[VPM_RAYCAST_MAX_CLIP_PLANES];  // keep dot(xyz, x) >= w (mm)
 };
 
+struct RaycastBandPush {
+  ivec4 rows;  // (band b, bands n, 0, 0): tile rows b, b + n, b + 2n, ...
+};
+
 struct UpscalePush {
   ivec4 size;  // (source width, source height, target width, target height)
 };

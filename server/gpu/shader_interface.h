@@ -109,6 +109,17 @@ struct RenderLutBlock {
 };
 static_assert(sizeof(RenderLutBlock) == 16384);
 
+// raycast_*.comp: the rows of 8 x 8 tiles a dispatch casts, so that a frame
+// may be cast in bands, one submit each (VolumeRenderer::Options::
+// still_band_rays). Band b of n takes tile rows b, b + n, b + 2n, ...: each
+// band a sample of the whole frame, whose cost lavapipe's threads share as
+// evenly as the whole frame's (bands of consecutive rows left one of two
+// threads idle for most of a band).
+struct RaycastBandPush {
+  glm::ivec4 rows;  // (b, n, 0, 0)
+};
+static_assert(sizeof(RaycastBandPush) == 16);
+
 // upscale.comp: bilinear RGBA8 resize.
 struct UpscalePush {
   glm::ivec4 size;  // (source width, source height, target width, target height)

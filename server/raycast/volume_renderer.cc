@@ -80,7 +80,7 @@ Status VolumeRenderer::Init() {
         .spirv = RaycastSpirv(sampled, mip, map),
         .bindings = {volume_read, volume_read, DT::eStorageBuffer, DT::eUniformBuffer,
                      DT::eUniformTexelBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
-        .push_constant_bytes = 0,
+        .push_constant_bytes = sizeof(gpu::RaycastBandPush),
         .local_size = {8, 8, 1}};
     if (cell_gradient) spec.specialization = {1u};
     return spec;
@@ -274,18 +274,16 @@ VolumeRenderer::BrickBox VolumeRenderer::BricksMeetingMapBox(const gpu::RaycastP
 Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
                                    const RaycastSetup& setup, const gpu::GpuBuffer& minmax,
                                    bool upscale, const BrickBox& occupancy_box,
-                                   vk::BufferView map_view) {
+                                   vk::BufferView map_view, int bands) {
   const gpu::RaycastParams& p = setup.params;
   const gpu::GpuImage3D* map = request.backward_map ? request.backward_map : &*identity_map_;
   const bool sampled = options_.volume_access == VolumeAccess::kSampler3D;
-  const bool mip = request.mode == RenderMode::kMip;
   const bool has_map = request.backward_map != nullptr;
   const bool occupancy = request.settings.empty_space_skipping && !occupancy_box.empty();
   if (request.settings.count_samples) RETURN_IF_ERROR(batch.Fill(*stats_, 0));
   // The map's texel copy serves the occupancy pass and the texel-buffer ray
   // casters.
   const bool in_place = has_map && request.backward_map_texels != nullptr;
-  if (!in_place) map_view = *map_texels_view_;
   if (has_map && !in_place && (occupancy || !sampled)) {
     RETURN_IF_ERROR(batch.CopyImageToBuffer(*map, *map_texels_, "map_copy"));
   }
@@ -306,19 +304,7 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
                                    {&minmax, map_view, &*nonzero_prefix_, &*occupancy_},
                                    push, {GroupCount(bricks, 64), 1, 1}, "occupancy"));
   }
-  const gpu::KernelArg volume_arg = sampled ? gpu::KernelArg(request.volume_image)
-                                            : gpu::KernelArg(request.volume->texel_view());
-  const gpu::KernelArg map_arg =
-      sampled ? gpu::KernelArg(map) : gpu::KernelArg(map_view);
-  const std::array<gpu::KernelArg, 7> args{
-      volume_arg, map_arg, &*params_, &*lut_, *occupancy_view_, &*pixels_, &*stats_};
-  ASSIGN_OR_RETURN(const gpu::ComputeKernel raycast,
-                   request.volume->KernelFor(*context_, (p.image.z & kRaycastCellGradient) != 0
-                                                            ? *cell_gradient_kernels_[has_map]
-                                                            : *raycast_kernels_[mip][has_map]));
-  RETURN_IF_ERROR(batch.Dispatch(
-      raycast, args, {},
-      {GroupCount(setup.render_width, 8), GroupCount(setup.render_height, 8), 1}, "raycast"));
+  RETURN_IF_ERROR(RecordBand(batch, request, setup, map_view, 0, bands));
   if (upscale) {
     const gpu::UpscalePush push{
         .size = glm::ivec4(setup.render_width, setup.render_height, request.width,
@@ -329,6 +315,39 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
                                    "upscale"));
   }
   return absl::OkStatus();
+}
+
+Status VolumeRenderer::RecordBand(gpu::ComputeBatch& batch, const RenderRequest& request,
+                                  const RaycastSetup& setup, vk::BufferView map_view, int band,
+                                  int bands) {
+  const gpu::RaycastParams& p = setup.params;
+  const bool sampled = options_.volume_access == VolumeAccess::kSampler3D;
+  const bool mip = request.mode == RenderMode::kMip;
+  const bool has_map = request.backward_map != nullptr;
+  const gpu::GpuImage3D* map = has_map ? request.backward_map : &*identity_map_;
+  const gpu::KernelArg volume_arg = sampled ? gpu::KernelArg(request.volume_image)
+                                            : gpu::KernelArg(request.volume->texel_view());
+  const gpu::KernelArg map_arg = sampled ? gpu::KernelArg(map) : gpu::KernelArg(map_view);
+  const std::array<gpu::KernelArg, 7> args{
+      volume_arg, map_arg, &*params_, &*lut_, *occupancy_view_, &*pixels_, &*stats_};
+  ASSIGN_OR_RETURN(const gpu::ComputeKernel raycast,
+                   request.volume->KernelFor(*context_, (p.image.z & kRaycastCellGradient) != 0
+                                                            ? *cell_gradient_kernels_[has_map]
+                                                            : *raycast_kernels_[mip][has_map]));
+  const gpu::RaycastBandPush push{.rows = glm::ivec4(band, bands, 0, 0)};
+  // Tile rows band, band + bands, ... below the frame's GroupCount(height).
+  const uint32_t tile_rows = GroupCount(setup.render_height, 8);
+  const uint32_t rows = (tile_rows - uint32_t(band) + uint32_t(bands) - 1) / uint32_t(bands);
+  return batch.Dispatch(raycast, args,
+                        std::as_bytes(std::span<const gpu::RaycastBandPush>(&push, 1)),
+                        {GroupCount(setup.render_width, 8), rows, 1}, "raycast");
+}
+
+int VolumeRenderer::Bands(const RenderRequest& request, int width, int height) const {
+  const int64_t rays = int64_t(width) * height;
+  if (request.quality != RenderQuality::kStill || options_.still_band_rays <= 0) return 1;
+  const int64_t tile_rows = (height + 7) / 8;
+  return int(std::clamp<int64_t>(rays / options_.still_band_rays, 1, tile_rows));
 }
 
 Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
@@ -403,11 +422,24 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   if (upscale) RETURN_IF_ERROR(EnsureBuffer(upscaled_, out_pixels * 4, BU::eStorageBuffer));
   RETURN_IF_ERROR(params_->Upload(std::as_bytes(std::span<const gpu::RaycastParams>(&p, 1))));
 
+  // The texels the kernels read for the map: the caller's buffer in place,
+  // else the renderer's copy of the image.
+  const vk::BufferView map_texels =
+      request.backward_map && request.backward_map_texels ? *map_view : *map_texels_view_;
+  const int bands = Bands(request, setup.render_width, setup.render_height);
   ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 5));
   RETURN_IF_ERROR(
-      RecordFrame(batch, request, setup, *minmax, upscale, occupancy_box, *map_view));
-  ASSIGN_OR_RETURN(const auto timings, batch.SubmitAndWait());
+      RecordFrame(batch, request, setup, *minmax, upscale, occupancy_box, map_texels, bands));
+  ASSIGN_OR_RETURN(auto timings, batch.SubmitAndWait());
   if (request.settings.empty_space_skipping && cacheable) occupancy_key_ = key;
+  // The other bands of a still, one submit each: what another renderer
+  // submits meanwhile runs between two of them.
+  for (int b = 1; b < bands; ++b) {
+    ASSIGN_OR_RETURN(auto band, gpu::ComputeBatch::Begin(*context_, 1));
+    RETURN_IF_ERROR(RecordBand(band, request, setup, map_texels, b, bands));
+    ASSIGN_OR_RETURN(auto band_timings, band.SubmitAndWait());
+    timings.insert(timings.end(), band_timings.begin(), band_timings.end());
+  }
 
   Frame frame;
   frame.width = request.width;
@@ -415,6 +447,7 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   frame.render_width = setup.render_width;
   frame.render_height = setup.render_height;
   frame.step_mm = setup.step_mm;
+  frame.bands = bands;
   frame.total_bricks = int64_t(bricks);
   frame.occupancy_reused = request.settings.empty_space_skipping && occupancy_current;
   if (request.settings.empty_space_skipping && !occupancy_box.empty()) {
@@ -424,7 +457,11 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   for (const auto& t : timings) {
     if (t.label == "occupancy") frame.timings.occupancy_ms = t.gpu_ms;
     if (t.label == "map_copy") frame.timings.map_copy_ms = t.gpu_ms;
-    if (t.label == "raycast") frame.timings.raycast_ms = t.gpu_ms;
+    if (t.label == "raycast") {
+      // Summed over the bands; -1 when the device has no timestamps.
+      const double so_far = frame.timings.raycast_ms;
+      frame.timings.raycast_ms = t.gpu_ms < 0 || so_far < 0 ? -1.0 : so_far + t.gpu_ms;
+    }
     if (t.label == "upscale") frame.timings.upscale_ms = t.gpu_ms;
     frame.timings.render_ms += std::max(0.0, t.gpu_ms);
   }

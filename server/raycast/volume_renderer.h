@@ -3,8 +3,10 @@
 // once per volume), the lookup table (rebaked when the preset or the step
 // changes), and the frame buffers. One frame = one command buffer: occupancy
 // (when skipping), ray cast, upscale (interactive), then readback and the
-// overlay on the CPU. Render is serialised by a mutex; one renderer per
-// session is the intended use.
+// overlay on the CPU; a still frame larger than Options::still_band_rays is
+// cast in bands of rows, one submit each. Render is serialised by a mutex;
+// one renderer per session is the intended use (the server's sessions each
+// have one).
 //
 // CPU reference: RenderReference() in raycast_cpu.h.
 #pragma once
@@ -30,10 +32,19 @@ namespace vpm {
 // through a linear sampler (GpuVolume::Image, request.volume_image).
 enum class VolumeAccess { kTexelBuffer, kSampler3D };
 
+// Still frames are cast in bands of about this many rays (interleaved rows
+// of 8 x 8 tiles, gpu::RaycastBandPush), one submit and wait each. Vulkan runs a queue's
+// submits in order, so a frame that another session submits while a still
+// is being cast runs after the band in progress, not after the whole still
+// (docs/RENDERING.md, "Stills in bands"): a 512^2 still is 8 bands, a
+// 256^2 one 2. Interactive frames are never cut.
+inline constexpr int64_t kStillBandRays = 32768;
+
 class VolumeRenderer {
  public:
   struct Options {
     VolumeAccess volume_access = VolumeAccess::kTexelBuffer;
+    int64_t still_band_rays = kStillBandRays;  // 0: a still in one submit
   };
 
   static Result<std::unique_ptr<VolumeRenderer>> Create(const gpu::GpuContext& context,
@@ -97,9 +108,19 @@ class VolumeRenderer {
   static BrickBox BricksMeetingMapBox(const gpu::RaycastParams& p,
                                       const std::array<int, 3>& map_dims, const glm::ivec3& lo,
                                       const glm::ivec3& hi);
+  // Records the frame's first submit: the map copy and occupancy pass as
+  // needed, the ray cast of band 0 of `bands`, and the upscale (interactive
+  // frames, always one band). map_view: the map's texels the kernels read.
   Status RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
                      const RaycastSetup& setup, const gpu::GpuBuffer& minmax, bool upscale,
-                     const BrickBox& occupancy_box, vk::BufferView map_view);
+                     const BrickBox& occupancy_box, vk::BufferView map_view, int bands);
+  // Records the ray cast of band `band` of `bands`: the rows of 8 x 8 tiles
+  // band, band + bands, ... (gpu::RaycastBandPush).
+  Status RecordBand(gpu::ComputeBatch& batch, const RenderRequest& request,
+                    const RaycastSetup& setup, vk::BufferView map_view, int band, int bands);
+  // Bands for a frame cast at width x height: still frames width x height /
+  // still_band_rays (at least 1, at most a tile row each), others 1.
+  int Bands(const RenderRequest& request, int width, int height) const;
 
   const gpu::GpuContext* context_;
   Options options_;

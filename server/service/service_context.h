@@ -4,7 +4,6 @@
 
 #include <atomic>
 
-#include "server/raycast/volume_renderer.h"
 #include "server/service/byte_budget.h"
 #include "server/service/load_progress_registry.h"
 #include "server/service/mesh_store.h"
@@ -21,7 +20,6 @@ namespace vpm::service {
 struct ServiceContext {
   ServerOptions options;
   const gpu::GpuContext* gpu = nullptr;
-  VolumeRenderer* renderer = nullptr;
   TokenAuth* auth = nullptr;
   VolumeStore* volumes = nullptr;
   MeshStore* meshes = nullptr;

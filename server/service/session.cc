@@ -28,7 +28,6 @@ Session::~Session() { volume_->sessions.fetch_sub(1); }
 
 Result<std::shared_ptr<Session>> Session::Create(std::string id, std::string owner,
                                                  const gpu::GpuContext& context,
-                                                 VolumeRenderer& renderer,
                                                  std::shared_ptr<VolumeEntry> volume,
                                                  std::shared_ptr<const MeshEntry> mesh,
                                                  const Options& options) {
@@ -40,8 +39,10 @@ Result<std::shared_ptr<Session>> Session::Create(std::string id, std::string own
   // would otherwise pay a map update per event it never shows).
   DeformableScene::Options scene_options;
   scene_options.defer_map_update = true;
-  ASSIGN_OR_RETURN(session->scene_, DeformableScene::Create(context, volume->volume, volume->gpu,
-                                                            renderer, mesh->mesh, scene_options));
+  ASSIGN_OR_RETURN(session->renderer_, VolumeRenderer::Create(context, {}));
+  ASSIGN_OR_RETURN(session->scene_,
+                   DeformableScene::Create(context, volume->volume, volume->gpu,
+                                           *session->renderer_, mesh->mesh, scene_options));
   return session;
 }
 

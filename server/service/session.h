@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 
+#include "server/raycast/volume_renderer.h"
 #include "server/scene/deformable_scene.h"
 #include "server/service/mesh_store.h"
 #include "server/service/proto_convert.h"
@@ -35,11 +36,11 @@ class Session {
   struct Options {
     double still_delay_ms = 150;  // a frame is interactive this long after a drag
   };
-  // The scene is built here (FEM set-up): call from a worker, not a callback.
-  // `owner`: the user who opens it (session_access.h).
+  // The scene is built here (FEM set-up), with a renderer of the session's
+  // own: call from a worker, not a callback. `owner`: the user who opens it
+  // (session_access.h).
   static Result<std::shared_ptr<Session>> Create(std::string id, std::string owner,
                                                  const gpu::GpuContext& context,
-                                                 VolumeRenderer& renderer,
                                                  std::shared_ptr<VolumeEntry> volume,
                                                  std::shared_ptr<const MeshEntry> mesh,
                                                  const Options& options);
@@ -118,6 +119,12 @@ class Session {
   // alone, so an event's FEM runs while a frame renders.
   std::mutex frame_mutex_;
   std::mutex scene_mutex_;  // the scene is single-threaded
+  // The session's own renderer (its lookup table, brick occupancy and frame
+  // buffers): frames of different sessions are recorded and cast side by
+  // side, and a still frame, cast in bands (VolumeRenderer::Options::
+  // still_band_rays), lets another session's frame run between its bands.
+  // Before scene_, which renders with it.
+  std::unique_ptr<VolumeRenderer> renderer_;
   std::unique_ptr<DeformableScene> scene_;
 
   mutable std::mutex state_mutex_;

@@ -3,8 +3,8 @@
 namespace vpm::service {
 
 Result<std::unique_ptr<SessionManager>> SessionManager::Create(const Options& options) {
-  if (options.context == nullptr || options.renderer == nullptr) {
-    return absl::InvalidArgumentError("SessionManager: no GPU context or renderer");
+  if (options.context == nullptr) {
+    return absl::InvalidArgumentError("SessionManager: no GPU context");
   }
   return std::unique_ptr<SessionManager>(new SessionManager(options));
 }
@@ -34,8 +34,7 @@ Result<std::shared_ptr<Session>> SessionManager::Open(const std::string& owner,
     ++opening_per_user_[owner];
     id = StrCat(options_.id_prefix, next_id_++);
   }
-  auto session = Session::Create(id, owner, *options_.context, *options_.renderer,
-                                 std::move(volume), std::move(mesh), options_.session);
+  auto session = Session::Create(id, owner, *options_.context, std::move(volume), std::move(mesh), options_.session);
   std::lock_guard lock(mutex_);
   --opening_;
   if (--opening_per_user_[owner] <= 0) opening_per_user_.erase(owner);

@@ -20,7 +20,6 @@ class SessionManager {
  public:
   struct Options {
     const gpu::GpuContext* context = nullptr;  // outlive the manager
-    VolumeRenderer* renderer = nullptr;
     int64_t max_sessions = 32;
     int64_t max_sessions_per_user = 16;    // 0: only max_sessions
     double idle_session_s = 900;           // no viewer; 0: never evict

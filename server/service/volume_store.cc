@@ -168,7 +168,6 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string
         evicted_.erase(id);
       }
       entry = std::make_shared<VolumeEntry>(id, std::move(volume), std::move(gpu), bytes);
-      entry->forget_gpu = options_.forget_gpu;
       if (load_key.empty()) {
         entry->owner = user;
       } else if (!user.empty()) {

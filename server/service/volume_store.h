@@ -50,14 +50,8 @@ struct VolumeEntry {
   // The scene may add a 3D image to `gpu` (export); guarded by this.
   std::mutex gpu_mutex;
 
-  // Tells the renderer to drop its per-volume caches before `gpu` is freed.
-  std::function<void(const GpuVolume*)> forget_gpu;
-
   VolumeEntry(std::string id_in, Volume v, GpuVolume g, int64_t b)
       : id(std::move(id_in)), volume(std::move(v)), gpu(std::move(g)), bytes(b) {}
-  ~VolumeEntry() {
-    if (forget_gpu) forget_gpu(&gpu);
-  }
 };
 
 // PermissionDenied unless `user` may use `volume`: its owner, or anyone for
@@ -73,7 +67,6 @@ class VolumeStore {
     int64_t max_bytes = int64_t{8} << 30;
     VolumeLimits read_limits;
     std::function<void(int64_t bytes, int64_t count)> on_change;  // metrics
-    std::function<void(const GpuVolume*)> forget_gpu;              // VolumeEntry::forget_gpu
     std::string id_prefix = "vol-";                                // ids: id_prefix + 1, 2, ...
     // Called (without the store's lock) with the id of each evicted volume,
     // so that the meshes built on it are dropped too.

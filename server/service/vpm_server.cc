@@ -94,7 +94,6 @@ Status VpmServer::Start() {
     ASSIGN_OR_RETURN(own_gpu_, gpu::GpuContext::Create(gpu_options));
     gpu_ = own_gpu_.get();
   }
-  ASSIGN_OR_RETURN(renderer_, VolumeRenderer::Create(*gpu_, {}));
   const FairJobQueue::Limits queue_limits{o.max_queued_per_user, o.max_queued};
   ASSIGN_OR_RETURN(request_pool_,
                    WorkerPool::Create({o.request_threads, "request", queue_limits}));
@@ -108,7 +107,6 @@ Status VpmServer::Start() {
   volume_options.on_change = [m = metrics_.get()](int64_t bytes, int64_t count) {
     m->Volumes(bytes, count);
   };
-  volume_options.forget_gpu = [r = renderer_.get()](const GpuVolume* v) { r->ForgetVolume(v); };
   id_tag_ = RandomIdTag();
   volume_options.id_prefix = StrCat("vol-", id_tag_, "-");
   volume_options.on_evict = [this](const std::string& id) {
@@ -123,7 +121,6 @@ Status VpmServer::Start() {
                                                StrCat("mesh-", id_tag_, "-")}));
   SessionManager::Options session_options;
   session_options.context = gpu_;
-  session_options.renderer = renderer_.get();
   session_options.max_sessions = o.max_sessions;
   session_options.idle_session_s = o.idle_session_s;
   session_options.idle_watched_session_s = o.idle_watched_session_s;
@@ -144,7 +141,6 @@ Status VpmServer::Start() {
 
   context_.options = o;
   context_.gpu = gpu_;
-  context_.renderer = renderer_.get();
   context_.auth = &*auth_;
   context_.volumes = volumes_.get();
   context_.meshes = meshes_.get();

@@ -1,6 +1,6 @@
-// The whole vpm-server process minus main(): the GPU context and renderer,
-// the managers, the worker pools, metrics, and the gRPC server with the vpm
-// service, grpc.health.v1 and reflection. Members are declared in dependency
+// The whole vpm-server process minus main(): the GPU context, the managers
+// (each session has its own renderer), the worker pools, metrics, and the
+// gRPC server with the vpm service, grpc.health.v1 and reflection. Members are declared in dependency
 // order, so destruction runs in reverse.
 #pragma once
 
@@ -13,7 +13,6 @@
 #include <grpcpp/grpcpp.h>
 
 #include "server/gpu/gpu_context.h"
-#include "server/raycast/volume_renderer.h"
 #include "server/service/server_options.h"
 #include "server/service/service_context.h"
 #include "server/service/vpm_service.h"
@@ -59,7 +58,6 @@ class VpmServer {
   ServerOptions options_;
   std::unique_ptr<gpu::GpuContext> own_gpu_;
   const gpu::GpuContext* gpu_ = nullptr;
-  std::unique_ptr<VolumeRenderer> renderer_;
   std::unique_ptr<ServiceMetrics> metrics_;
   std::optional<TokenAuth> auth_;
   std::unique_ptr<WorkerPool> request_pool_;

@@ -399,6 +399,46 @@ TEST_F(RaycastTest, InteractiveQuality_HalfResolutionUpscaled) {
   EXPECT_GT(CompareRgba(gpu.rgba, RenderGpu(r).rgba).psnr_db, 22.0);
 }
 
+// A still frame cast in bands (interleaved rows of tiles), one submit each,
+// is the frame cast in one: the same pixels bit for bit and the same
+// samples, for DVR and MIP, through a map, with bands of unequal height;
+// interactive frames stay whole.
+TEST_F(RaycastTest, StillBands_SameFrameAsOneSubmit) {
+  HostBackwardMap host;
+  auto map = MakeMap(9, 6.0, &host);
+  ASSERT_TRUE(map.ok()) << map.status();
+  auto whole = VolumeRenderer::Create(context(), {.still_band_rays = 0});
+  // 100 x 70: 7,000 rays in 4 bands of 1,750, over 9 rows of 8 x 8 tiles
+  // (the last one 6 pixels high): band 0 takes tile rows 0, 4, 8, the
+  // others two each.
+  auto banded = VolumeRenderer::Create(context(), {.still_band_rays = 1750});
+  ASSERT_TRUE(whole.ok() && banded.ok());
+  for (RenderMode mode : {RenderMode::kDvr, RenderMode::kMip}) {
+    SCOPED_TRACE(mode == RenderMode::kDvr ? "DVR" : "MIP");
+    RenderRequest r = Request(mode);
+    r.width = 100;
+    r.height = 70;
+    r.backward_map = &*map;
+    r.settings.count_samples = true;
+    auto one = (*whole)->Render(r);
+    auto cut = (*banded)->Render(r);
+    ASSERT_TRUE(one.ok() && cut.ok()) << one.status() << cut.status();
+    EXPECT_EQ(one->bands, 1);
+    EXPECT_EQ(cut->bands, 4);
+    EXPECT_GT(LitPixels(*cut), 100);
+    EXPECT_EQ(cut->rgba, one->rgba);
+    EXPECT_EQ(cut->samples, one->samples);
+    r.quality = RenderQuality::kInteractive;
+    auto interactive = (*banded)->Render(r);
+    ASSERT_TRUE(interactive.ok()) << interactive.status();
+    EXPECT_EQ(interactive->bands, 1);
+  }
+  // The default: a 512^2 still in 8 bands.
+  RenderRequest r = Request(RenderMode::kMip, "ct-vessels", 512);
+  const Frame still = RenderGpu(r);
+  EXPECT_EQ(still.bands, int(512 * 512 / kStillBandRays));
+}
+
 // Interactive DVR shades with the gradient of the trilinear cells (chain
 // rule through the map): GPU and CPU agree as for the tap gradient, and the
 // picture stays close to that of the taps.
