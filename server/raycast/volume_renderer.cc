@@ -274,7 +274,7 @@ VolumeRenderer::BrickBox VolumeRenderer::BricksMeetingMapBox(const gpu::RaycastP
 Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
                                    const RaycastSetup& setup, const gpu::GpuBuffer& minmax,
                                    bool upscale, const BrickBox& occupancy_box,
-                                   vk::BufferView map_view, int bands) {
+                                   vk::BufferView map_view, const Cast& cast, int bands) {
   const gpu::RaycastParams& p = setup.params;
   const gpu::GpuImage3D* map = request.backward_map ? request.backward_map : &*identity_map_;
   const bool sampled = options_.volume_access == VolumeAccess::kSampler3D;
@@ -304,7 +304,7 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
                                    {&minmax, map_view, &*nonzero_prefix_, &*occupancy_},
                                    push, {GroupCount(bricks, 64), 1, 1}, "occupancy"));
   }
-  RETURN_IF_ERROR(RecordBand(batch, request, setup, map_view, 0, bands));
+  RETURN_IF_ERROR(RecordBand(batch, cast, setup, 0, bands));
   if (upscale) {
     const gpu::UpscalePush push{
         .size = glm::ivec4(setup.render_width, setup.render_height, request.width,
@@ -317,10 +317,9 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
   return absl::OkStatus();
 }
 
-Status VolumeRenderer::RecordBand(gpu::ComputeBatch& batch, const RenderRequest& request,
-                                  const RaycastSetup& setup, vk::BufferView map_view, int band,
-                                  int bands) {
-  const gpu::RaycastParams& p = setup.params;
+Result<VolumeRenderer::Cast> VolumeRenderer::PrepareCast(const RenderRequest& request,
+                                                         const RaycastSetup& setup,
+                                                         vk::BufferView map_view) {
   const bool sampled = options_.volume_access == VolumeAccess::kSampler3D;
   const bool mip = request.mode == RenderMode::kMip;
   const bool has_map = request.backward_map != nullptr;
@@ -328,24 +327,29 @@ Status VolumeRenderer::RecordBand(gpu::ComputeBatch& batch, const RenderRequest&
   const gpu::KernelArg volume_arg = sampled ? gpu::KernelArg(request.volume_image)
                                             : gpu::KernelArg(request.volume->texel_view());
   const gpu::KernelArg map_arg = sampled ? gpu::KernelArg(map) : gpu::KernelArg(map_view);
-  const std::array<gpu::KernelArg, 7> args{
-      volume_arg, map_arg, &*params_, &*lut_, *occupancy_view_, &*pixels_, &*stats_};
-  ASSIGN_OR_RETURN(const gpu::ComputeKernel raycast,
-                   request.volume->KernelFor(*context_, (p.image.z & kRaycastCellGradient) != 0
-                                                            ? *cell_gradient_kernels_[has_map]
-                                                            : *raycast_kernels_[mip][has_map]));
+  ASSIGN_OR_RETURN(gpu::ComputeKernel kernel,
+                   request.volume->KernelFor(
+                       *context_, (setup.params.image.z & kRaycastCellGradient) != 0
+                                      ? *cell_gradient_kernels_[has_map]
+                                      : *raycast_kernels_[mip][has_map]));
+  return Cast{std::move(kernel),
+              {volume_arg, map_arg, &*params_, &*lut_, *occupancy_view_, &*pixels_, &*stats_}};
+}
+
+Status VolumeRenderer::RecordBand(gpu::ComputeBatch& batch, const Cast& cast,
+                                  const RaycastSetup& setup, int band, int bands) {
   const gpu::RaycastBandPush push{.rows = glm::ivec4(band, bands, 0, 0)};
   // Tile rows band, band + bands, ... below the frame's GroupCount(height).
   const uint32_t tile_rows = GroupCount(setup.render_height, 8);
   const uint32_t rows = (tile_rows - uint32_t(band) + uint32_t(bands) - 1) / uint32_t(bands);
-  return batch.Dispatch(raycast, args,
+  return batch.Dispatch(cast.kernel, cast.args,
                         std::as_bytes(std::span<const gpu::RaycastBandPush>(&push, 1)),
                         {GroupCount(setup.render_width, 8), rows, 1}, "raycast");
 }
 
 int VolumeRenderer::Bands(const RenderRequest& request, int width, int height) const {
-  const int64_t rays = int64_t(width) * height;
   if (request.quality != RenderQuality::kStill || options_.still_band_rays <= 0) return 1;
+  const int64_t rays = int64_t(width) * height;
   const int64_t tile_rows = (height + 7) / 8;
   return int(std::clamp<int64_t>(rays / options_.still_band_rays, 1, tile_rows));
 }
@@ -427,16 +431,17 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   const vk::BufferView map_texels =
       request.backward_map && request.backward_map_texels ? *map_view : *map_texels_view_;
   const int bands = Bands(request, setup.render_width, setup.render_height);
+  ASSIGN_OR_RETURN(const Cast cast, PrepareCast(request, setup, map_texels));
   ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 5));
-  RETURN_IF_ERROR(
-      RecordFrame(batch, request, setup, *minmax, upscale, occupancy_box, map_texels, bands));
+  RETURN_IF_ERROR(RecordFrame(batch, request, setup, *minmax, upscale, occupancy_box, map_texels,
+                              cast, bands));
   ASSIGN_OR_RETURN(auto timings, batch.SubmitAndWait());
   if (request.settings.empty_space_skipping && cacheable) occupancy_key_ = key;
   // The other bands of a still, one submit each: what another renderer
   // submits meanwhile runs between two of them.
   for (int b = 1; b < bands; ++b) {
     ASSIGN_OR_RETURN(auto band, gpu::ComputeBatch::Begin(*context_, 1));
-    RETURN_IF_ERROR(RecordBand(band, request, setup, map_texels, b, bands));
+    RETURN_IF_ERROR(RecordBand(band, cast, setup, b, bands));
     ASSIGN_OR_RETURN(auto band_timings, band.SubmitAndWait());
     timings.insert(timings.end(), band_timings.begin(), band_timings.end());
   }

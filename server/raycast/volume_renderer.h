@@ -11,6 +11,7 @@
 // CPU reference: RenderReference() in raycast_cpu.h.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -108,16 +109,25 @@ class VolumeRenderer {
   static BrickBox BricksMeetingMapBox(const gpu::RaycastParams& p,
                                       const std::array<int, 3>& map_dims, const glm::ivec3& lo,
                                       const glm::ivec3& hi);
+  // The frame's ray caster (specialized for the volume) and its arguments,
+  // resolved once for all its bands. map_view: the map's texels it reads.
+  struct Cast {
+    gpu::ComputeKernel kernel;
+    std::array<gpu::KernelArg, 7> args;
+  };
+  Result<Cast> PrepareCast(const RenderRequest& request, const RaycastSetup& setup,
+                           vk::BufferView map_view);
   // Records the frame's first submit: the map copy and occupancy pass as
   // needed, the ray cast of band 0 of `bands`, and the upscale (interactive
   // frames, always one band). map_view: the map's texels the kernels read.
   Status RecordFrame(gpu::ComputeBatch& batch, const RenderRequest& request,
                      const RaycastSetup& setup, const gpu::GpuBuffer& minmax, bool upscale,
-                     const BrickBox& occupancy_box, vk::BufferView map_view, int bands);
+                     const BrickBox& occupancy_box, vk::BufferView map_view, const Cast& cast,
+                     int bands);
   // Records the ray cast of band `band` of `bands`: the rows of 8 x 8 tiles
   // band, band + bands, ... (gpu::RaycastBandPush).
-  Status RecordBand(gpu::ComputeBatch& batch, const RenderRequest& request,
-                    const RaycastSetup& setup, vk::BufferView map_view, int band, int bands);
+  Status RecordBand(gpu::ComputeBatch& batch, const Cast& cast, const RaycastSetup& setup,
+                    int band, int bands);
   // Bands for a frame cast at width x height: still frames width x height /
   // still_band_rays (at least 1, at most a tile row each), others 1.
   int Bands(const RenderRequest& request, int width, int height) const;

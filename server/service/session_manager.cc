@@ -34,7 +34,8 @@ Result<std::shared_ptr<Session>> SessionManager::Open(const std::string& owner,
     ++opening_per_user_[owner];
     id = StrCat(options_.id_prefix, next_id_++);
   }
-  auto session = Session::Create(id, owner, *options_.context, std::move(volume), std::move(mesh), options_.session);
+  auto session = Session::Create(id, owner, *options_.context, std::move(volume),
+                                 std::move(mesh), options_.session);
   std::lock_guard lock(mutex_);
   --opening_;
   if (--opening_per_user_[owner] <= 0) opening_per_user_.erase(owner);
