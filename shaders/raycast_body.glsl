@@ -17,7 +17,8 @@
 //
 // Per ray: intersect the image box [0, extent_mm]; samples at
 // t_k = t_near + k * step; each reads the deformed volume J(x) = I(X(x)), X
-// from the backward map. Bricks of wx x wy x wz cells (p.brick_voxels: about
+// from the backward map (the brick-walk loops read two samples per
+// iteration, docs/RENDERING.md). Bricks of wx x wy x wz cells (p.brick_voxels: about
 // 6 mm still, 12 mm interactive, whatever the spacing) that the occupancy pass marked
 // empty (DVR: zero opacity over every value the brick can show; MIP: nothing
 // above the running maximum or the window's black) are jumped over to the
@@ -427,6 +428,25 @@ vec3 shade(vec3 rgb, vec3 g, vec3 dir) {
   return min(lit, vec3(1.0));
 }
 
+// Composites one cell-gradient DVR sample (value v, gradient g in value/mm)
+// front to back into acc: the table's colour and opacity, lit when shading
+// (head-on when its weight in the pixel is under kShadeMinWeight). True
+// when early termination ends the ray (acc.a past kOpaque).
+bool composite_sample(float v, vec3 g, vec3 dir, bool shading, bool early, inout vec4 acc) {
+  vec4 c = lut_at(v);
+  float w = (1.0 - acc.a) * c.a;
+  if (shading) {
+    c.rgb = w > kShadeMinWeight ? shade(c.rgb, g, dir)
+                                : min(c.rgb * (g_shading.x + g_shading.y), vec3(1.0));
+  }
+  if (c.a > 0.0) {
+    acc.rgb += w * c.rgb;
+    acc.a += w;
+    return early && acc.a > kOpaque;
+  }
+  return false;
+}
+
 uint pack_rgba(vec3 rgb) {
   uvec3 c = uvec3(clamp(rgb, 0.0, 1.0) * 255.0 + 0.5);
   return c.r | (c.g << 8) | (c.b << 16) | (255u << 24);
@@ -509,13 +529,28 @@ void main() {
        walk_step(w)) {
     vec3 x;
     segment_sample(k, t_near, step, t_end, eye, dir, x);  // next_segment: in the segment
+    // Two samples per iteration (docs/RENDERING.md, "Two samples per
+    // iteration"): both reads first, then the maximum sample by sample.
     for (;;) {
+      vec3 x2;
+      bool second = segment_sample(k + 1, t_near, step, t_end, eye, dir, x2);
+      float v1 = deformed_value(x);
+      float v2 = deformed_value(second ? x2 : x);
       ++taken;
-      ray_max = max(ray_max, deformed_value(x));
       ++k;
+      ray_max = max(ray_max, v1);
       if (early && ray_max >= white) {
         done = true;
         break;
+      }
+      if (second) {
+        ++taken;
+        ++k;
+        ray_max = max(ray_max, v2);
+        if (early && ray_max >= white) {
+          done = true;
+          break;
+        }
       }
       if (!segment_sample(k, t_near, step, t_end, eye, dir, x)) break;
     }
@@ -535,20 +570,24 @@ void main() {
          walk_step(walk)) {
       vec3 x;
       segment_sample(k, t_near, step, t_end, eye, dir, x);  // next_segment: in the segment
+      // Two samples per iteration, as in the MIP loop: both reads first,
+      // then compositing front to back, sample by sample.
       for (;;) {
+        vec3 x2;
+        bool second = segment_sample(k + 1, t_near, step, t_end, eye, dir, x2);
+        vec3 grad1, grad2;
+        float v1 = deformed_value_and_gradient(x, grad1);
+        float v2 = deformed_value_and_gradient(second ? x2 : x, grad2);
         ++taken;
-        vec3 grad;
-        vec4 c = lut_at(deformed_value_and_gradient(x, grad));
-        float w = (1.0 - acc.a) * c.a;
-        if (shading) {
-          c.rgb = w > kShadeMinWeight ? shade(c.rgb, grad, dir)
-                                      : min(c.rgb * (g_shading.x + g_shading.y), vec3(1.0));
-        }
         ++k;
-        if (c.a > 0.0) {
-          acc.rgb += w * c.rgb;
-          acc.a += w;
-          if (early && acc.a > kOpaque) {
+        if (composite_sample(v1, grad1, dir, shading, early, acc)) {
+          done = true;
+          break;
+        }
+        if (second) {
+          ++taken;
+          ++k;
+          if (composite_sample(v2, grad2, dir, shading, early, acc)) {
             done = true;
             break;
           }
