@@ -359,21 +359,42 @@ void walk_step(inout BrickWalk w) {
   w.t_next += vec3(m) * w.t_delta;
 }
 
+// The occupancy of brick b (clamped to the grid).
+float brick_occupancy(ivec3 b) {
+  b = clamp(b, ivec3(0), g_bricks - 1);
+  return texelFetch(u_occupancy, b.x + g_bricks.x * (b.y + g_bricks.y * b.z)).r;
+}
+
+// True when the walk's brick, of occupancy occ, is above threshold and holds
+// a sample (index >= k); then sets k to its first sample.
+bool enter_brick(BrickWalk w, float occ, inout int k, float threshold, float t_near, float t_far,
+                 float step) {
+  int first = max(k, int(ceil((w.t_enter - t_near) / step)));
+  float t_first = t_near + float(first) * step;
+  if (t_first <= min(walk_exit(w), t_far) && occ > threshold) {
+    k = first;
+    return true;
+  }
+  return false;
+}
+
 // Walks on to the first brick that holds a sample (index >= k) and whose
 // occupancy is above threshold; sets k to that brick's first sample. False
-// when the ray ends first.
+// when the ray ends first. Two bricks per iteration: both occupancy reads
+// in flight at once, then the bricks tested in order, the same decisions as
+// one brick at a time (docs/RENDERING.md, "Two samples per iteration").
 bool walk_to_occupied(inout BrickWalk w, inout int k, float threshold, float t_near,
                       float t_far, float step) {
   for (;;) {
+    BrickWalk next = w;
+    walk_step(next);
+    float occ = brick_occupancy(w.b);
+    float occ_next = brick_occupancy(next.b);
     if (w.t_enter > t_far) return false;
-    int first = max(k, int(ceil((w.t_enter - t_near) / step)));
-    float t_first = t_near + float(first) * step;
-    ivec3 b = clamp(w.b, ivec3(0), g_bricks - 1);
-    if (t_first <= min(walk_exit(w), t_far) &&
-        texelFetch(u_occupancy, b.x + g_bricks.x * (b.y + g_bricks.y * b.z)).r > threshold) {
-      k = first;
-      return true;
-    }
+    if (enter_brick(w, occ, k, threshold, t_near, t_far, step)) return true;
+    w = next;
+    if (w.t_enter > t_far) return false;
+    if (enter_brick(w, occ_next, k, threshold, t_near, t_far, step)) return true;
     walk_step(w);
   }
 }
