@@ -10,7 +10,7 @@
 // inside a panel), so the FEM takes exactly the path it took with Eigen's
 // solve. The backward solve stays one dependent chain of subtractions per
 // column, as Eigen's; summing a panel's columns together halves the solve
-// again but changes its rounding (docs/BENCHMARKS.md, "Drag loop").
+// again but changes its rounding (docs/benchmarks/DRAG_LOOP.md).
 #pragma once
 
 #include <cstdint>

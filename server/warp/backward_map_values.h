@@ -20,7 +20,7 @@ inline constexpr double kBackwardMapEps = 1e-5;
 // At most this many default map grid points per axis: the map follows the
 // mesh (a lattice step h of extent / 20 by default), not the voxel count, so
 // that a 512 x 512 x 900 CT's drags cost what the 256^3 phantom's do
-// (docs/BENCHMARKS.md, "Full-size volumes"); 64 is the phantom's own.
+// (docs/benchmarks/FULL_SIZE.md); 64 is the phantom's own.
 inline constexpr int64_t kMaxDefaultMapPointsPerAxis = 64;
 
 // The default map resolution: ceil(n / 4) grid points per axis, at least 2
