@@ -56,7 +56,10 @@ layout(binding = 1) uniform samplerBuffer u_map;  // RGBA32F, grid points x fast
 // descriptor bind, and never frees it (docs/SERVICE.md, "Memory findings");
 // storage-buffer loads are not inlined.
 layout(std140, binding = 2) restrict readonly buffer Params { RaycastParams p; };
-layout(std140, binding = 3) uniform Lut { vec4 entries[VPM_RENDER_LUT_ENTRIES]; } u_lut;
+// The baked table (RenderLutBlock: VPM_RENDER_LUT_ENTRIES RGBA entries) as a
+// uniform texel buffer: lavapipe gathers it; indexed per sample in a uniform
+// block it cost the composite still 7-10% more (docs/RENDERING.md).
+layout(binding = 3) uniform samplerBuffer u_lut;
 // Per brick (R32F), as a uniform texel buffer: one gather per fetch on
 // lavapipe.
 layout(binding = 4) uniform samplerBuffer u_occupancy;
@@ -426,8 +429,8 @@ vec4 lut_at(float v) {
   float f = clamp((v - g_lut.x) * g_lut.y, 0.0, n - 1.0);
   int i = min(int(f), int(n) - 2);
   float t = f - float(i);
-  vec4 a = u_lut.entries[i];
-  vec4 b = u_lut.entries[i + 1];
+  vec4 a = texelFetch(u_lut, i);
+  vec4 b = texelFetch(u_lut, i + 1);
   return a + (b - a) * t;
 }
 

@@ -101,8 +101,9 @@ struct RaycastParams {
 };
 static_assert(sizeof(RaycastParams) == 256 + 16 * kRaycastMaxClipPlanes);
 
-// Uniform block RenderLutBlock (std140): colour (rgb) and opacity for the
-// frame's step (a) at value_lo + i / (entries per value unit).
+// RenderLutBlock: colour (rgb) and opacity for the frame's step (a) at
+// value_lo + i / (entries per value unit); the ray casters read it as an
+// RGBA32F uniform texel buffer, one entry a texel.
 inline constexpr int kRenderLutEntries = 1024;
 struct RenderLutBlock {
   glm::vec4 entries[kRenderLutEntries];

@@ -78,7 +78,7 @@ Status VolumeRenderer::Init() {
         .name = StrCat("raycast_", mip ? "mip" : "dvr", map ? "_map" : "", sampled ? "_sampled" : "",
                        cell_gradient ? " (cell gradient)" : ""),
         .spirv = RaycastSpirv(sampled, mip, map),
-        .bindings = {volume_read, volume_read, DT::eStorageBuffer, DT::eUniformBuffer,
+        .bindings = {volume_read, volume_read, DT::eStorageBuffer, DT::eUniformTexelBuffer,
                      DT::eUniformTexelBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
         .push_constant_bytes = sizeof(gpu::RaycastBandPush),
         .local_size = {8, 8, 1}};
@@ -115,7 +115,14 @@ Status VolumeRenderer::Init() {
   identity_map_.emplace(std::move(identity));
   // Params are a storage buffer (shaders/raycast_body.glsl says why).
   RETURN_IF_ERROR(EnsureBuffer(params_, sizeof(gpu::RaycastParams), BU::eStorageBuffer));
-  RETURN_IF_ERROR(EnsureBuffer(lut_, sizeof(gpu::RenderLutBlock), BU::eUniformBuffer));
+  RETURN_IF_ERROR(
+      EnsureBuffer(lut_, sizeof(gpu::RenderLutBlock), BU::eUniformTexelBuffer));
+  RETURN_IF_ERROR(gpu::CatchVulkan("creating the lookup table's texel view", [&] {
+    lut_view_ = vk::raii::BufferView(
+        context_->device(), vk::BufferViewCreateInfo({}, lut_->handle(),
+                                                     vk::Format::eR32G32B32A32Sfloat, 0,
+                                                     VK_WHOLE_SIZE));
+  }));
   RETURN_IF_ERROR(EnsureBuffer(nonzero_prefix_, (gpu::kRenderLutEntries + 1) * sizeof(int32_t),
                                BU::eStorageBuffer));
   RETURN_IF_ERROR(EnsureBuffer(stats_, 16, BU::eStorageBuffer));
@@ -333,7 +340,7 @@ Result<VolumeRenderer::Cast> VolumeRenderer::PrepareCast(const RenderRequest& re
                                       ? *cell_gradient_kernels_[has_map]
                                       : *raycast_kernels_[mip][has_map]));
   return Cast{std::move(kernel),
-              {volume_arg, map_arg, &*params_, &*lut_, *occupancy_view_, &*pixels_, &*stats_}};
+              {volume_arg, map_arg, &*params_, *lut_view_, *occupancy_view_, &*pixels_, &*stats_}};
 }
 
 Status VolumeRenderer::RecordBand(gpu::ComputeBatch& batch, const Cast& cast,

@@ -146,7 +146,11 @@ class VolumeRenderer {
   std::optional<gpu::GpuBuffer> map_texels_;
   vk::raii::BufferView map_texels_view_{nullptr};  // after the buffer it views
   std::optional<gpu::GpuBuffer> params_;          // RaycastParams, storage
-  std::optional<gpu::GpuBuffer> lut_;             // RenderLutBlock, uniform
+  // RenderLutBlock, read by the ray casters through an RGBA32F texel view
+  // (a gather per fetch on lavapipe; as a uniform block indexed per sample
+  // the composite still cost 7-10% more, docs/RENDERING.md).
+  std::optional<gpu::GpuBuffer> lut_;
+  vk::raii::BufferView lut_view_{nullptr};  // after the buffer it views
   std::optional<gpu::GpuBuffer> nonzero_prefix_;  // int per entry + 1, storage
   std::optional<gpu::GpuBuffer> stats_;           // sample counter, storage
   // Float per brick: written as storage, read by the ray casters through a
