@@ -285,10 +285,10 @@ float deformed_value_and_gradient(vec3 x, out vec3 grad) {
 
 ivec3 brick_of(vec3 x) { return clamp(ivec3(floor(x * g_inv_brick)), ivec3(0), g_bricks - 1); }
 
-int brick_index(vec3 x) {
-  ivec3 b = brick_of(x);
-  return b.x + g_bricks.x * (b.y + g_bricks.y * b.z);
-}
+// Linear index of brick b of the grid (x fastest).
+int brick_linear(ivec3 b) { return b.x + g_bricks.x * (b.y + g_bricks.y * b.z); }
+
+int brick_index(vec3 x) { return brick_linear(brick_of(x)); }
 
 // Ray parameter where the ray leaves the brick holding x.
 float brick_exit(vec3 x, vec3 eye, vec3 inv_dir) {
@@ -364,8 +364,7 @@ void walk_step(inout BrickWalk w) {
 
 // The occupancy of brick b (clamped to the grid).
 float brick_occupancy(ivec3 b) {
-  b = clamp(b, ivec3(0), g_bricks - 1);
-  return texelFetch(u_occupancy, b.x + g_bricks.x * (b.y + g_bricks.y * b.z)).r;
+  return texelFetch(u_occupancy, brick_linear(clamp(b, ivec3(0), g_bricks - 1))).r;
 }
 
 // True when the walk's brick, of occupancy occ, is above threshold and holds
