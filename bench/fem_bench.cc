@@ -85,7 +85,7 @@ DragResult Drag(FemModel& model, const glm::dvec3& point, double radius_mm) {
   }
   r.inverted = model.CountInvertedTets();
   r.displacement = model.Displacements();
-  model.Release();
+  (void)model.Release();
   return r;
 }
 

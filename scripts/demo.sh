@@ -60,6 +60,26 @@ done
 "$vpm" slice --volume "$ct" "${ct_mesh[@]}" --drag 0 0 10 --plane sagittal --overlay \
   --out out/ct_sagittal_after_overlay.png | tail -1
 echo
+echo "== a real patient's abdominal CT: grab the left kidney, drag it 15 mm superior"
+# tests/data/ct-abdomen-kidney: the grab at the left kidney's centre
+# (physical mm; world LPS (79, -125, 358)) takes the organ (the tissue
+# connected to the point) and drags it superior; Slicer's CT-Soft-Tissue with
+# the view cut shows it in 3D.
+kidney=tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz
+kidney_grab=(--grab 99 114 264)
+kidney_before=$("$vpm" render --volume "$kidney" "${kidney_grab[@]}" --preset CT-Soft-Tissue \
+  --out out/kidney_before.png)
+echo "$kidney_before" | grep -E '^grab|^mesh'
+"$vpm" render --volume "$kidney" "${kidney_grab[@]}" --preset CT-Soft-Tissue --drag 0 0 15 \
+  --out out/kidney_after.png | grep -E '^mesh'
+kidney_pixel=$(echo "$kidney_before" | sed -n 's/^grab point at pixel (\([0-9.-]*\), \([0-9.-]*\))$/\1 \2/p')
+# shellcheck disable=SC2086
+python3 scripts/region_difference.py out/kidney_before.png out/kidney_after.png $kidney_pixel 40
+"$vpm" slice --volume "$kidney" "${kidney_grab[@]}" --plane coronal --pixel 1 \
+  --out out/kidney_coronal_before.png | tail -1
+"$vpm" slice --volume "$kidney" "${kidney_grab[@]}" --drag 0 0 15 --plane coronal --pixel 1 \
+  --out out/kidney_coronal_after.png | tail -1
+echo
 echo "== vpm compare-meshes (same vertex budget; section-6 measures)"
 "$vpm" compare-meshes --volume phantom:abdomen --json out/compare-meshes.json
 echo
@@ -73,6 +93,8 @@ echo "                               vertices yellow, hard blue, handles and dra
 echo "  slice_before/after.png       coronal slices through the grab (cut tets outlined)"
 echo "  ct_before/after.png          the tilted head CT: 3D frames before and after a 10 mm drag"
 echo "  ct_{coronal,sagittal}_*.png  its slices through the grab, before and after"
+echo "  kidney_*.png                 the abdominal CT: its left kidney dragged 15 mm superior,"
+echo "                               3D (CT-Soft-Tissue, cut) and coronal slice, before and after"
 echo "  deformed.nii.gz              the deformed volume, source geometry"
 echo "  compare-meshes.json          section-6 reconstruction measures"
 echo "  phantom_abdomen.nii.gz       the phantom itself"

@@ -51,7 +51,16 @@ Result<std::optional<MipWindow>> WindowOf(const std::vector<double>& w) {
 void AddGrabFlags(CLI::App* app, RenderArgs* a) {
   app->add_option("--grab", a->grab, "grab point X Y Z (mm, physical voxel space)")->expected(3);
   app->add_option("--grab-landmark", a->grab_landmark, "grab at a named landmark");
-  app->add_option("--grab-radius", a->grab_radius, "handle radius in mm (default: h)");
+  app->add_option("--grab-rule", a->grab_rule,
+                  "organ: the tissue connected to the grab point moves as a body (default); "
+                  "ball: the vertices within --grab-radius (the paper's grab)")
+      ->check(CLI::IsMember({"organ", "ball"}));
+  app->add_option("--grab-radius", a->grab_radius,
+                  "ball: handle radius in mm (default: h); organ: the organ's bound (default 80)");
+  app->add_option("--pin", a->pins,
+                  "hold the tissue at X Y Z (mm, physical voxel space) still; repeatable")
+      ->expected(3)
+      ->take_all();
   app->add_option("--drag", a->drag, "drag the handles by DX DY DZ mm")->expected(3);
   app->add_option("--pull", a->pull, "pull the handles with FX FY FZ N in total")->expected(3);
 }
@@ -123,12 +132,19 @@ Result<std::unique_ptr<OfflineScene>> PrepareOfflineScene(const RenderArgs& args
                                                        *out->gpu_volume, *out->renderer,
                                                        out->mesh, {}));
   out->setup_ms = MsSince(t0);
+  for (size_t p = 0; p + 2 < args.pins.size(); p += 3) {
+    const glm::dvec3 pin(args.pins[p], args.pins[p + 1], args.pins[p + 2]);
+    RETURN_IF_ERROR(out->scene->Pin(pin, 0.0).status());
+    std::printf("pin at (%.1f, %.1f, %.1f) mm\n", pin.x, pin.y, pin.z);
+  }
   const std::optional<glm::dvec3>& grab = out->grab;
   if (grab) {
-    const double radius = args.grab_radius > 0 ? args.grab_radius : out->mesh.stats.h_mm;
-    ASSIGN_OR_RETURN(GrabInfo info, out->scene->Grab(*grab, radius));
-    std::printf("grab at (%.1f, %.1f, %.1f) mm, radius %.1f mm: %zu handles%s%s\n", grab->x,
-                grab->y, grab->z, radius, info.handles.size(), info.message.empty() ? "" : "; ",
+    const GrabRule rule = args.grab_rule == "ball" ? GrabRule::kBall : GrabRule::kOrgan;
+    ASSIGN_OR_RETURN(GrabInfo info, out->scene->Grab(GrabRequest{
+                                        .point_mm = *grab, .rule = rule,
+                                        .radius_mm = args.grab_radius}));
+    std::printf("grab (%s) at (%.1f, %.1f, %.1f) mm: %zu handles%s%s\n", args.grab_rule.c_str(),
+                grab->x, grab->y, grab->z, info.handles.size(), info.message.empty() ? "" : "; ",
                 info.message.c_str());
     if (!args.drag.empty()) {
       ASSIGN_OR_RETURN(glm::dvec3 offset, Vec3Of(args.drag, "--drag"));

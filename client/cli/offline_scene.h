@@ -32,7 +32,9 @@ struct RenderArgs {
   std::string render_tf;        // a ParaView .json[#NAME] or Slicer .vp; overrides preset
   std::vector<double> window;   // MIP: W L (the volume's units)
   std::vector<double> grab, drag, pull;
+  std::vector<double> pins;  // 3 per --pin: X Y Z, mm
   std::string grab_landmark;
+  std::string grab_rule = "organ";  // organ | ball
   double grab_radius = 0.0;
   std::vector<int> size{512, 512};
   bool overlay = false;
@@ -41,8 +43,8 @@ struct RenderArgs {
   VolumeFlags volume_flags;
 };
 
-// The grab and drag flags (--grab, --grab-landmark, --grab-radius, --drag,
-// --pull), shared by the commands that deform.
+// The grab and drag flags (--grab, --grab-landmark, --grab-rule,
+// --grab-radius, --pin, --drag, --pull), shared by the commands that deform.
 void AddGrabFlags(CLI::App* app, RenderArgs* args);
 
 // --window W L: MIP black at L - W/2, white at L + W/2; empty: none.

@@ -147,6 +147,7 @@ Result<ProxyMesh> FetchMesh(const ServerConnection& server, const std::string& m
     out.lattice_id = v.lattice_id();
     ASSIGN_OR_RETURN(out.kind, KindOf(v.kind()));
     out.hard = v.hard();
+    out.skeleton = v.hard() && v.skeleton();
     out.cost = v.cost();
     mesh.vertices.push_back(out);
   }

@@ -49,9 +49,10 @@ Status RunOffline(const RenderArgs& args) {
   const double encode_ms = MsSince(t0);
   RETURN_IF_ERROR(WriteFile(
       args.out, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size())));
-  std::printf("mesh %zu vertices, %zu tets; max displacement %.2f mm, inverted tets %lld\n",
-              mesh.vertices.size(), mesh.tets.size(), step.max_displacement_mm,
-              static_cast<long long>(step.inverted_tets));
+  std::printf(
+      "mesh %zu vertices, %zu tets; max displacement %.2f mm, inverted tets %lld, lag %.2f mm\n",
+      mesh.vertices.size(), mesh.tets.size(), step.max_displacement_mm,
+      static_cast<long long>(step.inverted_tets), step.lag_mm);
   if (offline->grab) {
     if (auto at = view.camera.Project(*offline->grab, frame.width, frame.height)) {
       std::printf("grab point at pixel (%.0f, %.0f)\n", at->x, at->y);
@@ -144,12 +145,19 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
   v2::SessionInfo session;
   RETURN_IF_ERROR(FromGrpc(server.stub().OpenSession(server.Context().get(), open, &session)));
   SessionCloser closer(server, session.session_id());
-  double max_displacement_mm = 0.0;
+  for (size_t p = 0; p + 2 < args.pins.size(); p += 3) {
+    v2::ClientEvent pin;
+    *pin.mutable_pin()->mutable_point_mm() =
+        ToProto(glm::dvec3(args.pins[p], args.pins[p + 1], args.pins[p + 2]));
+    RETURN_IF_ERROR(Manipulate(server, session.session_id(), pin).status());
+  }
   if (!grab.empty()) {
     v2::ClientEvent event;
     ASSIGN_OR_RETURN(const glm::dvec3 grab_mm, Vec3Of(grab, "--grab"));
     *event.mutable_grab()->mutable_point_mm() = ToProto(grab_mm);
     event.mutable_grab()->set_radius_mm(args.grab_radius);
+    event.mutable_grab()->set_rule(args.grab_rule == "ball" ? v2::GRAB_RULE_BALL
+                                                            : v2::GRAB_RULE_ORGAN);
     RETURN_IF_ERROR(Manipulate(server, session.session_id(), event).status());
     event.Clear();
     if (!args.drag.empty()) {
@@ -161,9 +169,7 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
       *event.mutable_pull()->mutable_force_n() = ToProto(force);
     }
     if (event.event_case() != v2::ClientEvent::EVENT_NOT_SET) {
-      ASSIGN_OR_RETURN(v2::ManipulateResponse moved,
-                       Manipulate(server, session.session_id(), event));
-      max_displacement_mm = moved.max_displacement_mm();
+      RETURN_IF_ERROR(Manipulate(server, session.session_id(), event).status());
     }
   }
   v2::RenderRequest render;
@@ -202,7 +208,10 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
               flags.address.c_str(), volume.volume_id().c_str(), mesh.mesh_id().c_str(),
               static_cast<long long>(mesh.stats().vertices()),
               static_cast<long long>(mesh.stats().tets()), session.session_id().c_str());
-  std::printf("max displacement %.2f mm\n", max_displacement_mm);
+  // The still's state: the drag settled (the server finishes it first).
+  std::printf("max displacement %.2f mm, inverted tets %lld, lag %.2f mm\n",
+              frame.max_displacement_mm(), static_cast<long long>(frame.inverted_tets()),
+              frame.lag_mm());
   const v2::StageTimings& t = frame.timings();
   std::printf("%-22s %9s\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n", "stage (server)",
               "ms", "render (GPU)", t.render_ms(), "encode", t.encode_ms(), "queue", t.queue_ms(),

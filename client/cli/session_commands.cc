@@ -20,9 +20,11 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   struct Args {
     std::string volume_id, mesh_id, session_id, out, out_dir, user;
     bool revoke = false;
-    std::vector<double> camera, grab, drag, pull;
+    std::vector<double> camera, grab, drag, pull, pin;
     std::vector<int> size{512, 512};
-    bool release = false;
+    bool release = false, keep = false, reset = false;
+    std::string grab_rule = "organ";
+    double radius_mm = 0.0;
     int frames = 10;
   };
   auto a = std::make_shared<Args>();
@@ -114,7 +116,14 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   manipulate->add_option("--grab", a->grab, "X Y Z mm")->expected(3);
   manipulate->add_option("--drag", a->drag, "DX DY DZ mm")->expected(3);
   manipulate->add_option("--pull", a->pull, "FX FY FZ N")->expected(3);
+  manipulate->add_option("--grab-rule", a->grab_rule, "organ (default) or ball")
+      ->check(CLI::IsMember({"organ", "ball"}));
+  manipulate->add_option("--radius", a->radius_mm,
+                         "grab: the organ's bound or the ball's radius; pin: its radius (mm)");
+  manipulate->add_option("--pin", a->pin, "hold the tissue at X Y Z mm still")->expected(3);
   manipulate->add_flag("--release", a->release);
+  manipulate->add_flag("--keep", a->keep, "with --release: the drag stays");
+  manipulate->add_flag("--reset", a->reset, "back to rest: drops the grab, kept drags and pins");
   manipulate->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
     v2::ManipulateRequest request;
     request.set_session_id(a->session_id);
@@ -125,13 +134,28 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
       v->set_y(x[1]);
       v->set_z(x[2]);
     };
-    if (a->grab.size() == 3) set(e->mutable_grab()->mutable_point_mm(), a->grab);
-    else if (a->drag.size() == 3) set(e->mutable_drag()->mutable_offset_mm(), a->drag);
-    else if (a->pull.size() == 3) set(e->mutable_pull()->mutable_force_n(), a->pull);
-    else if (a->release) e->mutable_release();
+    if (a->grab.size() == 3) {
+      set(e->mutable_grab()->mutable_point_mm(), a->grab);
+      e->mutable_grab()->set_radius_mm(a->radius_mm);
+      e->mutable_grab()->set_rule(a->grab_rule == "ball" ? v2::GRAB_RULE_BALL : v2::GRAB_RULE_ORGAN);
+    } else if (a->drag.size() == 3) {
+      set(e->mutable_drag()->mutable_offset_mm(), a->drag);
+    } else if (a->pull.size() == 3) {
+      set(e->mutable_pull()->mutable_force_n(), a->pull);
+    } else if (a->pin.size() == 3) {
+      set(e->mutable_pin()->mutable_point_mm(), a->pin);
+      e->mutable_pin()->set_radius_mm(a->radius_mm);
+    } else if (a->release) {
+      e->mutable_release()->set_keep(a->keep);
+    } else if (a->reset) {
+      e->mutable_reset();
+    }
     v2::ManipulateResponse response;
     RETURN_IF_ERROR(FromGrpc(s.stub().Manipulate(s.Context().get(), request, &response)));
-    std::printf("applied; max displacement %.2f mm\n", response.max_displacement_mm());
+    std::printf("applied; max displacement %.2f mm, lag %.2f mm, inverted tets %lld\n",
+                response.max_displacement_mm(), response.lag_mm(),
+                static_cast<long long>(response.inverted_tets()));
+    if (!response.message().empty()) std::printf("%s\n", response.message().c_str());
     return absl::OkStatus();
   }));
 

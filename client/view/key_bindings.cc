@@ -42,7 +42,8 @@ std::span<const KeyBinding> KeyBindings() {
       {{"PageDown"}, Action::kScrollBack, "slice under the cursor -1 pixel; on 3D: clip plane back"},
       {{"R"}, Action::kRefineHere, "refine the mesh at the cursor (new session)"},
       {{"V", "Home"}, Action::kResetView, "reset the view"},
-      {{"X"}, Action::kResetDeformation, "reset the deformation (let go)"},
+      {{"K"}, Action::kPinHere, "pin: hold the tissue at the cursor still"},
+      {{"X"}, Action::kResetDeformation, "back to rest (drops kept drags and pins)"},
       {{"S", "F12"}, Action::kScreenshot, "save a screenshot (PNG)"},
       {{"Q", "Escape"}, Action::kQuit, "quit"},
   };
@@ -65,7 +66,7 @@ std::span<const MouseBinding> MouseBindings() {
       {"middle drag", "pan (right drag too)"},
       {"G, left press", "grab the point under the cursor"},
       {"G, left drag", "pull the grabbed point"},
-      {"G, left release", "let go (hold Shift: keep the pull)"},
+      {"G, left release", "let go (hold Shift: keep the drag)"},
       {"wheel on a slice", "scroll it: up +1 pixel along its normal (Shift 5)"},
       {"G, left on a slice", "grab there and drag within the slice's plane"},
       {"B, left drag", "on a box face: move it; elsewhere orbit"},

@@ -27,6 +27,7 @@ enum class Action {
   kScrollForward,
   kScrollBack,
   kRefineHere,
+  kPinHere,
   kResetView,
   kResetDeformation,
   kScreenshot,

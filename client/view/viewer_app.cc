@@ -160,11 +160,16 @@ void ViewerApp::OnAction(Action action) {
     case Action::kResetView:
       if (camera_) camera_->Reset(), SendCamera();
       break;
-    case Action::kResetDeformation:
-      if (grabbed_) LetGo();
+    case Action::kResetDeformation: {
+      v2::ClientEvent event;
+      event.mutable_reset();
+      connection_->Send(event);
+      grabbed_ = false;
       gesture_ = Gesture::kNone;
-      Notice("deformation reset");
+      Notice("back to rest: kept drags and pins dropped");
       break;
+    }
+    case Action::kPinHere: PinAtCursor(); break;
     case Action::kScreenshot: SaveScreenshot(); break;
     case Action::kQuit: running_ = false; break;
   }
@@ -206,11 +211,9 @@ void ViewerApp::OnButtonUp(const SDL_MouseButtonEvent& b) {
                         : b.button == SDL_BUTTON_LEFT;
   if (!ends) return;
   if (gesture_ == Gesture::kPull || gesture_ == Gesture::kSlicePull) {
-    if (SDL_GetModState() & KMOD_SHIFT) {
-      Notice("pull kept: X lets go");
-    } else {
-      LetGo();
-    }
+    const bool keep = (SDL_GetModState() & KMOD_SHIFT) != 0;
+    LetGo(keep);
+    if (keep) Notice("drag kept: X returns to rest");
   }
   gesture_ = Gesture::kNone;
 }
@@ -270,7 +273,7 @@ void ViewerApp::OnMotion(const SDL_MouseMotionEvent& m) {
 
 void ViewerApp::StartPull(int window_x, int window_y) {
   if (!camera_) return;
-  if (grabbed_) LetGo();  // a kept pull ends when a new one starts
+  if (grabbed_) LetGo();  // a grab still held ends when a new one starts
   const std::optional<SDL_Point> px = window_->ToFramePixel(window_x, window_y);
   if (!px || !camera_->PickPoint(px->x, px->y, window_->frame_width(), window_->frame_height())) {
     Notice("nothing to grab there: the point is outside the volume");
@@ -288,11 +291,28 @@ void ViewerApp::StartPull(int window_x, int window_y) {
   pull_from_y_ = window_y;
 }
 
-void ViewerApp::LetGo() {
+void ViewerApp::LetGo(bool keep) {
   v2::ClientEvent event;
-  event.mutable_release();
+  event.mutable_release()->set_keep(keep);
   connection_->Send(event);
   grabbed_ = false;
+}
+
+void ViewerApp::PinAtCursor() {
+  int x = 0, y = 0;
+  SDL_GetMouseState(&x, &y);
+  const std::optional<SDL_Point> px = window_->ToFramePixel(x, y);
+  if (!camera_ || !px ||
+      !camera_->PickPoint(px->x, px->y, window_->frame_width(), window_->frame_height())) {
+    return Notice("pin: put the cursor over the volume");
+  }
+  v2::ClientEvent event;
+  v2::Pin* pin = event.mutable_pin();
+  pin->set_pick(true);
+  pin->set_pixel_x(px->x);
+  pin->set_pixel_y(px->y);
+  connection_->Send(event);
+  Notice("pinned: the tissue under the cursor holds still");
 }
 
 void ViewerApp::RefineAtCursor() {

@@ -35,7 +35,8 @@ class ViewerApp {
   void OnButtonUp(const SDL_MouseButtonEvent& button);
   void OnMotion(const SDL_MouseMotionEvent& motion);
   void StartPull(int window_x, int window_y);
-  void LetGo();
+  void LetGo(bool keep = false);  // keep: the drag stays (Release.keep)
+  void PinAtCursor();
   void RefineAtCursor();
   // Three slices (axial, coronal, sagittal) with every frame, or none.
   void ToggleSlices();

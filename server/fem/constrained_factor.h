@@ -16,6 +16,11 @@
 // per H: setting H costs one numeric factorization, each application one
 // solve. Both give the same z to round-off (ConstrainedFactor tests);
 // bench/drag_loop_bench.cc --handle-factor measures which is faster.
+//
+// Or H held by springs instead of prescribed (SetSprings): the inverse of
+// K_BB + E_H diag(k) E_H^T on all of B, by the same two routes (kRefactor:
+// k added to H's diagonal, numeric factorization on the same analysis;
+// kCapacitance: Woodbury, C = diag(1/k) + (K_BB^-1)_HH).
 enum class HandleFactor { kCapacitance, kRefactor };
 #pragma once
 
@@ -50,9 +55,15 @@ class ConstrainedFactor {
   // decoupled factor fails (kRefactor; not expected: a principal block of a
   // positive definite matrix is positive definite).
   Status SetExtraFixed(const std::vector<int32_t>& dofs);
+  // Replaces H by spring-held DOFs: `dofs` as for SetExtraFixed, with
+  // stiffness_n_per_mm[j] > 0 (finite) added to dofs[j]'s diagonal. Apply
+  // with with_extra then inverts K_BB + diag(k) on every free DOF.
+  Status SetSprings(const std::vector<int32_t>& dofs,
+                    const std::vector<double>& stiffness_n_per_mm);
 
   // z = K_SS^-1 r_S on S = free DOFs minus (with_extra ? H : none), 0 on
   // every other DOF. r, z: n (z resized). Entries of r outside S are ignored.
+  // With springs (SetSprings) and with_extra: z = (K_BB + diag(k))^-1 r_B.
   void Apply(const Eigen::VectorXd& r, bool with_extra, Eigen::VectorXd& z) const;
 
   // An empty factor (size 0); use Create.
@@ -64,7 +75,13 @@ class ConstrainedFactor {
 
  private:
   using Ldlt = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>;
-  Status RefactorDecoupled(std::vector<int32_t> extra);  // kRefactor's SetExtraFixed
+  // H as compact indices, checked (InvalidArgument on a bad or repeated DOF).
+  Result<std::vector<int32_t>> CompactExtra(const std::vector<int32_t>& dofs) const;
+  // kRefactor: factors the free block with H decoupled (springs empty) or
+  // with springs[j] added to H[j]'s diagonal.
+  Status Refactor(std::vector<int32_t> extra, const std::vector<double>& springs);
+  // kCapacitance: W and C^-1, C = (K_BB^-1)_HH (+ diag(1/k) with springs).
+  void SetCapacitance(std::vector<int32_t> extra, const std::vector<double>& springs);
 
   std::vector<int32_t> free_dofs_;  // compact index -> DOF
   std::vector<int32_t> compact_;    // DOF -> compact index, -1 if fixed
@@ -78,6 +95,7 @@ class ConstrainedFactor {
   std::unique_ptr<Ldlt> handle_ldlt_;
   LdltPanels handle_panels_;  // handle_ldlt_'s solve, by panels
   std::vector<int32_t> extra_compact_;   // H as compact indices
+  bool springs_ = false;                 // H is spring-held (SetSprings)
   Eigen::MatrixXd w_;                    // #B by |H|
   Eigen::MatrixXd capacitance_inverse_;  // C^-1, |H| by |H|
   mutable Eigen::VectorXd rc_, yc_;      // scratch, #B

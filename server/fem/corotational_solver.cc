@@ -77,6 +77,7 @@ Result<CorotationalSolver> CorotationalSolver::Create(
   const Eigen::SparseMatrix<double> rest_stiffness =
       AssembleStiffness(solver.elements_, CorotatedFrames{}, static_cast<int64_t>(rest_mm.size()));
   solver.setup_assembly_ms_ = MsSince(t0);
+  solver.rest_diagonal_ = rest_stiffness.diagonal();
   const auto t1 = SteadyClock::now();
   ASSIGN_OR_RETURN(solver.factor_, ConstrainedFactor::Create(rest_stiffness, fixed_dofs,
                                                                 options.handle_factor));
@@ -93,6 +94,17 @@ Result<CorotationalSolver> CorotationalSolver::Create(
 Status CorotationalSolver::SetHandles(const std::vector<int32_t>& handle_dofs) {
   RETURN_IF_ERROR(factor_.SetExtraFixed(handle_dofs));
   handles_ = handle_dofs;
+  spring_k_.clear();
+  linearized_ = false;
+  budget_.Clear();
+  return absl::OkStatus();
+}
+
+Status CorotationalSolver::SetHandleSprings(const std::vector<int32_t>& handle_dofs,
+                                            const std::vector<double>& stiffness_n_per_mm) {
+  RETURN_IF_ERROR(factor_.SetSprings(handle_dofs, stiffness_n_per_mm));
+  handles_ = handle_dofs;
+  spring_k_ = stiffness_n_per_mm;
   linearized_ = false;
   budget_.Clear();
   return absl::OkStatus();
@@ -135,8 +147,14 @@ double CorotationalSolver::Evaluate(const Eigen::VectorXd& force_n,
                                     const std::vector<int32_t>& constrained, FemMethod method) {
   CorotatedForces(elements_, displacement_, method, frames_, forces_, ElementThreads(),
                   options_.inversion_barrier);
-  residual_ = force_n - forces_;
   Eigen::VectorXd applied = force_n;
+  if (spring_target_ != nullptr) {
+    for (size_t j = 0; j < handles_.size(); ++j) {
+      const int32_t d = handles_[j];
+      applied[d] += spring_k_[j] * ((*spring_target_)[d] - displacement_[d]);
+    }
+  }
+  residual_ = applied - forces_;
   for (int32_t d : constrained) {
     residual_[d] = 0.0;
     applied[d] = 0.0;
@@ -154,6 +172,9 @@ Eigen::VectorXd CorotationalSolver::TangentSolve(const Eigen::VectorXd& rhs,
   const auto t0 = SteadyClock::now();
   const LinearMap apply_k = [this](const Eigen::VectorXd& v, Eigen::VectorXd& y) {
     ApplyCorotatedStiffness(elements_, frames_, v, y, ElementThreads());
+    if (spring_target_ != nullptr) {
+      for (size_t j = 0; j < handles_.size(); ++j) y[handles_[j]] += spring_k_[j] * v[handles_[j]];
+    }
   };
   const LinearMap precondition = [this, with_handles, &stats](const Eigen::VectorXd& r,
                                                               Eigen::VectorXd& z) {
@@ -225,6 +246,7 @@ Status CorotationalSolver::Equilibrate(const Eigen::VectorXd& force_n,
 Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_mm,
                                              const Eigen::VectorXd& force_n, HandleMode mode) {
   RETURN_IF_ERROR(CheckLoad(prescribed_mm, force_n));
+  if (mode == HandleMode::kSpring) return SolveSprings(prescribed_mm, force_n);
   const bool with_handles = mode == HandleMode::kPrescribed;
   std::vector<int32_t> constrained = fixed_list_;
   if (with_handles) constrained.insert(constrained.end(), handles_.begin(), handles_.end());
@@ -358,6 +380,45 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
   } else {
     stats.remaining_mm = 0.0;
   }
+  stats.max_displacement_mm = MaxVertexNorm(displacement_);
+  return stats;
+}
+
+double CorotationalSolver::SpringLag(const Eigen::VectorXd& target_mm) const {
+  double lag = 0.0;
+  for (size_t j = 0; j < handles_.size();) {
+    const int32_t vertex = handles_[j] / 3;
+    double squared = 0.0;
+    for (; j < handles_.size() && handles_[j] / 3 == vertex; ++j) {
+      const double gap = target_mm[handles_[j]] - displacement_[handles_[j]];
+      squared += gap * gap;
+    }
+    lag = std::max(lag, std::sqrt(squared));
+  }
+  return lag;
+}
+
+Result<SolveStats> CorotationalSolver::SolveSprings(const Eigen::VectorXd& target_mm,
+                                                    const Eigen::VectorXd& force_n) {
+  if (spring_k_.empty() && !handles_.empty()) {
+    return absl::FailedPreconditionError("a spring solve needs SetHandleSprings first");
+  }
+  const Eigen::VectorXd start = displacement_;
+  SolveStats stats;
+  stats.load_steps = 1;
+  const double asked_mm = SpringLag(target_mm);
+  const int iterations = options_.event_newton_budget > 0 ? options_.event_newton_budget
+                                                          : options_.max_newton_iterations;
+  // Newton on elastic + barrier + spring energy from the current state; each
+  // update is cut to stay feasible, so no element crosses J = 0 and the
+  // springs stretch instead where the tissue cannot follow.
+  linearized_ = false;
+  spring_target_ = &target_mm;
+  const Status status = Equilibrate(force_n, fixed_list_, /*with_handles=*/true, start, asked_mm,
+                                    0, iterations, stats);
+  spring_target_ = nullptr;
+  if (!status.ok()) return status;
+  stats.spring_lag_mm = SpringLag(target_mm);
   stats.max_displacement_mm = MaxVertexNorm(displacement_);
   return stats;
 }

@@ -129,8 +129,10 @@ inline constexpr double kInteractiveMaxLagShares = 2.0;
 // thread start-ups of ~20-50 us against loops of < 1 ms).
 inline constexpr int64_t kMinTetsToSplit = 4000;
 
-// Handles: prescribed displacement (drag) or free with forces (pull).
-enum class HandleMode { kPrescribed, kFree };
+// Handles: prescribed displacement (drag), free with forces (pull), or held
+// by springs towards their targets (SetHandleSprings: the interactive drag,
+// whose barrier always wins against the springs, so no element inverts).
+enum class HandleMode { kPrescribed, kFree, kSpring };
 
 struct SolveStats {
   double assembly_ms = 0.0;  // rotations and elastic forces, all evaluations
@@ -161,6 +163,9 @@ struct SolveStats {
   double remaining_mm = 0.0;
   // Converged at the target: false too when the target is not reached.
   bool converged = false;
+  // kSpring: the largest distance of a spring-held DOF's vertex from its
+  // target at the end (mm): how far the held tissue lags its pointer.
+  double spring_lag_mm = 0.0;
   double total_ms() const { return assembly_ms + solve_ms; }
 };
 
@@ -191,11 +196,22 @@ class CorotationalSolver {
   // Sets the handle DOFs (each not in fixed_dofs, no repeats; empty: none).
   // Costs one factor solve per DOF. InvalidArgument on a bad DOF.
   Status SetHandles(const std::vector<int32_t>& handle_dofs);
+  // Sets the handle DOFs as spring-held for kSpring solves: DOF handle_dofs[j]
+  // is pulled towards its target by stiffness_n_per_mm[j] (> 0, N/mm). One
+  // numeric refactorization (kRefactor). InvalidArgument on bad input.
+  Status SetHandleSprings(const std::vector<int32_t>& handle_dofs,
+                          const std::vector<double>& stiffness_n_per_mm);
+  // The diagonal of the rest stiffness (3*#V, N/mm), e.g. to scale springs.
+  const Eigen::VectorXd& rest_diagonal() const { return rest_diagonal_; }
 
   // Solves for equilibrium, warm-started from the current displacement.
   //   prescribed_mm  3*#V; read on fixed DOFs and, in kPrescribed mode, on
   //                  handle DOFs, mm
   //   force_n        3*#V external nodal forces, read on the free DOFs, N
+  // kSpring (after SetHandleSprings): prescribed_mm on the handle DOFs are
+  // the springs' targets; Newton from the current state, each update cut to
+  // stay feasible (the barrier), at most event_newton_budget iterations
+  // when that is set; no load steps, nothing forced.
   // Not converging within the iteration limits is not an error (see
   // stats.converged); non-finite inputs are InvalidArgument, a non-finite
   // state is Internal and restores the previous displacement.
@@ -219,6 +235,9 @@ class CorotationalSolver {
 
  private:
   Status CheckLoad(const Eigen::VectorXd& prescribed_mm, const Eigen::VectorXd& force_n) const;
+  Result<SolveStats> SolveSprings(const Eigen::VectorXd& target_mm, const Eigen::VectorXd& force_n);
+  // Largest vertex distance of the spring DOFs from target_mm, mm.
+  double SpringLag(const Eigen::VectorXd& target_mm) const;
   // Rotations and forces at displacement_; returns the residual on the free
   // DOFs into residual_ and its relative size.
   double Evaluate(const Eigen::VectorXd& force_n, const std::vector<int32_t>& constrained,
@@ -247,6 +266,10 @@ class CorotationalSolver {
   std::vector<uint8_t> fixed_;
   std::vector<int32_t> fixed_list_;
   std::vector<int32_t> handles_;
+  std::vector<double> spring_k_;  // per handle DOF, N/mm; empty: prescribed handles
+  // During a kSpring solve: the springs' targets (3*#V, mm), else null.
+  const Eigen::VectorXd* spring_target_ = nullptr;
+  Eigen::VectorXd rest_diagonal_;
   ConstrainedFactor factor_;
   EventBudget budget_;
   Eigen::VectorXd displacement_;

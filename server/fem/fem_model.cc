@@ -59,6 +59,14 @@ Result<FemModel> FemModel::Create(const ProxyMesh& mesh, const glm::dvec3& box_e
   for (size_t v = 0; v < used.size(); ++v) {
     if (!used[v]) fixed[3 * v] = fixed[3 * v + 1] = fixed[3 * v + 2] = 1;
   }
+  if (!std::isfinite(options.spring_factor) || !(options.spring_factor > 0.0)) {
+    return absl::InvalidArgumentError(
+        StrCat("spring_factor must be finite and > 0, got ", options.spring_factor));
+  }
+  model.attachment_ = options.attachment;
+  model.spring_factor_ = options.spring_factor;
+  model.held_.assign(3 * mesh.vertices.size(), 0);
+  model.held_target_.setZero(3 * static_cast<int64_t>(mesh.vertices.size()));
   ASSIGN_OR_RETURN(model.solver_,
                    CorotationalSolver::Create(model.rest_mm_, model.tets_, young,
                                               options.material.poisson, fixed, options.solver));
@@ -66,7 +74,7 @@ Result<FemModel> FemModel::Create(const ProxyMesh& mesh, const glm::dvec3& box_e
   for (size_t v = 0; v < mesh.vertices.size(); ++v) {
     const bool any_free = !fixed[3 * v] || !fixed[3 * v + 1] || !fixed[3 * v + 2];
     model.deformable_[v] =
-        !mesh.vertices[v].hard && mesh.vertices[v].kind != VertexKind::kAnchor && any_free;
+        !mesh.vertices[v].skeleton && mesh.vertices[v].kind != VertexKind::kAnchor && any_free;
   }
   model.fixed_neighbours_ = FixedNeighbours(model.tets_, fixed);
   const double soft = young.empty() ? 0.0 : *std::min_element(young.begin(), young.end());
@@ -81,23 +89,72 @@ Result<FemModel> FemModel::Create(const ProxyMesh& mesh, const glm::dvec3& box_e
 Result<GrabInfo> FemModel::Grab(const glm::dvec3& point_mm, double radius_mm) {
   ASSIGN_OR_RETURN(GrabInfo info, FindHandles(Positions(), deformable_, fixed_neighbours_,
                                               box_extent_mm_, point_mm, radius_mm));
+  const std::vector<int32_t> handles = info.handles;
+  return GrabVertices(handles, std::move(info));
+}
+
+Result<GrabInfo> FemModel::GrabVertices(const std::vector<int32_t>& vertices, GrabInfo info) {
+  std::vector<int32_t> handles;
+  for (int32_t v : vertices) {
+    if (v < 0 || v >= vertex_count()) {
+      return absl::InvalidArgumentError(StrCat("grab: vertex ", v, " does not exist"));
+    }
+    if (deformable_[v]) handles.push_back(v);
+  }
+  std::sort(handles.begin(), handles.end());
+  handles.erase(std::unique(handles.begin(), handles.end()), handles.end());
+  if (handles.empty()) {
+    return absl::FailedPreconditionError(
+        StrCat("none of the ", vertices.size(), " vertices to grab can move (skeleton or corners)"));
+  }
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<int32_t> dofs;
-  for (int32_t v : info.handles) {
+  for (int32_t v : handles) {
     for (int i = 0; i < 3; ++i) {
       if (!solver_.fixed_dofs()[3 * v + i]) dofs.push_back(3 * v + i);
     }
   }
-  RETURN_IF_ERROR(solver_.SetHandles(dofs));
-  info.setup_ms = MsSince(t0);
   handle_dofs_ = std::move(dofs);
   displacement_at_grab_ = solver_.displacement_mm();
+  if (attachment_ == HandleAttachment::kPrescribed) {
+    RETURN_IF_ERROR(solver_.SetHandles(handle_dofs_));
+  } else {
+    Eigen::VectorXd target;
+    RETURN_IF_ERROR(ApplySprings(true, glm::dvec3(0.0), target));
+  }
+  info.handles = std::move(handles);
+  info.setup_ms = MsSince(t0);
   grab_ = info;
   grabbed_ = true;
   last_was_pull_ = false;
   last_load_ = glm::dvec3(0.0);
   settled_ = true;
+  lag_mm_ = 0.0;
   return info;
+}
+
+Status FemModel::ApplySprings(bool active, const glm::dvec3& offset_mm,
+                              Eigen::VectorXd& target_mm) {
+  target_mm = held_target_;
+  std::vector<uint8_t> sprung = held_;
+  if (active) {
+    for (int32_t d : handle_dofs_) {
+      target_mm[d] = displacement_at_grab_[d] + offset_mm[d % 3];
+      sprung[d] = 1;
+    }
+  }
+  std::vector<int32_t> dofs;
+  for (size_t d = 0; d < sprung.size(); ++d) {
+    if (sprung[d]) dofs.push_back(static_cast<int32_t>(d));
+  }
+  if (dofs == spring_dofs_ && !spring_dofs_.empty()) return absl::OkStatus();
+  std::vector<double> stiffness(dofs.size());
+  for (size_t j = 0; j < dofs.size(); ++j) {
+    stiffness[j] = spring_factor_ * solver_.rest_diagonal()[dofs[j]];
+  }
+  RETURN_IF_ERROR(solver_.SetHandleSprings(dofs, stiffness));
+  spring_dofs_ = std::move(dofs);
+  return absl::OkStatus();
 }
 
 Status FemModel::CheckGrabbed(const char* action) const {
@@ -110,6 +167,25 @@ Status FemModel::CheckGrabbed(const char* action) const {
 Result<SolveStats> FemModel::Drag(const glm::dvec3& offset_mm) {
   RETURN_IF_ERROR(CheckGrabbed("drag"));
   if (!IsFinite(offset_mm)) return absl::InvalidArgumentError("drag offset must be finite");
+  last_was_pull_ = false;
+  last_load_ = offset_mm;
+  if (attachment_ == HandleAttachment::kSpring) {
+    Eigen::VectorXd target;
+    RETURN_IF_ERROR(ApplySprings(true, offset_mm, target));
+    Result<SolveStats> stats =
+        solver_.Solve(target, Eigen::VectorXd::Zero(target.size()), HandleMode::kSpring);
+    lag_mm_ = 0.0;
+    if (stats.ok()) {
+      for (int32_t v : grab_.handles) {
+        glm::dvec3 gap(0.0);
+        for (int i = 0; i < 3; ++i) gap[i] = target[3 * v + i] - solver_.displacement_mm()[3 * v + i];
+        // Fixed DOFs (a handle on a box face) cannot follow: not lag.
+        for (int i = 0; i < 3; ++i) gap[i] *= solver_.fixed_dofs()[3 * v + i] ? 0.0 : 1.0;
+        lag_mm_ = std::max(lag_mm_, glm::length(gap));
+      }
+    }
+    return Settled(std::move(stats));
+  }
   // Fixed DOFs are 0 in every state, so the grab-time state prescribes them.
   Eigen::VectorXd prescribed = displacement_at_grab_;
   for (int32_t d : handle_dofs_) prescribed[d] = displacement_at_grab_[d] + offset_mm[d % 3];
@@ -120,12 +196,16 @@ Result<SolveStats> FemModel::Drag(const glm::dvec3& offset_mm) {
 }
 
 Result<SolveStats> FemModel::Settle() {
+  if (!grabbed_ && attachment_ == HandleAttachment::kSpring && held_vertices() > 0) {
+    return SolveHeld();
+  }
   RETURN_IF_ERROR(CheckGrabbed("settle"));
   return last_was_pull_ ? Pull(last_load_) : Drag(last_load_);
 }
 
 Result<SolveStats> FemModel::Settled(Result<SolveStats> stats) {
   settled_ = stats.ok() && stats->converged && stats->target_fraction == 1.0;
+  if (stats.ok() && attachment_ == HandleAttachment::kSpring) stats->spring_lag_mm = lag_mm_;
   return stats;
 }
 
@@ -140,18 +220,94 @@ Result<SolveStats> FemModel::Pull(const glm::dvec3& force_n) {
   }
   last_was_pull_ = true;
   last_load_ = force_n;
+  if (attachment_ == HandleAttachment::kSpring && held_vertices() > 0) {
+    Eigen::VectorXd target;
+    RETURN_IF_ERROR(ApplySprings(false, glm::dvec3(0.0), target));
+    return Settled(solver_.Solve(target, force, HandleMode::kSpring));
+  }
   return Settled(solver_.Solve(prescribed, force, HandleMode::kFree));
 }
 
-void FemModel::Release() {
+Status FemModel::Release(bool keep) {
+  if (keep) {
+    if (attachment_ != HandleAttachment::kSpring) {
+      return absl::FailedPreconditionError("keeping a drag needs spring handles");
+    }
+    RETURN_IF_ERROR(CheckGrabbed("keep"));
+    // Held where the drag's targets are (a pull: where the handles are now).
+    for (int32_t d : handle_dofs_) {
+      held_[d] = 1;
+      held_target_[d] = last_was_pull_ ? solver_.displacement_mm()[d]
+                                       : displacement_at_grab_[d] + last_load_[d % 3];
+    }
+  }
+  grabbed_ = false;
+  grab_ = GrabInfo{};
+  handle_dofs_.clear();
+  lag_mm_ = 0.0;
+  if (held_vertices() == 0) {
+    Reset();
+    return absl::OkStatus();
+  }
+  // The tissue relaxes to what the held springs hold: Settle solves it.
+  settled_ = false;
+  return absl::OkStatus();
+}
+
+Status FemModel::Pin(const std::vector<int32_t>& vertices) {
+  if (attachment_ != HandleAttachment::kSpring) {
+    return absl::FailedPreconditionError("pins need spring handles");
+  }
+  int64_t pinned = 0;
+  for (int32_t v : vertices) {
+    if (v < 0 || v >= vertex_count()) {
+      return absl::InvalidArgumentError(StrCat("pin: vertex ", v, " does not exist"));
+    }
+    if (!deformable_[v]) continue;
+    for (int i = 0; i < 3; ++i) {
+      const int32_t d = 3 * v + i;
+      if (solver_.fixed_dofs()[d]) continue;
+      held_[d] = 1;
+      held_target_[d] = solver_.displacement_mm()[d];
+    }
+    ++pinned;
+  }
+  if (pinned == 0) {
+    return absl::FailedPreconditionError("no deformable vertex to pin there (skeleton or corners)");
+  }
+  return absl::OkStatus();
+}
+
+Result<SolveStats> FemModel::SolveHeld() {
+  Eigen::VectorXd target;
+  RETURN_IF_ERROR(ApplySprings(false, glm::dvec3(0.0), target));
+  Result<SolveStats> stats =
+      solver_.Solve(target, Eigen::VectorXd::Zero(target.size()), HandleMode::kSpring);
+  settled_ = stats.ok() && stats->converged;
+  return stats;
+}
+
+void FemModel::Reset() {
   solver_.Reset();
   grabbed_ = false;
   grab_ = GrabInfo{};
   handle_dofs_.clear();
   displacement_at_grab_.setZero(3 * vertex_count());
+  std::fill(held_.begin(), held_.end(), 0);
+  held_target_.setZero();
   settled_ = true;
+  lag_mm_ = 0.0;
+  spring_dofs_.clear();
   // The handles' capacitance is dropped too; clearing cannot fail.
   (void)solver_.SetHandles({});
+}
+
+int64_t FemModel::held_vertices() const {
+  int64_t count = 0;
+  for (size_t v = 0; 3 * v < held_.size(); ++v) {
+    count += held_[3 * v] || held_[3 * v + 1] || held_[3 * v + 2];
+  }
+  return count;
 }
 
 std::vector<glm::dvec3> FemModel::Displacements() const {

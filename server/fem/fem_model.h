@@ -3,9 +3,18 @@
 // them (force), release back to rest. Units: mm, N, E in kPa at the API
 // (fem_units.h).
 //
-// Constraints: hard vertices and anchors fixed, box-face vertices fixed along
-// their face normal (FixedDofs). Material: E_soft everywhere, E_hard in every
-// tet touching a hard vertex (TetYoungModuli). Tets that are flat to
+// Constraints: skeleton vertices and anchors fixed, box-face vertices fixed
+// along their face normal (FixedDofs); other hard vertices are free.
+// Material: E_soft everywhere, E_hard in every tet touching a hard vertex
+// (TetYoungModuli).
+//
+// Handles are attached in one of two ways (FemOptions::attachment): prescribed
+// (the paper's drag, kept for the section-6 measures) or by stiff springs
+// towards their targets (the interactive default): the inversion barrier
+// then always wins against a spring, so no tet inverts whatever the drag,
+// and the handles lag where the tissue cannot follow. With springs, a drag
+// can be kept on release and pins hold tissue still (held springs); Reset
+// returns to rest. Tets that are flat to
 // round-off are left out of the FEM (flat_tets.h); a vertex left in no tet
 // is fixed.
 #pragma once
@@ -24,9 +33,16 @@
 
 namespace vpm {
 
+enum class HandleAttachment { kPrescribed, kSpring };
+
 struct FemOptions {
   FemMaterial material;
   SolverOptions solver;
+  HandleAttachment attachment = HandleAttachment::kPrescribed;
+  // kSpring: each handle DOF's spring stiffness is this multiple of the DOF's
+  // rest-stiffness diagonal (dimensionless). 100 keeps a handle in soft
+  // tissue within about 1% of its target (docs/FEM.md, "Spring handles").
+  double spring_factor = 100.0;
 };
 
 // The interactive scene's settings (DeformableScene): the solver's
@@ -37,6 +53,7 @@ inline FemOptions InteractiveFemOptions() {
   FemOptions options;
   options.solver.event_newton_budget = kInteractiveEventNewtonBudget;
   options.solver.event_max_lag_shares = kInteractiveMaxLagShares;
+  options.attachment = HandleAttachment::kSpring;
   return options;
 }
 
@@ -64,6 +81,11 @@ class FemModel {
   // replaces any earlier grab and keeps the
   // current deformation, to which later drags are relative.
   Result<GrabInfo> Grab(const glm::dvec3& point_mm, double radius_mm);
+  // Takes `vertices` (indices; those that are not deformable are skipped) as
+  // the handles, e.g. the organ under the grab point (server/scene); info's
+  // handles are replaced by the ones taken. FailedPrecondition when none is
+  // deformable, InvalidArgument on a bad index.
+  Result<GrabInfo> GrabVertices(const std::vector<int32_t>& vertices, GrabInfo info);
 
   // Moves the handles to (their displacement at grab time) + offset_mm (3,
   // mm), each along its free directions only (a handle on a box face keeps
@@ -83,8 +105,21 @@ class FemModel {
   // after a Grab or Release).
   bool settled() const { return settled_; }
 
-  // Back to rest (every displacement exactly 0); drops the handles.
-  void Release();
+  // Drops the handles. keep = false: back to rest (every displacement
+  // exactly 0) when nothing is held, else the tissue relaxes to what the
+  // held springs hold (Settle goes on). keep = true (kSpring only): the
+  // handles stay held where the drag put them (kept drags compose).
+  Status Release(bool keep = false);
+  // Holds `vertices` (deformable ones; others skipped) where they are now by
+  // held springs (kSpring only): tissue there stays while another point is
+  // pulled. FailedPrecondition with prescribed handles or no deformable vertex.
+  Status Pin(const std::vector<int32_t>& vertices);
+  // Back to rest: drops the handles, kept drags and pins.
+  void Reset();
+  int64_t held_vertices() const;
+  // kSpring: the largest distance of a handle from its target after the last
+  // solve (mm): how far the grabbed tissue lags the pointer; 0 otherwise.
+  double lag_mm() const { return lag_mm_; }
 
   bool grabbed() const { return grabbed_; }
   const GrabInfo& grab() const { return grab_; }
@@ -100,12 +135,19 @@ class FemModel {
   int64_t CountInvertedTets() const;
   // #V flags: may be a handle.
   const std::vector<uint8_t>& deformable() const { return deformable_; }
+  // #V lists: the fully fixed vertices (skeleton, anchors) sharing a tet with
+  // each vertex, ascending.
+  const std::vector<std::vector<int32_t>>& fixed_neighbours() const { return fixed_neighbours_; }
   const FemSetupStats& setup() const { return setup_; }
   const CorotationalSolver& solver() const { return solver_; }
 
  private:
   FemModel() = default;
   Status CheckGrabbed(const char* action) const;
+  // kSpring: gives the solver the springs of the handles (when `active`) and
+  // the held DOFs, refactoring when the set changed; fills target_mm (3*#V).
+  Status ApplySprings(bool active, const glm::dvec3& offset_mm, Eigen::VectorXd& target_mm);
+  Result<SolveStats> SolveHeld();  // kSpring with no handles: towards the held targets
   // Records whether `stats` (a Drag or Pull) reached and converged; passes it on.
   Result<SolveStats> Settled(Result<SolveStats> stats);
 
@@ -124,6 +166,12 @@ class FemModel {
   bool last_was_pull_ = false;
   glm::dvec3 last_load_{0.0};  // drag offset, mm, or pull force, N
   bool settled_ = true;
+  HandleAttachment attachment_ = HandleAttachment::kPrescribed;
+  double spring_factor_ = 100.0;
+  std::vector<uint8_t> held_;   // 3*#V: DOF held by a kept drag or a pin
+  Eigen::VectorXd held_target_;  // 3*#V, mm, where held_
+  std::vector<int32_t> spring_dofs_;  // the springs the solver has now
+  double lag_mm_ = 0.0;
 };
 
 }  // namespace vpm

@@ -18,7 +18,7 @@ Result<std::vector<uint8_t>> FixedDofs(const ProxyMesh& mesh, const glm::dvec3& 
   std::vector<uint8_t> fixed(3 * mesh.vertices.size(), 0);
   for (size_t v = 0; v < mesh.vertices.size(); ++v) {
     const MeshVertex& vertex = mesh.vertices[v];
-    const bool all = vertex.hard || vertex.kind == VertexKind::kAnchor;
+    const bool all = vertex.skeleton || vertex.kind == VertexKind::kAnchor;
     for (int i = 0; i < 3; ++i) {
       const double p = vertex.position_mm[i];
       if (!std::isfinite(p)) {

@@ -12,7 +12,9 @@
 namespace vpm {
 
 // Which degrees of freedom are fixed (displacement 0) for the whole session:
-//   - every DOF of a hard vertex and of an anchor (the 8 box corners);
+//   - every DOF of a skeleton vertex (hard and on the skeleton: only the
+//     skeleton is fixed; other hard vertices are stiff and free) and of an
+//     anchor (the 8 box corners);
 //   - on a box face (coordinate within 1e-6 * extent of 0 or of the extent
 //     along an axis), the DOF along that face's normal: vertices slide on
 //     faces, on an edge they keep one free direction, on a corner none.

@@ -58,7 +58,7 @@ Result<Solved> Solve(const Volume& volume, const ProxyMesh& mesh, const std::str
   ASSIGN_OR_RETURN(const SolveStats validity, fem.Drag(glm::normalize(offset_mm) * (1.5 * h_mm)));
   out.row.inverted_at_1_5h = fem.CountInvertedTets();
   out.row.forced_at_1_5h = validity.forced_inversion;
-  fem.Release();
+  RETURN_IF_ERROR(fem.Release());
   RETURN_IF_ERROR(fem.Grab(grab_mm, radius_mm).status());
   const auto t0 = std::chrono::steady_clock::now();
   ASSIGN_OR_RETURN(SolveStats stats, fem.Drag(offset_mm));

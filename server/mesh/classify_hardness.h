@@ -5,6 +5,13 @@
 //     I[voxel(u)] >= influence_threshold.
 //  3. Overrides (by vertex index, box or sphere), applied in order, win over
 //     both rules.
+//  4. Skeleton (docs/MESH.md, "The skeleton"): a rule-1 vertex is on the
+//     skeleton when the 26-connected set of voxels >= bone_threshold
+//     through its voxel holds at least skeleton_min_volume_mm3; a rule-2
+//     vertex when a skeleton vertex within the influence radius made it
+//     hard; an override that makes a vertex hard puts it on the skeleton.
+//     Only skeleton vertices are fixed in FEM; the other hard ones are stiff
+//     and free.
 // Anchors are fixed in FEM anyway and are left deformable here.
 #pragma once
 
@@ -34,10 +41,15 @@ struct ClassifyParams {
   double bone_threshold = 250.0;      // HU
   double influence_threshold = 100.0; // HU
   double influence_factor = 0.75;     // influence radius = factor * R
+  // Bone components smaller than this are islands (stones, calcifications),
+  // not skeleton: mm^3. On the abdominal CT of tests/data the rib segments
+  // the field of view cuts off are 1,377 mm^3 and more, the kidney stones
+  // 351 mm^3 and less (docs/MESH.md). 0: every hard vertex is skeleton.
+  double skeleton_min_volume_mm3 = 1000.0;
   std::vector<HardnessOverride> overrides;
 };
 
-// Sets vertices[i].hard. R_mm: the density radius of step 2.
+// Sets vertices[i].hard and .skeleton. R_mm: the density radius of step 2.
 Status ClassifyHardness(const Volume& volume, double R_mm, const ClassifyParams& params,
                         std::vector<MeshVertex>& vertices);
 

@@ -122,6 +122,13 @@ Status ReadVertices(const json& array, std::vector<MeshVertex>& vertices) {
     }
     ASSIGN_OR_RETURN(out.position_mm, r.Vec3("position_mm"));
     ASSIGN_OR_RETURN(out.hard, r.Bool("hard"));
+    // Absent in meshes written before the skeleton rule: every hard vertex
+    // was fixed then.
+    out.skeleton = out.hard;
+    if (array[v].contains("skeleton")) {
+      ASSIGN_OR_RETURN(const bool skeleton, r.Bool("skeleton"));
+      out.skeleton = out.hard && skeleton;
+    }
     ASSIGN_OR_RETURN(out.cost, r.Double("cost"));
   }
   return absl::OkStatus();
@@ -236,6 +243,7 @@ json MeshToJson(const ProxyMesh& mesh) {
                         {"kind", VertexKindName(v.kind)},
                         {"position_mm", {v.position_mm.x, v.position_mm.y, v.position_mm.z}},
                         {"hard", v.hard},
+                        {"skeleton", v.skeleton},
                         {"cost", v.cost}});
   }
   json tets = json::array();

@@ -2,7 +2,7 @@
 // `vpm render --mesh-json`).
 //
 // {"vertices": [{"lattice_id": int, "kind": "lattice|anchor|refined|boundary|steiner",
-//                "position_mm": [x, y, z], "hard": bool, "cost": double}, ...],
+//                "position_mm": [x, y, z], "hard": bool, "skeleton": bool (hard and fixed; absent: = hard), "cost": double}, ...],
 //  "tets": [[a, b, c, d], ...],
 //  "stats": {"grid": [gx, gy, gz], "lattice_vertices", "kept_lattice",
 //            "anchors", "refined", "boundary", "steiner" (both optional on

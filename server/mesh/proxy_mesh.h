@@ -30,7 +30,11 @@ struct MeshVertex {
   int64_t lattice_id = -1;      // a + Gx*(b + Gy*c) for lattice vertices, -1 otherwise
   VertexKind kind = VertexKind::kLattice;
   std::array<int64_t, 3> voxel{0, 0, 0};  // voxel(v): nearest voxel (round half up, clamped)
-  bool hard = false;            // non-deformable (step 3)
+  bool hard = false;            // non-deformable (step 3): stiff
+  // Hard and part of the skeleton (classify_hardness.h): fixed in space. A
+  // hard vertex off the skeleton (a stone, a calcification) is stiff but
+  // moves with the tissue around it. Implies hard.
+  bool skeleton = false;
   // Lattice: Ctotal when decimation stopped; refined: its Ci*Cg score;
   // anchor: 0.
   double cost = 0.0;

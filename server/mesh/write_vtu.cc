@@ -47,6 +47,8 @@ Status WriteVtu(const ProxyMesh& mesh, const std::string& path) {
       << mesh.tets.size() << "\">\n"
       << "      <PointData Scalars=\"cost\">\n";
   WritePointArray(out, mesh, "UInt8", "hard", [](const MeshVertex& v) { return v.hard ? 1 : 0; });
+  WritePointArray(out, mesh, "UInt8", "skeleton",
+                  [](const MeshVertex& v) { return v.skeleton ? 1 : 0; });
   WritePointArray(out, mesh, "Float64", "cost", [](const MeshVertex& v) { return v.cost; });
   WritePointArray(out, mesh, "Int32", "kind", [](const MeshVertex& v) { return KindCode(v.kind); });
   WritePointArray(out, mesh, "Int64", "lattice_id",

@@ -4,9 +4,13 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
+#include <limits>
 
 #include "server/common/clock.h"
+#include "server/common/finite_vec3.h"
 #include "server/raycast/overlay.h"
+#include "server/scene/organ_grab.h"
 #include "server/warp/warp_volume.h"
 
 namespace vpm {
@@ -20,6 +24,7 @@ std::atomic<uint64_t> next_map_version{1};
 SceneStepTimings FromSolve(const SolveStats& solve, std::chrono::steady_clock::time_point t0) {
   return {.fem_ms = MsSince(t0),
           .max_displacement_mm = solve.max_displacement_mm,
+          .lag_mm = solve.spring_lag_mm,
           .converged = solve.converged,
           .solve = solve};
 }
@@ -46,10 +51,55 @@ Result<std::unique_ptr<DeformableScene>> DeformableScene::Create(
 }
 
 Result<GrabInfo> DeformableScene::Grab(const glm::dvec3& point_mm, double radius_mm) {
-  ASSIGN_OR_RETURN(GrabInfo info, fem_->Grab(point_mm, radius_mm));
-  grab_point_mm_ = point_mm;
+  return Grab(GrabRequest{.point_mm = point_mm, .rule = GrabRule::kBall, .radius_mm = radius_mm});
+}
+
+Result<GrabInfo> DeformableScene::Grab(const GrabRequest& request) {
+  if (!IsFinite(request.point_mm)) return absl::InvalidArgumentError("grab point must be finite");
+  if (!std::isfinite(request.radius_mm) || request.radius_mm < 0.0) {
+    return absl::InvalidArgumentError("grab radius must be finite and >= 0 mm (0: the default)");
+  }
+  GrabInfo info;
+  if (request.rule == GrabRule::kBall) {
+    const double radius = request.radius_mm > 0.0 ? request.radius_mm : mesh_.stats.h_mm;
+    ASSIGN_OR_RETURN(info, fem_->Grab(request.point_mm, radius));
+  } else {
+    ASSIGN_OR_RETURN(info, GrabOrgan(*volume_, *fem_, request.point_mm, request.radius_mm,
+                                     kOrganMarginH * mesh_.stats.h_mm));
+  }
+  grab_point_mm_ = request.point_mm;
   drag_offset_mm_ = glm::dvec3(0.0);
   return info;
+}
+
+Result<SceneStepTimings> DeformableScene::Pin(const glm::dvec3& point_mm, double radius_mm) {
+  if (!IsFinite(point_mm)) return absl::InvalidArgumentError("pin point must be finite");
+  if (!std::isfinite(radius_mm) || radius_mm < 0.0) {
+    return absl::InvalidArgumentError("pin radius must be finite and >= 0 mm (0: h / 2)");
+  }
+  const double radius = radius_mm > 0.0 ? radius_mm : 0.5 * mesh_.stats.h_mm;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<glm::dvec3> now = fem_->Positions();
+  std::vector<int32_t> vertices;
+  int32_t nearest = -1;
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t v = 0; v < now.size(); ++v) {
+    if (!fem_->deformable()[v]) continue;
+    const double d = glm::distance(now[v], point_mm);
+    if (d <= radius) vertices.push_back(static_cast<int32_t>(v));
+    if (d < best) best = d, nearest = static_cast<int32_t>(v);
+  }
+  if (vertices.empty() && nearest >= 0) vertices.push_back(nearest);
+  RETURN_IF_ERROR(fem_->Pin(vertices));
+  return AfterStep({.fem_ms = MsSince(t0)});
+}
+
+Result<SceneStepTimings> DeformableScene::Reset() {
+  const auto t0 = std::chrono::steady_clock::now();
+  fem_->Reset();
+  grab_point_mm_.reset();
+  drag_offset_mm_ = glm::dvec3(0.0);
+  return AfterStep({.fem_ms = MsSince(t0)});
 }
 
 Result<SceneStepTimings> DeformableScene::UpdateMap(SceneStepTimings timings) {
@@ -110,7 +160,7 @@ Result<SceneStepTimings> DeformableScene::Pull(const glm::dvec3& force_n) {
 }
 
 Result<SceneStepTimings> DeformableScene::Settle(int max_solves) {
-  if (fem_->settled() || !fem_->grabbed()) return SceneStepTimings{};
+  if (fem_->settled()) return SceneStepTimings{};
   const auto t0 = std::chrono::steady_clock::now();
   SolveStats last;
   for (int i = 0; i < max_solves && !fem_->settled(); ++i) {
@@ -119,12 +169,20 @@ Result<SceneStepTimings> DeformableScene::Settle(int max_solves) {
   return AfterStep(FromSolve(last, t0));
 }
 
-Result<SceneStepTimings> DeformableScene::Release() {
+Result<SceneStepTimings> DeformableScene::Release(bool keep) {
   const auto t0 = std::chrono::steady_clock::now();
-  fem_->Release();
+  RETURN_IF_ERROR(fem_->Release(keep));
   grab_point_mm_.reset();
   drag_offset_mm_ = glm::dvec3(0.0);
-  return AfterStep({.fem_ms = MsSince(t0)});
+  SceneStepTimings timings;
+  // With something held the tissue relaxes towards it: one bounded solve
+  // now, Settle goes on.
+  if (!fem_->settled()) {
+    ASSIGN_OR_RETURN(const SolveStats solve, fem_->Settle());
+    timings = FromSolve(solve, t0);
+  }
+  timings.fem_ms = MsSince(t0);
+  return AfterStep(timings);
 }
 
 std::optional<glm::dvec3> DeformableScene::GrabbedTissueMm() const {

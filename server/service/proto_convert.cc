@@ -133,6 +133,7 @@ void FillMeshGeometry(const ProxyMesh& mesh, v2::GetMeshResponse* response) {
     out->set_lattice_id(v.lattice_id);
     out->set_kind(KindToProto(v.kind));
     out->set_hard(v.hard);
+    out->set_skeleton(v.skeleton);
     out->set_cost(v.cost);
   }
   for (const auto& t : mesh.tets) {

@@ -104,17 +104,36 @@ Result<AppliedEvent> Session::ApplyLocked(const v2::ClientEvent& event, const Sc
     }
     case v2::ClientEvent::kGrab: {
       ASSIGN_OR_RETURN(glm::dvec3 point, GrabPoint(event.grab(), view));
-      if (event.grab().radius_mm() < 0) {
-        return absl::InvalidArgumentError("grab.radius_mm: negative (0: one lattice step)");
-      }
-      const double radius =
-          event.grab().radius_mm() > 0 ? event.grab().radius_mm() : mesh_->mesh.stats.h_mm;
-      auto info = scene_->Grab(point, radius);
-      if (!info.ok()) return info.status();
+      const GrabRule rule =
+          event.grab().rule() == v2::GRAB_RULE_BALL ? GrabRule::kBall : GrabRule::kOrgan;
+      ASSIGN_OR_RETURN(GrabInfo info, scene_->Grab(GrabRequest{
+                                          .point_mm = point,
+                                          .rule = rule,
+                                          .radius_mm = event.grab().radius_mm()}));
       std::lock_guard lock(state_mutex_);
       grabbed_ = true;
       grab_point_ = point;
       applied.grab_point_mm = point;
+      applied.grab = std::move(info);
+      return applied;
+    }
+    case v2::ClientEvent::kPin: {
+      v2::Grab where;
+      *where.mutable_point_mm() = event.pin().point_mm();
+      where.set_pick(event.pin().pick());
+      where.set_pixel_x(event.pin().pixel_x());
+      where.set_pixel_y(event.pin().pixel_y());
+      ASSIGN_OR_RETURN(glm::dvec3 point, GrabPoint(where, view));
+      ASSIGN_OR_RETURN(applied.step, scene_->Pin(point, event.pin().radius_mm()));
+      applied.deformed = true;
+      return applied;
+    }
+    case v2::ClientEvent::kReset: {
+      ASSIGN_OR_RETURN(applied.step, scene_->Reset());
+      applied.deformed = true;
+      std::lock_guard lock(state_mutex_);
+      grabbed_ = false;
+      grab_point_.reset();
       return applied;
     }
     case v2::ClientEvent::kDrag:
@@ -142,7 +161,7 @@ Result<AppliedEvent> Session::ApplyLocked(const v2::ClientEvent& event, const Sc
         std::lock_guard lock(state_mutex_);
         if (!grabbed_) return absl::FailedPreconditionError("release: no grab in effect");
       }
-      ASSIGN_OR_RETURN(applied.step, scene_->Release());
+      ASSIGN_OR_RETURN(applied.step, scene_->Release(event.release().keep()));
       applied.deformed = true;
       std::lock_guard lock(state_mutex_);
       grabbed_ = false;
@@ -210,7 +229,18 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
     // A still comes once the pointer has stopped: the drag the per-event
     // bound left short of its offset is finished first (docs/FEM.md,
     // "Per-event work bound"), so the still shows where the pointer is.
-    if (!interactive) RETURN_IF_ERROR(scene_->Settle(kSettleSolves).status());
+    if (!interactive) {
+      ASSIGN_OR_RETURN(const SceneStepTimings settled, scene_->Settle(kSettleSolves));
+      if (settled.fem_ms > 0.0) {
+        step.max_displacement_mm = settled.max_displacement_mm;
+        step.inverted_tets = settled.inverted_tets;
+        step.lag_mm = settled.lag_mm;
+        std::lock_guard lock(state_mutex_);
+        last_step_.max_displacement_mm = step.max_displacement_mm;
+        last_step_.inverted_tets = step.inverted_tets;
+        last_step_.lag_mm = step.lag_mm;
+      }
+    }
     ASSIGN_OR_RETURN(prepared, scene_->PrepareRender(view, &map_update));
     // Slices are cheap (a few ms): cast here, under the scene lock, from the
     // map this frame uses.
@@ -240,6 +270,8 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
   out.set_interactive(interactive);
   out.set_last_sequence(sequence);
   out.set_max_displacement_mm(step.max_displacement_mm);
+  out.set_inverted_tets(step.inverted_tets);
+  out.set_lag_mm(step.lag_mm);
   v2::StageTimings* timings = out.mutable_timings();
   timings->set_fem_ms(step.fem_ms);
   timings->set_warp_ms(map_update.warp_ms);

@@ -29,6 +29,7 @@ struct AppliedEvent {
   SceneStepTimings step;  // FEM and warp times (zero for camera events)
   bool deformed = false;
   std::optional<glm::dvec3> grab_point_mm;  // a grab's point (picked or given)
+  std::optional<GrabInfo> grab;              // a grab's handles and message
 };
 
 class Session {

@@ -363,7 +363,7 @@ grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* co
                      service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
     const v2::ClientEvent& event = request->event();
     if (event.event_case() == v2::ClientEvent::EVENT_NOT_SET) {
-      return absl::InvalidArgumentError("event: required (camera, grab, drag, pull or release)");
+      return absl::InvalidArgumentError("event: required (camera, grab, drag, pull, release, pin or reset)");
     }
     if (event.has_settings()) {
       return absl::InvalidArgumentError(
@@ -372,7 +372,13 @@ grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* co
     ASSIGN_OR_RETURN(AppliedEvent applied, session->Apply(event));
     response->set_applied_sequence(event.sequence());
     response->set_max_displacement_mm(session->max_displacement_mm());
+    response->set_inverted_tets(applied.step.inverted_tets);
+    response->set_lag_mm(applied.step.lag_mm);
     if (applied.grab_point_mm) *response->mutable_grab_point_mm() = ToProto(*applied.grab_point_mm);
+    if (applied.grab) {
+      response->set_handles(static_cast<int32_t>(applied.grab->handles.size()));
+      response->set_message(applied.grab->message);
+    }
     return absl::OkStatus();
   });
 }

@@ -72,7 +72,7 @@ TEST(FemModel, GrabFallsBackToTheNearestDeformableVertices) {
 TEST(FemModel, GrabLeavesVerticesNextToAFixedOneFreeButTakesTheNearest) {
   ProxyMesh mesh = GridMesh({6, 6, 6}, kExtent);
   const int32_t hard = 3 + 7 * (3 + 7 * 3);  // (15, 15, 15)
-  mesh.vertices[hard].hard = true;
+  mesh.vertices[hard].hard = mesh.vertices[hard].skeleton = true;
   auto model = FemModel::Create(mesh, kExtent);
   ASSERT_TRUE(model.ok()) << model.status();
   const glm::dvec3 point(20.5, 15.0, 15.0);
@@ -122,6 +122,7 @@ TEST(FemModel, GrabLeavesVerticesNextToAFixedOneFreeButTakesTheNearest) {
 TEST(FemModel, GrabRejectsBadInputWithClearCodes) {
   ProxyMesh mesh = GridMesh({6, 6, 6}, kExtent);
   mesh.vertices[3 + 7 * (3 + 7 * 3)].hard = true;  // the centre (15, 15, 15)
+  mesh.vertices[3 + 7 * (3 + 7 * 3)].skeleton = true;
   auto model = *FemModel::Create(mesh, kExtent);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
@@ -144,7 +145,7 @@ TEST(FemModel, GrabRejectsBadInputWithClearCodes) {
             absl::StatusCode::kFailedPrecondition);
   EXPECT_FALSE(model.grabbed());
   // A mesh with nothing deformable.
-  for (MeshVertex& v : mesh.vertices) v.hard = true;
+  for (MeshVertex& v : mesh.vertices) v.hard = v.skeleton = true;
   EXPECT_EQ(FemModel::Create(mesh, kExtent).status().code(), absl::StatusCode::kFailedPrecondition);
 }
 
@@ -178,7 +179,7 @@ TEST(FemModel, DragAndPullNeedAGrab) {
   EXPECT_EQ(model.Drag(glm::dvec3(std::nan(""), 0.0, 0.0)).status().code(),
             absl::StatusCode::kInvalidArgument);
   EXPECT_TRUE(model.Drag(glm::dvec3(1.0, 0.0, 0.0)).ok());
-  model.Release();
+  ASSERT_TRUE(model.Release().ok());
   EXPECT_FALSE(model.grabbed());
   EXPECT_EQ(model.Drag(glm::dvec3(1.0, 0.0, 0.0)).status().code(),
             absl::StatusCode::kFailedPrecondition);
@@ -217,7 +218,7 @@ TEST(FemModel, DragThenReleaseReturnsToRestExactly) {
   ASSERT_TRUE(model.Grab(glm::dvec3(14.0, 15.0, 16.0), 4.0).ok());
   for (int s = 1; s <= 5; ++s) ASSERT_TRUE(model.Drag(glm::dvec3(0.0, 1.0 * s, 0.5 * s)).ok());
   ASSERT_TRUE(model.Pull(glm::dvec3(0.0, 0.0, 1e-3)).ok());
-  model.Release();
+  ASSERT_TRUE(model.Release().ok());
   EXPECT_EQ(model.Positions(), RestPositions(mesh));
   for (const glm::dvec3& d : model.Displacements()) EXPECT_EQ(d, glm::dvec3(0.0));
   // And it can be grabbed and dragged again from rest.

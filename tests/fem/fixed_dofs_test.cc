@@ -37,7 +37,7 @@ TEST(FixedDofs, CornersFixedFacesSlideInteriorFree) {
 TEST(FixedDofs, HardVerticesAndAnchorsAreFixedEverywhere) {
   const glm::dvec3 extent(10.0);
   ProxyMesh mesh = GridMesh({2, 2, 2}, extent);
-  mesh.vertices[13].hard = true;
+  mesh.vertices[13].hard = mesh.vertices[13].skeleton = true;
   // Within 1e-6 relative of a face counts as on it; 1e-5 does not.
   mesh.vertices[4].position_mm.z = 1e-7 * extent.z;
   mesh.vertices[22].position_mm.z = extent.z * (1.0 - 1e-5);

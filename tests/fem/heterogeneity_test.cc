@@ -78,7 +78,7 @@ TEST(Heterogeneity, HardVerticesStayPutAndHardenTheirTets) {
   int hard = 0;
   for (MeshVertex& v : mesh.vertices) {
     const glm::dvec3 d = v.position_mm - glm::dvec3(10.0, 15.0, 15.0);
-    if (glm::length(d) < 5.5) v.hard = true, ++hard;
+    if (glm::length(d) < 5.5) v.hard = v.skeleton = true, ++hard;
   }
   ASSERT_GT(hard, 3);
   auto model = FemModel::Create(mesh, extent);

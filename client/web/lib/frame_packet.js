@@ -40,6 +40,11 @@ export function packFrame(frame, extra = {}) {
     interactive: frame.interactive,
     timings: frame.timings,        // server-side ms per stage
     max_displacement_mm: frame.max_displacement_mm,
+    inverted_tets: Number(frame.inverted_tets ?? 0),  // of the proxy mesh (0 expected)
+    lag_mm: frame.lag_mm ?? 0,     // how far the grabbed tissue is behind the pointer
+    // The held grab's point (physical voxel space), as the server picked it.
+    grab_point_mm: frame.grab_point_mm
+      ? [frame.grab_point_mm.x, frame.grab_point_mm.y, frame.grab_point_mm.z] : null,
     frame_number: Number(frame.frame_number),
     superseded_frames: Number(frame.superseded_frames),
     vertices: frame.vertices_mm?.length ?? 0,

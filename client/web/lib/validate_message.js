@@ -4,7 +4,7 @@
 // Error with a message for the page.
 import { toProtoSettings } from './render_settings.js';
 
-const kEventKinds = ['camera', 'settings', 'grab', 'drag', 'pull', 'release'];
+const kEventKinds = ['camera', 'settings', 'grab', 'drag', 'pull', 'release', 'pin', 'reset'];
 const kMaxIdChars = 128;
 const kMaxSourceChars = 2048;
 const kMaxSlices = 3;

@@ -150,6 +150,7 @@ const tools = new PointerTools({
     $('refine-grab').disabled = false;
   },
   onRefused: (text) => showMessage(text, 'error'),
+  keepDrags: () => $('keep-drag').checked,
   onCropPress: (x, y, width, height) => cuts.pressFace(state.camera, x, y, width, height),
   onCropDrag: (dx, dy, width, height) => cuts.dragFace(state.camera, dx, dy, width, height),
 });
@@ -261,6 +262,12 @@ function onFrame(frame) {
   state.lastHeader = h;
   state.framesReceived += 1;
   state.peakDisplacementMm = Math.max(state.peakDisplacementMm, h.max_displacement_mm);
+  // The point the server picked for the held grab (the page's own pick is
+  // only a guess until then): "Refine at last grab" refines there.
+  if (h.grab_point_mm) {
+    const [x, y, z] = h.grab_point_mm;
+    state.lastGrabMm = { x, y, z };
+  }
   if (waiting) state.framesSuperseded += 1;  // newest wins: the waiting one is dropped
   waiting = frame;
   if (!drawing) drawNext();
@@ -313,7 +320,8 @@ function showStatus(h) {
     `${stats.fps()} fps · latency ${latency} ms · ${h.width}x${h.height} ` +
     `${(h.bytes / 1024).toFixed(1)} KB ${h.encoding} · ${h.interactive ? 'interactive' : 'still'}` +
     ` · server ${h.timings.total_ms.toFixed(0)} ms · max displacement ` +
-    `${h.max_displacement_mm.toFixed(2)} mm · frame ${h.frame_number}`;
+    `${h.max_displacement_mm.toFixed(2)} mm · lag ${(h.lag_mm ?? 0).toFixed(1)} mm · ` +
+    `inverted tets ${h.inverted_tets ?? 0} · frame ${h.frame_number}`;
 }
 
 // ------------------------------------------------------------ controls
@@ -377,6 +385,7 @@ $('frame-size').addEventListener('change', () => {
   settingsChanged();
 });
 $('refine-grab').addEventListener('click', () => state.lastGrabMm && refineAt(state.lastGrabMm));
+$('reset-tissue').addEventListener('click', () => sendEvent({ reset: {} }));
 $('reset-view').addEventListener('click', () => {
   if (!state.camera) return;
   state.camera.reset();

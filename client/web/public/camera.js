@@ -1,7 +1,8 @@
 // The orbit camera of server/raycast/camera.{h,cc}, mirrored in the browser
 // so that screen motion becomes millimetres: drag offsets for the grab tool,
-// and the picked point for refine-here (the server does not report the
-// point it picks). Physical voxel space (index * spacing, mm) throughout.
+// and the picked point for refine-here (a grab's point is the server's own,
+// Frame.grab_point_mm, once its frame arrives). Physical voxel space
+// (index * spacing, mm) throughout.
 //
 // Conventions kept from the server: azimuth 0, elevation 0 looks from
 // anterior to posterior with superior up; azimuth turns towards the

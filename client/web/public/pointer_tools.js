@@ -3,6 +3,7 @@
 //   grab tool:  press grabs the pixel (Grab{pick}: the server casts the same
 //               ray), moving drags (Drag offsets in mm from the screen motion
 //               and the camera), releasing lets go (Release);
+//   pin tool:   a click holds the tissue under the pixel still (Pin{pick});
 //   refine tool: a click refines the mesh at the picked point;
 //   crop tool:  pressing on a face of the crop box and dragging moves the
 //               face along its normal (onCropPress, onCropDrag); pressing
@@ -18,9 +19,11 @@ export class PointerTools {
   // onRefine(point_mm); onGrab(point_mm | null); onRefused(text);
   // onCropPress(x, y, width, height) -> true when on a face;
   // onCropDrag(dx, dy, width, height): frame pixels from the press.
-  constructor({ canvas, camera, send, onRefine, onGrab, onRefused, onCropPress, onCropDrag }) {
+  // keepDrags(): whether a release keeps the drag (Shift on release keeps too).
+  constructor({ canvas, camera, send, onRefine, onGrab, onRefused, onCropPress, onCropDrag,
+                keepDrags = () => false }) {
     Object.assign(this, { canvas, camera, send, onRefine, onGrab, onRefused, onCropPress,
-                          onCropDrag });
+                          onCropDrag, keepDrags });
     this.tool = 'orbit';
     this.gesture = null;  // {kind, startX, startY, lastX, lastY}
     this.queued = null;   // the newest camera or drag event waiting for a frame
@@ -46,7 +49,7 @@ export class PointerTools {
     if (!camera || e.button !== 0 || this.gesture) return;
     const [x, y] = this.pixel(e);
     const { width, height } = this.canvas;
-    if (this.tool === 'refine' || this.tool === 'grab') {
+    if (this.tool === 'refine' || this.tool === 'grab' || this.tool === 'pin') {
       const point = camera.pickPointMm(x, y, width, height);
       if (!camera.insideVolume(point)) {
         this.onRefused('That pixel picks a point outside the volume; aim at the volume.');
@@ -54,6 +57,10 @@ export class PointerTools {
       }
       if (this.tool === 'refine') {
         this.onRefine({ x: point[0], y: point[1], z: point[2] });
+        return;
+      }
+      if (this.tool === 'pin') {
+        this.send({ pin: { pick: true, pixel_x: x, pixel_y: y } });
         return;
       }
       this.send({ grab: { pick: true, pixel_x: x, pixel_y: y } });
@@ -89,7 +96,7 @@ export class PointerTools {
     this.gesture = null;
     if (this.canvas.hasPointerCapture(e.pointerId)) this.canvas.releasePointerCapture(e.pointerId);
     this.flush();
-    if (g.kind === 'grab') this.send({ release: {} });
+    if (g.kind === 'grab') this.send({ release: { keep: Boolean(e.shiftKey || this.keepDrags()) } });
   }
 
   // The server reported that the grab failed: forget the gesture.

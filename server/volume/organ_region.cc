@@ -1,0 +1,274 @@
+#include "server/volume/organ_region.h"
+
+#include <algorithm>
+#include <climits>
+#include <cstdint>
+#include <cmath>
+#include <deque>
+#include <optional>
+
+namespace vpm {
+namespace {
+
+// Percentiles p_low and p_high (in [0, 1]) of about 100,000 voxels taken at a
+// fixed stride.
+std::pair<float, float> RobustRange(const Volume& volume, double p_low, double p_high) {
+  const int64_t n = volume.geometry().voxel_count();
+  const int64_t stride = std::max<int64_t>(1, n / 100000);
+  std::vector<float> sample;
+  sample.reserve(static_cast<size_t>(n / stride + 1));
+  for (int64_t i = 0; i < n; i += stride) {
+    const float v = volume.voxels()[i];
+    if (std::isfinite(v)) sample.push_back(v);
+  }
+  if (sample.empty()) return {0.0f, 0.0f};
+  const auto at = [&](double p) {
+    auto it = sample.begin() + static_cast<int64_t>(p * double(sample.size() - 1));
+    std::nth_element(sample.begin(), it, sample.end());
+    return *it;
+  };
+  return {at(p_low), at(p_high)};
+}
+
+// The dominant intensity around `c` (the 5 x 5 x 5 voxels, clamped at the
+// edges): the value with the most neighbours within +-band, refined to the
+// median of those neighbours. A click near a hilum or on a partial-volume
+// voxel still finds the organ's own intensity.
+float DominantIntensity(const Volume& volume, const std::array<int64_t, 3>& c, float band) {
+  std::vector<float> values;
+  for (int64_t k = c[2] - 2; k <= c[2] + 2; ++k)
+    for (int64_t j = c[1] - 2; j <= c[1] + 2; ++j)
+      for (int64_t i = c[0] - 2; i <= c[0] + 2; ++i) {
+        const float v = volume.AtClamped(i, j, k);
+        if (std::isfinite(v)) values.push_back(v);
+      }
+  if (values.empty()) return 0.0f;
+  const float centre = volume.AtClamped(c[0], c[1], c[2]);
+  float best = values.front();
+  size_t best_count = 0;
+  for (float v : values) {
+    const size_t count = std::count_if(values.begin(), values.end(),
+                                       [&](float w) { return std::abs(w - v) <= band; });
+    if (count > best_count ||
+        (count == best_count && std::abs(v - centre) < std::abs(best - centre))) {
+      best = v, best_count = count;
+    }
+  }
+  std::vector<float> near;
+  for (float v : values) {
+    if (std::abs(v - best) <= band) near.push_back(v);
+  }
+  auto mid = near.begin() + near.size() / 2;
+  std::nth_element(near.begin(), mid, near.end());
+  return *mid;
+}
+
+// A dense mask over the box [lo, hi] (voxel indices, inclusive).
+struct BoxMask {
+  std::array<int64_t, 3> lo{}, size{};
+  std::vector<uint8_t> bits;
+  int64_t Index(int64_t i, int64_t j, int64_t k) const {
+    return (i - lo[0]) + size[0] * ((j - lo[1]) + size[1] * (k - lo[2]));
+  }
+  bool Inside(int64_t i, int64_t j, int64_t k) const {
+    return i >= lo[0] && j >= lo[1] && k >= lo[2] && i < lo[0] + size[0] &&
+           j < lo[1] + size[1] && k < lo[2] + size[2];
+  }
+  bool At(int64_t i, int64_t j, int64_t k) const { return Inside(i, j, k) && bits[Index(i, j, k)]; }
+};
+
+constexpr int kSteps[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+
+// The face-connected component of `allowed` through `seed` (empty if the
+// seed is not allowed).
+BoxMask Component(const BoxMask& allowed, const std::array<int64_t, 3>& seed) {
+  BoxMask out = allowed;
+  std::fill(out.bits.begin(), out.bits.end(), 0);
+  if (!allowed.At(seed[0], seed[1], seed[2])) return out;
+  std::deque<std::array<int64_t, 3>> queue{seed};
+  out.bits[out.Index(seed[0], seed[1], seed[2])] = 1;
+  while (!queue.empty()) {
+    const auto [i, j, k] = queue.front();
+    queue.pop_front();
+    for (const auto& s : kSteps) {
+      const int64_t a = i + s[0], b = j + s[1], c = k + s[2];
+      if (!allowed.At(a, b, c) || out.bits[out.Index(a, b, c)]) continue;
+      out.bits[out.Index(a, b, c)] = 1;
+      queue.push_back({a, b, c});
+    }
+  }
+  return out;
+}
+
+// The face-connected voxels of `box` reachable from `seed` through voxels
+// `accept` takes (none when it does not take the seed).
+template <typename Accept>
+BoxMask Grow(const BoxMask& box, const std::array<int64_t, 3>& seed, const Accept& accept) {
+  BoxMask out = box;
+  out.bits.assign(box.size[0] * box.size[1] * box.size[2], 0);
+  if (!accept(seed[0], seed[1], seed[2])) return out;
+  std::deque<std::array<int64_t, 3>> queue{seed};
+  out.bits[out.Index(seed[0], seed[1], seed[2])] = 1;
+  while (!queue.empty()) {
+    const auto [i, j, k] = queue.front();
+    queue.pop_front();
+    for (const auto& st : kSteps) {
+      const int64_t a = i + st[0], b = j + st[1], c = k + st[2];
+      if (!out.Inside(a, b, c) || out.bits[out.Index(a, b, c)] || !accept(a, b, c)) continue;
+      out.bits[out.Index(a, b, c)] = 1;
+      queue.push_back({a, b, c});
+    }
+  }
+  return out;
+}
+
+// `mask` cut to the bounding box of its set voxels and one voxel around.
+BoxMask Crop(const BoxMask& mask) {
+  std::array<int64_t, 3> lo = {INT64_MAX, INT64_MAX, INT64_MAX}, hi = {-1, -1, -1};
+  for (int64_t k = mask.lo[2]; k < mask.lo[2] + mask.size[2]; ++k)
+    for (int64_t j = mask.lo[1]; j < mask.lo[1] + mask.size[1]; ++j)
+      for (int64_t i = mask.lo[0]; i < mask.lo[0] + mask.size[0]; ++i) {
+        if (!mask.bits[mask.Index(i, j, k)]) continue;
+        const std::array<int64_t, 3> p{i, j, k};
+        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+      }
+  if (hi[0] < 0) return mask;
+  BoxMask out;
+  for (int a = 0; a < 3; ++a) {
+    out.lo[a] = lo[a] - 1;
+    out.size[a] = hi[a] - lo[a] + 3;
+  }
+  out.bits.assign(out.size[0] * out.size[1] * out.size[2], 0);
+  for (int64_t k = lo[2]; k <= hi[2]; ++k)
+    for (int64_t j = lo[1]; j <= hi[1]; ++j)
+      for (int64_t i = lo[0]; i <= hi[0]; ++i) out.bits[out.Index(i, j, k)] = mask.At(i, j, k);
+  return out;
+}
+
+// The largest face-connected component of `mask` with a voxel within
+// `reach` voxels (Chebyshev) of `c`; none when no such voxel is set.
+std::optional<BoxMask> LargestComponentNear(const BoxMask& mask, const std::array<int64_t, 3>& c,
+                                            int reach) {
+  std::optional<BoxMask> best;
+  int64_t best_count = 0;
+  for (int64_t dk = -reach; dk <= reach; ++dk)
+    for (int64_t dj = -reach; dj <= reach; ++dj)
+      for (int64_t di = -reach; di <= reach; ++di) {
+        const std::array<int64_t, 3> at{c[0] + di, c[1] + dj, c[2] + dk};
+        if (!mask.At(at[0], at[1], at[2])) continue;
+        if (best && best->At(at[0], at[1], at[2])) continue;  // already that one
+        BoxMask component = Component(mask, at);
+        const int64_t count = std::count(component.bits.begin(), component.bits.end(), 1);
+        if (count > best_count) best = std::move(component), best_count = count;
+      }
+  return best;
+}
+
+// One face-connected erosion (grow = false) or dilation within `limit`.
+BoxMask Morph(const BoxMask& in, bool grow, const BoxMask& limit) {
+  BoxMask out = in;
+  for (int64_t k = in.lo[2]; k < in.lo[2] + in.size[2]; ++k) {
+    for (int64_t j = in.lo[1]; j < in.lo[1] + in.size[1]; ++j) {
+      for (int64_t i = in.lo[0]; i < in.lo[0] + in.size[0]; ++i) {
+        const int64_t x = in.Index(i, j, k);
+        bool any = false, all = true;
+        for (const auto& s : kSteps) {
+          const bool on = in.At(i + s[0], j + s[1], k + s[2]);
+          any |= on;
+          all &= on;
+        }
+        out.bits[x] = grow ? (in.bits[x] || (any && limit.bits[x])) : (in.bits[x] && all);
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+bool OrganRegion::Contains(int64_t linear) const {
+  return std::binary_search(voxels.begin(), voxels.end(), linear);
+}
+
+Result<OrganRegion> GrowOrganRegion(const Volume& volume, const glm::dvec3& seed_mm,
+                                    const OrganRegionParams& params) {
+  if (!std::isfinite(seed_mm.x) || !std::isfinite(seed_mm.y) || !std::isfinite(seed_mm.z)) {
+    return absl::InvalidArgumentError("organ seed must be finite");
+  }
+  if (!(params.max_radius_mm > 0.0) || !std::isfinite(params.max_radius_mm) ||
+      !(params.window_fraction >= 0.0) ||
+      params.opening_voxels < 0 || params.opening_voxels > 4) {
+    return absl::InvalidArgumentError("organ region: bad parameters");
+  }
+  const glm::dvec3 index = glm::round(volume.geometry().PhysicalToIndex(seed_mm));
+  const auto& dims = volume.dims();
+  const std::array<int64_t, 3> seed{int64_t(index.x), int64_t(index.y), int64_t(index.z)};
+  for (int a = 0; a < 3; ++a) {
+    if (seed[a] < 0 || seed[a] >= dims[a]) {
+      return absl::OutOfRangeError("organ seed lies outside the volume");
+    }
+  }
+  OrganRegion region;
+  const auto [low, high] = RobustRange(volume, 0.02, 0.98);
+  region.window = static_cast<float>(params.window_fraction * double(high - low));
+  region.reference = DominantIntensity(volume, seed, 0.5f * region.window);
+  const glm::dvec3 s = volume.spacing_mm();
+  BoxMask box;  // the bound's box
+  for (int a = 0; a < 3; ++a) {
+    const auto reach = static_cast<int64_t>(std::ceil(params.max_radius_mm / s[a]));
+    box.lo[a] = std::max<int64_t>(0, seed[a] - reach);
+    box.size[a] = std::min<int64_t>(dims[a] - 1, seed[a] + reach) - box.lo[a] + 1;
+  }
+  const double r2 = params.max_radius_mm * params.max_radius_mm;
+  const auto accept = [&](int64_t i, int64_t j, int64_t k) {
+    const glm::dvec3 d = (glm::dvec3(i, j, k) - glm::dvec3(index)) * s;
+    return box.Inside(i, j, k) && glm::dot(d, d) <= r2 &&
+           std::abs(volume.At(i, j, k) - region.reference) <= region.window;
+  };
+  // The flood starts at the seed, or where the seed's voxel is off the
+  // organ's intensity (a stone, partial volume), at the accepted voxel
+  // nearest to it within two voxels.
+  std::array<int64_t, 3> start = seed;
+  int64_t best_d2 = accept(seed[0], seed[1], seed[2]) ? 0 : -1;
+  for (int64_t dk = -2; dk <= 2 && best_d2 != 0; ++dk)
+    for (int64_t dj = -2; dj <= 2; ++dj)
+      for (int64_t di = -2; di <= 2; ++di) {
+        const int64_t d2 = di * di + dj * dj + dk * dk;
+        if ((best_d2 < 0 || d2 < best_d2) && accept(seed[0] + di, seed[1] + dj, seed[2] + dk)) {
+          start = {seed[0] + di, seed[1] + dj, seed[2] + dk};
+          best_d2 = d2;
+        }
+      }
+  BoxMask grown = Crop(Grow(box, start, accept));
+  if (params.opening_voxels > 0) {
+    BoxMask core = grown;
+    for (int n = 0; n < params.opening_voxels; ++n) core = Morph(core, false, grown);
+    // The seed itself may erode away (next to a hilum's fat, in a thin
+    // part): the largest core component within two voxels stands for it.
+    const std::optional<BoxMask> anchored = LargestComponentNear(core, seed, 2);
+    if (anchored) core = *anchored;
+    const bool anchor = anchored.has_value();
+    // The seed's whole neighbourhood eroded away (a thin structure): keep
+    // the plain region.
+    if (anchor) {
+      for (int n = 0; n < params.opening_voxels; ++n) core = Morph(core, true, grown);
+      grown = std::move(core);
+    }
+  }
+  for (int64_t k = grown.lo[2]; k < grown.lo[2] + grown.size[2]; ++k) {
+    for (int64_t j = grown.lo[1]; j < grown.lo[1] + grown.size[1]; ++j) {
+      for (int64_t i = grown.lo[0]; i < grown.lo[0] + grown.size[0]; ++i) {
+        if (!grown.bits[grown.Index(i, j, k)]) continue;
+        region.voxels.push_back(volume.LinearIndex(i, j, k));
+        const glm::dvec3 d = (glm::dvec3(i, j, k) - glm::dvec3(index)) * s;
+        region.reached_bound |= glm::length(d) > params.max_radius_mm - std::max({s.x, s.y, s.z});
+      }
+    }
+  }
+  if (region.voxels.empty()) region.voxels.push_back(volume.LinearIndex(seed[0], seed[1], seed[2]));
+  std::sort(region.voxels.begin(), region.voxels.end());
+  region.volume_mm3 = double(region.voxels.size()) * s.x * s.y * s.z;
+  return region;
+}
+
+}  // namespace vpm
