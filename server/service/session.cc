@@ -10,6 +10,11 @@
 namespace vpm::service {
 namespace {
 
+// The largest grab radius (mm), drag offset (mm) or pull force (N) a client
+// may send: ten metres, or ten kilonewtons, is past anything a body allows;
+// numbers far larger overflow the FEM model.
+constexpr double kMaxEventMagnitude = 1e4;
+
 }  // namespace
 
 Session::Session(std::string id, std::string owner, std::shared_ptr<VolumeEntry> volume,
@@ -104,8 +109,11 @@ Result<AppliedEvent> Session::ApplyLocked(const v2::ClientEvent& event, const Sc
     }
     case v2::ClientEvent::kGrab: {
       ASSIGN_OR_RETURN(glm::dvec3 point, GrabPoint(event.grab(), view));
-      if (event.grab().radius_mm() < 0) {
-        return absl::InvalidArgumentError("grab.radius_mm: negative (0: one lattice step)");
+      const double radius_mm = event.grab().radius_mm();
+      if (!std::isfinite(radius_mm) || radius_mm < 0 || radius_mm > kMaxEventMagnitude) {
+        return absl::InvalidArgumentError(StrCat(
+            "grab.radius_mm: must be a finite number of mm in [0, ", kMaxEventMagnitude,
+            "] (0: one lattice step)"));
       }
       const double radius =
           event.grab().radius_mm() > 0 ? event.grab().radius_mm() : mesh_->mesh.stats.h_mm;
@@ -129,11 +137,22 @@ Result<AppliedEvent> Session::ApplyLocked(const v2::ClientEvent& event, const Sc
       }
       const glm::dvec3 v =
           FromProto(event.has_drag() ? event.drag().offset_mm() : event.pull().force_n());
+      const char* field = event.has_drag() ? "drag.offset_mm" : "pull.force_n";
       if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
-        return absl::InvalidArgumentError(event.has_drag() ? "drag.offset_mm: not finite"
-                                                           : "pull.force_n: not finite");
+        return absl::InvalidArgumentError(StrCat(field, ": not finite"));
       }
-      ASSIGN_OR_RETURN(applied.step, event.has_drag() ? scene_->Drag(v) : scene_->Pull(v));
+      if (glm::length(v) > kMaxEventMagnitude) {
+        return absl::InvalidArgumentError(
+            StrCat(field, ": longer than ", kMaxEventMagnitude, " (mm or N)"));
+      }
+      Result<SceneStepTimings> step = event.has_drag() ? scene_->Drag(v) : scene_->Pull(v);
+      // The model cannot follow a drag or pull this large (its state became
+      // non-finite and was restored): the request's fault, not the server's.
+      if (absl::IsInternal(step.status())) {
+        return absl::InvalidArgumentError(StrCat(field, ": the model cannot follow this (",
+                                                 step.status().message(), "); ask for less"));
+      }
+      ASSIGN_OR_RETURN(applied.step, std::move(step));
       applied.deformed = true;
       return applied;
     }
