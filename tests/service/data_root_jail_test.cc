@@ -23,7 +23,7 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-double SecondsSince(Clock::time_point start) {
+double ElapsedSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
@@ -139,7 +139,7 @@ TEST_F(JailTest, FifoIsAnErrorAtOnceAndTheServerStaysResponsive) {
   auto x = std::async(std::launch::async, [&] { return Load("x.nii", nullptr, 10); });
   auto y = std::async(std::launch::async, [&] { return Load("y.nii", nullptr, 10); });
   const grpc::Status sx = x.get(), sy = y.get();
-  const double waited_s = SecondsSince(start);
+  const double waited_s = ElapsedSince(start);
   done = true;
   rescue.join();
   EXPECT_LT(waited_s, 1.0);
@@ -155,7 +155,7 @@ TEST_F(JailTest, FifoIsAnErrorAtOnceAndTheServerStaysResponsive) {
   EXPECT_TRUE(phantom.ok()) << phantom.error_message();
   v2::ListVolumesResponse list;
   EXPECT_TRUE(stub_->ListVolumes(Context(kToken, 5).get(), {}, &list).ok());
-  EXPECT_LT(SecondsSince(after), 10.0);
+  EXPECT_LT(ElapsedSince(after), 10.0);
 }
 
 TEST_F(JailTest, NameTooLongIsInvalidArgument) {
