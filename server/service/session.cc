@@ -15,6 +15,34 @@ namespace {
 // numbers far larger overflow the FEM model.
 constexpr double kMaxEventMagnitude = 1e4;
 
+Status CheckGrabRadius(double radius_mm) {
+  if (std::isfinite(radius_mm) && radius_mm >= 0 && radius_mm <= kMaxEventMagnitude) {
+    return absl::OkStatus();
+  }
+  return absl::InvalidArgumentError(StrCat("grab.radius_mm: must be a finite number of mm in [0, ",
+                                           kMaxEventMagnitude, "] (0: one lattice step)"));
+}
+
+// A drag offset (mm) or pull force (N): finite, and at most kMaxEventMagnitude long.
+Status CheckMotion(const glm::dvec3& v, const char* field) {
+  if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
+    return absl::InvalidArgumentError(StrCat(field, ": not finite"));
+  }
+  if (glm::length(v) > kMaxEventMagnitude) {
+    return absl::InvalidArgumentError(
+        StrCat(field, ": longer than ", kMaxEventMagnitude, " (mm or N)"));
+  }
+  return absl::OkStatus();
+}
+
+// The model cannot follow a drag or pull this large (its state became
+// non-finite and was restored): the request's fault, not the server's.
+Status MotionRefused(const Status& status, const char* field) {
+  if (!absl::IsInternal(status)) return status;
+  return absl::InvalidArgumentError(
+      StrCat(field, ": the model cannot follow this (", status.message(), "); ask for less"));
+}
+
 }  // namespace
 
 Session::Session(std::string id, std::string owner, std::shared_ptr<VolumeEntry> volume,
@@ -109,12 +137,7 @@ Result<AppliedEvent> Session::ApplyLocked(const v2::ClientEvent& event, const Sc
     }
     case v2::ClientEvent::kGrab: {
       ASSIGN_OR_RETURN(glm::dvec3 point, GrabPoint(event.grab(), view));
-      const double radius_mm = event.grab().radius_mm();
-      if (!std::isfinite(radius_mm) || radius_mm < 0 || radius_mm > kMaxEventMagnitude) {
-        return absl::InvalidArgumentError(StrCat(
-            "grab.radius_mm: must be a finite number of mm in [0, ", kMaxEventMagnitude,
-            "] (0: one lattice step)"));
-      }
+      RETURN_IF_ERROR(CheckGrabRadius(event.grab().radius_mm()));
       const double radius =
           event.grab().radius_mm() > 0 ? event.grab().radius_mm() : mesh_->mesh.stats.h_mm;
       auto info = scene_->Grab(point, radius);
@@ -138,21 +161,10 @@ Result<AppliedEvent> Session::ApplyLocked(const v2::ClientEvent& event, const Sc
       const glm::dvec3 v =
           FromProto(event.has_drag() ? event.drag().offset_mm() : event.pull().force_n());
       const char* field = event.has_drag() ? "drag.offset_mm" : "pull.force_n";
-      if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
-        return absl::InvalidArgumentError(StrCat(field, ": not finite"));
-      }
-      if (glm::length(v) > kMaxEventMagnitude) {
-        return absl::InvalidArgumentError(
-            StrCat(field, ": longer than ", kMaxEventMagnitude, " (mm or N)"));
-      }
+      RETURN_IF_ERROR(CheckMotion(v, field));
       Result<SceneStepTimings> step = event.has_drag() ? scene_->Drag(v) : scene_->Pull(v);
-      // The model cannot follow a drag or pull this large (its state became
-      // non-finite and was restored): the request's fault, not the server's.
-      if (absl::IsInternal(step.status())) {
-        return absl::InvalidArgumentError(StrCat(field, ": the model cannot follow this (",
-                                                 step.status().message(), "); ask for less"));
-      }
-      ASSIGN_OR_RETURN(applied.step, std::move(step));
+      if (!step.ok()) return MotionRefused(step.status(), field);
+      applied.step = *step;
       applied.deformed = true;
       return applied;
     }
