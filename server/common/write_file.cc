@@ -14,7 +14,11 @@ Status WriteError(const std::filesystem::path& path, int error) {
     return absl::PermissionDeniedError(message);
   }
   if (error == ENOENT || error == ENOTDIR) return absl::NotFoundError(message);
-  if (error == ENOSPC || error == EDQUOT) return absl::ResourceExhaustedError(message);
+  // No room on the disk, over the quota, or over the process's file size
+  // limit: the machine's shortage, not a fault of the bytes.
+  if (error == ENOSPC || error == EDQUOT || error == EFBIG) {
+    return absl::ResourceExhaustedError(message);
+  }
   return absl::InternalError(message);
 }
 

@@ -9,15 +9,14 @@ bool IsSpace(char c) {
   return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v';
 }
 
-// Shortened for messages: hostile headers can hold megabyte-long tokens.
-std::string Quote(std::string_view text) {
-  constexpr size_t kMax = 40;
-  std::string out(text.substr(0, kMax));
-  if (text.size() > kMax) out += "...";
-  return StrCat("\"", out, "\"");
-}
-
 }  // namespace
+
+std::string QuoteForMessage(std::string_view text, char quote) {
+  constexpr size_t kMax = 40;
+  const std::string_view q(&quote, 1);
+  if (text.size() <= kMax) return StrCat(q, text, q);
+  return StrCat(q, text.substr(0, kMax), "...", q, " (", text.size(), " bytes)");
+}
 
 std::string_view TrimAscii(std::string_view text) {
   while (!text.empty() && IsSpace(text.front())) text.remove_prefix(1);
@@ -80,7 +79,7 @@ Result<std::vector<int64_t>> ParseIntList(std::string_view text, std::string_vie
     const std::optional<int64_t> value = ParseInt(token);
     if (!value.has_value()) {
       return absl::InvalidArgumentError(
-          StrCat(std::string(what), ": ", Quote(token), " is not an integer"));
+          StrCat(std::string(what), ": ", QuoteForMessage(token), " is not an integer"));
     }
     values.push_back(*value);
   }
@@ -93,7 +92,7 @@ Result<std::vector<double>> ParseDoubleList(std::string_view text, std::string_v
     const std::optional<double> value = ParseDouble(token);
     if (!value.has_value()) {
       return absl::InvalidArgumentError(
-          StrCat(std::string(what), ": ", Quote(token), " is not a number"));
+          StrCat(std::string(what), ": ", QuoteForMessage(token), " is not a number"));
     }
     values.push_back(*value);
   }

@@ -12,6 +12,10 @@
 
 namespace vpm {
 
+// `text` quoted for an error message, shortened to 40 bytes (then "...",
+// and its length): hostile files can hold megabyte-long tokens.
+std::string QuoteForMessage(std::string_view text, char quote = '"');
+
 std::string_view TrimAscii(std::string_view text);
 std::string ToLowerAscii(std::string_view text);
 

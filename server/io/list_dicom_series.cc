@@ -55,7 +55,7 @@ Result<std::vector<DicomSeriesSummary>> ListDicomSeries(const std::filesystem::p
   for (const std::filesystem::path& path : files) {
     // A look at the prefix first, so that large non-DICOM files in the
     // folder (a PDF report, a video) are neither read nor counted.
-    ASSIGN_OR_RETURN(const std::vector<uint8_t> prefix, ReadFilePrefix(path, 132));
+    ASSIGN_OR_RETURN(const std::vector<uint8_t> prefix, ReadFilePrefix(path, 132, limits));
     if (!LooksLikeDicom(prefix)) continue;
     ASSIGN_OR_RETURN(const std::vector<uint8_t> bytes, budget.Read(path));
     Result<std::vector<DicomSlice>> frames =

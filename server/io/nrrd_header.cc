@@ -100,9 +100,10 @@ Status ParseEncoding(const std::string& value, NrrdHeader& h) {
   } else if (value == "ascii" || value == "text" || value == "txt") {
     h.encoding = NrrdEncoding::kAscii;
   } else if (value == "bzip2" || value == "bz2" || value == "hex" || value == "zrl") {
-    return absl::UnimplementedError(StrCat("encoding \"", value, "\" is not supported"));
+    return absl::UnimplementedError(
+        StrCat("encoding ", QuoteForMessage(value), " is not supported"));
   } else {
-    return absl::InvalidArgumentError(StrCat("unknown encoding \"", value, "\""));
+    return absl::InvalidArgumentError(StrCat("unknown encoding ", QuoteForMessage(value)));
   }
   return absl::OkStatus();
 }
@@ -122,7 +123,7 @@ Status ParseType(const std::string& value, NrrdHeader& h) {
   }
   const std::optional<VoxelType> type = NrrdType(value);
   if (!type.has_value()) {
-    return absl::InvalidArgumentError(StrCat("unknown type \"", value, "\""));
+    return absl::InvalidArgumentError(StrCat("unknown type ", QuoteForMessage(value)));
   }
   h.type = *type;
   return absl::OkStatus();

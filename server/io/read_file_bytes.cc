@@ -1,50 +1,32 @@
 #include "server/io/read_file_bytes.h"
 
+#include <unistd.h>
+
 #include <algorithm>
-#include <fstream>
-#include <system_error>
+#include <cerrno>
+
+#include "server/io/open_source_file.h"
 
 namespace vpm {
 
-Result<std::vector<uint8_t>> ReadFileBytes(const std::filesystem::path& path,
-                                           const VolumeLimits& limits) {
-  const std::string name = path.string();
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) {
-    return absl::NotFoundError(StrCat(name, ": no such file"));
-  }
-  if (!std::filesystem::is_regular_file(status)) {
-    return absl::InvalidArgumentError(StrCat(name, ": not a regular file"));
-  }
-  const uintmax_t size = std::filesystem::file_size(path, ec);
-  if (ec) return absl::InvalidArgumentError(StrCat(name, ": cannot get its size"));
-  if (size > static_cast<uintmax_t>(limits.max_bytes)) {
-    return absl::ResourceExhaustedError(StrCat(
-        name, ": file of ", size, " bytes is over the cap of ", limits.max_bytes, " bytes"));
-  }
-  std::vector<uint8_t> bytes(static_cast<size_t>(size));
-  RETURN_IF_ERROR(ReadFileRangeInto(path, 0, bytes, limits));
-  return bytes;
-}
+namespace {
 
-Status ReadFileRangeInto(const std::filesystem::path& path, int64_t offset,
-                         std::span<uint8_t> out, const VolumeLimits& limits) {
-  const std::string name = path.string();
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return absl::NotFoundError(StrCat(name, ": cannot open"));
-  if (offset > 0) in.seekg(static_cast<std::streamoff>(offset));
+// Reads exactly out.size() bytes at `offset` of the open file, in chunks, so
+// that a progress bar moves while a large file comes in.
+Status ReadRange(const SourceFile& file, const std::string& name, int64_t offset,
+                 std::span<uint8_t> out, const VolumeLimits& limits) {
   const uintmax_t size = out.size();
-  // In chunks, so that a progress bar moves while a large file comes in.
   constexpr uintmax_t kChunk = uintmax_t{16} << 20;
   for (uintmax_t done = 0; done < size;) {
-    const uintmax_t n = std::min(kChunk, size - done);
-    in.read(reinterpret_cast<char*>(out.data() + done), static_cast<std::streamsize>(n));
-    if (static_cast<uintmax_t>(in.gcount()) != n) {
-      return absl::InvalidArgumentError(StrCat(name, ": read ", done + in.gcount(), " of ", size,
-                                               " bytes (file changed?)"));
+    const size_t want = static_cast<size_t>(std::min(kChunk, size - done));
+    const ssize_t got = ::pread(file.fd(), out.data() + done, want,
+                                static_cast<off_t>(offset + static_cast<int64_t>(done)));
+    if (got < 0 && errno == EINTR) continue;
+    if (got <= 0) {
+      return absl::InvalidArgumentError(
+          StrCat(name, ": read ", done, " of ", size, " bytes (file changed?)"));
     }
-    done += n;
+    done += static_cast<uintmax_t>(got);
     if (limits.read_progress != nullptr && *limits.read_progress) {
       (*limits.read_progress)(double(done) / double(size), "reading");
     }
@@ -52,12 +34,36 @@ Status ReadFileRangeInto(const std::filesystem::path& path, int64_t offset,
   return absl::OkStatus();
 }
 
-Result<std::vector<uint8_t>> ReadFilePrefix(const std::filesystem::path& path, int64_t count) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return absl::NotFoundError(StrCat(path.string(), ": cannot open"));
-  std::vector<uint8_t> bytes(static_cast<size_t>(std::max<int64_t>(count, 0)));
-  in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  bytes.resize(static_cast<size_t>(in.gcount()));
+}  // namespace
+
+Result<std::vector<uint8_t>> ReadFileBytes(const std::filesystem::path& path,
+                                           const VolumeLimits& limits) {
+  const std::string name = path.string();
+  ASSIGN_OR_RETURN(const SourceFile file, OpenSourceFile(path, limits));
+  const int64_t size = file.size_bytes();
+  if (size > limits.max_bytes) {
+    return absl::ResourceExhaustedError(StrCat(
+        name, ": file of ", size, " bytes is over the cap of ", limits.max_bytes, " bytes"));
+  }
+  std::vector<uint8_t> bytes(static_cast<size_t>(size));
+  RETURN_IF_ERROR(ReadRange(file, name, 0, bytes, limits));
+  return bytes;
+}
+
+Status ReadFileRangeInto(const std::filesystem::path& path, int64_t offset,
+                         std::span<uint8_t> out, const VolumeLimits& limits) {
+  ASSIGN_OR_RETURN(const SourceFile file, OpenSourceFile(path, limits));
+  return ReadRange(file, path.string(), std::max<int64_t>(offset, 0), out, limits);
+}
+
+Result<std::vector<uint8_t>> ReadFilePrefix(const std::filesystem::path& path, int64_t count,
+                                            const VolumeLimits& limits) {
+  ASSIGN_OR_RETURN(const SourceFile file, OpenSourceFile(path, limits));
+  std::vector<uint8_t> bytes(
+      static_cast<size_t>(std::clamp<int64_t>(count, 0, file.size_bytes())));
+  VolumeLimits quiet = limits;  // a peek moves no progress bar
+  quiet.read_progress = nullptr;
+  RETURN_IF_ERROR(ReadRange(file, path.string(), 0, bytes, quiet));
   return bytes;
 }
 

@@ -60,7 +60,7 @@ Result<Volume> DecodeNifti(std::span<const uint8_t> bytes, std::string_view name
 // it and reports what is wrong.
 Result<std::optional<Volume>> ReadInt16NiftiInPlace(const std::filesystem::path& path,
                                                     const VolumeLimits& limits) {
-  const Result<std::vector<uint8_t>> prefix = ReadFilePrefix(path, kNifti2HeaderBytes);
+  const Result<std::vector<uint8_t>> prefix = ReadFilePrefix(path, kNifti2HeaderBytes, limits);
   if (!prefix.ok() || LooksLikeGzip(*prefix)) return std::nullopt;
   const Result<NiftiHeader> header = ParseNiftiHeader(*prefix);
   if (!header.ok()) return std::nullopt;

@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "server/io/header_text.h"
 #include "server/io/read_file_bytes.h"
 
 namespace vpm {
@@ -109,12 +110,14 @@ Result<const json*> FindEntry(const json& root, std::string_view name, std::stri
     const auto it = entry.find("Name");
     const std::string entry_name = it != entry.end() && it->is_string() ? it->get<std::string>() : "";
     if (name.empty() || entry_name == name) found = &entry;
-    if (names.size() < 400) names += StrCat(names.empty() ? "" : ", ", "'", entry_name, "'");
+    if (names.size() < 400) {
+      names += StrCat(names.empty() ? "" : ", ", QuoteForMessage(entry_name, '\''));
+    }
   }
   if (found != nullptr) return found;
   if (count == 0) return absl::InvalidArgumentError(StrCat(what, ": the preset list is empty"));
   return absl::InvalidArgumentError(
-      StrCat(what, ": no preset named '", name, "'; the file holds ", names));
+      StrCat(what, ": no preset named ", QuoteForMessage(name, '\''), "; the file holds ", names));
 }
 
 }  // namespace
@@ -128,7 +131,8 @@ Result<RenderTransferFunction> ParseParaviewPreset(std::string_view text, std::s
   if (const auto it = entry->find("Name"); it != entry->end() && it->is_string()) {
     tf.name = it->get<std::string>();
   }
-  const std::string where = tf.name.empty() ? std::string(what) : StrCat(what, " '", tf.name, "'");
+  const std::string where =
+      tf.name.empty() ? std::string(what) : StrCat(what, " ", QuoteForMessage(tf.name, '\''));
   ASSIGN_OR_RETURN(const std::vector<double> rgb, FlatNumbers(*entry, "RGBPoints", 4, where));
   for (size_t i = 0; i < rgb.size(); i += 4) {
     tf.colors.push_back({rgb[i], glm::dvec3(rgb[i + 1], rgb[i + 2], rgb[i + 3])});

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "server/io/header_text.h"
 #include "server/io/read_file_bytes.h"
 
 namespace vpm {
@@ -27,7 +28,8 @@ Result<double> Number(std::string_view word, std::string_view what) {
   double v = 0.0;
   const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), v);
   if (ec != std::errc() || end != word.data() + word.size() || !std::isfinite(v)) {
-    return absl::InvalidArgumentError(StrCat(what, ": '", word, "' is not a finite number"));
+    return absl::InvalidArgumentError(
+        StrCat(what, ": ", QuoteForMessage(word, '\''), " is not a finite number"));
   }
   return v;
 }
@@ -55,7 +57,7 @@ Result<std::vector<double>> ParseSlicerFunctionString(std::string_view line, int
   if (words.empty()) return absl::InvalidArgumentError(StrCat(what, ": empty"));
   ASSIGN_OR_RETURN(const double count, Number(words[0], what));
   if (count != std::floor(count) || count < stride || std::fmod(count, stride) != 0.0) {
-    return absl::InvalidArgumentError(StrCat(what, ": count ", words[0],
+    return absl::InvalidArgumentError(StrCat(what, ": count ", count,
                                              " must be a positive multiple of ", stride));
   }
   if (count / stride > double(kMaxRenderTfPoints)) {
@@ -64,7 +66,7 @@ Result<std::vector<double>> ParseSlicerFunctionString(std::string_view line, int
   }
   if (double(words.size() - 1) != count) {
     return absl::InvalidArgumentError(
-        StrCat(what, ": count says ", words[0], " numbers, the line holds ", words.size() - 1));
+        StrCat(what, ": count says ", count, " numbers, the line holds ", words.size() - 1));
   }
   std::vector<double> out;
   out.reserve(words.size() - 1);

@@ -2,6 +2,21 @@
 
 namespace vpm::service {
 
+std::string BoundedStatusMessage(absl::string_view message) {
+  if (message.size() <= kMaxStatusMessageBytes) return std::string(message);
+  const absl::string_view tail_format = "... (NNNNNNNNNNNNNNNNNNNN bytes cut)";
+  size_t keep = kMaxStatusMessageBytes - tail_format.size();
+  // Back off to the start of a UTF-8 character (never cut one in two).
+  while (keep > 0 && (static_cast<unsigned char>(message[keep]) & 0xC0) == 0x80) --keep;
+  return StrCat(message.substr(0, keep), "... (", message.size() - keep, " bytes cut)");
+}
+
+grpc::Status ToGrpcStatus(const Status& status) {
+  if (status.ok()) return grpc::Status::OK;
+  return grpc::Status(static_cast<grpc::StatusCode>(status.code()),
+                      BoundedStatusMessage(status.message()));
+}
+
 const char* StatusCodeName(grpc::StatusCode code) {
   switch (code) {
     case grpc::OK: return "OK";

@@ -1,6 +1,7 @@
 #include "server/service/interact_reactor.h"
 
 #include "server/service/grpc_status.h"
+#include "server/service/request_limits.h"
 
 namespace vpm::service {
 
@@ -23,6 +24,14 @@ void InteractReactor::OnReadDone(bool ok) {
       current->FinishAfterEvents(grpc::Status::OK);
     } else {
       FinishStream(grpc::Status::OK);
+    }
+    return;
+  }
+  if (Status limits = CheckRequestLimits(request_); !limits.ok()) {
+    if (current) {
+      current->Finish(ToGrpcStatus(limits));
+    } else {
+      FinishStream(ToGrpcStatus(limits));
     }
     return;
   }

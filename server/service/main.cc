@@ -48,6 +48,10 @@ int main(int argc, char** argv) {
   sigaddset(&signals, SIGTERM);
   sigaddset(&signals, SIGINT);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  // Under a file size limit (RLIMIT_FSIZE) a write past it fails with EFBIG,
+  // which the upload spool reports (RESOURCE_EXHAUSTED), instead of the
+  // signal killing the server and every user's sessions with it.
+  std::signal(SIGXFSZ, SIG_IGN);
 
   auto server = vpm::service::VpmServer::Create(options);
   if (!server.ok()) {

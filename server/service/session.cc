@@ -10,6 +10,39 @@
 namespace vpm::service {
 namespace {
 
+// The largest grab radius (mm), drag offset (mm) or pull force (N) a client
+// may send: ten metres, or ten kilonewtons, is past anything a body allows;
+// numbers far larger overflow the FEM model.
+constexpr double kMaxEventMagnitude = 1e4;
+
+Status CheckGrabRadius(double radius_mm) {
+  if (std::isfinite(radius_mm) && radius_mm >= 0 && radius_mm <= kMaxEventMagnitude) {
+    return absl::OkStatus();
+  }
+  return absl::InvalidArgumentError(StrCat("grab.radius_mm: must be a finite number of mm in [0, ",
+                                           kMaxEventMagnitude, "] (0: one lattice step)"));
+}
+
+// A drag offset (mm) or pull force (N): finite, and at most kMaxEventMagnitude long.
+Status CheckMotion(const glm::dvec3& v, const char* field) {
+  if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
+    return absl::InvalidArgumentError(StrCat(field, ": not finite"));
+  }
+  if (glm::length(v) > kMaxEventMagnitude) {
+    return absl::InvalidArgumentError(
+        StrCat(field, ": longer than ", kMaxEventMagnitude, " (mm or N)"));
+  }
+  return absl::OkStatus();
+}
+
+// The model cannot follow a drag or pull this large (its state became
+// non-finite and was restored): the request's fault, not the server's.
+Status MotionRefused(const Status& status, const char* field) {
+  if (!absl::IsInternal(status)) return status;
+  return absl::InvalidArgumentError(
+      StrCat(field, ": the model cannot follow this (", status.message(), "); ask for less"));
+}
+
 }  // namespace
 
 Session::Session(std::string id, std::string owner, std::shared_ptr<VolumeEntry> volume,
@@ -102,32 +135,10 @@ Result<AppliedEvent> Session::ApplyLocked(const v2::ClientEvent& event, const Sc
       camera_ = camera;
       return applied;
     }
-    case v2::ClientEvent::kGrab: {
-      ASSIGN_OR_RETURN(glm::dvec3 point, GrabPoint(event.grab(), view));
-      const GrabRule rule =
-          event.grab().rule() == v2::GRAB_RULE_BALL ? GrabRule::kBall : GrabRule::kOrgan;
-      ASSIGN_OR_RETURN(GrabInfo info, scene_->Grab(GrabRequest{
-                                          .point_mm = point,
-                                          .rule = rule,
-                                          .radius_mm = event.grab().radius_mm()}));
-      std::lock_guard lock(state_mutex_);
-      grabbed_ = true;
-      grab_point_ = point;
-      applied.grab_point_mm = point;
-      applied.grab = std::move(info);
-      return applied;
-    }
-    case v2::ClientEvent::kPin: {
-      v2::Grab where;
-      *where.mutable_point_mm() = event.pin().point_mm();
-      where.set_pick(event.pin().pick());
-      where.set_pixel_x(event.pin().pixel_x());
-      where.set_pixel_y(event.pin().pixel_y());
-      ASSIGN_OR_RETURN(glm::dvec3 point, GrabPoint(where, view));
-      ASSIGN_OR_RETURN(applied.step, scene_->Pin(point, event.pin().radius_mm()));
-      applied.deformed = true;
-      return applied;
-    }
+    case v2::ClientEvent::kGrab:
+      return ApplyGrab(event.grab(), view);
+    case v2::ClientEvent::kPin:
+      return ApplyPin(event.pin(), view);
     case v2::ClientEvent::kReset: {
       ASSIGN_OR_RETURN(applied.step, scene_->Reset());
       applied.deformed = true;
@@ -148,11 +159,11 @@ Result<AppliedEvent> Session::ApplyLocked(const v2::ClientEvent& event, const Sc
       }
       const glm::dvec3 v =
           FromProto(event.has_drag() ? event.drag().offset_mm() : event.pull().force_n());
-      if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z)) {
-        return absl::InvalidArgumentError(event.has_drag() ? "drag.offset_mm: not finite"
-                                                           : "pull.force_n: not finite");
-      }
-      ASSIGN_OR_RETURN(applied.step, event.has_drag() ? scene_->Drag(v) : scene_->Pull(v));
+      const char* field = event.has_drag() ? "drag.offset_mm" : "pull.force_n";
+      RETURN_IF_ERROR(CheckMotion(v, field));
+      Result<SceneStepTimings> step = event.has_drag() ? scene_->Drag(v) : scene_->Pull(v);
+      if (!step.ok()) return MotionRefused(step.status(), field);
+      applied.step = *step;
       applied.deformed = true;
       return applied;
     }
@@ -172,6 +183,37 @@ Result<AppliedEvent> Session::ApplyLocked(const v2::ClientEvent& event, const Sc
     case v2::ClientEvent::EVENT_NOT_SET:
       return applied;
   }
+  return applied;
+}
+
+Result<AppliedEvent> Session::ApplyGrab(const v2::Grab& grab, const SceneView* view) {
+  ASSIGN_OR_RETURN(glm::dvec3 point, GrabPoint(grab, view));
+  RETURN_IF_ERROR(CheckGrabRadius(grab.radius_mm()));
+  const GrabRule rule = grab.rule() == v2::GRAB_RULE_BALL ? GrabRule::kBall : GrabRule::kOrgan;
+  ASSIGN_OR_RETURN(GrabInfo info, scene_->Grab(GrabRequest{
+                                      .point_mm = point, .rule = rule,
+                                      .radius_mm = grab.radius_mm()}));
+  AppliedEvent applied;
+  std::lock_guard lock(state_mutex_);
+  grabbed_ = true;
+  grab_point_ = point;
+  applied.grab_point_mm = point;
+  applied.grab = std::move(info);
+  return applied;
+}
+
+Result<AppliedEvent> Session::ApplyPin(const v2::Pin& pin, const SceneView* view) {
+  // A pin is placed as a grab is: by point or by a pixel of the frame.
+  v2::Grab where;
+  *where.mutable_point_mm() = pin.point_mm();
+  where.set_pick(pin.pick());
+  where.set_pixel_x(pin.pixel_x());
+  where.set_pixel_y(pin.pixel_y());
+  ASSIGN_OR_RETURN(glm::dvec3 point, GrabPoint(where, view));
+  RETURN_IF_ERROR(CheckGrabRadius(pin.radius_mm()));
+  AppliedEvent applied;
+  ASSIGN_OR_RETURN(applied.step, scene_->Pin(point, pin.radius_mm()));
+  applied.deformed = true;
   return applied;
 }
 

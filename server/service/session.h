@@ -102,6 +102,9 @@ class Session {
   Session(std::string id, std::string owner, std::shared_ptr<VolumeEntry> volume,
           std::shared_ptr<const MeshEntry> mesh, const Options& options);
   Result<AppliedEvent> ApplyLocked(const v2::ClientEvent& event, const SceneView* view);
+  // The grab and pin events of ApplyLocked (scene lock held).
+  Result<AppliedEvent> ApplyGrab(const v2::Grab& grab, const SceneView* view);
+  Result<AppliedEvent> ApplyPin(const v2::Pin& pin, const SceneView* view);
   Result<glm::dvec3> GrabPoint(const v2::Grab& grab, const SceneView* view) const;
   void Changed(uint64_t sequence, bool deformed, const SceneStepTimings* step);
   // The slices `requests` place now; the caller holds scene_mutex_.

@@ -2,6 +2,10 @@
 
 namespace vpm::service {
 
+Status SessionNotFound() {
+  return absl::NotFoundError("session_id: no such session of yours or shared with you");
+}
+
 void SessionAccess::Share(const std::string& user, bool shared) {
   std::lock_guard lock(mutex_);
   if (shared) {
@@ -30,8 +34,7 @@ Status SessionAccess::Check(std::string_view user, SessionRole role,
         StrCat("session_id: session '", session_id,
                "' is shared with you to watch; only its owner may change it"));
   }
-  return absl::PermissionDeniedError(
-      StrCat("session_id: session '", session_id, "' belongs to another user"));
+  return SessionNotFound();
 }
 
 }  // namespace vpm::service

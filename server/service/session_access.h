@@ -2,7 +2,9 @@
 // drives it (Interact, Manipulate, SetCamera), shares it and closes it. The
 // owner may share it with other users by name: they are viewers, who may
 // Watch it, Render stills of it and read it (GetSession, ListSessions) but
-// never deform it or move its camera. Everyone else gets PermissionDenied.
+// never deform it or move its camera. Everyone else gets the answer a
+// missing session gets (SessionNotFound), so that no user learns which ids
+// exist.
 #pragma once
 
 #include <mutex>
@@ -13,6 +15,10 @@
 #include "server/common/status.h"
 
 namespace vpm::service {
+
+// The one answer for a session id that does not exist and for one that is
+// not the caller's: NotFound, the same text, without the id.
+Status SessionNotFound();
 
 enum class SessionRole {
   kViewer,  // Watch, Render, GetSession
@@ -28,7 +34,8 @@ class SessionAccess {
   // Lets `user` watch (true) or no longer watch (false).
   void Share(const std::string& user, bool shared);
   std::vector<std::string> viewers() const;  // sorted
-  // PermissionDenied unless `user` has `role` (an owner is a viewer too);
+  // OK when `user` has `role` (an owner is a viewer too); PermissionDenied
+  // for a viewer asking for the owner's role; SessionNotFound for anyone else.
   // `session_id` names the session in the message.
   Status Check(std::string_view user, SessionRole role, std::string_view session_id) const;
 

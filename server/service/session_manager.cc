@@ -1,5 +1,7 @@
 #include "server/service/session_manager.h"
 
+#include "server/common/random_hex.h"
+
 namespace vpm::service {
 
 Result<std::unique_ptr<SessionManager>> SessionManager::Create(const Options& options) {
@@ -32,7 +34,8 @@ Result<std::shared_ptr<Session>> SessionManager::Open(const std::string& owner,
     }
     ++opening_;
     ++opening_per_user_[owner];
-    id = StrCat(options_.id_prefix, next_id_++);
+    // 128 random bits: an id says nothing of the others, and cannot be guessed.
+    id = StrCat(options_.id_prefix, RandomHex(16));
   }
   auto session = Session::Create(id, owner, *options_.context, std::move(volume),
                                  std::move(mesh), options_.session);
@@ -49,7 +52,7 @@ Result<std::shared_ptr<Session>> SessionManager::Get(std::string_view id, std::s
                                                      SessionRole role) const {
   std::lock_guard lock(mutex_);
   auto it = sessions_.find(id);
-  if (it == sessions_.end()) return absl::NotFoundError(StrCat("session_id: no session '", id, "'"));
+  if (it == sessions_.end()) return SessionNotFound();
   RETURN_IF_ERROR(it->second->access().Check(user, role, id));
   it->second->Touch();
   return it->second;
@@ -60,9 +63,7 @@ Status SessionManager::Close(std::string_view id, std::string_view user) {
   {
     std::lock_guard lock(mutex_);
     auto it = sessions_.find(id);
-    if (it == sessions_.end()) {
-      return absl::NotFoundError(StrCat("session_id: no session '", id, "'"));
-    }
+    if (it == sessions_.end()) return SessionNotFound();
     RETURN_IF_ERROR(it->second->access().Check(user, SessionRole::kOwner, id));
     session = it->second;
     sessions_.erase(it);

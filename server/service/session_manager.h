@@ -28,7 +28,7 @@ class SessionManager {
     // Metrics: sessions open, and per owner (users whose count fell to zero
     // are reported with 0 once).
     std::function<void(int64_t open, const std::map<std::string, int64_t>& per_user)> on_change;
-    std::string id_prefix = "ses-";  // ids are id_prefix + 1, 2, ...
+    std::string id_prefix = "ses-";  // ids are id_prefix + 32 random hex digits
   };
   static Result<std::unique_ptr<SessionManager>> Create(const Options& options);
 
@@ -37,7 +37,8 @@ class SessionManager {
   Result<std::shared_ptr<Session>> Open(const std::string& owner,
                                         std::shared_ptr<VolumeEntry> volume,
                                         std::shared_ptr<const MeshEntry> mesh);
-  // NotFound; PermissionDenied unless `user` has `role`; touches it.
+  // NotFound (SessionNotFound) when missing or not shared with `user`;
+  // PermissionDenied for a viewer asking for the owner's role; touches it.
   Result<std::shared_ptr<Session>> Get(std::string_view id, std::string_view user,
                                        SessionRole role) const;
   Status Close(std::string_view id, std::string_view user);  // as Get for the owner
@@ -57,7 +58,6 @@ class SessionManager {
   int64_t opening_ = 0;  // reserved places while scenes are built
   std::map<std::string, int64_t> opening_per_user_;
   mutable std::map<std::string, int64_t> reported_;  // per owner, as last reported
-  int64_t next_id_ = 1;
 };
 
 }  // namespace vpm::service

@@ -2,13 +2,14 @@
 
 #include <cctype>
 #include <filesystem>
-#include <fstream>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
 
+#include "server/common/write_file.h"
 #include "server/service/grpc_status.h"
 #include "server/service/proto_convert.h"
+#include "server/service/resolve_data_path.h"
 
 namespace vpm::service {
 namespace {
@@ -120,6 +121,10 @@ Status UploadVolumeReactor::TakeHeader(const v2::UploadVolumeRequest::Header& he
   if (name.empty() || name.find('/') != std::string::npos || name.find('\\') != std::string::npos ||
       name == "." || name == "..") {
     return absl::InvalidArgumentError("header.file_name: give a plain file name (no folders)");
+  }
+  if (name.size() > kMaxPathComponentBytes) {  // the spool's file system takes no longer name
+    return absl::InvalidArgumentError(StrCat("header.file_name: ", name.size(),
+                                             " bytes; at most ", kMaxPathComponentBytes));
   }
   if (!(EndsWith(name, ".nii") || EndsWith(name, ".nii.gz") || EndsWith(name, ".nrrd") ||
         EndsWith(name, ".mha"))) {
@@ -237,18 +242,24 @@ void UploadVolumeReactor::Complete() {
     // or swap the patient's file while it is parsed.
     std::string pattern = (fs::temp_directory_path() / "vpm-upload-XXXXXX").string();
     if (mkdtemp(pattern.data()) == nullptr) {
-      return absl::InternalError(StrCat("upload: cannot make a temporary folder: ",
-                                        std::strerror(errno)));
+      const int error = errno;
+      const std::string why = StrCat("upload: the server cannot spool it: ", std::strerror(error));
+      return error == ENOSPC || error == EDQUOT ? absl::ResourceExhaustedError(why)
+                                                : absl::InternalError(why);
     }
     const fs::path dir = pattern;
     service_->metrics->TempFiles(+1);
     const fs::path path = dir / file_name_;
     Status status = [&]() -> Status {
-      {
-        std::ofstream file(path, std::ios::binary);
-        file.write(reinterpret_cast<const char*>(bytes_.data()), std::streamsize(bytes_.size()));
-        if (!file) return absl::InternalError("upload: cannot write the temporary file");
+      // A full spool (ENOSPC, EDQUOT, EFBIG) is the server's problem:
+      // ResourceExhausted, never the user's malformed file.
+      Status spooled = WriteFile(
+          path, std::string_view(reinterpret_cast<const char*>(bytes_.data()), bytes_.size()));
+      if (absl::IsResourceExhausted(spooled)) {
+        return absl::ResourceExhaustedError(StrCat("upload: the server's upload spool is full (",
+                                                   spooled.message(), "); try again later"));
       }
+      RETURN_IF_ERROR(spooled);
       std::vector<uint8_t>().swap(bytes_);
       ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
                        service_->volumes->AddFile(path, StrCat("upload:", file_name_), user_));
@@ -257,6 +268,7 @@ void UploadVolumeReactor::Complete() {
     }();
     fs::remove_all(dir, error);
     service_->metrics->TempFiles(-1);
+    status = HideFolder(status, dir, "the upload");  // "case.nii: ...", no server path
     // A file that no reader accepts is a malformed upload.
     if (!status.ok() && status.code() != absl::StatusCode::kResourceExhausted &&
         status.code() != absl::StatusCode::kInternal) {

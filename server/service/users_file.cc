@@ -54,7 +54,12 @@ std::string HashToken(std::string_view token) {
 
 Result<std::string> UsersFileLine(std::string_view name, std::string_view token) {
   RETURN_IF_ERROR(CheckUserName(name));
-  if (token.empty()) return absl::InvalidArgumentError("the token is empty");
+  if (token.size() < kMinTokenBytes) {
+    // The length only: the token itself never goes into a message.
+    return absl::InvalidArgumentError(StrCat(
+        "the token has ", token.size(), " characters; give at least ", kMinTokenBytes,
+        " (e.g. head -c 16 /dev/urandom | od -An -tx1 | tr -d ' \\n')"));
+  }
   return StrCat(name, " ", HashToken(token));
 }
 

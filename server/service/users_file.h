@@ -30,7 +30,11 @@ Result<std::vector<UserCredential>> ReadUsersFile(const std::string& path);
 Status CheckUserName(std::string_view name);
 // Lower-case hex SHA-256 of `token`.
 std::string HashToken(std::string_view token);
+// The shortest token `--hash-token` takes, characters: a guessable token is
+// refused before it is written into a users file.
+inline constexpr size_t kMinTokenBytes = 16;
 // The line of the users file for `name` and `token`, without a newline.
+// InvalidArgument for a bad name or a token shorter than kMinTokenBytes.
 Result<std::string> UsersFileLine(std::string_view name, std::string_view token);
 
 }  // namespace vpm::service

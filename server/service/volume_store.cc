@@ -103,8 +103,18 @@ std::shared_ptr<VolumeEntry> VolumeStore::FindLoadedLocked(const std::string& lo
 
 Result<Volume> VolumeStore::ReadSource(const std::string& load_key, const std::string& source,
                                        const ProgressFn& progress) const {
-  const std::string read_from = load_key.starts_with("file:") ? load_key.substr(5) : load_key;
-  ASSIGN_OR_RETURN(Volume volume, ReadVolume(read_from, options_.read_limits, progress));
+  if (!load_key.starts_with("file:")) {
+    ASSIGN_OR_RETURN(Volume volume, ReadVolume(load_key, options_.read_limits, progress));
+    volume.set_source(source);
+    return volume;
+  }
+  // Every file the reader opens stays inside the data root; messages name
+  // files relative to it.
+  VolumeLimits limits = options_.read_limits;
+  ASSIGN_OR_RETURN(limits.read_root, CanonicalDataRoot(options_.data_root));
+  Result<Volume> read = ReadVolume(load_key.substr(5), limits, progress);
+  if (!read.ok()) return HideFolder(read.status(), limits.read_root, "the data root");
+  Volume volume = *std::move(read);
   volume.set_source(source);
   return volume;
 }
@@ -118,8 +128,8 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
   }
   std::string key(source);
   if (!source.starts_with("phantom:")) {
-    ASSIGN_OR_RETURN(std::filesystem::path path, ResolveDataPath(options_.data_root, source));
-    key = "file:" + path.string();
+    ASSIGN_OR_RETURN(const std::string path, ResolveDataSource(options_.data_root, source));
+    key = "file:" + path;
   }
   {
     std::lock_guard lock(mutex_);
@@ -138,7 +148,11 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::AddFile(const std::filesystem::path& path,
                                                           std::string source, std::string owner) {
   RETURN_IF_ERROR(CheckRoom(0));
-  ASSIGN_OR_RETURN(Volume volume, ReadVolume(path.string(), options_.read_limits));
+  VolumeLimits limits = options_.read_limits;  // the file's own folder is its root
+  std::error_code error;
+  limits.read_root = std::filesystem::canonical(path.parent_path(), error);
+  if (error) return absl::InternalError("upload: the temporary folder is gone");
+  ASSIGN_OR_RETURN(Volume volume, ReadVolume(path.string(), limits));
   volume.set_source(std::move(source));
   return Add(std::move(volume), "", owner);
 }

@@ -74,10 +74,11 @@ class VolumeStore {
   };
   static Result<std::unique_ptr<VolumeStore>> Create(const Options& options);
 
-  // `source`: phantom:SPEC, or a path under the data root (resolve_data_path.h).
+  // `source`: phantom:SPEC, or a path under the data root, a DICOM folder with
+  // its "?series=" query included (resolve_data_path.h).
   // A source already loaded (the same phantom spec, or a path resolving to
   // the same file) returns the volume held, not a second copy: delete it to
-  // read the file again. Errors: those of ResolveDataPath and ReadVolume;
+  // read the file again. Errors: those of ResolveDataSource and ReadVolume;
   // InvalidArgument for raw: sources; ResourceExhausted past max_volumes or
   // max_bytes. `user` is recorded as one of its loaders. `progress` hears
   // the read (0..0.85) and the upload (0.85..1).

@@ -7,6 +7,7 @@
 #include "server/service/grpc_status.h"
 #include "server/service/interact_reactor.h"
 #include "server/service/proto_convert.h"
+#include "server/service/request_limits.h"
 #include "server/service/upload_volume_reactor.h"
 #include "server/service/watch_reactor.h"
 
@@ -18,6 +19,18 @@ namespace {
 constexpr size_t kMaxTransferFunctionTextBytes = size_t{1} << 20;
 
 }  // namespace
+
+grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context,
+                                            const google::protobuf::Message& request,
+                                            const char* method, WorkerPool* pool,
+                                            std::function<Status(const std::string& user)> fn) {
+  // Refused inline, after authentication, before any handler or queue sees
+  // an over-long string.
+  if (Status limits = CheckRequestLimits(request); !limits.ok()) {
+    return Unary(context, method, nullptr, [limits](const std::string&) { return limits; });
+  }
+  return Unary(context, method, pool, std::move(fn));
+}
 
 grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context,
                                             const char* method, WorkerPool* pool,
@@ -135,7 +148,7 @@ Result<std::shared_ptr<const MeshEntry>> VpmService::FindMesh(std::string_view m
 grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* context,
                                                  const v2::LoadVolumeRequest* request,
                                                  v2::VolumeInfo* response) {
-  return Unary(context, "LoadVolume", service_->request_pool,
+  return Unary(context, *request, "LoadVolume", service_->request_pool,
                [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     if (request->source().empty()) return absl::InvalidArgumentError("source: required");
@@ -160,7 +173,7 @@ grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::GetLoadProgress(grpc::CallbackServerContext* context,
                                                       const v2::GetLoadProgressRequest* request,
                                                       v2::LoadProgress* response) {
-  return Unary(context, "GetLoadProgress", nullptr, [=, this](const std::string&) -> Status {
+  return Unary(context, *request, "GetLoadProgress", nullptr, [=, this](const std::string&) -> Status {
     if (service_->load_progress == nullptr) return absl::UnimplementedError("no load progress");
     ASSIGN_OR_RETURN(const LoadProgressState state,
                      service_->load_progress->Get(request->progress_id()));
@@ -168,7 +181,7 @@ grpc::ServerUnaryReactor* VpmService::GetLoadProgress(grpc::CallbackServerContex
     response->set_stage(state.stage);
     response->set_done(state.done);
     response->set_error_code(static_cast<int32_t>(state.status.code()));
-    response->set_error_message(std::string(state.status.message()));
+    response->set_error_message(BoundedStatusMessage(state.status.message()));
     return absl::OkStatus();
   });
 }
@@ -182,7 +195,7 @@ grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* con
                                                 const v2::GetVolumeRequest* request,
                                                 v2::VolumeInfo* response) {
   // On a pool: an evicted volume is read again.
-  return Unary(context, "GetVolume", service_->request_pool,
+  return Unary(context, *request, "GetVolume", service_->request_pool,
                [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
                      service_->volumes->Get(request->volume_id(), user));
@@ -205,7 +218,7 @@ grpc::ServerUnaryReactor* VpmService::ListVolumes(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* context,
                                                    const v2::DeleteVolumeRequest* request,
                                                    v2::DeleteVolumeResponse*) {
-  return Unary(context, "DeleteVolume", service_->request_pool,
+  return Unary(context, *request, "DeleteVolume", service_->request_pool,
                [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(service_->volumes->Delete(request->volume_id(), user));
     service_->meshes->ForgetVolume(request->volume_id());
@@ -216,7 +229,7 @@ grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* 
 grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* context,
                                                 const v2::BuildMeshRequest* request,
                                                 v2::MeshInfo* response) {
-  return Unary(context, "BuildMesh", service_->request_pool,
+  return Unary(context, *request, "BuildMesh", service_->request_pool,
                [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
@@ -232,7 +245,7 @@ grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* con
 grpc::ServerUnaryReactor* VpmService::GetMesh(grpc::CallbackServerContext* context,
                                               const v2::GetMeshRequest* request,
                                               v2::GetMeshResponse* response) {
-  return Unary(context, "GetMesh", service_->request_pool,
+  return Unary(context, *request, "GetMesh", service_->request_pool,
                [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh, FindMesh(request->mesh_id(), user));
     FillMeshInfo(*mesh, response->mutable_info());
@@ -244,7 +257,7 @@ grpc::ServerUnaryReactor* VpmService::GetMesh(grpc::CallbackServerContext* conte
 grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* context,
                                                  const v2::RefineMeshRequest* request,
                                                  v2::MeshInfo* response) {
-  return Unary(context, "RefineMesh", service_->request_pool,
+  return Unary(context, *request, "RefineMesh", service_->request_pool,
                [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     if (!request->has_point_mm()) return absl::InvalidArgumentError("point_mm: required");
@@ -259,7 +272,7 @@ grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::DeleteMesh(grpc::CallbackServerContext* context,
                                                  const v2::DeleteMeshRequest* request,
                                                  v2::DeleteMeshResponse*) {
-  return Unary(context, "DeleteMesh", service_->request_pool,
+  return Unary(context, *request, "DeleteMesh", service_->request_pool,
                [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(FindMesh(request->mesh_id(), user).status());
     return service_->meshes->Delete(request->mesh_id());
@@ -269,7 +282,7 @@ grpc::ServerUnaryReactor* VpmService::DeleteMesh(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* context,
                                                   const v2::OpenSessionRequest* request,
                                                   v2::SessionInfo* response) {
-  return Unary(context, "OpenSession", service_->request_pool,
+  return Unary(context, *request, "OpenSession", service_->request_pool,
                [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     std::shared_ptr<const MeshEntry> mesh;
@@ -298,7 +311,7 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* VpmService::CloseSession(grpc::CallbackServerContext* context,
                                                    const v2::CloseSessionRequest* request,
                                                    v2::CloseSessionResponse*) {
-  return Unary(context, "CloseSession", service_->request_pool, [=, this](const std::string& user) {
+  return Unary(context, *request, "CloseSession", service_->request_pool, [=, this](const std::string& user) {
     return service_->sessions->Close(request->session_id(), user);
   });
 }
@@ -317,7 +330,7 @@ grpc::ServerUnaryReactor* VpmService::ListSessions(grpc::CallbackServerContext* 
 grpc::ServerUnaryReactor* VpmService::GetSession(grpc::CallbackServerContext* context,
                                                  const v2::GetSessionRequest* request,
                                                  v2::SessionInfo* response) {
-  return Unary(context, "GetSession", nullptr, [=, this](const std::string& user) -> Status {
+  return Unary(context, *request, "GetSession", nullptr, [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id(), user, SessionRole::kViewer));
     FillSessionInfo(*session, user, response);
@@ -328,7 +341,7 @@ grpc::ServerUnaryReactor* VpmService::GetSession(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::ShareSession(grpc::CallbackServerContext* context,
                                                    const v2::ShareSessionRequest* request,
                                                    v2::SessionInfo* response) {
-  return Unary(context, "ShareSession", nullptr, [=, this](const std::string& user) -> Status {
+  return Unary(context, *request, "ShareSession", nullptr, [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
     if (!service_->auth->HasUser(request->user())) {
@@ -357,7 +370,7 @@ grpc::ServerWriteReactor<v2::Frame>* VpmService::Watch(grpc::CallbackServerConte
 grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* context,
                                                  const v2::ManipulateRequest* request,
                                                  v2::ManipulateResponse* response) {
-  return Unary(context, "Manipulate", service_->render_pool,
+  return Unary(context, *request, "Manipulate", service_->render_pool,
                [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
@@ -386,7 +399,7 @@ grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* context,
                                                 const v2::SetCameraRequest* request,
                                                 v2::SetCameraResponse*) {
-  return Unary(context, "SetCamera", service_->render_pool,
+  return Unary(context, *request, "SetCamera", service_->render_pool,
                [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
@@ -397,7 +410,7 @@ grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* con
 grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* context,
                                              const v2::RenderRequest* request,
                                              v2::Frame* response) {
-  return Unary(context, "Render", service_->render_pool,
+  return Unary(context, *request, "Render", service_->render_pool,
                [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id(), user, SessionRole::kViewer));
@@ -419,7 +432,7 @@ grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* contex
 grpc::ServerUnaryReactor* VpmService::RenderSlice(grpc::CallbackServerContext* context,
                                                   const v2::RenderSliceRequest* request,
                                                   v2::Frame* response) {
-  return Unary(context, "RenderSlice", service_->render_pool,
+  return Unary(context, *request, "RenderSlice", service_->render_pool,
                [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id(), user, SessionRole::kViewer));
@@ -439,7 +452,7 @@ grpc::ServerUnaryReactor* VpmService::RenderSlice(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* VpmService::ReadTransferFunction(
     grpc::CallbackServerContext* context, const v2::ReadTransferFunctionRequest* request,
     v2::RenderTransferFunction* response) {
-  return Unary(context, "ReadTransferFunction", service_->request_pool,
+  return Unary(context, *request, "ReadTransferFunction", service_->request_pool,
                [=](const std::string&) -> Status {
     const std::string& name = request->file_name();
     const std::string what = StrCat("file '", name.substr(0, 128), "'");

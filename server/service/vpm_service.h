@@ -80,6 +80,12 @@ class VpmService final : public v2::Vpm::CallbackService {
   grpc::ServerUnaryReactor* Unary(grpc::CallbackServerContext* context, const char* method,
                                   WorkerPool* pool,
                                   std::function<Status(const std::string& user)> fn);
+  // The same, for a request with strings: their lengths are checked first
+  // (request_limits.h), and an over-long one is answered inline.
+  grpc::ServerUnaryReactor* Unary(grpc::CallbackServerContext* context,
+                                  const google::protobuf::Message& request, const char* method,
+                                  WorkerPool* pool,
+                                  std::function<Status(const std::string& user)> fn);
   void Done(grpc::ServerUnaryReactor* reactor, const char* method, const Status& status,
             const std::string& user);
   // How long each method's work takes (moving average, ms), so that a call

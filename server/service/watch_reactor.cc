@@ -1,6 +1,7 @@
 #include "server/service/watch_reactor.h"
 
 #include "server/service/grpc_status.h"
+#include "server/service/request_limits.h"
 
 namespace vpm::service {
 
@@ -11,6 +12,10 @@ WatchReactor::WatchReactor(ServiceContext* service, grpc::CallbackServerContext*
 void WatchReactor::Begin() {
   if (Status admitted = Admit(); !admitted.ok()) {
     FinishStream(ToGrpcStatus(admitted));
+    return;
+  }
+  if (Status limits = CheckRequestLimits(request_); !limits.ok()) {
+    FinishStream(ToGrpcStatus(limits));
     return;
   }
   if (request_.session_id().empty()) {

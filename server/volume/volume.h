@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <filesystem>
 #include <span>
 #include <string>
 #include <vector>
@@ -66,6 +67,10 @@ struct VolumeLimits {
   // Where readers report how far they have read (the fraction of the file
   // or of the folder's files); not owned, may be null. ReadVolume sets it.
   const ProgressFn* read_progress = nullptr;
+  // Empty, or a canonical folder (the server's --data-root, an upload's
+  // private folder): every file a reader opens must resolve, through
+  // symlinks, inside it (server/io/open_source_file.h).
+  std::filesystem::path read_root;
 };
 
 // No budget: for volumes derived from one that passed its own (a warp).

@@ -314,10 +314,17 @@ stop_server
 
 # --- users: a users file written by --hash-token, the default user's token
 # from a file (never on the command line), and a session shared to watch.
-alice_line=$(printf 'alice-token\n' | "$server_bin" --hash-token alice)
-[ "$alice_line" = "alice $(printf 'alice-token' | sha256sum | cut -d' ' -f1)" ] &&
+alice_line=$(printf 'alice-secret-token\n' | "$server_bin" --hash-token alice)
+[ "$alice_line" = "alice $(printf 'alice-secret-token' | sha256sum | cut -d' ' -f1)" ] &&
   pass "--hash-token prints NAME SHA256(token)" || fail "--hash-token printed '$alice_line'"
-{ echo "# planners"; echo "$alice_line"; printf 'bob-token' | "$server_bin" --hash-token bob; } \
+if printf 'short-token\n' | "$server_bin" --hash-token carol > "$tmp/short.out" 2>&1; then
+  fail "--hash-token took an 11-character token"
+else
+  grep -q "at least 16" "$tmp/short.out" && ! grep -q "short-token" "$tmp/short.out" &&
+    pass "--hash-token refuses a token under 16 characters, without echoing it" ||
+    fail "--hash-token said: $(cat "$tmp/short.out")"
+fi
+{ echo "# planners"; echo "$alice_line"; printf 'bob-secret-token' | "$server_bin" --hash-token bob; } \
   > "$tmp/users.txt"
 printf 'file-token\n' > "$tmp/token"
 auth_flags=(--users "$tmp/users.txt" --token-file "$tmp/token")
@@ -326,19 +333,19 @@ addr="127.0.0.1:$port"
 grep -q -- "file-token" "/proc/$server_pid/cmdline" && fail "the token shows in ps" ||
   pass "--token-file: the token is not on the command line"
 expect_ok "the --token-file user" -- --server "$addr" --token file-token volume list
-expect_ok "alice loads" -- --server "$addr" --token alice-token volume load "phantom:abdomen?size=32"
+expect_ok "alice loads" -- --server "$addr" --token alice-secret-token volume load "phantom:abdomen?size=32"
 volume_id=$(python3 -c 'import json,sys; print(json.load(sys.stdin)["volume_id"])' < "$tmp/out")
-expect_ok "alice opens a session" -- --server "$addr" --token alice-token session open --volume-id "$volume_id"
+expect_ok "alice opens a session" -- --server "$addr" --token alice-secret-token session open --volume-id "$volume_id"
 session_id=$(python3 -c 'import json,sys; print(json.load(sys.stdin)["session_id"])' < "$tmp/out")
-expect_error "bob cannot watch alice's session" PERMISSION_DENIED -- \
-  --server "$addr" --token bob-token watch --session "$session_id" --frames 1
-expect_ok "alice shares it with bob" -- --server "$addr" --token alice-token session share "$session_id" --with bob
+expect_error "bob cannot watch alice's session (one answer: NOT_FOUND)" NOT_FOUND -- \
+  --server "$addr" --token bob-secret-token watch --session "$session_id" --frames 1
+expect_ok "alice shares it with bob" -- --server "$addr" --token alice-secret-token session share "$session_id" --with bob
 grep -q '"bob"' "$tmp/out" || fail "session share did not list bob: $(cat "$tmp/out")"
-expect_ok "bob watches it" -- --server "$addr" --token bob-token watch --session "$session_id" --frames 1
+expect_ok "bob watches it" -- --server "$addr" --token bob-secret-token watch --session "$session_id" --frames 1
 expect_error "bob cannot deform it" PERMISSION_DENIED -- \
-  --server "$addr" --token bob-token manipulate --session "$session_id" --release
+  --server "$addr" --token bob-secret-token manipulate --session "$session_id" --release
 expect_error "a user unknown to the server" INVALID_ARGUMENT -- \
-  --server "$addr" --token alice-token session share "$session_id" --with mallory
+  --server "$addr" --token alice-secret-token session share "$session_id" --with mallory
 stop_server
 auth_flags=(--token secret)
 printf 'alice nothex\n' > "$tmp/bad-users.txt"

@@ -467,7 +467,12 @@ TEST_F(SessionTest, Ids_CarryTheServersTag) {
   const std::string& tag = server_->id_tag();
   ASSERT_EQ(tag.size(), 8u);
   EXPECT_EQ(tag.find_first_not_of("0123456789abcdef"), std::string::npos) << tag;
-  EXPECT_EQ(session_.session_id(), "ses-" + tag + "-1");
+  // Session ids: the tag, then 128 random bits (32 hex digits).
+  const std::string prefix = "ses-" + tag + "-";
+  ASSERT_EQ(session_.session_id().substr(0, prefix.size()), prefix);
+  const std::string random = session_.session_id().substr(prefix.size());
+  EXPECT_EQ(random.size(), 32u) << session_.session_id();
+  EXPECT_EQ(random.find_first_not_of("0123456789abcdef"), std::string::npos) << random;
   EXPECT_EQ(volume_.volume_id(), "vol-" + tag + "-1");
   EXPECT_EQ(session_.mesh_id(), "mesh-" + tag + "-1");
   auto other = VpmServer::Create(SmallServerOptions(), SharedGpu());

@@ -1,7 +1,7 @@
 // Users and ownership: the users file and its errors, --token-file, every
 // call knowing its user, sessions and uploads belonging to their creator
-// (PERMISSION_DENIED for anyone else), sharing a session to watch, shared
-// volumes of the data root and phantoms, per-user stream caps and per-user
+// (another's session is NOT_FOUND, as a missing one; another's upload
+// PERMISSION_DENIED), sharing a session to watch, shared volumes of the data root and phantoms, per-user stream caps and per-user
 // metrics.
 #include <atomic>
 #include <chrono>
@@ -41,11 +41,22 @@ TEST(UsersFile, ParsesNamesHashesCommentsAndBlankLines) {
 TEST(UsersFile, HashIsTheSha256OfTheToken) {
   // FIPS 180-2's "abc" example.
   EXPECT_EQ(HashToken("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
-  auto line = UsersFileLine("alice", "abc");
-  ASSERT_TRUE(line.ok());
-  EXPECT_EQ(*line, "alice ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
-  EXPECT_FALSE(UsersFileLine("al ice", "abc").ok());
+  auto line = UsersFileLine("alice", kAlice);
+  ASSERT_TRUE(line.ok()) << line.status();
+  EXPECT_EQ(*line, "alice " + HashToken(kAlice));
+  EXPECT_FALSE(UsersFileLine("al ice", kAlice).ok());
   EXPECT_FALSE(UsersFileLine("alice", "").ok());
+}
+
+TEST(UsersFile, HashTokenRefusesTokensUnder16CharactersWithoutEchoingThem) {
+  auto short_line = UsersFileLine("alice", "abcdefghijklmno");  // 15
+  ASSERT_FALSE(short_line.ok());
+  EXPECT_EQ(short_line.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(short_line.status().message().find("at least 16"), std::string::npos)
+      << short_line.status();
+  EXPECT_EQ(short_line.status().message().find("abcdefghijklmno"), std::string::npos);
+  EXPECT_FALSE(UsersFileLine("alice", "x").ok());
+  EXPECT_TRUE(UsersFileLine("alice", "abcdefghijklmnop").ok());  // 16
 }
 
 TEST(UsersFile, BadLinesNameTheLineAndTheFault) {
@@ -178,7 +189,7 @@ TEST_F(UsersTest, EveryUserSignsInWithTheirOwnTokenAndNoOtherToken) {
   EXPECT_EQ(server_->metrics().requests("ListVolumes", "UNAUTHENTICATED", "unauthenticated"), 2);
 }
 
-TEST_F(UsersTest, AnotherUsersSessionIsPermissionDenied) {
+TEST_F(UsersTest, AnotherUsersSessionIsNotFoundLikeAMissingOne) {
   const v2::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
   const v2::SessionInfo session = OpenSession(volume.volume_id(), kAlice);
   EXPECT_EQ(session.owner(), "alice");
@@ -186,26 +197,32 @@ TEST_F(UsersTest, AnotherUsersSessionIsPermissionDenied) {
   EXPECT_TRUE(GetSession(kAlice, session.session_id(), &info).ok());
   EXPECT_TRUE(Manipulate(kAlice, session.session_id()).ok());
 
-  EXPECT_EQ(Manipulate(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
-  EXPECT_EQ(GetSession(kBob, session.session_id(), &info).error_code(), grpc::PERMISSION_DENIED);
-  EXPECT_EQ(Watch(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
-  EXPECT_EQ(Interact(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
+  EXPECT_EQ(Manipulate(kBob, session.session_id()).error_code(), grpc::NOT_FOUND);
+  EXPECT_EQ(GetSession(kBob, session.session_id(), &info).error_code(), grpc::NOT_FOUND);
+  EXPECT_EQ(Watch(kBob, session.session_id()).error_code(), grpc::NOT_FOUND);
+  EXPECT_EQ(Interact(kBob, session.session_id()).error_code(), grpc::NOT_FOUND);
   v2::SetCameraRequest camera;
   camera.set_session_id(session.session_id());
   v2::SetCameraResponse camera_response;
   EXPECT_EQ(stub_->SetCamera(Context(kBob).get(), camera, &camera_response).error_code(),
-            grpc::PERMISSION_DENIED);
+            grpc::NOT_FOUND);
   v2::RenderRequest render;
   render.set_session_id(session.session_id());
   v2::Frame frame;
   EXPECT_EQ(stub_->Render(Context(kBob).get(), render, &frame).error_code(),
-            grpc::PERMISSION_DENIED);
+            grpc::NOT_FOUND);
   v2::CloseSessionRequest close;
   close.set_session_id(session.session_id());
   v2::CloseSessionResponse close_response;
   EXPECT_EQ(stub_->CloseSession(Context(kBob).get(), close, &close_response).error_code(),
-            grpc::PERMISSION_DENIED);
-  EXPECT_EQ(Share(kBob, session.session_id(), "bob").error_code(), grpc::PERMISSION_DENIED);
+            grpc::NOT_FOUND);
+  EXPECT_EQ(Share(kBob, session.session_id(), "bob").error_code(), grpc::NOT_FOUND);
+  // One answer for "not yours" and "not there": the same code and text.
+  grpc::Status not_yours = GetSession(kBob, session.session_id(), &info);
+  grpc::Status not_there = GetSession(kBob, "ses-00000000-0123456789abcdef0123456789abcdef", &info);
+  EXPECT_EQ(not_yours.error_code(), grpc::NOT_FOUND);
+  EXPECT_EQ(not_there.error_code(), grpc::NOT_FOUND);
+  EXPECT_EQ(not_yours.error_message(), not_there.error_message());
 
   v2::ListSessionsResponse listed;
   ASSERT_TRUE(stub_->ListSessions(Context(kBob).get(), {}, &listed).ok());
@@ -215,10 +232,10 @@ TEST_F(UsersTest, AnotherUsersSessionIsPermissionDenied) {
 
   // Alice's session survived all of it.
   EXPECT_TRUE(Watch(kAlice, session.session_id()).ok());
-  EXPECT_GE(server_->metrics().requests("Manipulate", "PERMISSION_DENIED", "bob"), 1);
+  EXPECT_GE(server_->metrics().requests("Manipulate", "NOT_FOUND", "bob"), 1);
   const std::string metrics = server_->metrics().Scrape();
   EXPECT_NE(metrics.find("vpm_user_sessions{user=\"alice\"} 1"), std::string::npos) << metrics;
-  EXPECT_NE(metrics.find("vpm_requests_total{code=\"PERMISSION_DENIED\",method=\"Manipulate\","
+  EXPECT_NE(metrics.find("vpm_requests_total{code=\"NOT_FOUND\",method=\"Manipulate\","
                          "user=\"bob\"} 1"),
             std::string::npos)
       << metrics;
@@ -249,11 +266,11 @@ TEST_F(UsersTest, SharingLetsAViewerWatchButNotDeform) {
   EXPECT_EQ(Manipulate(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
   EXPECT_EQ(Interact(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
   // Carol was not asked.
-  EXPECT_EQ(Watch(kCarol, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
+  EXPECT_EQ(Watch(kCarol, session.session_id()).error_code(), grpc::NOT_FOUND);
 
   ASSERT_TRUE(Share(kAlice, session.session_id(), "bob", /*revoke=*/true).ok());
   ASSERT_TRUE(UserStreamsReleased("bob")) << server_->metrics().Scrape();
-  EXPECT_EQ(Watch(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
+  EXPECT_EQ(Watch(kBob, session.session_id()).error_code(), grpc::NOT_FOUND);
 }
 
 TEST_F(UsersTest, UploadedVolumesBelongToTheUploader) {

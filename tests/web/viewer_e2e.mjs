@@ -7,7 +7,7 @@
 // holding differs from the one before), release brings it back, refine,
 // zoom and MIP work, the Crop tool drags a face of the crop box, the token never reaches the browser, a second browser
 // without a cookie (sent to sign in, WebSocket refused) or signed in as bob
-// (PERMISSION_DENIED) cannot reach alice's session, stopping the server
+// (NOT_FOUND, as for a missing one) cannot reach alice's session, stopping the server
 // shows a clear message, and restarting it brings the view back.
 // Usage: node viewer_e2e.mjs --build BUILD --source SOURCE
 import assert from 'node:assert/strict';
@@ -277,7 +277,7 @@ async function checkIsolation(browser, url, aliceSession) {
   await signInWithForm(b, url, bobToken);
   await b.waitForFunction(() => document.getElementById('user').textContent === 'bob');
   const watch = await rawSocket(b, { type: 'watch', session_id: aliceSession });
-  assert.equal(watch.code, 'PERMISSION_DENIED', JSON.stringify(watch));
+  assert.equal(watch.code, 'NOT_FOUND', JSON.stringify(watch));  // one answer for not yours and not there
   step(`bob's browser asks to watch alice's ${aliceSession}: ${watch.message}`);
   const sessions = await b.evaluate(() => fetch('/whoami').then((r) => r.json()));
   assert.deepEqual(sessions, { user: 'bob' });
