@@ -320,8 +320,10 @@ int DefaultThreads() {
 
 }  // namespace
 
-Result<DecimationResult> DecimateFast(const DecimationInput& in, const DecimationParams& p) {
+Result<DecimationResult> DecimateFast(const DecimationInput& in, const DecimationParams& p,
+                                      const CancelToken& cancel) {
   RETURN_IF_ERROR(Validate(in, p));
+  RETURN_IF_ERROR(cancel.Check());
   const int64_t n = static_cast<int64_t>(in.positions.size());
   // What the removal loop reads at scattered addresses, in huge pages.
   HugePageArray<VertexState> state(n, HugePageArray<VertexState>::Init::kNone);
@@ -336,8 +338,10 @@ Result<DecimationResult> DecimateFast(const DecimationInput& in, const Decimatio
   }
   const HugePageArray<int32_t> neighbour_ids = FindNeighbours(
       in.positions, p.radius_mm, p.threads > 0 ? p.threads : DefaultThreads(), state.data());
+  RETURN_IF_ERROR(cancel.Check());
   double d0 = 0.0;
   for (int64_t v = 0; v < n; ++v) d0 = std::max(d0, state[v].dens);
+  CancelCheckpoint checkpoint(cancel);
   const CostModel cost_model{p, d0};
   auto cost = [&](int64_t v) {
     const VertexState& s = state[v];
@@ -410,6 +414,7 @@ Result<DecimationResult> DecimateFast(const DecimationInput& in, const Decimatio
       }
     };
     for (int64_t remaining = n; remaining > keep;) {
+      RETURN_IF_ERROR(checkpoint.Tick());
       prefetch_ahead();
       const LookaheadMinQueue::Entry top = queue.Top();
       queue.Pop();
@@ -426,6 +431,7 @@ Result<DecimationResult> DecimateFast(const DecimationInput& in, const Decimatio
     for (int64_t v = 0; v < n; ++v) initial[v] = cost(v);
     IndexedMinHeap heap(initial);
     while (heap.size() > keep) {
+      RETURN_IF_ERROR(checkpoint.Tick());
       const int64_t v = heap.top();
       heap.Pop();
       remove(v, [&](int32_t id) {

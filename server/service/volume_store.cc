@@ -111,7 +111,8 @@ Result<Volume> VolumeStore::ReadSource(const std::string& load_key, const std::s
 
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
                                                        const std::string& user,
-                                                       const ProgressFn& progress) {
+                                                       const ProgressFn& progress,
+                                                       const CancelToken& cancel) {
   if (source.starts_with("raw:")) {
     return absl::InvalidArgumentError(
         "source: raw: sources are not served; upload the file instead");
@@ -130,8 +131,10 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
     }
   }
   RETURN_IF_ERROR(CheckRoom(0));
+  RETURN_IF_ERROR(cancel.Check());
   ASSIGN_OR_RETURN(Volume volume,
                    ReadSource(key, std::string(source), SubProgress(progress, 0.0, 0.85)));
+  RETURN_IF_ERROR(cancel.Check());
   return Add(std::move(volume), std::move(key), user, {}, SubProgress(progress, 0.85, 1.0));
 }
 

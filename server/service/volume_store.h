@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "server/common/cancel_token.h"
 #include "server/common/status.h"
 #include "server/gpu/gpu_context.h"
 #include "server/volume/gpu_volume.h"
@@ -80,9 +81,11 @@ class VolumeStore {
   // read the file again. Errors: those of ResolveDataPath and ReadVolume;
   // InvalidArgument for raw: sources; ResourceExhausted past max_volumes or
   // max_bytes. `user` is recorded as one of its loaders. `progress` hears
-  // the read (0..0.85) and the upload (0.85..1).
+  // the read (0..0.85) and the upload (0.85..1). `cancel` is polled
+  // before the read and between the read and the upload to the GPU.
   Result<std::shared_ptr<VolumeEntry>> Load(std::string_view source, const std::string& user,
-                                            const ProgressFn& progress = {});
+                                            const ProgressFn& progress = {},
+                                            const CancelToken& cancel = {});
   // A volume read from `path` (an upload's temporary file); `source` is what
   // GetVolume reports; `owner` the uploader.
   Result<std::shared_ptr<VolumeEntry>> AddFile(const std::filesystem::path& path,

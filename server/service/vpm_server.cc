@@ -206,6 +206,10 @@ void VpmServer::Shutdown(std::chrono::milliseconds grace) {
   // dropped (each call answered UNAVAILABLE, counted), so that the process
   // exits within the grace period but for a job already running.
   const auto deadline = std::chrono::steady_clock::now() + grace;
+  // Running work (a mesh build, a load) polls this and stops at the end of
+  // the grace period, so that the pools' threads can be joined in time.
+  context_.stop_work_at_ns =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(deadline.time_since_epoch()).count();
   if (render_pool_) render_pool_->Shutdown(deadline);
   if (request_pool_) request_pool_->Shutdown(deadline);
   if (server_) {
