@@ -213,8 +213,9 @@ void VpmServer::Shutdown(std::chrono::milliseconds grace) {
     streams_->FinishAll(grpc::Status(grpc::UNAVAILABLE, "the server is shutting down"));
   }
   // Queued work runs until the grace period ends; what is left then is
-  // dropped (each call answered UNAVAILABLE, counted), so that the process
-  // exits within the grace period but for a job already running.
+  // dropped (each call answered UNAVAILABLE, counted), and a job still
+  // running stops at its next poll, so that the process exits within the
+  // grace period.
   const auto deadline = std::chrono::steady_clock::now() + grace;
   // Running work (a mesh build, a load) polls this and stops at the end of
   // the grace period, so that the pools' threads can be joined in time.

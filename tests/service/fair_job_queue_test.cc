@@ -61,6 +61,34 @@ TEST(FairJobQueue, FullLaneIsRefusedButPurgesGoneJobsFirst) {
   EXPECT_EQ(queue.TakeAll().size(), 3u);
 }
 
+TEST(FairJobQueue, LaneAtItsRunningCapWaitsWhileOthersRun) {
+  FairJobQueue queue({.max_running_per_lane = 1});
+  std::vector<std::string> log;
+  std::vector<Job> dropped;
+  ASSERT_TRUE(queue.Push(Tagged("alice", &log, "a1"), &dropped).ok());
+  ASSERT_TRUE(queue.Push(Tagged("alice", &log, "a2"), &dropped).ok());
+  ASSERT_TRUE(queue.Push(Tagged("bob", &log, "b1"), &dropped).ok());
+  ASSERT_TRUE(queue.Push(Tagged("", &log, "own1"), &dropped).ok());
+  ASSERT_TRUE(queue.Push(Tagged("", &log, "own2"), &dropped).ok());
+  Job a1, b1, own1, own2, none;
+  ASSERT_TRUE(queue.Pop(&a1));
+  EXPECT_EQ(a1.lane, "alice");
+  // Alice's lane is at its cap while a1 runs: bob's job comes next, then
+  // the server's own lane "", which has no running cap.
+  ASSERT_TRUE(queue.Pop(&b1));
+  EXPECT_EQ(b1.lane, "bob");
+  ASSERT_TRUE(queue.Pop(&own1));
+  ASSERT_TRUE(queue.Pop(&own2));
+  EXPECT_EQ(own2.lane, "");
+  EXPECT_FALSE(queue.Pop(&none)) << "a2 ran beside a1";
+  EXPECT_EQ(queue.running("alice"), 1);
+  queue.Finished("alice");
+  Job a2;
+  ASSERT_TRUE(queue.Pop(&a2));
+  a2.run();
+  EXPECT_EQ(log, std::vector<std::string>{"a2"});
+}
+
 TEST(WorkerPool, ShutdownRunsTheQueueUntilItsDeadlineThenDropsTheRest) {
   auto pool = WorkerPool::Create({.threads = 1, .name = "test"});
   ASSERT_TRUE(pool.ok());
