@@ -50,7 +50,7 @@ Status FairJobQueue::Push(Job&& job, std::vector<Job>* dropped) {
 bool FairJobQueue::Pop(Job* job) {
   // The first lane in turn that may run one more job.
   auto at = std::find_if(turn_.begin(), turn_.end(), [&](const std::string& lane) {
-    return lane.empty() || limits_.max_running_per_lane <= 0 ||
+    return limits_.max_running_per_lane <= 0 || !lanes_.at(lane).front().capped ||
            running(lane) < limits_.max_running_per_lane;
   });
   if (at == turn_.end()) return false;
@@ -60,7 +60,7 @@ bool FairJobQueue::Pop(Job* job) {
   *job = std::move(it->second.front());
   it->second.pop_front();
   --size_;
-  ++running_[lane];
+  if (job->capped) ++running_[lane];
   if (it->second.empty()) {
     lanes_.erase(it);
   } else {
@@ -69,7 +69,8 @@ bool FairJobQueue::Pop(Job* job) {
   return true;
 }
 
-void FairJobQueue::Finished(const std::string& lane) {
+void FairJobQueue::Finished(const std::string& lane, bool capped) {
+  if (!capped) return;
   auto it = running_.find(lane);
   if (it != running_.end() && --it->second <= 0) running_.erase(it);
 }

@@ -7,9 +7,10 @@
 // upload's completion) is bounded by the streams that exist and is never
 // refused for room: refusing it would leave an admitted call unanswered. Jobs whose caller is gone (cancelled,
 // past its deadline) are purged to make room before anything is refused.
-// A lane also has a cap on its jobs running at once (every lane but "",
-// the server's own): one user's long calls (mesh builds, loads) leave the
-// other workers to the other lanes.
+// A lane also has a cap on its callers' jobs running at once (the server's
+// own work, `capped = false`, is never held back: a stream's FEM and its
+// frame run side by side): one user's long calls (mesh builds, loads) leave
+// the other workers to the other lanes.
 // Not thread-safe: the pool holds its mutex around every call.
 #pragma once
 
@@ -45,7 +46,7 @@ class FairJobQueue {
   struct Limits {
     int64_t max_per_lane = 0;          // queued; 0: no cap
     int64_t max_total = 0;             // queued; 0: no cap
-    int64_t max_running_per_lane = 0;  // taken and not yet Finished; 0: no cap
+    int64_t max_running_per_lane = 0;  // capped jobs taken, not yet Finished; 0: no cap
   };
   explicit FairJobQueue(Limits limits) : limits_(limits) {}
 
@@ -53,11 +54,11 @@ class FairJobQueue {
   // lane or the queue is full even after purging gone jobs; the purged jobs
   // are appended to `dropped` for the caller to drop outside its lock.
   Status Push(Job&& job, std::vector<Job>* dropped);
-  // The next job, lanes in turn (round robin over the lanes with work and
-  // under their running cap); false when none may run now. The caller
-  // calls Finished(job->lane) once it has run.
+  // The next job, lanes in turn (round robin over the lanes with work whose
+  // next job may run: uncapped, or its lane under the running cap); false
+  // when none may run now. The caller calls Finished(job) once it has run.
   bool Pop(Job* job);
-  void Finished(const std::string& lane);
+  void Finished(const std::string& lane, bool capped);
   // Everything queued, oldest lane first, running caps aside (for a
   // shutdown that drops it).
   std::vector<Job> TakeAll();
@@ -73,7 +74,7 @@ class FairJobQueue {
   Limits limits_;
   std::map<std::string, std::deque<Job>> lanes_;  // lanes with work only
   std::list<std::string> turn_;                   // lanes with work, next first
-  std::map<std::string, int64_t> running_;        // lanes with jobs running only
+  std::map<std::string, int64_t> running_;        // capped jobs running, by lane (> 0 only)
   int64_t size_ = 0;
 };
 

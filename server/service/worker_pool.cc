@@ -118,10 +118,11 @@ void WorkerPool::Run() {
       job.run();
       const double ms = MsSince(start);
       const std::string lane = std::move(job.lane);
+      const bool capped = job.capped;
       job = Job{};  // release what the job held before taking the lock
       lock.lock();
       --running_;
-      queue_.Finished(lane);
+      queue_.Finished(lane, capped);
       // A job of this lane may wait for its running cap: another worker
       // may take it now.
       if (queue_.size() > 0) wake_.notify_one();

@@ -68,21 +68,26 @@ TEST(FairJobQueue, LaneAtItsRunningCapWaitsWhileOthersRun) {
   ASSERT_TRUE(queue.Push(Tagged("alice", &log, "a1"), &dropped).ok());
   ASSERT_TRUE(queue.Push(Tagged("alice", &log, "a2"), &dropped).ok());
   ASSERT_TRUE(queue.Push(Tagged("bob", &log, "b1"), &dropped).ok());
-  ASSERT_TRUE(queue.Push(Tagged("", &log, "own1"), &dropped).ok());
-  ASSERT_TRUE(queue.Push(Tagged("", &log, "own2"), &dropped).ok());
+  // The server's own work (uncapped) in one lane is never held back.
+  for (const char* tag : {"own1", "own2"}) {
+    Job own = Tagged("own", &log, tag);
+    own.capped = false;
+    ASSERT_TRUE(queue.Push(std::move(own), &dropped).ok());
+  }
   Job a1, b1, own1, own2, none;
   ASSERT_TRUE(queue.Pop(&a1));
   EXPECT_EQ(a1.lane, "alice");
   // Alice's lane is at its cap while a1 runs: bob's job comes next, then
-  // the server's own lane "", which has no running cap.
+  // both of the server's own.
   ASSERT_TRUE(queue.Pop(&b1));
   EXPECT_EQ(b1.lane, "bob");
   ASSERT_TRUE(queue.Pop(&own1));
   ASSERT_TRUE(queue.Pop(&own2));
-  EXPECT_EQ(own2.lane, "");
+  EXPECT_EQ(own2.lane, "own");
+  EXPECT_EQ(queue.running("own"), 0);
   EXPECT_FALSE(queue.Pop(&none)) << "a2 ran beside a1";
   EXPECT_EQ(queue.running("alice"), 1);
-  queue.Finished("alice");
+  queue.Finished("alice", true);
   Job a2;
   ASSERT_TRUE(queue.Pop(&a2));
   a2.run();
