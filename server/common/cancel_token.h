@@ -2,7 +2,7 @@
 // load, a render) still wants its result. The caller builds the token (the
 // service from its gRPC call: cancelled, past its deadline, or the server's
 // grace period over); library code takes it as a parameter, polls Check()
-// between stages and every few thousand iterations of a long loop, and
+// between stages and every thousand or so iterations of a long loop, and
 // returns the status it gives (Cancelled, DeadlineExceeded or Unavailable)
 // at once, so that work nobody waits for stops within milliseconds.
 //
@@ -51,11 +51,11 @@ class CancelToken {
 };
 
 // Polls a token once every `stride` calls of Tick(), for loops whose
-// iterations take a microsecond or less (a poll costs about as much as a
+// iterations take microseconds (a poll costs about as much as a
 // clock read and an atomic load).
 class CancelCheckpoint {
  public:
-  explicit CancelCheckpoint(const CancelToken& token, int64_t stride = 4096)
+  explicit CancelCheckpoint(const CancelToken& token, int64_t stride = 1024)
       : token_(token), stride_(stride) {}
   Status Tick() {
     if (!token_.can_cancel() || ++count_ < stride_) return absl::OkStatus();

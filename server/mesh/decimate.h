@@ -59,7 +59,7 @@ struct DecimationResult {
   double d0 = 0.0;                     // D0 (1/mm)
 };
 
-// `cancel` is polled every few thousand removals: a cancelled call returns
+// `cancel` is polled every 1,024 removals: a cancelled call returns
 // its status within milliseconds.
 Result<DecimationResult> DecimateFast(const DecimationInput& input,
                                       const DecimationParams& params,

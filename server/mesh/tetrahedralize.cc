@@ -157,8 +157,7 @@ Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm,
   for (size_t v = 0; v < points_mm.size(); ++v) points_mm[v] = mesh.vertices[v].position_mm;
   // Delaunay keeps the slivers of cospherical lattice rows; flips remove
   // most (improve_tets_by_flips.h, docs/MESH.md "Tet quality").
-  RETURN_IF_ERROR(cancel.Check());
-  ImproveTetsByFlips(points_mm, tets);
+  RETURN_IF_ERROR(ImproveTetsByFlips(points_mm, tets, {}, cancel).status());
   for (Tet& t : tets) t = CanonicalRotation(t);
   std::sort(tets.begin(), tets.end());
 

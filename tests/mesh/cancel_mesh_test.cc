@@ -4,6 +4,7 @@
 // changes nothing.
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <thread>
 
 #include <gtest/gtest.h>

@@ -4,6 +4,7 @@
 // volumes are capped per owner; a user's calls run on at most all workers
 // but one. (Per-user streams, sessions and queued jobs: users_test.cc.)
 #include <chrono>
+#include <cstdio>
 #include <condition_variable>
 #include <mutex>
 #include <thread>
@@ -184,7 +185,7 @@ TEST_F(FairShareTest, OneUsersLongCallsLeaveAWorkerFree) {
     v2::BuildMeshRequest request;
     request.set_volume_id(volume.volume_id());
     for (int a = 0; a < 3; ++a) request.mutable_params()->add_grid(60);
-    request.mutable_params()->set_target(300 + i);
+    request.mutable_params()->set_target(4000 + i);
     contexts.push_back(Context(kAliceToken));
     stub_->async()->BuildMesh(contexts.back().get(), &request, &infos[i], [&](grpc::Status) {
       std::lock_guard lock(mutex);

@@ -5,6 +5,7 @@
 // Through gRPC, alice owning the session and bob watching it.
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <condition_variable>
 #include <mutex>
 #include <optional>
