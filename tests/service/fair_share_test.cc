@@ -135,8 +135,9 @@ TEST_F(FairShareTest, TricklingUploadIsEnded) {
   std::printf("trickle ended after %d chunks: %s\n", chunks, ended.error_message().c_str());
 }
 
-// The case 4: alice uploads 15 small volumes (the server holds 16);
-// only --max-volumes-per-user of them are taken, and bob's LoadVolume and
+// The case 4: alice uploads small volumes until refused (20 tries;
+// the server holds 16, and uploads are never evicted): only
+// --max-volumes-per-user of them are taken, and bob's LoadVolume and
 // UploadVolume are served.
 TEST_F(FairShareTest, UploadedVolumesAreCappedPerOwner) {
   ServerOptions options = SmallServerOptions();
@@ -144,7 +145,7 @@ TEST_F(FairShareTest, UploadedVolumesAreCappedPerOwner) {
   options.max_volumes_per_user = 4;
   StartWithUsers(options);
   int taken = 0, refused = 0;
-  for (int i = 0; i < 15; ++i) {
+  for (int i = 0; i < 20; ++i) {
     v2::VolumeInfo info;
     const grpc::Status status = UploadAs(kAliceToken, &info);
     if (status.ok()) {
@@ -155,7 +156,7 @@ TEST_F(FairShareTest, UploadedVolumesAreCappedPerOwner) {
     }
   }
   EXPECT_EQ(taken, 4);
-  EXPECT_EQ(refused, 11);
+  EXPECT_EQ(refused, 16);
   const grpc::Status loaded = LoadAs(kBobToken, "phantom:abdomen?size=16");
   EXPECT_TRUE(loaded.ok()) << loaded.error_message();
   v2::VolumeInfo bobs;
