@@ -2,7 +2,8 @@
 // served. Upload memory is reserved as bytes arrive (idle headers hold
 // nothing) and capped per user; a trickling upload is ended; uploaded
 // volumes are capped per owner; a user's calls run on at most all workers
-// but one. (Per-user streams, sessions and queued jobs: users_test.cc.)
+// but one; a user's sessions cannot pin every mesh slot. (Per-user streams,
+// sessions and queued jobs: users_test.cc.)
 #include <chrono>
 #include <cstdio>
 #include <condition_variable>
@@ -213,6 +214,44 @@ TEST_F(FairShareTest, OneUsersLongCallsLeaveAWorkerFree) {
   for (auto& context : contexts) context->TryCancel();
   std::unique_lock lock(mutex);
   done.wait_for(lock, std::chrono::seconds(60), [&] { return finished == 2; });
+}
+
+// Mesh slots: a mesh is pinned only by the sessions on it, and a user's
+// sessions are capped (--max-sessions-per-user, under --max-meshes), so
+// alice at her session cap with more meshes built than the server holds
+// leaves bob room: her unpinned meshes are evicted for his build.
+TEST_F(FairShareTest, MeshSlotsLeaveRoomForAnotherUser) {
+  ServerOptions options = SmallServerOptions();
+  options.max_meshes = 3;
+  options.max_sessions = 6;
+  options.max_sessions_per_user = 2;
+  StartWithUsers(options);
+  v2::VolumeInfo volume;
+  {
+    v2::LoadVolumeRequest request;
+    request.set_source("phantom:abdomen?size=32");
+    ASSERT_TRUE(stub_->LoadVolume(Context(kAliceToken).get(), request, &volume).ok());
+  }
+  auto build = [&](const std::string& token, int64_t target, v2::MeshInfo* info) {
+    v2::BuildMeshRequest request;
+    request.set_volume_id(volume.volume_id());
+    request.mutable_params()->set_target(target);
+    return stub_->BuildMesh(Context(token).get(), request, info);
+  };
+  // Alice: three meshes (the server's whole room), two pinned by her two
+  // sessions, and a third session refused.
+  std::vector<v2::MeshInfo> alices(3);
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(build(kAliceToken, 40 + i, &alices[i]).ok());
+  for (int i = 0; i < 3; ++i) {
+    v2::OpenSessionRequest open;
+    open.set_mesh_id(alices[i].mesh_id());
+    v2::SessionInfo session;
+    const grpc::Status status = stub_->OpenSession(Context(kAliceToken).get(), open, &session);
+    EXPECT_EQ(status.ok(), i < 2) << status.error_message();
+  }
+  v2::MeshInfo bobs;
+  const grpc::Status status = build(kBobToken, 50, &bobs);
+  EXPECT_TRUE(status.ok()) << status.error_message();
 }
 
 }  // namespace
