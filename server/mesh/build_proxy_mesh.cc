@@ -42,8 +42,9 @@ std::vector<MeshVertex> MakeAnchors(const VolumeGeometry& geometry) {
 }
 
 Result<DecimatedLattice> DecimateLattice(const Volume& volume, const MeshParams& params,
-                                         const MeshGpu& gpu) {
+                                         const MeshGpu& gpu, const CancelToken& cancel) {
   RETURN_IF_ERROR(CheckParams(params));
+  RETURN_IF_ERROR(cancel.Check());
   ASSIGN_OR_RETURN(Lattice lattice, Lattice::Create(volume.geometry(), params.grid));
   ASSIGN_OR_RETURN(TransferFunction tf, TransferFunction::FromSpec(params.tf, volume));
   auto t0 = SteadyClock::now();
@@ -60,6 +61,7 @@ Result<DecimatedLattice> DecimateLattice(const Volume& volume, const MeshParams&
   } else {
     costs = EvaluateLatticeCostsCpu(volume, lattice, tf);
   }
+  RETURN_IF_ERROR(cancel.Check());
   MeshStats stats;
   stats.evaluate_ms = MsSince(t0);
   stats.evaluated_on = evaluated_on;
@@ -74,7 +76,7 @@ Result<DecimatedLattice> DecimateLattice(const Volume& volume, const MeshParams&
                             .wd = params.wd,
                             .radius_mm = params.radius_factor * h,
                             .density_mode = params.density_mode};
-  ASSIGN_OR_RETURN(DecimationResult kept, DecimateFast(input, dp));
+  ASSIGN_OR_RETURN(DecimationResult kept, DecimateFast(input, dp, cancel));
   std::vector<MeshVertex> vertices = MakeAnchors(volume.geometry());
   for (size_t n = 0; n < kept.kept.size(); ++n) {
     const int64_t id = kept.kept[n];
@@ -97,7 +99,8 @@ Result<DecimatedLattice> DecimateLattice(const Volume& volume, const MeshParams&
 }
 
 Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& base,
-                                  const MeshParams& params) {
+                                  const MeshParams& params, const CancelToken& cancel) {
+  RETURN_IF_ERROR(cancel.Check());
   ProxyMesh mesh;
   mesh.stats = base.stats;
   mesh.vertices = base.vertices;
@@ -113,6 +116,7 @@ Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& 
     mesh.vertices.insert(mesh.vertices.end(), refined.begin(), refined.end());
   }
   mesh.stats.refine_ms = MsSince(t0);
+  RETURN_IF_ERROR(cancel.Check());
   t0 = SteadyClock::now();
   const BoundaryParams bp{.min_cell_mm = 0.5 * base.stats.h_mm};
   const std::vector<MeshVertex> boundary =
@@ -121,7 +125,7 @@ Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& 
   mesh.vertices.insert(mesh.vertices.end(), boundary.begin(), boundary.end());
   mesh.stats.boundary_ms = MsSince(t0);
   t0 = SteadyClock::now();
-  RETURN_IF_ERROR(Tetrahedralize(mesh, volume.geometry().extent_mm()));
+  RETURN_IF_ERROR(Tetrahedralize(mesh, volume.geometry().extent_mm(), cancel));
   const double tetrahedralize_ms = MsSince(t0);
   t0 = SteadyClock::now();
   if (params.hard_reach_factor > 0.0 && params.refine_at_mm) {
@@ -132,7 +136,8 @@ Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& 
                              .radius_mm = params.hard_reach_radius_factor * h,
                              .min_spacing_mm = h / 6.0};
     ASSIGN_OR_RETURN(const HardReachStats reach,
-                     AddHardReachSteinerPoints(mesh, volume, base.stats.R_mm, params.classify, hp));
+                     AddHardReachSteinerPoints(mesh, volume, base.stats.R_mm, params.classify, hp,
+                                               cancel));
     mesh.stats.steiner += reach.added;
   }
   if (params.steiner_min_dihedral_deg > 0.0) {
@@ -141,10 +146,11 @@ Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& 
     const SteinerParams sp{.target_min_dihedral_deg = params.steiner_min_dihedral_deg,
                            .min_spacing_mm = base.stats.h_mm / 6.0};
     ASSIGN_OR_RETURN(const SteinerStats steiner,
-                     AddSliverSteinerPoints(mesh, volume.geometry(), sp));
+                     AddSliverSteinerPoints(mesh, volume.geometry(), sp, cancel));
     mesh.stats.steiner += steiner.added;
   }
   mesh.stats.steiner_ms = MsSince(t0);
+  RETURN_IF_ERROR(cancel.Check());
   mesh.stats.tetrahedralize_ms = tetrahedralize_ms;  // the Steiner rounds' own are in steiner_ms
   t0 = SteadyClock::now();
   // Step 3 after the tetrahedralization: it reads positions only, and the

@@ -14,6 +14,7 @@
 
 #include <glm/glm.hpp>
 
+#include "server/common/cancel_token.h"
 #include "server/common/status.h"
 #include "server/mesh/classify_hardness.h"
 #include "server/mesh/decimate.h"
@@ -71,19 +72,26 @@ struct DecimatedLattice {
   MeshStats stats;                      // grid, counts, h, R, evaluate_ms, decimate_ms
 };
 
+// `cancel` is polled between the steps and inside step 2's removal loop: a
+// cancelled build returns its status (Cancelled, DeadlineExceeded, ...)
+// within milliseconds.
 Result<DecimatedLattice> DecimateLattice(const Volume& volume, const MeshParams& params,
-                                         const MeshGpu& gpu = {});
+                                         const MeshGpu& gpu = {},
+                                         const CancelToken& cancel = {});
 
 // Step 4, the boundary vertices, the tetrahedralization with its Steiner
 // points, then step 3 over every vertex, on top of `base`; refine_at_mm of
 // `params` (if any) replaces any earlier refinement.
+// `cancel` is polled between the steps, between Steiner rounds and inside
+// the Delaunay insertion.
 Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& base,
-                                  const MeshParams& params);
+                                  const MeshParams& params, const CancelToken& cancel = {});
 
 inline Result<ProxyMesh> BuildProxyMesh(const Volume& volume, const MeshParams& params,
-                                        const MeshGpu& gpu = {}) {
-  ASSIGN_OR_RETURN(DecimatedLattice base, DecimateLattice(volume, params, gpu));
-  return FinishProxyMesh(volume, base, params);
+                                        const MeshGpu& gpu = {},
+                                        const CancelToken& cancel = {}) {
+  ASSIGN_OR_RETURN(DecimatedLattice base, DecimateLattice(volume, params, gpu, cancel));
+  return FinishProxyMesh(volume, base, params, cancel);
 }
 
 // The 8 corners of the image box, (0,0,0) to (n-1)*s, as anchors.

@@ -6,6 +6,7 @@
 #include <array>
 #include <memory>
 #include <optional>
+#include <atomic>
 #include <thread>
 
 #include "server/common/huge_page_array.h"
@@ -246,9 +247,11 @@ int64_t FirstBucketFrom(const PointGrid& grid, int64_t slot) {
 // box are gathered and sorted once for all of its points; two passes (count, then fill the exact
 // CSR). Each pass splits the buckets between `threads` threads, about the
 // same number of points each; a vertex's list and density do not depend on
-// which thread computes them.
-HugePageArray<int32_t> FindNeighbours(const std::vector<glm::dvec3>& positions, double r,
-                                      int threads, VertexState* state) {
+// which thread computes them. `cancel` is polled every 64 buckets by each
+// thread; once it cancels, every thread stops and its status is returned.
+Result<HugePageArray<int32_t>> FindNeighbours(const std::vector<glm::dvec3>& positions, double r,
+                                              int threads, VertexState* state,
+                                              const CancelToken& cancel) {
   const int64_t n = static_cast<int64_t>(positions.size());
   const PointGrid grid(positions, r);
   const int parts = static_cast<int>(
@@ -257,9 +260,16 @@ HugePageArray<int32_t> FindNeighbours(const std::vector<glm::dvec3>& positions, 
   for (int k = 0; k <= parts; ++k) part_begin[k] = FirstBucketFrom(grid, n * k / parts);
   part_begin[parts] = grid.bucket_count();
   std::optional<HugePageArray<int32_t>> ids;
+  std::atomic<bool> stop{false};
   auto pass = [&](int part, bool fill) {
     Candidates c;
     for (int64_t b = part_begin[part]; b < part_begin[part + 1]; ++b) {
+      if ((b - part_begin[part]) % 64 == 0 && cancel.can_cancel()) {
+        if (stop.load(std::memory_order_relaxed) || !cancel.Check().ok()) {
+          stop = true;
+          return;
+        }
+      }
       if (grid.slot_begin(b) == grid.slot_begin(b + 1)) continue;
       if (fill) {
         c.GatherSortedById(grid, b, r);
@@ -287,6 +297,7 @@ HugePageArray<int32_t> FindNeighbours(const std::vector<glm::dvec3>& positions, 
     for (std::thread& t : helpers) t.join();
   };
   all_parts(false);
+  RETURN_IF_ERROR(cancel.Check());
   int64_t total = 0;
   for (int64_t v = 0; v < n; ++v) {
     state[v].list_begin = total;
@@ -295,6 +306,7 @@ HugePageArray<int32_t> FindNeighbours(const std::vector<glm::dvec3>& positions, 
   // Left uninitialized: the second pass writes every entry.
   ids.emplace(total, HugePageArray<int32_t>::Init::kNone);
   all_parts(true);
+  RETURN_IF_ERROR(cancel.Check());
   return std::move(*ids);
 }
 
@@ -320,8 +332,10 @@ int DefaultThreads() {
 
 }  // namespace
 
-Result<DecimationResult> DecimateFast(const DecimationInput& in, const DecimationParams& p) {
+Result<DecimationResult> DecimateFast(const DecimationInput& in, const DecimationParams& p,
+                                      const CancelToken& cancel) {
   RETURN_IF_ERROR(Validate(in, p));
+  RETURN_IF_ERROR(cancel.Check());
   const int64_t n = static_cast<int64_t>(in.positions.size());
   // What the removal loop reads at scattered addresses, in huge pages.
   HugePageArray<VertexState> state(n, HugePageArray<VertexState>::Init::kNone);
@@ -334,10 +348,13 @@ Result<DecimationResult> DecimateFast(const DecimationInput& in, const Decimatio
                            .list_size = 0,
                            .alive = 1};
   }
-  const HugePageArray<int32_t> neighbour_ids = FindNeighbours(
-      in.positions, p.radius_mm, p.threads > 0 ? p.threads : DefaultThreads(), state.data());
+  ASSIGN_OR_RETURN(const HugePageArray<int32_t> neighbour_ids,
+                   FindNeighbours(in.positions, p.radius_mm,
+                                  p.threads > 0 ? p.threads : DefaultThreads(), state.data(),
+                                  cancel));
   double d0 = 0.0;
   for (int64_t v = 0; v < n; ++v) d0 = std::max(d0, state[v].dens);
+  CancelCheckpoint checkpoint(cancel);
   const CostModel cost_model{p, d0};
   auto cost = [&](int64_t v) {
     const VertexState& s = state[v];
@@ -410,6 +427,7 @@ Result<DecimationResult> DecimateFast(const DecimationInput& in, const Decimatio
       }
     };
     for (int64_t remaining = n; remaining > keep;) {
+      RETURN_IF_ERROR(checkpoint.Tick());
       prefetch_ahead();
       const LookaheadMinQueue::Entry top = queue.Top();
       queue.Pop();
@@ -426,6 +444,7 @@ Result<DecimationResult> DecimateFast(const DecimationInput& in, const Decimatio
     for (int64_t v = 0; v < n; ++v) initial[v] = cost(v);
     IndexedMinHeap heap(initial);
     while (heap.size() > keep) {
+      RETURN_IF_ERROR(checkpoint.Tick());
       const int64_t v = heap.top();
       heap.Pop();
       remove(v, [&](int32_t id) {

@@ -20,6 +20,7 @@
 
 #include <glm/glm.hpp>
 
+#include "server/common/cancel_token.h"
 #include "server/common/status.h"
 
 namespace vpm {
@@ -58,8 +59,11 @@ struct DecimationResult {
   double d0 = 0.0;                     // D0 (1/mm)
 };
 
+// `cancel` is polled every 1,024 removals: a cancelled call returns
+// its status within milliseconds.
 Result<DecimationResult> DecimateFast(const DecimationInput& input,
-                                      const DecimationParams& params);
+                                      const DecimationParams& params,
+                                      const CancelToken& cancel = {});
 Result<DecimationResult> DecimateNaive(const DecimationInput& input,
                                        const DecimationParams& params);
 

@@ -60,7 +60,8 @@ std::vector<LongEdge> LongHardEdges(const ProxyMesh& mesh, const HardReachParams
 
 Result<HardReachStats> AddHardReachSteinerPoints(ProxyMesh& mesh, const Volume& volume, double R_mm,
                                                  const ClassifyParams& classify,
-                                                 const HardReachParams& params) {
+                                                 const HardReachParams& params,
+                                                 const CancelToken& cancel) {
   if (!(params.max_reach_mm > 0.0) || !(params.min_spacing_mm > 0.0) || params.max_rounds < 0) {
     return absl::InvalidArgumentError(
         "AddHardReachSteinerPoints: max reach and min spacing must be > 0, rounds >= 0");
@@ -70,6 +71,7 @@ Result<HardReachStats> AddHardReachSteinerPoints(ProxyMesh& mesh, const Volume& 
   HardReachStats stats;
   RETURN_IF_ERROR(ClassifyHardness(volume, R_mm, classify, mesh.vertices));
   for (int round = 0;; ++round) {
+    RETURN_IF_ERROR(cancel.Check());
     double longest = 0.0;
     const std::vector<LongEdge> edges = LongHardEdges(mesh, params, longest);
     if (round == 0) stats.longest_before_mm = longest;
@@ -87,7 +89,7 @@ Result<HardReachStats> AddHardReachSteinerPoints(ProxyMesh& mesh, const Volume& 
     }
     if (taken.empty()) break;
     AppendSteinerVertices(mesh, geometry, taken);
-    RETURN_IF_ERROR(Tetrahedralize(mesh, extent));
+    RETURN_IF_ERROR(Tetrahedralize(mesh, extent, cancel));
     RETURN_IF_ERROR(ClassifyHardness(volume, R_mm, classify, mesh.vertices));
     stats.added += static_cast<int64_t>(taken.size());
     stats.rounds = round + 1;

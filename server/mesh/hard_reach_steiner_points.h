@@ -23,6 +23,7 @@
 
 #include <cstdint>
 
+#include "server/common/cancel_token.h"
 #include "server/common/status.h"
 #include "server/mesh/classify_hardness.h"
 #include "server/mesh/proxy_mesh.h"
@@ -57,9 +58,10 @@ struct HardReachStats {
 //   volume  the image: its box bounds the new vertices, its voxels classify
 //           them
 // Fails where Tetrahedralize or ClassifyHardness fail, or on non-positive
-// params.
+// params; returns `cancel`'s status once it cancels (polled each round).
 Result<HardReachStats> AddHardReachSteinerPoints(ProxyMesh& mesh, const Volume& volume, double R_mm,
                                                  const ClassifyParams& classify,
-                                                 const HardReachParams& params);
+                                                 const HardReachParams& params,
+                                                 const CancelToken& cancel = {});
 
 }  // namespace vpm

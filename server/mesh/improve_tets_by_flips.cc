@@ -259,13 +259,17 @@ double SmallestQuality(const FlipMesh& mesh) {
 
 }  // namespace
 
-FlipStats ImproveTetsByFlips(const std::vector<glm::dvec3>& positions, std::vector<Tet>& tets,
-                             const FlipOptions& options) {
+Result<FlipStats> ImproveTetsByFlips(const std::vector<glm::dvec3>& positions,
+                                     std::vector<Tet>& tets, const FlipOptions& options,
+                                     const CancelToken& cancel) {
   FlipStats stats;
   if (tets.empty()) return stats;
+  RETURN_IF_ERROR(cancel.Check());
   FlipMesh mesh(positions, tets);
   stats.min_dihedral_before_deg = SmallestQuality(mesh);
+  CancelCheckpoint checkpoint(cancel, 256);
   for (int pass = 0; pass < options.max_passes; ++pass) {
+    RETURN_IF_ERROR(cancel.Check());
     std::vector<std::pair<double, int32_t>> poor;
     for (int32_t t = 0; t < mesh.size(); ++t) {
       if (mesh.alive(t) && mesh.quality(t) < options.target_min_dihedral_deg) {
@@ -275,6 +279,7 @@ FlipStats ImproveTetsByFlips(const std::vector<glm::dvec3>& positions, std::vect
     std::sort(poor.begin(), poor.end());
     int64_t changes = 0;
     for (const auto& [quality, t] : poor) {
+      RETURN_IF_ERROR(checkpoint.Tick());
       if (!mesh.alive(t)) continue;
       if (mesh.TryEdgeRemovals(t)) {
         ++stats.edge_removals;

@@ -25,6 +25,9 @@
 
 #include <glm/glm.hpp>
 
+#include "server/common/cancel_token.h"
+#include "server/common/status.h"
+
 namespace vpm {
 
 // Longest ring of tets around an edge that edge removal tries.
@@ -53,8 +56,17 @@ struct FlipStats {
 //              same with each tet's smallest dihedral angle among the tets
 //              it came from raised, in no particular order
 // The covered region and its boundary faces are unchanged.
-FlipStats ImproveTetsByFlips(const std::vector<glm::dvec3>& positions,
-                             std::vector<std::array<int32_t, 4>>& tets,
-                             const FlipOptions& options = {});
+// `cancel` is polled at each pass and every 256 tets worked on; once it
+// cancels, `tets` is left as it came in and its status is returned.
+Result<FlipStats> ImproveTetsByFlips(const std::vector<glm::dvec3>& positions,
+                                     std::vector<std::array<int32_t, 4>>& tets,
+                                     const FlipOptions& options, const CancelToken& cancel);
+
+// The same, never cancelled.
+inline FlipStats ImproveTetsByFlips(const std::vector<glm::dvec3>& positions,
+                                    std::vector<std::array<int32_t, 4>>& tets,
+                                    const FlipOptions& options = {}) {
+  return *ImproveTetsByFlips(positions, tets, options, CancelToken());
+}
 
 }  // namespace vpm

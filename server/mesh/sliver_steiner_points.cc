@@ -76,7 +76,8 @@ std::vector<glm::dvec3> RoundCandidates(const std::vector<glm::dvec3>& p,
 }  // namespace
 
 Result<SteinerStats> AddSliverSteinerPoints(ProxyMesh& mesh, const VolumeGeometry& geometry,
-                                            const SteinerParams& params) {
+                                            const SteinerParams& params,
+                                            const CancelToken& cancel) {
   if (!(params.min_spacing_mm > 0.0) || !(params.target_min_dihedral_deg > 0.0) ||
       params.max_rounds < 0) {
     return absl::InvalidArgumentError(
@@ -86,6 +87,7 @@ Result<SteinerStats> AddSliverSteinerPoints(ProxyMesh& mesh, const VolumeGeometr
   SteinerStats stats;
   stats.min_dihedral_before_deg = mesh.quality.min_dihedral_deg;
   for (int round = 0; round < params.max_rounds; ++round) {
+    RETURN_IF_ERROR(cancel.Check());
     std::vector<glm::dvec3> p(mesh.vertices.size());
     for (size_t v = 0; v < p.size(); ++v) p[v] = mesh.vertices[v].position_mm;
     const auto bad = BadTets(p, mesh.tets, params.target_min_dihedral_deg);
@@ -94,7 +96,7 @@ Result<SteinerStats> AddSliverSteinerPoints(ProxyMesh& mesh, const VolumeGeometr
         RoundCandidates(p, mesh.tets, bad, extent, params.min_spacing_mm);
     if (added.empty()) break;
     AppendSteinerVertices(mesh, geometry, added);
-    RETURN_IF_ERROR(Tetrahedralize(mesh, extent));
+    RETURN_IF_ERROR(Tetrahedralize(mesh, extent, cancel));
     stats.added += static_cast<int64_t>(added.size());
     stats.rounds = round + 1;
   }

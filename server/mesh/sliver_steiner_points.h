@@ -18,6 +18,7 @@
 
 #include <cstdint>
 
+#include "server/common/cancel_token.h"
 #include "server/common/status.h"
 #include "server/mesh/proxy_mesh.h"
 #include "server/volume/volume.h"
@@ -53,7 +54,10 @@ struct SteinerStats {
 //             vertex lies in (on a face at worst), and its voxels
 // Fails only where Tetrahedralize fails (it cannot on a mesh it built) or
 // on non-positive params.
+// Returns `cancel`'s status once it cancels (polled each round and inside
+// each tetrahedralization).
 Result<SteinerStats> AddSliverSteinerPoints(ProxyMesh& mesh, const VolumeGeometry& geometry,
-                                            const SteinerParams& params);
+                                            const SteinerParams& params,
+                                            const CancelToken& cancel = {});
 
 }  // namespace vpm

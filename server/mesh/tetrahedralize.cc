@@ -104,7 +104,8 @@ Tet CanonicalRotation(const Tet& t) {
 
 }  // namespace
 
-Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm) {
+Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm,
+                      const CancelToken& cancel) {
   const auto start = std::chrono::steady_clock::now();
   RETURN_IF_ERROR(CheckPositions(mesh.vertices, box_extent_mm));
   RETURN_IF_ERROR(CheckDuplicates(mesh.vertices));
@@ -115,7 +116,17 @@ Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm) {
     const glm::dvec3& p = mesh.vertices[v].position_mm;
     points.emplace_back(Point(p.x, p.y, p.z), static_cast<int32_t>(v));
   }
-  Delaunay delaunay(points.begin(), points.end());
+  // In batches, so that a cancelled call stops between two. CGAL's
+  // Delaunay triangulation does not depend on the insertion order (symbolic
+  // perturbation settles cospherical points), and the tets are sorted below.
+  Delaunay delaunay;
+  constexpr size_t kInsertBatch = 8192;
+  for (size_t begin = 0; begin < points.size(); begin += kInsertBatch) {
+    RETURN_IF_ERROR(cancel.Check());
+    const size_t end = std::min(points.size(), begin + kInsertBatch);
+    delaunay.insert(points.begin() + begin, points.begin() + end);
+  }
+  RETURN_IF_ERROR(cancel.Check());
   if (delaunay.dimension() < 3) {
     return absl::InvalidArgumentError(
         StrCat("Tetrahedralize: the ", mesh.vertices.size(),
@@ -146,7 +157,7 @@ Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm) {
   for (size_t v = 0; v < points_mm.size(); ++v) points_mm[v] = mesh.vertices[v].position_mm;
   // Delaunay keeps the slivers of cospherical lattice rows; flips remove
   // most (improve_tets_by_flips.h, docs/MESH.md "Tet quality").
-  ImproveTetsByFlips(points_mm, tets);
+  RETURN_IF_ERROR(ImproveTetsByFlips(points_mm, tets, {}, cancel).status());
   for (Tet& t : tets) t = CanonicalRotation(t);
   std::sort(tets.begin(), tets.end());
 

@@ -3,6 +3,7 @@
 
 #include <glm/glm.hpp>
 
+#include "server/common/cancel_token.h"
 #include "server/common/status.h"
 #include "server/mesh/proxy_mesh.h"
 
@@ -34,6 +35,10 @@ namespace vpm {
 // duplicate positions (listed), all vertices coplanar, vertices outside the
 // box, or a triangulation whose volume differs from the box volume by more
 // than 1e-9 relative (the hull is not the box: corners missing).
-Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm);
+// `cancel` is polled between batches of kInsertBatch insertions and
+// before the flips; a cancelled call leaves `mesh` unchanged and returns
+// its status.
+Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm,
+                      const CancelToken& cancel = {});
 
 }  // namespace vpm

@@ -48,13 +48,19 @@ Status FairJobQueue::Push(Job&& job, std::vector<Job>* dropped) {
 }
 
 bool FairJobQueue::Pop(Job* job) {
-  if (turn_.empty()) return false;
-  const std::string lane = std::move(turn_.front());
-  turn_.pop_front();
+  // The first lane in turn that may run one more job.
+  auto at = std::find_if(turn_.begin(), turn_.end(), [&](const std::string& lane) {
+    return limits_.max_running_per_lane <= 0 || !lanes_.at(lane).front().capped ||
+           running(lane) < limits_.max_running_per_lane;
+  });
+  if (at == turn_.end()) return false;
+  const std::string lane = std::move(*at);
+  turn_.erase(at);
   auto it = lanes_.find(lane);
   *job = std::move(it->second.front());
   it->second.pop_front();
   --size_;
+  if (job->capped) ++running_[lane];
   if (it->second.empty()) {
     lanes_.erase(it);
   } else {
@@ -63,10 +69,25 @@ bool FairJobQueue::Pop(Job* job) {
   return true;
 }
 
+void FairJobQueue::Finished(const std::string& lane, bool capped) {
+  if (!capped) return;
+  auto it = running_.find(lane);
+  if (it != running_.end() && --it->second <= 0) running_.erase(it);
+}
+
+int64_t FairJobQueue::running(const std::string& lane) const {
+  auto it = running_.find(lane);
+  return it == running_.end() ? 0 : it->second;
+}
+
 std::vector<Job> FairJobQueue::TakeAll() {
   std::vector<Job> all;
-  Job job;
-  while (Pop(&job)) all.push_back(std::move(job));
+  for (const std::string& lane : turn_) {
+    for (Job& job : lanes_[lane]) all.push_back(std::move(job));
+  }
+  lanes_.clear();
+  turn_.clear();
+  size_ = 0;
   return all;
 }
 

@@ -216,6 +216,10 @@ void FrameStream::DeliverLocked(std::unique_ptr<v2::Frame> frame) {
 }
 
 void FrameStream::WriteLocked(std::unique_ptr<v2::Frame> frame) {
+  if (Status access = session_->access().Check(options_.user, options_.role, session_->id());
+      !access.ok()) {
+    return FinishLocked(ToGrpcStatus(access));
+  }
   frame->set_superseded_frames(superseded_);
   service_->metrics->FrameSent(frame->timings());
   current_ = std::move(frame);

@@ -34,6 +34,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <string>
 
 #include <grpcpp/support/status.h>
 
@@ -56,6 +57,11 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
  public:
   struct Options {
     bool per_stream_sequence = false;  // Interact: frames echo this stream's events
+    // Who watches and in which role: checked before every frame is written
+    // (session_access.h), so that a revoked viewer gets no frame more and
+    // the stream ends with PERMISSION_DENIED.
+    std::string user;
+    SessionRole role = SessionRole::kViewer;
   };
   static std::shared_ptr<FrameStream> Create(ServiceContext* service,
                                              std::shared_ptr<Session> session,
@@ -97,6 +103,8 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   void ScheduleLocked();
   void RenderNow(std::chrono::steady_clock::time_point queued_at);
   void DeliverLocked(std::unique_ptr<v2::Frame> frame);
+  // Writes `frame`, or finishes the stream with PERMISSION_DENIED when the
+  // user may no longer see the session.
   void WriteLocked(std::unique_ptr<v2::Frame> frame);
   void StillCheck();
   // The client is interacting: events queued or being applied, or one

@@ -133,7 +133,7 @@ class FrameStreamReactor : public Reactor,
       std::lock_guard lock(mutex_);
       if (finished_) return false;
       stream_ = stream;
-      registry_token_ = service_->streams->Register(stream);
+      registry_token_ = service_->streams->Register(stream, user_, stream->session().id());
     }
     stream->Attach();
     return true;

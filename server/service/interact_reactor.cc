@@ -65,7 +65,9 @@ void InteractReactor::Start(const v2::InteractRequest& first) {
                                                                    : v2::RenderSettings(),
                                       session->volume().volume, service_->options.max_frame_side));
     return FrameStream::Create(service_, session, std::move(settings), this,
-                               {.per_stream_sequence = true});
+                               {.per_stream_sequence = true,
+                                .user = user(),
+                                .role = SessionRole::kOwner});
   };
   StartOnPool(std::move(make), [first](FrameStream& stream) {
     if (first.has_event()) stream.EnqueueEvent(first.event());

@@ -84,5 +84,6 @@ int main(int argc, char** argv) {
   std::printf("vpm-server: stopped; %.0f streams opened, %.0f released, %.0f frames, %.0f superseded\n",
               (*server)->metrics().streams_opened(), (*server)->metrics().streams_closed(),
               (*server)->metrics().frames(), (*server)->metrics().superseded());
+  std::fflush(stdout);  // the work is done: say so before the process's own teardown
   return 0;
 }

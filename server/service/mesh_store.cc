@@ -31,7 +31,8 @@ Result<std::unique_ptr<MeshStore>> MeshStore::Create(const Options& options) {
 }
 
 Result<std::shared_ptr<const MeshEntry>> MeshStore::Build(std::shared_ptr<VolumeEntry> volume,
-                                                          const MeshParams& params) {
+                                                          const MeshParams& params,
+                                                          const CancelToken& cancel) {
   if (params.refine_at_mm) {
     RETURN_IF_ERROR(CheckInsideVolume(volume->volume.geometry(), *params.refine_at_mm,
                                       "params.refine_at_mm"));
@@ -49,19 +50,20 @@ Result<std::shared_ptr<const MeshEntry>> MeshStore::Build(std::shared_ptr<Volume
   {
     std::lock_guard lock(costs_mutex_);
     ASSIGN_OR_RETURN(DecimatedLattice base,
-                     DecimateLattice(volume->volume, params, {&volume->gpu, &*costs_}));
+                     DecimateLattice(volume->volume, params, {&volume->gpu, &*costs_}, cancel));
     // Clients print where step 1 ran (MeshStats.evaluated_on): name the device.
     if (base.stats.evaluated_on != kStep1OnCpuReference) {
       base.stats.evaluated_on += StrCat("; Vulkan device ", options_.context->device_name());
     }
     entry->base = std::make_shared<const DecimatedLattice>(std::move(base));
   }
-  ASSIGN_OR_RETURN(entry->mesh, FinishProxyMesh(volume->volume, *entry->base, params));
+  ASSIGN_OR_RETURN(entry->mesh, FinishProxyMesh(volume->volume, *entry->base, params, cancel));
   return Add(std::move(entry));
 }
 
 Result<std::shared_ptr<const MeshEntry>> MeshStore::Refine(std::string_view mesh_id,
-                                                           const glm::dvec3& point_mm) {
+                                                           const glm::dvec3& point_mm,
+                                                           const CancelToken& cancel) {
   ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> old, Get(mesh_id));
   RETURN_IF_ERROR(CheckInsideVolume(old->volume->volume.geometry(), point_mm, "point_mm"));
   auto entry = std::make_shared<MeshEntry>();
@@ -75,7 +77,8 @@ Result<std::shared_ptr<const MeshEntry>> MeshStore::Refine(std::string_view mesh
     RETURN_IF_ERROR(MakeRoomLocked());
   }
   entry->base = old->base;
-  ASSIGN_OR_RETURN(entry->mesh, FinishProxyMesh(entry->volume->volume, *entry->base, entry->params));
+  ASSIGN_OR_RETURN(entry->mesh,
+                   FinishProxyMesh(entry->volume->volume, *entry->base, entry->params, cancel));
   return Add(std::move(entry));
 }
 

@@ -43,11 +43,14 @@ class MeshStore {
   static Result<std::unique_ptr<MeshStore>> Create(const Options& options);
 
   // Errors: InvalidArgument for bad parameters; OutOfRange for a refinement
-  // point outside the volume; ResourceExhausted past max_meshes.
+  // point outside the volume; ResourceExhausted past max_meshes; `cancel`'s
+  // status once the caller is gone (polled while the mesh is built).
   Result<std::shared_ptr<const MeshEntry>> Build(std::shared_ptr<VolumeEntry> volume,
-                                                 const MeshParams& params);
+                                                 const MeshParams& params,
+                                                 const CancelToken& cancel = {});
   Result<std::shared_ptr<const MeshEntry>> Refine(std::string_view mesh_id,
-                                                  const glm::dvec3& point_mm);
+                                                  const glm::dvec3& point_mm,
+                                                  const CancelToken& cancel = {});
   Result<std::shared_ptr<const MeshEntry>> Get(std::string_view id) const;  // NotFound
   // NotFound, or FailedPrecondition while a session holds the mesh.
   Status Delete(std::string_view id);

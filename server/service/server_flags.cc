@@ -40,11 +40,23 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--max-upload-bytes", o->max_upload_bytes, "size of one uploaded file")
       ->capture_default_str();
   app.add_option("--max-upload-memory-bytes", o->max_upload_memory_bytes,
-                 "bytes of all uploads in flight (held in memory until complete); "
-                 "an upload whose declared size would pass it is refused")
+                 "bytes of all uploads in flight (held in memory until complete, counted as "
+                 "they arrive); a chunk that would pass it ends its upload")
+      ->capture_default_str();
+  app.add_option("--max-upload-memory-bytes-per-user", o->max_upload_memory_bytes_per_user,
+                 "the same for one user's uploads; an upload declaring more is refused at "
+                 "its header (0: no cap)")
       ->capture_default_str();
   app.add_option("--upload-idle-s", o->upload_idle_s,
                  "an upload that sends no chunk for this long is ended, seconds")
+      ->capture_default_str();
+  app.add_option("--upload-min-bytes-per-s", o->upload_min_bytes_per_s,
+                 "after its first --upload-idle-s, an upload averaging fewer bytes a second "
+                 "is ended (a trickle may not hold its memory for ever; 0: no minimum)")
+      ->capture_default_str();
+  app.add_option("--max-volumes-per-user", o->max_volumes_per_user,
+                 "uploaded volumes one user holds at once (volumes loaded from the data "
+                 "root or a phantom are shared and evicted when idle; 0: no cap)")
       ->capture_default_str();
   app.add_option("--max-meshes", o->max_meshes, "meshes held at once")->capture_default_str();
   app.add_option("--max-sessions", o->max_sessions, "sessions open at once")
@@ -80,6 +92,10 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
       ->capture_default_str();
   app.add_option("--max-queued", o->max_queued,
                  "calls waiting per worker pool, all users (0: no cap)")->capture_default_str();
+  app.add_option("--max-running-per-user", o->max_running_per_user,
+                 "one user's calls running at once per worker pool (0: the pool's threads "
+                 "less one, at least 1: another user's call always finds a free worker)")
+      ->capture_default_str();
   app.add_option("--still-delay-ms", o->still_delay_ms,
                  "idle time after a drag before the full-quality still frame")
       ->capture_default_str();

@@ -30,6 +30,9 @@ struct ServerOptions {
   int64_t max_total_volume_bytes = int64_t{8} << 30;  // host + GPU bytes of every volume held
   int64_t max_upload_bytes = int64_t{1} << 30;   // one uploaded file
   int64_t max_upload_memory_bytes = int64_t{2} << 30;  // all uploads in flight, in memory
+  int64_t max_upload_memory_bytes_per_user = int64_t{1} << 30;  // one user's uploads in flight
+  int64_t max_volumes_per_user = 4;              // uploaded volumes one user holds (0: no cap)
+  double upload_min_bytes_per_s = 16 << 10;      // an upload slower than this on average fails
   double upload_idle_s = 60;                     // an upload with no chunk this long fails
   int64_t max_meshes = 64;
   int64_t max_sessions = 32;
@@ -48,6 +51,7 @@ struct ServerOptions {
   int render_threads = 2;                        // frame and event workers
   int request_threads = 2;                       // unary workers (load, mesh builds)
   int64_t max_queued_per_user = 64;              // jobs one user (or stream) may have waiting per pool
+  int64_t max_running_per_user = 0;              // a user's jobs running at once per pool; 0: threads - 1 (at least 1)
   int64_t max_queued = 1024;                     // jobs waiting per pool, all users
   double still_delay_ms = 150;                   // idle time before a still frame
   double drain_s = 0;                            // SIGTERM: NOT_SERVING this long first

@@ -3,6 +3,9 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <limits>
 
 #include "server/service/byte_budget.h"
 #include "server/service/load_progress_registry.h"
@@ -35,6 +38,21 @@ struct ServiceContext {
   // Shutting down: new streams are refused too.
   LoadProgressRegistry* load_progress = nullptr;  // GetLoadProgress
   std::atomic<bool> draining{false};
+
+  // When running work must stop (steady clock, ns since its epoch): the end
+  // of the shutdown grace period once VpmServer::Shutdown has begun, never
+  // before. Every call's CancelToken polls it (WorkAllowed).
+  std::atomic<int64_t> stop_work_at_ns{std::numeric_limits<int64_t>::max()};
+
+  // UNAVAILABLE once the grace period is over: a running build, load or
+  // render returns at its next poll, so that the process exits in time.
+  Status WorkAllowed() const {
+    const int64_t now_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                               std::chrono::steady_clock::now().time_since_epoch())
+                               .count();
+    if (now_ns < stop_work_at_ns.load(std::memory_order_relaxed)) return absl::OkStatus();
+    return absl::UnavailableError("the server shut down before this call finished");
+  }
 
   // UNAVAILABLE while leaving, for the calls that create state.
   Status AcceptingNewWork() const {

@@ -29,10 +29,11 @@ void StreamRegistry::Release(const std::string& user) {
   if (on_change_) on_change_(user, left > 0 ? left : 0);
 }
 
-int64_t StreamRegistry::Register(std::weak_ptr<FrameStream> stream) {
+int64_t StreamRegistry::Register(std::weak_ptr<FrameStream> stream, std::string user,
+                                 std::string session_id) {
   std::lock_guard lock(mutex_);
   const int64_t token = next_token_++;
-  streams_.emplace(token, std::move(stream));
+  streams_.emplace(token, Entry{std::move(stream), std::move(user), std::move(session_id)});
   return token;
 }
 
@@ -45,11 +46,27 @@ void StreamRegistry::FinishAll(const grpc::Status& status) {
   std::vector<std::shared_ptr<FrameStream>> live;
   {
     std::lock_guard lock(mutex_);
-    for (auto& [token, weak] : streams_) {
-      if (auto s = weak.lock()) live.push_back(std::move(s));
+    for (auto& [token, entry] : streams_) {
+      if (auto s = entry.stream.lock()) live.push_back(std::move(s));
     }
   }
   for (auto& s : live) s->Finish(status);
+}
+
+int StreamRegistry::FinishSession(std::string_view session_id, std::string_view user,
+                                  const grpc::Status& status) {
+  std::vector<std::shared_ptr<FrameStream>> affected;
+  {
+    std::lock_guard lock(mutex_);
+    for (auto& [token, entry] : streams_) {
+      if (entry.session_id != session_id || (!user.empty() && entry.user != user)) continue;
+      if (auto s = entry.stream.lock()) affected.push_back(std::move(s));
+    }
+  }
+  // Finished after the registry's lock is released (FrameStream::mutex_ is
+  // taken before it, never after).
+  for (auto& s : affected) s->Finish(status);
+  return static_cast<int>(affected.size());
 }
 
 int64_t StreamRegistry::open_streams() const {

@@ -10,6 +10,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <string_view>
 
 #include <grpcpp/support/status.h>
 
@@ -29,10 +30,16 @@ class StreamRegistry {
   // ResourceExhausted past the per-user cap.
   Status Acquire(const std::string& user);
   void Release(const std::string& user);
-  int64_t Register(std::weak_ptr<FrameStream> stream);
+  // A frame stream of `user` on session `session_id`, until Unregister.
+  int64_t Register(std::weak_ptr<FrameStream> stream, std::string user, std::string session_id);
   void Unregister(int64_t token);
   // Finishes every registered stream with `status`.
   void FinishAll(const grpc::Status& status);
+  // Finishes the streams on session `session_id` with `status`: those of
+  // `user`, or every one when `user` is empty (the share revoked, the
+  // session closed). Returns how many.
+  int FinishSession(std::string_view session_id, std::string_view user,
+                    const grpc::Status& status);
   int64_t open_streams() const;
 
  private:
@@ -40,7 +47,12 @@ class StreamRegistry {
   std::function<void(const std::string& user, int64_t streams)> on_change_;
   mutable std::mutex mutex_;
   std::map<std::string, int64_t> per_user_;
-  std::map<int64_t, std::weak_ptr<FrameStream>> streams_;
+  struct Entry {
+    std::weak_ptr<FrameStream> stream;
+    std::string user;
+    std::string session_id;
+  };
+  std::map<int64_t, Entry> streams_;
   int64_t next_token_ = 1;
 };
 

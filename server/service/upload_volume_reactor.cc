@@ -1,5 +1,6 @@
 #include "server/service/upload_volume_reactor.h"
 
+#include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <cerrno>
@@ -68,7 +69,7 @@ void UploadVolumeReactor::Begin() {
   slot_held_ = true;
   {
     std::lock_guard lock(mutex_);
-    last_message_at_ = std::chrono::steady_clock::now();
+    last_message_at_ = started_at_ = std::chrono::steady_clock::now();
   }
   ArmIdleTimer(std::chrono::milliseconds(int64_t(service_->options.upload_idle_s * 1000)));
   ReadNext();
@@ -101,10 +102,27 @@ void UploadVolumeReactor::ArmIdleTimer(std::chrono::milliseconds delay) {
 void UploadVolumeReactor::CheckIdle() {
   const auto limit = std::chrono::milliseconds(int64_t(service_->options.upload_idle_s * 1000));
   std::chrono::steady_clock::duration idle;
+  double elapsed_s = 0.0;
+  int64_t received = 0;
   {
     std::lock_guard lock(mutex_);
     if (finished_ || completing_) return;
-    idle = std::chrono::steady_clock::now() - last_message_at_;
+    const auto now = std::chrono::steady_clock::now();
+    idle = now - last_message_at_;
+    elapsed_s = std::chrono::duration<double>(now - started_at_).count();
+    received = received_bytes_;
+  }
+  // Past its first --upload-idle-s, an upload must keep up an average of
+  // --upload-min-bytes-per-s over the rest of its time.
+  const double min_rate = service_->options.upload_min_bytes_per_s;
+  const double grace_s = service_->options.upload_idle_s;
+  if (min_rate > 0 && elapsed_s > grace_s && double(received) < min_rate * (elapsed_s - grace_s)) {
+    service_->metrics->DroppedJob("UploadVolume", "idle");
+    FinishOnce(absl::DeadlineExceededError(
+        StrCat("upload: ", received, " bytes in ", int64_t(elapsed_s),
+               " s, under the minimum average of ", int64_t(min_rate),
+               " bytes a second (--upload-min-bytes-per-s); send chunks steadily")));
+    return;
   }
   if (idle < limit) {
     ArmIdleTimer(std::chrono::duration_cast<std::chrono::milliseconds>(limit - idle));
@@ -143,14 +161,21 @@ Status UploadVolumeReactor::TakeHeader(const v2::UploadVolumeRequest::Header& he
   if (!IsHex64(header.sha256_hex())) {
     return absl::InvalidArgumentError("header.sha256_hex: must be 64 hexadecimal digits");
   }
+  const int64_t share = service_->upload_memory->per_key_limit();
+  if (share > 0 && header.total_bytes() > share) {
+    return absl::ResourceExhaustedError(StrCat("header.total_bytes: ", header.total_bytes(),
+                                               " is over your share of upload memory, ", share,
+                                               " bytes (--max-upload-memory-bytes-per-user)"));
+  }
   RETURN_IF_ERROR(service_->volumes->CheckRoom(0));
-  RETURN_IF_ERROR(service_->upload_memory->Reserve(header.total_bytes(), "upload in memory"));
-  reserved_bytes_ = header.total_bytes();
+  RETURN_IF_ERROR(service_->volumes->CheckOwnerRoom(user_));
+  // Memory is reserved as chunks arrive (TakeChunk), not here: a header
+  // that sends nothing holds nothing.
   file_name_ = name;
   total_bytes_ = header.total_bytes();
   sha256_hex_ = header.sha256_hex();
   for (char& c : sha256_hex_) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  bytes_.reserve(static_cast<size_t>(total_bytes_));
+  bytes_.reserve(static_cast<size_t>(std::min<int64_t>(total_bytes_, kMaxUploadChunkBytes)));
   have_header_ = true;
   return absl::OkStatus();
 }
@@ -168,9 +193,13 @@ Status UploadVolumeReactor::TakeChunk(const std::string& chunk) {
     return absl::InvalidArgumentError(
         StrCat("chunk: ", size, " bytes; chunks are 64 KiB to 1 MiB (only the last may be shorter)"));
   }
+  RETURN_IF_ERROR(service_->upload_memory->Reserve(user_, size, "upload in memory"));
+  reserved_bytes_ += size;
   const auto* data = reinterpret_cast<const uint8_t*>(chunk.data());
   bytes_.insert(bytes_.end(), data, data + size);
   sha_.Update({data, chunk.size()});
+  std::lock_guard lock(mutex_);
+  received_bytes_ += size;
   return absl::OkStatus();
 }
 
@@ -303,7 +332,7 @@ void UploadVolumeReactor::FinishOnce(const Status& status) {
 }
 
 void UploadVolumeReactor::OnDone() {
-  if (reserved_bytes_ > 0) service_->upload_memory->Release(reserved_bytes_);
+  if (reserved_bytes_ > 0) service_->upload_memory->Release(user_, reserved_bytes_);
   if (slot_held_) service_->streams->Release(user_);
   service_->metrics->StreamClosed();
   std::shared_ptr<UploadVolumeReactor> last = std::move(self_);  // may free this

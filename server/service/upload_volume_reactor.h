@@ -6,10 +6,15 @@
 // The volume belongs to the caller's user.
 // Errors: UNAUTHENTICATED; INVALID_ARGUMENT for a missing or bad header, a
 // bad chunk size, more bytes than declared, a truncated stream or a checksum
-// mismatch; RESOURCE_EXHAUSTED past the upload or volume caps, the user's
-// stream cap (an upload counts as a stream) or the server's memory budget
-// for uploads in flight (the declared size is reserved at the header);
-// DEADLINE_EXCEEDED when no message arrives for --upload-idle-s.
+// mismatch; RESOURCE_EXHAUSTED past the upload or volume caps (the user's
+// uploaded volumes included), the user's stream cap (an upload counts as a
+// stream), a declared size over the user's share of upload memory, or, as
+// chunks arrive, the memory budget for uploads in flight (server-wide and
+// per user: bytes are reserved as they arrive, so an idle header holds
+// nothing); DEADLINE_EXCEEDED when no message arrives for --upload-idle-s,
+// or when after that long the upload averages under
+// --upload-min-bytes-per-s (a chunk a minute does not hold its bytes for
+// ever).
 //
 // Lifetime and races: the reactor owns itself from Make until OnDone, and
 // its idle timer and the completion task hold it too, so neither can touch
@@ -68,7 +73,7 @@ class UploadVolumeReactor : public grpc::ServerReadReactor<v2::UploadVolumeReque
   std::string user_;  // the caller: the volume's owner (set in Begin)
   std::shared_ptr<UploadVolumeReactor> self_;  // from Make until OnDone
   bool slot_held_ = false;                     // a stream slot of this user
-  int64_t reserved_bytes_ = 0;                 // in service_->upload_memory
+  int64_t reserved_bytes_ = 0;                 // in service_->upload_memory, under user_
   v2::UploadVolumeRequest request_;
   bool have_header_ = false;
   std::string file_name_;
@@ -82,6 +87,8 @@ class UploadVolumeReactor : public grpc::ServerReadReactor<v2::UploadVolumeReque
   bool reading_ = false;                       // a StartRead is being made
   std::optional<grpc::Status> deferred_finish_;
   std::chrono::steady_clock::time_point last_message_at_;
+  std::chrono::steady_clock::time_point started_at_;
+  int64_t received_bytes_ = 0;  // chunk bytes taken so far
 };
 
 }  // namespace vpm::service

@@ -121,7 +121,8 @@ Result<Volume> VolumeStore::ReadSource(const std::string& load_key, const std::s
 
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
                                                        const std::string& user,
-                                                       const ProgressFn& progress) {
+                                                       const ProgressFn& progress,
+                                                       const CancelToken& cancel) {
   if (source.starts_with("raw:")) {
     return absl::InvalidArgumentError(
         "source: raw: sources are not served; upload the file instead");
@@ -140,8 +141,10 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
     }
   }
   RETURN_IF_ERROR(CheckRoom(0));
+  RETURN_IF_ERROR(cancel.Check());
   ASSIGN_OR_RETURN(Volume volume,
                    ReadSource(key, std::string(source), SubProgress(progress, 0.0, 0.85)));
+  RETURN_IF_ERROR(cancel.Check());
   return Add(std::move(volume), std::move(key), user, {}, SubProgress(progress, 0.85, 1.0));
 }
 
@@ -174,7 +177,8 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string
       if (!user.empty()) loaded_by_[loaded->id].insert(user);
       return loaded;
     }
-    room = MakeRoomLocked(bytes, &evicted);
+    if (load_key.empty()) room = CheckOwnerRoomLocked(user);
+    if (room.ok()) room = MakeRoomLocked(bytes, &evicted);
     if (room.ok()) {
       if (id.empty()) {
         id = StrCat(options_.id_prefix, next_id_++);
@@ -268,6 +272,21 @@ Status VolumeStore::Delete(std::string_view id, const std::string& user) {
   volumes_.erase(it);
   NotifyLocked();
   return absl::OkStatus();
+}
+
+Status VolumeStore::CheckOwnerRoom(std::string_view owner) const {
+  std::lock_guard lock(mutex_);
+  return CheckOwnerRoomLocked(owner);
+}
+
+Status VolumeStore::CheckOwnerRoomLocked(std::string_view owner) const {
+  if (options_.max_volumes_per_owner <= 0) return absl::OkStatus();
+  int64_t held = 0;
+  for (const auto& [id, entry] : volumes_) held += entry->owner == owner;
+  if (held < options_.max_volumes_per_owner) return absl::OkStatus();
+  return absl::ResourceExhaustedError(
+      StrCat("you hold ", held, " uploaded volumes, the most one user may "
+             "(--max-volumes-per-user); delete one first"));
 }
 
 int64_t VolumeStore::evictions() const {

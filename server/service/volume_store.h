@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "server/common/cancel_token.h"
 #include "server/common/status.h"
 #include "server/gpu/gpu_context.h"
 #include "server/volume/gpu_volume.h"
@@ -65,6 +66,10 @@ class VolumeStore {
     std::filesystem::path data_root;           // empty: file loads off
     int64_t max_volumes = 16;
     int64_t max_bytes = int64_t{8} << 30;
+    // Uploaded volumes one owner holds at once (0: no cap). Uploads are never
+    // evicted, so without it one user's uploads could fill max_volumes;
+    // shared volumes are evicted when idle and count against nobody.
+    int64_t max_volumes_per_owner = 0;
     VolumeLimits read_limits;
     std::function<void(int64_t bytes, int64_t count)> on_change;  // metrics
     std::string id_prefix = "vol-";                                // ids: id_prefix + 1, 2, ...
@@ -81,9 +86,11 @@ class VolumeStore {
   // read the file again. Errors: those of ResolveDataSource and ReadVolume;
   // InvalidArgument for raw: sources; ResourceExhausted past max_volumes or
   // max_bytes. `user` is recorded as one of its loaders. `progress` hears
-  // the read (0..0.85) and the upload (0.85..1).
+  // the read (0..0.85) and the upload (0.85..1). `cancel` is polled
+  // before the read and between the read and the upload to the GPU.
   Result<std::shared_ptr<VolumeEntry>> Load(std::string_view source, const std::string& user,
-                                            const ProgressFn& progress = {});
+                                            const ProgressFn& progress = {},
+                                            const CancelToken& cancel = {});
   // A volume read from `path` (an upload's temporary file); `source` is what
   // GetVolume reports; `owner` the uploader.
   Result<std::shared_ptr<VolumeEntry>> AddFile(const std::filesystem::path& path,
@@ -101,6 +108,8 @@ class VolumeStore {
   // ResourceExhausted when one more volume of `extra_bytes` would pass a cap
   // even after evicting every idle volume (which this does not do).
   Status CheckRoom(int64_t extra_bytes) const;
+  // ResourceExhausted when `owner` holds max_volumes_per_owner uploads.
+  Status CheckOwnerRoom(std::string_view owner) const;
   int64_t total_bytes() const;
   int64_t evictions() const;
 
@@ -125,6 +134,7 @@ class VolumeStore {
   // only user who loaded it.
   Status CheckSoleLoaderLocked(std::string_view id, const std::string& user) const;
   void NotifyLocked() const;
+  Status CheckOwnerRoomLocked(std::string_view owner) const;
 
   Options options_;
   mutable std::mutex mutex_;

@@ -94,15 +94,24 @@ Status VpmServer::Start() {
     ASSIGN_OR_RETURN(own_gpu_, gpu::GpuContext::Create(gpu_options));
     gpu_ = own_gpu_.get();
   }
-  const FairJobQueue::Limits queue_limits{o.max_queued_per_user, o.max_queued};
-  ASSIGN_OR_RETURN(request_pool_,
-                   WorkerPool::Create({o.request_threads, "request", queue_limits}));
-  ASSIGN_OR_RETURN(render_pool_, WorkerPool::Create({o.render_threads, "render", queue_limits}));
+  // A user's calls run on at most all workers but one of a pool (unless
+  // told otherwise), so that another user's call always finds one free.
+  auto queue_limits = [&o](int threads) {
+    const int64_t running = o.max_running_per_user > 0
+                                ? o.max_running_per_user
+                                : std::max<int64_t>(1, threads - 1);
+    return FairJobQueue::Limits{o.max_queued_per_user, o.max_queued, running};
+  };
+  ASSIGN_OR_RETURN(request_pool_, WorkerPool::Create({o.request_threads, "request",
+                                                      queue_limits(o.request_threads)}));
+  ASSIGN_OR_RETURN(render_pool_, WorkerPool::Create({o.render_threads, "render",
+                                                     queue_limits(o.render_threads)}));
   VolumeStore::Options volume_options;
   volume_options.context = gpu_;
   volume_options.data_root = o.data_root;
   volume_options.max_volumes = o.max_volumes;
   volume_options.max_bytes = o.max_total_volume_bytes;
+  volume_options.max_volumes_per_owner = o.max_volumes_per_user;
   volume_options.read_limits.max_volume_bytes = o.max_volume_bytes;
   volume_options.on_change = [m = metrics_.get()](int64_t bytes, int64_t count) {
     m->Volumes(bytes, count);
@@ -136,7 +145,8 @@ Status VpmServer::Start() {
       o.max_streams_per_user,
       [m = metrics_.get()](const std::string& user, int64_t n) { m->UserStreams(user, n); });
   metrics_->SetOpenStreamsSource([s = streams_.get()] { return s->open_streams(); });
-  upload_memory_ = std::make_unique<ByteBudget>(o.max_upload_memory_bytes);
+  upload_memory_ = std::make_unique<ByteBudget>(o.max_upload_memory_bytes,
+                                               o.max_upload_memory_bytes_per_user);
   load_progress_ = std::make_unique<LoadProgressRegistry>();
 
   context_.options = o;
@@ -203,9 +213,14 @@ void VpmServer::Shutdown(std::chrono::milliseconds grace) {
     streams_->FinishAll(grpc::Status(grpc::UNAVAILABLE, "the server is shutting down"));
   }
   // Queued work runs until the grace period ends; what is left then is
-  // dropped (each call answered UNAVAILABLE, counted), so that the process
-  // exits within the grace period but for a job already running.
+  // dropped (each call answered UNAVAILABLE, counted), and a job still
+  // running stops at its next poll, so that the process exits within the
+  // grace period.
   const auto deadline = std::chrono::steady_clock::now() + grace;
+  // Running work (a mesh build, a load) polls this and stops at the end of
+  // the grace period, so that the pools' threads can be joined in time.
+  context_.stop_work_at_ns =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(deadline.time_since_epoch()).count();
   if (render_pool_) render_pool_->Shutdown(deadline);
   if (request_pool_) request_pool_->Shutdown(deadline);
   if (server_) {

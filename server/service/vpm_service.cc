@@ -26,6 +26,18 @@ grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context
                                             std::function<Status(const std::string& user)> fn) {
   // Refused inline, after authentication, before any handler or queue sees
   // an over-long string.
+  return Unary(context, request, method, pool,
+               [fn = std::move(fn)](const std::string& user, const CancelToken&) {
+                 return fn(user);
+               });
+}
+
+grpc::ServerUnaryReactor* VpmService::Unary(
+    grpc::CallbackServerContext* context, const google::protobuf::Message& request,
+    const char* method, WorkerPool* pool,
+    std::function<Status(const std::string& user, const CancelToken& cancel)> fn) {
+  // Refused inline, after authentication, before any handler or queue sees
+  // an over-long string.
   if (Status limits = CheckRequestLimits(request); !limits.ok()) {
     return Unary(context, method, nullptr, [limits](const std::string&) { return limits; });
   }
@@ -35,6 +47,25 @@ grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context
 grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context,
                                             const char* method, WorkerPool* pool,
                                             std::function<Status(const std::string& user)> fn) {
+  return Unary(context, method, pool,
+               [fn = std::move(fn)](const std::string& user, const CancelToken&) {
+                 return fn(user);
+               });
+}
+
+CancelToken VpmService::CallToken(grpc::CallbackServerContext* context) const {
+  return CancelToken([context, service = service_]() -> Status {
+    if (context->IsCancelled()) return absl::CancelledError("the call was cancelled");
+    if (std::chrono::system_clock::now() > context->deadline()) {
+      return absl::DeadlineExceededError("the call's deadline passed while it ran");
+    }
+    return service->WorkAllowed();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::Unary(
+    grpc::CallbackServerContext* context, const char* method, WorkerPool* pool,
+    std::function<Status(const std::string& user, const CancelToken& cancel)> fn) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
   service_->metrics->UnaryInFlight(method, +1);  // -1 in Done
   Result<std::string> authenticated = service_->auth->Authenticate(*context);
@@ -44,7 +75,7 @@ grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context
   }
   const std::string user = *std::move(authenticated);
   if (pool == nullptr) {
-    Done(reactor, method, fn(user), user);
+    Done(reactor, method, fn(user, CancelToken()), user);
     return reactor;
   }
   // Dropped unrun, answered with `why`.
@@ -74,7 +105,7 @@ grpc::ServerUnaryReactor* VpmService::Unary(grpc::CallbackServerContext* context
               return dropped(gone);
             }
             const auto start = std::chrono::steady_clock::now();
-            Status status = fn(user);
+            Status status = fn(user, CallToken(context));
             run_times_.Add(method, MsSince(start));
             Done(reactor, method, status, user);
           },
@@ -149,20 +180,20 @@ grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* co
                                                  const v2::LoadVolumeRequest* request,
                                                  v2::VolumeInfo* response) {
   return Unary(context, *request, "LoadVolume", service_->request_pool,
-               [=, this](const std::string& user) -> Status {
+               [=, this](const std::string& user, const CancelToken& cancel) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     if (request->source().empty()) return absl::InvalidArgumentError("source: required");
     const std::string& progress_id = request->progress_id();
     LoadProgressRegistry* registry = service_->load_progress;
     if (progress_id.empty() || registry == nullptr) {
       ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
-                       service_->volumes->Load(request->source(), user));
+                       service_->volumes->Load(request->source(), user, {}, cancel));
       FillVolumeInfo(*entry, response);
       return absl::OkStatus();
     }
     RETURN_IF_ERROR(registry->Start(progress_id));
     Result<std::shared_ptr<VolumeEntry>> entry =
-        service_->volumes->Load(request->source(), user, registry->Reporter(progress_id));
+        service_->volumes->Load(request->source(), user, registry->Reporter(progress_id), cancel);
     registry->Finish(progress_id, entry.status());
     RETURN_IF_ERROR(entry.status());
     FillVolumeInfo(**entry, response);
@@ -230,13 +261,13 @@ grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* con
                                                 const v2::BuildMeshRequest* request,
                                                 v2::MeshInfo* response) {
   return Unary(context, *request, "BuildMesh", service_->request_pool,
-               [=, this](const std::string& user) -> Status {
+               [=, this](const std::string& user, const CancelToken& cancel) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
                      service_->volumes->Get(request->volume_id(), user));
     ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(request->params()));
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
-                     service_->meshes->Build(volume, params));
+                     service_->meshes->Build(volume, params, cancel));
     FillMeshInfo(*mesh, response);
     return absl::OkStatus();
   });
@@ -258,12 +289,13 @@ grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* co
                                                  const v2::RefineMeshRequest* request,
                                                  v2::MeshInfo* response) {
   return Unary(context, *request, "RefineMesh", service_->request_pool,
-               [=, this](const std::string& user) -> Status {
+               [=, this](const std::string& user, const CancelToken& cancel) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     if (!request->has_point_mm()) return absl::InvalidArgumentError("point_mm: required");
     RETURN_IF_ERROR(FindMesh(request->mesh_id(), user).status());
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
-                     service_->meshes->Refine(request->mesh_id(), FromProto(request->point_mm())));
+                     service_->meshes->Refine(request->mesh_id(), FromProto(request->point_mm()),
+                                              cancel));
     FillMeshInfo(*mesh, response);
     return absl::OkStatus();
   });
@@ -283,7 +315,7 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
                                                   const v2::OpenSessionRequest* request,
                                                   v2::SessionInfo* response) {
   return Unary(context, *request, "OpenSession", service_->request_pool,
-               [=, this](const std::string& user) -> Status {
+               [=, this](const std::string& user, const CancelToken& cancel) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     std::shared_ptr<const MeshEntry> mesh;
     if (!request->mesh_id().empty()) {
@@ -299,8 +331,9 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
       }
       ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
                        service_->volumes->Get(request->volume_id(), user));
-      ASSIGN_OR_RETURN(mesh, service_->meshes->Build(volume, MeshParams{}));
+      ASSIGN_OR_RETURN(mesh, service_->meshes->Build(volume, MeshParams{}, cancel));
     }
+    RETURN_IF_ERROR(cancel.Check());
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Open(user, mesh->volume, mesh));
     FillSessionInfo(*session, user, response);
@@ -312,6 +345,14 @@ grpc::ServerUnaryReactor* VpmService::CloseSession(grpc::CallbackServerContext* 
                                                    const v2::CloseSessionRequest* request,
                                                    v2::CloseSessionResponse*) {
   return Unary(context, *request, "CloseSession", service_->request_pool, [=, this](const std::string& user) {
+    // Only the owner gets this far; its streams, and its viewers', end at
+    // once with PERMISSION_DENIED (before Close's own notice, which would
+    // say FAILED_PRECONDITION: the first finish wins).
+    RETURN_IF_ERROR(
+        service_->sessions->Get(request->session_id(), user, SessionRole::kOwner).status());
+    service_->streams->FinishSession(
+        request->session_id(), "",
+        grpc::Status(grpc::PERMISSION_DENIED, "the session was closed by its owner"));
     return service_->sessions->Close(request->session_id(), user);
   });
 }
@@ -352,6 +393,13 @@ grpc::ServerUnaryReactor* VpmService::ShareSession(grpc::CallbackServerContext* 
       return absl::InvalidArgumentError("user: a session is always its owner's");
     }
     session->access().Share(request->user(), !request->revoke());
+    if (request->revoke()) {
+      // The viewer's open streams end now, not at their next frame (which
+      // they would not get either: FrameStream checks access per frame).
+      service_->streams->FinishSession(
+          session->id(), request->user(),
+          grpc::Status(grpc::PERMISSION_DENIED, "the session's owner stopped sharing it with you"));
+    }
     FillSessionInfo(*session, user, response);
     return absl::OkStatus();
   });
@@ -411,7 +459,7 @@ grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* contex
                                              const v2::RenderRequest* request,
                                              v2::Frame* response) {
   return Unary(context, *request, "Render", service_->render_pool,
-               [=, this](const std::string& user) -> Status {
+               [=, this](const std::string& user, const CancelToken& cancel) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id(), user, SessionRole::kViewer));
     ASSIGN_OR_RETURN(StreamSettings settings,
@@ -422,6 +470,7 @@ grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* contex
       ASSIGN_OR_RETURN(frame_request.camera,
                        ToCamera(request->camera(), session->volume().volume.geometry()));
     }
+    RETURN_IF_ERROR(cancel.Check());
     ASSIGN_OR_RETURN(*response, session->Render(frame_request));
     response->set_frame_number(1);
     service_->metrics->FrameSent(response->timings());

@@ -12,6 +12,7 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include "server/common/cancel_token.h"
 #include "server/service/service_context.h"
 #include "vpm/v2/vpm.grpc.pb.h"
 
@@ -76,16 +77,28 @@ class VpmService final : public v2::Vpm::CallbackService {
  private:
   // Authenticates the caller, then runs `fn` with the caller's user name
   // inline (pool == nullptr) or on `pool`, and finishes the call with its
-  // status.
+  // status. The second form hands long work the call's CancelToken
+  // (CallToken) to pass down.
   grpc::ServerUnaryReactor* Unary(grpc::CallbackServerContext* context, const char* method,
                                   WorkerPool* pool,
                                   std::function<Status(const std::string& user)> fn);
-  // The same, for a request with strings: their lengths are checked first
-  // (request_limits.h), and an over-long one is answered inline.
+  grpc::ServerUnaryReactor* Unary(
+      grpc::CallbackServerContext* context, const char* method, WorkerPool* pool,
+      std::function<Status(const std::string& user, const CancelToken& cancel)> fn);
+  // The same two, for a request with strings: their lengths are checked
+  // first (request_limits.h), and an over-long one is answered inline.
   grpc::ServerUnaryReactor* Unary(grpc::CallbackServerContext* context,
                                   const google::protobuf::Message& request, const char* method,
                                   WorkerPool* pool,
                                   std::function<Status(const std::string& user)> fn);
+  grpc::ServerUnaryReactor* Unary(
+      grpc::CallbackServerContext* context, const google::protobuf::Message& request,
+      const char* method, WorkerPool* pool,
+      std::function<Status(const std::string& user, const CancelToken& cancel)> fn);
+  // Cancelled once the client cancels, DeadlineExceeded once the call's
+  // deadline passes, Unavailable once the shutdown grace period is over;
+  // valid while the call is (until it is finished).
+  CancelToken CallToken(grpc::CallbackServerContext* context) const;
   void Done(grpc::ServerUnaryReactor* reactor, const char* method, const Status& status,
             const std::string& user);
   // How long each method's work takes (moving average, ms), so that a call

@@ -30,7 +30,8 @@ void WatchReactor::Begin() {
         ASSIGN_OR_RETURN(StreamSettings settings,
                          ToStreamSettings(request_.settings(), session->volume().volume,
                                           service_->options.max_frame_side));
-        return FrameStream::Create(service_, session, std::move(settings), this, {});
+        return FrameStream::Create(service_, session, std::move(settings), this,
+                                   {.user = user(), .role = SessionRole::kViewer});
       },
       [](FrameStream&) {});
 }

@@ -117,9 +117,15 @@ void WorkerPool::Run() {
       const auto start = std::chrono::steady_clock::now();
       job.run();
       const double ms = MsSince(start);
+      const std::string lane = std::move(job.lane);
+      const bool capped = job.capped;
       job = Job{};  // release what the job held before taking the lock
       lock.lock();
       --running_;
+      queue_.Finished(lane, capped);
+      // A job of this lane may wait for its running cap: another worker
+      // may take it now.
+      if (queue_.size() > 0) wake_.notify_one();
       mean_job_ms_ = 0.9 * mean_job_ms_ + 0.1 * ms;
       if (queue_.size() == 0 && running_ == 0) idle_.notify_all();
       continue;

@@ -44,7 +44,9 @@ class WorkerPool {
   bool PostAfter(std::chrono::milliseconds delay, std::function<void()> task);
   // Stops taking jobs, runs the queue until `deadline`, drops what is left
   // (calling each job's drop), drops the delayed tasks, joins the threads
-  // (a job that is running is finished). Returns the number dropped.
+  // (a job that is running is waited for: the service's jobs poll their
+  // call's CancelToken, which ends them at `deadline`). Returns the number
+  // dropped.
   int64_t Shutdown(std::chrono::steady_clock::time_point deadline);
   int64_t queued() const;
   // A client refused for a full lane should wait about this long (ms): the

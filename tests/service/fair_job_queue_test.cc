@@ -61,6 +61,39 @@ TEST(FairJobQueue, FullLaneIsRefusedButPurgesGoneJobsFirst) {
   EXPECT_EQ(queue.TakeAll().size(), 3u);
 }
 
+TEST(FairJobQueue, LaneAtItsRunningCapWaitsWhileOthersRun) {
+  FairJobQueue queue({.max_running_per_lane = 1});
+  std::vector<std::string> log;
+  std::vector<Job> dropped;
+  ASSERT_TRUE(queue.Push(Tagged("alice", &log, "a1"), &dropped).ok());
+  ASSERT_TRUE(queue.Push(Tagged("alice", &log, "a2"), &dropped).ok());
+  ASSERT_TRUE(queue.Push(Tagged("bob", &log, "b1"), &dropped).ok());
+  // The server's own work (uncapped) in one lane is never held back.
+  for (const char* tag : {"own1", "own2"}) {
+    Job own = Tagged("own", &log, tag);
+    own.capped = false;
+    ASSERT_TRUE(queue.Push(std::move(own), &dropped).ok());
+  }
+  Job a1, b1, own1, own2, none;
+  ASSERT_TRUE(queue.Pop(&a1));
+  EXPECT_EQ(a1.lane, "alice");
+  // Alice's lane is at its cap while a1 runs: bob's job comes next, then
+  // both of the server's own.
+  ASSERT_TRUE(queue.Pop(&b1));
+  EXPECT_EQ(b1.lane, "bob");
+  ASSERT_TRUE(queue.Pop(&own1));
+  ASSERT_TRUE(queue.Pop(&own2));
+  EXPECT_EQ(own2.lane, "own");
+  EXPECT_EQ(queue.running("own"), 0);
+  EXPECT_FALSE(queue.Pop(&none)) << "a2 ran beside a1";
+  EXPECT_EQ(queue.running("alice"), 1);
+  queue.Finished("alice", true);
+  Job a2;
+  ASSERT_TRUE(queue.Pop(&a2));
+  a2.run();
+  EXPECT_EQ(log, std::vector<std::string>{"a2"});
+}
+
 TEST(WorkerPool, ShutdownRunsTheQueueUntilItsDeadlineThenDropsTheRest) {
   auto pool = WorkerPool::Create({.threads = 1, .name = "test"});
   ASSERT_TRUE(pool.ok());

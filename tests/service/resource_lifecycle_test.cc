@@ -118,16 +118,29 @@ std::unique_ptr<grpc::ClientWriter<v2::UploadVolumeRequest>> StartUpload(
   return writer;
 }
 
+bool SendChunk(grpc::ClientWriter<v2::UploadVolumeRequest>& writer, int64_t bytes) {
+  v2::UploadVolumeRequest chunk;
+  chunk.set_chunk(std::string(static_cast<size_t>(bytes), '\0'));
+  return writer.Write(chunk);
+}
+
 TEST_F(ResourceLifecycleTest, QuietUploadEndsWithDeadlineExceededAndFreesItsBudget) {
+  // Memory is reserved as bytes arrive: the first upload holds the 2 MiB it
+  // has sent of its 3 MiB.
   v2::VolumeInfo info;
   auto context = Context();
-  auto writer = StartUpload(stub_.get(), context.get(), &info, 2 << 20);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // its header is taken
-  // While it holds 2 MiB of the 3 MiB budget, a second 2 MiB upload is refused.
+  auto writer = StartUpload(stub_.get(), context.get(), &info, 3 << 20);
+  ASSERT_TRUE(SendChunk(*writer, 1 << 20));
+  ASSERT_TRUE(SendChunk(*writer, 1 << 20));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // its chunks are taken
+  // While it holds 2 MiB of the 3 MiB budget, a second upload's second
+  // MiB is refused.
   {
     v2::VolumeInfo info2;
     auto context2 = Context();
     auto writer2 = StartUpload(stub_.get(), context2.get(), &info2, 2 << 20);
+    SendChunk(*writer2, 1 << 20);
+    SendChunk(*writer2, 1 << 20);
     writer2->WritesDone();
     const grpc::Status refused = writer2->Finish();
     EXPECT_EQ(refused.error_code(), grpc::RESOURCE_EXHAUSTED) << refused.error_message();
@@ -136,15 +149,19 @@ TEST_F(ResourceLifecycleTest, QuietUploadEndsWithDeadlineExceededAndFreesItsBudg
   // The first sends nothing more: after --upload-idle-s (1 s) it is ended.
   const grpc::Status quiet = writer->Finish();
   EXPECT_EQ(quiet.error_code(), grpc::DEADLINE_EXCEEDED) << quiet.error_message();
-  // Its budget is free again: a 2 MiB upload is taken (then fails on its
-  // checksum, which is this test's stand-in for a whole file).
+  // Its budget is free again: a 2 MiB upload is taken whole (then fails on
+  // its checksum, which is this test's stand-in for a whole file).
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   v2::VolumeInfo info3;
   auto context3 = Context();
   auto writer3 = StartUpload(stub_.get(), context3.get(), &info3, 2 << 20);
+  SendChunk(*writer3, 1 << 20);
+  SendChunk(*writer3, 1 << 20);
   writer3->WritesDone();
-  const grpc::Status truncated = writer3->Finish();
-  EXPECT_EQ(truncated.error_code(), grpc::INVALID_ARGUMENT) << truncated.error_message();
+  const grpc::Status mismatch = writer3->Finish();
+  EXPECT_EQ(mismatch.error_code(), grpc::INVALID_ARGUMENT) << mismatch.error_message();
+  EXPECT_NE(mismatch.error_message().find("checksum"), std::string::npos)
+      << mismatch.error_message();
 }
 
 TEST_F(ResourceLifecycleTest, UploadsCountAgainstTheUsersStreamCap) {

@@ -1,0 +1,258 @@
+// A fair share of everything shared: alice at her caps leaves bob fully
+// served. Upload memory is reserved as bytes arrive (idle headers hold
+// nothing) and capped per user; a trickling upload is ended; uploaded
+// volumes are capped per owner; a user's calls run on at most all workers
+// but one; a user's sessions cannot pin every mesh slot. (Per-user streams,
+// sessions and queued jobs: users_test.cc.)
+#include <chrono>
+#include <cstdio>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
+#include "server/common/sha256.h"
+#include "tests/service/two_users.h"
+
+namespace vpm::service::testing {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The header of an upload of `total` bytes, and nothing after it yet.
+std::unique_ptr<grpc::ClientWriter<v2::UploadVolumeRequest>> StartUpload(
+    v2::Vpm::Stub* stub, grpc::ClientContext* context, v2::VolumeInfo* info, int64_t total) {
+  auto writer = stub->UploadVolume(context, info);
+  v2::UploadVolumeRequest header;
+  header.mutable_header()->set_file_name("held.nii");
+  header.mutable_header()->set_total_bytes(total);
+  header.mutable_header()->set_sha256_hex(std::string(64, 'a'));
+  writer->Write(header);
+  return writer;
+}
+
+bool WriteChunk(grpc::ClientWriter<v2::UploadVolumeRequest>& writer, int64_t bytes) {
+  v2::UploadVolumeRequest chunk;
+  chunk.set_chunk(std::string(static_cast<size_t>(bytes), '\0'));
+  return writer.Write(chunk);
+}
+
+class FairShareTest : public TwoUsersTest {
+ protected:
+  void SetUp() override {}  // each test starts its server with its caps
+  grpc::Status UploadAs(const std::string& token, v2::VolumeInfo* info) {
+    const std::vector<uint8_t> bytes = NiftiBytes();
+    return Upload(bytes, int64_t(bytes.size()), Sha256::HexOf(bytes), 64 << 10, info, true,
+                  token);
+  }
+  grpc::Status LoadAs(const std::string& token, const std::string& source) {
+    v2::LoadVolumeRequest request;
+    request.set_source(source);
+    v2::VolumeInfo info;
+    return stub_->LoadVolume(Context(token).get(), request, &info);
+  }
+};
+
+// The case 3: two idle 1 GiB upload headers of alice's, then bob's
+// 125 KB upload (a 40^3 NIfTI). Before, the headers reserved the whole
+// 2 GiB budget and bob was refused.
+TEST_F(FairShareTest, IdleUploadHeadersHoldNoMemory) {
+  StartWithUsers(SmallServerOptions());  // the default 1 GiB uploads, 2 GiB budget
+  std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
+  std::vector<std::unique_ptr<grpc::ClientWriter<v2::UploadVolumeRequest>>> writers;
+  std::vector<v2::VolumeInfo> infos(2);
+  for (int i = 0; i < 2; ++i) {
+    contexts.push_back(Context(kAliceToken));
+    writers.push_back(StartUpload(stub_.get(), contexts.back().get(), &infos[i], int64_t{1} << 30));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the headers are taken
+  v2::VolumeInfo bobs;
+  const grpc::Status status = UploadAs(kBobToken, &bobs);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(bobs.owner(), "bob");
+  for (auto& context : contexts) context->TryCancel();
+  for (auto& writer : writers) writer->Finish();
+}
+
+// Alice's uploads in flight reach her share of upload memory: her next
+// chunk is refused, and bob's upload is taken whole.
+TEST_F(FairShareTest, UploadMemoryIsSharedPerUser) {
+  ServerOptions options = SmallServerOptions();
+  options.max_upload_memory_bytes = 1 << 20;
+  options.max_upload_memory_bytes_per_user = 512 << 10;
+  StartWithUsers(options);
+  // A header over her share is refused at once.
+  {
+    auto context = Context(kAliceToken);
+    v2::VolumeInfo info;
+    auto writer = StartUpload(stub_.get(), context.get(), &info, 600 << 10);
+    writer->WritesDone();
+    const grpc::Status refused = writer->Finish();
+    EXPECT_EQ(refused.error_code(), grpc::RESOURCE_EXHAUSTED) << refused.error_message();
+  }
+  // Two uploads of 400 KiB: the first sends all of its bytes, the second
+  // passes her 512 KiB share at its second chunk.
+  auto first_context = Context(kAliceToken);
+  v2::VolumeInfo first_info;
+  auto first = StartUpload(stub_.get(), first_context.get(), &first_info, 400 << 10);
+  ASSERT_TRUE(WriteChunk(*first, 256 << 10));
+  ASSERT_TRUE(WriteChunk(*first, 144 << 10));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the chunks are taken
+  auto second_context = Context(kAliceToken);
+  v2::VolumeInfo second_info;
+  auto second = StartUpload(stub_.get(), second_context.get(), &second_info, 400 << 10);
+  WriteChunk(*second, 64 << 10);
+  WriteChunk(*second, 128 << 10);
+  second->WritesDone();
+  const grpc::Status over = second->Finish();
+  EXPECT_EQ(over.error_code(), grpc::RESOURCE_EXHAUSTED) << over.error_message();
+  EXPECT_NE(over.error_message().find("share"), std::string::npos) << over.error_message();
+
+  v2::VolumeInfo bobs;
+  const grpc::Status status = UploadAs(kBobToken, &bobs);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  first_context->TryCancel();
+  first->Finish();
+}
+
+// A chunk every 400 ms never leaves the upload idle for --upload-idle-s
+// (1 s), but its average is far under --upload-min-bytes-per-s: it is
+// ended, so a trickle cannot hold memory for ever.
+TEST_F(FairShareTest, TricklingUploadIsEnded) {
+  ServerOptions options = SmallServerOptions();
+  options.upload_idle_s = 1;
+  options.upload_min_bytes_per_s = 1 << 20;
+  StartWithUsers(options);
+  auto context = Context(kAliceToken, 30);
+  v2::VolumeInfo info;
+  auto writer = StartUpload(stub_.get(), context.get(), &info, 8 << 20);
+  int chunks = 0;
+  while (chunks < 40 && WriteChunk(*writer, 64 << 10)) {
+    ++chunks;
+    std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  }
+  const grpc::Status ended = writer->Finish();
+  EXPECT_EQ(ended.error_code(), grpc::DEADLINE_EXCEEDED) << ended.error_message();
+  EXPECT_LT(chunks, 40) << "the trickle was never ended";
+  std::printf("trickle ended after %d chunks: %s\n", chunks, ended.error_message().c_str());
+}
+
+// The case 4: alice uploads small volumes until refused (20 tries;
+// the server holds 16, and uploads are never evicted): only
+// --max-volumes-per-user of them are taken, and bob's LoadVolume and
+// UploadVolume are served.
+TEST_F(FairShareTest, UploadedVolumesAreCappedPerOwner) {
+  ServerOptions options = SmallServerOptions();
+  options.max_volumes = 16;
+  options.max_volumes_per_user = 4;
+  StartWithUsers(options);
+  int taken = 0, refused = 0;
+  for (int i = 0; i < 20; ++i) {
+    v2::VolumeInfo info;
+    const grpc::Status status = UploadAs(kAliceToken, &info);
+    if (status.ok()) {
+      ++taken;
+    } else {
+      EXPECT_EQ(status.error_code(), grpc::RESOURCE_EXHAUSTED) << status.error_message();
+      ++refused;
+    }
+  }
+  EXPECT_EQ(taken, 4);
+  EXPECT_EQ(refused, 16);
+  const grpc::Status loaded = LoadAs(kBobToken, "phantom:abdomen?size=16");
+  EXPECT_TRUE(loaded.ok()) << loaded.error_message();
+  v2::VolumeInfo bobs;
+  const grpc::Status uploaded = UploadAs(kBobToken, &bobs);
+  EXPECT_TRUE(uploaded.ok()) << uploaded.error_message();
+}
+
+// Running jobs per user: alice's two long builds (not cancelled) take one
+// of the two request workers only; bob's LoadVolume runs on the other at
+// once instead of waiting for a build to end.
+TEST_F(FairShareTest, OneUsersLongCallsLeaveAWorkerFree) {
+  ServerOptions options = SmallServerOptions();
+  options.request_threads = 2;
+  StartWithUsers(options);
+  v2::VolumeInfo volume;
+  {
+    v2::LoadVolumeRequest request;
+    request.set_source("phantom:abdomen?size=96");
+    ASSERT_TRUE(stub_->LoadVolume(Context(kAliceToken).get(), request, &volume).ok());
+  }
+  std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
+  std::vector<v2::MeshInfo> infos(2);
+  std::mutex mutex;
+  std::condition_variable done;
+  int finished = 0;
+  for (int i = 0; i < 2; ++i) {
+    v2::BuildMeshRequest request;
+    request.set_volume_id(volume.volume_id());
+    for (int a = 0; a < 3; ++a) request.mutable_params()->add_grid(60);
+    request.mutable_params()->set_target(4000 + i);
+    contexts.push_back(Context(kAliceToken));
+    stub_->async()->BuildMesh(contexts.back().get(), &request, &infos[i], [&](grpc::Status) {
+      std::lock_guard lock(mutex);
+      ++finished;
+      done.notify_all();
+    });
+  }
+  // Both calls have arrived (one runs, one waits in alice's lane).
+  const auto arrived_by = Clock::now() + std::chrono::seconds(30);
+  while (server_->metrics().unary_in_flight() < 2 && Clock::now() < arrived_by) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  const auto start = Clock::now();
+  const grpc::Status loaded = LoadAs(kBobToken, "phantom:abdomen?size=16");
+  const double waited_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  EXPECT_TRUE(loaded.ok()) << loaded.error_message();
+  std::printf("bob's LoadVolume waited %.1f ms beside alice's two builds\n", waited_ms);
+  EXPECT_LT(waited_ms, 1000.0);
+  {
+    std::lock_guard lock(mutex);
+    EXPECT_EQ(finished, 0) << "the builds ended before bob's call; use a bigger lattice";
+  }
+  for (auto& context : contexts) context->TryCancel();
+  std::unique_lock lock(mutex);
+  done.wait_for(lock, std::chrono::seconds(60), [&] { return finished == 2; });
+}
+
+// Mesh slots: a mesh is pinned only by the sessions on it, and a user's
+// sessions are capped (--max-sessions-per-user, under --max-meshes), so
+// alice at her session cap with more meshes built than the server holds
+// leaves bob room: her unpinned meshes are evicted for his build.
+TEST_F(FairShareTest, MeshSlotsLeaveRoomForAnotherUser) {
+  ServerOptions options = SmallServerOptions();
+  options.max_meshes = 3;
+  options.max_sessions = 6;
+  options.max_sessions_per_user = 2;
+  StartWithUsers(options);
+  v2::VolumeInfo volume;
+  {
+    v2::LoadVolumeRequest request;
+    request.set_source("phantom:abdomen?size=32");
+    ASSERT_TRUE(stub_->LoadVolume(Context(kAliceToken).get(), request, &volume).ok());
+  }
+  auto build = [&](const std::string& token, int64_t target, v2::MeshInfo* info) {
+    v2::BuildMeshRequest request;
+    request.set_volume_id(volume.volume_id());
+    request.mutable_params()->set_target(target);
+    return stub_->BuildMesh(Context(token).get(), request, info);
+  };
+  // Alice: three meshes (the server's whole room), two pinned by her two
+  // sessions, and a third session refused.
+  std::vector<v2::MeshInfo> alices(3);
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(build(kAliceToken, 40 + i, &alices[i]).ok());
+  for (int i = 0; i < 3; ++i) {
+    v2::OpenSessionRequest open;
+    open.set_mesh_id(alices[i].mesh_id());
+    v2::SessionInfo session;
+    const grpc::Status status = stub_->OpenSession(Context(kAliceToken).get(), open, &session);
+    EXPECT_EQ(status.ok(), i < 2) << status.error_message();
+  }
+  v2::MeshInfo bobs;
+  const grpc::Status status = build(kBobToken, 50, &bobs);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+}
+
+}  // namespace
+}  // namespace vpm::service::testing
