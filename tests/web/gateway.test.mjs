@@ -69,7 +69,7 @@ test('Gateway_SignInSetsAStrictHttpOnlyCookie', async () => {
   assert.equal(page.headers.location, '/login');
   const form = await request(base, '/login');
   assert.equal(form.status, 200);
-  assert.match(form.body, /<form id="login" method="post" action="\/login">/);
+  assert.match(form.body, /<form id="login" method="post" action="\/login" data-link="refuse">/);
   const wrong = await request(base, '/login', {
     method: 'POST', body: 'token=nope', headers: { 'Content-Type': 'application/x-www-form-urlencoded' } });
   assert.equal(wrong.status, 401);
@@ -91,15 +91,63 @@ test('Gateway_SignInSetsAStrictHttpOnlyCookie', async () => {
   assert.equal(foreign.status, 403);
 });
 
+// What Chromium sends with a navigation typed into the address bar.
+const kTyped = { 'Sec-Fetch-Site': 'none', 'Sec-Fetch-Mode': 'navigate', 'Sec-Fetch-Dest': 'document' };
+
 test('Gateway_TokenInTheAddressIsExchangedAtOnceAndRedirectedAway', async () => {
-  const r = await request(base, `/index.html?token=${kViewer}&x=1`);
+  const r = await request(base, `/index.html?token=${kViewer}&x=1`, { headers: kTyped });
   assert.equal(r.status, 303);
   assert.equal(r.headers.location, '/index.html?x=1');
   assert.equal(r.headers['referrer-policy'], 'no-referrer');
   const cookie = r.headers['set-cookie'][0].split(';')[0];
   const who = await request(base, '/whoami', { headers: { Cookie: cookie } });
   assert.deepEqual(JSON.parse(who.body), { user: 'viewer' });
-  assert.equal((await request(base, '/?token=wrong')).status, 401);
+  assert.equal((await request(base, '/?token=wrong', { headers: kTyped })).status, 401);
+});
+
+test('Gateway_TokenInTheAddressOnlyOnANavigationNotFromAnotherSite', async () => {
+  const sameOrigin = { ...kTyped, 'Sec-Fetch-Site': 'same-origin' };
+  const ok = await request(base, `/?token=${kViewer}`, { headers: sameOrigin });
+  assert.equal(ok.status, 303);
+  assert.match(ok.headers['set-cookie'][0], /^vpm_session=/);
+  // Login CSRF: another site (a link, a redirect, a form, a frame, a fetch)
+  // or a client that does not say where it came from.
+  for (const headers of [{ ...kTyped, 'Sec-Fetch-Site': 'cross-site' },
+                         { ...kTyped, 'Sec-Fetch-Site': 'same-site' },
+                         { ...kTyped, 'Sec-Fetch-Mode': 'no-cors' },
+                         { ...kTyped, 'Sec-Fetch-Mode': 'cors' },
+                         { ...kTyped, 'Sec-Fetch-Dest': 'iframe' },
+                         {}]) {
+    const r = await request(base, `/?token=${kViewer}`, { headers });
+    assert.equal(r.status, 403, JSON.stringify(headers));
+    assert.ok(!r.headers['set-cookie'], `signed in for ${JSON.stringify(headers)}`);
+    assert.match(r.body, /not from another site/);
+    assert.ok(!r.body.includes(kViewer), 'the token is echoed');
+  }
+  // The sign-in page accepts a link's fragment only on such a navigation.
+  assert.match((await request(base, '/login', { headers: kTyped })).body, /data-link="accept"/);
+  assert.match((await request(base, '/login', { headers: { ...kTyped, 'Sec-Fetch-Site': 'cross-site' } })).body,
+               /data-link="refuse"/);
+  assert.equal((await request(base, '/login.js')).status, 200);
+});
+
+test('Gateway_RedirectsStayOnThisOrigin', async () => {
+  const targets = ['/.//evil.example/', '//evil.example/', '/\\evil.example/', '/\\/evil.example/',
+                   '/./\\evil.example/', '/%2F%2Fevil.example/', '/%5C%5Cevil.example/',
+                   '/.%2F/evil.example/', '/%2e//evil.example/', '/..//evil.example/',
+                   '///evil.example/x', '/./././/evil.example/'];
+  for (const target of targets) {
+    const r = await request(base, `${target}?token=${kViewer}&next=1`, { headers: kTyped });
+    assert.equal(r.status, 303, target);
+    const location = r.headers.location;
+    assert.match(location, /^\/(?![/\\])/, `${target} -> ${location}`);
+    assert.equal(new URL(location, base).origin, base, `${target} -> ${location}`);
+    assert.ok(!location.includes('token'), `${target} -> ${location}`);
+  }
+  for (const target of ['/.//evil.example/', '//evil.example/', '/\\evil.example/']) {
+    const r = await request(base, target);
+    if (r.headers.location) assert.equal(new URL(r.headers.location, base).origin, base, target);
+  }
 });
 
 test('Gateway_SendsTheSignedInUsersTokenAndOneAffinityKeyPerTab', async () => {
@@ -300,6 +348,32 @@ test('Gateway_WatchesOnlySessionsSharedWithTheUser', async () => {
   await new Promise((r) => setTimeout(r, 300));
   assert.ok(!callsSince(start).some((c) => c.method === 'CloseSession'),
             'a viewer leaving closes nothing of the owner');
+  a.ws.close();
+});
+
+test('Gateway_RevokedWatchStopsFramesAndTellsThePage', async () => {
+  const a = await connect({ cookie: alice });
+  a.send({ type: 'open', source: 'phantom:loaded' });
+  const opened = await a.next((m) => m.type === 'opened');
+  const b = await connect({ cookie: bob });
+  fake.share(opened.session.session_id, kBob);
+  b.send({ type: 'watch', session_id: opened.session.session_id });
+  await b.next((m) => m.type === 'opened' && m.watching === true);
+  await b.next((m) => m.type === 'frame');
+  await b.next((m) => m.type === 'frame');
+  const watchesBefore = fake.calls.filter((c) => c.method === 'Watch').length;
+  fake.revoke(opened.session.session_id, kBob);
+  const ended = await b.next((m) => m.type === 'access_ended');
+  assert.equal(ended.code, 'PERMISSION_DENIED');
+  assert.equal(ended.session_id, opened.session.session_id);
+  assert.match(ended.message, /no longer shared/);
+  const at = b.inbox.length;
+  await new Promise((r) => setTimeout(r, 300));
+  assert.equal(b.inbox.slice(at).filter((m) => m.type === 'frame').length, 0,
+               'frames after the revoke');
+  assert.equal(fake.calls.filter((c) => c.method === 'Watch').length, watchesBefore,
+               'the gateway watched again after PERMISSION_DENIED');
+  b.ws.close();
   a.ws.close();
 });
 
