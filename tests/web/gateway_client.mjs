@@ -13,9 +13,11 @@ export function wsModule(source) {
 }
 
 // The gateway as a child process; resolves with {child, base} once it
-// prints its address (base: http(s)://127.0.0.1:PORT).
-export function startGatewayProcess({ source, args = [], env = {}, stderr = 'inherit' }) {
-  const child = spawn(process.execPath, [path.join(source, 'client', 'web', 'gateway.js'),
+// prints its address (base: http(s)://127.0.0.1:PORT). script: another
+// gateway.js to run (default: SOURCE's).
+export function startGatewayProcess({ source, args = [], env = {}, stderr = 'inherit',
+                                      script = null }) {
+  const child = spawn(process.execPath, [script ?? path.join(source, 'client', 'web', 'gateway.js'),
                                          '--listen', '127.0.0.1:0', ...args],
                       { env: { ...process.env, VPM_TOKEN: '', ...env },
                         stdio: ['ignore', 'pipe', stderr] });
