@@ -6,7 +6,8 @@
 //   GET  /healthz             200 while the gateway runs (no host check: probes)
 //   GET  ?token=TOKEN         on a top-level navigation not from another site
 //                             (sign_in_link.js): signs in and redirects (303) to
-//                             the same path without it; from anywhere else 403
+//                             the same path without it; from anywhere else 303 to
+//                             /login?link=refused (the token left behind)
 //   GET  /login               the sign-in form (a link /login#token=TOKEN fills and
 //                             posts it, login.js, on such a navigation only)
 //   POST /login               token=TOKEN (form): signs in, 303 to /; 401 with the form
@@ -124,9 +125,8 @@ export function makeRequestHandler({ signIns, serveFile, allowedHost, allowedOri
       url.searchParams.delete('token');
       if (!notCrossSiteNavigation(req)) {
         log(`refused a ?token= sign-in from ${address(req)}: not a same-site navigation`);
-        return html(403, loginPage('A sign-in link works only when opened directly (typed, ' +
-                                   'pasted or bookmarked), not from another site. Sign in here ' +
-                                   'with your own token.'), { 'Referrer-Policy': 'no-referrer' });
+        // Redirected, so the address bar and history keep no token.
+        return redirect('/login?link=refused', { 'Referrer-Policy': 'no-referrer' });
       }
       const signIn = signInWith(token, () =>
         html(401, loginPage('That token is not valid here.')));
@@ -138,7 +138,10 @@ export function makeRequestHandler({ signIns, serveFile, allowedHost, allowedOri
     }
     if (url.pathname === '/login') {
       if (req.method === 'GET' || req.method === 'HEAD') {
-        return html(200, loginPage('', { acceptLink: notCrossSiteNavigation(req) }));
+        const message = url.searchParams.get('link') === 'refused'
+          ? 'A sign-in link works only when opened directly (typed, pasted or bookmarked), ' +
+            'not from another site. Sign in here with your own token.' : '';
+        return html(200, loginPage(message, { acceptLink: notCrossSiteNavigation(req) }));
       }
       if (req.method !== 'POST') return text(405, 'method not allowed', { Allow: 'GET, POST' });
       let form;

@@ -1,8 +1,9 @@
 // Issue 25, point 5 (and 6 of the findings): login CSRF and the token in
 // history, in headless Chromium. Another site (a page on 127.0.0.1, the
 // gateway on localhost: two sites) sends the browser to the gateway with
-// alice's token, by a script navigation and by a 302, as `?token=` and as
-// the `/login#token=` link: the browser is not signed in. Typed into the
+// alice's token, by a script navigation and by a clicked link through a
+// 302 of its own, as `?token=` and as the `/login#token=` link: the
+// browser is not signed in, and no token stays in its address bar. Typed into the
 // address bar, both sign in, and afterwards neither the page's address nor
 // any entry of the tab's history (Chromium's navigation list, what its
 // session files keep) holds the token.
@@ -12,13 +13,17 @@ import http from 'node:http';
 import { launchBrowser } from '../harness.mjs';
 import { request } from '../gateway_client.mjs';
 
-// A page on another site: /link?to=URL navigates by script, /redirect?to=URL
-// answers 302.
+// A page on another site: /link?to=URL navigates by script, /click?to=URL
+// is a link to /redirect?to=URL, which answers 302 (the user clicks it).
 function startEvilSite() {
   const server = http.createServer((req, res) => {
     const url = new URL(req.url, 'http://evil');
     const to = url.searchParams.get('to') ?? '/';
     if (url.pathname === '/redirect') return res.writeHead(302, { Location: to }).end();
+    if (url.pathname === '/click') {
+      return res.writeHead(200, { 'Content-Type': 'text/html' })
+        .end(`<!doctype html><a id="go" href="/redirect?to=${encodeURIComponent(to)}">cats</a>`);
+    }
     return res.writeHead(200, { 'Content-Type': 'text/html' })
       .end(`<!doctype html><p>cute cats</p><script>location.href = ${JSON.stringify(to)};</script>`);
   });
@@ -40,12 +45,13 @@ async function historyUrls(context, page) {
 
 async function crossSite(browser, evil, gateway, token) {
   const refused = [];
-  for (const how of ['link', 'redirect']) {
+  for (const how of ['link', 'click']) {
     for (const target of [`/?token=${token}`, `/login#token=${token}`]) {
       const context = await browser.newContext();
       const page = await context.newPage();
       const to = `${gateway}${target}`;
       await page.goto(`${evil}/${how}?to=${encodeURIComponent(to)}`);
+      if (how === 'click') await page.click('#go');
       await page.waitForURL((u) => u.origin === gateway, { timeout: 10000 });
       await page.waitForLoadState('load');
       await page.waitForTimeout(300);  // login.js would have posted the form by now
@@ -89,7 +95,8 @@ export async function run(ctx) {
     const viaQuery = await typed(browser, gateway, ctx.tokens.bob, `/?token=${ctx.tokens.bob}`, 'bob');
     // The same ?token= without Fetch Metadata (a script, an old browser): refused.
     const bare = await request(ctx.gateway.base, `/?token=${ctx.tokens.bob}`);
-    assert.equal(bare.status, 403);
+    assert.equal(bare.status, 303);
+    assert.equal(bare.headers.location, '/login?link=refused');
     assert.ok(!bare.headers['set-cookie']);
     return { cross_site_refused: refused.length, history_after_link: viaLink,
              history_after_query: viaQuery };
