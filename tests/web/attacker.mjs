@@ -60,8 +60,10 @@ async function startCtx() {
     async startGateway() {
       const log = fs.openSync(path.join(out, `attacker_gateway${starts ? `_${starts}` : ''}.log`), 'w');
       starts += 1;
+      // An older gateway (--gateway) may not know --sessions-file.
       const args = ['--server', server.address, '--users', usersFile, '--cookie-key-file', keyFile,
-                    '--sessions-file', sessionsFile, '--max-tabs-per-user', '16'];
+                    '--max-tabs-per-user', '16',
+                    ...(gatewayScript ? [] : ['--sessions-file', sessionsFile])];
       const started = await startGatewayProcess({ source, args, stderr: log, script: gatewayScript });
       track(started.child);
       ctx.gateway = started;
