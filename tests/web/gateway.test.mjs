@@ -445,6 +445,35 @@ test('Gateway_RejectsMalformedMessages', async () => {
   t.ws.close();
 });
 
+test('Gateway_ClosesSessionsAKilledGatewayLeftBeforeOpeningAnother', async () => {
+  const file = path.join(tmp, 'sessions.json');
+  // The record a killed gateway left: alice's two sessions, one of bob's.
+  fs.writeFileSync(file, JSON.stringify({ sessions: [
+    { user: 'alice', id: 'ses-left-1' }, { user: 'alice', id: 'ses-left-2' },
+    { user: 'bob', id: 'ses-left-3' }] }));
+  const { child, base: other } = await startGatewayProcess({ source, args: [
+    '--server', fake.address, '--users', path.join(tmp, 'users.txt'), '--sessions-file', file] });
+  try {
+    const cookie = await signIn(other, kAlice);
+    const start = fake.calls.length;
+    const t = await connectTo(source, other, { cookie });
+    t.send({ type: 'open', source: 'phantom:loaded' });
+    const opened = await t.next((m) => m.type === 'opened');
+    const calls = callsSince(start).filter((c) => ['CloseSession', 'OpenSession'].includes(c.method));
+    assert.deepEqual(calls.map((c) => `${c.method} ${c.request.session_id ?? ''}`).sort(),
+                     ['CloseSession ses-left-1', 'CloseSession ses-left-2', 'OpenSession '].sort());
+    assert.equal(calls.at(-1).method, 'OpenSession', 'opened before the leftovers were closed');
+    assert.ok(calls.every((c) => c.authorization === `Bearer ${kAlice}`));
+    const recorded = () => JSON.parse(fs.readFileSync(file, 'utf8')).sessions.map((x) => x.id).sort();
+    assert.deepEqual(recorded(), [opened.session.session_id, 'ses-left-3'].sort());
+    t.ws.close();
+    await waitFor('the closed tab is still recorded', () => recorded().length === 1);
+    assert.ok(!fs.readFileSync(file, 'utf8').includes(kAlice), 'a token in the record');
+  } finally {
+    child.kill('SIGTERM');
+  }
+});
+
 test('Gateway_TlsOnBothSides', async () => {
   // A self-signed certificate for 127.0.0.1, for the gateway and the server.
   const key = path.join(tmp, 'tls.key');
