@@ -11,7 +11,10 @@ import assert from 'node:assert/strict';
 import { closeTab, frameClock, framesIn, openView, orbit, sleep } from './view.mjs';
 
 const kWindowMs = 4000;
-export const kCase1Text = `1\n0\n0\n0\n0\n1\n2 ${'%'.repeat(50000)} 1\n...`;
+// The issue's message, its "..." the rest of a Slicer .vp (9 lines in all),
+// so that the server reads as far as line 7 and quotes its bad number.
+export const kCase1Text = `1\n0\n0\n0\n0\n1\n2 ${'%'.repeat(50000)} 1\n2 0 1 255 1\n` +
+  '8 0 0 0 0 255 1 1 1\n';
 
 export async function run(ctx) {
   const bob = await ctx.tab(await ctx.signIn('bob'));
