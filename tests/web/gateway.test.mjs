@@ -274,6 +274,7 @@ test('Gateway_UploadedTransferFunctionIsReadByTheServerAndRendersWithIt', async 
   const event = callsSince(start).filter((c) => c.method === 'Interact.event').at(-1);
   assert.equal(event.request.event.settings.render_tf.name, 'MyBone');
   assert.equal(event.request.event.settings.preset, '');  // the upload replaces the preset
+  const readsBefore = fake.calls.filter((c) => c.method === 'ReadTransferFunction').length;
   t.send({ type: 'tf', file_name: 'broken.vp', text: 'bad' });
   assert.match((await t.next((m) => m.type === 'error')).message,
                /INVALID_ARGUMENT: file 'broken\.vp': line 7/);
@@ -281,11 +282,18 @@ test('Gateway_UploadedTransferFunctionIsReadByTheServerAndRendersWithIt', async 
     [{ type: 'tf', file_name: 'a.png', text: 'x' }, /ending in \.json/],
     [{ type: 'tf', file_name: 'a.vp', text: 'x'.repeat(60001) }, /at most 60000/],
     [{ type: 'tf', file_name: 'a.vp' }, /tf: text/],
+    // Issue 25's case 1: a .vp field no number is that long never reaches the server.
+    [{ type: 'tf', file_name: 'x.vp', text: `1\n0\n0\n0\n0\n1\n2 ${'%'.repeat(50000)} 1\n` },
+     /line 7 of the \.vp has a field of 50000 characters/],
     [{ type: 'event', event: { sequence: 6, settings: { uploaded_tf: 'yes' } } }, /uploaded_tf: true or false/],
   ]) {
     t.send(message);
-    assert.match((await t.next((m) => m.type === 'error')).message, expect);
+    const error = await t.next((m) => m.type === 'error');
+    assert.match(error.message, expect);
+    assert.ok(error.message.length < 300, 'the error quotes the message');
   }
+  assert.equal(fake.calls.filter((c) => c.method === 'ReadTransferFunction').length, readsBefore + 1,
+               'a refused tf message reached the server');
   t.ws.close();
 });
 
