@@ -10,7 +10,8 @@
 // with another token are PERMISSION_DENIED unless the session was shared
 // (share(sessionId, token)); a Watch sends a frame every 20 ms until
 // revoke(sessionId, token) ends it with PERMISSION_DENIED, as the server
-// does when a share is revoked. With tls = {cert, key} it serves TLS.
+// does when a share is revoked (CloseSession ends it with
+// FAILED_PRECONDITION "session ... is closed"). With tls = {cert, key} it serves TLS.
 import { createRequire } from 'node:module';
 import path from 'node:path';
 
@@ -72,6 +73,16 @@ export async function startFakeServer(source, { tls = null } = {}) {
     }),
     CloseSession: unary('CloseSession', (r) => {
       owners.delete(r.session_id);
+      // Its watchers' streams end as the server ends them.
+      for (const [key, set] of watches) {
+        if (!key.startsWith(`${r.session_id} `)) continue;
+        for (const { call, timer } of set) {
+          clearInterval(timer);
+          call.emit('error', { code: grpc.status.FAILED_PRECONDITION,
+                               details: `session '${r.session_id}' is closed` });
+        }
+        watches.delete(key);
+      }
       return {};
     }),
     DeleteMesh: unary('DeleteMesh', () => ({})),

@@ -385,6 +385,26 @@ test('Gateway_RevokedWatchStopsFramesAndTellsThePage', async () => {
   a.ws.close();
 });
 
+test('Gateway_WatchOfASessionItsOwnerClosedEndsAndIsNotReopened', async () => {
+  const a = await connect({ cookie: alice });
+  a.send({ type: 'open', source: 'phantom:loaded' });
+  const opened = await a.next((m) => m.type === 'opened');
+  const b = await connect({ cookie: bob });
+  fake.share(opened.session.session_id, kBob);
+  b.send({ type: 'watch', session_id: opened.session.session_id });
+  await b.next((m) => m.type === 'frame');
+  const start = fake.calls.length;
+  a.ws.close();  // the owner's tab goes: the gateway closes the session
+  const ended = await b.next((m) => m.type === 'access_ended');
+  assert.equal(ended.code, 'FAILED_PRECONDITION');
+  await new Promise((r) => setTimeout(r, 300));
+  assert.ok(!b.inbox.some((m) => m.type === 'session_lost'), 'the watcher was told to reopen');
+  assert.ok(!callsSince(start).some((c) => ['Watch', 'GetSession', 'OpenSession'].includes(c.method) &&
+                                          c.authorization === `Bearer ${kBob}`),
+            'the watcher watched or opened again');
+  b.ws.close();
+});
+
 test('Gateway_SignOutClosesThatBrowsersTabs', async () => {
   const cookie = await signIn(base, kBob);
   const t = await connect({ cookie });

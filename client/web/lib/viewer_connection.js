@@ -454,16 +454,18 @@ export class ViewerConnection {
     }
     const gone = err.code === GrpcStatus.NOT_FOUND ||
       (err.code === GrpcStatus.FAILED_PRECONDITION && /session.*closed/.test(err.details ?? ''));
-    if (err.code === GrpcStatus.PERMISSION_DENIED || err.code === GrpcStatus.UNAUTHENTICATED) {
+    // A watched session that is gone is its owner's to reopen, not this tab's.
+    if (err.code === GrpcStatus.PERMISSION_DENIED || err.code === GrpcStatus.UNAUTHENTICATED ||
+        (gone && this.watching)) {
       this.accessEnded(err);
       return;
     }
     if (gone) {
       // A restarted server, or an idle session the server expired.
-      if (!this.watching && this.session) this.record.closed(this.session.session_id);
+      if (this.session) this.record.closed(this.session.session_id);
       this.session = null;
-      this.send({ type: 'session_lost',
-                  message: `The session is gone from vpm-server (${err.details}); reopening.` });
+      this.send({ type: 'session_lost', message: `The session is gone from vpm-server ` +
+                  `(${String(err.details ?? '').slice(0, 300)}); reopening.` });
       return;
     }
     // An event the server refused (e.g. a grab outside the volume) ends the

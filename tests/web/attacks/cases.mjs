@@ -8,14 +8,15 @@
 import * as killedGateway from './killed_gateway.mjs';
 import * as loginCsrf from './login_csrf.mjs';
 import * as openRedirect from './open_redirect.mjs';
-import * as revokeWatch from './revoke_watch.mjs';
 import * as signOut from './sign_out.mjs';
 import * as tfStall from './tf_stall.mjs';
+import * as watchEnds from './watch_ends.mjs';
 
 export const kCases = [
   { name: 'tf_stall', point: 'point 1', run: tfStall.run },
   { name: 'sign_out', point: 'point 2', run: signOut.run },
-  { name: 'revoke_watch', point: 'point 2', run: revokeWatch.run,
+  { name: 'close_watched', point: 'point 2', run: watchEnds.runClose },
+  { name: 'revoke_watch', point: 'point 2', run: watchEnds.runRevoke,
     waitsFor: "the server's end of a revoked Watch (issue 25 point 2, server side)" },
   { name: 'login_csrf', point: 'point 5', run: loginCsrf.run },
   { name: 'open_redirect', point: 'point 9', run: openRedirect.run },
