@@ -102,8 +102,11 @@ async function main() {
       step(`case ${c.name}: PASS ${JSON.stringify(figures[c.name])}`);
     } catch (e) {
       failures.push(c.name);
-      figures[c.name] = { failed: e.message };
-      step(`case ${c.name}: FAIL: ${e.stack ?? e}`);
+      // No token in the output, whatever a case's error quotes.
+      let text = String(e?.stack ?? e);
+      for (const [user, token] of Object.entries(ctx.tokens)) text = text.replaceAll(token, `${user}'s token`);
+      figures[c.name] = { failed: text.split('\n')[0] };
+      step(`case ${c.name}: FAIL: ${text}`);
     }
     if (ctx.gateway.child.exitCode !== null || ctx.gateway.child.signalCode !== null) {
       await ctx.startGateway();

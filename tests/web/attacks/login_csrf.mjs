@@ -83,7 +83,22 @@ async function typed(browser, gateway, token, target, user) {
   return urls.map((u) => u.replace(gateway, ''));
 }
 
+// Playwright's errors quote the addresses they waited on: the tokens go.
+function redacted(e, tokens) {
+  let text = String(e?.stack ?? e);
+  for (const [user, token] of Object.entries(tokens)) text = text.replaceAll(token, `${user.toUpperCase()}_TOKEN`);
+  return new Error(text);
+}
+
 export async function run(ctx) {
+  try {
+    return await attack(ctx);
+  } catch (e) {
+    throw redacted(e, ctx.tokens);
+  }
+}
+
+async function attack(ctx) {
   // The browser reaches the gateway as localhost, the attacker as 127.0.0.1.
   const gateway = ctx.gateway.base.replace('127.0.0.1', 'localhost');
   const evil = await startEvilSite();
