@@ -502,6 +502,31 @@ test('Gateway_ClosesSessionsAKilledGatewayLeftBeforeOpeningAnother', async () =>
   }
 });
 
+test('Gateway_EachUserHasAConnectionOfTheirOwn', async () => {
+  // A server that accepts TCP connections and never answers: the calls of
+  // alice and bob must open two connections (grpc-js puts equal channels on
+  // one unless each has its own subchannel pool), alice's second call none.
+  const { VpmClient } = await import('../../client/web/lib/vpm_client.js');
+  const net = await import('node:net');
+  const sockets = [];
+  const silent = net.createServer((s) => {
+    sockets.push(s);
+    s.on('error', () => {});
+  });
+  await new Promise((r) => silent.listen(0, '127.0.0.1', r));
+  const client = new VpmClient({ address: `127.0.0.1:${silent.address().port}` });
+  try {
+    for (const token of [kAlice, kBob, kAlice]) client.call('ListVolumes', {}, { token }).catch(() => {});
+    await waitFor('two connections', () => sockets.length >= 2, 3000);
+    await new Promise((r) => setTimeout(r, 300));
+    assert.equal(sockets.length, 2);
+  } finally {
+    client.close();
+    for (const s of sockets) s.destroy();
+    silent.close();
+  }
+});
+
 test('Gateway_TlsOnBothSides', async () => {
   // A self-signed certificate for 127.0.0.1, for the gateway and the server.
   const key = path.join(tmp, 'tls.key');
