@@ -1,7 +1,7 @@
 // The gateway's channel per user (client/web/lib/user_channels.js): one
 // stub per token, shared by that user's tabs, another user's never the
 // same; closed once idle after the user's last tab, kept while a tab holds
-// it. (That each channel has a connection of its own is gateway.test.mjs's
+// it; renewed once when a call on it got stuck. (That each channel has a connection of its own is gateway.test.mjs's
 // Gateway_EachUserHasAConnectionOfTheirOwn.)
 // Usage: node --test user_channels.test.mjs
 import assert from 'node:assert/strict';
@@ -54,5 +54,21 @@ test('UserChannels_ClosedOnceIdleAfterTheLastTab', async () => {
   assert.equal(channels.size, 0);
   channels.acquire('alice-token');
   assert.equal(made.length, 2, 'no new channel after the idle one closed');
+  channels.closeAll();
+});
+
+test('UserChannels_RenewGivesTheUserAFreshChannelOnce', () => {
+  const { made, make } = fakeStubs();
+  const channels = new UserChannels(make, { idleCloseMs: 50 });
+  channels.acquire('alice-token');
+  channels.acquire('bob-token');
+  const [stuck, bobs] = [channels.stub('alice-token'), channels.stub('bob-token')];
+  channels.renew('alice-token', stuck);
+  channels.renew('alice-token', stuck);  // a second call failing on the old one
+  assert.equal(stuck.closed, true);
+  assert.notEqual(channels.stub('alice-token'), stuck);
+  assert.equal(made.length, 3, 'renewed more than once');
+  assert.equal(channels.stub('bob-token'), bobs, "bob's channel renewed");
+  assert.equal(bobs.closed, false);
   channels.closeAll();
 });

@@ -37,6 +37,18 @@ export class UserChannels {
     return this.entry(token).e.stub;
   }
 
+  // The user's connection looks stuck: a call on `stub` ran out its
+  // deadline, or the server refused it a stream. Later calls go on a fresh
+  // channel; what is under way on the old one goes on until it ends
+  // (closing a grpc-js channel ends no call), so a user who stalled their
+  // own connection recovers without waiting for it.
+  renew(token, stub) {
+    const e = this.byUser.get(UserChannels.key(token));
+    if (!e || e.stub !== stub) return;
+    e.stub = this.makeStub();
+    stub.close();
+  }
+
   acquire(token) {
     const { e } = this.entry(token);
     e.tabs += 1;

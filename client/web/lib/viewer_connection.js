@@ -166,15 +166,17 @@ export class ViewerConnection {
     }
   }
 
-  serverUpAgain() {
+  // fromStream: the stream's first frame says so (that stream is fine).
+  serverUpAgain(fromStream = false) {
     this.probeBackoff.reset();
     if (this.serverUp === true) return;
     const wasDown = this.serverUp === false;
     this.serverUp = true;
     this.send({ type: 'server', up: true, address: this.client.address });
     // Back after an outage: the session may have survived (a network blip)
-    // or not (a restart); the stream tells which.
-    if (wasDown && this.session && !this.call) this.startStream();
+    // or not (a restart); the stream tells which. A stream still open then
+    // is on a connection that stopped answering: it is replaced.
+    if (wasDown && this.session && !(fromStream && this.call)) this.startStream();
   }
 
   async listVolumes() {
@@ -418,7 +420,7 @@ export class ViewerConnection {
       if (!framed) {
         framed = true;
         this.barrenRestarts = 0;
-        this.serverUpAgain();
+        this.serverUpAgain(true);
       }
       this.deliver(frame);
     });

@@ -101,10 +101,14 @@ export class VpmClient {
 
   // One unary call as `as` (metadata()): resolves with the response,
   // rejects with the gRPC error (err.code, err.details).
+  // A call that ran out its deadline or was refused a stream renews the
+  // user's channel (user_channels.js).
   call(method, request, as = {}) {
     const deadline = new Date(Date.now() + (kDeadlineMs[method] ?? 30000));
+    const stub = this.stub(as);
     return new Promise((resolve, reject) => {
-      this.stub(as)[method](request, this.metadata(as), { deadline }, (err, response) => {
+      stub[method](request, this.metadata(as), { deadline }, (err, response) => {
+        if (err && connectionStuck(err)) this.channels.renew(as.token ?? '', stub);
         if (err) reject(err);
         else resolve(response);
       });
@@ -146,6 +150,14 @@ export function streamError(err) {
     details: 'the stream ended without a status: the vpm-server replica behind the balancer ' +
              'went away',
   });
+}
+
+// True for errors that say more of the call's connection than of the
+// server: no answer within the deadline, or a stream refused (HTTP/2
+// REFUSED_STREAM, a connection whose streams are all held).
+function connectionStuck(err) {
+  return err?.code === grpc.status.DEADLINE_EXCEEDED ||
+    (err?.code === grpc.status.UNAVAILABLE && /Stream refused/i.test(err?.details ?? ''));
 }
 
 // True for errors that mean "the server is not there", as opposed to a call

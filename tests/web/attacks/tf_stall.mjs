@@ -10,7 +10,8 @@
 //    bob's calls go on a connection of his own.
 // Each time, bob's frames in the 4 s after the message are at least half of
 // those in the 4 s before, with no gap over 1 s, and alice's page gets a
-// bounded error.
+// bounded error; once told, alice's next call answers within 5 s (the
+// gateway gave her a fresh connection).
 import assert from 'node:assert/strict';
 
 import { closeTab, frameClock, framesIn, openView, orbit, sleep } from './view.mjs';
@@ -65,6 +66,11 @@ export async function run(ctx) {
     // the server answers): either way her page is told in bounded words.
     const told = await alice.next((m) => m.type === 'error', 15000);
     assert.ok(told.message.length <= 1000, `alice's error is ${told.message.length} characters`);
+    // And she is not left on a stalled connection: her next call answers.
+    const t3 = performance.now();
+    alice.send({ type: 'list' });
+    await alice.next((m) => m.type === 'volumes', 5000);
+    const aliceBackMs = performance.now() - t3;
     // Bob still drives his view after alice's call is over.
     const again = times.length;
     await orbit(bob, 1000, { from: json.last });
@@ -72,7 +78,8 @@ export async function run(ctx) {
     assert.ok(times.length > again, 'bob got no frame after the attack');
     return { vp_bob_fps: [vp.before, vp.during], vp_bob_gap_ms: vp.gap_ms,
              json_bob_fps: [json.before, json.during], json_bob_gap_ms: json.gap_ms,
-             alice_vp: refused.message.slice(0, 120), alice_json: `${told.code}: ${told.message.slice(0, 120)}` };
+             alice_vp: refused.message.slice(0, 120), alice_json: `${told.code}: ${told.message.slice(0, 120)}`,
+             alice_back_ms: Math.round(aliceBackMs) };
   } finally {
     await closeTab(alice);
     await closeTab(bob);
