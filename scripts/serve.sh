@@ -5,12 +5,14 @@
 # Environment: VPM_WEB_LISTEN   the gateway's HOST:PORT (default 127.0.0.1:8080)
 #              VPM_LISTEN       vpm-server's HOST:PORT (default 127.0.0.1:0, a free port)
 #              VPM_TOKEN        the server's token (default: a random one); the
-#                               gateway's viewer token too: the printed URL carries
-#                               it once (?token=), and the gateway swaps it at once
-#                               for a sign-in cookie and drops it from the address
+#                               gateway's viewer token too: the printed link carries
+#                               it in its fragment (/login#token=), which never
+#                               reaches the gateway's logs; the sign-in page posts it
+#                               and swaps it out of the address bar and history
 #              VPM_USERS        a users file (vpm-server --hash-token) for both, when set
 #              VPM_DATA_ROOT    passed to vpm-server --data-root when set
-# Logs: out/serve-server.log, out/serve-gateway.log.
+# Logs: out/serve-server.log, out/serve-gateway.log; the gateway's record of
+# its open sessions (--sessions-file): out/serve-gateway-sessions.json.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=$(cd "${1:-build}" && pwd)
@@ -23,7 +25,7 @@ gateway_log="$root/out/serve-gateway.log"
 export VPM_TOKEN=${VPM_TOKEN:-$(head -c 16 /dev/urandom | od -An -tx1 | tr -d ' \n')}
 
 server_args=(--listen "${VPM_LISTEN:-127.0.0.1:0}")
-gateway_args=()
+gateway_args=(--sessions-file "$root/out/serve-gateway-sessions.json")
 [ -n "${VPM_DATA_ROOT:-}" ] && server_args+=(--data-root "$VPM_DATA_ROOT")
 if [ -n "${VPM_USERS:-}" ]; then
   server_args+=(--users "$VPM_USERS")
@@ -69,8 +71,9 @@ gateway_pid=$!
 url=$(wait_for "$gateway_log" 's/^vpm-web listening on \(https*:[^ ]*\).*/\1/p' "$gateway_pid" "the gateway")
 
 echo "vpm-server on $host:$port (log $server_log)"
-echo "web viewer:  $url?token=$VPM_TOKEN"
-echo "             (signs this browser in as 'viewer'; log $gateway_log)"
+echo "web viewer:  ${url}login#token=$VPM_TOKEN"
+echo "             (paste it into the address bar: signs this browser in as 'viewer';"
+echo "             a link followed from another site does not; log $gateway_log)"
 echo "Open the URL, pick phantom:abdomen?size=128 and press Open. Ctrl-C stops both."
 wait -n "$server_pid" "$gateway_pid" || true
 echo "serve: vpm-server or the gateway exited on its own; see $server_log and $gateway_log" >&2

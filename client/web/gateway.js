@@ -10,6 +10,7 @@
 //                   [--tls-cert PEM --tls-key PEM]
 //                   [--server-tls-ca PEM [--server-tls-cert PEM --server-tls-key PEM]]
 //                   [--session-hours H] [--cookie-key-file FILE] [--max-tabs-per-user N]
+//                   [--sessions-file FILE]
 //
 // Who may sign in (lib/users.js): the users of --users (vpm-server's users
 // file: each signs in with their own token) and the viewer token
@@ -27,7 +28,10 @@
 // "vpm-web listening on http(s)://HOST:PORT/" once ready. GET /healthz
 // answers 200 while the gateway runs (whether or not vpm-server is up). No
 // input ends the process: a request or message that fails closes that one
-// connection with a message.
+// connection with a message. Each user's calls go on a channel of their own
+// (lib/user_channels.js); --sessions-file keeps the ids of the sessions
+// this process opened, so a gateway killed without closing them closes
+// them when it runs again (lib/session_record.js).
 import crypto from 'node:crypto';
 import fs from 'node:fs';
 import http from 'node:http';
@@ -41,6 +45,7 @@ import { WebSocketServer } from 'ws';
 import { hostName, makeRequestHandler } from './lib/http_handler.js';
 import { MeshRefs } from './lib/mesh_refs.js';
 import { ProtoShape } from './lib/proto_shape.js';
+import { SessionRecord } from './lib/session_record.js';
 import { SignIns } from './lib/sign_ins.js';
 import { staticHandler } from './lib/static_files.js';
 import { Users } from './lib/users.js';
@@ -54,7 +59,7 @@ const kUsage = `usage: node gateway.js [--listen HOST:PORT] [--server HOST:PORT]
   [--users FILE] [--viewer-token TOKEN | --viewer-token-file FILE]
   [--allowed-host NAME ...] [--allowed-origin ORIGIN ...]
   [--tls-cert PEM --tls-key PEM] [--server-tls-ca PEM [--server-tls-cert PEM --server-tls-key PEM]]
-  [--session-hours 12] [--cookie-key-file FILE] [--max-tabs-per-user 8]
+  [--session-hours 12] [--cookie-key-file FILE] [--max-tabs-per-user 8] [--sessions-file FILE]
  --users: vpm-server's users file (NAME TOKEN-SHA256 lines); each user signs in with their token,
    which the gateway forwards to vpm-server as theirs
  --viewer-token(-file): one more token that signs in as the user 'viewer' (default:
@@ -67,6 +72,9 @@ const kUsage = `usage: node gateway.js [--listen HOST:PORT] [--server HOST:PORT]
  --cookie-key-file: a secret (16 bytes or more; or VPM_WEB_COOKIE_KEY) that seals the sign-in
    cookies; give every gateway replica the same one, and sign-ins survive restarts (default:
    random per process)
+ --sessions-file: where this gateway records the sessions it opened (ids and user names, no
+   token); one started after a kill closes the ones left open as their users come back (one
+   file per gateway process; also VPM_WEB_SESSIONS_FILE)
  VPM_WEB_LISTEN and VPM_SERVER set the defaults of --listen and --server
 `;
 
@@ -110,6 +118,7 @@ function parseOptions(argv) {
       'session-hours': { type: 'string', default: '12' },
       'cookie-key-file': { type: 'string' },
       'max-tabs-per-user': { type: 'string', default: '8' },
+      'sessions-file': { type: 'string', default: process.env.VPM_WEB_SESSIONS_FILE || undefined },
       help: { type: 'boolean', default: false },
     },
   });
@@ -192,6 +201,7 @@ function main() {
   }
   const log = (line) => process.stderr.write(`vpm-web: ${line}\n`);
   const shape = new ProtoShape(client.definition);
+  const record = new SessionRecord(options['sessions-file'] ?? null, log);
   const signIns = new SignIns({ users: options.users, key: options.cookieKey,
                                 maxAgeS: options.sessionHours * 3600, secure: Boolean(options.tls) });
   const scheme = options.tls ? 'https' : 'http';
@@ -259,7 +269,8 @@ function main() {
           else tabsOf.delete(signIn.user);
         });
         try {
-          new ViewerConnection({ ws, client, shape, meshRefs, token: signIn.token, log });  // eslint-disable-line no-new
+          new ViewerConnection({ ws, client, shape, meshRefs, token: signIn.token,  // eslint-disable-line no-new
+                                 user: signIn.user, record, log });
         } catch (e) {
           log(`closing a connection after an unexpected error: ${e?.stack ?? e}`);
           ws.close(1011, 'internal error');

@@ -8,7 +8,10 @@
 // after the file, or INVALID_ARGUMENT for text 'bad'.
 // Sessions belong to the bearer token that opened them: GetSession and Watch
 // with another token are PERMISSION_DENIED unless the session was shared
-// (share(sessionId, token)). With tls = {cert, key} it serves TLS.
+// (share(sessionId, token)); a Watch sends a frame every 20 ms until
+// revoke(sessionId, token) ends it with PERMISSION_DENIED, as the server
+// does when a share is revoked (CloseSession ends it with
+// FAILED_PRECONDITION "session ... is closed"). With tls = {cert, key} it serves TLS.
 import { createRequire } from 'node:module';
 import path from 'node:path';
 
@@ -33,6 +36,7 @@ export async function startFakeServer(source, { tls = null } = {}) {
   let next = 1;
   const owners = new Map();  // session id -> authorization of its opener
   const shared = new Set();  // `${session id} ${authorization}` allowed to watch
+  const watches = new Map();  // `${session id} ${authorization}` -> Set of {call, timer}
   const mayWatch = (call) => {
     const auth = call.metadata.get('authorization')[0] ?? null;
     const id = call.request.session_id;
@@ -69,6 +73,16 @@ export async function startFakeServer(source, { tls = null } = {}) {
     }),
     CloseSession: unary('CloseSession', (r) => {
       owners.delete(r.session_id);
+      // Its watchers' streams end as the server ends them.
+      for (const [key, set] of watches) {
+        if (!key.startsWith(`${r.session_id} `)) continue;
+        for (const { call, timer } of set) {
+          clearInterval(timer);
+          call.emit('error', { code: grpc.status.FAILED_PRECONDITION,
+                               details: `session '${r.session_id}' is closed` });
+        }
+        watches.delete(key);
+      }
       return {};
     }),
     DeleteMesh: unary('DeleteMesh', () => ({})),
@@ -90,7 +104,15 @@ export async function startFakeServer(source, { tls = null } = {}) {
         call.emit('error', refused);
         return;
       }
-      call.write(frame(1, 0));
+      const key = `${call.request.session_id} ${call.metadata.get('authorization')[0] ?? null}`;
+      let n = 0;
+      const watch = { call, timer: setInterval(() => call.write(frame(++n, 0)), 20) };
+      if (!watches.has(key)) watches.set(key, new Set());
+      watches.get(key).add(watch);
+      call.on('cancelled', () => {
+        clearInterval(watch.timer);
+        watches.get(key)?.delete(watch);
+      });
     },
     Interact: (call) => {
       record('Interact', call);
@@ -125,5 +147,15 @@ export async function startFakeServer(source, { tls = null } = {}) {
   const port = await new Promise((resolve, reject) => server.bindAsync(
     '127.0.0.1:0', credentials, (err, p) => (err ? reject(err) : resolve(p))));
   return { address: `127.0.0.1:${port}`, calls, stop: () => server.forceShutdown(),
-           share: (sessionId, token) => shared.add(`${sessionId} Bearer ${token}`) };
+           share: (sessionId, token) => shared.add(`${sessionId} Bearer ${token}`),
+           revoke: (sessionId, token) => {
+             const key = `${sessionId} Bearer ${token}`;
+             shared.delete(key);
+             for (const { call, timer } of watches.get(key) ?? []) {
+               clearInterval(timer);
+               call.emit('error', { code: grpc.status.PERMISSION_DENIED,
+                                    details: `session '${sessionId}' is no longer shared with you` });
+             }
+             watches.delete(key);
+           } };
 }

@@ -69,7 +69,7 @@ test('Gateway_SignInSetsAStrictHttpOnlyCookie', async () => {
   assert.equal(page.headers.location, '/login');
   const form = await request(base, '/login');
   assert.equal(form.status, 200);
-  assert.match(form.body, /<form id="login" method="post" action="\/login">/);
+  assert.match(form.body, /<form id="login" method="post" action="\/login" data-link="refuse">/);
   const wrong = await request(base, '/login', {
     method: 'POST', body: 'token=nope', headers: { 'Content-Type': 'application/x-www-form-urlencoded' } });
   assert.equal(wrong.status, 401);
@@ -91,15 +91,63 @@ test('Gateway_SignInSetsAStrictHttpOnlyCookie', async () => {
   assert.equal(foreign.status, 403);
 });
 
+// What Chromium sends with a navigation typed into the address bar.
+const kTyped = { 'Sec-Fetch-Site': 'none', 'Sec-Fetch-Mode': 'navigate', 'Sec-Fetch-Dest': 'document' };
+
 test('Gateway_TokenInTheAddressIsExchangedAtOnceAndRedirectedAway', async () => {
-  const r = await request(base, `/index.html?token=${kViewer}&x=1`);
+  const r = await request(base, `/index.html?token=${kViewer}&x=1`, { headers: kTyped });
   assert.equal(r.status, 303);
   assert.equal(r.headers.location, '/index.html?x=1');
   assert.equal(r.headers['referrer-policy'], 'no-referrer');
   const cookie = r.headers['set-cookie'][0].split(';')[0];
   const who = await request(base, '/whoami', { headers: { Cookie: cookie } });
   assert.deepEqual(JSON.parse(who.body), { user: 'viewer' });
-  assert.equal((await request(base, '/?token=wrong')).status, 401);
+  assert.equal((await request(base, '/?token=wrong', { headers: kTyped })).status, 401);
+});
+
+test('Gateway_TokenInTheAddressOnlyOnANavigationNotFromAnotherSite', async () => {
+  const sameOrigin = { ...kTyped, 'Sec-Fetch-Site': 'same-origin' };
+  const ok = await request(base, `/?token=${kViewer}`, { headers: sameOrigin });
+  assert.equal(ok.status, 303);
+  assert.match(ok.headers['set-cookie'][0], /^vpm_session=/);
+  // Login CSRF: another site (a link, a redirect, a form, a frame, a fetch)
+  // or a client that does not say where it came from.
+  for (const headers of [{ ...kTyped, 'Sec-Fetch-Site': 'cross-site' },
+                         { ...kTyped, 'Sec-Fetch-Site': 'same-site' },
+                         { ...kTyped, 'Sec-Fetch-Mode': 'no-cors' },
+                         { ...kTyped, 'Sec-Fetch-Mode': 'cors' },
+                         { ...kTyped, 'Sec-Fetch-Dest': 'iframe' },
+                         {}]) {
+    const r = await request(base, `/?token=${kViewer}`, { headers });
+    assert.equal(r.status, 303, JSON.stringify(headers));
+    assert.equal(r.headers.location, '/login?link=refused');
+    assert.ok(!r.headers['set-cookie'], `signed in for ${JSON.stringify(headers)}`);
+  }
+  assert.match((await request(base, '/login?link=refused')).body, /not from another site/);
+  // The sign-in page accepts a link's fragment only on such a navigation.
+  assert.match((await request(base, '/login', { headers: kTyped })).body, /data-link="accept"/);
+  assert.match((await request(base, '/login', { headers: { ...kTyped, 'Sec-Fetch-Site': 'cross-site' } })).body,
+               /data-link="refuse"/);
+  assert.equal((await request(base, '/login.js')).status, 200);
+});
+
+test('Gateway_RedirectsStayOnThisOrigin', async () => {
+  const targets = ['/.//evil.example/', '//evil.example/', '/\\evil.example/', '/\\/evil.example/',
+                   '/./\\evil.example/', '/%2F%2Fevil.example/', '/%5C%5Cevil.example/',
+                   '/.%2F/evil.example/', '/%2e//evil.example/', '/..//evil.example/',
+                   '///evil.example/x', '/./././/evil.example/'];
+  for (const target of targets) {
+    const r = await request(base, `${target}?token=${kViewer}&next=1`, { headers: kTyped });
+    assert.equal(r.status, 303, target);
+    const location = r.headers.location;
+    assert.match(location, /^\/(?![/\\])/, `${target} -> ${location}`);
+    assert.equal(new URL(location, base).origin, base, `${target} -> ${location}`);
+    assert.ok(!location.includes('token'), `${target} -> ${location}`);
+  }
+  for (const target of ['/.//evil.example/', '//evil.example/', '/\\evil.example/']) {
+    const r = await request(base, target);
+    if (r.headers.location) assert.equal(new URL(r.headers.location, base).origin, base, target);
+  }
 });
 
 test('Gateway_SendsTheSignedInUsersTokenAndOneAffinityKeyPerTab', async () => {
@@ -226,6 +274,7 @@ test('Gateway_UploadedTransferFunctionIsReadByTheServerAndRendersWithIt', async 
   const event = callsSince(start).filter((c) => c.method === 'Interact.event').at(-1);
   assert.equal(event.request.event.settings.render_tf.name, 'MyBone');
   assert.equal(event.request.event.settings.preset, '');  // the upload replaces the preset
+  const readsBefore = fake.calls.filter((c) => c.method === 'ReadTransferFunction').length;
   t.send({ type: 'tf', file_name: 'broken.vp', text: 'bad' });
   assert.match((await t.next((m) => m.type === 'error')).message,
                /INVALID_ARGUMENT: file 'broken\.vp': line 7/);
@@ -233,11 +282,18 @@ test('Gateway_UploadedTransferFunctionIsReadByTheServerAndRendersWithIt', async 
     [{ type: 'tf', file_name: 'a.png', text: 'x' }, /ending in \.json/],
     [{ type: 'tf', file_name: 'a.vp', text: 'x'.repeat(60001) }, /at most 60000/],
     [{ type: 'tf', file_name: 'a.vp' }, /tf: text/],
+    // Issue 25's case 1: a .vp field no number is that long never reaches the server.
+    [{ type: 'tf', file_name: 'x.vp', text: `1\n0\n0\n0\n0\n1\n2 ${'%'.repeat(50000)} 1\n` },
+     /line 7 of the \.vp has a field of 50000 characters/],
     [{ type: 'event', event: { sequence: 6, settings: { uploaded_tf: 'yes' } } }, /uploaded_tf: true or false/],
   ]) {
     t.send(message);
-    assert.match((await t.next((m) => m.type === 'error')).message, expect);
+    const error = await t.next((m) => m.type === 'error');
+    assert.match(error.message, expect);
+    assert.ok(error.message.length < 300, 'the error quotes the message');
   }
+  assert.equal(fake.calls.filter((c) => c.method === 'ReadTransferFunction').length, readsBefore + 1,
+               'a refused tf message reached the server');
   t.ws.close();
 });
 
@@ -301,6 +357,52 @@ test('Gateway_WatchesOnlySessionsSharedWithTheUser', async () => {
   assert.ok(!callsSince(start).some((c) => c.method === 'CloseSession'),
             'a viewer leaving closes nothing of the owner');
   a.ws.close();
+});
+
+test('Gateway_RevokedWatchStopsFramesAndTellsThePage', async () => {
+  const a = await connect({ cookie: alice });
+  a.send({ type: 'open', source: 'phantom:loaded' });
+  const opened = await a.next((m) => m.type === 'opened');
+  const b = await connect({ cookie: bob });
+  fake.share(opened.session.session_id, kBob);
+  b.send({ type: 'watch', session_id: opened.session.session_id });
+  await b.next((m) => m.type === 'opened' && m.watching === true);
+  await b.next((m) => m.type === 'frame');
+  await b.next((m) => m.type === 'frame');
+  const watchesBefore = fake.calls.filter((c) => c.method === 'Watch').length;
+  fake.revoke(opened.session.session_id, kBob);
+  const ended = await b.next((m) => m.type === 'access_ended');
+  assert.equal(ended.code, 'PERMISSION_DENIED');
+  assert.equal(ended.session_id, opened.session.session_id);
+  assert.match(ended.message, /no longer shared/);
+  const at = b.inbox.length;
+  await new Promise((r) => setTimeout(r, 300));
+  assert.equal(b.inbox.slice(at).filter((m) => m.type === 'frame').length, 0,
+               'frames after the revoke');
+  assert.equal(fake.calls.filter((c) => c.method === 'Watch').length, watchesBefore,
+               'the gateway watched again after PERMISSION_DENIED');
+  b.ws.close();
+  a.ws.close();
+});
+
+test('Gateway_WatchOfASessionItsOwnerClosedEndsAndIsNotReopened', async () => {
+  const a = await connect({ cookie: alice });
+  a.send({ type: 'open', source: 'phantom:loaded' });
+  const opened = await a.next((m) => m.type === 'opened');
+  const b = await connect({ cookie: bob });
+  fake.share(opened.session.session_id, kBob);
+  b.send({ type: 'watch', session_id: opened.session.session_id });
+  await b.next((m) => m.type === 'frame');
+  const start = fake.calls.length;
+  a.ws.close();  // the owner's tab goes: the gateway closes the session
+  const ended = await b.next((m) => m.type === 'access_ended');
+  assert.equal(ended.code, 'FAILED_PRECONDITION');
+  await new Promise((r) => setTimeout(r, 300));
+  assert.ok(!b.inbox.some((m) => m.type === 'session_lost'), 'the watcher was told to reopen');
+  assert.ok(!callsSince(start).some((c) => ['Watch', 'GetSession', 'OpenSession'].includes(c.method) &&
+                                          c.authorization === `Bearer ${kBob}`),
+            'the watcher watched or opened again');
+  b.ws.close();
 });
 
 test('Gateway_SignOutClosesThatBrowsersTabs', async () => {
@@ -369,6 +471,60 @@ test('Gateway_RejectsMalformedMessages', async () => {
   t.send({ type: 'list' });
   await t.next((m) => m.type === 'volumes');
   t.ws.close();
+});
+
+test('Gateway_ClosesSessionsAKilledGatewayLeftBeforeOpeningAnother', async () => {
+  const file = path.join(tmp, 'sessions.json');
+  // The record a killed gateway left: alice's two sessions, one of bob's.
+  fs.writeFileSync(file, JSON.stringify({ sessions: [
+    { user: 'alice', id: 'ses-left-1' }, { user: 'alice', id: 'ses-left-2' },
+    { user: 'bob', id: 'ses-left-3' }] }));
+  const { child, base: other } = await startGatewayProcess({ source, args: [
+    '--server', fake.address, '--users', path.join(tmp, 'users.txt'), '--sessions-file', file] });
+  try {
+    const cookie = await signIn(other, kAlice);
+    const start = fake.calls.length;
+    const t = await connectTo(source, other, { cookie });
+    t.send({ type: 'open', source: 'phantom:loaded' });
+    const opened = await t.next((m) => m.type === 'opened');
+    const calls = callsSince(start).filter((c) => ['CloseSession', 'OpenSession'].includes(c.method));
+    assert.deepEqual(calls.map((c) => `${c.method} ${c.request.session_id ?? ''}`).sort(),
+                     ['CloseSession ses-left-1', 'CloseSession ses-left-2', 'OpenSession '].sort());
+    assert.equal(calls.at(-1).method, 'OpenSession', 'opened before the leftovers were closed');
+    assert.ok(calls.every((c) => c.authorization === `Bearer ${kAlice}`));
+    const recorded = () => JSON.parse(fs.readFileSync(file, 'utf8')).sessions.map((x) => x.id).sort();
+    assert.deepEqual(recorded(), [opened.session.session_id, 'ses-left-3'].sort());
+    t.ws.close();
+    await waitFor('the closed tab is still recorded', () => recorded().length === 1);
+    assert.ok(!fs.readFileSync(file, 'utf8').includes(kAlice), 'a token in the record');
+  } finally {
+    child.kill('SIGTERM');
+  }
+});
+
+test('Gateway_EachUserHasAConnectionOfTheirOwn', async () => {
+  // A server that accepts TCP connections and never answers: the calls of
+  // alice and bob must open two connections (grpc-js puts equal channels on
+  // one unless each has its own subchannel pool), alice's second call none.
+  const { VpmClient } = await import('../../client/web/lib/vpm_client.js');
+  const net = await import('node:net');
+  const sockets = [];
+  const silent = net.createServer((s) => {
+    sockets.push(s);
+    s.on('error', () => {});
+  });
+  await new Promise((r) => silent.listen(0, '127.0.0.1', r));
+  const client = new VpmClient({ address: `127.0.0.1:${silent.address().port}` });
+  try {
+    for (const token of [kAlice, kBob, kAlice]) client.call('ListVolumes', {}, { token }).catch(() => {});
+    await waitFor('two connections', () => sockets.length >= 2, 3000);
+    await new Promise((r) => setTimeout(r, 300));
+    assert.equal(sockets.length, 2);
+  } finally {
+    client.close();
+    for (const s of sockets) s.destroy();
+    silent.close();
+  }
 });
 
 test('Gateway_TlsOnBothSides', async () => {

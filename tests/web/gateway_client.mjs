@@ -13,9 +13,11 @@ export function wsModule(source) {
 }
 
 // The gateway as a child process; resolves with {child, base} once it
-// prints its address (base: http(s)://127.0.0.1:PORT).
-export function startGatewayProcess({ source, args = [], env = {}, stderr = 'inherit' }) {
-  const child = spawn(process.execPath, [path.join(source, 'client', 'web', 'gateway.js'),
+// prints its address (base: http(s)://127.0.0.1:PORT). script: another
+// gateway.js to run (default: SOURCE's).
+export function startGatewayProcess({ source, args = [], env = {}, stderr = 'inherit',
+                                      script = null }) {
+  const child = spawn(process.execPath, [script ?? path.join(source, 'client', 'web', 'gateway.js'),
                                          '--listen', '127.0.0.1:0', ...args],
                       { env: { ...process.env, VPM_TOKEN: '', ...env },
                         stdio: ['ignore', 'pipe', stderr] });
@@ -31,12 +33,14 @@ export function startGatewayProcess({ source, args = [], env = {}, stderr = 'inh
 }
 
 // One HTTP request; resolves with {status, headers, body}. options: method,
-// headers, body (string), ca (PEM, for https).
+// headers, body (string), ca (PEM, for https). The target goes on the
+// request line as given (`//host/` stays a path, as an attacker sends it).
 export function request(base, target, { method = 'GET', headers = {}, body, ca } = {}) {
-  const url = new URL(target, base);
+  const url = new URL(base);
   const lib = url.protocol === 'https:' ? https : http;
   return new Promise((resolve, reject) => {
-    const req = lib.request(url, { method, headers, ca }, (res) => {
+    const req = lib.request({ protocol: url.protocol, hostname: url.hostname, port: url.port,
+                              path: target, method, headers, ca }, (res) => {
       const chunks = [];
       res.on('data', (c) => chunks.push(c));
       res.on('end', () => resolve({ status: res.statusCode, headers: res.headers,

@@ -6,6 +6,8 @@
 #   gateway               the gateway against a stand-in server (gateway.test.mjs)
 #   gateway_fuzz          10,500 malformed HTTP requests and WebSocket frames (gateway_fuzz.mjs)
 #   gateway_cycles        open/close cycles through the gateway on a real server (gateway_cycles.mjs)
+#   attacker              issue 25's attacks through the gateway on a real server, two users,
+#                         headless Chromium for the sign-in ones (attacker.mjs)
 # Usage: web_e2e.sh BUILD_DIR SOURCE_DIR SCENARIO
 set -euo pipefail
 build=$1
@@ -27,4 +29,7 @@ if [ "$scenario" = gateway_cycles ]; then
 fi
 chromium=${VPM_CHROMIUM:-/usr/bin/chromium}
 [ -x "$chromium" ] || fail "$chromium is missing: run scripts/install-deps.sh (Debian's chromium)"
+if [ "$scenario" = attacker ]; then
+  exec node "$source/tests/web/attacker.mjs" --build "$build" --source "$source"
+fi
 exec node "$source/tests/web/${scenario}_e2e.mjs" --build "$build" --source "$source"

@@ -1,11 +1,16 @@
 // Messages a person can act on, from gRPC errors of calls to vpm-server.
 import { GrpcStatus, statusName } from './vpm_client.js';
 
+const kMaxDetailsChars = 500;
+
 // err: a grpc-js error (code, details); what: the action that failed, e.g.
 // "Loading phantom:abdomen" (null: none in particular); address: the
 // server's HOST:PORT.
 export function explainError(err, what, address) {
-  const details = err?.details || err?.message || String(err);
+  // The server's text may quote what was sent (a file's line, an id): the
+  // page gets a bounded part of it.
+  const full = String(err?.details || err?.message || err);
+  const details = full.length > kMaxDetailsChars ? `${full.slice(0, kMaxDetailsChars)}...` : full;
   const prefix = what ? `${what}: ` : '';
   switch (err?.code) {
     case GrpcStatus.UNAVAILABLE:

@@ -4,8 +4,12 @@
 // drops that connection) and the gateway carries on.
 //
 //   GET  /healthz             200 while the gateway runs (no host check: probes)
-//   any  ?token=TOKEN         signs in and redirects (303) to the same path without it
-//   GET  /login               the sign-in form
+//   GET  ?token=TOKEN         on a top-level navigation not from another site
+//                             (sign_in_link.js): signs in and redirects (303) to
+//                             the same path without it; from anywhere else 303 to
+//                             /login?link=refused (the token left behind)
+//   GET  /login               the sign-in form (a link /login#token=TOKEN fills and
+//                             posts it, login.js, on such a navigation only)
 //   POST /login               token=TOKEN (form): signs in, 303 to /; 401 with the form
 //   POST /logout              ends the sign-in (its tabs close), 303 to /login
 //   GET  /whoami              {"user": NAME} or 401
@@ -13,9 +17,11 @@
 //
 // Every request but /healthz must name an allowed host (421 otherwise: DNS
 // rebinding); a POST with an Origin must come from an allowed origin (403);
-// failed sign-ins are throttled per address (429).
+// failed sign-ins are throttled per address (429). Redirects stay on this
+// origin.
 import { loginPage } from './login_page.js';
 import { securityHeaders } from './security_headers.js';
+import { notCrossSiteNavigation, sameOriginLocation } from './sign_in_link.js';
 
 const kMaxFormBytes = 8192;
 const kFormTimeoutMs = 10000;
@@ -117,17 +123,26 @@ export function makeRequestHandler({ signIns, serveFile, allowedHost, allowedOri
     };
     if (token !== null && req.method === 'GET') {
       url.searchParams.delete('token');
+      if (!notCrossSiteNavigation(req)) {
+        log(`refused a ?token= sign-in from ${address(req)}: not a same-site navigation`);
+        // Redirected, so the address bar and history keep no token.
+        return redirect('/login?link=refused', { 'Referrer-Policy': 'no-referrer' });
+      }
       const signIn = signInWith(token, () =>
         html(401, loginPage('That token is not valid here.')));
       if (signIn?.user) {
-        const rest = url.searchParams.toString();
-        return redirect(`${url.pathname}${rest ? `?${rest}` : ''}`,
+        return redirect(sameOriginLocation(url),
                         { 'Set-Cookie': signIns.cookie(signIn), 'Referrer-Policy': 'no-referrer' });
       }
       return undefined;
     }
     if (url.pathname === '/login') {
-      if (req.method === 'GET' || req.method === 'HEAD') return html(200, loginPage());
+      if (req.method === 'GET' || req.method === 'HEAD') {
+        const message = url.searchParams.get('link') === 'refused'
+          ? 'A sign-in link works only when opened directly (typed, pasted or bookmarked), ' +
+            'not from another site. Sign in here with your own token.' : '';
+        return html(200, loginPage(message, { acceptLink: notCrossSiteNavigation(req) }));
+      }
       if (req.method !== 'POST') return text(405, 'method not allowed', { Allow: 'GET, POST' });
       let form;
       try {
@@ -151,8 +166,8 @@ export function makeRequestHandler({ signIns, serveFile, allowedHost, allowedOri
       return res.writeHead(200, { 'Content-Type': 'application/json', 'Cache-Control': 'no-store' })
         .end(JSON.stringify({ user: signIn.user }));
     }
-    // The stylesheet is the sign-in page's too.
-    if (!signIn && url.pathname !== '/style.css') {
+    // The stylesheet and login.js are the sign-in page's too.
+    if (!signIn && url.pathname !== '/style.css' && url.pathname !== '/login.js') {
       if (req.method === 'GET' || req.method === 'HEAD') return redirect('/login');
       return text(401, 'vpm-web: sign in first (/login)');
     }

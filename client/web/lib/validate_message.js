@@ -12,6 +12,9 @@ const kMaxSlices = 3;
 // accepts 64 KiB): one exported preset, not ParaView's whole list.
 export const kMaxTfTextChars = 60000;
 const kMaxTfNameChars = 256;
+// A Slicer .vp holds numbers only, each far shorter than this: a longer
+// field is refused here, before the server reads (and quotes) it.
+export const kMaxVpFieldChars = 64;
 
 function optionalString(message, key, max) {
   const v = message[key];
@@ -47,6 +50,18 @@ export function checkSettings(shape, settings, path) {
     throw new Error(`${path}.slices: at most ${kMaxSlices}`);
   }
   shape.check('RenderSettings', toProtoSettings(settings), path);
+}
+
+// Throws when a field of a Slicer .vp's text is longer than any number.
+function checkVpFields(text) {
+  const lines = text.split('\n');
+  for (let i = 0; i < lines.length; ++i) {
+    const long = lines[i].split(/\s+/).find((field) => field.length > kMaxVpFieldChars);
+    if (long !== undefined) {
+      throw new Error(`tf: line ${i + 1} of the .vp has a field of ${long.length} characters; ` +
+                      `its fields are numbers (at most ${kMaxVpFieldChars} characters)`);
+    }
+  }
 }
 
 // data: the WebSocket message (Buffer); isBinary: its opcode. Returns the
@@ -106,6 +121,7 @@ export function parseMessage(shape, data, isBinary) {
       if (typeof message.text !== 'string' || message.text.length > kMaxTfTextChars) {
         throw new Error(`tf: text, the file's contents, at most ${kMaxTfTextChars} characters`);
       }
+      if (message.file_name.endsWith('.vp')) checkVpFields(message.text);
       return message;
     }
     default:

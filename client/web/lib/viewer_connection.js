@@ -33,6 +33,7 @@ import { Backoff } from '../public/backoff.js';
 import { explainError } from './explain_error.js';
 import { packFrame } from './frame_packet.js';
 import { toProtoSettings } from './render_settings.js';
+import { SessionRecord } from './session_record.js';
 import { parseMessage } from './validate_message.js';
 import { GrpcStatus, isServerDown, statusName, streamError } from './vpm_client.js';
 
@@ -45,11 +46,19 @@ const kDeleteMeshRetries = 5;
 export class ViewerConnection {
   // ws: a `ws` WebSocket; client: a VpmClient; shape: a ProtoShape of the
   // client's proto; meshRefs: the gateway's MeshRefs; token: the signed-in
-  // user's token ('' for a server without auth); log: (line) => void.
-  constructor({ ws, client, shape, meshRefs, token = '', log = () => {} }) {
-    Object.assign(this, { ws, client, shape, meshRefs, log });
-    // Every call of this tab: the user's token and one x-vpm-session key.
+  // user's token ('' for a server without auth); user: their name; record:
+  // the gateway's SessionRecord; log: (line) => void.
+  constructor({ ws, client, shape, meshRefs, token = '', user = '', record = new SessionRecord(),
+                log = () => {} }) {
+    Object.assign(this, { ws, client, shape, meshRefs, user, record, log });
+    // Every call of this tab: the user's token and one x-vpm-session key,
+    // on the user's own channel.
     this.as = { token, affinity: crypto.randomUUID() };
+    this.client.acquire(this.as);
+    // Sessions an earlier gateway process left open for this user are
+    // closed before this tab opens one (they would count against the cap).
+    this.leftoversClosed = record.closeLeftovers(user, (id) =>
+      this.rpc('CloseSession', { session_id: id }).then(() => true, (err) => !isServerDown(err)));
     this.watching = false;  // the session is another user's, shared to watch
     this.builtMeshes = new Map();  // mesh id -> {volumeId, holds}: built or refined here
     this.volume = null;
@@ -157,15 +166,17 @@ export class ViewerConnection {
     }
   }
 
-  serverUpAgain() {
+  // fromStream: the stream's first frame says so (that stream is fine).
+  serverUpAgain(fromStream = false) {
     this.probeBackoff.reset();
     if (this.serverUp === true) return;
     const wasDown = this.serverUp === false;
     this.serverUp = true;
     this.send({ type: 'server', up: true, address: this.client.address });
     // Back after an outage: the session may have survived (a network blip)
-    // or not (a restart); the stream tells which.
-    if (wasDown && this.session && !this.call) this.startStream();
+    // or not (a restart); the stream tells which. A stream still open then
+    // is on a connection that stopped answering: it is replaced.
+    if (wasDown && this.session && !(fromStream && this.call)) this.startStream();
   }
 
   async listVolumes() {
@@ -198,13 +209,13 @@ export class ViewerConnection {
       this.send({ type: 'progress', step: 'session', text: 'Opening a session ...' });
       let session;
       try {
-        session = await this.rpc('OpenSession', { volume_id: volume.volume_id, mesh_id: mesh.mesh_id });
+        session = await this.openSession(volume, mesh);
       } catch (err) {
         // Another tab deleted the (shared) mesh between our BuildMesh and
         // this call: build it again, once.
         if (err?.code !== GrpcStatus.NOT_FOUND || !/mesh/.test(err.details ?? '')) throw err;
         mesh = await this.buildMesh(volume);
-        session = await this.rpc('OpenSession', { volume_id: volume.volume_id, mesh_id: mesh.mesh_id });
+        session = await this.openSession(volume, mesh);
       }
       if (op !== this.openOp || this.closed) {
         this.closeSession(session, mesh);
@@ -217,6 +228,16 @@ export class ViewerConnection {
     } catch (err) {
       if (op === this.openOp) this.fail(what, err);
     }
+  }
+
+  // OpenSession as this tab's user, once an earlier gateway's leftovers are
+  // closed; the session is recorded until closed (session_record.js).
+  async openSession(volume, mesh) {
+    await this.leftoversClosed;
+    const session = await this.rpc('OpenSession', { volume_id: volume.volume_id,
+                                                    mesh_id: mesh.mesh_id });
+    this.record.opened(this.user, session.session_id);
+    return session;
   }
 
   async buildMesh(volume) {
@@ -283,8 +304,7 @@ export class ViewerConnection {
         mesh_id: this.mesh.mesh_id, point_mm: pointMm }).finally(done);
       this.holdMesh({ ...mesh, volume_id: this.volume.volume_id });
       if (op !== this.openOp) return;
-      const session = await this.rpc('OpenSession', {
-        volume_id: this.volume.volume_id, mesh_id: mesh.mesh_id });
+      const session = await this.openSession(this.volume, mesh);
       if (op !== this.openOp || this.closed) {
         this.closeSession(session, mesh);
         return;
@@ -318,7 +338,11 @@ export class ViewerConnection {
   closeSession(session, mesh = null) {
     const closing = session
       ? this.rpc('CloseSession', { session_id: session.session_id })
-        .catch((err) => this.log(`CloseSession ${session.session_id}: ${err.details ?? err}`))
+        .then(() => this.record.closed(session.session_id), (err) => {
+          this.log(`CloseSession ${session.session_id}: ${err.details ?? err}`);
+          if (isServerDown(err)) this.record.leftOver(session.session_id);
+          else this.record.closed(session.session_id);
+        })
       : Promise.resolve();
     closing.then(() => {
       if (this.closed) return this.releaseMeshes([...this.builtMeshes.keys()]);
@@ -396,7 +420,7 @@ export class ViewerConnection {
       if (!framed) {
         framed = true;
         this.barrenRestarts = 0;
-        this.serverUpAgain();
+        this.serverUpAgain(true);
       }
       this.deliver(frame);
     });
@@ -432,11 +456,18 @@ export class ViewerConnection {
     }
     const gone = err.code === GrpcStatus.NOT_FOUND ||
       (err.code === GrpcStatus.FAILED_PRECONDITION && /session.*closed/.test(err.details ?? ''));
+    // A watched session that is gone is its owner's to reopen, not this tab's.
+    if (err.code === GrpcStatus.PERMISSION_DENIED || err.code === GrpcStatus.UNAUTHENTICATED ||
+        (gone && this.watching)) {
+      this.accessEnded(err);
+      return;
+    }
     if (gone) {
       // A restarted server, or an idle session the server expired.
+      if (this.session) this.record.closed(this.session.session_id);
       this.session = null;
-      this.send({ type: 'session_lost',
-                  message: `The session is gone from vpm-server (${err.details}); reopening.` });
+      this.send({ type: 'session_lost', message: `The session is gone from vpm-server ` +
+                  `(${String(err.details ?? '').slice(0, 300)}); reopening.` });
       return;
     }
     // An event the server refused (e.g. a grab outside the volume) ends the
@@ -444,6 +475,23 @@ export class ViewerConnection {
     this.fail('Interaction', err);
     this.barrenRestarts = framed ? 0 : this.barrenRestarts + 1;
     if (this.session && this.barrenRestarts <= kMaxBarrenRestarts) this.startStream();
+  }
+
+  // The server ended the stream because this user may no longer see the
+  // session (a share revoked, the session closed or deleted by its owner, the
+  // token no longer valid): no frame more, no new stream, and the page told.
+  accessEnded(err) {
+    const session = this.session;
+    this.pending = null;
+    if (this.watching) {
+      Object.assign(this, { session: null, watching: false });
+    } else {
+      this.releaseSession();
+    }
+    this.log(`stream ended: ${statusName(err.code)}`);
+    this.send({ type: 'access_ended', code: statusName(err.code),
+                session_id: session?.session_id ?? '',
+                message: explainError(err, 'Viewing this session', this.client.address) });
   }
 
   event(event) {
@@ -504,5 +552,6 @@ export class ViewerConnection {
     clearTimeout(this.probeTimer);
     this.stopStream();
     this.releaseSession();
+    this.client.release(this.as);
   }
 }

@@ -4,11 +4,18 @@
 // for as `authorization: Bearer TOKEN` metadata, so the server knows who is
 // calling; the token never goes back to a browser. TLS towards the server
 // when given a CA (and, for mutual TLS, a client certificate and key).
+//
+// Each signed-in user gets a channel (an HTTP/2 connection) of their own
+// (user_channels.js): a call of one user that stalls its connection (a
+// status the server cannot send, a flow-control window never opened) stalls
+// only that user's calls and streams, never another user's.
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 
 import grpc from '@grpc/grpc-js';
 import protoLoader from '@grpc/proto-loader';
+
+import { UserChannels } from './user_channels.js';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 export const kDefaultProtoPath = path.resolve(here, '../../../proto/vpm/v2/vpm.proto');
@@ -25,12 +32,15 @@ const kLoaderOptions = {
 };
 
 // grpc-js backs off up to 120 s between reconnection attempts by default;
-// a viewer wants to see a restarted server within seconds.
+// a viewer wants to see a restarted server within seconds. grpc-js shares
+// one connection between channels of equal target and options (its global
+// subchannel pool) unless told not to: each user's channel has its own.
 const kChannelOptions = {
   'grpc.initial_reconnect_backoff_ms': 250,
   'grpc.min_reconnect_backoff_ms': 250,
   'grpc.max_reconnect_backoff_ms': 3000,
   'grpc.max_receive_message_length': 64 * 1024 * 1024,
+  'grpc.use_local_subchannel_pool': 1,
 };
 
 // Deadlines of the unary calls, ms. Mesh building and session opening run
@@ -45,6 +55,7 @@ const kDeadlineMs = {
   OpenSession: 120000,
   CloseSession: 5000,
   DeleteMesh: 5000,
+  ReadTransferFunction: 10000,
 };
 
 export class VpmClient {
@@ -57,7 +68,7 @@ export class VpmClient {
     this.address = address;
     const credentials = tls ? grpc.credentials.createSsl(tls.ca, tls.key ?? null, tls.cert ?? null)
                             : grpc.credentials.createInsecure();
-    this.stub = new Vpm(address, credentials, kChannelOptions);
+    this.channels = new UserChannels(() => new Vpm(address, credentials, kChannelOptions));
   }
 
   // affinity: a key for `x-vpm-session`, on which a consistent-hash router
@@ -73,12 +84,31 @@ export class VpmClient {
     return md;
   }
 
+  // A tab of the user `as.token` starts (acquire) or ends (release): the
+  // user's channel lives while they have tabs, and a little after.
+  acquire(as = {}) {
+    this.channels.acquire(as.token ?? '');
+  }
+
+  release(as = {}) {
+    this.channels.release(as.token ?? '');
+  }
+
+  // The stub on the channel of the user `as.token`.
+  stub(as = {}) {
+    return this.channels.stub(as.token ?? '');
+  }
+
   // One unary call as `as` (metadata()): resolves with the response,
   // rejects with the gRPC error (err.code, err.details).
+  // A call that ran out its deadline or was refused a stream renews the
+  // user's channel (user_channels.js).
   call(method, request, as = {}) {
     const deadline = new Date(Date.now() + (kDeadlineMs[method] ?? 30000));
+    const stub = this.stub(as);
     return new Promise((resolve, reject) => {
-      this.stub[method](request, this.metadata(as), { deadline }, (err, response) => {
+      stub[method](request, this.metadata(as), { deadline }, (err, response) => {
+        if (err && connectionStuck(err)) this.channels.renew(as.token ?? '', stub);
         if (err) reject(err);
         else resolve(response);
       });
@@ -87,16 +117,16 @@ export class VpmClient {
 
   // The bidirectional Interact stream (events in, frames out).
   interact(as = {}) {
-    return this.stub.Interact(this.metadata(as));
+    return this.stub(as).Interact(this.metadata(as));
   }
 
   // The Watch stream of a session (frames out): for a viewer it is shared with.
   watch(request, as = {}) {
-    return this.stub.Watch(request, this.metadata(as));
+    return this.stub(as).Watch(request, this.metadata(as));
   }
 
   close() {
-    this.stub.close();
+    this.channels.closeAll();
   }
 }
 
@@ -120,6 +150,14 @@ export function streamError(err) {
     details: 'the stream ended without a status: the vpm-server replica behind the balancer ' +
              'went away',
   });
+}
+
+// True for errors that say more of the call's connection than of the
+// server: no answer within the deadline, or a stream refused (HTTP/2
+// REFUSED_STREAM, a connection whose streams are all held).
+function connectionStuck(err) {
+  return err?.code === grpc.status.DEADLINE_EXCEEDED ||
+    (err?.code === grpc.status.UNAVAILABLE && /Stream refused/i.test(err?.details ?? ''));
 }
 
 // True for errors that mean "the server is not there", as opposed to a call

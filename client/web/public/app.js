@@ -200,6 +200,15 @@ const handlers = {
     showMesh();
   },
   stream(m) { state.streamOpen = m.state === 'open'; },
+  // The server ended the stream: this user may no longer see the session
+  // (its share revoked, closed or deleted by its owner). Nothing reopens it.
+  access_ended(m) {
+    Object.assign(state, { session: null, intent: null, opening: false, streamOpen: false });
+    state.errors.push({ what: 'access', message: m.message });
+    tools.cancelGrab();
+    slices.cancelGrab();
+    showMessage(`${m.message} The view has stopped; open a volume to go on.`, 'error');
+  },
   session_lost(m) {
     state.session = null;
     showMessage(m.message, 'info');

@@ -1,0 +1,49 @@
+// Issue 25, point 2 (the gateway's part): signing out ends that browser's
+// streams and WebSockets at once. Alice's tab streams frames; she signs out
+// (POST /logout with her cookie): the tab's WebSocket closes (4001) within
+// 1 s, no frame arrives after, the server's open streams and alice's
+// sessions fall back to what they were before the tab within 2 s, and the
+// cookie opens nothing more.
+import assert from 'node:assert/strict';
+
+import { request } from '../gateway_client.mjs';
+import { frameClock, openView, orbit, sleep } from './view.mjs';
+
+async function waitMetrics(ctx, pred, timeoutMs) {
+  const deadline = performance.now() + timeoutMs;
+  for (;;) {
+    const m = await ctx.metrics();
+    if (pred(m) || performance.now() > deadline) return m;
+    await sleep(50);
+  }
+}
+
+const aliceSessions = (m) => m['vpm_user_sessions{user="alice"}'] ?? 0;
+
+export async function run(ctx) {
+  const start = await ctx.metrics();
+  const cookie = await ctx.signIn('alice');
+  const tab = await ctx.tab(cookie);
+  await openView(tab);
+  const times = frameClock(tab);
+  const driving = orbit(tab, 1500);
+  await sleep(500);
+  const streaming = await ctx.metrics();
+  assert.ok(streaming.vpm_open_streams > start.vpm_open_streams, 'no stream open on the server');
+  const t0 = performance.now();
+  const out = await request(ctx.gateway.base, '/logout', { method: 'POST', headers: { Cookie: cookie } });
+  assert.equal(out.status, 303);
+  const closed = await Promise.race([tab.closed, sleep(1000).then(() => null)]);
+  const closedMs = performance.now() - t0;
+  assert.ok(closed, 'the tab was still open 1 s after signing out');
+  assert.equal(closed.code, 4001);
+  const after = await waitMetrics(ctx, (m) => m.vpm_open_streams === start.vpm_open_streams &&
+                                  aliceSessions(m) === aliceSessions(start), 2000);
+  const settledMs = performance.now() - t0;
+  await driving;
+  assert.equal(after.vpm_open_streams, start.vpm_open_streams, 'the stream outlived the sign-out');
+  assert.equal(aliceSessions(after), aliceSessions(start), 'the session outlived the sign-out');
+  assert.equal(times.filter((t) => t > t0 + closedMs).length, 0, 'frames after the sign-out');
+  await assert.rejects(ctx.tab(cookie), /401/);
+  return { closed_ms: Math.round(closedMs), server_settled_ms: Math.round(settledMs) };
+}
