@@ -25,7 +25,7 @@
 namespace vpm::cli {
 
 struct RenderArgs {
-  std::string source, mesh_json, out, out_volume;
+  std::string source, mesh_json, out, out_volume, out_displacement;
   MeshFlags mesh;
   std::vector<double> camera;  // AZ EL DIST
   std::string mode = "dvr", preset = "ct-soft-tissue", quality = "still";

@@ -22,6 +22,7 @@
 #include "server/io/read_volume.h"
 #include "server/raycast/render_preset_from_tf.h"
 #include "server/io/write_nifti.h"
+#include "server/io/write_displacement_field.h"
 
 namespace vpm::cli {
 namespace {
@@ -32,6 +33,24 @@ Result<bool> IsJpegName(const std::string& out) {
     return absl::InvalidArgumentError(StrCat("--out ", out, ": use a .png or .jpg name"));
   }
   return jpeg;
+}
+
+// --out-volume and --out-displacement, through the exact map of the scene's
+// deformation on the source grid.
+Status WriteDeformation(const RenderArgs& args, OfflineScene& offline) {
+  if (!args.out_volume.empty()) {
+    ASSIGN_OR_RETURN(Volume warped, offline.scene->WarpedVolume());
+    RETURN_IF_ERROR(WriteNifti(warped, args.out_volume));
+    std::printf("wrote %s (deformed volume, source geometry)\n", args.out_volume.c_str());
+  }
+  if (!args.out_displacement.empty()) {
+    ASSIGN_OR_RETURN(const std::vector<glm::vec3> field, offline.scene->DisplacementField());
+    RETURN_IF_ERROR(
+        WriteDisplacementField(offline.volume->geometry(), field, args.out_displacement));
+    std::printf("wrote %s (displacement field, world LPS mm, source grid)\n",
+                args.out_displacement.c_str());
+  }
+  return absl::OkStatus();
 }
 
 Status RunOffline(const RenderArgs& args) {
@@ -64,12 +83,7 @@ Status RunOffline(const RenderArgs& args) {
               encode_ms);
   std::printf("wrote %s (%dx%d, %zu bytes)\n", args.out.c_str(), frame.width, frame.height,
               bytes.size());
-  if (!args.out_volume.empty()) {
-    ASSIGN_OR_RETURN(Volume warped, scene->WarpedVolume());
-    RETURN_IF_ERROR(WriteNifti(warped, args.out_volume));
-    std::printf("wrote %s (deformed volume, source geometry)\n", args.out_volume.c_str());
-  }
-  return absl::OkStatus();
+  return WriteDeformation(args, *offline);
 }
 
 // Closes a server session when it goes out of scope (errors ignored: the
@@ -111,6 +125,9 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
         "flags");
   }
   if (!args.out_volume.empty()) return absl::InvalidArgumentError("--out-volume is offline only");
+  if (!args.out_displacement.empty()) {
+    return absl::InvalidArgumentError("--out-displacement is offline only");
+  }
   if (args.quality != "still") {
     return absl::InvalidArgumentError(
         "--quality interactive is offline only (Render is a still frame)");
@@ -259,6 +276,9 @@ void AddRenderCommand(CLI::App& app, const ServerFlags* server, int* exit_code) 
   cmd->add_option("--jpeg-quality", a->jpeg_quality, "1..100")->capture_default_str();
   cmd->add_option("--out", a->out, "frame.png or frame.jpg")->required();
   cmd->add_option("--out-volume", a->out_volume, "also write the deformed volume (NIfTI)");
+  cmd->add_option("--out-displacement", a->out_displacement,
+                  "also write the displacement field (.mha or .nrrd; world LPS mm on the source "
+                  "grid, the grid transform 3D Slicer and ITK apply)");
   cmd->callback([server, a, exit_code] {
     *exit_code = ExitWith(server->address.empty() ? RunOffline(*a) : RunOnServer(*server, *a));
   });

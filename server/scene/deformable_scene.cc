@@ -270,15 +270,34 @@ Result<SliceFrame> DeformableScene::RenderSlice(const SliceView& view) {
   return frame;
 }
 
-Result<Volume> DeformableScene::WarpedVolume() {
+Result<BackwardMap> DeformableScene::ExactMap() const {
   // Export through an exact map (one point per voxel centre), not the coarse
   // interactive one: docs/WARP.md measures what the coarse map costs.
   BackwardMap::Options exact;
   exact.map_dims = volume_->dims();
   ASSIGN_OR_RETURN(BackwardMap map, BackwardMap::Create(*context_, volume_->geometry(), exact));
   RETURN_IF_ERROR(map.Update(fem_->rest_positions_mm(), fem_->Positions(), fem_->tets()).status());
+  return map;
+}
+
+Result<Volume> DeformableScene::WarpedVolume() {
+  ASSIGN_OR_RETURN(const BackwardMap map, ExactMap());
   ASSIGN_OR_RETURN(VolumeWarper warper, VolumeWarper::Create(*context_));
   return warper.Warp(*gpu_volume_, *volume_, map);
+}
+
+Result<std::vector<glm::vec3>> DeformableScene::DisplacementField() {
+  ASSIGN_OR_RETURN(const BackwardMap map, ExactMap());
+  ASSIGN_OR_RETURN(const BackwardMapValues values, map.Download());
+  // The map holds X(p) - p in physical voxel space; world LPS rotates it by
+  // the volume's direction (no origin: it is an offset).
+  const glm::dmat3& direction = volume_->geometry().direction;
+  std::vector<glm::vec3> out(values.values.size());
+  for (size_t i = 0; i < out.size(); ++i) {
+    const glm::vec4& v = values.values[i];
+    out[i] = v.w > 0.5f ? glm::vec3(direction * glm::dvec3(v.x, v.y, v.z)) : glm::vec3(0.0f);
+  }
+  return out;
 }
 
 }  // namespace vpm

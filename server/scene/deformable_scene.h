@@ -183,6 +183,11 @@ class DeformableScene {
   // The deformed volume at full resolution on the source grid (for export),
   // through an exact backward map (one point per voxel).
   Result<Volume> WarpedVolume();
+  // The same exact map as a displacement field: per voxel of the source grid
+  // (x fastest), the offset in world LPS mm from that point of the deformed
+  // frame to the source point seen there (0 where no tet covers it); what
+  // Slicer and ITK apply as a grid transform (write_displacement_field.h).
+  Result<std::vector<glm::vec3>> DisplacementField();
 
   const ProxyMesh& mesh() const { return mesh_; }
   const FemModel& fem() const { return *fem_; }
@@ -198,6 +203,9 @@ class DeformableScene {
   Result<SceneStepTimings> UpdateMap(SceneStepTimings timings);
   // After FEM changed the deformation: update the map now, or mark it stale.
   Result<SceneStepTimings> AfterStep(SceneStepTimings timings);
+  // A backward map with one point per voxel of the source grid, of the
+  // current deformation.
+  Result<BackwardMap> ExactMap() const;
   const gpu::GpuContext* context_ = nullptr;
   const Volume* volume_ = nullptr;
   GpuVolume* gpu_volume_ = nullptr;

@@ -79,27 +79,6 @@ struct BoxMask {
 
 constexpr int kSteps[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
 
-// The face-connected component of `allowed` through `seed` (empty if the
-// seed is not allowed).
-BoxMask Component(const BoxMask& allowed, const std::array<int64_t, 3>& seed) {
-  BoxMask out = allowed;
-  std::fill(out.bits.begin(), out.bits.end(), 0);
-  if (!allowed.At(seed[0], seed[1], seed[2])) return out;
-  std::deque<std::array<int64_t, 3>> queue{seed};
-  out.bits[out.Index(seed[0], seed[1], seed[2])] = 1;
-  while (!queue.empty()) {
-    const auto [i, j, k] = queue.front();
-    queue.pop_front();
-    for (const auto& s : kSteps) {
-      const int64_t a = i + s[0], b = j + s[1], c = k + s[2];
-      if (!allowed.At(a, b, c) || out.bits[out.Index(a, b, c)]) continue;
-      out.bits[out.Index(a, b, c)] = 1;
-      queue.push_back({a, b, c});
-    }
-  }
-  return out;
-}
-
 // The face-connected voxels of `box` reachable from `seed` through voxels
 // `accept` takes (none when it does not take the seed).
 template <typename Accept>
@@ -120,6 +99,12 @@ BoxMask Grow(const BoxMask& box, const std::array<int64_t, 3>& seed, const Accep
     }
   }
   return out;
+}
+
+// The face-connected component of `allowed` through `seed` (empty if the
+// seed is not allowed).
+BoxMask Component(const BoxMask& allowed, const std::array<int64_t, 3>& seed) {
+  return Grow(allowed, seed, [&](int64_t i, int64_t j, int64_t k) { return allowed.At(i, j, k); });
 }
 
 // `mask` cut to the bounding box of its set voxels and one voxel around.
