@@ -3,7 +3,7 @@
 // reachable from a seed through voxels a predicate accepts.
 // Used for the skeleton (which bone components are large: classify_hardness)
 // and the organ grab (the tissue connected to the grab point:
-// server/scene/organ_region.h).
+// server/volume/organ_region.h).
 #pragma once
 
 #include <array>
