@@ -26,14 +26,19 @@ struct CompareArgs {
   std::vector<double> drag{StandardDrag{}.offset_mm.x, StandardDrag{}.offset_mm.y,
                            StandardDrag{}.offset_mm.z};
   double grab_radius_factor = StandardDrag{}.grab_radius_factor;
+  std::vector<double> grab;  // X Y Z mm: the grab point instead of the landmark
   VolumeFlags volume_flags;
 };
 
 void PrintDeformation(const std::vector<DeformationMeasure>& rows, const StandardDrag& drag) {
+  const std::string at =
+      drag.point_mm ? StrCat("(", drag.point_mm->x, ", ", drag.point_mm->y, ", ",
+                             drag.point_mm->z, ") mm")
+                    : StrCat("'", drag.landmark, "'");
   std::printf(
-      "\ndeformation: grab '%s' (radius %.2f h), drag (%.1f, %.1f, %.1f) mm; error vs the "
+      "\ndeformation: grab %s (radius %.2f h), drag (%.1f, %.1f, %.1f) mm; error vs the "
       "dense-lattice reference over body voxels (every 4th per axis)\n",
-      drag.landmark.c_str(), drag.grab_radius_factor, drag.offset_mm.x, drag.offset_mm.y,
+      at.c_str(), drag.grab_radius_factor, drag.offset_mm.x, drag.offset_mm.y,
       drag.offset_mm.z);
   std::printf("%-10s %6s %8s %8s %10s %10s %12s %11s %12s %9s  %s\n", "mesh", "verts",
               "handles", "min dih", "RMS mm", "max mm", "bone max %", "inverted", "inv @1.5h",
@@ -101,16 +106,19 @@ Status Run(const CompareArgs& args) {
   if (!args.json_out.empty()) RETURN_IF_ERROR(WriteJson(rows, args.json_out));
   if (!args.deformation) return absl::OkStatus();
   const bool has_landmark =
+      args.grab.size() == 3 ||
       std::any_of(volume.landmarks().begin(), volume.landmarks().end(),
                   [&](const Landmark& l) { return l.name == args.drag_landmark; });
   if (!has_landmark) {
-    std::printf("\ndeformation measures skipped: %s has no landmark '%s' (--drag-landmark)\n",
+    std::printf("\ndeformation measures skipped: %s has no landmark '%s' (--drag-landmark; "
+                "--grab X Y Z grabs anywhere)\n",
                 volume.source().c_str(), args.drag_landmark.c_str());
     return absl::OkStatus();
   }
-  const StandardDrag drag{.landmark = args.drag_landmark,
-                          .offset_mm = glm::dvec3(args.drag[0], args.drag[1], args.drag[2]),
-                          .grab_radius_factor = args.grab_radius_factor};
+  StandardDrag drag{.landmark = args.drag_landmark,
+                    .offset_mm = glm::dvec3(args.drag[0], args.drag[1], args.drag[2]),
+                    .grab_radius_factor = args.grab_radius_factor};
+  if (args.grab.size() == 3) drag.point_mm = glm::dvec3(args.grab[0], args.grab[1], args.grab[2]);
   ASSIGN_OR_RETURN(auto deformation, CompareDeformation(volume, params, drag));
   PrintDeformation(deformation, drag);
   return absl::OkStatus();
@@ -130,6 +138,9 @@ void AddCompareMeshesCommand(CLI::App& app, int* exit_code) {
                 "skip the deformation measures (FEM on each mesh and on the dense reference)");
   cmd->add_option("--drag-landmark", args->drag_landmark, "the standard drag's grab point")
       ->capture_default_str();
+  cmd->add_option("--grab", args->grab,
+                  "the drag's grab point X Y Z (mm, physical voxel space) instead of a landmark")
+      ->expected(3);
   cmd->add_option("--drag", args->drag, "the standard drag, DX DY DZ mm")
       ->expected(3)
       ->capture_default_str();

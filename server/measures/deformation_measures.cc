@@ -97,11 +97,11 @@ Result<std::vector<DeformationMeasure>> CompareDeformation(const Volume& volume,
                                                            const MeshParams& params,
                                                            const StandardDrag& drag,
                                                            const DeformationOptions& options) {
-  const Landmark* landmark = nullptr;
+  std::optional<glm::dvec3> grab_mm = drag.point_mm;
   for (const Landmark& l : volume.landmarks()) {
-    if (l.name == drag.landmark) landmark = &l;
+    if (!grab_mm && l.name == drag.landmark) grab_mm = l.position_mm;
   }
-  if (landmark == nullptr) {
+  if (!grab_mm) {
     return absl::NotFoundError(
         StrCat("landmark '", drag.landmark, "' is not in ", volume.source()));
   }
@@ -112,7 +112,7 @@ Result<std::vector<DeformationMeasure>> CompareDeformation(const Volume& volume,
 
   // Step 4 first: its accepted refinement count fixes the budget.
   MeshParams step4 = params;
-  step4.refine_at_mm = landmark->position_mm;
+  step4.refine_at_mm = *grab_mm;
   ASSIGN_OR_RETURN(DecimatedLattice base, DecimateLattice(volume, step4));
   ASSIGN_OR_RETURN(ProxyMesh refined_mesh, FinishProxyMesh(volume, base, step4));
   const int64_t budget = static_cast<int64_t>(refined_mesh.vertices.size());
@@ -136,7 +136,7 @@ Result<std::vector<DeformationMeasure>> CompareDeformation(const Volume& volume,
   dense.steiner_min_dihedral_deg = 0.0;
   ASSIGN_OR_RETURN(ProxyMesh dense_mesh, BuildProxyMesh(volume, dense));
 
-  const glm::dvec3 at = landmark->position_mm;
+  const glm::dvec3 at = *grab_mm;
   ASSIGN_OR_RETURN(Solved reference, Solve(volume, dense_mesh, "reference", at, radius,
                                            drag.offset_mm, h, voxels, options.fem));
   std::vector<DeformationMeasure> rows{reference.row};

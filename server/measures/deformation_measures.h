@@ -11,6 +11,7 @@
 // of the voxels), which is documented with the figures.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,9 @@ namespace vpm {
 // near the spine hard, so a grab there holds fixed vertices.
 struct StandardDrag {
   std::string landmark = "left_kidney_center";
+  // The grab point itself (physical voxel space, mm), for volumes without
+  // landmarks; when set, `landmark` is not looked up.
+  std::optional<glm::dvec3> point_mm;
   glm::dvec3 offset_mm{0.0, -12.0, 0.0};
   double grab_radius_factor = 0.5;  // x h of the G lattice
 };
