@@ -22,6 +22,10 @@ std::array<std::string, kStatusLineCount> StatusLines(const StatusInputs& in) {
     rate += "  " + std::to_string(f.width()) + "x" + std::to_string(f.height());
     state = f.interactive() ? "interactive" : "still";
     state += Format("  disp %.1f mm", f.max_displacement_mm());
+    // Shown when there is something to say: the grabbed tissue behind the
+    // pointer, or (never expected) inverted tets.
+    if (f.lag_mm() >= 0.05) state += Format("  lag %.1f", f.lag_mm());
+    if (f.inverted_tets() > 0) state += Format("  INV %d", static_cast<int>(f.inverted_tets()));
     const v2::StageTimings& t = f.timings();
     stages += Format(" fem %.0f", t.fem_ms()) + Format(" warp %.0f", t.warp_ms()) +
               Format(" rend %.0f", t.render_ms());
