@@ -177,10 +177,12 @@ Result<SolveStats> FemModel::Drag(const glm::dvec3& offset_mm) {
     lag_mm_ = 0.0;
     if (stats.ok()) {
       for (int32_t v : grab_.handles) {
-        glm::dvec3 gap(0.0);
-        for (int i = 0; i < 3; ++i) gap[i] = target[3 * v + i] - solver_.displacement_mm()[3 * v + i];
         // Fixed DOFs (a handle on a box face) cannot follow: not lag.
-        for (int i = 0; i < 3; ++i) gap[i] *= solver_.fixed_dofs()[3 * v + i] ? 0.0 : 1.0;
+        glm::dvec3 gap(0.0);
+        for (int i = 0; i < 3; ++i) {
+          const int32_t d = 3 * v + i;
+          if (!solver_.fixed_dofs()[d]) gap[i] = target[d] - solver_.displacement_mm()[d];
+        }
         lag_mm_ = std::max(lag_mm_, glm::length(gap));
       }
     }
