@@ -21,15 +21,15 @@
 #include <grpcpp/grpcpp.h>
 
 #include "bench/bench_util.h"
-#include "client/cli/closed_loop_drag.h"
+#include "client/common/closed_loop_drag.h"
 #include "server/gpu/gpu_context.h"
 #include "server/service/vpm_server.h"
-#include "vpm/v2/vpm.grpc.pb.h"
+#include "vpm/v3/vpm.grpc.pb.h"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using Stream = grpc::ClientReaderWriter<vpm::v2::InteractRequest, vpm::v2::Frame>;
+using Stream = grpc::ClientReaderWriter<vpm::v3::InteractRequest, vpm::v3::Frame>;
 constexpr char kToken[] = "bench-token";
 
 std::unique_ptr<grpc::ClientContext> Context(int deadline_ms = 600000) {
@@ -50,19 +50,19 @@ struct Row {
   int ran = 0, expired = 0, refused = 0;
 };
 
-Row RunOnce(vpm::service::VpmServer& server, vpm::v2::Vpm::Stub& stub,
-            const std::string& session_id, const vpm::v2::Vec3& centre) {
-  vpm::v2::RenderSettings small;
+Row RunOnce(vpm::service::VpmServer& server, vpm::v3::Vpm::Stub& stub,
+            const std::string& session_id, const vpm::v3::Vec3& centre) {
+  vpm::v3::RenderSettings small;
   small.set_width(96);
   small.set_height(96);
   auto context = Context();
   auto stream = stub.Interact(context.get());
-  vpm::v2::InteractRequest first;
+  vpm::v3::InteractRequest first;
   first.set_session_id(session_id);
   first.mutable_event()->set_sequence(1);
   *first.mutable_event()->mutable_settings() = small;
   *first.mutable_event()->mutable_grab()->mutable_point_mm() = centre;
-  vpm::v2::Frame frame;
+  vpm::v3::Frame frame;
   if (!stream->Write(first) || !stream->Read(&frame)) {
     std::fprintf(stderr, "render_storm_bench: the Interact stream failed\n");
     std::exit(1);
@@ -75,13 +75,13 @@ Row RunOnce(vpm::service::VpmServer& server, vpm::v2::Vpm::Stub& stub,
 
   auto storm_channel = grpc::CreateChannel("127.0.0.1:" + std::to_string(server.port()),
                                            grpc::InsecureChannelCredentials());
-  auto storm_stub = vpm::v2::Vpm::NewStub(storm_channel);
+  auto storm_stub = vpm::v3::Vpm::NewStub(storm_channel);
   constexpr int kCalls = 2000;
   std::atomic<bool> storming{false};
   std::atomic<int> answered{0}, expired{0}, refused{0};
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts(kCalls);
-  std::vector<vpm::v2::Frame> frames(kCalls);
-  vpm::v2::RenderRequest request;
+  std::vector<vpm::v3::Frame> frames(kCalls);
+  vpm::v3::RenderRequest request;
   request.set_session_id(session_id);
   *request.mutable_settings() = small;
   const double ran_before = server.metrics().requests("Render", "OK");
@@ -141,14 +141,14 @@ int main(int argc, char** argv) {
                                   "vpm-server");
   auto channel = grpc::CreateChannel("127.0.0.1:" + std::to_string(server->port()),
                                      grpc::InsecureChannelCredentials());
-  auto stub = vpm::v2::Vpm::NewStub(channel);
+  auto stub = vpm::v3::Vpm::NewStub(channel);
 
-  vpm::v2::LoadVolumeRequest load;
+  vpm::v3::LoadVolumeRequest load;
   load.set_source("phantom:abdomen?size=48");
-  vpm::v2::VolumeInfo volume;
+  vpm::v3::VolumeInfo volume;
   auto c1 = Context();
-  vpm::v2::OpenSessionRequest open;
-  vpm::v2::SessionInfo session;
+  vpm::v3::OpenSessionRequest open;
+  vpm::v3::SessionInfo session;
   auto c2 = Context();
   grpc::Status status = stub->LoadVolume(c1.get(), load, &volume);
   if (status.ok()) {
@@ -159,7 +159,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "render_storm_bench: %s\n", status.error_message().c_str());
     return 1;
   }
-  vpm::v2::Vec3 centre;
+  vpm::v3::Vec3 centre;
   centre.set_x((volume.dims(0) - 1) * volume.spacing_mm().x() / 2);
   centre.set_y((volume.dims(1) - 1) * volume.spacing_mm().y() / 2);
   centre.set_z((volume.dims(2) - 1) * volume.spacing_mm().z() / 2);

@@ -8,48 +8,48 @@
 #include <optional>
 #include <string_view>
 
-#include "vpm/v2/vpm.pb.h"
+#include "vpm/v3/vpm.pb.h"
 
 namespace vpm {
 
-inline std::optional<v2::RenderMode> RenderModeFromName(std::string_view name) {
-  if (name == "dvr") return v2::RENDER_MODE_DVR;
-  if (name == "mip") return v2::RENDER_MODE_MIP;
+inline std::optional<v3::RenderMode> RenderModeFromName(std::string_view name) {
+  if (name == "dvr") return v3::RENDER_MODE_DVR;
+  if (name == "mip") return v3::RENDER_MODE_MIP;
   return std::nullopt;
 }
 
-inline std::optional<v2::Encoding> EncodingFromName(std::string_view name) {
-  if (name == "jpeg") return v2::ENCODING_JPEG;
-  if (name == "png") return v2::ENCODING_PNG;
+inline std::optional<v3::Encoding> EncodingFromName(std::string_view name) {
+  if (name == "jpeg") return v3::ENCODING_JPEG;
+  if (name == "png") return v3::ENCODING_PNG;
   return std::nullopt;
 }
 
 // A frame file's encoding from its name: .png is PNG, anything else JPEG.
-inline v2::Encoding EncodingForFile(std::string_view file_name) {
-  return file_name.ends_with(".png") ? v2::ENCODING_PNG : v2::ENCODING_JPEG;
+inline v3::Encoding EncodingForFile(std::string_view file_name) {
+  return file_name.ends_with(".png") ? v3::ENCODING_PNG : v3::ENCODING_JPEG;
 }
 
-inline std::string_view EncodingExtension(v2::Encoding encoding) {
-  return encoding == v2::ENCODING_PNG ? "png" : "jpg";
+inline std::string_view EncodingExtension(v3::Encoding encoding) {
+  return encoding == v3::ENCODING_PNG ? "png" : "jpg";
 }
 
-inline std::optional<v2::Footprint> FootprintFromName(std::string_view name) {
-  if (name == "point") return v2::FOOTPRINT_POINT;
-  if (name == "cell") return v2::FOOTPRINT_CELL;
+inline std::optional<v3::Footprint> FootprintFromName(std::string_view name) {
+  if (name == "point") return v3::FOOTPRINT_POINT;
+  if (name == "cell") return v3::FOOTPRINT_CELL;
   return std::nullopt;
 }
 
-inline std::optional<v2::DensityMode> DensityModeFromName(std::string_view name) {
-  if (name == "spread") return v2::DENSITY_MODE_SPREAD;
-  if (name == "paper") return v2::DENSITY_MODE_PAPER;
+inline std::optional<v3::DensityMode> DensityModeFromName(std::string_view name) {
+  if (name == "spread") return v3::DENSITY_MODE_SPREAD;
+  if (name == "paper") return v3::DENSITY_MODE_PAPER;
   return std::nullopt;
 }
 
-inline std::string_view VertexKindName(v2::VertexKind kind) {
+inline std::string_view VertexKindName(v3::VertexKind kind) {
   switch (kind) {
-    case v2::VERTEX_KIND_LATTICE: return "lattice";
-    case v2::VERTEX_KIND_ANCHOR: return "anchor";
-    case v2::VERTEX_KIND_REFINED: return "refined";
+    case v3::VERTEX_KIND_LATTICE: return "lattice";
+    case v3::VERTEX_KIND_ANCHOR: return "anchor";
+    case v3::VERTEX_KIND_REFINED: return "refined";
     default: return "unknown";
   }
 }

@@ -43,7 +43,7 @@ echo "== a real scanner's CT: the gantry-tilted Philips series (tests/data/ct-ph
 # A skull phantom (interior dark in any window) with plastic inserts: grab
 # the central plastic insert and drag it 10 mm superior (physical mm).
 ct=tests/data/ct-philips-tilt
-ct_mesh=(--grid 20 20 18 --grab 123 145 64)
+ct_mesh=(--grid 20 20 18 --grab -0.5 102.3 770.4)
 "$vpm" volume info "$ct"
 ct_before=$("$vpm" render --volume "$ct" "${ct_mesh[@]}" --out out/ct_before.png)
 echo "$ct_before" | tail -1
@@ -66,7 +66,7 @@ echo "== a real patient's abdominal CT: grab the left kidney, drag it 15 mm supe
 # connected to the point) and drags it superior; Slicer's CT-Soft-Tissue with
 # the view cut shows it in 3D.
 kidney=tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz
-kidney_grab=(--grab 99 114 264)
+kidney_grab=(--grab 79 -125.3 358.3)
 kidney_before=$("$vpm" render --volume "$kidney" "${kidney_grab[@]}" --preset CT-Soft-Tissue \
   --out out/kidney_before.png)
 echo "$kidney_before" | grep -E '^grab|^mesh'

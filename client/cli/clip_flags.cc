@@ -38,13 +38,13 @@ Result<ClipChoice> ToClipChoice(const ClipFlags& flags) {
   return choice;
 }
 
-void FillClipSettings(const ClipChoice& choice, v2::RenderSettings* settings) {
+void FillClipSettings(const ClipChoice& choice, v3::RenderSettings* settings) {
   if (choice.region.crop) {
     *settings->mutable_crop()->mutable_lo_mm() = ToProto(choice.region.crop->lo_mm);
     *settings->mutable_crop()->mutable_hi_mm() = ToProto(choice.region.crop->hi_mm);
   }
   for (const ClipPlane& plane : choice.region.planes) {
-    v2::ClipPlane* out = settings->add_clip();
+    v3::ClipPlane* out = settings->add_clip();
     *out->mutable_normal() = ToProto(plane.normal);
     out->set_offset_mm(plane.offset_mm);
   }

@@ -13,7 +13,7 @@
 
 #include "server/common/status.h"
 #include "server/raycast/clip_region.h"
-#include "vpm/v2/vpm.pb.h"
+#include "vpm/v3/vpm.pb.h"
 
 namespace vpm::cli {
 
@@ -33,6 +33,6 @@ struct ClipChoice {
 Result<ClipChoice> ToClipChoice(const ClipFlags& flags);
 
 // The same choice as RenderSettings fields (crop, clip, view_cut).
-void FillClipSettings(const ClipChoice& choice, v2::RenderSettings* settings);
+void FillClipSettings(const ClipChoice& choice, v3::RenderSettings* settings);
 
 }  // namespace vpm::cli

@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "client/cli/command_status.h"
+#include "client/common/command_status.h"
 #include "client/cli/volume_flags.h"
 #include "client/cli/gpu_backend.h"
 #include "client/cli/mesh_flags.h"
@@ -30,26 +30,29 @@ struct CompareArgs {
   VolumeFlags volume_flags;
 };
 
-void PrintDeformation(const std::vector<DeformationMeasure>& rows, const StandardDrag& drag) {
+// `drag` in physical voxel space, printed in world LPS as the user gave it.
+void PrintDeformation(const std::vector<DeformationMeasure>& rows, const StandardDrag& drag,
+                      const VolumeGeometry& geometry) {
+  const glm::dvec3 point = drag.point_mm ? geometry.PhysicalToWorld(*drag.point_mm) : glm::dvec3();
+  const glm::dvec3 offset = geometry.PhysicalVectorToWorld(drag.offset_mm);
   const std::string at =
-      drag.point_mm ? StrCat("(", drag.point_mm->x, ", ", drag.point_mm->y, ", ",
-                             drag.point_mm->z, ") mm")
+      drag.point_mm ? StrCat("(", point.x, ", ", point.y, ", ", point.z, ") mm (LPS)")
                     : StrCat("'", drag.landmark, "'");
   std::printf(
       "\ndeformation: grab %s (radius %.2f h), drag (%.1f, %.1f, %.1f) mm; error vs the "
       "dense-lattice reference over body voxels (every 4th per axis)\n",
-      at.c_str(), drag.grab_radius_factor, drag.offset_mm.x, drag.offset_mm.y,
-      drag.offset_mm.z);
+      at.c_str(), drag.grab_radius_factor, offset.x, offset.y, offset.z);
   std::printf("%-10s %6s %8s %8s %10s %10s %12s %11s %12s %9s  %s\n", "mesh", "verts",
               "handles", "min dih", "RMS mm", "max mm", "bone max %", "inverted", "inv @1.5h",
-              "FEM ms", "worst bone voxel (mm)");
+              "FEM ms", "worst bone voxel (mm, LPS)");
   for (const auto& r : rows) {
+    const glm::dvec3 worst = geometry.PhysicalToWorld(r.bone_worst_mm);
     std::printf(
         "%-10s %6lld %8lld %8.2f %10.3f %10.3f %12.2f %11lld %12lld %9.1f  (%.0f, %.0f, %.0f)%s\n",
         r.name.c_str(), static_cast<long long>(r.vertices), static_cast<long long>(r.handles),
         r.min_dihedral_deg, r.rms_error_mm, r.max_error_mm, 100.0 * r.bone_max_fraction,
         static_cast<long long>(r.inverted_at_drag), static_cast<long long>(r.inverted_at_1_5h),
-        r.solve_ms, r.bone_worst_mm.x, r.bone_worst_mm.y, r.bone_worst_mm.z,
+        r.solve_ms, worst.x, worst.y, worst.z,
         r.converged ? "" : " (not converged)");
   }
   for (const auto& r : rows) {
@@ -115,12 +118,17 @@ Status Run(const CompareArgs& args) {
                 volume.source().c_str(), args.drag_landmark.c_str());
     return absl::OkStatus();
   }
+  // --grab and --drag are world LPS; the measures work in physical voxel space.
+  const VolumeGeometry& geometry = volume.geometry();
   StandardDrag drag{.landmark = args.drag_landmark,
-                    .offset_mm = glm::dvec3(args.drag[0], args.drag[1], args.drag[2]),
+                    .offset_mm = geometry.WorldVectorToPhysical(
+                        glm::dvec3(args.drag[0], args.drag[1], args.drag[2])),
                     .grab_radius_factor = args.grab_radius_factor};
-  if (args.grab.size() == 3) drag.point_mm = glm::dvec3(args.grab[0], args.grab[1], args.grab[2]);
+  if (args.grab.size() == 3) {
+    drag.point_mm = geometry.WorldToPhysical(glm::dvec3(args.grab[0], args.grab[1], args.grab[2]));
+  }
   ASSIGN_OR_RETURN(auto deformation, CompareDeformation(volume, params, drag));
-  PrintDeformation(deformation, drag);
+  PrintDeformation(deformation, drag, geometry);
   return absl::OkStatus();
 }
 
@@ -139,9 +147,9 @@ void AddCompareMeshesCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--drag-landmark", args->drag_landmark, "the standard drag's grab point")
       ->capture_default_str();
   cmd->add_option("--grab", args->grab,
-                  "the drag's grab point X Y Z (mm, physical voxel space) instead of a landmark")
+                  "the drag's grab point X Y Z (mm, world LPS) instead of a landmark")
       ->expected(3);
-  cmd->add_option("--drag", args->drag, "the standard drag, DX DY DZ mm")
+  cmd->add_option("--drag", args->drag, "the standard drag, DX DY DZ mm (world LPS)")
       ->expected(3)
       ->capture_default_str();
   cmd->add_option("--grab-radius", args->grab_radius_factor,

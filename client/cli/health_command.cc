@@ -6,7 +6,7 @@
 
 #include <grpcpp/grpcpp.h>
 
-#include "client/cli/command_status.h"
+#include "client/common/command_status.h"
 #include "grpc/health/v1/health.grpc.pb.h"
 
 namespace vpm::cli {

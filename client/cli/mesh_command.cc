@@ -3,12 +3,13 @@
 #include <cstdio>
 #include <iostream>
 
-#include "client/cli/command_status.h"
+#include "client/common/command_status.h"
 #include "client/cli/gpu_backend.h"
 #include "client/cli/mesh_flags.h"
-#include "client/cli/progress_bar.h"
+#include "client/common/progress_bar.h"
 #include "client/cli/remote_pipeline.h"
 #include "client/cli/volume_flags.h"
+#include "server/mesh/mesh_frame.h"
 #include "server/mesh/mesh_json.h"
 #include "server/mesh/write_vtu.h"
 #include "server/io/read_volume.h"
@@ -86,7 +87,7 @@ Result<ProxyMesh> BuildOffline(const MeshArgs& args) {
   PrintSummary(mesh, gpu.get(),
                gpu ? StrCat(mesh.stats.evaluated_on, "; Vulkan device ", gpu->context().device_name())
                    : mesh.stats.evaluated_on);
-  return mesh;
+  return MeshToWorld(mesh, volume.geometry());  // the files are world LPS, as the server's
 }
 
 Status Run(const ServerFlags& server, const MeshArgs& args) {

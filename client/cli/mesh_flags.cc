@@ -33,7 +33,7 @@ void AddMeshFlags(CLI::App* app, MeshFlags* f) {
   app->add_option("--influence-factor", f->influence_factor,
                   "influence radius = factor * R")->capture_default_str();
   app->add_option("--refine-at", f->refine_at,
-                  "manipulation point X Y Z (mm, physical voxel space: index * spacing)")
+                  "manipulation point X Y Z (mm, world LPS, as `vpm volume info`)")
       ->expected(3);
   app->add_option("--refine-at-landmark", f->refine_at_landmark,
                   "refine at a named landmark of the volume (see `vpm volume info`)");
@@ -64,7 +64,9 @@ Result<MeshParams> ToMeshParams(const MeshFlags& f, const Volume& volume) {
   p.classify.influence_factor = f.influence_factor;
   if (!f.refine_at.empty()) {
     if (f.refine_at.size() != 3) return absl::InvalidArgumentError("--refine-at takes X Y Z");
-    p.refine_at_mm = glm::dvec3(f.refine_at[0], f.refine_at[1], f.refine_at[2]);
+    // World LPS on the command line; the mesh is built in physical voxel space.
+    p.refine_at_mm = volume.geometry().WorldToPhysical(
+        glm::dvec3(f.refine_at[0], f.refine_at[1], f.refine_at[2]));
   }
   if (!f.refine_at_landmark.empty()) {
     if (p.refine_at_mm) {

@@ -21,7 +21,7 @@ struct MeshFlags {
   double wg = 1.0, wd = 0.5, radius_factor = 2.0;
   std::string tf = "ct-soft-tissue";
   double bone = 250.0, influence_threshold = 100.0, influence_factor = 0.75;
-  std::vector<double> refine_at;  // empty or X Y Z (mm, physical voxel space)
+  std::vector<double> refine_at;  // empty or X Y Z (mm, world LPS)
   std::string refine_at_landmark; // or a landmark of the volume (phantoms have them)
   double roi_factor = 1.5;
   int64_t refine_count = 150;

@@ -4,10 +4,11 @@
 #include <cmath>
 #include <cstdio>
 
-#include "client/cli/progress_bar.h"
+#include "client/common/progress_bar.h"
 #include "server/common/clock.h"
 #include "server/mesh/build_proxy_mesh.h"
 #include "server/mesh/lattice_costs_gpu.h"
+#include "server/mesh/mesh_frame.h"
 #include "server/mesh/mesh_json.h"
 #include "server/io/read_render_transfer_function.h"
 #include "server/io/read_volume.h"
@@ -18,17 +19,26 @@ namespace {
 
 Result<ProxyMesh> LoadOrBuildMesh(const RenderArgs& args, const Volume& volume,
                                   const gpu::GpuContext& context, const GpuVolume& gpu_volume) {
-  if (!args.mesh_json.empty()) return ReadMeshJson(args.mesh_json);
+  if (!args.mesh_json.empty()) {
+    // `vpm mesh --json` writes world LPS; the scene works in physical voxel space.
+    ASSIGN_OR_RETURN(const ProxyMesh world, ReadMeshJson(args.mesh_json));
+    return MeshFromWorld(world, volume.geometry());
+  }
   ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(args.mesh, volume));
   if (params.refine_at_mm == std::nullopt && !args.grab.empty()) {
-    params.refine_at_mm = glm::dvec3(args.grab[0], args.grab[1], args.grab[2]);
+    params.refine_at_mm = volume.geometry().WorldToPhysical(
+        glm::dvec3(args.grab[0], args.grab[1], args.grab[2]));
   }
   ASSIGN_OR_RETURN(LatticeCostsGpu costs, LatticeCostsGpu::Create(context));
   return BuildProxyMesh(volume, params, {&gpu_volume, &costs});
 }
 
+// The grab point in physical voxel space (mm); --grab is world LPS.
 Result<std::optional<glm::dvec3>> GrabPoint(const RenderArgs& args, const Volume& volume) {
-  if (!args.grab.empty()) return std::optional<glm::dvec3>(*Vec3Of(args.grab, "--grab"));
+  if (!args.grab.empty()) {
+    ASSIGN_OR_RETURN(const glm::dvec3 world, Vec3Of(args.grab, "--grab"));
+    return std::optional<glm::dvec3>(volume.geometry().WorldToPhysical(world));
+  }
   if (args.grab_landmark.empty()) return std::optional<glm::dvec3>();
   for (const Landmark& l : volume.landmarks()) {
     if (l.name == args.grab_landmark) return std::optional<glm::dvec3>(l.position_mm);
@@ -49,7 +59,8 @@ Result<std::optional<MipWindow>> WindowOf(const std::vector<double>& w) {
 }
 
 void AddGrabFlags(CLI::App* app, RenderArgs* a) {
-  app->add_option("--grab", a->grab, "grab point X Y Z (mm, physical voxel space)")->expected(3);
+  app->add_option("--grab", a->grab, "grab point X Y Z (mm, world LPS, as `vpm volume info`)")
+      ->expected(3);
   app->add_option("--grab-landmark", a->grab_landmark, "grab at a named landmark");
   app->add_option("--grab-rule", a->grab_rule,
                   "organ: the tissue connected to the grab point moves as a body (default); "
@@ -58,11 +69,13 @@ void AddGrabFlags(CLI::App* app, RenderArgs* a) {
   app->add_option("--grab-radius", a->grab_radius,
                   "ball: handle radius in mm (default: h); organ: the organ's bound (default 80)");
   app->add_option("--pin", a->pins,
-                  "hold the tissue at X Y Z (mm, physical voxel space) still; repeatable")
+                  "hold the tissue at X Y Z (mm, world LPS) still; repeatable")
       ->expected(3)
       ->take_all();
-  app->add_option("--drag", a->drag, "drag the handles by DX DY DZ mm")->expected(3);
-  app->add_option("--pull", a->pull, "pull the handles with FX FY FZ N in total")->expected(3);
+  app->add_option("--drag", a->drag, "drag the handles by DX DY DZ mm (world LPS: +z superior)")
+      ->expected(3);
+  app->add_option("--pull", a->pull, "pull the handles with FX FY FZ N in total (world LPS)")
+      ->expected(3);
 }
 
 Result<glm::dvec3> Vec3Of(const std::vector<double>& v, const char* flag) {
@@ -122,7 +135,10 @@ Result<std::unique_ptr<OfflineScene>> PrepareOfflineScene(const RenderArgs& args
   out->upload_ms = MsSince(t0);
   t0 = std::chrono::steady_clock::now();
   RenderArgs effective = args;
-  if (out->grab) effective.grab = {out->grab->x, out->grab->y, out->grab->z};
+  if (out->grab) {
+    const glm::dvec3 world = out->volume->geometry().PhysicalToWorld(*out->grab);
+    effective.grab = {world.x, world.y, world.z};
+  }
   ASSIGN_OR_RETURN(out->mesh,
                    LoadOrBuildMesh(effective, *out->volume, *out->context, *out->gpu_volume));
   out->mesh_ms = MsSince(t0);
@@ -132,10 +148,11 @@ Result<std::unique_ptr<OfflineScene>> PrepareOfflineScene(const RenderArgs& args
                                                        *out->gpu_volume, *out->renderer,
                                                        out->mesh, {}));
   out->setup_ms = MsSince(t0);
+  const VolumeGeometry& geometry = out->volume->geometry();
   for (size_t p = 0; p + 2 < args.pins.size(); p += 3) {
-    const glm::dvec3 pin(args.pins[p], args.pins[p + 1], args.pins[p + 2]);
-    RETURN_IF_ERROR(out->scene->Pin(pin, 0.0).status());
-    std::printf("pin at (%.1f, %.1f, %.1f) mm\n", pin.x, pin.y, pin.z);
+    const glm::dvec3 pin(args.pins[p], args.pins[p + 1], args.pins[p + 2]);  // world
+    RETURN_IF_ERROR(out->scene->Pin(geometry.WorldToPhysical(pin), 0.0).status());
+    std::printf("pin at (%.1f, %.1f, %.1f) mm (LPS)\n", pin.x, pin.y, pin.z);
   }
   const std::optional<glm::dvec3>& grab = out->grab;
   if (grab) {
@@ -143,12 +160,13 @@ Result<std::unique_ptr<OfflineScene>> PrepareOfflineScene(const RenderArgs& args
     ASSIGN_OR_RETURN(GrabInfo info, out->scene->Grab(GrabRequest{
                                         .point_mm = *grab, .rule = rule,
                                         .radius_mm = args.grab_radius}));
-    std::printf("grab (%s) at (%.1f, %.1f, %.1f) mm: %zu handles%s%s\n", args.grab_rule.c_str(),
-                grab->x, grab->y, grab->z, info.handles.size(), info.message.empty() ? "" : "; ",
-                info.message.c_str());
+    const glm::dvec3 world = geometry.PhysicalToWorld(*grab);
+    std::printf("grab (%s) at (%.1f, %.1f, %.1f) mm (LPS): %zu handles%s%s\n",
+                args.grab_rule.c_str(), world.x, world.y, world.z, info.handles.size(),
+                info.message.empty() ? "" : "; ", info.message.c_str());
     if (!args.drag.empty()) {
       ASSIGN_OR_RETURN(glm::dvec3 offset, Vec3Of(args.drag, "--drag"));
-      ASSIGN_OR_RETURN(out->step, out->scene->Drag(offset));
+      ASSIGN_OR_RETURN(out->step, out->scene->Drag(geometry.WorldVectorToPhysical(offset)));
       // A drag event's FEM work is bounded (docs/FEM.md, "Per-event work bound"):
       // a long drag in one event stops short and the rest is carried. The
       // offline commands render a still, so the drag is finished first, as a
@@ -161,7 +179,7 @@ Result<std::unique_ptr<OfflineScene>> PrepareOfflineScene(const RenderArgs& args
       }
     } else if (!args.pull.empty()) {
       ASSIGN_OR_RETURN(glm::dvec3 force, Vec3Of(args.pull, "--pull"));
-      ASSIGN_OR_RETURN(out->step, out->scene->Pull(force));
+      ASSIGN_OR_RETURN(out->step, out->scene->Pull(geometry.WorldVectorToPhysical(force)));
     }
   } else if (!args.drag.empty() || !args.pull.empty()) {
     return absl::InvalidArgumentError("--drag and --pull need --grab or --grab-landmark");

@@ -10,8 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "client/cli/interrupt.h"
-#include "client/cli/script_player.h"
+#include "client/common/interrupt.h"
+#include "client/common/script_player.h"
 #include "proto/enum_names.h"
 #include "client/cli/server_flags.h"
 #include "server/common/clock.h"
@@ -36,13 +36,13 @@ Result<std::string> Reopen(const ServerConnection& s, const std::string& source)
   const SteadyClock::time_point start = SteadyClock::now();
   double wait_s = 0.25;
   while (true) {
-    v2::LoadVolumeRequest load;
+    v3::LoadVolumeRequest load;
     load.set_source(source);
-    v2::VolumeInfo volume;
+    v3::VolumeInfo volume;
     Status status = FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &volume));
-    v2::SessionInfo info;
+    v3::SessionInfo info;
     if (status.ok()) {
-      v2::OpenSessionRequest open;
+      v3::OpenSessionRequest open;
       open.set_volume_id(volume.volume_id());
       status = FromGrpc(s.stub().OpenSession(s.Context().get(), open, &info));
     }
@@ -77,24 +77,24 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
   CatchInterrupts();
   ASSIGN_OR_RETURN(json script_json, ReadJsonFile(script_path));
   const std::string source = script_json.value("volume", "phantom:abdomen?size=64");
-  v2::VolumeInfo volume;
+  v3::VolumeInfo volume;
   const bool opened_here = session_id.empty();
   if (opened_here) {
-    v2::LoadVolumeRequest load;
+    v3::LoadVolumeRequest load;
     load.set_source(source);
     RETURN_IF_ERROR(FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &volume)));
-    v2::OpenSessionRequest open;
+    v3::OpenSessionRequest open;
     open.set_volume_id(volume.volume_id());
-    v2::SessionInfo info;
+    v3::SessionInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().OpenSession(s.Context().get(), open, &info)));
     session_id = info.session_id();
     std::printf("volume %s, session %s\n", volume.volume_id().c_str(), session_id.c_str());
   } else {
-    v2::ListSessionsResponse sessions;
+    v3::ListSessionsResponse sessions;
     RETURN_IF_ERROR(FromGrpc(s.stub().ListSessions(s.Context().get(), {}, &sessions)));
     for (const auto& x : sessions.sessions()) {
       if (x.session_id() == session_id) {
-        v2::GetVolumeRequest get;
+        v3::GetVolumeRequest get;
         get.set_volume_id(x.volume_id());
         RETURN_IF_ERROR(FromGrpc(s.stub().GetVolume(s.Context().get(), get, &volume)));
       }
@@ -107,7 +107,7 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
   options.session_id = session_id;
   Status write_status;  // the first frame that could not be saved, reported at the end
   int64_t frame_index = 0;  // across reopened sessions
-  options.on_frame = [&](const v2::Frame& frame, int64_t) {
+  options.on_frame = [&](const v3::Frame& frame, int64_t) {
     if (out_dir.empty() || !write_status.ok()) return;
     char name[64];
     std::snprintf(name, sizeof name, "frame_%04lld.%s", (long long)frame_index++,
@@ -162,9 +162,9 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
     // exist, on this replica or another; closing one that is gone is
     // NOT_FOUND, which changes nothing).
     for (const std::string& id : sessions) {
-      v2::CloseSessionRequest close;
+      v3::CloseSessionRequest close;
       close.set_session_id(id);
-      v2::CloseSessionResponse closed;
+      v3::CloseSessionResponse closed;
       (void)s.stub().CloseSession(s.Context().get(), close, &closed);
     }
   }
@@ -232,7 +232,7 @@ void AddPlayCommand(CLI::App& app, const ServerFlags* flags, int* exit_code) {
   };
   auto a = std::make_shared<PlayArgs>();
   CLI::App* play = app.add_subcommand("play", "server: replay an interaction script over Interact");
-  play->add_option("SCRIPT", a->script, "script JSON (see client/cli/script_player.h)")->required();
+  play->add_option("SCRIPT", a->script, "script JSON (see client/common/script_player.h)")->required();
   play->add_option("--session", a->session,
                    "play on this session (default: open one on the script's volume, closed at the end)");
   play->add_option("--out-dir", a->out_dir, "save frames and report.json here");

@@ -1,11 +1,11 @@
 // `vpm play SCRIPT.json`: replays an interaction script over a session's
-// Interact stream (the script format is in client/cli/script_player.h),
+// Interact stream (the script format is in client/common/script_player.h),
 // saves the frames and prints and writes a timing report.
 #pragma once
 
 #include <CLI/CLI.hpp>
 
-#include "client/cli/server_connection.h"
+#include "client/common/server_connection.h"
 
 namespace vpm::cli {
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "client/cli/proto_json.h"
+#include "client/common/proto_json.h"
 #include "proto/enum_names.h"
 #include "client/cli/server_flags.h"
 #include "server/common/write_file.h"
@@ -31,7 +31,7 @@ void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_co
   build->add_option("--tf", a->tf, "transfer-function preset or v:c,...");
   build->add_option("--refine-at", a->point, "X Y Z mm")->expected(3);
   build->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v2::BuildMeshRequest request;
+    v3::BuildMeshRequest request;
     request.set_volume_id(a->volume_id);
     for (int64_t g : a->grid) request.mutable_params()->add_grid(g);
     request.mutable_params()->set_target(a->target);
@@ -42,7 +42,7 @@ void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_co
       p->set_y(a->point[1]);
       p->set_z(a->point[2]);
     }
-    v2::MeshInfo info;
+    v3::MeshInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().BuildMesh(s.Context().get(), request, &info)));
     PrintJson(MeshJson(info));
     return absl::OkStatus();
@@ -52,10 +52,10 @@ void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_co
   get->add_flag("--geometry", a->geometry, "include vertices and tets");
   get->add_option("--json", a->json_out, "write the response as JSON here");
   get->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v2::GetMeshRequest request;
+    v3::GetMeshRequest request;
     request.set_mesh_id(a->mesh_id);
     request.set_include_geometry(a->geometry || !a->json_out.empty());
-    v2::GetMeshResponse response;
+    v3::GetMeshResponse response;
     RETURN_IF_ERROR(FromGrpc(s.stub().GetMesh(s.Context().get(), request, &response)));
     json j = MeshJson(response.info());
     if (!a->json_out.empty()) {
@@ -76,12 +76,12 @@ void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_co
   refine->add_option("ID", a->mesh_id)->required();
   refine->add_option("POINT", a->point, "X Y Z mm")->expected(3)->required();
   refine->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v2::RefineMeshRequest request;
+    v3::RefineMeshRequest request;
     request.set_mesh_id(a->mesh_id);
     request.mutable_point_mm()->set_x(a->point[0]);
     request.mutable_point_mm()->set_y(a->point[1]);
     request.mutable_point_mm()->set_z(a->point[2]);
-    v2::MeshInfo info;
+    v3::MeshInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().RefineMesh(s.Context().get(), request, &info)));
     PrintJson(MeshJson(info));
     return absl::OkStatus();
@@ -89,9 +89,9 @@ void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_co
   CLI::App* del = app.add_subcommand("mesh-delete", "server: DeleteMesh (not while a session uses it)");
   del->add_option("ID", a->mesh_id)->required();
   del->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v2::DeleteMeshRequest request;
+    v3::DeleteMeshRequest request;
     request.set_mesh_id(a->mesh_id);
-    v2::DeleteMeshResponse response;
+    v3::DeleteMeshResponse response;
     return FromGrpc(s.stub().DeleteMesh(s.Context().get(), request, &response));
   }));
 }

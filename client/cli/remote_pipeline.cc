@@ -10,18 +10,18 @@
 namespace vpm::cli {
 namespace {
 
-Result<VertexKind> KindOf(v2::VertexKind kind) {
+Result<VertexKind> KindOf(v3::VertexKind kind) {
   switch (kind) {
-    case v2::VERTEX_KIND_LATTICE: return VertexKind::kLattice;
-    case v2::VERTEX_KIND_ANCHOR: return VertexKind::kAnchor;
-    case v2::VERTEX_KIND_REFINED: return VertexKind::kRefined;
-    case v2::VERTEX_KIND_BOUNDARY: return VertexKind::kBoundary;
-    case v2::VERTEX_KIND_STEINER: return VertexKind::kSteiner;
+    case v3::VERTEX_KIND_LATTICE: return VertexKind::kLattice;
+    case v3::VERTEX_KIND_ANCHOR: return VertexKind::kAnchor;
+    case v3::VERTEX_KIND_REFINED: return VertexKind::kRefined;
+    case v3::VERTEX_KIND_BOUNDARY: return VertexKind::kBoundary;
+    case v3::VERTEX_KIND_STEINER: return VertexKind::kSteiner;
     default: return absl::DataLossError(StrCat("server sent a vertex of unknown kind ", kind));
   }
 }
 
-MeshStats StatsOf(const v2::MeshStats& s) {
+MeshStats StatsOf(const v3::MeshStats& s) {
   MeshStats out;
   for (int i = 0; i < 3 && i < s.grid_size(); ++i) out.grid[i] = s.grid(i);
   out.lattice_vertices = s.lattice_vertices();
@@ -59,21 +59,21 @@ std::string RandomProgressId() {
   return id;
 }
 
-Result<v2::VolumeInfo> LoadVolumeOnServer(const ServerConnection& server,
+Result<v3::VolumeInfo> LoadVolumeOnServer(const ServerConnection& server,
                                           const std::string& source, const ProgressFn& progress) {
-  v2::LoadVolumeRequest request;
+  v3::LoadVolumeRequest request;
   request.set_source(source);
   if (progress) request.set_progress_id(RandomProgressId());
   auto load = std::async(std::launch::async, [&server, request] {
-    v2::VolumeInfo info;
+    v3::VolumeInfo info;
     const grpc::Status status = server.stub().LoadVolume(server.Context().get(), request, &info);
     return std::make_pair(status, info);
   });
   while (progress &&
          load.wait_for(std::chrono::milliseconds(100)) != std::future_status::ready) {
-    v2::GetLoadProgressRequest poll;
+    v3::GetLoadProgressRequest poll;
     poll.set_progress_id(request.progress_id());
-    v2::LoadProgress state;
+    v3::LoadProgress state;
     // NotFound until the server starts the load: keep polling.
     if (server.stub().GetLoadProgress(server.Context().get(), poll, &state).ok()) {
       progress(state.fraction(), state.stage());
@@ -85,9 +85,9 @@ Result<v2::VolumeInfo> LoadVolumeOnServer(const ServerConnection& server,
   return info;
 }
 
-Result<glm::dvec3> FindLandmark(const v2::VolumeInfo& volume, const std::string& name) {
+Result<glm::dvec3> FindLandmark(const v3::VolumeInfo& volume, const std::string& name) {
   std::string names;
-  for (const v2::Landmark& l : volume.landmarks()) {
+  for (const v3::Landmark& l : volume.landmarks()) {
     if (l.name() == name) return FromProto(l.position_mm());
     names += (names.empty() ? "" : ", ") + l.name();
   }
@@ -95,8 +95,8 @@ Result<glm::dvec3> FindLandmark(const v2::VolumeInfo& volume, const std::string&
                                     names.empty() ? " (it has none)" : " (it has: " + names + ")"));
 }
 
-Result<v2::MeshParams> ToProtoMeshParams(const MeshFlags& f, const v2::VolumeInfo& volume) {
-  v2::MeshParams p;
+Result<v3::MeshParams> ToProtoMeshParams(const MeshFlags& f, const v3::VolumeInfo& volume) {
+  v3::MeshParams p;
   for (int64_t g : f.grid) p.add_grid(g);
   p.set_target(f.target);
   const auto footprint = FootprintFromName(f.footprint);
@@ -134,16 +134,16 @@ Result<v2::MeshParams> ToProtoMeshParams(const MeshFlags& f, const v2::VolumeInf
 }
 
 Result<ProxyMesh> FetchMesh(const ServerConnection& server, const std::string& mesh_id) {
-  v2::GetMeshRequest request;
+  v3::GetMeshRequest request;
   request.set_mesh_id(mesh_id);
   request.set_include_geometry(true);
-  v2::GetMeshResponse response;
+  v3::GetMeshResponse response;
   RETURN_IF_ERROR(FromGrpc(server.stub().GetMesh(server.Context().get(), request, &response)));
   ProxyMesh mesh;
   mesh.vertices.reserve(response.vertices_size());
-  for (const v2::MeshVertex& v : response.vertices()) {
+  for (const v3::MeshVertex& v : response.vertices()) {
     MeshVertex out;
-    out.position_mm = FromProto(v.position_mm());
+    out.position_mm = FromProto(v.position_mm());  // world LPS, as the API gives it
     out.lattice_id = v.lattice_id();
     ASSIGN_OR_RETURN(out.kind, KindOf(v.kind()));
     out.hard = v.hard();
@@ -152,14 +152,14 @@ Result<ProxyMesh> FetchMesh(const ServerConnection& server, const std::string& m
     mesh.vertices.push_back(out);
   }
   const int32_t n = static_cast<int32_t>(mesh.vertices.size());
-  for (const v2::Tet& t : response.tets()) {
+  for (const v3::Tet& t : response.tets()) {
     const std::array<int32_t, 4> tet{t.a(), t.b(), t.c(), t.d()};
     for (int32_t i : tet) {
       if (i < 0 || i >= n) return absl::DataLossError(StrCat("server sent a tet with vertex ", i));
     }
     mesh.tets.push_back(tet);
   }
-  const v2::MeshStats& s = response.info().stats();
+  const v3::MeshStats& s = response.info().stats();
   mesh.stats = StatsOf(s);
   mesh.quality.min_dihedral_deg = s.min_dihedral_deg();
   mesh.quality.mean_min_dihedral_deg = s.mean_min_dihedral_deg();
@@ -173,7 +173,7 @@ Result<RemoteMesh> BuildMeshOnServer(const ServerConnection& server, const std::
                                      const MeshFlags& flags) {
   RemoteMesh out;
   ASSIGN_OR_RETURN(out.volume, LoadVolumeOnServer(server, source));
-  v2::BuildMeshRequest request;
+  v3::BuildMeshRequest request;
   request.set_volume_id(out.volume.volume_id());
   ASSIGN_OR_RETURN(*request.mutable_params(), ToProtoMeshParams(flags, out.volume));
   RETURN_IF_ERROR(FromGrpc(server.stub().BuildMesh(server.Context().get(), request, &out.info)));

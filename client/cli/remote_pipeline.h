@@ -10,7 +10,7 @@
 #include <glm/glm.hpp>
 
 #include "client/cli/mesh_flags.h"
-#include "client/cli/server_connection.h"
+#include "client/common/server_connection.h"
 #include "server/common/progress.h"
 #include "server/common/status.h"
 #include "server/mesh/proxy_mesh.h"
@@ -20,26 +20,26 @@ namespace vpm::cli {
 // LoadVolume: `source` is a path under the server's data root or phantom:NAME.
 // With `progress`, the load carries a random progress_id and this polls
 // GetLoadProgress every 100 ms while it runs, reporting what it says.
-Result<v2::VolumeInfo> LoadVolumeOnServer(const ServerConnection& server,
+Result<v3::VolumeInfo> LoadVolumeOnServer(const ServerConnection& server,
                                           const std::string& source,
                                           const ProgressFn& progress = {});
 
 // The mesh flags as the API's MeshParams; --refine-at-landmark is resolved
 // with the landmarks the server reports for `volume` (NOT_FOUND if absent).
-Result<v2::MeshParams> ToProtoMeshParams(const MeshFlags& flags, const v2::VolumeInfo& volume);
+Result<v3::MeshParams> ToProtoMeshParams(const MeshFlags& flags, const v3::VolumeInfo& volume);
 
-// A named landmark of `volume` (physical voxel space, mm); NOT_FOUND lists
+// A named landmark of `volume` (world LPS, mm); NOT_FOUND lists
 // the volume's landmarks.
-Result<glm::dvec3> FindLandmark(const v2::VolumeInfo& volume, const std::string& name);
+Result<glm::dvec3> FindLandmark(const v3::VolumeInfo& volume, const std::string& name);
 
-// GetMesh with geometry, as the ProxyMesh the offline commands write (voxel
-// indices are not sent by the API and stay 0).
+// GetMesh with geometry, as the ProxyMesh the offline commands write: world
+// LPS positions (voxel indices are not sent by the API and stay 0).
 Result<ProxyMesh> FetchMesh(const ServerConnection& server, const std::string& mesh_id);
 
 // LoadVolume + BuildMesh + FetchMesh.
 struct RemoteMesh {
-  v2::VolumeInfo volume;
-  v2::MeshInfo info;
+  v3::VolumeInfo volume;
+  v3::MeshInfo info;
   ProxyMesh mesh;
 };
 Result<RemoteMesh> BuildMeshOnServer(const ServerConnection& server, const std::string& source,

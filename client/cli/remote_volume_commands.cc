@@ -6,8 +6,8 @@
 #include <memory>
 #include <vector>
 
-#include "client/cli/progress_bar.h"
-#include "client/cli/proto_json.h"
+#include "client/common/progress_bar.h"
+#include "client/common/proto_json.h"
 #include "client/cli/remote_pipeline.h"
 #include "client/cli/server_flags.h"
 #include "server/common/sha256.h"
@@ -24,16 +24,16 @@ Status Upload(const ServerConnection& server, const std::string& path) {
   std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(file)),
                              std::istreambuf_iterator<char>());
   auto context = server.Context();
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   auto writer = server.stub().UploadVolume(context.get(), &info);
-  v2::UploadVolumeRequest header;
+  v3::UploadVolumeRequest header;
   header.mutable_header()->set_file_name(fs::path(path).filename().string());
   header.mutable_header()->set_total_bytes(int64_t(bytes.size()));
   header.mutable_header()->set_sha256_hex(Sha256::HexOf(bytes));
   bool ok = writer->Write(header);
   constexpr size_t kChunk = 1 << 20;
   for (size_t at = 0; ok && at < bytes.size(); at += kChunk) {
-    v2::UploadVolumeRequest chunk;
+    v3::UploadVolumeRequest chunk;
     chunk.set_chunk(bytes.data() + at, std::min(kChunk, bytes.size() - at));
     ok = writer->Write(chunk);
   }
@@ -60,7 +60,7 @@ void AddRemoteVolumeCommands(CLI::App& app, const ServerFlags* flags, int* exit_
                  "draw the progress bar (GetLoadProgress) even when stderr is not a terminal");
   load->callback(WithServer(flags, exit_code, [load_args](const ServerConnection& s) -> Status {
     ProgressBar bar(StrCat("loading ", load_args->source), ProgressWanted(load_args->progress));
-    ASSIGN_OR_RETURN(v2::VolumeInfo info,
+    ASSIGN_OR_RETURN(v3::VolumeInfo info,
                      LoadVolumeOnServer(s, load_args->source, bar.Reporter()));
     bar.Finish();
     PrintJson(VolumeJson(info));
@@ -74,7 +74,7 @@ void AddRemoteVolumeCommands(CLI::App& app, const ServerFlags* flags, int* exit_
   }));
   volume->add_subcommand("list", "server: ListVolumes")
       ->callback(WithServer(flags, exit_code, [](const ServerConnection& s) -> Status {
-        v2::ListVolumesResponse response;
+        v3::ListVolumesResponse response;
         RETURN_IF_ERROR(FromGrpc(s.stub().ListVolumes(s.Context().get(), {}, &response)));
         json j = json::array();
         for (const auto& v : response.volumes()) j.push_back(VolumeJson(v));
@@ -85,9 +85,9 @@ void AddRemoteVolumeCommands(CLI::App& app, const ServerFlags* flags, int* exit_
   CLI::App* get = volume->add_subcommand("get", "server: GetVolume");
   get->add_option("ID", *id)->required();
   get->callback(WithServer(flags, exit_code, [id](const ServerConnection& s) -> Status {
-    v2::GetVolumeRequest request;
+    v3::GetVolumeRequest request;
     request.set_volume_id(*id);
-    v2::VolumeInfo info;
+    v3::VolumeInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().GetVolume(s.Context().get(), request, &info)));
     PrintJson(VolumeJson(info));
     return absl::OkStatus();
@@ -95,9 +95,9 @@ void AddRemoteVolumeCommands(CLI::App& app, const ServerFlags* flags, int* exit_
   CLI::App* del = volume->add_subcommand("delete", "server: DeleteVolume");
   del->add_option("ID", *id)->required();
   del->callback(WithServer(flags, exit_code, [id](const ServerConnection& s) -> Status {
-    v2::DeleteVolumeRequest request;
+    v3::DeleteVolumeRequest request;
     request.set_volume_id(*id);
-    v2::DeleteVolumeResponse response;
+    v3::DeleteVolumeResponse response;
     return FromGrpc(s.stub().DeleteVolume(s.Context().get(), request, &response));
   }));
 }

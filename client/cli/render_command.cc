@@ -6,7 +6,7 @@
 #include <string_view>
 
 #include "client/cli/clip_flags.h"
-#include "client/cli/command_status.h"
+#include "client/common/command_status.h"
 #include "client/cli/mesh_flags.h"
 #include "client/cli/offline_scene.h"
 #include "client/cli/remote_pipeline.h"
@@ -92,9 +92,9 @@ class SessionCloser {
  public:
   SessionCloser(const ServerConnection& server, std::string id) : server_(server), id_(id) {}
   ~SessionCloser() {
-    v2::CloseSessionRequest request;
+    v3::CloseSessionRequest request;
     request.set_session_id(id_);
-    v2::CloseSessionResponse response;
+    v3::CloseSessionResponse response;
     (void)server_.stub().CloseSession(server_.Context().get(), request, &response);
   }
   SessionCloser(const SessionCloser&) = delete;
@@ -105,12 +105,12 @@ class SessionCloser {
   std::string id_;
 };
 
-Result<v2::ManipulateResponse> Manipulate(const ServerConnection& server,
-                                          const std::string& session, v2::ClientEvent event) {
-  v2::ManipulateRequest request;
+Result<v3::ManipulateResponse> Manipulate(const ServerConnection& server,
+                                          const std::string& session, v3::ClientEvent event) {
+  v3::ManipulateRequest request;
   request.set_session_id(session);
   *request.mutable_event() = std::move(event);
-  v2::ManipulateResponse response;
+  v3::ManipulateResponse response;
   RETURN_IF_ERROR(FromGrpc(server.stub().Manipulate(server.Context().get(), request, &response)));
   return response;
 }
@@ -141,7 +141,7 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
     return absl::InvalidArgumentError("--drag and --pull need --grab or --grab-landmark");
   }
   ASSIGN_OR_RETURN(ServerConnection server, ServerConnection::Connect(flags));
-  ASSIGN_OR_RETURN(v2::VolumeInfo volume, LoadVolumeOnServer(server, args.source));
+  ASSIGN_OR_RETURN(v3::VolumeInfo volume, LoadVolumeOnServer(server, args.source));
   std::vector<double> grab = args.grab;
   if (!args.grab_landmark.empty()) {
     ASSIGN_OR_RETURN(glm::dvec3 at, FindLandmark(volume, args.grab_landmark));
@@ -151,30 +151,30 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
   if (!grab.empty() && mesh_flags.refine_at.empty() && mesh_flags.refine_at_landmark.empty()) {
     mesh_flags.refine_at = grab;
   }
-  v2::BuildMeshRequest build;
+  v3::BuildMeshRequest build;
   build.set_volume_id(volume.volume_id());
   ASSIGN_OR_RETURN(*build.mutable_params(), ToProtoMeshParams(mesh_flags, volume));
-  v2::MeshInfo mesh;
+  v3::MeshInfo mesh;
   RETURN_IF_ERROR(FromGrpc(server.stub().BuildMesh(server.Context().get(), build, &mesh)));
-  v2::OpenSessionRequest open;
+  v3::OpenSessionRequest open;
   open.set_volume_id(volume.volume_id());
   open.set_mesh_id(mesh.mesh_id());
-  v2::SessionInfo session;
+  v3::SessionInfo session;
   RETURN_IF_ERROR(FromGrpc(server.stub().OpenSession(server.Context().get(), open, &session)));
   SessionCloser closer(server, session.session_id());
   for (size_t p = 0; p + 2 < args.pins.size(); p += 3) {
-    v2::ClientEvent pin;
+    v3::ClientEvent pin;
     *pin.mutable_pin()->mutable_point_mm() =
         ToProto(glm::dvec3(args.pins[p], args.pins[p + 1], args.pins[p + 2]));
     RETURN_IF_ERROR(Manipulate(server, session.session_id(), pin).status());
   }
   if (!grab.empty()) {
-    v2::ClientEvent event;
+    v3::ClientEvent event;
     ASSIGN_OR_RETURN(const glm::dvec3 grab_mm, Vec3Of(grab, "--grab"));
     *event.mutable_grab()->mutable_point_mm() = ToProto(grab_mm);
     event.mutable_grab()->set_radius_mm(args.grab_radius);
-    event.mutable_grab()->set_rule(args.grab_rule == "ball" ? v2::GRAB_RULE_BALL
-                                                            : v2::GRAB_RULE_ORGAN);
+    event.mutable_grab()->set_rule(args.grab_rule == "ball" ? v3::GRAB_RULE_BALL
+                                                            : v3::GRAB_RULE_ORGAN);
     RETURN_IF_ERROR(Manipulate(server, session.session_id(), event).status());
     event.Clear();
     if (!args.drag.empty()) {
@@ -185,18 +185,18 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
       ASSIGN_OR_RETURN(const glm::dvec3 force, Vec3Of(args.pull, "--pull"));
       *event.mutable_pull()->mutable_force_n() = ToProto(force);
     }
-    if (event.event_case() != v2::ClientEvent::EVENT_NOT_SET) {
+    if (event.event_case() != v3::ClientEvent::EVENT_NOT_SET) {
       RETURN_IF_ERROR(Manipulate(server, session.session_id(), event).status());
     }
   }
-  v2::RenderRequest render;
+  v3::RenderRequest render;
   render.set_session_id(session.session_id());
   if (!args.camera.empty()) {
     render.mutable_camera()->set_azimuth_deg(args.camera[0]);
     render.mutable_camera()->set_elevation_deg(args.camera[1]);
     render.mutable_camera()->set_distance_mm(args.camera[2]);
   }
-  v2::RenderSettings* settings = render.mutable_settings();
+  v3::RenderSettings* settings = render.mutable_settings();
   const auto mode = RenderModeFromName(args.mode);
   if (!mode) return absl::InvalidArgumentError(StrCat("--mode: '", args.mode, "' is not dvr or mip"));
   settings->set_mode(*mode);
@@ -214,11 +214,11 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
   settings->set_width(args.size[0]);
   settings->set_height(args.size[1]);
   settings->set_overlay(args.overlay);
-  settings->set_encoding(jpeg ? v2::ENCODING_JPEG : v2::ENCODING_PNG);
+  settings->set_encoding(jpeg ? v3::ENCODING_JPEG : v3::ENCODING_PNG);
   settings->set_jpeg_quality(args.jpeg_quality);
   ASSIGN_OR_RETURN(const ClipChoice clip, ToClipChoice(args.clip));
   FillClipSettings(clip, settings);
-  v2::Frame frame;
+  v3::Frame frame;
   RETURN_IF_ERROR(FromGrpc(server.stub().Render(server.Context().get(), render, &frame)));
   RETURN_IF_ERROR(WriteFile(args.out, frame.image()));
   std::printf("server %s: volume %s, mesh %s (%lld vertices, %lld tets), session %s\n",
@@ -229,7 +229,7 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
   std::printf("max displacement %.2f mm, inverted tets %lld, lag %.2f mm\n",
               frame.max_displacement_mm(), static_cast<long long>(frame.inverted_tets()),
               frame.lag_mm());
-  const v2::StageTimings& t = frame.timings();
+  const v3::StageTimings& t = frame.timings();
   std::printf("%-22s %9s\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n", "stage (server)",
               "ms", "render (GPU)", t.render_ms(), "encode", t.encode_ms(), "queue", t.queue_ms(),
               "total", t.total_ms());

@@ -7,7 +7,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "client/cli/server_connection.h"
+#include "client/common/server_connection.h"
 
 namespace vpm::cli {
 

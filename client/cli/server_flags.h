@@ -7,8 +7,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "client/cli/command_status.h"
-#include "client/cli/server_connection.h"
+#include "client/common/command_status.h"
+#include "client/common/server_connection.h"
 
 namespace vpm::cli {
 

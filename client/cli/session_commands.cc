@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "client/cli/proto_json.h"
+#include "client/common/proto_json.h"
 #include "proto/enum_names.h"
 #include "client/cli/server_flags.h"
 #include "server/common/write_file.h"
@@ -34,17 +34,17 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   open->add_option("--volume-id", a->volume_id);
   open->add_option("--mesh-id", a->mesh_id, "empty: a mesh with default parameters");
   open->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v2::OpenSessionRequest request;
+    v3::OpenSessionRequest request;
     request.set_volume_id(a->volume_id);
     request.set_mesh_id(a->mesh_id);
-    v2::SessionInfo info;
+    v3::SessionInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().OpenSession(s.Context().get(), request, &info)));
     PrintJson(SessionJson(info));
     return absl::OkStatus();
   }));
   session->add_subcommand("list", "ListSessions")
       ->callback(WithServer(flags, exit_code, [](const ServerConnection& s) -> Status {
-        v2::ListSessionsResponse response;
+        v3::ListSessionsResponse response;
         RETURN_IF_ERROR(FromGrpc(s.stub().ListSessions(s.Context().get(), {}, &response)));
         json j = json::array();
         for (const auto& x : response.sessions()) j.push_back(SessionJson(x));
@@ -54,18 +54,18 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   CLI::App* close = session->add_subcommand("close", "CloseSession");
   close->add_option("ID", a->session_id)->required();
   close->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v2::CloseSessionRequest request;
+    v3::CloseSessionRequest request;
     request.set_session_id(a->session_id);
-    v2::CloseSessionResponse response;
+    v3::CloseSessionResponse response;
     return FromGrpc(s.stub().CloseSession(s.Context().get(), request, &response));
   }));
 
   CLI::App* get = session->add_subcommand("get", "GetSession");
   get->add_option("ID", a->session_id)->required();
   get->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v2::GetSessionRequest request;
+    v3::GetSessionRequest request;
     request.set_session_id(a->session_id);
-    v2::SessionInfo info;
+    v3::SessionInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().GetSession(s.Context().get(), request, &info)));
     PrintJson(SessionJson(info));
     return absl::OkStatus();
@@ -76,11 +76,11 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   share->add_option("--with", a->user, "the user's name on the server")->required();
   share->add_flag("--revoke", a->revoke, "no longer let that user watch");
   share->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v2::ShareSessionRequest request;
+    v3::ShareSessionRequest request;
     request.set_session_id(a->session_id);
     request.set_user(a->user);
     request.set_revoke(a->revoke);
-    v2::SessionInfo info;
+    v3::SessionInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().ShareSession(s.Context().get(), request, &info)));
     PrintJson(SessionJson(info));
     return absl::OkStatus();
@@ -92,7 +92,7 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   snapshot->add_option("--size", a->size, "W H")->expected(2);
   snapshot->add_option("--out", a->out, "frame.jpg or frame.png")->required();
   snapshot->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v2::RenderRequest request;
+    v3::RenderRequest request;
     request.set_session_id(a->session_id);
     if (a->camera.size() == 3) {
       request.mutable_camera()->set_azimuth_deg(a->camera[0]);
@@ -102,7 +102,7 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
     request.mutable_settings()->set_width(a->size[0]);
     request.mutable_settings()->set_height(a->size[1]);
     request.mutable_settings()->set_encoding(EncodingForFile(a->out));
-    v2::Frame frame;
+    v3::Frame frame;
     RETURN_IF_ERROR(FromGrpc(s.stub().Render(s.Context().get(), request, &frame)));
     RETURN_IF_ERROR(WriteFile(a->out, frame.image()));
     std::printf("wrote %s (%dx%d, %zu bytes; render %.1f ms, encode %.1f ms)\n", a->out.c_str(),
@@ -125,11 +125,11 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   manipulate->add_flag("--keep", a->keep, "with --release: the drag stays");
   manipulate->add_flag("--reset", a->reset, "back to rest: drops the grab, kept drags and pins");
   manipulate->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v2::ManipulateRequest request;
+    v3::ManipulateRequest request;
     request.set_session_id(a->session_id);
-    v2::ClientEvent* e = request.mutable_event();
+    v3::ClientEvent* e = request.mutable_event();
     e->set_sequence(1);
-    auto set = [](v2::Vec3* v, const std::vector<double>& x) {
+    auto set = [](v3::Vec3* v, const std::vector<double>& x) {
       v->set_x(x[0]);
       v->set_y(x[1]);
       v->set_z(x[2]);
@@ -137,7 +137,7 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
     if (a->grab.size() == 3) {
       set(e->mutable_grab()->mutable_point_mm(), a->grab);
       e->mutable_grab()->set_radius_mm(a->radius_mm);
-      e->mutable_grab()->set_rule(a->grab_rule == "ball" ? v2::GRAB_RULE_BALL : v2::GRAB_RULE_ORGAN);
+      e->mutable_grab()->set_rule(a->grab_rule == "ball" ? v3::GRAB_RULE_BALL : v3::GRAB_RULE_ORGAN);
     } else if (a->drag.size() == 3) {
       set(e->mutable_drag()->mutable_offset_mm(), a->drag);
     } else if (a->pull.size() == 3) {
@@ -150,7 +150,7 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
     } else if (a->reset) {
       e->mutable_reset();
     }
-    v2::ManipulateResponse response;
+    v3::ManipulateResponse response;
     RETURN_IF_ERROR(FromGrpc(s.stub().Manipulate(s.Context().get(), request, &response)));
     std::printf("applied; max displacement %.2f mm, lag %.2f mm, inverted tets %lld\n",
                 response.max_displacement_mm(), response.lag_mm(),
@@ -163,12 +163,12 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   camera->add_option("--session", a->session_id)->required();
   camera->add_option("POSE", a->camera, "AZ EL [DIST]")->expected(2, 3)->required();
   camera->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v2::SetCameraRequest request;
+    v3::SetCameraRequest request;
     request.set_session_id(a->session_id);
     request.mutable_camera()->set_azimuth_deg(a->camera[0]);
     request.mutable_camera()->set_elevation_deg(a->camera[1]);
     if (a->camera.size() == 3) request.mutable_camera()->set_distance_mm(a->camera[2]);
-    v2::SetCameraResponse response;
+    v3::SetCameraResponse response;
     return FromGrpc(s.stub().SetCamera(s.Context().get(), request, &response));
   }));
 
@@ -178,14 +178,14 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
   watch->add_option("--out-dir", a->out_dir, "save the frames here");
   watch->add_option("--size", a->size, "W H")->expected(2);
   watch->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
-    v2::WatchRequest request;
+    v3::WatchRequest request;
     request.set_session_id(a->session_id);
     request.mutable_settings()->set_width(a->size[0]);
     request.mutable_settings()->set_height(a->size[1]);
     auto context = s.Context(true);
     auto reader = s.stub().Watch(context.get(), request);
     if (!a->out_dir.empty()) RETURN_IF_ERROR(MakeDirectories(a->out_dir));
-    v2::Frame frame;
+    v3::Frame frame;
     int n = 0;
     while (n < a->frames && reader->Read(&frame)) {
       std::printf("frame %llu: seq %llu %s %zu bytes, render %.1f ms\n",

@@ -5,7 +5,7 @@
 #include <memory>
 #include <string_view>
 
-#include "client/cli/command_status.h"
+#include "client/common/command_status.h"
 #include "client/cli/offline_scene.h"
 #include "client/cli/server_flags.h"
 #include "proto/enum_names.h"
@@ -114,13 +114,13 @@ Status RunRemoteSlice(const SliceArgs& args, const ServerConnection& server) {
     return absl::InvalidArgumentError(
         "with --server, slice shows a session (--session): --volume is offline only");
   }
-  v2::RenderSliceRequest request;
+  v3::RenderSliceRequest request;
   request.set_session_id(args.session_id);
-  v2::SliceSpec* spec = request.mutable_slice();
+  v3::SliceSpec* spec = request.mutable_slice();
   std::string enum_name = "SLICE_ORIENTATION_" + args.plane;
   for (char& c : enum_name) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  v2::SliceOrientation orientation = v2::SLICE_ORIENTATION_UNSPECIFIED;
-  if (!v2::SliceOrientation_Parse(enum_name, &orientation)) {
+  v3::SliceOrientation orientation = v3::SLICE_ORIENTATION_UNSPECIFIED;
+  if (!v3::SliceOrientation_Parse(enum_name, &orientation)) {
     return absl::InvalidArgumentError(StrCat("--plane ", args.plane, ": not a plane"));
   }
   spec->set_orientation(orientation);
@@ -137,10 +137,10 @@ Status RunRemoteSlice(const SliceArgs& args, const ServerConnection& server) {
   spec->set_overlay(args.scene.overlay);
   request.set_encoding(EncodingForFile(args.scene.out));
   request.set_jpeg_quality(args.scene.jpeg_quality);
-  v2::Frame frame;
+  v3::Frame frame;
   RETURN_IF_ERROR(FromGrpc(server.stub().RenderSlice(server.Context().get(), request, &frame)));
   RETURN_IF_ERROR(WriteFile(args.scene.out, frame.image()));
-  const v2::SliceGeometry& g = frame.slice();
+  const v3::SliceGeometry& g = frame.slice();
   std::printf("%s slice at %.3f mm along (%.3f, %.3f, %.3f); window W %.0f L %.0f",
               args.plane.c_str(), g.offset_mm(), g.world_normal().x(), g.world_normal().y(),
               g.world_normal().z(), g.window().width(), g.window().level());

@@ -9,8 +9,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "client/cli/command_status.h"
-#include "client/cli/progress_bar.h"
+#include "client/common/command_status.h"
+#include "client/common/progress_bar.h"
 #include "client/cli/volume_flags.h"
 #include "server/io/list_dicom_series.h"
 #include "server/io/parse_dicom_source.h"
@@ -27,8 +27,7 @@ nlohmann::json VolumeInfoJson(const Volume& v) {
   nlohmann::json landmarks = nlohmann::json::array();
   for (const Landmark& l : v.landmarks()) {
     landmarks.push_back({{"name", l.name},
-                         {"position_mm", Vec(l.position_mm)},
-                         {"world_lps_mm", Vec(g.PhysicalToWorld(l.position_mm))},
+                         {"position_mm", Vec(g.PhysicalToWorld(l.position_mm))},  // world LPS
                          {"description", l.description}});
   }
   return {{"source", v.source()},
@@ -37,6 +36,7 @@ nlohmann::json VolumeInfoJson(const Volume& v) {
           {"origin_lps_mm", Vec(g.origin_mm)},
           {"direction_columns_lps", {Vec(g.direction[0]), Vec(g.direction[1]), Vec(g.direction[2])}},
           {"extent_mm", Vec(g.extent_mm())},
+          {"box_lps_mm", {Vec(g.WorldBox()[0]), Vec(g.WorldBox()[1])}},
           {"value_range", {v.min_value(), v.max_value()}},
           {"voxel_encoding", VoxelEncodingName(v.encoding())},
           {"value_bytes", v.value_bytes()},
@@ -91,6 +91,10 @@ void PrintInfo(const Volume& v) {
             << " mm\n"
             << "origin      " << g.origin_mm.x << " " << g.origin_mm.y << " " << g.origin_mm.z
             << " mm (world, LPS)\n";
+  const std::array<glm::dvec3, 2> box = g.WorldBox();
+  std::cout << "box         " << box[0].x << " " << box[0].y << " " << box[0].z << " .. "
+            << box[1].x << " " << box[1].y << " " << box[1].z
+            << " mm (world, LPS: where points go)\n";
   for (int c = 0; c < 3; ++c) {
     std::cout << (c == 0 ? "direction   " : "            ") << g.direction[c].x << " "
               << g.direction[c].y << " " << g.direction[c].z << "  (axis " << "ijk"[c] << ")\n";
@@ -105,9 +109,10 @@ void PrintInfo(const Volume& v) {
               << " NaN/infinite voxels were replaced by the minimum\n";
   }
   for (const Landmark& l : v.landmarks()) {
+    const glm::dvec3 w = g.PhysicalToWorld(l.position_mm);
     std::cout << "landmark    " << std::left << std::setw(22) << l.name << std::right
-              << std::setprecision(2) << l.position_mm.x << " " << l.position_mm.y << " "
-              << l.position_mm.z << " mm  " << l.description << "\n";
+              << std::setprecision(2) << w.x << " " << w.y << " " << w.z << " mm (LPS)  "
+              << l.description << "\n";
   }
 }
 

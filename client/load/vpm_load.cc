@@ -11,8 +11,8 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "client/cli/command_status.h"
-#include "client/cli/script_player.h"
+#include "client/common/command_status.h"
+#include "client/common/script_player.h"
 #include "server/common/write_file.h"
 
 namespace vpm::load {
@@ -49,21 +49,21 @@ json Histogram(const std::vector<double>& v, int buckets = 10) {
 
 Result<json> RunLevel(const cli::ServerConnection& s, const json& script_json, int concurrency,
                       const LoadArgs& args) {
-  v2::LoadVolumeRequest load;
+  v3::LoadVolumeRequest load;
   load.set_source(script_json.value("volume", "phantom:abdomen?size=64"));
-  v2::VolumeInfo volume;
+  v3::VolumeInfo volume;
   RETURN_IF_ERROR(FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &volume)));
   ASSIGN_OR_RETURN(cli::Script script, cli::ParseScript(script_json, volume));
-  v2::BuildMeshRequest build;
+  v3::BuildMeshRequest build;
   build.set_volume_id(volume.volume_id());
-  v2::MeshInfo mesh;
+  v3::MeshInfo mesh;
   RETURN_IF_ERROR(FromGrpc(s.stub().BuildMesh(s.Context().get(), build, &mesh)));
   std::vector<std::string> sessions;
   std::map<std::string, int64_t> codes;
   for (int i = 0; i < (args.shared_session ? 1 : concurrency); ++i) {
-    v2::OpenSessionRequest open;
+    v3::OpenSessionRequest open;
     open.set_mesh_id(mesh.mesh_id());
-    v2::SessionInfo info;
+    v3::SessionInfo info;
     grpc::Status status = s.stub().OpenSession(s.Context().get(), open, &info);
     if (!status.ok()) {
       codes[absl::StatusCodeToString(FromGrpc(status).code())]++;
@@ -84,14 +84,14 @@ Result<json> RunLevel(const cli::ServerConnection& s, const json& script_json, i
   }
   for (auto& t : threads) t.join();
   for (const std::string& id : sessions) {
-    v2::CloseSessionRequest close;
+    v3::CloseSessionRequest close;
     close.set_session_id(id);
-    v2::CloseSessionResponse closed;
+    v3::CloseSessionResponse closed;
     (void)s.stub().CloseSession(s.Context().get(), close, &closed);
   }
-  v2::DeleteVolumeRequest del;
+  v3::DeleteVolumeRequest del;
   del.set_volume_id(volume.volume_id());
-  v2::DeleteVolumeResponse deleted;
+  v3::DeleteVolumeResponse deleted;
   (void)s.stub().DeleteVolume(s.Context().get(), del, &deleted);
 
   std::vector<double> latency, frame_latency, first, fps, jitter;

@@ -6,7 +6,7 @@
 namespace vpm::view {
 namespace {
 
-glm::dvec3 UnitNormal(const v2::ClipPlane& plane) {
+glm::dvec3 UnitNormal(const v3::ClipPlane& plane) {
   const glm::dvec3 n{plane.normal().x(), plane.normal().y(), plane.normal().z()};
   const double length = glm::length(n);
   return length > 0.0 ? n / length : glm::dvec3(0.0, 0.0, 1.0);
@@ -14,10 +14,10 @@ glm::dvec3 UnitNormal(const v2::ClipPlane& plane) {
 
 }  // namespace
 
-v2::ClipPlane ClipPlaneFacingCamera(const ViewCamera& camera, const VolumeGeometry& geometry) {
+v3::ClipPlane ClipPlaneFacingCamera(const ViewCamera& camera, const VolumeGeometry& geometry) {
   const glm::dvec3 n = glm::normalize(geometry.direction * camera.camera().Forward());
   const glm::dvec3 target = geometry.PhysicalToWorld(camera.camera().Target());
-  v2::ClipPlane plane;
+  v3::ClipPlane plane;
   plane.mutable_normal()->set_x(n.x);
   plane.mutable_normal()->set_y(n.y);
   plane.mutable_normal()->set_z(n.z);
@@ -25,7 +25,7 @@ v2::ClipPlane ClipPlaneFacingCamera(const ViewCamera& camera, const VolumeGeomet
   return plane;
 }
 
-v2::ClipPlane MoveClipPlane(const v2::ClipPlane& plane, double delta_mm, const WorldBox& box) {
+v3::ClipPlane MoveClipPlane(const v3::ClipPlane& plane, double delta_mm, const WorldBox& box) {
   const glm::dvec3 n = UnitNormal(plane);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (int c = 0; c < 8; ++c) {
@@ -38,7 +38,7 @@ v2::ClipPlane MoveClipPlane(const v2::ClipPlane& plane, double delta_mm, const W
   const double length = glm::length(
       glm::dvec3{plane.normal().x(), plane.normal().y(), plane.normal().z()});
   const double offset = length > 0.0 ? plane.offset_mm() / length : plane.offset_mm();
-  v2::ClipPlane out;
+  v3::ClipPlane out;
   out.mutable_normal()->set_x(n.x);
   out.mutable_normal()->set_y(n.y);
   out.mutable_normal()->set_z(n.z);
@@ -47,7 +47,7 @@ v2::ClipPlane MoveClipPlane(const v2::ClipPlane& plane, double delta_mm, const W
 }
 
 double ClipDragMm(const ViewCamera& camera, const VolumeGeometry& geometry,
-                  const v2::ClipPlane& plane, double dx_px, double dy_px, int frame_width,
+                  const v3::ClipPlane& plane, double dx_px, double dy_px, int frame_width,
                   int frame_height) {
   const glm::dvec3 n_physical = glm::transpose(geometry.direction) * UnitNormal(plane);
   return camera.MotionAlongMm(n_physical, dx_px, dy_px, frame_width, frame_height);

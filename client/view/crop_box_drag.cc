@@ -11,8 +11,8 @@ glm::dvec3 Corner(const WorldBox& box, int c) {
           (c & 4) ? box.hi.z : box.lo.z};
 }
 
-v2::Vec3 ToVec3(const glm::dvec3& v) {
-  v2::Vec3 out;
+v3::Vec3 ToVec3(const glm::dvec3& v) {
+  v3::Vec3 out;
   out.set_x(v.x);
   out.set_y(v.y);
   out.set_z(v.z);
@@ -35,8 +35,8 @@ WorldBox VolumeWorldBox(const VolumeGeometry& geometry) {
   return box;
 }
 
-v2::CropBox CropBoxToProto(const WorldBox& box) {
-  v2::CropBox out;
+v3::CropBox CropBoxToProto(const WorldBox& box) {
+  v3::CropBox out;
   *out.mutable_lo_mm() = ToVec3(box.lo);
   *out.mutable_hi_mm() = ToVec3(box.hi);
   return out;

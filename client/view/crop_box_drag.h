@@ -15,7 +15,7 @@
 
 #include "client/view/view_camera.h"
 #include "server/volume/volume.h"
-#include "vpm/v2/vpm.pb.h"
+#include "vpm/v3/vpm.pb.h"
 
 namespace vpm::view {
 
@@ -29,7 +29,7 @@ struct WorldBox {
 // index box mapped to world, then their bounds).
 WorldBox VolumeWorldBox(const VolumeGeometry& geometry);
 
-v2::CropBox CropBoxToProto(const WorldBox& box);
+v3::CropBox CropBoxToProto(const WorldBox& box);
 
 // One face: the faces at lo[axis] (high = false) and hi[axis] (high = true).
 struct BoxFace {

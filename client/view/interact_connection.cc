@@ -12,10 +12,10 @@ std::string Describe(const Status& status) {
   return StrCat(absl::StatusCodeToString(status.code()), ": ", status.message());
 }
 
-Result<DecodedImage> Decode(const v2::Frame& frame) {
+Result<DecodedImage> Decode(const v3::Frame& frame) {
   std::span<const uint8_t> bytes(reinterpret_cast<const uint8_t*>(frame.image().data()),
                                  frame.image().size());
-  if (frame.encoding() == v2::ENCODING_PNG) return DecodePng(bytes);
+  if (frame.encoding() == v3::ENCODING_PNG) return DecodePng(bytes);
   return DecodeJpeg(bytes);
 }
 
@@ -38,7 +38,7 @@ void InteractConnection::Stop() {
   if (thread_.joinable()) thread_.join();
 }
 
-void InteractConnection::Send(const v2::ClientEvent& event) {
+void InteractConnection::Send(const v3::ClientEvent& event) {
   {
     std::lock_guard lock(mutex_);
     if (event.has_settings()) settings_ = event.settings();
@@ -123,14 +123,14 @@ void InteractConnection::Run() {
 Status InteractConnection::ResolveSession() {
   std::string session_id = state().session_id;
   if (!session_id.empty()) {
-    v2::ListSessionsResponse sessions;
-    RETURN_IF_ERROR(Call(&v2::Vpm::Stub::ListSessions, v2::ListSessionsRequest(), &sessions));
-    for (const v2::SessionInfo& s : sessions.sessions()) {
+    v3::ListSessionsResponse sessions;
+    RETURN_IF_ERROR(Call(&v3::Vpm::Stub::ListSessions, v3::ListSessionsRequest(), &sessions));
+    for (const v3::SessionInfo& s : sessions.sessions()) {
       if (s.session_id() != session_id) continue;
-      v2::GetVolumeRequest get;
+      v3::GetVolumeRequest get;
       get.set_volume_id(s.volume_id());
-      v2::VolumeInfo volume;
-      RETURN_IF_ERROR(Call(&v2::Vpm::Stub::GetVolume, get, &volume));
+      v3::VolumeInfo volume;
+      RETURN_IF_ERROR(Call(&v3::Vpm::Stub::GetVolume, get, &volume));
       std::lock_guard lock(mutex_);
       state_.volume = volume;
       state_.mesh_id = s.mesh_id();
@@ -145,15 +145,15 @@ Status InteractConnection::ResolveSession() {
     return absl::InvalidArgumentError("give --session ID or --volume SRC");
   }
   SetState(false, StrCat("loading ", options_.volume_source, " ..."));
-  v2::LoadVolumeRequest load;
+  v3::LoadVolumeRequest load;
   load.set_source(options_.volume_source);
-  v2::VolumeInfo volume;
-  RETURN_IF_ERROR(Call(&v2::Vpm::Stub::LoadVolume, load, &volume));
+  v3::VolumeInfo volume;
+  RETURN_IF_ERROR(Call(&v3::Vpm::Stub::LoadVolume, load, &volume));
   SetState(false, "opening a session (building the proxy mesh) ...");
-  v2::OpenSessionRequest open;
+  v3::OpenSessionRequest open;
   open.set_volume_id(volume.volume_id());
-  v2::SessionInfo session;
-  RETURN_IF_ERROR(Call(&v2::Vpm::Stub::OpenSession, open, &session));
+  v3::SessionInfo session;
+  RETURN_IF_ERROR(Call(&v3::Vpm::Stub::OpenSession, open, &session));
   std::fprintf(stderr, "vpm-view: opened session %s on %s (volume %s)\n",
                session.session_id().c_str(), options_.volume_source.c_str(),
                volume.volume_id().c_str());
@@ -170,18 +170,18 @@ Status InteractConnection::Refine(const glm::dvec3& point_mm) {
   if (!before.volume || before.mesh_id.empty()) return ResolveSession();
   SetState(false, StrCat("refining the mesh at (", point_mm.x, ", ", point_mm.y, ", ",
                          point_mm.z, ") mm ..."));
-  v2::RefineMeshRequest refine;
+  v3::RefineMeshRequest refine;
   refine.set_mesh_id(before.mesh_id);
   refine.mutable_point_mm()->set_x(point_mm.x);
   refine.mutable_point_mm()->set_y(point_mm.y);
   refine.mutable_point_mm()->set_z(point_mm.z);
-  v2::MeshInfo mesh;
-  RETURN_IF_ERROR(Call(&v2::Vpm::Stub::RefineMesh, refine, &mesh));
-  v2::OpenSessionRequest open;
+  v3::MeshInfo mesh;
+  RETURN_IF_ERROR(Call(&v3::Vpm::Stub::RefineMesh, refine, &mesh));
+  v3::OpenSessionRequest open;
   open.set_volume_id(before.volume->volume_id());
   open.set_mesh_id(mesh.mesh_id());
-  v2::SessionInfo session;
-  RETURN_IF_ERROR(Call(&v2::Vpm::Stub::OpenSession, open, &session));
+  v3::SessionInfo session;
+  RETURN_IF_ERROR(Call(&v3::Vpm::Stub::OpenSession, open, &session));
   bool close_old;
   {
     std::lock_guard lock(mutex_);
@@ -192,10 +192,10 @@ Status InteractConnection::Refine(const glm::dvec3& point_mm) {
   }
   if (close_old) {
     // The old session was ours alone; a failure only leaves it to expire.
-    v2::CloseSessionRequest close;
+    v3::CloseSessionRequest close;
     close.set_session_id(before.session_id);
-    v2::CloseSessionResponse closed;
-    (void)Call(&v2::Vpm::Stub::CloseSession, close, &closed);
+    v3::CloseSessionResponse closed;
+    (void)Call(&v3::Vpm::Stub::CloseSession, close, &closed);
   }
   std::fprintf(stderr, "vpm-view: refined mesh %s, session %s\n", mesh.mesh_id().c_str(),
                session.session_id().c_str());
@@ -205,7 +205,7 @@ Status InteractConnection::Refine(const glm::dvec3& point_mm) {
 Status InteractConnection::StreamOnce() {
   auto context = server_->Context(/*streaming=*/true);
   auto stream = server_->stub().Interact(context.get());
-  v2::InteractRequest first;
+  v3::InteractRequest first;
   {
     std::lock_guard lock(mutex_);
     context_ = context.get();
@@ -224,7 +224,7 @@ Status InteractConnection::StreamOnce() {
     std::lock_guard lock(mutex_);
     latency_.Sent(sequence, SteadyClock::now());
     if (camera_) {  // the view this viewer had, restored on the new stream
-      v2::ClientEvent camera;
+      v3::ClientEvent camera;
       *camera.mutable_camera() = *camera_;
       events_.Push(camera);
     }
@@ -240,11 +240,11 @@ Status InteractConnection::StreamOnce() {
 }
 
 void InteractConnection::WriteEvents(
-    grpc::ClientReaderWriter<v2::InteractRequest, v2::Frame>* stream, uint64_t* sequence) {
+    grpc::ClientReaderWriter<v3::InteractRequest, v3::Frame>* stream, uint64_t* sequence) {
   while (!stopping_ && !stream_ended_) {
-    std::optional<v2::ClientEvent> event = events_.Pop(std::chrono::milliseconds(100));
+    std::optional<v3::ClientEvent> event = events_.Pop(std::chrono::milliseconds(100));
     if (!event) continue;
-    v2::InteractRequest request;
+    v3::InteractRequest request;
     *request.mutable_event() = *event;
     request.mutable_event()->set_sequence(++*sequence);
     {
@@ -259,8 +259,8 @@ void InteractConnection::WriteEvents(
 }
 
 void InteractConnection::ReadFrames(
-    grpc::ClientReaderWriter<v2::InteractRequest, v2::Frame>* stream) {
-  v2::Frame frame;
+    grpc::ClientReaderWriter<v3::InteractRequest, v3::Frame>* stream) {
+  v3::Frame frame;
   while (stream->Read(&frame)) {
     const SteadyClock::time_point now = SteadyClock::now();
     auto image = Decode(frame);
@@ -273,11 +273,11 @@ void InteractConnection::ReadFrames(
     ShownFrame shown;
     shown.image = std::move(*image);
     frame.clear_image();
-    for (v2::SliceImage& slice : *frame.mutable_slices()) {
+    for (v3::SliceImage& slice : *frame.mutable_slices()) {
       const std::string_view bytes = slice.image();
       const std::span<const uint8_t> data(reinterpret_cast<const uint8_t*>(bytes.data()),
                                           bytes.size());
-      auto decoded = slice.encoding() == v2::ENCODING_PNG ? DecodePng(data) : DecodeJpeg(data);
+      auto decoded = slice.encoding() == v3::ENCODING_PNG ? DecodePng(data) : DecodeJpeg(data);
       if (decoded.ok()) shown.slices.push_back(*std::move(decoded));
       slice.clear_image();
     }

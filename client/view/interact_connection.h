@@ -16,7 +16,7 @@
 
 #include <glm/glm.hpp>
 
-#include "client/cli/server_connection.h"
+#include "client/common/server_connection.h"
 #include "client/view/outbound_events.h"
 #include "client/view/stream_meters.h"
 #include "server/raycast/frame_encoder.h"
@@ -34,7 +34,7 @@ struct ConnectionOptions {
 struct ShownFrame {
   DecodedImage image;                // RGBA8, row 0 at the top
   std::vector<DecodedImage> slices;  // Frame.slices, decoded, in order
-  v2::Frame info;                    // the frame without its image bytes
+  v3::Frame info;                    // the frame without its image bytes
   std::optional<double> latency_ms;  // event sent -> this frame, when it shows a new event
   double fps = 0;                    // frames per second received
 };
@@ -43,7 +43,7 @@ struct ConnectionState {
   bool connected = false;   // a stream is up and has delivered a frame
   std::string message;      // when not connected: what went wrong and what happens next
   uint64_t stream_generation = 0;  // +1 for every new stream (the server forgot any grab)
-  std::optional<v2::VolumeInfo> volume;
+  std::optional<v3::VolumeInfo> volume;
   std::string session_id;
   std::string mesh_id;
 };
@@ -62,7 +62,7 @@ class InteractConnection {
 
   // Queues an event for the current stream. Settings and camera are also
   // remembered and sent first on every new stream.
-  void Send(const v2::ClientEvent& event);
+  void Send(const v3::ClientEvent& event);
   // Ends the current stream, refines the session's mesh at point_mm, opens
   // a session on the refined mesh and streams from it.
   void RefineAt(const glm::dvec3& point_mm);
@@ -76,13 +76,13 @@ class InteractConnection {
   Status ResolveSession();
   Status Refine(const glm::dvec3& point_mm);
   Status StreamOnce();
-  void ReadFrames(grpc::ClientReaderWriter<v2::InteractRequest, v2::Frame>* stream);
-  void WriteEvents(grpc::ClientReaderWriter<v2::InteractRequest, v2::Frame>* stream,
+  void ReadFrames(grpc::ClientReaderWriter<v3::InteractRequest, v3::Frame>* stream);
+  void WriteEvents(grpc::ClientReaderWriter<v3::InteractRequest, v3::Frame>* stream,
                    uint64_t* sequence);
   void SetState(bool connected, std::string message);
   // One unary call with the token and the deadline.
   template <typename Request, typename Response>
-  Status Call(grpc::Status (v2::Vpm::Stub::*method)(grpc::ClientContext*, const Request&,
+  Status Call(grpc::Status (v3::Vpm::Stub::*method)(grpc::ClientContext*, const Request&,
                                                      Response*),
               const Request& request, Response* response) {
     auto context = server_->Context();
@@ -97,8 +97,8 @@ class InteractConnection {
 
   mutable std::mutex mutex_;  // guards everything below
   ConnectionState state_;
-  std::optional<v2::RenderSettings> settings_;
-  std::optional<v2::Camera> camera_;
+  std::optional<v3::RenderSettings> settings_;
+  std::optional<v3::Camera> camera_;
   std::optional<glm::dvec3> refine_at_mm_;
   bool session_opened_here_ = false;
   std::optional<ShownFrame> newest_;

@@ -2,20 +2,20 @@
 
 namespace vpm::view {
 
-bool Coalesces(const v2::ClientEvent& a, const v2::ClientEvent& b) {
+bool Coalesces(const v3::ClientEvent& a, const v3::ClientEvent& b) {
   if (a.event_case() != b.event_case()) return false;
   switch (a.event_case()) {
-    case v2::ClientEvent::kCamera:
-    case v2::ClientEvent::kDrag:
-    case v2::ClientEvent::kSettings:
-    case v2::ClientEvent::kPull:
+    case v3::ClientEvent::kCamera:
+    case v3::ClientEvent::kDrag:
+    case v3::ClientEvent::kSettings:
+    case v3::ClientEvent::kPull:
       return !a.want_vertices() || b.want_vertices();
     default:
       return false;
   }
 }
 
-void OutboundEvents::Push(const v2::ClientEvent& event) {
+void OutboundEvents::Push(const v3::ClientEvent& event) {
   {
     std::lock_guard lock(mutex_);
     if (!events_.empty() && Coalesces(events_.back(), event)) {
@@ -27,11 +27,11 @@ void OutboundEvents::Push(const v2::ClientEvent& event) {
   changed_.notify_one();
 }
 
-std::optional<v2::ClientEvent> OutboundEvents::Pop(std::chrono::milliseconds timeout) {
+std::optional<v3::ClientEvent> OutboundEvents::Pop(std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
   changed_.wait_for(lock, timeout, [this] { return closed_ || !events_.empty(); });
   if (closed_ || events_.empty()) return std::nullopt;
-  v2::ClientEvent event = std::move(events_.front());
+  v3::ClientEvent event = std::move(events_.front());
   events_.pop_front();
   return event;
 }

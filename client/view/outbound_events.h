@@ -11,16 +11,16 @@
 #include <mutex>
 #include <optional>
 
-#include "vpm/v2/vpm.pb.h"
+#include "vpm/v3/vpm.pb.h"
 
 namespace vpm::view {
 
 class OutboundEvents {
  public:
-  void Push(const v2::ClientEvent& event);
+  void Push(const v3::ClientEvent& event);
   // The oldest event, waiting up to `timeout`; empty on timeout or once
   // Close() was called.
-  std::optional<v2::ClientEvent> Pop(std::chrono::milliseconds timeout);
+  std::optional<v3::ClientEvent> Pop(std::chrono::milliseconds timeout);
   // Drops everything waiting (the stream they were meant for is gone).
   void Clear();
   // Wakes a waiting Pop; later Pops return at once until Reopen().
@@ -31,11 +31,11 @@ class OutboundEvents {
  private:
   mutable std::mutex mutex_;
   std::condition_variable changed_;
-  std::deque<v2::ClientEvent> events_;
+  std::deque<v3::ClientEvent> events_;
   bool closed_ = false;
 };
 
 // Whether `b`, arriving right after `a`, can replace it.
-bool Coalesces(const v2::ClientEvent& a, const v2::ClientEvent& b);
+bool Coalesces(const v3::ClientEvent& a, const v3::ClientEvent& b);
 
 }  // namespace vpm::view

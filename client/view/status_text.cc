@@ -18,7 +18,7 @@ std::array<std::string, kStatusLineCount> StatusLines(const StatusInputs& in) {
   rate += in.latency_ms ? Format("  rtt %.0f ms", *in.latency_ms) : std::string("  rtt -");
   std::string state, stages = "server ms", more;
   if (in.frame) {
-    const v2::Frame& f = *in.frame;
+    const v3::Frame& f = *in.frame;
     rate += "  " + std::to_string(f.width()) + "x" + std::to_string(f.height());
     state = f.interactive() ? "interactive" : "still";
     state += Format("  disp %.1f mm", f.max_displacement_mm());
@@ -26,7 +26,7 @@ std::array<std::string, kStatusLineCount> StatusLines(const StatusInputs& in) {
     // pointer, or (never expected) inverted tets.
     if (f.lag_mm() >= 0.05) state += Format("  lag %.1f", f.lag_mm());
     if (f.inverted_tets() > 0) state += Format("  INV %d", static_cast<int>(f.inverted_tets()));
-    const v2::StageTimings& t = f.timings();
+    const v3::StageTimings& t = f.timings();
     stages += Format(" fem %.0f", t.fem_ms()) + Format(" warp %.0f", t.warp_ms()) +
               Format(" rend %.0f", t.render_ms());
     more = Format("enc %.0f", t.encode_ms()) + Format(" queue %.0f", t.queue_ms()) +

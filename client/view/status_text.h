@@ -5,14 +5,14 @@
 #include <optional>
 #include <string>
 
-#include "vpm/v2/vpm.pb.h"
+#include "vpm/v3/vpm.pb.h"
 
 namespace vpm::view {
 
 struct StatusInputs {
   double fps = 0;                    // frames per second received
   std::optional<double> latency_ms;  // newest event-to-frame round trip
-  std::optional<v2::Frame> frame;    // the frame shown (image bytes not needed)
+  std::optional<v3::Frame> frame;    // the frame shown (image bytes not needed)
   bool grab_mode = false;
   bool grabbed = false;
 };

@@ -9,7 +9,7 @@ constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 }  // namespace
 
-Result<VolumeGeometry> GeometryFromProto(const v2::VolumeInfo& info) {
+Result<VolumeGeometry> GeometryFromProto(const v3::VolumeInfo& info) {
   if (info.dims_size() != 3) {
     return absl::InvalidArgumentError(
         StrCat("volume ", info.volume_id(), ": ", info.dims_size(), " dims, expected 3"));
@@ -55,9 +55,9 @@ void ViewCamera::Pan(double dx_px, double dy_px, int frame_width, int frame_heig
 
 void ViewCamera::Reset() { camera_.Reset(); }
 
-v2::Camera ViewCamera::ToProto() const {
+v3::Camera ViewCamera::ToProto() const {
   const Camera::Pose& p = camera_.pose();
-  v2::Camera out;
+  v3::Camera out;
   out.set_azimuth_deg(p.azimuth_deg);
   out.set_elevation_deg(p.elevation_deg);
   out.set_distance_mm(p.distance_mm);

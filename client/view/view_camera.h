@@ -4,8 +4,9 @@
 // click becomes the point the server's pick will grab.
 //
 // Units: angles in degrees, lengths in mm, points in physical voxel space
-// (index * spacing, mm), pixels of the frame the server renders
-// (width x height, row 0 at the top).
+// (index * spacing, mm: the camera's frame; the viewer turns them into the
+// API's world LPS with the volume's geometry before sending), pixels of the
+// frame the server renders (width x height, row 0 at the top).
 #pragma once
 
 #include <optional>
@@ -15,7 +16,7 @@
 #include "server/common/status.h"
 #include "server/raycast/camera.h"
 #include "server/volume/volume.h"
-#include "vpm/v2/vpm.pb.h"
+#include "vpm/v3/vpm.pb.h"
 
 namespace vpm::view {
 
@@ -26,7 +27,7 @@ inline constexpr double kZoomPerWheelClick = 1.1;
 
 // dims, spacing, origin and direction (9 values, column-major) of `info`.
 // InvalidArgument when a field is missing or not positive.
-Result<VolumeGeometry> GeometryFromProto(const v2::VolumeInfo& info);
+Result<VolumeGeometry> GeometryFromProto(const v3::VolumeInfo& info);
 
 class ViewCamera {
  public:
@@ -44,7 +45,7 @@ class ViewCamera {
   void Pan(double dx_px, double dy_px, int frame_width, int frame_height);
   void Reset();
 
-  v2::Camera ToProto() const;
+  v3::Camera ToProto() const;
   const Camera& camera() const { return camera_; }
 
   // mm covered by one frame pixel in the plane through the orbit centre

@@ -19,12 +19,12 @@ constexpr auto kResizeQuiet = std::chrono::milliseconds(200);  // debounce of wi
 }  // namespace
 
 ViewerApp::ViewerApp(ViewFlags flags) : flags_(std::move(flags)) {
-  settings_.set_mode(RenderModeFromName(flags_.mode).value_or(v2::RENDER_MODE_DVR));
+  settings_.set_mode(RenderModeFromName(flags_.mode).value_or(v3::RENDER_MODE_DVR));
   settings_.set_preset(flags_.preset);
   settings_.set_width(flags_.width);
   settings_.set_height(flags_.height);
   settings_.set_overlay(flags_.overlay);
-  settings_.set_encoding(v2::ENCODING_JPEG);
+  settings_.set_encoding(v3::ENCODING_JPEG);
   settings_.set_jpeg_quality(flags_.jpeg_quality);
 }
 
@@ -116,7 +116,7 @@ void ViewerApp::HandleEvent(const SDL_Event& e) {
 
 void ViewerApp::OnAction(Action action) {
   auto preset = [this](const char* name) {
-    settings_.set_mode(v2::RENDER_MODE_DVR);
+    settings_.set_mode(v3::RENDER_MODE_DVR);
     settings_.set_preset(name);
     SendSettings();
     Notice(StrCat("DVR ", name));
@@ -132,10 +132,10 @@ void ViewerApp::OnAction(Action action) {
     case Action::kPresetVessels: preset("ct-vessels"); break;
     case Action::kPresetMriT1: preset("mri-t1"); break;
     case Action::kMip:
-      settings_.set_mode(settings_.mode() == v2::RENDER_MODE_MIP ? v2::RENDER_MODE_DVR
-                                                                 : v2::RENDER_MODE_MIP);
+      settings_.set_mode(settings_.mode() == v3::RENDER_MODE_MIP ? v3::RENDER_MODE_DVR
+                                                                 : v3::RENDER_MODE_MIP);
       SendSettings();
-      Notice(settings_.mode() == v2::RENDER_MODE_MIP ? "MIP" : "DVR");
+      Notice(settings_.mode() == v3::RENDER_MODE_MIP ? "MIP" : "DVR");
       break;
     case Action::kToggleSlices: ToggleSlices(); break;
     case Action::kToggleCropMode: ToggleCropMode(); break;
@@ -161,7 +161,7 @@ void ViewerApp::OnAction(Action action) {
       if (camera_) camera_->Reset(), SendCamera();
       break;
     case Action::kResetDeformation: {
-      v2::ClientEvent event;
+      v3::ClientEvent event;
       event.mutable_reset();
       connection_->Send(event);
       grabbed_ = false;
@@ -231,7 +231,7 @@ void ViewerApp::OnMotion(const SDL_MouseMotionEvent& m) {
     const glm::dvec3 offset =
         SliceDragOffsetMm(pull_slice_, (m.x - pull_from_x_) * pull_slice_scale_,
                           (m.y - pull_from_y_) * pull_slice_scale_);
-    v2::ClientEvent event;
+    v3::ClientEvent event;
     event.mutable_drag()->mutable_offset_mm()->set_x(offset.x);
     event.mutable_drag()->mutable_offset_mm()->set_y(offset.y);
     event.mutable_drag()->mutable_offset_mm()->set_z(offset.z);
@@ -260,10 +260,11 @@ void ViewerApp::OnMotion(const SDL_MouseMotionEvent& m) {
   } else if (gesture_ == Gesture::kPan) {
     camera_->Pan(dx * scale, dy * scale, fw, fh);
     SendCamera();
-  } else if (gesture_ == Gesture::kPull && grabbed_) {
-    const glm::dvec3 offset = camera_->DragOffsetMm((m.x - pull_from_x_) * scale,
-                                                    (m.y - pull_from_y_) * scale, fw, fh);
-    v2::ClientEvent event;
+  } else if (gesture_ == Gesture::kPull && grabbed_ && geometry_) {
+    // The camera works in physical voxel space; the API takes world LPS.
+    const glm::dvec3 offset = geometry_->PhysicalVectorToWorld(camera_->DragOffsetMm(
+        (m.x - pull_from_x_) * scale, (m.y - pull_from_y_) * scale, fw, fh));
+    v3::ClientEvent event;
     event.mutable_drag()->mutable_offset_mm()->set_x(offset.x);
     event.mutable_drag()->mutable_offset_mm()->set_y(offset.y);
     event.mutable_drag()->mutable_offset_mm()->set_z(offset.z);
@@ -279,8 +280,8 @@ void ViewerApp::StartPull(int window_x, int window_y) {
     Notice("nothing to grab there: the point is outside the volume");
     return;
   }
-  v2::ClientEvent event;
-  v2::Grab* grab = event.mutable_grab();
+  v3::ClientEvent event;
+  v3::Grab* grab = event.mutable_grab();
   grab->set_pick(true);
   grab->set_pixel_x(px->x);
   grab->set_pixel_y(px->y);
@@ -292,7 +293,7 @@ void ViewerApp::StartPull(int window_x, int window_y) {
 }
 
 void ViewerApp::LetGo(bool keep) {
-  v2::ClientEvent event;
+  v3::ClientEvent event;
   event.mutable_release()->set_keep(keep);
   connection_->Send(event);
   grabbed_ = false;
@@ -306,8 +307,8 @@ void ViewerApp::PinAtCursor() {
       !camera_->PickPoint(px->x, px->y, window_->frame_width(), window_->frame_height())) {
     return Notice("pin: put the cursor over the volume");
   }
-  v2::ClientEvent event;
-  v2::Pin* pin = event.mutable_pin();
+  v3::ClientEvent event;
+  v3::Pin* pin = event.mutable_pin();
   pin->set_pick(true);
   pin->set_pixel_x(px->x);
   pin->set_pixel_y(px->y);
@@ -323,10 +324,10 @@ void ViewerApp::RefineAtCursor() {
       (camera_ && px) ? camera_->PickPoint(px->x, px->y, window_->frame_width(),
                                            window_->frame_height())
                       : std::nullopt;
-  if (!point) return Notice("refine: put the cursor over the volume");
+  if (!point || !geometry_) return Notice("refine: put the cursor over the volume");
   grabbed_ = false;
   gesture_ = Gesture::kNone;
-  connection_->RefineAt(*point);
+  connection_->RefineAt(geometry_->PhysicalToWorld(*point));  // RefineMesh takes world LPS
   Notice("refining the mesh at the cursor ...");
 }
 
@@ -389,10 +390,10 @@ void ViewerApp::ToggleSlices() {
     settings_.clear_slices();
     Notice("slices off");
   } else {
-    for (auto [view, orientation] : {std::pair{"axial", v2::SLICE_ORIENTATION_AXIAL},
-                                     std::pair{"coronal", v2::SLICE_ORIENTATION_CORONAL},
-                                     std::pair{"sagittal", v2::SLICE_ORIENTATION_SAGITTAL}}) {
-      v2::SliceSpec* spec = settings_.add_slices();
+    for (auto [view, orientation] : {std::pair{"axial", v3::SLICE_ORIENTATION_AXIAL},
+                                     std::pair{"coronal", v3::SLICE_ORIENTATION_CORONAL},
+                                     std::pair{"sagittal", v3::SLICE_ORIENTATION_SAGITTAL}}) {
+      v3::SliceSpec* spec = settings_.add_slices();
       spec->set_view(view);
       spec->set_orientation(orientation);
     }
@@ -401,18 +402,18 @@ void ViewerApp::ToggleSlices() {
   SendSettings();
 }
 
-const v2::SliceGeometry* ViewerApp::SliceGeometryOf(int index) const {
+const v3::SliceGeometry* ViewerApp::SliceGeometryOf(int index) const {
   if (!frame_info_ || index < 0 || index >= frame_info_->slices_size()) return nullptr;
   return &frame_info_->slices(index).geometry();
 }
 
 bool ViewerApp::ScrollSliceAt(int window_x, int window_y, double notches) {
   const std::optional<SlicePixel> at = window_->ToSlicePixel(window_x, window_y);
-  const v2::SliceGeometry* g = at ? SliceGeometryOf(at->index) : nullptr;
+  const v3::SliceGeometry* g = at ? SliceGeometryOf(at->index) : nullptr;
   if (g == nullptr) return false;
   // The pane shows Frame.slices(i), the answer to settings_.slices(i) by its view tag.
   const std::string& view = frame_info_->slices(at->index).view();
-  for (v2::SliceSpec& spec : *settings_.mutable_slices()) {
+  for (v3::SliceSpec& spec : *settings_.mutable_slices()) {
     if (spec.view() != view) continue;
     const double from = spec.has_at_mm() ? spec.at_mm() : g->offset_mm();
     spec.set_at_mm(ScrolledSliceOffset(*g, from, notches));
@@ -424,18 +425,19 @@ bool ViewerApp::ScrollSliceAt(int window_x, int window_y, double notches) {
 }
 
 void ViewerApp::StartSlicePull(const SlicePixel& at) {
-  const v2::SliceGeometry* g = SliceGeometryOf(at.index);
+  const v3::SliceGeometry* g = SliceGeometryOf(at.index);
   if (g == nullptr || !geometry_) return;
   if (grabbed_) LetGo();
-  const glm::dvec3 point = SlicePointMm(*g, at.x, at.y);
+  const glm::dvec3 point = SlicePointMm(*g, at.x, at.y);  // world LPS
+  const glm::dvec3 in_volume = geometry_->WorldToPhysical(point);
   const glm::dvec3 extent = geometry_->extent_mm();
   for (int a = 0; a < 3; ++a) {
-    if (!(point[a] >= 0.0 && point[a] <= extent[a])) {
+    if (!(in_volume[a] >= 0.0 && in_volume[a] <= extent[a])) {
       return Notice("nothing to grab there: the point is outside the volume");
     }
   }
-  v2::ClientEvent event;
-  v2::Vec3* p = event.mutable_grab()->mutable_point_mm();
+  v3::ClientEvent event;
+  v3::Vec3* p = event.mutable_grab()->mutable_point_mm();
   p->set_x(point.x);
   p->set_y(point.y);
   p->set_z(point.z);
@@ -522,31 +524,31 @@ void ViewerApp::Paint() {
 
 void ViewerApp::SendCamera() {
   if (!camera_) return;
-  v2::ClientEvent event;
+  v3::ClientEvent event;
   *event.mutable_camera() = camera_->ToProto();
   connection_->Send(event);
 }
 
 void ViewerApp::SendSettings() {
-  v2::ClientEvent event;
+  v3::ClientEvent event;
   *event.mutable_settings() = settings_;
   connection_->Send(event);
   if (flags_.connection.log_frames) {
     // For tests: what the viewer asked for, world mm.
     std::string line = "settings crop";
     if (settings_.has_crop()) {
-      const v2::CropBox& c = settings_.crop();
-      for (const v2::Vec3& v : {c.lo_mm(), c.hi_mm()}) {
+      const v3::CropBox& c = settings_.crop();
+      for (const v3::Vec3& v : {c.lo_mm(), c.hi_mm()}) {
         line += StrCat(" ", v.x(), " ", v.y(), " ", v.z());
       }
     } else {
       line += " none";
     }
     line += " clip";
-    for (const v2::ClipPlane& c : settings_.clip()) line += StrCat(" ", c.offset_mm());
+    for (const v3::ClipPlane& c : settings_.clip()) line += StrCat(" ", c.offset_mm());
     if (settings_.clip_size() == 0) line += " none";
     line += " at";
-    for (const v2::SliceSpec& spec : settings_.slices()) {
+    for (const v3::SliceSpec& spec : settings_.slices()) {
       line += spec.has_at_mm() ? StrCat(" ", spec.view(), "=", spec.at_mm())
                                : StrCat(" ", spec.view(), "=auto");
     }

@@ -46,7 +46,7 @@ class ViewerApp {
   // Grab mode, a press on a slice: grab the point of its plane there.
   void StartSlicePull(const SlicePixel& at);
   // The geometry of slice `index` in the newest frame, if it has one.
-  const v2::SliceGeometry* SliceGeometryOf(int index) const;
+  const v3::SliceGeometry* SliceGeometryOf(int index) const;
   // Crop box (B) and clip plane (C).
   void ToggleCropMode();
   void ToggleClipPlane();
@@ -72,7 +72,7 @@ class ViewerApp {
 
   std::optional<ViewCamera> camera_;
   std::string volume_id_;
-  v2::RenderSettings settings_;
+  v3::RenderSettings settings_;
   uint64_t stream_generation_ = 0;
 
   enum class Gesture { kNone, kOrbit, kPan, kPull, kSlicePull, kCropFace, kClipPlane };
@@ -82,11 +82,11 @@ class ViewerApp {
   // kSlicePull: the slice's geometry at the press and its image pixels per
   // window pixel; kCropFace: the face and the box at the press; kClipPlane:
   // the plane at the press.
-  v2::SliceGeometry pull_slice_;
+  v3::SliceGeometry pull_slice_;
   double pull_slice_scale_ = 1.0;
   BoxFace drag_face_;
   WorldBox drag_box_start_;
-  v2::ClipPlane drag_clip_start_;
+  v3::ClipPlane drag_clip_start_;
   bool grab_mode_ = false;
   bool crop_mode_ = false;                 // the crop box applies and its faces drag
   WorldBox crop_box_;                      // world mm; the volume's box at first
@@ -95,7 +95,7 @@ class ViewerApp {
   bool grabbed_ = false;  // the server holds a grab of ours
   bool show_help_ = false;
 
-  std::optional<v2::Frame> frame_info_;
+  std::optional<v3::Frame> frame_info_;
   double fps_ = 0;
   std::optional<double> latency_ms_;
   std::string notice_;

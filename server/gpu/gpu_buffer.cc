@@ -42,6 +42,7 @@ Result<GpuBuffer> GpuBuffer::Allocate(const GpuContext& context, vk::DeviceSize 
     b.buffer_.bindMemory(*b.memory_, 0);
     if ((flags & MemFlag::eHostVisible) && (flags & MemFlag::eHostCoherent)) {
       b.mapped_ = b.memory_.mapMemory(0, size_bytes);
+      b.read_mapped_ = (flags & MemFlag::eHostCached) || !(flags & MemFlag::eDeviceLocal);
     }
   }));
   return b;
@@ -72,7 +73,7 @@ Status GpuBuffer::Upload(std::span<const std::byte> data, vk::DeviceSize offset_
 Status GpuBuffer::Download(std::span<std::byte> out, vk::DeviceSize offset_bytes) const {
   RETURN_IF_ERROR(CheckRange(out.size(), offset_bytes));
   if (out.empty()) return absl::OkStatus();
-  if (mapped_ != nullptr) {
+  if (mapped_ != nullptr && read_mapped_) {
     std::memcpy(out.data(), static_cast<const std::byte*>(mapped_) + offset_bytes, out.size());
     return absl::OkStatus();
   }

@@ -56,6 +56,13 @@ class GpuBuffer {
   vk::raii::Buffer buffer_{nullptr};
   vk::raii::DeviceMemory memory_{nullptr};
   void* mapped_ = nullptr;  // non-null when the memory is host-visible and coherent
+  // Download reads the mapping itself only where that is fast: host-cached
+  // memory (a CPU device, or system RAM), or memory that is not device-local
+  // (a staging buffer, the last resort). Device-local memory the host can
+  // map (resizable BAR on a discrete GPU) is uncached: reads from it ran at
+  // about 30 MB/s on an NVIDIA H200 (docs/benchmarks/GPU_H200.md), so they
+  // go through a host-cached staging copy.
+  bool read_mapped_ = false;
   vk::DeviceSize size_bytes_ = 0;
   vk::BufferUsageFlags usage_{};
 };

@@ -43,6 +43,12 @@ Status WriteVtu(const ProxyMesh& mesh, const std::string& path) {
   out << "<?xml version=\"1.0\"?>\n"
       << "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
       << "  <UnstructuredGrid>\n"
+      // A VTK XML ASCII string: its characters' codes, then 0.
+      << "    <FieldData>\n"
+      << "      <Array type=\"String\" Name=\"SPACE\" NumberOfTuples=\"1\" format=\"ascii\">\n"
+      << "        76 80 83 0\n"
+      << "      </Array>\n"
+      << "    </FieldData>\n"
       << "    <Piece NumberOfPoints=\"" << mesh.vertices.size() << "\" NumberOfCells=\""
       << mesh.tets.size() << "\">\n"
       << "      <PointData Scalars=\"cost\">\n";

@@ -10,8 +10,10 @@
 namespace vpm {
 
 // Writes `mesh` to `path` as ASCII VTK XML UnstructuredGrid (version 0.1):
-//   Points      #V by 3 Float64, mm, physical voxel space (origin and
-//               direction of the volume not applied)
+//   FieldData   SPACE       String "LPS": how 3D Slicer (4.11 and later)
+//               and vtkMRMLModelStorageNode learn the points' frame
+//   Points      #V by 3 Float64, mm, as given: `vpm mesh` gives world LPS
+//               (MeshToWorld, server/mesh/mesh_frame.h)
 //   Cells       #T VTK_TETRA (type 10), connectivity Int64, offsets Int64
 //   PointData   hard        UInt8  1 = non-deformable (step 3)
 //               cost        Float64 MeshVertex::cost

@@ -98,6 +98,18 @@ struct GrabRequest {
   double radius_mm = 0.0;
 };
 
+// One manipulation as the scene applied it (physical voxel space): the
+// scene's history since rest, which DeformableScene::Rebuilt replays onto
+// another mesh of the same volume.
+struct SceneOp {
+  enum class Kind { kGrab, kDrag, kPull, kRelease, kPin };
+  Kind kind = Kind::kGrab;
+  GrabRequest grab;           // kGrab
+  glm::dvec3 vector{0.0};     // kDrag: offset mm; kPull: force N; kPin: point mm
+  double radius_mm = 0.0;     // kPin
+  bool keep = false;          // kRelease
+};
+
 class DeformableScene {
  public:
   struct Options {
@@ -154,6 +166,17 @@ class DeformableScene {
   // (physical mm); empty with nothing grabbed. The view cut and the slice
   // marker pass through it.
   std::optional<glm::dvec3> GrabbedTissueMm() const;
+  // The point of the grab in effect, at rest (physical mm); empty with
+  // nothing grabbed.
+  std::optional<glm::dvec3> GrabPointMm() const { return grab_point_mm_; }
+
+  // The point pixel (pixel_x, pixel_y) of a frame of `view` shows, at rest
+  // (server/raycast/pick_ray.h): DVR the first point where the composited
+  // opacity reaches 0.5, MIP the brightest sample, both within the frame's
+  // clip and view cut; a ray that shows nothing takes the plane through the
+  // orbit centre that faces the camera. Physical mm. OutOfRange for a pixel
+  // outside the frame or a plane point outside the volume.
+  Result<glm::dvec3> Pick(const SceneView& view, int pixel_x, int pixel_y) const;
 
   // The clip region a frame of `view` uses: view.clip plus the view cut.
   ClipRegion ViewClip(const SceneView& view) const;
@@ -189,6 +212,17 @@ class DeformableScene {
   // Slicer and ITK apply as a grid transform (write_displacement_field.h).
   Result<std::vector<glm::vec3>> DisplacementField();
 
+  // What holds the tissue where it is now: the grabs, their last drag or
+  // pull, kept releases and pins since rest, in order (a release that did
+  // not keep drops its grab; Reset clears it). Drags and pulls are
+  // absolute, so each grab keeps only its last.
+  const std::vector<SceneOp>& history() const { return history_; }
+  // A new scene of the same volume, renderer and options on `mesh` (a
+  // refinement of this one), with this scene's history replayed and
+  // settled: the same manipulation on the finer mesh. The map is brought
+  // up to date at its first frame (deferred mode) or at once.
+  Result<std::unique_ptr<DeformableScene>> Rebuilt(const ProxyMesh& mesh) const;
+
   const ProxyMesh& mesh() const { return mesh_; }
   const FemModel& fem() const { return *fem_; }
   std::vector<glm::dvec3> Positions() const { return fem_->Positions(); }
@@ -206,7 +240,11 @@ class DeformableScene {
   // A backward map with one point per voxel of the source grid, of the
   // current deformation.
   Result<BackwardMap> ExactMap() const;
+  // Appends a drag or pull, replacing the grab's earlier one.
+  void RecordMotion(SceneOp op);
   const gpu::GpuContext* context_ = nullptr;
+  Options options_;
+  std::vector<SceneOp> history_;
   const Volume* volume_ = nullptr;
   GpuVolume* gpu_volume_ = nullptr;
   VolumeRenderer* renderer_ = nullptr;

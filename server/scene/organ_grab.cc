@@ -34,15 +34,14 @@ bool NearRegion(const Volume& volume, const OrganRegion& region, const glm::dvec
 }
 
 // Deformable vertices whose rest position lies within margin_mm of
-// `region`, plus the kNearestHandleCount nearest to point_mm (current
-// positions). Vertices beside the skeleton stay handles: leaving them free
+// `region`, plus the kNearestHandleCount nearest to point_mm (by `now`, the
+// current positions). Vertices beside the skeleton stay handles: leaving them free
 // (as the ball grab does) cut the kidney drag's mean to 76% of the drag and
 // raised its coefficient of variation to 0.34 (tests/scene/kidney_drag_test.cc).
 std::vector<int32_t> OrganHandles(const Volume& volume, const FemModel& fem,
-                                  const OrganRegion& region, const glm::dvec3& point_mm,
-                                  double margin_mm) {
+                                  const std::vector<glm::dvec3>& now, const OrganRegion& region,
+                                  const glm::dvec3& point_mm, double margin_mm) {
   const std::vector<glm::dvec3>& rest = fem.rest_positions_mm();
-  const std::vector<glm::dvec3> now = fem.Positions();
   std::vector<int32_t> handles;
   std::vector<std::pair<double, int32_t>> nearest;
   for (size_t v = 0; v < rest.size(); ++v) {
@@ -80,9 +79,10 @@ Result<GrabInfo> GrabOrgan(const Volume& volume, FemModel& fem, const glm::dvec3
   ASSIGN_OR_RETURN(const OrganRegion region, GrowOrganRegion(volume, seed_mm, params));
   GrabInfo info;
   info.message = StrCat("grabbed the tissue connected to the point (", region.volume_mm3 / 1000.0,
-                        " cm^3 within ", params.max_radius_mm, " mm", 
+                        " cm^3 within ", params.max_radius_mm, " mm",
                         region.reached_bound ? ", cut at that bound" : "", ")");
-  ASSIGN_OR_RETURN(info, fem.GrabVertices(OrganHandles(volume, fem, region, point_mm, margin_mm), std::move(info)));
+  std::vector<int32_t> handles = OrganHandles(volume, fem, now, region, point_mm, margin_mm);
+  ASSIGN_OR_RETURN(info, fem.GrabVertices(std::move(handles), std::move(info)));
   info.message += StrCat(": ", info.handles.size(), " vertices");
   return info;
 }

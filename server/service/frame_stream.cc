@@ -36,11 +36,11 @@ void FrameStream::Attach() {
   RequestFrame();
 }
 
-void FrameStream::EnqueueEvent(const v2::ClientEvent& event) {
+void FrameStream::EnqueueEvent(const v3::ClientEvent& event) {
   auto lock = Lock();
   if (finish_) return;
   const auto kind = event.event_case();
-  const bool replaceable = kind == v2::ClientEvent::kCamera || kind == v2::ClientEvent::kDrag;
+  const bool replaceable = kind == v3::ClientEvent::kCamera || kind == v3::ClientEvent::kDrag;
   last_event_at_ = std::chrono::steady_clock::now();
   if (replaceable && !events_.empty() && events_.back().event_case() == kind) {
     const bool want_vertices = events_.back().want_vertices() || event.want_vertices();
@@ -68,7 +68,7 @@ void FrameStream::ReadNext() {
 
 void FrameStream::ApplyQueued() {
   while (true) {
-    v2::ClientEvent event;
+    v3::ClientEvent event;
     {
       auto lock = Lock();
       if (events_.empty() || finish_) {
@@ -148,7 +148,7 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
   auto lock = Lock();
   render_scheduled_ = false;
   if (!frame.ok()) return FinishLocked(ToGrpcStatus(frame.status()));
-  auto out = std::make_unique<v2::Frame>(*std::move(frame));
+  auto out = std::make_unique<v3::Frame>(*std::move(frame));
   out->mutable_timings()->set_queue_ms(queue_ms);
   out->mutable_timings()->set_total_ms(out->timings().total_ms() + queue_ms);
   if (options_.per_stream_sequence) out->set_last_sequence(sequence);
@@ -201,7 +201,7 @@ void FrameStream::StillCheck() {
   ScheduleLocked();
 }
 
-void FrameStream::DeliverLocked(std::unique_ptr<v2::Frame> frame) {
+void FrameStream::DeliverLocked(std::unique_ptr<v3::Frame> frame) {
   if (sink_ == nullptr || finish_) return;
   frame->set_frame_number(++frame_number_);
   if (write_in_flight_) {
@@ -215,7 +215,7 @@ void FrameStream::DeliverLocked(std::unique_ptr<v2::Frame> frame) {
   WriteLocked(std::move(frame));
 }
 
-void FrameStream::WriteLocked(std::unique_ptr<v2::Frame> frame) {
+void FrameStream::WriteLocked(std::unique_ptr<v3::Frame> frame) {
   if (Status access = session_->access().Check(options_.user, options_.role, session_->id());
       !access.ok()) {
     return FinishLocked(ToGrpcStatus(access));

@@ -40,7 +40,7 @@
 
 #include "server/service/service_context.h"
 #include "server/service/session.h"
-#include "vpm/v2/vpm.pb.h"
+#include "vpm/v3/vpm.pb.h"
 
 namespace vpm::service {
 
@@ -48,7 +48,7 @@ namespace vpm::service {
 class FrameSink {
  public:
   virtual ~FrameSink() = default;
-  virtual void WriteFrame(const v2::Frame* frame) = 0;        // StartWrite
+  virtual void WriteFrame(const v3::Frame* frame) = 0;        // StartWrite
   virtual void FinishStream(const grpc::Status& status) = 0;  // Finish, called once
   virtual void ReadNext() {}                                  // StartRead (Interact)
 };
@@ -75,7 +75,7 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   // it (the newest wins for input too, so a slow scene never builds a
   // backlog). An invalid event finishes the stream with its status; more
   // than kMaxQueuedEvents waiting finishes it with RESOURCE_EXHAUSTED.
-  void EnqueueEvent(const v2::ClientEvent& event);
+  void EnqueueEvent(const v3::ClientEvent& event);
   static constexpr size_t kMaxQueuedEvents = 256;
   // Starts the sink's next read unless the stream is finishing (no read may
   // start after Finish).
@@ -102,10 +102,10 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   bool PostToPool(std::function<void()> task);
   void ScheduleLocked();
   void RenderNow(std::chrono::steady_clock::time_point queued_at);
-  void DeliverLocked(std::unique_ptr<v2::Frame> frame);
+  void DeliverLocked(std::unique_ptr<v3::Frame> frame);
   // Writes `frame`, or finishes the stream with PERMISSION_DENIED when the
   // user may no longer see the session.
-  void WriteLocked(std::unique_ptr<v2::Frame> frame);
+  void WriteLocked(std::unique_ptr<v3::Frame> frame);
   void StillCheck();
   // The client is interacting: events queued or being applied, or one
   // arrived within still_delay_ms.
@@ -115,7 +115,7 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   // A call on the sink, decided under mutex_ and made by Flush() without it.
   struct SinkCall {
     enum class Kind { kWrite, kRead, kFinish } kind;
-    const v2::Frame* frame = nullptr;  // kWrite: owned by current_
+    const v3::Frame* frame = nullptr;  // kWrite: owned by current_
     grpc::Status status;               // kFinish
   };
   // mutex_, released by its destructor, which then flushes the outbox.
@@ -151,7 +151,7 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   StreamSettings settings_;
   bool want_vertices_ = false;
   uint64_t stream_sequence_ = 0;
-  std::deque<v2::ClientEvent> events_;
+  std::deque<v3::ClientEvent> events_;
   bool applying_ = false;
   std::optional<grpc::Status> finish_after_events_;
   // When this stream's client last sent an event (events arrive here before
@@ -167,8 +167,8 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   bool dirty_ = false;
   bool last_interactive_ = false;
   bool write_in_flight_ = false;
-  std::unique_ptr<v2::Frame> current_;  // being written
-  std::unique_ptr<v2::Frame> pending_;  // the newest frame waiting for the write
+  std::unique_ptr<v3::Frame> current_;  // being written
+  std::unique_ptr<v3::Frame> pending_;  // the newest frame waiting for the write
   std::optional<grpc::Status> finish_;
   bool finished_ = false;
   uint64_t frame_number_ = 0;

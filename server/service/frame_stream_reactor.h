@@ -5,8 +5,8 @@
 // with the call, the release of everything the stream held (a test counts that every
 // stream opened is closed).
 //
-// `Reactor` is grpc::ServerBidiReactor<In, v2::Frame> or
-// grpc::ServerWriteReactor<v2::Frame>.
+// `Reactor` is grpc::ServerBidiReactor<In, v3::Frame> or
+// grpc::ServerWriteReactor<v3::Frame>.
 //
 // Lifetime: a reactor owns itself (self_) from Make until OnDone, and every
 // task it posts to a pool holds it too, so a task that runs after OnDone
@@ -26,7 +26,7 @@
 #include "server/service/frame_stream.h"
 #include "server/service/grpc_status.h"
 #include "server/service/service_context.h"
-#include "vpm/v2/vpm.pb.h"
+#include "vpm/v3/vpm.pb.h"
 
 namespace vpm::service {
 
@@ -75,7 +75,7 @@ class FrameStreamReactor : public Reactor,
     service_->metrics->StreamClosed();
     std::shared_ptr<FrameStreamReactor> last = std::move(self_);  // may free this
   }
-  void WriteFrame(const v2::Frame* frame) override { this->StartWrite(frame); }
+  void WriteFrame(const v3::Frame* frame) override { this->StartWrite(frame); }
   void FinishStream(const grpc::Status& status) override {
     {
       std::lock_guard lock(mutex_);

@@ -48,7 +48,7 @@ void InteractReactor::OnReadDone(bool ok) {
   current->ReadNext();
 }
 
-void InteractReactor::Start(const v2::InteractRequest& first) {
+void InteractReactor::Start(const v3::InteractRequest& first) {
   if (first.session_id().empty()) {
     FinishStream(grpc::Status(grpc::INVALID_ARGUMENT,
                               "session_id: required on the first message of Interact"));
@@ -62,7 +62,7 @@ void InteractReactor::Start(const v2::InteractRequest& first) {
     // Settings on the first event shape the first frame too.
     ASSIGN_OR_RETURN(StreamSettings settings,
                      ToStreamSettings(first.event().has_settings() ? first.event().settings()
-                                                                   : v2::RenderSettings(),
+                                                                   : v3::RenderSettings(),
                                       session->volume().volume, service_->options.max_frame_side));
     return FrameStream::Create(service_, session, std::move(settings), this,
                                {.per_stream_sequence = true,

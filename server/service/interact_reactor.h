@@ -15,7 +15,7 @@
 namespace vpm::service {
 
 class InteractReactor
-    : public FrameStreamReactor<grpc::ServerBidiReactor<v2::InteractRequest, v2::Frame>> {
+    : public FrameStreamReactor<grpc::ServerBidiReactor<v3::InteractRequest, v3::Frame>> {
  public:
   InteractReactor(ServiceContext* service, grpc::CallbackServerContext* context);
 
@@ -24,9 +24,9 @@ class InteractReactor
 
  private:
   void Begin() override;
-  void Start(const v2::InteractRequest& first);
+  void Start(const v3::InteractRequest& first);
 
-  v2::InteractRequest request_;
+  v3::InteractRequest request_;
 };
 
 }  // namespace vpm::service

@@ -14,9 +14,13 @@ Status CheckInsideVolume(const VolumeGeometry& geometry, const glm::dvec3& point
       return absl::InvalidArgumentError(StrCat(field, ": not a finite point"));
     }
     if (point_mm[axis] < 0.0 || point_mm[axis] > extent[axis]) {
-      return absl::OutOfRangeError(StrCat(field, ": (", point_mm.x, ", ", point_mm.y, ", ",
-                                          point_mm.z, ") mm is outside the volume, (0, 0, 0) to (",
-                                          extent.x, ", ", extent.y, ", ", extent.z, ") mm"));
+      // Said in the client's frame: world LPS, with the volume's world box.
+      const glm::dvec3 w = geometry.PhysicalToWorld(point_mm);
+      const std::array<glm::dvec3, 2> box = geometry.WorldBox();
+      return absl::OutOfRangeError(StrCat(
+          field, ": (", w.x, ", ", w.y, ", ", w.z, ") mm (world LPS) is outside the volume",
+          ", whose box spans (", box[0].x, ", ", box[0].y, ", ", box[0].z, ") to (", box[1].x,
+          ", ", box[1].y, ", ", box[1].z, ") mm"));
     }
   }
   return absl::OkStatus();

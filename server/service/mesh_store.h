@@ -81,7 +81,8 @@ class MeshStore {
   int64_t next_id_ = 1;
 };
 
-// OutOfRange unless `point_mm` lies in the image box [0, (n-1) * spacing].
+// OutOfRange unless `point_mm` (physical mm) lies in the image box
+// [0, (n-1) * spacing]; the message gives the point and box in world LPS.
 Status CheckInsideVolume(const VolumeGeometry& geometry, const glm::dvec3& point_mm,
                          std::string_view field);
 

@@ -9,7 +9,19 @@
 
 namespace vpm::service {
 
-void FillVolumeInfo(const VolumeEntry& entry, v2::VolumeInfo* info) {
+glm::dvec3 PointFromApi(const v3::Vec3& world_mm, const VolumeGeometry& geometry) {
+  return geometry.WorldToPhysical(FromProto(world_mm));
+}
+
+glm::dvec3 VectorFromApi(const v3::Vec3& world, const VolumeGeometry& geometry) {
+  return geometry.WorldVectorToPhysical(FromProto(world));
+}
+
+v3::Vec3 PointToApi(const glm::dvec3& physical_mm, const VolumeGeometry& geometry) {
+  return ToProto(geometry.PhysicalToWorld(physical_mm));
+}
+
+void FillVolumeInfo(const VolumeEntry& entry, v3::VolumeInfo* info) {
   const Volume& volume = entry.volume;
   const VolumeGeometry& g = volume.geometry();
   info->set_volume_id(entry.id);
@@ -22,14 +34,16 @@ void FillVolumeInfo(const VolumeEntry& entry, v2::VolumeInfo* info) {
   for (int c = 0; c < 3; ++c) {
     for (int r = 0; r < 3; ++r) info->add_direction(g.direction[c][r]);
   }
+  const std::array<glm::dvec3, 2> box = g.WorldBox();
+  *info->mutable_box_lo_lps_mm() = ToProto(box[0]);
+  *info->mutable_box_hi_lps_mm() = ToProto(box[1]);
   info->set_min_value(volume.min_value());
   info->set_max_value(volume.max_value());
   info->clear_landmarks();
   for (const Landmark& l : volume.landmarks()) {
-    v2::Landmark* out = info->add_landmarks();
+    v3::Landmark* out = info->add_landmarks();
     out->set_name(l.name);
-    *out->mutable_position_mm() = ToProto(l.position_mm);
-    *out->mutable_world_lps_mm() = ToProto(g.PhysicalToWorld(l.position_mm));
+    *out->mutable_position_mm() = PointToApi(l.position_mm, g);
     out->set_description(l.description);
   }
   info->set_bytes(entry.bytes);
@@ -39,11 +53,11 @@ void FillVolumeInfo(const VolumeEntry& entry, v2::VolumeInfo* info) {
   info->set_owner(entry.owner);
 }
 
-void FillMeshInfo(const MeshEntry& entry, v2::MeshInfo* info) {
+void FillMeshInfo(const MeshEntry& entry, v3::MeshInfo* info) {
   info->set_mesh_id(entry.id);
   info->set_volume_id(entry.volume->id);
   const ProxyMesh& mesh = entry.mesh;
-  v2::MeshStats* s = info->mutable_stats();
+  v3::MeshStats* s = info->mutable_stats();
   s->set_vertices(static_cast<int64_t>(mesh.vertices.size()));
   s->set_tets(static_cast<int64_t>(mesh.tets.size()));
   s->set_hard(mesh.stats.hard);
@@ -74,26 +88,26 @@ void FillMeshInfo(const MeshEntry& entry, v2::MeshInfo* info) {
 
 namespace {
 
-v2::VertexKind KindToProto(VertexKind kind) {
+v3::VertexKind KindToProto(VertexKind kind) {
   switch (kind) {
-    case VertexKind::kLattice: return v2::VERTEX_KIND_LATTICE;
-    case VertexKind::kAnchor: return v2::VERTEX_KIND_ANCHOR;
-    case VertexKind::kRefined: return v2::VERTEX_KIND_REFINED;
-    case VertexKind::kBoundary: return v2::VERTEX_KIND_BOUNDARY;
-    case VertexKind::kSteiner: return v2::VERTEX_KIND_STEINER;
+    case VertexKind::kLattice: return v3::VERTEX_KIND_LATTICE;
+    case VertexKind::kAnchor: return v3::VERTEX_KIND_ANCHOR;
+    case VertexKind::kRefined: return v3::VERTEX_KIND_REFINED;
+    case VertexKind::kBoundary: return v3::VERTEX_KIND_BOUNDARY;
+    case VertexKind::kSteiner: return v3::VERTEX_KIND_STEINER;
   }
-  return v2::VERTEX_KIND_UNSPECIFIED;
+  return v3::VERTEX_KIND_UNSPECIFIED;
 }
 
 }  // namespace
 
-Result<FrameEncoding> ToFrameEncoding(v2::Encoding encoding, int32_t jpeg_quality,
+Result<FrameEncoding> ToFrameEncoding(v3::Encoding encoding, int32_t jpeg_quality,
                                       std::string_view prefix) {
   FrameEncoding out;
   switch (encoding) {
-    case v2::ENCODING_UNSPECIFIED:
-    case v2::ENCODING_JPEG: out.png = false; break;
-    case v2::ENCODING_PNG: out.png = true; break;
+    case v3::ENCODING_UNSPECIFIED:
+    case v3::ENCODING_JPEG: out.png = false; break;
+    case v3::ENCODING_PNG: out.png = true; break;
     default:
       return absl::InvalidArgumentError(
           StrCat(prefix, "encoding: ", encoding, " is not an Encoding"));
@@ -106,7 +120,7 @@ Result<FrameEncoding> ToFrameEncoding(v2::Encoding encoding, int32_t jpeg_qualit
   return out;
 }
 
-Status ToSliceRequests(const v2::RenderSettings& in, const Volume& volume, int max_side,
+Status ToSliceRequests(const v3::RenderSettings& in, const Volume& volume, int max_side,
                        std::vector<SliceRequest>* out) {
   if (in.slices_size() > kMaxSlicesPerFrame) {
     return absl::InvalidArgumentError(StrCat("settings.slices: ", in.slices_size(),
@@ -126,10 +140,11 @@ Status ToSliceRequests(const v2::RenderSettings& in, const Volume& volume, int m
   return absl::OkStatus();
 }
 
-void FillMeshGeometry(const ProxyMesh& mesh, v2::GetMeshResponse* response) {
+void FillMeshGeometry(const ProxyMesh& mesh, const VolumeGeometry& geometry,
+                      v3::GetMeshResponse* response) {
   for (const MeshVertex& v : mesh.vertices) {
-    v2::MeshVertex* out = response->add_vertices();
-    *out->mutable_position_mm() = ToProto(v.position_mm);
+    v3::MeshVertex* out = response->add_vertices();
+    *out->mutable_position_mm() = PointToApi(v.position_mm, geometry);
     out->set_lattice_id(v.lattice_id);
     out->set_kind(KindToProto(v.kind));
     out->set_hard(v.hard);
@@ -137,7 +152,7 @@ void FillMeshGeometry(const ProxyMesh& mesh, v2::GetMeshResponse* response) {
     out->set_cost(v.cost);
   }
   for (const auto& t : mesh.tets) {
-    v2::Tet* out = response->add_tets();
+    v3::Tet* out = response->add_tets();
     out->set_a(t[0]);
     out->set_b(t[1]);
     out->set_c(t[2]);
@@ -145,7 +160,7 @@ void FillMeshGeometry(const ProxyMesh& mesh, v2::GetMeshResponse* response) {
   }
 }
 
-Result<MeshParams> ToMeshParams(const v2::MeshParams& in) {
+Result<MeshParams> ToMeshParams(const v3::MeshParams& in, const VolumeGeometry& geometry) {
   MeshParams p;
   if (in.grid_size() != 0) {
     if (in.grid_size() != 3) {
@@ -163,17 +178,17 @@ Result<MeshParams> ToMeshParams(const v2::MeshParams& in) {
   if (in.target() < 0) return absl::InvalidArgumentError("params.target: negative");
   if (in.target() > 0) p.target = in.target();
   switch (in.footprint()) {
-    case v2::FOOTPRINT_UNSPECIFIED: break;
-    case v2::FOOTPRINT_POINT: p.footprint = Footprint::kPoint; break;
-    case v2::FOOTPRINT_CELL: p.footprint = Footprint::kCell; break;
+    case v3::FOOTPRINT_UNSPECIFIED: break;
+    case v3::FOOTPRINT_POINT: p.footprint = Footprint::kPoint; break;
+    case v3::FOOTPRINT_CELL: p.footprint = Footprint::kCell; break;
     default:
       return absl::InvalidArgumentError(
           StrCat("params.footprint: ", in.footprint(), " is not a Footprint"));
   }
   switch (in.density_mode()) {
-    case v2::DENSITY_MODE_UNSPECIFIED: break;
-    case v2::DENSITY_MODE_SPREAD: p.density_mode = DensityMode::kSpread; break;
-    case v2::DENSITY_MODE_PAPER: p.density_mode = DensityMode::kPaper; break;
+    case v3::DENSITY_MODE_UNSPECIFIED: break;
+    case v3::DENSITY_MODE_SPREAD: p.density_mode = DensityMode::kSpread; break;
+    case v3::DENSITY_MODE_PAPER: p.density_mode = DensityMode::kPaper; break;
     default:
       return absl::InvalidArgumentError(
           StrCat("params.density_mode: ", in.density_mode(), " is not a DensityMode"));
@@ -190,7 +205,7 @@ Result<MeshParams> ToMeshParams(const v2::MeshParams& in) {
   if (in.has_bone_threshold()) p.classify.bone_threshold = in.bone_threshold();
   if (in.has_influence_threshold()) p.classify.influence_threshold = in.influence_threshold();
   if (in.has_influence_factor()) p.classify.influence_factor = in.influence_factor();
-  if (in.has_refine_at_mm()) p.refine_at_mm = FromProto(in.refine_at_mm());
+  if (in.has_refine_at_mm()) p.refine_at_mm = PointFromApi(in.refine_at_mm(), geometry);
   if (in.has_roi_factor()) p.roi_radius_factor = in.roi_factor();
   if (in.has_refine_count()) {
     if (in.refine_count() < 0) return absl::InvalidArgumentError("params.refine_count: negative");
@@ -199,13 +214,13 @@ Result<MeshParams> ToMeshParams(const v2::MeshParams& in) {
   return p;
 }
 
-Result<StreamSettings> ToStreamSettings(const v2::RenderSettings& in, const Volume& volume,
+Result<StreamSettings> ToStreamSettings(const v3::RenderSettings& in, const Volume& volume,
                                         int max_side) {
   StreamSettings out;
   switch (in.mode()) {
-    case v2::RENDER_MODE_UNSPECIFIED:
-    case v2::RENDER_MODE_DVR: out.view.mode = RenderMode::kDvr; break;
-    case v2::RENDER_MODE_MIP: out.view.mode = RenderMode::kMip; break;
+    case v3::RENDER_MODE_UNSPECIFIED:
+    case v3::RENDER_MODE_DVR: out.view.mode = RenderMode::kDvr; break;
+    case v3::RENDER_MODE_MIP: out.view.mode = RenderMode::kMip; break;
     default:
       return absl::InvalidArgumentError(StrCat("settings.mode: ", in.mode(), " is not a RenderMode"));
   }
@@ -222,7 +237,7 @@ Result<StreamSettings> ToStreamSettings(const v2::RenderSettings& in, const Volu
   }
   out.view.preset = *std::move(preset);
   if (in.has_mip_window()) {
-    const v2::WindowLevel& w = in.mip_window();
+    const v3::WindowLevel& w = in.mip_window();
     if (!std::isfinite(w.level()) || !std::isfinite(w.width()) || !(w.width() > 0.0)) {
       return absl::InvalidArgumentError(StrCat("settings.mip_window: width ", w.width(),
                                                ", level ", w.level(),
@@ -243,7 +258,7 @@ Result<StreamSettings> ToStreamSettings(const v2::RenderSettings& in, const Volu
   if (in.has_crop()) {
     out.view.clip.crop = CropBox{FromProto(in.crop().lo_mm()), FromProto(in.crop().hi_mm())};
   }
-  for (const v2::ClipPlane& plane : in.clip()) {
+  for (const v3::ClipPlane& plane : in.clip()) {
     out.view.clip.planes.push_back(ClipPlane{FromProto(plane.normal()), plane.offset_mm()});
   }
   if (Status clip = ValidateClipRegion(out.view.clip); !clip.ok()) {
@@ -258,7 +273,7 @@ Result<StreamSettings> ToStreamSettings(const v2::RenderSettings& in, const Volu
   return out;
 }
 
-Result<Camera> ToCamera(const v2::Camera& in, const VolumeGeometry& geometry) {
+Result<Camera> ToCamera(const v3::Camera& in, const VolumeGeometry& geometry) {
   Camera camera = Camera::ForVolume(geometry);
   Camera::Pose pose = camera.pose();
   pose.azimuth_deg = in.azimuth_deg();
@@ -274,8 +289,8 @@ Result<Camera> ToCamera(const v2::Camera& in, const VolumeGeometry& geometry) {
   return camera;
 }
 
-v2::Camera FromCamera(const Camera& camera) {
-  v2::Camera out;
+v3::Camera FromCamera(const Camera& camera) {
+  v3::Camera out;
   out.set_azimuth_deg(camera.pose().azimuth_deg);
   out.set_elevation_deg(camera.pose().elevation_deg);
   out.set_distance_mm(camera.pose().distance_mm);

@@ -99,6 +99,10 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--still-delay-ms", o->still_delay_ms,
                  "idle time after a drag before the full-quality still frame")
       ->capture_default_str();
+  app.add_flag("--refine-on-grab,!--no-refine-on-grab", o->refine_on_grab,
+               "a grab where the session's mesh is coarse refines it there, built beside the "
+               "running mesh and swapped in at the next frame with the manipulation replayed")
+      ->capture_default_str();
   app.add_option("--drain-s", o->drain_s,
                  "on SIGTERM/SIGINT, report NOT_SERVING to health checks for this long first, "
                  "while calls on existing sessions go on and new volumes, meshes and sessions "

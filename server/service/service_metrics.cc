@@ -126,7 +126,7 @@ double ServiceMetrics::requests(const std::string& method, const std::string& co
   return sum;
 }
 
-void ServiceMetrics::FrameSent(const v2::StageTimings& t) {
+void ServiceMetrics::FrameSent(const v3::StageTimings& t) {
   frames_->Increment();
   for (auto [stage, ms] : {std::pair{"fem", t.fem_ms()}, std::pair{"warp", t.warp_ms()},
                            std::pair{"render", t.render_ms()}, std::pair{"encode", t.encode_ms()},

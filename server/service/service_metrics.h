@@ -34,7 +34,7 @@
 #include <prometheus/registry.h>
 
 #include "server/common/status.h"
-#include "vpm/v2/vpm.pb.h"
+#include "vpm/v3/vpm.pb.h"
 
 namespace vpm::service {
 
@@ -47,7 +47,7 @@ class ServiceMetrics {
 
   // `user`: the caller (empty: not authenticated).
   void Request(const std::string& method, const char* code, const std::string& user);
-  void FrameSent(const v2::StageTimings& timings);
+  void FrameSent(const v3::StageTimings& timings);
   void Superseded();
   void Sessions(int64_t open, const std::map<std::string, int64_t>& per_user);
   void UserStreams(const std::string& user, int64_t streams);

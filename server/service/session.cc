@@ -5,7 +5,7 @@
 
 #include "server/common/clock.h"
 #include "server/raycast/frame_encoder.h"
-#include "server/raycast/pick_ray.h"
+#include "server/common/prefix_status.h"
 
 namespace vpm::service {
 namespace {
@@ -79,45 +79,28 @@ Result<std::shared_ptr<Session>> Session::Create(std::string id, std::string own
   return session;
 }
 
-Result<glm::dvec3> Session::GrabPoint(const v2::Grab& grab, const SceneView* stream_view) const {
+Result<glm::dvec3> Session::GrabPoint(const v3::Grab& grab, const SceneView* stream_view) const {
   const Volume& volume = volume_->volume;
   if (!grab.pick()) {
-    const glm::dvec3 p = FromProto(grab.point_mm());
+    const glm::dvec3 p = PointFromApi(grab.point_mm(), volume.geometry());
     RETURN_IF_ERROR(CheckInsideVolume(volume.geometry(), p, "grab.point_mm"));
     return p;
   }
-  std::lock_guard lock(state_mutex_);
-  const SceneView& view = stream_view != nullptr ? *stream_view : last_view_;
-  if (grab.pixel_x() < 0 || grab.pixel_x() >= view.width || grab.pixel_y() < 0 ||
-      grab.pixel_y() >= view.height) {
-    return absl::OutOfRangeError(StrCat("grab.pixel: (", grab.pixel_x(), ", ", grab.pixel_y(),
-                                        ") is outside the frame, ", view.width, "x", view.height));
-  }
-  // The pixel's ray through the volume as the frame showed it
-  // (server/raycast/pick_ray.h); a ray that shows nothing falls back to the plane
-  // through the orbit centre that faces the camera.
-  const CameraRays rays = camera_.Rays(view.width, view.height);
-  const glm::dvec3 dir = rays.Direction(grab.pixel_x(), grab.pixel_y());
-  // Before any frame (Manipulate first) there is no preset to pick with.
+  // The frame the pixel belongs to, as it was shown, with today's camera.
   // The caller (ApplyLocked) holds scene_mutex_, so the scene's grab state
   // that places the view cut cannot change under the pick.
-  if (view.preset.points.size() >= 2) {
-    SceneView shown = view;
+  SceneView shown;
+  {
+    std::lock_guard lock(state_mutex_);
+    shown = stream_view != nullptr ? *stream_view : last_view_;
     shown.camera = camera_;
-    const std::vector<glm::dvec4> clip =
-        ClipPlanesInPhysical(scene_->ViewClip(shown), volume.geometry());
-    if (auto hit = PickAlongRay(volume, view.preset, view.mode, rays.eye_mm, dir, clip)) {
-      return *hit;
-    }
   }
-  const double t = glm::dot(camera_.Target() - rays.eye_mm, camera_.Forward()) /
-                   glm::dot(dir, camera_.Forward());
-  const glm::dvec3 p = rays.eye_mm + t * dir;
-  RETURN_IF_ERROR(CheckInsideVolume(volume.geometry(), p, "grab.pixel"));
-  return p;
+  Result<glm::dvec3> picked = scene_->Pick(shown, grab.pixel_x(), grab.pixel_y());
+  if (!picked.ok()) return PrefixStatus(picked.status(), "grab.pixel: ");
+  return picked;
 }
 
-Result<AppliedEvent> Session::Apply(const v2::ClientEvent& event, const SceneView* view) {
+Result<AppliedEvent> Session::Apply(const v3::ClientEvent& event, const SceneView* view) {
   if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
   Touch();
   std::lock_guard scene_lock(scene_mutex_);
@@ -126,39 +109,34 @@ Result<AppliedEvent> Session::Apply(const v2::ClientEvent& event, const SceneVie
   return applied;
 }
 
-Result<AppliedEvent> Session::ApplyLocked(const v2::ClientEvent& event, const SceneView* view) {
+Result<AppliedEvent> Session::ApplyLocked(const v3::ClientEvent& event, const SceneView* view) {
   AppliedEvent applied;
   switch (event.event_case()) {
-    case v2::ClientEvent::kCamera: {
+    case v3::ClientEvent::kCamera: {
       ASSIGN_OR_RETURN(Camera camera, ToCamera(event.camera(), volume_->volume.geometry()));
       std::lock_guard lock(state_mutex_);
       camera_ = camera;
       return applied;
     }
-    case v2::ClientEvent::kGrab:
+    case v3::ClientEvent::kGrab:
       return ApplyGrab(event.grab(), view);
-    case v2::ClientEvent::kPin:
+    case v3::ClientEvent::kPin:
       return ApplyPin(event.pin(), view);
-    case v2::ClientEvent::kReset: {
+    case v3::ClientEvent::kReset: {
       ASSIGN_OR_RETURN(applied.step, scene_->Reset());
       applied.deformed = true;
-      std::lock_guard lock(state_mutex_);
-      grabbed_ = false;
-      grab_point_.reset();
       return applied;
     }
-    case v2::ClientEvent::kDrag:
-    case v2::ClientEvent::kPull: {
-      {
-        std::lock_guard lock(state_mutex_);
-        if (!grabbed_) {
-          return absl::FailedPreconditionError(event.has_drag()
-                                                   ? "drag: no grab in effect; send a grab first"
-                                                   : "pull: no grab in effect; send a grab first");
-        }
+    case v3::ClientEvent::kDrag:
+    case v3::ClientEvent::kPull: {
+      if (!scene_->GrabPointMm()) {
+        return absl::FailedPreconditionError(event.has_drag()
+                                                 ? "drag: no grab in effect; send a grab first"
+                                                 : "pull: no grab in effect; send a grab first");
       }
-      const glm::dvec3 v =
-          FromProto(event.has_drag() ? event.drag().offset_mm() : event.pull().force_n());
+      const glm::dvec3 v = VectorFromApi(
+          event.has_drag() ? event.drag().offset_mm() : event.pull().force_n(),
+          volume_->volume.geometry());
       const char* field = event.has_drag() ? "drag.offset_mm" : "pull.force_n";
       RETURN_IF_ERROR(CheckMotion(v, field));
       Result<SceneStepTimings> step = event.has_drag() ? scene_->Drag(v) : scene_->Pull(v);
@@ -167,44 +145,38 @@ Result<AppliedEvent> Session::ApplyLocked(const v2::ClientEvent& event, const Sc
       applied.deformed = true;
       return applied;
     }
-    case v2::ClientEvent::kRelease: {
-      {
-        std::lock_guard lock(state_mutex_);
-        if (!grabbed_) return absl::FailedPreconditionError("release: no grab in effect");
+    case v3::ClientEvent::kRelease: {
+      if (!scene_->GrabPointMm()) {
+        return absl::FailedPreconditionError("release: no grab in effect");
       }
       ASSIGN_OR_RETURN(applied.step, scene_->Release(event.release().keep()));
       applied.deformed = true;
-      std::lock_guard lock(state_mutex_);
-      grabbed_ = false;
-      grab_point_.reset();
       return applied;
     }
-    case v2::ClientEvent::kSettings:
-    case v2::ClientEvent::EVENT_NOT_SET:
+    case v3::ClientEvent::kSettings:
+    case v3::ClientEvent::EVENT_NOT_SET:
       return applied;
   }
   return applied;
 }
 
-Result<AppliedEvent> Session::ApplyGrab(const v2::Grab& grab, const SceneView* view) {
+Result<AppliedEvent> Session::ApplyGrab(const v3::Grab& grab, const SceneView* view) {
   ASSIGN_OR_RETURN(glm::dvec3 point, GrabPoint(grab, view));
   RETURN_IF_ERROR(CheckGrabRadius(grab.radius_mm()));
-  const GrabRule rule = grab.rule() == v2::GRAB_RULE_BALL ? GrabRule::kBall : GrabRule::kOrgan;
+  const GrabRule rule = grab.rule() == v3::GRAB_RULE_BALL ? GrabRule::kBall : GrabRule::kOrgan;
   ASSIGN_OR_RETURN(GrabInfo info, scene_->Grab(GrabRequest{
                                       .point_mm = point, .rule = rule,
                                       .radius_mm = grab.radius_mm()}));
   AppliedEvent applied;
-  std::lock_guard lock(state_mutex_);
-  grabbed_ = true;
-  grab_point_ = point;
   applied.grab_point_mm = point;
   applied.grab = std::move(info);
+  RefineAtGrab(point);
   return applied;
 }
 
-Result<AppliedEvent> Session::ApplyPin(const v2::Pin& pin, const SceneView* view) {
+Result<AppliedEvent> Session::ApplyPin(const v3::Pin& pin, const SceneView* view) {
   // A pin is placed as a grab is: by point or by a pixel of the frame.
-  v2::Grab where;
+  v3::Grab where;
   *where.mutable_point_mm() = pin.point_mm();
   where.set_pick(pin.pick());
   where.set_pixel_x(pin.pixel_x());
@@ -217,7 +189,7 @@ Result<AppliedEvent> Session::ApplyPin(const v2::Pin& pin, const SceneView* view
   return applied;
 }
 
-Status Session::SetCamera(const v2::Camera& camera) {
+Status Session::SetCamera(const v3::Camera& camera) {
   if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
   Touch();
   ASSIGN_OR_RETURN(Camera c, ToCamera(camera, volume_->volume.geometry()));
@@ -240,7 +212,7 @@ void Session::Changed(uint64_t sequence, bool deformed, const SceneStepTimings* 
   Notify(false);
 }
 
-Result<v2::Frame> Session::Render(const FrameRequest& request) {
+Result<v3::Frame> Session::Render(const FrameRequest& request) {
   if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
   const auto t0 = std::chrono::steady_clock::now();
   SceneView view = request.settings->view;
@@ -249,7 +221,7 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
   uint64_t sequence = 0;
   const bool interactive = request.interactive;
   view.quality = interactive ? RenderQuality::kInteractive : RenderQuality::kStill;
-  v2::Frame out;
+  v3::Frame out;
   // The map stays as this frame's request saw it until the frame is cast;
   // the scene itself is free meanwhile, so the next event's FEM runs while
   // this frame renders (DeformableScene::PrepareRender).
@@ -260,13 +232,17 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
     // The state is read under the scene lock, so the frame shows exactly
     // the events it reports.
     std::lock_guard scene_lock(scene_mutex_);
+    SwapInRefinedMeshLocked();
     {
       std::lock_guard lock(state_mutex_);
       view.camera = request.camera ? *request.camera : camera_;
       step = last_step_;
       sequence = last_sequence_;
       last_view_ = view;
-      if (grab_point_) *out.mutable_grab_point_mm() = ToProto(*grab_point_);
+      out.set_mesh_id(mesh_->id);
+      if (const auto grabbed = scene_->GrabPointMm()) {
+        *out.mutable_grab_point_mm() = PointToApi(*grabbed, volume_->volume.geometry());
+      }
     }
     // A still comes once the pointer has stopped: the drag the per-event
     // bound left short of its offset is finished first (docs/FEM.md,
@@ -288,7 +264,9 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
     // map this frame uses.
     ASSIGN_OR_RETURN(slices, RenderSlicesLocked(request.settings->slices));
     if (request.want_vertices) {
-      for (const glm::dvec3& p : scene_->Positions()) *out.add_vertices_mm() = ToProto(p);
+      for (const glm::dvec3& p : scene_->Positions()) {
+        *out.add_vertices_mm() = PointToApi(p, volume_->volume.geometry());
+      }
     }
   }
   ASSIGN_OR_RETURN(const Frame frame, scene_->RenderPrepared(prepared));
@@ -306,7 +284,7 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
                      EncodeSliceImage(slices[i], s.slices[i], volume_->volume.geometry(), s.png,
                                       interactive ? std::min(s.jpeg_quality, 75) : s.jpeg_quality));
   }
-  out.set_encoding(s.png ? v2::ENCODING_PNG : v2::ENCODING_JPEG);
+  out.set_encoding(s.png ? v3::ENCODING_PNG : v3::ENCODING_JPEG);
   out.set_width(frame.width);
   out.set_height(frame.height);
   out.set_interactive(interactive);
@@ -314,7 +292,7 @@ Result<v2::Frame> Session::Render(const FrameRequest& request) {
   out.set_max_displacement_mm(step.max_displacement_mm);
   out.set_inverted_tets(step.inverted_tets);
   out.set_lag_mm(step.lag_mm);
-  v2::StageTimings* timings = out.mutable_timings();
+  v3::StageTimings* timings = out.mutable_timings();
   timings->set_fem_ms(step.fem_ms);
   timings->set_warp_ms(map_update.warp_ms);
   timings->set_render_ms(render_ms);
@@ -335,10 +313,10 @@ Result<std::vector<SliceFrame>> Session::RenderSlicesLocked(
   return frames;
 }
 
-Result<v2::Frame> Session::RenderSlice(const SliceRequest& request, bool png, int jpeg_quality) {
+Result<v3::Frame> Session::RenderSlice(const SliceRequest& request, bool png, int jpeg_quality) {
   if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
   const auto t0 = std::chrono::steady_clock::now();
-  v2::Frame out;
+  v3::Frame out;
   SliceFrame frame;
   {
     // The slice may update the map (SyncMap), which a frame being cast
@@ -349,14 +327,16 @@ Result<v2::Frame> Session::RenderSlice(const SliceRequest& request, bool png, in
       std::lock_guard lock(state_mutex_);
       out.set_last_sequence(last_sequence_);
       out.set_max_displacement_mm(last_step_.max_displacement_mm);
-      if (grab_point_) *out.mutable_grab_point_mm() = ToProto(*grab_point_);
+      if (const auto grabbed = scene_->GrabPointMm()) {
+        *out.mutable_grab_point_mm() = PointToApi(*grabbed, volume_->volume.geometry());
+      }
     }
     ASSIGN_OR_RETURN(std::vector<SliceFrame> frames, RenderSlicesLocked({request}));
     frame = std::move(frames.front());
   }
   const double render_ms = MsSince(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  ASSIGN_OR_RETURN(v2::SliceImage image,
+  ASSIGN_OR_RETURN(v3::SliceImage image,
                    EncodeSliceImage(frame, request, volume_->volume.geometry(), png, jpeg_quality));
   out.set_image(std::move(*image.mutable_image()));
   out.set_encoding(image.encoding());
@@ -422,6 +402,7 @@ void Session::Close() {
     if (closed_) return;
     closed_ = true;
   }
+  refine_cancel_.Cancel();
   Notify(true);
 }
 

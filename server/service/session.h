@@ -14,13 +14,14 @@
 #include <optional>
 #include <string>
 
+#include "server/common/cancel_token.h"
 #include "server/raycast/volume_renderer.h"
 #include "server/scene/deformable_scene.h"
 #include "server/service/mesh_store.h"
 #include "server/service/proto_convert.h"
 #include "server/service/session_access.h"
 #include "server/service/volume_store.h"
-#include "vpm/v2/vpm.pb.h"
+#include "vpm/v3/vpm.pb.h"
 
 namespace vpm::service {
 
@@ -32,10 +33,17 @@ struct AppliedEvent {
   std::optional<GrabInfo> grab;              // a grab's handles and message
 };
 
-class Session {
+class Session : public std::enable_shared_from_this<Session> {
  public:
+  // Refinement without asking (docs/SERVICE.md): builds the mesh
+  // `mesh_id` refined at `point_mm` (physical) beside the running one, off
+  // the caller's thread, and hands the result to session->OfferRefinedMesh
+  // (if the session still lives). `cancel` ends it when the session closes.
+  using RefineFn = std::function<void(std::weak_ptr<Session> session, std::string mesh_id,
+                                      glm::dvec3 point_mm, CancelToken cancel)>;
   struct Options {
     double still_delay_ms = 150;  // a frame is interactive this long after a drag
+    RefineFn refine;              // empty: a grab never refines by itself
   };
   // The scene is built here (FEM set-up), with a renderer of the session's
   // own: call from a worker, not a callback. `owner`: the user who opens it
@@ -52,7 +60,17 @@ class Session {
   SessionAccess& access() { return access_; }
   const SessionAccess& access() const { return access_; }
   const VolumeEntry& volume() const { return *volume_; }
-  const MeshEntry& mesh() const { return *mesh_; }
+  // The mesh in use: it changes when a refinement is swapped in.
+  std::shared_ptr<const MeshEntry> mesh() const;
+  // A refinement started by a grab has finished: the next frame swaps it in
+  // (between events, under the frame and scene locks), replaying the
+  // manipulation onto it (DeformableScene::Rebuilt). Errors are logged and
+  // the running mesh stays.
+  void OfferRefinedMesh(Result<std::shared_ptr<const MeshEntry>> refined);
+  // Refinements swapped in so far, and the last swap's time (ms: the new
+  // scene's set-up and the replay).
+  int64_t refinements() const;
+  double last_swap_ms() const;
 
   // Camera, grab (point or pick), drag, pull, release. Settings events are
   // the stream's business and ignored here. Errors: InvalidArgument naming
@@ -61,8 +79,8 @@ class Session {
   // `view`: the settings of the stream that sent the event, for a grab by
   // pixel (frame size, preset and mode of the frame the user clicked);
   // null (Manipulate) uses those of the last frame rendered.
-  Result<AppliedEvent> Apply(const v2::ClientEvent& event, const SceneView* view = nullptr);
-  Status SetCamera(const v2::Camera& camera);
+  Result<AppliedEvent> Apply(const v3::ClientEvent& event, const SceneView* view = nullptr);
+  Status SetCamera(const v3::Camera& camera);
 
   // One frame of the current state, encoded. `camera` overrides the
   // session's; `interactive` picks the cheap quality (streams use it while
@@ -73,10 +91,10 @@ class Session {
     bool interactive = false;
     bool want_vertices = false;
   };
-  Result<v2::Frame> Render(const FrameRequest& request);
+  Result<v3::Frame> Render(const FrameRequest& request);
   // One slice of the current state (RenderSlice): the Frame's image is the
   // slice, Frame.slice where it lies.
-  Result<v2::Frame> RenderSlice(const SliceRequest& request, bool png, int jpeg_quality);
+  Result<v3::Frame> RenderSlice(const SliceRequest& request, bool png, int jpeg_quality);
 
   // True while the last change (camera, grab, drag, pull, release,
   // settings; from any client) is younger than still_delay_ms: frames are
@@ -101,11 +119,17 @@ class Session {
  private:
   Session(std::string id, std::string owner, std::shared_ptr<VolumeEntry> volume,
           std::shared_ptr<const MeshEntry> mesh, const Options& options);
-  Result<AppliedEvent> ApplyLocked(const v2::ClientEvent& event, const SceneView* view);
+  Result<AppliedEvent> ApplyLocked(const v3::ClientEvent& event, const SceneView* view);
   // The grab and pin events of ApplyLocked (scene lock held).
-  Result<AppliedEvent> ApplyGrab(const v2::Grab& grab, const SceneView* view);
-  Result<AppliedEvent> ApplyPin(const v2::Pin& pin, const SceneView* view);
-  Result<glm::dvec3> GrabPoint(const v2::Grab& grab, const SceneView* view) const;
+  Result<AppliedEvent> ApplyGrab(const v3::Grab& grab, const SceneView* view);
+  Result<AppliedEvent> ApplyPin(const v3::Pin& pin, const SceneView* view);
+  Result<glm::dvec3> GrabPoint(const v3::Grab& grab, const SceneView* view) const;
+  // After a grab at point_mm: asks options_.refine for a mesh refined there
+  // unless the mesh in use (or one on its way) already is, within h / 2.
+  void RefineAtGrab(const glm::dvec3& point_mm);
+  // The offered refinement, if any, replaces the scene (frame and scene
+  // locks held).
+  void SwapInRefinedMeshLocked();
   void Changed(uint64_t sequence, bool deformed, const SceneStepTimings* step);
   // The slices `requests` place now; the caller holds scene_mutex_.
   Result<std::vector<SliceFrame>> RenderSlicesLocked(const std::vector<SliceRequest>& requests);
@@ -114,7 +138,7 @@ class Session {
   const std::string id_;
   SessionAccess access_;
   std::shared_ptr<VolumeEntry> volume_;
-  std::shared_ptr<const MeshEntry> mesh_;
+  std::shared_ptr<const MeshEntry> mesh_;  // under state_mutex_
   Options options_;
 
   // Lock order: frame_mutex_, scene_mutex_, state_mutex_. Whatever reads or
@@ -135,10 +159,13 @@ class Session {
   Camera camera_;
   uint64_t version_ = 0;
   uint64_t last_sequence_ = 0;
-  bool grabbed_ = false;
   SceneStepTimings last_step_;
   SceneView last_view_;  // settings of the last frame rendered (picks without a stream)
-  std::optional<glm::dvec3> grab_point_;  // while grabbed
+  std::optional<glm::dvec3> refining_at_;          // a refinement on its way (physical mm)
+  std::shared_ptr<const MeshEntry> refined_mesh_;  // offered, not yet swapped in
+  CancelToken::Source refine_cancel_;              // cancelled on Close
+  int64_t refinements_ = 0;                        // swapped in so far
+  double last_swap_ms_ = 0.0;                      // the last swap's rebuild and replay
   std::chrono::steady_clock::time_point last_change_{};
   std::chrono::steady_clock::time_point last_touch_;
   bool closed_ = false;

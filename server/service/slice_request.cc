@@ -11,15 +11,15 @@
 namespace vpm::service {
 namespace {
 
-Result<SliceOrientation> OrientationFromProto(v2::SliceOrientation o, std::string_view path) {
+Result<SliceOrientation> OrientationFromProto(v3::SliceOrientation o, std::string_view path) {
   switch (o) {
-    case v2::SLICE_ORIENTATION_AXIAL:
+    case v3::SLICE_ORIENTATION_AXIAL:
       return SliceOrientation::kAxial;
-    case v2::SLICE_ORIENTATION_CORONAL:
+    case v3::SLICE_ORIENTATION_CORONAL:
       return SliceOrientation::kCoronal;
-    case v2::SLICE_ORIENTATION_SAGITTAL:
+    case v3::SLICE_ORIENTATION_SAGITTAL:
       return SliceOrientation::kSagittal;
-    case v2::SLICE_ORIENTATION_OBLIQUE:
+    case v3::SLICE_ORIENTATION_OBLIQUE:
       return SliceOrientation::kOblique;
     default:
       return absl::InvalidArgumentError(
@@ -28,22 +28,22 @@ Result<SliceOrientation> OrientationFromProto(v2::SliceOrientation o, std::strin
   }
 }
 
-v2::SliceOrientation OrientationToProto(SliceOrientation o) {
+v3::SliceOrientation OrientationToProto(SliceOrientation o) {
   switch (o) {
     case SliceOrientation::kAxial:
-      return v2::SLICE_ORIENTATION_AXIAL;
+      return v3::SLICE_ORIENTATION_AXIAL;
     case SliceOrientation::kCoronal:
-      return v2::SLICE_ORIENTATION_CORONAL;
+      return v3::SLICE_ORIENTATION_CORONAL;
     case SliceOrientation::kSagittal:
-      return v2::SLICE_ORIENTATION_SAGITTAL;
+      return v3::SLICE_ORIENTATION_SAGITTAL;
     case SliceOrientation::kOblique:
-      return v2::SLICE_ORIENTATION_OBLIQUE;
+      return v3::SLICE_ORIENTATION_OBLIQUE;
   }
-  return v2::SLICE_ORIENTATION_UNSPECIFIED;
+  return v3::SLICE_ORIENTATION_UNSPECIFIED;
 }
 
 // Where the spec places the plane, world LPS mm: a landmark or a point.
-Status PlacePoint(const v2::SliceSpec& spec, const Volume& volume, std::string_view path,
+Status PlacePoint(const v3::SliceSpec& spec, const Volume& volume, std::string_view path,
                   SliceRequest* out) {
   const int placed =
       int(spec.has_at_mm()) + int(!spec.at_landmark().empty()) + int(spec.has_point_lps_mm());
@@ -86,7 +86,7 @@ Status PlacePoint(const v2::SliceSpec& spec, const Volume& volume, std::string_v
 
 }  // namespace
 
-Result<SliceRequest> ToSliceRequest(const v2::SliceSpec& spec, const Volume& volume, int max_side,
+Result<SliceRequest> ToSliceRequest(const v3::SliceSpec& spec, const Volume& volume, int max_side,
                                     std::string_view path) {
   SliceRequest out;
   ASSIGN_OR_RETURN(out.orientation, OrientationFromProto(spec.orientation(), path));
@@ -162,15 +162,14 @@ SliceView PlaceSlice(const SliceRequest& request, const VolumeGeometry& geometry
   return view;
 }
 
-v2::SliceGeometry ToProtoSliceGeometry(const SliceFrame& frame, SliceOrientation orientation,
+v3::SliceGeometry ToProtoSliceGeometry(const SliceFrame& frame, SliceOrientation orientation,
                                        const VolumeGeometry& geometry) {
   const SliceGrid& g = frame.grid;
-  v2::SliceGeometry out;
+  v3::SliceGeometry out;
   out.set_orientation(OrientationToProto(orientation));
-  *out.mutable_origin_mm() = ToProto(g.origin_mm);
-  *out.mutable_step_u_mm() = ToProto(g.step_u_mm);
-  *out.mutable_step_v_mm() = ToProto(g.step_v_mm);
-  *out.mutable_world_origin_lps_mm() = ToProto(g.world_origin_mm);
+  *out.mutable_origin_mm() = ToProto(g.world_origin_mm);
+  *out.mutable_step_u_mm() = ToProto(geometry.PhysicalVectorToWorld(g.step_u_mm));
+  *out.mutable_step_v_mm() = ToProto(geometry.PhysicalVectorToWorld(g.step_v_mm));
   *out.mutable_world_u() = ToProto(g.world_u);
   *out.mutable_world_v() = ToProto(g.world_v);
   *out.mutable_world_normal() = ToProto(g.world_normal);
@@ -192,16 +191,16 @@ v2::SliceGeometry ToProtoSliceGeometry(const SliceFrame& frame, SliceOrientation
   return out;
 }
 
-Result<v2::SliceImage> EncodeSliceImage(const SliceFrame& frame, const SliceRequest& request,
+Result<v3::SliceImage> EncodeSliceImage(const SliceFrame& frame, const SliceRequest& request,
                                         const VolumeGeometry& geometry, bool png,
                                         int jpeg_quality) {
   const int w = frame.grid.width, h = frame.grid.height;
   ASSIGN_OR_RETURN(std::vector<uint8_t> bytes,
                    png ? EncodePng(frame.rgba, w, h) : EncodeJpeg(frame.rgba, w, h, jpeg_quality));
-  v2::SliceImage out;
+  v3::SliceImage out;
   out.set_view(request.view);
   out.set_image(bytes.data(), bytes.size());
-  out.set_encoding(png ? v2::ENCODING_PNG : v2::ENCODING_JPEG);
+  out.set_encoding(png ? v3::ENCODING_PNG : v3::ENCODING_JPEG);
   out.set_width(w);
   out.set_height(h);
   *out.mutable_geometry() = ToProtoSliceGeometry(frame, request.orientation, geometry);

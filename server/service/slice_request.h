@@ -13,7 +13,7 @@
 #include "server/common/status.h"
 #include "server/scene/slice_view.h"
 #include "server/volume/volume.h"
-#include "vpm/v2/vpm.pb.h"
+#include "vpm/v3/vpm.pb.h"
 
 namespace vpm::service {
 
@@ -36,7 +36,7 @@ struct SliceRequest {
 // non-finite numbers, a zero normal, an unknown landmark, a bad window, a
 // plane that misses the volume or an image over `max_side` pixels a side
 // (as placed without a grab; a grab point is always inside the volume).
-Result<SliceRequest> ToSliceRequest(const v2::SliceSpec& spec, const Volume& volume, int max_side,
+Result<SliceRequest> ToSliceRequest(const v3::SliceSpec& spec, const Volume& volume, int max_side,
                                     std::string_view path);
 
 // The view of `request` at this moment: `grabbed_mm` (physical mm, the
@@ -45,11 +45,11 @@ Result<SliceRequest> ToSliceRequest(const v2::SliceSpec& spec, const Volume& vol
 SliceView PlaceSlice(const SliceRequest& request, const VolumeGeometry& geometry,
                      const std::optional<glm::dvec3>& grabbed_mm);
 
-v2::SliceGeometry ToProtoSliceGeometry(const SliceFrame& frame, SliceOrientation orientation,
+v3::SliceGeometry ToProtoSliceGeometry(const SliceFrame& frame, SliceOrientation orientation,
                                        const VolumeGeometry& geometry);
 
 // The frame's pixels encoded (PNG, or JPEG at `jpeg_quality`) with its geometry.
-Result<v2::SliceImage> EncodeSliceImage(const SliceFrame& frame, const SliceRequest& request,
+Result<v3::SliceImage> EncodeSliceImage(const SliceFrame& frame, const SliceRequest& request,
                                         const VolumeGeometry& geometry, bool png, int jpeg_quality);
 
 }  // namespace vpm::service

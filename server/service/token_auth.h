@@ -1,4 +1,4 @@
-// Who is calling: every vpm.v2.Vpm call carries `authorization: Bearer
+// Who is calling: every vpm.v3.Vpm call carries `authorization: Bearer
 // TOKEN` metadata, and the token names a user. Users come from --users (a
 // file of names and token hashes, users_file.h) and from the single
 // --token (or --token-file, or VPM_TOKEN), which is the user `default`.

@@ -37,7 +37,7 @@ bool IsHex64(const std::string& s) {
 
 UploadVolumeReactor* UploadVolumeReactor::Make(ServiceContext* service,
                                                grpc::CallbackServerContext* context,
-                                               v2::VolumeInfo* response) {
+                                               v3::VolumeInfo* response) {
   std::shared_ptr<UploadVolumeReactor> reactor(new UploadVolumeReactor(service, context, response));
   reactor->self_ = reactor;
   reactor->Begin();
@@ -46,7 +46,7 @@ UploadVolumeReactor* UploadVolumeReactor::Make(ServiceContext* service,
 
 UploadVolumeReactor::UploadVolumeReactor(ServiceContext* service,
                                          grpc::CallbackServerContext* context,
-                                         v2::VolumeInfo* response)
+                                         v3::VolumeInfo* response)
     : service_(service), context_(context), response_(response) {
   service_->metrics->StreamOpened();
 }
@@ -134,7 +134,7 @@ void UploadVolumeReactor::CheckIdle() {
                                                 " s (--upload-idle-s); send chunks steadily")));
 }
 
-Status UploadVolumeReactor::TakeHeader(const v2::UploadVolumeRequest::Header& header) {
+Status UploadVolumeReactor::TakeHeader(const v3::UploadVolumeRequest::Header& header) {
   const std::string& name = header.file_name();
   if (name.empty() || name.find('/') != std::string::npos || name.find('\\') != std::string::npos ||
       name == "." || name == "..") {
@@ -245,7 +245,7 @@ void UploadVolumeReactor::OnReadDone(bool ok) {
   if (request_.has_header()) {
     status = have_header_ ? absl::InvalidArgumentError("header: sent twice")
                           : TakeHeader(request_.header());
-  } else if (request_.part_case() == v2::UploadVolumeRequest::kChunk) {
+  } else if (request_.part_case() == v3::UploadVolumeRequest::kChunk) {
     status = have_header_ ? TakeChunk(request_.chunk())
                           : absl::InvalidArgumentError("header: must come before any chunk");
   } else {

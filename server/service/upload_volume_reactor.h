@@ -35,18 +35,18 @@
 
 #include "server/service/service_context.h"
 #include "server/common/sha256.h"
-#include "vpm/v2/vpm.pb.h"
+#include "vpm/v3/vpm.pb.h"
 
 namespace vpm::service {
 
 inline constexpr int64_t kMinUploadChunkBytes = 64 << 10;
 inline constexpr int64_t kMaxUploadChunkBytes = 1 << 20;
 
-class UploadVolumeReactor : public grpc::ServerReadReactor<v2::UploadVolumeRequest>,
+class UploadVolumeReactor : public grpc::ServerReadReactor<v3::UploadVolumeRequest>,
                             public std::enable_shared_from_this<UploadVolumeReactor> {
  public:
   static UploadVolumeReactor* Make(ServiceContext* service, grpc::CallbackServerContext* context,
-                                   v2::VolumeInfo* response);
+                                   v3::VolumeInfo* response);
 
   void OnReadDone(bool ok) override;
   void OnCancel() override;
@@ -54,7 +54,7 @@ class UploadVolumeReactor : public grpc::ServerReadReactor<v2::UploadVolumeReque
 
  private:
   UploadVolumeReactor(ServiceContext* service, grpc::CallbackServerContext* context,
-                      v2::VolumeInfo* response);
+                      v3::VolumeInfo* response);
   void Begin();
   // StartRead, unless the call is finished; a Finish decided meanwhile is
   // made right after.
@@ -62,19 +62,19 @@ class UploadVolumeReactor : public grpc::ServerReadReactor<v2::UploadVolumeReque
   // Re-arms itself until the call ends; fails the upload when idle.
   void ArmIdleTimer(std::chrono::milliseconds delay);
   void CheckIdle();
-  Status TakeHeader(const v2::UploadVolumeRequest::Header& header);
+  Status TakeHeader(const v3::UploadVolumeRequest::Header& header);
   Status TakeChunk(const std::string& chunk);
   void Complete();  // on the request pool
   void FinishOnce(const Status& status);
 
   ServiceContext* service_;
   grpc::CallbackServerContext* context_;
-  v2::VolumeInfo* response_;
+  v3::VolumeInfo* response_;
   std::string user_;  // the caller: the volume's owner (set in Begin)
   std::shared_ptr<UploadVolumeReactor> self_;  // from Make until OnDone
   bool slot_held_ = false;                     // a stream slot of this user
   int64_t reserved_bytes_ = 0;                 // in service_->upload_memory, under user_
-  v2::UploadVolumeRequest request_;
+  v3::UploadVolumeRequest request_;
   bool have_header_ = false;
   std::string file_name_;
   int64_t total_bytes_ = 0;

@@ -134,6 +134,30 @@ Status VpmServer::Start() {
   session_options.idle_session_s = o.idle_session_s;
   session_options.idle_watched_session_s = o.idle_watched_session_s;
   session_options.session.still_delay_ms = o.still_delay_ms;
+  // Refinement without asking: on the request pool, in a lane of its own,
+  // uncapped (the server's work for an admitted grab), ended by the
+  // session's close.
+  if (o.refine_on_grab) {
+    session_options.session.refine = [this](std::weak_ptr<Session> session, std::string mesh_id,
+                                            glm::dvec3 point_mm, CancelToken cancel) {
+      Job job;
+      job.lane = "refine";
+      job.capped = false;
+      job.run = [this, session, mesh_id, point_mm, cancel] {
+        Result<std::shared_ptr<const MeshEntry>> refined =
+            meshes_->Refine(mesh_id, point_mm, cancel);
+        if (auto s = session.lock()) s->OfferRefinedMesh(std::move(refined));
+      };
+      job.drop = [session] {
+        if (auto s = session.lock()) {
+          s->OfferRefinedMesh(absl::UnavailableError("the server is stopping"));
+        }
+      };
+      if (Status queued = request_pool_->Submit(std::move(job)); !queued.ok()) {
+        if (auto s = session.lock()) s->OfferRefinedMesh(queued);
+      }
+    };
+  }
   session_options.max_sessions_per_user = o.max_sessions_per_user;
   session_options.on_change = [m = metrics_.get()](
                                   int64_t open, const std::map<std::string, int64_t>& per_user) {

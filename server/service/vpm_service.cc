@@ -154,10 +154,10 @@ void VpmService::Done(grpc::ServerUnaryReactor* reactor, const char* method,
 }
 
 void VpmService::FillSessionInfo(const Session& session, const std::string& user,
-                                 v2::SessionInfo* info) const {
+                                 v3::SessionInfo* info) const {
   info->set_session_id(session.id());
   info->set_volume_id(session.volume().id);
-  info->set_mesh_id(session.mesh().id);
+  info->set_mesh_id(session.mesh()->id);
   info->set_viewers(session.viewers());
   info->set_idle_s(session.idle_s());
   info->set_owner(session.access().owner());
@@ -177,8 +177,8 @@ Result<std::shared_ptr<const MeshEntry>> VpmService::FindMesh(std::string_view m
 }
 
 grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* context,
-                                                 const v2::LoadVolumeRequest* request,
-                                                 v2::VolumeInfo* response) {
+                                                 const v3::LoadVolumeRequest* request,
+                                                 v3::VolumeInfo* response) {
   return Unary(context, *request, "LoadVolume", service_->request_pool,
                [=, this](const std::string& user, const CancelToken& cancel) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
@@ -202,8 +202,8 @@ grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* co
 }
 
 grpc::ServerUnaryReactor* VpmService::GetLoadProgress(grpc::CallbackServerContext* context,
-                                                      const v2::GetLoadProgressRequest* request,
-                                                      v2::LoadProgress* response) {
+                                                      const v3::GetLoadProgressRequest* request,
+                                                      v3::LoadProgress* response) {
   return Unary(context, *request, "GetLoadProgress", nullptr, [=, this](const std::string&) -> Status {
     if (service_->load_progress == nullptr) return absl::UnimplementedError("no load progress");
     ASSIGN_OR_RETURN(const LoadProgressState state,
@@ -217,14 +217,14 @@ grpc::ServerUnaryReactor* VpmService::GetLoadProgress(grpc::CallbackServerContex
   });
 }
 
-grpc::ServerReadReactor<v2::UploadVolumeRequest>* VpmService::UploadVolume(
-    grpc::CallbackServerContext* context, v2::VolumeInfo* response) {
+grpc::ServerReadReactor<v3::UploadVolumeRequest>* VpmService::UploadVolume(
+    grpc::CallbackServerContext* context, v3::VolumeInfo* response) {
   return UploadVolumeReactor::Make(service_, context, response);
 }
 
 grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* context,
-                                                const v2::GetVolumeRequest* request,
-                                                v2::VolumeInfo* response) {
+                                                const v3::GetVolumeRequest* request,
+                                                v3::VolumeInfo* response) {
   // On a pool: an evicted volume is read again.
   return Unary(context, *request, "GetVolume", service_->request_pool,
                [=, this](const std::string& user) -> Status {
@@ -236,8 +236,8 @@ grpc::ServerUnaryReactor* VpmService::GetVolume(grpc::CallbackServerContext* con
 }
 
 grpc::ServerUnaryReactor* VpmService::ListVolumes(grpc::CallbackServerContext* context,
-                                                  const v2::ListVolumesRequest*,
-                                                  v2::ListVolumesResponse* response) {
+                                                  const v3::ListVolumesRequest*,
+                                                  v3::ListVolumesResponse* response) {
   return Unary(context, "ListVolumes", nullptr, [=, this](const std::string& user) -> Status {
     for (const auto& entry : service_->volumes->List(user)) {
       FillVolumeInfo(*entry, response->add_volumes());
@@ -247,8 +247,8 @@ grpc::ServerUnaryReactor* VpmService::ListVolumes(grpc::CallbackServerContext* c
 }
 
 grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* context,
-                                                   const v2::DeleteVolumeRequest* request,
-                                                   v2::DeleteVolumeResponse*) {
+                                                   const v3::DeleteVolumeRequest* request,
+                                                   v3::DeleteVolumeResponse*) {
   return Unary(context, *request, "DeleteVolume", service_->request_pool,
                [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(service_->volumes->Delete(request->volume_id(), user));
@@ -258,14 +258,14 @@ grpc::ServerUnaryReactor* VpmService::DeleteVolume(grpc::CallbackServerContext* 
 }
 
 grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* context,
-                                                const v2::BuildMeshRequest* request,
-                                                v2::MeshInfo* response) {
+                                                const v3::BuildMeshRequest* request,
+                                                v3::MeshInfo* response) {
   return Unary(context, *request, "BuildMesh", service_->request_pool,
                [=, this](const std::string& user, const CancelToken& cancel) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
                      service_->volumes->Get(request->volume_id(), user));
-    ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(request->params()));
+    ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(request->params(), volume->volume.geometry()));
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
                      service_->meshes->Build(volume, params, cancel));
     FillMeshInfo(*mesh, response);
@@ -274,27 +274,32 @@ grpc::ServerUnaryReactor* VpmService::BuildMesh(grpc::CallbackServerContext* con
 }
 
 grpc::ServerUnaryReactor* VpmService::GetMesh(grpc::CallbackServerContext* context,
-                                              const v2::GetMeshRequest* request,
-                                              v2::GetMeshResponse* response) {
+                                              const v3::GetMeshRequest* request,
+                                              v3::GetMeshResponse* response) {
   return Unary(context, *request, "GetMesh", service_->request_pool,
                [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh, FindMesh(request->mesh_id(), user));
     FillMeshInfo(*mesh, response->mutable_info());
-    if (request->include_geometry()) FillMeshGeometry(mesh->mesh, response);
+    if (request->include_geometry()) {
+      FillMeshGeometry(mesh->mesh, mesh->volume->volume.geometry(), response);
+    }
     return absl::OkStatus();
   });
 }
 
 grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* context,
-                                                 const v2::RefineMeshRequest* request,
-                                                 v2::MeshInfo* response) {
+                                                 const v3::RefineMeshRequest* request,
+                                                 v3::MeshInfo* response) {
   return Unary(context, *request, "RefineMesh", service_->request_pool,
                [=, this](const std::string& user, const CancelToken& cancel) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
     if (!request->has_point_mm()) return absl::InvalidArgumentError("point_mm: required");
-    RETURN_IF_ERROR(FindMesh(request->mesh_id(), user).status());
+    ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> held, FindMesh(request->mesh_id(), user));
+    const VolumeGeometry mesh_geometry = held->volume->volume.geometry();
     ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh,
-                     service_->meshes->Refine(request->mesh_id(), FromProto(request->point_mm()),
+                     service_->meshes->Refine(request->mesh_id(),
+                                              PointFromApi(request->point_mm(),
+                                                           mesh_geometry),
                                               cancel));
     FillMeshInfo(*mesh, response);
     return absl::OkStatus();
@@ -302,8 +307,8 @@ grpc::ServerUnaryReactor* VpmService::RefineMesh(grpc::CallbackServerContext* co
 }
 
 grpc::ServerUnaryReactor* VpmService::DeleteMesh(grpc::CallbackServerContext* context,
-                                                 const v2::DeleteMeshRequest* request,
-                                                 v2::DeleteMeshResponse*) {
+                                                 const v3::DeleteMeshRequest* request,
+                                                 v3::DeleteMeshResponse*) {
   return Unary(context, *request, "DeleteMesh", service_->request_pool,
                [=, this](const std::string& user) -> Status {
     RETURN_IF_ERROR(FindMesh(request->mesh_id(), user).status());
@@ -312,8 +317,8 @@ grpc::ServerUnaryReactor* VpmService::DeleteMesh(grpc::CallbackServerContext* co
 }
 
 grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* context,
-                                                  const v2::OpenSessionRequest* request,
-                                                  v2::SessionInfo* response) {
+                                                  const v3::OpenSessionRequest* request,
+                                                  v3::SessionInfo* response) {
   return Unary(context, *request, "OpenSession", service_->request_pool,
                [=, this](const std::string& user, const CancelToken& cancel) -> Status {
     RETURN_IF_ERROR(service_->AcceptingNewWork());
@@ -342,8 +347,8 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
 }
 
 grpc::ServerUnaryReactor* VpmService::CloseSession(grpc::CallbackServerContext* context,
-                                                   const v2::CloseSessionRequest* request,
-                                                   v2::CloseSessionResponse*) {
+                                                   const v3::CloseSessionRequest* request,
+                                                   v3::CloseSessionResponse*) {
   return Unary(context, *request, "CloseSession", service_->request_pool, [=, this](const std::string& user) {
     // Only the owner gets this far; its streams, and its viewers', end at
     // once with PERMISSION_DENIED (before Close's own notice, which would
@@ -358,8 +363,8 @@ grpc::ServerUnaryReactor* VpmService::CloseSession(grpc::CallbackServerContext* 
 }
 
 grpc::ServerUnaryReactor* VpmService::ListSessions(grpc::CallbackServerContext* context,
-                                                   const v2::ListSessionsRequest*,
-                                                   v2::ListSessionsResponse* response) {
+                                                   const v3::ListSessionsRequest*,
+                                                   v3::ListSessionsResponse* response) {
   return Unary(context, "ListSessions", nullptr, [=, this](const std::string& user) -> Status {
     for (const auto& session : service_->sessions->List(user)) {
       FillSessionInfo(*session, user, response->add_sessions());
@@ -369,8 +374,8 @@ grpc::ServerUnaryReactor* VpmService::ListSessions(grpc::CallbackServerContext* 
 }
 
 grpc::ServerUnaryReactor* VpmService::GetSession(grpc::CallbackServerContext* context,
-                                                 const v2::GetSessionRequest* request,
-                                                 v2::SessionInfo* response) {
+                                                 const v3::GetSessionRequest* request,
+                                                 v3::SessionInfo* response) {
   return Unary(context, *request, "GetSession", nullptr, [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id(), user, SessionRole::kViewer));
@@ -380,8 +385,8 @@ grpc::ServerUnaryReactor* VpmService::GetSession(grpc::CallbackServerContext* co
 }
 
 grpc::ServerUnaryReactor* VpmService::ShareSession(grpc::CallbackServerContext* context,
-                                                   const v2::ShareSessionRequest* request,
-                                                   v2::SessionInfo* response) {
+                                                   const v3::ShareSessionRequest* request,
+                                                   v3::SessionInfo* response) {
   return Unary(context, *request, "ShareSession", nullptr, [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
@@ -405,25 +410,25 @@ grpc::ServerUnaryReactor* VpmService::ShareSession(grpc::CallbackServerContext* 
   });
 }
 
-grpc::ServerBidiReactor<v2::InteractRequest, v2::Frame>* VpmService::Interact(
+grpc::ServerBidiReactor<v3::InteractRequest, v3::Frame>* VpmService::Interact(
     grpc::CallbackServerContext* context) {
   return InteractReactor::Make<InteractReactor>(service_, context);
 }
 
-grpc::ServerWriteReactor<v2::Frame>* VpmService::Watch(grpc::CallbackServerContext* context,
-                                                       const v2::WatchRequest* request) {
+grpc::ServerWriteReactor<v3::Frame>* VpmService::Watch(grpc::CallbackServerContext* context,
+                                                       const v3::WatchRequest* request) {
   return WatchReactor::Make<WatchReactor>(service_, context, *request);
 }
 
 grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* context,
-                                                 const v2::ManipulateRequest* request,
-                                                 v2::ManipulateResponse* response) {
+                                                 const v3::ManipulateRequest* request,
+                                                 v3::ManipulateResponse* response) {
   return Unary(context, *request, "Manipulate", service_->render_pool,
                [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
                      service_->sessions->Get(request->session_id(), user, SessionRole::kOwner));
-    const v2::ClientEvent& event = request->event();
-    if (event.event_case() == v2::ClientEvent::EVENT_NOT_SET) {
+    const v3::ClientEvent& event = request->event();
+    if (event.event_case() == v3::ClientEvent::EVENT_NOT_SET) {
       return absl::InvalidArgumentError("event: required (camera, grab, drag, pull, release, pin or reset)");
     }
     if (event.has_settings()) {
@@ -435,7 +440,10 @@ grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* co
     response->set_max_displacement_mm(session->max_displacement_mm());
     response->set_inverted_tets(applied.step.inverted_tets);
     response->set_lag_mm(applied.step.lag_mm);
-    if (applied.grab_point_mm) *response->mutable_grab_point_mm() = ToProto(*applied.grab_point_mm);
+    if (applied.grab_point_mm) {
+      *response->mutable_grab_point_mm() =
+          PointToApi(*applied.grab_point_mm, session->volume().volume.geometry());
+    }
     if (applied.grab) {
       response->set_handles(static_cast<int32_t>(applied.grab->handles.size()));
       response->set_message(applied.grab->message);
@@ -445,8 +453,8 @@ grpc::ServerUnaryReactor* VpmService::Manipulate(grpc::CallbackServerContext* co
 }
 
 grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* context,
-                                                const v2::SetCameraRequest* request,
-                                                v2::SetCameraResponse*) {
+                                                const v3::SetCameraRequest* request,
+                                                v3::SetCameraResponse*) {
   return Unary(context, *request, "SetCamera", service_->render_pool,
                [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
@@ -456,8 +464,8 @@ grpc::ServerUnaryReactor* VpmService::SetCamera(grpc::CallbackServerContext* con
 }
 
 grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* context,
-                                             const v2::RenderRequest* request,
-                                             v2::Frame* response) {
+                                             const v3::RenderRequest* request,
+                                             v3::Frame* response) {
   return Unary(context, *request, "Render", service_->render_pool,
                [=, this](const std::string& user, const CancelToken& cancel) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
@@ -479,8 +487,8 @@ grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* contex
 }
 
 grpc::ServerUnaryReactor* VpmService::RenderSlice(grpc::CallbackServerContext* context,
-                                                  const v2::RenderSliceRequest* request,
-                                                  v2::Frame* response) {
+                                                  const v3::RenderSliceRequest* request,
+                                                  v3::Frame* response) {
   return Unary(context, *request, "RenderSlice", service_->render_pool,
                [=, this](const std::string& user) -> Status {
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
@@ -499,8 +507,8 @@ grpc::ServerUnaryReactor* VpmService::RenderSlice(grpc::CallbackServerContext* c
 }
 
 grpc::ServerUnaryReactor* VpmService::ReadTransferFunction(
-    grpc::CallbackServerContext* context, const v2::ReadTransferFunctionRequest* request,
-    v2::RenderTransferFunction* response) {
+    grpc::CallbackServerContext* context, const v3::ReadTransferFunctionRequest* request,
+    v3::RenderTransferFunction* response) {
   return Unary(context, *request, "ReadTransferFunction", service_->request_pool,
                [=](const std::string&) -> Status {
     const std::string& name = request->file_name();

@@ -1,4 +1,4 @@
-// vpm.v2.Vpm on gRPC's callback API. Unary calls authenticate the caller
+// vpm.v3.Vpm on gRPC's callback API. Unary calls authenticate the caller
 // (token_auth.h: every call knows its user, for ownership checks and
 // per-user metrics), then run
 // cheap lookups inline and anything heavy (reads, mesh builds, FEM, frames)
@@ -14,65 +14,65 @@
 
 #include "server/common/cancel_token.h"
 #include "server/service/service_context.h"
-#include "vpm/v2/vpm.grpc.pb.h"
+#include "vpm/v3/vpm.grpc.pb.h"
 
 namespace vpm::service {
 
-class VpmService final : public v2::Vpm::CallbackService {
+class VpmService final : public v3::Vpm::CallbackService {
  public:
   explicit VpmService(ServiceContext* service) : service_(service) {}
 
-  grpc::ServerUnaryReactor* LoadVolume(grpc::CallbackServerContext*, const v2::LoadVolumeRequest*,
-                                       v2::VolumeInfo*) override;
-  grpc::ServerReadReactor<v2::UploadVolumeRequest>* UploadVolume(grpc::CallbackServerContext*,
-                                                                 v2::VolumeInfo*) override;
+  grpc::ServerUnaryReactor* LoadVolume(grpc::CallbackServerContext*, const v3::LoadVolumeRequest*,
+                                       v3::VolumeInfo*) override;
+  grpc::ServerReadReactor<v3::UploadVolumeRequest>* UploadVolume(grpc::CallbackServerContext*,
+                                                                 v3::VolumeInfo*) override;
   grpc::ServerUnaryReactor* GetLoadProgress(grpc::CallbackServerContext*,
-                                            const v2::GetLoadProgressRequest*,
-                                            v2::LoadProgress*) override;
-  grpc::ServerUnaryReactor* GetVolume(grpc::CallbackServerContext*, const v2::GetVolumeRequest*,
-                                      v2::VolumeInfo*) override;
+                                            const v3::GetLoadProgressRequest*,
+                                            v3::LoadProgress*) override;
+  grpc::ServerUnaryReactor* GetVolume(grpc::CallbackServerContext*, const v3::GetVolumeRequest*,
+                                      v3::VolumeInfo*) override;
   grpc::ServerUnaryReactor* ListVolumes(grpc::CallbackServerContext*,
-                                        const v2::ListVolumesRequest*,
-                                        v2::ListVolumesResponse*) override;
+                                        const v3::ListVolumesRequest*,
+                                        v3::ListVolumesResponse*) override;
   grpc::ServerUnaryReactor* DeleteVolume(grpc::CallbackServerContext*,
-                                         const v2::DeleteVolumeRequest*,
-                                         v2::DeleteVolumeResponse*) override;
-  grpc::ServerUnaryReactor* BuildMesh(grpc::CallbackServerContext*, const v2::BuildMeshRequest*,
-                                      v2::MeshInfo*) override;
-  grpc::ServerUnaryReactor* GetMesh(grpc::CallbackServerContext*, const v2::GetMeshRequest*,
-                                    v2::GetMeshResponse*) override;
-  grpc::ServerUnaryReactor* RefineMesh(grpc::CallbackServerContext*, const v2::RefineMeshRequest*,
-                                       v2::MeshInfo*) override;
-  grpc::ServerUnaryReactor* DeleteMesh(grpc::CallbackServerContext*, const v2::DeleteMeshRequest*,
-                                       v2::DeleteMeshResponse*) override;
+                                         const v3::DeleteVolumeRequest*,
+                                         v3::DeleteVolumeResponse*) override;
+  grpc::ServerUnaryReactor* BuildMesh(grpc::CallbackServerContext*, const v3::BuildMeshRequest*,
+                                      v3::MeshInfo*) override;
+  grpc::ServerUnaryReactor* GetMesh(grpc::CallbackServerContext*, const v3::GetMeshRequest*,
+                                    v3::GetMeshResponse*) override;
+  grpc::ServerUnaryReactor* RefineMesh(grpc::CallbackServerContext*, const v3::RefineMeshRequest*,
+                                       v3::MeshInfo*) override;
+  grpc::ServerUnaryReactor* DeleteMesh(grpc::CallbackServerContext*, const v3::DeleteMeshRequest*,
+                                       v3::DeleteMeshResponse*) override;
   grpc::ServerUnaryReactor* OpenSession(grpc::CallbackServerContext*,
-                                        const v2::OpenSessionRequest*, v2::SessionInfo*) override;
+                                        const v3::OpenSessionRequest*, v3::SessionInfo*) override;
   grpc::ServerUnaryReactor* CloseSession(grpc::CallbackServerContext*,
-                                         const v2::CloseSessionRequest*,
-                                         v2::CloseSessionResponse*) override;
+                                         const v3::CloseSessionRequest*,
+                                         v3::CloseSessionResponse*) override;
   grpc::ServerUnaryReactor* ListSessions(grpc::CallbackServerContext*,
-                                         const v2::ListSessionsRequest*,
-                                         v2::ListSessionsResponse*) override;
-  grpc::ServerUnaryReactor* GetSession(grpc::CallbackServerContext*, const v2::GetSessionRequest*,
-                                       v2::SessionInfo*) override;
+                                         const v3::ListSessionsRequest*,
+                                         v3::ListSessionsResponse*) override;
+  grpc::ServerUnaryReactor* GetSession(grpc::CallbackServerContext*, const v3::GetSessionRequest*,
+                                       v3::SessionInfo*) override;
   grpc::ServerUnaryReactor* ShareSession(grpc::CallbackServerContext*,
-                                         const v2::ShareSessionRequest*,
-                                         v2::SessionInfo*) override;
-  grpc::ServerBidiReactor<v2::InteractRequest, v2::Frame>* Interact(
+                                         const v3::ShareSessionRequest*,
+                                         v3::SessionInfo*) override;
+  grpc::ServerBidiReactor<v3::InteractRequest, v3::Frame>* Interact(
       grpc::CallbackServerContext*) override;
-  grpc::ServerWriteReactor<v2::Frame>* Watch(grpc::CallbackServerContext*,
-                                             const v2::WatchRequest*) override;
-  grpc::ServerUnaryReactor* Manipulate(grpc::CallbackServerContext*, const v2::ManipulateRequest*,
-                                       v2::ManipulateResponse*) override;
-  grpc::ServerUnaryReactor* SetCamera(grpc::CallbackServerContext*, const v2::SetCameraRequest*,
-                                      v2::SetCameraResponse*) override;
-  grpc::ServerUnaryReactor* Render(grpc::CallbackServerContext*, const v2::RenderRequest*,
-                                   v2::Frame*) override;
+  grpc::ServerWriteReactor<v3::Frame>* Watch(grpc::CallbackServerContext*,
+                                             const v3::WatchRequest*) override;
+  grpc::ServerUnaryReactor* Manipulate(grpc::CallbackServerContext*, const v3::ManipulateRequest*,
+                                       v3::ManipulateResponse*) override;
+  grpc::ServerUnaryReactor* SetCamera(grpc::CallbackServerContext*, const v3::SetCameraRequest*,
+                                      v3::SetCameraResponse*) override;
+  grpc::ServerUnaryReactor* Render(grpc::CallbackServerContext*, const v3::RenderRequest*,
+                                   v3::Frame*) override;
   grpc::ServerUnaryReactor* RenderSlice(grpc::CallbackServerContext*,
-                                        const v2::RenderSliceRequest*, v2::Frame*) override;
+                                        const v3::RenderSliceRequest*, v3::Frame*) override;
   grpc::ServerUnaryReactor* ReadTransferFunction(grpc::CallbackServerContext*,
-                                                 const v2::ReadTransferFunctionRequest*,
-                                                 v2::RenderTransferFunction*) override;
+                                                 const v3::ReadTransferFunctionRequest*,
+                                                 v3::RenderTransferFunction*) override;
 
  private:
   // Authenticates the caller, then runs `fn` with the caller's user name
@@ -131,7 +131,7 @@ class VpmService final : public v2::Vpm::CallbackService {
   static std::string FairShareKey(const std::string& user);
   // shared_with only for the owner.
   void FillSessionInfo(const Session& session, const std::string& user,
-                       v2::SessionInfo* info) const;
+                       v3::SessionInfo* info) const;
   // NotFound; PermissionDenied for a mesh on another user's upload.
   Result<std::shared_ptr<const MeshEntry>> FindMesh(std::string_view mesh_id,
                                                    const std::string& user) const;

@@ -6,7 +6,7 @@
 namespace vpm::service {
 
 WatchReactor::WatchReactor(ServiceContext* service, grpc::CallbackServerContext* context,
-                           const v2::WatchRequest& request)
+                           const v3::WatchRequest& request)
     : FrameStreamReactor(service, context, "Watch"), request_(request) {}
 
 void WatchReactor::Begin() {

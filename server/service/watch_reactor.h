@@ -12,15 +12,15 @@
 
 namespace vpm::service {
 
-class WatchReactor : public FrameStreamReactor<grpc::ServerWriteReactor<v2::Frame>> {
+class WatchReactor : public FrameStreamReactor<grpc::ServerWriteReactor<v3::Frame>> {
  public:
   WatchReactor(ServiceContext* service, grpc::CallbackServerContext* context,
-               const v2::WatchRequest& request);
+               const v3::WatchRequest& request);
 
  private:
   void Begin() override;
 
-  const v2::WatchRequest& request_;  // gRPC's, valid until OnDone
+  const v3::WatchRequest& request_;  // gRPC's, valid until OnDone
 };
 
 }  // namespace vpm::service

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -39,6 +40,25 @@ struct VolumeGeometry {
   }
   glm::dvec3 WorldToPhysical(const glm::dvec3& w_mm) const {
     return glm::transpose(direction) * (w_mm - origin_mm);
+  }
+  // Directions and offsets (mm or N): rotated only.
+  glm::dvec3 PhysicalVectorToWorld(const glm::dvec3& v) const { return direction * v; }
+  glm::dvec3 WorldVectorToPhysical(const glm::dvec3& v) const {
+    return glm::transpose(direction) * v;
+  }
+  // The world (LPS) axis-aligned box around the voxel centres, mm: the
+  // least and greatest corner.
+  std::array<glm::dvec3, 2> WorldBox() const {
+    glm::dvec3 lo(std::numeric_limits<double>::infinity());
+    glm::dvec3 hi(-std::numeric_limits<double>::infinity());
+    const glm::dvec3 e = extent_mm();
+    for (int c = 0; c < 8; ++c) {
+      const glm::dvec3 w = PhysicalToWorld(
+          glm::dvec3((c & 1) ? e.x : 0.0, (c & 2) ? e.y : 0.0, (c & 4) ? e.z : 0.0));
+      lo = glm::min(lo, w);
+      hi = glm::max(hi, w);
+    }
+    return {lo, hi};
   }
   // Extent of the image box in physical voxel space: (n - 1) * spacing (mm).
   glm::dvec3 extent_mm() const {

@@ -85,7 +85,7 @@ TEST(VpmCli, BadSourceExitsNonZeroNamingTheFile) {
   EXPECT_NE(run.output.find("/no/such/scan.nii.gz"), std::string::npos) << run.output;
   EXPECT_NE(Vpm("mesh --volume phantom:nothing").exit_code, 0);
   const CliRun outside = Vpm("mesh --volume 'phantom:abdomen?size=48' --grid 8 8 8 --target 60 "
-                          "--refine-at -5 0 0 --backend cpu");
+                          "--refine-at -500 0 0 --backend cpu");
   EXPECT_NE(outside.exit_code, 0);
   EXPECT_NE(outside.output.find("OUT_OF_RANGE"), std::string::npos) << outside.output;
 }

@@ -9,9 +9,9 @@ build=$1
 source_dir=$2
 out=$("$build/client/vpm" compare-meshes \
   --volume "$source_dir/tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz" \
-  --grab 99 114 264 --drag 0 0 15)
+  --grab 79 -125.3 358.3 --drag 0 0 15)
 echo "$out" | tail -6
-echo "$out" | grep -q "^deformation: grab (99, 114, 264) mm" || { echo "no deformation table"; exit 1; }
+echo "$out" | grep -q "^deformation: grab (79, -125.3, 358.3) mm (LPS)" || { echo "no deformation table"; exit 1; }
 python3 - "$out" <<'PY'
 import sys
 rows = {}

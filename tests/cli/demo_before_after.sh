@@ -44,7 +44,7 @@ python3 "$source_dir/scripts/region_difference.py" "$out/before_skin.png" "$out/
 # pixels; measured 9.7/255), the coronal slices through it by at least 8/255
 # (measured 16.8/255; README, "A real scanner's CT in the demo").
 ct="$source_dir/tests/data/ct-philips-tilt"
-ct_mesh=(--grid 20 20 18 --grab 123 145 64)
+ct_mesh=(--grid 20 20 18 --grab -0.5 102.3 770.4)
 ct_before=$("$vpm" render --volume "$ct" "${ct_mesh[@]}" --out "$out/ct_before.png")
 "$vpm" render --volume "$ct" "${ct_mesh[@]}" --drag 0 0 10 --out "$out/ct_after.png" >/dev/null
 ct_pixel=$(echo "$ct_before" | sed -n 's/^grab point at pixel (\([0-9.-]*\), \([0-9.-]*\))$/\1 \2/p')
@@ -68,7 +68,7 @@ python3 "$source_dir/scripts/region_difference.py" "$out/ct_coronal_before.png" 
 # least 8/255 (measured 24.7) while the right kidney's, mirrored at (100, 69),
 # stays under 2/255 (measured 0.4): the organ moved, not the body.
 kidney="$source_dir/tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz"
-kidney_grab=(--grab 99 114 264)
+kidney_grab=(--grab 79 -125.3 358.3)
 kidney_before=$("$vpm" render --volume "$kidney" "${kidney_grab[@]}" --preset CT-Soft-Tissue \
   --out "$out/kidney_before.png")
 kidney_after=$("$vpm" render --volume "$kidney" "${kidney_grab[@]}" --preset CT-Soft-Tissue \

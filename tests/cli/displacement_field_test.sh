@@ -22,7 +22,7 @@ check() {  # SOURCE GRAB... -- DRAG...: render, export, resample, compare
 }
 check "phantom:abdomen?size=48" phantom --grid 10 10 10 --grab-landmark left_renal_artery \
   --drag 0 0 12
-check "$source_dir/tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz" kidney --grab 99 114 264 \
+check "$source_dir/tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz" kidney --grab 79 -125.3 358.3 \
   --drag 0 0 15
 # A name the writer does not know is refused with a clear error.
 if "$vpm" render --volume "phantom:abdomen?size=48" --grid 10 10 10 --size 64 64 \

@@ -18,7 +18,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/cli/command_run.h"
-#include "vpm/v2/vpm.grpc.pb.h"
+#include "vpm/v3/vpm.grpc.pb.h"
 
 extern char** environ;
 
@@ -79,7 +79,7 @@ class ServerProcess {
 };
 
 // A gRPC server in this process with grpc.health.v1 (the same default
-// service vpm-server enables), so the test sets its status. The vpm.v2.Vpm
+// service vpm-server enables), so the test sets its status. The vpm.v3.Vpm
 // base service (every method UNIMPLEMENTED) is there because gRPC polls
 // the default health service only on a server with synchronous methods.
 class HealthOnlyServer {
@@ -98,7 +98,7 @@ class HealthOnlyServer {
 
  private:
   int port_ = 0;
-  vpm::v2::Vpm::Service unimplemented_;
+  vpm::v3::Vpm::Service unimplemented_;
   std::unique_ptr<grpc::Server> server_;
 };
 
@@ -153,10 +153,10 @@ TEST(HealthCommand, NotServingExitsOneNamingTheStatus) {
 
 TEST(HealthCommand, NamedServiceIsCheckedAndAnUnknownOneFails) {
   HealthOnlyServer server;
-  server.health().SetServingStatus("vpm.v2.Vpm", true);
-  const CommandRun known = Vpm("health --server " + server.address() + " --service vpm.v2.Vpm");
+  server.health().SetServingStatus("vpm.v3.Vpm", true);
+  const CommandRun known = Vpm("health --server " + server.address() + " --service vpm.v3.Vpm");
   EXPECT_EQ(known.exit_code, 0) << known.output;
-  EXPECT_NE(known.output.find("vpm.v2.Vpm"), std::string::npos) << known.output;
+  EXPECT_NE(known.output.find("vpm.v3.Vpm"), std::string::npos) << known.output;
 
   const CommandRun unknown = Vpm("health --server " + server.address() + " --service no.such.Service");
   EXPECT_EQ(unknown.exit_code, 1) << unknown.output;

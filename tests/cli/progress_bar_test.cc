@@ -1,6 +1,6 @@
 // The CLI's progress bar: drawn only when enabled and after its delay,
 // monotone, ending at 100% on a line of its own.
-#include "client/cli/progress_bar.h"
+#include "client/common/progress_bar.h"
 
 #include <cstdio>
 #include <string>

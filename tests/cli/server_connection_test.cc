@@ -6,8 +6,8 @@
 
 #include <gtest/gtest.h>
 
-#include "client/cli/server_connection.h"
-#include "client/cli/session_key.h"
+#include "client/common/server_connection.h"
+#include "client/common/session_key.h"
 
 namespace vpm::cli {
 namespace {

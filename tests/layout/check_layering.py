@@ -11,6 +11,11 @@ every folder F listed there:
   - tests/<F>/ exists (tests mirror the folders).
 Any server/ folder with sources that is not listed is an error too.
 
+The clients (client/<F>/, F with C++ sources): client/common is the library
+every client shares; a client's folder includes client/common and itself,
+never another client's folder; client/common includes no client folder;
+and nothing under server/ includes client/.
+
 Usage: check_layering.py [--repo DIR] | --self-test
 """
 import argparse
@@ -21,6 +26,9 @@ import sys
 import tempfile
 
 INCLUDE = re.compile(r'^\s*#\s*include\s+"server/([a-z_]+)/', re.M)
+CLIENT_INCLUDE = re.compile(r'^\s*#\s*include\s+"client/([a-z_]+)/', re.M)
+SHARED_CLIENT = 'common'
+
 LINK_BLOCK = re.compile(r'target_link_libraries\(\s*vpm_\w+(.*?)\)', re.S)
 LIB = re.compile(r'\bvpm_([a-z_]+)\b')
 ADD_LIB = re.compile(r'add_library\(\s*(vpm_[a-z_]+)\b')
@@ -79,7 +87,42 @@ def check(repo):
                 elif rank[target] > rank[folder]:
                     errors.append(f'server/{folder}/{name}: includes server/{target}/, which '
                                   f'comes after server/{folder}/ in the dependency order')
+    errors += check_clients(repo)
     return order, errors
+
+
+def sources(folder):
+    """(path, text) of the C++ sources under `folder`, recursively."""
+    for base, _, names in os.walk(folder):
+        for name in sorted(names):
+            if name.endswith(('.h', '.cc')):
+                path = os.path.join(base, name)
+                with open(path, encoding='utf-8') as f:
+                    yield path, f.read()
+
+
+def check_clients(repo):
+    errors = []
+    for path, text in sources(os.path.join(repo, 'server')):
+        for target in CLIENT_INCLUDE.findall(text):
+            errors.append(f'{os.path.relpath(path, repo)}: includes client/{target}/; '
+                          'the server never includes a client')
+    client = os.path.join(repo, 'client')
+    if not os.path.isdir(client):
+        return errors
+    for folder in sorted(os.listdir(client)):
+        if folder == 'web' or not os.path.isdir(os.path.join(client, folder)):
+            continue
+        for path, text in sources(os.path.join(client, folder)):
+            rel = os.path.relpath(path, repo)
+            for target in CLIENT_INCLUDE.findall(text):
+                if folder == SHARED_CLIENT and target != SHARED_CLIENT:
+                    errors.append(f'{rel}: includes client/{target}/; client/{SHARED_CLIENT} '
+                                  'is shared by every client and includes none of them')
+                elif target not in (folder, SHARED_CLIENT):
+                    errors.append(f'{rel}: includes client/{target}/; a client includes '
+                                  f'client/{SHARED_CLIENT} and itself only')
+    return errors
 
 
 def self_test():
@@ -103,6 +146,10 @@ def self_test():
         write(os.path.join(srv, high, 'CMakeLists.txt'), 'add_library(vpm_other b.cc)\n')
         write(os.path.join(srv, high, 'b.h'), f'#include "{srv}/{low}/a.h"\n')
         write(os.path.join(srv, 'stray', 'c.cc'), '\n')
+        cli, view, common = 'client', 'view', SHARED_CLIENT
+        write(os.path.join(cli, 'tool', 'main.cc'), f'#include "{cli}/{view}/x.h"\n')
+        write(os.path.join(cli, common, 'lib.cc'), f'#include "{cli}/tool/main.h"\n')
+        write(os.path.join(srv, low, 'b.cc'), f'#include "{cli}/{common}/lib.h"\n')
         os.makedirs(os.path.join(root, 'tests', low))
         _, errors = check(root)
         expected = [
@@ -112,6 +159,9 @@ def self_test():
             f'{srv}/{high}/CMakeLists.txt: defines',
             f'{srv}/{high}/README.md: missing',
             f'tests/{high}/: missing',
+            f'{srv}/{low}/b.cc: includes {cli}/{common}/',
+            f'{cli}/tool/main.cc: includes {cli}/{view}/',
+            f'{cli}/{common}/lib.cc: includes {cli}/tool/',
         ]
         missing = [e for e in expected if not any(x.startswith(e) for x in errors)]
         unexpected = [x for x in errors if not any(x.startswith(e) for e in expected)]
@@ -141,7 +191,8 @@ def main():
     if errors:
         print(f'{len(errors)} layering errors')
         return 1
-    print('layering: ' + ' -> '.join(order) + ': every include and link runs down the order')
+    print('layering: ' + ' -> '.join(order) + ': every include and link runs down the order; '
+          'clients include client/common and themselves only')
     return 0
 
 

@@ -21,13 +21,13 @@ std::string ReadText(const std::string& path) {
   return text.str();
 }
 
-// The whitespace-separated tokens of the DataArray whose opening tag
+// The whitespace-separated tokens of the DataArray (or Array) whose opening tag
 // contains `marker` (e.g. Name="offsets").
 std::vector<std::string> ArrayTokens(const std::string& xml, const std::string& marker) {
   const size_t tag = xml.find(marker);
   if (tag == std::string::npos) return {};
   const size_t begin = xml.find('>', tag) + 1;
-  const size_t end = xml.find("</DataArray>", begin);
+  const size_t end = xml.find("</", begin);  // </DataArray> or </Array>
   std::istringstream in(xml.substr(begin, end - begin));
   std::vector<std::string> tokens;
   for (std::string t; in >> t;) tokens.push_back(t);
@@ -86,6 +86,13 @@ TEST(WriteVtu, WritesTheRightCounts) {
   EXPECT_EQ(kind[1], "2");
   EXPECT_EQ(kind[V - 1], "1");
   EXPECT_EQ(ArrayTokens(xml, "Name=\"cost\"").size(), V);
+  // The frame, as 3D Slicer reads it: a string array SPACE = "LPS".
+  const auto space = ArrayTokens(xml, "Name=\"SPACE\"");
+  ASSERT_EQ(space.size(), 4u);
+  std::string name;
+  for (int c = 0; c < 3; ++c) name += static_cast<char>(std::stoi(space[c]));
+  EXPECT_EQ(name, "LPS");
+  EXPECT_EQ(space[3], "0");
   // Connectivity is the tets, in order.
   const auto connectivity = ArrayTokens(xml, "Name=\"connectivity\"");
   EXPECT_EQ(connectivity[4], std::to_string(mesh.tets[1][0]));

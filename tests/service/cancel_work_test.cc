@@ -36,7 +36,7 @@ class CancelWorkTest : public TwoUsersTest {
   // BuildMesh calls of alice's on the 60^3 lattice, answered asynchronously.
   struct Builds {
     std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
-    std::vector<v2::MeshInfo> infos;
+    std::vector<v3::MeshInfo> infos;
     std::mutex mutex;
     std::condition_variable done;
     std::vector<grpc::Status> statuses;
@@ -44,7 +44,7 @@ class CancelWorkTest : public TwoUsersTest {
   void StartBuilds(Builds& builds, int count, int64_t target) {
     builds.infos.resize(count);
     for (int i = 0; i < count; ++i) {
-      v2::BuildMeshRequest request;
+      v3::BuildMeshRequest request;
       request.set_volume_id(volume_.volume_id());
       for (int a = 0; a < 3; ++a) request.mutable_params()->add_grid(60);
       // Distinct targets: distinct meshes, not one build shared.
@@ -71,7 +71,7 @@ class CancelWorkTest : public TwoUsersTest {
     return false;
   }
 
-  v2::VolumeInfo volume_;
+  v3::VolumeInfo volume_;
 };
 
 // Cancelled in step 2 (0.3 s in) and in the Steiner rounds (2.5 s in; a
@@ -88,7 +88,7 @@ TEST_F(CancelWorkTest, CancelledBuildsFreeTheWorkersForAnotherUser) {
     const auto cancelled_at = Clock::now();
     for (auto& context : builds.contexts) context->TryCancel();
 
-    const v2::VolumeInfo tiny = LoadPhantom(
+    const v3::VolumeInfo tiny = LoadPhantom(
         "phantom:abdomen?size=" + std::to_string(16 + cancel_after_ms % 7), kBobToken);
     const double waited_ms =
         std::chrono::duration<double, std::milli>(Clock::now() - cancelled_at).count();
@@ -107,13 +107,13 @@ TEST_F(CancelWorkTest, CancelledBuildsFreeTheWorkersForAnotherUser) {
 }
 
 TEST_F(CancelWorkTest, ABuildPastItsDeadlineStops) {
-  v2::BuildMeshRequest request;
+  v3::BuildMeshRequest request;
   request.set_volume_id(volume_.volume_id());
   for (int a = 0; a < 3; ++a) request.mutable_params()->add_grid(60);
   request.mutable_params()->set_target(4200);
   auto context = Context(kAliceToken);
   context->set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(700));
-  v2::MeshInfo info;
+  v3::MeshInfo info;
   const auto start = Clock::now();
   const grpc::Status status = stub_->BuildMesh(context.get(), request, &info);
   EXPECT_EQ(status.error_code(), grpc::DEADLINE_EXCEEDED);

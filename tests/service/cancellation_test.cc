@@ -23,9 +23,9 @@ class CancellationTest : public ServiceTest {
 };
 
 TEST_F(CancellationTest, RendersPastTheirDeadlineAreDroppedBeforeTheyRun) {
-  const v2::VolumeInfo volume = LoadPhantom();
-  const v2::SessionInfo session = OpenSession(volume.volume_id());
-  v2::RenderRequest request;
+  const v3::VolumeInfo volume = LoadPhantom();
+  const v3::SessionInfo session = OpenSession(volume.volume_id());
+  v3::RenderRequest request;
   request.set_session_id(session.session_id());
   request.mutable_settings()->set_width(128);
   request.mutable_settings()->set_height(128);
@@ -39,7 +39,7 @@ TEST_F(CancellationTest, RendersPastTheirDeadlineAreDroppedBeforeTheyRun) {
 
   constexpr int kCalls = 40;  // under the lane's cap, max_queued_per_user (64)
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
-  std::vector<v2::Frame> frames(kCalls);
+  std::vector<v3::Frame> frames(kCalls);
   std::mutex mutex;
   std::condition_variable done;
   int finished = 0, expired = 0;
@@ -71,7 +71,7 @@ TEST_F(CancellationTest, RendersPastTheirDeadlineAreDroppedBeforeTheyRun) {
   // share the user's lane: once this call returns, every call of the burst
   // has been taken from the queue, and each must have been dropped unrun.
   auto context = Context();
-  v2::Frame frame;
+  v3::Frame frame;
   const grpc::Status status = stub_->Render(context.get(), request, &frame);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_GT(frame.image().size(), 0u);

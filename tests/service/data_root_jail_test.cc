@@ -85,10 +85,10 @@ class JailTest : public ServiceTest {
     fs::remove_all(root_);
     fs::remove_all(outside_);
   }
-  grpc::Status Load(const std::string& source, v2::VolumeInfo* info = nullptr, int deadline_s = 60) {
-    v2::LoadVolumeRequest request;
+  grpc::Status Load(const std::string& source, v3::VolumeInfo* info = nullptr, int deadline_s = 60) {
+    v3::LoadVolumeRequest request;
     request.set_source(source);
-    v2::VolumeInfo ignored;
+    v3::VolumeInfo ignored;
     return stub_->LoadVolume(Context(kToken, deadline_s).get(), request,
                              info != nullptr ? info : &ignored);
   }
@@ -103,7 +103,7 @@ class JailTest : public ServiceTest {
 };
 
 TEST_F(JailTest, MetaImageDataFileMustStayInsideTheRoot) {
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   grpc::Status good = Load("good.mhd", &info);
   ASSERT_TRUE(good.ok()) << good.error_message();
   EXPECT_EQ(info.dims(0), 2);
@@ -156,10 +156,10 @@ TEST_F(JailTest, FifoIsAnErrorAtOnceAndTheServerStaysResponsive) {
   }
   // The pools are free: a load and a listing answer at once.
   const auto after = Clock::now();
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   grpc::Status phantom = Load(kPhantom, &info, 30);
   EXPECT_TRUE(phantom.ok()) << phantom.error_message();
-  v2::ListVolumesResponse list;
+  v3::ListVolumesResponse list;
   EXPECT_TRUE(stub_->ListVolumes(Context(kToken, 5).get(), {}, &list).ok());
   EXPECT_LT(ElapsedSince(after), 10.0);
 }
@@ -193,9 +193,9 @@ TEST_F(ServiceTest, LoadVolume_DicomFolderWithSeriesQuery) {
   ASSERT_FALSE(series->empty());
   const std::string uid = series->front().uid;
   ASSERT_FALSE(uid.empty());
-  v2::LoadVolumeRequest request;
+  v3::LoadVolumeRequest request;
   request.set_source("ct-philips-tilt?series=" + uid);
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   grpc::Status status = stub_->LoadVolume(Context().get(), request, &info);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(info.source(), "ct-philips-tilt?series=" + uid);

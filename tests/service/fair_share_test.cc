@@ -19,10 +19,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 // The header of an upload of `total` bytes, and nothing after it yet.
-std::unique_ptr<grpc::ClientWriter<v2::UploadVolumeRequest>> StartUpload(
-    v2::Vpm::Stub* stub, grpc::ClientContext* context, v2::VolumeInfo* info, int64_t total) {
+std::unique_ptr<grpc::ClientWriter<v3::UploadVolumeRequest>> StartUpload(
+    v3::Vpm::Stub* stub, grpc::ClientContext* context, v3::VolumeInfo* info, int64_t total) {
   auto writer = stub->UploadVolume(context, info);
-  v2::UploadVolumeRequest header;
+  v3::UploadVolumeRequest header;
   header.mutable_header()->set_file_name("held.nii");
   header.mutable_header()->set_total_bytes(total);
   header.mutable_header()->set_sha256_hex(std::string(64, 'a'));
@@ -30,8 +30,8 @@ std::unique_ptr<grpc::ClientWriter<v2::UploadVolumeRequest>> StartUpload(
   return writer;
 }
 
-bool WriteChunk(grpc::ClientWriter<v2::UploadVolumeRequest>& writer, int64_t bytes) {
-  v2::UploadVolumeRequest chunk;
+bool WriteChunk(grpc::ClientWriter<v3::UploadVolumeRequest>& writer, int64_t bytes) {
+  v3::UploadVolumeRequest chunk;
   chunk.set_chunk(std::string(static_cast<size_t>(bytes), '\0'));
   return writer.Write(chunk);
 }
@@ -39,15 +39,15 @@ bool WriteChunk(grpc::ClientWriter<v2::UploadVolumeRequest>& writer, int64_t byt
 class FairShareTest : public TwoUsersTest {
  protected:
   void SetUp() override {}  // each test starts its server with its caps
-  grpc::Status UploadAs(const std::string& token, v2::VolumeInfo* info) {
+  grpc::Status UploadAs(const std::string& token, v3::VolumeInfo* info) {
     const std::vector<uint8_t> bytes = NiftiBytes();
     return Upload(bytes, int64_t(bytes.size()), Sha256::HexOf(bytes), 64 << 10, info, true,
                   token);
   }
   grpc::Status LoadAs(const std::string& token, const std::string& source) {
-    v2::LoadVolumeRequest request;
+    v3::LoadVolumeRequest request;
     request.set_source(source);
-    v2::VolumeInfo info;
+    v3::VolumeInfo info;
     return stub_->LoadVolume(Context(token).get(), request, &info);
   }
 };
@@ -58,14 +58,14 @@ class FairShareTest : public TwoUsersTest {
 TEST_F(FairShareTest, IdleUploadHeadersHoldNoMemory) {
   StartWithUsers(SmallServerOptions());  // the default 1 GiB uploads, 2 GiB budget
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
-  std::vector<std::unique_ptr<grpc::ClientWriter<v2::UploadVolumeRequest>>> writers;
-  std::vector<v2::VolumeInfo> infos(2);
+  std::vector<std::unique_ptr<grpc::ClientWriter<v3::UploadVolumeRequest>>> writers;
+  std::vector<v3::VolumeInfo> infos(2);
   for (int i = 0; i < 2; ++i) {
     contexts.push_back(Context(kAliceToken));
     writers.push_back(StartUpload(stub_.get(), contexts.back().get(), &infos[i], int64_t{1} << 30));
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the headers are taken
-  v2::VolumeInfo bobs;
+  v3::VolumeInfo bobs;
   const grpc::Status status = UploadAs(kBobToken, &bobs);
   EXPECT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(bobs.owner(), "bob");
@@ -83,7 +83,7 @@ TEST_F(FairShareTest, UploadMemoryIsSharedPerUser) {
   // A header over her share is refused at once.
   {
     auto context = Context(kAliceToken);
-    v2::VolumeInfo info;
+    v3::VolumeInfo info;
     auto writer = StartUpload(stub_.get(), context.get(), &info, 600 << 10);
     writer->WritesDone();
     const grpc::Status refused = writer->Finish();
@@ -92,13 +92,13 @@ TEST_F(FairShareTest, UploadMemoryIsSharedPerUser) {
   // Two uploads of 400 KiB: the first sends all of its bytes, the second
   // passes her 512 KiB share at its second chunk.
   auto first_context = Context(kAliceToken);
-  v2::VolumeInfo first_info;
+  v3::VolumeInfo first_info;
   auto first = StartUpload(stub_.get(), first_context.get(), &first_info, 400 << 10);
   ASSERT_TRUE(WriteChunk(*first, 256 << 10));
   ASSERT_TRUE(WriteChunk(*first, 144 << 10));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the chunks are taken
   auto second_context = Context(kAliceToken);
-  v2::VolumeInfo second_info;
+  v3::VolumeInfo second_info;
   auto second = StartUpload(stub_.get(), second_context.get(), &second_info, 400 << 10);
   WriteChunk(*second, 64 << 10);
   WriteChunk(*second, 128 << 10);
@@ -107,7 +107,7 @@ TEST_F(FairShareTest, UploadMemoryIsSharedPerUser) {
   EXPECT_EQ(over.error_code(), grpc::RESOURCE_EXHAUSTED) << over.error_message();
   EXPECT_NE(over.error_message().find("share"), std::string::npos) << over.error_message();
 
-  v2::VolumeInfo bobs;
+  v3::VolumeInfo bobs;
   const grpc::Status status = UploadAs(kBobToken, &bobs);
   EXPECT_TRUE(status.ok()) << status.error_message();
   first_context->TryCancel();
@@ -123,7 +123,7 @@ TEST_F(FairShareTest, TricklingUploadIsEnded) {
   options.upload_min_bytes_per_s = 1 << 20;
   StartWithUsers(options);
   auto context = Context(kAliceToken, 30);
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   auto writer = StartUpload(stub_.get(), context.get(), &info, 8 << 20);
   int chunks = 0;
   while (chunks < 40 && WriteChunk(*writer, 64 << 10)) {
@@ -147,7 +147,7 @@ TEST_F(FairShareTest, UploadedVolumesAreCappedPerOwner) {
   StartWithUsers(options);
   int taken = 0, refused = 0;
   for (int i = 0; i < 20; ++i) {
-    v2::VolumeInfo info;
+    v3::VolumeInfo info;
     const grpc::Status status = UploadAs(kAliceToken, &info);
     if (status.ok()) {
       ++taken;
@@ -160,7 +160,7 @@ TEST_F(FairShareTest, UploadedVolumesAreCappedPerOwner) {
   EXPECT_EQ(refused, 16);
   const grpc::Status loaded = LoadAs(kBobToken, "phantom:abdomen?size=16");
   EXPECT_TRUE(loaded.ok()) << loaded.error_message();
-  v2::VolumeInfo bobs;
+  v3::VolumeInfo bobs;
   const grpc::Status uploaded = UploadAs(kBobToken, &bobs);
   EXPECT_TRUE(uploaded.ok()) << uploaded.error_message();
 }
@@ -172,19 +172,19 @@ TEST_F(FairShareTest, OneUsersLongCallsLeaveAWorkerFree) {
   ServerOptions options = SmallServerOptions();
   options.request_threads = 2;
   StartWithUsers(options);
-  v2::VolumeInfo volume;
+  v3::VolumeInfo volume;
   {
-    v2::LoadVolumeRequest request;
+    v3::LoadVolumeRequest request;
     request.set_source("phantom:abdomen?size=96");
     ASSERT_TRUE(stub_->LoadVolume(Context(kAliceToken).get(), request, &volume).ok());
   }
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
-  std::vector<v2::MeshInfo> infos(2);
+  std::vector<v3::MeshInfo> infos(2);
   std::mutex mutex;
   std::condition_variable done;
   int finished = 0;
   for (int i = 0; i < 2; ++i) {
-    v2::BuildMeshRequest request;
+    v3::BuildMeshRequest request;
     request.set_volume_id(volume.volume_id());
     for (int a = 0; a < 3; ++a) request.mutable_params()->add_grid(60);
     request.mutable_params()->set_target(4000 + i);
@@ -226,30 +226,30 @@ TEST_F(FairShareTest, MeshSlotsLeaveRoomForAnotherUser) {
   options.max_sessions = 6;
   options.max_sessions_per_user = 2;
   StartWithUsers(options);
-  v2::VolumeInfo volume;
+  v3::VolumeInfo volume;
   {
-    v2::LoadVolumeRequest request;
+    v3::LoadVolumeRequest request;
     request.set_source("phantom:abdomen?size=32");
     ASSERT_TRUE(stub_->LoadVolume(Context(kAliceToken).get(), request, &volume).ok());
   }
-  auto build = [&](const std::string& token, int64_t target, v2::MeshInfo* info) {
-    v2::BuildMeshRequest request;
+  auto build = [&](const std::string& token, int64_t target, v3::MeshInfo* info) {
+    v3::BuildMeshRequest request;
     request.set_volume_id(volume.volume_id());
     request.mutable_params()->set_target(target);
     return stub_->BuildMesh(Context(token).get(), request, info);
   };
   // Alice: three meshes (the server's whole room), two pinned by her two
   // sessions, and a third session refused.
-  std::vector<v2::MeshInfo> alices(3);
+  std::vector<v3::MeshInfo> alices(3);
   for (int i = 0; i < 3; ++i) ASSERT_TRUE(build(kAliceToken, 40 + i, &alices[i]).ok());
   for (int i = 0; i < 3; ++i) {
-    v2::OpenSessionRequest open;
+    v3::OpenSessionRequest open;
     open.set_mesh_id(alices[i].mesh_id());
-    v2::SessionInfo session;
+    v3::SessionInfo session;
     const grpc::Status status = stub_->OpenSession(Context(kAliceToken).get(), open, &session);
     EXPECT_EQ(status.ok(), i < 2) << status.error_message();
   }
-  v2::MeshInfo bobs;
+  v3::MeshInfo bobs;
   const grpc::Status status = build(kBobToken, 50, &bobs);
   EXPECT_TRUE(status.ok()) << status.error_message();
 }

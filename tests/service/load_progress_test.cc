@@ -77,15 +77,15 @@ class LoadProgressTest : public ServiceTest {
     fs::remove_all(root_);
   }
   grpc::Status Load(const std::string& source, const std::string& progress_id) {
-    v2::LoadVolumeRequest request;
+    v3::LoadVolumeRequest request;
     request.set_source(source);
     request.set_progress_id(progress_id);
-    v2::VolumeInfo info;
+    v3::VolumeInfo info;
     auto context = Context();
     return stub_->LoadVolume(context.get(), request, &info);
   }
-  grpc::Status Poll(const std::string& progress_id, v2::LoadProgress* out) {
-    v2::GetLoadProgressRequest request;
+  grpc::Status Poll(const std::string& progress_id, v3::LoadProgress* out) {
+    v3::GetLoadProgressRequest request;
     request.set_progress_id(progress_id);
     auto context = Context();
     return stub_->GetLoadProgress(context.get(), request, out);
@@ -98,7 +98,7 @@ TEST_F(LoadProgressTest, PollsSeeMonotoneProgressReachingOne) {
   std::atomic<bool> loaded{false};
   std::thread poller([&] {
     while (!loaded) {
-      v2::LoadProgress p;
+      v3::LoadProgress p;
       if (Poll("load-1", &p).ok()) seen.push_back(p.fraction());
     }
   });
@@ -106,7 +106,7 @@ TEST_F(LoadProgressTest, PollsSeeMonotoneProgressReachingOne) {
   loaded = true;
   poller.join();
   ASSERT_TRUE(status.ok()) << status.error_message();
-  v2::LoadProgress last;
+  v3::LoadProgress last;
   ASSERT_TRUE(Poll("load-1", &last).ok());
   EXPECT_TRUE(last.done());
   EXPECT_EQ(last.fraction(), 1.0);
@@ -118,7 +118,7 @@ TEST_F(LoadProgressTest, PollsSeeMonotoneProgressReachingOne) {
 
 TEST_F(LoadProgressTest, FailedLoadIsDoneWithItsError) {
   EXPECT_EQ(Load("missing.nii", "load-2").error_code(), grpc::NOT_FOUND);
-  v2::LoadProgress p;
+  v3::LoadProgress p;
   ASSERT_TRUE(Poll("load-2", &p).ok());
   EXPECT_TRUE(p.done());
   EXPECT_EQ(p.stage(), "failed");

@@ -47,9 +47,9 @@ using BoundsTest = ServiceTest;
 // Issue 25 case 1 over gRPC: a 70,000-character id used to be echoed into a
 // status whose trailers never went out, stalling the whole connection.
 TEST_F(BoundsTest, GetSession_HugeIdIsAShortErrorAndTheChannelGoesOn) {
-  v2::GetSessionRequest request;
+  v3::GetSessionRequest request;
   request.set_session_id(std::string(70000, 'A'));
-  v2::SessionInfo info;
+  v3::SessionInfo info;
   const auto start = Clock::now();
   grpc::Status status = stub_->GetSession(Context(kToken, 10).get(), request, &info);
   EXPECT_LT(SecondsSince(start), 2.0);
@@ -60,17 +60,17 @@ TEST_F(BoundsTest, GetSession_HugeIdIsAShortErrorAndTheChannelGoesOn) {
   EXPECT_EQ(status.error_message().find("AAAAAAAAAA"), std::string::npos);
   // The same channel still answers, at once.
   for (int i = 0; i < 3; ++i) {
-    v2::ListVolumesResponse list;
+    v3::ListVolumesResponse list;
     const auto again = Clock::now();
     EXPECT_TRUE(stub_->ListVolumes(Context(kToken, 10).get(), {}, &list).ok());
     EXPECT_LT(SecondsSince(again), 2.0);
   }
   // Streams check their strings too.
-  v2::WatchRequest watch;
+  v3::WatchRequest watch;
   watch.set_session_id(std::string(70000, 'B'));
   auto context = Context(kToken, 10);
   auto reader = stub_->Watch(context.get(), watch);
-  v2::Frame frame;
+  v3::Frame frame;
   while (reader->Read(&frame)) {
   }
   grpc::Status watched = reader->Finish();
@@ -79,17 +79,17 @@ TEST_F(BoundsTest, GetSession_HugeIdIsAShortErrorAndTheChannelGoesOn) {
 }
 
 TEST_F(BoundsTest, LongStringsAreRefusedBeforeUse) {
-  v2::LoadVolumeRequest load;
+  v3::LoadVolumeRequest load;
   load.set_source(std::string(20000, 'p'));
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   grpc::Status status = stub_->LoadVolume(Context().get(), load, &info);
   EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("source: 20000 bytes"), std::string::npos)
       << status.error_message();
-  v2::ShareSessionRequest share;
+  v3::ShareSessionRequest share;
   share.set_session_id("ses-x");
   share.set_user(std::string(100000, 'u'));
-  v2::SessionInfo session;
+  v3::SessionInfo session;
   status = stub_->ShareSession(Context().get(), share, &session);
   EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
   EXPECT_LE(status.error_message().size(), 200u) << status.error_message();
@@ -98,11 +98,11 @@ TEST_F(BoundsTest, LongStringsAreRefusedBeforeUse) {
 // Issue 25 case 1 through the web viewer: a .vp whose opacity line holds a
 // 50,000-character token.
 TEST_F(BoundsTest, ReadTransferFunction_HugeTokenGivesABoundedMessage) {
-  v2::ReadTransferFunctionRequest request;
+  v3::ReadTransferFunctionRequest request;
   request.set_file_name("x.vp");
   request.set_text("1\n0\n0\n0\n0\n1\n2 " + std::string(50000, '%') +
                    " 1\n2 0 1\n4 0 1 1 1\n");
-  v2::RenderTransferFunction tf;
+  v3::RenderTransferFunction tf;
   const auto start = Clock::now();
   grpc::Status status = stub_->ReadTransferFunction(Context().get(), request, &tf);
   EXPECT_LT(SecondsSince(start), 2.0);
@@ -117,14 +117,14 @@ TEST_F(BoundsTest, ReadTransferFunction_HugeTokenGivesABoundedMessage) {
 TEST_F(BoundsTest, Upload_FileNameTooLongIsInvalidArgument) {
   const std::vector<uint8_t> bytes = NiftiBytes();
   auto context = Context();
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   auto writer = stub_->UploadVolume(context.get(), &info);
-  v2::UploadVolumeRequest header;
+  v3::UploadVolumeRequest header;
   header.mutable_header()->set_file_name(std::string(300, 'n') + ".nii");
   header.mutable_header()->set_total_bytes(int64_t(bytes.size()));
   header.mutable_header()->set_sha256_hex(Sha256::HexOf(bytes));
   writer->Write(header);
-  v2::UploadVolumeRequest chunk;
+  v3::UploadVolumeRequest chunk;
   chunk.set_chunk(bytes.data(), bytes.size());
   writer->Write(chunk);
   writer->WritesDone();
@@ -145,7 +145,7 @@ TEST_F(BoundsTest, Upload_FullSpoolIsResourceExhausted) {
   rlimit small = before;
   small.rlim_cur = 64 << 10;
   ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   grpc::Status status =
       Upload(bytes, int64_t(bytes.size()), Sha256::HexOf(bytes), 256 << 10, &info);
   ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &before), 0);
@@ -164,7 +164,7 @@ TEST_F(BoundsTest, Upload_FullSpoolIsResourceExhausted) {
 TEST_F(BoundsTest, Upload_ErrorsDoNotRevealTemporaryPaths) {
   std::vector<uint8_t> bytes = NiftiBytes();
   bytes.resize(bytes.size() / 2);  // truncated
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   grpc::Status status =
       Upload(bytes, int64_t(bytes.size()), Sha256::HexOf(bytes), 64 << 10, &info);
   EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT) << status.error_message();
@@ -183,31 +183,31 @@ class GrabBoundsTest : public ServiceTest {
     volume_ = LoadPhantom();
     session_ = OpenSession(volume_.volume_id());
   }
-  grpc::Status Send(const v2::ClientEvent& event) {
-    v2::ManipulateRequest request;
+  grpc::Status Send(const v3::ClientEvent& event) {
+    v3::ManipulateRequest request;
     request.set_session_id(session_.session_id());
     *request.mutable_event() = event;
-    v2::ManipulateResponse response;
+    v3::ManipulateResponse response;
     return stub_->Manipulate(Context().get(), request, &response);
   }
   grpc::Status Grab(double radius_mm) {
-    v2::ClientEvent event;
+    v3::ClientEvent event;
     *event.mutable_grab()->mutable_point_mm() = Centre(volume_);
     event.mutable_grab()->set_radius_mm(radius_mm);
     return Send(event);
   }
   grpc::Status Drag(double dx_mm) {
-    v2::ClientEvent event;
+    v3::ClientEvent event;
     *event.mutable_drag()->mutable_offset_mm() = V(dx_mm, 0, 0);
     return Send(event);
   }
   grpc::Status Pull(double fx_n) {
-    v2::ClientEvent event;
+    v3::ClientEvent event;
     *event.mutable_pull()->mutable_force_n() = V(fx_n, 0, 0);
     return Send(event);
   }
-  v2::VolumeInfo volume_;
-  v2::SessionInfo session_;
+  v3::VolumeInfo volume_;
+  v3::SessionInfo session_;
 };
 
 TEST_F(GrabBoundsTest, NonFiniteOrHugeGrabRadiusIsInvalidArgument) {

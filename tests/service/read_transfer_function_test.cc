@@ -21,8 +21,8 @@ constexpr char kParaview[] = R"([
 class ReadTransferFunctionTest : public ServiceTest {
  protected:
   grpc::Status Read(const std::string& file_name, const std::string& text,
-                    v2::RenderTransferFunction* tf, const std::string& preset = "") {
-    v2::ReadTransferFunctionRequest request;
+                    v3::RenderTransferFunction* tf, const std::string& preset = "") {
+    v3::ReadTransferFunctionRequest request;
     request.set_file_name(file_name);
     request.set_text(text);
     request.set_preset(preset);
@@ -32,7 +32,7 @@ class ReadTransferFunctionTest : public ServiceTest {
 };
 
 TEST_F(ReadTransferFunctionTest, ReadTransferFunction_ReadsSlicerAndParaviewFiles) {
-  v2::RenderTransferFunction tf;
+  v3::RenderTransferFunction tf;
   grpc::Status status = Read("MyBone.vp", kCtBoneVp, &tf);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(tf.name(), "MyBone");
@@ -49,7 +49,7 @@ TEST_F(ReadTransferFunctionTest, ReadTransferFunction_ReadsSlicerAndParaviewFile
 }
 
 TEST_F(ReadTransferFunctionTest, ReadTransferFunction_RefusesWhatIsNotOne) {
-  v2::RenderTransferFunction tf;
+  v3::RenderTransferFunction tf;
   struct Bad {
     std::string file_name, text, preset, says;
   };

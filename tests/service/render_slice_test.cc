@@ -32,19 +32,19 @@ class RenderSliceTest : public ServiceTest {
     ASSERT_FALSE(session_.session_id().empty());
   }
 
-  grpc::Status RenderSlice(const v2::SliceSpec& spec, v2::Frame* frame,
+  grpc::Status RenderSlice(const v3::SliceSpec& spec, v3::Frame* frame,
                            const std::string& session_id = "") {
-    v2::RenderSliceRequest request;
+    v3::RenderSliceRequest request;
     request.set_session_id(session_id.empty() ? session_.session_id() : session_id);
     *request.mutable_slice() = spec;
-    request.set_encoding(v2::ENCODING_PNG);
+    request.set_encoding(v3::ENCODING_PNG);
     auto context = Context();
     return stub_->RenderSlice(context.get(), request, frame);
   }
 
-  static v2::SliceSpec Axial(double at_mm) {
-    v2::SliceSpec spec;
-    spec.set_orientation(v2::SLICE_ORIENTATION_AXIAL);
+  static v3::SliceSpec Axial(double at_mm) {
+    v3::SliceSpec spec;
+    spec.set_orientation(v3::SLICE_ORIENTATION_AXIAL);
     spec.set_at_mm(at_mm);
     spec.mutable_window()->set_width(400);
     spec.mutable_window()->set_level(40);
@@ -56,21 +56,21 @@ class RenderSliceTest : public ServiceTest {
   std::vector<glm::dvec3> GrabAndDrag(double drag_mm) {
     auto context = Context();
     auto stream = stub_->Interact(context.get());
-    v2::InteractRequest grab;
+    v3::InteractRequest grab;
     grab.set_session_id(session_.session_id());
     grab.mutable_event()->set_sequence(1);
     *grab.mutable_event()->mutable_grab()->mutable_point_mm() = Centre(volume_);
     EXPECT_TRUE(stream->Write(grab));
-    v2::InteractRequest drag;
+    v3::InteractRequest drag;
     drag.mutable_event()->set_sequence(2);
     *drag.mutable_event()->mutable_drag()->mutable_offset_mm() = V(drag_mm, 0, 0);
     drag.mutable_event()->set_want_vertices(true);
     EXPECT_TRUE(stream->Write(drag));
     std::vector<glm::dvec3> deformed;
-    v2::Frame frame;
+    v3::Frame frame;
     while (stream->Read(&frame)) {
       if (frame.last_sequence() == 2 && frame.vertices_mm_size() > 0) {
-        for (const v2::Vec3& p : frame.vertices_mm()) deformed.push_back(FromProto(p));
+        for (const v3::Vec3& p : frame.vertices_mm()) deformed.push_back(FromProto(p));
         break;
       }
     }
@@ -81,8 +81,8 @@ class RenderSliceTest : public ServiceTest {
     return deformed;
   }
 
-  v2::VolumeInfo volume_;
-  v2::SessionInfo session_;
+  v3::VolumeInfo volume_;
+  v3::SessionInfo session_;
 };
 
 DecodedImage DecodeFramePng(const std::string& bytes) {
@@ -92,47 +92,50 @@ DecodedImage DecodeFramePng(const std::string& bytes) {
 }
 
 TEST_F(RenderSliceTest, RenderSlice_MatchesTheCpuReferenceOfTheDeformedVolume) {
-  const std::vector<glm::dvec3> deformed = GrabAndDrag(6.0);
+  std::vector<glm::dvec3> deformed = GrabAndDrag(6.0);
   ASSERT_FALSE(deformed.empty());
-  v2::GetMeshRequest mesh_request;
+  v3::GetMeshRequest mesh_request;
   mesh_request.set_mesh_id(session_.mesh_id());
   mesh_request.set_include_geometry(true);
-  v2::GetMeshResponse mesh;
+  v3::GetMeshResponse mesh;
   auto mc = Context();
   ASSERT_TRUE(stub_->GetMesh(mc.get(), mesh_request, &mesh).ok());
-  std::vector<glm::dvec3> rest;
-  for (const v2::MeshVertex& v : mesh.vertices()) rest.push_back(FromProto(v.position_mm()));
-  std::vector<std::array<int32_t, 4>> tets;
-  for (const v2::Tet& t : mesh.tets()) tets.push_back({t.a(), t.b(), t.c(), t.d()});
-  ASSERT_EQ(rest.size(), deformed.size());
-
   // The reference: the same phantom, the map on the CPU at the server's
-  // map resolution, the slice sampled in double, the same window.
+  // map resolution, the slice sampled in double, the same window. The API's
+  // positions are world LPS; the map works in physical voxel space.
   auto volume = ReadVolume(kPhantom, {});
   ASSERT_TRUE(volume.ok()) << volume.status();
   const VolumeGeometry& g = volume->geometry();
+  std::vector<glm::dvec3> rest;
+  for (const v3::MeshVertex& v : mesh.vertices()) {
+    rest.push_back(g.WorldToPhysical(FromProto(v.position_mm())));
+  }
+  for (glm::dvec3& p : deformed) p = g.WorldToPhysical(p);
+  std::vector<std::array<int32_t, 4>> tets;
+  for (const v3::Tet& t : mesh.tets()) tets.push_back({t.a(), t.b(), t.c(), t.d()});
+  ASSERT_EQ(rest.size(), deformed.size());
   auto map = BackwardMapCpu(g.extent_mm(), DefaultBackwardMapDims(g.dims), rest, deformed, tets);
   ASSERT_TRUE(map.ok()) << map.status();
-  const glm::dvec3 centre_world = g.PhysicalToWorld(FromProto(Centre(volume_)));
+  const glm::dvec3 centre_world = FromProto(Centre(volume_));
 
   struct Case {
     const char* name;
-    v2::SliceSpec spec;
+    v3::SliceSpec spec;
     SlicePlane plane;
   };
   std::vector<Case> cases;
   cases.push_back({"axial",
                    Axial(centre_world.z),
                    {.orientation = SliceOrientation::kAxial, .at_mm = centre_world.z}});
-  v2::SliceSpec coronal = Axial(0);
-  coronal.set_orientation(v2::SLICE_ORIENTATION_CORONAL);
+  v3::SliceSpec coronal = Axial(0);
+  coronal.set_orientation(v3::SLICE_ORIENTATION_CORONAL);
   coronal.set_at_mm(centre_world.y + 2.0);
   cases.push_back({"coronal",
                    coronal,
                    {.orientation = SliceOrientation::kCoronal, .at_mm = centre_world.y + 2.0}});
-  v2::SliceSpec oblique = Axial(0);
+  v3::SliceSpec oblique = Axial(0);
   oblique.clear_at_mm();
-  oblique.set_orientation(v2::SLICE_ORIENTATION_OBLIQUE);
+  oblique.set_orientation(v3::SLICE_ORIENTATION_OBLIQUE);
   *oblique.mutable_point_lps_mm() = ToProto(centre_world);
   *oblique.mutable_normal() = V(1, 1, 2);
   cases.push_back({"oblique",
@@ -142,14 +145,14 @@ TEST_F(RenderSliceTest, RenderSlice_MatchesTheCpuReferenceOfTheDeformedVolume) {
                     .normal = glm::dvec3(1, 1, 2)}});
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
-    v2::Frame frame;
+    v3::Frame frame;
     grpc::Status status = RenderSlice(c.spec, &frame);
     ASSERT_TRUE(status.ok()) << status.error_message();
     auto grid = MakeSliceGrid(c.plane, g);
     ASSERT_TRUE(grid.ok()) << grid.status();
     ASSERT_EQ(frame.width(), grid->width);
     ASSERT_EQ(frame.height(), grid->height);
-    EXPECT_EQ(frame.encoding(), v2::ENCODING_PNG);
+    EXPECT_EQ(frame.encoding(), v3::ENCODING_PNG);
     EXPECT_NEAR(frame.slice().offset_mm(), glm::dot(grid->world_normal, grid->world_origin_mm),
                 1e-6);
     EXPECT_NEAR(glm::length(FromProto(frame.slice().origin_mm()) - grid->origin_mm), 0.0, 1e-6);
@@ -181,28 +184,21 @@ TEST_F(RenderSliceTest, RenderSlice_MatchesTheCpuReferenceOfTheDeformedVolume) {
 }
 
 TEST_F(RenderSliceTest, RenderSlice_DefaultPlaneFollowsTheGrabbedTissue) {
-  v2::SliceSpec spec;
-  spec.set_orientation(v2::SLICE_ORIENTATION_SAGITTAL);  // normal L: offset = world x
-  v2::Frame before;
+  v3::SliceSpec spec;
+  spec.set_orientation(v3::SLICE_ORIENTATION_SAGITTAL);  // normal L: offset = world x
+  v3::Frame before;
   ASSERT_TRUE(RenderSlice(spec, &before).ok());
-  const v2::Vec3 centre = Centre(volume_);
-  glm::dvec3 world = FromProto(volume_.origin_lps_mm());
-  const glm::dvec3 p = FromProto(centre);
-  for (int c = 0; c < 3; ++c) {
-    world += p[c] * glm::dvec3(volume_.direction(3 * c), volume_.direction(3 * c + 1),
-                               volume_.direction(3 * c + 2));
-  }
+  const glm::dvec3 world = FromProto(Centre(volume_));  // the grab point, world LPS
   EXPECT_NEAR(before.slice().offset_mm(), world.x, 1e-6);
   EXPECT_LT(before.slice().min_offset_mm(), before.slice().offset_mm());
   EXPECT_GT(before.slice().max_offset_mm(), before.slice().offset_mm());
   EXPECT_EQ(before.slice().cut_tets(), -1);
   GrabAndDrag(5.0);
   spec.set_overlay(true);
-  v2::Frame after;
+  v3::Frame after;
   ASSERT_TRUE(RenderSlice(spec, &after).ok());
-  // The grabbed tissue moved 5 mm along physical x: world x moves by the
-  // direction's (0, 0) entry times 5 (+-5 for an axis-aligned volume).
-  EXPECT_NEAR(after.slice().offset_mm(), world.x + 5.0 * volume_.direction(0), 1e-6);
+  // The grabbed tissue moved 5 mm along world x (the drag is world LPS).
+  EXPECT_NEAR(after.slice().offset_mm(), world.x + 5.0, 1e-6);
   EXPECT_GT(after.slice().cut_tets(), 0);
   EXPECT_NEAR(after.slice().window().width(), 400.0, 1e-9);  // the CT default
 }
@@ -210,47 +206,47 @@ TEST_F(RenderSliceTest, RenderSlice_DefaultPlaneFollowsTheGrabbedTissue) {
 TEST_F(RenderSliceTest, RenderSlice_BadInputGetsClearStatusesAndTheServerGoesOn) {
   struct Bad {
     const char* name;
-    v2::SliceSpec spec;
+    v3::SliceSpec spec;
     grpc::StatusCode code;
     const char* says;
   };
   std::vector<Bad> bad;
-  v2::SliceSpec unset;
+  v3::SliceSpec unset;
   bad.push_back({"unset orientation", unset, grpc::INVALID_ARGUMENT, "slice.orientation"});
   bad.push_back({"NaN", Axial(std::nan("")), grpc::INVALID_ARGUMENT, "slice.at_mm"});
   bad.push_back({"outside", Axial(1e4), grpc::INVALID_ARGUMENT, "misses the volume"});
-  v2::SliceSpec zero_normal;
-  zero_normal.set_orientation(v2::SLICE_ORIENTATION_OBLIQUE);
+  v3::SliceSpec zero_normal;
+  zero_normal.set_orientation(v3::SLICE_ORIENTATION_OBLIQUE);
   *zero_normal.mutable_normal() = V(0, 0, 0);
   bad.push_back({"zero normal", zero_normal, grpc::INVALID_ARGUMENT, "slice.normal"});
-  v2::SliceSpec tiny = Axial(0);
+  v3::SliceSpec tiny = Axial(0);
   tiny.clear_at_mm();
   tiny.set_pixel_mm(1e-3);
   bad.push_back({"absurd size", tiny, grpc::INVALID_ARGUMENT, "pixels"});
-  v2::SliceSpec inf_pixel = tiny;
+  v3::SliceSpec inf_pixel = tiny;
   inf_pixel.set_pixel_mm(INFINITY);
   bad.push_back({"infinite pixel", inf_pixel, grpc::INVALID_ARGUMENT, "slice.pixel_mm"});
-  v2::SliceSpec no_width = tiny;
+  v3::SliceSpec no_width = tiny;
   no_width.set_pixel_mm(0);
   no_width.mutable_window()->set_width(0);
   bad.push_back({"zero window", no_width, grpc::INVALID_ARGUMENT, "slice.window"});
-  v2::SliceSpec landmark;
-  landmark.set_orientation(v2::SLICE_ORIENTATION_AXIAL);
+  v3::SliceSpec landmark;
+  landmark.set_orientation(v3::SLICE_ORIENTATION_AXIAL);
   landmark.set_at_landmark("no_such_organ");
   bad.push_back({"landmark", landmark, grpc::INVALID_ARGUMENT, "no_such_organ"});
-  v2::SliceSpec both = Axial(0);
+  v3::SliceSpec both = Axial(0);
   both.set_at_landmark("x");
   bad.push_back({"two places", both, grpc::INVALID_ARGUMENT, "at most one"});
   for (const Bad& b : bad) {
     SCOPED_TRACE(b.name);
-    v2::Frame frame;
+    v3::Frame frame;
     grpc::Status status = RenderSlice(b.spec, &frame);
     EXPECT_EQ(status.error_code(), b.code) << status.error_message();
     EXPECT_NE(status.error_message().find(b.says), std::string::npos) << status.error_message();
   }
-  v2::Frame frame;
+  v3::Frame frame;
   EXPECT_EQ(RenderSlice(Axial(0), &frame, "ses-404").error_code(), grpc::NOT_FOUND);
-  v2::RenderSliceRequest quality;
+  v3::RenderSliceRequest quality;
   quality.set_session_id(session_.session_id());
   *quality.mutable_slice() = landmark;
   quality.mutable_slice()->clear_at_landmark();
@@ -264,33 +260,33 @@ TEST_F(RenderSliceTest, RenderSlice_BadInputGetsClearStatusesAndTheServerGoesOn)
   landmark.set_at_landmark(volume_.landmarks(0).name());
   grpc::Status status = RenderSlice(landmark, &frame);
   ASSERT_TRUE(status.ok()) << status.error_message();
-  EXPECT_NEAR(frame.slice().offset_mm(), volume_.landmarks(0).world_lps_mm().z(), 1e-6);
+  EXPECT_NEAR(frame.slice().offset_mm(), volume_.landmarks(0).position_mm().z(), 1e-6);
 }
 
 TEST_F(RenderSliceTest, Interact_FramesCarryTheSlicesTheSettingsAskFor) {
   auto context = Context();
   auto stream = stub_->Interact(context.get());
-  v2::InteractRequest first;
+  v3::InteractRequest first;
   first.set_session_id(session_.session_id());
   first.mutable_event()->set_sequence(1);
-  v2::RenderSettings* settings = first.mutable_event()->mutable_settings();
+  v3::RenderSettings* settings = first.mutable_event()->mutable_settings();
   settings->set_width(96);
   settings->set_height(96);
-  const std::pair<const char*, v2::SliceOrientation> views[] = {
-      {"axial", v2::SLICE_ORIENTATION_AXIAL},
-      {"coronal", v2::SLICE_ORIENTATION_CORONAL},
-      {"sagittal", v2::SLICE_ORIENTATION_SAGITTAL}};
+  const std::pair<const char*, v3::SliceOrientation> views[] = {
+      {"axial", v3::SLICE_ORIENTATION_AXIAL},
+      {"coronal", v3::SLICE_ORIENTATION_CORONAL},
+      {"sagittal", v3::SLICE_ORIENTATION_SAGITTAL}};
   for (const auto& [view, orientation] : views) {
-    v2::SliceSpec* s = settings->add_slices();
+    v3::SliceSpec* s = settings->add_slices();
     s->set_view(view);
     s->set_orientation(orientation);
   }
   ASSERT_TRUE(stream->Write(first));
-  v2::Frame frame;
+  v3::Frame frame;
   ASSERT_TRUE(stream->Read(&frame));
   ASSERT_EQ(frame.slices_size(), 3);
   for (int i = 0; i < 3; ++i) {
-    const v2::SliceImage& s = frame.slices(i);
+    const v3::SliceImage& s = frame.slices(i);
     EXPECT_EQ(s.view(), views[i].first);
     EXPECT_EQ(s.geometry().orientation(), views[i].second);
     auto decoded =
@@ -302,7 +298,7 @@ TEST_F(RenderSliceTest, Interact_FramesCarryTheSlicesTheSettingsAskFor) {
   }
   // Scrolling: the axial slice moves to the asked position.
   const double lo = frame.slices(0).geometry().min_offset_mm();
-  v2::InteractRequest scroll;
+  v3::InteractRequest scroll;
   scroll.mutable_event()->set_sequence(2);
   *scroll.mutable_event()->mutable_settings() = *settings;
   scroll.mutable_event()->mutable_settings()->mutable_slices(0)->set_at_mm(lo + 3.0);
@@ -317,7 +313,7 @@ TEST_F(RenderSliceTest, Interact_FramesCarryTheSlicesTheSettingsAskFor) {
   }
   EXPECT_TRUE(scrolled);
   // Four slices are refused with the field named, ending the stream.
-  v2::InteractRequest four;
+  v3::InteractRequest four;
   four.mutable_event()->set_sequence(3);
   *four.mutable_event()->mutable_settings() = *settings;
   *four.mutable_event()->mutable_settings()->add_slices() = settings->slices(0);

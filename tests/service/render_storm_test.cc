@@ -17,7 +17,7 @@
 #include <thread>
 #include <vector>
 
-#include "client/cli/closed_loop_drag.h"
+#include "client/common/closed_loop_drag.h"
 #include "tests/service/service_test_util.h"
 
 namespace vpm::service::testing {
@@ -28,21 +28,21 @@ using Clock = std::chrono::steady_clock;
 using RenderStormTest = ServiceTest;
 
 TEST_F(RenderStormTest, ExpiredRenderStormRunsAlmostNoneAndNeverStallsTheDrag) {
-  const v2::VolumeInfo volume = LoadPhantom();
-  const v2::SessionInfo session = OpenSession(volume.volume_id());
-  v2::RenderSettings small;
+  const v3::VolumeInfo volume = LoadPhantom();
+  const v3::SessionInfo session = OpenSession(volume.volume_id());
+  v3::RenderSettings small;
   small.set_width(96);
   small.set_height(96);
 
   auto context = Context();
   auto stream = stub_->Interact(context.get());
-  v2::InteractRequest first;
+  v3::InteractRequest first;
   first.set_session_id(session.session_id());
   first.mutable_event()->set_sequence(1);
   *first.mutable_event()->mutable_settings() = small;
   *first.mutable_event()->mutable_grab()->mutable_point_mm() = Centre(volume);
   ASSERT_TRUE(stream->Write(first));
-  v2::Frame frame;
+  v3::Frame frame;
   ASSERT_TRUE(stream->Read(&frame));
   uint64_t sequence = 1;
   cli::DragFor(stream.get(), 0.5, &sequence);
@@ -51,13 +51,13 @@ TEST_F(RenderStormTest, ExpiredRenderStormRunsAlmostNoneAndNeverStallsTheDrag) {
   // second channel (another connection of the same client address).
   auto storm_channel = grpc::CreateChannel("127.0.0.1:" + std::to_string(server_->port()),
                                            grpc::InsecureChannelCredentials());
-  auto storm_stub = v2::Vpm::NewStub(storm_channel);
+  auto storm_stub = v3::Vpm::NewStub(storm_channel);
   constexpr int kCalls = 2000;
   std::atomic<bool> storming{false};
   std::atomic<int> answered{0}, ok{0}, expired{0}, exhausted{0}, unexpected{0};
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts(kCalls);
-  std::vector<v2::Frame> frames(kCalls);
-  v2::RenderRequest request;
+  std::vector<v3::Frame> frames(kCalls);
+  v3::RenderRequest request;
   request.set_session_id(session.session_id());
   *request.mutable_settings() = small;
   const double rendered_before = server_->metrics().requests("Render", "OK");
@@ -123,15 +123,15 @@ TEST_F(RenderStormTest, ExpiredRenderStormRunsAlmostNoneAndNeverStallsTheDrag) {
 // pushback trailer once its lane is full, and the calls it had queued still
 // run.
 TEST_F(RenderStormTest, FullLaneIsRefusedWithARetryHint) {
-  const v2::VolumeInfo volume = LoadPhantom();
-  const v2::SessionInfo session = OpenSession(volume.volume_id());
-  v2::RenderRequest request;
+  const v3::VolumeInfo volume = LoadPhantom();
+  const v3::SessionInfo session = OpenSession(volume.volume_id());
+  v3::RenderRequest request;
   request.set_session_id(session.session_id());
   request.mutable_settings()->set_width(64);
   request.mutable_settings()->set_height(64);
   constexpr int kCalls = 200;  // past the default lane cap of 64
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts(kCalls);
-  std::vector<v2::Frame> frames(kCalls);
+  std::vector<v3::Frame> frames(kCalls);
   std::atomic<int> answered{0}, ok{0}, exhausted{0}, hinted{0};
   for (int i = 0; i < kCalls; ++i) {
     contexts[i] = Context();

@@ -23,14 +23,14 @@ class ResourceLifecycleTest : public ServiceTest {
     options.upload_idle_s = 1;
     StartServer(options);
   }
-  grpc::Status GetVolume(const std::string& id, v2::VolumeInfo* info) {
-    v2::GetVolumeRequest request;
+  grpc::Status GetVolume(const std::string& id, v3::VolumeInfo* info) {
+    v3::GetVolumeRequest request;
     request.set_volume_id(id);
     auto context = Context();
     return stub_->GetVolume(context.get(), request, info);
   }
-  grpc::Status Load(const std::string& source, v2::VolumeInfo* info) {
-    v2::LoadVolumeRequest request;
+  grpc::Status Load(const std::string& source, v3::VolumeInfo* info) {
+    v3::LoadVolumeRequest request;
     request.set_source(source);
     auto context = Context();
     return stub_->LoadVolume(context.get(), request, info);
@@ -38,7 +38,7 @@ class ResourceLifecycleTest : public ServiceTest {
 };
 
 TEST_F(ResourceLifecycleTest, IdleVolumesAreEvictedLeastRecentlyUsedAndReadAgain) {
-  v2::VolumeInfo a, b, c, again;
+  v3::VolumeInfo a, b, c, again;
   ASSERT_TRUE(Load("phantom:abdomen?size=32", &a).ok());
   ASSERT_TRUE(Load("phantom:abdomen?size=36", &b).ok());
   ASSERT_TRUE(GetVolume(a.volume_id(), &again).ok());  // a is now the more recent
@@ -47,51 +47,51 @@ TEST_F(ResourceLifecycleTest, IdleVolumesAreEvictedLeastRecentlyUsedAndReadAgain
   ASSERT_TRUE(loaded.ok()) << loaded.error_message();
   EXPECT_EQ(server_->metrics().volumes_evicted(), 1.0);
   // b's id still works: it is read again (evicting a, now the LRU one).
-  v2::VolumeInfo b_again;
+  v3::VolumeInfo b_again;
   ASSERT_TRUE(GetVolume(b.volume_id(), &b_again).ok());
   EXPECT_EQ(b_again.volume_id(), b.volume_id());
   EXPECT_EQ(b_again.dims(0), 36);
   EXPECT_EQ(server_->metrics().volumes_evicted(), 2.0);
   // A deleted id is gone for good, evicted or not.
-  v2::DeleteVolumeRequest del;
+  v3::DeleteVolumeRequest del;
   del.set_volume_id(a.volume_id());
-  v2::DeleteVolumeResponse deleted;
+  v3::DeleteVolumeResponse deleted;
   auto context = Context();
   ASSERT_TRUE(stub_->DeleteVolume(context.get(), del, &deleted).ok());
   EXPECT_EQ(GetVolume(a.volume_id(), &again).error_code(), grpc::NOT_FOUND);
 }
 
 TEST_F(ResourceLifecycleTest, VolumesInUseAreNeverEvictedAndTheRefusalSaysWhy) {
-  v2::VolumeInfo a, b, c;
+  v3::VolumeInfo a, b, c;
   ASSERT_TRUE(Load("phantom:abdomen?size=32", &a).ok());
   ASSERT_TRUE(Load("phantom:abdomen?size=36", &b).ok());
-  const v2::SessionInfo sa = OpenSession(a.volume_id());
-  const v2::SessionInfo sb = OpenSession(b.volume_id());
+  const v3::SessionInfo sa = OpenSession(a.volume_id());
+  const v3::SessionInfo sb = OpenSession(b.volume_id());
   const grpc::Status refused = Load("phantom:abdomen?size=40", &c);
   EXPECT_EQ(refused.error_code(), grpc::RESOURCE_EXHAUSTED);
   EXPECT_NE(refused.error_message().find("session"), std::string::npos)
       << refused.error_message();
   EXPECT_EQ(server_->metrics().volumes_evicted(), 0.0);
   // Both sessions still work.
-  v2::RenderRequest render;
+  v3::RenderRequest render;
   render.set_session_id(sa.session_id());
   render.mutable_settings()->set_width(32);
   render.mutable_settings()->set_height(32);
-  v2::Frame frame;
+  v3::Frame frame;
   auto context = Context();
   EXPECT_TRUE(stub_->Render(context.get(), render, &frame).ok());
 }
 
 TEST_F(ResourceLifecycleTest, SessionWatchedButNeverDrivenIsClosed) {
-  const v2::VolumeInfo volume = LoadPhantom("phantom:abdomen?size=32");
-  const v2::SessionInfo session = OpenSession(volume.volume_id());
-  v2::WatchRequest watch;
+  const v3::VolumeInfo volume = LoadPhantom("phantom:abdomen?size=32");
+  const v3::SessionInfo session = OpenSession(volume.volume_id());
+  v3::WatchRequest watch;
   watch.set_session_id(session.session_id());
   watch.mutable_settings()->set_width(32);
   watch.mutable_settings()->set_height(32);
   auto context = Context();
   auto reader = stub_->Watch(context.get(), watch);
-  v2::Frame frame;
+  v3::Frame frame;
   ASSERT_TRUE(reader->Read(&frame));
   // Nobody drives it: within a few reaper rounds (1 s each) it is closed and
   // the Watch ends.
@@ -99,18 +99,18 @@ TEST_F(ResourceLifecycleTest, SessionWatchedButNeverDrivenIsClosed) {
   }
   const grpc::Status ended = reader->Finish();
   EXPECT_EQ(ended.error_code(), grpc::FAILED_PRECONDITION) << ended.error_message();
-  v2::ListSessionsRequest list;
-  v2::ListSessionsResponse sessions;
+  v3::ListSessionsRequest list;
+  v3::ListSessionsResponse sessions;
   auto list_context = Context();
   ASSERT_TRUE(stub_->ListSessions(list_context.get(), list, &sessions).ok());
   EXPECT_EQ(sessions.sessions_size(), 0);
 }
 
 // Starts an upload of a `total`-byte file: the header only.
-std::unique_ptr<grpc::ClientWriter<v2::UploadVolumeRequest>> StartUpload(
-    v2::Vpm::Stub* stub, grpc::ClientContext* context, v2::VolumeInfo* info, int64_t total) {
+std::unique_ptr<grpc::ClientWriter<v3::UploadVolumeRequest>> StartUpload(
+    v3::Vpm::Stub* stub, grpc::ClientContext* context, v3::VolumeInfo* info, int64_t total) {
   auto writer = stub->UploadVolume(context, info);
-  v2::UploadVolumeRequest header;
+  v3::UploadVolumeRequest header;
   header.mutable_header()->set_file_name("quiet.nii");
   header.mutable_header()->set_total_bytes(total);
   header.mutable_header()->set_sha256_hex(std::string(64, 'a'));
@@ -118,8 +118,8 @@ std::unique_ptr<grpc::ClientWriter<v2::UploadVolumeRequest>> StartUpload(
   return writer;
 }
 
-bool SendChunk(grpc::ClientWriter<v2::UploadVolumeRequest>& writer, int64_t bytes) {
-  v2::UploadVolumeRequest chunk;
+bool SendChunk(grpc::ClientWriter<v3::UploadVolumeRequest>& writer, int64_t bytes) {
+  v3::UploadVolumeRequest chunk;
   chunk.set_chunk(std::string(static_cast<size_t>(bytes), '\0'));
   return writer.Write(chunk);
 }
@@ -127,7 +127,7 @@ bool SendChunk(grpc::ClientWriter<v2::UploadVolumeRequest>& writer, int64_t byte
 TEST_F(ResourceLifecycleTest, QuietUploadEndsWithDeadlineExceededAndFreesItsBudget) {
   // Memory is reserved as bytes arrive: the first upload holds the 2 MiB it
   // has sent of its 3 MiB.
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   auto context = Context();
   auto writer = StartUpload(stub_.get(), context.get(), &info, 3 << 20);
   ASSERT_TRUE(SendChunk(*writer, 1 << 20));
@@ -136,7 +136,7 @@ TEST_F(ResourceLifecycleTest, QuietUploadEndsWithDeadlineExceededAndFreesItsBudg
   // While it holds 2 MiB of the 3 MiB budget, a second upload's second
   // MiB is refused.
   {
-    v2::VolumeInfo info2;
+    v3::VolumeInfo info2;
     auto context2 = Context();
     auto writer2 = StartUpload(stub_.get(), context2.get(), &info2, 2 << 20);
     SendChunk(*writer2, 1 << 20);
@@ -152,7 +152,7 @@ TEST_F(ResourceLifecycleTest, QuietUploadEndsWithDeadlineExceededAndFreesItsBudg
   // Its budget is free again: a 2 MiB upload is taken whole (then fails on
   // its checksum, which is this test's stand-in for a whole file).
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  v2::VolumeInfo info3;
+  v3::VolumeInfo info3;
   auto context3 = Context();
   auto writer3 = StartUpload(stub_.get(), context3.get(), &info3, 2 << 20);
   SendChunk(*writer3, 1 << 20);
@@ -167,8 +167,8 @@ TEST_F(ResourceLifecycleTest, QuietUploadEndsWithDeadlineExceededAndFreesItsBudg
 TEST_F(ResourceLifecycleTest, UploadsCountAgainstTheUsersStreamCap) {
   // SmallServerOptions: 4 streams per user. Four quiet uploads hold them.
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
-  std::vector<std::unique_ptr<grpc::ClientWriter<v2::UploadVolumeRequest>>> writers;
-  std::vector<v2::VolumeInfo> infos(5);
+  std::vector<std::unique_ptr<grpc::ClientWriter<v3::UploadVolumeRequest>>> writers;
+  std::vector<v3::VolumeInfo> infos(5);
   for (int i = 0; i < 4; ++i) {
     contexts.push_back(Context());
     writers.push_back(StartUpload(stub_.get(), contexts.back().get(), &infos[i], 100));

@@ -39,8 +39,8 @@ grpc::Status GenericUnary(grpc::Channel* channel, const std::string& method,
 }
 
 TEST_F(ServiceTest, Auth_RejectsMissingAndWrongToken) {
-  v2::ListVolumesRequest request;
-  v2::ListVolumesResponse response;
+  v3::ListVolumesRequest request;
+  v3::ListVolumesResponse response;
   auto none = Context("");
   EXPECT_EQ(stub_->ListVolumes(none.get(), request, &response).error_code(),
             grpc::UNAUTHENTICATED);
@@ -93,7 +93,7 @@ TEST_F(ServiceTest, Reflection_ListsTheServiceWithoutToken) {
   ASSERT_TRUE(response.Dump(&slices).ok());
   std::string bytes;
   for (const auto& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
-  EXPECT_NE(bytes.find("vpm.v2.Vpm"), std::string::npos);
+  EXPECT_NE(bytes.find("vpm.v3.Vpm"), std::string::npos);
   context.TryCancel();
   grpc::Status status;
   call->Finish(&status, reinterpret_cast<void*>(4));
@@ -104,28 +104,28 @@ TEST_F(ServiceTest, Reflection_ListsTheServiceWithoutToken) {
 }
 
 TEST_F(ServiceTest, Volumes_LoadGetListDelete) {
-  v2::VolumeInfo info = LoadPhantom();
+  v3::VolumeInfo info = LoadPhantom();
   ASSERT_EQ(info.dims_size(), 3);
   EXPECT_EQ(info.dims(0), 48);
   EXPECT_GT(info.landmarks_size(), 0);
   EXPECT_LT(info.min_value(), info.max_value());
   EXPECT_EQ(info.direction_size(), 9);
 
-  v2::GetVolumeRequest get;
+  v3::GetVolumeRequest get;
   get.set_volume_id(info.volume_id());
-  v2::VolumeInfo got;
+  v3::VolumeInfo got;
   auto c1 = Context();
   ASSERT_TRUE(stub_->GetVolume(c1.get(), get, &got).ok());
   EXPECT_EQ(got.source(), kPhantom);
 
-  v2::ListVolumesResponse list;
+  v3::ListVolumesResponse list;
   auto c2 = Context();
   ASSERT_TRUE(stub_->ListVolumes(c2.get(), {}, &list).ok());
   EXPECT_EQ(list.volumes_size(), 1);
 
-  v2::DeleteVolumeRequest del;
+  v3::DeleteVolumeRequest del;
   del.set_volume_id(info.volume_id());
-  v2::DeleteVolumeResponse deleted;
+  v3::DeleteVolumeResponse deleted;
   auto c3 = Context();
   ASSERT_TRUE(stub_->DeleteVolume(c3.get(), del, &deleted).ok());
   auto c4 = Context();
@@ -135,14 +135,14 @@ TEST_F(ServiceTest, Volumes_LoadGetListDelete) {
 }
 
 TEST_F(ServiceTest, Volumes_LoadedOnceAndShared) {
-  const v2::VolumeInfo first = LoadPhantom();
-  const v2::VolumeInfo again = LoadPhantom();
+  const v3::VolumeInfo first = LoadPhantom();
+  const v3::VolumeInfo again = LoadPhantom();
   EXPECT_EQ(again.volume_id(), first.volume_id());
-  const v2::VolumeInfo other = LoadPhantom(std::string(kPhantom) + "&seed=2");
+  const v3::VolumeInfo other = LoadPhantom(std::string(kPhantom) + "&seed=2");
   EXPECT_NE(other.volume_id(), first.volume_id());
-  v2::ListVolumesResponse list;
+  v3::ListVolumesResponse list;
   auto context = Context();
-  ASSERT_TRUE(stub_->ListVolumes(context.get(), v2::ListVolumesRequest(), &list).ok());
+  ASSERT_TRUE(stub_->ListVolumes(context.get(), v3::ListVolumesRequest(), &list).ok());
   EXPECT_EQ(list.volumes_size(), 2);
 }
 
@@ -153,9 +153,9 @@ TEST_F(ServiceTest, Volumes_CapEvictsAnIdleVolume) {
   for (int i = 0; i < 4; ++i) {
     LoadPhantom(std::string(kPhantom) + "&seed=" + std::to_string(i + 1));
   }
-  v2::LoadVolumeRequest request;
+  v3::LoadVolumeRequest request;
   request.set_source(std::string(kPhantom) + "&seed=99");
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   auto context = Context();
   EXPECT_TRUE(stub_->LoadVolume(context.get(), request, &info).ok());
   EXPECT_EQ(server_->metrics().volumes_evicted(), 1.0);
@@ -163,9 +163,9 @@ TEST_F(ServiceTest, Volumes_CapEvictsAnIdleVolume) {
 
 TEST_F(ServiceTest, Volumes_BadSourceIsInvalidArgument) {
   for (const char* source : {"", "phantom:nosuchthing", "raw:/etc/passwd?dims=1,1,1&type=uint8"}) {
-    v2::LoadVolumeRequest request;
+    v3::LoadVolumeRequest request;
     request.set_source(source);
-    v2::VolumeInfo info;
+    v3::VolumeInfo info;
     auto context = Context();
     EXPECT_EQ(stub_->LoadVolume(context.get(), request, &info).error_code(),
               grpc::INVALID_ARGUMENT)
@@ -198,9 +198,9 @@ class DataRootTest : public ServiceTest {
     fs::remove_all(outside_);
   }
   grpc::StatusCode Load(const std::string& source) {
-    v2::LoadVolumeRequest request;
+    v3::LoadVolumeRequest request;
     request.set_source(source);
-    v2::VolumeInfo info;
+    v3::VolumeInfo info;
     auto context = Context();
     return stub_->LoadVolume(context.get(), request, &info).error_code();
   }
@@ -211,9 +211,9 @@ TEST_F(DataRootTest, LoadVolume_ReadsInsideTheRoot) {
   EXPECT_EQ(Load("cases/small.nii.gz"), grpc::OK);
   // Another spelling of the same file is the same volume.
   EXPECT_EQ(Load("cases/./small.nii.gz"), grpc::OK);
-  v2::ListVolumesResponse list;
+  v3::ListVolumesResponse list;
   auto context = Context();
-  ASSERT_TRUE(stub_->ListVolumes(context.get(), v2::ListVolumesRequest(), &list).ok());
+  ASSERT_TRUE(stub_->ListVolumes(context.get(), v3::ListVolumesRequest(), &list).ok());
   EXPECT_EQ(list.volumes_size(), 1);
 }
 
@@ -224,14 +224,14 @@ TEST_F(ServiceTest, LoadVolume_ReportsTheReadersCorrections) {
   ServerOptions options = SmallServerOptions();
   options.data_root = (fs::path(std::getenv("VPM_SOURCE_DIR")) / "tests" / "data").string();
   StartServer(options);
-  const v2::VolumeInfo info = LoadPhantom("ct-philips-tilt");
+  const v3::VolumeInfo info = LoadPhantom("ct-philips-tilt");
   std::string notes;
   for (const std::string& note : info.notes()) notes += note + "\n";
   EXPECT_NE(notes.find("gantry tilt 18.5 deg"), std::string::npos) << notes;
   EXPECT_NE(notes.find("resampled"), std::string::npos) << notes;
-  v2::GetVolumeRequest get;
+  v3::GetVolumeRequest get;
   get.set_volume_id(info.volume_id());
-  v2::VolumeInfo again;
+  v3::VolumeInfo again;
   ASSERT_TRUE(stub_->GetVolume(Context().get(), get, &again).ok());
   EXPECT_EQ(again.notes_size(), info.notes_size());
   // A phantom has nothing to report.
@@ -252,7 +252,7 @@ using UploadTest = ServiceTest;
 
 TEST_F(UploadTest, UploadVolume_AcceptsChunkedFileWithChecksum) {
   const std::vector<uint8_t> bytes = NiftiBytes();
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   grpc::Status status = Upload(bytes, int64_t(bytes.size()), Sha256::HexOf(bytes), 64 << 10, &info);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(info.dims(0), 40);
@@ -262,7 +262,7 @@ TEST_F(UploadTest, UploadVolume_AcceptsChunkedFileWithChecksum) {
 TEST_F(UploadTest, UploadVolume_RejectsChecksumMismatch) {
   const std::vector<uint8_t> bytes = NiftiBytes();
   std::string wrong(64, 'a');
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   grpc::Status status = Upload(bytes, int64_t(bytes.size()), wrong, 64 << 10, &info);
   EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("sha256"), std::string::npos) << status.error_message();
@@ -273,7 +273,7 @@ TEST_F(UploadTest, UploadVolume_RejectsTruncatedStream) {
   const std::string sha = Sha256::HexOf(bytes);
   const int64_t declared = int64_t(bytes.size());
   bytes.resize(bytes.size() / 2 / (64 << 10) * (64 << 10));
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   grpc::Status status = Upload(bytes, declared, sha, 64 << 10, &info);
   EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("truncated"), std::string::npos) << status.error_message();
@@ -282,7 +282,7 @@ TEST_F(UploadTest, UploadVolume_RejectsTruncatedStream) {
 TEST_F(UploadTest, UploadVolume_RejectsBadChunksAndMissingHeader) {
   const std::vector<uint8_t> bytes = NiftiBytes();
   const std::string sha = Sha256::HexOf(bytes);
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   EXPECT_EQ(Upload(bytes, int64_t(bytes.size()), sha, 1000, &info).error_code(),
             grpc::INVALID_ARGUMENT);  // under 64 KiB and not the last
   const std::vector<uint8_t> big(3 << 20, 0);
@@ -295,14 +295,14 @@ TEST_F(UploadTest, UploadVolume_RejectsBadChunksAndMissingHeader) {
 }
 
 TEST_F(ServiceTest, Meshes_BuildGetRefine) {
-  v2::VolumeInfo volume = LoadPhantom();
-  v2::BuildMeshRequest build;
+  v3::VolumeInfo volume = LoadPhantom();
+  v3::BuildMeshRequest build;
   build.set_volume_id(volume.volume_id());
   build.mutable_params()->add_grid(10);
   build.mutable_params()->add_grid(10);
   build.mutable_params()->add_grid(10);
   build.mutable_params()->set_target(80);
-  v2::MeshInfo mesh;
+  v3::MeshInfo mesh;
   auto c1 = Context();
   grpc::Status status = stub_->BuildMesh(c1.get(), build, &mesh);
   ASSERT_TRUE(status.ok()) << status.error_message();
@@ -311,26 +311,26 @@ TEST_F(ServiceTest, Meshes_BuildGetRefine) {
   EXPECT_EQ(mesh.stats().vertices(), 80 + mesh.stats().boundary() + mesh.stats().steiner());
   EXPECT_GT(mesh.stats().tets(), 0);
 
-  v2::GetMeshRequest get;
+  v3::GetMeshRequest get;
   get.set_mesh_id(mesh.mesh_id());
   get.set_include_geometry(true);
-  v2::GetMeshResponse got;
+  v3::GetMeshResponse got;
   auto c2 = Context();
   ASSERT_TRUE(stub_->GetMesh(c2.get(), get, &got).ok());
   EXPECT_EQ(got.vertices_size(), mesh.stats().vertices());
   EXPECT_EQ(got.tets_size(), mesh.stats().tets());
 
-  v2::RefineMeshRequest refine;
+  v3::RefineMeshRequest refine;
   refine.set_mesh_id(mesh.mesh_id());
   *refine.mutable_point_mm() = Centre(volume);
-  v2::MeshInfo refined;
+  v3::MeshInfo refined;
   auto c3 = Context();
   status = stub_->RefineMesh(c3.get(), refine, &refined);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_NE(refined.mesh_id(), mesh.mesh_id());
   EXPECT_GT(refined.stats().refined(), 0);
 
-  *refine.mutable_point_mm() = V(-50, 0, 0);
+  *refine.mutable_point_mm() = AtPhysical(volume, -50, 0, 0);
   auto c4 = Context();
   EXPECT_EQ(stub_->RefineMesh(c4.get(), refine, &refined).error_code(), grpc::OUT_OF_RANGE);
   refine.set_mesh_id("mesh-404");
@@ -339,23 +339,23 @@ TEST_F(ServiceTest, Meshes_BuildGetRefine) {
 }
 
 TEST_F(ServiceTest, Meshes_BadParamsAreInvalidArgument) {
-  v2::VolumeInfo volume = LoadPhantom();
-  v2::BuildMeshRequest build;
+  v3::VolumeInfo volume = LoadPhantom();
+  v3::BuildMeshRequest build;
   build.set_volume_id(volume.volume_id());
   build.mutable_params()->add_grid(10);
-  v2::MeshInfo mesh;
+  v3::MeshInfo mesh;
   auto c1 = Context();
   grpc::Status status = stub_->BuildMesh(c1.get(), build, &mesh);
   EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("params.grid"), std::string::npos);
   build.mutable_params()->clear_grid();
   // An enum value this server does not know (a newer client's) is refused.
-  build.mutable_params()->set_footprint(static_cast<v2::Footprint>(7));
+  build.mutable_params()->set_footprint(static_cast<v3::Footprint>(7));
   auto c2 = Context();
   status = stub_->BuildMesh(c2.get(), build, &mesh);
   EXPECT_EQ(status.error_code(), grpc::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("params.footprint"), std::string::npos);
-  build.mutable_params()->set_footprint(v2::FOOTPRINT_UNSPECIFIED);
+  build.mutable_params()->set_footprint(v3::FOOTPRINT_UNSPECIFIED);
   build.set_volume_id("vol-404");
   auto c3 = Context();
   EXPECT_EQ(stub_->BuildMesh(c3.get(), build, &mesh).error_code(), grpc::NOT_FOUND);
@@ -376,23 +376,23 @@ TEST(ProtoConvert, RenderSettingsEnumsMapAndUnknownValuesAreRefused) {
   auto read = ReadVolume("phantom:abdomen?size=16", VolumeLimits{});
   ASSERT_TRUE(read.ok()) << read.status();
   const Volume& volume = *read;
-  v2::RenderSettings settings;
+  v3::RenderSettings settings;
   auto defaults = ToStreamSettings(settings, volume, 1024);
   ASSERT_TRUE(defaults.ok()) << defaults.status();
   EXPECT_EQ(defaults->view.mode, RenderMode::kDvr);
   EXPECT_FALSE(defaults->png);
-  settings.set_mode(v2::RENDER_MODE_MIP);
-  settings.set_encoding(v2::ENCODING_PNG);
+  settings.set_mode(v3::RENDER_MODE_MIP);
+  settings.set_encoding(v3::ENCODING_PNG);
   auto chosen = ToStreamSettings(settings, volume, 1024);
   ASSERT_TRUE(chosen.ok()) << chosen.status();
   EXPECT_EQ(chosen->view.mode, RenderMode::kMip);
   EXPECT_TRUE(chosen->png);
-  settings.set_mode(static_cast<v2::RenderMode>(9));
+  settings.set_mode(static_cast<v3::RenderMode>(9));
   auto bad_mode = ToStreamSettings(settings, volume, 1024);
   EXPECT_EQ(bad_mode.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(bad_mode.status().message().find("settings.mode"), std::string::npos);
-  settings.set_mode(v2::RENDER_MODE_DVR);
-  settings.set_encoding(static_cast<v2::Encoding>(5));
+  settings.set_mode(v3::RENDER_MODE_DVR);
+  settings.set_encoding(static_cast<v3::Encoding>(5));
   auto bad_encoding = ToStreamSettings(settings, volume, 1024);
   EXPECT_EQ(bad_encoding.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(bad_encoding.status().message().find("settings.encoding"), std::string::npos);
@@ -410,7 +410,7 @@ TEST(ProtoConvert, RenderTfAndMipWindowReachTheView) {
                                   {{0.0, 0.0}, {300.0, 0.4}},
                                   TfLighting{false, 0.3, 0.7, 0.1, 5.0}};
   EXPECT_EQ(FromProto(ToProto(tf)), tf);
-  v2::RenderSettings settings;
+  v3::RenderSettings settings;
   *settings.mutable_render_tf() = ToProto(tf);
   settings.mutable_mip_window()->set_width(500.0);
   settings.mutable_mip_window()->set_level(200.0);

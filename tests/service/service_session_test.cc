@@ -18,60 +18,60 @@ class SessionTest : public ServiceTest {
     session_ = OpenSession(volume_.volume_id());
     ASSERT_FALSE(session_.session_id().empty());
   }
-  grpc::Status Manipulate(const v2::ClientEvent& event, v2::ManipulateResponse* response) {
-    v2::ManipulateRequest request;
+  grpc::Status Manipulate(const v3::ClientEvent& event, v3::ManipulateResponse* response) {
+    v3::ManipulateRequest request;
     request.set_session_id(session_.session_id());
     *request.mutable_event() = event;
     auto context = Context();
     return stub_->Manipulate(context.get(), request, response);
   }
-  v2::ClientEvent Grab(const v2::Vec3& p, uint64_t sequence) {
-    v2::ClientEvent e;
+  v3::ClientEvent Grab(const v3::Vec3& p, uint64_t sequence) {
+    v3::ClientEvent e;
     e.set_sequence(sequence);
     *e.mutable_grab()->mutable_point_mm() = p;
     return e;
   }
-  v2::ClientEvent Drag(double dx, uint64_t sequence) {
-    v2::ClientEvent e;
+  v3::ClientEvent Drag(double dx, uint64_t sequence) {
+    v3::ClientEvent e;
     e.set_sequence(sequence);
     *e.mutable_drag()->mutable_offset_mm() = V(dx, 0, 0);
     return e;
   }
-  static v2::RenderSettings Small() {
-    v2::RenderSettings s;
+  static v3::RenderSettings Small() {
+    v3::RenderSettings s;
     s.set_width(96);
     s.set_height(96);
     return s;
   }
   // A Watch of this test's session at 96x96.
-  v2::WatchRequest SmallWatch() const {
-    v2::WatchRequest request;
+  v3::WatchRequest SmallWatch() const {
+    v3::WatchRequest request;
     request.set_session_id(session_.session_id());
     *request.mutable_settings() = Small();
     return request;
   }
-  v2::VolumeInfo volume_;
-  v2::SessionInfo session_;
+  v3::VolumeInfo volume_;
+  v3::SessionInfo session_;
 };
 
 TEST_F(SessionTest, Sessions_OpenListClose) {
-  v2::ListSessionsResponse list;
+  v3::ListSessionsResponse list;
   auto c1 = Context();
   ASSERT_TRUE(stub_->ListSessions(c1.get(), {}, &list).ok());
   ASSERT_EQ(list.sessions_size(), 1);
   EXPECT_EQ(list.sessions(0).volume_id(), volume_.volume_id());
 
   // A volume in use cannot be deleted.
-  v2::DeleteVolumeRequest del;
+  v3::DeleteVolumeRequest del;
   del.set_volume_id(volume_.volume_id());
-  v2::DeleteVolumeResponse deleted;
+  v3::DeleteVolumeResponse deleted;
   auto c2 = Context();
   EXPECT_EQ(stub_->DeleteVolume(c2.get(), del, &deleted).error_code(),
             grpc::FAILED_PRECONDITION);
 
-  v2::CloseSessionRequest close;
+  v3::CloseSessionRequest close;
   close.set_session_id(session_.session_id());
-  v2::CloseSessionResponse closed;
+  v3::CloseSessionResponse closed;
   auto c3 = Context();
   ASSERT_TRUE(stub_->CloseSession(c3.get(), close, &closed).ok());
   auto c4 = Context();
@@ -81,9 +81,9 @@ TEST_F(SessionTest, Sessions_OpenListClose) {
 TEST_F(SessionTest, Sessions_CapAndUnknownIds) {
   OpenSession(volume_.volume_id());
   OpenSession(volume_.volume_id());
-  v2::OpenSessionRequest request;
+  v3::OpenSessionRequest request;
   request.set_volume_id(volume_.volume_id());
-  v2::SessionInfo info;
+  v3::SessionInfo info;
   auto c1 = Context();
   EXPECT_EQ(stub_->OpenSession(c1.get(), request, &info).error_code(), grpc::RESOURCE_EXHAUSTED);
   request.set_volume_id("vol-404");
@@ -95,10 +95,10 @@ TEST_F(SessionTest, Sessions_CapAndUnknownIds) {
 }
 
 TEST_F(SessionTest, Render_ReturnsDecodableStill) {
-  v2::RenderRequest request;
+  v3::RenderRequest request;
   request.set_session_id(session_.session_id());
   *request.mutable_settings() = Small();
-  v2::Frame frame;
+  v3::Frame frame;
   auto c1 = Context();
   grpc::Status status = stub_->Render(c1.get(), request, &frame);
   ASSERT_TRUE(status.ok()) << status.error_message();
@@ -121,24 +121,24 @@ TEST_F(SessionTest, Render_ReturnsDecodableStill) {
 }
 
 TEST_F(SessionTest, Manipulate_GrabDragReleaseAndTheirErrors) {
-  v2::ManipulateResponse response;
+  v3::ManipulateResponse response;
   EXPECT_EQ(Manipulate(Drag(3, 1), &response).error_code(), grpc::FAILED_PRECONDITION);
   EXPECT_EQ(Manipulate(Grab(V(-10, 0, 0), 2), &response).error_code(), grpc::OUT_OF_RANGE);
-  EXPECT_EQ(Manipulate(v2::ClientEvent(), &response).error_code(), grpc::INVALID_ARGUMENT);
+  EXPECT_EQ(Manipulate(v3::ClientEvent(), &response).error_code(), grpc::INVALID_ARGUMENT);
   ASSERT_TRUE(Manipulate(Grab(Centre(volume_), 3), &response).ok());
   grpc::Status status = Manipulate(Drag(4, 4), &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(response.applied_sequence(), 4u);
   EXPECT_GT(response.max_displacement_mm(), 0.0);
-  v2::ClientEvent release;
+  v3::ClientEvent release;
   release.set_sequence(5);
   release.mutable_release();
   ASSERT_TRUE(Manipulate(release, &response).ok());
 
-  v2::SetCameraRequest camera;
+  v3::SetCameraRequest camera;
   camera.set_session_id(session_.session_id());
   camera.mutable_camera()->set_azimuth_deg(30);
-  v2::SetCameraResponse camera_response;
+  v3::SetCameraResponse camera_response;
   auto c1 = Context();
   EXPECT_TRUE(stub_->SetCamera(c1.get(), camera, &camera_response).ok());
   camera.mutable_camera()->set_distance_mm(-1);
@@ -150,12 +150,12 @@ TEST_F(SessionTest, Manipulate_GrabDragReleaseAndTheirErrors) {
 TEST_F(SessionTest, Manipulate_PickBeforeAnyFrameTakesTheOrbitCentrePlane) {
   // No frame yet: no preset to cast with; the default 512x512 view's centre
   // pixel lies on the plane through the orbit centre.
-  v2::ClientEvent pick;
+  v3::ClientEvent pick;
   pick.set_sequence(1);
   pick.mutable_grab()->set_pick(true);
   pick.mutable_grab()->set_pixel_x(256);
   pick.mutable_grab()->set_pixel_y(256);
-  v2::ManipulateResponse response;
+  v3::ManipulateResponse response;
   grpc::Status status = Manipulate(pick, &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_NEAR(response.grab_point_mm().y(), Centre(volume_).y(), 5.0);
@@ -163,26 +163,26 @@ TEST_F(SessionTest, Manipulate_PickBeforeAnyFrameTakesTheOrbitCentrePlane) {
 
 TEST_F(SessionTest, Manipulate_PickByPixelGrabsTheSurfaceThePixelShows) {
   // A frame sets the size and preset picks refer to (Manipulate has no stream).
-  v2::RenderRequest render;
+  v3::RenderRequest render;
   render.set_session_id(session_.session_id());
   *render.mutable_settings() = Small();
-  v2::Frame frame;
+  v3::Frame frame;
   auto c1 = Context();
   ASSERT_TRUE(stub_->Render(c1.get(), render, &frame).ok());
-  v2::ClientEvent pick;
+  v3::ClientEvent pick;
   pick.set_sequence(1);
   pick.mutable_grab()->set_pick(true);
   pick.mutable_grab()->set_pixel_x(48);
   pick.mutable_grab()->set_pixel_y(48);
-  v2::ManipulateResponse response;
+  v3::ManipulateResponse response;
   grpc::Status status = Manipulate(pick, &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   ASSERT_TRUE(response.has_grab_point_mm());
   // The default camera looks from the front (anterior, -y) at the volume's
   // centre: the body's surface is in front of the centre, on the camera's
   // side, and the old plane-through-the-centre pick would give the centre.
-  const v2::Vec3 centre = Centre(volume_);
-  const v2::Vec3& p = response.grab_point_mm();
+  const v3::Vec3 centre = Centre(volume_);
+  const v3::Vec3& p = response.grab_point_mm();
   EXPECT_LT(p.y(), centre.y() - 20.0) << p.ShortDebugString();
   EXPECT_NEAR(p.x(), centre.x(), 5.0);
   // Frames report the held grab's point.
@@ -197,21 +197,21 @@ TEST_F(SessionTest, Manipulate_PickByPixelGrabsTheSurfaceThePixelShows) {
 TEST_F(SessionTest, Interact_FramesEchoTheLastEventAndEndWithAStill) {
   auto context = Context();
   auto stream = stub_->Interact(context.get());
-  v2::InteractRequest first;
+  v3::InteractRequest first;
   first.set_session_id(session_.session_id());
   first.mutable_event()->set_sequence(1);
   *first.mutable_event()->mutable_settings() = Small();
   ASSERT_TRUE(stream->Write(first));
-  v2::InteractRequest grab;
+  v3::InteractRequest grab;
   *grab.mutable_event() = Grab(Centre(volume_), 2);
   ASSERT_TRUE(stream->Write(grab));
   for (int i = 1; i <= 4; ++i) {
-    v2::InteractRequest drag;
+    v3::InteractRequest drag;
     *drag.mutable_event() = Drag(1.5 * i, 2 + i);
     ASSERT_TRUE(stream->Write(drag));
   }
   // Read until a still frame reflects the last event (sequence 6).
-  v2::Frame frame;
+  v3::Frame frame;
   bool saw_final_still = false;
   int frames = 0;
   while (stream->Read(&frame)) {
@@ -232,19 +232,19 @@ TEST_F(SessionTest, Interact_FramesEchoTheLastEventAndEndWithAStill) {
 TEST_F(SessionTest, Interact_BadEventEndsTheStreamWithItsCode) {
   auto context = Context();
   auto stream = stub_->Interact(context.get());
-  v2::InteractRequest first;
+  v3::InteractRequest first;
   first.set_session_id(session_.session_id());
   *first.mutable_event() = Drag(2, 1);  // no grab
   ASSERT_TRUE(stream->Write(first));
   stream->WritesDone();
-  v2::Frame frame;
+  v3::Frame frame;
   while (stream->Read(&frame)) {
   }
   EXPECT_EQ(stream->Finish().error_code(), grpc::FAILED_PRECONDITION);
 
   auto context2 = Context();
   auto stream2 = stub_->Interact(context2.get());
-  v2::InteractRequest unknown;
+  v3::InteractRequest unknown;
   unknown.set_session_id("ses-404");
   stream2->Write(unknown);
   stream2->WritesDone();
@@ -256,7 +256,7 @@ TEST_F(SessionTest, Interact_BadEventEndsTheStreamWithItsCode) {
 TEST_F(SessionTest, Interact_RejectsMissingToken) {
   auto context = Context("");
   auto stream = stub_->Interact(context.get());
-  v2::Frame frame;
+  v3::Frame frame;
   EXPECT_FALSE(stream->Read(&frame));
   EXPECT_EQ(stream->Finish().error_code(), grpc::UNAUTHENTICATED);
 }
@@ -265,13 +265,13 @@ TEST_F(SessionTest, Interact_ClientCancelMidStreamReleasesEverything) {
   for (int round = 0; round < 3; ++round) {
     auto context = Context();
     auto stream = stub_->Interact(context.get());
-    v2::InteractRequest first;
+    v3::InteractRequest first;
     first.set_session_id(session_.session_id());
     *first.mutable_event()->mutable_settings() = Small();
     ASSERT_TRUE(stream->Write(first));
-    v2::Frame frame;
+    v3::Frame frame;
     ASSERT_TRUE(stream->Read(&frame));
-    v2::InteractRequest camera;
+    v3::InteractRequest camera;
     camera.mutable_event()->set_sequence(2);
     camera.mutable_event()->mutable_camera()->set_azimuth_deg(45);
     stream->Write(camera);
@@ -291,13 +291,13 @@ TEST_F(SessionTest, Interact_ClientCancelMidStreamReleasesEverything) {
 
 TEST_F(SessionTest, Watch_SlowReaderGetsNewestFrameWithSupersededCounted) {
   auto context = Context();
-  v2::WatchRequest request;
+  v3::WatchRequest request;
   request.set_session_id(session_.session_id());
   // Large lossless frames fill the transport window after one or two, so
   // the server must hold back and drop.
   request.mutable_settings()->set_width(320);
   request.mutable_settings()->set_height(320);
-  request.mutable_settings()->set_encoding(v2::ENCODING_PNG);
+  request.mutable_settings()->set_encoding(v3::ENCODING_PNG);
   // A client whose transport window stays small (no BDP growth): what it
   // does not read stays on the server.
   grpc::ChannelArguments args;
@@ -305,18 +305,18 @@ TEST_F(SessionTest, Watch_SlowReaderGetsNewestFrameWithSupersededCounted) {
   args.SetInt(GRPC_ARG_HTTP2_STREAM_LOOKAHEAD_BYTES, 16 << 10);
   auto slow_channel = grpc::CreateCustomChannel(
       "127.0.0.1:" + std::to_string(server_->port()), grpc::InsecureChannelCredentials(), args);
-  auto slow_stub = v2::Vpm::NewStub(slow_channel);
+  auto slow_stub = v3::Vpm::NewStub(slow_channel);
   auto reader = slow_stub->Watch(context.get(), request);
-  v2::Frame frame;
+  v3::Frame frame;
   ASSERT_TRUE(reader->Read(&frame));
   // Camera changes for 4 s while this client does not read.
   int changes = 0;
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(4);
   while (std::chrono::steady_clock::now() < until) {
-    v2::SetCameraRequest camera;
+    v3::SetCameraRequest camera;
     camera.set_session_id(session_.session_id());
     camera.mutable_camera()->set_azimuth_deg(++changes * 3.0);
-    v2::SetCameraResponse response;
+    v3::SetCameraResponse response;
     auto c = Context();
     ASSERT_TRUE(stub_->SetCamera(c.get(), camera, &response).ok());
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -343,11 +343,11 @@ TEST_F(SessionTest, Watch_SlowReaderGetsNewestFrameWithSupersededCounted) {
 
 TEST_F(SessionTest, Watch_SeesAnotherClientsManipulation) {
   auto context = Context();
-  const v2::WatchRequest request = SmallWatch();
+  const v3::WatchRequest request = SmallWatch();
   auto reader = stub_->Watch(context.get(), request);
-  v2::Frame frame;
+  v3::Frame frame;
   ASSERT_TRUE(reader->Read(&frame));
-  v2::ManipulateResponse response;
+  v3::ManipulateResponse response;
   ASSERT_TRUE(Manipulate(Grab(Centre(volume_), 7), &response).ok());
   ASSERT_TRUE(Manipulate(Drag(3, 8), &response).ok());
   bool moved = false;
@@ -364,17 +364,17 @@ TEST_F(SessionTest, Watch_SeesAnotherClientsManipulation) {
 
 TEST_F(SessionTest, Watch_StreamCapPerClientIsResourceExhausted) {
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
-  std::vector<std::unique_ptr<grpc::ClientReader<v2::Frame>>> readers;
-  const v2::WatchRequest request = SmallWatch();
+  std::vector<std::unique_ptr<grpc::ClientReader<v3::Frame>>> readers;
+  const v3::WatchRequest request = SmallWatch();
   for (int i = 0; i < 4; ++i) {
     contexts.push_back(Context());
     readers.push_back(stub_->Watch(contexts.back().get(), request));
-    v2::Frame frame;
+    v3::Frame frame;
     ASSERT_TRUE(readers.back()->Read(&frame));
   }
   auto context = Context();
   auto extra = stub_->Watch(context.get(), request);
-  v2::Frame frame;
+  v3::Frame frame;
   EXPECT_FALSE(extra->Read(&frame));
   EXPECT_EQ(extra->Finish().error_code(), grpc::RESOURCE_EXHAUSTED);
   for (size_t i = 0; i < readers.size(); ++i) {
@@ -385,9 +385,9 @@ TEST_F(SessionTest, Watch_StreamCapPerClientIsResourceExhausted) {
 
 TEST_F(SessionTest, Shutdown_FinishesOpenStreamsWithUnavailable) {
   auto context = Context();
-  const v2::WatchRequest request = SmallWatch();
+  const v3::WatchRequest request = SmallWatch();
   auto reader = stub_->Watch(context.get(), request);
-  v2::Frame frame;
+  v3::Frame frame;
   ASSERT_TRUE(reader->Read(&frame));
   std::thread stopper([&] { server_->Shutdown(std::chrono::milliseconds(3000)); });
   while (reader->Read(&frame)) {
@@ -412,45 +412,45 @@ TEST_F(SessionTest, Drain_NotServingWhileTheSessionGoesOn) {
   };
   ASSERT_EQ(Check(), grpc::health::v1::HealthCheckResponse::SERVING);
   auto watch_context = Context();
-  const v2::WatchRequest request = SmallWatch();
+  const v3::WatchRequest request = SmallWatch();
   auto reader = stub_->Watch(watch_context.get(), request);
-  v2::Frame frame;
+  v3::Frame frame;
   ASSERT_TRUE(reader->Read(&frame));
 
   server_->BeginDrain();
   EXPECT_EQ(Check(), grpc::health::v1::HealthCheckResponse::NOT_SERVING);
   // The session goes on: a grab and a drag are taken, and the stream shows them.
-  v2::ManipulateResponse manipulated;
+  v3::ManipulateResponse manipulated;
   ASSERT_TRUE(Manipulate(Grab(Centre(volume_), 1), &manipulated).ok());
   ASSERT_TRUE(Manipulate(Drag(5, 2), &manipulated).ok());
   bool shown = false;
   while (!shown && reader->Read(&frame)) shown = frame.last_sequence() >= 2;
   EXPECT_TRUE(shown) << "no frame of the drag while draining";
-  v2::RenderRequest render;
+  v3::RenderRequest render;
   render.set_session_id(session_.session_id());
   *render.mutable_settings() = Small();
-  v2::Frame still;
+  v3::Frame still;
   auto rc = Context();
   EXPECT_TRUE(stub_->Render(rc.get(), render, &still).ok());
-  v2::ListSessionsResponse list;
+  v3::ListSessionsResponse list;
   auto lc = Context();
   EXPECT_TRUE(stub_->ListSessions(lc.get(), {}, &list).ok());
   // Nothing new is made here any more.
-  v2::OpenSessionRequest open;
+  v3::OpenSessionRequest open;
   open.set_volume_id(volume_.volume_id());
-  v2::SessionInfo info;
+  v3::SessionInfo info;
   auto oc = Context();
   const grpc::Status refused = stub_->OpenSession(oc.get(), open, &info);
   EXPECT_EQ(refused.error_code(), grpc::UNAVAILABLE);
   EXPECT_NE(refused.error_message().find("draining"), std::string::npos) << refused.error_message();
-  v2::LoadVolumeRequest load;
+  v3::LoadVolumeRequest load;
   load.set_source("phantom:abdomen?size=32");
-  v2::VolumeInfo loaded;
+  v3::VolumeInfo loaded;
   auto vc = Context();
   EXPECT_EQ(stub_->LoadVolume(vc.get(), load, &loaded).error_code(), grpc::UNAVAILABLE);
-  v2::BuildMeshRequest build;
+  v3::BuildMeshRequest build;
   build.set_volume_id(volume_.volume_id());
-  v2::MeshInfo mesh;
+  v3::MeshInfo mesh;
   auto bc = Context();
   EXPECT_EQ(stub_->BuildMesh(bc.get(), build, &mesh).error_code(), grpc::UNAVAILABLE);
 
@@ -483,13 +483,13 @@ TEST_F(SessionTest, Ids_CarryTheServersTag) {
 
 TEST_F(SessionTest, CloseSession_EndsItsStreams) {
   auto context = Context();
-  const v2::WatchRequest request = SmallWatch();
+  const v3::WatchRequest request = SmallWatch();
   auto reader = stub_->Watch(context.get(), request);
-  v2::Frame frame;
+  v3::Frame frame;
   ASSERT_TRUE(reader->Read(&frame));
-  v2::CloseSessionRequest close;
+  v3::CloseSessionRequest close;
   close.set_session_id(session_.session_id());
-  v2::CloseSessionResponse closed;
+  v3::CloseSessionResponse closed;
   auto c = Context();
   ASSERT_TRUE(stub_->CloseSession(c.get(), close, &closed).ok());
   while (reader->Read(&frame)) {

@@ -15,7 +15,7 @@
 #include "server/io/read_volume.h"
 #include "server/io/write_nifti.h"
 #include "server/service/vpm_server.h"
-#include "vpm/v2/vpm.grpc.pb.h"
+#include "vpm/v3/vpm.grpc.pb.h"
 
 namespace vpm::service::testing {
 
@@ -31,6 +31,9 @@ inline ServerOptions SmallServerOptions() {
   o.max_streams_per_user = 4;
   o.still_delay_ms = 100;
   o.max_frame_side = 512;
+  // The session keeps its mesh: tests compare frames with it
+  // (refine_on_grab_test.cc turns this on).
+  o.refine_on_grab = false;
   return o;
 }
 
@@ -52,7 +55,7 @@ class ServiceTest : public ::testing::Test {
     server_ = *std::move(server);
     channel_ = grpc::CreateChannel("127.0.0.1:" + std::to_string(server_->port()),
                                    grpc::InsecureChannelCredentials());
-    stub_ = v2::Vpm::NewStub(channel_);
+    stub_ = v3::Vpm::NewStub(channel_);
   }
   void SetUp() override { StartServer(SmallServerOptions()); }
   void TearDown() override {
@@ -68,11 +71,11 @@ class ServiceTest : public ::testing::Test {
     return context;
   }
 
-  v2::VolumeInfo LoadPhantom(const std::string& source = kPhantom,
+  v3::VolumeInfo LoadPhantom(const std::string& source = kPhantom,
                              const std::string& token = kToken) {
-    v2::LoadVolumeRequest request;
+    v3::LoadVolumeRequest request;
     request.set_source(source);
-    v2::VolumeInfo info;
+    v3::VolumeInfo info;
     auto context = Context(token);
     grpc::Status status = stub_->LoadVolume(context.get(), request, &info);
     EXPECT_TRUE(status.ok()) << status.error_message();
@@ -90,19 +93,19 @@ class ServiceTest : public ::testing::Test {
   // UploadVolume as `token`'s user: the header, then `bytes` in chunks of
   // `chunk` bytes.
   grpc::Status Upload(const std::vector<uint8_t>& bytes, int64_t declared, const std::string& sha,
-                      size_t chunk, v2::VolumeInfo* info, bool header = true,
+                      size_t chunk, v3::VolumeInfo* info, bool header = true,
                       const std::string& token = kToken) {
     auto context = Context(token);
     auto writer = stub_->UploadVolume(context.get(), info);
     if (header) {
-      v2::UploadVolumeRequest h;
+      v3::UploadVolumeRequest h;
       h.mutable_header()->set_file_name("case.nii");
       h.mutable_header()->set_total_bytes(declared);
       h.mutable_header()->set_sha256_hex(sha);
       if (!writer->Write(h)) return writer->Finish();
     }
     for (size_t at = 0; at < bytes.size(); at += chunk) {
-      v2::UploadVolumeRequest c;
+      v3::UploadVolumeRequest c;
       c.set_chunk(bytes.data() + at, std::min(chunk, bytes.size() - at));
       if (!writer->Write(c)) break;
     }
@@ -110,18 +113,18 @@ class ServiceTest : public ::testing::Test {
     return writer->Finish();
   }
 
-  v2::SessionInfo OpenSession(const std::string& volume_id, const std::string& token = kToken) {
-    v2::OpenSessionRequest request;
+  v3::SessionInfo OpenSession(const std::string& volume_id, const std::string& token = kToken) {
+    v3::OpenSessionRequest request;
     request.set_volume_id(volume_id);
-    v2::SessionInfo info;
+    v3::SessionInfo info;
     auto context = Context(token);
     grpc::Status status = stub_->OpenSession(context.get(), request, &info);
     EXPECT_TRUE(status.ok()) << status.error_message();
     return info;
   }
 
-  static v2::Vec3 V(double x, double y, double z) {
-    v2::Vec3 v;
+  static v3::Vec3 V(double x, double y, double z) {
+    v3::Vec3 v;
     v.set_x(x);
     v.set_y(y);
     v.set_z(z);
@@ -129,15 +132,29 @@ class ServiceTest : public ::testing::Test {
   }
 
   // The middle of the volume in physical voxel space (mm).
-  static v2::Vec3 Centre(const v2::VolumeInfo& info) {
-    return V((info.dims(0) - 1) * info.spacing_mm().x() / 2,
-             (info.dims(1) - 1) * info.spacing_mm().y() / 2,
-             (info.dims(2) - 1) * info.spacing_mm().z() / 2);
+  // The world point (LPS mm, the API's frame) of physical voxel space point
+  // (x, y, z) = index * spacing: origin + direction * p.
+  static v3::Vec3 AtPhysical(const v3::VolumeInfo& info, double x, double y, double z) {
+    const auto& d = info.direction();
+    const double p[3] = {x, y, z};
+    double w[3] = {info.origin_lps_mm().x(), info.origin_lps_mm().y(), info.origin_lps_mm().z()};
+    for (int c = 0; c < 3; ++c) {
+      for (int r = 0; r < 3; ++r) w[r] += d.size() == 9 ? d[3 * c + r] * p[c] : (r == c) * p[c];
+    }
+    return V(w[0], w[1], w[2]);
+  }
+
+  // The centre of the volume's box, world LPS mm (the API's frame): the
+  // middle of its world axis-aligned box.
+  static v3::Vec3 Centre(const v3::VolumeInfo& info) {
+    return V((info.box_lo_lps_mm().x() + info.box_hi_lps_mm().x()) / 2,
+             (info.box_lo_lps_mm().y() + info.box_hi_lps_mm().y()) / 2,
+             (info.box_lo_lps_mm().z() + info.box_hi_lps_mm().z()) / 2);
   }
 
   std::unique_ptr<VpmServer> server_;
   std::shared_ptr<grpc::Channel> channel_;
-  std::unique_ptr<v2::Vpm::Stub> stub_;
+  std::unique_ptr<v3::Vpm::Stub> stub_;
 };
 
 }  // namespace vpm::service::testing

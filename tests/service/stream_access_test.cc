@@ -21,12 +21,12 @@ using Clock = std::chrono::steady_clock;
 // A Watch read on a thread of its own: frames counted, the end's status kept.
 class WatchReader {
  public:
-  WatchReader(v2::Vpm::Stub* stub, const std::string& token, const std::string& session_id) {
+  WatchReader(v3::Vpm::Stub* stub, const std::string& token, const std::string& session_id) {
     context_.AddMetadata("authorization", std::string("Bearer ") + token);
     // Only so that a stream that never ends fails the test instead of
     // hanging it.
     context_.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-    v2::WatchRequest request;
+    v3::WatchRequest request;
     request.set_session_id(session_id);
     request.mutable_settings()->set_width(64);
     request.mutable_settings()->set_height(64);
@@ -61,7 +61,7 @@ class WatchReader {
 
  private:
   void Read() {
-    v2::Frame frame;
+    v3::Frame frame;
     while (reader_->Read(&frame)) {
       std::lock_guard lock(mutex_);
       ++frames_;
@@ -75,7 +75,7 @@ class WatchReader {
   }
 
   grpc::ClientContext context_;
-  std::unique_ptr<grpc::ClientReader<v2::Frame>> reader_;
+  std::unique_ptr<grpc::ClientReader<v3::Frame>> reader_;
   mutable std::mutex mutex_;
   std::condition_variable changed_;
   int frames_ = 0;
@@ -92,23 +92,23 @@ class StreamAccessTest : public TwoUsersTest {
     session_ = OpenSession(volume_.volume_id(), kAliceToken);
   }
   grpc::Status Share(const std::string& user, bool revoke) {
-    v2::ShareSessionRequest request;
+    v3::ShareSessionRequest request;
     request.set_session_id(session_.session_id());
     request.set_user(user);
     request.set_revoke(revoke);
-    v2::SessionInfo info;
+    v3::SessionInfo info;
     return stub_->ShareSession(Context(kAliceToken).get(), request, &info);
   }
   grpc::Status SetCamera(double azimuth_deg) {
-    v2::SetCameraRequest request;
+    v3::SetCameraRequest request;
     request.set_session_id(session_.session_id());
     request.mutable_camera()->set_azimuth_deg(azimuth_deg);
-    v2::SetCameraResponse response;
+    v3::SetCameraResponse response;
     return stub_->SetCamera(Context(kAliceToken).get(), request, &response);
   }
 
-  v2::VolumeInfo volume_;
-  v2::SessionInfo session_;
+  v3::VolumeInfo volume_;
+  v3::SessionInfo session_;
 };
 
 TEST_F(StreamAccessTest, RevokeEndsAViewersWatchWhileFramesFlow) {
@@ -185,16 +185,16 @@ TEST_F(StreamAccessTest, CloseSessionEndsTheOwnersAndTheViewersStreams) {
   WatchReader bob(stub_.get(), kBobToken, session_.session_id());
   auto context = Context(kAliceToken);
   auto interact = stub_->Interact(context.get());
-  v2::InteractRequest first;
+  v3::InteractRequest first;
   first.set_session_id(session_.session_id());
   ASSERT_TRUE(interact->Write(first));
-  v2::Frame frame;
+  v3::Frame frame;
   ASSERT_TRUE(interact->Read(&frame));
   ASSERT_TRUE(bob.WaitForFrames(1));
 
-  v2::CloseSessionRequest close;
+  v3::CloseSessionRequest close;
   close.set_session_id(session_.session_id());
-  v2::CloseSessionResponse closed;
+  v3::CloseSessionResponse closed;
   ASSERT_TRUE(stub_->CloseSession(Context(kAliceToken).get(), close, &closed).ok());
   const std::optional<grpc::Status> end = bob.WaitForEnd(std::chrono::seconds(10));
   ASSERT_TRUE(end.has_value());

@@ -106,37 +106,37 @@ class UsersTest : public ServiceTest {
   }
 
   grpc::Status Manipulate(const std::string& token, const std::string& session_id) {
-    v2::ManipulateRequest request;
+    v3::ManipulateRequest request;
     request.set_session_id(session_id);
     request.mutable_event()->mutable_camera()->set_azimuth_deg(30);
-    v2::ManipulateResponse response;
+    v3::ManipulateResponse response;
     return stub_->Manipulate(Context(token).get(), request, &response);
   }
   grpc::Status GetSession(const std::string& token, const std::string& session_id,
-                          v2::SessionInfo* info) {
-    v2::GetSessionRequest request;
+                          v3::SessionInfo* info) {
+    v3::GetSessionRequest request;
     request.set_session_id(session_id);
     return stub_->GetSession(Context(token).get(), request, info);
   }
   grpc::Status Share(const std::string& token, const std::string& session_id,
                      const std::string& user, bool revoke = false) {
-    v2::ShareSessionRequest request;
+    v3::ShareSessionRequest request;
     request.set_session_id(session_id);
     request.set_user(user);
     request.set_revoke(revoke);
-    v2::SessionInfo info;
+    v3::SessionInfo info;
     return stub_->ShareSession(Context(token).get(), request, &info);
   }
   // A Watch as `token`'s user: the status it ends with after `frames`
   // frames (or before the first), OK when it delivered them.
   grpc::Status Watch(const std::string& token, const std::string& session_id, int frames = 1) {
-    v2::WatchRequest request;
+    v3::WatchRequest request;
     request.set_session_id(session_id);
     request.mutable_settings()->set_width(64);
     request.mutable_settings()->set_height(64);
     auto context = Context(token);
     auto reader = stub_->Watch(context.get(), request);
-    v2::Frame frame;
+    v3::Frame frame;
     for (int i = 0; i < frames; ++i) {
       if (!reader->Read(&frame)) return reader->Finish();
     }
@@ -160,10 +160,10 @@ class UsersTest : public ServiceTest {
   grpc::Status Interact(const std::string& token, const std::string& session_id) {
     auto context = Context(token);
     auto stream = stub_->Interact(context.get());
-    v2::InteractRequest first;
+    v3::InteractRequest first;
     first.set_session_id(session_id);
     stream->Write(first);
-    v2::Frame frame;
+    v3::Frame frame;
     if (stream->Read(&frame)) {
       context->TryCancel();
       stream->Finish();
@@ -177,7 +177,7 @@ class UsersTest : public ServiceTest {
 };
 
 TEST_F(UsersTest, EveryUserSignsInWithTheirOwnTokenAndNoOtherToken) {
-  v2::ListVolumesResponse response;
+  v3::ListVolumesResponse response;
   EXPECT_TRUE(stub_->ListVolumes(Context(kAlice).get(), {}, &response).ok());
   EXPECT_TRUE(stub_->ListVolumes(Context(kBob).get(), {}, &response).ok());
   EXPECT_EQ(stub_->ListVolumes(Context(kToken).get(), {}, &response).error_code(),
@@ -190,10 +190,10 @@ TEST_F(UsersTest, EveryUserSignsInWithTheirOwnTokenAndNoOtherToken) {
 }
 
 TEST_F(UsersTest, AnotherUsersSessionIsNotFoundLikeAMissingOne) {
-  const v2::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
-  const v2::SessionInfo session = OpenSession(volume.volume_id(), kAlice);
+  const v3::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const v3::SessionInfo session = OpenSession(volume.volume_id(), kAlice);
   EXPECT_EQ(session.owner(), "alice");
-  v2::SessionInfo info;
+  v3::SessionInfo info;
   EXPECT_TRUE(GetSession(kAlice, session.session_id(), &info).ok());
   EXPECT_TRUE(Manipulate(kAlice, session.session_id()).ok());
 
@@ -201,19 +201,19 @@ TEST_F(UsersTest, AnotherUsersSessionIsNotFoundLikeAMissingOne) {
   EXPECT_EQ(GetSession(kBob, session.session_id(), &info).error_code(), grpc::NOT_FOUND);
   EXPECT_EQ(Watch(kBob, session.session_id()).error_code(), grpc::NOT_FOUND);
   EXPECT_EQ(Interact(kBob, session.session_id()).error_code(), grpc::NOT_FOUND);
-  v2::SetCameraRequest camera;
+  v3::SetCameraRequest camera;
   camera.set_session_id(session.session_id());
-  v2::SetCameraResponse camera_response;
+  v3::SetCameraResponse camera_response;
   EXPECT_EQ(stub_->SetCamera(Context(kBob).get(), camera, &camera_response).error_code(),
             grpc::NOT_FOUND);
-  v2::RenderRequest render;
+  v3::RenderRequest render;
   render.set_session_id(session.session_id());
-  v2::Frame frame;
+  v3::Frame frame;
   EXPECT_EQ(stub_->Render(Context(kBob).get(), render, &frame).error_code(),
             grpc::NOT_FOUND);
-  v2::CloseSessionRequest close;
+  v3::CloseSessionRequest close;
   close.set_session_id(session.session_id());
-  v2::CloseSessionResponse close_response;
+  v3::CloseSessionResponse close_response;
   EXPECT_EQ(stub_->CloseSession(Context(kBob).get(), close, &close_response).error_code(),
             grpc::NOT_FOUND);
   EXPECT_EQ(Share(kBob, session.session_id(), "bob").error_code(), grpc::NOT_FOUND);
@@ -224,7 +224,7 @@ TEST_F(UsersTest, AnotherUsersSessionIsNotFoundLikeAMissingOne) {
   EXPECT_EQ(not_there.error_code(), grpc::NOT_FOUND);
   EXPECT_EQ(not_yours.error_message(), not_there.error_message());
 
-  v2::ListSessionsResponse listed;
+  v3::ListSessionsResponse listed;
   ASSERT_TRUE(stub_->ListSessions(Context(kBob).get(), {}, &listed).ok());
   EXPECT_EQ(listed.sessions_size(), 0);
   ASSERT_TRUE(stub_->ListSessions(Context(kAlice).get(), {}, &listed).ok());
@@ -242,13 +242,13 @@ TEST_F(UsersTest, AnotherUsersSessionIsNotFoundLikeAMissingOne) {
 }
 
 TEST_F(UsersTest, SharingLetsAViewerWatchButNotDeform) {
-  const v2::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
-  const v2::SessionInfo session = OpenSession(volume.volume_id(), kAlice);
+  const v3::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const v3::SessionInfo session = OpenSession(volume.volume_id(), kAlice);
   EXPECT_EQ(Share(kAlice, session.session_id(), "nobody").error_code(), grpc::INVALID_ARGUMENT);
   EXPECT_EQ(Share(kAlice, session.session_id(), "alice").error_code(), grpc::INVALID_ARGUMENT);
   ASSERT_TRUE(Share(kAlice, session.session_id(), "bob").ok());
 
-  v2::SessionInfo info;
+  v3::SessionInfo info;
   ASSERT_TRUE(GetSession(kBob, session.session_id(), &info).ok());
   EXPECT_EQ(info.owner(), "alice");
   EXPECT_EQ(info.shared_with_size(), 0);  // the list is the owner's to see
@@ -257,11 +257,11 @@ TEST_F(UsersTest, SharingLetsAViewerWatchButNotDeform) {
   EXPECT_EQ(info.shared_with(0), "bob");
 
   EXPECT_TRUE(Watch(kBob, session.session_id()).ok());
-  v2::RenderRequest render;
+  v3::RenderRequest render;
   render.set_session_id(session.session_id());
   render.mutable_settings()->set_width(64);
   render.mutable_settings()->set_height(64);
-  v2::Frame frame;
+  v3::Frame frame;
   EXPECT_TRUE(stub_->Render(Context(kBob).get(), render, &frame).ok());
   EXPECT_EQ(Manipulate(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
   EXPECT_EQ(Interact(kBob, session.session_id()).error_code(), grpc::PERMISSION_DENIED);
@@ -275,105 +275,105 @@ TEST_F(UsersTest, SharingLetsAViewerWatchButNotDeform) {
 
 TEST_F(UsersTest, UploadedVolumesBelongToTheUploader) {
   const std::vector<uint8_t> bytes = NiftiBytes();
-  v2::VolumeInfo volume;
+  v3::VolumeInfo volume;
   ASSERT_TRUE(Upload(bytes, int64_t(bytes.size()), Sha256::HexOf(bytes), 64 << 10, &volume, true,
                      kAlice)
                   .ok());
   EXPECT_EQ(volume.owner(), "alice");
 
-  v2::GetVolumeRequest get;
+  v3::GetVolumeRequest get;
   get.set_volume_id(volume.volume_id());
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   EXPECT_EQ(stub_->GetVolume(Context(kBob).get(), get, &info).error_code(),
             grpc::PERMISSION_DENIED);
-  v2::ListVolumesResponse listed;
+  v3::ListVolumesResponse listed;
   ASSERT_TRUE(stub_->ListVolumes(Context(kBob).get(), {}, &listed).ok());
   EXPECT_EQ(listed.volumes_size(), 0);
-  v2::BuildMeshRequest build;
+  v3::BuildMeshRequest build;
   build.set_volume_id(volume.volume_id());
-  v2::MeshInfo mesh;
+  v3::MeshInfo mesh;
   EXPECT_EQ(stub_->BuildMesh(Context(kBob).get(), build, &mesh).error_code(),
             grpc::PERMISSION_DENIED);
-  v2::OpenSessionRequest open;
+  v3::OpenSessionRequest open;
   open.set_volume_id(volume.volume_id());
-  v2::SessionInfo session;
+  v3::SessionInfo session;
   EXPECT_EQ(stub_->OpenSession(Context(kBob).get(), open, &session).error_code(),
             grpc::PERMISSION_DENIED);
 
   // Alice's mesh on it is out of Bob's reach too.
   ASSERT_TRUE(stub_->BuildMesh(Context(kAlice).get(), build, &mesh).ok());
-  v2::GetMeshRequest get_mesh;
+  v3::GetMeshRequest get_mesh;
   get_mesh.set_mesh_id(mesh.mesh_id());
-  v2::GetMeshResponse got_mesh;
+  v3::GetMeshResponse got_mesh;
   EXPECT_EQ(stub_->GetMesh(Context(kBob).get(), get_mesh, &got_mesh).error_code(),
             grpc::PERMISSION_DENIED);
-  v2::DeleteMeshRequest delete_mesh;
+  v3::DeleteMeshRequest delete_mesh;
   delete_mesh.set_mesh_id(mesh.mesh_id());
-  v2::DeleteMeshResponse deleted_mesh;
+  v3::DeleteMeshResponse deleted_mesh;
   EXPECT_EQ(stub_->DeleteMesh(Context(kBob).get(), delete_mesh, &deleted_mesh).error_code(),
             grpc::PERMISSION_DENIED);
 
-  v2::DeleteVolumeRequest del;
+  v3::DeleteVolumeRequest del;
   del.set_volume_id(volume.volume_id());
-  v2::DeleteVolumeResponse deleted;
+  v3::DeleteVolumeResponse deleted;
   EXPECT_EQ(stub_->DeleteVolume(Context(kBob).get(), del, &deleted).error_code(),
             grpc::PERMISSION_DENIED);
   EXPECT_TRUE(stub_->DeleteVolume(Context(kAlice).get(), del, &deleted).ok());
 }
 
 TEST_F(UsersTest, SharedVolumesAreReadByAllAndDeletedOnlyByTheirSoleLoader) {
-  const v2::VolumeInfo by_alice = LoadPhantom(kPhantom, kAlice);
+  const v3::VolumeInfo by_alice = LoadPhantom(kPhantom, kAlice);
   EXPECT_EQ(by_alice.owner(), "");
   // Bob reads and uses it without loading it...
-  v2::GetVolumeRequest get;
+  v3::GetVolumeRequest get;
   get.set_volume_id(by_alice.volume_id());
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   EXPECT_TRUE(stub_->GetVolume(Context(kBob).get(), get, &info).ok());
-  const v2::SessionInfo bobs = OpenSession(by_alice.volume_id(), kBob);
+  const v3::SessionInfo bobs = OpenSession(by_alice.volume_id(), kBob);
   EXPECT_EQ(bobs.owner(), "bob");
-  v2::CloseSessionRequest close;
+  v3::CloseSessionRequest close;
   close.set_session_id(bobs.session_id());
-  v2::CloseSessionResponse closed;
+  v3::CloseSessionResponse closed;
   ASSERT_TRUE(stub_->CloseSession(Context(kBob).get(), close, &closed).ok());
   // ...but may not delete what he did not load.
-  v2::DeleteVolumeRequest del;
+  v3::DeleteVolumeRequest del;
   del.set_volume_id(by_alice.volume_id());
-  v2::DeleteVolumeResponse deleted;
+  v3::DeleteVolumeResponse deleted;
   EXPECT_EQ(stub_->DeleteVolume(Context(kBob).get(), del, &deleted).error_code(),
             grpc::PERMISSION_DENIED);
   // Once Bob loads it too, neither may delete it alone.
-  const v2::VolumeInfo by_bob = LoadPhantom(kPhantom, kBob);
+  const v3::VolumeInfo by_bob = LoadPhantom(kPhantom, kBob);
   EXPECT_EQ(by_bob.volume_id(), by_alice.volume_id());
   EXPECT_EQ(stub_->DeleteVolume(Context(kAlice).get(), del, &deleted).error_code(),
             grpc::PERMISSION_DENIED);
   // A phantom Carol alone loaded is hers to delete.
-  const v2::VolumeInfo by_carol = LoadPhantom("phantom:abdomen?size=40", kCarol);
+  const v3::VolumeInfo by_carol = LoadPhantom("phantom:abdomen?size=40", kCarol);
   del.set_volume_id(by_carol.volume_id());
   EXPECT_TRUE(stub_->DeleteVolume(Context(kCarol).get(), del, &deleted).ok());
 }
 
 TEST_F(UsersTest, StreamCapIsPerUser) {
-  const v2::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
-  const v2::SessionInfo alices = OpenSession(volume.volume_id(), kAlice);
-  const v2::SessionInfo bobs = OpenSession(volume.volume_id(), kBob);
+  const v3::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const v3::SessionInfo alices = OpenSession(volume.volume_id(), kAlice);
+  const v3::SessionInfo bobs = OpenSession(volume.volume_id(), kBob);
   // Alice fills her two stream slots (every user here shares one address).
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
-  std::vector<std::unique_ptr<grpc::ClientReader<v2::Frame>>> readers;
-  v2::WatchRequest request;
+  std::vector<std::unique_ptr<grpc::ClientReader<v3::Frame>>> readers;
+  v3::WatchRequest request;
   request.set_session_id(alices.session_id());
   request.mutable_settings()->set_width(64);
   request.mutable_settings()->set_height(64);
   for (int i = 0; i < 2; ++i) {
     contexts.push_back(Context(kAlice));
     readers.push_back(stub_->Watch(contexts.back().get(), request));
-    v2::Frame frame;
+    v3::Frame frame;
     ASSERT_TRUE(readers.back()->Read(&frame));
   }
   EXPECT_EQ(Watch(kAlice, alices.session_id()).error_code(), grpc::RESOURCE_EXHAUSTED);
   // An upload is a stream of its user too.
   const std::vector<uint8_t> nifti = NiftiBytes();
   const std::string sha = Sha256::HexOf(nifti);
-  v2::VolumeInfo uploaded;
+  v3::VolumeInfo uploaded;
   const grpc::Status refused = Upload(nifti, int64_t(nifti.size()), sha, 64 << 10,
                                       &uploaded, true, kAlice);
   EXPECT_EQ(refused.error_code(), grpc::RESOURCE_EXHAUSTED) << refused.error_message();
@@ -396,17 +396,17 @@ TEST_F(UsersTest, StreamCapIsPerUser) {
 // waited (all those still queued with one queue for everybody; the few in
 // the workers' hands with a lane per user).
 TEST_F(UsersTest, OneUsersRenderBurstDoesNotQueueAnotherUser) {
-  const v2::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
-  const v2::SessionInfo alices = OpenSession(volume.volume_id(), kAlice);
-  const v2::SessionInfo bobs = OpenSession(volume.volume_id(), kBob);
-  v2::RenderRequest request;
+  const v3::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const v3::SessionInfo alices = OpenSession(volume.volume_id(), kAlice);
+  const v3::SessionInfo bobs = OpenSession(volume.volume_id(), kBob);
+  v3::RenderRequest request;
   request.mutable_settings()->set_width(512);
   request.mutable_settings()->set_height(512);
   request.set_session_id(alices.session_id());
   constexpr int kBurst = 40;  // under the lane cap of 64
   std::atomic<int> alice_done{0}, alice_ok{0};
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
-  std::vector<v2::Frame> frames(kBurst);
+  std::vector<v3::Frame> frames(kBurst);
   for (int i = 0; i < kBurst; ++i) {
     contexts.push_back(Context(kAlice));
     stub_->async()->Render(contexts.back().get(), &request, &frames[i],
@@ -418,7 +418,7 @@ TEST_F(UsersTest, OneUsersRenderBurstDoesNotQueueAnotherUser) {
   // Her calls are queued once the first has come back.
   while (alice_done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   request.set_session_id(bobs.session_id());
-  v2::Frame bobs_frame;
+  v3::Frame bobs_frame;
   const int done_when_bob_asked = alice_done.load();
   const grpc::Status bob = stub_->Render(Context(kBob).get(), request, &bobs_frame);
   const int done_when_bob_got = alice_done.load();
@@ -442,12 +442,12 @@ TEST_F(UsersTest, SessionCapIsPerUser) {
   o.max_sessions = 6;
   o.max_sessions_per_user = 2;
   StartServer(o);
-  const v2::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const v3::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
   OpenSession(volume.volume_id(), kAlice);
   OpenSession(volume.volume_id(), kAlice);
-  v2::OpenSessionRequest open;
+  v3::OpenSessionRequest open;
   open.set_volume_id(volume.volume_id());
-  v2::SessionInfo info;
+  v3::SessionInfo info;
   grpc::Status third = stub_->OpenSession(Context(kAlice).get(), open, &info);
   EXPECT_EQ(third.error_code(), grpc::RESOURCE_EXHAUSTED);
   EXPECT_NE(third.error_message().find("per user"), std::string::npos) << third.error_message();
@@ -495,9 +495,9 @@ TEST(UsersServer, TokenFileGivesTheDefaultUsersToken) {
   o.token_file = WriteFile(dir / "token", "  file-token\n");
   auto server = VpmServer::Create(o, SharedGpu());
   ASSERT_TRUE(server.ok()) << server.status();
-  auto stub = v2::Vpm::NewStub(grpc::CreateChannel(
+  auto stub = v3::Vpm::NewStub(grpc::CreateChannel(
       "127.0.0.1:" + std::to_string((*server)->port()), grpc::InsecureChannelCredentials()));
-  v2::ListVolumesResponse response;
+  v3::ListVolumesResponse response;
   auto context = [](const std::string& token) {
     auto c = std::make_unique<grpc::ClientContext>();
     c->AddMetadata("authorization", "Bearer " + token);

@@ -60,7 +60,7 @@ TEST(CropBoxDrag, VolumeWorldBoxBoundsTheRotatedVolume) {
   EXPECT_NEAR(box.hi.y, 25.0 + 94.5, 1e-9);
   EXPECT_NEAR(box.lo.z, 100.0 - 97.5, 1e-9);
   EXPECT_NEAR(box.hi.z, 100.0, 1e-9);
-  const v2::CropBox proto = CropBoxToProto(box);
+  const v3::CropBox proto = CropBoxToProto(box);
   EXPECT_DOUBLE_EQ(proto.lo_mm().x(), box.lo.x);
   EXPECT_DOUBLE_EQ(proto.hi_mm().z(), box.hi.z);
 }
@@ -182,7 +182,7 @@ TEST(ClipPlaneDrag, FacingPlanePassesThroughTheTargetAndCutsTheEyeSide) {
   const VolumeGeometry g = Rotated();
   ViewCamera c(g);
   c.Orbit(50, -20);
-  const v2::ClipPlane plane = ClipPlaneFacingCamera(c, g);
+  const v3::ClipPlane plane = ClipPlaneFacingCamera(c, g);
   const glm::dvec3 n{plane.normal().x(), plane.normal().y(), plane.normal().z()};
   EXPECT_NEAR(glm::length(n), 1.0, 1e-12);
   const glm::dvec3 forward_world = g.direction * c.camera().Forward();
@@ -193,10 +193,10 @@ TEST(ClipPlaneDrag, FacingPlanePassesThroughTheTargetAndCutsTheEyeSide) {
 
 TEST(ClipPlaneDrag, MovingKeepsThePlaneOnTheBoxAndNormalisesTheNormal) {
   const WorldBox box{{0, 0, 0}, {100, 80, 60}};
-  v2::ClipPlane plane;
+  v3::ClipPlane plane;
   plane.mutable_normal()->set_z(2.0);  // keeps 2 z >= 20: z >= 10
   plane.set_offset_mm(20.0);
-  const v2::ClipPlane moved = MoveClipPlane(plane, 5.0, box);
+  const v3::ClipPlane moved = MoveClipPlane(plane, 5.0, box);
   EXPECT_DOUBLE_EQ(moved.normal().z(), 1.0);
   EXPECT_DOUBLE_EQ(moved.offset_mm(), 15.0);
   EXPECT_DOUBLE_EQ(MoveClipPlane(plane, 500.0, box).offset_mm(), 60.0);
@@ -207,7 +207,7 @@ TEST(ClipPlaneDrag, DraggingUpCutsDeeperIntoAPlaneFacingTheCamera) {
   const VolumeGeometry g = Rotated();
   ViewCamera c(g);
   c.Orbit(-30, 10);
-  const v2::ClipPlane plane = ClipPlaneFacingCamera(c, g);
+  const v3::ClipPlane plane = ClipPlaneFacingCamera(c, g);
   const double mm = c.MmPerPixel(kCutW, kCutH);
   EXPECT_NEAR(ClipDragMm(c, g, plane, 3.0, -10.0, kCutW, kCutH), 10.0 * mm, 1e-9);
   EXPECT_NEAR(ClipDragMm(c, g, plane, 0.0, 4.0, kCutW, kCutH), -4.0 * mm, 1e-9);

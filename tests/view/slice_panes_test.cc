@@ -7,15 +7,15 @@
 namespace vpm::view {
 namespace {
 
-void Set(v2::Vec3* v, double x, double y, double z) {
+void Set(v3::Vec3* v, double x, double y, double z) {
   v->set_x(x);
   v->set_y(y);
   v->set_z(z);
 }
 
 // A coronal-like slice: right along +x (0.8 mm a pixel), down along -z.
-v2::SliceGeometry Coronal() {
-  v2::SliceGeometry g;
+v3::SliceGeometry Coronal() {
+  v3::SliceGeometry g;
   Set(g.mutable_origin_mm(), 10.0, 40.0, 90.0);
   Set(g.mutable_step_u_mm(), 0.8, 0.0, 0.0);
   Set(g.mutable_step_v_mm(), 0.0, 0.0, -0.8);
@@ -27,7 +27,7 @@ v2::SliceGeometry Coronal() {
 }
 
 TEST(SlicePanes, ScrollStepsOnePixelANotchAndStaysOnTheVolume) {
-  const v2::SliceGeometry g = Coronal();
+  const v3::SliceGeometry g = Coronal();
   EXPECT_DOUBLE_EQ(ScrolledSliceOffset(g, -12.0, 1.0), -11.2);
   EXPECT_DOUBLE_EQ(ScrolledSliceOffset(g, -12.0, -5.0), -16.0);
   EXPECT_DOUBLE_EQ(ScrolledSliceOffset(g, 19.5, 3.0), 20.0);     // the far end
@@ -36,7 +36,7 @@ TEST(SlicePanes, ScrollStepsOnePixelANotchAndStaysOnTheVolume) {
 }
 
 TEST(SlicePanes, PixelCentresMapAsSliceGeometrySays) {
-  const v2::SliceGeometry g = Coronal();
+  const v3::SliceGeometry g = Coronal();
   // Pixel (i, j) shows origin + (i + 0.5) step_u + (j + 0.5) step_v.
   const glm::dvec3 p = SlicePointMm(g, 3.5, 10.5);
   EXPECT_DOUBLE_EQ(p.x, 10.0 + 3.5 * 0.8);
@@ -45,7 +45,7 @@ TEST(SlicePanes, PixelCentresMapAsSliceGeometrySays) {
 }
 
 TEST(SlicePanes, DragStaysInThePlaneAndFollowsThePixels) {
-  const v2::SliceGeometry g = Coronal();
+  const v3::SliceGeometry g = Coronal();
   const glm::dvec3 d = SliceDragOffsetMm(g, 5.0, -2.0);
   EXPECT_DOUBLE_EQ(d.x, 4.0);
   EXPECT_DOUBLE_EQ(d.y, 0.0);  // no motion along the normal

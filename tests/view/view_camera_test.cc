@@ -94,7 +94,7 @@ TEST(ViewCamera, PanMovesThePictureWithTheMouse) {
 
 TEST(ViewCamera, ResetReturnsToTheFittedView) {
   ViewCamera c(Phantom());
-  const v2::Camera home = c.ToProto();
+  const v3::Camera home = c.ToProto();
   c.Orbit(50, 20);
   c.Zoom(3);
   c.Pan(5, 5, kW, kH);
@@ -104,7 +104,7 @@ TEST(ViewCamera, ResetReturnsToTheFittedView) {
 }
 
 TEST(GeometryFromProto, ReadsDirectionColumnMajor) {
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   for (int n : {10, 20, 30}) info.add_dims(n);
   info.mutable_spacing_mm()->set_x(1);
   info.mutable_spacing_mm()->set_y(2);
@@ -119,7 +119,7 @@ TEST(GeometryFromProto, ReadsDirectionColumnMajor) {
 }
 
 TEST(GeometryFromProto, RefusesMissingDimsAndZeroSpacing) {
-  v2::VolumeInfo info;
+  v3::VolumeInfo info;
   EXPECT_FALSE(GeometryFromProto(info).ok());
   for (int n : {10, 20, 30}) info.add_dims(n);
   EXPECT_FALSE(GeometryFromProto(info).ok());  // spacing 0

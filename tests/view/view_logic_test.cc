@@ -86,8 +86,8 @@ TEST(KeyBindings, HelpTextListsEveryControlInTheFont) {
   }
 }
 
-v2::ClientEvent CameraAt(double azimuth) {
-  v2::ClientEvent e;
+v3::ClientEvent CameraAt(double azimuth) {
+  v3::ClientEvent e;
   e.mutable_camera()->set_azimuth_deg(azimuth);
   return e;
 }
@@ -102,7 +102,7 @@ TEST(OutboundEvents, NewestCameraReplacesOneWaitingAtTheTail) {
 
 TEST(OutboundEvents, GrabsAndReleasesKeepTheirOrder) {
   OutboundEvents q;
-  v2::ClientEvent grab, drag1, drag2, release;
+  v3::ClientEvent grab, drag1, drag2, release;
   grab.mutable_grab()->set_pick(true);
   drag1.mutable_drag()->mutable_offset_mm()->set_x(1);
   drag2.mutable_drag()->mutable_offset_mm()->set_x(2);
@@ -167,14 +167,14 @@ TEST(ReconnectBackoff, DoublesFromAQuarterSecondUpToFive) {
   EXPECT_DOUBLE_EQ(ReconnectBackoffS(1000), 5.0);
 }
 
-v2::Frame FrameOf(int side, bool interactive, double displacement_mm,
+v3::Frame FrameOf(int side, bool interactive, double displacement_mm,
                   std::array<double, 6> stage_ms) {  // fem warp render encode queue total
-  v2::Frame f;
+  v3::Frame f;
   f.set_width(side);
   f.set_height(side * 3 / 4);
   f.set_interactive(interactive);
   f.set_max_displacement_mm(displacement_mm);
-  v2::StageTimings* t = f.mutable_timings();
+  v3::StageTimings* t = f.mutable_timings();
   t->set_fem_ms(stage_ms[0]);
   t->set_warp_ms(stage_ms[1]);
   t->set_render_ms(stage_ms[2]);

@@ -20,9 +20,9 @@ export async function startFakeServer(source, { tls = null } = {}) {
   const grpc = require('@grpc/grpc-js');
   const protoLoader = require('@grpc/proto-loader');
   const definition = protoLoader.loadSync(
-    path.join(source, 'proto', 'vpm', 'v2', 'vpm.proto'),
+    path.join(source, 'proto', 'vpm', 'v3', 'vpm.proto'),
     { keepCase: true, longs: Number, enums: String, defaults: true, oneofs: true });
-  const { Vpm } = grpc.loadPackageDefinition(definition).vpm.v2;
+  const { Vpm } = grpc.loadPackageDefinition(definition).vpm.v3;
 
   const calls = [];  // {method, request, metadata: {authorization, session}}
   const record = (method, call) => {

@@ -8,15 +8,15 @@
 
 import { encodingName } from './render_settings.js';
 
-// A SliceGeometry as the page uses it (physical and world vectors as
+// A SliceGeometry as the page uses it (world LPS points and vectors as
 // [x, y, z], mm).
 function sliceGeometry(g = {}) {
   const v = (p) => [p?.x ?? 0, p?.y ?? 0, p?.z ?? 0];
   return {
     orientation: g.orientation,
-    origin_mm: v(g.origin_mm),          // physical voxel space: the corner of pixel (0, 0)
-    step_u_mm: v(g.step_u_mm),          // one pixel right, physical mm
-    step_v_mm: v(g.step_v_mm),          // one pixel down, physical mm
+    origin_mm: v(g.origin_mm),          // world LPS: the corner of pixel (0, 0)
+    step_u_mm: v(g.step_u_mm),          // one pixel right, world mm
+    step_v_mm: v(g.step_v_mm),          // one pixel down, world mm
     world_normal: v(g.world_normal),
     pixel_mm: g.pixel_mm,
     offset_mm: g.offset_mm,             // the plane's position along its normal (world)
@@ -27,7 +27,7 @@ function sliceGeometry(g = {}) {
   };
 }
 
-// frame: a vpm.v2.Frame as loaded by proto-loader (snake_case fields);
+// frame: a vpm.v3.Frame as loaded by proto-loader (snake_case fields);
 // extra: fields the gateway adds (e.g. gateway_dropped).
 export function packFrame(frame, extra = {}) {
   const image = Buffer.from(frame.image ?? []);
@@ -42,9 +42,12 @@ export function packFrame(frame, extra = {}) {
     max_displacement_mm: frame.max_displacement_mm,
     inverted_tets: Number(frame.inverted_tets ?? 0),  // of the proxy mesh (0 expected)
     lag_mm: frame.lag_mm ?? 0,     // how far the grabbed tissue is behind the pointer
-    // The held grab's point (physical voxel space), as the server picked it.
+    // The held grab's point (world LPS), as the server picked it.
     grab_point_mm: frame.grab_point_mm
       ? [frame.grab_point_mm.x, frame.grab_point_mm.y, frame.grab_point_mm.z] : null,
+    // The mesh this frame ran on: a grab refines it by itself, and frames
+    // then name the finer mesh.
+    mesh_id: frame.mesh_id ?? '',
     frame_number: Number(frame.frame_number),
     superseded_frames: Number(frame.superseded_frames),
     vertices: frame.vertices_mm?.length ?? 0,

@@ -2,7 +2,7 @@
 // the proto before the gateway hands it to grpc-js: every key a field of
 // the message, every value of the field's type (finite numbers, integers in
 // range, enum names, nested messages, bounded strings and lists). Walks the
-// descriptors @grpc/proto-loader made of proto/vpm/v2/vpm.proto, so it
+// descriptors @grpc/proto-loader made of proto/vpm/v3/vpm.proto, so it
 // follows the proto as it changes.
 const kMaxDepth = 8;
 const kMaxString = 4096;
@@ -23,7 +23,7 @@ const kIntRanges = {
 
 export class ProtoShape {
   // definition: proto-loader's package definition; pkg: the proto package.
-  constructor(definition, pkg = 'vpm.v2') {
+  constructor(definition, pkg = 'vpm.v3') {
     this.definition = definition;
     this.pkg = pkg;
   }

@@ -1,5 +1,5 @@
 // The page speaks in the names a user reads (mode 'dvr' | 'mip', encoding
-// 'jpeg' | 'png'); vpm.v2 carries them as enums. proto-loader is set up with
+// 'jpeg' | 'png'); vpm.v3 carries them as enums. proto-loader is set up with
 // `enums: String`, so an enum travels as its value's name.
 const kModes = { dvr: 'RENDER_MODE_DVR', mip: 'RENDER_MODE_MIP' };
 const kEncodings = { jpeg: 'ENCODING_JPEG', png: 'ENCODING_PNG' };
@@ -7,7 +7,7 @@ const kEncodings = { jpeg: 'ENCODING_JPEG', png: 'ENCODING_PNG' };
 // naming the field, as it refused an unknown name before.
 const kUnknown = 999;
 
-// The page's settings object as a vpm.v2.RenderSettings. `uploaded_tf:
+// The page's settings object as a vpm.v3.RenderSettings. `uploaded_tf:
 // true` asks for the transfer function this tab uploaded (`uploadedTf`, a
 // RenderTransferFunction the gateway holds: too large to travel with every
 // settings message) in place of the preset.

@@ -1,5 +1,5 @@
 // The gateway's side of the vpm API: loads the project's own
-// proto/vpm/v2/vpm.proto with @grpc/proto-loader and wraps the unary calls
+// proto/vpm/v3/vpm.proto with @grpc/proto-loader and wraps the unary calls
 // as promises. Each call carries the token of the signed-in user it is made
 // for as `authorization: Bearer TOKEN` metadata, so the server knows who is
 // calling; the token never goes back to a browser. TLS towards the server
@@ -18,7 +18,7 @@ import protoLoader from '@grpc/proto-loader';
 import { UserChannels } from './user_channels.js';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
-export const kDefaultProtoPath = path.resolve(here, '../../../proto/vpm/v2/vpm.proto');
+export const kDefaultProtoPath = path.resolve(here, '../../../proto/vpm/v3/vpm.proto');
 
 // Field names stay snake_case as in the proto (keepCase), 64-bit integers
 // become JS numbers (sequences and sizes stay far below 2^53), unset
@@ -64,7 +64,7 @@ export class VpmClient {
   // TLS, may be null).
   constructor({ address, protoPath = kDefaultProtoPath, tls = null }) {
     this.definition = protoLoader.loadSync(protoPath, kLoaderOptions);
-    const { Vpm } = grpc.loadPackageDefinition(this.definition).vpm.v2;
+    const { Vpm } = grpc.loadPackageDefinition(this.definition).vpm.v3;
     this.address = address;
     const credentials = tls ? grpc.credentials.createSsl(tls.ca, tls.key ?? null, tls.cert ?? null)
                             : grpc.credentials.createInsecure();

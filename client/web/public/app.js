@@ -277,6 +277,13 @@ function onFrame(frame) {
     const [x, y, z] = h.grab_point_mm;
     state.lastGrabMm = { x, y, z };
   }
+  // The server refined the mesh at a grab and swapped it in.
+  if (h.mesh_id && state.mesh && h.mesh_id !== state.mesh.mesh_id) {
+    state.mesh = { ...state.mesh, mesh_id: h.mesh_id };
+    state.meshRefinedAtGrab = true;
+    $('mesh-info').textContent = `${state.volume.source} · mesh ${h.mesh_id}, refined at the ` +
+      `grab by the server · session ${state.session.session_id}`;
+  }
   if (waiting) state.framesSuperseded += 1;  // newest wins: the waiting one is dropped
   waiting = frame;
   if (!drawing) drawNext();

@@ -26,6 +26,9 @@ export class OrbitCamera {
   constructor(volume) {
     const d = volume.direction?.length === 9 ? volume.direction : [1, 0, 0, 0, 1, 0, 0, 0, 1];
     const columns = [d.slice(0, 3), d.slice(3, 6), d.slice(6, 9)];
+    this.columns = columns;
+    const o = volume.origin_lps_mm ?? { x: 0, y: 0, z: 0 };
+    this.originLps = [o.x ?? 0, o.y ?? 0, o.z ?? 0];
     // Physical direction of world (LPS) direction w: D^T w.
     const toPhysical = (w) => normalize(columns.map((c) => dot(c, w)));
     this.anterior = toPhysical([0, -1, 0]);
@@ -103,7 +106,7 @@ export class OrbitCamera {
     this.distanceMm = Math.max(0.05 * fit, Math.min(20 * fit, this.distanceMm / factor));
   }
 
-  // The vpm.v2.Camera message.
+  // The vpm.v3.Camera message.
   toProto() {
     return { azimuth_deg: this.azimuthDeg, elevation_deg: this.elevationDeg,
              distance_mm: this.distanceMm, pan_mm: { x: this.panMm[0], y: this.panMm[1], z: 0 } };
@@ -155,11 +158,23 @@ export class OrbitCamera {
     return (2 * Math.tan(0.5 * kFovDeg * kDegToRad) * this.distanceMm) / shorter;
   }
 
-  // The drag offset (mm, physical) that follows the pointer: a screen motion
-  // of (dxPx right, dyPx down) on a width x height frame, applied on the
-  // orbit-centre plane so the grabbed tissue stays under the pointer.
+  // The drag offset (mm, world LPS, as Drag.offset_mm) that follows the
+  // pointer: a screen motion of (dxPx right, dyPx down) on a width x height
+  // frame, applied on the orbit-centre plane so the grabbed tissue stays
+  // under the pointer.
   dragOffsetMm(dxPx, dyPx, width, height) {
     const s = this.mmPerPixel(width, height);
-    return add(scale(this.right(), dxPx * s), scale(this.up(), -dyPx * s));
+    return this.worldDirection(add(scale(this.right(), dxPx * s), scale(this.up(), -dyPx * s)));
+  }
+
+  // The camera works in physical voxel space (index * spacing); the API in
+  // world LPS: a direction turns (D v), a point also moves (origin + D p).
+  worldDirection(v) {
+    const c = this.columns;
+    return [0, 1, 2].map((r) => c[0][r] * v[0] + c[1][r] * v[1] + c[2][r] * v[2]);
+  }
+
+  worldPoint(p) {
+    return add(this.originLps, this.worldDirection(p));
   }
 }

@@ -55,8 +55,9 @@ export class PointerTools {
         this.onRefused('That pixel picks a point outside the volume; aim at the volume.');
         return;
       }
+      const world = camera.worldPoint(point);  // the API's frame, LPS mm
       if (this.tool === 'refine') {
-        this.onRefine({ x: point[0], y: point[1], z: point[2] });
+        this.onRefine({ x: world[0], y: world[1], z: world[2] });
         return;
       }
       if (this.tool === 'pin') {
@@ -64,7 +65,7 @@ export class PointerTools {
         return;
       }
       this.send({ grab: { pick: true, pixel_x: x, pixel_y: y } });
-      this.onGrab({ x: point[0], y: point[1], z: point[2] });
+      this.onGrab({ x: world[0], y: world[1], z: world[2] });  // until the server says where
     }
     let kind = this.tool;
     if (kind === 'crop') kind = this.onCropPress(x, y, width, height) ? 'crop' : 'orbit';

@@ -103,7 +103,7 @@ export class SliceViews {
     const [x, y] = this.pixel(view, e);
     const tool = this.tool();
     if (tool === 'grab') {
-      // Physical voxel space, as Grab.point_mm: pixel centres of the slice.
+      // World LPS, as Grab.point_mm: pixel centres of the slice.
       const p = [0, 1, 2].map((k) => g.origin_mm[k] + x * g.step_u_mm[k] + y * g.step_v_mm[k]);
       const point = { x: p[0], y: p[1], z: p[2] };
       this.send({ grab: { point_mm: point } });

@@ -1,6 +1,6 @@
-#include "client/cli/server_connection.h"
+#include "client/common/server_connection.h"
 
-#include "client/cli/session_key.h"
+#include "client/common/session_key.h"
 #include "server/common/read_text_file.h"
 
 #include <cstdlib>
@@ -33,7 +33,7 @@ Result<ServerConnection> ServerConnection::Connect(const ServerFlags& flags) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(64 << 20);
   c.channel_ = grpc::CreateCustomChannel(flags.address, credentials, args);
-  c.stub_ = v2::Vpm::NewStub(c.channel_);
+  c.stub_ = v3::Vpm::NewStub(c.channel_);
   return c;
 }
 

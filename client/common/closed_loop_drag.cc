@@ -1,4 +1,4 @@
-#include "client/cli/closed_loop_drag.h"
+#include "client/common/closed_loop_drag.h"
 
 #include <algorithm>
 #include <chrono>
@@ -6,14 +6,14 @@
 
 namespace vpm::cli {
 
-ClosedLoopDrag DragFor(grpc::ClientReaderWriter<v2::InteractRequest, v2::Frame>* stream,
+ClosedLoopDrag DragFor(grpc::ClientReaderWriter<v3::InteractRequest, v3::Frame>* stream,
                        double seconds, uint64_t* sequence) {
   using Clock = std::chrono::steady_clock;
   ClosedLoopDrag result;
   const auto end = Clock::now() + std::chrono::duration<double>(seconds);
-  v2::Frame frame;
+  v3::Frame frame;
   while (Clock::now() < end) {
-    v2::InteractRequest drag;
+    v3::InteractRequest drag;
     drag.mutable_event()->set_sequence(++*sequence);
     drag.mutable_event()->mutable_drag()->mutable_offset_mm()->set_x(
         3.0 * std::sin(0.3 * double(*sequence)));

@@ -24,24 +24,24 @@
 
 #include <nlohmann/json.hpp>
 
-#include "client/cli/server_connection.h"
+#include "client/common/server_connection.h"
 #include "server/common/status.h"
 
 namespace vpm::cli {
 
 struct ScriptEvent {
-  v2::ClientEvent event;  // sequence filled in when sent
+  v3::ClientEvent event;  // sequence filled in when sent
   double wait_ms = 0;     // pause before sending
 };
 
 struct Script {
   std::string volume = "phantom:abdomen?size=64";
-  v2::RenderSettings settings;
+  v3::RenderSettings settings;
   std::vector<ScriptEvent> events;
 };
 
 // Landmarks are resolved against `volume` (from GetVolume/LoadVolume).
-Result<Script> ParseScript(const nlohmann::json& json, const v2::VolumeInfo& volume);
+Result<Script> ParseScript(const nlohmann::json& json, const v3::VolumeInfo& volume);
 Result<nlohmann::json> ReadJsonFile(const std::string& path);
 // A default script: orbit, grab at the centre, drag, release.
 nlohmann::json DefaultScriptJson();
@@ -55,7 +55,7 @@ struct FrameRecord {
   uint64_t last_sequence = 0;
   bool interactive = false;
   int64_t bytes = 0;
-  v2::StageTimings timings;
+  v3::StageTimings timings;
   uint64_t superseded = 0;
 };
 
@@ -80,7 +80,7 @@ struct PlayOptions {
   // goes on from here.
   int64_t resume_at = 0;
   // Called for each frame (e.g. to save it); may be empty.
-  std::function<void(const v2::Frame&, int64_t index)> on_frame;
+  std::function<void(const v3::Frame&, int64_t index)> on_frame;
 };
 
 // Opens an Interact stream on options.session_id, plays the script, waits

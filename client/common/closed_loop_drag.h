@@ -8,7 +8,7 @@
 
 #include <grpcpp/grpcpp.h>
 
-#include "vpm/v2/vpm.grpc.pb.h"
+#include "vpm/v3/vpm.grpc.pb.h"
 
 namespace vpm::cli {
 
@@ -20,7 +20,7 @@ struct ClosedLoopDrag {
 // Drags for `seconds` (wall clock); `sequence` is the stream's event
 // sequence number, advanced by one per event. Stops early when the stream
 // breaks.
-ClosedLoopDrag DragFor(grpc::ClientReaderWriter<v2::InteractRequest, v2::Frame>* stream,
+ClosedLoopDrag DragFor(grpc::ClientReaderWriter<v3::InteractRequest, v3::Frame>* stream,
                        double seconds, uint64_t* sequence);
 
 }  // namespace vpm::cli

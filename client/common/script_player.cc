@@ -1,4 +1,4 @@
-#include "client/cli/script_player.h"
+#include "client/common/script_player.h"
 
 #include <algorithm>
 #include <chrono>
@@ -9,22 +9,22 @@
 #include <mutex>
 #include <thread>
 
-#include "client/cli/interrupt.h"
+#include "client/common/interrupt.h"
 #include "proto/enum_names.h"
 #include "server/common/clock.h"
 
 namespace vpm::cli {
 namespace {
 
-v2::Vec3 Vec(double x, double y, double z) {
-  v2::Vec3 v;
+v3::Vec3 Vec(double x, double y, double z) {
+  v3::Vec3 v;
   v.set_x(x);
   v.set_y(y);
   v.set_z(z);
   return v;
 }
 
-Result<v2::Vec3> VecOf(const nlohmann::json& j, const char* what) {
+Result<v3::Vec3> VecOf(const nlohmann::json& j, const char* what) {
   if (!j.is_array() || j.size() != 3) {
     return absl::InvalidArgumentError(StrCat(what, ": needs [x, y, z]"));
   }
@@ -58,7 +58,7 @@ nlohmann::json DefaultScriptJson() {
     ]})");
 }
 
-Result<Script> ParseScript(const nlohmann::json& j, const v2::VolumeInfo& volume) {
+Result<Script> ParseScript(const nlohmann::json& j, const v3::VolumeInfo& volume) {
   Script script;
   try {
     if (j.contains("volume")) script.volume = j["volume"].get<std::string>();
@@ -114,7 +114,7 @@ Result<Script> ParseScript(const nlohmann::json& j, const v2::VolumeInfo& volume
         const auto& g = step["grab"];
         ScriptEvent e;
         e.wait_ms = interval;
-        v2::Grab* grab = e.event.mutable_grab();
+        v3::Grab* grab = e.event.mutable_grab();
         if (g.contains("landmark")) {
           const std::string name = g["landmark"].get<std::string>();
           bool found = false;
@@ -138,7 +138,7 @@ Result<Script> ParseScript(const nlohmann::json& j, const v2::VolumeInfo& volume
         script.events.push_back(e);
       } else if (step.contains("drag")) {
         const auto& d = step["drag"];
-        ASSIGN_OR_RETURN(v2::Vec3 to, VecOf(d.at("to_mm"), "drag.to_mm"));
+        ASSIGN_OR_RETURN(v3::Vec3 to, VecOf(d.at("to_mm"), "drag.to_mm"));
         const int steps = d.value("steps", 10);
         for (int i = 1; i <= steps; ++i) {
           ScriptEvent e;
@@ -187,7 +187,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
   // Reads until the server ends the stream; the sender half-closes once the
   // still frame of the last event has arrived.
   std::thread reader([&] {
-    v2::Frame frame;
+    v3::Frame frame;
     int64_t index = 0;
     while (stream->Read(&frame)) {
       const SteadyClock::time_point now = SteadyClock::now();
@@ -221,7 +221,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
     got_final.notify_all();
   });
 
-  auto send = [&](v2::InteractRequest request, uint64_t sequence) {
+  auto send = [&](v3::InteractRequest request, uint64_t sequence) {
     request.mutable_event()->set_sequence(sequence);
     {
       std::lock_guard lock(mutex);
@@ -232,7 +232,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
     return stream->Write(request);
   };
   uint64_t sequence = 1;
-  v2::InteractRequest first;
+  v3::InteractRequest first;
   first.set_session_id(options.session_id);
   *first.mutable_event()->mutable_settings() = script.settings;
   bool ok = send(first, sequence);
@@ -246,7 +246,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
           !SleepUnlessInterrupted(std::chrono::microseconds(int64_t(e.wait_ms * 1000)))) {
         break;
       }
-      v2::InteractRequest request;
+      v3::InteractRequest request;
       *request.mutable_event() = e.event;
       if (e.event.has_grab()) grabbed = true;
       if (e.event.has_release()) grabbed = false;
@@ -265,7 +265,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
     return result;
   }
   if (ok && grabbed) {
-    v2::InteractRequest release;
+    v3::InteractRequest release;
     release.mutable_event()->mutable_release();
     ok = send(release, ++sequence);
   }

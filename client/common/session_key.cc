@@ -1,4 +1,4 @@
-#include "client/cli/session_key.h"
+#include "client/common/session_key.h"
 
 #include <pwd.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-#include "client/cli/progress_bar.h"
+#include "client/common/progress_bar.h"
 
 #include <algorithm>
 #include <cmath>

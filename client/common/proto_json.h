@@ -4,13 +4,13 @@
 
 #include <nlohmann/json.hpp>
 
-#include "vpm/v2/vpm.pb.h"
+#include "vpm/v3/vpm.pb.h"
 
 namespace vpm::cli {
 
-nlohmann::json VolumeJson(const v2::VolumeInfo& volume);
-nlohmann::json MeshJson(const v2::MeshInfo& mesh);
-nlohmann::json SessionJson(const v2::SessionInfo& session);
+nlohmann::json VolumeJson(const v3::VolumeInfo& volume);
+nlohmann::json MeshJson(const v3::MeshInfo& mesh);
+nlohmann::json SessionJson(const v3::SessionInfo& session);
 // Writes `j` to stdout, indented by 2.
 void PrintJson(const nlohmann::json& j);
 

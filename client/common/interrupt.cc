@@ -1,4 +1,4 @@
-#include "client/cli/interrupt.h"
+#include "client/common/interrupt.h"
 
 #include <algorithm>
 #include <atomic>

@@ -10,7 +10,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "server/common/status.h"
-#include "vpm/v2/vpm.grpc.pb.h"
+#include "vpm/v3/vpm.grpc.pb.h"
 
 namespace vpm::cli {
 
@@ -28,7 +28,7 @@ class ServerConnection {
  public:
   static Result<ServerConnection> Connect(const ServerFlags& flags);
 
-  v2::Vpm::Stub& stub() const { return *stub_; }
+  v3::Vpm::Stub& stub() const { return *stub_; }
   // For other services on the same server (grpc.health.v1).
   std::shared_ptr<grpc::Channel> channel() const { return channel_; }
   const std::string& session_key() const { return flags_.session_key; }
@@ -38,7 +38,7 @@ class ServerConnection {
  private:
   ServerFlags flags_;
   std::shared_ptr<grpc::Channel> channel_;
-  std::shared_ptr<v2::Vpm::Stub> stub_;
+  std::shared_ptr<v3::Vpm::Stub> stub_;
 };
 
 inline Status FromGrpc(const grpc::Status& status) {

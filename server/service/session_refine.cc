@@ -1,0 +1,89 @@
+// Session: refinement without asking (docs/SERVICE.md). A grab where the
+// mesh is coarse asks for the mesh refined there, built beside the running
+// one; the next frame swaps it in and replays the manipulation onto it.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+
+#include "server/common/clock.h"
+#include "server/service/session.h"
+
+namespace vpm::service {
+
+std::shared_ptr<const MeshEntry> Session::mesh() const {
+  std::lock_guard lock(state_mutex_);
+  return mesh_;
+}
+
+void Session::RefineAtGrab(const glm::dvec3& point_mm) {
+  if (!options_.refine) return;
+  std::string mesh_id;
+  {
+    std::lock_guard lock(state_mutex_);
+    if (closed_) return;
+    const double near_mm = 0.5 * mesh_->mesh.stats.h_mm;
+    const std::optional<glm::dvec3>& at = refined_mesh_ ? refined_mesh_->params.refine_at_mm
+                                                        : mesh_->params.refine_at_mm;
+    if (at && glm::distance(*at, point_mm) <= near_mm) return;
+    if (refining_at_ && glm::distance(*refining_at_, point_mm) <= near_mm) return;
+    if (refining_at_) return;  // one at a time: the next grab asks again
+    refining_at_ = point_mm;
+    mesh_id = mesh_->id;
+  }
+  options_.refine(weak_from_this(), std::move(mesh_id), point_mm, refine_cancel_.token());
+}
+
+void Session::OfferRefinedMesh(Result<std::shared_ptr<const MeshEntry>> refined) {
+  {
+    std::lock_guard lock(state_mutex_);
+    refining_at_.reset();
+    if (closed_) return;
+    if (!refined.ok()) {
+      std::fprintf(stderr, "vpm-server: session %s: refinement at the grab failed: %s\n",
+                   id_.c_str(), refined.status().ToString().c_str());
+      return;
+    }
+    refined_mesh_ = *std::move(refined);
+  }
+  // A frame for every stream: it swaps the finer mesh in.
+  Changed(0, false, nullptr);
+}
+
+void Session::SwapInRefinedMeshLocked() {
+  std::shared_ptr<const MeshEntry> next;
+  {
+    std::lock_guard lock(state_mutex_);
+    next = std::move(refined_mesh_);
+    refined_mesh_.reset();
+  }
+  if (!next) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  Result<std::unique_ptr<DeformableScene>> rebuilt = scene_->Rebuilt(next->mesh);
+  if (!rebuilt.ok()) {
+    std::fprintf(stderr, "vpm-server: session %s: the refined mesh was not swapped in: %s\n",
+                 id_.c_str(), rebuilt.status().ToString().c_str());
+    return;
+  }
+  scene_ = *std::move(rebuilt);
+  double max_mm = 0.0;
+  for (const glm::dvec3& u : scene_->fem().Displacements()) max_mm = std::max(max_mm, glm::length(u));
+  std::lock_guard lock(state_mutex_);
+  last_step_.max_displacement_mm = max_mm;
+  last_step_.inverted_tets = scene_->fem().CountInvertedTets();
+  last_step_.lag_mm = scene_->fem().lag_mm();
+  mesh_ = std::move(next);
+  ++refinements_;
+  last_swap_ms_ = MsSince(t0);
+}
+
+int64_t Session::refinements() const {
+  std::lock_guard lock(state_mutex_);
+  return refinements_;
+}
+
+double Session::last_swap_ms() const {
+  std::lock_guard lock(state_mutex_);
+  return last_swap_ms_;
+}
+
+}  // namespace vpm::service
