@@ -101,7 +101,8 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
       ->capture_default_str();
   app.add_flag("--refine-on-grab,!--no-refine-on-grab", o->refine_on_grab,
                "a grab where the session's mesh is coarse refines it there, built beside the "
-               "running mesh and swapped in at the next frame with the manipulation replayed")
+               "running mesh and swapped in at the next frame with the manipulation replayed "
+               "(off by default)")
       ->capture_default_str();
   app.add_option("--drain-s", o->drain_s,
                  "on SIGTERM/SIGINT, report NOT_SERVING to health checks for this long first, "

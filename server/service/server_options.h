@@ -54,7 +54,10 @@ struct ServerOptions {
   int64_t max_running_per_user = 0;              // a user's jobs running at once per pool; 0: threads - 1 (at least 1)
   int64_t max_queued = 1024;                     // jobs waiting per pool, all users
   double still_delay_ms = 150;                   // idle time before a still frame
-  bool refine_on_grab = true;                    // a grab refines the session's mesh there
+  // A grab refines the session's mesh there (docs/SERVICE.md). Off by
+  // default: on the phantom the organ lags the pointer more on the refined
+  // mesh (an 8 mm drag reaches 5.4 mm at 64^3), which needs a look first.
+  bool refine_on_grab = false;
   double drain_s = 0;                            // SIGTERM: NOT_SERVING this long first
   double shutdown_grace_s = 5;                   // then streams get this long
 

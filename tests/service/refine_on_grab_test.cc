@@ -16,7 +16,7 @@ class RefineOnGrabTest : public ServiceTest {
  protected:
   void SetUp() override {
     ServerOptions options = SmallServerOptions();
-    options.refine_on_grab = true;  // the server's default
+    options.refine_on_grab = true;  // vpm-server --refine-on-grab
     const char* source = std::getenv("VPM_SOURCE_DIR");
     ASSERT_NE(source, nullptr) << "VPM_SOURCE_DIR: the repository (ctest sets it)";
     options.data_root = std::string(source) + "/tests/data";

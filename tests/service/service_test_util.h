@@ -31,9 +31,6 @@ inline ServerOptions SmallServerOptions() {
   o.max_streams_per_user = 4;
   o.still_delay_ms = 100;
   o.max_frame_side = 512;
-  // The session keeps its mesh: tests compare frames with it
-  // (refine_on_grab_test.cc turns this on).
-  o.refine_on_grab = false;
   return o;
 }
 
