@@ -16,6 +16,7 @@
 
 #include <glm/glm.hpp>
 
+#include "server/common/cancel_token.h"
 #include "server/common/progress.h"
 #include "server/common/status.h"
 #include "server/volume/voxel_values.h"
@@ -71,6 +72,10 @@ struct VolumeLimits {
   // private folder): every file a reader opens must resolve, through
   // symlinks, inside it (server/io/open_source_file.h).
   std::filesystem::path read_root;
+  // Polled by the readers as they read (every few MiB read or inflated,
+  // every DICOM file, every few million voxels converted): a cancelled
+  // load stops within milliseconds with the token's status. Default: never.
+  CancelToken cancel;
 };
 
 // No budget: for volumes derived from one that passed its own (a warp).
