@@ -47,6 +47,15 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "the same for one user's uploads; an upload declaring more is refused at "
                  "its header (0: no cap)")
       ->capture_default_str();
+  app.add_option("--max-upload-spool-bytes", o->max_upload_spool_bytes,
+                 "bytes of all uploads bound for the spool, the temporary files they are "
+                 "read from (reserved as they arrive, freed when the file is removed; 0: no "
+                 "cap)")
+      ->capture_default_str();
+  app.add_option("--max-upload-spool-bytes-per-user", o->max_upload_spool_bytes_per_user,
+                 "the same for one user's uploads; an upload declaring more is refused at its "
+                 "header (0: no cap)")
+      ->capture_default_str();
   app.add_option("--upload-idle-s", o->upload_idle_s,
                  "an upload that sends no chunk for this long is ended, seconds")
       ->capture_default_str();
@@ -55,10 +64,15 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "is ended (a trickle may not hold its memory for ever; 0: no minimum)")
       ->capture_default_str();
   app.add_option("--max-volumes-per-user", o->max_volumes_per_user,
-                 "uploaded volumes one user holds at once (volumes loaded from the data "
-                 "root or a phantom are shared and evicted when idle; 0: no cap)")
+                 "volume slots one user holds at once: their uploads, and the volumes loaded "
+                 "from the data root or a phantom that their sessions keep loaded (idle ones "
+                 "are shared and evicted; 0: no cap)")
       ->capture_default_str();
   app.add_option("--max-meshes", o->max_meshes, "meshes held at once")->capture_default_str();
+  app.add_option("--max-meshes-per-user", o->max_meshes_per_user,
+                 "meshes one user's sessions pin at once (unpinned meshes are evicted when "
+                 "room is needed; 0: no cap)")
+      ->capture_default_str();
   app.add_option("--max-sessions", o->max_sessions, "sessions open at once")
       ->capture_default_str();
   app.add_option("--max-sessions-per-user", o->max_sessions_per_user,
