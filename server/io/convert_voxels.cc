@@ -8,8 +8,8 @@
 namespace vpm {
 namespace {
 
-// Voxels converted between two polls of the load's CancelToken (a few ms).
-constexpr int64_t kSlabVoxels = int64_t{4} << 20;
+// Voxels converted between two polls of the load's CancelToken (1-3 ms).
+constexpr int64_t kSlabVoxels = int64_t{1} << 20;
 
 // The integer range of the values, or why they are not int16 material.
 struct IntegerRange {
@@ -124,10 +124,14 @@ Result<VoxelValues> ConvertVoxels(std::span<const uint8_t> bytes, VoxelType type
     const std::optional<int32_t> offset = ExactOffset(range);
     if (offset) {
       RETURN_IF_ERROR(ValidateGeometry(geometry, limits, VoxelEncoding::kInt16));
-      std::vector<int16_t> stored(static_cast<size_t>(count));
+      // Grown a slab at a time within its reservation: no zero-fill of the
+      // whole volume between two polls.
+      std::vector<int16_t> stored;
+      stored.reserve(static_cast<size_t>(count));
       for (int64_t first = 0; first < count; first += kSlabVoxels) {
         RETURN_IF_ERROR(limits.cancel.Check());
         const int64_t n = std::min(kSlabVoxels, count - first);
+        stored.resize(static_cast<size_t>(first + n));
         WithIntegerType(type, [&](auto tag) {
           ToInt16<decltype(tag)>(bytes.data() + first * size, endian, n, slope, intercept, *offset,
                                  stored.data() + first);
@@ -137,10 +141,17 @@ Result<VoxelValues> ConvertVoxels(std::span<const uint8_t> bytes, VoxelType type
     }
     if (float_note != nullptr) *float_note = WhyFloat(range);
   }
-  RETURN_IF_ERROR(limits.cancel.Check());
   RETURN_IF_ERROR(ValidateGeometry(geometry, limits, VoxelEncoding::kFloat32));
-  ASSIGN_OR_RETURN(std::vector<float> values,
-                   ConvertVoxelsToFloat(bytes, type, endian, count, slope, intercept));
+  std::vector<float> values;
+  values.reserve(static_cast<size_t>(count));
+  for (int64_t first = 0; first < count; first += kSlabVoxels) {
+    RETURN_IF_ERROR(limits.cancel.Check());
+    const int64_t n = std::min(kSlabVoxels, count - first);
+    ASSIGN_OR_RETURN(const std::vector<float> slab,
+                     ConvertVoxelsToFloat(bytes.subspan(static_cast<size_t>(first * size)), type,
+                                          endian, n, slope, intercept));
+    values.insert(values.end(), slab.begin(), slab.end());
+  }
   return VoxelValues::Float(std::move(values));
 }
 
@@ -151,6 +162,7 @@ Result<Volume> VolumeFromStoredVoxels(std::span<const uint8_t> bytes, VoxelType 
   std::string note;
   ASSIGN_OR_RETURN(VoxelValues values, ConvertVoxels(bytes, type, endian, geometry, limits, slope,
                                                      intercept, &note));
+  RETURN_IF_ERROR(limits.cancel.Check());
   ASSIGN_OR_RETURN(Volume volume, Volume::Create(geometry, std::move(values), limits));
   volume.set_source(std::string(name));
   if (!note.empty()) volume.add_note(std::move(note));

@@ -12,8 +12,11 @@ namespace {
 constexpr int64_t kMaxChunk = int64_t{1} << 30;
 // Output grows by doubling from here, never beyond the bound.
 constexpr int64_t kInitialOutput = int64_t{1} << 20;
-// Bytes inflated between two polls of the load's CancelToken (about 4-10 ms).
-constexpr int64_t kOutputStep = int64_t{4} << 20;
+// Bytes inflated between two polls of the load's CancelToken (1-3 ms).
+constexpr int64_t kOutputStep = int64_t{1} << 20;
+// The most address space reserved for the output at once (virtual: a
+// declared size that the stream does not fill costs nothing).
+constexpr int64_t kMaxReserve = int64_t{1} << 30;
 
 // Owns a z_stream set up for inflation with gzip/zlib auto-detection.
 class Inflater {
@@ -47,6 +50,11 @@ Result<InflateOutcome> InflateBounded(std::span<const uint8_t> in, int64_t bound
   if (!inflater.ok()) return absl::InternalError("zlib inflateInit2 failed");
   z_stream& z = inflater.stream();
   InflateOutcome out;
+  // Address space for up to kMaxReserve bytes is reserved at once (pages
+  // not yet written cost no memory), so the buffer then grows kOutputStep
+  // at a time without copying what it holds: no step between two polls of
+  // `cancel` copies tens of MiB.
+  out.bytes.reserve(static_cast<size_t>(std::min(bound, kMaxReserve)));
   out.bytes.resize(static_cast<size_t>(std::min(bound, kInitialOutput)));
   int64_t produced = 0;
   int64_t consumed = 0;
@@ -56,7 +64,10 @@ Result<InflateOutcome> InflateBounded(std::span<const uint8_t> in, int64_t bound
     RETURN_IF_ERROR(cancel.Check());
     if (stop_quietly && produced == bound) break;
     if (produced == static_cast<int64_t>(out.bytes.size()) && produced < bound) {
-      out.bytes.resize(static_cast<size_t>(std::min(bound, produced * 2 + 1)));
+      const int64_t reserved = static_cast<int64_t>(out.bytes.capacity());
+      out.bytes.resize(static_cast<size_t>(produced < reserved
+                                               ? std::min({bound, reserved, produced + kOutputStep})
+                                               : std::min(bound, produced * 2 + 1)));
     }
     uint8_t probe = 0;  // one byte of room past the bound, to detect overrun
     const bool probing = produced == bound;

@@ -72,8 +72,8 @@ struct VolumeLimits {
   // private folder): every file a reader opens must resolve, through
   // symlinks, inside it (server/io/open_source_file.h).
   std::filesystem::path read_root;
-  // Polled by the readers as they read (every few MiB read or inflated,
-  // every DICOM file, every few million voxels converted): a cancelled
+  // Polled by the readers as they read (every 4 MiB read, 1 MiB inflated,
+  // 1 Mi voxels converted, every DICOM file): a cancelled
   // load stops within milliseconds with the token's status. Default: never.
   CancelToken cancel;
 };
