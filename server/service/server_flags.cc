@@ -2,6 +2,8 @@
 
 #include <cstdlib>
 
+#include "server/common/status.h"
+
 namespace vpm::service {
 
 void AddServerFlags(CLI::App& app, ServerOptions* o) {
@@ -130,6 +132,24 @@ void ApplyEnvironment(ServerOptions* o) {
   if (o->token.empty() && o->token_file.empty()) {
     if (const char* token = std::getenv("VPM_TOKEN")) o->token = token;
   }
+}
+
+std::vector<std::string> FairShareWarnings(const ServerOptions& o) {
+  std::vector<std::string> out;
+  auto check = [&](const char* user_flag, int64_t per_user, const char* server_flag,
+                   int64_t server) {
+    if (per_user <= 0 || server <= 0 || per_user < server) return;
+    out.push_back(StrCat(user_flag, " ", per_user, " is not below ", server_flag, " ", server,
+                         ": one user at their cap can hold all of it"));
+  };
+  check("--max-volumes-per-user", o.max_volumes_per_user, "--max-volumes", o.max_volumes);
+  check("--max-meshes-per-user", o.max_meshes_per_user, "--max-meshes", o.max_meshes);
+  check("--max-sessions-per-user", o.max_sessions_per_user, "--max-sessions", o.max_sessions);
+  check("--max-upload-memory-bytes-per-user", o.max_upload_memory_bytes_per_user,
+        "--max-upload-memory-bytes", o.max_upload_memory_bytes);
+  check("--max-upload-spool-bytes-per-user", o.max_upload_spool_bytes_per_user,
+        "--max-upload-spool-bytes", o.max_upload_spool_bytes);
+  return out;
 }
 
 }  // namespace vpm::service

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "server/common/sha256.h"
+#include "server/service/server_flags.h"
 #include "server/service/users_file.h"
 #include "tests/service/service_test_util.h"
 
@@ -502,6 +503,23 @@ TEST_F(UsersTest, SessionCapIsPerUser) {
   EXPECT_EQ(third.error_code(), grpc::RESOURCE_EXHAUSTED);
   EXPECT_NE(third.error_message().find("per user"), std::string::npos) << third.error_message();
   EXPECT_TRUE(stub_->OpenSession(Context(kBob).get(), open, &info).ok());
+}
+
+// One user at their caps leaves the others room only while each per-user
+// cap is below its server-wide one: vpm-server warns at start otherwise.
+TEST(UsersServer, WarnsOfPerUserCapsNotBelowTheServers) {
+  EXPECT_TRUE(FairShareWarnings(ServerOptions{}).empty());
+  ServerOptions options;
+  options.max_volumes = 4;
+  options.max_volumes_per_user = 4;
+  options.max_meshes = 8;
+  options.max_meshes_per_user = 16;
+  const std::vector<std::string> warnings = FairShareWarnings(options);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_NE(warnings[0].find("--max-volumes-per-user 4 is not below --max-volumes 4"),
+            std::string::npos)
+      << warnings[0];
+  EXPECT_NE(warnings[1].find("--max-meshes-per-user"), std::string::npos) << warnings[1];
 }
 
 TEST(UsersServer, StartupErrorsAreClear) {
