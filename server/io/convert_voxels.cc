@@ -8,6 +8,9 @@
 namespace vpm {
 namespace {
 
+// Voxels converted between two polls of the load's CancelToken (1-3 ms).
+constexpr int64_t kSlabVoxels = int64_t{1} << 20;
+
 // The integer range of the values, or why they are not int16 material.
 struct IntegerRange {
   bool integers = true;
@@ -106,25 +109,49 @@ Result<VoxelValues> ConvertVoxels(std::span<const uint8_t> bytes, VoxelType type
     return VoxelValues::Int16(std::move(stored), static_cast<int32_t>(intercept));
   }
   if (IsIntegerType(type) && std::isfinite(slope) && std::isfinite(intercept)) {
+    // In slabs of kSlabVoxels, polling the load's CancelToken between them.
     IntegerRange range;
-    WithIntegerType(type, [&](auto tag) {
-      range = ScanRange<decltype(tag)>(bytes.data(), endian, count, slope, intercept);
-    });
+    for (int64_t first = 0; first < count && range.integers; first += kSlabVoxels) {
+      RETURN_IF_ERROR(limits.cancel.Check());
+      const int64_t n = std::min(kSlabVoxels, count - first);
+      WithIntegerType(type, [&](auto tag) {
+        const IntegerRange slab =
+            ScanRange<decltype(tag)>(bytes.data() + first * size, endian, n, slope, intercept);
+        range = {range.integers && slab.integers, std::min(range.lo, slab.lo),
+                 std::max(range.hi, slab.hi)};
+      });
+    }
     const std::optional<int32_t> offset = ExactOffset(range);
     if (offset) {
       RETURN_IF_ERROR(ValidateGeometry(geometry, limits, VoxelEncoding::kInt16));
-      std::vector<int16_t> stored(static_cast<size_t>(count));
-      WithIntegerType(type, [&](auto tag) {
-        ToInt16<decltype(tag)>(bytes.data(), endian, count, slope, intercept, *offset,
-                               stored.data());
-      });
+      // Grown a slab at a time within its reservation: no zero-fill of the
+      // whole volume between two polls.
+      std::vector<int16_t> stored;
+      stored.reserve(static_cast<size_t>(count));
+      for (int64_t first = 0; first < count; first += kSlabVoxels) {
+        RETURN_IF_ERROR(limits.cancel.Check());
+        const int64_t n = std::min(kSlabVoxels, count - first);
+        stored.resize(static_cast<size_t>(first + n));
+        WithIntegerType(type, [&](auto tag) {
+          ToInt16<decltype(tag)>(bytes.data() + first * size, endian, n, slope, intercept, *offset,
+                                 stored.data() + first);
+        });
+      }
       return VoxelValues::Int16(std::move(stored), *offset);
     }
     if (float_note != nullptr) *float_note = WhyFloat(range);
   }
   RETURN_IF_ERROR(ValidateGeometry(geometry, limits, VoxelEncoding::kFloat32));
-  ASSIGN_OR_RETURN(std::vector<float> values,
-                   ConvertVoxelsToFloat(bytes, type, endian, count, slope, intercept));
+  std::vector<float> values;
+  values.reserve(static_cast<size_t>(count));
+  for (int64_t first = 0; first < count; first += kSlabVoxels) {
+    RETURN_IF_ERROR(limits.cancel.Check());
+    const int64_t n = std::min(kSlabVoxels, count - first);
+    ASSIGN_OR_RETURN(const std::vector<float> slab,
+                     ConvertVoxelsToFloat(bytes.subspan(static_cast<size_t>(first * size)), type,
+                                          endian, n, slope, intercept));
+    values.insert(values.end(), slab.begin(), slab.end());
+  }
   return VoxelValues::Float(std::move(values));
 }
 
@@ -135,6 +162,7 @@ Result<Volume> VolumeFromStoredVoxels(std::span<const uint8_t> bytes, VoxelType 
   std::string note;
   ASSIGN_OR_RETURN(VoxelValues values, ConvertVoxels(bytes, type, endian, geometry, limits, slope,
                                                      intercept, &note));
+  RETURN_IF_ERROR(limits.cancel.Check());
   ASSIGN_OR_RETURN(Volume volume, Volume::Create(geometry, std::move(values), limits));
   volume.set_source(std::string(name));
   if (!note.empty()) volume.add_note(std::move(note));
@@ -152,7 +180,10 @@ std::string IntegerRangeOfFloats::WhyFloat() const {
 Result<VoxelValues> FloatsToVoxels(std::vector<float> values, const VolumeGeometry& geometry,
                                    const VolumeLimits& limits, std::string* float_note) {
   IntegerRangeOfFloats range;
-  for (float v : values) range.Add(v);
+  for (size_t n = 0; n < values.size(); ++n) {
+    if (n % static_cast<size_t>(kSlabVoxels) == 0) RETURN_IF_ERROR(limits.cancel.Check());
+    range.Add(values[n]);
+  }
   const std::optional<int32_t> offset = range.Offset();
   if (!offset) {
     if (float_note != nullptr) *float_note = range.WhyFloat();

@@ -12,6 +12,11 @@ namespace {
 constexpr int64_t kMaxChunk = int64_t{1} << 30;
 // Output grows by doubling from here, never beyond the bound.
 constexpr int64_t kInitialOutput = int64_t{1} << 20;
+// Bytes inflated between two polls of the load's CancelToken (1-3 ms).
+constexpr int64_t kOutputStep = int64_t{1} << 20;
+// The most address space reserved for the output at once (virtual: a
+// declared size that the stream does not fill costs nothing).
+constexpr int64_t kMaxReserve = int64_t{1} << 30;
 
 // Owns a z_stream set up for inflation with gzip/zlib auto-detection.
 class Inflater {
@@ -39,20 +44,30 @@ struct InflateOutcome {
 // Inflates up to `bound` bytes. Stops early (more_output) when the stream
 // would produce more; errors on corrupt or truncated streams unless
 // `stop_quietly` (prefix reads tolerate a truncated stream).
-Result<InflateOutcome> InflateBounded(std::span<const uint8_t> in, int64_t bound,
-                                      bool stop_quietly) {
+Result<InflateOutcome> InflateBounded(std::span<const uint8_t> in, int64_t bound, bool stop_quietly,
+                                      const CancelToken& cancel = {}) {
   Inflater inflater;
   if (!inflater.ok()) return absl::InternalError("zlib inflateInit2 failed");
   z_stream& z = inflater.stream();
   InflateOutcome out;
+  // Address space for up to kMaxReserve bytes is reserved at once (pages
+  // not yet written cost no memory), so the buffer then grows kOutputStep
+  // at a time without copying what it holds: no step between two polls of
+  // `cancel` copies tens of MiB.
+  out.bytes.reserve(static_cast<size_t>(std::min(bound, kMaxReserve)));
   out.bytes.resize(static_cast<size_t>(std::min(bound, kInitialOutput)));
   int64_t produced = 0;
   int64_t consumed = 0;
   const int64_t in_size = static_cast<int64_t>(in.size());
   for (;;) {
+    // Each turn inflates at most kOutputStep bytes (a few ms), then polls.
+    RETURN_IF_ERROR(cancel.Check());
     if (stop_quietly && produced == bound) break;
     if (produced == static_cast<int64_t>(out.bytes.size()) && produced < bound) {
-      out.bytes.resize(static_cast<size_t>(std::min(bound, produced * 2 + 1)));
+      const int64_t reserved = static_cast<int64_t>(out.bytes.capacity());
+      out.bytes.resize(static_cast<size_t>(produced < reserved
+                                               ? std::min({bound, reserved, produced + kOutputStep})
+                                               : std::min(bound, produced * 2 + 1)));
     }
     uint8_t probe = 0;  // one byte of room past the bound, to detect overrun
     const bool probing = produced == bound;
@@ -61,7 +76,7 @@ Result<InflateOutcome> InflateBounded(std::span<const uint8_t> in, int64_t bound
     z.next_out = probing ? &probe : out.bytes.data() + produced;
     // Room left in the buffer, which grows geometrically up to `bound`.
     const int64_t room = static_cast<int64_t>(out.bytes.size()) - produced;
-    z.avail_out = probing ? 1u : static_cast<uInt>(std::min(room, kMaxChunk));
+    z.avail_out = probing ? 1u : static_cast<uInt>(std::min(room, kOutputStep));
     const uInt avail_in_before = z.avail_in;
     const uInt avail_out_before = z.avail_out;
     const int rc = inflate(&z, Z_NO_FLUSH);
@@ -111,7 +126,8 @@ Result<std::vector<uint8_t>> InflateExactly(std::span<const uint8_t> compressed,
                                                      " bytes is over the cap of ", limits.max_bytes,
                                                      " bytes"));
   }
-  ASSIGN_OR_RETURN(InflateOutcome out, InflateBounded(compressed, declared_bytes, false));
+  ASSIGN_OR_RETURN(InflateOutcome out,
+                   InflateBounded(compressed, declared_bytes, false, limits.cancel));
   if (out.more_output) {
     return absl::InvalidArgumentError(StrCat(LooksLikeGzip(compressed) ? "gzip" : "zlib data",
                                                    " inflates past the declared size of ",

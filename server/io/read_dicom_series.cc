@@ -43,6 +43,7 @@ Result<std::vector<NamedSlice>> DecodeSeries(const std::filesystem::path& folder
   VolumeLimits file_limits = limits;
   file_limits.read_progress = nullptr;
   for (size_t file = 0; file < series.files.size(); ++file) {
+    RETURN_IF_ERROR(limits.cancel.Check());
     const std::filesystem::path& path = series.files[file];
     if (limits.read_progress != nullptr && *limits.read_progress) {
       (*limits.read_progress)(double(file) / double(series.files.size()), "reading DICOM");

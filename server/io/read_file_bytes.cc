@@ -12,12 +12,15 @@ namespace vpm {
 namespace {
 
 // Reads exactly out.size() bytes at `offset` of the open file, in chunks, so
-// that a progress bar moves while a large file comes in.
+// that a progress bar moves while a large file comes in and a cancelled load
+// stops within a chunk's time (4 MiB: about 2 ms from the page cache, 30 ms
+// from a 150 MB/s disk).
 Status ReadRange(const SourceFile& file, const std::string& name, int64_t offset,
                  std::span<uint8_t> out, const VolumeLimits& limits) {
   const uintmax_t size = out.size();
-  constexpr uintmax_t kChunk = uintmax_t{16} << 20;
+  constexpr uintmax_t kChunk = uintmax_t{4} << 20;
   for (uintmax_t done = 0; done < size;) {
+    RETURN_IF_ERROR(limits.cancel.Check());
     const size_t want = static_cast<size_t>(std::min(kChunk, size - done));
     const ssize_t got = ::pread(file.fd(), out.data() + done, want,
                                 static_cast<off_t>(offset + static_cast<int64_t>(done)));

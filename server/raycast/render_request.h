@@ -10,6 +10,7 @@
 
 #include <glm/glm.hpp>
 
+#include "server/common/cancel_token.h"
 #include "server/common/status.h"
 #include "server/gpu/gpu_buffer.h"
 #include "server/gpu/gpu_image3d.h"
@@ -122,6 +123,9 @@ struct RenderRequest {
   // What part of the deformed volume shows (world frame); empty: all of it.
   ClipRegion clip;
   OverlayData overlay;
+  // Polled between the bands of a still (VolumeRenderer::Render): a still
+  // nobody waits for stops after the band in progress. Default: never.
+  CancelToken cancel;
 };
 
 struct FrameTimings {

@@ -447,6 +447,7 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   // The other bands of a still, one submit each: what another renderer
   // submits meanwhile runs between two of them.
   for (int b = 1; b < bands; ++b) {
+    RETURN_IF_ERROR(request.cancel.Check());
     ASSIGN_OR_RETURN(auto band, gpu::ComputeBatch::Begin(*context_, 1));
     RETURN_IF_ERROR(RecordBand(band, cast, setup, b, bands));
     ASSIGN_OR_RETURN(auto band_timings, band.SubmitAndWait());

@@ -144,7 +144,15 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
     interactive = ClientActiveLocked() || (!force_still_ && session_changing);
     force_still_ = false;
   }
-  auto frame = session_->Render({&settings, std::nullopt, interactive, want_vertices});
+  // A stream that ends meanwhile (client gone, session closed, shutdown)
+  // stops its still after the band in progress.
+  const CancelToken cancel([this]() -> Status {
+    if (finishing_.load(std::memory_order_relaxed)) {
+      return absl::CancelledError("the stream ended");
+    }
+    return service_->WorkAllowed();
+  });
+  auto frame = session_->Render({&settings, std::nullopt, interactive, want_vertices, cancel});
   auto lock = Lock();
   render_scheduled_ = false;
   if (!frame.ok()) return FinishLocked(ToGrpcStatus(frame.status()));
@@ -266,6 +274,7 @@ void FrameStream::Finish(const grpc::Status& status) {
 void FrameStream::FinishLocked(const grpc::Status& status) {
   if (finish_) return;
   finish_ = status;
+  finishing_.store(true, std::memory_order_relaxed);
   pending_.reset();
   if (!write_in_flight_ && sink_ != nullptr) {
     finished_ = true;

@@ -27,6 +27,7 @@
 // makes no call on it.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <deque>
@@ -170,6 +171,9 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   std::unique_ptr<v3::Frame> current_;  // being written
   std::unique_ptr<v3::Frame> pending_;  // the newest frame waiting for the write
   std::optional<grpc::Status> finish_;
+  // finish_ is set: polled (without mutex_) by the render in progress, so
+  // that a still for a stream that ended stops between its bands.
+  std::atomic<bool> finishing_{false};
   bool finished_ = false;
   uint64_t frame_number_ = 0;
   uint64_t superseded_ = 0;

@@ -34,11 +34,15 @@ void LoadProgressRegistry::EvictLocked() {
   }
 }
 
-Status LoadProgressRegistry::Start(const std::string& id) {
+std::string LoadProgressRegistry::Key(std::string_view user, std::string_view id) {
+  return StrCat(user, "\n", id);  // user names hold no newline
+}
+
+Status LoadProgressRegistry::Start(std::string_view user, const std::string& id) {
   RETURN_IF_ERROR(CheckId(id));
   std::lock_guard lock(mutex_);
   EvictLocked();
-  auto it = entries_.find(id);
+  auto it = entries_.find(Key(user, id));
   if (it != entries_.end() && !it->second.state.done) {
     return absl::AlreadyExistsError(StrCat("progress_id '", id, "': a load with it is running"));
   }
@@ -46,14 +50,14 @@ Status LoadProgressRegistry::Start(const std::string& id) {
     return absl::ResourceExhaustedError(
         StrCat("progress_id: ", options_.max_entries, " followed loads run already"));
   }
-  entries_[id] = Entry{LoadProgressState{0.0, "queued", false, absl::OkStatus()}, {}};
+  entries_[Key(user, id)] = Entry{LoadProgressState{0.0, "queued", false, absl::OkStatus()}, {}};
   return absl::OkStatus();
 }
 
-ProgressFn LoadProgressRegistry::Reporter(const std::string& id) {
-  return [this, id](double fraction, std::string_view stage) {
+ProgressFn LoadProgressRegistry::Reporter(std::string_view user, const std::string& id) {
+  return [this, key = Key(user, id)](double fraction, std::string_view stage) {
     std::lock_guard lock(mutex_);
-    auto it = entries_.find(id);
+    auto it = entries_.find(key);
     if (it == entries_.end() || it->second.state.done) return;
     LoadProgressState& s = it->second.state;
     s.fraction = std::max(s.fraction, std::clamp(fraction, 0.0, 1.0));
@@ -61,9 +65,10 @@ ProgressFn LoadProgressRegistry::Reporter(const std::string& id) {
   };
 }
 
-void LoadProgressRegistry::Finish(const std::string& id, const Status& status) {
+void LoadProgressRegistry::Finish(std::string_view user, const std::string& id,
+                                  const Status& status) {
   std::lock_guard lock(mutex_);
-  auto it = entries_.find(id);
+  auto it = entries_.find(Key(user, id));
   if (it == entries_.end() || it->second.state.done) return;
   LoadProgressState& s = it->second.state;
   s.done = true;
@@ -77,10 +82,11 @@ void LoadProgressRegistry::Finish(const std::string& id, const Status& status) {
   it->second.finished_at = std::chrono::steady_clock::now();
 }
 
-Result<LoadProgressState> LoadProgressRegistry::Get(const std::string& id) const {
+Result<LoadProgressState> LoadProgressRegistry::Get(std::string_view user,
+                                                    const std::string& id) const {
   RETURN_IF_ERROR(CheckId(id));
   std::lock_guard lock(mutex_);
-  auto it = entries_.find(id);
+  auto it = entries_.find(Key(user, id));
   if (it == entries_.end()) {
     return absl::NotFoundError(StrCat("progress_id '", id, "': no load with it (yet)"));
   }

@@ -34,17 +34,20 @@ class LoadProgressRegistry {
   explicit LoadProgressRegistry(Options options) : options_(options) {}
   LoadProgressRegistry() : LoadProgressRegistry(Options{}) {}
 
+  // Ids are each user's own: `user`'s id names nothing of another user's
+  // loads (the same id of two users is two entries; another user's is
+  // NotFound like a missing one).
   // InvalidArgument unless `id` is 1..64 of [A-Za-z0-9_-].
   static Status CheckId(std::string_view id);
-  // A new entry ("queued", 0); AlreadyExists while a load with this id runs;
-  // ResourceExhausted when full of running loads.
-  Status Start(const std::string& id);
+  // A new entry ("queued", 0); AlreadyExists while a load of `user`'s with
+  // this id runs; ResourceExhausted when full of running loads.
+  Status Start(std::string_view user, const std::string& id);
   // Reports into the entry (monotone; ignored once done).
-  ProgressFn Reporter(const std::string& id);
+  ProgressFn Reporter(std::string_view user, const std::string& id);
   // Ends the entry: fraction 1 and "done" on success, "failed" otherwise.
-  void Finish(const std::string& id, const Status& status);
-  // NotFound for an id never started or long finished.
-  Result<LoadProgressState> Get(const std::string& id) const;
+  void Finish(std::string_view user, const std::string& id, const Status& status);
+  // NotFound for an id `user` never started or long finished.
+  Result<LoadProgressState> Get(std::string_view user, const std::string& id) const;
 
  private:
   struct Entry {
@@ -52,6 +55,7 @@ class LoadProgressRegistry {
     std::chrono::steady_clock::time_point finished_at{};
   };
   void EvictLocked();
+  static std::string Key(std::string_view user, std::string_view id);
 
   Options options_;
   mutable std::mutex mutex_;

@@ -40,6 +40,9 @@ int main(int argc, char** argv) {
     return 0;
   }
   vpm::service::ApplyEnvironment(&options);
+  for (const std::string& warning : vpm::service::FairShareWarnings(options)) {
+    std::fprintf(stderr, "vpm-server: warning: %s\n", warning.c_str());
+  }
 
   // Signals are taken synchronously by sigwait on this thread: no handler
   // runs in an arbitrary thread.

@@ -2,9 +2,12 @@
 
 #include <cmath>
 
+#include "server/common/random_hex.h"
 #include "server/service/mesh_params_key.h"
 
 namespace vpm::service {
+
+Status MeshNotFound() { return absl::NotFoundError("mesh_id: no such mesh of yours or shared"); }
 
 Status CheckInsideVolume(const VolumeGeometry& geometry, const glm::dvec3& point_mm,
                          std::string_view field) {
@@ -126,7 +129,8 @@ Result<std::shared_ptr<const MeshEntry>> MeshStore::Add(std::shared_ptr<MeshEntr
   // Another call may have built the same mesh meanwhile: one copy is kept.
   if (auto held = FindLocked(entry->key)) return held;
   RETURN_IF_ERROR(MakeRoomLocked());
-  entry->id = StrCat(options_.id_prefix, next_id_++);
+  // 128 random bits: an id says nothing of the others, nor can it be guessed.
+  entry->id = StrCat(options_.id_prefix, RandomHex(16));
   meshes_.emplace(entry->id, Held{entry, ++tick_});
   ChangedLocked();
   return std::shared_ptr<const MeshEntry>(entry);
@@ -135,7 +139,7 @@ Result<std::shared_ptr<const MeshEntry>> MeshStore::Add(std::shared_ptr<MeshEntr
 Result<std::shared_ptr<const MeshEntry>> MeshStore::Get(std::string_view id) const {
   std::lock_guard lock(mutex_);
   auto it = meshes_.find(id);
-  if (it == meshes_.end()) return absl::NotFoundError(StrCat("mesh_id: no mesh '", id, "'"));
+  if (it == meshes_.end()) return MeshNotFound();
   it->second.last_used = ++tick_;
   return it->second.entry;
 }
@@ -143,7 +147,7 @@ Result<std::shared_ptr<const MeshEntry>> MeshStore::Get(std::string_view id) con
 Status MeshStore::Delete(std::string_view id) {
   std::lock_guard lock(mutex_);
   auto it = meshes_.find(id);
-  if (it == meshes_.end()) return absl::NotFoundError(StrCat("mesh_id: no mesh '", id, "'"));
+  if (it == meshes_.end()) return MeshNotFound();
   if (it->second.entry.use_count() > 1) {
     return absl::FailedPreconditionError(
         StrCat("mesh ", id, " is in use by a session; close the session first"));

@@ -32,13 +32,17 @@ struct MeshEntry {
   ProxyMesh mesh;
 };
 
+// The one answer for "no such mesh" and "a mesh on another user's upload",
+// so that ids say nothing of other users' meshes.
+Status MeshNotFound();
+
 class MeshStore {
  public:
   struct Options {
     const gpu::GpuContext* context = nullptr;  // step 1 on the GPU; outlives the store
     int64_t max_meshes = 64;
     std::function<void(int64_t count)> on_change;  // metrics: meshes held, after each change
-    std::string id_prefix = "mesh-";               // ids: id_prefix + 1, 2, ...
+    std::string id_prefix = "mesh-";               // ids: id_prefix + 32 random hex digits
   };
   static Result<std::unique_ptr<MeshStore>> Create(const Options& options);
 
@@ -78,7 +82,6 @@ class MeshStore {
   };
   std::map<std::string, Held, std::less<>> meshes_;
   mutable int64_t tick_ = 0;
-  int64_t next_id_ = 1;
 };
 
 // OutOfRange unless `point_mm` (physical mm) lies in the image box

@@ -2,6 +2,8 @@
 
 #include <cstdlib>
 
+#include "server/common/status.h"
+
 namespace vpm::service {
 
 void AddServerFlags(CLI::App& app, ServerOptions* o) {
@@ -47,6 +49,15 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "the same for one user's uploads; an upload declaring more is refused at "
                  "its header (0: no cap)")
       ->capture_default_str();
+  app.add_option("--max-upload-spool-bytes", o->max_upload_spool_bytes,
+                 "bytes of all uploads bound for the spool, the temporary files they are "
+                 "read from (reserved as they arrive, freed when the file is removed; 0: no "
+                 "cap)")
+      ->capture_default_str();
+  app.add_option("--max-upload-spool-bytes-per-user", o->max_upload_spool_bytes_per_user,
+                 "the same for one user's uploads; an upload declaring more is refused at its "
+                 "header (0: no cap)")
+      ->capture_default_str();
   app.add_option("--upload-idle-s", o->upload_idle_s,
                  "an upload that sends no chunk for this long is ended, seconds")
       ->capture_default_str();
@@ -55,10 +66,15 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "is ended (a trickle may not hold its memory for ever; 0: no minimum)")
       ->capture_default_str();
   app.add_option("--max-volumes-per-user", o->max_volumes_per_user,
-                 "uploaded volumes one user holds at once (volumes loaded from the data "
-                 "root or a phantom are shared and evicted when idle; 0: no cap)")
+                 "volume slots one user holds at once: their uploads, and the volumes loaded "
+                 "from the data root or a phantom that their sessions keep loaded (idle ones "
+                 "are shared and evicted; 0: no cap)")
       ->capture_default_str();
   app.add_option("--max-meshes", o->max_meshes, "meshes held at once")->capture_default_str();
+  app.add_option("--max-meshes-per-user", o->max_meshes_per_user,
+                 "meshes one user's sessions pin at once (unpinned meshes are evicted when "
+                 "room is needed; 0: no cap)")
+      ->capture_default_str();
   app.add_option("--max-sessions", o->max_sessions, "sessions open at once")
       ->capture_default_str();
   app.add_option("--max-sessions-per-user", o->max_sessions_per_user,
@@ -121,6 +137,24 @@ void ApplyEnvironment(ServerOptions* o) {
   if (o->token.empty() && o->token_file.empty()) {
     if (const char* token = std::getenv("VPM_TOKEN")) o->token = token;
   }
+}
+
+std::vector<std::string> FairShareWarnings(const ServerOptions& o) {
+  std::vector<std::string> out;
+  auto check = [&](const char* user_flag, int64_t per_user, const char* server_flag,
+                   int64_t server) {
+    if (per_user <= 0 || server <= 0 || per_user < server) return;
+    out.push_back(StrCat(user_flag, " ", per_user, " is not below ", server_flag, " ", server,
+                         ": one user at their cap can hold all of it"));
+  };
+  check("--max-volumes-per-user", o.max_volumes_per_user, "--max-volumes", o.max_volumes);
+  check("--max-meshes-per-user", o.max_meshes_per_user, "--max-meshes", o.max_meshes);
+  check("--max-sessions-per-user", o.max_sessions_per_user, "--max-sessions", o.max_sessions);
+  check("--max-upload-memory-bytes-per-user", o.max_upload_memory_bytes_per_user,
+        "--max-upload-memory-bytes", o.max_upload_memory_bytes);
+  check("--max-upload-spool-bytes-per-user", o.max_upload_spool_bytes_per_user,
+        "--max-upload-spool-bytes", o.max_upload_spool_bytes);
+  return out;
 }
 
 }  // namespace vpm::service

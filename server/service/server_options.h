@@ -31,7 +31,14 @@ struct ServerOptions {
   int64_t max_upload_bytes = int64_t{1} << 30;   // one uploaded file
   int64_t max_upload_memory_bytes = int64_t{2} << 30;  // all uploads in flight, in memory
   int64_t max_upload_memory_bytes_per_user = int64_t{1} << 30;  // one user's uploads in flight
-  int64_t max_volumes_per_user = 4;              // uploaded volumes one user holds (0: no cap)
+  // Bytes of uploads bound for the spool (the temporary files they are read
+  // from), all users and one user's; reserved as the bytes arrive.
+  int64_t max_upload_spool_bytes = int64_t{2} << 30;
+  int64_t max_upload_spool_bytes_per_user = int64_t{1} << 30;
+  // Volume slots one user holds: their uploads and the shared volumes their
+  // sessions keep loaded (0: no cap).
+  int64_t max_volumes_per_user = 4;
+  int64_t max_meshes_per_user = 16;              // meshes one user's sessions pin (0: no cap)
   double upload_min_bytes_per_s = 16 << 10;      // an upload slower than this on average fails
   double upload_idle_s = 60;                     // an upload with no chunk this long fails
   int64_t max_meshes = 64;

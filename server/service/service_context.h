@@ -32,6 +32,7 @@ struct ServiceContext {
   WorkerPool* request_pool = nullptr;  // unary work
   StreamRegistry* streams = nullptr;
   ByteBudget* upload_memory = nullptr;  // bytes of uploads in flight
+  ByteBudget* upload_spool = nullptr;   // bytes of uploads bound for the spool's disk
   // Health says NOT_SERVING (VpmServer::BeginDrain): calls on what exists go
   // on, calls that would create volumes, meshes or sessions are refused.
   std::atomic<bool> leaving{false};

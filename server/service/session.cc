@@ -45,27 +45,24 @@ Status MotionRefused(const Status& status, const char* field) {
 
 }  // namespace
 
-Session::Session(std::string id, std::string owner, std::shared_ptr<VolumeEntry> volume,
+Session::Session(std::string id, std::string owner, VolumeHold volume,
                  std::shared_ptr<const MeshEntry> mesh, const Options& options)
     : id_(std::move(id)),
       access_(std::move(owner)),
-      volume_(std::move(volume)),
+      hold_(std::move(volume)),
+      volume_(hold_.volume()),
       mesh_(std::move(mesh)),
       options_(options),
       camera_(Camera::ForVolume(volume_->volume.geometry())),
-      last_touch_(std::chrono::steady_clock::now()) {
-  volume_->sessions.fetch_add(1);
-}
-
-Session::~Session() { volume_->sessions.fetch_sub(1); }
+      last_touch_(std::chrono::steady_clock::now()) {}
 
 Result<std::shared_ptr<Session>> Session::Create(std::string id, std::string owner,
-                                                 const gpu::GpuContext& context,
-                                                 std::shared_ptr<VolumeEntry> volume,
+                                                 const gpu::GpuContext& context, VolumeHold hold,
                                                  std::shared_ptr<const MeshEntry> mesh,
                                                  const Options& options) {
+  const std::shared_ptr<VolumeEntry> volume = hold.volume();
   std::shared_ptr<Session> session(
-      new Session(std::move(id), std::move(owner), volume, mesh, options));
+      new Session(std::move(id), std::move(owner), std::move(hold), mesh, options));
   std::lock_guard gpu_lock(volume->gpu_mutex);
   // Events update FEM only; each frame brings the backward map up to date
   // once, however many steps came since (a slow stream or a busy server
@@ -269,6 +266,8 @@ Result<v3::Frame> Session::Render(const FrameRequest& request) {
       }
     }
   }
+  RETURN_IF_ERROR(request.cancel.Check());
+  prepared.cancel = request.cancel;
   ASSIGN_OR_RETURN(const Frame frame, scene_->RenderPrepared(prepared));
   frame_lock.unlock();
   const double render_ms = MsSince(t0) - map_update.warp_ms;

@@ -47,13 +47,12 @@ class Session : public std::enable_shared_from_this<Session> {
   };
   // The scene is built here (FEM set-up), with a renderer of the session's
   // own: call from a worker, not a callback. `owner`: the user who opens it
-  // (session_access.h).
+  // (session_access.h); `volume`: the owner's hold on the session's volume
+  // (VolumeStore::HoldForSession), kept until the session is destroyed.
   static Result<std::shared_ptr<Session>> Create(std::string id, std::string owner,
-                                                 const gpu::GpuContext& context,
-                                                 std::shared_ptr<VolumeEntry> volume,
+                                                 const gpu::GpuContext& context, VolumeHold volume,
                                                  std::shared_ptr<const MeshEntry> mesh,
                                                  const Options& options);
-  ~Session();
 
   const std::string& id() const { return id_; }
   // Its owner and the users it is shared with.
@@ -90,6 +89,9 @@ class Session : public std::enable_shared_from_this<Session> {
     std::optional<Camera> camera;
     bool interactive = false;
     bool want_vertices = false;
+    // Polled between the bands of a still and before the cast: a frame
+    // nobody waits for (Render cancelled or past its deadline) stops.
+    CancelToken cancel;
   };
   Result<v3::Frame> Render(const FrameRequest& request);
   // One slice of the current state (RenderSlice): the Frame's image is the
@@ -117,7 +119,7 @@ class Session : public std::enable_shared_from_this<Session> {
   double idle_s() const;
 
  private:
-  Session(std::string id, std::string owner, std::shared_ptr<VolumeEntry> volume,
+  Session(std::string id, std::string owner, VolumeHold volume,
           std::shared_ptr<const MeshEntry> mesh, const Options& options);
   Result<AppliedEvent> ApplyLocked(const v3::ClientEvent& event, const SceneView* view);
   // The grab and pin events of ApplyLocked (scene lock held).
@@ -137,7 +139,8 @@ class Session : public std::enable_shared_from_this<Session> {
 
   const std::string id_;
   SessionAccess access_;
-  std::shared_ptr<VolumeEntry> volume_;
+  VolumeHold hold_;
+  std::shared_ptr<VolumeEntry> volume_;    // hold_'s
   std::shared_ptr<const MeshEntry> mesh_;  // under state_mutex_
   Options options_;
 

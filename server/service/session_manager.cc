@@ -1,5 +1,7 @@
 #include "server/service/session_manager.h"
 
+#include <set>
+
 #include "server/common/random_hex.h"
 
 namespace vpm::service {
@@ -11,10 +13,30 @@ Result<std::unique_ptr<SessionManager>> SessionManager::Create(const Options& op
   return std::unique_ptr<SessionManager>(new SessionManager(options));
 }
 
-Result<std::shared_ptr<Session>> SessionManager::Open(const std::string& owner,
-                                                      std::shared_ptr<VolumeEntry> volume,
+Status SessionManager::CheckMeshRoomLocked(const std::string& owner,
+                                           const std::string& mesh_id) const {
+  if (options_.max_meshes_per_user <= 0) return absl::OkStatus();
+  std::set<std::string> pinned;
+  for (const auto& [id, session] : sessions_) {
+    if (session->access().IsOwner(owner)) pinned.insert(session->mesh().id);
+  }
+  for (auto [it, end] = opening_meshes_.equal_range(owner); it != end; ++it) {
+    pinned.insert(it->second);
+  }
+  if (pinned.contains(mesh_id) ||
+      static_cast<int64_t>(pinned.size()) < options_.max_meshes_per_user) {
+    return absl::OkStatus();
+  }
+  return absl::ResourceExhaustedError(
+      StrCat("your sessions use ", pinned.size(),
+             " meshes, the most one user's may "
+             "(--max-meshes-per-user); open the session on a mesh you use, or close one"));
+}
+
+Result<std::shared_ptr<Session>> SessionManager::Open(const std::string& owner, VolumeHold volume,
                                                       std::shared_ptr<const MeshEntry> mesh) {
   std::string id;
+  std::multimap<std::string, std::string>::iterator opening_mesh;
   {
     std::lock_guard lock(mutex_);
     if (static_cast<int64_t>(sessions_.size()) + opening_ >= options_.max_sessions) {
@@ -32,8 +54,13 @@ Result<std::shared_ptr<Session>> SessionManager::Open(const std::string& owner,
                                                    " sessions per user; close one first"));
       }
     }
+    if (Status room = CheckMeshRoomLocked(owner, mesh->id); !room.ok()) {
+      if (opening_per_user_[owner] == 0) opening_per_user_.erase(owner);
+      return room;
+    }
     ++opening_;
     ++opening_per_user_[owner];
+    opening_mesh = opening_meshes_.emplace(owner, mesh->id);
     // 128 random bits: an id says nothing of the others, and cannot be guessed.
     id = StrCat(options_.id_prefix, RandomHex(16));
   }
@@ -42,6 +69,7 @@ Result<std::shared_ptr<Session>> SessionManager::Open(const std::string& owner,
   std::lock_guard lock(mutex_);
   --opening_;
   if (--opening_per_user_[owner] <= 0) opening_per_user_.erase(owner);
+  opening_meshes_.erase(opening_mesh);
   if (!session.ok()) return session.status();
   sessions_.emplace(id, *session);
   NotifyLocked();

@@ -167,6 +167,12 @@ Status UploadVolumeReactor::TakeHeader(const v3::UploadVolumeRequest::Header& he
                                                " is over your share of upload memory, ", share,
                                                " bytes (--max-upload-memory-bytes-per-user)"));
   }
+  const int64_t spool_share = service_->upload_spool->per_key_limit();
+  if (spool_share > 0 && header.total_bytes() > spool_share) {
+    return absl::ResourceExhaustedError(StrCat(
+        "header.total_bytes: ", header.total_bytes(), " is over your share of the upload spool, ",
+        spool_share, " bytes (--max-upload-spool-bytes-per-user)"));
+  }
   RETURN_IF_ERROR(service_->volumes->CheckRoom(0));
   RETURN_IF_ERROR(service_->volumes->CheckOwnerRoom(user_));
   // Memory is reserved as chunks arrive (TakeChunk), not here: a header
@@ -195,6 +201,10 @@ Status UploadVolumeReactor::TakeChunk(const std::string& chunk) {
   }
   RETURN_IF_ERROR(service_->upload_memory->Reserve(user_, size, "upload in memory"));
   reserved_bytes_ += size;
+  // Every byte taken is written to the spool when the upload ends: its disk
+  // is reserved now, so that one user's uploads cannot fill it.
+  RETURN_IF_ERROR(service_->upload_spool->Reserve(user_, size, "upload spool"));
+  spooled_bytes_ += size;
   const auto* data = reinterpret_cast<const uint8_t*>(chunk.data());
   bytes_.insert(bytes_.end(), data, data + size);
   sha_.Update({data, chunk.size()});
@@ -333,6 +343,8 @@ void UploadVolumeReactor::FinishOnce(const Status& status) {
 
 void UploadVolumeReactor::OnDone() {
   if (reserved_bytes_ > 0) service_->upload_memory->Release(user_, reserved_bytes_);
+  // Complete removed the spooled file before the call finished.
+  if (spooled_bytes_ > 0) service_->upload_spool->Release(user_, spooled_bytes_);
   if (slot_held_) service_->streams->Release(user_);
   service_->metrics->StreamClosed();
   std::shared_ptr<UploadVolumeReactor> last = std::move(self_);  // may free this

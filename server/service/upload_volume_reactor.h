@@ -11,7 +11,9 @@
 // stream), a declared size over the user's share of upload memory, or, as
 // chunks arrive, the memory budget for uploads in flight (server-wide and
 // per user: bytes are reserved as they arrive, so an idle header holds
-// nothing); DEADLINE_EXCEEDED when no message arrives for --upload-idle-s,
+// nothing), or the spool's disk for uploads (server-wide and per user,
+// reserved the same way, freed once the spooled file is removed);
+// DEADLINE_EXCEEDED when no message arrives for --upload-idle-s,
 // or when after that long the upload averages under
 // --upload-min-bytes-per-s (a chunk a minute does not hold its bytes for
 // ever).
@@ -74,6 +76,7 @@ class UploadVolumeReactor : public grpc::ServerReadReactor<v3::UploadVolumeReque
   std::shared_ptr<UploadVolumeReactor> self_;  // from Make until OnDone
   bool slot_held_ = false;                     // a stream slot of this user
   int64_t reserved_bytes_ = 0;                 // in service_->upload_memory, under user_
+  int64_t spooled_bytes_ = 0;                  // in service_->upload_spool, under user_
   v3::UploadVolumeRequest request_;
   bool have_header_ = false;
   std::string file_name_;

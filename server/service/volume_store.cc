@@ -2,15 +2,36 @@
 
 #include <atomic>
 
-#include "server/service/resolve_data_path.h"
+#include "server/common/random_hex.h"
 #include "server/io/read_volume.h"
+#include "server/service/resolve_data_path.h"
 
 namespace vpm::service {
 
+Status VolumeNotFound() {
+  return absl::NotFoundError("volume_id: no such volume of yours or shared");
+}
+
 Status CheckVolumeAccess(const VolumeEntry& volume, std::string_view user) {
   if (volume.owner.empty() || volume.owner == user) return absl::OkStatus();
-  return absl::PermissionDeniedError(
-      StrCat("volume_id: volume '", volume.id, "' was uploaded by another user"));
+  return VolumeNotFound();
+}
+
+VolumeHold::VolumeHold(std::shared_ptr<VolumeEntry> volume, std::string owner)
+    : volume_(std::move(volume)), owner_(std::move(owner)) {
+  std::lock_guard lock(volume_->holders_mutex);
+  ++volume_->session_owners[owner_];
+  volume_->sessions.fetch_add(1);
+}
+
+VolumeHold::~VolumeHold() {
+  if (!volume_) return;
+  std::lock_guard lock(volume_->holders_mutex);
+  auto it = volume_->session_owners.find(owner_);
+  if (it != volume_->session_owners.end() && --it->second <= 0) {
+    volume_->session_owners.erase(it);
+  }
+  volume_->sessions.fetch_sub(1);
 }
 
 Result<std::unique_ptr<VolumeStore>> VolumeStore::Create(const Options& options) {
@@ -102,15 +123,17 @@ std::shared_ptr<VolumeEntry> VolumeStore::FindLoadedLocked(const std::string& lo
 }
 
 Result<Volume> VolumeStore::ReadSource(const std::string& load_key, const std::string& source,
-                                       const ProgressFn& progress) const {
+                                       const ProgressFn& progress,
+                                       const CancelToken& cancel) const {
+  VolumeLimits limits = options_.read_limits;
+  limits.cancel = cancel;  // the readers poll it as they read
   if (!load_key.starts_with("file:")) {
-    ASSIGN_OR_RETURN(Volume volume, ReadVolume(load_key, options_.read_limits, progress));
+    ASSIGN_OR_RETURN(Volume volume, ReadVolume(load_key, limits, progress));
     volume.set_source(source);
     return volume;
   }
   // Every file the reader opens stays inside the data root; messages name
   // files relative to it.
-  VolumeLimits limits = options_.read_limits;
   ASSIGN_OR_RETURN(limits.read_root, CanonicalDataRoot(options_.data_root));
   Result<Volume> read = ReadVolume(load_key.substr(5), limits, progress);
   if (!read.ok()) return HideFolder(read.status(), limits.read_root, "the data root");
@@ -143,7 +166,7 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
   RETURN_IF_ERROR(CheckRoom(0));
   RETURN_IF_ERROR(cancel.Check());
   ASSIGN_OR_RETURN(Volume volume,
-                   ReadSource(key, std::string(source), SubProgress(progress, 0.0, 0.85)));
+                   ReadSource(key, std::string(source), SubProgress(progress, 0.0, 0.85), cancel));
   RETURN_IF_ERROR(cancel.Check());
   return Add(std::move(volume), std::move(key), user, {}, SubProgress(progress, 0.85, 1.0));
 }
@@ -181,7 +204,9 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string
     if (room.ok()) room = MakeRoomLocked(bytes, &evicted);
     if (room.ok()) {
       if (id.empty()) {
-        id = StrCat(options_.id_prefix, next_id_++);
+        // 128 random bits: an id says nothing of the others, nor can it be
+        // guessed.
+        id = StrCat(options_.id_prefix, RandomHex(16));
       } else {
         evicted_.erase(id);
       }
@@ -216,9 +241,7 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Get(std::string_view id,
       return it->second;
     }
     auto gone = evicted_.find(id);
-    if (gone == evicted_.end()) {
-      return absl::NotFoundError(StrCat("volume_id: no volume '", id, "'"));
-    }
+    if (gone == evicted_.end()) return VolumeNotFound();
     again = gone->second;
   }
   // Evicted while idle (a shared volume: anyone may read it): read it again
@@ -259,7 +282,7 @@ Status VolumeStore::Delete(std::string_view id, const std::string& user) {
     return absl::OkStatus();
   }
   auto it = volumes_.find(id);
-  if (it == volumes_.end()) return absl::NotFoundError(StrCat("volume_id: no volume '", id, "'"));
+  if (it == volumes_.end()) return VolumeNotFound();
   RETURN_IF_ERROR(CheckVolumeAccess(*it->second, user));
   if (it->second->owner.empty()) RETURN_IF_ERROR(CheckSoleLoaderLocked(id, user));
   if (it->second->sessions.load() > 0) {
@@ -279,14 +302,40 @@ Status VolumeStore::CheckOwnerRoom(std::string_view owner) const {
   return CheckOwnerRoomLocked(owner);
 }
 
+int64_t VolumeStore::SlotsOfLocked(std::string_view owner) const {
+  int64_t held = 0;
+  for (const auto& [id, entry] : volumes_) {
+    if (entry->owner == owner) {
+      ++held;
+    } else if (entry->owner.empty()) {
+      std::lock_guard holders(entry->holders_mutex);
+      held += entry->session_owners.contains(owner);
+    }
+  }
+  return held;
+}
+
 Status VolumeStore::CheckOwnerRoomLocked(std::string_view owner) const {
   if (options_.max_volumes_per_owner <= 0) return absl::OkStatus();
-  int64_t held = 0;
-  for (const auto& [id, entry] : volumes_) held += entry->owner == owner;
+  const int64_t held = SlotsOfLocked(owner);
   if (held < options_.max_volumes_per_owner) return absl::OkStatus();
   return absl::ResourceExhaustedError(
-      StrCat("you hold ", held, " uploaded volumes, the most one user may "
-             "(--max-volumes-per-user); delete one first"));
+      StrCat("you hold ", held,
+             " volumes (your uploads, and the volumes your sessions keep "
+             "loaded), the most one user may (--max-volumes-per-user); close a session or "
+             "delete an upload first"));
+}
+
+Result<VolumeHold> VolumeStore::HoldForSession(std::shared_ptr<VolumeEntry> volume,
+                                               const std::string& owner) {
+  std::lock_guard lock(mutex_);
+  bool new_slot = false;
+  if (volume->owner.empty()) {
+    std::lock_guard holders(volume->holders_mutex);
+    new_slot = !volume->session_owners.contains(owner);
+  }
+  if (new_slot) RETURN_IF_ERROR(CheckOwnerRoomLocked(owner));
+  return VolumeHold(std::move(volume), owner);
 }
 
 int64_t VolumeStore::evictions() const {

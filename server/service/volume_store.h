@@ -46,7 +46,12 @@ struct VolumeEntry {
   // The uploader; empty for a shared volume (loaded from the data root or a
   // phantom).
   std::string owner;
-  std::atomic<int32_t> sessions{0}; // sessions using it
+  std::atomic<int32_t> sessions{0};  // sessions using it (VolumeHold)
+  // The owners of those sessions, with how many each: a shared volume kept
+  // loaded by a user's sessions takes one of that user's volume slots.
+  // Guarded by holders_mutex.
+  std::map<std::string, int32_t, std::less<>> session_owners;
+  mutable std::mutex holders_mutex;
   std::atomic<int64_t> last_used{0};  // a use counter, for LRU eviction
   // The scene may add a 3D image to `gpu` (export); guarded by this.
   std::mutex gpu_mutex;
@@ -55,9 +60,28 @@ struct VolumeEntry {
       : id(std::move(id_in)), volume(std::move(v)), gpu(std::move(g)), bytes(b) {}
 };
 
-// PermissionDenied unless `user` may use `volume`: its owner, or anyone for
-// a shared volume.
+// NotFound unless `user` may use `volume`: its owner, or anyone for a
+// shared volume. Another user's upload answers exactly as a missing volume
+// (VolumeNotFound), so that ids say nothing of other users' volumes.
 Status CheckVolumeAccess(const VolumeEntry& volume, std::string_view user);
+// The one answer for "no such volume" and "not yours".
+Status VolumeNotFound();
+
+// A session's hold on its volume (VolumeStore::HoldForSession): counted in
+// the volume's `sessions` and against the session's owner until destroyed.
+class VolumeHold {
+ public:
+  VolumeHold(std::shared_ptr<VolumeEntry> volume, std::string owner);
+  VolumeHold(VolumeHold&& other) noexcept = default;
+  VolumeHold& operator=(VolumeHold&&) = delete;
+  VolumeHold(const VolumeHold&) = delete;
+  ~VolumeHold();
+  const std::shared_ptr<VolumeEntry>& volume() const { return volume_; }
+
+ private:
+  std::shared_ptr<VolumeEntry> volume_;  // null once moved from
+  std::string owner_;
+};
 
 class VolumeStore {
  public:
@@ -66,13 +90,15 @@ class VolumeStore {
     std::filesystem::path data_root;           // empty: file loads off
     int64_t max_volumes = 16;
     int64_t max_bytes = int64_t{8} << 30;
-    // Uploaded volumes one owner holds at once (0: no cap). Uploads are never
-    // evicted, so without it one user's uploads could fill max_volumes;
-    // shared volumes are evicted when idle and count against nobody.
+    // Volume slots one user holds at once (0: no cap): their uploads, and
+    // the shared volumes their sessions keep loaded. Neither can be evicted,
+    // so without it one user's uploads or sessions could fill max_volumes;
+    // an idle shared volume is evicted when room is needed and counts
+    // against nobody.
     int64_t max_volumes_per_owner = 0;
     VolumeLimits read_limits;
     std::function<void(int64_t bytes, int64_t count)> on_change;  // metrics
-    std::string id_prefix = "vol-";                                // ids: id_prefix + 1, 2, ...
+    std::string id_prefix = "vol-";  // ids: id_prefix + 32 random hex digits
     // Called (without the store's lock) with the id of each evicted volume,
     // so that the meshes built on it are dropped too.
     std::function<void(const std::string& id)> on_evict;
@@ -87,7 +113,8 @@ class VolumeStore {
   // InvalidArgument for raw: sources; ResourceExhausted past max_volumes or
   // max_bytes. `user` is recorded as one of its loaders. `progress` hears
   // the read (0..0.85) and the upload (0.85..1). `cancel` is polled
-  // before the read and between the read and the upload to the GPU.
+  // before the read, by the readers as they read (VolumeLimits::cancel) and
+  // between the read and the upload to the GPU.
   Result<std::shared_ptr<VolumeEntry>> Load(std::string_view source, const std::string& user,
                                             const ProgressFn& progress = {},
                                             const CancelToken& cancel = {});
@@ -95,20 +122,26 @@ class VolumeStore {
   // GetVolume reports; `owner` the uploader.
   Result<std::shared_ptr<VolumeEntry>> AddFile(const std::filesystem::path& path,
                                                std::string source, std::string owner);
-  // NotFound; PermissionDenied for another user's upload; an evicted volume
-  // is read again (the errors of Load).
+  // NotFound (VolumeNotFound) when missing or another user's upload; an
+  // evicted volume is read again (the errors of Load).
   Result<std::shared_ptr<VolumeEntry>> Get(std::string_view id, std::string_view user);
+  // A session's hold on `volume` for `owner`; ResourceExhausted when the
+  // volume would be a new slot of `owner`'s (a shared volume none of their
+  // sessions uses yet) past max_volumes_per_owner. Checked and counted
+  // under one lock, so concurrent opens cannot pass the cap together.
+  Result<VolumeHold> HoldForSession(std::shared_ptr<VolumeEntry> volume, const std::string& owner);
   // The volumes `user` may use.
   std::vector<std::shared_ptr<VolumeEntry>> List(std::string_view user) const;
-  // NotFound; PermissionDenied for another user's upload, or a shared
-  // volume that `user` did not load or that another user loaded too;
+  // NotFound (VolumeNotFound) when missing or another user's upload;
+  // PermissionDenied for a shared volume that `user` did not load or that
+  // another user loaded too;
   // FailedPrecondition while a session uses it. An evicted volume is
   // forgotten (the same permission rules).
   Status Delete(std::string_view id, const std::string& user);
   // ResourceExhausted when one more volume of `extra_bytes` would pass a cap
   // even after evicting every idle volume (which this does not do).
   Status CheckRoom(int64_t extra_bytes) const;
-  // ResourceExhausted when `owner` holds max_volumes_per_owner uploads.
+  // ResourceExhausted when `owner` holds max_volumes_per_owner slots.
   Status CheckOwnerRoom(std::string_view owner) const;
   int64_t total_bytes() const;
   int64_t evictions() const;
@@ -123,7 +156,7 @@ class VolumeStore {
                                            const std::string& user, std::string id = {},
                                            const ProgressFn& upload_progress = {});
   Result<Volume> ReadSource(const std::string& load_key, const std::string& source,
-                            const ProgressFn& progress = {}) const;
+                            const ProgressFn& progress = {}, const CancelToken& cancel = {}) const;
   std::shared_ptr<VolumeEntry> FindLoadedLocked(const std::string& load_key) const;
   // Evicts idle volumes, least recently used first, until one more of
   // `extra_bytes` fits (appending their ids to `evicted`); else
@@ -135,6 +168,9 @@ class VolumeStore {
   Status CheckSoleLoaderLocked(std::string_view id, const std::string& user) const;
   void NotifyLocked() const;
   Status CheckOwnerRoomLocked(std::string_view owner) const;
+  // `owner`'s volume slots: their uploads held, and the shared volumes
+  // their sessions use.
+  int64_t SlotsOfLocked(std::string_view owner) const;
 
   Options options_;
   mutable std::mutex mutex_;
@@ -148,7 +184,6 @@ class VolumeStore {
   std::map<std::string, std::set<std::string>, std::less<>> loaded_by_;
   int64_t evictions_ = 0;
   int64_t total_bytes_ = 0;
-  int64_t next_id_ = 1;
 };
 
 }  // namespace vpm::service

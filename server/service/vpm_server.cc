@@ -159,6 +159,7 @@ Status VpmServer::Start() {
     };
   }
   session_options.max_sessions_per_user = o.max_sessions_per_user;
+  session_options.max_meshes_per_user = o.max_meshes_per_user;
   session_options.on_change = [m = metrics_.get()](
                                   int64_t open, const std::map<std::string, int64_t>& per_user) {
     m->Sessions(open, per_user);
@@ -171,6 +172,8 @@ Status VpmServer::Start() {
   metrics_->SetOpenStreamsSource([s = streams_.get()] { return s->open_streams(); });
   upload_memory_ = std::make_unique<ByteBudget>(o.max_upload_memory_bytes,
                                                o.max_upload_memory_bytes_per_user);
+  upload_spool_ =
+      std::make_unique<ByteBudget>(o.max_upload_spool_bytes, o.max_upload_spool_bytes_per_user);
   load_progress_ = std::make_unique<LoadProgressRegistry>();
 
   context_.options = o;
@@ -184,6 +187,7 @@ Status VpmServer::Start() {
   context_.request_pool = request_pool_.get();
   context_.streams = streams_.get();
   context_.upload_memory = upload_memory_.get();
+  context_.upload_spool = upload_spool_.get();
   context_.load_progress = load_progress_.get();
   service_ = std::make_unique<VpmService>(&context_);
 

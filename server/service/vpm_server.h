@@ -33,7 +33,7 @@ class VpmServer {
 
   int port() const { return port_; }
   // Random per server start, in every volume, mesh and session id
-  // ("ses-TAG-1"): behind a balancer an id from one replica (or from before
+  // ("vol-TAG-<32 hex>"): behind a balancer an id from one replica (or from before
   // a restart) is NOT_FOUND on another, never someone else's session.
   const std::string& id_tag() const { return id_tag_; }
   ServiceContext& context() { return context_; }
@@ -67,6 +67,7 @@ class VpmServer {
   std::unique_ptr<SessionManager> sessions_;
   std::unique_ptr<StreamRegistry> streams_;
   std::unique_ptr<ByteBudget> upload_memory_;
+  std::unique_ptr<ByteBudget> upload_spool_;
   std::unique_ptr<LoadProgressRegistry> load_progress_;
   ServiceContext context_;
   std::unique_ptr<VpmService> service_;

@@ -169,10 +169,8 @@ void VpmService::FillSessionInfo(const Session& session, const std::string& user
 Result<std::shared_ptr<const MeshEntry>> VpmService::FindMesh(std::string_view mesh_id,
                                                              const std::string& user) const {
   ASSIGN_OR_RETURN(std::shared_ptr<const MeshEntry> mesh, service_->meshes->Get(mesh_id));
-  if (!CheckVolumeAccess(*mesh->volume, user).ok()) {
-    return absl::PermissionDeniedError(
-        StrCat("mesh_id: mesh '", mesh_id, "' is on a volume another user uploaded"));
-  }
+  // A mesh on another user's upload answers as a missing one.
+  if (!CheckVolumeAccess(*mesh->volume, user).ok()) return MeshNotFound();
   return mesh;
 }
 
@@ -191,10 +189,10 @@ grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* co
       FillVolumeInfo(*entry, response);
       return absl::OkStatus();
     }
-    RETURN_IF_ERROR(registry->Start(progress_id));
-    Result<std::shared_ptr<VolumeEntry>> entry =
-        service_->volumes->Load(request->source(), user, registry->Reporter(progress_id), cancel);
-    registry->Finish(progress_id, entry.status());
+    RETURN_IF_ERROR(registry->Start(user, progress_id));
+    Result<std::shared_ptr<VolumeEntry>> entry = service_->volumes->Load(
+        request->source(), user, registry->Reporter(user, progress_id), cancel);
+    registry->Finish(user, progress_id, entry.status());
     RETURN_IF_ERROR(entry.status());
     FillVolumeInfo(**entry, response);
     return absl::OkStatus();
@@ -204,10 +202,11 @@ grpc::ServerUnaryReactor* VpmService::LoadVolume(grpc::CallbackServerContext* co
 grpc::ServerUnaryReactor* VpmService::GetLoadProgress(grpc::CallbackServerContext* context,
                                                       const v3::GetLoadProgressRequest* request,
                                                       v3::LoadProgress* response) {
-  return Unary(context, *request, "GetLoadProgress", nullptr, [=, this](const std::string&) -> Status {
+  return Unary(context, *request, "GetLoadProgress", nullptr,
+               [=, this](const std::string& user) -> Status {
     if (service_->load_progress == nullptr) return absl::UnimplementedError("no load progress");
     ASSIGN_OR_RETURN(const LoadProgressState state,
-                     service_->load_progress->Get(request->progress_id()));
+                     service_->load_progress->Get(user, request->progress_id()));
     response->set_fraction(state.fraction);
     response->set_stage(state.stage);
     response->set_done(state.done);
@@ -339,8 +338,15 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
       ASSIGN_OR_RETURN(mesh, service_->meshes->Build(volume, MeshParams{}, cancel));
     }
     RETURN_IF_ERROR(cancel.Check());
+    ASSIGN_OR_RETURN(VolumeHold hold, service_->volumes->HoldForSession(mesh->volume, user));
     ASSIGN_OR_RETURN(std::shared_ptr<Session> session,
-                     service_->sessions->Open(user, mesh->volume, mesh));
+                     service_->sessions->Open(user, std::move(hold), mesh));
+    // A client gone while the scene was built (a closed tab, a sign-out)
+    // would never close it: it is closed now, not after --idle-session-s.
+    if (Status gone = cancel.Check(); !gone.ok()) {
+      service_->sessions->Close(session->id(), user).IgnoreError();
+      return gone;
+    }
     FillSessionInfo(*session, user, response);
     return absl::OkStatus();
   });
@@ -473,7 +479,7 @@ grpc::ServerUnaryReactor* VpmService::Render(grpc::CallbackServerContext* contex
     ASSIGN_OR_RETURN(StreamSettings settings,
                      ToStreamSettings(request->settings(), session->volume().volume,
                                       service_->options.max_frame_side));
-    Session::FrameRequest frame_request{&settings, std::nullopt, false, false};
+    Session::FrameRequest frame_request{&settings, std::nullopt, false, false, cancel};
     if (request->has_camera()) {
       ASSIGN_OR_RETURN(frame_request.camera,
                        ToCamera(request->camera(), session->volume().volume.geometry()));

@@ -132,7 +132,7 @@ class VpmService final : public v3::Vpm::CallbackService {
   // shared_with only for the owner.
   void FillSessionInfo(const Session& session, const std::string& user,
                        v3::SessionInfo* info) const;
-  // NotFound; PermissionDenied for a mesh on another user's upload.
+  // NotFound (MeshNotFound) when missing or on another user's upload.
   Result<std::shared_ptr<const MeshEntry>> FindMesh(std::string_view mesh_id,
                                                    const std::string& user) const;
 

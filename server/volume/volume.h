@@ -17,6 +17,7 @@
 
 #include <glm/glm.hpp>
 
+#include "server/common/cancel_token.h"
 #include "server/common/progress.h"
 #include "server/common/status.h"
 #include "server/volume/voxel_values.h"
@@ -91,6 +92,10 @@ struct VolumeLimits {
   // private folder): every file a reader opens must resolve, through
   // symlinks, inside it (server/io/open_source_file.h).
   std::filesystem::path read_root;
+  // Polled by the readers as they read (every 4 MiB read, 1 MiB inflated,
+  // 1 Mi voxels converted, every DICOM file): a cancelled
+  // load stops within milliseconds with the token's status. Default: never.
+  CancelToken cancel;
 };
 
 // No budget: for volumes derived from one that passed its own (a warp).

@@ -68,8 +68,8 @@ export async function vpmOk(build, args, options) {
   }
 }
 
-// The server tag in an id: "mesh-1a2b3c4d-7" or "ses-1a2b3c4d-<32 hex>" ->
-// "1a2b3c4d".
+// The server tag in an id: "mesh-1a2b3c4d-<32 hex>" (volumes, meshes and
+// sessions alike) -> "1a2b3c4d".
 export function tagOf(id) {
   const m = /^[a-z]+-([0-9a-f]{8})-[0-9a-f]+$/.exec(id ?? '');
   if (!m) throw new Error(`'${id}' is not an id of a tagged vpm-server`);

@@ -1,8 +1,10 @@
 // A fair share of everything shared: alice at her caps leaves bob fully
 // served. Upload memory is reserved as bytes arrive (idle headers hold
 // nothing) and capped per user; a trickling upload is ended; uploaded
-// volumes are capped per owner; a user's calls run on at most all workers
-// but one; a user's sessions cannot pin every mesh slot. (Per-user streams,
+// volumes are capped per owner, and so are the shared volumes a user's
+// sessions keep loaded; the upload spool's disk is shared per user; a
+// user's calls run on at most all workers but one; a user's sessions cannot
+// pin every mesh slot. (Per-user streams,
 // sessions and queued jobs: users_test.cc.)
 #include <chrono>
 #include <cstdio>
@@ -106,6 +108,52 @@ TEST_F(FairShareTest, UploadMemoryIsSharedPerUser) {
   const grpc::Status over = second->Finish();
   EXPECT_EQ(over.error_code(), grpc::RESOURCE_EXHAUSTED) << over.error_message();
   EXPECT_NE(over.error_message().find("share"), std::string::npos) << over.error_message();
+
+  v3::VolumeInfo bobs;
+  const grpc::Status status = UploadAs(kBobToken, &bobs);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  first_context->TryCancel();
+  first->Finish();
+}
+
+// The spool's disk, like upload memory: every byte an upload takes will be
+// written to the spool when it ends, so it is reserved as it arrives and
+// capped per user. Alice's uploads in flight reach her share of the spool:
+// her next chunk is refused, and bob's upload is taken whole (memory caps
+// here are far above the spool's, so only the spool can refuse).
+TEST_F(FairShareTest, UploadSpoolIsSharedPerUser) {
+  ServerOptions options = SmallServerOptions();
+  options.max_upload_memory_bytes = 64 << 20;
+  options.max_upload_memory_bytes_per_user = 64 << 20;
+  options.max_upload_spool_bytes = 1 << 20;
+  options.max_upload_spool_bytes_per_user = 512 << 10;
+  StartWithUsers(options);
+  {
+    // A header over her share of the spool is refused at once.
+    auto context = Context(kAliceToken);
+    v3::VolumeInfo info;
+    auto writer = StartUpload(stub_.get(), context.get(), &info, 600 << 10);
+    writer->WritesDone();
+    const grpc::Status refused = writer->Finish();
+    EXPECT_EQ(refused.error_code(), grpc::RESOURCE_EXHAUSTED) << refused.error_message();
+    EXPECT_NE(refused.error_message().find("spool"), std::string::npos) << refused.error_message();
+  }
+  auto first_context = Context(kAliceToken);
+  v3::VolumeInfo first_info;
+  auto first = StartUpload(stub_.get(), first_context.get(), &first_info, 400 << 10);
+  ASSERT_TRUE(WriteChunk(*first, 256 << 10));
+  ASSERT_TRUE(WriteChunk(*first, 144 << 10));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the chunks are taken
+  auto second_context = Context(kAliceToken);
+  v3::VolumeInfo second_info;
+  auto second = StartUpload(stub_.get(), second_context.get(), &second_info, 400 << 10);
+  WriteChunk(*second, 64 << 10);
+  WriteChunk(*second, 128 << 10);
+  second->WritesDone();
+  const grpc::Status over = second->Finish();
+  EXPECT_EQ(over.error_code(), grpc::RESOURCE_EXHAUSTED) << over.error_message();
+  EXPECT_NE(over.error_message().find("upload spool"), std::string::npos) << over.error_message();
+  std::printf("alice's second upload: %s\n", over.error_message().c_str());
 
   v3::VolumeInfo bobs;
   const grpc::Status status = UploadAs(kBobToken, &bobs);
@@ -249,6 +297,94 @@ TEST_F(FairShareTest, MeshSlotsLeaveRoomForAnotherUser) {
     const grpc::Status status = stub_->OpenSession(Context(kAliceToken).get(), open, &session);
     EXPECT_EQ(status.ok(), i < 2) << status.error_message();
   }
+  v3::MeshInfo bobs;
+  const grpc::Status status = build(kBobToken, 50, &bobs);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+}
+
+// The case 4 through sessions: a shared volume (a phantom here, or
+// a file of the data root) that a user's session keeps loaded cannot be
+// evicted, so it takes one of that user's volume slots. Alice loads the
+// server's four volumes and opens sessions on them: two are taken
+// (--max-volumes-per-user 2), and bob's LoadVolume of a fifth volume and his
+// UploadVolume are served. Before, her four sessions held every slot and
+// bob got "the server's volumes are all in use".
+TEST_F(FairShareTest, SessionsOnSharedVolumesTakeTheirOwnersSlots) {
+  ServerOptions options = SmallServerOptions();
+  options.max_volumes = 4;
+  options.max_volumes_per_user = 2;
+  options.max_sessions = 16;
+  options.max_sessions_per_user = 8;
+  StartWithUsers(options);
+  int opened = 0;
+  std::string refusal;
+  for (int i = 0; i < 4; ++i) {
+    v3::LoadVolumeRequest load;
+    load.set_source("phantom:abdomen?size=" + std::to_string(24 + i));
+    v3::VolumeInfo volume;
+    ASSERT_TRUE(stub_->LoadVolume(Context(kAliceToken).get(), load, &volume).ok());
+    v3::OpenSessionRequest open;
+    open.set_volume_id(volume.volume_id());
+    v3::SessionInfo session;
+    const grpc::Status status = stub_->OpenSession(Context(kAliceToken).get(), open, &session);
+    if (status.ok()) {
+      ++opened;
+      // A second session on a volume she holds takes no new slot.
+      ASSERT_TRUE(stub_->OpenSession(Context(kAliceToken).get(), open, &session).ok());
+    } else {
+      EXPECT_EQ(status.error_code(), grpc::RESOURCE_EXHAUSTED) << status.error_message();
+      refusal = status.error_message();
+    }
+  }
+  EXPECT_EQ(opened, 2);
+  EXPECT_NE(refusal.find("--max-volumes-per-user"), std::string::npos) << refusal;
+  std::printf("alice's third volume: %s\n", refusal.c_str());
+  // Her uploads count against the same slots.
+  v3::VolumeInfo upload;
+  EXPECT_EQ(UploadAs(kAliceToken, &upload).error_code(), grpc::RESOURCE_EXHAUSTED);
+
+  const grpc::Status loaded = LoadAs(kBobToken, "phantom:abdomen?size=32");
+  EXPECT_TRUE(loaded.ok()) << loaded.error_message();
+  v3::VolumeInfo bobs;
+  const grpc::Status uploaded = UploadAs(kBobToken, &bobs);
+  EXPECT_TRUE(uploaded.ok()) << uploaded.error_message();
+}
+
+// Mesh slots per user, whatever the session cap: alice's sessions may pin
+// --max-meshes-per-user meshes (here 2 of the server's 3, with a session
+// cap of 8); a session on a third mesh is refused, and bob's build is
+// served (her unpinned mesh is evicted for it).
+TEST_F(FairShareTest, SessionsPinAtMostTheirOwnersMeshSlots) {
+  ServerOptions options = SmallServerOptions();
+  options.max_meshes = 3;
+  options.max_meshes_per_user = 2;
+  options.max_sessions = 16;
+  options.max_sessions_per_user = 8;
+  StartWithUsers(options);
+  v3::VolumeInfo volume;
+  {
+    v3::LoadVolumeRequest request;
+    request.set_source("phantom:abdomen?size=32");
+    ASSERT_TRUE(stub_->LoadVolume(Context(kAliceToken).get(), request, &volume).ok());
+  }
+  auto build = [&](const std::string& token, int64_t target, v3::MeshInfo* info) {
+    v3::BuildMeshRequest request;
+    request.set_volume_id(volume.volume_id());
+    request.mutable_params()->set_target(target);
+    return stub_->BuildMesh(Context(token).get(), request, info);
+  };
+  std::vector<v3::MeshInfo> alices(3);
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(build(kAliceToken, 40 + i, &alices[i]).ok());
+  std::string refusal;
+  for (int i = 0; i < 3; ++i) {
+    v3::OpenSessionRequest open;
+    open.set_mesh_id(alices[i].mesh_id());
+    v3::SessionInfo session;
+    const grpc::Status status = stub_->OpenSession(Context(kAliceToken).get(), open, &session);
+    EXPECT_EQ(status.ok(), i < 2) << status.error_message();
+    if (!status.ok()) refusal = status.error_message();
+  }
+  EXPECT_NE(refusal.find("--max-meshes-per-user"), std::string::npos) << refusal;
   v3::MeshInfo bobs;
   const grpc::Status status = build(kBobToken, 50, &bobs);
   EXPECT_TRUE(status.ok()) << status.error_message();

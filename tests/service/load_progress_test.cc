@@ -17,45 +17,48 @@ namespace fs = std::filesystem;
 
 TEST(LoadProgressRegistry, IsMonotoneEndsAtOneAndKeepsErrors) {
   LoadProgressRegistry registry;
-  ASSERT_TRUE(registry.Start("a").ok());
-  EXPECT_EQ(registry.Start("a").code(), absl::StatusCode::kAlreadyExists);
-  const ProgressFn report = registry.Reporter("a");
+  ASSERT_TRUE(registry.Start("u", "a").ok());
+  EXPECT_EQ(registry.Start("u", "a").code(), absl::StatusCode::kAlreadyExists);
+  const ProgressFn report = registry.Reporter("u", "a");
   report(0.5, "reading");
   report(0.2, "reading");  // a second file starting over: not shown
-  auto state = registry.Get("a");
+  auto state = registry.Get("u", "a");
   ASSERT_TRUE(state.ok());
   EXPECT_EQ(state->fraction, 0.5);
   EXPECT_FALSE(state->done);
-  registry.Finish("a", absl::OkStatus());
-  state = registry.Get("a");
+  registry.Finish("u", "a", absl::OkStatus());
+  state = registry.Get("u", "a");
   EXPECT_TRUE(state->done);
   EXPECT_EQ(state->fraction, 1.0);
   EXPECT_EQ(state->stage, "done");
   report(0.7, "late");  // ignored once done
-  EXPECT_EQ(registry.Get("a")->stage, "done");
+  EXPECT_EQ(registry.Get("u", "a")->stage, "done");
 
-  ASSERT_TRUE(registry.Start("b").ok());
-  registry.Reporter("b")(0.3, "reading");
-  registry.Finish("b", absl::NotFoundError("gone"));
-  state = registry.Get("b");
+  ASSERT_TRUE(registry.Start("u", "b").ok());
+  registry.Reporter("u", "b")(0.3, "reading");
+  registry.Finish("u", "b", absl::NotFoundError("gone"));
+  state = registry.Get("u", "b");
   EXPECT_TRUE(state->done);
   EXPECT_EQ(state->stage, "failed");
   EXPECT_EQ(state->fraction, 0.3);
   EXPECT_EQ(state->status.code(), absl::StatusCode::kNotFound);
 
-  EXPECT_EQ(registry.Get("never").status().code(), absl::StatusCode::kNotFound);
-  EXPECT_EQ(registry.Start("has space").code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_EQ(registry.Start(std::string(65, 'x')).code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(registry.Get("u", "never").status().code(), absl::StatusCode::kNotFound);
+  // Another user's id is theirs alone: not found, and free to take.
+  EXPECT_EQ(registry.Get("v", "b").status().code(), absl::StatusCode::kNotFound);
+  EXPECT_TRUE(registry.Start("v", "a").ok());
+  EXPECT_EQ(registry.Start("u", "has space").code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(registry.Start("u", std::string(65, 'x')).code(), absl::StatusCode::kInvalidArgument);
 }
 
 TEST(LoadProgressRegistry, EvictsFinishedLoadsWhenFull) {
   LoadProgressRegistry registry({.max_entries = 2, .keep_after_done = std::chrono::hours(1)});
-  ASSERT_TRUE(registry.Start("a").ok());
-  ASSERT_TRUE(registry.Start("b").ok());
-  EXPECT_EQ(registry.Start("c").code(), absl::StatusCode::kResourceExhausted);
-  registry.Finish("a", absl::OkStatus());
-  EXPECT_TRUE(registry.Start("c").ok());
-  EXPECT_EQ(registry.Get("a").status().code(), absl::StatusCode::kNotFound);
+  ASSERT_TRUE(registry.Start("u", "a").ok());
+  ASSERT_TRUE(registry.Start("u", "b").ok());
+  EXPECT_EQ(registry.Start("u", "c").code(), absl::StatusCode::kResourceExhausted);
+  registry.Finish("u", "a", absl::OkStatus());
+  EXPECT_TRUE(registry.Start("u", "c").ok());
+  EXPECT_EQ(registry.Get("u", "a").status().code(), absl::StatusCode::kNotFound);
 }
 
 class LoadProgressTest : public ServiceTest {

@@ -1,15 +1,17 @@
 // Users and ownership: the users file and its errors, --token-file, every
 // call knowing its user, sessions and uploads belonging to their creator
-// (another's session is NOT_FOUND, as a missing one; another's upload
-// PERMISSION_DENIED), sharing a session to watch, shared volumes of the data root and phantoms, per-user stream caps and per-user
-// metrics.
+// (another's session, upload, mesh on an upload or load progress id is
+// NOT_FOUND, exactly as a missing one; ids are random), sharing a session to watch, shared volumes
+// of the data root and phantoms, per-user stream caps and per-user metrics.
 #include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <regex>
 #include <thread>
 
 #include "server/common/sha256.h"
+#include "server/service/server_flags.h"
 #include "server/service/users_file.h"
 #include "tests/service/service_test_util.h"
 
@@ -280,45 +282,94 @@ TEST_F(UsersTest, UploadedVolumesBelongToTheUploader) {
                      kAlice)
                   .ok());
   EXPECT_EQ(volume.owner(), "alice");
+  // Ids are random: they tell nothing of how many volumes or meshes exist.
+  EXPECT_TRUE(std::regex_match(volume.volume_id(), std::regex("vol-[0-9a-f]{8}-[0-9a-f]{32}")))
+      << volume.volume_id();
 
+  // Every answer to Bob is exactly a missing volume's or mesh's (code and
+  // message), so he cannot tell that Alice's exist.
+  auto same_as_missing = [](const grpc::Status& theirs, const grpc::Status& missing) {
+    EXPECT_EQ(theirs.error_code(), grpc::NOT_FOUND) << theirs.error_message();
+    EXPECT_EQ(theirs.error_code(), missing.error_code());
+    EXPECT_EQ(theirs.error_message(), missing.error_message());
+  };
+  const std::string made_up_volume = "vol-00000000-00000000000000000000000000000000";
   v3::GetVolumeRequest get;
-  get.set_volume_id(volume.volume_id());
   v3::VolumeInfo info;
-  EXPECT_EQ(stub_->GetVolume(Context(kBob).get(), get, &info).error_code(),
-            grpc::PERMISSION_DENIED);
+  get.set_volume_id(made_up_volume);
+  const grpc::Status missing_volume = stub_->GetVolume(Context(kBob).get(), get, &info);
+  get.set_volume_id(volume.volume_id());
+  same_as_missing(stub_->GetVolume(Context(kBob).get(), get, &info), missing_volume);
   v3::ListVolumesResponse listed;
   ASSERT_TRUE(stub_->ListVolumes(Context(kBob).get(), {}, &listed).ok());
   EXPECT_EQ(listed.volumes_size(), 0);
   v3::BuildMeshRequest build;
-  build.set_volume_id(volume.volume_id());
   v3::MeshInfo mesh;
-  EXPECT_EQ(stub_->BuildMesh(Context(kBob).get(), build, &mesh).error_code(),
-            grpc::PERMISSION_DENIED);
+  build.set_volume_id(made_up_volume);
+  const grpc::Status missing_build = stub_->BuildMesh(Context(kBob).get(), build, &mesh);
+  build.set_volume_id(volume.volume_id());
+  same_as_missing(stub_->BuildMesh(Context(kBob).get(), build, &mesh), missing_build);
   v3::OpenSessionRequest open;
-  open.set_volume_id(volume.volume_id());
   v3::SessionInfo session;
-  EXPECT_EQ(stub_->OpenSession(Context(kBob).get(), open, &session).error_code(),
-            grpc::PERMISSION_DENIED);
+  open.set_volume_id(made_up_volume);
+  const grpc::Status missing_open = stub_->OpenSession(Context(kBob).get(), open, &session);
+  open.set_volume_id(volume.volume_id());
+  same_as_missing(stub_->OpenSession(Context(kBob).get(), open, &session), missing_open);
 
   // Alice's mesh on it is out of Bob's reach too.
   ASSERT_TRUE(stub_->BuildMesh(Context(kAlice).get(), build, &mesh).ok());
+  EXPECT_TRUE(std::regex_match(mesh.mesh_id(), std::regex("mesh-[0-9a-f]{8}-[0-9a-f]{32}")))
+      << mesh.mesh_id();
+  const std::string made_up_mesh = "mesh-00000000-00000000000000000000000000000000";
   v3::GetMeshRequest get_mesh;
-  get_mesh.set_mesh_id(mesh.mesh_id());
   v3::GetMeshResponse got_mesh;
-  EXPECT_EQ(stub_->GetMesh(Context(kBob).get(), get_mesh, &got_mesh).error_code(),
-            grpc::PERMISSION_DENIED);
+  get_mesh.set_mesh_id(made_up_mesh);
+  const grpc::Status missing_mesh = stub_->GetMesh(Context(kBob).get(), get_mesh, &got_mesh);
+  get_mesh.set_mesh_id(mesh.mesh_id());
+  same_as_missing(stub_->GetMesh(Context(kBob).get(), get_mesh, &got_mesh), missing_mesh);
   v3::DeleteMeshRequest delete_mesh;
-  delete_mesh.set_mesh_id(mesh.mesh_id());
   v3::DeleteMeshResponse deleted_mesh;
-  EXPECT_EQ(stub_->DeleteMesh(Context(kBob).get(), delete_mesh, &deleted_mesh).error_code(),
-            grpc::PERMISSION_DENIED);
+  delete_mesh.set_mesh_id(made_up_mesh);
+  const grpc::Status missing_mesh_delete =
+      stub_->DeleteMesh(Context(kBob).get(), delete_mesh, &deleted_mesh);
+  delete_mesh.set_mesh_id(mesh.mesh_id());
+  same_as_missing(stub_->DeleteMesh(Context(kBob).get(), delete_mesh, &deleted_mesh),
+                  missing_mesh_delete);
+  open.clear_volume_id();
+  open.set_mesh_id(mesh.mesh_id());
+  same_as_missing(stub_->OpenSession(Context(kBob).get(), open, &session), missing_mesh);
 
   v3::DeleteVolumeRequest del;
-  del.set_volume_id(volume.volume_id());
   v3::DeleteVolumeResponse deleted;
-  EXPECT_EQ(stub_->DeleteVolume(Context(kBob).get(), del, &deleted).error_code(),
-            grpc::PERMISSION_DENIED);
+  del.set_volume_id(made_up_volume);
+  const grpc::Status missing_delete = stub_->DeleteVolume(Context(kBob).get(), del, &deleted);
+  del.set_volume_id(volume.volume_id());
+  same_as_missing(stub_->DeleteVolume(Context(kBob).get(), del, &deleted), missing_delete);
   EXPECT_TRUE(stub_->DeleteVolume(Context(kAlice).get(), del, &deleted).ok());
+}
+
+// A load's progress id is its user's: Bob polling Alice's id gets what an
+// id nobody used gets, and may use the same id for a load of his own.
+TEST_F(UsersTest, LoadProgressIdsArePerUser) {
+  v3::LoadVolumeRequest load;
+  load.set_source(kPhantom);
+  load.set_progress_id("shared-id");
+  v3::VolumeInfo info;
+  ASSERT_TRUE(stub_->LoadVolume(Context(kAlice).get(), load, &info).ok());
+  v3::GetLoadProgressRequest poll;
+  v3::LoadProgress progress;
+  poll.set_progress_id("shared-id");
+  ASSERT_TRUE(stub_->GetLoadProgress(Context(kAlice).get(), poll, &progress).ok());
+  EXPECT_TRUE(progress.done());
+  const grpc::Status bobs = stub_->GetLoadProgress(Context(kBob).get(), poll, &progress);
+  poll.set_progress_id("never-used");
+  const grpc::Status missing = stub_->GetLoadProgress(Context(kBob).get(), poll, &progress);
+  EXPECT_EQ(bobs.error_code(), grpc::NOT_FOUND);
+  EXPECT_EQ(missing.error_code(), grpc::NOT_FOUND);
+  std::string expected = missing.error_message();  // the same text, naming his id
+  expected.replace(expected.find("never-used"), 10, "shared-id");
+  EXPECT_EQ(bobs.error_message(), expected);
+  ASSERT_TRUE(stub_->LoadVolume(Context(kBob).get(), load, &info).ok());
 }
 
 TEST_F(UsersTest, SharedVolumesAreReadByAllAndDeletedOnlyByTheirSoleLoader) {
@@ -452,6 +503,23 @@ TEST_F(UsersTest, SessionCapIsPerUser) {
   EXPECT_EQ(third.error_code(), grpc::RESOURCE_EXHAUSTED);
   EXPECT_NE(third.error_message().find("per user"), std::string::npos) << third.error_message();
   EXPECT_TRUE(stub_->OpenSession(Context(kBob).get(), open, &info).ok());
+}
+
+// One user at their caps leaves the others room only while each per-user
+// cap is below its server-wide one: vpm-server warns at start otherwise.
+TEST(UsersServer, WarnsOfPerUserCapsNotBelowTheServers) {
+  EXPECT_TRUE(FairShareWarnings(ServerOptions{}).empty());
+  ServerOptions options;
+  options.max_volumes = 4;
+  options.max_volumes_per_user = 4;
+  options.max_meshes = 8;
+  options.max_meshes_per_user = 16;
+  const std::vector<std::string> warnings = FairShareWarnings(options);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_NE(warnings[0].find("--max-volumes-per-user 4 is not below --max-volumes 4"),
+            std::string::npos)
+      << warnings[0];
+  EXPECT_NE(warnings[1].find("--max-meshes-per-user"), std::string::npos) << warnings[1];
 }
 
 TEST(UsersServer, StartupErrorsAreClear) {

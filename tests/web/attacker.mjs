@@ -53,7 +53,7 @@ async function startCtx() {
   fs.rmSync(sessionsFile, { force: true });
   let starts = 0;
   const ctx = {
-    source, out, tokens, server, step,
+    build, source, out, tokens, server, step,
     grpc: new VpmClient({ address: server.address }),
     metrics: () => metrics(server.metricsPort),
     gateway: null,

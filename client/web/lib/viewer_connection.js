@@ -79,6 +79,7 @@ export class ViewerConnection {
     this.pending = null;    // the newest frame waiting for it
     this.dropped = 0;       // frames the gateway replaced before sending
     this.closed = false;
+    this.calls = new Set();  // unary calls running (grpc-js call objects)
 
     // An error nothing else caught ends this connection only, with a message;
     // the gateway and every other tab carry on.
@@ -102,8 +103,10 @@ export class ViewerConnection {
     this.probe();
   }
 
+  // A unary call of this tab's; cancelled if still running when the tab
+  // closes (onClose).
   rpc(method, request) {
-    return this.client.call(method, request, this.as);
+    return this.client.call(method, request, this.as, this.closed ? null : this.calls);
   }
 
   send(message) {
@@ -549,6 +552,12 @@ export class ViewerConnection {
   onClose() {
     this.closed = true;
     this.openOp += 1;
+    // The tab's calls still running (a load, a mesh build, an open: on a
+    // sign-out too) are cancelled, so the server stops their work now
+    // rather than for a tab that is gone; a session an open made anyway is
+    // closed by the server (OpenSession answers CANCELLED) or by open().
+    for (const call of this.calls) call.cancel();
+    this.calls.clear();
     clearTimeout(this.probeTimer);
     this.stopStream();
     this.releaseSession();

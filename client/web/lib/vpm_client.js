@@ -102,16 +102,20 @@ export class VpmClient {
   // One unary call as `as` (metadata()): resolves with the response,
   // rejects with the gRPC error (err.code, err.details).
   // A call that ran out its deadline or was refused a stream renews the
-  // user's channel (user_channels.js).
-  call(method, request, as = {}) {
+  // user's channel (user_channels.js). `pending`, a Set, holds the call
+  // while it runs, so that its owner can cancel it (a tab closing, a
+  // sign-out): the server then stops the work (a mesh build, a load).
+  call(method, request, as = {}, pending = null) {
     const deadline = new Date(Date.now() + (kDeadlineMs[method] ?? 30000));
     const stub = this.stub(as);
     return new Promise((resolve, reject) => {
-      stub[method](request, this.metadata(as), { deadline }, (err, response) => {
+      const call = stub[method](request, this.metadata(as), { deadline }, (err, response) => {
+        pending?.delete(call);
         if (err && connectionStuck(err)) this.channels.renew(as.token ?? '', stub);
         if (err) reject(err);
         else resolve(response);
       });
+      pending?.add(call);
     });
   }
 
