@@ -16,7 +16,8 @@
 // making six more reads that every other iteration would pay for as well.
 //
 // Per ray: intersect the image box [0, extent_mm]; samples at
-// t_k = t_near + k * step; each reads the deformed volume J(x) = I(X(x)), X
+// t_k = t_near + k * step (t_near moved on by a jitter in [0, step) when
+// VPM_RAYCAST_JITTER is set: ray_jitter.glsl); each reads the deformed volume J(x) = I(X(x)), X
 // from the backward map (the brick-walk loops read two samples per
 // iteration, docs/RENDERING.md). Bricks of wx x wy x wz cells (p.brick_voxels: about
 // 6 mm still, 12 mm interactive, whatever the spacing) that the occupancy pass marked
@@ -40,6 +41,7 @@
 
 #include "shader_interface.glsl"
 #include "backward_map.glsl"
+#include "ray_jitter.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #ifdef VPM_RAYCAST_SAMPLED
@@ -534,6 +536,11 @@ void main() {
     return;
   }
   float step = p.eye_mm.w;
+  // Jittered start (docs/RENDERING.md, "Sampling"): the samples of this ray
+  // sit at t_near + (k + j) step, j from a hash of the pixel and the seed.
+  if (has_flag(VPM_RAYCAST_JITTER)) {
+    t_near += ray_start_jitter(uvec2(px), uint(p.image.w)) * step;
+  }
   bool skipping = has_flag(VPM_RAYCAST_SKIPPING);
   uint taken = 0u;
   int k = 0;

@@ -27,6 +27,7 @@ struct LatticeCostsPush {
 #define VPM_RAYCAST_EARLY_TERMINATION 4
 #define VPM_RAYCAST_HAS_MAP 8
 #define VPM_RAYCAST_COUNT_SAMPLES 16
+#define VPM_RAYCAST_JITTER 64
 #define VPM_RAYCAST_MAX_CLIP_PLANES 16
 
 struct BrickMinMaxPush {
@@ -53,7 +54,7 @@ struct RaycastParams {
   vec4 up;          // xyz camera up * tan(fov/2) * height / shorter side
   ivec4 dims;       // (nx, ny, nz, mode: 0 DVR / 1 MIP) voxels
   vec4 spacing_mm;  // (sx, sy, sz, 0)
-  ivec4 image;      // (width, height, flags, 0) pixels
+  ivec4 image;      // (width, height, flags, jitter seed) pixels
   ivec4 bricks;     // (bx, by, bz, 0) bricks
   ivec4 brick_voxels;  // (wx, wy, wz, 0) voxels per brick side
   vec4 lut;         // (value_lo, entries per value unit, entry count, 0)

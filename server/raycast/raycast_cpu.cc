@@ -9,6 +9,7 @@
 
 #include "server/common/clock.h"
 #include "server/raycast/clip_region.h"
+#include "server/raycast/ray_start_jitter.h"
 
 namespace vpm {
 namespace {
@@ -305,6 +306,9 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
   const vec3 background(p_.background);
   if (t_near > t_far) return PackRgba(background);
   const float step = p_.eye_mm.w;
+  if (Flag(gpu::kRaycastJitter)) {
+    t_near += RayStartJitter(uint32_t(px), uint32_t(py), uint32_t(p_.image.w)) * step;
+  }
   const bool mip = p_.dims.w == 1;
   const bool skipping = Flag(gpu::kRaycastSkipping);
   const bool shading = Flag(gpu::kRaycastShading);

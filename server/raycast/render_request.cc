@@ -121,6 +121,7 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   if (s.early_termination) flags |= gpu::kRaycastEarlyTermination;
   if (has_map) flags |= gpu::kRaycastHasMap;
   if (s.count_samples) flags |= gpu::kRaycastCountSamples;
+  if (s.jitter) flags |= gpu::kRaycastJitter;
   if ((interactive ? s.interactive_cell_gradient : s.still_cell_gradient) &&
       request.mode == RenderMode::kDvr) {
     flags |= kRaycastCellGradient;
@@ -135,7 +136,8 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   p.dims = glm::ivec4(int(geometry.dims[0]), int(geometry.dims[1]), int(geometry.dims[2]),
                       request.mode == RenderMode::kMip ? 1 : 0);
   p.spacing_mm = Vec4(geometry.spacing_mm);
-  p.image = glm::ivec4(setup.render_width, setup.render_height, flags, 0);
+  p.image = glm::ivec4(setup.render_width, setup.render_height, flags,
+                       int32_t(s.jitter_seed));
   p.bricks = glm::ivec4(bricks[0], bricks[1], bricks[2], 0);
   p.brick_voxels = glm::ivec4(brick_voxels, 0);
   p.window = glm::vec4(float(window.level - 0.5 * window.width), float(1.0 / window.width),

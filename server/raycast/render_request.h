@@ -78,6 +78,14 @@ struct RaycastSettings {
   // halves (GPU 563 -> 276 ms in one run), at 33-37 dB PSNR against the taps
   // (docs/RENDERING.md, "Quality modes"); false: the central-difference taps.
   bool still_cell_gradient = true;
+  // Each ray's first sample moved on by a fraction of the step in [0, 1),
+  // from a hash of its pixel and jitter_seed (ray_start_jitter.h): samples of
+  // neighbouring rays at unrelated depths, so the step shows as fine noise
+  // instead of rings ("wood grain") on surfaces (docs/RENDERING.md,
+  // "Sampling"). One seed, one picture: keep the seed for stills, change it
+  // per interactive frame (DeformableScene does).
+  bool jitter = true;
+  uint32_t jitter_seed = 0;
 };
 
 // Raycast flag (RaycastParams::image.z) beside gpu::kRaycast*: shade with
