@@ -2,10 +2,14 @@
 // step: PSNR (RGB, 8 bits) of the still at its own step against the still at
 // step / FINE (default 8), per preset and volume, default camera (anterior,
 // whole box), no map. The issue-29 floor is 40 dB.
-// Usage: step_psnr_bench [--no-jitter] [--taps] [--cut] [--fine F] [--size N]
+// Usage: step_psnr_bench [--no-jitter] [--taps] [--no-preintegration]
+//                        [--no-shading] [--cut] [--scale S] [--fine F] [--size N]
 //                        [--png-dir DIR] [--presets A,B,...] SOURCE...
 //   --no-jitter: ray starts not jittered (the renderer before jittering);
 //   --taps: shade with central differences instead of the cell gradient;
+//   --no-preintegration: each sample through the 1D table (a point);
+//   --scale S: the still at S x its own step (and the reference at S / F);
+//   --no-shading: every preset unshaded;
 //   --cut: the view cut through the orbit centre, facing the camera (what
 //   the clients show first); --png-dir: writes VOLUME_PRESET_{still,fine}.png;
 //   SOURCE: a volume file or phantom:NAME (default phantom:abdomen).
@@ -60,8 +64,8 @@ std::string FileStem(const std::string& source) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool jitter = true, cut = false, taps = false;
-  double fine = 8.0;
+  bool jitter = true, cut = false, taps = false, shading = true, pre = true;
+  double fine = 8.0, scale = 1.0;
   int size = 512;
   std::string png_dir;
   std::vector<std::string> presets = {"ct-soft-tissue", "ct-bone", "ct-vessels", "CT-AAA",
@@ -72,10 +76,16 @@ int main(int argc, char** argv) {
     const std::string arg = argv[i];
     if (arg == "--no-jitter") {
       jitter = false;
+    } else if (arg == "--no-shading") {
+      shading = false;
+    } else if (arg == "--no-preintegration") {
+      pre = false;
     } else if (arg == "--taps") {
       taps = true;
     } else if (arg == "--cut") {
       cut = true;
+    } else if (arg == "--scale" && i + 1 < argc) {
+      scale = std::atof(argv[++i]);
     } else if (arg == "--fine" && i + 1 < argc) {
       fine = std::atof(argv[++i]);
     } else if (arg == "--size" && i + 1 < argc) {
@@ -93,9 +103,9 @@ int main(int argc, char** argv) {
   auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
   auto renderer = bench::Check(VolumeRenderer::Create(*context, {}), "renderer");
   std::printf("still at its own step against step / %.0f, %dx%d, default camera%s, jitter %s, "
-              "%s gradient\n",
+              "%s gradient, pre-integration %s, shading %s\n",
               fine, size, size, cut ? ", view cut" : "", jitter ? "on" : "off",
-              taps ? "tap" : "cell");
+              taps ? "tap" : "cell", pre ? "on" : "off", shading ? "as the preset" : "off");
   std::printf("%-24s %-28s %9s %9s %8s %8s\n", "volume", "preset", "step mm", "fine mm",
               "PSNR dB", "cast ms");
   double worst = 1e9;
@@ -114,10 +124,14 @@ int main(int argc, char** argv) {
       r.volume = &gpu_volume;
       r.settings.jitter = jitter;
       r.settings.still_cell_gradient = !taps;
+      r.settings.preintegrated = pre;
+      r.settings.shading = shading;
+      if (!shading && r.preset.lighting) r.preset.lighting->shade = false;
       if (cut) {
         r.clip.planes.push_back(CutPlaneFacing(g.PhysicalToWorld(r.camera.Target()),
                                                g.direction * r.camera.Forward()));
       }
+      if (scale != 1.0) r.settings.step_mm = RequestStepMm(r, g) * scale;
       const Frame still = bench::Check(renderer->Render(r), "still");
       r.settings.step_mm = still.step_mm / fine;
       const Frame reference = bench::Check(renderer->Render(r), "fine still");

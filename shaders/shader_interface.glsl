@@ -22,6 +22,7 @@ struct LatticeCostsPush {
 
 // Ray casting (server/raycast).
 #define VPM_RENDER_LUT_ENTRIES 1024
+#define VPM_PREINTEGRATED_ENTRIES 256
 #define VPM_RAYCAST_SHADING 1
 #define VPM_RAYCAST_SKIPPING 2
 #define VPM_RAYCAST_EARLY_TERMINATION 4

@@ -112,6 +112,10 @@ struct RenderLutBlock {
   glm::vec4 entries[kRenderLutEntries];
 };
 static_assert(sizeof(RenderLutBlock) == 16384);
+// The pre-integrated table (server/raycast/preintegrated_lut.h) follows the
+// RenderLutBlock in the same texel buffer: N x N entries, N =
+// kPreintegratedEntries (RaycastParams::lut.w when the frame uses it).
+inline constexpr int kPreintegratedEntries = 256;
 
 // raycast_*.comp: the rows of 8 x 8 tiles a dispatch casts, so that a frame
 // may be cast in bands, one submit each (VolumeRenderer::Options::

@@ -72,9 +72,9 @@ double RequestStepMm(const RenderRequest& request, const VolumeGeometry& geometr
                              geometry);
   }
   const glm::dvec3& s = geometry.spacing_mm;
-  const double factor = request.mode == RenderMode::kMip ? kStillMipStepFactor
-                                                         : request.preset.still_step_factor;
-  return factor * std::min({s.x, s.y, s.z});
+  const bool mip = request.mode == RenderMode::kMip;
+  const double factor = mip ? kStillMipStepFactor : request.preset.still_step_factor;
+  return std::min(factor * std::min({s.x, s.y, s.z}), mip ? kStillMipMaxStepMm : kStillMaxStepMm);
 }
 
 Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGeometry& geometry,
@@ -125,6 +125,7 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   if ((interactive ? s.interactive_cell_gradient : s.still_cell_gradient) &&
       request.mode == RenderMode::kDvr) {
     flags |= kRaycastCellGradient;
+    if (s.preintegrated) flags |= kRaycastPreintegrated;
   }
   const glm::ivec3 brick_voxels = BrickVoxels(request.quality, geometry);
   const auto bricks = BrickGridDims(geometry.dims, brick_voxels);
@@ -157,7 +158,8 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
 }
 
 glm::vec4 LutParams(const RenderLut& lut) {
-  return glm::vec4(lut.value_lo, lut.entries_per_value, float(lut.entries.size()), 0.0f);
+  return glm::vec4(lut.value_lo, lut.entries_per_value, float(lut.entries.size()),
+                   float(gpu::kPreintegratedEntries));
 }
 
 }  // namespace vpm
