@@ -16,7 +16,8 @@
 // making six more reads that every other iteration would pay for as well.
 //
 // Per ray: intersect the image box [0, extent_mm]; samples at
-// t_k = t_near + k * step; each reads the deformed volume J(x) = I(X(x)), X
+// t_k = t_near + k * step (t_near moved on by a jitter in [0, step) when
+// VPM_RAYCAST_JITTER is set: ray_jitter.glsl); each reads the deformed volume J(x) = I(X(x)), X
 // from the backward map (the brick-walk loops read two samples per
 // iteration, docs/RENDERING.md). Bricks of wx x wy x wz cells (p.brick_voxels: about
 // 6 mm still, 12 mm interactive, whatever the spacing) that the occupancy pass marked
@@ -40,6 +41,7 @@
 
 #include "shader_interface.glsl"
 #include "backward_map.glsl"
+#include "ray_jitter.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #ifdef VPM_RAYCAST_SAMPLED
@@ -67,6 +69,11 @@ layout(std430, binding = 5) writeonly buffer Pixels { uint pixels[]; };
 layout(std430, binding = 6) buffer Stats { uint samples_taken; };
 
 layout(constant_id = 0) const bool kCellGradient = false;
+// Specialization constant 3 (with kCellGradient, DVR; 1 and 2 are
+// voxel_encoding.glsl's): composite each step as a segment through the
+// pre-integrated table (server/raycast/preintegrated_lut.h), which follows
+// the 1D table in u_lut.
+layout(constant_id = 3) const bool kPreintegrated = false;
 // Which rows of tiles this dispatch casts: a still frame is cast in bands.
 layout(push_constant) uniform Band { RaycastBandPush band; };
 
@@ -75,6 +82,10 @@ const float kOpaque = 0.99;
 // six taps: it is lit head-on (ambient + diffuse), as flat tissue is.
 const float kShadeMinWeight = 1.0 / 256.0;
 const float kNoValue = -3.0e38;
+// The cell-gradient loops' threshold: weight under 1/256 per mm of ray
+// (kShadeMinWeight x step / 1 mm), so that the share of the picture lit
+// head-on does not grow as the step shrinks (docs/RENDERING.md, "Sampling").
+float g_shade_min_weight;
 
 bool has_flag(int f) { return (p.image.z & f) != 0; }
 
@@ -94,6 +105,7 @@ vec3 g_to_grid;      // (M - 1) / extent: map grid points per mm
 vec4 g_lut;          // p.lut
 vec4 g_shading;      // p.shading
 float g_gradient_half;  // p.gradient.x, value/mm
+float g_pre_scale;      // pre-integrated entries per value unit
 
 void set_globals() {
   g_inv_spacing = 1.0 / p.spacing_mm.xyz;
@@ -109,6 +121,7 @@ void set_globals() {
   g_lut = p.lut;
   g_shading = p.shading;
   g_gradient_half = p.gradient.x;
+  g_pre_scale = g_lut.y * (g_lut.w - 1.0) / (g_lut.z - 1.0);
 }
 
 vec3 extent_mm() { return g_extent_mm; }
@@ -440,26 +453,67 @@ vec4 lut_at(float v) {
 // gradient (value/mm). Shading is weighted by s = |g| / (|g| + g_half), so
 // that inside homogeneous tissue, where the gradient is noise, the colour
 // stays as lit head-on instead of speckling.
-vec3 shade(vec3 rgb, vec3 g, vec3 dir) {
+// alpha: 1 for a colour, the opacity for a premultiplied one (the
+// specular highlight and the clamp scale with it).
+vec3 shade(vec3 rgb, vec3 g, vec3 dir, float alpha) {
   float len = length(g);
   float ndl = len > 0.0 ? abs(dot(g, dir)) / len : 1.0;
   float s = len / (len + g_gradient_half);
   float n = g_shading.w;
   float spec = ndl / (n - n * ndl + ndl);
   float diffuse = 1.0 + (ndl - 1.0) * s;
-  vec3 lit = rgb * (g_shading.x + g_shading.y * diffuse) + vec3(g_shading.z * spec * s);
-  return min(lit, vec3(1.0));
+  vec3 lit = rgb * (g_shading.x + g_shading.y * diffuse) + vec3(alpha * g_shading.z * spec * s);
+  return min(lit, vec3(alpha));
+}
+
+// The pre-integrated table at (front, back) values, bilinear: premultiplied
+// colour and opacity of one step (SamplePreintegratedLut on the CPU).
+vec4 preintegrated_at(float front, float back) {
+  float n = g_lut.w;
+  float ff = clamp((front - g_lut.x) * g_pre_scale, 0.0, n - 1.0);
+  float fb = clamp((back - g_lut.x) * g_pre_scale, 0.0, n - 1.0);
+  int i = min(int(ff), int(n) - 2);
+  int j = min(int(fb), int(n) - 2);
+  float s = ff - float(i), t = fb - float(j);
+  int base = VPM_RENDER_LUT_ENTRIES + i + int(n) * j;
+  vec4 a = texelFetch(u_lut, base);
+  vec4 b = texelFetch(u_lut, base + 1);
+  vec4 c = texelFetch(u_lut, base + int(n));
+  vec4 d = texelFetch(u_lut, base + int(n) + 1);
+  vec4 ab = a + (b - a) * s;
+  vec4 cd = c + (d - c) * s;
+  return ab + (cd - ab) * t;
+}
+
+// Composites the step that ends at a sample of value `back` (gradient g)
+// and begins at `front` through the pre-integrated table, as
+// composite_sample does a point. True when early termination ends the ray.
+bool composite_segment(float front, float back, vec3 g, vec3 dir, bool shading, bool early,
+                       inout vec4 acc) {
+  vec4 c = preintegrated_at(front, back);
+  float transmitted = 1.0 - acc.a;
+  if (shading) {
+    c.rgb = transmitted * c.a > g_shade_min_weight
+                ? shade(c.rgb, g, dir, c.a)
+                : min(c.rgb * (g_shading.x + g_shading.y), vec3(c.a));
+  }
+  if (c.a > 0.0) {
+    acc.rgb += transmitted * c.rgb;
+    acc.a += transmitted * c.a;
+    return early && acc.a > kOpaque;
+  }
+  return false;
 }
 
 // Composites one cell-gradient DVR sample (value v, gradient g in value/mm)
 // front to back into acc: the table's colour and opacity, lit when shading
-// (head-on when its weight in the pixel is under kShadeMinWeight). True
+// (head-on when its weight in the pixel is under g_shade_min_weight). True
 // when early termination ends the ray (acc.a past kOpaque).
 bool composite_sample(float v, vec3 g, vec3 dir, bool shading, bool early, inout vec4 acc) {
   vec4 c = lut_at(v);
   float w = (1.0 - acc.a) * c.a;
   if (shading) {
-    c.rgb = w > kShadeMinWeight ? shade(c.rgb, g, dir)
+    c.rgb = w > g_shade_min_weight ? shade(c.rgb, g, dir, 1.0)
                                 : min(c.rgb * (g_shading.x + g_shading.y), vec3(1.0));
   }
   if (c.a > 0.0) {
@@ -534,6 +588,12 @@ void main() {
     return;
   }
   float step = p.eye_mm.w;
+  g_shade_min_weight = kShadeMinWeight * step;
+  // Jittered start (docs/RENDERING.md, "Sampling"): the samples of this ray
+  // sit at t_near + (k + j) step, j from a hash of the pixel and the seed.
+  if (has_flag(VPM_RAYCAST_JITTER)) {
+    t_near += ray_start_jitter(uvec2(px), uint(p.image.w)) * step;
+  }
   bool skipping = has_flag(VPM_RAYCAST_SKIPPING);
   uint taken = 0u;
   int k = 0;
@@ -588,9 +648,25 @@ void main() {
     // Segments of the brick walk, as in the MIP loop.
     BrickWalk walk = walk_start(eye, dir, inv_dir, t_near);
     bool done = false;
+    // Pre-integrated: the value at the front of the next step (that of the
+    // last sample composited, k_next - 1); a ray's first sample is a step
+    // of constant value.
+    int k_next = 0;
+    float front = 0.0;
+    bool has_front = false;
     for (float t_end;
          !done && next_segment(walk, k, 0.0, skipping, t_near, t_far, step, t_end);
          walk_step(walk)) {
+      if (kPreintegrated) {
+        // After skipped samples, the step into this brick begins at the
+        // sample before it; the segment ends with the first sample past the
+        // brick, so that the step leaving it counts too.
+        if (k != k_next) {
+          has_front = k > 0;
+          front = deformed_value(eye + (t_near + float(k - 1) * step) * dir);
+        }
+        t_end = min(t_end + step, t_far);
+      }
       vec3 x;
       segment_sample(k, t_near, step, t_end, eye, dir, x);  // next_segment: in the segment
       // Two samples per iteration, as in the MIP loop: both reads first,
@@ -603,20 +679,27 @@ void main() {
         float v2 = deformed_value_and_gradient(second ? x2 : x, grad2);
         ++taken;
         ++k;
-        if (composite_sample(v1, grad1, dir, shading, early, acc)) {
+        if (kPreintegrated ? composite_segment(has_front ? front : v1, v1, grad1, dir, shading,
+                                               early, acc)
+                           : composite_sample(v1, grad1, dir, shading, early, acc)) {
           done = true;
           break;
         }
+        front = v1;
+        has_front = true;
         if (second) {
           ++taken;
           ++k;
-          if (composite_sample(v2, grad2, dir, shading, early, acc)) {
+          if (kPreintegrated ? composite_segment(front, v2, grad2, dir, shading, early, acc)
+                             : composite_sample(v2, grad2, dir, shading, early, acc)) {
             done = true;
             break;
           }
+          front = v2;
         }
         if (!segment_sample(k, t_near, step, t_end, eye, dir, x)) break;
       }
+      k_next = k;
       if (!skipping) break;
     }
   }
@@ -655,7 +738,7 @@ void main() {
     } else {
       g += sign * v * along;
       if (phase == 6) {
-        c.rgb = shade(c.rgb, g / (2.0 * h), dir);
+        c.rgb = shade(c.rgb, g / (2.0 * h), dir, 1.0);
         composite = true;
         phase = 0;
         ++k;

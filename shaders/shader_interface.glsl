@@ -22,11 +22,13 @@ struct LatticeCostsPush {
 
 // Ray casting (server/raycast).
 #define VPM_RENDER_LUT_ENTRIES 1024
+#define VPM_PREINTEGRATED_ENTRIES 256
 #define VPM_RAYCAST_SHADING 1
 #define VPM_RAYCAST_SKIPPING 2
 #define VPM_RAYCAST_EARLY_TERMINATION 4
 #define VPM_RAYCAST_HAS_MAP 8
 #define VPM_RAYCAST_COUNT_SAMPLES 16
+#define VPM_RAYCAST_JITTER 64
 #define VPM_RAYCAST_MAX_CLIP_PLANES 16
 
 struct BrickMinMaxPush {
@@ -53,7 +55,7 @@ struct RaycastParams {
   vec4 up;          // xyz camera up * tan(fov/2) * height / shorter side
   ivec4 dims;       // (nx, ny, nz, mode: 0 DVR / 1 MIP) voxels
   vec4 spacing_mm;  // (sx, sy, sz, 0)
-  ivec4 image;      // (width, height, flags, 0) pixels
+  ivec4 image;      // (width, height, flags, jitter seed) pixels
   ivec4 bricks;     // (bx, by, bz, 0) bricks
   ivec4 brick_voxels;  // (wx, wy, wz, 0) voxels per brick side
   vec4 lut;         // (value_lo, entries per value unit, entry count, 0)

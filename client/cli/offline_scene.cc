@@ -110,6 +110,7 @@ Result<SceneView> MakeView(const RenderArgs& args, const Volume& volume) {
   view.width = args.size[0];
   view.height = args.size[1];
   view.overlay = args.overlay;
+  view.step_mm = args.step_mm;
   ASSIGN_OR_RETURN(const ClipChoice clip, ToClipChoice(args.clip));
   view.clip = clip.region;
   view.view_cut = clip.view_cut;

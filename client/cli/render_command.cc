@@ -133,6 +133,9 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
         "--quality interactive is offline only (Render is a still frame)");
   }
   if (args.size.size() != 2) return absl::InvalidArgumentError("--size takes W H");
+  if (args.step_mm != 0.0) {
+    return absl::InvalidArgumentError("--step is offline only (the server picks the step)");
+  }
   if (!args.camera.empty() && args.camera.size() != 3) {
     return absl::InvalidArgumentError("--camera takes AZ EL DIST");
   }
@@ -266,6 +269,11 @@ void AddRenderCommand(CLI::App& app, const ServerFlags* server, int* exit_code) 
                   "MIP window W L: black at L - W/2, white at L + W/2 (default: the volume's "
                   "1st..99.5th percentile, above air for CT)")
       ->expected(2);
+  cmd->add_option("--step", a->step_mm,
+                  "sample step along the rays, mm (0: the quality's default: a still DVR "
+                  "frame the preset's factor of the smallest spacing; offline only)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--quality", a->quality, "still or interactive")
       ->check(CLI::IsMember({"still", "interactive"}))
       ->capture_default_str();

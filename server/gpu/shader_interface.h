@@ -77,6 +77,9 @@ inline constexpr int kRaycastSkipping = 2;
 inline constexpr int kRaycastEarlyTermination = 4;
 inline constexpr int kRaycastHasMap = 8;
 inline constexpr int kRaycastCountSamples = 16;
+// Ray starts jittered by a fraction of the step from a hash of the pixel and
+// image.w, the frame's seed (RaycastJitter in server/raycast/raycast_jitter.h).
+inline constexpr int kRaycastJitter = 64;
 inline constexpr int kRaycastMaxClipPlanes = 16;  // VPM_RAYCAST_MAX_CLIP_PLANES
 struct RaycastParams {
   glm::vec4 eye_mm;      // xyz eye (physical mm); w: step_mm
@@ -85,7 +88,7 @@ struct RaycastParams {
   glm::vec4 up;          // xyz camera up * tan(fov/2) * height / shorter side
   glm::ivec4 dims;       // (nx, ny, nz, mode: 0 DVR / 1 MIP) voxels
   glm::vec4 spacing_mm;  // (sx, sy, sz, 0)
-  glm::ivec4 image;      // (width, height, flags, 0) pixels
+  glm::ivec4 image;      // (width, height, flags, jitter seed) pixels
   glm::ivec4 bricks;     // (bx, by, bz, 0) bricks
   glm::ivec4 brick_voxels;  // (wx, wy, wz, 0) voxels per brick side
   glm::vec4 lut;         // (value_lo, entries per value unit, entry count, 0)
@@ -109,6 +112,10 @@ struct RenderLutBlock {
   glm::vec4 entries[kRenderLutEntries];
 };
 static_assert(sizeof(RenderLutBlock) == 16384);
+// The pre-integrated table (server/raycast/preintegrated_lut.h) follows the
+// RenderLutBlock in the same texel buffer: N x N entries, N =
+// kPreintegratedEntries (RaycastParams::lut.w when the frame uses it).
+inline constexpr int kPreintegratedEntries = 256;
 
 // raycast_*.comp: the rows of 8 x 8 tiles a dispatch casts, so that a frame
 // may be cast in bands, one submit each (VolumeRenderer::Options::

@@ -9,6 +9,8 @@
 
 #include "server/common/clock.h"
 #include "server/raycast/clip_region.h"
+#include "server/raycast/preintegrated_lut.h"
+#include "server/raycast/ray_start_jitter.h"
 
 namespace vpm {
 namespace {
@@ -204,8 +206,9 @@ class Caster {
     return g / (2.0f * h);
   }
 
-  // shade() of raycast_body.glsl; g: the gradient (value/mm).
-  vec3 Shade(vec3 rgb, vec3 g, vec3 dir) const {
+  // shade() of raycast_body.glsl; g: the gradient (value/mm); alpha: 1 for
+  // a colour, the opacity for a premultiplied one.
+  vec3 Shade(vec3 rgb, vec3 g, vec3 dir, float alpha = 1.0f) const {
     const float len = glm::length(g);
     const float ndl = len > 0.0f ? std::abs(glm::dot(g, dir)) / len : 1.0f;
     const float s = len / (len + p_.gradient.x);
@@ -213,8 +216,24 @@ class Caster {
     const float spec = ndl / (n - n * ndl + ndl);  // Schlick's ndl^n
     const float diffuse = 1.0f + (ndl - 1.0f) * s;
     const vec3 lit =
-        rgb * (p_.shading.x + p_.shading.y * diffuse) + vec3(p_.shading.z * spec * s);
-    return glm::min(lit, vec3(1.0f));
+        rgb * (p_.shading.x + p_.shading.y * diffuse) + vec3(alpha * p_.shading.z * spec * s);
+    return glm::min(lit, vec3(alpha));
+  }
+
+  // preintegrated_at() of raycast_body.glsl.
+  vec4 PreintegratedAt(float front, float back) const {
+    const std::vector<vec4>& table = *in_.preintegrated;
+    const float n = p_.lut.w;
+    const float scale = p_.lut.y * (n - 1.0f) / (p_.lut.z - 1.0f);
+    const float ff = std::clamp((front - p_.lut.x) * scale, 0.0f, n - 1.0f);
+    const float fb = std::clamp((back - p_.lut.x) * scale, 0.0f, n - 1.0f);
+    const int ni = int(n);
+    const int i = std::min(int(ff), ni - 2), j = std::min(int(fb), ni - 2);
+    const float s = ff - float(i), t = fb - float(j);
+    const size_t base = size_t(i) + size_t(ni) * j;
+    const vec4 ab = table[base] + (table[base + 1] - table[base]) * s;
+    const vec4 cd = table[base + ni] + (table[base + ni + 1] - table[base + ni]) * s;
+    return ab + (cd - ab) * t;
   }
 
   ivec3 BrickOf(vec3 x) const {
@@ -305,14 +324,22 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
   const vec3 background(p_.background);
   if (t_near > t_far) return PackRgba(background);
   const float step = p_.eye_mm.w;
+  if (Flag(gpu::kRaycastJitter)) {
+    t_near += RayStartJitter(uint32_t(px), uint32_t(py), uint32_t(p_.image.w)) * step;
+  }
   const bool mip = p_.dims.w == 1;
   const bool skipping = Flag(gpu::kRaycastSkipping);
   const bool shading = Flag(gpu::kRaycastShading);
   const bool early = Flag(gpu::kRaycastEarlyTermination);
   const bool cell = Flag(kRaycastCellGradient);
+  const bool pre = !mip && cell && Flag(kRaycastPreintegrated);
   float ray_max = kNoValue;
   vec4 acc(0.0f);
   int k = 0;
+  // Pre-integrated: the value at the front of the next step, as the shader.
+  int k_next = 0;
+  float front = 0.0f;
+  bool has_front = false;
   // One sample k at x: true when the ray is done (early termination).
   const auto sample = [&](vec3 x) {
     ++taken;
@@ -322,11 +349,28 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
       ray_max = std::max(ray_max, v);
       return early && ray_max >= p_.window.z;  // white: no later sample shows
     }
+    if (pre) {
+      // composite_segment() of raycast_body.glsl.
+      vec4 c = PreintegratedAt(has_front ? front : v, v);
+      front = v;
+      has_front = true;
+      const float transmitted = 1.0f - acc.a;
+      vec3 rgb(c);
+      if (shading) {
+        rgb = transmitted * c.a > kShadeMinWeight * step
+                  ? Shade(rgb, cell_gradient, dir, c.a)
+                  : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(c.a));
+      }
+      if (c.a <= 0.0f) return false;
+      acc += vec4(transmitted * rgb, transmitted * c.a);
+      return early && acc.a > kOpaque;
+    }
     const vec4 c = LutAt(v);
     if (c.a <= 0.0f) return false;
     vec3 rgb = vec3(c);
     if (shading) {
-      rgb = (1.0f - acc.a) * c.a > kShadeMinWeight
+      // Per mm of ray with the cell gradient (raycast_body.glsl).
+      rgb = (1.0f - acc.a) * c.a > (cell ? kShadeMinWeight * step : kShadeMinWeight)
                 ? Shade(rgb, cell ? cell_gradient : TapGradient(x), dir)
                 : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(1.0f));
     }
@@ -348,11 +392,19 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
         if (!WalkToOccupied(walk, k, threshold, step_b, t_delta, t_near, t_far, step)) break;
         t_end = std::min(WalkExit(walk), t_far);
       }
+      if (pre) {
+        if (k != k_next) {
+          has_front = k > 0;
+          front = DeformedValue(eye + (t_near + float(k - 1) * step) * dir);
+        }
+        t_end = std::min(t_end + step, t_far);
+      }
       for (float t = t_near + float(k) * step; t <= t_end; t = t_near + float(k) * step) {
         done = sample(eye + t * dir);
         ++k;
         if (done) break;
       }
+      k_next = k;
       if (!skipping) break;
       WalkStep(walk, step_b, t_delta);
     }
@@ -545,7 +597,11 @@ Result<Frame> RenderReference(const RenderRequest& request, const Volume& volume
   }
   frame.timings.occupancy_ms = MsSince(t0);
   t0 = std::chrono::steady_clock::now();
-  const RaycastCpuInputs inputs{&volume, map, &lut, occupancy};
+  std::vector<glm::vec4> preintegrated;
+  if (setup.params.image.z & kRaycastPreintegrated) {
+    preintegrated = BakePreintegratedLut(request.preset, setup.step_mm);
+  }
+  const RaycastCpuInputs inputs{&volume, map, &lut, occupancy, &preintegrated};
   int64_t samples = 0;
   std::vector<uint32_t> pixels = RaycastCpu(setup.params, inputs, threads, &samples);
   if (request.settings.count_samples) frame.samples = samples;

@@ -44,6 +44,9 @@ struct RaycastCpuInputs {
   const HostBackwardMap* map = nullptr;        // needed when params flag a map
   const RenderLut* lut = nullptr;
   std::span<const float> occupancy;            // needed when params flag skipping
+  // BakePreintegratedLut of the same preset and step; needed when params
+  // flag kRaycastPreintegrated.
+  const std::vector<glm::vec4>* preintegrated = nullptr;
 };
 
 // One packed RGBA8 word per pixel (r in the low byte), params.image.xy

@@ -72,9 +72,9 @@ double RequestStepMm(const RenderRequest& request, const VolumeGeometry& geometr
                              geometry);
   }
   const glm::dvec3& s = geometry.spacing_mm;
-  const double factor = request.mode == RenderMode::kMip ? kStillMipStepFactor
-                                                         : request.preset.still_step_factor;
-  return factor * std::min({s.x, s.y, s.z});
+  const bool mip = request.mode == RenderMode::kMip;
+  const double factor = mip ? kStillMipStepFactor : request.preset.still_step_factor;
+  return std::min(factor * std::min({s.x, s.y, s.z}), mip ? kStillMipMaxStepMm : kStillMaxStepMm);
 }
 
 Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGeometry& geometry,
@@ -121,9 +121,11 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   if (s.early_termination) flags |= gpu::kRaycastEarlyTermination;
   if (has_map) flags |= gpu::kRaycastHasMap;
   if (s.count_samples) flags |= gpu::kRaycastCountSamples;
+  if (s.jitter) flags |= gpu::kRaycastJitter;
   if ((interactive ? s.interactive_cell_gradient : s.still_cell_gradient) &&
       request.mode == RenderMode::kDvr) {
     flags |= kRaycastCellGradient;
+    if (s.preintegrated) flags |= kRaycastPreintegrated;
   }
   const glm::ivec3 brick_voxels = BrickVoxels(request.quality, geometry);
   const auto bricks = BrickGridDims(geometry.dims, brick_voxels);
@@ -135,7 +137,8 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   p.dims = glm::ivec4(int(geometry.dims[0]), int(geometry.dims[1]), int(geometry.dims[2]),
                       request.mode == RenderMode::kMip ? 1 : 0);
   p.spacing_mm = Vec4(geometry.spacing_mm);
-  p.image = glm::ivec4(setup.render_width, setup.render_height, flags, 0);
+  p.image = glm::ivec4(setup.render_width, setup.render_height, flags,
+                       int32_t(s.jitter_seed));
   p.bricks = glm::ivec4(bricks[0], bricks[1], bricks[2], 0);
   p.brick_voxels = glm::ivec4(brick_voxels, 0);
   p.window = glm::vec4(float(window.level - 0.5 * window.width), float(1.0 / window.width),
@@ -155,7 +158,8 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
 }
 
 glm::vec4 LutParams(const RenderLut& lut) {
-  return glm::vec4(lut.value_lo, lut.entries_per_value, float(lut.entries.size()), 0.0f);
+  return glm::vec4(lut.value_lo, lut.entries_per_value, float(lut.entries.size()),
+                   float(gpu::kPreintegratedEntries));
 }
 
 }  // namespace vpm

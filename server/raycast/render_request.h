@@ -44,6 +44,14 @@ inline constexpr int kMaxFrameSide = 4096;
 inline constexpr double kStillBrickMm = 6.0;
 inline constexpr double kInteractiveBrickMm = 12.0;
 inline constexpr double kStillMipStepFactor = 1.0;
+// Still steps are also no coarser than these (mm), whatever the voxels: on
+// the 3 mm kidney CT, the presets' factors gave steps of 1.5 (DVR) and 3 mm
+// (MIP), whose stills measured 28.6-37.9 dB (DVR, shaded bone and vessel
+// presets) and 33.4 dB (MIP) against step / 8; at these caps every preset
+// holds 40 dB on that CT and the phantom (docs/RENDERING.md, "Sampling";
+// bench/step_psnr_bench).
+inline constexpr double kStillMaxStepMm = 0.375;
+inline constexpr double kStillMipMaxStepMm = 0.75;
 // Interactive frames step by what the screen can show, not by the voxels:
 // half the footprint of one ray-cast pixel at the orbit centre
 // (kInteractiveStepPerPixel, Nyquist for what a pixel resolves), at least
@@ -79,12 +87,29 @@ struct RaycastSettings {
   // halves (GPU 563 -> 276 ms in one run), at 33-37 dB PSNR against the taps
   // (docs/RENDERING.md, "Quality modes"); false: the central-difference taps.
   bool still_cell_gradient = true;
+  // Each ray's first sample moved on by a fraction of the step in [0, 1),
+  // from a hash of its pixel and jitter_seed (ray_start_jitter.h): samples of
+  // neighbouring rays at unrelated depths, so the step shows as fine noise
+  // instead of rings ("wood grain") on surfaces (docs/RENDERING.md,
+  // "Sampling"). One seed, one picture: keep the seed for stills, change it
+  // per interactive frame (DeformableScene does).
+  bool jitter = true;
+  uint32_t jitter_seed = 0;
+  // DVR with the cell gradient: each step composited as a segment whose
+  // value runs from the previous sample's to this one's, through the
+  // pre-integrated table (preintegrated_lut.h), so that sharp transfer
+  // functions do not depend on where samples land (docs/RENDERING.md,
+  // "Sampling"). The tap-gradient loop ignores it.
+  bool preintegrated = true;
 };
 
 // Raycast flag (RaycastParams::image.z) beside gpu::kRaycast*: shade with
 // the cell gradient (the GPU picks the pipeline by it, the CPU reference
 // the code path).
 inline constexpr int kRaycastCellGradient = 32;
+// Raycast flag: composite each step as a segment through the pre-integrated
+// table (RaycastSettings::preintegrated; the GPU picks the pipeline by it).
+inline constexpr int kRaycastPreintegrated = 128;
 
 struct RenderRequest {
   Camera camera;
@@ -183,7 +208,8 @@ struct RaycastSetup {
 Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGeometry& geometry,
                                     const std::array<int, 3>& map_dims);
 
-// params.lut for `lut`: (value_lo, entries per value unit, entry count, 0).
+// params.lut for `lut`: (value_lo, entries per value unit, entry count,
+// gpu::kPreintegratedEntries).
 glm::vec4 LutParams(const RenderLut& lut);
 
 // The step a request will use (validated by PrepareRaycast).

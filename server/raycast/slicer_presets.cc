@@ -10,7 +10,7 @@ using glm::dvec3;
 // near white, lilac at 3071 HU.
 constexpr TfLighting kCtLighting{true, 0.1, 0.9, 0.2, 10.0};
 
-RenderTransferFunction CtAaa() {
+RenderTransferFunction SlicerCtAaa() {
   return {"CT-AAA",
           {{-3024, dvec3(0, 0, 0)},
            {143.556, dvec3(0.615686, 0.356863, 0.184314)},
@@ -23,7 +23,7 @@ RenderTransferFunction CtAaa() {
           kCtLighting};
 }
 
-RenderTransferFunction CtBone() {
+RenderTransferFunction SlicerCtBone() {
   return {"CT-Bone",
           {{-3024, dvec3(0, 0, 0)},
            {-16.4458, dvec3(0.729412, 0.254902, 0.301961)},
@@ -33,7 +33,7 @@ RenderTransferFunction CtBone() {
           kCtLighting};
 }
 
-RenderTransferFunction CtMuscle() {
+RenderTransferFunction SlicerCtMuscle() {
   return {"CT-Muscle",
           {{-3024, dvec3(0, 0, 0)},
            {-155.407, dvec3(0.54902, 0.25098, 0.14902)},
@@ -44,7 +44,7 @@ RenderTransferFunction CtMuscle() {
           kCtLighting};
 }
 
-RenderTransferFunction CtChestContrastEnhanced() {
+RenderTransferFunction SlicerCtChestContrastEnhanced() {
   return {"CT-Chest-Contrast-Enhanced",
           {{-3024, dvec3(0, 0, 0)},
            {67.0106, dvec3(0.54902, 0.25098, 0.14902)},
@@ -57,7 +57,7 @@ RenderTransferFunction CtChestContrastEnhanced() {
 
 // Slicer's soft tissue is a grey, unshaded, opaque surface from -160 HU
 // (fat and everything denser), white from 240 HU.
-RenderTransferFunction CtSoftTissue() {
+RenderTransferFunction SlicerCtSoftTissue() {
   return {"CT-Soft-Tissue",
           {{-2048, dvec3(0, 0, 0)},
            {-167.01, dvec3(0, 0, 0)},
@@ -68,7 +68,7 @@ RenderTransferFunction CtSoftTissue() {
           TfLighting{false, 0.2, 1.0, 0.0, 1.0}};
 }
 
-RenderTransferFunction MrDefault() {
+RenderTransferFunction SlicerMrDefault() {
   return {"MR-Default",
           {{0, dvec3(0, 0, 0)},
            {20, dvec3(0.168627, 0, 0)},
@@ -94,12 +94,12 @@ std::vector<std::pair<std::string, std::string>> SlicerPresetNames() {
 }
 
 std::optional<RenderTransferFunction> SlicerPreset(std::string_view name) {
-  if (name == "CT-AAA") return CtAaa();
-  if (name == "CT-Bone") return CtBone();
-  if (name == "CT-Muscle") return CtMuscle();
-  if (name == "CT-Chest-Contrast-Enhanced") return CtChestContrastEnhanced();
-  if (name == "CT-Soft-Tissue") return CtSoftTissue();
-  if (name == "MR-Default") return MrDefault();
+  if (name == "CT-AAA") return SlicerCtAaa();
+  if (name == "CT-Bone") return SlicerCtBone();
+  if (name == "CT-Muscle") return SlicerCtMuscle();
+  if (name == "CT-Chest-Contrast-Enhanced") return SlicerCtChestContrastEnhanced();
+  if (name == "CT-Soft-Tissue") return SlicerCtSoftTissue();
+  if (name == "MR-Default") return SlicerMrDefault();
   return std::nullopt;
 }
 

@@ -8,6 +8,7 @@
 #include "server/common/clock.h"
 #include "server/gpu/compute_batch.h"
 #include "server/gpu/shader_interface.h"
+#include "server/raycast/preintegrated_lut.h"
 #include "shaders/brick_minmax.spv.h"
 #include "shaders/brick_occupancy.spv.h"
 #include "shaders/raycast_dvr.spv.h"
@@ -72,17 +73,19 @@ Status VolumeRenderer::Init() {
                                    .local_size = {64, 1, 1}}));
   // The ray casters: DVR or MIP, with or without a backward map, and DVR
   // shaded with the cell gradient (specialization constant kCellGradient).
-  auto raycast_spec = [&](bool mip, bool map, bool cell_gradient) {
+  auto raycast_spec = [&](bool mip, bool map, bool cell_gradient, bool preintegrated = false) {
     const DT volume_read = sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer;
     gpu::KernelSpec spec{
         .name = StrCat("raycast_", mip ? "mip" : "dvr", map ? "_map" : "", sampled ? "_sampled" : "",
-                       cell_gradient ? " (cell gradient)" : ""),
+                       cell_gradient ? " (cell gradient)" : "",
+                       preintegrated ? " (pre-integrated)" : ""),
         .spirv = RaycastSpirv(sampled, mip, map),
         .bindings = {volume_read, volume_read, DT::eStorageBuffer, DT::eUniformTexelBuffer,
                      DT::eUniformTexelBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
         .push_constant_bytes = sizeof(gpu::RaycastBandPush),
         .local_size = {8, 8, 1}};
-    if (cell_gradient) spec.specialization = {1u};
+    // Ids 1 and 2 are the volume's (GpuVolume::KernelFor), 3 pre-integration.
+    if (cell_gradient) spec.specialization = {1u, 0u, 0u, preintegrated ? 1u : 0u};
     return spec;
   };
   for (int mip = 0; mip < 2; ++mip) {
@@ -96,6 +99,9 @@ Status VolumeRenderer::Init() {
     ASSIGN_OR_RETURN(auto raycast,
                      gpu::ComputeKernel::Create(*context_, raycast_spec(false, map, true)));
     cell_gradient_kernels_[map].emplace(std::move(raycast));
+    ASSIGN_OR_RETURN(auto preintegrated,
+                     gpu::ComputeKernel::Create(*context_, raycast_spec(false, map, true, true)));
+    preintegrated_kernels_[map].emplace(std::move(preintegrated));
   }
   ASSIGN_OR_RETURN(auto upscale,
                    gpu::ComputeKernel::Create(
@@ -116,7 +122,10 @@ Status VolumeRenderer::Init() {
   // Params are a storage buffer (shaders/raycast_body.glsl says why).
   RETURN_IF_ERROR(EnsureBuffer(params_, sizeof(gpu::RaycastParams), BU::eStorageBuffer));
   RETURN_IF_ERROR(
-      EnsureBuffer(lut_, sizeof(gpu::RenderLutBlock), BU::eUniformTexelBuffer));
+      EnsureBuffer(lut_,
+                   sizeof(gpu::RenderLutBlock) + sizeof(glm::vec4) * gpu::kPreintegratedEntries *
+                                                     gpu::kPreintegratedEntries,
+                   BU::eUniformTexelBuffer));
   RETURN_IF_ERROR(gpu::CatchVulkan("creating the lookup table's texel view", [&] {
     lut_view_ = vk::raii::BufferView(
         context_->device(), vk::BufferViewCreateInfo({}, lut_->handle(),
@@ -211,8 +220,18 @@ Result<const gpu::GpuBuffer*> VolumeRenderer::BrickMinMax(const GpuVolume& volum
   return &brick_grids_.back().minmax;
 }
 
-Status VolumeRenderer::PrepareLut(const RenderPreset& preset, double step_mm) {
-  if (lut_preset_ && *lut_preset_ == preset && lut_step_mm_ == step_mm) return absl::OkStatus();
+Status VolumeRenderer::PrepareLut(const RenderPreset& preset, double step_mm,
+                                  bool preintegrated) {
+  const bool same = lut_preset_ && *lut_preset_ == preset && lut_step_mm_ == step_mm;
+  if (same && (!preintegrated || preintegrated_baked_)) return absl::OkStatus();
+  if (preintegrated) {
+    // After the RenderLutBlock in the same buffer (shader_interface.h).
+    const std::vector<glm::vec4> table = BakePreintegratedLut(preset, step_mm);
+    RETURN_IF_ERROR(lut_->Upload(std::as_bytes(std::span<const glm::vec4>(table)),
+                                 sizeof(gpu::RenderLutBlock)));
+  }
+  preintegrated_baked_ = preintegrated;
+  if (same) return absl::OkStatus();
   const RenderLut lut = BakeRenderLut(preset, step_mm);
   RETURN_IF_ERROR(lut_->Upload(std::as_bytes(std::span<const glm::vec4>(lut.entries))));
   RETURN_IF_ERROR(
@@ -336,7 +355,9 @@ Result<VolumeRenderer::Cast> VolumeRenderer::PrepareCast(const RenderRequest& re
   const gpu::KernelArg map_arg = sampled ? gpu::KernelArg(map) : gpu::KernelArg(map_view);
   ASSIGN_OR_RETURN(gpu::ComputeKernel kernel,
                    request.volume->KernelFor(
-                       *context_, (setup.params.image.z & kRaycastCellGradient) != 0
+                       *context_, (setup.params.image.z & kRaycastPreintegrated) != 0
+                                      ? *preintegrated_kernels_[has_map]
+                                  : (setup.params.image.z & kRaycastCellGradient) != 0
                                       ? *cell_gradient_kernels_[has_map]
                                       : *raycast_kernels_[mip][has_map]));
   return Cast{std::move(kernel),
@@ -372,7 +393,8 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   }
   ASSIGN_OR_RETURN(RaycastSetup setup,
                    PrepareRaycast(request, request.volume->geometry(), map_dims));
-  RETURN_IF_ERROR(PrepareLut(request.preset, setup.step_mm));
+  RETURN_IF_ERROR(PrepareLut(request.preset, setup.step_mm,
+                             (setup.params.image.z & kRaycastPreintegrated) != 0));
   setup.params.lut = lut_params_;
   ASSIGN_OR_RETURN(const gpu::GpuBuffer* minmax,
                    BrickMinMax(*request.volume, glm::ivec3(setup.params.brick_voxels)));

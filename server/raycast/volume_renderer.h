@@ -92,7 +92,9 @@ class VolumeRenderer {
   // The volume's brick min-max grid for bricks of `brick_voxels` per side,
   // computed on first use and cached.
   Result<const gpu::GpuBuffer*> BrickMinMax(const GpuVolume& volume, glm::ivec3 brick_voxels);
-  Status PrepareLut(const RenderPreset& preset, double step_mm);
+  // Bakes and uploads the preset's table for the step (and, when asked, its
+  // pre-integrated table) unless they are there already.
+  Status PrepareLut(const RenderPreset& preset, double step_mm, bool preintegrated);
   Status EnsureBuffer(std::optional<gpu::GpuBuffer>& buffer, vk::DeviceSize bytes,
                       vk::BufferUsageFlags usage);
   Status EnsureMapTexels(size_t points);
@@ -139,6 +141,7 @@ class VolumeRenderer {
   std::optional<gpu::ComputeKernel> occupancy_kernel_;
   std::optional<gpu::ComputeKernel> raycast_kernels_[2][2];  // [mip][backward map]
   std::optional<gpu::ComputeKernel> cell_gradient_kernels_[2];  // DVR [backward map]
+  std::optional<gpu::ComputeKernel> preintegrated_kernels_[2];  // the same, pre-integrated
   std::optional<gpu::ComputeKernel> upscale_kernel_;
   std::optional<gpu::GpuImage3D> identity_map_;  // 2^3 zeros, bound when there is no map
   // The backward map copied per frame for the texel-buffer variants (RGBA32F,
@@ -165,6 +168,7 @@ class VolumeRenderer {
   double lut_step_mm_ = 0.0;
   glm::vec4 lut_params_{0.0f};
   uint64_t lut_generation_ = 0;  // bumped at every bake
+  bool preintegrated_baked_ = false;  // the buffer holds the pre-integrated table of lut_preset_
   std::optional<OccupancyKey> occupancy_key_;
 };
 

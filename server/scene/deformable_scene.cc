@@ -235,6 +235,10 @@ Result<RenderRequest> DeformableScene::PrepareRender(const SceneView& view,
   request.width = view.width;
   request.height = view.height;
   request.clip = ViewClip(view);
+  request.settings.step_mm = view.step_mm;
+  if (view.quality == RenderQuality::kInteractive) {
+    request.settings.jitter_seed = ++interactive_frames_;
+  }
   request.volume = gpu_volume_;
   // Undeformed (every displacement 0): no map, the identity, whose reads
   // would cost a third of the cast for the same picture.

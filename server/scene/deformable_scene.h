@@ -58,6 +58,9 @@ struct SceneView {
   // nothing grabbed, through the orbit centre: the view shows the tissue
   // being moved, not the skin in front of it (DeformableScene::ViewClip).
   bool view_cut = false;
+  // The sample step along the rays (mm); 0: the quality's default
+  // (RaycastSettings::step_mm).
+  double step_mm = 0.0;
 };
 
 // The interactive backward map: Update keeps the vertices that moved less
@@ -265,6 +268,10 @@ class DeformableScene {
   bool defer_map_update_ = false;
   bool map_stale_ = false;  // deferred mode: FEM moved since the last map update
   bool map_identity_ = true;  // every displacement 0 at the last map update
+  // Interactive frames prepared so far: their jitter seed, so that the
+  // jitter's noise changes from frame to frame while stills keep seed 0
+  // (RaycastSettings::jitter_seed).
+  uint32_t interactive_frames_ = 0;
 };
 
 }  // namespace vpm

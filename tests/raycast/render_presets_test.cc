@@ -94,20 +94,26 @@ TEST(RenderPresets, RejectsBadPresets) {
 }
 
 // Still DVR steps by the preset's factor (ct-soft-tissue 1.0, the others
-// 0.5) of the smallest spacing, still MIP by 1.0, interactive frames by 1.0;
-// an explicit step wins.
+// 0.5) of the smallest spacing, still MIP by 1.0, but no coarser than
+// kStillMaxStepMm (DVR) and kStillMipMaxStepMm (MIP); interactive frames by
+// 1.0; an explicit step wins.
 TEST(RenderPresets, StillStepFollowsPresetAndMode) {
   const Volume volume = testing::MakeSphereRodVolume(16);  // smallest spacing 1.0 mm
+  VolumeGeometry fine = volume.geometry();
+  fine.spacing_mm *= 0.25;  // smallest spacing 0.25 mm
   RenderRequest r;
   r.preset = *MakeRenderPreset("ct-vessels", volume);
-  EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), 0.5);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, fine), 0.125);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), kStillMaxStepMm);
   r.preset = *MakeRenderPreset("ct-bone", volume);
-  EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), 0.5);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, fine), 0.125);
   r.preset = *MakeRenderPreset("ct-soft-tissue", volume);
-  EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), 1.0);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, fine), 0.25);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), kStillMaxStepMm);
   r.mode = RenderMode::kMip;
   r.preset = *MakeRenderPreset("ct-vessels", volume);
-  EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), 1.0);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, fine), 0.25);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), kStillMipMaxStepMm);
   r.mode = RenderMode::kDvr;
   r.quality = RenderQuality::kInteractive;
   EXPECT_DOUBLE_EQ(RequestStepMm(r, volume.geometry()), 1.0);
