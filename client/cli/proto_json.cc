@@ -13,6 +13,10 @@ json VolumeJson(const v2::VolumeInfo& v) {
          {"owner", v.owner()}};
   j["dims"] = std::vector<int64_t>(v.dims().begin(), v.dims().end());
   j["spacing_mm"] = {v.spacing_mm().x(), v.spacing_mm().y(), v.spacing_mm().z()};
+  j["origin_lps_mm"] = {v.origin_lps_mm().x(), v.origin_lps_mm().y(), v.origin_lps_mm().z()};
+  j["direction"] = std::vector<double>(v.direction().begin(), v.direction().end());
+  j["voxel_encoding"] = v.voxel_encoding();
+  j["notes"] = std::vector<std::string>(v.notes().begin(), v.notes().end());
   for (const auto& l : v.landmarks()) {
     j["landmarks"].push_back({{"name", l.name()},
                               {"position_mm", {l.position_mm().x(), l.position_mm().y(),

@@ -10,7 +10,8 @@ namespace vpm::service {
 Status CheckVolumeAccess(const VolumeEntry& volume, std::string_view user) {
   if (volume.owner.empty() || volume.owner == user) return absl::OkStatus();
   return absl::PermissionDeniedError(
-      StrCat("volume_id: volume '", volume.id, "' was uploaded by another user"));
+      StrCat("volume_id: volume '", volume.id, "' was ",
+             volume.load_key.empty() ? "uploaded" : "loaded from a PACS", " by another user"));
 }
 
 Result<std::unique_ptr<VolumeStore>> VolumeStore::Create(const Options& options) {
@@ -28,6 +29,20 @@ int64_t NextUse() {
   static std::atomic<int64_t> uses{0};
   return ++uses;
 }
+
+// A PACS volume's load key: "pacs:ENDPOINT/STUDY/SERIES#USER" (user names
+// hold no '#'), one per user: a PACS volume belongs to its loader.
+constexpr std::string_view kPacsKeyPrefix = "pacs:";
+
+std::string PacsKey(std::string_view source, std::string_view user) {
+  return StrCat(source, "#", user);
+}
+
+std::string PacsKeyOwner(std::string_view key) {
+  return std::string(key.substr(key.rfind('#') + 1));
+}
+
+std::string_view PacsKeySource(std::string_view key) { return key.substr(0, key.rfind('#')); }
 
 // A volume no session uses and whose source can be read again.
 bool Evictable(const VolumeEntry& entry) {
@@ -102,7 +117,15 @@ std::shared_ptr<VolumeEntry> VolumeStore::FindLoadedLocked(const std::string& lo
 }
 
 Result<Volume> VolumeStore::ReadSource(const std::string& load_key, const std::string& source,
-                                       const ProgressFn& progress) const {
+                                       const ProgressFn& progress,
+                                       const CancelToken& cancel) const {
+  if (load_key.starts_with(kPacsKeyPrefix)) {
+    if (!options_.read_pacs) {
+      return absl::FailedPreconditionError(
+          "source: this server has no PACS endpoints (vpm-server --pacs FILE)");
+    }
+    return options_.read_pacs(PacsKeySource(load_key), PacsKeyOwner(load_key), progress, cancel);
+  }
   if (!load_key.starts_with("file:")) {
     ASSIGN_OR_RETURN(Volume volume, ReadVolume(load_key, options_.read_limits, progress));
     volume.set_source(source);
@@ -128,7 +151,10 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
         "source: raw: sources are not served; upload the file instead");
   }
   std::string key(source);
-  if (!source.starts_with("phantom:")) {
+  const bool pacs = source.starts_with(kPacsKeyPrefix);
+  if (pacs) {
+    key = PacsKey(source, user);
+  } else if (!source.starts_with("phantom:")) {
     ASSIGN_OR_RETURN(const std::string path, ResolveDataSource(options_.data_root, source));
     key = "file:" + path;
   }
@@ -136,14 +162,15 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
     std::lock_guard lock(mutex_);
     if (auto loaded = FindLoadedLocked(key)) {
       loaded->last_used = NextUse();
-      loaded_by_[loaded->id].insert(user);
+      if (!pacs) loaded_by_[loaded->id].insert(user);
+      if (pacs && options_.on_pacs_reuse) options_.on_pacs_reuse(source, user);
       return loaded;
     }
   }
   RETURN_IF_ERROR(CheckRoom(0));
   RETURN_IF_ERROR(cancel.Check());
-  ASSIGN_OR_RETURN(Volume volume,
-                   ReadSource(key, std::string(source), SubProgress(progress, 0.0, 0.85)));
+  ASSIGN_OR_RETURN(Volume volume, ReadSource(key, std::string(source),
+                                             SubProgress(progress, 0.0, 0.85), cancel));
   RETURN_IF_ERROR(cancel.Check());
   return Add(std::move(volume), std::move(key), user, {}, SubProgress(progress, 0.85, 1.0));
 }
@@ -188,6 +215,8 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string
       entry = std::make_shared<VolumeEntry>(id, std::move(volume), std::move(gpu), bytes);
       if (load_key.empty()) {
         entry->owner = user;
+      } else if (load_key.starts_with(kPacsKeyPrefix)) {
+        entry->owner = PacsKeyOwner(load_key);
       } else if (!user.empty()) {
         loaded_by_[id].insert(user);
       }
@@ -221,6 +250,10 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Get(std::string_view id,
     }
     again = gone->second;
   }
+  if (again.load_key.starts_with(kPacsKeyPrefix) && PacsKeyOwner(again.load_key) != user) {
+    return absl::PermissionDeniedError(
+        StrCat("volume_id: volume '", id, "' was loaded from a PACS by another user"));
+  }
   // Evicted while idle (a shared volume: anyone may read it): read it again
   // under its id, its loaders kept.
   {
@@ -252,7 +285,15 @@ Status VolumeStore::CheckSoleLoaderLocked(std::string_view id, const std::string
 
 Status VolumeStore::Delete(std::string_view id, const std::string& user) {
   std::lock_guard lock(mutex_);
-  if (evicted_.contains(id)) {  // only shared volumes are evicted
+  if (auto gone = evicted_.find(id); gone != evicted_.end()) {  // shared or PACS volumes
+    if (gone->second.load_key.starts_with(kPacsKeyPrefix)) {
+      if (PacsKeyOwner(gone->second.load_key) != user) {
+        return absl::PermissionDeniedError(
+            StrCat("volume_id: volume '", id, "' was loaded from a PACS by another user"));
+      }
+      evicted_.erase(gone);
+      return absl::OkStatus();
+    }
     RETURN_IF_ERROR(CheckSoleLoaderLocked(id, user));
     evicted_.erase(evicted_.find(id));
     loaded_by_.erase(loaded_by_.find(id));
@@ -282,7 +323,7 @@ Status VolumeStore::CheckOwnerRoom(std::string_view owner) const {
 Status VolumeStore::CheckOwnerRoomLocked(std::string_view owner) const {
   if (options_.max_volumes_per_owner <= 0) return absl::OkStatus();
   int64_t held = 0;
-  for (const auto& [id, entry] : volumes_) held += entry->owner == owner;
+  for (const auto& [id, entry] : volumes_) held += entry->owner == owner && entry->load_key.empty();
   if (held < options_.max_volumes_per_owner) return absl::OkStatus();
   return absl::ResourceExhaustedError(
       StrCat("you hold ", held, " uploaded volumes, the most one user may "

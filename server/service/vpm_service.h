@@ -73,6 +73,12 @@ class VpmService final : public v2::Vpm::CallbackService {
   grpc::ServerUnaryReactor* ReadTransferFunction(grpc::CallbackServerContext*,
                                                  const v2::ReadTransferFunctionRequest*,
                                                  v2::RenderTransferFunction*) override;
+  // pacs_handlers.cc
+  grpc::ServerUnaryReactor* SearchStudies(grpc::CallbackServerContext*,
+                                          const v2::SearchStudiesRequest*,
+                                          v2::SearchStudiesResponse*) override;
+  grpc::ServerUnaryReactor* ListSeries(grpc::CallbackServerContext*, const v2::ListSeriesRequest*,
+                                       v2::ListSeriesResponse*) override;
 
  private:
   // Authenticates the caller, then runs `fn` with the caller's user name
