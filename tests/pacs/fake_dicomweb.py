@@ -15,6 +15,7 @@ prefix that picks the behaviour (http://127.0.0.1:PORT/MODE/studies...):
   mixed      the series' instances and one of another series
   notdicom   a part that is not a DICOM file
   stall      one part, then nothing for a long time
+  slow       like good (without auth), one part every 25 ms
 
 Usage: fake_dicomweb.py CT_FOLDER SR_FOLDER OTHER_FOLDER PORT_FILE
 (listens on a free loopback port and writes it to PORT_FILE). Counts the
@@ -120,6 +121,18 @@ class Handler(BaseHTTPRequestHandler):
         # cut body is seen by the parser, not by the transport.
         self.send_header('Connection', 'close')
         self.end_headers()
+        if mode == 'slow':
+            marker = f'--{boundary}'.encode()
+            at = 0
+            while at < len(body):
+                following = body.find(marker, at + 1)
+                end = len(body) if following < 0 else following
+                self.wfile.write(body[at:end])
+                self.wfile.flush()
+                time.sleep(0.025)
+                at = end
+            self.close_connection = True
+            return
         if mode == 'stall':
             self.wfile.write(body[:len(body) - 10])
             self.wfile.flush()

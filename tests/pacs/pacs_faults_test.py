@@ -12,6 +12,7 @@ Usage: pacs_faults_test.py BUILD_DIR SOURCE_DIR
 """
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -68,7 +69,7 @@ def run(h, t, build, source):
     h.write_secret('good.token', 'good-token')
     h.write_secret('wrong.token', 'wrong-token')
     modes = ['quirky', 'truncated', 's401', 's403', 's404', 's500', 'w401', 'w403', 'w404', 'w500',
-             'sr', 'mixed', 'notdicom', 'stall']
+             'sr', 'mixed', 'notdicom', 'stall', 'slow']
     endpoints = [{'name': 'good', 'dicomweb': f'{base}/good', 'bearer_token_file': 'good.token',
                   'users': ['alice'], 'page_size': 2},
                  {'name': 'badtoken', 'dicomweb': f'{base}/good', 'bearer_token_file': 'wrong.token',
@@ -112,6 +113,13 @@ def run(h, t, build, source):
     t.check(rc == 0 and vol.get('dims') == [122, 101, 112] and vol.get('min_value') == -1207,
             f'unquoted boundary, parts without Content-Length, a preamble: loads ({err.strip()[-200:]})')
     t.check(bool(cached('quirky')), 'and is cached')
+    rc, _, err = h.vpm('alice', 'volume', 'load', '--progress', f'pacs:slow/{STUDY}/{CT_SERIES}')
+    stages = [s for s in ('retrieving', 'reading', 'uploading') if s in err]
+    percents = [int(p) for p in re.findall(r'\] +(\d+)%', err)]
+    t.check(rc == 0 and 'retrieving' in stages and len(set(percents)) >= 3 and
+            percents == sorted(percents),
+            f'a 3 s retrieval reports progress: stages {stages}, {len(set(percents))} distinct '
+            f'fractions, never decreasing')
 
     expect = {
         'truncated': ('INVALID_ARGUMENT', 'truncated'),
