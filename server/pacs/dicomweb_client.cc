@@ -1,10 +1,10 @@
 #include "server/pacs/dicomweb_client.h"
 
 #include <algorithm>
-#include <fstream>
 #include <memory>
 #include <set>
 
+#include "server/pacs/dicom_part_writer.h"
 #include "server/pacs/http_get.h"
 #include "server/pacs/multipart_parser.h"
 
@@ -15,25 +15,6 @@ constexpr const char* kAcceptDicom =
     "Accept: multipart/related; type=\"application/dicom\"; transfer-syntax=*";
 
 std::string Label(const PacsEndpoint& e) { return StrCat("PACS '", e.name, "'"); }
-
-char FileNameDigit(int64_t n, int place) {
-  for (int i = 0; i < place; ++i) n /= 10;
-  return static_cast<char>('0' + n % 10);
-}
-
-std::string InstanceFileName(int64_t n) {
-  std::string name(6, '0');
-  for (int i = 0; i < 6; ++i) name[5 - i] = FileNameDigit(n, i);
-  return name + ".dcm";
-}
-
-// One part of a WADO-RS answer, written to its file as it arrives.
-struct PartWriter {
-  std::filesystem::path path;
-  std::ofstream file;
-  std::string head;  // the first 132 bytes: preamble and "DICM"
-  int64_t bytes = 0;
-};
 
 }  // namespace
 
@@ -168,6 +149,7 @@ Result<RetrievedSeries> DicomwebClient::RetrieveSeries(
   RETURN_IF_ERROR(CheckUid(study_uid, "study_uid"));
   RETURN_IF_ERROR(CheckUid(series_uid, "series_uid"));
   const std::string label = Label(endpoint_);
+  const std::string what = StrCat(label, ": series ", series_uid);
   HttpRequest request{
       .url = StrCat(endpoint_.dicomweb_url, "/studies/", study_uid, "/series/", series_uid),
       .headers = {kAcceptDicom},
@@ -178,110 +160,47 @@ Result<RetrievedSeries> DicomwebClient::RetrieveSeries(
       .label = label,
       .connect_timeout_s = options_.connect_timeout_s,
       .stall_timeout_s = options_.stall_timeout_s};
-  RetrievedSeries out;
+  DicomPartWriter writer(folder, what, max_bytes);
   std::unique_ptr<MultipartParser> parser;
-  std::unique_ptr<PartWriter> part;
   int64_t received = 0;
-  auto report = [&](int64_t body_bytes, int64_t content_length) {
-    if (!progress) return;
-    double f = 0;
-    if (expected_instances > 0) {
-      f = static_cast<double>(out.instances) / static_cast<double>(expected_instances);
-    } else if (content_length > 0) {
-      f = static_cast<double>(body_bytes) / static_cast<double>(content_length);
+  const auto on_body = [&](const HttpResponse& h, std::string_view chunk) -> Status {
+    if (!parser) {  // the boundary comes with the answer's headers
+      Result<std::string> boundary = MultipartBoundary(h.content_type);
+      if (!boundary.ok()) {
+        return absl::InvalidArgumentError(StrCat(what, ": ", boundary.status().message()));
+      }
+      parser = std::make_unique<MultipartParser>(*boundary, writer.Callbacks());
     }
-    progress(std::min(f, 0.99), "retrieving");
+    received += static_cast<int64_t>(chunk.size());
+    Status fed = parser->Feed(chunk);
+    if (!fed.ok() && absl::IsInvalidArgument(fed) &&
+        std::string_view(fed.message().data(), fed.message().size()).starts_with("multipart:")) {
+      return absl::InvalidArgumentError(StrCat(what, ": ", fed.message()));
+    }
+    RETURN_IF_ERROR(fed);
+    if (progress) {
+      double f = 0;
+      if (expected_instances > 0) {
+        f = static_cast<double>(writer.files()) / static_cast<double>(expected_instances);
+      } else if (h.content_length > 0) {
+        f = static_cast<double>(received) / static_cast<double>(h.content_length);
+      }
+      progress(std::min(f, 0.99), "retrieving");
+    }
+    return absl::OkStatus();
   };
-  MultipartParser::Callbacks callbacks{
-      .part_begin = [&](const MultipartParser::Headers& headers) -> Status {
-        auto type = headers.find("content-type");
-        if (type != headers.end()) {
-          std::string media = type->second.substr(0, type->second.find(';'));
-          std::transform(media.begin(), media.end(), media.begin(),
-                         [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-          while (!media.empty() && media.back() == ' ') media.pop_back();
-          if (media != "application/dicom" && media != "application/octet-stream") {
-            return absl::InvalidArgumentError(
-                StrCat(label, ": series ", series_uid, ": part ", out.instances + 1, " is '",
-                       media.substr(0, 60), "', not application/dicom"));
-          }
-        }
-        part = std::make_unique<PartWriter>();
-        part->path = folder / InstanceFileName(out.instances + 1);
-        part->file.open(part->path, std::ios::binary | std::ios::trunc);
-        if (!part->file) return absl::InternalError("the PACS cache: cannot create a file");
-        return absl::OkStatus();
-      },
-      .part_data = [&](std::string_view chunk) -> Status {
-        if (!part) return absl::InternalError("multipart: data outside a part");
-        if (part->head.size() < 132) {
-          part->head.append(chunk.substr(0, 132 - part->head.size()));
-        }
-        part->file.write(chunk.data(), static_cast<std::streamsize>(chunk.size()));
-        if (!part->file) return absl::InternalError("the PACS cache: cannot write (disk full?)");
-        part->bytes += static_cast<int64_t>(chunk.size());
-        out.bytes += static_cast<int64_t>(chunk.size());
-        if (out.bytes > max_bytes) {
-          return absl::ResourceExhaustedError(
-              StrCat(label, ": series ", series_uid, " is over ", max_bytes,
-                     " bytes, the PACS cache's budget (--pacs-cache-bytes)"));
-        }
-        return absl::OkStatus();
-      },
-      .part_end = [&]() -> Status {
-        part->file.close();
-        if (!part->file) return absl::InternalError("the PACS cache: cannot write (disk full?)");
-        if (part->head.size() < 132 || part->head.compare(128, 4, "DICM") != 0) {
-          return absl::InvalidArgumentError(StrCat(label, ": series ", series_uid, ": part ",
-                                                   out.instances + 1, " (", part->bytes,
-                                                   " bytes) is not a DICOM file"));
-        }
-        ++out.instances;
-        part.reset();
-        return absl::OkStatus();
-      },
-  };
-  ASSIGN_OR_RETURN(
-      const HttpResponse head,
-      HttpGet(
-          request,
-          [&](const HttpResponse& h, std::string_view chunk) -> Status {
-            if (!parser) {
-              Result<std::string> boundary = MultipartBoundary(h.content_type);
-              if (!boundary.ok()) {
-                return absl::InvalidArgumentError(
-                    StrCat(label, ": series ", series_uid, ": ", boundary.status().message()));
-              }
-              parser = std::make_unique<MultipartParser>(*boundary, callbacks);
-            }
-            received += static_cast<int64_t>(chunk.size());
-            Status fed = parser->Feed(chunk);
-            if (!fed.ok() && std::string_view(fed.message().data(), fed.message().size())
-                                 .starts_with("multipart:")) {
-              return absl::InvalidArgumentError(
-                  StrCat(label, ": series ", series_uid, ": ", fed.message()));
-            }
-            RETURN_IF_ERROR(fed);
-            report(received, h.content_length);
-            return absl::OkStatus();
-          },
-          cancel));
+  ASSIGN_OR_RETURN(const HttpResponse head, HttpGet(request, on_body, cancel));
   if (head.status < 200 || head.status > 299) {
     return StatusFromHttp(head.status, label, StrCat("retrieve series ", series_uid));
   }
-  if (!parser) {
-    return absl::NotFoundError(
-        StrCat(label, ": series ", series_uid, ": the PACS sent no instances"));
+  if (parser) {
+    if (Status done = parser->Finish(); !done.ok()) {
+      return absl::InvalidArgumentError(StrCat(what, ": ", done.message()));
+    }
   }
-  if (Status done = parser->Finish(); !done.ok()) {
-    return absl::InvalidArgumentError(StrCat(label, ": series ", series_uid, ": ", done.message()));
-  }
-  if (out.instances == 0) {
-    return absl::NotFoundError(
-        StrCat(label, ": series ", series_uid, ": the PACS sent no instances"));
-  }
+  if (writer.files() == 0) return absl::NotFoundError(StrCat(what, ": the PACS sent no instances"));
   if (progress) progress(1.0, "retrieving");
-  return out;
+  return RetrievedSeries{.instances = writer.files(), .bytes = writer.bytes()};
 }
 
 }  // namespace vpm::pacs

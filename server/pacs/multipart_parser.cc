@@ -97,83 +97,95 @@ Status MultipartParser::Feed(std::string_view bytes) {
   return absl::OkStatus();
 }
 
+Status MultipartParser::StepPreamble(std::string_view rest, bool* progressed) {
+  const size_t at = rest.find(delimiter_);
+  if (at == std::string_view::npos) {
+    if (total_bytes_ > static_cast<int64_t>(kMaxPreambleBytes)) {
+      return absl::InvalidArgumentError(
+          StrCat("multipart: no boundary in the first ", kMaxPreambleBytes, " bytes"));
+    }
+    // Keep only what may still begin a delimiter.
+    if (rest.size() >= delimiter_.size()) consumed_ += rest.size() - (delimiter_.size() - 1);
+    return absl::OkStatus();
+  }
+  consumed_ += at + delimiter_.size();
+  state_ = State::kAfterDelimiter;
+  *progressed = true;
+  return absl::OkStatus();
+}
+
+Status MultipartParser::StepAfterDelimiter(std::string_view rest, bool* progressed) {
+  if (rest.size() < 2) return absl::OkStatus();
+  if (rest.substr(0, 2) == "--") {
+    state_ = State::kEpilogue;
+    *progressed = true;
+    return absl::OkStatus();
+  }
+  // Transport padding (spaces, tabs), then CRLF.
+  size_t i = 0;
+  while (i < rest.size() && (rest[i] == ' ' || rest[i] == '\t')) ++i;
+  if (i + 2 > rest.size()) {
+    if (i > 256) return absl::InvalidArgumentError("multipart: junk after a boundary");
+    return absl::OkStatus();
+  }
+  if (rest.substr(i, 2) != "\r\n") {
+    return absl::InvalidArgumentError(
+        StrCat("multipart: part ", parts_ + 1, ": the boundary is not followed by a line end"));
+  }
+  consumed_ += i + 2;
+  state_ = State::kHeaders;
+  *progressed = true;
+  return absl::OkStatus();
+}
+
+Status MultipartParser::StepHeaders(std::string_view rest, bool* progressed) {
+  // No headers at all: the blank line comes first.
+  size_t end = rest.starts_with("\r\n") ? 0 : rest.find("\r\n\r\n");
+  if (end == std::string_view::npos) {
+    if (rest.size() > kMaxHeaderBytes) {
+      return absl::InvalidArgumentError(
+          StrCat("multipart: part ", parts_ + 1, ": headers over ", kMaxHeaderBytes, " bytes"));
+    }
+    return absl::OkStatus();
+  }
+  ++parts_;
+  RETURN_IF_ERROR(ParseHeaders(rest.substr(0, end)));
+  consumed_ += end == 0 ? 2 : end + 4;
+  state_ = State::kBody;
+  *progressed = true;
+  return absl::OkStatus();
+}
+
+Status MultipartParser::StepBody(std::string_view rest, bool* progressed) {
+  const size_t at = rest.find(delimiter_);
+  if (at == std::string_view::npos) {
+    // Everything but what may begin a delimiter goes out now.
+    if (rest.size() >= delimiter_.size()) {
+      const size_t out = rest.size() - (delimiter_.size() - 1);
+      RETURN_IF_ERROR(callbacks_.part_data(rest.substr(0, out)));
+      consumed_ += out;
+    }
+    return absl::OkStatus();
+  }
+  if (at > 0) RETURN_IF_ERROR(callbacks_.part_data(rest.substr(0, at)));
+  if (callbacks_.part_end) RETURN_IF_ERROR(callbacks_.part_end());
+  consumed_ += at + delimiter_.size();
+  state_ = State::kAfterDelimiter;
+  *progressed = true;
+  return absl::OkStatus();
+}
+
 Status MultipartParser::Step(bool* progressed) {
   const std::string_view rest = std::string_view(buffer_).substr(consumed_);
   switch (state_) {
-    case State::kPreamble: {
-      const size_t at = rest.find(delimiter_);
-      if (at == std::string_view::npos) {
-        if (total_bytes_ > static_cast<int64_t>(kMaxPreambleBytes)) {
-          return absl::InvalidArgumentError(
-              StrCat("multipart: no boundary in the first ", kMaxPreambleBytes, " bytes"));
-        }
-        // Keep only what may still begin a delimiter.
-        if (rest.size() >= delimiter_.size()) consumed_ += rest.size() - (delimiter_.size() - 1);
-        return absl::OkStatus();
-      }
-      consumed_ += at + delimiter_.size();
-      state_ = State::kAfterDelimiter;
-      *progressed = true;
-      return absl::OkStatus();
-    }
-    case State::kAfterDelimiter: {
-      if (rest.size() < 2) return absl::OkStatus();
-      if (rest.substr(0, 2) == "--") {
-        state_ = State::kEpilogue;
-        *progressed = true;
-        return absl::OkStatus();
-      }
-      // Transport padding (spaces, tabs), then CRLF.
-      size_t i = 0;
-      while (i < rest.size() && (rest[i] == ' ' || rest[i] == '\t')) ++i;
-      if (i + 2 > rest.size()) {
-        if (i > 256) return absl::InvalidArgumentError("multipart: junk after a boundary");
-        return absl::OkStatus();
-      }
-      if (rest.substr(i, 2) != "\r\n") {
-        return absl::InvalidArgumentError(
-            StrCat("multipart: part ", parts_ + 1, ": the boundary is not followed by a line end"));
-      }
-      consumed_ += i + 2;
-      state_ = State::kHeaders;
-      *progressed = true;
-      return absl::OkStatus();
-    }
-    case State::kHeaders: {
-      // No headers at all: the blank line comes first.
-      size_t end = rest.starts_with("\r\n") ? 0 : rest.find("\r\n\r\n");
-      if (end == std::string_view::npos) {
-        if (rest.size() > kMaxHeaderBytes) {
-          return absl::InvalidArgumentError(
-              StrCat("multipart: part ", parts_ + 1, ": headers over ", kMaxHeaderBytes, " bytes"));
-        }
-        return absl::OkStatus();
-      }
-      ++parts_;
-      RETURN_IF_ERROR(ParseHeaders(rest.substr(0, end)));
-      consumed_ += end == 0 ? 2 : end + 4;
-      state_ = State::kBody;
-      *progressed = true;
-      return absl::OkStatus();
-    }
-    case State::kBody: {
-      const size_t at = rest.find(delimiter_);
-      if (at == std::string_view::npos) {
-        // Everything but what may begin a delimiter goes out now.
-        if (rest.size() >= delimiter_.size()) {
-          const size_t out = rest.size() - (delimiter_.size() - 1);
-          RETURN_IF_ERROR(callbacks_.part_data(rest.substr(0, out)));
-          consumed_ += out;
-        }
-        return absl::OkStatus();
-      }
-      if (at > 0) RETURN_IF_ERROR(callbacks_.part_data(rest.substr(0, at)));
-      if (callbacks_.part_end) RETURN_IF_ERROR(callbacks_.part_end());
-      consumed_ += at + delimiter_.size();
-      state_ = State::kAfterDelimiter;
-      *progressed = true;
-      return absl::OkStatus();
-    }
+    case State::kPreamble:
+      return StepPreamble(rest, progressed);
+    case State::kAfterDelimiter:
+      return StepAfterDelimiter(rest, progressed);
+    case State::kHeaders:
+      return StepHeaders(rest, progressed);
+    case State::kBody:
+      return StepBody(rest, progressed);
     case State::kEpilogue:
       return absl::OkStatus();
   }

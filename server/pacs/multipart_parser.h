@@ -46,6 +46,12 @@ class MultipartParser {
  private:
   enum class State { kPreamble, kAfterDelimiter, kHeaders, kBody, kEpilogue };
   Status Step(bool* progressed);
+  // One state's step on the unhandled bytes `rest`; *progressed when it
+  // moved to another state.
+  Status StepPreamble(std::string_view rest, bool* progressed);
+  Status StepAfterDelimiter(std::string_view rest, bool* progressed);
+  Status StepHeaders(std::string_view rest, bool* progressed);
+  Status StepBody(std::string_view rest, bool* progressed);
   Status ParseHeaders(std::string_view block);
 
   const std::string delimiter_;  // "\r\n--" + boundary
