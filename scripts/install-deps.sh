@@ -29,6 +29,10 @@ packages=(
   chromium
   # workstation viewer (vpm-view) and its test under a virtual X server
   libsdl2-dev xvfb xdotool x11-utils imagemagick
+  # PACS: the DICOMweb client's HTTP (libcurl); the live tests' PACS
+  # (Orthanc with its DICOMweb and GDCM plugins, run unprivileged on
+  # loopback by tests/pacs) and their DICOM reading (pydicom, numpy)
+  libcurl4-openssl-dev orthanc orthanc-dicomweb orthanc-gdcm python3-pydicom python3-numpy
   # deployment checks: YAML parsing of the compose and Kubernetes files; the
   # balancer docker/ ships (HAProxy), run by `ctest -R balancer`
   python3-yaml haproxy

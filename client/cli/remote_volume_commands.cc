@@ -53,9 +53,10 @@ void AddRemoteVolumeCommands(CLI::App& app, const ServerFlags* flags, int* exit_
   };
   auto load_args = std::make_shared<LoadArgs>();
   CLI::App* load = volume->add_subcommand(
-      "load", "server: LoadVolume (data-root path or phantom:), with its progress");
+      "load", "server: LoadVolume (data-root path, phantom: or pacs:), with its progress");
   load->add_option("SOURCE", load_args->source,
-                   "path under the server's data root, or phantom:NAME")->required();
+                   "path under the server's data root, phantom:NAME, or "
+                   "pacs:ENDPOINT/STUDY_UID/SERIES_UID")->required();
   load->add_flag("--progress", load_args->progress,
                  "draw the progress bar (GetLoadProgress) even when stderr is not a terminal");
   load->callback(WithServer(flags, exit_code, [load_args](const ServerConnection& s) -> Status {

@@ -24,6 +24,19 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--data-root", o->data_root,
                  "folder LoadVolume paths are resolved under (no '..', no symlink escape); "
                  "empty: only phantom: sources and uploads");
+  app.add_option("--pacs", o->pacs_file,
+                 "PACS endpoints file (JSON list: name, dicomweb URL, username + password_file "
+                 "or bearer_token_file, ca_file, users; docs/PACS.md): turns on SearchStudies, "
+                 "ListSeries and pacs:ENDPOINT/STUDY/SERIES sources");
+  app.add_option("--pacs-cache", o->pacs_cache,
+                 "folder of retrieved series (mode 0700; default: a private temporary folder "
+                 "removed at exit)");
+  app.add_option("--pacs-cache-bytes", o->pacs_cache_bytes,
+                 "bytes of retrieved series kept on disk; least recently used go first")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--pacs-audit-log", o->pacs_audit_log,
+                 "JSON-lines audit log of every PACS action (required with --pacs)");
   app.add_option("--metrics-listen", o->metrics_listen,
                  "HOST:PORT for Prometheus metrics at /metrics (empty: off)");
   app.add_option("--tls-cert", o->tls_cert, "server certificate chain (PEM): turns TLS on");

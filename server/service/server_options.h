@@ -69,6 +69,14 @@ struct ServerOptions {
   double shutdown_grace_s = 5;                   // then streams get this long
 
   std::string vulkan_device;                     // VPM_VULKAN_DEVICE-style selector
+
+  // PACS (docs/PACS.md): the endpoints file, where retrieved series are
+  // kept (empty: a private temporary folder removed at exit) and how many
+  // bytes of them, and the audit log every PACS action is recorded in.
+  std::string pacs_file;
+  std::string pacs_cache;
+  int64_t pacs_cache_bytes = int64_t{4} << 30;
+  std::string pacs_audit_log;
 };
 
 }  // namespace vpm::service

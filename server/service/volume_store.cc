@@ -50,6 +50,20 @@ int64_t NextUse() {
   return ++uses;
 }
 
+// A PACS volume's load key: "pacs:ENDPOINT/STUDY/SERIES#USER" (user names
+// hold no '#'), one per user: a PACS volume belongs to its loader.
+constexpr std::string_view kPacsKeyPrefix = "pacs:";
+
+std::string PacsKey(std::string_view source, std::string_view user) {
+  return StrCat(source, "#", user);
+}
+
+std::string PacsKeyOwner(std::string_view key) {
+  return std::string(key.substr(key.rfind('#') + 1));
+}
+
+std::string_view PacsKeySource(std::string_view key) { return key.substr(0, key.rfind('#')); }
+
 // A volume no session uses and whose source can be read again.
 bool Evictable(const VolumeEntry& entry) {
   return entry.sessions.load() == 0 && !entry.load_key.empty();
@@ -127,6 +141,13 @@ Result<Volume> VolumeStore::ReadSource(const std::string& load_key, const std::s
                                        const CancelToken& cancel) const {
   VolumeLimits limits = options_.read_limits;
   limits.cancel = cancel;  // the readers poll it as they read
+  if (load_key.starts_with(kPacsKeyPrefix)) {
+    if (!options_.read_pacs) {
+      return absl::FailedPreconditionError(
+          "source: this server has no PACS endpoints (vpm-server --pacs FILE)");
+    }
+    return options_.read_pacs(PacsKeySource(load_key), PacsKeyOwner(load_key), progress, cancel);
+  }
   if (!load_key.starts_with("file:")) {
     ASSIGN_OR_RETURN(Volume volume, ReadVolume(load_key, limits, progress));
     volume.set_source(source);
@@ -151,7 +172,10 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
         "source: raw: sources are not served; upload the file instead");
   }
   std::string key(source);
-  if (!source.starts_with("phantom:")) {
+  const bool pacs = source.starts_with(kPacsKeyPrefix);
+  if (pacs) {
+    key = PacsKey(source, user);
+  } else if (!source.starts_with("phantom:")) {
     ASSIGN_OR_RETURN(const std::string path, ResolveDataSource(options_.data_root, source));
     key = "file:" + path;
   }
@@ -159,7 +183,8 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
     std::lock_guard lock(mutex_);
     if (auto loaded = FindLoadedLocked(key)) {
       loaded->last_used = NextUse();
-      loaded_by_[loaded->id].insert(user);
+      if (!pacs) loaded_by_[loaded->id].insert(user);
+      if (pacs && options_.on_pacs_reuse) options_.on_pacs_reuse(source, user);
       return loaded;
     }
   }
@@ -213,6 +238,8 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string
       entry = std::make_shared<VolumeEntry>(id, std::move(volume), std::move(gpu), bytes);
       if (load_key.empty()) {
         entry->owner = user;
+      } else if (load_key.starts_with(kPacsKeyPrefix)) {
+        entry->owner = PacsKeyOwner(load_key);
       } else if (!user.empty()) {
         loaded_by_[id].insert(user);
       }
@@ -243,6 +270,9 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Get(std::string_view id,
     auto gone = evicted_.find(id);
     if (gone == evicted_.end()) return VolumeNotFound();
     again = gone->second;
+  }
+  if (again.load_key.starts_with(kPacsKeyPrefix) && PacsKeyOwner(again.load_key) != user) {
+    return VolumeNotFound();  // another user's PACS volume: as a missing one
   }
   // Evicted while idle (a shared volume: anyone may read it): read it again
   // under its id, its loaders kept.
@@ -275,7 +305,15 @@ Status VolumeStore::CheckSoleLoaderLocked(std::string_view id, const std::string
 
 Status VolumeStore::Delete(std::string_view id, const std::string& user) {
   std::lock_guard lock(mutex_);
-  if (evicted_.contains(id)) {  // only shared volumes are evicted
+  if (auto gone = evicted_.find(id); gone != evicted_.end()) {  // shared or PACS volumes
+    if (gone->second.load_key.starts_with(kPacsKeyPrefix)) {
+      if (PacsKeyOwner(gone->second.load_key) != user) {
+        return absl::PermissionDeniedError(
+            StrCat("volume_id: volume '", id, "' was loaded from a PACS by another user"));
+      }
+      evicted_.erase(gone);
+      return absl::OkStatus();
+    }
     RETURN_IF_ERROR(CheckSoleLoaderLocked(id, user));
     evicted_.erase(evicted_.find(id));
     loaded_by_.erase(loaded_by_.find(id));
@@ -306,7 +344,7 @@ int64_t VolumeStore::SlotsOfLocked(std::string_view owner) const {
   int64_t held = 0;
   for (const auto& [id, entry] : volumes_) {
     if (entry->owner == owner) {
-      ++held;
+      held += entry->load_key.empty();  // an upload; a PACS volume is evictable
     } else if (entry->owner.empty()) {
       std::lock_guard holders(entry->holders_mutex);
       held += entry->session_owners.contains(owner);

@@ -102,11 +102,23 @@ class VolumeStore {
     // Called (without the store's lock) with the id of each evicted volume,
     // so that the meshes built on it are dropped too.
     std::function<void(const std::string& id)> on_evict;
+    // Reads a pacs:ENDPOINT/STUDY/SERIES source for `user` (the PACS
+    // gateway: access, audit, cache, retrieval); empty: pacs: sources are
+    // FailedPrecondition. A PACS volume belongs to the user who loaded it,
+    // like an upload, but is evicted when idle and read again (from the
+    // series cache) like a file.
+    std::function<Result<Volume>(std::string_view source, const std::string& user,
+                                 const ProgressFn& progress, const CancelToken& cancel)>
+        read_pacs;
+    // Told when a LoadVolume of a pacs: source returns the volume the user
+    // already holds (for the audit log).
+    std::function<void(std::string_view source, const std::string& user)> on_pacs_reuse;
   };
   static Result<std::unique_ptr<VolumeStore>> Create(const Options& options);
 
-  // `source`: phantom:SPEC, or a path under the data root, a DICOM folder with
-  // its "?series=" query included (resolve_data_path.h).
+  // `source`: phantom:SPEC, a path under the data root, a DICOM folder with
+  // its "?series=" query included (resolve_data_path.h), or
+  // pacs:ENDPOINT/STUDY/SERIES (Options::read_pacs; the volume is `user`'s).
   // A source already loaded (the same phantom spec, or a path resolving to
   // the same file) returns the volume held, not a second copy: delete it to
   // read the file again. Errors: those of ResolveDataSource and ReadVolume;

@@ -5,6 +5,7 @@
 #include "server/service/loopback_address.h"
 
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
@@ -55,6 +56,33 @@ Result<TokenAuth> MakeAuth(const ServerOptions& o) {
     ASSIGN_OR_RETURN(auth.users, ReadUsersFile(o.users_file));
   }
   return TokenAuth::Create(auth);
+}
+
+// The PACS gateway of --pacs, --pacs-cache, --pacs-cache-bytes and
+// --pacs-audit-log; null without --pacs.
+Result<std::unique_ptr<pacs::PacsGateway>> MakePacsGateway(const ServerOptions& o) {
+  if (o.pacs_file.empty()) {
+    if (!o.pacs_cache.empty() || !o.pacs_audit_log.empty()) {
+      return absl::InvalidArgumentError("--pacs-cache and --pacs-audit-log need --pacs FILE");
+    }
+    return std::unique_ptr<pacs::PacsGateway>();
+  }
+  pacs::PacsGateway::Options options;
+  ASSIGN_OR_RETURN(options.endpoints, pacs::ReadPacsEndpoints(o.pacs_file));
+  options.audit_log = o.pacs_audit_log;
+  options.cache.max_bytes = o.pacs_cache_bytes;
+  if (o.pacs_cache.empty()) {
+    const char* tmp = std::getenv("TMPDIR");
+    std::string pattern = StrCat(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp", "/vpm-pacs-cache-XXXXXX");
+    if (::mkdtemp(pattern.data()) == nullptr) {
+      return absl::InvalidArgumentError("--pacs: cannot make a temporary cache folder (give --pacs-cache)");
+    }
+    options.cache.root = pattern;
+    options.cache.remove_root_on_destroy = true;
+  } else {
+    options.cache.root = o.pacs_cache;
+  }
+  return pacs::PacsGateway::Create(std::move(options));
 }
 
 // 8 hex digits from the OS's random source.
@@ -122,6 +150,18 @@ Status VpmServer::Start() {
     metrics_->VolumeEvicted();
     if (meshes_) meshes_->ForgetVolume(id);
   };
+  ASSIGN_OR_RETURN(pacs_, MakePacsGateway(o));
+  if (pacs_) {
+    volume_options.read_pacs = [p = pacs_.get(), limits = volume_options.read_limits](
+                                   std::string_view source, const std::string& user,
+                                   const ProgressFn& progress, const CancelToken& cancel) {
+      return p->LoadSeries(user, source, limits, progress, cancel);
+    };
+    volume_options.on_pacs_reuse = [p = pacs_.get()](std::string_view source,
+                                                     const std::string& user) {
+      p->RecordHeld(user, source);
+    };
+  }
   ASSIGN_OR_RETURN(volumes_, VolumeStore::Create(volume_options));
   ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes,
                                                [m = metrics_.get()](int64_t count) {
@@ -189,6 +229,7 @@ Status VpmServer::Start() {
   context_.upload_memory = upload_memory_.get();
   context_.upload_spool = upload_spool_.get();
   context_.load_progress = load_progress_.get();
+  context_.pacs = pacs_.get();
   service_ = std::make_unique<VpmService>(&context_);
 
   grpc::EnableDefaultHealthCheckService(true);

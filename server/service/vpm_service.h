@@ -73,6 +73,12 @@ class VpmService final : public v3::Vpm::CallbackService {
   grpc::ServerUnaryReactor* ReadTransferFunction(grpc::CallbackServerContext*,
                                                  const v3::ReadTransferFunctionRequest*,
                                                  v3::RenderTransferFunction*) override;
+  // pacs_handlers.cc
+  grpc::ServerUnaryReactor* SearchStudies(grpc::CallbackServerContext*,
+                                          const v3::SearchStudiesRequest*,
+                                          v3::SearchStudiesResponse*) override;
+  grpc::ServerUnaryReactor* ListSeries(grpc::CallbackServerContext*, const v3::ListSeriesRequest*,
+                                       v3::ListSeriesResponse*) override;
 
  private:
   // Authenticates the caller, then runs `fn` with the caller's user name

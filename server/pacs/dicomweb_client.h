@@ -1,0 +1,85 @@
+// A DICOMweb client of one PACS endpoint: QIDO-RS study search and series
+// listing, WADO-RS retrieval of one series into a folder.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "server/common/cancel_token.h"
+#include "server/common/progress.h"
+#include "server/common/status.h"
+#include "server/pacs/dicom_json.h"
+#include "server/pacs/pacs_endpoint.h"
+#include "server/pacs/study_query.h"
+
+namespace vpm::pacs {
+
+struct StudySearch {
+  std::vector<StudySummary> studies;  // in the PACS's order, each UID once
+  bool truncated = false;             // the limit was reached; more may match
+  int64_t requests = 0;               // QIDO pages asked for
+};
+
+struct RetrievedSeries {
+  int64_t instances = 0;  // files written
+  int64_t bytes = 0;      // their total size
+};
+
+class DicomwebClient {
+ public:
+  struct Options {
+    int64_t max_answer_bytes = int64_t{16} << 20;  // one QIDO answer
+    int64_t connect_timeout_s = 10;
+    int64_t stall_timeout_s = 60;
+  };
+  DicomwebClient(PacsEndpoint endpoint, Options options);
+
+  // QIDO-RS /studies, page by page (endpoint.page_size, limit and offset)
+  // until query.limit studies, a short page, or a page with nothing new: a
+  // server that ignores `offset` answers the first page again, and the
+  // search ends there instead of looping, marked truncated. Errors: CheckStudyQuery's, and those of
+  // Get below.
+  Result<StudySearch> SearchStudies(const StudyQuery& query, const CancelToken& cancel) const;
+
+  // QIDO-RS /studies/UID/series, sorted by SeriesNumber.
+  Result<std::vector<SeriesSummary>> ListSeries(const std::string& study_uid,
+                                                const CancelToken& cancel) const;
+
+  // WADO-RS /studies/UID/series/UID with
+  // Accept: multipart/related; type="application/dicom"; transfer-syntax=*
+  // (the stored transfer syntax: no transcoding on the PACS), each part
+  // written to `folder` (which must exist) as 000001.dcm, 000002.dcm, ... as
+  // it streams in. `expected_instances` (> 0) paces `progress`. Errors:
+  // InvalidArgument for a malformed or truncated multipart body, a part
+  // that is not DICOM Part 10 or of another content type, no parts;
+  // ResourceExhausted past `max_bytes`; Internal when a file cannot be
+  // written; the HTTP and transfer errors of Get. Files written before an
+  // error stay: the caller owns the folder.
+  Result<RetrievedSeries> RetrieveSeries(const std::string& study_uid,
+                                         const std::string& series_uid,
+                                         const std::filesystem::path& folder, int64_t max_bytes,
+                                         int64_t expected_instances, const ProgressFn& progress,
+                                         const CancelToken& cancel) const;
+
+  const PacsEndpoint& endpoint() const { return endpoint_; }
+
+ private:
+  // GETs base + `path_and_query` into a string of at most max_answer_bytes.
+  // Errors: an HTTP status other than 2xx as StatusFromHttp says, and
+  // HttpGet's.
+  Result<std::string> GetText(const std::string& path_and_query, const CancelToken& cancel) const;
+
+  PacsEndpoint endpoint_;
+  Options options_;
+};
+
+// The status for an HTTP answer `status` (not 2xx) to `what` ("study
+// search") from the PACS `label`: 401 and 403 PermissionDenied (the PACS
+// refused vpm's credentials, or the action), 404 NotFound, 400
+// InvalidArgument, 408, 429 and 5xx Unavailable; the message says which and
+// never quotes the answer's body.
+Status StatusFromHttp(int64_t status, const std::string& label, const std::string& what);
+
+}  // namespace vpm::pacs

@@ -1,0 +1,78 @@
+// What the service asks of the PACS side: the endpoints of the --pacs file,
+// who may use each, the DICOMweb client of each, the series cache and the
+// audit log. Every action checks the user against the endpoint and is
+// audited, allowed or not.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "server/common/cancel_token.h"
+#include "server/common/progress.h"
+#include "server/common/status.h"
+#include "server/pacs/audit_log.h"
+#include "server/pacs/dicomweb_client.h"
+#include "server/pacs/pacs_endpoint.h"
+#include "server/pacs/series_cache.h"
+#include "server/volume/volume.h"
+
+namespace vpm::pacs {
+
+class PacsGateway {
+ public:
+  struct Options {
+    std::vector<PacsEndpoint> endpoints;  // at least one
+    SeriesCache::Options cache;
+    std::filesystem::path audit_log;  // required
+    DicomwebClient::Options client;
+  };
+  static Result<std::unique_ptr<PacsGateway>> Create(Options options);
+
+  // The endpoints `user` may use, by name.
+  std::vector<std::string> EndpointsFor(const std::string& user) const;
+
+  // PermissionDenied, the same for an unknown endpoint and one the user may
+  // not use ("no PACS endpoint 'X' that you may use"), else the client's
+  // errors.
+  Result<StudySearch> SearchStudies(const std::string& user, const std::string& endpoint,
+                                    const StudyQuery& query, const CancelToken& cancel);
+  Result<std::vector<SeriesSummary>> ListSeries(const std::string& user,
+                                                const std::string& endpoint,
+                                                const std::string& study_uid,
+                                                const CancelToken& cancel);
+
+  // The series `source` names (pacs:NAME/STUDY/SERIES) as a Volume:
+  // from the cache, or retrieved (WADO-RS) into it, then read by
+  // ReadDicomSeries with `limits` (its read root: the series' folder).
+  // The retrieved files must hold images of that series and no other
+  // (InvalidArgument otherwise: a structured report, a dose report, a
+  // presentation state, or mixed series), else nothing is cached.
+  // `progress`: retrieval 0..0.7 (from the instance count the PACS lists),
+  // reading 0.7..1. Errors name the series by UID, never the cache's path.
+  Result<Volume> LoadSeries(const std::string& user, std::string_view source,
+                            const VolumeLimits& limits, const ProgressFn& progress,
+                            const CancelToken& cancel);
+
+  // Audits an open answered with the volume `user` already holds.
+  void RecordHeld(const std::string& user, std::string_view source);
+
+  SeriesCache::Stats cache_stats() const { return cache_->stats(); }
+
+ private:
+  PacsGateway() = default;
+  Result<const DicomwebClient*> ClientFor(const std::string& user,
+                                          const std::string& endpoint) const;
+  Status FetchSeries(const DicomwebClient& client, const std::string& study_uid,
+                     const std::string& series_uid, const std::filesystem::path& folder,
+                     int64_t max_bytes, const VolumeLimits& limits, const ProgressFn& progress,
+                     const CancelToken& cancel, int64_t* instances);
+
+  std::map<std::string, std::unique_ptr<DicomwebClient>> clients_;  // by endpoint name
+  std::unique_ptr<SeriesCache> cache_;
+  std::unique_ptr<AuditLog> audit_;
+};
+
+}  // namespace vpm::pacs

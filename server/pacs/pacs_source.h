@@ -1,0 +1,23 @@
+// The LoadVolume source of a series on a PACS: "pacs:NAME/STUDY_UID/SERIES_UID".
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "server/common/status.h"
+
+namespace vpm::pacs {
+
+struct PacsSource {
+  std::string endpoint;
+  std::string study_uid;
+  std::string series_uid;
+};
+
+inline constexpr std::string_view kPacsPrefix = "pacs:";
+
+// InvalidArgument naming the form for anything else (a bad endpoint name,
+// a UID that is not 1-64 digits and dots, a missing part).
+Result<PacsSource> ParsePacsSource(std::string_view source);
+
+}  // namespace vpm::pacs

@@ -1,0 +1,294 @@
+#!/usr/bin/env python3
+"""vpm against a real PACS: Debian's Orthanc with its DICOMweb and GDCM
+plugins, authentication on, loopback only, started here as an unprivileged
+process with a temporary configuration and storage.
+
+Loaded into Orthanc by POST /instances: the kidney CT (tests/data's NIfTI,
+written as a DICOM CT series by vpm_test_write_dicom_series), a Basic Text
+SR in the same study (a non-image series), and the tilted Philips series
+of tests/data. Then, through vpm-server --pacs and the `vpm` client:
+search by patient-name wildcard, patient ID, date range and modality;
+series listing; the library-level check of one retrieved series (every
+voxel against the NIfTI, every slice against its ImagePositionPatient);
+`vpm volume load pacs:...` with its geometry checked against the slices'
+own positions and orientation and its value range against the slices'
+pixels; the cache (the second user's open is a cache hit in the audit log,
+and still works once Orthanc is stopped); ownership of PACS volumes; the
+SR refused with nothing cached; a wrong password; a user the endpoints
+file does not allow; Orthanc stopped (UNAVAILABLE, the server keeps
+serving); no patient identifier or secret in the server's log or in
+errors; the audit log's records.
+
+Usage: pacs_orthanc_test.py BUILD_DIR SOURCE_DIR
+"""
+import json
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from pacs_harness import Failures, Harness  # noqa: E402
+
+import numpy  # noqa: E402  (python3-numpy, with python3-pydicom)
+import pydicom  # noqa: E402
+
+STUDY = '1.2.826.0.1.3680043.8.498.77010'
+CT_SERIES = STUDY + '.1'
+SR_SERIES = STUDY + '.9'
+PATIENT_NAME = 'KIDNEY^TESTPATIENT'
+PATIENT_ID = 'VPMPAT0042'
+BIRTH_DATE = '19700101'
+ORTHANC_PASSWORD = 'orthanc-pw-5e1f0c'
+WRONG_PASSWORD = 'not-the-pw-93ab17'
+
+
+def slices_geometry(folder):
+    """Row, column, normal, the slice positions sorted along the normal,
+    pixel spacing and the min/max of the rescaled pixels, from the files."""
+    datasets = []
+    for name in sorted(os.listdir(folder)):
+        try:
+            d = pydicom.dcmread(os.path.join(folder, name))
+        except pydicom.errors.InvalidDicomError:
+            continue  # a README, a licence
+        if 'PixelData' in d:
+            datasets.append(d)
+    iop = numpy.array([float(v) for v in datasets[0].ImageOrientationPatient])
+    row, col = iop[:3], iop[3:]
+    normal = numpy.cross(row, col)
+    positions = sorted((numpy.array([float(v) for v in d.ImagePositionPatient]) for d in datasets),
+                       key=lambda p: float(numpy.dot(p, normal)))
+    values = [d.pixel_array * float(d.RescaleSlope) + float(d.RescaleIntercept) for d in datasets]
+    return dict(row=row, col=col, normal=normal, positions=positions,
+                spacing=[float(v) for v in datasets[0].PixelSpacing],
+                rows=int(datasets[0].Rows), columns=int(datasets[0].Columns),
+                min=float(min(v.min() for v in values)), max=float(max(v.max() for v in values)))
+
+
+def audit_records(path):
+    with open(path) as f:
+        return [json.loads(line) for line in f if line.strip()]
+
+
+def main():
+    build, source = sys.argv[1], sys.argv[2]
+    h = Harness(build)
+    t = Failures()
+    try:
+        run(h, t, build, source)
+    finally:
+        h.close()
+    print(f'{t.count} failure(s)')
+    return 1 if t.count else 0
+
+
+def run(h, t, build, source):
+    writer = os.path.join(build, 'tests', 'pacs', 'vpm_test_write_dicom_series')
+    checker = os.path.join(build, 'tests', 'pacs', 'vpm_test_pacs_live_check')
+    kidney_nifti = os.path.join(source, 'tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz')
+    tilt_folder = os.path.join(source, 'tests/data/ct-philips-tilt')
+    kidney = os.path.join(h.tmp, 'kidney')
+    report = os.path.join(h.tmp, 'report')
+    common = ['--study-uid', STUDY, '--patient-name', PATIENT_NAME, '--patient-id', PATIENT_ID,
+              '--birth-date', BIRTH_DATE, '--study-date', '20240315']
+    import subprocess
+    subprocess.run([writer, kidney_nifti, kidney, '--series-uid', CT_SERIES, '--series-number', '2',
+                    '--description', 'Abdomen 3mm'] + common, check=True, capture_output=True)
+    subprocess.run([writer, '--structured-report', report, '--series-uid', SR_SERIES,
+                    '--series-number', '9', '--description', 'Report'] + common,
+                   check=True, capture_output=True)
+
+    base = h.start_orthanc({'vpm': ORTHANC_PASSWORD})
+    n = h.orthanc_upload_folder(kidney, 'vpm', ORTHANC_PASSWORD)
+    n += h.orthanc_upload_folder(report, 'vpm', ORTHANC_PASSWORD)
+    tilt_n = h.orthanc_upload_folder(tilt_folder, 'vpm', ORTHANC_PASSWORD)
+    t.check(n == 113 and tilt_n == 54, f'Orthanc took {n} kidney/SR and {tilt_n} tilted instances')
+
+    # The library alone: every voxel and every slice position.
+    pw_file = h.write_secret('orthanc.pw', ORTHANC_PASSWORD)
+    p = subprocess.run([checker, '--url', base, '--username', 'vpm', '--password-file', pw_file,
+                        '--study', STUDY, '--series', CT_SERIES, '--source', kidney_nifti,
+                        '--cache', os.path.join(h.tmp, 'live-cache')],
+                       capture_output=True, text=True)
+    print('      live check:', p.stdout.strip(), p.stderr.strip())
+    t.check(p.returncode == 0, 'vpm_pacs retrieves the kidney CT: every voxel equals the NIfTI, '
+                               'every slice lies at its ImagePositionPatient')
+
+    bad_pw = h.write_secret('wrong.pw', WRONG_PASSWORD)
+    users = h.write_users(['alice', 'bob', 'carol'])
+    endpoints = h.write_endpoints([
+        {'name': 'orthanc', 'dicomweb': base, 'username': 'vpm', 'password_file': 'orthanc.pw',
+         'users': ['alice', 'bob']},
+        {'name': 'orthanc-badpw', 'dicomweb': base, 'username': 'vpm', 'password_file': 'wrong.pw',
+         'users': ['alice']}])
+    audit = os.path.join(h.tmp, 'audit.jsonl')
+    cache = os.path.join(h.tmp, 'cache')
+    h.start_server(users, ['--pacs', endpoints, '--pacs-cache', cache, '--pacs-audit-log', audit])
+
+    # ------------------------------------------------------------ search
+    found, err = h.vpm_json('alice', 'pacs', 'search', '--endpoint', 'orthanc',
+                            '--patient-name', 'KIDNEY^TEST*', '--json')
+    studies = (found or {}).get('studies', [])
+    t.check(len(studies) == 1 and studies[0]['study_uid'] == STUDY and
+            studies[0]['patient_id'] == PATIENT_ID and studies[0]['patient_birth_date'] == BIRTH_DATE,
+            f'search by patient-name wildcard finds the kidney study ({err.strip()})')
+    t.check(bool(studies) and set(studies[0]['modalities']) >= {'CT', 'SR'} and
+            studies[0]['series_count'] == 2, 'the study lists CT and SR, 2 series')
+    found, _ = h.vpm_json('alice', 'pacs', 'search', '--endpoint', 'orthanc', '--patient-id',
+                          PATIENT_ID, '--study-date', '20240101-20241231', '--modality', 'CT', '--json')
+    t.check([s['study_uid'] for s in (found or {}).get('studies', [])] == [STUDY],
+            'search by patient ID, study-date range and modality')
+    found, _ = h.vpm_json('alice', 'pacs', 'search', '--endpoint', 'orthanc', '--patient-id',
+                          PATIENT_ID, '--study-date', '20250101-', '--json')
+    t.check(found is not None and found['studies'] == [], 'a date range after the study finds nothing')
+    everything, _ = h.vpm_json('alice', 'pacs', 'search', '--endpoint', 'orthanc', '--json')
+    t.check(everything is not None and len(everything['studies']) == 2,
+            'an empty search lists both studies')
+    limited, _ = h.vpm_json('alice', 'pacs', 'search', '--endpoint', 'orthanc', '--limit', '1', '--json')
+    t.check(limited is not None and len(limited['studies']) == 1 and limited['truncated'],
+            '--limit 1 answers one study, truncated')
+    rc, out, _ = h.vpm('alice', 'pacs', 'search', '--endpoint', 'orthanc', '--patient-name', 'KIDNEY*')
+    t.check(rc == 0 and PATIENT_NAME in out and '1 studies' in out, 'the text table of a search')
+    rc, _, err = h.vpm('carol', 'pacs', 'search', '--endpoint', 'orthanc')
+    t.check(rc != 0 and 'PERMISSION_DENIED' in err, f'a user the file does not allow is refused: {err.strip()}')
+    rc, _, err2 = h.vpm('alice', 'pacs', 'search', '--endpoint', 'nowhere')
+    t.check(rc != 0 and 'PERMISSION_DENIED' in err2 and
+            err2.replace('nowhere', 'orthanc') == err.replace('carol', 'alice'),
+            'an unknown endpoint gets the same answer as a forbidden one')
+
+    # ------------------------------------------------------------ series
+    listed, err = h.vpm_json('alice', 'pacs', 'series', '--endpoint', 'orthanc', '--study', STUDY, '--json')
+    series = (listed or {}).get('series', [])
+    ct = [s for s in series if s['series_uid'] == CT_SERIES]
+    t.check(len(series) == 2 and len(ct) == 1 and ct[0]['modality'] == 'CT' and
+            ct[0]['instance_count'] == 112 and ct[0]['body_part'] == 'ABDOMEN' and
+            ct[0]['description'] == 'Abdomen 3mm' and
+            ct[0]['source'] == f'pacs:orthanc/{STUDY}/{CT_SERIES}',
+            f'series listing: modality, description, body part, 112 images ({err.strip()})')
+    rc, out, _ = h.vpm('alice', 'pacs', 'series', '--endpoint', 'orthanc', '--study', STUDY)
+    t.check(rc == 0 and f'pacs:orthanc/{STUDY}/{CT_SERIES}' in out, 'the text table of a listing')
+
+    # ------------------------------------------------------------ load
+    ct_source = f'pacs:orthanc/{STUDY}/{CT_SERIES}'
+    start = time.monotonic()
+    rc, out, err = h.vpm('alice', 'volume', 'load', ct_source)
+    first_s = time.monotonic() - start
+    vol = json.loads(out) if rc == 0 else {}
+    t.check(rc == 0, f'vpm volume load {ct_source} ({err.strip()[-300:]})')
+    g = slices_geometry(kidney)
+    if vol:
+        direction = numpy.array(vol['direction']).reshape(3, 3)  # rows: the i, j, k axes
+        origin = numpy.array(vol['origin_lps_mm'])
+        spacing = vol['spacing_mm']
+        gap = float(numpy.dot(g['positions'][1] - g['positions'][0], g['normal']))
+        t.check(vol['dims'] == [g['columns'], g['rows'], len(g['positions'])],
+                f'dims {vol["dims"]} = columns, rows, slices')
+        t.check(numpy.allclose(direction[0], g['row'], atol=1e-6) and
+                numpy.allclose(direction[1], g['col'], atol=1e-6) and
+                numpy.allclose(direction[2], g['normal'], atol=1e-6),
+                'direction = ImageOrientationPatient and its normal')
+        t.check(abs(spacing[0] - g['spacing'][1]) < 1e-6 and abs(spacing[1] - g['spacing'][0]) < 1e-6
+                and abs(spacing[2] - gap) < 1e-4, f'spacing {spacing} = PixelSpacing and the gap')
+        worst = max(float(numpy.linalg.norm(origin + direction[2] * spacing[2] * k - p))
+                    for k, p in enumerate(g['positions']))
+        t.check(worst < 1e-3, f'every slice k at origin + k gap normal = its ImagePositionPatient '
+                              f'(worst {worst:.2e} mm)')
+        t.check(vol['min_value'] == g['min'] and vol['max_value'] == g['max'],
+                f'values {vol["min_value"]}..{vol["max_value"]} = the slices\' {g["min"]}..{g["max"]}')
+        t.check(vol['owner'] == 'alice' and vol['source'] == ct_source, 'the volume is alice\'s')
+    records = audit_records(audit)
+    opens = [r for r in records if r['action'] == 'open']
+    t.check(len(opens) == 1 and opens[0]['cache'] == 'miss' and opens[0]['result'] == 'OK' and
+            opens[0]['instances'] == 112, 'the first open is a cache miss of 112 instances')
+    t.check(os.path.isdir(os.path.join(cache, 'orthanc', CT_SERIES)) and
+            not [n for n in os.listdir(cache) if n.startswith('.tmp-')],
+            'the series is in the cache, whole, with no temporary folder left')
+
+    start = time.monotonic()
+    rc, out, err = h.vpm('bob', 'volume', 'load', ct_source)
+    second_s = time.monotonic() - start
+    bob_vol = json.loads(out) if rc == 0 else {}
+    opens = [r for r in audit_records(audit) if r['action'] == 'open']
+    t.check(rc == 0 and bob_vol.get('owner') == 'bob' and bob_vol.get('volume_id') != vol.get('volume_id')
+            and bob_vol.get('min_value') == vol.get('min_value'),
+            'bob opens the same series as a volume of his own')
+    t.check(len(opens) == 2 and opens[1]['cache'] == 'hit' and opens[1]['user'] == 'bob',
+            'bob\'s open is a cache hit (no second retrieval)')
+    start = time.monotonic()
+    rc, out, _ = h.vpm('alice', 'volume', 'load', ct_source)
+    held_s = time.monotonic() - start
+    opens = [r for r in audit_records(audit) if r['action'] == 'open']
+    t.check(rc == 0 and json.loads(out)['volume_id'] == vol.get('volume_id') and
+            opens[-1]['cache'] == 'held', 'alice loading again gets her volume (audited as held)')
+    rc, _, err = h.vpm('bob', 'volume', 'get', vol.get('volume_id', 'x'))
+    t.check(rc != 0 and 'NOT_FOUND' in err,
+            'bob may not read alice\'s PACS volume (told it is not there, as for a missing id)')
+    listed, _ = h.vpm_json('bob', 'volume', 'list')
+    t.check(listed is not None and vol.get('volume_id') not in [v['volume_id'] for v in listed],
+            'nor see it listed')
+    print(f'      figures: first open {first_s:.2f} s (retrieve + read + GPU upload), '
+          f'second user from the cache {second_s:.2f} s, held {held_s:.2f} s')
+
+    # The tilted series: retrieved, resampled, every slice inside the box.
+    tilt = pydicom.dcmread(os.path.join(tilt_folder, 'I10'))
+    tilt_source = f'pacs:orthanc/{tilt.StudyInstanceUID}/{tilt.SeriesInstanceUID}'
+    rc, out, err = h.vpm('alice', 'volume', 'load', tilt_source)
+    tv = json.loads(out) if rc == 0 else {}
+    t.check(rc == 0 and any('tilt' in n for n in tv.get('notes', [])),
+            f'the tilted Philips series loads from Orthanc, resampled ({err.strip()[-200:]})')
+    if tv:
+        tg = slices_geometry(tilt_folder)
+        d = numpy.array(tv['direction']).reshape(3, 3)
+        o = numpy.array(tv['origin_lps_mm'])
+        idx = [numpy.dot(d, p - o) / numpy.array(tv['spacing_mm']) for p in tg['positions']]
+        inside = all(-0.5 <= i[c] <= tv['dims'][c] - 0.5 for i in idx for c in range(3))
+        t.check(inside, 'every tilted slice\'s ImagePositionPatient lies inside the volume\'s grid')
+
+    # ------------------------------------------------------------ failures
+    rc, _, err = h.vpm('alice', 'volume', 'load', f'pacs:orthanc/{STUDY}/{SR_SERIES}')
+    t.check(rc != 0 and 'INVALID_ARGUMENT' in err and 'holds no images' in err,
+            f'the structured report is refused: {err.strip()[-200:]}')
+    t.check(not os.path.exists(os.path.join(cache, 'orthanc', SR_SERIES)) and
+            not [n for n in os.listdir(cache) if n.startswith('.tmp-')], 'and nothing of it is cached')
+    rc, _, err = h.vpm('alice', 'volume', 'load', f'pacs:orthanc/{STUDY}/{STUDY}.555')
+    t.check(rc != 0 and 'NOT_FOUND' in err, f'an unknown series is NOT_FOUND: {err.strip()[-160:]}')
+    rc, _, err = h.vpm('alice', 'pacs', 'search', '--endpoint', 'orthanc-badpw', '--patient-name', 'K*')
+    t.check(rc != 0 and 'PERMISSION_DENIED' in err and 'credentials' in err and
+            WRONG_PASSWORD not in err, f'a wrong password: {err.strip()}')
+    rc, _, err = h.vpm('carol', 'volume', 'load', ct_source)
+    t.check(rc != 0 and 'PERMISSION_DENIED' in err, 'carol may not pull from the PACS')
+
+    h.stop_orthanc()
+    rc, _, err = h.vpm('alice', 'pacs', 'search', '--endpoint', 'orthanc')
+    t.check(rc != 0 and 'UNAVAILABLE' in err, f'Orthanc stopped: search is UNAVAILABLE: {err.strip()}')
+    rc, _, err = h.vpm('alice', 'volume', 'load', f'pacs:orthanc/{STUDY}/{SR_SERIES}')
+    t.check(rc != 0 and 'UNAVAILABLE' in err, 'and an uncached series is UNAVAILABLE')
+    rc, _, _ = h.vpm('bob', 'volume', 'delete', bob_vol.get('volume_id', 'x'))
+    rc2, out, err = h.vpm('bob', 'volume', 'load', ct_source)
+    t.check(rc == 0 and rc2 == 0, f'a cached series still opens with Orthanc down ({err.strip()[-160:]})')
+    rc, _, _ = h.vpm('alice', 'volume', 'list')
+    t.check(rc == 0 and h.server_alive(), 'the server keeps serving')
+
+    # ------------------------------------------------------------ privacy
+    with open(h.server_log) as f:
+        log = f.read()
+    secrets = [PATIENT_NAME, 'KIDNEY', PATIENT_ID, BIRTH_DATE, ORTHANC_PASSWORD, WRONG_PASSWORD]
+    t.check(not any(s in log for s in secrets),
+            'the server log holds no patient name, ID, birth date or password')
+    with open(audit) as f:
+        text = f.read()
+    records = audit_records(audit)
+    t.check(not any(s in text for s in secrets), 'neither does the audit log')
+    keys = {'time', 'user', 'action', 'endpoint', 'study_uid', 'series_uid', 'result'}
+    t.check(all(keys <= set(r) for r in records),
+            f'every audit record has time, user, action, UIDs, result ({len(records)})')
+    actions = {(r['user'], r['action'], r['result']) for r in records}
+    t.check({('alice', 'search', 'OK'), ('carol', 'search', 'PERMISSION_DENIED'),
+             ('alice', 'series', 'OK'), ('alice', 'open', 'OK'), ('bob', 'open', 'OK'),
+             ('alice', 'open', 'INVALID_ARGUMENT'), ('alice', 'search', 'UNAVAILABLE'),
+             ('carol', 'open', 'PERMISSION_DENIED')} <= actions, 'the audit log records every action')
+    print('      audit excerpt:', json.dumps(records[0]))
+
+
+if __name__ == '__main__':
+    sys.exit(main())
