@@ -96,8 +96,15 @@ void InteractConnection::Run() {
       refine_at_mm_.reset();
     }
     Status status = refine ? Refine(*refine) : ResolveSession();
+    const bool opening_failed = !status.ok();
     if (status.ok()) status = StreamOnce();
     if (stopping_) break;
+    if (opening_failed && !RetryCanSucceed(status)) {
+      // A refused --volume or --session fails the same way every time.
+      SetState(false, StrCat(Describe(status), "; not retrying (fix the command line)"));
+      std::fprintf(stderr, "vpm-view: %s; not retrying\n", Describe(status).c_str());
+      break;
+    }
     bool refine_pending;
     {
       std::lock_guard lock(mutex_);

@@ -28,6 +28,23 @@ std::optional<double> LatencyMeter::Received(uint64_t last_sequence, SteadyClock
   return MsBetween(newest, t);
 }
 
+bool RetryCanSucceed(const Status& status) {
+  switch (status.code()) {
+    case absl::StatusCode::kInvalidArgument:
+    case absl::StatusCode::kNotFound:
+    case absl::StatusCode::kOutOfRange:
+    case absl::StatusCode::kFailedPrecondition:
+    case absl::StatusCode::kPermissionDenied:
+    case absl::StatusCode::kUnauthenticated:
+    case absl::StatusCode::kUnimplemented:
+    case absl::StatusCode::kAlreadyExists:
+    case absl::StatusCode::kDataLoss:
+      return false;
+    default:
+      return true;
+  }
+}
+
 double ReconnectBackoffS(int attempt) {
   return std::min(5.0, 0.25 * std::pow(2.0, std::clamp(attempt, 0, 10)));
 }

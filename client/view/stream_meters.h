@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "server/common/clock.h"
+#include "server/common/status.h"
 
 namespace vpm::view {
 
@@ -41,5 +42,14 @@ class LatencyMeter {
 // Seconds to wait before reconnect attempt `attempt` (0-based): 0.25 s,
 // doubling, at most 5 s.
 double ReconnectBackoffS(int attempt);
+
+// Whether opening the view (LoadVolume, OpenSession, joining --session) may
+// succeed if tried again after `status`: the server down, busy or slow
+// (Unavailable, ResourceExhausted, DeadlineExceeded, Aborted, Internal,
+// Unknown, Cancelled) may pass; a bad or missing volume or session, a
+// refused token or permission (InvalidArgument, NotFound, OutOfRange,
+// FailedPrecondition, PermissionDenied, Unauthenticated, Unimplemented,
+// AlreadyExists, DataLoss) will fail the same way every time.
+bool RetryCanSucceed(const Status& status);
 
 }  // namespace vpm::view

@@ -30,7 +30,16 @@ void AddViewFlags(CLI::App& app, ViewFlags* f) {
       ->expected(2)
       ->type_name("W H");
   app.add_option("--mode", f->mode, "dvr or mip")->check(CLI::IsMember({"dvr", "mip"}));
-  app.add_option("--preset", f->preset, "DVR preset: ct-soft-tissue, ct-bone, ct-vessels, mri-t1");
+  app.add_option("--preset", f->preset,
+                 "DVR preset: ct-soft-tissue, ct-bone, ct-vessels, mri-t1, or Slicer's CT-AAA, "
+                 "CT-Bone, CT-Muscle, CT-Chest-Contrast-Enhanced, CT-Soft-Tissue, MR-Default");
+  app.add_option("--cut", [f](const CLI::results_t& r) {
+                   f->view_cut = r.at(0) == "on";
+                   return r.at(0) == "on" || r.at(0) == "off";
+                 },
+                 "start with the view cut on or off (default on: what lies in front of the "
+                 "grabbed tissue, or the orbit centre, is cut away while no crop or clip is on)")
+      ->type_name("on|off");
   app.add_option("--jpeg-quality", f->jpeg_quality, "1..100")->check(CLI::Range(1, 100));
   app.add_flag("--overlay", f->overlay, "start with the proxy-mesh overlay on");
   app.add_option("--screenshot-dir", f->screenshot_dir, "folder for screenshots (S key)");

@@ -24,6 +24,7 @@ ViewerApp::ViewerApp(ViewFlags flags) : flags_(std::move(flags)) {
   settings_.set_width(flags_.width);
   settings_.set_height(flags_.height);
   settings_.set_overlay(flags_.overlay);
+  view_cut_ = flags_.view_cut;
   settings_.set_encoding(v3::ENCODING_JPEG);
   settings_.set_jpeg_quality(flags_.jpeg_quality);
 }
@@ -131,6 +132,17 @@ void ViewerApp::OnAction(Action action) {
     case Action::kPresetBone: preset("ct-bone"); break;
     case Action::kPresetVessels: preset("ct-vessels"); break;
     case Action::kPresetMriT1: preset("mri-t1"); break;
+    case Action::kPresetSlicerAaa: preset("CT-AAA"); break;
+    case Action::kPresetSlicerBone: preset("CT-Bone"); break;
+    case Action::kPresetSlicerMuscle: preset("CT-Muscle"); break;
+    case Action::kPresetSlicerChest: preset("CT-Chest-Contrast-Enhanced"); break;
+    case Action::kPresetSlicerSoftTissue: preset("CT-Soft-Tissue"); break;
+    case Action::kPresetSlicerMr: preset("MR-Default"); break;
+    case Action::kToggleViewCut:
+      view_cut_ = !view_cut_;
+      SendSettings();
+      Notice(view_cut_ ? "view cut on (while no crop or clip)" : "view cut off");
+      break;
     case Action::kMip:
       settings_.set_mode(settings_.mode() == v3::RENDER_MODE_MIP ? v3::RENDER_MODE_DVR
                                                                  : v3::RENDER_MODE_MIP);
@@ -530,6 +542,9 @@ void ViewerApp::SendCamera() {
 }
 
 void ViewerApp::SendSettings() {
+  // The view cut as `vpm render --cut auto`: on unless a crop box or a clip
+  // plane says what to show.
+  settings_.set_view_cut(view_cut_ && !settings_.has_crop() && settings_.clip_size() == 0);
   v3::ClientEvent event;
   *event.mutable_settings() = settings_;
   connection_->Send(event);

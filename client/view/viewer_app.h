@@ -88,6 +88,7 @@ class ViewerApp {
   WorldBox drag_box_start_;
   v3::ClipPlane drag_clip_start_;
   bool grab_mode_ = false;
+  bool view_cut_ = true;  // the user's choice; SendSettings applies it while no crop or clip is on
   bool crop_mode_ = false;                 // the crop box applies and its faces drag
   WorldBox crop_box_;                      // world mm; the volume's box at first
   std::optional<BoxFace> hover_face_;      // highlighted in the outline

@@ -78,7 +78,7 @@ inline constexpr int kRaycastEarlyTermination = 4;
 inline constexpr int kRaycastHasMap = 8;
 inline constexpr int kRaycastCountSamples = 16;
 // Ray starts jittered by a fraction of the step from a hash of the pixel and
-// image.w, the frame's seed (RaycastJitter in server/raycast/raycast_jitter.h).
+// image.w, the frame's seed (RaycastJitter in server/raycast/ray_start_jitter.h).
 inline constexpr int kRaycastJitter = 64;
 inline constexpr int kRaycastMaxClipPlanes = 16;  // VPM_RAYCAST_MAX_CLIP_PLANES
 struct RaycastParams {

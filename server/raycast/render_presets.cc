@@ -13,24 +13,30 @@ namespace {
 
 using glm::dvec4;
 
-// CT soft tissue: fat almost clear, skin, muscle and organs red-brown and
-// nearly opaque (a ray stops within some 20 mm of tissue: the skin surface
-// over the muscle wall, organs only where fat lies between), bone ivory.
-// The opacity also sets the cost: every tissue sample is shaded (7 reads).
-// Still step 1.0 x the spacing: its smooth table and thick layers give
-// 44 dB against step 0.5 at half the samples (docs/RENDERING.md).
+// CT soft tissue, the default: what a cut through the abdomen shows
+// (SceneView::view_cut, on in every client's first frame) reads like a
+// coloured slice in depth. Fat yellow and translucent, so that organs
+// embedded in it show through a few millimetres of it; unenhanced
+// parenchyma (kidney, 30 HU) dark red; blood, muscle and liver (45-65 HU)
+// turning orange, so the vessels and the muscle stand apart from the
+// kidney; enhancing tissue and contrast vessels (150-300 HU) bright red to
+// pink; bone ivory. Issue 29: the earlier table painted kidney and fat the
+// same red, and a 15 mm kidney drag was hard to see.
 RenderPreset CtSoftTissue() {
   RenderPreset preset = {"ct-soft-tissue",
           {{-1000, dvec4(0.0, 0.0, 0.0, 0.0)},
-           {-300, dvec4(0.85, 0.70, 0.45, 0.0)},
-           {-100, dvec4(0.90, 0.75, 0.50, 0.002)},
-           {-50, dvec4(0.90, 0.72, 0.50, 0.002)},
-           {10, dvec4(0.80, 0.40, 0.30, 0.06)},
-           {40, dvec4(0.85, 0.42, 0.33, 0.2)},
-           {80, dvec4(0.90, 0.45, 0.35, 0.22)},
-           {150, dvec4(0.95, 0.55, 0.45, 0.25)},
-           {250, dvec4(0.95, 0.90, 0.80, 0.45)},
-           {700, dvec4(1.0, 0.97, 0.90, 0.9)},
+           {-400, dvec4(0.95, 0.85, 0.35, 0.0)},
+           {-180, dvec4(0.95, 0.85, 0.35, 0.02)},
+           {-100, dvec4(0.98, 0.88, 0.38, 0.12)},
+           {-50, dvec4(0.95, 0.80, 0.40, 0.15)},
+           {0, dvec4(0.70, 0.30, 0.22, 0.35)},
+           {25, dvec4(0.58, 0.10, 0.10, 0.6)},
+           {40, dvec4(0.72, 0.22, 0.15, 0.6)},
+           {60, dvec4(0.95, 0.62, 0.30, 0.6)},
+           {100, dvec4(0.98, 0.65, 0.45, 0.6)},
+           {150, dvec4(0.85, 0.05, 0.10, 0.7)},
+           {300, dvec4(1.0, 0.70, 0.70, 0.8)},
+           {400, dvec4(1.0, 0.95, 0.85, 0.9)},
            {3000, dvec4(1.0, 0.97, 0.90, 0.9)}}};
   preset.still_step_factor = 1.0;
   return preset;
@@ -112,7 +118,9 @@ Result<RenderPreset> VpmPreset(std::string_view name, const Volume& volume) {
 
 std::vector<std::pair<std::string, std::string>> RenderPresetNames() {
   std::vector<std::pair<std::string, std::string>> names = {
-      {"ct-soft-tissue", "CT: fat nearly clear, skin and muscle red-brown, bone ivory"},
+      {"ct-soft-tissue",
+       "CT: fat yellow, kidney and parenchyma dark red, blood, muscle and liver orange, "
+       "contrast red, bone ivory"},
       {"ct-bone", "CT: bone only (>= 230 HU), cortex opaque"},
       {"ct-vessels", "CT angiography: contrast vessels and kidney cortex red, bone faint"},
       {"mri-t1", "MRI T1: greyscale on the volume's percentiles (p5 transparent .. p99.5)"},

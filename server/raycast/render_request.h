@@ -49,7 +49,7 @@ inline constexpr double kStillMipStepFactor = 1.0;
 // (MIP), whose stills measured 28.6-37.9 dB (DVR, shaded bone and vessel
 // presets) and 33.4 dB (MIP) against step / 8; at these caps every preset
 // holds 40 dB on that CT and the phantom (docs/RENDERING.md, "Sampling";
-// bench/step_psnr_bench).
+// bench/step_psnr_bench.cc).
 inline constexpr double kStillMaxStepMm = 0.375;
 inline constexpr double kStillMipMaxStepMm = 0.75;
 // Interactive frames step by what the screen can show, not by the voxels:

@@ -18,7 +18,7 @@ Status SessionManager::CheckMeshRoomLocked(const std::string& owner,
   if (options_.max_meshes_per_user <= 0) return absl::OkStatus();
   std::set<std::string> pinned;
   for (const auto& [id, session] : sessions_) {
-    if (session->access().IsOwner(owner)) pinned.insert(session->mesh().id);
+    if (session->access().IsOwner(owner)) pinned.insert(session->mesh()->id);
   }
   for (auto [it, end] = opening_meshes_.equal_range(owner); it != end; ++it) {
     pinned.insert(it->second);

@@ -80,6 +80,19 @@ kidney_pixel=$(echo "$kidney_before" | sed -n 's/^grab point at pixel (\([0-9.-]
 # shellcheck disable=SC2086
 python3 "$source_dir/scripts/region_difference.py" "$out/kidney_before.png" \
   "$out/kidney_after.png" $kidney_pixel 40 --min 8
+# The same drag with every default (ct-soft-tissue, the view cut), what each
+# client shows first: at least 8/255 around the grab (measured 30.7/255 on
+# 2026-11-28; 10.8/255 with the earlier ct-soft-tissue, which painted the
+# kidney and the fat around it the same red; issue 29).
+default_before=$("$vpm" render --volume "$kidney" "${kidney_grab[@]}" \
+  --out "$out/kidney_default_before.png")
+"$vpm" render --volume "$kidney" "${kidney_grab[@]}" --drag 0 0 15 \
+  --out "$out/kidney_default_after.png" >/dev/null
+default_pixel=$(echo "$default_before" | sed -n 's/^grab point at pixel (\([0-9.-]*\), \([0-9.-]*\))$/\1 \2/p')
+[ -n "$default_pixel" ] || { echo "vpm render did not print the grab pixel"; exit 1; }
+# shellcheck disable=SC2086
+python3 "$source_dir/scripts/region_difference.py" "$out/kidney_default_before.png" \
+  "$out/kidney_default_after.png" $default_pixel 40 --min 8
 "$vpm" slice --volume "$kidney" "${kidney_grab[@]}" --plane coronal --pixel 1 \
   --out "$out/kidney_coronal_before.png" >/dev/null
 "$vpm" slice --volume "$kidney" "${kidney_grab[@]}" --drag 0 0 15 --plane coronal --pixel 1 \

@@ -2,6 +2,7 @@
 // promise, the baked table matches the control points and its step
 // correction, the non-zero prefix agrees with the table, and the still step
 // follows the preset and the mode.
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -39,7 +40,17 @@ TEST(RenderPresets, CtPresetsShowWhatTheyPromise) {
   EXPECT_GT(SampleRenderLut(bone, 700.0f).a, 0.9f);
   const RenderLut soft = BakeRenderLut(*MakeRenderPreset("ct-soft-tissue", volume), 1.0);
   EXPECT_EQ(SampleRenderLut(soft, -1000.0f).a, 0.0f);    // air
-  EXPECT_GT(SampleRenderLut(soft, 40.0f).a, 10.0f * SampleRenderLut(soft, -100.0f).a);
+  EXPECT_GT(SampleRenderLut(soft, 40.0f).a, 4.0f * SampleRenderLut(soft, -100.0f).a);
+  // Fat, kidney parenchyma (30 HU), blood and muscle (55 HU) and contrast
+  // (200 HU) in colours apart by at least 0.2 in some channel.
+  const float values[] = {-100.0f, 30.0f, 55.0f, 200.0f};
+  for (int i = 0; i < 4; ++i) {
+    for (int j = i + 1; j < 4; ++j) {
+      const glm::vec4 a = SampleRenderLut(soft, values[i]), b = SampleRenderLut(soft, values[j]);
+      const glm::vec3 d = glm::abs(glm::vec3(a) - glm::vec3(b));
+      EXPECT_GT(std::max({d.r, d.g, d.b}), 0.2f) << values[i] << " HU against " << values[j];
+    }
+  }
 }
 
 TEST(RenderPresets, BakeAppliesTheStepCorrectionAndPrefixCounts) {

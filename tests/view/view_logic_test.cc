@@ -159,6 +159,18 @@ TEST(FrameRateMeter, CountsFramesOverTheWindowAndDecaysWhenTheyStop) {
   EXPECT_EQ(meter.Fps(t0 + milliseconds(5000)), 0.0);
 }
 
+TEST(ReconnectBackoff, RetriesOnlyWhatCanSucceed) {
+  EXPECT_TRUE(RetryCanSucceed(absl::UnavailableError("server down")));
+  EXPECT_TRUE(RetryCanSucceed(absl::ResourceExhaustedError("too many sessions")));
+  EXPECT_TRUE(RetryCanSucceed(absl::DeadlineExceededError("slow")));
+  // `--volume /abs/path.nii.gz` the server may not read, a gone session, a
+  // bad token: the same answer every time.
+  EXPECT_FALSE(RetryCanSucceed(absl::InvalidArgumentError("absolute paths are refused")));
+  EXPECT_FALSE(RetryCanSucceed(absl::NotFoundError("no such file")));
+  EXPECT_FALSE(RetryCanSucceed(absl::PermissionDeniedError("outside the data root")));
+  EXPECT_FALSE(RetryCanSucceed(absl::UnauthenticatedError("bad token")));
+}
+
 TEST(ReconnectBackoff, DoublesFromAQuarterSecondUpToFive) {
   EXPECT_DOUBLE_EQ(ReconnectBackoffS(0), 0.25);
   EXPECT_DOUBLE_EQ(ReconnectBackoffS(1), 0.5);

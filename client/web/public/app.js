@@ -93,8 +93,12 @@ function sendEvent(event) {
 function settings() {
   const [mode, preset] = $('render').value.split(':');
   const side = Number($('frame-size').value);
+  const cut = cuts.settings();
+  // The view cut (as `vpm render --cut auto`): on unless a crop box or a
+  // clip plane says what to show.
+  const viewCut = $('view-cut').checked && !cut.crop && !cut.clip;
   const out = { mode, preset, width: side, height: side, overlay: $('overlay').checked,
-                slices: slices.specs(), ...cuts.settings() };
+                slices: slices.specs(), ...cut, view_cut: viewCut };
   if (preset === 'uploaded') Object.assign(out, { preset: undefined, uploaded_tf: true });
   return out;
 }
@@ -363,6 +367,7 @@ for (const input of document.querySelectorAll('input[name="tool"]')) {
 const settingsChanged = () => state.session && sendEvent({ settings: settings() });
 $('render').addEventListener('change', settingsChanged);
 $('overlay').addEventListener('change', settingsChanged);
+$('view-cut').addEventListener('change', settingsChanged);
 $('slices').addEventListener('change', () => {
   slices.enabled = $('slices').checked;
   $('views').dataset.layout = slices.enabled ? 'grid' : 'single';
