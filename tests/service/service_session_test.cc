@@ -473,8 +473,15 @@ TEST_F(SessionTest, Ids_CarryTheServersTag) {
   const std::string random = session_.session_id().substr(prefix.size());
   EXPECT_EQ(random.size(), 32u) << session_.session_id();
   EXPECT_EQ(random.find_first_not_of("0123456789abcdef"), std::string::npos) << random;
-  EXPECT_EQ(volume_.volume_id(), "vol-" + tag + "-1");
-  EXPECT_EQ(session_.mesh_id(), "mesh-" + tag + "-1");
+  // Volume and mesh ids alike: the tag, then 128 random bits.
+  for (const std::string& id : {volume_.volume_id(), session_.mesh_id()}) {
+    const std::string kind = id.substr(0, id.find('-') + 1);
+    EXPECT_TRUE(kind == "vol-" || kind == "mesh-") << id;
+    ASSERT_EQ(id.substr(0, kind.size() + tag.size() + 1), kind + tag + "-") << id;
+    const std::string bits = id.substr(kind.size() + tag.size() + 1);
+    EXPECT_EQ(bits.size(), 32u) << id;
+    EXPECT_EQ(bits.find_first_not_of("0123456789abcdef"), std::string::npos) << id;
+  }
   auto other = VpmServer::Create(SmallServerOptions(), SharedGpu());
   ASSERT_TRUE(other.ok()) << other.status();
   EXPECT_NE((*other)->id_tag(), tag);

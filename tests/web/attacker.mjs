@@ -12,6 +12,7 @@
 // case finds before its fix). Figures: BUILD/tests/web/attacker.json;
 // logs: attacker_server.log, attacker_gateway*.log.
 import assert from 'node:assert/strict';
+import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 
@@ -42,10 +43,20 @@ async function metrics(port) {
 async function startCtx() {
   const tokens = { alice: randomToken(), bob: randomToken() };
   const usersFile = writeUsersFile(path.join(out, 'attacker_users.txt'), tokens);
+  // A data root with a large volume whose load takes the server a second or
+  // more (sign_out_work signs out while it is read).
+  const dataRoot = path.join(out, 'attacker_data');
+  fs.mkdirSync(dataRoot, { recursive: true });
+  if (!fs.existsSync(path.join(dataRoot, 'big.nii.gz'))) {
+    const made = spawnSync(path.join(build, 'client', 'vpm'),
+                           ['volume', 'export', 'phantom:abdomen?size=256',
+                            path.join(dataRoot, 'big.nii.gz')], { encoding: 'utf8' });
+    assert.equal(made.status, 0, `vpm volume export: ${made.stderr}`);
+  }
   const server = await startServer({
     build, out, token: randomToken(), logName: 'attacker_server.log',
     args: ['--users', usersFile, '--metrics-listen', '127.0.0.1:0',
-           '--max-sessions-per-user', '3'] });
+           '--max-sessions-per-user', '3', '--data-root', dataRoot] });
   assert.ok(server.metricsPort > 0, 'the server printed no metrics port');
   const keyFile = path.join(out, 'attacker_cookie.key');
   fs.writeFileSync(keyFile, randomToken(), { mode: 0o600 });
