@@ -33,7 +33,9 @@ async function workspace(balancer, key, volumeSource) {
   const volume = await vpmOk(build, [...g, 'volume', 'load', volumeSource]);
   const session = await vpmOk(build, [...g, 'session', 'open', '--volume-id', volume.volume_id]);
   const s = ['--session', session.session_id];
-  const centre = volume.dims.map((d, i) => String(((d - 1) * volume.spacing_mm[i]) / 2));
+  // The middle of the volume's world box (LPS mm, the API's frame).
+  const [lo, hi] = volume.box_lps_mm;
+  const centre = lo.map((l, i) => String((l + hi[i]) / 2));
   await vpmOk(build, [...g, 'manipulate', ...s, '--grab', ...centre]);
   await vpmOk(build, [...g, 'manipulate', ...s, '--drag', '0', '0', '5']);
   await vpmOk(build, [...g, 'manipulate', ...s, '--drag', '0', '0', '10']);

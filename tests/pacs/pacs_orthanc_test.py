@@ -177,7 +177,7 @@ def run(h, t, build, source):
     t.check(rc == 0, f'vpm volume load {ct_source} ({err.strip()[-300:]})')
     g = slices_geometry(kidney)
     if vol:
-        direction = numpy.array(vol['direction']).reshape(3, 3)  # rows: the i, j, k axes
+        direction = numpy.array(vol['direction_columns_lps'])  # rows: the i, j, k axes
         origin = numpy.array(vol['origin_lps_mm'])
         spacing = vol['spacing_mm']
         gap = float(numpy.dot(g['positions'][1] - g['positions'][0], g['normal']))
@@ -238,7 +238,7 @@ def run(h, t, build, source):
             f'the tilted Philips series loads from Orthanc, resampled ({err.strip()[-200:]})')
     if tv:
         tg = slices_geometry(tilt_folder)
-        d = numpy.array(tv['direction']).reshape(3, 3)
+        d = numpy.array(tv['direction_columns_lps'])
         o = numpy.array(tv['origin_lps_mm'])
         idx = [numpy.dot(d, p - o) / numpy.array(tv['spacing_mm']) for p in tg['positions']]
         inside = all(-0.5 <= i[c] <= tv['dims'][c] - 0.5 for i in idx for c in range(3))

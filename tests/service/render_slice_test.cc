@@ -155,7 +155,7 @@ TEST_F(RenderSliceTest, RenderSlice_MatchesTheCpuReferenceOfTheDeformedVolume) {
     EXPECT_EQ(frame.encoding(), v3::ENCODING_PNG);
     EXPECT_NEAR(frame.slice().offset_mm(), glm::dot(grid->world_normal, grid->world_origin_mm),
                 1e-6);
-    EXPECT_NEAR(glm::length(FromProto(frame.slice().origin_mm()) - grid->origin_mm), 0.0, 1e-6);
+    EXPECT_NEAR(glm::length(FromProto(frame.slice().origin_mm()) - grid->world_origin_mm), 0.0, 1e-6);
     EXPECT_GT(frame.max_displacement_mm(), 1.0);
     const MipWindow window{40, 400};
     const std::vector<uint8_t> reference =

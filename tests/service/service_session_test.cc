@@ -123,7 +123,7 @@ TEST_F(SessionTest, Render_ReturnsDecodableStill) {
 TEST_F(SessionTest, Manipulate_GrabDragReleaseAndTheirErrors) {
   v3::ManipulateResponse response;
   EXPECT_EQ(Manipulate(Drag(3, 1), &response).error_code(), grpc::FAILED_PRECONDITION);
-  EXPECT_EQ(Manipulate(Grab(V(-10, 0, 0), 2), &response).error_code(), grpc::OUT_OF_RANGE);
+  EXPECT_EQ(Manipulate(Grab(V(-1000, 0, 0), 2), &response).error_code(), grpc::OUT_OF_RANGE);
   EXPECT_EQ(Manipulate(v3::ClientEvent(), &response).error_code(), grpc::INVALID_ARGUMENT);
   ASSERT_TRUE(Manipulate(Grab(Centre(volume_), 3), &response).ok());
   grpc::Status status = Manipulate(Drag(4, 4), &response);
