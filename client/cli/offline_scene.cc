@@ -17,7 +17,10 @@
 namespace vpm::cli {
 namespace {
 
+// `grab_mm` (physical voxel space, the point GrabPoint resolved from --grab
+// or --grab-landmark): where the mesh is refined unless the mesh flags say.
 Result<ProxyMesh> LoadOrBuildMesh(const RenderArgs& args, const Volume& volume,
+                                  const std::optional<glm::dvec3>& grab_mm,
                                   const gpu::GpuContext& context, const GpuVolume& gpu_volume) {
   if (!args.mesh_json.empty()) {
     // `vpm mesh --json` writes world LPS; the scene works in physical voxel space.
@@ -25,10 +28,7 @@ Result<ProxyMesh> LoadOrBuildMesh(const RenderArgs& args, const Volume& volume,
     return MeshFromWorld(world, volume.geometry());
   }
   ASSIGN_OR_RETURN(MeshParams params, ToMeshParams(args.mesh, volume));
-  if (params.refine_at_mm == std::nullopt && !args.grab.empty()) {
-    params.refine_at_mm = volume.geometry().WorldToPhysical(
-        glm::dvec3(args.grab[0], args.grab[1], args.grab[2]));
-  }
+  if (params.refine_at_mm == std::nullopt) params.refine_at_mm = grab_mm;
   ASSIGN_OR_RETURN(LatticeCostsGpu costs, LatticeCostsGpu::Create(context));
   return BuildProxyMesh(volume, params, {&gpu_volume, &costs});
 }
@@ -135,13 +135,8 @@ Result<std::unique_ptr<OfflineScene>> PrepareOfflineScene(const RenderArgs& args
   out->gpu_volume.emplace(std::move(gpu_volume));
   out->upload_ms = MsSince(t0);
   t0 = std::chrono::steady_clock::now();
-  RenderArgs effective = args;
-  if (out->grab) {
-    const glm::dvec3 world = out->volume->geometry().PhysicalToWorld(*out->grab);
-    effective.grab = {world.x, world.y, world.z};
-  }
-  ASSIGN_OR_RETURN(out->mesh,
-                   LoadOrBuildMesh(effective, *out->volume, *out->context, *out->gpu_volume));
+  ASSIGN_OR_RETURN(out->mesh, LoadOrBuildMesh(args, *out->volume, out->grab, *out->context,
+                                              *out->gpu_volume));
   out->mesh_ms = MsSince(t0);
   ASSIGN_OR_RETURN(out->renderer, VolumeRenderer::Create(*out->context, {}));
   t0 = std::chrono::steady_clock::now();

@@ -24,6 +24,7 @@ nlohmann::json Vec(const glm::dvec3& v) { return {v.x, v.y, v.z}; }
 
 nlohmann::json VolumeInfoJson(const Volume& v) {
   const VolumeGeometry& g = v.geometry();
+  const std::array<glm::dvec3, 2> box = g.WorldBox();  // world LPS
   nlohmann::json landmarks = nlohmann::json::array();
   for (const Landmark& l : v.landmarks()) {
     landmarks.push_back({{"name", l.name},
@@ -36,7 +37,7 @@ nlohmann::json VolumeInfoJson(const Volume& v) {
           {"origin_lps_mm", Vec(g.origin_mm)},
           {"direction_columns_lps", {Vec(g.direction[0]), Vec(g.direction[1]), Vec(g.direction[2])}},
           {"extent_mm", Vec(g.extent_mm())},
-          {"box_lps_mm", {Vec(g.WorldBox()[0]), Vec(g.WorldBox()[1])}},
+          {"box_lps_mm", {Vec(box[0]), Vec(box[1])}},
           {"value_range", {v.min_value(), v.max_value()}},
           {"voxel_encoding", VoxelEncodingName(v.encoding())},
           {"value_bytes", v.value_bytes()},

@@ -25,7 +25,6 @@ void Session::RefineAtGrab(const glm::dvec3& point_mm) {
     const std::optional<glm::dvec3>& at = refined_mesh_ ? refined_mesh_->params.refine_at_mm
                                                         : mesh_->params.refine_at_mm;
     if (at && glm::distance(*at, point_mm) <= near_mm) return;
-    if (refining_at_ && glm::distance(*refining_at_, point_mm) <= near_mm) return;
     if (refining_at_) return;  // one at a time: the next grab asks again
     refining_at_ = point_mm;
     mesh_id = mesh_->id;
