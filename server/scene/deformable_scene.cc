@@ -70,7 +70,7 @@ Result<GrabInfo> DeformableScene::Grab(const GrabRequest& request) {
   }
   grab_point_mm_ = request.point_mm;
   drag_offset_mm_ = glm::dvec3(0.0);
-  history_.push_back({.kind = SceneOp::Kind::kGrab, .grab = request});
+  Record({.kind = SceneOp::Kind::kGrab, .grab = request});
   return info;
 }
 
@@ -93,14 +93,14 @@ Result<SceneStepTimings> DeformableScene::Pin(const glm::dvec3& point_mm, double
   }
   if (vertices.empty() && nearest >= 0) vertices.push_back(nearest);
   RETURN_IF_ERROR(fem_->Pin(vertices));
-  history_.push_back({.kind = SceneOp::Kind::kPin, .vector = point_mm, .radius_mm = radius_mm});
+  Record({.kind = SceneOp::Kind::kPin, .vector = point_mm, .radius_mm = radius_mm});
   return AfterStep({.fem_ms = MsSince(t0)});
 }
 
 Result<SceneStepTimings> DeformableScene::Reset() {
   const auto t0 = std::chrono::steady_clock::now();
   fem_->Reset();
-  history_.clear();
+  Record({.kind = SceneOp::Kind::kReset});
   grab_point_mm_.reset();
   drag_offset_mm_ = glm::dvec3(0.0);
   return AfterStep({.fem_ms = MsSince(t0)});
@@ -147,14 +147,14 @@ Result<SceneStepTimings> DeformableScene::Drag(const glm::dvec3& offset_mm) {
   const auto t0 = std::chrono::steady_clock::now();
   ASSIGN_OR_RETURN(SolveStats solve, fem_->Drag(offset_mm));
   drag_offset_mm_ = offset_mm;
-  RecordMotion({.kind = SceneOp::Kind::kDrag, .vector = offset_mm});
+  Record({.kind = SceneOp::Kind::kDrag, .vector = offset_mm});
   return AfterStep(FromSolve(solve, t0));
 }
 
 Result<SceneStepTimings> DeformableScene::Pull(const glm::dvec3& force_n) {
   const auto t0 = std::chrono::steady_clock::now();
   ASSIGN_OR_RETURN(SolveStats solve, fem_->Pull(force_n));
-  RecordMotion({.kind = SceneOp::Kind::kPull, .vector = force_n});
+  Record({.kind = SceneOp::Kind::kPull, .vector = force_n});
   const SceneStepTimings timings = FromSolve(solve, t0);
   // The arrow follows the mean handle displacement.
   glm::dvec3 mean(0.0);
@@ -178,13 +178,7 @@ Result<SceneStepTimings> DeformableScene::Settle(int max_solves) {
 Result<SceneStepTimings> DeformableScene::Release(bool keep) {
   const auto t0 = std::chrono::steady_clock::now();
   RETURN_IF_ERROR(fem_->Release(keep));
-  if (keep) {
-    history_.push_back({.kind = SceneOp::Kind::kRelease, .keep = true});
-  } else {
-    // Nothing of this grab stays: drop it and its motion.
-    while (!history_.empty() && history_.back().kind != SceneOp::Kind::kGrab) history_.pop_back();
-    if (!history_.empty()) history_.pop_back();
-  }
+  Record({.kind = SceneOp::Kind::kRelease, .keep = keep});
   grab_point_mm_.reset();
   drag_offset_mm_ = glm::dvec3(0.0);
   SceneStepTimings timings;

@@ -20,6 +20,8 @@
 #include "server/raycast/camera.h"
 #include "server/raycast/clip_region.h"
 #include "server/raycast/slice_sampler.h"
+#include "server/scene/scene_history.h"
+#include "server/scene/scene_op.h"
 #include "server/scene/slice_view.h"
 #include "server/raycast/render_presets.h"
 #include "server/raycast/volume_renderer.h"
@@ -79,39 +81,12 @@ inline BackwardMap::Options InteractiveMapOptions() {
 // converge.
 inline constexpr int kSettleSolves = 16;
 
-// Which tissue a grab takes (docs/FEM.md, "The organ grab").
-enum class GrabRule {
-  kOrgan,  // the tissue connected to the point (organ_region.h), within a bound
-  kBall,   // the paper's ball: deformable vertices within the radius (FindHandles)
-};
-
 // The organ grab's margin (GrabOrgan), in lattice steps h. On the kidney
 // drag of tests/scene/kidney_drag_test.cc (mean along the drag, its
 // coefficient of variation, bone's 95th percentile): 0: 86%, 0.18, 0.73 mm;
 // 0.25 h: 89%, 0.14, 1.33 mm; 0.5 h: 91%, 0.12, 1.44 mm. The organ passes
 // either way; bone stays best with none.
 inline constexpr double kOrganMarginH = 0.0;
-
-struct GrabRequest {
-  glm::dvec3 point_mm{0.0};  // physical voxel space, mm
-  GrabRule rule = GrabRule::kOrgan;
-  // kBall: the ball's radius; kOrgan: the region's bound (max distance from
-  // the point). 0: the rule's default (kBall: one lattice step h; kOrgan:
-  // OrganRegionParams::max_radius_mm). mm, finite, >= 0.
-  double radius_mm = 0.0;
-};
-
-// One manipulation as the scene applied it (physical voxel space): the
-// scene's history since rest, which DeformableScene::Rebuilt replays onto
-// another mesh of the same volume.
-struct SceneOp {
-  enum class Kind { kGrab, kDrag, kPull, kRelease, kPin };
-  Kind kind = Kind::kGrab;
-  GrabRequest grab;           // kGrab
-  glm::dvec3 vector{0.0};     // kDrag: offset mm; kPull: force N; kPin: point mm
-  double radius_mm = 0.0;     // kPin
-  bool keep = false;          // kRelease
-};
 
 class DeformableScene {
  public:
@@ -219,12 +194,21 @@ class DeformableScene {
   // pull, kept releases and pins since rest, in order (a release that did
   // not keep drops its grab; Reset clears it). Drags and pulls are
   // absolute, so each grab keeps only its last.
-  const std::vector<SceneOp>& history() const { return history_; }
+  const std::vector<SceneOp>& history() const { return history_.ops(); }
+  // The op the last successful Grab, Drag, Pull, Release, Pin or Reset
+  // applied (what a case records); empty before any.
+  const std::optional<SceneOp>& last_op() const { return last_op_; }
   // A new scene of the same volume, renderer and options on `mesh` (a
   // refinement of this one), with this scene's history replayed and
   // settled: the same manipulation on the finer mesh. The map is brought
   // up to date at its first frame (deferred mode) or at once.
   Result<std::unique_ptr<DeformableScene>> Rebuilt(const ProxyMesh& mesh) const;
+  // The same on `mesh` with `ops` (a folded history, scene_history.h)
+  // replayed and settled: a reopened case, or one after an undo.
+  Result<std::unique_ptr<DeformableScene>> Replayed(const ProxyMesh& mesh,
+                                                    const std::vector<SceneOp>& ops) const;
+  // Applies `ops` to this scene, settling each drag and release.
+  Status Replay(const std::vector<SceneOp>& ops);
 
   const ProxyMesh& mesh() const { return mesh_; }
   const FemModel& fem() const { return *fem_; }
@@ -243,11 +227,12 @@ class DeformableScene {
   // A backward map with one point per voxel of the source grid, of the
   // current deformation.
   Result<BackwardMap> ExactMap() const;
-  // Appends a drag or pull, replacing the grab's earlier one.
-  void RecordMotion(SceneOp op);
+  // Records an applied op in the history and as last_op_.
+  void Record(const SceneOp& op);
   const gpu::GpuContext* context_ = nullptr;
   Options options_;
-  std::vector<SceneOp> history_;
+  SceneHistory history_;
+  std::optional<SceneOp> last_op_;
   const Volume* volume_ = nullptr;
   GpuVolume* gpu_volume_ = nullptr;
   VolumeRenderer* renderer_ = nullptr;

@@ -1,45 +1,55 @@
 // DeformableScene's history and its replay onto a refined mesh
-// (docs/SERVICE.md, "Refinement without asking").
+// (docs/SERVICE.md, "Refinement without asking") or a reopened case
+// (docs/CASES.md).
 #include "server/scene/deformable_scene.h"
 
 namespace vpm {
 
-void DeformableScene::RecordMotion(SceneOp op) {
-  if (!history_.empty() && (history_.back().kind == SceneOp::Kind::kDrag ||
-                            history_.back().kind == SceneOp::Kind::kPull)) {
-    history_.back() = op;
-  } else {
-    history_.push_back(op);
-  }
+void DeformableScene::Record(const SceneOp& op) {
+  last_op_ = op;
+  history_.Record(op);
 }
 
-Result<std::unique_ptr<DeformableScene>> DeformableScene::Rebuilt(const ProxyMesh& mesh) const {
-  ASSIGN_OR_RETURN(std::unique_ptr<DeformableScene> scene,
-                   Create(*context_, *volume_, *gpu_volume_, *renderer_, mesh, options_));
-  for (const SceneOp& op : history_) {
+Status DeformableScene::Replay(const std::vector<SceneOp>& ops) {
+  for (const SceneOp& op : ops) {
     switch (op.kind) {
       case SceneOp::Kind::kGrab:
-        RETURN_IF_ERROR(scene->Grab(op.grab).status());
+        RETURN_IF_ERROR(Grab(op.grab).status());
         break;
       case SceneOp::Kind::kDrag:
-        RETURN_IF_ERROR(scene->Drag(op.vector).status());
+        RETURN_IF_ERROR(Drag(op.vector).status());
         // A drag event's work is bounded (docs/FEM.md): finish it, as the
         // running scene has (or will by its next still).
-        RETURN_IF_ERROR(scene->Settle(kSettleSolves).status());
+        RETURN_IF_ERROR(Settle(kSettleSolves).status());
         break;
       case SceneOp::Kind::kPull:
-        RETURN_IF_ERROR(scene->Pull(op.vector).status());
+        RETURN_IF_ERROR(Pull(op.vector).status());
         break;
       case SceneOp::Kind::kRelease:
-        RETURN_IF_ERROR(scene->Release(op.keep).status());
-        RETURN_IF_ERROR(scene->Settle(kSettleSolves).status());
+        RETURN_IF_ERROR(Release(op.keep).status());
+        RETURN_IF_ERROR(Settle(kSettleSolves).status());
         break;
       case SceneOp::Kind::kPin:
-        RETURN_IF_ERROR(scene->Pin(op.vector, op.radius_mm).status());
+        RETURN_IF_ERROR(Pin(op.vector, op.radius_mm).status());
+        break;
+      case SceneOp::Kind::kReset:
+        RETURN_IF_ERROR(Reset().status());
         break;
     }
   }
+  return absl::OkStatus();
+}
+
+Result<std::unique_ptr<DeformableScene>> DeformableScene::Replayed(
+    const ProxyMesh& mesh, const std::vector<SceneOp>& ops) const {
+  ASSIGN_OR_RETURN(std::unique_ptr<DeformableScene> scene,
+                   Create(*context_, *volume_, *gpu_volume_, *renderer_, mesh, options_));
+  RETURN_IF_ERROR(scene->Replay(ops));
   return scene;
+}
+
+Result<std::unique_ptr<DeformableScene>> DeformableScene::Rebuilt(const ProxyMesh& mesh) const {
+  return Replayed(mesh, history_.ops());
 }
 
 }  // namespace vpm
