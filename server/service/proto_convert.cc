@@ -160,6 +160,26 @@ void FillMeshGeometry(const ProxyMesh& mesh, const VolumeGeometry& geometry,
   }
 }
 
+v3::MeshParams MeshParamsToApi(const MeshParams& p, const VolumeGeometry& geometry) {
+  v3::MeshParams out;
+  for (int a = 0; a < 3; ++a) out.add_grid(p.grid[a]);
+  out.set_target(p.target);
+  out.set_footprint(p.footprint == Footprint::kCell ? v3::FOOTPRINT_CELL : v3::FOOTPRINT_POINT);
+  out.set_density_mode(p.density_mode == DensityMode::kPaper ? v3::DENSITY_MODE_PAPER
+                                                             : v3::DENSITY_MODE_SPREAD);
+  out.set_wg(p.wg);
+  out.set_wd(p.wd);
+  out.set_radius_factor(p.radius_factor);
+  out.set_tf(p.tf);
+  out.set_bone_threshold(p.classify.bone_threshold);
+  out.set_influence_threshold(p.classify.influence_threshold);
+  out.set_influence_factor(p.classify.influence_factor);
+  if (p.refine_at_mm) *out.mutable_refine_at_mm() = PointToApi(*p.refine_at_mm, geometry);
+  out.set_roi_factor(p.roi_radius_factor);
+  out.set_refine_count(p.refine_count);
+  return out;
+}
+
 Result<MeshParams> ToMeshParams(const v3::MeshParams& in, const VolumeGeometry& geometry) {
   MeshParams p;
   if (in.grid_size() != 0) {

@@ -32,6 +32,8 @@ void FillMeshGeometry(const ProxyMesh& mesh, const VolumeGeometry& geometry,
 // Unset fields take the docs/ALGORITHM.md defaults. InvalidArgument names the field.
 // refine_at_mm (world) comes back in `geometry`'s physical voxel space.
 Result<MeshParams> ToMeshParams(const v3::MeshParams& params, const VolumeGeometry& geometry);
+// The inverse (every field set; refine_at in world LPS): what a case keeps.
+v3::MeshParams MeshParamsToApi(const MeshParams& params, const VolumeGeometry& geometry);
 
 // How one stream wants its frames: the scene view but for the camera, plus
 // the encoding.

@@ -133,6 +133,10 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                "running mesh and swapped in at the next frame with the manipulation replayed "
                "(off by default)")
       ->capture_default_str();
+  app.add_option("--state-dir", o->state_dir,
+                 "keep cases here (DIR/cases.sqlite, created if missing): every session is a "
+                 "case whose manipulations are stored as they are acknowledged, reopened after a "
+                 "restart with OpenCase (docs/CASES.md); empty: none are kept");
   app.add_option("--drain-s", o->drain_s,
                  "on SIGTERM/SIGINT, report NOT_SERVING to health checks for this long first, "
                  "while calls on existing sessions go on and new volumes, meshes and sessions "

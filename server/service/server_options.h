@@ -65,6 +65,9 @@ struct ServerOptions {
   // default: on the phantom the organ lags the pointer more on the refined
   // mesh (an 8 mm drag reaches 5.4 mm at 64^3), which needs a look first.
   bool refine_on_grab = false;
+  // Cases (docs/CASES.md): the folder of the case database (cases.sqlite);
+  // empty: no cases are kept (sessions live in memory only).
+  std::string state_dir;
   double drain_s = 0;                            // SIGTERM: NOT_SERVING this long first
   double shutdown_grace_s = 5;                   // then streams get this long
 

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 #include "server/common/clock.h"
 #include "server/raycast/frame_encoder.h"
@@ -100,8 +101,14 @@ Result<glm::dvec3> Session::GrabPoint(const v3::Grab& grab, const SceneView* str
 Result<AppliedEvent> Session::Apply(const v3::ClientEvent& event, const SceneView* view) {
   if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
   Touch();
-  std::lock_guard scene_lock(scene_mutex_);
+  std::unique_lock scene_lock(scene_mutex_);
+  std::vector<SceneOp> before;
+  if (case_store_ != nullptr) before = scene_->history();
   ASSIGN_OR_RETURN(AppliedEvent applied, ApplyLocked(event, view));
+  if (Status stored = StoreInCase(event, before, scene_lock); !stored.ok()) {
+    Changed(0, true, nullptr);
+    return stored;
+  }
   Changed(event.sequence(), applied.deformed, applied.deformed ? &applied.step : nullptr);
   return applied;
 }
@@ -195,6 +202,14 @@ Status Session::SetCamera(const v3::Camera& camera) {
     camera_ = c;
   }
   Changed(0, false, nullptr);
+  // The camera is part of the case, but a view the store cannot keep is no
+  // reason to refuse the view: it is said, not returned.
+  if (case_store_ != nullptr) {
+    if (Status stored = case_store_->SetCamera(case_id_, camera.SerializeAsString()); !stored.ok()) {
+      std::fprintf(stderr, "vpm-server: session %s: camera not stored: %s\n", id_.c_str(),
+                   stored.ToString().c_str());
+    }
+  }
   return absl::OkStatus();
 }
 

@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 
+#include "server/cases/case_store.h"
 #include "server/common/cancel_token.h"
 #include "server/raycast/volume_renderer.h"
 #include "server/scene/deformable_scene.h"
@@ -78,8 +79,30 @@ class Session : public std::enable_shared_from_this<Session> {
   // `view`: the settings of the stream that sent the event, for a grab by
   // pixel (frame size, preset and mode of the frame the user clicked);
   // null (Manipulate) uses those of the last frame rendered.
+  // With a case attached, a manipulation is stored in the case before
+  // Apply returns; when the store refuses it (a full disk, a locked
+  // database) the scene goes back to what the case holds and the store's
+  // error is returned: what a client saw acknowledged is what is stored.
   Result<AppliedEvent> Apply(const v3::ClientEvent& event, const SceneView* view = nullptr);
   Status SetCamera(const v3::Camera& camera);
+
+  // The case this session is open on (docs/CASES.md, session_case.cc):
+  // call once, before the session is shared (OpenSession, OpenCase).
+  // Replays `ops` (a folded history, scene_history.h) onto the scene and
+  // sets `camera` (a serialized vpm.v3.Camera; empty: keep the default).
+  Status AttachCase(cases::CaseStore* store, std::string case_id, const std::vector<SceneOp>& ops,
+                    const std::string& camera);
+  const std::string& case_id() const { return case_id_; }
+  // Undo (redo = false) or redo one action of the case; the scene is
+  // replayed from the case's events in effect. FailedPrecondition without
+  // a case.
+  struct UndoOutcome {
+    bool changed = false;
+    double max_displacement_mm = 0.0;
+    int64_t events = 0;
+    int64_t undone = 0;
+  };
+  Result<UndoOutcome> Undo(bool redo);
 
   // One frame of the current state, encoded. `camera` overrides the
   // session's; `interactive` picks the cheap quality (streams use it while
@@ -133,6 +156,18 @@ class Session : public std::enable_shared_from_this<Session> {
   // locks held).
   void SwapInRefinedMeshLocked();
   void Changed(uint64_t sequence, bool deformed, const SceneStepTimings* step);
+  // After ApplyLocked changed the scene: stores its op in the case (no case:
+  // nothing to do; a camera event: the camera). The caller holds
+  // `scene_lock`; on a refusal the scene is replayed from the case (or
+  // `before`, the history before the event, when the case cannot be read),
+  // the lock released and taken again under the frame lock.
+  Status StoreInCase(const v3::ClientEvent& event, const std::vector<SceneOp>& before,
+                     std::unique_lock<std::mutex>& scene_lock);
+  // Replaces the scene by the mesh's with `ops` replayed (frame and scene
+  // locks held), and records its displacement as the last step's.
+  Status ReplaySceneLocked(const std::vector<SceneOp>& ops);
+  // The case's events in effect, folded.
+  Result<std::vector<SceneOp>> CaseHistory() const;
   // The slices `requests` place now; the caller holds scene_mutex_.
   Result<std::vector<SliceFrame>> RenderSlicesLocked(const std::vector<SliceRequest>& requests);
   void Notify(bool closed);
@@ -172,6 +207,9 @@ class Session : public std::enable_shared_from_this<Session> {
   std::chrono::steady_clock::time_point last_change_{};
   std::chrono::steady_clock::time_point last_touch_;
   bool closed_ = false;
+  // Set once by AttachCase, before the session is shared.
+  cases::CaseStore* case_store_ = nullptr;
+  std::string case_id_;
 
   mutable std::mutex observers_mutex_;
   std::map<int64_t, Observer> observers_;

@@ -196,6 +196,15 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
   return Add(std::move(volume), std::move(key), user, {}, SubProgress(progress, 0.85, 1.0));
 }
 
+std::string VolumeStore::ReloadSource(const VolumeEntry& volume) const {
+  const std::string& key = volume.load_key;
+  if (key.starts_with(kPacsKeyPrefix)) return std::string(PacsKeySource(key));
+  if (!key.starts_with("file:")) return key;  // phantom:..., or "" (an upload)
+  Result<std::filesystem::path> root = CanonicalDataRoot(options_.data_root);
+  if (!root.ok()) return "";
+  return std::filesystem::path(key.substr(5)).lexically_relative(*root).string();
+}
+
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::AddFile(const std::filesystem::path& path,
                                                           std::string source, std::string owner) {
   RETURN_IF_ERROR(CheckRoom(0));

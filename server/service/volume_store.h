@@ -137,6 +137,10 @@ class VolumeStore {
   // NotFound (VolumeNotFound) when missing or another user's upload; an
   // evicted volume is read again (the errors of Load).
   Result<std::shared_ptr<VolumeEntry>> Get(std::string_view id, std::string_view user);
+  // The Load source that reads `volume` again (what a case keeps):
+  // phantom:..., pacs:ENDPOINT/STUDY_UID/SERIES_UID, or the path under the
+  // data root; empty for an upload.
+  std::string ReloadSource(const VolumeEntry& volume) const;
   // A session's hold on `volume` for `owner`; ResourceExhausted when the
   // volume would be a new slot of `owner`'s (a shared volume none of their
   // sessions uses yet) past max_volumes_per_owner. Checked and counted

@@ -1,11 +1,14 @@
 #include "server/service/vpm_server.h"
 
+#include "server/cases/sqlite_case_store.h"
+#include "server/common/prefix_status.h"
 #include "server/common/read_text_file.h"
 #include "server/service/users_file.h"
 #include "server/service/loopback_address.h"
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <random>
 
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
@@ -56,6 +59,23 @@ Result<TokenAuth> MakeAuth(const ServerOptions& o) {
     ASSIGN_OR_RETURN(auth.users, ReadUsersFile(o.users_file));
   }
   return TokenAuth::Create(auth);
+}
+
+// The case store of --state-dir (the folder is created); null without it.
+// The error names the folder and what is wrong with it, so that the server
+// says so at start.
+Result<std::unique_ptr<cases::CaseStore>> OpenCaseStore(const std::string& state_dir) {
+  if (state_dir.empty()) return std::unique_ptr<cases::CaseStore>();
+  std::error_code error;
+  std::filesystem::create_directories(state_dir, error);
+  if (error) {
+    return absl::FailedPreconditionError(
+        StrCat("--state-dir ", state_dir, ": cannot create it (", error.message(), ")"));
+  }
+  Result<std::unique_ptr<cases::CaseStore>> store =
+      cases::OpenSqliteCaseStore(std::filesystem::path(state_dir) / "cases.sqlite");
+  if (!store.ok()) return PrefixStatus(store.status(), StrCat("--state-dir ", state_dir));
+  return store;
 }
 
 // The PACS gateway of --pacs, --pacs-cache, --pacs-cache-bytes and
@@ -163,6 +183,7 @@ Status VpmServer::Start() {
     };
   }
   ASSIGN_OR_RETURN(volumes_, VolumeStore::Create(volume_options));
+  ASSIGN_OR_RETURN(cases_, OpenCaseStore(o.state_dir));
   ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes,
                                                [m = metrics_.get()](int64_t count) {
                                                  m->Meshes(count);
@@ -230,6 +251,7 @@ Status VpmServer::Start() {
   context_.upload_spool = upload_spool_.get();
   context_.load_progress = load_progress_.get();
   context_.pacs = pacs_.get();
+  context_.cases = cases_.get();
   service_ = std::make_unique<VpmService>(&context_);
 
   grpc::EnableDefaultHealthCheckService(true);

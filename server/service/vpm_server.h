@@ -63,6 +63,7 @@ class VpmServer {
   std::unique_ptr<WorkerPool> request_pool_;
   std::unique_ptr<WorkerPool> render_pool_;
   std::unique_ptr<pacs::PacsGateway> pacs_;  // before volumes_: their reads call it
+  std::unique_ptr<cases::CaseStore> cases_;  // before sessions_: they write to it
   std::unique_ptr<VolumeStore> volumes_;
   std::unique_ptr<MeshStore> meshes_;
   std::unique_ptr<SessionManager> sessions_;

@@ -161,6 +161,7 @@ void VpmService::FillSessionInfo(const Session& session, const std::string& user
   info->set_viewers(session.viewers());
   info->set_idle_s(session.idle_s());
   info->set_owner(session.access().owner());
+  info->set_case_id(session.case_id());
   if (session.access().IsOwner(user)) {
     for (const std::string& viewer : session.access().viewers()) info->add_shared_with(viewer);
   }
@@ -343,9 +344,11 @@ grpc::ServerUnaryReactor* VpmService::OpenSession(grpc::CallbackServerContext* c
                      service_->sessions->Open(user, std::move(hold), mesh));
     // A client gone while the scene was built (a closed tab, a sign-out)
     // would never close it: it is closed now, not after --idle-session-s.
-    if (Status gone = cancel.Check(); !gone.ok()) {
+    Status started = cancel.Check();
+    if (started.ok()) started = StartCase(*session, user);
+    if (!started.ok()) {
       service_->sessions->Close(session->id(), user).IgnoreError();
-      return gone;
+      return started;
     }
     FillSessionInfo(*session, user, response);
     return absl::OkStatus();

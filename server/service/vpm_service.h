@@ -8,6 +8,7 @@
 
 #include <map>
 #include <mutex>
+#include <set>
 #include <string>
 
 #include <grpcpp/grpcpp.h>
@@ -79,6 +80,22 @@ class VpmService final : public v3::Vpm::CallbackService {
                                           v3::SearchStudiesResponse*) override;
   grpc::ServerUnaryReactor* ListSeries(grpc::CallbackServerContext*, const v3::ListSeriesRequest*,
                                        v3::ListSeriesResponse*) override;
+  // case_handlers.cc
+  grpc::ServerUnaryReactor* ListCases(grpc::CallbackServerContext*, const v3::ListCasesRequest*,
+                                      v3::ListCasesResponse*) override;
+  grpc::ServerUnaryReactor* GetCase(grpc::CallbackServerContext*, const v3::GetCaseRequest*,
+                                    v3::CaseInfo*) override;
+  grpc::ServerUnaryReactor* OpenCase(grpc::CallbackServerContext*, const v3::OpenCaseRequest*,
+                                     v3::SessionInfo*) override;
+  grpc::ServerUnaryReactor* UpdateCase(grpc::CallbackServerContext*,
+                                       const v3::UpdateCaseRequest*, v3::CaseInfo*) override;
+  grpc::ServerUnaryReactor* DeleteCase(grpc::CallbackServerContext*,
+                                       const v3::DeleteCaseRequest*,
+                                       v3::DeleteCaseResponse*) override;
+  grpc::ServerUnaryReactor* ShareCase(grpc::CallbackServerContext*, const v3::ShareCaseRequest*,
+                                      v3::CaseInfo*) override;
+  grpc::ServerUnaryReactor* Undo(grpc::CallbackServerContext*, const v3::UndoRequest*,
+                                 v3::UndoResponse*) override;
 
  private:
   // Authenticates the caller, then runs `fn` with the caller's user name
@@ -138,11 +155,26 @@ class VpmService final : public v3::Vpm::CallbackService {
   // shared_with only for the owner.
   void FillSessionInfo(const Session& session, const std::string& user,
                        v3::SessionInfo* info) const;
+  // A new case for a session just opened (with --state-dir), attached to
+  // it (case_handlers.cc).
+  Status StartCase(Session& session, const std::string& user);
+  // The case `id` if `user` owns it (owner_only) or may read it; NotFound
+  // otherwise, the same answer as for a missing case.
+  Result<cases::CaseRecord> FindCase(const std::string& id, const std::string& user,
+                                     bool owner_only) const;
+  // The session open on case `id` for its owner, if any.
+  std::shared_ptr<Session> OpenSessionOf(const std::string& id, const std::string& owner) const;
+  void FillCaseInfo(const cases::CaseRecord& record, const std::string& user,
+                    v3::CaseInfo* info) const;
   // NotFound (MeshNotFound) when missing or on another user's upload.
   Result<std::shared_ptr<const MeshEntry>> FindMesh(std::string_view mesh_id,
                                                    const std::string& user) const;
 
   ServiceContext* service_;
+  // Cases being opened (OpenCase): a second open of the same case waits
+  // for none, it is told to retry, so that one case never has two sessions.
+  std::mutex opening_mutex_;
+  std::set<std::string> opening_cases_;
 };
 
 }  // namespace vpm::service

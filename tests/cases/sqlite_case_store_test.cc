@@ -216,7 +216,7 @@ TEST_F(CaseStoreTest, AFullDiskRefusesTheEventWholeAndTheStoreGoesOnAfterwards) 
   ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old), 0);
   signal(SIGXFSZ, SIG_IGN);
   rlimit limited = old;
-  limited.rlim_cur = std::max<uintmax_t>(fs::file_size(dir_ / "cases.sqlite-wal"), 4096);
+  limited.rlim_cur = fs::file_size(dir_ / "cases.sqlite-wal") + 64 * 1024;
   ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &limited), 0);
   Status refused = absl::OkStatus();
   int stored = 0;

@@ -1,0 +1,223 @@
+#include "client/cli/case_commands.h"
+
+#include <cstdio>
+#include <ctime>
+#include <memory>
+#include <string>
+
+#include "client/cli/server_flags.h"
+#include "client/common/proto_json.h"
+
+namespace vpm::cli {
+namespace {
+
+using nlohmann::json;
+
+// Unix ms as local "YYYY-MM-DD HH:MM".
+std::string When(int64_t unix_ms) {
+  const std::time_t t = static_cast<std::time_t>(unix_ms / 1000);
+  std::tm local{};
+  localtime_r(&t, &local);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M", &local);
+  return text;
+}
+
+json CaseJson(const v3::CaseInfo& c) {
+  return {{"case_id", c.case_id()},
+          {"title", c.title()},
+          {"notes", c.notes()},
+          {"owner", c.owner()},
+          {"shared_with", json(std::vector<std::string>(c.shared_with().begin(),
+                                                        c.shared_with().end()))},
+          {"source", c.source()},
+          {"events", c.events()},
+          {"undone", c.undone()},
+          {"max_displacement_mm", c.max_displacement_mm()},
+          {"created_unix_ms", c.created_unix_ms()},
+          {"modified_unix_ms", c.modified_unix_ms()},
+          {"session_id", c.session_id()}};
+}
+
+void PrintCase(const v3::CaseInfo& c) {
+  std::printf("case %s\n  title: %s\n  owner: %s\n", c.case_id().c_str(), c.title().c_str(),
+              c.owner().c_str());
+  std::string shares;
+  for (const std::string& u : c.shared_with()) shares += (shares.empty() ? "" : ", ") + u;
+  if (!shares.empty()) std::printf("  shared with: %s\n", shares.c_str());
+  std::printf("  source: %s\n  events: %lld (%lld undone)\n  largest displacement: %.3f mm\n",
+              c.source().c_str(), static_cast<long long>(c.events()),
+              static_cast<long long>(c.undone()), c.max_displacement_mm());
+  std::printf("  created: %s  modified: %s\n", When(c.created_unix_ms()).c_str(),
+              When(c.modified_unix_ms()).c_str());
+  std::printf("  session: %s\n", c.session_id().empty() ? "(not open)" : c.session_id().c_str());
+  if (!c.notes().empty()) std::printf("  notes: %s\n", c.notes().c_str());
+}
+
+struct Args {
+  std::string case_id, session_id, text, user;
+  bool json = false, revoke = false;
+};
+
+Status List(const ServerConnection& s, const Args& a) {
+  v3::ListCasesResponse response;
+  RETURN_IF_ERROR(FromGrpc(s.stub().ListCases(s.Context().get(), {}, &response)));
+  if (a.json) {
+    json cases = json::array();
+    for (const auto& c : response.cases()) cases.push_back(CaseJson(c));
+    PrintJson({{"cases", cases}});
+    return absl::OkStatus();
+  }
+  std::printf("%-42s %-10s %-16s %7s %9s  %s\n", "CASE", "OWNER", "MODIFIED", "EVENTS", "MAX MM",
+              "TITLE");
+  for (const auto& c : response.cases()) {
+    std::printf("%-42s %-10s %-16s %7lld %9.3f  %s%s\n", c.case_id().c_str(), c.owner().c_str(),
+                When(c.modified_unix_ms()).c_str(), static_cast<long long>(c.events()),
+                c.max_displacement_mm(), c.title().c_str(),
+                c.session_id().empty() ? "" : "  (open)");
+  }
+  std::printf("%d cases\n", response.cases_size());
+  return absl::OkStatus();
+}
+
+Status Show(const ServerConnection& s, const Args& a) {
+  v3::GetCaseRequest request;
+  request.set_case_id(a.case_id);
+  v3::CaseInfo info;
+  RETURN_IF_ERROR(FromGrpc(s.stub().GetCase(s.Context().get(), request, &info)));
+  if (a.json) {
+    PrintJson(CaseJson(info));
+  } else {
+    PrintCase(info);
+  }
+  return absl::OkStatus();
+}
+
+Status Open(const ServerConnection& s, const Args& a) {
+  v3::OpenCaseRequest request;
+  request.set_case_id(a.case_id);
+  v3::SessionInfo session;
+  RETURN_IF_ERROR(FromGrpc(s.stub().OpenCase(s.Context().get(), request, &session)));
+  if (a.json) {
+    PrintJson({{"session_id", session.session_id()},
+               {"case_id", session.case_id()},
+               {"volume_id", session.volume_id()},
+               {"mesh_id", session.mesh_id()}});
+  } else {
+    std::printf("%s\n", session.session_id().c_str());
+  }
+  return absl::OkStatus();
+}
+
+Status Update(const ServerConnection& s, const Args& a, bool notes) {
+  v3::UpdateCaseRequest request;
+  request.set_case_id(a.case_id);
+  if (notes) {
+    request.set_notes(a.text);
+  } else {
+    request.set_title(a.text);
+  }
+  v3::CaseInfo info;
+  RETURN_IF_ERROR(FromGrpc(s.stub().UpdateCase(s.Context().get(), request, &info)));
+  PrintCase(info);
+  return absl::OkStatus();
+}
+
+Status Delete(const ServerConnection& s, const Args& a) {
+  v3::DeleteCaseRequest request;
+  request.set_case_id(a.case_id);
+  v3::DeleteCaseResponse response;
+  RETURN_IF_ERROR(FromGrpc(s.stub().DeleteCase(s.Context().get(), request, &response)));
+  std::printf("deleted %s\n", a.case_id.c_str());
+  return absl::OkStatus();
+}
+
+Status Share(const ServerConnection& s, const Args& a) {
+  v3::ShareCaseRequest request;
+  request.set_case_id(a.case_id);
+  request.set_user(a.user);
+  request.set_revoke(a.revoke);
+  v3::CaseInfo info;
+  RETURN_IF_ERROR(FromGrpc(s.stub().ShareCase(s.Context().get(), request, &info)));
+  PrintCase(info);
+  return absl::OkStatus();
+}
+
+Status UndoOrRedo(const ServerConnection& s, const Args& a, bool redo) {
+  v3::UndoRequest request;
+  request.set_session_id(a.session_id);
+  request.set_redo(redo);
+  v3::UndoResponse response;
+  RETURN_IF_ERROR(FromGrpc(s.stub().Undo(s.Context().get(), request, &response)));
+  if (!response.changed()) {
+    std::printf("nothing to %s\n", redo ? "redo" : "undo");
+  } else {
+    std::printf("%s: %lld events in effect, %lld undone, largest displacement %.3f mm\n",
+                redo ? "redone" : "undone", static_cast<long long>(response.events()),
+                static_cast<long long>(response.undone()), response.max_displacement_mm());
+  }
+  return absl::OkStatus();
+}
+
+using Run = Status (*)(const ServerConnection&, const Args&);
+
+CLI::App* Command(CLI::App* parent, const char* name, const char* help,
+                  const std::shared_ptr<Args>& args, const ServerFlags* flags, int* exit_code,
+                  std::function<Status(const ServerConnection&, const Args&)> run) {
+  CLI::App* c = parent->add_subcommand(name, help);
+  c->callback(WithServer(flags, exit_code,
+                         [args, run](const ServerConnection& s) { return run(s, *args); }));
+  return c;
+}
+
+}  // namespace
+
+void AddCaseCommands(CLI::App& app, const ServerFlags* flags, int* exit_code) {
+  CLI::App* cases =
+      app.add_subcommand("case", "server: cases (a server started with --state-dir)");
+  cases->require_subcommand(1);
+  auto a = std::make_shared<Args>();
+  Command(cases, "list", "my cases and those shared with me, newest first", a, flags, exit_code,
+          List)
+      ->add_flag("--json", a->json, "print JSON");
+  CLI::App* show = Command(cases, "show", "one case: source, title, owner, shares, events, "
+                                          "largest displacement", a, flags, exit_code, Show);
+  show->add_option("case_id", a->case_id, "case id")->required();
+  show->add_flag("--json", a->json, "print JSON");
+  CLI::App* open = Command(cases, "open", "open the case (replayed if not open) and print its "
+                                          "session id", a, flags, exit_code, Open);
+  open->add_option("case_id", a->case_id, "case id")->required();
+  open->add_flag("--json", a->json, "print JSON");
+  CLI::App* rename = Command(cases, "rename", "set the case's title", a, flags, exit_code,
+                             [](const ServerConnection& s, const Args& x) {
+                               return Update(s, x, false);
+                             });
+  rename->add_option("case_id", a->case_id, "case id")->required();
+  rename->add_option("title", a->text, "new title (at most 256 bytes)")->required();
+  CLI::App* notes = Command(cases, "notes", "set the case's notes", a, flags, exit_code,
+                            [](const ServerConnection& s, const Args& x) {
+                              return Update(s, x, true);
+                            });
+  notes->add_option("case_id", a->case_id, "case id")->required();
+  notes->add_option("text", a->text, "the notes")->required();
+  CLI::App* del = Command(cases, "delete", "delete the case and everything stored of it", a,
+                          flags, exit_code, Delete);
+  del->add_option("case_id", a->case_id, "case id")->required();
+  CLI::App* share = Command(cases, "share", "let a user read and watch the case", a, flags,
+                            exit_code, Share);
+  share->add_option("case_id", a->case_id, "case id")->required();
+  share->add_option("--with", a->user, "user name")->required();
+  share->add_flag("--revoke", a->revoke, "no longer share it with that user");
+  CLI::App* undo = Command(cases, "undo", "take back the session's last action", a, flags,
+                           exit_code, [](const ServerConnection& s, const Args& x) {
+                             return UndoOrRedo(s, x, false);
+                           });
+  undo->add_option("session_id", a->session_id, "session id")->required();
+  CLI::App* redo = Command(cases, "redo", "bring back the session's first undone action", a,
+                           flags, exit_code, [](const ServerConnection& s, const Args& x) {
+                             return UndoOrRedo(s, x, true);
+                           });
+  redo->add_option("session_id", a->session_id, "session id")->required();
+}
+
+}  // namespace vpm::cli

@@ -1,0 +1,139 @@
+// A session's case (docs/CASES.md): each acknowledged manipulation stored,
+// the scene replayed from the case on attach, undo, redo and a refused
+// write.
+#include <chrono>
+#include <cstdio>
+
+#include "server/scene/scene_history.h"
+#include "server/service/session.h"
+
+namespace vpm::service {
+namespace {
+
+double MaxDisplacementMm(const DeformableScene& scene) {
+  double max_mm = 0.0;
+  for (const glm::dvec3& u : scene.fem().Displacements()) max_mm = std::max(max_mm, glm::length(u));
+  return max_mm;
+}
+
+bool IsManipulation(const v3::ClientEvent& event) {
+  switch (event.event_case()) {
+    case v3::ClientEvent::kGrab:
+    case v3::ClientEvent::kDrag:
+    case v3::ClientEvent::kPull:
+    case v3::ClientEvent::kRelease:
+    case v3::ClientEvent::kPin:
+    case v3::ClientEvent::kReset:
+      return true;
+    default:
+      return false;
+  }
+}
+
+}  // namespace
+
+Status Session::AttachCase(cases::CaseStore* store, std::string case_id,
+                           const std::vector<SceneOp>& ops, const std::string& camera) {
+  std::lock_guard frame_lock(frame_mutex_);
+  std::lock_guard scene_lock(scene_mutex_);
+  case_store_ = store;
+  case_id_ = std::move(case_id);
+  if (!camera.empty()) {
+    v3::Camera api;
+    if (!api.ParseFromString(camera)) {
+      return absl::DataLossError(StrCat("case '", case_id_, "': its stored camera is unreadable"));
+    }
+    ASSIGN_OR_RETURN(Camera c, ToCamera(api, volume_->volume.geometry()));
+    std::lock_guard lock(state_mutex_);
+    camera_ = c;
+  }
+  if (ops.empty()) return absl::OkStatus();
+  return ReplaySceneLocked(ops);
+}
+
+Status Session::ReplaySceneLocked(const std::vector<SceneOp>& ops) {
+  std::shared_ptr<const MeshEntry> mesh;
+  {
+    std::lock_guard lock(state_mutex_);
+    mesh = mesh_;
+  }
+  ASSIGN_OR_RETURN(std::unique_ptr<DeformableScene> replayed, scene_->Replayed(mesh->mesh, ops));
+  scene_ = std::move(replayed);
+  std::lock_guard lock(state_mutex_);
+  last_step_ = SceneStepTimings{};
+  last_step_.max_displacement_mm = MaxDisplacementMm(*scene_);
+  last_step_.inverted_tets = scene_->fem().CountInvertedTets();
+  last_step_.lag_mm = scene_->fem().lag_mm();
+  return absl::OkStatus();
+}
+
+Result<std::vector<SceneOp>> Session::CaseHistory() const {
+  ASSIGN_OR_RETURN(const std::vector<cases::CaseEvent> events, case_store_->Events(case_id_));
+  std::vector<SceneOp> log;
+  log.reserve(events.size());
+  for (const cases::CaseEvent& event : events) log.push_back(event.op);
+  return FoldHistory(log);
+}
+
+Status Session::StoreInCase(const v3::ClientEvent& event, const std::vector<SceneOp>& before,
+                            std::unique_lock<std::mutex>& scene_lock) {
+  if (case_store_ == nullptr) return absl::OkStatus();
+  if (event.has_camera()) {
+    // As SetCamera: said, not refused.
+    if (Status stored = case_store_->SetCamera(case_id_, event.camera().SerializeAsString());
+        !stored.ok()) {
+      std::fprintf(stderr, "vpm-server: session %s: camera not stored: %s\n", id_.c_str(),
+                   stored.ToString().c_str());
+    }
+    return absl::OkStatus();
+  }
+  if (!IsManipulation(event) || !scene_->last_op()) return absl::OkStatus();
+  Result<int64_t> stored =
+      case_store_->Append(case_id_, *scene_->last_op(), MaxDisplacementMm(*scene_));
+  if (stored.ok()) return absl::OkStatus();
+  // Refused: the scene goes back to what the case holds (or, if the case
+  // cannot be read either, to what it held before this event), under the
+  // frame lock, as no frame may be cast from a scene being replaced.
+  scene_lock.unlock();
+  std::lock_guard frame_lock(frame_mutex_);
+  scene_lock.lock();
+  Result<std::vector<SceneOp>> history = CaseHistory();
+  Status replayed = ReplaySceneLocked(history.ok() ? *history : before);
+  if (!replayed.ok()) {
+    std::fprintf(stderr, "vpm-server: session %s: the scene could not go back to its case: %s\n",
+                 id_.c_str(), replayed.ToString().c_str());
+  }
+  return Status(stored.status().code(),
+                StrCat(stored.status().message(), "; this manipulation was not applied"));
+}
+
+Result<Session::UndoOutcome> Session::Undo(bool redo) {
+  if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
+  if (case_store_ == nullptr) {
+    return absl::FailedPreconditionError(
+        "undo: this server keeps no cases (start vpm-server with --state-dir DIR)");
+  }
+  Touch();
+  UndoOutcome outcome;
+  {
+    std::lock_guard frame_lock(frame_mutex_);
+    std::lock_guard scene_lock(scene_mutex_);
+    ASSIGN_OR_RETURN(outcome.changed, redo ? case_store_->Redo(case_id_)
+                                           : case_store_->Undo(case_id_));
+    if (outcome.changed) {
+      ASSIGN_OR_RETURN(const std::vector<SceneOp> history, CaseHistory());
+      RETURN_IF_ERROR(ReplaySceneLocked(history));
+      outcome.max_displacement_mm = MaxDisplacementMm(*scene_);
+      RETURN_IF_ERROR(case_store_->SetDisplacement(case_id_, outcome.max_displacement_mm));
+    } else {
+      outcome.max_displacement_mm = MaxDisplacementMm(*scene_);
+    }
+  }
+  ASSIGN_OR_RETURN(const cases::CaseRecord record, case_store_->Get(case_id_));
+  outcome.events = record.events;
+  outcome.undone = record.undone;
+  if (outcome.changed) Changed(0, true, nullptr);
+  return outcome;
+}
+
+}  // namespace vpm::service

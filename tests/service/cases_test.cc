@@ -1,0 +1,272 @@
+// Cases through the API of an in-process server with --state-dir: every
+// session is a case, stored as it is made, reopened after a restart with the
+// same deformation and frame, undone and redone, shared, deleted.
+#include <unistd.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "server/raycast/frame_encoder.h"
+#include "server/service/users_file.h"
+#include "tests/service/service_test_util.h"
+
+namespace vpm::service::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr char kAlice[] = "alice-secret-token";
+constexpr char kBob[] = "bob-secret-token";
+
+class CasesTest : public ServiceTest {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("vpm-cases-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    std::ofstream(dir_ / "users.txt") << "alice " << HashToken(kAlice) << "\nbob "
+                                      << HashToken(kBob) << "\n";
+    StartServer(Options());
+  }
+  void TearDown() override {
+    ServiceTest::TearDown();
+    fs::remove_all(dir_);
+  }
+  ServerOptions Options() const {
+    ServerOptions o = SmallServerOptions();
+    o.token.clear();
+    o.users_file = (dir_ / "users.txt").string();
+    o.state_dir = (dir_ / "state").string();
+    return o;
+  }
+  void Restart() {
+    server_->Shutdown(std::chrono::milliseconds(2000));
+    server_.reset();
+    StartServer(Options());
+  }
+
+  grpc::Status Manipulate(const std::string& session, const v3::ClientEvent& event,
+                          v3::ManipulateResponse* response = nullptr) {
+    v3::ManipulateRequest request;
+    request.set_session_id(session);
+    *request.mutable_event() = event;
+    v3::ManipulateResponse ignored;
+    return stub_->Manipulate(Context(kAlice).get(), request, response ? response : &ignored);
+  }
+  static v3::ClientEvent Grab(const v3::Vec3& at) {
+    v3::ClientEvent e;
+    *e.mutable_grab()->mutable_point_mm() = at;
+    return e;
+  }
+  static v3::ClientEvent Drag(double x, double y, double z) {
+    v3::ClientEvent e;
+    *e.mutable_drag()->mutable_offset_mm() = V(x, y, z);
+    return e;
+  }
+  static v3::ClientEvent Release(bool keep) {
+    v3::ClientEvent e;
+    e.mutable_release()->set_keep(keep);
+    return e;
+  }
+  // A still PNG of the session, and the largest displacement it reports.
+  v3::Frame Still(const std::string& session) {
+    v3::RenderRequest request;
+    request.set_session_id(session);
+    request.mutable_settings()->set_width(128);
+    request.mutable_settings()->set_height(128);
+    request.mutable_settings()->set_encoding(v3::ENCODING_PNG);
+    v3::Frame frame;
+    const grpc::Status status = stub_->Render(Context(kAlice).get(), request, &frame);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return frame;
+  }
+  static double MeanDifference(const v3::Frame& a, const v3::Frame& b) {
+    auto da = DecodePng({reinterpret_cast<const uint8_t*>(a.image().data()), a.image().size()});
+    auto db = DecodePng({reinterpret_cast<const uint8_t*>(b.image().data()), b.image().size()});
+    EXPECT_TRUE(da.ok() && db.ok());
+    if (!da.ok() || !db.ok() || da->rgba.size() != db->rgba.size()) return 255.0;
+    double sum = 0.0;
+    for (size_t i = 0; i < da->rgba.size(); ++i) sum += std::abs(int(da->rgba[i]) - int(db->rgba[i]));
+    return sum / double(da->rgba.size());
+  }
+  // A session on the phantom with two kept drags and a third grab dragged.
+  std::string Plan(const v3::VolumeInfo& volume) {
+    const v3::SessionInfo session = OpenSession(volume.volume_id(), kAlice);
+    EXPECT_FALSE(session.case_id().empty());
+    const v3::Vec3 c = Centre(volume);
+    const std::string id = session.session_id();
+    EXPECT_TRUE(Manipulate(id, Grab(c)).ok());
+    for (int i = 1; i <= 3; ++i) EXPECT_TRUE(Manipulate(id, Drag(0, 0, 2.0 * i)).ok());
+    EXPECT_TRUE(Manipulate(id, Release(true)).ok());
+    EXPECT_TRUE(Manipulate(id, Grab(V(c.x() + 8, c.y(), c.z()))).ok());
+    EXPECT_TRUE(Manipulate(id, Drag(4, 0, 0)).ok());
+    return id;
+  }
+  v3::CaseInfo GetCase(const std::string& id, const char* token, grpc::Status* status = nullptr) {
+    v3::GetCaseRequest request;
+    request.set_case_id(id);
+    v3::CaseInfo info;
+    grpc::Status s = stub_->GetCase(Context(token).get(), request, &info);
+    if (status) *status = s;
+    return info;
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(CasesTest, ACaseReopensAfterARestartWithTheSameDeformationAndFrame) {
+  const v3::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const std::string session = Plan(volume);
+  const v3::Frame before = Still(session);
+  ASSERT_GT(before.max_displacement_mm(), 1.0);
+  v3::GetSessionRequest get;
+  get.set_session_id(session);
+  v3::SessionInfo info;
+  ASSERT_TRUE(stub_->GetSession(Context(kAlice).get(), get, &info).ok());
+  const std::string case_id = info.case_id();
+
+  Restart();
+  v3::ListCasesResponse listed;
+  ASSERT_TRUE(stub_->ListCases(Context(kAlice).get(), {}, &listed).ok());
+  ASSERT_EQ(listed.cases_size(), 1);
+  EXPECT_EQ(listed.cases(0).case_id(), case_id);
+  EXPECT_EQ(listed.cases(0).events(), 7);
+  EXPECT_EQ(listed.cases(0).source(), kPhantom);
+  EXPECT_TRUE(listed.cases(0).session_id().empty());
+
+  v3::OpenCaseRequest open;
+  open.set_case_id(case_id);
+  v3::SessionInfo reopened;
+  const auto t0 = std::chrono::steady_clock::now();
+  const grpc::Status status = stub_->OpenCase(Context(kAlice).get(), open, &reopened);
+  const double open_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(reopened.case_id(), case_id);
+  const v3::Frame after = Still(reopened.session_id());
+  const double frame_difference = MeanDifference(before, after);
+  std::printf("reopen: %.0f ms; largest displacement %.6f -> %.6f mm; frame mean difference "
+              "%.4f / 255\n", open_ms, before.max_displacement_mm(), after.max_displacement_mm(),
+              frame_difference);
+  EXPECT_NEAR(after.max_displacement_mm(), before.max_displacement_mm(), 1e-3);
+  EXPECT_LT(frame_difference, 1.0);
+  // Opening it again gives the same session, not a second one.
+  v3::SessionInfo again;
+  ASSERT_TRUE(stub_->OpenCase(Context(kAlice).get(), open, &again).ok());
+  EXPECT_EQ(again.session_id(), reopened.session_id());
+  EXPECT_EQ(GetCase(case_id, kAlice).session_id(), reopened.session_id());
+}
+
+TEST_F(CasesTest, UndoTakesBackTheLastActionAndRedoBringsItBack) {
+  const v3::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const std::string session = Plan(volume);
+  const double planned = Still(session).max_displacement_mm();
+  v3::UndoRequest undo;
+  undo.set_session_id(session);
+  v3::UndoResponse response;
+  ASSERT_TRUE(stub_->Undo(Context(kAlice).get(), undo, &response).ok());
+  EXPECT_TRUE(response.changed());
+  EXPECT_EQ(response.events(), 5);  // the first grab, three drags, its kept release
+  EXPECT_EQ(response.undone(), 2);
+  const double first_only = Still(session).max_displacement_mm();
+  EXPECT_GT(std::abs(first_only - planned), 1e-3);
+  ASSERT_TRUE(stub_->Undo(Context(kAlice).get(), undo, &response).ok());
+  EXPECT_EQ(response.events(), 0);
+  EXPECT_NEAR(Still(session).max_displacement_mm(), 0.0, 1e-9);
+  ASSERT_TRUE(stub_->Undo(Context(kAlice).get(), undo, &response).ok());
+  EXPECT_FALSE(response.changed());
+
+  undo.set_redo(true);
+  ASSERT_TRUE(stub_->Undo(Context(kAlice).get(), undo, &response).ok());
+  ASSERT_TRUE(stub_->Undo(Context(kAlice).get(), undo, &response).ok());
+  EXPECT_EQ(response.events(), 7);
+  EXPECT_NEAR(Still(session).max_displacement_mm(), planned, 1e-3);
+  // A drag after an undo drops what was undone.
+  undo.set_redo(false);
+  ASSERT_TRUE(stub_->Undo(Context(kAlice).get(), undo, &response).ok());
+  ASSERT_TRUE(Manipulate(session, Grab(Centre(volume))).ok());
+  undo.set_redo(true);
+  ASSERT_TRUE(stub_->Undo(Context(kAlice).get(), undo, &response).ok());
+  EXPECT_FALSE(response.changed());
+  EXPECT_EQ(response.events(), 6);
+}
+
+TEST_F(CasesTest, OthersSeeNoCaseUntilSharedAndADeletedCaseIsGone) {
+  const v3::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const std::string session = Plan(volume);
+  v3::GetSessionRequest get;
+  get.set_session_id(session);
+  v3::SessionInfo info;
+  ASSERT_TRUE(stub_->GetSession(Context(kAlice).get(), get, &info).ok());
+  const std::string id = info.case_id();
+
+  grpc::Status theirs, missing;
+  GetCase(id, kBob, &theirs);
+  GetCase("case-00000000000000000000000000000000", kBob, &missing);
+  EXPECT_EQ(theirs.error_code(), grpc::NOT_FOUND);
+  EXPECT_EQ(missing.error_code(), grpc::NOT_FOUND);
+  EXPECT_EQ(theirs.error_message().size(), missing.error_message().size());
+  v3::ListCasesResponse bobs;
+  ASSERT_TRUE(stub_->ListCases(Context(kBob).get(), {}, &bobs).ok());
+  EXPECT_EQ(bobs.cases_size(), 0);
+
+  v3::ShareCaseRequest share;
+  share.set_case_id(id);
+  share.set_user("bob");
+  v3::CaseInfo shared;
+  ASSERT_TRUE(stub_->ShareCase(Context(kAlice).get(), share, &shared).ok());
+  EXPECT_EQ(shared.shared_with_size(), 1);
+  grpc::Status readable;
+  const v3::CaseInfo seen = GetCase(id, kBob, &readable);
+  ASSERT_TRUE(readable.ok()) << readable.error_message();
+  EXPECT_EQ(seen.owner(), "alice");
+  EXPECT_EQ(seen.shared_with_size(), 0);  // shown to the owner only
+  v3::OpenCaseRequest open;
+  open.set_case_id(id);
+  v3::SessionInfo bobs_session;
+  EXPECT_EQ(stub_->OpenCase(Context(kBob).get(), open, &bobs_session).error_code(),
+            grpc::NOT_FOUND);
+  // Bob may watch the open session of a case shared with him.
+  ASSERT_TRUE(stub_->GetSession(Context(kBob).get(), get, &info).ok());
+
+  v3::UpdateCaseRequest rename;
+  rename.set_case_id(id);
+  rename.set_title("left kidney, medial");
+  v3::CaseInfo renamed;
+  ASSERT_TRUE(stub_->UpdateCase(Context(kAlice).get(), rename, &renamed).ok());
+  EXPECT_EQ(renamed.title(), "left kidney, medial");
+  EXPECT_EQ(stub_->UpdateCase(Context(kBob).get(), rename, &renamed).error_code(),
+            grpc::NOT_FOUND);
+
+  v3::DeleteCaseRequest remove;
+  remove.set_case_id(id);
+  v3::DeleteCaseResponse removed;
+  EXPECT_EQ(stub_->DeleteCase(Context(kBob).get(), remove, &removed).error_code(),
+            grpc::NOT_FOUND);
+  ASSERT_TRUE(stub_->DeleteCase(Context(kAlice).get(), remove, &removed).ok());
+  grpc::Status gone;
+  GetCase(id, kAlice, &gone);
+  EXPECT_EQ(gone.error_code(), grpc::NOT_FOUND);
+  // Its session closed with it.
+  EXPECT_EQ(stub_->GetSession(Context(kAlice).get(), get, &info).error_code(), grpc::NOT_FOUND);
+}
+
+TEST(CasesOff, WithoutAStateDirThereAreNoCasesAndSessionsWorkAsBefore) {
+  auto server = VpmServer::Create(SmallServerOptions(), SharedGpu());
+  ASSERT_TRUE(server.ok()) << server.status();
+  auto channel = grpc::CreateChannel("127.0.0.1:" + std::to_string((*server)->port()),
+                                     grpc::InsecureChannelCredentials());
+  auto stub = v3::Vpm::NewStub(channel);
+  grpc::ClientContext context;
+  context.AddMetadata("authorization", std::string("Bearer ") + kToken);
+  v3::ListCasesResponse listed;
+  const grpc::Status status = stub->ListCases(&context, {}, &listed);
+  EXPECT_EQ(status.error_code(), grpc::FAILED_PRECONDITION);
+  EXPECT_NE(status.error_message().find("--state-dir"), std::string::npos);
+  (*server)->Shutdown(std::chrono::milliseconds(1000));
+}
+
+}  // namespace
+}  // namespace vpm::service::testing
