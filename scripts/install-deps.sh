@@ -33,6 +33,8 @@ packages=(
   # (Orthanc with its DICOMweb and GDCM plugins, run unprivileged on
   # loopback by tests/pacs) and their DICOM reading (pydicom, numpy)
   libcurl4-openssl-dev orthanc orthanc-dicomweb orthanc-gdcm python3-pydicom python3-numpy
+  # cases (--state-dir): the embedded SQLite database
+  libsqlite3-dev
   # deployment checks: YAML parsing of the compose and Kubernetes files; the
   # balancer docker/ ships (HAProxy), run by `ctest -R balancer`
   python3-yaml haproxy

@@ -33,6 +33,13 @@ struct CaseEvent {
   int64_t seq = 0;
   SceneOp op;
   int64_t time_ms = 0;  // Unix time, ms
+  // A still frame settled the bounded drag after this event, before the
+  // next (MarkSettled): a replay settles there too.
+  bool settled = false;
 };
+
+// The ops a scene at rest replays to reach the state of `events` (in effect,
+// in order): each op, and a kSettle after each settled event.
+std::vector<SceneOp> ReplayLog(const std::vector<CaseEvent>& events);
 
 }  // namespace vpm::cases

@@ -36,6 +36,9 @@ class CaseStore {
   // one. False when there is none.
   virtual Result<bool> Undo(std::string_view id) = 0;
   virtual Result<bool> Redo(std::string_view id) = 0;
+  // A still frame settled the state the last event in effect left: the
+  // event is marked (CaseEvent::settled). Nothing happens without events.
+  virtual Status MarkSettled(std::string_view id) = 0;
   virtual Status SetCamera(std::string_view id, const std::string& camera) = 0;
   virtual Status SetDisplacement(std::string_view id, double max_displacement_mm) = 0;
   virtual Status Update(std::string_view id, const std::optional<std::string>& title,

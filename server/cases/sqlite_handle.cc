@@ -112,4 +112,20 @@ int64_t SqliteStatement::Int(int column) const { return sqlite3_column_int64(stm
 
 double SqliteStatement::Real(int column) const { return sqlite3_column_double(stmt_, column); }
 
+SqlRow SqliteStatement::Row() const {
+  SqlRow row;
+  const int n = sqlite3_column_count(stmt_);
+  row.reserve(n);
+  for (int c = 0; c < n; ++c) {
+    switch (sqlite3_column_type(stmt_, c)) {
+      case SQLITE_INTEGER: row.emplace_back(Int(c)); break;
+      case SQLITE_FLOAT: row.emplace_back(Real(c)); break;
+      case SQLITE_TEXT: row.emplace_back(Text(c)); break;
+      case SQLITE_BLOB: row.emplace_back(SqlBlob{Text(c)}); break;
+      default: row.emplace_back(std::monostate{}); break;
+    }
+  }
+  return row;
+}
+
 }  // namespace vpm::cases

@@ -5,9 +5,12 @@
 #include <sqlite3.h>
 
 #include <cstdint>
+#include <filesystem>
+#include <memory>
 #include <string>
 #include <string_view>
 
+#include "server/cases/sql_connection.h"
 #include "server/common/status.h"
 
 namespace vpm::cases {
@@ -56,11 +59,19 @@ class SqliteStatement {
   std::string Text(int column) const;
   int64_t Int(int column) const;
   double Real(int column) const;
+  // The current row, each column as SQLite typed it.
+  SqlRow Row() const;
 
  private:
   SqliteStatement(sqlite3* db, sqlite3_stmt* stmt) : db_(db), stmt_(stmt) {}
   sqlite3* db_;
   sqlite3_stmt* stmt_;
 };
+
+struct SqliteCaseStoreOptions;
+// An open, configured connection (WAL, synchronous=NORMAL, foreign keys, the
+// busy timeout, quick_check); the SQLite case store runs over it.
+Result<std::unique_ptr<SqlConnection>> OpenSqliteConnection(const std::filesystem::path& file,
+                                                            const SqliteCaseStoreOptions& options);
 
 }  // namespace vpm::cases

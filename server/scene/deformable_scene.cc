@@ -60,6 +60,11 @@ Result<GrabInfo> DeformableScene::Grab(const GrabRequest& request) {
   if (!std::isfinite(request.radius_mm) || request.radius_mm < 0.0) {
     return absl::InvalidArgumentError("grab radius must be finite and >= 0 mm (0: the default)");
   }
+  // A grab takes the tissue where it rests: the earlier drag is finished
+  // first, so that what the grab holds (and so the state it leads to) does
+  // not depend on how far the bounded drag events had come (docs/CASES.md:
+  // a case replays to the same state).
+  RETURN_IF_ERROR(Settle(kSettleSolves).status());
   GrabInfo info;
   if (request.rule == GrabRule::kBall) {
     const double radius = request.radius_mm > 0.0 ? request.radius_mm : mesh_.stats.h_mm;
@@ -79,6 +84,7 @@ Result<SceneStepTimings> DeformableScene::Pin(const glm::dvec3& point_mm, double
   if (!std::isfinite(radius_mm) || radius_mm < 0.0) {
     return absl::InvalidArgumentError("pin radius must be finite and >= 0 mm (0: h / 2)");
   }
+  RETURN_IF_ERROR(Settle(kSettleSolves).status());  // as Grab: pins where the tissue rests
   const double radius = radius_mm > 0.0 ? radius_mm : 0.5 * mesh_.stats.h_mm;
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<glm::dvec3> now = fem_->Positions();
@@ -131,6 +137,11 @@ Result<SceneStepTimings> DeformableScene::UpdateMap(SceneStepTimings timings) {
 
 Result<SceneStepTimings> DeformableScene::AfterStep(SceneStepTimings timings) {
   timings.inverted_tets = fem_->CountInvertedTets();
+  // The state's, whatever the step (a pin or a reset solves nothing).
+  timings.max_displacement_mm = 0.0;
+  for (const glm::dvec3& u : fem_->Displacements()) {
+    timings.max_displacement_mm = std::max(timings.max_displacement_mm, glm::length(u));
+  }
   if (!defer_map_update_) return UpdateMap(timings);
   map_stale_ = true;
   return timings;
@@ -177,6 +188,9 @@ Result<SceneStepTimings> DeformableScene::Settle(int max_solves) {
 
 Result<SceneStepTimings> DeformableScene::Release(bool keep) {
   const auto t0 = std::chrono::steady_clock::now();
+  // The drag is finished first: a kept drag keeps its target, not how far
+  // the bounded events had come (as Grab).
+  RETURN_IF_ERROR(Settle(kSettleSolves).status());
   RETURN_IF_ERROR(fem_->Release(keep));
   Record({.kind = SceneOp::Kind::kRelease, .keep = keep});
   grab_point_mm_.reset();

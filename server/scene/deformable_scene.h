@@ -203,12 +203,18 @@ class DeformableScene {
   // settled: the same manipulation on the finer mesh. The map is brought
   // up to date at its first frame (deferred mode) or at once.
   Result<std::unique_ptr<DeformableScene>> Rebuilt(const ProxyMesh& mesh) const;
-  // The same on `mesh` with `ops` (a folded history, scene_history.h)
-  // replayed and settled: a reopened case, or one after an undo.
+  // How Replay applies ops. kFolded: a folded history (scene_history.h),
+  // each drag settled (the same constraints; the state within the solver's
+  // tolerance). kExact: a log of every op as applied, settles included, so
+  // that the replay takes the same bounded steps (the same state, to the
+  // last bit on the same build): a reopened case, or one after an undo.
+  enum class ReplayMode { kFolded, kExact };
+  // A new scene of the same volume, renderer and options on `mesh` with
+  // `ops` replayed.
   Result<std::unique_ptr<DeformableScene>> Replayed(const ProxyMesh& mesh,
-                                                    const std::vector<SceneOp>& ops) const;
-  // Applies `ops` to this scene, settling each drag and release.
-  Status Replay(const std::vector<SceneOp>& ops);
+                                                    const std::vector<SceneOp>& ops,
+                                                    ReplayMode mode) const;
+  Status Replay(const std::vector<SceneOp>& ops, ReplayMode mode);
 
   const ProxyMesh& mesh() const { return mesh_; }
   const FemModel& fem() const { return *fem_; }

@@ -30,7 +30,17 @@ void SceneHistory::Record(const SceneOp& op) {
     case SceneOp::Kind::kReset:
       ops_.clear();
       return;
+    case SceneOp::Kind::kSettle:
+      return;  // changes no constraint
   }
+}
+
+std::vector<SceneOp> SinceLastReset(const std::vector<SceneOp>& log) {
+  size_t from = 0;
+  for (size_t i = 0; i < log.size(); ++i) {
+    if (log[i].kind == SceneOp::Kind::kReset) from = i + 1;
+  }
+  return {log.begin() + static_cast<std::ptrdiff_t>(from), log.end()};
 }
 
 std::vector<SceneOp> FoldHistory(const std::vector<SceneOp>& log) {

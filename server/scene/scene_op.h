@@ -23,7 +23,10 @@ struct GrabRequest {
 };
 
 struct SceneOp {
-  enum class Kind { kGrab, kDrag, kPull, kRelease, kPin, kReset };
+  // kSettle: a still frame finished the bounded drag events here
+  // (DeformableScene::Settle); a case marks the event before it
+  // (CaseEvent::settled), so that a replay takes the same path.
+  enum class Kind { kGrab, kDrag, kPull, kRelease, kPin, kReset, kSettle };
   Kind kind = Kind::kGrab;
   GrabRequest grab;        // kGrab
   glm::dvec3 vector{0.0};  // kDrag: offset mm; kPull: force N; kPin: point mm

@@ -10,7 +10,8 @@ void DeformableScene::Record(const SceneOp& op) {
   history_.Record(op);
 }
 
-Status DeformableScene::Replay(const std::vector<SceneOp>& ops) {
+Status DeformableScene::Replay(const std::vector<SceneOp>& ops, ReplayMode mode) {
+  const bool folded = mode == ReplayMode::kFolded;
   for (const SceneOp& op : ops) {
     switch (op.kind) {
       case SceneOp::Kind::kGrab:
@@ -20,14 +21,14 @@ Status DeformableScene::Replay(const std::vector<SceneOp>& ops) {
         RETURN_IF_ERROR(Drag(op.vector).status());
         // A drag event's work is bounded (docs/FEM.md): finish it, as the
         // running scene has (or will by its next still).
-        RETURN_IF_ERROR(Settle(kSettleSolves).status());
+        if (folded) RETURN_IF_ERROR(Settle(kSettleSolves).status());
         break;
       case SceneOp::Kind::kPull:
         RETURN_IF_ERROR(Pull(op.vector).status());
         break;
       case SceneOp::Kind::kRelease:
         RETURN_IF_ERROR(Release(op.keep).status());
-        RETURN_IF_ERROR(Settle(kSettleSolves).status());
+        if (folded) RETURN_IF_ERROR(Settle(kSettleSolves).status());
         break;
       case SceneOp::Kind::kPin:
         RETURN_IF_ERROR(Pin(op.vector, op.radius_mm).status());
@@ -35,21 +36,24 @@ Status DeformableScene::Replay(const std::vector<SceneOp>& ops) {
       case SceneOp::Kind::kReset:
         RETURN_IF_ERROR(Reset().status());
         break;
+      case SceneOp::Kind::kSettle:
+        RETURN_IF_ERROR(Settle(kSettleSolves).status());
+        break;
     }
   }
   return absl::OkStatus();
 }
 
 Result<std::unique_ptr<DeformableScene>> DeformableScene::Replayed(
-    const ProxyMesh& mesh, const std::vector<SceneOp>& ops) const {
+    const ProxyMesh& mesh, const std::vector<SceneOp>& ops, ReplayMode mode) const {
   ASSIGN_OR_RETURN(std::unique_ptr<DeformableScene> scene,
                    Create(*context_, *volume_, *gpu_volume_, *renderer_, mesh, options_));
-  RETURN_IF_ERROR(scene->Replay(ops));
+  RETURN_IF_ERROR(scene->Replay(ops, mode));
   return scene;
 }
 
 Result<std::unique_ptr<DeformableScene>> DeformableScene::Rebuilt(const ProxyMesh& mesh) const {
-  return Replayed(mesh, history_.ops());
+  return Replayed(mesh, history_.ops(), ReplayMode::kFolded);
 }
 
 }  // namespace vpm

@@ -171,9 +171,8 @@ grpc::ServerUnaryReactor* VpmService::OpenCase(grpc::CallbackServerContext* cont
       Result<std::vector<cases::CaseEvent>> events = service_->cases->Events(record.id);
       attached = events.status();
       if (attached.ok()) {
-        std::vector<SceneOp> log;
-        for (const cases::CaseEvent& e : *events) log.push_back(e.op);
-        attached = session->AttachCase(service_->cases, record.id, FoldHistory(log), record.camera);
+        attached = session->AttachCase(service_->cases, record.id,
+                                       SinceLastReset(cases::ReplayLog(*events)), record.camera);
       }
     }
     if (!attached.ok()) {

@@ -137,6 +137,10 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "keep cases here (DIR/cases.sqlite, created if missing): every session is a "
                  "case whose manipulations are stored as they are acknowledged, reopened after a "
                  "restart with OpenCase (docs/CASES.md); empty: none are kept");
+  app.add_option("--state", o->state_url,
+                 "keep cases in PostgreSQL instead (replicas share them): a libpq connection "
+                 "string, postgresql://USER@HOST/DB or 'host=... dbname=...'; the password "
+                 "comes from PGPASSFILE or ~/.pgpass, never from this flag");
   app.add_option("--drain-s", o->drain_s,
                  "on SIGTERM/SIGINT, report NOT_SERVING to health checks for this long first, "
                  "while calls on existing sessions go on and new volumes, meshes and sessions "

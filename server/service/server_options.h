@@ -68,6 +68,9 @@ struct ServerOptions {
   // Cases (docs/CASES.md): the folder of the case database (cases.sqlite);
   // empty: no cases are kept (sessions live in memory only).
   std::string state_dir;
+  // Or a PostgreSQL database shared by replicas (libpq connection string;
+  // its password from PGPASSFILE, never here).
+  std::string state_url;
   double drain_s = 0;                            // SIGTERM: NOT_SERVING this long first
   double shutdown_grace_s = 5;                   // then streams get this long
 

@@ -270,6 +270,7 @@ Result<v3::Frame> Session::Render(const FrameRequest& request) {
         last_step_.inverted_tets = step.inverted_tets;
         last_step_.lag_mm = step.lag_mm;
       }
+      if (settled.fem_ms > 0.0) RecordSettleInCase();
     }
     ASSIGN_OR_RETURN(prepared, scene_->PrepareRender(view, &map_update));
     // Slices are cheap (a few ms): cast here, under the scene lock, from the

@@ -88,8 +88,9 @@ class Session : public std::enable_shared_from_this<Session> {
 
   // The case this session is open on (docs/CASES.md, session_case.cc):
   // call once, before the session is shared (OpenSession, OpenCase).
-  // Replays `ops` (a folded history, scene_history.h) onto the scene and
-  // sets `camera` (a serialized vpm.v3.Camera; empty: keep the default).
+  // Replays `ops` (the case's events since its last reset:
+  // SinceLastReset) exactly onto the scene and sets `camera` (a serialized
+  // vpm.v3.Camera; empty: keep the default).
   Status AttachCase(cases::CaseStore* store, std::string case_id, const std::vector<SceneOp>& ops,
                     const std::string& camera);
   const std::string& case_id() const { return case_id_; }
@@ -165,9 +166,13 @@ class Session : public std::enable_shared_from_this<Session> {
                      std::unique_lock<std::mutex>& scene_lock);
   // Replaces the scene by the mesh's with `ops` replayed (frame and scene
   // locks held), and records its displacement as the last step's.
-  Status ReplaySceneLocked(const std::vector<SceneOp>& ops);
-  // The case's events in effect, folded.
+  Status ReplaySceneLocked(const std::vector<SceneOp>& ops, DeformableScene::ReplayMode mode);
+  // The case's events in effect since the last reset (the exact replay).
   Result<std::vector<SceneOp>> CaseHistory() const;
+  // A still's Settle did work: the case records it, so that a replay takes
+  // the same path (scene lock held). A refusal is logged: the still is not
+  // the user's event.
+  void RecordSettleInCase();
   // The slices `requests` place now; the caller holds scene_mutex_.
   Result<std::vector<SliceFrame>> RenderSlicesLocked(const std::vector<SliceRequest>& requests);
   void Notify(bool closed);

@@ -48,16 +48,18 @@ Status Session::AttachCase(cases::CaseStore* store, std::string case_id,
     camera_ = c;
   }
   if (ops.empty()) return absl::OkStatus();
-  return ReplaySceneLocked(ops);
+  return ReplaySceneLocked(ops, DeformableScene::ReplayMode::kExact);
 }
 
-Status Session::ReplaySceneLocked(const std::vector<SceneOp>& ops) {
+Status Session::ReplaySceneLocked(const std::vector<SceneOp>& ops,
+                                  DeformableScene::ReplayMode mode) {
   std::shared_ptr<const MeshEntry> mesh;
   {
     std::lock_guard lock(state_mutex_);
     mesh = mesh_;
   }
-  ASSIGN_OR_RETURN(std::unique_ptr<DeformableScene> replayed, scene_->Replayed(mesh->mesh, ops));
+  ASSIGN_OR_RETURN(std::unique_ptr<DeformableScene> replayed,
+                   scene_->Replayed(mesh->mesh, ops, mode));
   scene_ = std::move(replayed);
   std::lock_guard lock(state_mutex_);
   last_step_ = SceneStepTimings{};
@@ -69,10 +71,17 @@ Status Session::ReplaySceneLocked(const std::vector<SceneOp>& ops) {
 
 Result<std::vector<SceneOp>> Session::CaseHistory() const {
   ASSIGN_OR_RETURN(const std::vector<cases::CaseEvent> events, case_store_->Events(case_id_));
-  std::vector<SceneOp> log;
-  log.reserve(events.size());
-  for (const cases::CaseEvent& event : events) log.push_back(event.op);
-  return FoldHistory(log);
+  return SinceLastReset(cases::ReplayLog(events));
+}
+
+void Session::RecordSettleInCase() {
+  if (case_store_ == nullptr) return;
+  Status stored = case_store_->MarkSettled(case_id_);
+  if (stored.ok()) stored = case_store_->SetDisplacement(case_id_, MaxDisplacementMm(*scene_));
+  if (!stored.ok()) {
+    std::fprintf(stderr, "vpm-server: session %s: a still's settle not stored: %s\n",
+                 id_.c_str(), stored.ToString().c_str());
+  }
 }
 
 Status Session::StoreInCase(const v3::ClientEvent& event, const std::vector<SceneOp>& before,
@@ -98,7 +107,9 @@ Status Session::StoreInCase(const v3::ClientEvent& event, const std::vector<Scen
   std::lock_guard frame_lock(frame_mutex_);
   scene_lock.lock();
   Result<std::vector<SceneOp>> history = CaseHistory();
-  Status replayed = ReplaySceneLocked(history.ok() ? *history : before);
+  Status replayed =
+      history.ok() ? ReplaySceneLocked(*history, DeformableScene::ReplayMode::kExact)
+                   : ReplaySceneLocked(before, DeformableScene::ReplayMode::kFolded);
   if (!replayed.ok()) {
     std::fprintf(stderr, "vpm-server: session %s: the scene could not go back to its case: %s\n",
                  id_.c_str(), replayed.ToString().c_str());
@@ -122,7 +133,7 @@ Result<Session::UndoOutcome> Session::Undo(bool redo) {
                                            : case_store_->Undo(case_id_));
     if (outcome.changed) {
       ASSIGN_OR_RETURN(const std::vector<SceneOp> history, CaseHistory());
-      RETURN_IF_ERROR(ReplaySceneLocked(history));
+      RETURN_IF_ERROR(ReplaySceneLocked(history, DeformableScene::ReplayMode::kExact));
       outcome.max_displacement_mm = MaxDisplacementMm(*scene_);
       RETURN_IF_ERROR(case_store_->SetDisplacement(case_id_, outcome.max_displacement_mm));
     } else {

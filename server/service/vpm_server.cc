@@ -1,6 +1,6 @@
 #include "server/service/vpm_server.h"
 
-#include "server/cases/sqlite_case_store.h"
+#include "server/cases/open_case_store.h"
 #include "server/common/prefix_status.h"
 #include "server/common/read_text_file.h"
 #include "server/service/users_file.h"
@@ -61,20 +61,26 @@ Result<TokenAuth> MakeAuth(const ServerOptions& o) {
   return TokenAuth::Create(auth);
 }
 
-// The case store of --state-dir (the folder is created); null without it.
-// The error names the folder and what is wrong with it, so that the server
-// says so at start.
-Result<std::unique_ptr<cases::CaseStore>> OpenCaseStore(const std::string& state_dir) {
-  if (state_dir.empty()) return std::unique_ptr<cases::CaseStore>();
+// The case store of --state-dir (SQLite; the folder is created) or --state
+// (PostgreSQL); null without either. The error names the flag and what is
+// wrong, so that the server says so at start.
+Result<std::unique_ptr<cases::CaseStore>> OpenCaseStore(const ServerOptions& o) {
+  if (!o.state_url.empty()) {
+    if (!o.state_dir.empty()) {
+      return absl::InvalidArgumentError("--state and --state-dir: give one, not both");
+    }
+    return cases::OpenPostgresCaseStore(o.state_url);
+  }
+  if (o.state_dir.empty()) return std::unique_ptr<cases::CaseStore>();
   std::error_code error;
-  std::filesystem::create_directories(state_dir, error);
+  std::filesystem::create_directories(o.state_dir, error);
   if (error) {
     return absl::FailedPreconditionError(
-        StrCat("--state-dir ", state_dir, ": cannot create it (", error.message(), ")"));
+        StrCat("--state-dir ", o.state_dir, ": cannot create it (", error.message(), ")"));
   }
   Result<std::unique_ptr<cases::CaseStore>> store =
-      cases::OpenSqliteCaseStore(std::filesystem::path(state_dir) / "cases.sqlite");
-  if (!store.ok()) return PrefixStatus(store.status(), StrCat("--state-dir ", state_dir));
+      cases::OpenSqliteCaseStore(std::filesystem::path(o.state_dir) / "cases.sqlite");
+  if (!store.ok()) return PrefixStatus(store.status(), StrCat("--state-dir ", o.state_dir));
   return store;
 }
 
@@ -183,7 +189,7 @@ Status VpmServer::Start() {
     };
   }
   ASSIGN_OR_RETURN(volumes_, VolumeStore::Create(volume_options));
-  ASSIGN_OR_RETURN(cases_, OpenCaseStore(o.state_dir));
+  ASSIGN_OR_RETURN(cases_, OpenCaseStore(o));
   ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes,
                                                [m = metrics_.get()](int64_t count) {
                                                  m->Meshes(count);

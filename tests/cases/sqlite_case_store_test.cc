@@ -1,5 +1,6 @@
-// The SQLite case store against a temporary folder.
-#include "server/cases/sqlite_case_store.h"
+// What only the SQLite case store meets: a damaged file, a database locked
+// by another process, a full disk.
+#include "server/cases/open_case_store.h"
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -11,13 +12,14 @@
 #include <fstream>
 
 #include "server/cases/case_schema.h"
+#include "server/cases/sqlite_handle.h"
 
 namespace vpm::cases {
 namespace {
 
 namespace fs = std::filesystem;
 
-class CaseStoreTest : public ::testing::Test {
+class SqliteCaseStoreTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
@@ -46,138 +48,7 @@ class CaseStoreTest : public ::testing::Test {
   fs::path dir_;
 };
 
-TEST_F(CaseStoreTest, EventsAreKeptInOrderAcrossAReopen) {
-  {
-    auto store = Open();
-    ASSERT_TRUE(store);
-    ASSERT_TRUE(store->Create(Record("case-1", "alice")).ok());
-    EXPECT_EQ(*store->Append("case-1", Grab(1.0), 0.0), 1);
-    EXPECT_EQ(*store->Append("case-1", Drag(5.0), 4.25), 2);
-    EXPECT_EQ(*store->Append("case-1", Release(true), 4.0), 3);
-    EXPECT_EQ(store->Append("case-9", Grab(1.0), 0.0).status().code(),
-              absl::StatusCode::kNotFound);
-  }
-  auto store = Open();
-  ASSERT_TRUE(store);
-  auto events = store->Events("case-1");
-  ASSERT_TRUE(events.ok()) << events.status();
-  ASSERT_EQ(events->size(), 3u);
-  EXPECT_EQ((*events)[0].op.kind, SceneOp::Kind::kGrab);
-  EXPECT_EQ((*events)[0].op.grab.point_mm, glm::dvec3(1.0, 2.0, 3.0));
-  EXPECT_EQ((*events)[0].op.grab.radius_mm, 4.5);
-  EXPECT_EQ((*events)[1].op.vector, glm::dvec3(0.0, 0.0, 5.0));
-  EXPECT_TRUE((*events)[2].op.keep);
-  auto record = store->Get("case-1");
-  ASSERT_TRUE(record.ok());
-  EXPECT_EQ(record->events, 3);
-  EXPECT_EQ(record->max_displacement_mm, 4.0);
-  EXPECT_EQ(record->mesh_params, std::string("\x10\x20\0", 3));  // bytes, not text
-  EXPECT_EQ(record->source, "ct/abdomen.nii.gz");
-}
-
-TEST_F(CaseStoreTest, UndoTakesBackWholeActionsAndANewEventDropsTheRedo) {
-  auto store = Open();
-  ASSERT_TRUE(store);
-  ASSERT_TRUE(store->Create(Record("c", "alice")).ok());
-  for (const SceneOp& op : {Grab(1), Drag(1), Drag(2), Release(true), Grab(7), Drag(3)}) {
-    ASSERT_TRUE(store->Append("c", op, 1.0).ok());
-  }
-  EXPECT_TRUE(*store->Undo("c"));  // the second grab and its drag
-  EXPECT_EQ(store->Events("c")->size(), 4u);
-  EXPECT_EQ(store->Get("c")->undone, 2);
-  EXPECT_TRUE(*store->Undo("c"));  // the first grab, drags and release
-  EXPECT_EQ(store->Events("c")->size(), 0u);
-  EXPECT_FALSE(*store->Undo("c"));
-  EXPECT_TRUE(*store->Redo("c"));  // the first action only
-  EXPECT_EQ(store->Events("c")->size(), 4u);
-  // A new event after an undo: the undone second action is gone for good.
-  ASSERT_TRUE(store->Append("c", Grab(9), 0.0).ok());
-  EXPECT_FALSE(*store->Redo("c"));
-  auto events = store->Events("c");
-  ASSERT_EQ(events->size(), 5u);
-  EXPECT_EQ(events->back().op.grab.point_mm.x, 9.0);
-  EXPECT_EQ(events->back().seq, 5);
-}
-
-TEST_F(CaseStoreTest, ListsOwnAndSharedCasesAndDeleteRemovesEverything) {
-  auto store = Open();
-  ASSERT_TRUE(store);
-  ASSERT_TRUE(store->Create(Record("a1", "alice")).ok());
-  ASSERT_TRUE(store->Create(Record("b1", "bob")).ok());
-  EXPECT_EQ(store->Create(Record("a1", "alice")).code(), absl::StatusCode::kAlreadyExists);
-  ASSERT_TRUE(store->Append("a1", Grab(1), 0).ok());
-  ASSERT_TRUE(store->Share("a1", "bob", false).ok());
-  auto bobs = store->List("bob");
-  ASSERT_TRUE(bobs.ok());
-  ASSERT_EQ(bobs->size(), 2u);
-  auto alices = store->List("alice");
-  ASSERT_EQ(alices->size(), 1u);
-  EXPECT_EQ((*alices)[0].shared_with, std::vector<std::string>{"bob"});
-  ASSERT_TRUE(store->Update("a1", std::string("right kidney"), std::nullopt).ok());
-  EXPECT_EQ(store->Get("a1")->title, "right kidney");
-  EXPECT_EQ(store->Get("a1")->notes, "");
-  ASSERT_TRUE(store->Share("a1", "bob", true).ok());
-  EXPECT_EQ(store->List("bob")->size(), 1u);
-
-  ASSERT_TRUE(store->Share("a1", "carol", false).ok());
-  ASSERT_TRUE(store->Delete("a1").ok());
-  EXPECT_EQ(store->Get("a1").status().code(), absl::StatusCode::kNotFound);
-  EXPECT_EQ(store->Events("a1").status().code(), absl::StatusCode::kNotFound);
-  EXPECT_EQ(store->Delete("a1").code(), absl::StatusCode::kNotFound);
-  // Nothing of it is left in the file: no events, no shares.
-  store.reset();
-  SqliteDb db;
-  sqlite3* raw = nullptr;
-  ASSERT_EQ(sqlite3_open(file().c_str(), &raw), SQLITE_OK);
-  db = SqliteDb(raw);
-  auto count = [&](const char* sql) {
-    auto q = SqliteStatement::Prepare(db, sql);
-    EXPECT_TRUE(q.ok());
-    EXPECT_TRUE(*q->Step("count"));
-    return q->Int(0);
-  };
-  EXPECT_EQ(count("SELECT count(*) FROM events WHERE case_id = 'a1'"), 0);
-  EXPECT_EQ(count("SELECT count(*) FROM case_shares WHERE case_id = 'a1'"), 0);
-  EXPECT_EQ(count("SELECT count(*) FROM cases"), 1);
-}
-
-TEST_F(CaseStoreTest, ADatabaseOfThePreviousSchemaOpensAfterMigration) {
-  {
-    sqlite3* raw = nullptr;
-    ASSERT_EQ(sqlite3_open(file().c_str(), &raw), SQLITE_OK);
-    SqliteDb db(raw);
-    ASSERT_TRUE(MigrateCaseSchema(db, kCaseSchemaVersion - 1).ok());
-    ASSERT_EQ(*CaseSchemaVersion(db), kCaseSchemaVersion - 1);
-    ASSERT_TRUE(db.Exec("INSERT INTO cases(id, owner, title, source, mesh_params, created_ms, "
-                        "modified_ms) VALUES('old', 'alice', 'v1 case', 'phantom:abdomen', x'00', "
-                        "1, 2); INSERT INTO events VALUES('old', 1, 0, 1, 2, 3, 0, 0, 0, 0, 5);",
-                        "write a version-1 case")
-                    .ok());
-  }
-  auto store = Open();
-  ASSERT_TRUE(store);
-  auto record = store->Get("old");
-  ASSERT_TRUE(record.ok()) << record.status();
-  EXPECT_EQ(record->title, "v1 case");
-  EXPECT_EQ(record->notes, "");  // added by migration 2
-  EXPECT_EQ(record->events, 1);
-  ASSERT_TRUE(store->Update("old", std::nullopt, std::string("kept")).ok());
-  EXPECT_EQ(store->Get("old")->notes, "kept");
-}
-
-TEST_F(CaseStoreTest, ANewerDamagedOrUnwritableDatabaseIsRefusedWithTheReason) {
-  {
-    sqlite3* raw = nullptr;
-    ASSERT_EQ(sqlite3_open(file().c_str(), &raw), SQLITE_OK);
-    SqliteDb db(raw);
-    ASSERT_TRUE(db.Exec("PRAGMA user_version = 99", "set").ok());
-  }
-  auto newer = OpenSqliteCaseStore(file());
-  EXPECT_EQ(newer.status().code(), absl::StatusCode::kFailedPrecondition);
-  EXPECT_NE(newer.status().message().find("newer vpm-server"), std::string::npos)
-      << newer.status();
-
-  fs::remove(file());
+TEST_F(SqliteCaseStoreTest, ADamagedOrUnwritableDatabaseIsRefusedWithTheReason) {
   std::ofstream(file()) << std::string(8192, 'x');  // not a database
   auto damaged = OpenSqliteCaseStore(file());
   EXPECT_EQ(damaged.status().code(), absl::StatusCode::kDataLoss) << damaged.status();
@@ -188,7 +59,7 @@ TEST_F(CaseStoreTest, ANewerDamagedOrUnwritableDatabaseIsRefusedWithTheReason) {
   EXPECT_NE(nowhere.status().message().find("case store"), std::string::npos);
 }
 
-TEST_F(CaseStoreTest, ALockedDatabaseRefusesTheEventAndKeepsWhatItHad) {
+TEST_F(SqliteCaseStoreTest, ALockedDatabaseRefusesTheEventAndKeepsWhatItHad) {
   auto store = OpenSqliteCaseStore(file(), {.busy_timeout_ms = 50});
   ASSERT_TRUE(store.ok());
   ASSERT_TRUE((*store)->Create(Record("c", "alice")).ok());
@@ -207,7 +78,7 @@ TEST_F(CaseStoreTest, ALockedDatabaseRefusesTheEventAndKeepsWhatItHad) {
 // A full disk, as a file size limit (RLIMIT_FSIZE, SIGXFSZ ignored: writes
 // past it fail with EFBIG): the event is refused with ResourceExhausted,
 // nothing of it is stored, and once there is room again events are stored.
-TEST_F(CaseStoreTest, AFullDiskRefusesTheEventWholeAndTheStoreGoesOnAfterwards) {
+TEST_F(SqliteCaseStoreTest, AFullDiskRefusesTheEventWholeAndTheStoreGoesOnAfterwards) {
   auto store = Open();
   ASSERT_TRUE(store);
   ASSERT_TRUE(store->Create(Record("c", "alice")).ok());

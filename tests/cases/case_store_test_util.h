@@ -1,0 +1,88 @@
+// The case store tests' fixture: a fresh database of either backend.
+// SQLite: a file in a temporary folder. PostgreSQL: the server that
+// scripts/pg-test-server.sh started for ctest (its connection string in the
+// file VPM_TEST_POSTGRES names), emptied before each test.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "server/cases/open_case_store.h"
+#include "server/cases/postgres_connection.h"
+#include "server/cases/sqlite_handle.h"
+
+namespace vpm::cases {
+
+enum class Backend { kSqlite, kPostgres };
+
+inline std::string BackendName(const ::testing::TestParamInfo<Backend>& info) {
+  return info.param == Backend::kSqlite ? "Sqlite" : "Postgres";
+}
+
+class CaseStoreFixture : public ::testing::TestWithParam<Backend> {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("vpm-case-store-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+    if (GetParam() == Backend::kPostgres) {
+      const char* file = std::getenv("VPM_TEST_POSTGRES");
+      ASSERT_NE(file, nullptr) << "VPM_TEST_POSTGRES is not set: run under ctest, which starts "
+                                  "PostgreSQL (scripts/pg-test-server.sh)";
+      std::ifstream in(file);
+      ASSERT_TRUE(std::getline(in, conninfo_)) << "no connection string in " << file;
+      auto db = Connection();
+      ASSERT_TRUE(db);
+      ASSERT_TRUE(db->ExecScript("DROP TABLE IF EXISTS events, case_shares, cases, "
+                                 "vpm_schema_version CASCADE",
+                                 "empty the database")
+                      .ok());
+    }
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  std::filesystem::path file() const { return dir_ / "cases.sqlite"; }
+  Result<std::unique_ptr<CaseStore>> TryOpen() {
+    return GetParam() == Backend::kSqlite ? OpenSqliteCaseStore(file())
+                                          : OpenPostgresCaseStore(conninfo_);
+  }
+  std::unique_ptr<CaseStore> Open() {
+    auto store = TryOpen();
+    EXPECT_TRUE(store.ok()) << store.status();
+    return store.ok() ? std::move(*store) : nullptr;
+  }
+  // A connection of the backend's own, beside the store's.
+  std::unique_ptr<SqlConnection> Connection() {
+    auto db = GetParam() == Backend::kSqlite ? OpenSqliteConnection(file(), {})
+                                             : OpenPostgresConnection(conninfo_);
+    EXPECT_TRUE(db.ok()) << db.status();
+    return db.ok() ? std::move(*db) : nullptr;
+  }
+  int64_t Count(const std::string& sql) {
+    auto db = Connection();
+    auto rows = db->Query(sql, {}, "count");
+    EXPECT_TRUE(rows.ok()) << rows.status();
+    return rows.ok() && !rows->empty() ? SqlInt((*rows)[0][0]) : -1;
+  }
+
+  static CaseRecord Record(const std::string& id, const std::string& owner) {
+    return {.id = id, .owner = owner, .title = "left kidney", .source = "ct/abdomen.nii.gz",
+            .mesh_params = std::string("\x10\x20\0\xff", 4)};
+  }
+  static SceneOp Grab(double x) {
+    return {.kind = SceneOp::Kind::kGrab, .grab = {.point_mm = {x, 2.0, 3.0}, .radius_mm = 4.5}};
+  }
+  static SceneOp Drag(double z) { return {.kind = SceneOp::Kind::kDrag, .vector = {0, 0, z}}; }
+  static SceneOp Release(bool keep) { return {.kind = SceneOp::Kind::kRelease, .keep = keep}; }
+
+  std::filesystem::path dir_;
+  std::string conninfo_;
+};
+
+}  // namespace vpm::cases
