@@ -13,6 +13,15 @@ mkdir -p out
       echo; echo "## $b: not built"
     fi
   done
+  # Case event writes on SQLite and on a throwaway PostgreSQL server.
+  echo; echo "## case_store_bench"
+  pg_dir=$(mktemp -d /tmp/vpm-bench-pg.XXXXXX)
+  if scripts/pg-test-server.sh start "$pg_dir" >/dev/null; then
+    "$build/bench/case_store_bench" --postgres "$(cat "$pg_dir/conninfo")"
+  else
+    "$build/bench/case_store_bench"
+  fi
+  scripts/pg-test-server.sh stop "$pg_dir"
   # vpm against VTK's mappers (bench/peer_vtk.py): needs Debian's VTK and a
   # virtual X server, installed by bench/setup_peer.sh, not by make test.
   echo; echo "## peer_vtk"

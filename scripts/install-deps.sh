@@ -33,8 +33,10 @@ packages=(
   # (Orthanc with its DICOMweb and GDCM plugins, run unprivileged on
   # loopback by tests/pacs) and their DICOM reading (pydicom, numpy)
   libcurl4-openssl-dev orthanc orthanc-dicomweb orthanc-gdcm python3-pydicom python3-numpy
-  # cases (--state-dir): the embedded SQLite database
-  libsqlite3-dev
+  # cases: the embedded SQLite database (--state-dir), PostgreSQL's client
+  # library (--state) and its server for the tests (run unprivileged on a
+  # Unix socket by scripts/pg-test-server.sh)
+  libsqlite3-dev libpq-dev postgresql
   # deployment checks: YAML parsing of the compose and Kubernetes files; the
   # balancer docker/ ships (HAProxy), run by `ctest -R balancer`
   python3-yaml haproxy

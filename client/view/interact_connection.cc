@@ -24,6 +24,7 @@ Result<DecodedImage> Decode(const v3::Frame& frame) {
 InteractConnection::InteractConnection(ConnectionOptions options, std::function<void()> wake)
     : options_(std::move(options)), wake_(std::move(wake)) {
   state_.session_id = options_.session_id;
+  state_.case_id = options_.case_id;
   state_.message = StrCat("connecting to ", options_.server.address, " ...");
 }
 
@@ -36,6 +37,48 @@ void InteractConnection::Stop() {
   events_.Close();
   CancelStream();
   if (thread_.joinable()) thread_.join();
+  if (undo_thread_.joinable()) undo_thread_.join();
+}
+
+void InteractConnection::Undo(bool redo) {
+  const char* what = redo ? "redo" : "undo";
+  if (undoing_.exchange(true)) {
+    std::lock_guard lock(mutex_);
+    notice_ = StrCat(what, ": the last one still runs");
+    return;
+  }
+  if (undo_thread_.joinable()) undo_thread_.join();
+  const std::string session_id = state().session_id;
+  undo_thread_ = std::thread([this, redo, what, session_id] {
+    v3::UndoRequest request;
+    request.set_session_id(session_id);
+    request.set_redo(redo);
+    v3::UndoResponse response;
+    const Status status = server_ ? Call(&v3::Vpm::Stub::Undo, request, &response)
+                                  : absl::UnavailableError("not connected");
+    std::string text;
+    if (!status.ok()) {
+      text = StrCat(what, ": ", status.message());
+    } else if (!response.changed()) {
+      text = StrCat("nothing to ", what);
+    } else {
+      text = StrCat(redo ? "redone" : "undone", ": ", response.events(), " events, ",
+                    response.undone(), " undone");
+    }
+    {
+      std::lock_guard lock(mutex_);
+      notice_ = std::move(text);
+    }
+    undoing_ = false;
+    wake_();
+  });
+}
+
+std::optional<std::string> InteractConnection::TakeNotice() {
+  std::lock_guard lock(mutex_);
+  std::optional<std::string> notice = std::move(notice_);
+  notice_.reset();
+  return notice;
 }
 
 void InteractConnection::Send(const v3::ClientEvent& event) {
@@ -125,8 +168,9 @@ void InteractConnection::Run() {
   }
 }
 
-// Joins the remembered session if the server still has it; otherwise loads
-// the volume and opens a new one.
+// Joins the remembered session if the server still has it; otherwise
+// reopens its case (a server that restarted keeps cases, not sessions), or
+// loads the volume and opens a new one.
 Status InteractConnection::ResolveSession() {
   std::string session_id = state().session_id;
   if (!session_id.empty()) {
@@ -141,15 +185,17 @@ Status InteractConnection::ResolveSession() {
       std::lock_guard lock(mutex_);
       state_.volume = volume;
       state_.mesh_id = s.mesh_id();
+      if (!s.case_id().empty()) state_.case_id = s.case_id();
       return absl::OkStatus();
     }
-    if (options_.volume_source.empty()) {
-      return absl::NotFoundError(StrCat("session '", session_id,
-                                        "' is gone and no --volume was given to open a new one"));
-    }
+  }
+  if (const std::string case_id = state().case_id; !case_id.empty()) return OpenCase(case_id);
+  if (!session_id.empty() && options_.volume_source.empty()) {
+    return absl::NotFoundError(StrCat("session '", session_id,
+                                      "' is gone and no --volume was given to open a new one"));
   }
   if (options_.volume_source.empty()) {
-    return absl::InvalidArgumentError("give --session ID or --volume SRC");
+    return absl::InvalidArgumentError("give --session ID, --case ID or --volume SRC");
   }
   SetState(false, StrCat("loading ", options_.volume_source, " ..."));
   v3::LoadVolumeRequest load;
@@ -161,14 +207,35 @@ Status InteractConnection::ResolveSession() {
   open.set_volume_id(volume.volume_id());
   v3::SessionInfo session;
   RETURN_IF_ERROR(Call(&v3::Vpm::Stub::OpenSession, open, &session));
-  std::fprintf(stderr, "vpm-view: opened session %s on %s (volume %s)\n",
+  std::fprintf(stderr, "vpm-view: opened session %s on %s (volume %s%s%s)\n",
                session.session_id().c_str(), options_.volume_source.c_str(),
-               volume.volume_id().c_str());
+               volume.volume_id().c_str(), session.case_id().empty() ? "" : ", case ",
+               session.case_id().c_str());
   std::lock_guard lock(mutex_);
   state_.volume = volume;
   state_.session_id = session.session_id();
   state_.mesh_id = session.mesh_id();
+  state_.case_id = session.case_id();
   session_opened_here_ = true;
+  return absl::OkStatus();
+}
+
+Status InteractConnection::OpenCase(const std::string& case_id) {
+  SetState(false, StrCat("opening case ", case_id, " (loading, replaying) ..."));
+  v3::OpenCaseRequest open;
+  open.set_case_id(case_id);
+  v3::SessionInfo session;
+  RETURN_IF_ERROR(Call(&v3::Vpm::Stub::OpenCase, open, &session));
+  v3::GetVolumeRequest get;
+  get.set_volume_id(session.volume_id());
+  v3::VolumeInfo volume;
+  RETURN_IF_ERROR(Call(&v3::Vpm::Stub::GetVolume, get, &volume));
+  std::fprintf(stderr, "vpm-view: case %s open in session %s\n", case_id.c_str(),
+               session.session_id().c_str());
+  std::lock_guard lock(mutex_);
+  state_.volume = volume;
+  state_.session_id = session.session_id();
+  state_.mesh_id = session.mesh_id();
   return absl::OkStatus();
 }
 

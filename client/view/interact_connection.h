@@ -27,6 +27,7 @@ struct ConnectionOptions {
   cli::ServerFlags server;
   std::string volume_source;  // loaded when the session is missing or gone
   std::string session_id;     // join this one first
+  std::string case_id;        // or open this case (OpenCase)
   bool log_frames = false;    // one stdout line per frame
 };
 
@@ -46,6 +47,9 @@ struct ConnectionState {
   std::optional<v3::VolumeInfo> volume;
   std::string session_id;
   std::string mesh_id;
+  // The case the session is open on (a server with --state-dir): a server
+  // that lost the session (a restart) reopens it, with its manipulations.
+  std::string case_id;
 };
 
 class InteractConnection {
@@ -66,6 +70,13 @@ class InteractConnection {
   // Ends the current stream, refines the session's mesh at point_mm, opens
   // a session on the refined mesh and streams from it.
   void RefineAt(const glm::dvec3& point_mm);
+
+  // Undo (redo = false) or redo the session's last action, off the caller's
+  // thread; its outcome comes back through TakeNotice. A press while one
+  // runs is refused with a notice.
+  void Undo(bool redo);
+  // What the last undo or redo did (or why not), once.
+  std::optional<std::string> TakeNotice();
 
   // The newest frame since the last call, if any.
   std::optional<ShownFrame> TakeFrame();
@@ -89,6 +100,8 @@ class InteractConnection {
     return cli::FromGrpc((server_->stub().*method)(context.get(), request, response));
   }
   void CancelStream();
+  // Opens state_.case_id (OpenCase) into state_.
+  Status OpenCase(const std::string& case_id);
 
   ConnectionOptions options_;
   std::function<void()> wake_;
@@ -105,6 +118,10 @@ class InteractConnection {
   LatencyMeter latency_;
   FrameRateMeter frame_rate_;
   grpc::ClientContext* context_ = nullptr;  // of the live stream
+
+  std::optional<std::string> notice_;
+  std::thread undo_thread_;             // the running undo or redo, if any
+  std::atomic<bool> undoing_{false};
 
   std::atomic<bool> stopping_{false};
   std::atomic<bool> stream_ended_{false};

@@ -52,6 +52,8 @@ std::span<const KeyBinding> KeyBindings() {
       {{"V", "Home"}, Action::kResetView, "reset the view"},
       {{"K"}, Action::kPinHere, "pin: hold the tissue at the cursor still"},
       {{"X"}, Action::kResetDeformation, "back to rest (drops kept drags and pins)"},
+      {{"Ctrl+Z"}, Action::kUndo, "undo the last grab, pin or reset (a server with cases)"},
+      {{"Ctrl+Shift+Z"}, Action::kRedo, "redo what was undone"},
       {{"S", "F12"}, Action::kScreenshot, "save a screenshot (PNG)"},
       {{"Q", "Escape"}, Action::kQuit, "quit"},
   };
@@ -65,6 +67,11 @@ std::optional<Action> ActionForKey(std::string_view sdl_key_name) {
     }
   }
   return std::nullopt;
+}
+
+std::string KeyNameWithModifiers(std::string_view sdl_key_name, bool ctrl, bool shift) {
+  if (!ctrl) return std::string(sdl_key_name);
+  return std::string(shift ? "Ctrl+Shift+" : "Ctrl+") + std::string(sdl_key_name);
 }
 
 std::span<const MouseBinding> MouseBindings() {

@@ -37,6 +37,8 @@ enum class Action {
   kPinHere,
   kResetView,
   kResetDeformation,
+  kUndo,
+  kRedo,
   kScreenshot,
   kQuit,
 };
@@ -48,8 +50,13 @@ struct KeyBinding {
 };
 
 std::span<const KeyBinding> KeyBindings();
-// The action of an SDL key name, if any ("h" and "H" are the same key).
+// The action of an SDL key name, if any ("h" and "H" are the same key);
+// with Ctrl (or Cmd) held the name is "Ctrl+" or "Ctrl+Shift+" and the key's
+// (KeyNameWithModifiers).
 std::optional<Action> ActionForKey(std::string_view sdl_key_name);
+// "Z" with Ctrl and Shift held: "Ctrl+Shift+Z"; without Ctrl (or Cmd): the
+// key's name as it is.
+std::string KeyNameWithModifiers(std::string_view sdl_key_name, bool ctrl, bool shift);
 struct MouseBinding {
   std::string_view control;  // "left drag"; "G, ..." means in grab mode
   std::string_view description;

@@ -18,6 +18,9 @@ void AddViewFlags(CLI::App& app, ViewFlags* f) {
                  "phantom:NAME[?size=N]); also used to reopen after the server lost the session "
                  "(default phantom:abdomen when --session is not given either)");
   app.add_option("--session", c.session_id, "join this existing session");
+  app.add_option("--case", c.case_id,
+                 "open this case (a server with --state-dir: the open session, or the case "
+                 "replayed); the viewer comes back into it after the server restarts");
   app.add_option("--session-key", c.server.session_key,
                  "x-vpm-session of every call, on which a balancer picks the replica (default: "
                  "env VPM_SESSION_KEY, else the key `vpm` uses for this user and host)");
@@ -57,7 +60,8 @@ Status FinishViewFlags(ViewFlags* f) {
   if (f->connection.server.token.empty()) {
     if (const char* token = std::getenv("VPM_TOKEN")) f->connection.server.token = token;
   }
-  if (f->connection.volume_source.empty() && f->connection.session_id.empty()) {
+  if (f->connection.volume_source.empty() && f->connection.session_id.empty() &&
+      f->connection.case_id.empty()) {
     f->connection.volume_source = kDefaultVolume;
   }
   if (f->width < 16 || f->height < 16 || f->width > 4096 || f->height > 4096) {

@@ -89,9 +89,14 @@ void ViewerApp::HandleEvent(const SDL_Event& e) {
         resize_at_ = SteadyClock::now() + kResizeQuiet;
       }
       break;
-    case SDL_KEYDOWN:
-      if (auto action = ActionForKey(SDL_GetKeyName(e.key.keysym.sym))) OnAction(*action);
+    case SDL_KEYDOWN: {
+      const SDL_Keymod mod = SDL_GetModState();
+      const std::string key = KeyNameWithModifiers(SDL_GetKeyName(e.key.keysym.sym),
+                                                   (mod & (KMOD_CTRL | KMOD_GUI)) != 0,
+                                                   (mod & KMOD_SHIFT) != 0);
+      if (auto action = ActionForKey(key)) OnAction(*action);
       break;
+    }
     case SDL_MOUSEBUTTONDOWN:
       OnButtonDown(e.button);
       break;
@@ -182,6 +187,8 @@ void ViewerApp::OnAction(Action action) {
       break;
     }
     case Action::kPinHere: PinAtCursor(); break;
+    case Action::kUndo: connection_->Undo(false); break;
+    case Action::kRedo: connection_->Undo(true); break;
     case Action::kScreenshot: SaveScreenshot(); break;
     case Action::kQuit: running_ = false; break;
   }
@@ -383,6 +390,7 @@ void ViewerApp::PollConnection() {
       SendCamera();
     }
   }
+  if (std::optional<std::string> notice = connection_->TakeNotice()) Notice(*std::move(notice));
   if (std::optional<ShownFrame> frame = connection_->TakeFrame()) {
     window_->SetFrame(frame->image);
     const SDL_Rect before = window_->FrameArea();

@@ -12,10 +12,15 @@
 // revoke(sessionId, token) ends it with PERMISSION_DENIED, as the server
 // does when a share is revoked (CloseSession ends it with
 // FAILED_PRECONDITION "session ... is closed"). With tls = {cert, key} it serves TLS.
+// Cases (docs/CASES.md) once keepCases(true), as with --state-dir: every
+// OpenSession makes one, owned by the token's user (`users`: {token: name});
+// grab, drag, release and pin events count as its events; Undo and redo
+// move one event; before that, the case calls answer FAILED_PRECONDITION
+// with the server's message.
 import { createRequire } from 'node:module';
 import path from 'node:path';
 
-export async function startFakeServer(source, { tls = null } = {}) {
+export async function startFakeServer(source, { tls = null, users = {} } = {}) {
   const require = createRequire(path.join(source, 'client', 'web', 'package.json'));
   const grpc = require('@grpc/grpc-js');
   const protoLoader = require('@grpc/proto-loader');
@@ -56,8 +61,10 @@ export async function startFakeServer(source, { tls = null } = {}) {
     image: Buffer.from([0xff, 0xd8, n & 0xff, 0xff, 0xd9]), encoding: 'ENCODING_JPEG', width: 4,
     height: 4, last_sequence: sequence, frame_number: n, timings: { total_ms: 1 }, ...extra });
 
+  const cases = makeCases(grpc, users);
   const server = new grpc.Server();
   server.addService(Vpm.service, {
+    ...cases.handlers(unary, owners, () => `ses-${++next}`),
     ListVolumes: unary('ListVolumes', () => ({ volumes: [volume] })),
     GetVolume: unary('GetVolume', () => volume),
     LoadVolume: unary('LoadVolume', (r) => ({ ...volume, volume_id: `vol-${++next}`,
@@ -69,10 +76,11 @@ export async function startFakeServer(source, { tls = null } = {}) {
     OpenSession: unary('OpenSession', (r, call) => {
       const session = { session_id: `ses-${++next}`, ...r };
       owners.set(session.session_id, call.metadata.get('authorization')[0] ?? null);
-      return session;
+      return cases.opened(session, call);
     }),
     CloseSession: unary('CloseSession', (r) => {
       owners.delete(r.session_id);
+      cases.closed(r.session_id);
       // Its watchers' streams end as the server ends them.
       for (const [key, set] of watches) {
         if (!key.startsWith(`${r.session_id} `)) continue;
@@ -128,6 +136,8 @@ export async function startFakeServer(source, { tls = null } = {}) {
                                details: 'grab.pixel: outside the last frame' });
           return;
         }
+        if (request.session_id) call.sessionId = request.session_id;
+        cases.event(call.sessionId, event);
         sequence = Math.max(sequence, Number(event.sequence) || 0);
         call.write(frame(++frames, sequence, {
           max_displacement_mm: event.drag ? 1.5 : 0,
@@ -147,6 +157,7 @@ export async function startFakeServer(source, { tls = null } = {}) {
   const port = await new Promise((resolve, reject) => server.bindAsync(
     '127.0.0.1:0', credentials, (err, p) => (err ? reject(err) : resolve(p))));
   return { address: `127.0.0.1:${port}`, calls, stop: () => server.forceShutdown(),
+           keepCases: (on) => { cases.kept = on; },
            share: (sessionId, token) => shared.add(`${sessionId} Bearer ${token}`),
            revoke: (sessionId, token) => {
              const key = `${sessionId} Bearer ${token}`;
@@ -158,4 +169,104 @@ export async function startFakeServer(source, { tls = null } = {}) {
              }
              watches.delete(key);
            } };
+}
+
+// The case calls of the stand-in (see the header). sessions: session id ->
+// {case_id, auth}; a case: {case_id, title, auth, events, undone, session}.
+function makeCases(grpc, users) {
+  const byId = new Map();
+  const sessions = new Map();
+  let next = 0;
+  const auth = (call) => call.metadata.get('authorization')[0] ?? null;
+  const userOf = (a) => users[String(a).replace(/^Bearer /, '')] ?? 'default';
+  const refuse = (code, details) => Object.assign(new Error(details), { code, details });
+  const kept = () => {
+    if (!state.kept) {
+      throw refuse(grpc.status.FAILED_PRECONDITION,
+                   'this server keeps no cases (start vpm-server with --state-dir DIR)');
+    }
+  };
+  const mine = (call, id) => {
+    kept();
+    const c = byId.get(id);
+    if (!c || c.auth !== auth(call)) throw refuse(grpc.status.NOT_FOUND, `case '${id}' not found`);
+    return c;
+  };
+  const info = (c) => ({ case_id: c.case_id, title: c.title, owner: userOf(c.auth), events: c.events,
+                         undone: c.undone, max_displacement_mm: 1.5 * c.events, source: 'phantom:loaded',
+                         created_unix_ms: 1700000000000, modified_unix_ms: 1700000000000 + c.events,
+                         session_id: c.session ?? '' });
+  const state = {
+    kept: false,
+    opened(session, call) {
+      if (!state.kept) return session;
+      const c = { case_id: `case-${(++next).toString(16).padStart(8, '0')}`, title: 'phantom:loaded',
+                  auth: auth(call), events: 0, undone: 0, session: session.session_id };
+      byId.set(c.case_id, c);
+      sessions.set(session.session_id, c);
+      return { ...session, case_id: c.case_id };
+    },
+    closed(sessionId) {
+      const c = sessions.get(sessionId);
+      if (c && c.session === sessionId) c.session = null;
+      sessions.delete(sessionId);
+    },
+    event(sessionId, event) {
+      const c = sessions.get(sessionId);
+      if (c && (event.grab || event.drag || event.release || event.pin || event.reset)) {
+        c.events += 1;
+        c.undone = 0;
+      }
+    },
+    handlers: (unary, owners, newSessionId) => ({
+      ListCases: unary('ListCases', (r, call) => {
+        kept();
+        return { cases: [...byId.values()].filter((c) => c.auth === auth(call)).map(info) };
+      }),
+      OpenCase: unary('OpenCase', (r, call) => {
+        const c = mine(call, r.case_id);
+        if (!c.session) {
+          c.session = newSessionId(c.case_id);
+          owners.set(c.session, auth(call));
+          sessions.set(c.session, c);
+        }
+        return { session_id: c.session, volume_id: 'vol-1', mesh_id: 'mesh-1', case_id: c.case_id };
+      }),
+      GetMesh: unary('GetMesh', (r) => ({ info: { mesh_id: r.mesh_id, volume_id: 'vol-1',
+                                                  stats: { vertices: 250 } } })),
+      UpdateCase: unary('UpdateCase', (r, call) => {
+        const c = mine(call, r.case_id);
+        if (r.title !== undefined && r.title !== null) c.title = r.title;
+        return info(c);
+      }),
+      DeleteCase: unary('DeleteCase', (r, call) => {
+        const c = mine(call, r.case_id);
+        if (c.session) {
+          owners.delete(c.session);
+          sessions.delete(c.session);
+        }
+        byId.delete(c.case_id);
+        return {};
+      }),
+      Undo: unary('Undo', (r, call) => {
+        const c = sessions.get(r.session_id);
+        if (!owners.has(r.session_id)) {
+          throw refuse(grpc.status.NOT_FOUND, `no session '${r.session_id}'`);
+        }
+        if (!c) {
+          throw refuse(grpc.status.FAILED_PRECONDITION,
+                       'undo: this server keeps no cases (start vpm-server with --state-dir DIR)');
+        }
+        mine(call, c.case_id);
+        const from = r.redo ? 'undone' : 'events';
+        const changed = c[from] > 0;
+        if (changed) {
+          c[from] -= 1;
+          c[r.redo ? 'events' : 'undone'] += 1;
+        }
+        return { changed, events: c.events, undone: c.undone, max_displacement_mm: 1.5 * c.events };
+      }),
+    }),
+  };
+  return state;
 }

@@ -6,7 +6,8 @@
 // headers, reuse of a loaded volume, frames in the binary format, an event
 // error reopening the stream with the camera and settings replayed, the
 // session closed and the mesh deleted with the tab, watching a shared
-// session, malformed messages, and TLS on both sides.
+// session, malformed messages, TLS on both sides, and the case messages
+// (list, open_case, rename, delete, undo; a server without --state-dir).
 // Usage: node --test gateway.test.mjs (SOURCE is found from this file).
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
@@ -39,7 +40,7 @@ before(async () => {
   fs.writeFileSync(path.join(tmp, 'users.txt'),
                    `# planners\nalice ${sha256(kAlice)}\nbob ${sha256(kBob)}\n`);
   fs.writeFileSync(path.join(tmp, 'viewer-token'), `${kViewer}\n`);
-  fake = await startFakeServer(source);
+  fake = await startFakeServer(source, { users: { [kAlice]: 'alice', [kBob]: 'bob' } });
   ({ child: gateway, base } = await startGatewayProcess({ source, args: [
     '--server', fake.address, '--users', path.join(tmp, 'users.txt'),
     '--viewer-token-file', path.join(tmp, 'viewer-token')] }));
@@ -463,6 +464,9 @@ test('Gateway_RejectsMalformedMessages', async () => {
     ['{"type":"event","event":{"camera":{"azimuth_deg":1},"drag":{}}}', /exactly one of/],
     ['{"type":"event","event":{"camera":{"nope":1}}}', /no field 'nope'/],
     ['{"type":"watch"}', /session_id required/],
+    ['{"type":"delete_case","case_id":"../cases.sqlite"}', /case_id: a case id/],
+    ['{"type":"rename_case","case_id":"case-1","title":""}', /title: a string of 1 to 256 bytes/],
+    ['{"type":"undo","redo":"yes"}', /redo: true or false/],
   ];
   for (const [text, expect] of cases) {
     t.ws.send(text);
@@ -471,6 +475,105 @@ test('Gateway_RejectsMalformedMessages', async () => {
   t.send({ type: 'list' });
   await t.next((m) => m.type === 'volumes');
   t.ws.close();
+});
+
+test('Gateway_CasesOfAServerWithoutStateDirSayItKeepsNone', async () => {
+  fake.keepCases(false);
+  const t = await connect();
+  t.send({ type: 'cases' });
+  const list = await t.next((m) => m.type === 'cases');
+  assert.equal(list.kept, false);
+  assert.deepEqual(list.cases, []);
+  assert.match(list.message, /^this server keeps no cases \(started without --state-dir\)\.$/);
+  t.send({ type: 'open', source: 'phantom:loaded' });
+  const opened = await t.next((m) => m.type === 'opened');
+  assert.equal(opened.session.case_id ?? '', '');
+  t.send({ type: 'undo' });
+  const error = await t.next((m) => m.type === 'error');
+  assert.equal(error.code, 'FAILED_PRECONDITION');
+  assert.match(error.message, /^Undo: this server keeps no cases \(started without --state-dir\)\.$/);
+  t.send({ type: 'open_case', case_id: 'case-00000001' });
+  const refused = await t.next((m) => m.type === 'error');
+  assert.equal(refused.case_id, 'case-00000001');
+  assert.match(refused.message, /^Opening case case-00000001: this server keeps no cases/);
+  t.ws.close();
+});
+
+test('Gateway_OpensUndoesRenamesAndDeletesCasesAsTheirOwner', async () => {
+  fake.keepCases(true);
+  const a = await connect({ cookie: alice });
+  a.send({ type: 'open', source: 'phantom:loaded' });
+  const first = await a.next((m) => m.type === 'opened');
+  const caseId = first.session.case_id;
+  assert.match(caseId, /^case-/);
+  await a.next((m) => m.type === 'frame');
+  a.send({ type: 'event', event: { sequence: 2, grab: { pick: true, pixel_x: 1, pixel_y: 1 } } });
+  a.send({ type: 'event', event: { sequence: 3, drag: { offset_mm: { x: 1, y: 0, z: 0 } } } });
+  await a.next((m) => m.type === 'frame' && m.header.last_sequence === 3);
+  a.ws.close();
+  await waitFor('the session closed with its tab', () => fake.calls.some(
+    (c) => c.method === 'CloseSession' && c.request.session_id === first.session.session_id));
+
+  // Another tab opens the case: OpenCase, its volume and mesh, a stream on
+  // the session with the default view (no camera from the page).
+  const b = await connect({ cookie: alice });
+  b.send({ type: 'cases' });
+  const listed = (await b.next((m) => m.type === 'cases')).cases.find((c) => c.case_id === caseId);
+  assert.deepEqual([listed.owner, listed.mine, listed.events, listed.session_id], ['alice', true, 2, '']);
+  const start = fake.calls.length;
+  b.send({ type: 'open_case', case_id: caseId, settings: { width: 4, height: 4 }, sequence: 7 });
+  const opened = await b.next((m) => m.type === 'opened');
+  assert.equal(opened.session.case_id, caseId);
+  assert.notEqual(opened.session.session_id, first.session.session_id);
+  assert.equal(opened.volume.volume_id, 'vol-1');
+  assert.equal(opened.mesh.stats.vertices, 250);
+  await b.next((m) => m.type === 'frame');
+  const calls = callsSince(start);
+  assert.deepEqual(calls.filter((c) => ['OpenCase', 'GetVolume', 'GetMesh'].includes(c.method))
+    .map((c) => c.method).sort(), ['GetMesh', 'GetVolume', 'OpenCase']);
+  const events = calls.filter((c) => c.method === 'Interact.event');
+  assert.equal(events[0].request.session_id, opened.session.session_id);
+  assert.equal(events[0].request.event.sequence, 7);  // the page's, carried by the open
+  assert.equal(events[1].request.event.camera.distance_mm, 0);
+
+  b.send({ type: 'undo' });
+  const undone = await b.next((m) => m.type === 'undone');
+  assert.deepEqual([undone.changed, undone.events, undone.undone, undone.max_displacement_mm,
+                    undone.redo, undone.case_id], [true, 1, 1, 1.5, false, caseId]);
+  b.send({ type: 'undo', redo: true });
+  const redone = await b.next((m) => m.type === 'undone');
+  assert.deepEqual([redone.changed, redone.events, redone.undone, redone.redo], [true, 2, 0, true]);
+  const undoCalls = callsSince(start).filter((c) => c.method === 'Undo');
+  assert.deepEqual(undoCalls.map((c) => [c.request.session_id, c.request.redo]),
+                   [[opened.session.session_id, false], [opened.session.session_id, true]]);
+
+  b.send({ type: 'rename_case', case_id: caseId, title: 'Liver retraction' });
+  assert.equal((await b.next((m) => m.type === 'case_renamed')).case.title, 'Liver retraction');
+  await waitFor('the list after the rename', () => b.inbox.some((m) => m.type === 'cases' &&
+    m.cases.some((c) => c.case_id === caseId && c.title === 'Liver retraction')));
+
+  // Bob neither lists nor opens it: NOT_FOUND, as for a missing case.
+  const bobs = await connect({ cookie: bob });
+  bobs.send({ type: 'cases' });
+  assert.deepEqual((await bobs.next((m) => m.type === 'cases')).cases, []);
+  bobs.send({ type: 'open_case', case_id: caseId });
+  const refused = await bobs.next((m) => m.type === 'error');
+  assert.deepEqual([refused.code, refused.case_id], ['NOT_FOUND', caseId]);
+  bobs.ws.close();
+
+  // Deleting the case on screen stops its stream; the session is not closed
+  // again (the server closed it).
+  const beforeDelete = fake.calls.length;
+  b.send({ type: 'delete_case', case_id: caseId });
+  const deleted = await b.next((m) => m.type === 'case_deleted');
+  assert.deepEqual([deleted.case_id, deleted.current], [caseId, true]);
+  await waitFor('the list after the delete', () => b.inbox.some((m) => m.type === 'cases' &&
+    !m.cases.some((c) => c.case_id === caseId)));
+  b.send({ type: 'undo' });
+  assert.match((await b.next((m) => m.type === 'error')).message, /Undo: open a volume or a case first/);
+  assert.ok(!callsSince(beforeDelete).some((c) => c.method === 'CloseSession'));
+  b.ws.close();
+  fake.keepCases(false);
 });
 
 test('Gateway_ClosesSessionsAKilledGatewayLeftBeforeOpeningAnother', async () => {

@@ -4,7 +4,8 @@
 // Host and Origin, broken bodies and chunking, bad WebSocket upgrades) and at
 // least 5,000 WebSocket frames on signed-in connections (random bytes,
 // unmasked, reserved opcodes and bits, bad UTF-8, lengths up to 2^63,
-// fragmented control frames, bad JSON, wrong types, messages out of order).
+// fragmented control frames, bad JSON, wrong types, messages out of order,
+// the case messages against a server that keeps cases).
 // Then the gateway must still run, answer /healthz and serve a real client
 // (sign in, open a volume, frames, an event). The gateway runs against the
 // stand-in server (fake_vpm_server.mjs); every input comes from a seeded
@@ -189,7 +190,13 @@ function randomMessage() {
   const vec = () => ({ x: pick([0, 1, -5, 1e9, 'a', null]), y: rand() * 100, z: pick([0, NaN, 3]) });
   return pick([
     () => junk(),
-    () => ({ type: pick(['list', 'open', 'event', 'refine', 'watch', 'close', '', null, 7]), ...junk() }),
+    () => ({ type: pick(['list', 'open', 'event', 'refine', 'watch', 'close', '', null, 7, 'cases',
+                         'open_case', 'rename_case', 'delete_case', 'undo']), ...junk() }),
+    () => ({ type: pick(['cases', 'open_case', 'rename_case', 'delete_case', 'undo']),
+             case_id: pick(['case-00000001', 'case-999', '', '../x', 'x'.repeat(200), 7, null, undefined]),
+             title: pick([undefined, 'T', '', 'x'.repeat(300), 'a\nb', 7]),
+             redo: pick([undefined, true, 'yes', 1]), sequence: pick([undefined, 3, -1, 'a']),
+             camera: pick([undefined, null, junk()]) }),
     () => ({ type: 'open', source: pick(['phantom:loaded', 'phantom:other', '../../etc/passwd', 'x'.repeat(3000), 5]),
              settings: pick([undefined, junk(), { mode: pick(['dvr', 'mip', 'x']), width: pick([4, -1, 1e9, 'a']) }]),
              camera: pick([undefined, junk(), { azimuth_deg: 30 }]) }),
@@ -287,6 +294,7 @@ async function main() {
   fs.writeFileSync(path.join(tmp, 'users.txt'),
                    `alice ${crypto.createHash('sha256').update(token).digest('hex')}\n`);
   const fake = await startFakeServer(source);
+  fake.keepCases(true);  // the case messages reach a server that keeps cases
   const log = fs.openSync(path.join(tmp, 'gateway.log'), 'w');
   const { child, base } = await startGatewayProcess({
     source, args: ['--server', fake.address, '--users', path.join(tmp, 'users.txt')],

@@ -78,6 +78,23 @@ export function stopChild(child) {
   });
 }
 
+// A fresh, empty folder under `out` for a server's --state-dir.
+export function freshStateDir(out, name) {
+  const dir = path.join(out, name);
+  fs.rmSync(dir, { recursive: true, force: true });
+  fs.mkdirSync(dir, { recursive: true });
+  return dir;
+}
+
+// Kills `child` with SIGKILL (no shutdown of its own) and waits for it.
+export function killChild(child) {
+  if (child.exitCode !== null || child.signalCode !== null) return Promise.resolve();
+  return new Promise((resolve) => {
+    child.on('exit', () => resolve());
+    child.kill('SIGKILL');
+  });
+}
+
 export const randomToken = () => crypto.randomBytes(16).toString('hex');
 
 // A users file (vpm-server's --users format) for {name: token}; returns its path.
@@ -88,13 +105,15 @@ export function writeUsersFile(file, users) {
 }
 
 // vpm-server on 127.0.0.1:port (0: ephemeral) with `token` (its user
-// `default`) and any further `args`; resolves with {child, port, address,
+// `default`) and any further `args`; with `stateDir` it keeps cases there
+// (--state-dir, docs/CASES.md). Resolves with {child, port, address,
 // metricsPort} (metricsPort with `--metrics-listen` among the args).
 export async function startServer({ build, out, token, port = 0, logName = 'server.log',
-                                    args = [] }) {
+                                    stateDir = null, args = [] }) {
   const binary = path.join(build, 'server', 'service', 'vpm-server');
   if (!fs.existsSync(binary)) throw new Error(`${binary} is missing: build the vpm-server target`);
-  const child = track(spawn(binary, ['--listen', `127.0.0.1:${port}`, ...args], {
+  const cases = stateDir ? ['--state-dir', stateDir] : [];
+  const child = track(spawn(binary, ['--listen', `127.0.0.1:${port}`, ...cases, ...args], {
     env: { ...process.env, VPM_TOKEN: token }, stdio: ['ignore', 'pipe', 'pipe'] }));
   const m = await waitForLine(child, /vpm-server listening on port (\d+)( metrics on port (\d+))?/,
                               'vpm-server', 30000, path.join(out, logName));
@@ -194,6 +213,35 @@ export async function settled(page, extra = 'true', timeoutMs = 20000) {
     throw new Error(`frame never settled (${extra}): ${e.message}\n${JSON.stringify(v)}`);
   });
   return page.evaluate(() => window.vpmViewer.lastHeader);
+}
+
+// Asks the page's Cases panel for the list again; resolves with {kept,
+// cases} (window.vpmViewer) once the gateway has answered. The button is
+// clicked from the page, so that the page does not scroll (the tests' mouse
+// positions on the canvases stay right).
+export async function refreshCases(page) {
+  const n = await page.evaluate(() => window.vpmViewer.casesListed);
+  await page.evaluate(() => document.getElementById('cases-refresh').click());
+  await page.waitForFunction((k) => window.vpmViewer.casesListed > k, n,
+                             { timeout: 15000, polling: 50 });
+  return page.evaluate(() => ({ kept: window.vpmViewer.casesKept,
+                                cases: window.vpmViewer.casesPanel.cases }));
+}
+
+// Presses `keys` (e.g. 'Control+z') on the page; resolves with the
+// gateway's answer to the undo or redo (an 'undone' message), or rejects
+// with the error the page got instead.
+export async function pressUndoKeys(page, keys) {
+  const [answers, errors] = await page.evaluate(() => [window.vpmViewer.undoAnswers,
+                                                       window.vpmViewer.errors.length]);
+  await page.keyboard.press(keys);
+  await page.waitForFunction(([a, e]) => window.vpmViewer.undoAnswers > a ||
+                             window.vpmViewer.errors.length > e, [answers, errors],
+                             { timeout: 20000, polling: 50 });
+  const v = await page.evaluate((e) => ({ answer: window.vpmViewer.lastUndo,
+                                          error: window.vpmViewer.errors[e] ?? null }), errors);
+  if (v.error) throw new Error(`${keys}: the page got an error: ${JSON.stringify(v.error)}`);
+  return v.answer;
 }
 
 // Runs a scenario's main(): prints "NAME: PASS", or the failure and exits 1;

@@ -9,14 +9,21 @@
 // without a cookie (sent to sign in, WebSocket refused) or signed in as bob
 // (NOT_FOUND, as for a missing one) cannot reach alice's session, stopping the server
 // shows a clear message, and restarting it brings the view back.
+// Cases (the server keeps them in a --state-dir): after a kept drag Ctrl+Z
+// takes it back (fewer events in effect, the largest displacement back to
+// what it was, the frame changes) and Ctrl+Shift+Z brings it back (the same
+// displacement within 1e-3 mm, the same frame); the Cases panel lists
+// alice's cases (not to bob), renames one, opens it again with its
+// deformation and deletes another; the restarted server's page is back in
+// the same case with the same largest displacement.
 // Usage: node viewer_e2e.mjs --build BUILD --source SOURCE
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
 
 import {
-  canvasGrey, launchBrowser, meanAbsDiff, randomToken, settled, signInWithForm, startGateway,
-  startServer, writeUsersFile,
+  canvasGrey, freshStateDir, launchBrowser, meanAbsDiff, pressUndoKeys, randomToken, refreshCases,
+  settled, signInWithForm, startGateway, startServer, writeUsersFile,
   runScenario, stopChild, testPaths,
 } from './harness.mjs';
 
@@ -25,6 +32,9 @@ import {
 const kMinVariance = 50;
 const kMinOrbitDiff = 2;   // a 30-degree turn moves most of the image
 const kMinGrabDiff = 0.2;  // a local deformation moves a small area
+// A case replayed (after an undo and redo, a reopen, a restart) has the
+// largest displacement it had, mm.
+const kReplayToleranceMm = 1e-3;
 
 const { build, source, out } = testPaths(process.argv);
 const token = randomToken();  // the viewer token (and the server's user `default`)
@@ -40,17 +50,17 @@ async function dragOnCanvas(page, from, to, steps) {
 }
 
 // Opens a WebSocket to the gateway from `page` (its cookies, its origin),
-// sends `message` once open and resolves with the first JSON reply, or
-// {refused: true} when the upgrade is refused.
-function rawSocket(page, message) {
-  return page.evaluate((m) => new Promise((resolve) => {
+// sends `message` once open and resolves with the first JSON reply of a
+// type in `until`, or {refused: true} when the upgrade is refused.
+function rawSocket(page, message, until = ['error', 'opened']) {
+  return page.evaluate(([m, types]) => new Promise((resolve) => {
     const ws = new WebSocket(`ws://${location.host}/ws`);
     const replies = [];
     ws.onopen = () => ws.send(JSON.stringify(m));
     ws.onmessage = (e) => {
       if (typeof e.data !== 'string') return;
       const r = JSON.parse(e.data);
-      if (r.type === 'error' || r.type === 'opened') {
+      if (types.includes(r.type)) {
         resolve(r);
         ws.close();
       }
@@ -58,7 +68,7 @@ function rawSocket(page, message) {
     };
     ws.onclose = () => resolve({ refused: true, replies });
     setTimeout(() => resolve({ timeout: true, replies }), 15000);
-  }), message);
+  }), [message, until]);
 }
 
 // Slice pixels change by at least this much (mean |grey difference|) when
@@ -259,8 +269,134 @@ async function checkCropDrag(page, sentCrops) {
   await settled(page, '!h.interactive');
 }
 
-// Alice's session is out of reach of a browser with no cookie and of Bob's.
-async function checkIsolation(browser, url, aliceSession) {
+// The case's row in the Cases panel (its cells' text), or null.
+const caseRow = (page, caseId) => page.evaluate((id) => {
+  const tr = document.querySelector(`#cases-body tr[data-case-id="${id}"]`);
+  return tr && { current: tr.dataset.current === 'true',
+                 cells: [...tr.cells].map((td) => td.textContent) };
+}, caseId);
+
+// The status line's case part after an undo or redo: [events, undone].
+async function statusCounts(page) {
+  const m = / · (\d+) events in effect, (\d+) undone/.exec(await page.textContent('#status'));
+  return m && [Number(m[1]), Number(m[2])];
+}
+
+const framesReceived = (page) => page.evaluate(() => window.vpmViewer.framesReceived);
+
+// Waits for a still frame received after the page's `framesBefore`th (the
+// one the server sends after an undo, a redo, an open) showing `mm` as the
+// largest displacement; returns its header.
+function frameShowing(page, framesBefore, mm) {
+  return settled(page, `!h.interactive && v.framesReceived > ${framesBefore} && ` +
+                 `Math.abs(h.max_displacement_mm - ${mm}) < ${kReplayToleranceMm}`, 30000);
+}
+
+// A kept drag, then Ctrl+Z and Ctrl+Shift+Z. Returns {caseId, keptMm}: the
+// case and its largest displacement with the drag (mm).
+async function checkUndoRedo(page, centre) {
+  await page.check('#keep-drag');
+  await page.check('input[name="tool"][value="grab"]');
+  await dragOnCanvas(page, centre, [centre[0] - 25, centre[1] + 20], 10);
+  await page.mouse.up();
+  const kept = await settled(page, '!h.interactive && h.max_displacement_mm > 0', 60000);
+  await page.uncheck('#keep-drag');
+  const keptGrey = await canvasGrey(page);
+  const caseId = await page.evaluate(() => window.vpmViewer.caseId);
+  assert.match(caseId ?? '', /^case-[0-9a-f]+$/, 'the session has no case');
+  const listed = (await refreshCases(page)).cases.find((c) => c.case_id === caseId);
+  assert.ok(listed && listed.events > 0, `the case is not listed: ${JSON.stringify(listed)}`);
+
+  let frames = await framesReceived(page);
+  const undo = await pressUndoKeys(page, 'Control+z');
+  await frameShowing(page, frames, undo.max_displacement_mm);
+  const undoneGrey = await canvasGrey(page);
+  const undoDiff = meanAbsDiff(keptGrey, undoneGrey);
+  step(`Ctrl+Z: events ${listed.events} -> ${undo.events} (${undo.undone} undone), largest ` +
+       `displacement ${kept.max_displacement_mm.toFixed(3)} -> ${undo.max_displacement_mm.toFixed(3)} ` +
+       `mm, mean |grey difference| ${undoDiff.toFixed(2)}; status: ${await page.textContent('#status')}`);
+  assert.ok(undo.changed && undo.events < listed.events && undo.undone > 0, JSON.stringify(undo));
+  assert.ok(undo.max_displacement_mm < kept.max_displacement_mm - 0.5, 'the undo left the drag');
+  assert.deepEqual(await statusCounts(page), [undo.events, undo.undone]);
+  assert.ok(undoDiff > kMinGrabDiff, `the undo did not change the frame (${undoDiff})`);
+
+  frames = await framesReceived(page);
+  const redo = await pressUndoKeys(page, 'Control+Shift+KeyZ');
+  await frameShowing(page, frames, redo.max_displacement_mm);
+  const redoDiff = meanAbsDiff(keptGrey, await canvasGrey(page));
+  step(`Ctrl+Shift+Z: events ${redo.events} (${redo.undone} undone), largest displacement ` +
+       `${redo.max_displacement_mm.toFixed(4)} mm (kept drag ${kept.max_displacement_mm.toFixed(4)}, ` +
+       `|difference| ${Math.abs(redo.max_displacement_mm - kept.max_displacement_mm).toExponential(1)}), ` +
+       `mean |grey difference| to the kept drag's frame ${redoDiff.toFixed(2)}`);
+  assert.ok(redo.changed && redo.redo, JSON.stringify(redo));
+  assert.deepEqual([redo.events, redo.undone], [listed.events, 0]);
+  assert.ok(Math.abs(redo.max_displacement_mm - kept.max_displacement_mm) < kReplayToleranceMm,
+            `redo: ${redo.max_displacement_mm} mm, the kept drag ${kept.max_displacement_mm} mm`);
+  assert.deepEqual(await statusCounts(page), [listed.events, 0]);
+  assert.ok(redoDiff < 0.5 * undoDiff, `the redo did not bring the frame back (${redoDiff})`);
+  figures.undo_mm = undo.max_displacement_mm;
+  figures.redo_mm = redo.max_displacement_mm;
+  await page.check('input[name="tool"][value="orbit"]');
+  return { caseId, keptMm: redo.max_displacement_mm };
+}
+
+// The Cases panel after a refine (a new session: a new case): the kept
+// case is listed closed with its displacement, renamed, opened again (its
+// deformation replayed, its title in the status line); the refined case is
+// deleted (a dismissed confirm deletes nothing).
+async function checkCases(page, kept) {
+  const refinedCase = await page.evaluate(() => window.vpmViewer.caseId);
+  assert.notEqual(refinedCase, kept.caseId);
+  let { cases } = await refreshCases(page);
+  const row = await caseRow(page, kept.caseId);
+  const listed = cases.find((c) => c.case_id === kept.caseId);
+  step(`Cases panel: ${cases.length} cases; the kept one: ${row?.cells.join(' | ')}`);
+  assert.ok(listed && row && !row.current, 'the kept case is not listed');
+  assert.equal(row.cells[1], 'alice (you)');
+  assert.equal(row.cells[5], 'closed');
+  assert.ok(Math.abs(listed.max_displacement_mm - kept.keptMm) < kReplayToleranceMm,
+            `listed ${listed.max_displacement_mm} mm, kept ${kept.keptMm} mm`);
+  assert.equal(row.cells[4], `${kept.keptMm.toFixed(2)} mm`);
+  assert.deepEqual((await caseRow(page, refinedCase))?.cells[5], 'open');
+  assert.ok((await caseRow(page, refinedCase)).current, 'the case on screen is not marked');
+
+  const title = 'Liver retraction, left lobe';
+  page.once('dialog', (d) => d.accept(title));
+  await page.click(`#cases-body tr[data-case-id="${kept.caseId}"] button:text("Rename")`);
+  await page.waitForFunction(([id, t]) => window.vpmViewer.casesPanel.find(id)?.title === t,
+                             [kept.caseId, title], { timeout: 15000 });
+  assert.equal((await caseRow(page, kept.caseId)).cells[0], title);
+
+  const frames = await framesReceived(page);
+  await page.click(`#cases-body tr[data-case-id="${kept.caseId}"] button:text("Open")`);
+  await page.waitForFunction((id) => window.vpmViewer.session?.case_id === id, kept.caseId,
+                             { timeout: 60000 });
+  const h = await frameShowing(page, frames, kept.keptMm);
+  const status = await page.textContent('#status');
+  step(`opened ${kept.caseId} from the panel: largest displacement ` +
+       `${h.max_displacement_mm.toFixed(4)} ` +
+       `mm; status: ${status}`);
+  assert.ok(status.includes(`case "${title}" (${kept.caseId})`), status);
+  assert.ok((await caseRow(page, kept.caseId)).current);
+
+  page.once('dialog', (d) => d.dismiss());
+  await page.click(`#cases-body tr[data-case-id="${refinedCase}"] button:text("Delete")`);
+  ({ cases } = await refreshCases(page));
+  assert.ok(cases.some((c) => c.case_id === refinedCase), 'a dismissed confirm deleted the case');
+  page.once('dialog', (d) => d.accept());
+  await page.click(`#cases-body tr[data-case-id="${refinedCase}"] button:text("Delete")`);
+  await page.waitForFunction((id) => !window.vpmViewer.casesPanel.find(id), refinedCase,
+                             { timeout: 15000 });
+  assert.equal(await caseRow(page, refinedCase), null);
+  assert.equal(await page.evaluate(() => window.vpmViewer.caseId), kept.caseId);
+  step(`renamed ${kept.caseId}, deleted ${refinedCase}`);
+  await page.screenshot({ path: path.join(out, 'web_viewer_cases.png'), fullPage: true });
+  await page.evaluate(() => window.scrollTo(0, 0));
+}
+
+// Alice's session is out of reach of a browser with no cookie and of Bob's,
+// and so is her case.
+async function checkIsolation(browser, url, aliceSession, aliceCase) {
   const anonymous = await browser.newContext();
   const a = await anonymous.newPage();
   const landed = await a.goto(url);
@@ -281,13 +417,21 @@ async function checkIsolation(browser, url, aliceSession) {
   step(`bob's browser asks to watch alice's ${aliceSession}: ${watch.message}`);
   const sessions = await b.evaluate(() => fetch('/whoami').then((r) => r.json()));
   assert.deepEqual(sessions, { user: 'bob' });
+  // Alice's cases: not in bob's list, and not his to open.
+  const list = await rawSocket(b, { type: 'cases' }, ['cases', 'error']);
+  assert.equal(list.type, 'cases', JSON.stringify(list));
+  assert.ok(list.kept && !list.cases.some((c) => c.owner === 'alice'), JSON.stringify(list));
+  const open = await rawSocket(b, { type: 'open_case', case_id: aliceCase });
+  assert.deepEqual([open.code, open.case_id], ['NOT_FOUND', aliceCase], JSON.stringify(open));
+  step(`bob's case list has none of alice's; opening her ${aliceCase}: ${open.message}`);
   await bobs.close();
 }
 
 async function main() {
   // Alice and Bob are users of both the server and the gateway.
   const usersFile = writeUsersFile(path.join(out, 'users.txt'), { alice: aliceToken, bob: bobToken });
-  const server = await startServer({ build, out, token, args: ['--users', usersFile] });
+  const stateDir = freshStateDir(out, 'viewer-state');
+  const server = await startServer({ build, out, token, stateDir, args: ['--users', usersFile] });
   const gateway = await startGateway({ source, out, serverAddress: server.address, token,
                                        args: ['--users', usersFile] });
   step(`vpm-server ${server.address}, gateway ${gateway.url}`);
@@ -433,6 +577,7 @@ async function main() {
        `(${figures.drag_fps} fps), median event-to-frame latency ` +
        `${figures.drag_latency_median_ms} ms`);
   assert.ok(sustainedFrames >= 1, 'no frame arrived during a sustained drag');
+  const kept = await checkUndoRedo(page, centre);
 
   // Refine at the grabbed point: a new mesh with refined vertices, a new
   // session on it, frames again.
@@ -473,7 +618,9 @@ async function main() {
             'the page script can read the sign-in cookie');
 
   await checkIsolation(browser, gateway.url,
-                       await page.evaluate(() => window.vpmViewer.session.session_id));
+                       ...await page.evaluate(() => [window.vpmViewer.session.session_id,
+                                                     window.vpmViewer.caseId]));
+  await checkCases(page, kept);
   assert.deepEqual(pageErrors, [], 'the page threw');
 
   // The server goes away: the page says so.
@@ -484,12 +631,12 @@ async function main() {
   assert.match(downMessage, /vpm-server at 127\.0\.0\.1:\d+ is not reachable/);
   assert.equal(await page.getAttribute('#server-state', 'data-state'), 'down');
 
-  // It comes back on the same port with nothing loaded: the session is
-  // gone (NOT_FOUND), and the page reopens the same source by itself.
+  // It comes back on the same port and state dir with nothing loaded: the
+  // session is gone (NOT_FOUND), and the page reopens its case by itself.
   const framesBefore = await page.evaluate(() => window.vpmViewer.framesReceived);
   const tRestart = performance.now();
   await startServer({ build, out, token, port: server.port, logName: 'server_restarted.log',
-                     args: ['--users', usersFile] });
+                     stateDir, args: ['--users', usersFile] });
   await page.waitForFunction((n) => window.vpmViewer.framesReceived > n, framesBefore,
                              { timeout: 60000, polling: 100 });
   await settled(page, '!h.interactive', 60000);
@@ -498,6 +645,13 @@ async function main() {
   step(`server restarted: the page reopened ${reopened} and shows frames after ` +
        `${figures.recovered_after_restart_ms} ms`);
   assert.equal(reopened, 'phantom:abdomen?size=128');
+  const back = await settled(page, '!h.interactive && ' +
+    `Math.abs(h.max_displacement_mm - ${kept.keptMm}) < ${kReplayToleranceMm}`, 30000);
+  const backCase = await page.evaluate(() => window.vpmViewer.session.case_id);
+  step(`the page is back in ${backCase} (was ${kept.caseId}): largest displacement ` +
+       `${back.max_displacement_mm.toFixed(4)} mm (before ${kept.keptMm.toFixed(4)}, |difference| ` +
+       `${Math.abs(back.max_displacement_mm - kept.keptMm).toExponential(1)} mm)`);
+  assert.equal(backCase, kept.caseId);
   await page.screenshot({ path: path.join(out, 'web_viewer_recovered.png') });
   assert.equal(await page.getAttribute('#server-state', 'data-state'), 'up');
 

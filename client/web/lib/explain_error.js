@@ -22,6 +22,12 @@ export function explainError(err, what, address) {
       return `vpm-server does not know the token you signed in with (${details}). ` +
         'The gateway\'s users must be users of vpm-server too: the same --users file, or a ' +
         'viewer token (VPM_TOKEN) equal to the server\'s --token.';
+    case GrpcStatus.FAILED_PRECONDITION:
+      // The case calls of a server started without --state-dir.
+      if (/keeps no cases/.test(full)) {
+        return `${prefix}this server keeps no cases (started without --state-dir).`;
+      }
+      return `${what} failed: FAILED_PRECONDITION: ${details}`;
     case GrpcStatus.PERMISSION_DENIED:
       return `${prefix}not yours: ${details}`;
     default:

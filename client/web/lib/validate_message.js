@@ -12,6 +12,10 @@ const kMaxSlices = 3;
 // accepts 64 KiB): one exported preset, not ParaView's whole list.
 export const kMaxTfTextChars = 60000;
 const kMaxTfNameChars = 256;
+// Case ids are the server's (case-HEX); a title is at most 256 bytes
+// (UpdateCaseRequest), checked here in UTF-8 bytes as the server counts.
+const kCaseIdPattern = /^[A-Za-z0-9][A-Za-z0-9._:-]{0,127}$/;
+export const kMaxCaseTitleBytes = 256;
 // A Slicer .vp holds numbers only, each far shorter than this: a longer
 // field is refused here, before the server reads (and quotes) it.
 export const kMaxVpFieldChars = 64;
@@ -64,6 +68,60 @@ function checkVpFields(text) {
   }
 }
 
+// message.sequence (optional): the page's last event sequence, carried by
+// an open so that the new stream's frames report it as shown.
+function optionalSequence(message) {
+  const v = message.sequence;
+  if (v !== undefined && !(Number.isSafeInteger(v) && v >= 0)) {
+    throw new Error('sequence: an integer from 0');
+  }
+}
+
+// message[key]: a case id (required).
+function caseId(message, key = 'case_id') {
+  const v = message[key];
+  if (typeof v !== 'string' || !kCaseIdPattern.test(v)) {
+    throw new Error(`${key}: a case id (letters, digits, . _ : -; 1 to 128 characters)`);
+  }
+}
+
+// The case messages (docs/WEB.md, "Cases"): returns the message, or null
+// when its type is not one of them.
+function parseCaseMessage(shape, message) {
+  switch (message.type) {
+    case 'cases':
+      return message;
+    case 'open_case':
+      caseId(message);
+      optionalSequence(message);
+      checkSettings(shape, message.settings, 'settings');
+      if (message.camera !== undefined && message.camera !== null) {
+        shape.check('Camera', message.camera, 'camera');
+      }
+      return message;
+    case 'rename_case': {
+      caseId(message);
+      const { title } = message;
+      if (typeof title !== 'string' || title.trim() === '' ||
+          Buffer.byteLength(title, 'utf8') > kMaxCaseTitleBytes || /[\u0000-\u001f\u007f]/.test(title)) {
+        throw new Error(`title: a string of 1 to ${kMaxCaseTitleBytes} bytes without control ` +
+                        'characters');
+      }
+      return message;
+    }
+    case 'delete_case':
+      caseId(message);
+      return message;
+    case 'undo':
+      if (message.redo !== undefined && typeof message.redo !== 'boolean') {
+        throw new Error('redo: true or false');
+      }
+      return message;
+    default:
+      return null;
+  }
+}
+
 // data: the WebSocket message (Buffer); isBinary: its opcode. Returns the
 // parsed message.
 export function parseMessage(shape, data, isBinary) {
@@ -86,6 +144,7 @@ export function parseMessage(shape, data, isBinary) {
       if ((message.source === undefined) === (message.volume_id === undefined)) {
         throw new Error('open: give one of source and volume_id');
       }
+      optionalSequence(message);
       checkSettings(shape, message.settings, 'settings');
       if (message.camera !== undefined && message.camera !== null) {
         shape.check('Camera', message.camera, 'camera');
@@ -124,7 +183,10 @@ export function parseMessage(shape, data, isBinary) {
       if (message.file_name.endsWith('.vp')) checkVpFields(message.text);
       return message;
     }
-    default:
+    default: {
+      const caseMessage = parseCaseMessage(shape, message);
+      if (caseMessage) return caseMessage;
       throw new Error(`unknown message type '${String(message.type).slice(0, 32)}'`);
+    }
   }
 }

@@ -7,7 +7,7 @@
 // Browser -> gateway, JSON text messages (validate_message.js checks each;
 // a bad one is answered with an error and changes nothing):
 //   {type: 'list'}                               -> {type: 'volumes', volumes}
-//   {type: 'open', source | volume_id, settings, camera}
+//   {type: 'open', source | volume_id, settings, camera, sequence}
 //        LoadVolume (or reuse of a loaded volume with the same source),
 //        BuildMesh (the server returns its mesh of equal parameters),
 //        OpenSession, then Interact -> progress..., {type: 'opened'}
@@ -18,18 +18,28 @@
 //   {type: 'tf', file_name, text, preset}        ReadTransferFunction (a ParaView
 //        .json or Slicer .vp the user picked) -> {type: 'tf', name, colors,
 //        opacities}; settings with `uploaded_tf: true` then render with it
+//   {type: 'open_case', case_id, settings, camera, sequence}
+//        OpenCase (the case's open session, or a new one with its events
+//        replayed), GetVolume, GetMesh, then Interact -> {type: 'opened'}
+//   {type: 'cases'|'rename_case'|'delete_case'|'undo', ...}   case_calls.js
 // Gateway -> browser:
 //   binary: one frame (lib/frame_packet.js)
 //   {type: 'hello'|'server'|'volumes'|'progress'|'opened'|'refined'|'stream'|
-//          'session_lost'|'tf'|'error', ...}
+//          'session_lost'|'tf'|'cases'|'case_renamed'|'case_deleted'|'undone'|
+//          'error', ...}
+// With --state-dir on the server every session is a case: `opened` and
+// `refined` carry it (session.case_id), and the page reopens it by id when
+// the session is lost (a server restart) or the gateway comes back.
 // The camera is the session's on the server, render settings the stream's:
 // the gateway remembers the last of each the browser sent and replays them
 // on every new stream, so reconnecting and refining keep the view. Replays
-// carry the browser's last sequence, so frames of the new stream report
-// what the browser has sent as shown.
+// carry the browser's last sequence (an open carries it too: a new gateway
+// learns it), so frames of the new stream report what the browser has sent
+// as shown.
 import crypto from 'node:crypto';
 
 import { Backoff } from '../public/backoff.js';
+import { CaseCalls } from './case_calls.js';
 import { explainError } from './explain_error.js';
 import { packFrame } from './frame_packet.js';
 import { toProtoSettings } from './render_settings.js';
@@ -42,6 +52,11 @@ import { GrpcStatus, isServerDown, statusName, streamError } from './vpm_client.
 const kMaxBarrenRestarts = 3;
 // DeleteMesh attempts after FAILED_PRECONDITION (100 ms doubling: 3.1 s in all).
 const kDeleteMeshRetries = 5;
+// The API's default view (distance 0: fit the volume), which a reset
+// OrbitCamera of the page reproduces: a case opened without the page's
+// camera starts there, so that page and server agree on the view.
+const kDefaultCamera = { azimuth_deg: 0, elevation_deg: 0, distance_mm: 0,
+                         pan_mm: { x: 0, y: 0, z: 0 } };
 
 export class ViewerConnection {
   // ws: a `ws` WebSocket; client: a VpmClient; shape: a ProtoShape of the
@@ -60,6 +75,7 @@ export class ViewerConnection {
     this.leftoversClosed = record.closeLeftovers(user, (id) =>
       this.rpc('CloseSession', { session_id: id }).then(() => true, (err) => !isServerDown(err)));
     this.watching = false;  // the session is another user's, shared to watch
+    this.serverUser = null; // this user's name on the server (SessionInfo.owner), once seen
     this.builtMeshes = new Map();  // mesh id -> {volumeId, holds}: built or refined here
     this.volume = null;
     this.mesh = null;
@@ -80,6 +96,7 @@ export class ViewerConnection {
     this.dropped = 0;       // frames the gateway replaced before sending
     this.closed = false;
     this.calls = new Set();  // unary calls running (grpc-js call objects)
+    this.cases = new CaseCalls(this);
 
     // An error nothing else caught ends this connection only, with a message;
     // the gateway and every other tab carry on.
@@ -113,10 +130,11 @@ export class ViewerConnection {
     if (!this.closed && this.ws.readyState === this.ws.OPEN) this.ws.send(JSON.stringify(message));
   }
 
-  fail(what, err) {
+  // extra: more fields for the page (e.g. the case_id an open_case failed on).
+  fail(what, err, extra = {}) {
     const message = explainError(err, what, this.client.address);
     this.log(`${what}: ${statusName(err?.code)}: ${err?.details ?? err}`);
-    this.send({ type: 'error', what, code: statusName(err?.code), message });
+    this.send({ type: 'error', what, code: statusName(err?.code), message, ...extra });
     if (isServerDown(err)) this.serverDown(err);
   }
 
@@ -135,6 +153,11 @@ export class ViewerConnection {
       case 'event': return this.event(message.event);
       case 'refine': return this.refine(message.point_mm);
       case 'tf': return this.readTransferFunction(message);
+      case 'open_case': return this.openCase(message);
+      case 'cases': return this.cases.list();
+      case 'rename_case': return this.cases.rename(message);
+      case 'delete_case': return this.cases.delete(message);
+      case 'undo': return this.cases.undo(message);
       default: throw new Error(`message type ${message.type} passed the check`);
     }
   }
@@ -194,8 +217,9 @@ export class ViewerConnection {
 
   // ------------------------------------------------------------ sessions
 
-  async open({ source, volume_id: volumeId, settings, camera }) {
+  async open({ source, volume_id: volumeId, settings, camera, sequence }) {
     const op = ++this.openOp;
+    this.lastSequence = Math.max(this.lastSequence, sequence ?? 0);
     this.stopStream();
     this.releaseSession();
     if (settings) this.settings = settings;
@@ -240,6 +264,7 @@ export class ViewerConnection {
     const session = await this.rpc('OpenSession', { volume_id: volume.volume_id,
                                                     mesh_id: mesh.mesh_id });
     this.record.opened(this.user, session.session_id);
+    if (session.owner) this.serverUser = session.owner;
     return session;
   }
 
@@ -261,6 +286,54 @@ export class ViewerConnection {
     const mine = this.builtMeshes.get(mesh.mesh_id) ?? { volumeId: mesh.volume_id, holds: 0 };
     mine.holds += 1;
     this.builtMeshes.set(mesh.mesh_id, mine);
+  }
+
+  // OpenCase as this tab's user: the case's open session (this tab's own
+  // when it already shows the case) or a new one with its events replayed;
+  // then its volume and mesh for the page, and the stream. `camera`: the
+  // page's (reattaching to the case it showed), else the default view.
+  async openCase({ case_id: caseId, settings, camera, sequence }) {
+    const op = ++this.openOp;
+    this.lastSequence = Math.max(this.lastSequence, sequence ?? 0);
+    const same = !this.watching && this.session?.case_id === caseId;
+    this.stopStream();
+    if (!same) this.releaseSession();
+    if (settings) this.settings = settings;
+    this.camera = camera ?? kDefaultCamera;
+    const what = `Opening case ${caseId}`;
+    try {
+      this.send({ type: 'progress', step: 'case', text: `${what} ...` });
+      await this.leftoversClosed;
+      const session = await this.rpc('OpenCase', { case_id: caseId });
+      this.record.opened(this.user, session.session_id);
+      if (session.owner) this.serverUser = session.owner;
+      if (op !== this.openOp || this.closed) {
+        if (!same) this.closeSession(session);
+        return;
+      }
+      Object.assign(this, { session, watching: false });
+      const [volume, mesh] = await Promise.all([
+        this.rpc('GetVolume', { volume_id: session.volume_id }),
+        this.caseMesh(session)]);
+      if (op !== this.openOp || this.closed) return;
+      Object.assign(this, { volume, mesh });
+      this.serverUpAgain();
+      this.send({ type: 'opened', volume, mesh, session });
+      this.startStream();
+    } catch (err) {
+      if (op === this.openOp) this.fail(what, err, { case_id: caseId });
+    }
+  }
+
+  // The mesh OpenCase built (or its open session uses), held by this tab as
+  // a mesh it built (deleted when unused once the tab goes); its id alone
+  // when GetMesh fails (the page then shows no mesh statistics).
+  async caseMesh(session) {
+    const fallback = { mesh_id: session.mesh_id, volume_id: session.volume_id };
+    const mesh = await this.rpc('GetMesh', { mesh_id: session.mesh_id })
+      .then(({ info }) => ({ ...fallback, ...info }), () => fallback);
+    this.holdMesh(mesh);
+    return mesh;
   }
 
   // Watches a session another user shared with this one: frames only.

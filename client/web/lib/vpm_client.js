@@ -53,6 +53,8 @@ const kDeadlineMs = {
   BuildMesh: 120000,
   RefineMesh: 120000,
   OpenSession: 120000,
+  OpenCase: 120000,  // loads the volume, builds the mesh and replays the case
+  ListCases: 10000,
   CloseSession: 5000,
   DeleteMesh: 5000,
   ReadTransferFunction: 10000,

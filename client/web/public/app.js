@@ -1,13 +1,16 @@
 // The page: wires the volume picker, the tools and the status line to the
 // gateway socket. The browser only shows frames and sends input; every
 // server call happens in the gateway. `window.vpmViewer` exposes the state
-// (frames, last frame header, peak displacement, errors) to tests.
+// (frames, last frame header, peak displacement, errors, the case, the
+// last undo's answer) to tests.
 import { OrbitCamera } from './camera.js';
+import { CasesPanel } from './cases_panel.js';
 import { CutControls } from './cut_controls.js';
 import { FrameStats } from './frame_stats.js';
 import { GatewaySocket } from './gateway_socket.js';
 import { PointerTools } from './pointer_tools.js';
 import { SliceViews } from './slice_views.js';
+import { installUndoKeys } from './undo_keys.js';
 
 const $ = (id) => document.getElementById(id);
 const canvas = $('frame');
@@ -17,8 +20,13 @@ const stats = new FrameStats();
 const state = {
   gatewayUp: false,
   serverUp: null,
-  intent: null,         // what to (re)open: {source} or {volume_id}
+  intent: null,         // what to (re)open: {source}, {volume_id} or {case_id}
   opening: false,
+  openedWithCamera: false,  // the open sent the page's camera (the view carries on)
+  caseId: null,         // the case of the session shown (server --state-dir), else null
+  lastUndo: null,       // the gateway's 'undone' answer, until the next manipulation
+  undoAnswers: 0,       // 'undone' answers received (for tests)
+  casesListed: 0,       // case lists received (for tests)
   volume: null,
   mesh: null,
   session: null,
@@ -35,6 +43,20 @@ const state = {
   stats,
 };
 window.vpmViewer = state;
+
+const casesPanel = new CasesPanel({
+  body: $('cases-body'),
+  note: $('cases-note'),
+  currentCaseId: () => state.caseId,
+  open(caseId) {
+    applyFrameSize();
+    state.intent = { case_id: caseId };
+    openVolume();
+  },
+  rename: (caseId, title) => socket.send({ type: 'rename_case', case_id: caseId, title }),
+  remove: (caseId) => socket.send({ type: 'delete_case', case_id: caseId }),
+});
+state.casesPanel = casesPanel;
 
 function showMessage(text, kind = 'info') {
   $('message').textContent = text;
@@ -84,6 +106,7 @@ checkSignedIn();
 // ------------------------------------------------------------ events out
 
 function sendEvent(event) {
+  if (!event.camera && !event.settings) state.lastUndo = null;  // a manipulation: the count moves on
   state.sequence += 1;
   const message = { ...event, sequence: state.sequence };
   if (socket.send({ type: 'event', event: message })) stats.sent(state.sequence);
@@ -103,12 +126,27 @@ function settings() {
   return out;
 }
 
+// Opens state.intent. The page's camera goes along when the view carries on
+// (the same case again, or the same source): else the server's default view.
 function openVolume() {
-  const sameVolume = state.camera && state.intent.source === state.volume?.source;
+  const { intent } = state;
+  const carryOn = Boolean(state.camera) && (intent.case_id ? intent.case_id === state.caseId
+                                                           : intent.source === state.volume?.source);
+  const message = intent.case_id ? { type: 'open_case', case_id: intent.case_id }
+                                 : { type: 'open', ...intent };
   // Unsent while the gateway is away; its reconnection reopens.
-  state.opening = socket.send({ type: 'open', ...state.intent, settings: settings(),
-                                camera: sameVolume ? state.camera.toProto() : null });
+  state.opening = socket.send({ ...message, settings: settings(), sequence: state.sequence,
+                                camera: carryOn ? state.camera.toProto() : null });
+  state.openedWithCamera = carryOn;
+  // The gateway lets the session shown go (or, for the same case, its stream).
+  if (state.opening) state.session = null;
 }
+
+function undo(action) {
+  if (!state.session) return showMessage('Nothing to undo: open a volume or a case first.', 'error');
+  return socket.send({ type: 'undo', redo: action === 'redo' });
+}
+installUndoKeys(document, undo);
 
 function refineAt(pointMm) {
   if (!state.session) return showMessage('Open a volume first.', 'error');
@@ -173,11 +211,13 @@ const handlers = {
     setServerState('up', `vpm-server ${m.address}`);
     if ($('message').dataset.kind === 'error') showMessage('');
     if (state.intent && !state.session && !state.opening) openVolume();
+    socket.send({ type: 'cases' });
   },
   volumes(m) { fillLoaded(m.volumes); },
   progress(m) { showMessage(m.text, 'info'); },
   opened(m) {
-    const sameVolume = state.camera && m.volume.source === state.volume?.source;
+    const sameVolume = state.camera && state.openedWithCamera &&
+      m.volume.source === state.volume?.source;
     Object.assign(state, { volume: m.volume, mesh: m.mesh, session: m.session, opening: false });
     // Ids belong to one vpm-server replica: a reopen (the session lost with
     // its replica, the gateway back) loads the volume again from its source,
@@ -185,6 +225,7 @@ const handlers = {
     if (state.intent?.volume_id && !m.volume.source.startsWith('upload:')) {
       state.intent = { source: m.volume.source };
     }
+    enterCase(m.session);
     if (!sameVolume) {
       state.camera = new OrbitCamera(m.volume);
       slices.reset();
@@ -198,6 +239,7 @@ const handlers = {
   },
   refined(m) {
     Object.assign(state, { mesh: m.mesh, session: m.session });
+    enterCase(m.session);  // a new session: a new case
     const p = m.point_mm;
     showMessage(`Refined at (${p.x.toFixed(1)}, ${p.y.toFixed(1)}, ${p.z.toFixed(1)}) mm: ` +
                 'a new session on the finer mesh, starting from rest.', 'info');
@@ -207,7 +249,8 @@ const handlers = {
   // The server ended the stream: this user may no longer see the session
   // (its share revoked, closed or deleted by its owner). Nothing reopens it.
   access_ended(m) {
-    Object.assign(state, { session: null, intent: null, opening: false, streamOpen: false });
+    Object.assign(state, { session: null, intent: null, opening: false, streamOpen: false,
+                           caseId: null });
     state.errors.push({ what: 'access', message: m.message });
     tools.cancelGrab();
     slices.cancelGrab();
@@ -232,13 +275,77 @@ const handlers = {
     settingsChanged();
   },
   error(m) {
-    state.errors.push({ what: m.what, message: m.message });
+    state.errors.push({ what: m.what, message: m.message, code: m.code });
     if (m.what !== 'Interaction') state.opening = false;
     tools.cancelGrab();
     slices.cancelGrab();
     showMessage(m.message, 'error');
+    if (m.case_id && m.case_id === state.intent?.case_id && !state.session) caseOpenFailed(m);
+  },
+  cases(m) {
+    casesPanel.show(m);
+    state.casesKept = m.kept;
+    state.casesListed += 1;
+    const current = casesPanel.find(state.caseId);
+    if (current) state.caseTitle = current.title;
+    refreshStatus();
+  },
+  case_renamed(m) {
+    if (m.case.case_id === state.caseId) state.caseTitle = m.case.title;
+    showMessage(`Case ${m.case.case_id} is now "${m.case.title}".`, 'info');
+    refreshStatus();
+  },
+  case_deleted(m) {
+    if (m.current) {
+      Object.assign(state, { session: null, intent: null, opening: false, caseId: null,
+                             streamOpen: false });
+      tools.cancelGrab();
+      slices.cancelGrab();
+    }
+    showMessage(`Deleted case ${m.case_id}.${m.current ? ' The view has stopped; open a volume ' +
+                'or a case to go on.' : ''}`, 'info');
+    refreshStatus();
+  },
+  undone(m) {
+    if (m.case_id !== state.caseId) return;
+    state.lastUndo = m;
+    state.undoAnswers += 1;
+    const verb = m.redo ? 'Redo' : 'Undo';
+    showMessage(m.changed
+      ? `${verb}: ${m.events} events in effect, ${m.undone} undone; largest displacement ` +
+        `${m.max_displacement_mm.toFixed(2)} mm.`
+      : `${verb}: nothing to ${m.redo ? 'redo' : 'undo'}.`, 'info');
+    refreshStatus();
   },
 };
+
+// The session shown is on a case (a server with --state-dir): a lost
+// session or a gateway back reopens that case, with its deformation.
+function enterCase(session) {
+  const caseId = session?.case_id || null;
+  if (caseId !== state.caseId) Object.assign(state, { lastUndo: null, caseTitle: null });
+  state.caseId = caseId;
+  if (caseId) state.intent = { case_id: caseId };
+  casesPanel.render();
+  socket.send({ type: 'cases' });
+}
+
+// OpenCase failed. A server that keeps no cases (restarted without
+// --state-dir) gets the source again, as a new session; a case that is
+// gone (deleted) is not reopened; anything else is tried again once the
+// server is back.
+function caseOpenFailed(m) {
+  const source = state.volume?.source;
+  if (m.code === 'FAILED_PRECONDITION' && /keeps no cases/.test(m.message) && source &&
+      !source.startsWith('upload:')) {
+    Object.assign(state, { intent: { source }, caseId: null });
+    showMessage(`${m.message} Reopening ${source} as a new session.`, 'error');
+    openVolume();
+  } else if (m.code === 'NOT_FOUND') {
+    Object.assign(state, { intent: null, caseId: null });
+    showMessage(`${m.message} Open a volume or a case to go on.`, 'error');
+  }
+}
 
 function onMessage(m) {
   const handler = handlers[m.type];
@@ -341,7 +448,21 @@ function showStatus(h) {
     `${(h.bytes / 1024).toFixed(1)} KB ${h.encoding} · ${h.interactive ? 'interactive' : 'still'}` +
     ` · server ${h.timings.total_ms.toFixed(0)} ms · max displacement ` +
     `${h.max_displacement_mm.toFixed(2)} mm · lag ${(h.lag_mm ?? 0).toFixed(1)} mm · ` +
-    `inverted tets ${h.inverted_tets ?? 0} · frame ${h.frame_number}`;
+    `inverted tets ${h.inverted_tets ?? 0} · frame ${h.frame_number}${caseStatus()}`;
+}
+
+// The case part of the status line: its title and id, and after an undo or
+// redo the events in effect and undone (until the next manipulation).
+function caseStatus() {
+  if (!state.caseId) return '';
+  const title = state.caseTitle ? `"${state.caseTitle}" ` : '';
+  const u = state.lastUndo;
+  return ` · case ${title}(${state.caseId})` +
+    (u ? ` · ${u.events} events in effect, ${u.undone} undone` : '');
+}
+
+function refreshStatus() {
+  if (state.lastHeader) showStatus(state.lastHeader);
 }
 
 // ------------------------------------------------------------ controls
@@ -407,6 +528,9 @@ $('frame-size').addEventListener('change', () => {
 });
 $('refine-grab').addEventListener('click', () => state.lastGrabMm && refineAt(state.lastGrabMm));
 $('reset-tissue').addEventListener('click', () => sendEvent({ reset: {} }));
+$('undo').addEventListener('click', () => undo('undo'));
+$('redo').addEventListener('click', () => undo('redo'));
+$('cases-refresh').addEventListener('click', () => socket.send({ type: 'cases' }));
 $('reset-view').addEventListener('click', () => {
   if (!state.camera) return;
   state.camera.reset();

@@ -1,0 +1,36 @@
+// Undo and redo from the keyboard: Ctrl+Z undoes, Ctrl+Shift+Z (and Ctrl+Y)
+// redoes; Cmd in place of Ctrl on macOS. Keys typed into a text field stay
+// the field's own (its text's undo). An ES module with no dependencies.
+
+const kTextInputTypes = new Set(['text', 'search', 'number', 'email', 'url', 'tel', 'password']);
+
+// e: a KeyboardEvent (or a plain object with its fields). Returns 'undo',
+// 'redo' or null.
+export function undoKey(e) {
+  if (!(e.ctrlKey || e.metaKey) || e.altKey) return null;
+  const key = String(e.key ?? '').toLowerCase();
+  const code = e.code ?? '';
+  if (key === 'z' || code === 'KeyZ') return e.shiftKey ? 'redo' : 'undo';
+  if ((key === 'y' || code === 'KeyY') && !e.shiftKey && !e.metaKey) return 'redo';
+  return null;
+}
+
+// True when `target` (an element) takes typed text.
+export function typesText(target) {
+  if (!target || typeof target !== 'object') return false;
+  if (target.isContentEditable) return true;
+  const tag = String(target.tagName ?? '').toUpperCase();
+  if (tag === 'TEXTAREA') return true;
+  return tag === 'INPUT' && kTextInputTypes.has(String(target.type ?? 'text').toLowerCase());
+}
+
+// Calls onKey('undo' | 'redo') for those keys pressed anywhere on `target`
+// (the document) but in a text field.
+export function installUndoKeys(target, onKey) {
+  target.addEventListener('keydown', (e) => {
+    const action = undoKey(e);
+    if (!action || typesText(e.target) || e.repeat) return;
+    e.preventDefault();
+    onKey(action);
+  });
+}
