@@ -4,7 +4,7 @@
 #   address: AddressSanitizer + UndefinedBehaviorSanitizer (leaks checked)
 #   thread:  ThreadSanitizer
 # Which tests: the in-process service tests (streams, queues, uploads,
-# eviction, the render storm, slices, users and fair shares), the FEM tests, and the ray caster's tests
+# eviction, the render storm, slices, users and fair shares, cases), the FEM tests, and the ray caster's tests
 # (GPU on lavapipe against the CPU reference). The other suites run
 # unsanitized in `make test`.
 set -euo pipefail
@@ -17,7 +17,7 @@ case "$mode" in
 esac
 service_tests=(service_basics_test service_session_test mesh_lifecycle_test cancellation_test
                render_storm_test fair_job_queue_test resource_lifecycle_test render_slice_test
-               users_test)
+               users_test cases_test)
 targets=("${service_tests[@]}" fem_test raycast_test)
 # -O1: the sanitizers' own advice; no -g2 to keep compiles short.
 cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
@@ -34,7 +34,7 @@ export ASAN_OPTIONS="detect_leaks=1:halt_on_error=1:abort_on_error=1"
 export LSAN_OPTIONS="suppressions=$supp/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$supp/tsan.supp"
-regex="^($(IFS='|'; echo "ServiceTest|SessionTest|UploadTest|DataRootTest|MeshLifecycleTest|CancellationTest|RenderStormTest|FairJobQueue|WorkerPool|ResourceLifecycleTest|RenderSliceTest|UsersTest|UsersServer|UsersFile"))\.|^(Fem|Stiff|Polar|Patch|Uniaxial|LargeRotation|Heterogeneity|Constrained|Spring|FixedDofs|InversionBarrier|Interpolate|Raycast|Render|Clip|Slice|Camera|Overlay|FrameEncoder|Pick|VolumeMipWindow)"
+regex="^($(IFS='|'; echo "ServiceTest|SessionTest|UploadTest|DataRootTest|MeshLifecycleTest|CancellationTest|RenderStormTest|FairJobQueue|WorkerPool|ResourceLifecycleTest|RenderSliceTest|UsersTest|UsersServer|UsersFile|CasesTest|CasesOff"))\.|^(Fem|Stiff|Polar|Patch|Uniaxial|LargeRotation|Heterogeneity|Constrained|Spring|FixedDofs|InversionBarrier|Interpolate|Raycast|Render|Clip|Slice|Camera|Overlay|FrameEncoder|Pick|VolumeMipWindow)"
 start=$(date +%s)
 # The render storm's drag bounds its longest wait for a frame in seconds,
 # which a sanitizer stretches ten- to fifty-fold; its other test (the full

@@ -48,6 +48,7 @@ json SessionJson(const v3::SessionInfo& s) {
   return {{"session_id", s.session_id()}, {"volume_id", s.volume_id()},
           {"mesh_id", s.mesh_id()},       {"viewers", s.viewers()},
           {"idle_s", s.idle_s()},         {"owner", s.owner()},
+          {"case_id", s.case_id()},
           {"shared_with", std::vector<std::string>(s.shared_with().begin(), s.shared_with().end())}};
 }
 
