@@ -5,8 +5,12 @@
 #include <memory>
 #include <string>
 
+#include <google/protobuf/util/json_util.h>
+
 #include "client/cli/server_flags.h"
 #include "client/common/proto_json.h"
+#include "server/common/read_text_file.h"
+#include "server/common/write_file.h"
 
 namespace vpm::cli {
 namespace {
@@ -55,7 +59,7 @@ void PrintCase(const v3::CaseInfo& c) {
 }
 
 struct Args {
-  std::string case_id, session_id, text, user;
+  std::string case_id, session_id, text, user, file;
   bool json = false, revoke = false;
 };
 
@@ -161,6 +165,39 @@ Status UndoOrRedo(const ServerConnection& s, const Args& a, bool redo) {
 
 using Run = Status (*)(const ServerConnection&, const Args&);
 
+// The archive as JSON (protobuf's mapping, field names as in vpm.proto).
+Status Export(const ServerConnection& s, const Args& a) {
+  v3::ExportCaseRequest request;
+  request.set_case_id(a.case_id);
+  v3::CaseArchive archive;
+  RETURN_IF_ERROR(FromGrpc(s.stub().ExportCase(s.Context().get(), request, &archive)));
+  google::protobuf::util::JsonPrintOptions options;
+  options.add_whitespace = true;
+  options.preserve_proto_field_names = true;
+  std::string json;
+  if (!google::protobuf::util::MessageToJsonString(archive, &json, options).ok()) {
+    return absl::InternalError("the archive could not be written as JSON");
+  }
+  RETURN_IF_ERROR(WriteFile(a.file, json));
+  std::printf("wrote %s (%d events, volume %s)\n", a.file.c_str(), archive.events_size(),
+              archive.source().c_str());
+  return absl::OkStatus();
+}
+
+Status Import(const ServerConnection& s, const Args& a) {
+  ASSIGN_OR_RETURN(const std::string json, ReadTextFile(a.file, "case import"));
+  v3::ImportCaseRequest request;
+  if (const auto parsed = google::protobuf::util::JsonStringToMessage(json, request.mutable_archive());
+      !parsed.ok()) {
+    return absl::InvalidArgumentError(
+        StrCat(a.file, ": not a vpm case archive (", std::string(parsed.message()), ")"));
+  }
+  v3::CaseInfo info;
+  RETURN_IF_ERROR(FromGrpc(s.stub().ImportCase(s.Context().get(), request, &info)));
+  PrintCase(info);
+  return absl::OkStatus();
+}
+
 CLI::App* Command(CLI::App* parent, const char* name, const char* help,
                   const std::shared_ptr<Args>& args, const ServerFlags* flags, int* exit_code,
                   std::function<Status(const ServerConnection&, const Args&)> run) {
@@ -218,6 +255,14 @@ void AddCaseCommands(CLI::App& app, const ServerFlags* flags, int* exit_code) {
                              return UndoOrRedo(s, x, true);
                            });
   redo->add_option("session_id", a->session_id, "session id")->required();
+  CLI::App* exp = Command(cases, "export", "write the case to a file (JSON) another server can "
+                                           "import; its volume referenced by source", a, flags,
+                          exit_code, Export);
+  exp->add_option("case_id", a->case_id, "case id")->required();
+  exp->add_option("file", a->file, "output file (.json)")->required();
+  CLI::App* imp = Command(cases, "import", "a new case of mine from a file of case export", a,
+                          flags, exit_code, Import);
+  imp->add_option("file", a->file, "the file")->required();
 }
 
 }  // namespace vpm::cli

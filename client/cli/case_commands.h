@@ -1,5 +1,6 @@
-// `vpm case list|show|open|rename|notes|delete|share|undo|redo`: the cases of a
-// vpm-server started with --state-dir (docs/CASES.md).
+// `vpm case list|show|open|rename|notes|delete|share|undo|redo|export|import`:
+// the cases of a vpm-server started with --state-dir or --state
+// (docs/CASES.md).
 #pragma once
 
 #include <CLI/CLI.hpp>

@@ -5,6 +5,7 @@
 
 #include "server/common/random_hex.h"
 #include "server/scene/scene_history.h"
+#include "server/service/case_archive.h"
 #include "server/service/vpm_service.h"
 
 namespace vpm::service {
@@ -255,6 +256,73 @@ grpc::ServerUnaryReactor* VpmService::Undo(grpc::CallbackServerContext* context,
     response->set_max_displacement_mm(outcome.max_displacement_mm);
     response->set_events(outcome.events);
     response->set_undone(outcome.undone);
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::ExportCase(grpc::CallbackServerContext* context,
+                                                 const v3::ExportCaseRequest* request,
+                                                 v3::CaseArchive* response) {
+  return Unary(context, *request, "ExportCase", service_->request_pool,
+               [=, this](const std::string& user, const CancelToken& cancel) -> Status {
+    ASSIGN_OR_RETURN(const cases::CaseRecord record, FindCase(request->case_id(), user, false));
+    if (record.source.starts_with("upload:")) {
+      return absl::FailedPreconditionError(
+          StrCat("case '", record.id, "': its volume is an upload, which an archive cannot "
+                 "reference; another server could not open it"));
+    }
+    ASSIGN_OR_RETURN(const std::vector<cases::CaseEvent> events,
+                     service_->cases->Events(record.id));
+    // The volume's geometry turns the stored points into world LPS.
+    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
+                     service_->volumes->Load(record.source, user, {}, cancel));
+    *response = ToCaseArchive(record, events, volume->volume.geometry());
+    return absl::OkStatus();
+  });
+}
+
+grpc::ServerUnaryReactor* VpmService::ImportCase(grpc::CallbackServerContext* context,
+                                                 const v3::ImportCaseRequest* request,
+                                                 v3::CaseInfo* response) {
+  return Unary(context, *request, "ImportCase", service_->request_pool,
+               [=, this](const std::string& user, const CancelToken& cancel) -> Status {
+    ASSIGN_OR_RETURN(cases::CaseStore * store, Cases(service_));
+    const v3::CaseArchive& archive = request->archive();
+    if (archive.source().empty() || archive.source().starts_with("upload:")) {
+      return absl::InvalidArgumentError("archive.source: a LoadVolume source is required");
+    }
+    if (archive.title().size() > kMaxTitleBytes) {
+      return absl::InvalidArgumentError(StrCat("archive.title: longer than ", kMaxTitleBytes,
+                                               " bytes"));
+    }
+    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
+                     service_->volumes->Load(archive.source(), user, {}, cancel));
+    const VolumeGeometry& geometry = volume->volume.geometry();
+    RETURN_IF_ERROR(ToMeshParams(archive.mesh_params(), geometry).status());
+    ASSIGN_OR_RETURN(const std::vector<cases::CaseEvent> events,
+                     EventsFromArchive(archive, geometry));
+    cases::CaseRecord record;
+    record.id = StrCat("case-", RandomHex(16));
+    record.owner = user;
+    record.title = archive.title();
+    record.notes = archive.notes();
+    record.source = archive.source();
+    record.mesh_params = archive.mesh_params().SerializeAsString();
+    if (archive.has_camera()) record.camera = archive.camera().SerializeAsString();
+    RETURN_IF_ERROR(store->Create(record));
+    // A failure part way leaves no half case behind.
+    Status stored = absl::OkStatus();
+    for (const cases::CaseEvent& e : events) {
+      stored = store->Append(record.id, e.op, 0.0).status();
+      if (stored.ok() && e.settled) stored = store->MarkSettled(record.id);
+      if (!stored.ok()) break;
+    }
+    if (!stored.ok()) {
+      store->Delete(record.id).IgnoreError();
+      return stored;
+    }
+    ASSIGN_OR_RETURN(const cases::CaseRecord created, store->Get(record.id));
+    FillCaseInfo(created, user, response);
     return absl::OkStatus();
   });
 }

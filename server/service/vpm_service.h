@@ -96,6 +96,10 @@ class VpmService final : public v3::Vpm::CallbackService {
                                       v3::CaseInfo*) override;
   grpc::ServerUnaryReactor* Undo(grpc::CallbackServerContext*, const v3::UndoRequest*,
                                  v3::UndoResponse*) override;
+  grpc::ServerUnaryReactor* ExportCase(grpc::CallbackServerContext*,
+                                       const v3::ExportCaseRequest*, v3::CaseArchive*) override;
+  grpc::ServerUnaryReactor* ImportCase(grpc::CallbackServerContext*,
+                                       const v3::ImportCaseRequest*, v3::CaseInfo*) override;
 
  private:
   // Authenticates the caller, then runs `fn` with the caller's user name

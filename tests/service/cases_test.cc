@@ -253,6 +253,64 @@ TEST_F(CasesTest, OthersSeeNoCaseUntilSharedAndADeletedCaseIsGone) {
   EXPECT_EQ(stub_->GetSession(Context(kAlice).get(), get, &info).error_code(), grpc::NOT_FOUND);
 }
 
+TEST_F(CasesTest, AnExportedCaseImportsAsANewCaseWithTheSameDeformation) {
+  const v3::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const std::string session = Plan(volume);
+  const double planned = Still(session).max_displacement_mm();
+  v3::GetSessionRequest get;
+  get.set_session_id(session);
+  v3::SessionInfo info;
+  ASSERT_TRUE(stub_->GetSession(Context(kAlice).get(), get, &info).ok());
+  v3::ExportCaseRequest request;
+  request.set_case_id(info.case_id());
+  v3::CaseArchive archive;
+  ASSERT_TRUE(stub_->ExportCase(Context(kAlice).get(), request, &archive).ok());
+  EXPECT_EQ(archive.format_version(), 1);
+  EXPECT_EQ(archive.source(), kPhantom);
+  ASSERT_EQ(archive.events_size(), 7);
+  EXPECT_EQ(archive.events(0).kind(), v3::CASE_EVENT_GRAB);
+  // The grab point is world LPS: the middle of the box, as the plan sent it.
+  const v3::Vec3 c = Centre(volume);
+  EXPECT_NEAR(archive.events(0).point_mm().x(), c.x(), 1e-9);
+  EXPECT_NEAR(archive.events(0).point_mm().z(), c.z(), 1e-9);
+  EXPECT_EQ(stub_->ExportCase(Context(kBob).get(), request, &archive).error_code(), grpc::NOT_FOUND);
+
+  // Bob imports Alice's file (she sent it to him): a case of his own.
+  v3::ImportCaseRequest import;
+  *import.mutable_archive() = archive;
+  v3::CaseInfo imported;
+  const grpc::Status status = stub_->ImportCase(Context(kBob).get(), import, &imported);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_NE(imported.case_id(), info.case_id());
+  EXPECT_EQ(imported.owner(), "bob");
+  EXPECT_EQ(imported.events(), 7);
+  v3::OpenCaseRequest open;
+  open.set_case_id(imported.case_id());
+  v3::SessionInfo bobs;
+  ASSERT_TRUE(stub_->OpenCase(Context(kBob).get(), open, &bobs).ok());
+  v3::RenderRequest render;
+  render.set_session_id(bobs.session_id());
+  render.mutable_settings()->set_width(64);
+  render.mutable_settings()->set_height(64);
+  v3::Frame frame;
+  ASSERT_TRUE(stub_->Render(Context(kBob).get(), render, &frame).ok());
+  EXPECT_NEAR(frame.max_displacement_mm(), planned, 1e-3);
+
+  // A damaged archive is refused whole, naming the fault.
+  v3::ImportCaseRequest bad = import;
+  bad.mutable_archive()->mutable_events(3)->mutable_vector()->set_x(std::nan(""));
+  EXPECT_EQ(stub_->ImportCase(Context(kBob).get(), bad, &imported).error_code(),
+            grpc::INVALID_ARGUMENT);
+  bad = import;
+  bad.mutable_archive()->set_format_version(9);
+  grpc::Status refused = stub_->ImportCase(Context(kBob).get(), bad, &imported);
+  EXPECT_EQ(refused.error_code(), grpc::INVALID_ARGUMENT);
+  EXPECT_NE(refused.error_message().find("format_version"), std::string::npos);
+  v3::ListCasesResponse bobs_cases;
+  ASSERT_TRUE(stub_->ListCases(Context(kBob).get(), {}, &bobs_cases).ok());
+  EXPECT_EQ(bobs_cases.cases_size(), 1);
+}
+
 TEST(CasesOff, WithoutAStateDirThereAreNoCasesAndSessionsWorkAsBefore) {
   auto server = VpmServer::Create(SmallServerOptions(), SharedGpu());
   ASSERT_TRUE(server.ok()) << server.status();
