@@ -9,6 +9,8 @@
 #   - a preset key (3) changes the picture,
 #   - grab mode (g) + a left drag deforms the volume (the server's
 #     max_displacement_mm in the frames vpm-view logs) and releasing lets go,
+#   - a drag released with Shift is kept; Ctrl+Z takes it back and
+#     Ctrl+Shift+Z brings it back (the server keeps cases: --state-dir),
 #   - S saves a PNG screenshot,
 #   - L shows three slices beside the 3D frame (2 x 2) and hides them; the
 #     wheel over a slice scrolls it in equal steps, and grab mode on a slice
@@ -18,7 +20,8 @@
 #     P adds a second plane after an orbit and PageUp moves only that one,
 #   - resizing the window brings frames of the new size,
 #   - killing the server shows a red "connection lost" banner, and a server
-#     restarted on the same port is reconnected to and streams again,
+#     restarted on the same port (and state directory) is reconnected to:
+#     the viewer reopens its case and shows the same displacement,
 #   - q quits with exit status 0.
 #
 # Usage: view_e2e.sh BUILD_DIR
@@ -82,7 +85,8 @@ start_server() {  # LISTEN_ADDRESS
   for attempt in 1 2 3 4 5; do
     touch "$tmp/server.log"
     before=$(grep -c "listening on port" "$tmp/server.log")
-    "$server_bin" --listen "$1" --token "$token" >> "$tmp/server.log" 2>&1 &
+    "$server_bin" --listen "$1" --token "$token" --state-dir "$tmp/state" \
+      >> "$tmp/server.log" 2>&1 &
     server_pid=$!
     wait_for 60 listening_or_gone "$before" || die "vpm-server did not listen within 60 s"
     if test_listening "$before"; then
@@ -197,6 +201,29 @@ disp=$(last_displacement)
 if ! gt "$disp" 0.001; then pass "release let go (max_displacement_mm $disp)"
 else fail "after release max_displacement_mm is $disp"; fi
 key g
+
+# 5b. A drag released with Shift held is kept; Ctrl+Z takes it back (the
+# whole grab, drag and release), Ctrl+Shift+Z brings it back.
+key g
+n=$(frames)
+drag 1 128 128 40 -30 8
+wait_for 60 displaced_more_than 20
+xdotool keydown shift; xdotool mouseup 1; xdotool keyup shift
+settle "$n"
+kept=$(last_displacement)
+key g
+if gt "$kept" 20; then pass "a drag released with Shift was kept (max_displacement_mm $kept)"
+else fail "Shift + release: max_displacement_mm $kept (expected the drag kept, > 20 mm)"; fi
+not_displaced() { ! displaced_more_than 0.001; }
+displaced_as_kept() { awk -v a="$(last_displacement)" -v b="$kept" 'BEGIN { d = a - b; exit !(d < 0.0015 && d > -0.0015) }'; }
+n=$(frames)
+key ctrl+z
+if wait_for 60 not_displaced; then settle "$n"; pass "Ctrl+Z took the kept drag back (max_displacement_mm $(last_displacement))"
+else fail "Ctrl+Z: max_displacement_mm $(last_displacement), expected 0"; fi
+n=$(frames)
+key ctrl+shift+z
+if wait_for 60 displaced_as_kept; then settle "$n"; pass "Ctrl+Shift+Z brought it back (max_displacement_mm $(last_displacement), kept $kept)"
+else fail "Ctrl+Shift+Z: max_displacement_mm $(last_displacement), expected $kept"; fi
 
 # 6. A screenshot.
 key s
@@ -325,7 +352,10 @@ else fail "no $want frame after resizing the window to 320x300"; fi
 settle "$n"
 frame_w=320 frame_h=$((300 - bar))
 
-# 8. The server dies: a red banner says so; it comes back on the same port: frames again.
+# 8. The server dies: a red banner says so; it comes back on the same port
+# and state directory: the viewer reopens its case, frames again, with the
+# same displacement.
+before_kill=$(last_displacement)
 kill -KILL "$server_pid"; wait "$server_pid" 2>/dev/null; server_pid=""
 wait_for 15 grep -q 'connection lost' "$tmp/view.err" || fail "vpm-view did not report the lost connection"
 sleep 0.5
@@ -342,6 +372,10 @@ shot back
 red=$(red_rows "$tmp/back-window.png") sd=$(stddev "$tmp/back.png")
 if [ "$red" = 0 ] && gt "$sd" 0.05; then pass "reconnected and streaming again (no banner, stddev $sd)"
 else fail "after the restart: $red red banner rows, frame stddev $sd"; fi
+if grep -q 'vpm-view: case case-[0-9a-f]* open in session' "$tmp/view.err" &&
+   [ "$(last_displacement)" = "$before_kill" ]; then
+  pass "reopened its case after the restart (max_displacement_mm $before_kill before, $(last_displacement) after)"
+else fail "after the restart: case reopened? $(grep -c 'open in session' "$tmp/view.err"); max_displacement_mm $before_kill before, $(last_displacement) after"; fi
 
 # 9. Quit.
 key q
