@@ -51,6 +51,26 @@ class OpeningCase {
 
 }  // namespace
 
+Result<std::shared_ptr<VolumeEntry>> VpmService::LoadCaseVolume(const cases::CaseRecord& record,
+                                                                const std::string& user,
+                                                                const CancelToken& cancel) {
+  if (!record.source.starts_with("upload:")) {
+    return service_->volumes->Load(record.source, user, {}, cancel);
+  }
+  const auto blob = cases::BlobStore::ParseReference(record.source);
+  const auto path = blob && service_->blobs ? service_->blobs->Find(blob->first, blob->second)
+                                            : std::nullopt;
+  if (!path) {
+    return absl::FailedPreconditionError(
+        StrCat("case '", record.id, "': its volume was an upload this server does not keep; "
+               "upload it again and open a new session"));
+  }
+  ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
+                   service_->volumes->AddFile(*path, StrCat("upload:", blob->second), user));
+  volume->upload_ref = record.source;
+  return volume;
+}
+
 Status VpmService::StartCase(Session& session, const std::string& user) {
   if (service_->cases == nullptr) return absl::OkStatus();
   const VolumeEntry& volume = session.volume();
@@ -149,13 +169,7 @@ grpc::ServerUnaryReactor* VpmService::OpenCase(grpc::CallbackServerContext* cont
       FillSessionInfo(*open, user, response);
       return absl::OkStatus();
     }
-    if (record.source.starts_with("upload:")) {
-      return absl::FailedPreconditionError(
-          StrCat("case '", record.id, "': its volume was an upload this server no longer holds; "
-                 "upload it again and open a new session"));
-    }
-    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume,
-                     service_->volumes->Load(record.source, user, {}, cancel));
+    ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> volume, LoadCaseVolume(record, user, cancel));
     v3::MeshParams api_params;
     if (!api_params.ParseFromString(record.mesh_params)) {
       return absl::DataLossError(StrCat("case '", record.id, "': its mesh parameters are unreadable"));

@@ -134,9 +134,10 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                "(off by default)")
       ->capture_default_str();
   app.add_option("--state-dir", o->state_dir,
-                 "keep cases here (DIR/cases.sqlite, created if missing): every session is a "
-                 "case whose manipulations are stored as they are acknowledged, reopened after a "
-                 "restart with OpenCase (docs/CASES.md); empty: none are kept");
+                 "keep cases here (DIR/cases.sqlite, created if missing; with --state, only the "
+                 "uploads): every session is a case whose manipulations are stored as they are "
+                 "acknowledged, reopened after a restart with OpenCase (docs/CASES.md); uploads "
+                 "are kept in DIR/blobs for their cases; empty: none are kept");
   app.add_option("--state", o->state_url,
                  "keep cases in PostgreSQL instead (replicas share them): a libpq connection "
                  "string, postgresql://USER@HOST/DB or 'host=... dbname=...'; the password "

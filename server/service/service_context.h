@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "server/cases/blob_store.h"
 #include "server/cases/case_store.h"
 #include "server/pacs/pacs_gateway.h"
 #include "server/service/byte_budget.h"
@@ -36,7 +37,8 @@ struct ServiceContext {
   ByteBudget* upload_memory = nullptr;  // bytes of uploads in flight
   ByteBudget* upload_spool = nullptr;   // bytes of uploads bound for the spool's disk
   pacs::PacsGateway* pacs = nullptr;    // null without --pacs
-  cases::CaseStore* cases = nullptr;    // null without --state-dir
+  cases::CaseStore* cases = nullptr;    // null without --state-dir or --state
+  const cases::BlobStore* blobs = nullptr;  // uploads kept for cases; null without --state-dir
   // Health says NOT_SERVING (VpmServer::BeginDrain): calls on what exists go
   // on, calls that would create volumes, meshes or sessions are refused.
   std::atomic<bool> leaving{false};

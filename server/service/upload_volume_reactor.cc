@@ -4,6 +4,7 @@
 #include <cctype>
 #include <filesystem>
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
@@ -302,6 +303,7 @@ void UploadVolumeReactor::Complete() {
       std::vector<uint8_t>().swap(bytes_);
       ASSIGN_OR_RETURN(std::shared_ptr<VolumeEntry> entry,
                        service_->volumes->AddFile(path, StrCat("upload:", file_name_), user_));
+      KeepForCases(*entry, path);
       FillVolumeInfo(*entry, response_);
       return absl::OkStatus();
     }();
@@ -316,6 +318,18 @@ void UploadVolumeReactor::Complete() {
     return status;
   };
   FinishOnce(run());
+}
+
+void UploadVolumeReactor::KeepForCases(VolumeEntry& entry, const std::filesystem::path& file) {
+  if (service_->blobs == nullptr) return;
+  // Not kept (a full state disk): the upload stands, its case reopens only
+  // while the upload is held (OpenCase says so).
+  if (Status kept = service_->blobs->Put(sha256_hex_, file_name_, file); !kept.ok()) {
+    std::fprintf(stderr, "vpm-server: upload %s not kept for its cases: %s\n", entry.id.c_str(),
+                 kept.ToString().c_str());
+    return;
+  }
+  entry.upload_ref = cases::BlobStore::Reference(sha256_hex_, file_name_);
 }
 
 void UploadVolumeReactor::OnCancel() {

@@ -27,6 +27,7 @@
 #pragma once
 
 #include <chrono>
+#include <filesystem>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -67,6 +68,9 @@ class UploadVolumeReactor : public grpc::ServerReadReactor<v3::UploadVolumeReque
   Status TakeHeader(const v3::UploadVolumeRequest::Header& header);
   Status TakeChunk(const std::string& chunk);
   void Complete();  // on the request pool
+  // With --state-dir: the verified file kept content-addressed (BlobStore)
+  // and entry.upload_ref set, so that a case of this upload reopens.
+  void KeepForCases(VolumeEntry& entry, const std::filesystem::path& file);
   void FinishOnce(const Status& status);
 
   ServiceContext* service_;

@@ -199,7 +199,8 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
 std::string VolumeStore::ReloadSource(const VolumeEntry& volume) const {
   const std::string& key = volume.load_key;
   if (key.starts_with(kPacsKeyPrefix)) return std::string(PacsKeySource(key));
-  if (!key.starts_with("file:")) return key;  // phantom:..., or "" (an upload)
+  if (key.empty()) return volume.upload_ref;  // an upload: kept, or "" when not
+  if (!key.starts_with("file:")) return key;  // phantom:...
   Result<std::filesystem::path> root = CanonicalDataRoot(options_.data_root);
   if (!root.ok()) return "";
   return std::filesystem::path(key.substr(5)).lexically_relative(*root).string();

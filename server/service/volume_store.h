@@ -46,6 +46,10 @@ struct VolumeEntry {
   // The uploader; empty for a shared volume (loaded from the data root or a
   // phantom).
   std::string owner;
+  // An upload kept for its cases (cases::BlobStore::Reference,
+  // "upload:SHA256/NAME"); empty otherwise. Set once, before its id is
+  // answered.
+  std::string upload_ref;
   std::atomic<int32_t> sessions{0};  // sessions using it (VolumeHold)
   // The owners of those sessions, with how many each: a shared volume kept
   // loaded by a user's sessions takes one of that user's volume slots.
@@ -138,8 +142,8 @@ class VolumeStore {
   // evicted volume is read again (the errors of Load).
   Result<std::shared_ptr<VolumeEntry>> Get(std::string_view id, std::string_view user);
   // The Load source that reads `volume` again (what a case keeps):
-  // phantom:..., pacs:ENDPOINT/STUDY_UID/SERIES_UID, or the path under the
-  // data root; empty for an upload.
+  // phantom:..., pacs:ENDPOINT/STUDY_UID/SERIES_UID, the path under the
+  // data root, or an upload's upload_ref (empty when it was not kept).
   std::string ReloadSource(const VolumeEntry& volume) const;
   // A session's hold on `volume` for `owner`; ResourceExhausted when the
   // volume would be a new slot of `owner`'s (a shared volume none of their

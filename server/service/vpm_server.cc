@@ -61,23 +61,21 @@ Result<TokenAuth> MakeAuth(const ServerOptions& o) {
   return TokenAuth::Create(auth);
 }
 
-// The case store of --state-dir (SQLite; the folder is created) or --state
-// (PostgreSQL); null without either. The error names the flag and what is
+// The case store of --state (PostgreSQL) or else --state-dir (SQLite; the
+// folder is created, and keeps uploads for cases either way); null without
+// either. The error names the flag and what is
 // wrong, so that the server says so at start.
 Result<std::unique_ptr<cases::CaseStore>> OpenCaseStore(const ServerOptions& o) {
-  if (!o.state_url.empty()) {
-    if (!o.state_dir.empty()) {
-      return absl::InvalidArgumentError("--state and --state-dir: give one, not both");
+  if (!o.state_dir.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(o.state_dir, error);
+    if (error) {
+      return absl::FailedPreconditionError(
+          StrCat("--state-dir ", o.state_dir, ": cannot create it (", error.message(), ")"));
     }
-    return cases::OpenPostgresCaseStore(o.state_url);
   }
+  if (!o.state_url.empty()) return cases::OpenPostgresCaseStore(o.state_url);
   if (o.state_dir.empty()) return std::unique_ptr<cases::CaseStore>();
-  std::error_code error;
-  std::filesystem::create_directories(o.state_dir, error);
-  if (error) {
-    return absl::FailedPreconditionError(
-        StrCat("--state-dir ", o.state_dir, ": cannot create it (", error.message(), ")"));
-  }
   Result<std::unique_ptr<cases::CaseStore>> store =
       cases::OpenSqliteCaseStore(std::filesystem::path(o.state_dir) / "cases.sqlite");
   if (!store.ok()) return PrefixStatus(store.status(), StrCat("--state-dir ", o.state_dir));
@@ -190,6 +188,9 @@ Status VpmServer::Start() {
   }
   ASSIGN_OR_RETURN(volumes_, VolumeStore::Create(volume_options));
   ASSIGN_OR_RETURN(cases_, OpenCaseStore(o));
+  if (!o.state_dir.empty()) {
+    ASSIGN_OR_RETURN(blobs_, cases::BlobStore::Open(o.state_dir));
+  }
   ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes,
                                                [m = metrics_.get()](int64_t count) {
                                                  m->Meshes(count);
@@ -258,6 +259,7 @@ Status VpmServer::Start() {
   context_.load_progress = load_progress_.get();
   context_.pacs = pacs_.get();
   context_.cases = cases_.get();
+  context_.blobs = blobs_ ? &*blobs_ : nullptr;
   service_ = std::make_unique<VpmService>(&context_);
 
   grpc::EnableDefaultHealthCheckService(true);

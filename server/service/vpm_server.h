@@ -7,6 +7,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <memory>
+#include <optional>
 #include <mutex>
 #include <thread>
 
@@ -64,6 +65,7 @@ class VpmServer {
   std::unique_ptr<WorkerPool> render_pool_;
   std::unique_ptr<pacs::PacsGateway> pacs_;  // before volumes_: their reads call it
   std::unique_ptr<cases::CaseStore> cases_;  // before sessions_: they write to it
+  std::optional<cases::BlobStore> blobs_;    // --state-dir's uploads
   std::unique_ptr<VolumeStore> volumes_;
   std::unique_ptr<MeshStore> meshes_;
   std::unique_ptr<SessionManager> sessions_;

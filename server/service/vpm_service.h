@@ -166,6 +166,11 @@ class VpmService final : public v3::Vpm::CallbackService {
   // otherwise, the same answer as for a missing case.
   Result<cases::CaseRecord> FindCase(const std::string& id, const std::string& user,
                                      bool owner_only) const;
+  // The volume of a case: Load of its source, or its kept upload
+  // (BlobStore) read again as the caller's.
+  Result<std::shared_ptr<VolumeEntry>> LoadCaseVolume(const cases::CaseRecord& record,
+                                                      const std::string& user,
+                                                      const CancelToken& cancel);
   // The session open on case `id` for its owner, if any.
   std::shared_ptr<Session> OpenSessionOf(const std::string& id, const std::string& owner) const;
   void FillCaseInfo(const cases::CaseRecord& record, const std::string& user,

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "server/common/sha256.h"
 #include "server/raycast/frame_encoder.h"
 #include "server/service/users_file.h"
 #include "tests/service/service_test_util.h"
@@ -157,6 +158,38 @@ TEST_F(CasesTest, ACaseReopensAfterARestartWithTheSameDeformationAndFrame) {
   ASSERT_TRUE(stub_->OpenCase(Context(kAlice).get(), open, &again).ok());
   EXPECT_EQ(again.session_id(), reopened.session_id());
   EXPECT_EQ(GetCase(case_id, kAlice).session_id(), reopened.session_id());
+}
+
+TEST_F(CasesTest, ACaseOfAnUploadReopensAfterARestartFromTheKeptFile) {
+  const std::vector<uint8_t> bytes = NiftiBytes();
+  v3::VolumeInfo volume;
+  ASSERT_TRUE(Upload(bytes, int64_t(bytes.size()), Sha256::HexOf(bytes), 64 << 10, &volume, true,
+                     kAlice)
+                  .ok());
+  const std::string session = Plan(volume);
+  const double planned = Still(session).max_displacement_mm();
+  v3::GetSessionRequest get;
+  get.set_session_id(session);
+  v3::SessionInfo info;
+  ASSERT_TRUE(stub_->GetSession(Context(kAlice).get(), get, &info).ok());
+  const v3::CaseInfo kept = GetCase(info.case_id(), kAlice);
+  EXPECT_EQ(kept.source(), "upload:" + Sha256::HexOf(bytes) + "/case.nii");
+  // Content-addressed: the file is there once, under its hash.
+  EXPECT_TRUE(fs::is_regular_file(dir_ / "state" / "blobs" / Sha256::HexOf(bytes) / "case.nii"));
+
+  Restart();
+  v3::OpenCaseRequest open;
+  open.set_case_id(info.case_id());
+  v3::SessionInfo reopened;
+  const grpc::Status status = stub_->OpenCase(Context(kAlice).get(), open, &reopened);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_NEAR(Still(reopened.session_id()).max_displacement_mm(), planned, 1e-3);
+  // The volume it reads is Alice's own, as her upload was.
+  v3::GetVolumeRequest volume_request;
+  volume_request.set_volume_id(reopened.volume_id());
+  v3::VolumeInfo read_again;
+  EXPECT_EQ(stub_->GetVolume(Context(kBob).get(), volume_request, &read_again).error_code(),
+            grpc::NOT_FOUND);
 }
 
 TEST_F(CasesTest, UndoTakesBackTheLastActionAndRedoBringsItBack) {
