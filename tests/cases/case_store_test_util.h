@@ -17,6 +17,17 @@
 
 namespace vpm::cases {
 
+// A case and ops the tests store.
+inline CaseRecord Record(const std::string& id, const std::string& owner) {
+  return {.id = id, .owner = owner, .title = "left kidney", .source = "ct/abdomen.nii.gz",
+          .mesh_params = std::string("\x10\x20\0\xff", 4)};
+}
+inline SceneOp Grab(double x) {
+  return {.kind = SceneOp::Kind::kGrab, .grab = {.point_mm = {x, 2.0, 3.0}, .radius_mm = 4.5}};
+}
+inline SceneOp Drag(double z) { return {.kind = SceneOp::Kind::kDrag, .vector = {0, 0, z}}; }
+inline SceneOp Release(bool keep) { return {.kind = SceneOp::Kind::kRelease, .keep = keep}; }
+
 enum class Backend { kSqlite, kPostgres };
 
 inline std::string BackendName(const ::testing::TestParamInfo<Backend>& info) {
@@ -70,16 +81,6 @@ class CaseStoreFixture : public ::testing::TestWithParam<Backend> {
     EXPECT_TRUE(rows.ok()) << rows.status();
     return rows.ok() && !rows->empty() ? SqlInt((*rows)[0][0]) : -1;
   }
-
-  static CaseRecord Record(const std::string& id, const std::string& owner) {
-    return {.id = id, .owner = owner, .title = "left kidney", .source = "ct/abdomen.nii.gz",
-            .mesh_params = std::string("\x10\x20\0\xff", 4)};
-  }
-  static SceneOp Grab(double x) {
-    return {.kind = SceneOp::Kind::kGrab, .grab = {.point_mm = {x, 2.0, 3.0}, .radius_mm = 4.5}};
-  }
-  static SceneOp Drag(double z) { return {.kind = SceneOp::Kind::kDrag, .vector = {0, 0, z}}; }
-  static SceneOp Release(bool keep) { return {.kind = SceneOp::Kind::kRelease, .keep = keep}; }
 
   std::filesystem::path dir_;
   std::string conninfo_;

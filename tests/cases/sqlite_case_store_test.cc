@@ -13,42 +13,17 @@
 
 #include "server/cases/case_schema.h"
 #include "server/cases/sqlite_handle.h"
+#include "tests/cases/case_store_test_util.h"
 
 namespace vpm::cases {
 namespace {
 
 namespace fs = std::filesystem;
 
-class SqliteCaseStoreTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("vpm-case-store-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path file() const { return dir_ / "cases.sqlite"; }
-  std::unique_ptr<CaseStore> Open() {
-    auto store = OpenSqliteCaseStore(file());
-    EXPECT_TRUE(store.ok()) << store.status();
-    return store.ok() ? std::move(*store) : nullptr;
-  }
-  static CaseRecord Record(const std::string& id, const std::string& owner) {
-    return {.id = id, .owner = owner, .title = "left kidney", .source = "ct/abdomen.nii.gz",
-            .mesh_params = std::string("\x10\x20\0", 3)};
-  }
-  static SceneOp Grab(double x) {
-    return {.kind = SceneOp::Kind::kGrab, .grab = {.point_mm = {x, 2.0, 3.0}, .radius_mm = 4.5}};
-  }
-  static SceneOp Drag(double z) { return {.kind = SceneOp::Kind::kDrag, .vector = {0, 0, z}}; }
-  static SceneOp Release(bool keep) { return {.kind = SceneOp::Kind::kRelease, .keep = keep}; }
+// The contract's fixture, on SQLite only.
+using SqliteCaseStoreTest = CaseStoreFixture;
 
-  fs::path dir_;
-};
-
-TEST_F(SqliteCaseStoreTest, ADamagedOrUnwritableDatabaseIsRefusedWithTheReason) {
+TEST_P(SqliteCaseStoreTest, ADamagedOrUnwritableDatabaseIsRefusedWithTheReason) {
   std::ofstream(file()) << std::string(8192, 'x');  // not a database
   auto damaged = OpenSqliteCaseStore(file());
   EXPECT_EQ(damaged.status().code(), absl::StatusCode::kDataLoss) << damaged.status();
@@ -59,7 +34,7 @@ TEST_F(SqliteCaseStoreTest, ADamagedOrUnwritableDatabaseIsRefusedWithTheReason) 
   EXPECT_NE(nowhere.status().message().find("case store"), std::string::npos);
 }
 
-TEST_F(SqliteCaseStoreTest, ALockedDatabaseRefusesTheEventAndKeepsWhatItHad) {
+TEST_P(SqliteCaseStoreTest, ALockedDatabaseRefusesTheEventAndKeepsWhatItHad) {
   auto store = OpenSqliteCaseStore(file(), {.busy_timeout_ms = 50});
   ASSERT_TRUE(store.ok());
   ASSERT_TRUE((*store)->Create(Record("c", "alice")).ok());
@@ -78,7 +53,7 @@ TEST_F(SqliteCaseStoreTest, ALockedDatabaseRefusesTheEventAndKeepsWhatItHad) {
 // A full disk, as a file size limit (RLIMIT_FSIZE, SIGXFSZ ignored: writes
 // past it fail with EFBIG): the event is refused with ResourceExhausted,
 // nothing of it is stored, and once there is room again events are stored.
-TEST_F(SqliteCaseStoreTest, AFullDiskRefusesTheEventWholeAndTheStoreGoesOnAfterwards) {
+TEST_P(SqliteCaseStoreTest, AFullDiskRefusesTheEventWholeAndTheStoreGoesOnAfterwards) {
   auto store = Open();
   ASSERT_TRUE(store);
   ASSERT_TRUE(store->Create(Record("c", "alice")).ok());
@@ -113,6 +88,9 @@ TEST_F(SqliteCaseStoreTest, AFullDiskRefusesTheEventWholeAndTheStoreGoesOnAfterw
   ASSERT_TRUE(again);
   EXPECT_EQ(int(again->Events("c")->size()), 2 + stored);
 }
+
+INSTANTIATE_TEST_SUITE_P(Sqlite, SqliteCaseStoreTest, ::testing::Values(Backend::kSqlite),
+                         BackendName);
 
 }  // namespace
 }  // namespace vpm::cases
