@@ -1,6 +1,8 @@
 // Cases through the API of an in-process server with --state-dir: every
 // session is a case, stored as it is made, reopened after a restart with the
 // same deformation and frame, undone and redone, shared, deleted.
+#include <signal.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -342,6 +344,66 @@ TEST_F(CasesTest, AnExportedCaseImportsAsANewCaseWithTheSameDeformation) {
   v3::ListCasesResponse bobs_cases;
   ASSERT_TRUE(stub_->ListCases(Context(kBob).get(), {}, &bobs_cases).ok());
   EXPECT_EQ(bobs_cases.cases_size(), 1);
+}
+
+// A full disk (a file size limit on the process, SIGXFSZ ignored) while
+// the surgeon drags: the event that cannot be stored is refused with
+// RESOURCE_EXHAUSTED, the session goes back to what the case holds, and a
+// restart reopens exactly that.
+TEST_F(CasesTest, AnEventTheDiskCannotHoldIsRefusedAndTheSessionKeepsWhatIsStored) {
+  const v3::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const v3::SessionInfo opened = OpenSession(volume.volume_id(), kAlice);
+  const std::string session = opened.session_id();
+  ASSERT_TRUE(Manipulate(session, Grab(Centre(volume))).ok());
+  ASSERT_TRUE(Manipulate(session, Drag(0, 0, 2)).ok());
+  const fs::path wal = dir_ / "state" / "cases.sqlite-wal";
+  ASSERT_TRUE(fs::exists(wal));
+  rlimit old{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old), 0);
+  signal(SIGXFSZ, SIG_IGN);
+  rlimit limited = old;
+  limited.rlim_cur = fs::file_size(wal) + 16 * 1024;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &limited), 0);
+  int acknowledged = 2;
+  grpc::Status refused;
+  for (int i = 3; i <= 400; ++i) {
+    refused = Manipulate(session, Drag(0, 0, 2 + 0.02 * i));
+    if (!refused.ok()) break;
+    ++acknowledged;
+  }
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &old), 0);
+  signal(SIGXFSZ, SIG_DFL);
+  std::printf("disk full after %d acknowledged events: %s\n", acknowledged,
+              refused.error_message().c_str());
+  ASSERT_EQ(refused.error_code(), grpc::RESOURCE_EXHAUSTED) << refused.error_message();
+  EXPECT_NE(refused.error_message().find("was not applied"), std::string::npos);
+  EXPECT_EQ(GetCase(opened.case_id(), kAlice).events(), acknowledged);
+  const double live = Still(session).max_displacement_mm();
+  // Room again: the plan goes on, and the case holds it.
+  ASSERT_TRUE(Manipulate(session, Release(true)).ok());
+  const double kept = Still(session).max_displacement_mm();
+  Restart();
+  v3::OpenCaseRequest open;
+  open.set_case_id(opened.case_id());
+  v3::SessionInfo reopened;
+  ASSERT_TRUE(stub_->OpenCase(Context(kAlice).get(), open, &reopened).ok());
+  EXPECT_EQ(GetCase(opened.case_id(), kAlice).events(), acknowledged + 1 /* the release */);
+  EXPECT_NEAR(Still(reopened.session_id()).max_displacement_mm(), kept, 1e-3);
+  EXPECT_GT(live, 0.5);
+}
+
+TEST(CasesOff, AServerWithADamagedCaseDatabaseDoesNotStartAndSaysWhy) {
+  const fs::path dir = fs::temp_directory_path() / ("vpm-cases-damaged-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "cases.sqlite") << std::string(8192, 'x');
+  ServerOptions options = SmallServerOptions();
+  options.state_dir = dir.string();
+  auto server = VpmServer::Create(options, SharedGpu());
+  ASSERT_FALSE(server.ok());
+  EXPECT_EQ(server.status().code(), absl::StatusCode::kDataLoss) << server.status();
+  EXPECT_NE(server.status().message().find("--state-dir"), std::string::npos) << server.status();
+  EXPECT_NE(server.status().message().find("damaged"), std::string::npos) << server.status();
+  fs::remove_all(dir);
 }
 
 TEST(CasesOff, WithoutAStateDirThereAreNoCasesAndSessionsWorkAsBefore) {
