@@ -69,6 +69,19 @@ Status BlobStore::Put(std::string_view sha256_hex, std::string_view name,
   return absl::InternalError(why);
 }
 
+Status BlobStore::Remove(std::string_view sha256_hex, std::string_view name) const {
+  RETURN_IF_ERROR(CheckKey(sha256_hex, name));
+  const fs::path folder = root_ / std::string(sha256_hex);
+  std::error_code error;
+  fs::remove(folder / std::string(name), error);
+  if (error) {
+    return absl::InternalError(
+        StrCat("blob store: could not remove a kept upload (", error.message(), ")"));
+  }
+  fs::remove(folder, error);  // only when empty: another name of the same bytes stays
+  return absl::OkStatus();
+}
+
 std::optional<fs::path> BlobStore::Find(std::string_view sha256_hex, std::string_view name) const {
   if (!CheckKey(sha256_hex, name).ok()) return std::nullopt;
   const fs::path target = root_ / std::string(sha256_hex) / std::string(name);

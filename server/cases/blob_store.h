@@ -25,6 +25,9 @@ class BlobStore {
   // disk is full (nothing is left behind).
   Status Put(std::string_view sha256_hex, std::string_view name,
              const std::filesystem::path& file) const;
+  // Removes the stored file (and its hash's folder once empty); OK when it
+  // was not there.
+  Status Remove(std::string_view sha256_hex, std::string_view name) const;
   // The stored file, if any.
   std::optional<std::filesystem::path> Find(std::string_view sha256_hex,
                                             std::string_view name) const;

@@ -46,6 +46,8 @@ class CaseStore {
   virtual Status Share(std::string_view id, const std::string& user, bool revoke) = 0;
   // The case and everything stored of it.
   virtual Status Delete(std::string_view id) = 0;
+  // How many cases keep `source` (a kept upload is removed with its last).
+  virtual Result<int64_t> CountWithSource(std::string_view source) = 0;
 };
 
 }  // namespace vpm::cases

@@ -199,6 +199,12 @@ class SqlCaseStore final : public CaseStore {
                      "delete the case");
   }
 
+  Result<int64_t> CountWithSource(std::string_view source) override {
+    std::lock_guard lock(mutex_);
+    return Scalar("SELECT count(*) FROM cases WHERE source = $1", {Text(source)},
+                  "count the cases of a source");
+  }
+
  private:
   // Commits when `result` is OK, else rolls back and returns its error.
   template <typename T>

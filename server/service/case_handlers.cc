@@ -71,6 +71,14 @@ Result<std::shared_ptr<VolumeEntry>> VpmService::LoadCaseVolume(const cases::Cas
   return volume;
 }
 
+Status VpmService::ForgetKeptUpload(const std::string& source) {
+  const auto blob = cases::BlobStore::ParseReference(source);
+  if (!blob || service_->blobs == nullptr) return absl::OkStatus();
+  ASSIGN_OR_RETURN(const int64_t others, service_->cases->CountWithSource(source));
+  if (others > 0) return absl::OkStatus();
+  return service_->blobs->Remove(blob->first, blob->second);
+}
+
 Status VpmService::StartCase(Session& session, const std::string& user) {
   if (service_->cases == nullptr) return absl::OkStatus();
   const VolumeEntry& volume = session.volume();
@@ -230,7 +238,8 @@ grpc::ServerUnaryReactor* VpmService::DeleteCase(grpc::CallbackServerContext* co
           open->id(), "", grpc::Status(grpc::PERMISSION_DENIED, "the case was deleted by its owner"));
       service_->sessions->Close(open->id(), user).IgnoreError();
     }
-    return service_->cases->Delete(record.id);
+    RETURN_IF_ERROR(service_->cases->Delete(record.id));
+    return ForgetKeptUpload(record.source);
   });
 }
 

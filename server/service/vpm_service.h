@@ -171,6 +171,8 @@ class VpmService final : public v3::Vpm::CallbackService {
   Result<std::shared_ptr<VolumeEntry>> LoadCaseVolume(const cases::CaseRecord& record,
                                                       const std::string& user,
                                                       const CancelToken& cancel);
+  // A deleted case's kept upload, once no case keeps it.
+  Status ForgetKeptUpload(const std::string& source);
   // The session open on case `id` for its owner, if any.
   std::shared_ptr<Session> OpenSessionOf(const std::string& id, const std::string& owner) const;
   void FillCaseInfo(const cases::CaseRecord& record, const std::string& user,

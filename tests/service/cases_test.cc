@@ -192,6 +192,12 @@ TEST_F(CasesTest, ACaseOfAnUploadReopensAfterARestartFromTheKeptFile) {
   v3::VolumeInfo read_again;
   EXPECT_EQ(stub_->GetVolume(Context(kBob).get(), volume_request, &read_again).error_code(),
             grpc::NOT_FOUND);
+  // Deleting the case deletes the kept file: it was the case's data.
+  v3::DeleteCaseRequest remove;
+  remove.set_case_id(info.case_id());
+  v3::DeleteCaseResponse removed;
+  ASSERT_TRUE(stub_->DeleteCase(Context(kAlice).get(), remove, &removed).ok());
+  EXPECT_FALSE(fs::exists(dir_ / "state" / "blobs" / Sha256::HexOf(bytes)));
 }
 
 TEST_F(CasesTest, UndoTakesBackTheLastActionAndRedoBringsItBack) {
