@@ -37,41 +37,96 @@ void InteractConnection::Stop() {
   events_.Close();
   CancelStream();
   if (thread_.joinable()) thread_.join();
-  if (undo_thread_.joinable()) undo_thread_.join();
+  if (call_thread_.joinable()) call_thread_.join();
+}
+
+bool InteractConnection::RunAsync(const char* what, std::function<std::string()> call) {
+  if (calling_.exchange(true)) {
+    std::lock_guard lock(mutex_);
+    notice_ = StrCat(what, ": the last call still runs");
+    return false;
+  }
+  if (call_thread_.joinable()) call_thread_.join();
+  call_thread_ = std::thread([this, call = std::move(call)] {
+    std::string text = server_ ? call() : "not connected";
+    {
+      std::lock_guard lock(mutex_);
+      if (!text.empty()) notice_ = std::move(text);
+    }
+    calling_ = false;
+    wake_();
+  });
+  return true;
 }
 
 void InteractConnection::Undo(bool redo) {
-  const char* what = redo ? "redo" : "undo";
-  if (undoing_.exchange(true)) {
-    std::lock_guard lock(mutex_);
-    notice_ = StrCat(what, ": the last one still runs");
-    return;
-  }
-  if (undo_thread_.joinable()) undo_thread_.join();
   const std::string session_id = state().session_id;
-  undo_thread_ = std::thread([this, redo, what, session_id] {
+  RunAsync(redo ? "redo" : "undo", [this, redo, session_id] {
+    const char* what = redo ? "redo" : "undo";
     v3::UndoRequest request;
     request.set_session_id(session_id);
     request.set_redo(redo);
     v3::UndoResponse response;
-    const Status status = server_ ? Call(&v3::Vpm::Stub::Undo, request, &response)
-                                  : absl::UnavailableError("not connected");
-    std::string text;
-    if (!status.ok()) {
-      text = StrCat(what, ": ", status.message());
-    } else if (!response.changed()) {
-      text = StrCat("nothing to ", what);
-    } else {
-      text = StrCat(redo ? "redone" : "undone", ": ", response.events(), " events, ",
-                    response.undone(), " undone");
-    }
-    {
-      std::lock_guard lock(mutex_);
-      notice_ = std::move(text);
-    }
-    undoing_ = false;
-    wake_();
+    const Status status = Call(&v3::Vpm::Stub::Undo, request, &response);
+    if (!status.ok()) return StrCat(what, ": ", status.message());
+    if (!response.changed()) return StrCat("nothing to ", what);
+    return StrCat(redo ? "redone" : "undone", ": ", response.events(), " events, ",
+                  response.undone(), " undone");
   });
+}
+
+void InteractConnection::ListCases() {
+  RunAsync("cases", [this] {
+    v3::ListCasesResponse response;
+    Status status = Call(&v3::Vpm::Stub::ListCases, v3::ListCasesRequest(), &response);
+    std::lock_guard lock(mutex_);
+    if (status.ok()) {
+      cases_ = std::vector<v3::CaseInfo>(response.cases().begin(), response.cases().end());
+    } else {
+      cases_ = status;
+    }
+    return std::string();
+  });
+}
+
+void InteractConnection::RenameCase(const std::string& case_id, const std::string& title) {
+  RunAsync("rename", [this, case_id, title] {
+    v3::UpdateCaseRequest request;
+    request.set_case_id(case_id);
+    request.set_title(title);
+    v3::CaseInfo info;
+    const Status status = Call(&v3::Vpm::Stub::UpdateCase, request, &info);
+    return status.ok() ? StrCat("case renamed ", case_id, " ", info.title())
+                       : StrCat("rename: ", status.message());
+  });
+}
+
+void InteractConnection::DeleteCase(const std::string& case_id) {
+  RunAsync("delete", [this, case_id] {
+    v3::DeleteCaseRequest request;
+    request.set_case_id(case_id);
+    v3::DeleteCaseResponse response;
+    const Status status = Call(&v3::Vpm::Stub::DeleteCase, request, &response);
+    return status.ok() ? StrCat("case deleted ", case_id) : StrCat("delete: ", status.message());
+  });
+}
+
+void InteractConnection::SwitchToCase(const std::string& case_id) {
+  {
+    std::lock_guard lock(mutex_);
+    if (case_id == state_.case_id && !state_.session_id.empty()) return;
+    state_.case_id = case_id;
+    state_.session_id.clear();  // ResolveSession opens the case
+    session_opened_here_ = false;
+  }
+  CancelStream();
+}
+
+std::optional<Result<std::vector<v3::CaseInfo>>> InteractConnection::TakeCases() {
+  std::lock_guard lock(mutex_);
+  std::optional<Result<std::vector<v3::CaseInfo>>> cases = std::move(cases_);
+  cases_.reset();
+  return cases;
 }
 
 std::optional<std::string> InteractConnection::TakeNotice() {

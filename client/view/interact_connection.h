@@ -72,11 +72,20 @@ class InteractConnection {
   void RefineAt(const glm::dvec3& point_mm);
 
   // Undo (redo = false) or redo the session's last action, off the caller's
-  // thread; its outcome comes back through TakeNotice. A press while one
+  // thread; its outcome comes back through TakeNotice. A press while a call
   // runs is refused with a notice.
   void Undo(bool redo);
-  // What the last undo or redo did (or why not), once.
+  // The cases panel's calls, off the caller's thread as Undo: ListCases
+  // (the list through TakeCases), UpdateCase (title), DeleteCase.
+  void ListCases();
+  void RenameCase(const std::string& case_id, const std::string& title);
+  void DeleteCase(const std::string& case_id);
+  // Ends the stream and streams from `case_id`'s session (OpenCase).
+  void SwitchToCase(const std::string& case_id);
+  // What the last call did (or why not), once.
   std::optional<std::string> TakeNotice();
+  // The newest ListCases answer (or its error), once.
+  std::optional<Result<std::vector<v3::CaseInfo>>> TakeCases();
 
   // The newest frame since the last call, if any.
   std::optional<ShownFrame> TakeFrame();
@@ -119,9 +128,14 @@ class InteractConnection {
   FrameRateMeter frame_rate_;
   grpc::ClientContext* context_ = nullptr;  // of the live stream
 
+  // Runs `call` on a thread of its own (one at a time); its text becomes
+  // the notice. False (and a notice) when one still runs.
+  bool RunAsync(const char* what, std::function<std::string()> call);
+
   std::optional<std::string> notice_;
-  std::thread undo_thread_;             // the running undo or redo, if any
-  std::atomic<bool> undoing_{false};
+  std::optional<Result<std::vector<v3::CaseInfo>>> cases_;
+  std::thread call_thread_;             // the running Undo or case call, if any
+  std::atomic<bool> calling_{false};
 
   std::atomic<bool> stopping_{false};
   std::atomic<bool> stream_ended_{false};

@@ -26,6 +26,8 @@ std::string Padded(std::string text) {
 std::span<const KeyBinding> KeyBindings() {
   static const std::vector<KeyBinding> kBindings = {
       {{"F1", "H"}, Action::kToggleHelp, "show or hide this help"},
+      {{"F2"}, Action::kToggleCases,
+       "cases: mine and those shared with me; Up/Down, Return opens, R renames, Delete x2"},
       {{"G"}, Action::kToggleGrabMode, "grab mode on/off: left drag pulls tissue"},
       {{"1"}, Action::kPresetSoftTissue, "DVR preset ct-soft-tissue"},
       {{"2"}, Action::kPresetBone, "DVR preset ct-bone"},

@@ -13,6 +13,7 @@ namespace vpm::view {
 
 enum class Action {
   kToggleHelp,
+  kToggleCases,
   kToggleGrabMode,
   kPresetSoftTissue,
   kPresetBone,

@@ -90,6 +90,10 @@ void ViewerApp::HandleEvent(const SDL_Event& e) {
       }
       break;
     case SDL_KEYDOWN: {
+      if (show_cases_) {  // the panel takes the keys while it shows
+        OnCasePanelKey(SDL_GetKeyName(e.key.keysym.sym));
+        break;
+      }
       const SDL_Keymod mod = SDL_GetModState();
       const std::string key = KeyNameWithModifiers(SDL_GetKeyName(e.key.keysym.sym),
                                                    (mod & (KMOD_CTRL | KMOD_GUI)) != 0,
@@ -97,6 +101,15 @@ void ViewerApp::HandleEvent(const SDL_Event& e) {
       if (auto action = ActionForKey(key)) OnAction(*action);
       break;
     }
+    case SDL_TEXTINPUT:
+      if (show_cases_ && case_panel_.renaming()) {
+        if (skip_text_) {
+          skip_text_ = false;
+        } else {
+          case_panel_.OnText(e.text.text);
+        }
+      }
+      break;
     case SDL_MOUSEBUTTONDOWN:
       OnButtonDown(e.button);
       break;
@@ -129,6 +142,7 @@ void ViewerApp::OnAction(Action action) {
   };
   switch (action) {
     case Action::kToggleHelp: show_help_ = !show_help_; break;
+    case Action::kToggleCases: ToggleCases(); break;
     case Action::kToggleGrabMode:
       grab_mode_ = !grab_mode_;
       Notice(grab_mode_ ? "grab mode: left drag pulls tissue" : "grab mode off: left drag orbits");
@@ -390,7 +404,7 @@ void ViewerApp::PollConnection() {
       SendCamera();
     }
   }
-  if (std::optional<std::string> notice = connection_->TakeNotice()) Notice(*std::move(notice));
+  PollCases();
   if (std::optional<ShownFrame> frame = connection_->TakeFrame()) {
     window_->SetFrame(frame->image);
     const SDL_Rect before = window_->FrameArea();
@@ -532,6 +546,7 @@ void ViewerApp::Paint() {
                       grabbed_};
   for (const std::string& line : StatusLines(status)) in.status_lines.push_back(line);
   in.show_help = show_help_;
+  if (show_cases_) in.panel_lines = case_panel_.Lines(window_->TextColumns());
   if (!state.connected) in.message = state.message;
   if (SteadyClock::now() < notice_until_) in.notice = notice_;
   if (crop_mode_ && camera_ && geometry_) {
@@ -578,6 +593,59 @@ void ViewerApp::SendSettings() {
     std::printf("%s\n", line.c_str());
     std::fflush(stdout);
   }
+}
+
+void ViewerApp::ToggleCases() {
+  show_cases_ = !show_cases_;
+  if (!show_cases_) return;
+  case_panel_.Clear();
+  connection_->ListCases();
+}
+
+void ViewerApp::OnCasePanelKey(std::string_view key) {
+  const bool was_renaming = case_panel_.renaming();
+  const CasePanelRequest request = case_panel_.OnKey(key);
+  if (case_panel_.renaming() && !was_renaming) {
+    SDL_StartTextInput();
+    skip_text_ = true;
+  }
+  if (!case_panel_.renaming() && was_renaming) skip_text_ = false;
+  switch (request.kind) {
+    case CasePanelRequest::Kind::kNone: break;
+    case CasePanelRequest::Kind::kClose: show_cases_ = false; break;
+    case CasePanelRequest::Kind::kOpen:
+      show_cases_ = false;
+      // Another case may be another volume: the view starts from its own.
+      camera_.reset();
+      volume_id_.clear();
+      connection_->SwitchToCase(request.case_id);
+      Notice("opening case " + request.case_id);
+      break;
+    case CasePanelRequest::Kind::kRename:
+      connection_->RenameCase(request.case_id, request.title);
+      break;
+    case CasePanelRequest::Kind::kDelete: connection_->DeleteCase(request.case_id); break;
+  }
+}
+
+void ViewerApp::PollCases() {
+  if (auto cases = connection_->TakeCases()) {
+    if (cases->ok()) {
+      if (flags_.connection.log_frames) std::printf("cases %zu\n", (*cases)->size());
+      case_panel_.SetCases(**std::move(cases), connection_->state().case_id);
+    } else {
+      case_panel_.SetError(std::string(cases->status().message()));
+    }
+  }
+  if (std::optional<std::string> notice = connection_->TakeNotice()) {
+    if (flags_.connection.log_frames) std::printf("notice %s\n", notice->c_str());
+    // A rename or a delete changed the list: ask for it again.
+    if (show_cases_ && (notice->starts_with("case renamed") || notice->starts_with("case deleted"))) {
+      connection_->ListCases();
+    }
+    Notice(*std::move(notice));
+  }
+  std::fflush(stdout);
 }
 
 void ViewerApp::Notice(std::string text) {

@@ -11,6 +11,7 @@
 
 #include <SDL.h>
 
+#include "client/view/case_panel.h"
 #include "client/view/clip_plane_drag.h"
 #include "client/view/crop_box_drag.h"
 #include "client/view/interact_connection.h"
@@ -55,6 +56,11 @@ class ViewerApp {
   // The crop face under the window point, in crop mode.
   std::optional<BoxFace> FaceAt(int window_x, int window_y) const;
   void SaveScreenshot();
+  // The cases panel (F2): shown or hidden; its keys and typed text; the
+  // list and the outcomes of its calls.
+  void ToggleCases();
+  void OnCasePanelKey(std::string_view key);
+  void PollCases();
   void PollConnection();
   void Paint();
   void SendCamera();
@@ -95,6 +101,9 @@ class ViewerApp {
   std::optional<VolumeGeometry> geometry_;
   bool grabbed_ = false;  // the server holds a grab of ours
   bool show_help_ = false;
+  bool show_cases_ = false;
+  CasePanel case_panel_;
+  bool skip_text_ = false;  // the key that starts a rename types a letter too
 
   std::optional<v3::Frame> frame_info_;
   double fps_ = 0;

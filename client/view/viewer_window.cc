@@ -171,7 +171,8 @@ void ViewerWindow::Paint(const PaintInputs& in) {
     text_->Draw(kPad, area.h + kPad + int(i) * kLineHeight, in.status_lines[i],
                 {220, 220, 220, 255});
   }
-  if (in.show_help) PaintHelp();
+  if (in.show_help) PaintPanel(HelpLines(), {255, 230, 120, 255});
+  if (!in.panel_lines.empty()) PaintPanel(in.panel_lines, {200, 235, 255, 255});
   if (!in.notice.empty()) PaintBanner(in.notice, {60, 60, 70, 230}, area.h - 2 * kLineHeight);
   if (!in.message.empty()) PaintBanner(in.message, {170, 20, 20, 235}, area.h / 2 - kLineHeight);
   SDL_RenderPresent(renderer_);
@@ -211,15 +212,18 @@ void ViewerWindow::PaintBanner(const std::string& text, SDL_Color fill, int y) {
   }
 }
 
-void ViewerWindow::PaintHelp() {
+void ViewerWindow::PaintPanel(const std::vector<std::string>& lines, SDL_Color color) {
   const SDL_Rect area = FrameArea();
-  const std::vector<std::string> lines = HelpLines();
   SDL_Rect panel{0, 0, area.w, std::min(area.h, int(lines.size()) * kLineHeight + 2 * kPad)};
   SDL_SetRenderDrawColor(renderer_, 0, 0, 0, 200);
   SDL_RenderFillRect(renderer_, &panel);
   for (size_t i = 0; i < lines.size(); ++i) {
-    text_->Draw(kPad, kPad + int(i) * kLineHeight, lines[i], {255, 230, 120, 255});
+    text_->Draw(kPad, kPad + int(i) * kLineHeight, lines[i], color);
   }
+}
+
+size_t ViewerWindow::TextColumns() const {
+  return size_t(std::max(8, (FrameArea().w - 2 * kPad) / kGlyphAdvance));
 }
 
 Result<DecodedImage> ViewerWindow::ReadPixels() const {

@@ -22,6 +22,8 @@ int StatusBarHeight();
 struct PaintInputs {
   std::vector<std::string> status_lines;
   bool show_help = false;
+  // The cases panel (F2) while shown: its lines, drawn over the frame.
+  std::vector<std::string> panel_lines;
   std::string message;  // shown in a red banner when not empty (connection lost, errors)
   std::string notice;   // shown briefly in a grey banner (screenshot saved, ...)
   // Lines over the 3D frame, frame pixels (the crop box's outline): on_face
@@ -57,6 +59,8 @@ class ViewerWindow {
   // The frame area (window minus the status bar; its top-left quarter
   // while slices show), window pixels.
   SDL_Rect FrameArea() const;
+  // Characters of the panel font that fit across the frame area.
+  size_t TextColumns() const;
   // Where the current frame is drawn (aspect kept, centred in the area).
   SDL_Rect FrameRect() const;
   // Window pixel -> pixel of the current frame; empty outside it.
@@ -73,7 +77,8 @@ class ViewerWindow {
  private:
   ViewerWindow() = default;
   void PaintBanner(const std::string& text, SDL_Color fill, int y);
-  void PaintHelp();
+  // Lines over the top of the frame area on a dark panel.
+  void PaintPanel(const std::vector<std::string>& lines, SDL_Color color);
   void PaintFrameLines(const std::vector<ScreenSegment>& lines);
   // Where slice i is drawn (cells 1..3 of the 2 x 2 grid, aspect kept).
   SDL_Rect SliceRect(size_t i) const;

@@ -377,6 +377,50 @@ if grep -q 'vpm-view: case case-[0-9a-f]* open in session' "$tmp/view.err" &&
   pass "reopened its case after the restart (max_displacement_mm $before_kill before, $(last_displacement) after)"
 else fail "after the restart: case reopened? $(grep -c 'open in session' "$tmp/view.err"); max_displacement_mm $before_kill before, $(last_displacement) after"; fi
 
+# 8b. F2: the cases panel lists my cases; R renames the viewer's case,
+# Return opens another (the viewer moves to its session), Delete twice
+# deletes one. Checked against the server with the vpm command line.
+vpm_cli() { VPM_TOKEN="$token" "$build/client/vpm" --server "127.0.0.1:$port" "$@"; }
+ours=$(sed -n 's/^vpm-view: case \(case-[0-9a-f]*\) open in session.*/\1/p' "$tmp/view.err" | tail -1)
+vol=$(vpm_cli volume load "phantom:abdomen?size=128" | sed -n 's/.*"volume_id": "\([^"]*\)".*/\1/p')
+other=$(vpm_cli session open --volume-id "$vol" | sed -n 's/.*"case_id": "\([^"]*\)".*/\1/p')
+count_lines() { grep -c "^$1" "$tmp/view.out"; }
+lists=$(count_lines 'cases 2')
+key F2
+wait_for 20 bash -c "[ \$(grep -c '^cases 2' '$tmp/view.out') -gt $lists ]" ||
+  fail "F2 did not list the 2 cases ($(grep '^cases' "$tmp/view.out" | tail -1))"
+shot cases
+key r; xdotool type --delay 40 "kidney plan"; key Return
+wait_for 20 grep -q "^notice case renamed $ours kidney plan" "$tmp/view.out" ||
+  fail "R + typing did not rename $ours: $(grep '^notice' "$tmp/view.out" | tail -1)"
+if vpm_cli case show "$ours" --json | grep -q '"title": "kidney plan"'; then
+  pass "the cases panel (F2) listed 2 cases and renamed the viewer's ($ours) to 'kidney plan'"
+else fail "after the panel's rename the server has: $(vpm_cli case show "$ours" --json | grep title)"; fi
+lists=$(count_lines 'cases 2')
+wait_for 20 bash -c "[ \$(grep -c '^cases 2' '$tmp/view.out') -gt $((lists - 1)) ]"
+key Down; key Return
+if wait_for 60 grep -q "^vpm-view: case $other open in session" "$tmp/view.err"; then
+  pass "Return opened the other case ($other) in the viewer"
+else fail "Return did not open $other: $(grep 'open in session' "$tmp/view.err" | tail -1)"; fi
+n=$(frames); settle "$n"
+key F2
+wait_for 20 bash -c "[ \$(grep -c '^cases 2' '$tmp/view.out') -gt $lists ]"
+# The panel opens on the viewer's case and lists as the server does (newest
+# change first): move to ours.
+at_other=$(vpm_cli case list --json | grep -o '"case_id": "[^"]*"' | grep -n "$other" | cut -d: -f1)
+at_ours=$(vpm_cli case list --json | grep -o '"case_id": "[^"]*"' | grep -n "$ours" | cut -d: -f1)
+if [ "$at_ours" -lt "$at_other" ]; then key Up; else key Down; fi
+key Delete
+sleep 0.5
+if grep -q "^notice case deleted" "$tmp/view.out"; then fail "one Delete deleted a case"; fi
+key Delete
+wait_for 20 grep -q "^notice case deleted $ours" "$tmp/view.out" ||
+  fail "Delete twice did not delete $ours: $(grep '^notice' "$tmp/view.out" | tail -1)"
+left=$(vpm_cli case list --json | grep -o '"case_id": "[^"]*"' | tr '\n' ' ')
+if [ "$left" = "\"case_id\": \"$other\" " ]; then pass "Delete twice deleted $ours; the server keeps $other only"
+else fail "after the panel's delete the server lists: $left"; fi
+key F2
+
 # 9. Quit.
 key q
 if wait_for 15 bash -c "! kill -0 $view_pid 2>/dev/null"; then
