@@ -55,6 +55,52 @@ Result<std::string> Reopen(const ServerConnection& s, const std::string& source)
   }
 }
 
+// A session on case `case_id` (OpenCase: the server replays what the case
+// holds) where the balancer sends the key now, and how many manipulations
+// the case holds. Retries UNAVAILABLE as Reopen; FailedPrecondition when the
+// server keeps no cases.
+struct ReopenedCase {
+  std::string session_id;
+  int64_t events = 0;
+};
+Result<ReopenedCase> ReopenCase(const ServerConnection& s, const std::string& case_id) {
+  const SteadyClock::time_point start = SteadyClock::now();
+  double wait_s = 0.25;
+  while (true) {
+    v3::OpenCaseRequest open;
+    open.set_case_id(case_id);
+    v3::SessionInfo info;
+    Status status = FromGrpc(s.stub().OpenCase(s.Context().get(), open, &info));
+    v3::CaseInfo kept;
+    if (status.ok()) {
+      v3::GetCaseRequest get;
+      get.set_case_id(case_id);
+      status = FromGrpc(s.stub().GetCase(s.Context().get(), get, &kept));
+    }
+    if (status.ok()) return ReopenedCase{info.session_id(), kept.events()};
+    if (!absl::IsUnavailable(status) || MsSince(start) / 1000 + wait_s > kReopenPatienceS) {
+      return status;
+    }
+    std::this_thread::sleep_for(std::chrono::duration<double>(wait_s));
+    wait_s = std::min(2.0, wait_s * 2);
+  }
+}
+
+// The script index after its first `manipulations` grabs, drags, pulls,
+// releases, pins and resets (what a case counts as its events).
+int64_t IndexAfterManipulations(const Script& script, int64_t manipulations) {
+  int64_t seen = 0;
+  for (size_t i = 0; i < script.events.size(); ++i) {
+    if (seen == manipulations) return static_cast<int64_t>(i);
+    const v3::ClientEvent& e = script.events[i].event;
+    if (e.has_grab() || e.has_drag() || e.has_pull() || e.has_release() || e.has_pin() ||
+        e.has_reset()) {
+      ++seen;
+    }
+  }
+  return static_cast<int64_t>(script.events.size());
+}
+
 // Appends a segment's frames (times shifted by offset_ms), event latencies
 // and counts.
 void Append(const PlayResult& segment, double offset_ms, PlayResult* all) {
@@ -78,6 +124,7 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
   ASSIGN_OR_RETURN(json script_json, ReadJsonFile(script_path));
   const std::string source = script_json.value("volume", "phantom:abdomen?size=64");
   v3::VolumeInfo volume;
+  std::string case_id;  // the session's case, when the server keeps cases
   const bool opened_here = session_id.empty();
   if (opened_here) {
     v3::LoadVolumeRequest load;
@@ -88,7 +135,10 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
     v3::SessionInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().OpenSession(s.Context().get(), open, &info)));
     session_id = info.session_id();
-    std::printf("volume %s, session %s\n", volume.volume_id().c_str(), session_id.c_str());
+    case_id = info.case_id();
+    std::printf("volume %s, session %s%s%s\n", volume.volume_id().c_str(), session_id.c_str(),
+                case_id.empty() ? "" : ", case ", case_id.c_str());
+    std::fflush(stdout);  // a watcher (a test, a script) learns the ids at once
   } else {
     v3::ListSessionsResponse sessions;
     RETURN_IF_ERROR(FromGrpc(s.stub().ListSessions(s.Context().get(), {}, &sessions)));
@@ -142,6 +192,20 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
                  std::string(segment.status.message()).c_str(), source.c_str(),
                  s.session_key().c_str(),
                  (long long)std::max(options.resume_at, segment.script_events_written));
+    // A server that keeps cases reopens ours with what it holds: the script
+    // goes on after the manipulations the case has, none sent twice.
+    Result<ReopenedCase> in_case =
+        case_id.empty() ? Result<ReopenedCase>(absl::FailedPreconditionError("no case"))
+                        : ReopenCase(s, case_id);
+    if (in_case.ok()) {
+      options.skip_until = IndexAfterManipulations(script, in_case->events);
+      options.resume_at = options.skip_until;
+      options.session_id = in_case->session_id;
+      sessions.push_back(in_case->session_id);
+      std::fprintf(stderr, "vpm play: reopened case %s as session %s (%lld events kept)\n",
+                   case_id.c_str(), in_case->session_id.c_str(), (long long)in_case->events);
+      continue;
+    }
     Result<std::string> reopened_id = Reopen(s, source);
     if (!reopened_id.ok()) {
       result.status = Status(reopened_id.status().code(),

@@ -237,10 +237,17 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
   *first.mutable_event()->mutable_settings() = script.settings;
   bool ok = send(first, sequence);
   bool grabbed = false;
+  bool first_pass = true;
   do {
     for (size_t i = 0; i < script.events.size(); ++i) {
       const ScriptEvent& e = script.events[i];
       if (!ok) break;
+      if (first_pass && static_cast<int64_t>(i) < options.skip_until) {
+        if (e.event.has_grab()) grabbed = true;
+        if (e.event.has_release()) grabbed = false;
+        result.script_events_written = static_cast<int64_t>(i) + 1;
+        continue;
+      }
       const bool catching_up = static_cast<int64_t>(i) < options.resume_at;
       if (!catching_up &&
           !SleepUnlessInterrupted(std::chrono::microseconds(int64_t(e.wait_ms * 1000)))) {
@@ -253,6 +260,7 @@ PlayResult PlayScript(const ServerConnection& server, const Script& script,
       ok = send(request, ++sequence);
       if (ok) result.script_events_written = static_cast<int64_t>(i) + 1;
     }
+    first_pass = false;
   } while (ok && !Interrupted() && options.duration_s > 0 &&
            MsBetween(start, SteadyClock::now()) < options.duration_s * 1000);
   if (Interrupted()) {

@@ -79,6 +79,9 @@ struct PlayOptions {
   // (a reopened session catches up with the deformation), then the script
   // goes on from here.
   int64_t resume_at = 0;
+  // Script events before this index are not sent at all (a reopened case
+  // holds them already), then the script goes on from here; first pass only.
+  int64_t skip_until = 0;
   // Called for each frame (e.g. to save it); may be empty.
   std::function<void(const v3::Frame&, int64_t index)> on_frame;
 };
