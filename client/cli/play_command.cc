@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
@@ -29,61 +30,59 @@ constexpr int kMaxReopens = 3;
 // key (or the one it picks is draining), seconds.
 constexpr double kReopenPatienceS = 60;
 
-// Loads `source` and opens a session on it: where the balancer sends the
-// session key now. Retries UNAVAILABLE (the balancer has not yet seen the
-// replica go, or a draining replica refuses new sessions) with backoff.
-Result<std::string> Reopen(const ServerConnection& s, const std::string& source) {
+// Runs `attempt` until it succeeds or fails with other than UNAVAILABLE (the
+// balancer has not yet seen the replica go, or a draining replica refuses
+// new sessions), backing off from 0.25 s to 2 s, for kReopenPatienceS.
+template <typename T>
+Result<T> RetryWhileUnavailable(const std::function<Result<T>()>& attempt) {
   const SteadyClock::time_point start = SteadyClock::now();
   double wait_s = 0.25;
   while (true) {
-    v3::LoadVolumeRequest load;
-    load.set_source(source);
-    v3::VolumeInfo volume;
-    Status status = FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &volume));
-    v3::SessionInfo info;
-    if (status.ok()) {
-      v3::OpenSessionRequest open;
-      open.set_volume_id(volume.volume_id());
-      status = FromGrpc(s.stub().OpenSession(s.Context().get(), open, &info));
-    }
-    if (status.ok()) return info.session_id();
-    if (!absl::IsUnavailable(status) || MsSince(start) / 1000 + wait_s > kReopenPatienceS) {
-      return status;
+    Result<T> result = attempt();
+    if (result.ok() || !absl::IsUnavailable(result.status()) ||
+        MsSince(start) / 1000 + wait_s > kReopenPatienceS) {
+      return result;
     }
     std::this_thread::sleep_for(std::chrono::duration<double>(wait_s));
     wait_s = std::min(2.0, wait_s * 2);
   }
 }
 
+// Loads `source` and opens a session on it, where the balancer sends the
+// session key now.
+Result<std::string> Reopen(const ServerConnection& s, const std::string& source) {
+  return RetryWhileUnavailable<std::string>([&]() -> Result<std::string> {
+    v3::LoadVolumeRequest load;
+    load.set_source(source);
+    v3::VolumeInfo volume;
+    RETURN_IF_ERROR(FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &volume)));
+    v3::OpenSessionRequest open;
+    open.set_volume_id(volume.volume_id());
+    v3::SessionInfo info;
+    RETURN_IF_ERROR(FromGrpc(s.stub().OpenSession(s.Context().get(), open, &info)));
+    return info.session_id();
+  });
+}
+
 // A session on case `case_id` (OpenCase: the server replays what the case
 // holds) where the balancer sends the key now, and how many manipulations
-// the case holds. Retries UNAVAILABLE as Reopen; FailedPrecondition when the
-// server keeps no cases.
+// the case holds. FailedPrecondition when the server keeps no cases.
 struct ReopenedCase {
   std::string session_id;
   int64_t events = 0;
 };
 Result<ReopenedCase> ReopenCase(const ServerConnection& s, const std::string& case_id) {
-  const SteadyClock::time_point start = SteadyClock::now();
-  double wait_s = 0.25;
-  while (true) {
+  return RetryWhileUnavailable<ReopenedCase>([&]() -> Result<ReopenedCase> {
     v3::OpenCaseRequest open;
     open.set_case_id(case_id);
     v3::SessionInfo info;
-    Status status = FromGrpc(s.stub().OpenCase(s.Context().get(), open, &info));
+    RETURN_IF_ERROR(FromGrpc(s.stub().OpenCase(s.Context().get(), open, &info)));
+    v3::GetCaseRequest get;
+    get.set_case_id(case_id);
     v3::CaseInfo kept;
-    if (status.ok()) {
-      v3::GetCaseRequest get;
-      get.set_case_id(case_id);
-      status = FromGrpc(s.stub().GetCase(s.Context().get(), get, &kept));
-    }
-    if (status.ok()) return ReopenedCase{info.session_id(), kept.events()};
-    if (!absl::IsUnavailable(status) || MsSince(start) / 1000 + wait_s > kReopenPatienceS) {
-      return status;
-    }
-    std::this_thread::sleep_for(std::chrono::duration<double>(wait_s));
-    wait_s = std::min(2.0, wait_s * 2);
-  }
+    RETURN_IF_ERROR(FromGrpc(s.stub().GetCase(s.Context().get(), get, &kept)));
+    return ReopenedCase{info.session_id(), kept.events()};
+  });
 }
 
 // The script index after its first `manipulations` grabs, drags, pulls,
