@@ -17,6 +17,30 @@
 namespace vpm::cli {
 namespace {
 
+// How near the fixed skeleton lies to the grabbed tissue (what the
+// inversion barrier may stop a drag against): the nearest skeleton vertex
+// to any handle, and the nearest one ahead of the drag (on the side the
+// drag moves towards), mm.
+void PrintSkeletonNearHandles(const ProxyMesh& mesh, const std::vector<int32_t>& handles,
+                              const glm::dvec3& drag_physical) {
+  const double length = glm::length(drag_physical);
+  double nearest = INFINITY, ahead = INFINITY;
+  for (const MeshVertex& s : mesh.vertices) {
+    if (!s.skeleton) continue;
+    for (int32_t h : handles) {
+      const glm::dvec3 d = s.position_mm - mesh.vertices[h].position_mm;
+      const double distance = glm::length(d);
+      nearest = std::min(nearest, distance);
+      if (length > 0 && glm::dot(d, drag_physical) > 0) ahead = std::min(ahead, distance);
+    }
+  }
+  if (!std::isfinite(nearest)) return;
+  char ahead_text[32] = "none";
+  if (std::isfinite(ahead)) std::snprintf(ahead_text, sizeof ahead_text, "%.1f mm", ahead);
+  std::printf("skeleton nearest the handles %.1f mm; nearest ahead of the drag %s\n", nearest,
+              ahead_text);
+}
+
 // `grab_mm` (physical voxel space, the point GrabPoint resolved from --grab
 // or --grab-landmark): where the mesh is refined unless the mesh flags say.
 Result<ProxyMesh> LoadOrBuildMesh(const RenderArgs& args, const Volume& volume,
@@ -162,6 +186,7 @@ Result<std::unique_ptr<OfflineScene>> PrepareOfflineScene(const RenderArgs& args
                 info.message.empty() ? "" : "; ", info.message.c_str());
     if (!args.drag.empty()) {
       ASSIGN_OR_RETURN(glm::dvec3 offset, Vec3Of(args.drag, "--drag"));
+      PrintSkeletonNearHandles(out->mesh, info.handles, geometry.WorldVectorToPhysical(offset));
       ASSIGN_OR_RETURN(out->step, out->scene->Drag(geometry.WorldVectorToPhysical(offset)));
       // A drag event's FEM work is bounded (docs/FEM.md, "Per-event work bound"):
       // a long drag in one event stops short and the rest is carried. The
