@@ -76,8 +76,7 @@ void Row(const Case& c, const Volume& volume, Footprint footprint, double radius
     forced |= s.forced_inversion;
   }
   if (std::getenv("GRAB_DRAG_EXPLAIN") != nullptr) bench::ExplainInvertedTets(model, volume, grab);
-  double max_u = 0.0;
-  for (const glm::dvec3& u : model.Displacements()) max_u = std::max(max_u, glm::length(u));
+  const double max_u = model.MaxDisplacementMm();
   std::printf("%-14s %-6s %5zu %6.1f %7zu %6lld %6lld %9.2f %7.3f %5lld %6s\n", c.name.c_str(),
               FootprintName(footprint), mesh.vertices.size(), radius, info.handles.size(),
               static_cast<long long>(info.fixed_within),

@@ -232,16 +232,7 @@ Status InteractConnection::ResolveSession() {
     v3::ListSessionsResponse sessions;
     RETURN_IF_ERROR(Call(&v3::Vpm::Stub::ListSessions, v3::ListSessionsRequest(), &sessions));
     for (const v3::SessionInfo& s : sessions.sessions()) {
-      if (s.session_id() != session_id) continue;
-      v3::GetVolumeRequest get;
-      get.set_volume_id(s.volume_id());
-      v3::VolumeInfo volume;
-      RETURN_IF_ERROR(Call(&v3::Vpm::Stub::GetVolume, get, &volume));
-      std::lock_guard lock(mutex_);
-      state_.volume = volume;
-      state_.mesh_id = s.mesh_id();
-      if (!s.case_id().empty()) state_.case_id = s.case_id();
-      return absl::OkStatus();
+      if (s.session_id() == session_id) return JoinSession(s);
     }
   }
   if (const std::string case_id = state().case_id; !case_id.empty()) return OpenCase(case_id);
@@ -281,16 +272,22 @@ Status InteractConnection::OpenCase(const std::string& case_id) {
   open.set_case_id(case_id);
   v3::SessionInfo session;
   RETURN_IF_ERROR(Call(&v3::Vpm::Stub::OpenCase, open, &session));
+  RETURN_IF_ERROR(JoinSession(session));
+  std::fprintf(stderr, "vpm-view: case %s open in session %s\n", case_id.c_str(),
+               session.session_id().c_str());
+  return absl::OkStatus();
+}
+
+Status InteractConnection::JoinSession(const v3::SessionInfo& session) {
   v3::GetVolumeRequest get;
   get.set_volume_id(session.volume_id());
   v3::VolumeInfo volume;
   RETURN_IF_ERROR(Call(&v3::Vpm::Stub::GetVolume, get, &volume));
-  std::fprintf(stderr, "vpm-view: case %s open in session %s\n", case_id.c_str(),
-               session.session_id().c_str());
   std::lock_guard lock(mutex_);
   state_.volume = volume;
   state_.session_id = session.session_id();
   state_.mesh_id = session.mesh_id();
+  if (!session.case_id().empty()) state_.case_id = session.case_id();
   return absl::OkStatus();
 }
 

@@ -109,8 +109,10 @@ class InteractConnection {
     return cli::FromGrpc((server_->stub().*method)(context.get(), request, response));
   }
   void CancelStream();
-  // Opens state_.case_id (OpenCase) into state_.
+  // Opens case `case_id` (OpenCase) and joins its session.
   Status OpenCase(const std::string& case_id);
+  // Streams from `session` from now on: its volume (GetVolume), mesh and case.
+  Status JoinSession(const v3::SessionInfo& session);
 
   ConnectionOptions options_;
   std::function<void()> wake_;

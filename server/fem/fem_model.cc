@@ -319,6 +319,15 @@ std::vector<glm::dvec3> FemModel::Displacements() const {
   return out;
 }
 
+double FemModel::MaxDisplacementMm() const {
+  const Eigen::VectorXd& u = solver_.displacement_mm();
+  double max_sq = 0.0;
+  for (Eigen::Index v = 0; v + 2 < u.size(); v += 3) {
+    max_sq = std::max(max_sq, u[v] * u[v] + u[v + 1] * u[v + 1] + u[v + 2] * u[v + 2]);
+  }
+  return std::sqrt(max_sq);
+}
+
 std::vector<glm::dvec3> FemModel::Positions() const {
   std::vector<glm::dvec3> out = Displacements();
   for (size_t v = 0; v < out.size(); ++v) out[v] += rest_mm_[v];

@@ -130,6 +130,8 @@ class FemModel {
   // #V by 3: current positions and displacements, mm.
   std::vector<glm::dvec3> Positions() const;
   std::vector<glm::dvec3> Displacements() const;
+  // The largest vertex displacement, mm.
+  double MaxDisplacementMm() const;
   // tets() with signed volume <= 0 at the current positions (section 6
   // validity).
   int64_t CountInvertedTets() const;

@@ -138,10 +138,7 @@ Result<SceneStepTimings> DeformableScene::UpdateMap(SceneStepTimings timings) {
 Result<SceneStepTimings> DeformableScene::AfterStep(SceneStepTimings timings) {
   timings.inverted_tets = fem_->CountInvertedTets();
   // The state's, whatever the step (a pin or a reset solves nothing).
-  timings.max_displacement_mm = 0.0;
-  for (const glm::dvec3& u : fem_->Displacements()) {
-    timings.max_displacement_mm = std::max(timings.max_displacement_mm, glm::length(u));
-  }
+  timings.max_displacement_mm = fem_->MaxDisplacementMm();
   if (!defer_map_update_) return UpdateMap(timings);
   map_stale_ = true;
   return timings;

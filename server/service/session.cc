@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 
 #include "server/common/clock.h"
 #include "server/raycast/frame_encoder.h"
@@ -202,14 +201,7 @@ Status Session::SetCamera(const v3::Camera& camera) {
     camera_ = c;
   }
   Changed(0, false, nullptr);
-  // The camera is part of the case, but a view the store cannot keep is no
-  // reason to refuse the view: it is said, not returned.
-  if (case_store_ != nullptr) {
-    if (Status stored = case_store_->SetCamera(case_id_, camera.SerializeAsString()); !stored.ok()) {
-      std::fprintf(stderr, "vpm-server: session %s: camera not stored: %s\n", id_.c_str(),
-                   stored.ToString().c_str());
-    }
-  }
+  StoreCameraInCase(camera);
   return absl::OkStatus();
 }
 

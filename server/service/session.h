@@ -164,6 +164,11 @@ class Session : public std::enable_shared_from_this<Session> {
   // the lock released and taken again under the frame lock.
   Status StoreInCase(const v3::ClientEvent& event, const std::vector<SceneOp>& before,
                      std::unique_lock<std::mutex>& scene_lock);
+  // The scene's largest displacement, inverted tets and lag as the last
+  // step's (state_mutex_ held): after its scene was replaced.
+  void TakeSceneStateLocked();
+  // The camera in the case (no case: nothing); a refusal is logged.
+  void StoreCameraInCase(const v3::Camera& camera);
   // Replaces the scene by the mesh's with `ops` replayed (frame and scene
   // locks held), and records its displacement as the last step's.
   Status ReplaySceneLocked(const std::vector<SceneOp>& ops, DeformableScene::ReplayMode mode);

@@ -10,12 +10,6 @@
 namespace vpm::service {
 namespace {
 
-double MaxDisplacementMm(const DeformableScene& scene) {
-  double max_mm = 0.0;
-  for (const glm::dvec3& u : scene.fem().Displacements()) max_mm = std::max(max_mm, glm::length(u));
-  return max_mm;
-}
-
 bool IsManipulation(const v3::ClientEvent& event) {
   switch (event.event_case()) {
     case v3::ClientEvent::kGrab:
@@ -63,10 +57,24 @@ Status Session::ReplaySceneLocked(const std::vector<SceneOp>& ops,
   scene_ = std::move(replayed);
   std::lock_guard lock(state_mutex_);
   last_step_ = SceneStepTimings{};
-  last_step_.max_displacement_mm = MaxDisplacementMm(*scene_);
+  TakeSceneStateLocked();
+  return absl::OkStatus();
+}
+
+void Session::TakeSceneStateLocked() {
+  last_step_.max_displacement_mm = scene_->fem().MaxDisplacementMm();
   last_step_.inverted_tets = scene_->fem().CountInvertedTets();
   last_step_.lag_mm = scene_->fem().lag_mm();
-  return absl::OkStatus();
+}
+
+void Session::StoreCameraInCase(const v3::Camera& camera) {
+  if (case_store_ == nullptr) return;
+  // The camera is part of the case, but a view the store cannot keep is no
+  // reason to refuse the view: it is said, not returned.
+  if (Status stored = case_store_->SetCamera(case_id_, camera.SerializeAsString()); !stored.ok()) {
+    std::fprintf(stderr, "vpm-server: session %s: camera not stored: %s\n", id_.c_str(),
+                 stored.ToString().c_str());
+  }
 }
 
 Result<std::vector<SceneOp>> Session::CaseHistory() const {
@@ -77,7 +85,7 @@ Result<std::vector<SceneOp>> Session::CaseHistory() const {
 void Session::RecordSettleInCase() {
   if (case_store_ == nullptr) return;
   Status stored = case_store_->MarkSettled(case_id_);
-  if (stored.ok()) stored = case_store_->SetDisplacement(case_id_, MaxDisplacementMm(*scene_));
+  if (stored.ok()) stored = case_store_->SetDisplacement(case_id_, scene_->fem().MaxDisplacementMm());
   if (!stored.ok()) {
     std::fprintf(stderr, "vpm-server: session %s: a still's settle not stored: %s\n",
                  id_.c_str(), stored.ToString().c_str());
@@ -88,17 +96,12 @@ Status Session::StoreInCase(const v3::ClientEvent& event, const std::vector<Scen
                             std::unique_lock<std::mutex>& scene_lock) {
   if (case_store_ == nullptr) return absl::OkStatus();
   if (event.has_camera()) {
-    // As SetCamera: said, not refused.
-    if (Status stored = case_store_->SetCamera(case_id_, event.camera().SerializeAsString());
-        !stored.ok()) {
-      std::fprintf(stderr, "vpm-server: session %s: camera not stored: %s\n", id_.c_str(),
-                   stored.ToString().c_str());
-    }
+    StoreCameraInCase(event.camera());
     return absl::OkStatus();
   }
   if (!IsManipulation(event) || !scene_->last_op()) return absl::OkStatus();
   Result<int64_t> stored =
-      case_store_->Append(case_id_, *scene_->last_op(), MaxDisplacementMm(*scene_));
+      case_store_->Append(case_id_, *scene_->last_op(), scene_->fem().MaxDisplacementMm());
   if (stored.ok()) return absl::OkStatus();
   // Refused: the scene goes back to what the case holds (or, if the case
   // cannot be read either, to what it held before this event), under the
@@ -134,10 +137,10 @@ Result<Session::UndoOutcome> Session::Undo(bool redo) {
     if (outcome.changed) {
       ASSIGN_OR_RETURN(const std::vector<SceneOp> history, CaseHistory());
       RETURN_IF_ERROR(ReplaySceneLocked(history, DeformableScene::ReplayMode::kExact));
-      outcome.max_displacement_mm = MaxDisplacementMm(*scene_);
+      outcome.max_displacement_mm = scene_->fem().MaxDisplacementMm();
       RETURN_IF_ERROR(case_store_->SetDisplacement(case_id_, outcome.max_displacement_mm));
     } else {
-      outcome.max_displacement_mm = MaxDisplacementMm(*scene_);
+      outcome.max_displacement_mm = scene_->fem().MaxDisplacementMm();
     }
   }
   ASSIGN_OR_RETURN(const cases::CaseRecord record, case_store_->Get(case_id_));

@@ -64,12 +64,8 @@ void Session::SwapInRefinedMeshLocked() {
     return;
   }
   scene_ = *std::move(rebuilt);
-  double max_mm = 0.0;
-  for (const glm::dvec3& u : scene_->fem().Displacements()) max_mm = std::max(max_mm, glm::length(u));
   std::lock_guard lock(state_mutex_);
-  last_step_.max_displacement_mm = max_mm;
-  last_step_.inverted_tets = scene_->fem().CountInvertedTets();
-  last_step_.lag_mm = scene_->fem().lag_mm();
+  TakeSceneStateLocked();
   mesh_ = std::move(next);
   ++refinements_;
   last_swap_ms_ = MsSince(t0);
