@@ -93,7 +93,7 @@ Result<glm::dvec3> Session::GrabPoint(const v3::Grab& grab, const SceneView* str
     shown.camera = camera_;
   }
   Result<glm::dvec3> picked = scene_->Pick(shown, grab.pixel_x(), grab.pixel_y());
-  if (!picked.ok()) return PrefixStatus(picked.status(), "grab.pixel: ");
+  if (!picked.ok()) return PrefixStatus(picked.status(), "grab.pixel");
   return picked;
 }
 
