@@ -11,6 +11,8 @@
 #                               and swaps it out of the address bar and history
 #              VPM_USERS        a users file (vpm-server --hash-token) for both, when set
 #              VPM_DATA_ROOT    passed to vpm-server --data-root when set
+#              VPM_STATE_DIR    vpm-server --state-dir: where cases are kept (default
+#                               out/state: every session is a case that outlives a restart)
 # Logs: out/serve-server.log, out/serve-gateway.log; the gateway's record of
 # its open sessions (--sessions-file): out/serve-gateway-sessions.json.
 set -euo pipefail
@@ -27,6 +29,7 @@ export VPM_TOKEN=${VPM_TOKEN:-$(head -c 16 /dev/urandom | od -An -tx1 | tr -d ' 
 server_args=(--listen "${VPM_LISTEN:-127.0.0.1:0}")
 gateway_args=(--sessions-file "$root/out/serve-gateway-sessions.json")
 [ -n "${VPM_DATA_ROOT:-}" ] && server_args+=(--data-root "$VPM_DATA_ROOT")
+server_args+=(--state-dir "${VPM_STATE_DIR:-$root/out/state}")
 if [ -n "${VPM_USERS:-}" ]; then
   server_args+=(--users "$VPM_USERS")
   gateway_args+=(--users "$VPM_USERS")
