@@ -1,7 +1,8 @@
 // The case store tests' fixture: a fresh database of either backend.
 // SQLite: a file in a temporary folder. PostgreSQL: the server that
 // scripts/pg-test-server.sh started for ctest (its connection string in the
-// file VPM_TEST_POSTGRES names), emptied before each test.
+// file VPM_TEST_POSTGRES names), a database of its own for each test, so that
+// tests run in parallel (ctest -j) never touch each other's tables.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -47,16 +48,25 @@ class CaseStoreFixture : public ::testing::TestWithParam<Backend> {
       ASSERT_NE(file, nullptr) << "VPM_TEST_POSTGRES is not set: run under ctest, which starts "
                                   "PostgreSQL (scripts/pg-test-server.sh)";
       std::ifstream in(file);
-      ASSERT_TRUE(std::getline(in, conninfo_)) << "no connection string in " << file;
-      auto db = Connection();
-      ASSERT_TRUE(db);
-      ASSERT_TRUE(db->ExecScript("DROP TABLE IF EXISTS events, case_shares, cases, "
-                                 "vpm_schema_version CASCADE",
-                                 "empty the database")
-                      .ok());
+      std::string server;
+      ASSERT_TRUE(std::getline(in, server)) << "no connection string in " << file;
+      auto admin = OpenPostgresConnection(server);
+      ASSERT_TRUE(admin.ok()) << admin.status();
+      database_ = "vpm_test_" + std::to_string(::getpid()) + "_" +
+                  std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+                  std::to_string(++databases_made_);
+      ASSERT_TRUE((*admin)->ExecScript("DROP DATABASE IF EXISTS " + database_, "drop").ok());
+      ASSERT_TRUE((*admin)->ExecScript("CREATE DATABASE " + database_, "create").ok());
+      admin_ = std::move(*admin);
+      conninfo_ = server + " dbname=" + database_;  // libpq: the last dbname wins
     }
   }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
+  void TearDown() override {
+    std::filesystem::remove_all(dir_);
+    // The test's stores are closed by now; WITH (FORCE) ends any connection
+    // a failed test left open.
+    if (admin_) (void)admin_->ExecScript("DROP DATABASE IF EXISTS " + database_ + " WITH (FORCE)", "drop");
+  }
 
   std::filesystem::path file() const { return dir_ / "cases.sqlite"; }
   Result<std::unique_ptr<CaseStore>> TryOpen() {
@@ -84,6 +94,9 @@ class CaseStoreFixture : public ::testing::TestWithParam<Backend> {
 
   std::filesystem::path dir_;
   std::string conninfo_;
+  std::string database_;
+  std::unique_ptr<SqlConnection> admin_;
+  static inline int databases_made_ = 0;
 };
 
 }  // namespace vpm::cases
