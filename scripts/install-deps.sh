@@ -33,6 +33,8 @@ packages=(
   # (Orthanc with its DICOMweb and GDCM plugins, run unprivileged on
   # loopback by tests/pacs) and their DICOM reading (pydicom, numpy)
   libcurl4-openssl-dev orthanc orthanc-dicomweb orthanc-gdcm python3-pydicom python3-numpy
+  # the exported DICOM checked against its IODs (dciodvfy)
+  dicom3tools
   # cases: the embedded SQLite database (--state-dir), PostgreSQL's client
   # library (--state) and its server for the tests (run unprivileged on a
   # Unix socket by scripts/pg-test-server.sh)

@@ -7,6 +7,7 @@
 #include "client/cli/health_command.h"
 #include "client/cli/mesh_command.h"
 #include "client/cli/case_commands.h"
+#include "client/cli/export_dicom_command.h"
 #include "client/cli/pacs_commands.h"
 #include "client/cli/play_command.h"
 #include "client/cli/remote_mesh_commands.h"
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
   vpm::cli::AddRemoteMeshCommands(app, &server_flags, &exit_code);
   vpm::cli::AddSessionCommands(app, &server_flags, &exit_code);
   vpm::cli::AddPacsCommands(app, &server_flags, &exit_code);
+  vpm::cli::AddExportDicomCommand(app, &server_flags, &exit_code);
   vpm::cli::AddCaseCommands(app, &server_flags, &exit_code);
   vpm::cli::AddPlayCommand(app, &server_flags, &exit_code);
   vpm::cli::AddHealthCommand(app, &server_flags, &exit_code);

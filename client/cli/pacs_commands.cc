@@ -110,12 +110,34 @@ Status Series(const ServerConnection& s, const SeriesArgs& a) {
   return absl::OkStatus();
 }
 
+Status Endpoints(const ServerConnection& s, bool as_json) {
+  v3::ListPacsEndpointsResponse response;
+  RETURN_IF_ERROR(FromGrpc(
+      s.stub().ListPacsEndpoints(s.Context().get(), v3::ListPacsEndpointsRequest(), &response)));
+  const std::vector<std::string> names(response.endpoints().begin(), response.endpoints().end());
+  if (as_json) {
+    PrintJson({{"endpoints", names}});
+  } else if (names.empty()) {
+    std::printf("no PACS endpoint that you may use on this server\n");
+  } else {
+    for (const std::string& name : names) std::printf("%s\n", name.c_str());
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 void AddPacsCommands(CLI::App& app, const ServerFlags* flags, int* exit_code) {
   CLI::App* pacs =
       app.add_subcommand("pacs", "server: search a PACS and list series (--pacs on the server)");
   pacs->require_subcommand(1);
+
+  auto endpoints_json = std::make_shared<bool>(false);
+  CLI::App* e = pacs->add_subcommand("endpoints", "server: the PACS endpoints you may use");
+  e->add_flag("--json", *endpoints_json, "print JSON");
+  e->callback(WithServer(flags, exit_code, [endpoints_json](const ServerConnection& c) {
+    return Endpoints(c, *endpoints_json);
+  }));
 
   auto search = std::make_shared<SearchArgs>();
   CLI::App* s = pacs->add_subcommand("search", "server: SearchStudies (QIDO-RS) on an endpoint");

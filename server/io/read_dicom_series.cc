@@ -10,6 +10,7 @@
 #include "server/io/convert_voxels.h"
 #include "server/io/folder_read_budget.h"
 #include "server/io/list_dicom_series.h"
+#include "server/io/read_dicom_origin.h"
 #include "server/io/read_dicom_slice.h"
 #include "server/io/resample_sheared_stack.h"
 
@@ -287,6 +288,10 @@ Result<Volume> ReadDicomSeries(const std::filesystem::path& folder, const Volume
                             " slices); ?series=N or ?series=UID picks "
                             "another"));
   }
+  // What an export into the same study copies (write_derived_series.h).
+  Result<DicomOrigin> origin = ReadDicomOrigin(series[*chosen].files);
+  if (!origin.ok()) return PrefixStatus(origin.status(), folder.string());
+  volume->set_dicom_origin(std::make_shared<const DicomOrigin>(std::move(*origin)));
   volume->set_source(folder.string());
   return volume;
 }

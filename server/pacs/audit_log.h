@@ -17,7 +17,7 @@ namespace vpm::pacs {
 
 struct AuditRecord {
   std::string user;
-  std::string action;  // "search", "series", "open"
+  std::string action;  // "search", "series", "open", "export"
   std::string endpoint;
   std::string study_uid;  // empty when none
   std::string series_uid;
@@ -25,7 +25,7 @@ struct AuditRecord {
   std::string filters;     // search: the filters set, "PatientName,StudyDate"
   int64_t matches = -1;    // search and series: how many answered; -1: not written
   std::string cache;       // open: "hit" or "miss"
-  int64_t instances = -1;  // open: files of the series; -1: not written
+  int64_t instances = -1;  // open, export: files of the series; -1: not written
 };
 
 class AuditLog {

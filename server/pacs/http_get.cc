@@ -89,8 +89,11 @@ struct SlistDeleter {
 
 }  // namespace
 
-Result<HttpResponse> HttpGet(const HttpRequest& request, const HttpBodySink& sink,
-                             const CancelToken& cancel) {
+namespace {
+
+// GET, or POST of `body` when it is not null.
+Result<HttpResponse> Perform(const HttpRequest& request, const std::string* body,
+                             const HttpBodySink& sink, const CancelToken& cancel) {
   GlobalInit();
   std::unique_ptr<CURL, CurlDeleter> curl(curl_easy_init());
   if (!curl) return absl::InternalError("libcurl: cannot make a handle");
@@ -122,6 +125,11 @@ Result<HttpResponse> HttpGet(const HttpRequest& request, const HttpBodySink& sin
     curl_easy_setopt(c, CURLOPT_PASSWORD, request.password.c_str());
   }
   if (!request.ca_file.empty()) curl_easy_setopt(c, CURLOPT_CAINFO, request.ca_file.c_str());
+  if (body != nullptr) {
+    curl_easy_setopt(c, CURLOPT_POST, 1L);
+    curl_easy_setopt(c, CURLOPT_POSTFIELDS, body->data());
+    curl_easy_setopt(c, CURLOPT_POSTFIELDSIZE_LARGE, static_cast<curl_off_t>(body->size()));
+  }
   curl_easy_setopt(c, CURLOPT_HEADERFUNCTION, OnHeader);
   curl_easy_setopt(c, CURLOPT_HEADERDATA, &t);
   curl_easy_setopt(c, CURLOPT_WRITEFUNCTION, OnBody);
@@ -146,6 +154,18 @@ Result<HttpResponse> HttpGet(const HttpRequest& request, const HttpBodySink& sin
   }
   FillHead(&t);
   return t.head;
+}
+
+}  // namespace
+
+Result<HttpResponse> HttpGet(const HttpRequest& request, const HttpBodySink& sink,
+                             const CancelToken& cancel) {
+  return Perform(request, nullptr, sink, cancel);
+}
+
+Result<HttpResponse> HttpPost(const HttpRequest& request, const std::string& body,
+                              const HttpBodySink& sink, const CancelToken& cancel) {
+  return Perform(request, &body, sink, cancel);
 }
 
 }  // namespace vpm::pacs

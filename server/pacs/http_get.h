@@ -1,5 +1,5 @@
-// One HTTP GET through libcurl, its body streamed to the caller: how the
-// DICOMweb client talks to a PACS. Credentials go to libcurl only (never
+// One HTTP GET (or POST) through libcurl, the answer's body streamed to the
+// caller: how the DICOMweb client talks to a PACS. Credentials go to libcurl only (never
 // into a URL, a log or an error); redirects are not followed (they could
 // carry the credentials elsewhere); only http and https are spoken.
 #pragma once
@@ -46,5 +46,10 @@ using HttpBodySink = std::function<Status(const HttpResponse& head, std::string_
 // (a search's query holds patient identifiers).
 Result<HttpResponse> HttpGet(const HttpRequest& request, const HttpBodySink& sink,
                              const CancelToken& cancel = {});
+
+// POSTs `body` (its Content-Type among request.headers) to `request.url`;
+// the answer as HttpGet's.
+Result<HttpResponse> HttpPost(const HttpRequest& request, const std::string& body,
+                              const HttpBodySink& sink, const CancelToken& cancel = {});
 
 }  // namespace vpm::pacs

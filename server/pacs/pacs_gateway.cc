@@ -182,6 +182,31 @@ Result<Volume> PacsGateway::LoadSeries(const std::string& user, std::string_view
   return result;
 }
 
+Result<StowResult> PacsGateway::StoreExport(const std::string& user, const std::string& endpoint,
+                                            const std::vector<const std::string*>& files,
+                                            const std::string& study_uid,
+                                            const std::string& series_uid,
+                                            const ProgressFn& progress,
+                                            const CancelToken& cancel) {
+  AuditRecord record{.user = user, .action = "export", .endpoint = endpoint,
+                     .study_uid = study_uid, .series_uid = series_uid,
+                     .instances = static_cast<int64_t>(files.size())};
+  Result<StowResult> result = [&]() -> Result<StowResult> {
+    ASSIGN_OR_RETURN(const DicomwebClient* client, ClientFor(user, endpoint));
+    return StoreInstances(client->endpoint(), files, {}, progress, cancel);
+  }();
+  record.result = result.status();
+  audit_->Record(record);
+  return result;
+}
+
+void PacsGateway::RecordExport(const std::string& user, const std::string& study_uid,
+                               const std::string& series_uid, const Status& result,
+                               int64_t instances) {
+  audit_->Record({.user = user, .action = "export", .study_uid = study_uid,
+                  .series_uid = series_uid, .result = result, .instances = instances});
+}
+
 void PacsGateway::RecordHeld(const std::string& user, std::string_view source) {
   AuditRecord record{.user = user, .action = "open", .cache = "held"};
   if (Result<PacsSource> s = ParsePacsSource(source); s.ok()) {

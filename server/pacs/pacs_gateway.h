@@ -17,6 +17,7 @@
 #include "server/pacs/dicomweb_client.h"
 #include "server/pacs/pacs_endpoint.h"
 #include "server/pacs/series_cache.h"
+#include "server/pacs/stow_client.h"
 #include "server/volume/volume.h"
 
 namespace vpm::pacs {
@@ -55,6 +56,17 @@ class PacsGateway {
   Result<Volume> LoadSeries(const std::string& user, std::string_view source,
                             const VolumeLimits& limits, const ProgressFn& progress,
                             const CancelToken& cancel);
+
+  // Sends an export's files to `endpoint` (STOW-RS, stow_client.h), audited
+  // as "export" with the study and the derived series; PermissionDenied as
+  // SearchStudies for an endpoint `user` may not use.
+  Result<StowResult> StoreExport(const std::string& user, const std::string& endpoint,
+                                 const std::vector<const std::string*>& files,
+                                 const std::string& study_uid, const std::string& series_uid,
+                                 const ProgressFn& progress, const CancelToken& cancel);
+  // Audits an export streamed back to `user` instead of sent.
+  void RecordExport(const std::string& user, const std::string& study_uid,
+                    const std::string& series_uid, const Status& result, int64_t instances);
 
   // Audits an open answered with the volume `user` already holds.
   void RecordHeld(const std::string& user, std::string_view source);

@@ -1,8 +1,10 @@
-// The PACS RPCs of VpmService (SearchStudies, ListSeries): translation
+// The PACS RPCs of VpmService (ListPacsEndpoints, SearchStudies,
+// ListSeries, ExportDicom's reactor): translation
 // between the API and server/pacs's PacsGateway, on the request pool (a
 // PACS may take seconds to answer). LoadVolume of pacs: sources goes
 // through the volume store (vpm_server.cc wires its read_pacs hook).
 #include "server/pacs/pacs_source.h"
+#include "server/service/export_dicom_reactor.h"
 #include "server/service/vpm_service.h"
 
 namespace vpm::service {
@@ -30,6 +32,23 @@ void FillStudy(const pacs::StudySummary& s, v3::StudyInfo* out) {
 }
 
 }  // namespace
+
+grpc::ServerUnaryReactor* VpmService::ListPacsEndpoints(grpc::CallbackServerContext* context,
+                                                        const v3::ListPacsEndpointsRequest*,
+                                                        v3::ListPacsEndpointsResponse* response) {
+  return Unary(context, "ListPacsEndpoints", service_->request_pool,
+               [=, this](const std::string& user) -> Status {
+                 if (service_->pacs == nullptr) return absl::OkStatus();
+                 for (const std::string& name : service_->pacs->EndpointsFor(user))
+                   response->add_endpoints(name);
+                 return absl::OkStatus();
+               });
+}
+
+grpc::ServerWriteReactor<v3::ExportDicomPart>* VpmService::ExportDicom(
+    grpc::CallbackServerContext* context, const v3::ExportDicomRequest* request) {
+  return ExportDicomReactor::Make(service_, context, *request);
+}
 
 grpc::ServerUnaryReactor* VpmService::SearchStudies(grpc::CallbackServerContext* context,
                                                     const v3::SearchStudiesRequest* request,

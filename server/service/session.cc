@@ -251,19 +251,7 @@ Result<v3::Frame> Session::Render(const FrameRequest& request) {
     // A still comes once the pointer has stopped: the drag the per-event
     // bound left short of its offset is finished first (docs/FEM.md,
     // "Per-event work bound"), so the still shows where the pointer is.
-    if (!interactive) {
-      ASSIGN_OR_RETURN(const SceneStepTimings settled, scene_->Settle(kSettleSolves));
-      if (settled.fem_ms > 0.0) {
-        step.max_displacement_mm = settled.max_displacement_mm;
-        step.inverted_tets = settled.inverted_tets;
-        step.lag_mm = settled.lag_mm;
-        std::lock_guard lock(state_mutex_);
-        last_step_.max_displacement_mm = step.max_displacement_mm;
-        last_step_.inverted_tets = step.inverted_tets;
-        last_step_.lag_mm = step.lag_mm;
-      }
-      if (settled.fem_ms > 0.0) RecordSettleInCase();
-    }
+    if (!interactive) RETURN_IF_ERROR(SettleLocked(&step));
     ASSIGN_OR_RETURN(prepared, scene_->PrepareRender(view, &map_update));
     // Slices are cheap (a few ms): cast here, under the scene lock, from the
     // map this frame uses.
@@ -306,6 +294,22 @@ Result<v3::Frame> Session::Render(const FrameRequest& request) {
   timings->set_encode_ms(MsSince(t1));
   timings->set_total_ms(MsSince(t0));
   return out;
+}
+
+Status Session::SettleLocked(SceneStepTimings* step) {
+  ASSIGN_OR_RETURN(const SceneStepTimings settled, scene_->Settle(kSettleSolves));
+  if (settled.fem_ms <= 0.0) return absl::OkStatus();
+  step->max_displacement_mm = settled.max_displacement_mm;
+  step->inverted_tets = settled.inverted_tets;
+  step->lag_mm = settled.lag_mm;
+  {
+    std::lock_guard lock(state_mutex_);
+    last_step_.max_displacement_mm = step->max_displacement_mm;
+    last_step_.inverted_tets = step->inverted_tets;
+    last_step_.lag_mm = step->lag_mm;
+  }
+  RecordSettleInCase();
+  return absl::OkStatus();
 }
 
 Result<std::vector<SliceFrame>> Session::RenderSlicesLocked(

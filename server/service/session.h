@@ -122,6 +122,18 @@ class Session : public std::enable_shared_from_this<Session> {
   // slice, Frame.slice where it lies.
   Result<v3::Frame> RenderSlice(const SliceRequest& request, bool png, int jpeg_quality);
 
+  // What an export writes (session_export.cc): the settled state's
+  // deformed volume on the source grid, a still 3D frame at the session's
+  // camera and last render settings, and what was done.
+  struct Exported {
+    Volume deformed;
+    Frame frame;                       // RGBA, rows top to bottom
+    double max_displacement_mm = 0.0;  // of the exported state
+    int64_t manipulations = 0;         // grabs and pins since the last reset
+    std::optional<glm::dvec3> grab_world_mm;  // the grab in effect, world LPS mm
+  };
+  Result<Exported> Export(const CancelToken& cancel);
+
   // True while the last change (camera, grab, drag, pull, release,
   // settings; from any client) is younger than still_delay_ms: frames are
   // interactive meanwhile.
@@ -178,6 +190,10 @@ class Session : public std::enable_shared_from_this<Session> {
   // the same path (scene lock held). A refusal is logged: the still is not
   // the user's event.
   void RecordSettleInCase();
+  // Finishes the drag the per-event bound left short (a still's settle);
+  // when that moved anything, `step` and the last step take its
+  // displacement and the case records the settle (scene lock held).
+  Status SettleLocked(SceneStepTimings* step);
   // The slices `requests` place now; the caller holds scene_mutex_.
   Result<std::vector<SliceFrame>> RenderSlicesLocked(const std::vector<SliceRequest>& requests);
   void Notify(bool closed);

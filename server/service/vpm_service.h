@@ -75,6 +75,11 @@ class VpmService final : public v3::Vpm::CallbackService {
                                                  const v3::ReadTransferFunctionRequest*,
                                                  v3::RenderTransferFunction*) override;
   // pacs_handlers.cc
+  grpc::ServerUnaryReactor* ListPacsEndpoints(grpc::CallbackServerContext*,
+                                              const v3::ListPacsEndpointsRequest*,
+                                              v3::ListPacsEndpointsResponse*) override;
+  grpc::ServerWriteReactor<v3::ExportDicomPart>* ExportDicom(
+      grpc::CallbackServerContext*, const v3::ExportDicomRequest*) override;
   grpc::ServerUnaryReactor* SearchStudies(grpc::CallbackServerContext*,
                                           const v3::SearchStudiesRequest*,
                                           v3::SearchStudiesResponse*) override;

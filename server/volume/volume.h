@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -20,6 +21,7 @@
 #include "server/common/cancel_token.h"
 #include "server/common/progress.h"
 #include "server/common/status.h"
+#include "server/volume/dicom_origin.h"
 #include "server/volume/voxel_values.h"
 
 namespace vpm {
@@ -154,6 +156,12 @@ class Volume {
   // `vpm volume info` can say that the grid is not the scanner's.
   const std::vector<std::string>& notes() const { return notes_; }
   void add_note(std::string note) { notes_.push_back(std::move(note)); }
+  // The DICOM series it was read from (null for other sources): what an
+  // export into the same study needs.
+  const std::shared_ptr<const DicomOrigin>& dicom_origin() const { return dicom_origin_; }
+  void set_dicom_origin(std::shared_ptr<const DicomOrigin> origin) {
+    dicom_origin_ = std::move(origin);
+  }
 
  private:
   Volume(VolumeGeometry geometry, VoxelValues values);
@@ -166,6 +174,7 @@ class Volume {
   std::vector<Landmark> landmarks_;
   std::string source_;
   std::vector<std::string> notes_;
+  std::shared_ptr<const DicomOrigin> dicom_origin_;
 };
 
 }  // namespace vpm

@@ -65,6 +65,104 @@ def slices_geometry(folder):
                 min=float(min(v.min() for v in values)), max=float(max(v.max() for v in values)))
 
 
+EXPORTED = {'session': 'none'}
+
+
+def dciodvfy_errors(folder):
+    """The 'Error' lines dciodvfy reports over every file of `folder`, and
+    the distinct report lines (for the note)."""
+    import subprocess
+    errors, lines = [], set()
+    for name in sorted(os.listdir(folder)):
+        p = subprocess.run(['dciodvfy', os.path.join(folder, name)], capture_output=True, text=True)
+        for line in (p.stdout + p.stderr).splitlines():
+            lines.add(line)
+            if line.startswith('Error'):
+                errors.append(f'{name}: {line}')
+    return errors, sorted(lines)
+
+
+def export_checks(h, t, vol, study, source_folder, audit):
+    """The kidney grabbed and dragged 15 mm superior, exported as a derived
+    series: to a folder (dciodvfy, the study's identity, the references) and
+    to Orthanc by STOW-RS (found by QIDO in the study, read back by vpm with
+    the source's geometry); other users refused."""
+    session, err = h.vpm_json('alice', 'session', 'open', '--volume-id', vol.get('volume_id', 'x'))
+    sid = (session or {}).get('session_id', 'x')
+    EXPORTED['session'] = sid
+    rc1, _, e1 = h.vpm('alice', 'manipulate', '--session', sid, '--grab', '79', '-125.3', '358.3')
+    rc2, out, e2 = h.vpm('alice', 'manipulate', '--session', sid, '--drag', '0', '0', '15')
+    t.check(session is not None and rc1 == 0 and rc2 == 0,
+            f'alice grabs the left kidney and drags it 15 mm superior ({(err + e1 + e2).strip()[-200:]})')
+    out_dir = os.path.join(h.tmp, 'export')
+    summary, err = h.vpm_json('alice', 'export-dicom', '--session', sid, '--out-dir', out_dir, '--json')
+    derived = os.path.join(out_dir, 'derived')
+    names = sorted(os.listdir(derived)) if os.path.isdir(derived) else []
+    t.check(summary is not None and len(names) == 112 and summary['instances'] == 113 and
+            summary['study_uid'] == study and summary['max_displacement_mm'] > 10,
+            f'export to a folder: 112 slices + 1 capture in the source study, '
+            f'{(summary or {}).get("max_displacement_mm", 0):.1f} mm moved ({err.strip()[-200:]})')
+    if not names:
+        return
+    errors, lines = dciodvfy_errors(derived)
+    cap_errors, cap_lines = dciodvfy_errors(os.path.join(out_dir, 'capture'))
+    t.check(not errors and not cap_errors,
+            f'dciodvfy: no error in 112 CT images and the secondary capture {(errors + cap_errors)[:3]}')
+    print('      dciodvfy (derived CT, distinct lines):', ' | '.join(lines))
+    print('      dciodvfy (secondary capture):', ' | '.join(cap_lines))
+    first = pydicom.dcmread(os.path.join(derived, names[0]))
+    source_files = [pydicom.dcmread(os.path.join(source_folder, n)) for n in sorted(os.listdir(source_folder))]
+    source_uids = {d.SOPInstanceUID for d in source_files}
+    t.check(first.StudyInstanceUID == study and first.PatientID == PATIENT_ID and
+            first.FrameOfReferenceUID == source_files[0].FrameOfReferenceUID and
+            list(first.ImageType)[:2] == ['DERIVED', 'SECONDARY'] and
+            first.SeriesInstanceUID != CT_SERIES and first.SOPInstanceUID not in source_uids and
+            first.SourceImageSequence[0].ReferencedSOPInstanceUID in source_uids and
+            'Deformed by vpm' in first.DerivationDescription,
+            'the derived series: same study, patient and frame of reference, new UIDs, '
+            'DERIVED\\SECONDARY, a source image referenced, what was done described')
+    deformed = numpy.stack([pydicom.dcmread(os.path.join(derived, n)).pixel_array for n in names])
+    t.check(deformed.shape == (112, 101, 122), f'slices of the source grid {deformed.shape}')
+
+    summary, err = h.vpm_json('alice', 'export-dicom', '--session', sid, '--to', 'pacs:orthanc', '--json')
+    t.check(summary is not None and summary['endpoint'] == 'orthanc' and summary['instances'] == 113,
+            f'export to Orthanc by STOW-RS ({err.strip()[-200:]})')
+    if summary is None:
+        return
+    listed, _ = h.vpm_json('alice', 'pacs', 'series', '--endpoint', 'orthanc', '--study', study, '--json')
+    by_uid = {s['series_uid']: s for s in (listed or {}).get('series', [])}
+    d = by_uid.get(summary['derived_series_uid'], {})
+    c = by_uid.get(summary['capture_series_uid'], {})
+    t.check(d.get('modality') == 'CT' and d.get('instance_count') == 112 and
+            d.get('description', '').startswith('vpm deformed') and c.get('instance_count') == 1,
+            f'QIDO finds the derived series (112 CT) and the capture in the study')
+    rc, out, err = h.vpm('alice', 'volume', 'load', d.get('source', 'pacs:orthanc/x/y'))
+    back = json.loads(out) if rc == 0 else {}
+    if back:
+        o1, o2 = numpy.array(vol['origin_lps_mm']), numpy.array(back['origin_lps_mm'])
+        d1, d2 = numpy.array(vol['direction_columns_lps']), numpy.array(back['direction_columns_lps'])
+        s1, s2 = numpy.array(vol['spacing_mm']), numpy.array(back['spacing_mm'])
+        corners = [numpy.array([i, j, k]) for i in (0, vol['dims'][0] - 1)
+                   for j in (0, vol['dims'][1] - 1) for k in (0, vol['dims'][2] - 1)]
+        worst = max(float(numpy.linalg.norm((o1 + d1.T @ (c * s1)) - (o2 + d2.T @ (c * s2))))
+                    for c in corners)
+        t.check(back['dims'] == vol['dims'] and worst < 1e-3,
+                f'vpm reads the exported series back from Orthanc on the source grid '
+                f'(geometry error {worst:.2e} mm at the corners)')
+        print(f'      figures: exported series geometry error {worst:.2e} mm')
+    else:
+        t.check(False, f'vpm reads the exported series back ({err.strip()[-200:]})')
+    rc, _, err = h.vpm('bob', 'export-dicom', '--session', sid, '--out-dir', os.path.join(h.tmp, 'bob'))
+    t.check(rc != 0 and ('NOT_FOUND' in err or 'PERMISSION_DENIED' in err),
+            f'bob may not export alice\'s session: {err.strip()[-120:]}')
+    rc, _, err = h.vpm('alice', 'export-dicom', '--session', sid, '--to', 'pacs:orthanc-nowhere')
+    t.check(rc != 0 and 'PERMISSION_DENIED' in err, 'nor alice to an endpoint she may not use')
+    exports = [r for r in audit_records(audit) if r['action'] == 'export']
+    t.check(any(r['result'] == 'OK' and r.get('endpoint') == 'orthanc' and
+                r['series_uid'] == summary['derived_series_uid'] and r['study_uid'] == study
+                for r in exports), 'the audit log records the export with its study and series')
+
+
 def audit_records(path):
     with open(path) as f:
         return [json.loads(line) for line in f if line.strip()]
@@ -244,6 +342,9 @@ def run(h, t, build, source):
         inside = all(-0.5 <= i[c] <= tv['dims'][c] - 0.5 for i in idx for c in range(3))
         t.check(inside, 'every tilted slice\'s ImagePositionPatient lies inside the volume\'s grid')
 
+    # ------------------------------------------------------------ export
+    export_checks(h, t, vol, STUDY, kidney, audit)
+
     # ------------------------------------------------------------ failures
     rc, _, err = h.vpm('alice', 'volume', 'load', f'pacs:orthanc/{STUDY}/{SR_SERIES}')
     t.check(rc != 0 and 'INVALID_ARGUMENT' in err and 'holds no images' in err,
@@ -266,6 +367,8 @@ def run(h, t, build, source):
     rc, _, _ = h.vpm('bob', 'volume', 'delete', bob_vol.get('volume_id', 'x'))
     rc2, out, err = h.vpm('bob', 'volume', 'load', ct_source)
     t.check(rc == 0 and rc2 == 0, f'a cached series still opens with Orthanc down ({err.strip()[-160:]})')
+    rc, _, err = h.vpm('alice', 'export-dicom', '--session', EXPORTED['session'], '--to', 'pacs:orthanc')
+    t.check(rc != 0 and 'UNAVAILABLE' in err, f'an export to the stopped Orthanc is UNAVAILABLE: {err.strip()[-200:]}')
     rc, _, _ = h.vpm('alice', 'volume', 'list')
     t.check(rc == 0 and h.server_alive(), 'the server keeps serving')
 
@@ -286,7 +389,11 @@ def run(h, t, build, source):
     t.check({('alice', 'search', 'OK'), ('carol', 'search', 'PERMISSION_DENIED'),
              ('alice', 'series', 'OK'), ('alice', 'open', 'OK'), ('bob', 'open', 'OK'),
              ('alice', 'open', 'INVALID_ARGUMENT'), ('alice', 'search', 'UNAVAILABLE'),
-             ('carol', 'open', 'PERMISSION_DENIED')} <= actions, 'the audit log records every action')
+             ('carol', 'open', 'PERMISSION_DENIED'), ('alice', 'export', 'OK'),
+             ('alice', 'export', 'UNAVAILABLE')} <= actions, 'the audit log records every action')
+    exports = [r for r in records if r['action'] == 'export' and r['result'] == 'OK']
+    if exports:
+        print('      audit excerpt (export):', json.dumps(exports[0]))
     print('      audit excerpt:', json.dumps(records[0]))
 
 

@@ -17,8 +17,13 @@
 // grab, drag, release and pin events count as its events; Undo and redo
 // move one event; before that, the case calls answer FAILED_PRECONDITION
 // with the server's message.
+// The PACS calls (ListPacsEndpoints, SearchStudies, ListSeries, LoadVolume of
+// pacs: sources with GetLoadProgress, ExportDicom) are fake_pacs.mjs's, with
+// the endpoints of setPacs([...]) (none: a server without --pacs).
 import { createRequire } from 'node:module';
 import path from 'node:path';
+
+import { makePacs } from './fake_pacs.mjs';
 
 export async function startFakeServer(source, { tls = null, users = {} } = {}) {
   const require = createRequire(path.join(source, 'client', 'web', 'package.json'));
@@ -39,7 +44,13 @@ export async function startFakeServer(source, { tls = null, users = {} } = {}) {
   const volume = { volume_id: 'vol-1', source: 'phantom:loaded', dims: [11, 11, 11],
                    spacing_mm: { x: 1, y: 1, z: 1 }, direction: [1, 0, 0, 0, 1, 0, 0, 0, 1] };
   let next = 1;
+  const loaded = new Map();  // volume id -> VolumeInfo of LoadVolume
+  const remember = (v) => {
+    loaded.set(v.volume_id, v);
+    return v;
+  };
   const owners = new Map();  // session id -> authorization of its opener
+  const sessionVolumes = new Map();  // session id -> volume id
   const shared = new Set();  // `${session id} ${authorization}` allowed to watch
   const watches = new Map();  // `${session id} ${authorization}` -> Set of {call, timer}
   const mayWatch = (call) => {
@@ -62,13 +73,24 @@ export async function startFakeServer(source, { tls = null, users = {} } = {}) {
     height: 4, last_sequence: sequence, frame_number: n, timings: { total_ms: 1 }, ...extra });
 
   const cases = makeCases(grpc, users);
+  const pacs = makePacs(grpc, users, (id, auth) => (owners.has(id) && owners.get(id) === auth
+    ? (loaded.get(sessionVolumes.get(id)) ?? volume).source : null));
+  pacs.record = record;
   const server = new grpc.Server();
   server.addService(Vpm.service, {
     ...cases.handlers(unary, owners, () => `ses-${++next}`),
+    ...pacs.handlers(unary),
     ListVolumes: unary('ListVolumes', () => ({ volumes: [volume] })),
-    GetVolume: unary('GetVolume', () => volume),
-    LoadVolume: unary('LoadVolume', (r) => ({ ...volume, volume_id: `vol-${++next}`,
-                                              source: r.source })),
+    GetVolume: unary('GetVolume', (r) => loaded.get(r.volume_id) ?? volume),
+    LoadVolume: (call, callback) => {
+      record('LoadVolume', call);
+      const newVolume = (source) => remember({ ...volume, volume_id: `vol-${++next}`, source });
+      if (call.request.source.startsWith('pacs:')) {
+        pacs.load(call, callback, newVolume);
+      } else {
+        callback(null, newVolume(call.request.source));
+      }
+    },
     BuildMesh: unary('BuildMesh', (r) => ({ mesh_id: `mesh-${++next}`, volume_id: r.volume_id,
                                             stats: { vertices: 250 } })),
     RefineMesh: unary('RefineMesh', () => ({ mesh_id: `mesh-${++next}`,
@@ -76,6 +98,7 @@ export async function startFakeServer(source, { tls = null, users = {} } = {}) {
     OpenSession: unary('OpenSession', (r, call) => {
       const session = { session_id: `ses-${++next}`, ...r };
       owners.set(session.session_id, call.metadata.get('authorization')[0] ?? null);
+      sessionVolumes.set(session.session_id, r.volume_id);
       return cases.opened(session, call);
     }),
     CloseSession: unary('CloseSession', (r) => {
@@ -158,6 +181,8 @@ export async function startFakeServer(source, { tls = null, users = {} } = {}) {
     '127.0.0.1:0', credentials, (err, p) => (err ? reject(err) : resolve(p))));
   return { address: `127.0.0.1:${port}`, calls, stop: () => server.forceShutdown(),
            keepCases: (on) => { cases.kept = on; },
+           setPacs: (endpoints) => { pacs.endpoints = endpoints; },
+           pacs,
            share: (sessionId, token) => shared.add(`${sessionId} Bearer ${token}`),
            revoke: (sessionId, token) => {
              const key = `${sessionId} Bearer ${token}`;

@@ -5,7 +5,8 @@
 // least 5,000 WebSocket frames on signed-in connections (random bytes,
 // unmasked, reserved opcodes and bits, bad UTF-8, lengths up to 2^63,
 // fragmented control frames, bad JSON, wrong types, messages out of order,
-// the case messages against a server that keeps cases).
+// the case messages against a server that keeps cases, the Studies panel's
+// and Export's messages against a server with a PACS endpoint).
 // Then the gateway must still run, answer /healthz and serve a real client
 // (sign in, open a volume, frames, an event). The gateway runs against the
 // stand-in server (fake_vpm_server.mjs); every input comes from a seeded
@@ -217,6 +218,17 @@ function randomMessage() {
       uploaded_tf: pick([undefined, true, false, 'yes', junk()]),
       crop: pick([undefined, junk(), { lo_mm: vec(), hi_mm: vec() }]),
       clip: pick([undefined, junk(), [{ normal: vec(), offset_mm: pick([1, 'a']) }]]) } } }),
+    () => ({ type: pick(['pacs_endpoints', 'pacs_search', 'pacs_series', 'pacs_open', 'pacs_cancel',
+                         'export_dicom']),
+             endpoint: pick([undefined, 'orthanc', 'nope', '', '.x', 'x'.repeat(100), 7, null]),
+             patient_name: pick([undefined, 'DOE^J*', '', '*', 'é'.repeat(40), 'a\u0000b', 7]),
+             study_date: pick([undefined, '20240101-', '2024', '-', junk()]),
+             modality: pick([undefined, 'CT', 'C T', 'x'.repeat(20)]),
+             limit: pick([undefined, 1, 0, 1001, 'a', 2 ** 60]),
+             study_uid: pick([undefined, '1.2.826.0.1.3680043.8.498.1', '1..2', 'x'.repeat(100), 7]),
+             source: pick([undefined, 'pacs:orthanc/1.2.826.0.1.3680043.8.498.1/1.2.826.0.1.3680043.8.498.1.1',
+                           'pacs:orthanc/1.2/1.2.9', 'pacs:x', `pacs:${'x'.repeat(400)}`, 5]),
+             series_description: pick([undefined, 'with files', 'x'.repeat(65), '', 7]) }),
     () => ({ type: 'tf', file_name: pick(['a.vp', 'a.json', 'a.png', '', 'x'.repeat(300), 7, null]),
              text: pick(['1\n1\n', 'bad', '', 'x'.repeat(60001), 5, null, junk()]),
              preset: pick([undefined, 'Bones', '', 7, 'x'.repeat(300)]) }),
@@ -295,6 +307,7 @@ async function main() {
                    `alice ${crypto.createHash('sha256').update(token).digest('hex')}\n`);
   const fake = await startFakeServer(source);
   fake.keepCases(true);  // the case messages reach a server that keeps cases
+  fake.setPacs([{ name: 'orthanc', users: ['*'] }]);  // and the PACS messages one with a PACS
   const log = fs.openSync(path.join(tmp, 'gateway.log'), 'w');
   const { child, base } = await startGatewayProcess({
     source, args: ['--server', fake.address, '--users', path.join(tmp, 'users.txt')],

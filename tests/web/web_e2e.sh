@@ -3,7 +3,8 @@
 # Checks what they need and fails (never skips) naming the command that
 # fixes it, then runs one scenario:
 #   viewer, server_down   end to end in headless Chromium (SCENARIO_e2e.mjs)
-#   gateway               the gateway against a stand-in server (gateway.test.mjs)
+#   gateway               the gateway against a stand-in server (gateway.test.mjs, and the
+#                         Studies panel's and Export's calls in gateway_pacs.test.mjs)
 #   gateway_fuzz          10,500 malformed HTTP requests and WebSocket frames (gateway_fuzz.mjs)
 #   gateway_cycles        open/close cycles through the gateway on a real server (gateway_cycles.mjs)
 #   attacker              issue 25's attacks through the gateway on a real server, two users,
@@ -18,7 +19,7 @@ fail() { echo "web_e2e: FAIL: $*" >&2; exit 1; }
 command -v node >/dev/null 2>&1 || fail "node is not installed: run scripts/install-deps.sh"
 "$source/scripts/install-web.sh" --check || fail "the gateway's npm packages are not installed"
 if [ "$scenario" = gateway ]; then
-  exec node --test "$source/tests/web/gateway.test.mjs"
+  exec node --test "$source/tests/web/gateway.test.mjs" "$source/tests/web/gateway_pacs.test.mjs"
 fi
 if [ "$scenario" = gateway_fuzz ]; then
   exec node "$source/tests/web/gateway_fuzz.mjs"

@@ -1,8 +1,10 @@
 // The messages a browser tab may send the gateway, checked before anything
 // acts on them: a JSON object with a known `type` and fields of the right
-// types (events against the proto's ClientEvent, proto_shape.js). Throws an
-// Error with a message for the page.
+// types (events against the proto's ClientEvent, proto_shape.js; the PACS
+// messages in validate_pacs_message.js). Throws an Error with a message for
+// the page.
 import { toProtoSettings } from './render_settings.js';
+import { parsePacsMessage } from './validate_pacs_message.js';
 
 const kEventKinds = ['camera', 'settings', 'grab', 'drag', 'pull', 'release', 'pin', 'reset'];
 const kMaxIdChars = 128;
@@ -184,8 +186,8 @@ export function parseMessage(shape, data, isBinary) {
       return message;
     }
     default: {
-      const caseMessage = parseCaseMessage(shape, message);
-      if (caseMessage) return caseMessage;
+      const known = parseCaseMessage(shape, message) ?? parsePacsMessage(message);
+      if (known) return known;
       throw new Error(`unknown message type '${String(message.type).slice(0, 32)}'`);
     }
   }

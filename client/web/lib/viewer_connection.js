@@ -22,11 +22,15 @@
 //        OpenCase (the case's open session, or a new one with its events
 //        replayed), GetVolume, GetMesh, then Interact -> {type: 'opened'}
 //   {type: 'cases'|'rename_case'|'delete_case'|'undo', ...}   case_calls.js
+//   {type: 'pacs_endpoints'|'pacs_search'|'pacs_series'|'pacs_open'|'pacs_cancel', ...}
+//        pacs_calls.js (the Studies panel)
+//   {type: 'export_dicom', endpoint, series_description}   dicom_export_call.js
 // Gateway -> browser:
 //   binary: one frame (lib/frame_packet.js)
 //   {type: 'hello'|'server'|'volumes'|'progress'|'opened'|'refined'|'stream'|
 //          'session_lost'|'tf'|'cases'|'case_renamed'|'case_deleted'|'undone'|
-//          'error', ...}
+//          'pacs_endpoints'|'pacs_studies'|'pacs_series'|'pacs_progress'|
+//          'pacs_loaded'|'export_progress'|'exported'|'pacs_error'|'error', ...}
 // With --state-dir on the server every session is a case: `opened` and
 // `refined` carry it (session.case_id), and the page reopens it by id when
 // the session is lost (a server restart) or the gateway comes back.
@@ -40,8 +44,10 @@ import crypto from 'node:crypto';
 
 import { Backoff } from '../public/backoff.js';
 import { CaseCalls } from './case_calls.js';
+import { DicomExport } from './dicom_export_call.js';
 import { explainError } from './explain_error.js';
 import { packFrame } from './frame_packet.js';
+import { PacsCalls } from './pacs_calls.js';
 import { toProtoSettings } from './render_settings.js';
 import { SessionRecord } from './session_record.js';
 import { parseMessage } from './validate_message.js';
@@ -97,6 +103,8 @@ export class ViewerConnection {
     this.closed = false;
     this.calls = new Set();  // unary calls running (grpc-js call objects)
     this.cases = new CaseCalls(this);
+    this.pacs = new PacsCalls(this);
+    this.dicomExport = new DicomExport(this);
 
     // An error nothing else caught ends this connection only, with a message;
     // the gateway and every other tab carry on.
@@ -158,6 +166,12 @@ export class ViewerConnection {
       case 'rename_case': return this.cases.rename(message);
       case 'delete_case': return this.cases.delete(message);
       case 'undo': return this.cases.undo(message);
+      case 'pacs_endpoints': return this.pacs.endpoints();
+      case 'pacs_search': return this.pacs.search(message);
+      case 'pacs_series': return this.pacs.series(message);
+      case 'pacs_open': return this.pacs.open(message);
+      case 'pacs_cancel': return this.pacs.cancelLoad();
+      case 'export_dicom': return this.dicomExport.start(message);
       default: throw new Error(`message type ${message.type} passed the check`);
     }
   }

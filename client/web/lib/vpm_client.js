@@ -58,6 +58,11 @@ const kDeadlineMs = {
   CloseSession: 5000,
   DeleteMesh: 5000,
   ReadTransferFunction: 10000,
+  ListPacsEndpoints: 5000,
+  // QIDO-RS through vpm-server, which ends a PACS transfer stalled for 60 s.
+  SearchStudies: 90000,
+  ListSeries: 90000,
+  GetLoadProgress: 5000,
 };
 
 export class VpmClient {
@@ -107,8 +112,9 @@ export class VpmClient {
   // user's channel (user_channels.js). `pending`, a Set, holds the call
   // while it runs, so that its owner can cancel it (a tab closing, a
   // sign-out): the server then stops the work (a mesh build, a load).
-  call(method, request, as = {}, pending = null) {
-    const deadline = new Date(Date.now() + (kDeadlineMs[method] ?? 30000));
+  // deadlineMs: this call's own deadline (a PACS load), else the method's.
+  call(method, request, as = {}, pending = null, deadlineMs = null) {
+    const deadline = new Date(Date.now() + (deadlineMs ?? kDeadlineMs[method] ?? 30000));
     const stub = this.stub(as);
     return new Promise((resolve, reject) => {
       const call = stub[method](request, this.metadata(as), { deadline }, (err, response) => {
@@ -129,6 +135,13 @@ export class VpmClient {
   // The Watch stream of a session (frames out): for a viewer it is shared with.
   watch(request, as = {}) {
     return this.stub(as).Watch(request, this.metadata(as));
+  }
+
+  // The ExportDicom stream (progress parts, then a summary), ending within
+  // deadlineMs.
+  exportDicom(request, as = {}, deadlineMs = 600000) {
+    return this.stub(as).ExportDicom(request, this.metadata(as),
+                                     { deadline: new Date(Date.now() + deadlineMs) });
   }
 
   close() {

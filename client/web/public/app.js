@@ -2,14 +2,16 @@
 // gateway socket. The browser only shows frames and sends input; every
 // server call happens in the gateway. `window.vpmViewer` exposes the state
 // (frames, last frame header, peak displacement, errors, the case, the
-// last undo's answer) to tests.
+// last undo's answer, the Studies panel, the last export's summary) to tests.
 import { OrbitCamera } from './camera.js';
 import { CasesPanel } from './cases_panel.js';
 import { CutControls } from './cut_controls.js';
+import { ExportButton } from './export_button.js';
 import { FrameStats } from './frame_stats.js';
 import { GatewaySocket } from './gateway_socket.js';
 import { PointerTools } from './pointer_tools.js';
 import { SliceViews } from './slice_views.js';
+import { StudiesPanel } from './studies_panel.js';
 import { installUndoKeys } from './undo_keys.js';
 
 const $ = (id) => document.getElementById(id);
@@ -40,6 +42,7 @@ const state = {
   lastGrabMm: null,
   errors: [],           // {what, message}
   uploadedTf: null,     // {name, colors, opacities} once the gateway read a file
+  lastExport: null,     // ExportDicomSummary of the last Export to PACS
   stats,
 };
 window.vpmViewer = state;
@@ -49,14 +52,33 @@ const casesPanel = new CasesPanel({
   note: $('cases-note'),
   currentCaseId: () => state.caseId,
   open(caseId) {
-    applyFrameSize();
-    state.intent = { case_id: caseId };
-    openVolume();
+    studies.forget();
+    openIntent({ case_id: caseId });
   },
   rename: (caseId, title) => socket.send({ type: 'rename_case', case_id: caseId, title }),
   remove: (caseId) => socket.send({ type: 'delete_case', case_id: caseId }),
 });
 state.casesPanel = casesPanel;
+
+// A series the Studies panel loaded opens as a volume of the list does.
+const studies = new StudiesPanel({
+  $,
+  send: (m) => socket.send(m),
+  openVolume: (volume) => openIntent({ volume_id: volume.volume_id }),
+});
+state.studies = studies;
+
+const exporter = new ExportButton({
+  e: { button: $('export-pacs'), description: $('export-description'), progress: $('export-progress') },
+  send: (m) => socket.send(m),
+  say: (text, kind) => showMessage(text, kind),
+});
+
+// The Export button follows what is shown: a session of this tab's on a
+// PACS series.
+function refreshExport() {
+  exporter.update({ source: state.volume?.source, session: state.session, watching: false });
+}
 
 function showMessage(text, kind = 'info') {
   $('message').textContent = text;
@@ -78,6 +100,7 @@ const socket = new GatewaySocket({
   onClose(delayMs) {
     const wasUp = state.gatewayUp;
     Object.assign(state, { gatewayUp: false, session: null, opening: false });
+    refreshExport();
     setServerState('down', 'gateway unreachable');
     showMessage(`${wasUp ? 'Lost the connection to' : 'Cannot reach'} the web gateway at ` +
                 `${location.host}; retrying in ${(delayMs / 1000).toFixed(1)} s.`, 'error');
@@ -124,6 +147,15 @@ function settings() {
                 slices: slices.specs(), ...cut, view_cut: viewCut };
   if (preset === 'uploaded') Object.assign(out, { preset: undefined, uploaded_tf: true });
   return out;
+}
+
+// Opens what the user picked: a volume of the list or a source
+// ({volume_id} | {source}), a case ({case_id}), or a series the Studies panel
+// loaded ({volume_id}).
+function openIntent(intent) {
+  applyFrameSize();
+  state.intent = intent;
+  openVolume();
 }
 
 // Opens state.intent. The page's camera goes along when the view carries on
@@ -212,6 +244,7 @@ const handlers = {
     if ($('message').dataset.kind === 'error') showMessage('');
     if (state.intent && !state.session && !state.opening) openVolume();
     socket.send({ type: 'cases' });
+    if (studies.isOpen) socket.send({ type: 'pacs_endpoints' });
   },
   volumes(m) { fillLoaded(m.volumes); },
   progress(m) { showMessage(m.text, 'info'); },
@@ -236,6 +269,7 @@ const handlers = {
     setServerState('up', `vpm-server ${state.gatewayServer ?? ''}`);
     showMessage('');
     showMesh();
+    studies.opened(m.volume);
   },
   refined(m) {
     Object.assign(state, { mesh: m.mesh, session: m.session });
@@ -281,6 +315,7 @@ const handlers = {
     slices.cancelGrab();
     showMessage(m.message, 'error');
     if (m.case_id && m.case_id === state.intent?.case_id && !state.session) caseOpenFailed(m);
+    if (m.what?.startsWith('Opening volume')) studies.viewerFailed(m.message);
   },
   cases(m) {
     casesPanel.show(m);
@@ -317,6 +352,25 @@ const handlers = {
       : `${verb}: nothing to ${m.redo ? 'redo' : 'undo'}.`, 'info');
     refreshStatus();
   },
+  // The Studies panel (studies_panel.js) and the Export button (export_button.js).
+  pacs_endpoints(m) { studies.showEndpoints(m); },
+  pacs_studies(m) { studies.showStudies(m); },
+  pacs_series(m) { studies.showSeries(m); },
+  pacs_progress(m) { studies.showProgress(m); },
+  pacs_loaded(m) {
+    studies.loaded(m);
+    socket.send({ type: 'list' });
+  },
+  pacs_error(m) {
+    state.errors.push({ what: `PACS ${m.action}`, message: m.message, code: m.code });
+    if (m.action === 'export') exporter.failed(m);
+    else studies.failed(m);
+  },
+  export_progress(m) { exporter.progress(m); },
+  exported(m) {
+    exporter.done(m);
+    state.lastExport = m.summary;
+  },
 };
 
 // The session shown is on a case (a server with --state-dir): a lost
@@ -350,6 +404,7 @@ function caseOpenFailed(m) {
 function onMessage(m) {
   const handler = handlers[m.type];
   if (handler) handler(m);
+  refreshExport();
 }
 
 function fillLoaded(volumes) {
@@ -476,9 +531,8 @@ function applyFrameSize() {
 $('open').addEventListener('click', () => {
   const [kind, ...rest] = $('volume').value.split(':');
   const value = rest.join(':');
-  applyFrameSize();
-  state.intent = kind === 'volume' ? { volume_id: value } : { source: value };
-  openVolume();
+  studies.forget();
+  openIntent(kind === 'volume' ? { volume_id: value } : { source: value });
 });
 $('refresh').addEventListener('click', () => socket.send({ type: 'list' }));
 for (const input of document.querySelectorAll('input[name="tool"]')) {
@@ -531,6 +585,11 @@ $('reset-tissue').addEventListener('click', () => sendEvent({ reset: {} }));
 $('undo').addEventListener('click', () => undo('undo'));
 $('redo').addEventListener('click', () => undo('redo'));
 $('cases-refresh').addEventListener('click', () => socket.send({ type: 'cases' }));
+document.addEventListener('keydown', (e) => {
+  if (e.key !== 'F2' || e.ctrlKey || e.altKey || e.metaKey || e.shiftKey) return;
+  e.preventDefault();
+  studies.toggle();
+});
 $('reset-view').addEventListener('click', () => {
   if (!state.camera) return;
   state.camera.reset();
