@@ -39,6 +39,8 @@ packages=(
   # library (--state) and its server for the tests (run unprivileged on a
   # Unix socket by scripts/pg-test-server.sh)
   libsqlite3-dev libpq-dev postgresql
+  # a DICOM series uploaded as a zip or tar archive (libarchive)
+  libarchive-dev
   # deployment checks: YAML parsing of the compose and Kubernetes files; the
   # balancer docker/ ships (HAProxy), run by `ctest -R balancer`
   python3-yaml haproxy

@@ -4,7 +4,7 @@
 #   address: AddressSanitizer + UndefinedBehaviorSanitizer (leaks checked)
 #   thread:  ThreadSanitizer
 # Which tests: the in-process service tests (streams, queues, uploads,
-# eviction, the render storm, slices, users and fair shares, cases), the FEM tests, and the ray caster's tests
+# eviction, the render storm, slices, users and fair shares, cases, DICOM export), the FEM tests, and the ray caster's tests
 # (GPU on lavapipe against the CPU reference). The other suites run
 # unsanitized in `make test`.
 set -euo pipefail
@@ -17,7 +17,7 @@ case "$mode" in
 esac
 service_tests=(service_basics_test service_session_test mesh_lifecycle_test cancellation_test
                render_storm_test fair_job_queue_test resource_lifecycle_test render_slice_test
-               users_test cases_test)
+               users_test cases_test export_dicom_test)
 targets=("${service_tests[@]}" fem_test raycast_test)
 # -O1: the sanitizers' own advice; no -g2 to keep compiles short.
 cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \

@@ -69,7 +69,7 @@ void AddRemoteVolumeCommands(CLI::App& app, const ServerFlags* flags, int* exit_
   }));
   auto file = std::make_shared<std::string>();
   CLI::App* upload = volume->add_subcommand("upload", "server: UploadVolume in 1 MiB chunks with SHA-256");
-  upload->add_option("FILE", *file, ".nii, .nii.gz, .nrrd or .mha")->required();
+  upload->add_option("FILE", *file, ".nii, .nii.gz, .nrrd or .mha; or a DICOM series as .zip, .tar, .tar.gz, .tgz")->required();
   upload->callback(WithServer(flags, exit_code, [file](const ServerConnection& s) {
     return Upload(s, *file);
   }));

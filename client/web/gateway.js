@@ -10,7 +10,7 @@
 //                   [--tls-cert PEM --tls-key PEM]
 //                   [--server-tls-ca PEM [--server-tls-cert PEM --server-tls-key PEM]]
 //                   [--session-hours H] [--cookie-key-file FILE] [--max-tabs-per-user N]
-//                   [--sessions-file FILE]
+//                   [--sessions-file FILE] [--max-upload-bytes N] [--max-uploads N]
 //
 // Who may sign in (lib/users.js): the users of --users (vpm-server's users
 // file: each signs in with their own token) and the viewer token
@@ -31,7 +31,10 @@
 // connection with a message. Each user's calls go on a channel of their own
 // (lib/user_channels.js); --sessions-file keeps the ids of the sessions
 // this process opened, so a gateway killed without closing them closes
-// them when it runs again (lib/session_record.js).
+// them when it runs again (lib/session_record.js). POST /upload takes a
+// volume file from a signed-in tab to vpm-server's UploadVolume
+// (lib/volume_upload.js): at most --max-upload-bytes, one per user, at most
+// --max-uploads at once.
 import crypto from 'node:crypto';
 import fs from 'node:fs';
 import http from 'node:http';
@@ -51,6 +54,7 @@ import { staticHandler } from './lib/static_files.js';
 import { Users } from './lib/users.js';
 import { ViewerConnection } from './lib/viewer_connection.js';
 import { kDefaultProtoPath, VpmClient } from './lib/vpm_client.js';
+import { kDefaultMaxUploadBytes, kDefaultMaxUploads, VolumeUploads } from './lib/volume_upload.js';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 const kMaxControlMessageBytes = 64 * 1024;  // browser -> gateway JSON
@@ -60,6 +64,7 @@ const kUsage = `usage: node gateway.js [--listen HOST:PORT] [--server HOST:PORT]
   [--allowed-host NAME ...] [--allowed-origin ORIGIN ...]
   [--tls-cert PEM --tls-key PEM] [--server-tls-ca PEM [--server-tls-cert PEM --server-tls-key PEM]]
   [--session-hours 12] [--cookie-key-file FILE] [--max-tabs-per-user 8] [--sessions-file FILE]
+  [--max-upload-bytes 1073741824] [--max-uploads 4]
  --users: vpm-server's users file (NAME TOKEN-SHA256 lines); each user signs in with their token,
    which the gateway forwards to vpm-server as theirs
  --viewer-token(-file): one more token that signs in as the user 'viewer' (default:
@@ -75,6 +80,9 @@ const kUsage = `usage: node gateway.js [--listen HOST:PORT] [--server HOST:PORT]
  --sessions-file: where this gateway records the sessions it opened (ids and user names, no
    token); one started after a kill closes the ones left open as their users come back (one
    file per gateway process; also VPM_WEB_SESSIONS_FILE)
+ --max-upload-bytes: the largest volume file a browser may upload (vpm-server's own
+   --max-upload-bytes applies too); --max-uploads: uploads at once in this gateway (each user
+   one), each spooled to a temporary file under TMPDIR while it arrives
  VPM_WEB_LISTEN and VPM_SERVER set the defaults of --listen and --server
 `;
 
@@ -119,6 +127,8 @@ function parseOptions(argv) {
       'cookie-key-file': { type: 'string' },
       'max-tabs-per-user': { type: 'string', default: '8' },
       'sessions-file': { type: 'string', default: process.env.VPM_WEB_SESSIONS_FILE || undefined },
+      'max-upload-bytes': { type: 'string', default: String(kDefaultMaxUploadBytes) },
+      'max-uploads': { type: 'string', default: String(kDefaultMaxUploads) },
       help: { type: 'boolean', default: false },
     },
   });
@@ -184,6 +194,8 @@ function parseOptions(argv) {
     users: Users.fromFile(values.users, viewerToken),
     sessionHours: positive(values['session-hours'], '--session-hours'),
     maxTabsPerUser: positive(values['max-tabs-per-user'], '--max-tabs-per-user'),
+    maxUploadBytes: Math.floor(positive(values['max-upload-bytes'], '--max-upload-bytes')),
+    maxUploads: Math.floor(positive(values['max-uploads'], '--max-uploads')),
     listen: splitHostPort(values.listen, '--listen'),
   };
 }
@@ -221,13 +233,18 @@ function main() {
     return parsed.protocol === `${scheme}:` && originPort === port &&
       options.allowedHosts.has(parsed.hostname.replace(/^\[(.*)\]$/, '$1'));
   };
+  const tabs = new Map();  // tab id (hello.tab_id) -> its ViewerConnection
+  const uploads = new VolumeUploads({ tabs, client, maxBytes: options.maxUploadBytes,
+                                      maxUploads: options.maxUploads, allowedOrigin, log });
   const handler = makeRequestHandler({
     signIns, serveFile: staticHandler(path.join(here, 'public')), allowedHost, allowedOrigin,
-    tls: Boolean(options.tls), log });
+    tls: Boolean(options.tls), log, upload: (...args) => uploads.handle(...args) });
   const server = options.tls ? https.createServer({ ...options.tls }, handler)
                              : http.createServer(handler);
   server.headersTimeout = 10000;
-  server.requestTimeout = 30000;
+  // Off: it would end an upload that takes longer; the handler bounds the
+  // other requests to 30 s itself (lib/http_handler.js).
+  server.requestTimeout = 0;
   server.keepAliveTimeout = 5000;
   server.on('clientError', (err, socket) => {
     if (socket.writable && err.code !== 'ECONNRESET') {
@@ -269,8 +286,11 @@ function main() {
           else tabsOf.delete(signIn.user);
         });
         try {
-          new ViewerConnection({ ws, client, shape, meshRefs, token: signIn.token,  // eslint-disable-line no-new
-                                 user: signIn.user, record, log });
+          const tab = new ViewerConnection({ ws, client, shape, meshRefs, token: signIn.token,
+                                             user: signIn.user, record, log,
+                                             maxUploadBytes: options.maxUploadBytes });
+          tabs.set(tab.tabId, tab);
+          ws.on('close', () => tabs.delete(tab.tabId));
         } catch (e) {
           log(`closing a connection after an unexpected error: ${e?.stack ?? e}`);
           ws.close(1011, 'internal error');

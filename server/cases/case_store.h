@@ -41,6 +41,9 @@ class CaseStore {
   virtual Status MarkSettled(std::string_view id) = 0;
   virtual Status SetCamera(std::string_view id, const std::string& camera) = 0;
   virtual Status SetDisplacement(std::string_view id, double max_displacement_mm) = 0;
+  // The mesh the case reopens on (serialized v3.MeshParams): a refinement
+  // swapped into its session.
+  virtual Status SetMeshParams(std::string_view id, const std::string& mesh_params) = 0;
   virtual Status Update(std::string_view id, const std::optional<std::string>& title,
                         const std::optional<std::string>& notes) = 0;
   virtual Status Share(std::string_view id, const std::string& user, bool revoke) = 0;

@@ -170,6 +170,12 @@ class SqlCaseStore final : public CaseStore {
                      {max_displacement_mm, Text(id)}, id, "store the displacement");
   }
 
+  Status SetMeshParams(std::string_view id, const std::string& mesh_params) override {
+    std::lock_guard lock(mutex_);
+    return UpdateOne("UPDATE cases SET mesh_params = $1 WHERE id = $2 RETURNING id",
+                     {SqlBlob{mesh_params}, Text(id)}, id, "store the mesh parameters");
+  }
+
   Status Update(std::string_view id, const std::optional<std::string>& title,
                 const std::optional<std::string>& notes) override {
     std::lock_guard lock(mutex_);

@@ -4,6 +4,9 @@
 #include <string>
 #include <optional>
 
+#include <stdlib.h>
+
+#include "server/io/extract_archive.h"
 #include "server/io/header_text.h"
 #include "server/io/parse_dicom_source.h"
 #include "server/io/parse_raw_source.h"
@@ -22,6 +25,39 @@ bool EndsWith(const std::string& text, std::string_view suffix) {
          text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
+bool IsArchiveName(const std::string& lower) {
+  return EndsWith(lower, ".zip") || EndsWith(lower, ".tar") || EndsWith(lower, ".tar.gz") ||
+         EndsWith(lower, ".tgz");
+}
+
+// A DICOM series packed in an archive: unpacked into a private temporary
+// folder (mode 0700), read as a DICOM folder, the folder removed. Messages
+// name the archive, never the folder.
+Result<Volume> ReadDicomArchive(const std::filesystem::path& path, const VolumeLimits& limits) {
+  namespace fs = std::filesystem;
+  std::string pattern = (fs::temp_directory_path() / "vpm-archive-XXXXXX").string();
+  if (mkdtemp(pattern.data()) == nullptr) {
+    return absl::ResourceExhaustedError("no room to unpack the archive in the temporary folder");
+  }
+  const fs::path folder = pattern;
+  Result<Volume> volume = [&]() -> Result<Volume> {
+    ASSIGN_OR_RETURN(const SourceFile file, OpenSourceFile(path, limits));
+    RETURN_IF_ERROR(
+        ExtractArchive(file, folder, {.max_bytes = limits.max_bytes}, limits.cancel).status());
+    VolumeLimits in_folder = limits;
+    in_folder.read_root = folder;
+    return ReadDicomSeries(folder, in_folder);
+  }();
+  std::error_code error;
+  fs::remove_all(folder, error);
+  if (volume.ok()) return volume;
+  std::string message(volume.status().message());
+  for (size_t at; (at = message.find(folder.string())) != std::string::npos;) {
+    message.replace(at, folder.string().size(), path.filename().string());
+  }
+  return Status(volume.status().code(), message);
+}
+
 Result<Volume> ReadByKind(std::string_view source, const VolumeLimits& limits) {
   if (source.starts_with("phantom:")) return MakePhantom(source.substr(8), limits);
   if (source.starts_with("raw:")) {
@@ -35,6 +71,7 @@ Result<Volume> ReadByKind(std::string_view source, const VolumeLimits& limits) {
   if (EndsWith(lower, ".nii") || EndsWith(lower, ".nii.gz")) return ReadNifti(path, limits);
   if (EndsWith(lower, ".nrrd") || EndsWith(lower, ".nhdr")) return ReadNrrd(path, limits);
   if (EndsWith(lower, ".mha") || EndsWith(lower, ".mhd")) return ReadMetaImage(path, limits);
+  if (IsArchiveName(lower)) return ReadDicomArchive(path, limits);
   return absl::InvalidArgumentError(StrCat("unknown volume source \"",
                                                  std::string(source.substr(0, 200)), "\"; use ",
                                                  std::string(kVolumeSourceForms)));

@@ -13,7 +13,8 @@ namespace vpm {
 inline constexpr std::string_view kVolumeSourceForms =
     "phantom:SPEC (e.g. phantom:abdomen?size=128), a folder of DICOM files "
     "(FOLDER[?series=UID|N][&spacing=MM]), "
-    "FILE.nii, FILE.nii.gz, FILE.nrrd, FILE.nhdr, FILE.mha, FILE.mhd, or "
+    "FILE.nii, FILE.nii.gz, FILE.nrrd, FILE.nhdr, FILE.mha, FILE.mhd, "
+    "a DICOM series packed as FILE.zip, FILE.tar, FILE.tar.gz, FILE.tgz, or "
     "raw:PATH?dims=X,Y,Z&type=int16&spacing=A,B,C[&endian=little|big][&offset=N]";
 
 // Reads the volume `source` names:
@@ -23,6 +24,8 @@ inline constexpr std::string_view kVolumeSourceForms =
 //   *.nii, *.nii.gz     ReadNifti
 //   *.nrrd, *.nhdr      ReadNrrd
 //   *.mha, *.mhd        ReadMetaImage
+//   *.zip, *.tar, *.tar.gz, *.tgz  ExtractArchive into a private temporary
+//                       folder, then ReadDicomSeries (the largest CT/MR series)
 // Extensions are matched case-insensitively. Every reader checks `limits`
 // before allocating. The volume's source() is set to `source`. Errors: those
 // of the reader; InvalidArgument listing the forms above for anything else.

@@ -7,6 +7,7 @@
 #include "server/pacs/dicom_part_writer.h"
 #include "server/pacs/http_get.h"
 #include "server/pacs/multipart_parser.h"
+#include "server/pacs/stow_client.h"
 
 namespace vpm::pacs {
 namespace {
@@ -201,6 +202,14 @@ Result<RetrievedSeries> DicomwebClient::RetrieveSeries(
   if (writer.files() == 0) return absl::NotFoundError(StrCat(what, ": the PACS sent no instances"));
   if (progress) progress(1.0, "retrieving");
   return RetrievedSeries{.instances = writer.files(), .bytes = writer.bytes()};
+}
+
+Status DicomwebClient::Store(const std::vector<const std::string*>& files,
+                             const ProgressFn& progress, const CancelToken& cancel) const {
+  StowOptions stow;
+  stow.connect_timeout_s = options_.connect_timeout_s;
+  stow.stall_timeout_s = options_.stall_timeout_s;
+  return StoreInstances(endpoint_, files, stow, progress, cancel).status();
 }
 
 }  // namespace vpm::pacs

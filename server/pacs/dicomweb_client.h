@@ -11,23 +11,13 @@
 #include "server/common/progress.h"
 #include "server/common/status.h"
 #include "server/pacs/dicom_json.h"
+#include "server/pacs/pacs_client.h"
 #include "server/pacs/pacs_endpoint.h"
 #include "server/pacs/study_query.h"
 
 namespace vpm::pacs {
 
-struct StudySearch {
-  std::vector<StudySummary> studies;  // in the PACS's order, each UID once
-  bool truncated = false;             // the limit was reached; more may match
-  int64_t requests = 0;               // QIDO pages asked for
-};
-
-struct RetrievedSeries {
-  int64_t instances = 0;  // files written
-  int64_t bytes = 0;      // their total size
-};
-
-class DicomwebClient {
+class DicomwebClient : public PacsClient {
  public:
   struct Options {
     int64_t max_answer_bytes = int64_t{16} << 20;  // one QIDO answer
@@ -41,11 +31,12 @@ class DicomwebClient {
   // server that ignores `offset` answers the first page again, and the
   // search ends there instead of looping, marked truncated. Errors: CheckStudyQuery's, and those of
   // Get below.
-  Result<StudySearch> SearchStudies(const StudyQuery& query, const CancelToken& cancel) const;
+  Result<StudySearch> SearchStudies(const StudyQuery& query,
+                                    const CancelToken& cancel) const override;
 
   // QIDO-RS /studies/UID/series, sorted by SeriesNumber.
   Result<std::vector<SeriesSummary>> ListSeries(const std::string& study_uid,
-                                                const CancelToken& cancel) const;
+                                                const CancelToken& cancel) const override;
 
   // WADO-RS /studies/UID/series/UID with
   // Accept: multipart/related; type="application/dicom"; transfer-syntax=*
@@ -61,9 +52,13 @@ class DicomwebClient {
                                          const std::string& series_uid,
                                          const std::filesystem::path& folder, int64_t max_bytes,
                                          int64_t expected_instances, const ProgressFn& progress,
-                                         const CancelToken& cancel) const;
+                                         const CancelToken& cancel) const override;
 
-  const PacsEndpoint& endpoint() const { return endpoint_; }
+  // STOW-RS (stow_client.h).
+  Status Store(const std::vector<const std::string*>& files, const ProgressFn& progress,
+               const CancelToken& cancel) const override;
+
+  const PacsEndpoint& endpoint() const override { return endpoint_; }
 
  private:
   // GETs base + `path_and_query` into a string of at most max_answer_bytes.

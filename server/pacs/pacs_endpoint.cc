@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "server/pacs/dimse_address.h"
+
 namespace vpm::pacs {
 namespace {
 
@@ -14,7 +16,37 @@ using nlohmann::json;
 
 const std::set<std::string> kKeys = {"name",          "dicomweb",          "username",
                                      "password_file", "bearer_token_file", "ca_file",
-                                     "users",         "page_size"};
+                                     "users",         "page_size",         "dimse",
+                                     "calling_aet"};
+
+// The "dimse" and "calling_aet" keys of an entry without "dicomweb".
+Status ParseDimseKeys(const json& entry, const std::string& named, PacsEndpoint* endpoint) {
+  for (const char* key : {"username", "password_file", "bearer_token_file", "ca_file"}) {
+    if (entry.contains(key)) {
+      return absl::InvalidArgumentError(
+          StrCat(named, ": \"", key, "\" is for DICOMweb; a \"dimse\" endpoint has none"));
+    }
+  }
+  if (!entry["dimse"].is_string()) {
+    return absl::InvalidArgumentError(StrCat(named, ": \"dimse\" must be a string AET@HOST:PORT"));
+  }
+  Result<DimseAddress> address = ParseDimseAddress(entry["dimse"].get<std::string>());
+  if (!address.ok()) {
+    return absl::InvalidArgumentError(StrCat(named, ": \"dimse\": ", address.status().message()));
+  }
+  endpoint->dimse_ae_title = address->ae_title;
+  endpoint->dimse_host = address->host;
+  endpoint->dimse_port = address->port;
+  if (entry.contains("calling_aet")) {
+    if (!entry["calling_aet"].is_string() ||
+        !CheckAeTitle(entry["calling_aet"].get<std::string>()).ok()) {
+      return absl::InvalidArgumentError(
+          StrCat(named, ": \"calling_aet\" must be an AE title (1-16 printable characters)"));
+    }
+    endpoint->calling_ae_title = entry["calling_aet"].get<std::string>();
+  }
+  return absl::OkStatus();
+}
 
 Result<std::string> ReadSecret(const std::filesystem::path& path, const std::string& where) {
   std::ifstream file(path, std::ios::binary);
@@ -62,6 +94,21 @@ Status CheckUrl(const std::string& url, const std::string& where) {
   return absl::OkStatus();
 }
 
+Status ParseUsers(const json& entry, const std::string& named, PacsEndpoint* endpoint) {
+  if (!entry.contains("users") || !entry["users"].is_array() || entry["users"].empty()) {
+    return absl::InvalidArgumentError(StrCat(named,
+                                             ": \"users\" must list the vpm users who may use it "
+                                             "(or [\"*\"] for every signed-in user)"));
+  }
+  for (const json& user : entry["users"]) {
+    if (!user.is_string() || user.get<std::string>().empty()) {
+      return absl::InvalidArgumentError(StrCat(named, ": \"users\" must hold non-empty strings"));
+    }
+    endpoint->users.push_back(user.get<std::string>());
+  }
+  return absl::OkStatus();
+}
+
 Result<PacsEndpoint> ParseEntry(const json& entry, const std::filesystem::path& folder,
                                 const std::string& where) {
   if (!entry.is_object()) return absl::InvalidArgumentError(StrCat(where, ": not an object"));
@@ -76,6 +123,15 @@ Result<PacsEndpoint> ParseEntry(const json& entry, const std::filesystem::path& 
     return absl::InvalidArgumentError(StrCat(where, ": \"name\": ", name.message()));
   }
   const std::string named = StrCat(where, " (", endpoint.name, ")");
+  if (entry.contains("dimse") == entry.contains("dicomweb")) {
+    return absl::InvalidArgumentError(
+        StrCat(named, ": give \"dicomweb\" (a URL) or \"dimse\" (AET@HOST:PORT), one of them"));
+  }
+  if (entry.contains("dimse")) {
+    RETURN_IF_ERROR(ParseDimseKeys(entry, named, &endpoint));
+    RETURN_IF_ERROR(ParseUsers(entry, named, &endpoint));
+    return endpoint;
+  }
   ASSIGN_OR_RETURN(endpoint.dicomweb_url, StringKey(entry, "dicomweb", named));
   if (endpoint.dicomweb_url.empty())
     return absl::InvalidArgumentError(StrCat(named, ": \"dicomweb\" is required"));
@@ -121,17 +177,7 @@ Result<PacsEndpoint> ParseEntry(const json& entry, const std::filesystem::path& 
     }
     endpoint.page_size = page.get<int64_t>();
   }
-  if (!entry.contains("users") || !entry["users"].is_array() || entry["users"].empty()) {
-    return absl::InvalidArgumentError(StrCat(named,
-                                             ": \"users\" must list the vpm users who may use it "
-                                             "(or [\"*\"] for every signed-in user)"));
-  }
-  for (const json& user : entry["users"]) {
-    if (!user.is_string() || user.get<std::string>().empty()) {
-      return absl::InvalidArgumentError(StrCat(named, ": \"users\" must hold non-empty strings"));
-    }
-    endpoint.users.push_back(user.get<std::string>());
-  }
+  RETURN_IF_ERROR(ParseUsers(entry, named, &endpoint));
   return endpoint;
 }
 

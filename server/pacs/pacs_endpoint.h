@@ -14,6 +14,12 @@ namespace vpm::pacs {
 struct PacsEndpoint {
   std::string name;                // 1-64 of [A-Za-z0-9._-], not starting with '.'
   std::string dicomweb_url;        // http:// or https:// base, no trailing '/', no credentials
+  // Or DICOM networking (DIMSE; dimse_client.h): the PACS's node, and the
+  // AE title vpm calls it with (default "VPM"). Exactly one of the two.
+  std::string dimse_ae_title;
+  std::string dimse_host;
+  int dimse_port = 0;
+  std::string calling_ae_title = "VPM";
   std::string username;            // basic auth with `password` (both read at start)
   std::string password;            // secret: never logged, never in an error
   std::string bearer_token;        // secret, from bearer_token_file
@@ -28,6 +34,8 @@ struct PacsEndpoint {
 //   {"name": "orthanc", "dicomweb": "http://127.0.0.1:8042/dicom-web",
 //    "username": "vpm", "password_file": "orthanc.pw",   (or "bearer_token_file")
 //    "ca_file": "ca.pem", "users": ["alice", "bob"], "page_size": 100}
+// or, for DICOM networking, {"name": "pacs", "dimse": "ORTHANC@10.0.0.5:4242",
+//    "calling_aet": "VPM", "users": [...]} (no credentials: DIMSE has none).
 // Relative file names are taken from the endpoints file's folder; a secret
 // file's surrounding whitespace is dropped. Unknown keys, a missing name,
 // URL or users list, a name given twice, credentials in the URL, both a

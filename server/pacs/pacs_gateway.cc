@@ -37,7 +37,12 @@ Result<std::unique_ptr<PacsGateway>> PacsGateway::Create(Options options) {
   ASSIGN_OR_RETURN(gateway->cache_, SeriesCache::Create(options.cache));
   for (PacsEndpoint& endpoint : options.endpoints) {
     const std::string name = endpoint.name;
-    gateway->clients_[name] = std::make_unique<DicomwebClient>(std::move(endpoint), options.client);
+    if (endpoint.dimse_host.empty()) {
+      gateway->clients_[name] =
+          std::make_unique<DicomwebClient>(std::move(endpoint), options.client);
+    } else {
+      gateway->clients_[name] = std::make_unique<DimseClient>(std::move(endpoint), options.dimse);
+    }
   }
   return gateway;
 }
@@ -50,7 +55,7 @@ std::vector<std::string> PacsGateway::EndpointsFor(const std::string& user) cons
   return out;
 }
 
-Result<const DicomwebClient*> PacsGateway::ClientFor(const std::string& user,
+Result<const PacsClient*> PacsGateway::ClientFor(const std::string& user,
                                                      const std::string& endpoint) const {
   auto it = clients_.find(endpoint);
   if (it == clients_.end() || !it->second->endpoint().AllowsUser(user)) {
@@ -66,7 +71,7 @@ Result<StudySearch> PacsGateway::SearchStudies(const std::string& user, const st
   AuditRecord record{
       .user = user, .action = "search", .endpoint = endpoint, .filters = StudyQueryFilters(query)};
   Result<StudySearch> result = [&]() -> Result<StudySearch> {
-    ASSIGN_OR_RETURN(const DicomwebClient* client, ClientFor(user, endpoint));
+    ASSIGN_OR_RETURN(const PacsClient* client, ClientFor(user, endpoint));
     return client->SearchStudies(query, cancel);
   }();
   record.result = result.status();
@@ -84,7 +89,7 @@ Result<std::vector<SeriesSummary>> PacsGateway::ListSeries(const std::string& us
                      .endpoint = endpoint,
                      .study_uid = CheckUid(study_uid, "").ok() ? study_uid : ""};
   Result<std::vector<SeriesSummary>> result = [&]() -> Result<std::vector<SeriesSummary>> {
-    ASSIGN_OR_RETURN(const DicomwebClient* client, ClientFor(user, endpoint));
+    ASSIGN_OR_RETURN(const PacsClient* client, ClientFor(user, endpoint));
     return client->ListSeries(study_uid, cancel);
   }();
   record.result = result.status();
@@ -93,7 +98,7 @@ Result<std::vector<SeriesSummary>> PacsGateway::ListSeries(const std::string& us
   return result;
 }
 
-Status PacsGateway::FetchSeries(const DicomwebClient& client, const std::string& study_uid,
+Status PacsGateway::FetchSeries(const PacsClient& client, const std::string& study_uid,
                                 const std::string& series_uid, const std::filesystem::path& folder,
                                 int64_t max_bytes, const VolumeLimits& limits,
                                 const ProgressFn& progress, const CancelToken& cancel,
@@ -145,7 +150,7 @@ Result<Volume> PacsGateway::LoadSeries(const std::string& user, std::string_view
     record.endpoint = s.endpoint;
     record.study_uid = s.study_uid;
     record.series_uid = s.series_uid;
-    ASSIGN_OR_RETURN(const DicomwebClient* client, ClientFor(user, s.endpoint));
+    ASSIGN_OR_RETURN(const PacsClient* client, ClientFor(user, s.endpoint));
     int64_t instances = -1;
     ASSIGN_OR_RETURN(std::shared_ptr<const SeriesCache::Lease> lease,
                      cache_->Open(
@@ -182,7 +187,7 @@ Result<Volume> PacsGateway::LoadSeries(const std::string& user, std::string_view
   return result;
 }
 
-Result<StowResult> PacsGateway::StoreExport(const std::string& user, const std::string& endpoint,
+Status PacsGateway::StoreExport(const std::string& user, const std::string& endpoint,
                                             const std::vector<const std::string*>& files,
                                             const std::string& study_uid,
                                             const std::string& series_uid,
@@ -191,11 +196,11 @@ Result<StowResult> PacsGateway::StoreExport(const std::string& user, const std::
   AuditRecord record{.user = user, .action = "export", .endpoint = endpoint,
                      .study_uid = study_uid, .series_uid = series_uid,
                      .instances = static_cast<int64_t>(files.size())};
-  Result<StowResult> result = [&]() -> Result<StowResult> {
-    ASSIGN_OR_RETURN(const DicomwebClient* client, ClientFor(user, endpoint));
-    return StoreInstances(client->endpoint(), files, {}, progress, cancel);
+  Status result = [&]() -> Status {
+    ASSIGN_OR_RETURN(const PacsClient* client, ClientFor(user, endpoint));
+    return client->Store(files, progress, cancel);
   }();
-  record.result = result.status();
+  record.result = result;
   audit_->Record(record);
   return result;
 }

@@ -15,9 +15,9 @@
 #include "server/common/status.h"
 #include "server/pacs/audit_log.h"
 #include "server/pacs/dicomweb_client.h"
+#include "server/pacs/dimse_client.h"
 #include "server/pacs/pacs_endpoint.h"
 #include "server/pacs/series_cache.h"
-#include "server/pacs/stow_client.h"
 #include "server/volume/volume.h"
 
 namespace vpm::pacs {
@@ -29,6 +29,7 @@ class PacsGateway {
     SeriesCache::Options cache;
     std::filesystem::path audit_log;  // required
     DicomwebClient::Options client;
+    DimseClient::Options dimse;
   };
   static Result<std::unique_ptr<PacsGateway>> Create(Options options);
 
@@ -57,10 +58,11 @@ class PacsGateway {
                             const VolumeLimits& limits, const ProgressFn& progress,
                             const CancelToken& cancel);
 
-  // Sends an export's files to `endpoint` (STOW-RS, stow_client.h), audited
-  // as "export" with the study and the derived series; PermissionDenied as
-  // SearchStudies for an endpoint `user` may not use.
-  Result<StowResult> StoreExport(const std::string& user, const std::string& endpoint,
+  // Sends an export's files to `endpoint` (STOW-RS or C-STORE, as the
+  // endpoint speaks), audited as "export" with the study and the derived
+  // series; PermissionDenied as SearchStudies for an endpoint `user` may
+  // not use.
+  Status StoreExport(const std::string& user, const std::string& endpoint,
                                  const std::vector<const std::string*>& files,
                                  const std::string& study_uid, const std::string& series_uid,
                                  const ProgressFn& progress, const CancelToken& cancel);
@@ -75,14 +77,14 @@ class PacsGateway {
 
  private:
   PacsGateway() = default;
-  Result<const DicomwebClient*> ClientFor(const std::string& user,
+  Result<const PacsClient*> ClientFor(const std::string& user,
                                           const std::string& endpoint) const;
-  Status FetchSeries(const DicomwebClient& client, const std::string& study_uid,
+  Status FetchSeries(const PacsClient& client, const std::string& study_uid,
                      const std::string& series_uid, const std::filesystem::path& folder,
                      int64_t max_bytes, const VolumeLimits& limits, const ProgressFn& progress,
                      const CancelToken& cancel, int64_t* instances);
 
-  std::map<std::string, std::unique_ptr<DicomwebClient>> clients_;  // by endpoint name
+  std::map<std::string, std::unique_ptr<PacsClient>> clients_;  // by endpoint name
   std::unique_ptr<SeriesCache> cache_;
   std::unique_ptr<AuditLog> audit_;
 };

@@ -31,6 +31,7 @@ void SceneHistory::Record(const SceneOp& op) {
       ops_.clear();
       return;
     case SceneOp::Kind::kSettle:
+    case SceneOp::Kind::kRemesh:
       return;  // changes no constraint
   }
 }

@@ -26,10 +26,14 @@ struct SceneOp {
   // kSettle: a still frame finished the bounded drag events here
   // (DeformableScene::Settle); a case marks the event before it
   // (CaseEvent::settled), so that a replay takes the same path.
-  enum class Kind { kGrab, kDrag, kPull, kRelease, kPin, kReset, kSettle };
+  // kRemesh: the session's mesh was replaced here by one refined at
+  // `vector` (refinement on grab): the scene was rebuilt on it from its
+  // folded history. The scene itself changes nothing for it; a session's
+  // replay rebuilds there (Session::ReplaySceneLocked).
+  enum class Kind { kGrab, kDrag, kPull, kRelease, kPin, kReset, kSettle, kRemesh };
   Kind kind = Kind::kGrab;
   GrabRequest grab;        // kGrab
-  glm::dvec3 vector{0.0};  // kDrag: offset mm; kPull: force N; kPin: point mm
+  glm::dvec3 vector{0.0};  // kDrag: offset mm; kPull: force N; kPin, kRemesh: point mm
   double radius_mm = 0.0;  // kPin
   bool keep = false;       // kRelease
 };

@@ -39,6 +39,8 @@ Status DeformableScene::Replay(const std::vector<SceneOp>& ops, ReplayMode mode)
       case SceneOp::Kind::kSettle:
         RETURN_IF_ERROR(Settle(kSettleSolves).status());
         break;
+      case SceneOp::Kind::kRemesh:
+        break;  // the mesh is the caller's (Session::ReplaySceneLocked)
     }
   }
   return absl::OkStatus();

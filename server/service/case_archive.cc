@@ -16,6 +16,7 @@ v3::CaseEventKind KindToApi(SceneOp::Kind kind) {
     case SceneOp::Kind::kRelease: return v3::CASE_EVENT_RELEASE;
     case SceneOp::Kind::kPin: return v3::CASE_EVENT_PIN;
     case SceneOp::Kind::kReset: return v3::CASE_EVENT_RESET;
+    case SceneOp::Kind::kRemesh: return v3::CASE_EVENT_REMESH;
     case SceneOp::Kind::kSettle: break;  // never stored as an event
   }
   return v3::CASE_EVENT_KIND_UNSPECIFIED;
@@ -29,6 +30,7 @@ Result<SceneOp::Kind> KindFromApi(v3::CaseEventKind kind) {
     case v3::CASE_EVENT_RELEASE: return SceneOp::Kind::kRelease;
     case v3::CASE_EVENT_PIN: return SceneOp::Kind::kPin;
     case v3::CASE_EVENT_RESET: return SceneOp::Kind::kReset;
+    case v3::CASE_EVENT_REMESH: return SceneOp::Kind::kRemesh;
     default: return absl::InvalidArgumentError(StrCat("kind ", static_cast<int>(kind), " is unknown"));
   }
 }
@@ -49,15 +51,15 @@ Result<cases::CaseEvent> FromApi(const v3::CaseArchiveEvent& in, const VolumeGeo
   if (!Finite(point) || !Finite(vector) || !std::isfinite(in.radius_mm()) || in.radius_mm() < 0) {
     return absl::InvalidArgumentError(StrCat(at, ": a number is not finite (or a radius < 0)"));
   }
-  if (e.op.kind == SceneOp::Kind::kGrab || e.op.kind == SceneOp::Kind::kPin) {
-    RETURN_IF_ERROR(CheckInsideVolume(geometry, point, StrCat(at, ".point_mm")));
-  }
+  const bool has_point = e.op.kind == SceneOp::Kind::kGrab || e.op.kind == SceneOp::Kind::kPin ||
+                         e.op.kind == SceneOp::Kind::kRemesh;
+  if (has_point) RETURN_IF_ERROR(CheckInsideVolume(geometry, point, StrCat(at, ".point_mm")));
   if (e.op.kind == SceneOp::Kind::kGrab) {
     e.op.grab = {.point_mm = point,
                  .rule = in.rule() == v3::GRAB_RULE_BALL ? GrabRule::kBall : GrabRule::kOrgan,
                  .radius_mm = in.radius_mm()};
   } else {
-    e.op.vector = e.op.kind == SceneOp::Kind::kPin ? point : vector;
+    e.op.vector = has_point ? point : vector;
     e.op.radius_mm = in.radius_mm();
   }
   e.op.keep = in.keep();
@@ -86,7 +88,7 @@ v3::CaseArchive ToCaseArchive(const cases::CaseRecord& record,
       *a->mutable_point_mm() = PointToApi(e.op.grab.point_mm, geometry);
       a->set_rule(e.op.grab.rule == GrabRule::kBall ? v3::GRAB_RULE_BALL : v3::GRAB_RULE_ORGAN);
       a->set_radius_mm(e.op.grab.radius_mm);
-    } else if (e.op.kind == SceneOp::Kind::kPin) {
+    } else if (e.op.kind == SceneOp::Kind::kPin || e.op.kind == SceneOp::Kind::kRemesh) {
       *a->mutable_point_mm() = PointToApi(e.op.vector, geometry);
       a->set_radius_mm(e.op.radius_mm);
     } else if (e.op.kind == SceneOp::Kind::kDrag || e.op.kind == SceneOp::Kind::kPull) {

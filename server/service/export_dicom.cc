@@ -92,8 +92,7 @@ Status RunDicomExport(ServiceContext* service, const std::string& user,
                                       [&](double f, std::string_view) {
                                         (void)emit(Progress("sending", f));
                                       },
-                                      cancel)
-                        .status());
+                                      cancel));
     summary.set_endpoint(request.endpoint());
   } else {
     for (size_t n = 0; n < files.size(); ++n) {

@@ -168,6 +168,10 @@ class Session : public std::enable_shared_from_this<Session> {
   // The offered refinement, if any, replaces the scene (frame and scene
   // locks held).
   void SwapInRefinedMeshLocked();
+  // A swap recorded in the case: its mesh parameters become the refined
+  // mesh's, and a kRemesh event marks where (scene lock held). A refusal is
+  // logged: the swap is not the user's event.
+  void RecordRemeshInCase(const MeshEntry& refined);
   void Changed(uint64_t sequence, bool deformed, const SceneStepTimings* step);
   // After ApplyLocked changed the scene: stores its op in the case (no case:
   // nothing to do; a camera event: the camera). The caller holds

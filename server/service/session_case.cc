@@ -52,8 +52,23 @@ Status Session::ReplaySceneLocked(const std::vector<SceneOp>& ops,
     std::lock_guard lock(state_mutex_);
     mesh = mesh_;
   }
-  ASSIGN_OR_RETURN(std::unique_ptr<DeformableScene> replayed,
-                   scene_->Replayed(mesh->mesh, ops, mode));
+  // After the last swap of a refined mesh (kRemesh), the scene was rebuilt
+  // from its folded history (DeformableScene::Rebuilt): the same here, then
+  // the ops that followed. The mesh in use is the case's last (SetMeshParams).
+  size_t rebuilt_at = ops.size();
+  for (size_t i = 0; i < ops.size(); ++i) {
+    if (ops[i].kind == SceneOp::Kind::kRemesh) rebuilt_at = i;
+  }
+  std::unique_ptr<DeformableScene> replayed;
+  if (rebuilt_at == ops.size()) {
+    ASSIGN_OR_RETURN(replayed, scene_->Replayed(mesh->mesh, ops, mode));
+  } else {
+    const std::vector<SceneOp> before(ops.begin(), ops.begin() + std::ptrdiff_t(rebuilt_at));
+    ASSIGN_OR_RETURN(replayed, scene_->Replayed(mesh->mesh, FoldHistory(before),
+                                                DeformableScene::ReplayMode::kFolded));
+    const std::vector<SceneOp> after(ops.begin() + std::ptrdiff_t(rebuilt_at) + 1, ops.end());
+    RETURN_IF_ERROR(replayed->Replay(after, mode));
+  }
   scene_ = std::move(replayed);
   std::lock_guard lock(state_mutex_);
   last_step_ = SceneStepTimings{};

@@ -64,11 +64,30 @@ void Session::SwapInRefinedMeshLocked() {
     return;
   }
   scene_ = *std::move(rebuilt);
+  RecordRemeshInCase(*next);
   std::lock_guard lock(state_mutex_);
   TakeSceneStateLocked();
   mesh_ = std::move(next);
   ++refinements_;
   last_swap_ms_ = MsSince(t0);
+}
+
+void Session::RecordRemeshInCase(const MeshEntry& refined) {
+  if (case_store_ == nullptr || !refined.params.refine_at_mm) return;
+  // The case reopens on the refined mesh, rebuilt where the swap was.
+  Status stored = case_store_->SetMeshParams(
+      case_id_, MeshParamsToApi(refined.params, volume_->volume.geometry()).SerializeAsString());
+  if (stored.ok()) {
+    stored = case_store_
+                 ->Append(case_id_,
+                          {.kind = SceneOp::Kind::kRemesh, .vector = *refined.params.refine_at_mm},
+                          scene_->fem().MaxDisplacementMm())
+                 .status();
+  }
+  if (!stored.ok()) {
+    std::fprintf(stderr, "vpm-server: session %s: the refined mesh not stored in its case: %s\n",
+                 id_.c_str(), stored.ToString().c_str());
+  }
 }
 
 int64_t Session::refinements() const {

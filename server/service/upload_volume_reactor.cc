@@ -146,10 +146,11 @@ Status UploadVolumeReactor::TakeHeader(const v3::UploadVolumeRequest::Header& he
                                              " bytes; at most ", kMaxPathComponentBytes));
   }
   if (!(EndsWith(name, ".nii") || EndsWith(name, ".nii.gz") || EndsWith(name, ".nrrd") ||
-        EndsWith(name, ".mha"))) {
+        EndsWith(name, ".mha") || EndsWith(name, ".zip") || EndsWith(name, ".tar") ||
+        EndsWith(name, ".tar.gz") || EndsWith(name, ".tgz"))) {
     return absl::InvalidArgumentError(
         StrCat("header.file_name: '", name, "' must end in .nii, .nii.gz, .nrrd or .mha "
-               "(single-file formats)"));
+               "(single-file formats), or .zip, .tar, .tar.gz or .tgz (a DICOM series)"));
   }
   if (header.total_bytes() <= 0) {
     return absl::InvalidArgumentError("header.total_bytes: must be positive");

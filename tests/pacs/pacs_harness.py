@@ -114,22 +114,29 @@ class Harness:
         return self.server is not None and self.server.poll() is None
 
     # -------------------------------------------------------------- Orthanc
-    def start_orthanc(self, users):
-        """Orthanc with authentication on, loopback HTTP only (the DICOM
-        server is off), storage in the temp folder. Returns the base URL."""
+    def start_orthanc(self, users, dimse=False):
+        """Orthanc with authentication on, loopback HTTP only, storage in the
+        temp folder. The DICOM server is off unless `dimse`: then Orthanc is
+        the node ORTHANC@127.0.0.1:self.orthanc_dicom_port, checks the AE
+        title it is called by, and knows vpm as the modality VPM (C-FIND,
+        C-GET, C-STORE). Returns the DICOMweb base URL."""
         if not os.access(ORTHANC, os.X_OK):
             raise SystemExit(f'FAIL: {ORTHANC} is not installed (scripts/install-deps.sh)')
         root = os.path.join(self.tmp, 'orthanc')
         os.makedirs(root, exist_ok=True)
         self.orthanc_port = free_port()
+        self.orthanc_dicom_port = free_port()
         self.orthanc_users = users
         config = {
             'Name': 'vpm-pacs-test',
             'StorageDirectory': os.path.join(root, 'storage'),
             'IndexDirectory': os.path.join(root, 'index'),
             'HttpPort': self.orthanc_port,
-            'DicomPort': free_port(),
-            'DicomServerEnabled': False,
+            'DicomPort': self.orthanc_dicom_port,
+            'DicomServerEnabled': dimse,
+            'DicomAet': 'ORTHANC',
+            'DicomCheckCalledAet': True,
+            'DicomModalities': {'vpm': ['VPM', '127.0.0.1', 1]},
             'RemoteAccessAllowed': False,
             'AuthenticationEnabled': True,
             'RegisteredUsers': users,
@@ -194,7 +201,9 @@ class Harness:
                 self.orthanc.wait()
 
     # ---------------------------------------------------------------- end
-    def close(self):
+    def close(self, keep=False):
+        """Stops every process started; removes the temp folder unless
+        `keep` (a failed test keeps its logs and screenshots there)."""
         for p in reversed(self.procs):
             if p.poll() is None:
                 p.send_signal(signal.SIGTERM)
@@ -203,4 +212,7 @@ class Harness:
                 except subprocess.TimeoutExpired:
                     p.kill()
                     p.wait()
-        shutil.rmtree(self.tmp, ignore_errors=True)
+        if keep:
+            print(f'      kept for inspection: {self.tmp}', flush=True)
+        else:
+            shutil.rmtree(self.tmp, ignore_errors=True)

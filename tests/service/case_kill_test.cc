@@ -50,7 +50,11 @@ class ServerProcess {
       dup2(fd, 2);
       execl(VPM_SERVER_BIN, VPM_SERVER_BIN, "--listen", "127.0.0.1:0", "--token-file",
             token_file.c_str(), "--state-dir", state.c_str(), "--max-sessions", "64",
-            "--still-delay-ms", "50", static_cast<char*>(nullptr));
+            "--still-delay-ms", "50",
+            // The reference sessions replay the script on the mesh they
+            // opened with; a refinement landing at its own moment would
+            // make them differ from the case for reasons other than a kill.
+            "--no-refine-on-grab", static_cast<char*>(nullptr));
       _exit(127);
     }
     for (int i = 0; i < 1200; ++i) {

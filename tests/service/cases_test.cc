@@ -11,6 +11,8 @@
 #include "server/common/sha256.h"
 #include "server/raycast/frame_encoder.h"
 #include "server/service/users_file.h"
+#include "tests/io/archive_test_util.h"
+#include "tests/io/dicom_test_util.h"
 #include "tests/service/service_test_util.h"
 
 namespace vpm::service::testing {
@@ -198,6 +200,77 @@ TEST_F(CasesTest, ACaseOfAnUploadReopensAfterARestartFromTheKeptFile) {
   v3::DeleteCaseResponse removed;
   ASSERT_TRUE(stub_->DeleteCase(Context(kAlice).get(), remove, &removed).ok());
   EXPECT_FALSE(fs::exists(dir_ / "state" / "blobs" / Sha256::HexOf(bytes)));
+}
+
+// A DICOM series uploaded as a zip (a folder dropped in the browser) reads
+// as a series of its user's, and its case reopens from the kept archive.
+TEST_F(CasesTest, ADicomSeriesUploadedAsAZipReadsAsASeriesAndItsCaseReopens) {
+  std::vector<vpm::testing::ArchiveEntry> slices;
+  const fs::path folder = dir_ / "series";
+  fs::create_directories(folder);
+  for (int k = 0; k < 24; ++k) {
+    vpm::testing::DicomSliceSpec s;
+    s.rows = 20;
+    s.columns = 24;
+    s.pixel_spacing_mm = {2.0, 2.0};
+    s.position_mm = {0.0, 0.0, 2.0 * k};
+    s.stored.resize(20 * 24);
+    for (int n = 0; n < 20 * 24; ++n) {
+      const int i = n % 24, j = n / 24;
+      const bool organ = std::abs(i - 12) < 6 && std::abs(j - 10) < 5 && std::abs(k - 12) < 6;
+      s.stored[n] = organ ? 1100 : (i < 2 ? 2500 : 1000);  // HU +76, bone at the edge, 0
+    }
+    const fs::path file = folder / ("IM" + std::to_string(k));
+    ASSERT_TRUE(vpm::testing::WriteDicomSlice(file, s));
+    slices.push_back({"patient/series/IM" + std::to_string(k), vpm::testing::ReadAll(file)});
+  }
+  vpm::testing::WriteArchive(dir_ / "series.zip", slices, true);
+  const std::string zipped = vpm::testing::ReadAll(dir_ / "series.zip");
+  const std::vector<uint8_t> bytes(zipped.begin(), zipped.end());
+  v3::VolumeInfo volume;
+  const grpc::Status uploaded = Upload(bytes, int64_t(bytes.size()), Sha256::HexOf(bytes),
+                                       64 << 10, &volume, true, kAlice, "series.zip");
+  ASSERT_TRUE(uploaded.ok()) << uploaded.error_message();
+  EXPECT_EQ(volume.dims(0), 24);
+  EXPECT_EQ(volume.dims(1), 20);
+  EXPECT_EQ(volume.dims(2), 24);
+  EXPECT_EQ(volume.owner(), "alice");
+  const std::string session = Plan(volume);
+  // On this small grid a still's bounded settle takes a few frames to come
+  // to rest: stills until it has (each settle is stored, so the reopened
+  // case takes the same path).
+  double planned = Still(session).max_displacement_mm();
+  for (int i = 0; i < 20; ++i) {
+    const double next = Still(session).max_displacement_mm();
+    if (std::abs(next - planned) < 1e-5) break;
+    planned = next;
+  }
+  ASSERT_GT(planned, 0.5);
+  v3::GetSessionRequest get;
+  get.set_session_id(session);
+  v3::SessionInfo info;
+  ASSERT_TRUE(stub_->GetSession(Context(kAlice).get(), get, &info).ok());
+  EXPECT_EQ(GetCase(info.case_id(), kAlice).source(),
+            "upload:" + Sha256::HexOf(bytes) + "/series.zip");
+
+  Restart();
+  v3::OpenCaseRequest open;
+  open.set_case_id(info.case_id());
+  v3::SessionInfo reopened;
+  const grpc::Status status = stub_->OpenCase(Context(kAlice).get(), open, &reopened);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_NEAR(Still(reopened.session_id()).max_displacement_mm(), planned, 1e-3);
+
+  // A zip without a series is the user's malformed upload, said plainly.
+  vpm::testing::WriteArchive(dir_ / "notes.zip", {{"notes.txt", "no images"}}, true);
+  const std::string notes = vpm::testing::ReadAll(dir_ / "notes.zip");
+  const std::vector<uint8_t> note_bytes(notes.begin(), notes.end());
+  v3::VolumeInfo refused;
+  const grpc::Status bad = Upload(note_bytes, int64_t(note_bytes.size()),
+                                  Sha256::HexOf(note_bytes), 64 << 10, &refused, true, kAlice,
+                                  "notes.zip");
+  EXPECT_EQ(bad.error_code(), grpc::INVALID_ARGUMENT) << bad.error_message();
+  EXPECT_EQ(bad.error_message().find("/tmp"), std::string::npos) << bad.error_message();
 }
 
 TEST_F(CasesTest, UndoTakesBackTheLastActionAndRedoBringsItBack) {

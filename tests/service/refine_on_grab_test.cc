@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <thread>
 
 #include "tests/service/service_test_util.h"
@@ -15,12 +16,11 @@ namespace {
 class RefineOnGrabTest : public ServiceTest {
  protected:
   void SetUp() override {
-    ServerOptions options = SmallServerOptions();
-    options.refine_on_grab = true;  // vpm-server --refine-on-grab
-    const char* source = std::getenv("VPM_SOURCE_DIR");
-    ASSERT_NE(source, nullptr) << "VPM_SOURCE_DIR: the repository (ctest sets it)";
-    options.data_root = std::string(source) + "/tests/data";
-    StartServer(options);
+    state_dir_ = std::filesystem::temp_directory_path() /
+                 ("vpm-refine-cases-" + std::to_string(::getpid()) + "-" +
+                  ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(state_dir_);
+    StartServer(Options());
     // The real abdominal CT (3 mm voxels), as a surgeon would grab it.
     volume_ = LoadPhantom("ct-abdomen-kidney/ct_abdomen.nii.gz");  // any source
     ASSERT_FALSE(volume_.volume_id().empty());
@@ -56,6 +56,31 @@ class RefineOnGrabTest : public ServiceTest {
     EXPECT_TRUE(stub_->GetMesh(context.get(), request, &response).ok());
     return response.info();
   }
+  void TearDown() override {
+    ServiceTest::TearDown();
+    std::filesystem::remove_all(state_dir_);
+  }
+  ServerOptions Options() const {
+    ServerOptions options = SmallServerOptions();
+    options.refine_on_grab = true;  // vpm-server --refine-on-grab
+    options.state_dir = state_dir_.string();  // every session is a case
+    const char* source = std::getenv("VPM_SOURCE_DIR");
+    EXPECT_NE(source, nullptr) << "VPM_SOURCE_DIR: the repository (ctest sets it)";
+    options.data_root = std::string(source ? source : ".") + "/tests/data";
+    return options;
+  }
+  // Still frames until one runs on another mesh than `mesh_id` (the
+  // refinement swapped in), at most 90 s.
+  v3::Frame StillOnAnotherMesh(const std::string& mesh_id) {
+    v3::Frame frame = Still();
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(90);
+    while (frame.mesh_id() == mesh_id && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      frame = Still();
+    }
+    return frame;
+  }
+  std::filesystem::path state_dir_;
   v3::VolumeInfo volume_;
   v3::SessionInfo session_;
 };
@@ -79,12 +104,7 @@ TEST_F(RefineOnGrabTest, AGrabRefinesTheMeshThereAndTheDragGoesOnWithoutAJump) {
   ASSERT_GT(coarse.max_displacement_mm(), 1.0);
 
   // The refinement runs beside the session; a still frame swaps it in.
-  v3::Frame fine = coarse;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(90);
-  while (fine.mesh_id() == coarse_id && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    fine = Still();
-  }
+  const v3::Frame fine = StillOnAnotherMesh(coarse_id);
   ASSERT_NE(fine.mesh_id(), coarse_id) << "no refined mesh was swapped in within 90 s";
   const v3::MeshInfo refined = Mesh(fine.mesh_id());
   EXPECT_GT(refined.stats().refined(), 0);
@@ -119,6 +139,47 @@ TEST_F(RefineOnGrabTest, AGrabRefinesTheMeshThereAndTheDragGoesOnWithoutAJump) {
   Manipulate(grab);
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   EXPECT_EQ(Still().mesh_id(), fine.mesh_id());
+}
+
+// The swap is part of the case: after a restart the case reopens on the
+// refined mesh, rebuilt where the swap was, with the same deformation.
+TEST_F(RefineOnGrabTest, ACaseReopensOnTheRefinedMeshWithTheSameDeformation) {
+  ASSERT_FALSE(session_.case_id().empty());
+  const std::string coarse_id = session_.mesh_id();
+  v3::ClientEvent grab;
+  *grab.mutable_grab()->mutable_point_mm() = V(79, -125.3, 358.3);  // the left kidney
+  Manipulate(grab);
+  v3::ClientEvent drag;
+  *drag.mutable_drag()->mutable_offset_mm() = V(0, 0, 9);
+  Manipulate(drag);
+  const v3::Frame fine = StillOnAnotherMesh(coarse_id);
+  ASSERT_NE(fine.mesh_id(), coarse_id) << "no refined mesh was swapped in within 90 s";
+  // More drags after the swap, one left to the bounded steps.
+  *drag.mutable_drag()->mutable_offset_mm() = V(0, 0, 15);
+  Manipulate(drag);
+  *drag.mutable_drag()->mutable_offset_mm() = V(2, 0, 17);
+  Manipulate(drag);
+  const v3::Frame before = Still();
+  ASSERT_GT(before.max_displacement_mm(), 5.0);
+
+  server_->Shutdown(std::chrono::milliseconds(2000));
+  server_.reset();
+  StartServer(Options());
+  v3::OpenCaseRequest open;
+  open.set_case_id(session_.case_id());
+  v3::SessionInfo reopened;
+  const grpc::Status status = stub_->OpenCase(Context().get(), open, &reopened);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  session_ = reopened;
+  EXPECT_GT(Mesh(reopened.mesh_id()).stats().refined(), 0) << "the case reopened on the coarse mesh";
+  const v3::Frame after = Still();
+  std::printf("refined case reopened: largest displacement %.6f -> %.6f mm\n",
+              before.max_displacement_mm(), after.max_displacement_mm());
+  EXPECT_NEAR(after.max_displacement_mm(), before.max_displacement_mm(), 1e-3);
+  // Reopened on the refined mesh, the session asks for no new refinement
+  // at the same place.
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(Still().mesh_id(), reopened.mesh_id());
 }
 
 }  // namespace

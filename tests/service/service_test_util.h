@@ -31,6 +31,10 @@ inline ServerOptions SmallServerOptions() {
   o.max_streams_per_user = 4;
   o.still_delay_ms = 100;
   o.max_frame_side = 512;
+  // The mesh stays the one the session opened with, so that a test's
+  // frames and displacements do not depend on when a background refinement
+  // lands (refine_on_grab_test turns it on).
+  o.refine_on_grab = false;
   return o;
 }
 
@@ -91,12 +95,13 @@ class ServiceTest : public ::testing::Test {
   // `chunk` bytes.
   grpc::Status Upload(const std::vector<uint8_t>& bytes, int64_t declared, const std::string& sha,
                       size_t chunk, v3::VolumeInfo* info, bool header = true,
-                      const std::string& token = kToken) {
+                      const std::string& token = kToken,
+                      const std::string& file_name = "case.nii") {
     auto context = Context(token);
     auto writer = stub_->UploadVolume(context.get(), info);
     if (header) {
       v3::UploadVolumeRequest h;
-      h.mutable_header()->set_file_name("case.nii");
+      h.mutable_header()->set_file_name(file_name);
       h.mutable_header()->set_total_bytes(declared);
       h.mutable_header()->set_sha256_hex(sha);
       if (!writer->Write(h)) return writer->Finish();

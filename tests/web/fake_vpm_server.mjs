@@ -20,10 +20,14 @@
 // The PACS calls (ListPacsEndpoints, SearchStudies, ListSeries, LoadVolume of
 // pacs: sources with GetLoadProgress, ExportDicom) are fake_pacs.mjs's, with
 // the endpoints of setPacs([...]) (none: a server without --pacs).
+// UploadVolume checks what the real server checks (fake_upload.mjs) and
+// keeps each upload in `uploads` (header, chunk sizes, bytes, metadata,
+// whether it was cancelled); the volume it answers opens like any other.
 import { createRequire } from 'node:module';
 import path from 'node:path';
 
 import { makePacs } from './fake_pacs.mjs';
+import { makeUploads } from './fake_upload.mjs';
 
 export async function startFakeServer(source, { tls = null, users = {} } = {}) {
   const require = createRequire(path.join(source, 'client', 'web', 'package.json'));
@@ -76,10 +80,16 @@ export async function startFakeServer(source, { tls = null, users = {} } = {}) {
   const pacs = makePacs(grpc, users, (id, auth) => (owners.has(id) && owners.get(id) === auth
     ? (loaded.get(sessionVolumes.get(id)) ?? volume).source : null));
   pacs.record = record;
+  const uploads = makeUploads(grpc, users, (name, owner) => remember({
+    ...volume, volume_id: `vol-${++next}`, source: `upload:${name}`, owner }));
   const server = new grpc.Server();
   server.addService(Vpm.service, {
     ...cases.handlers(unary, owners, () => `ses-${++next}`),
     ...pacs.handlers(unary),
+    UploadVolume: (call, callback) => {
+      record('UploadVolume', call);
+      uploads.take(call, callback);
+    },
     ListVolumes: unary('ListVolumes', () => ({ volumes: [volume] })),
     GetVolume: unary('GetVolume', (r) => loaded.get(r.volume_id) ?? volume),
     LoadVolume: (call, callback) => {
@@ -182,6 +192,7 @@ export async function startFakeServer(source, { tls = null, users = {} } = {}) {
   return { address: `127.0.0.1:${port}`, calls, stop: () => server.forceShutdown(),
            keepCases: (on) => { cases.kept = on; },
            setPacs: (endpoints) => { pacs.endpoints = endpoints; },
+           uploads,
            pacs,
            share: (sessionId, token) => shared.add(`${sessionId} Bearer ${token}`),
            revoke: (sessionId, token) => {

@@ -13,18 +13,22 @@
 //   POST /login               token=TOKEN (form): signs in, 303 to /; 401 with the form
 //   POST /logout              ends the sign-in (its tabs close), 303 to /login
 //   GET  /whoami              {"user": NAME} or 401
+//   POST /upload              a volume file from a signed-in tab (volume_upload.js)
 //   GET  anything else        the page (static_files.js) when signed in, else 303 /login
 //
 // Every request but /healthz must name an allowed host (421 otherwise: DNS
 // rebinding); a POST with an Origin must come from an allowed origin (403);
 // failed sign-ins are throttled per address (429). Redirects stay on this
-// origin.
+// origin. A request but an upload that has not arrived whole within 30 s
+// loses its connection (Node's own requestTimeout, which would end an
+// upload too, is off: gateway.js).
 import { loginPage } from './login_page.js';
 import { securityHeaders } from './security_headers.js';
 import { notCrossSiteNavigation, sameOriginLocation } from './sign_in_link.js';
 
 const kMaxFormBytes = 8192;
 const kFormTimeoutMs = 10000;
+const kRequestTimeoutMs = 30000;  // uploads have their own idle limit
 
 // The host name of a Host header ("name:port", "[v6]:port"), lower case;
 // null when it does not parse.
@@ -81,8 +85,9 @@ function readForm(req) {
 }
 
 // options: {signIns, serveFile, allowedHost(req), allowedOrigin(origin),
-// tls, log}.
-export function makeRequestHandler({ signIns, serveFile, allowedHost, allowedOrigin, tls, log }) {
+// tls, log, upload(req, res, signIn): POST /upload, or null: 404}.
+export function makeRequestHandler({ signIns, serveFile, allowedHost, allowedOrigin, tls, log,
+                                     upload = null }) {
   const address = (req) => req.socket?.remoteAddress ?? 'unknown';
 
   async function handle(req, res) {
@@ -156,6 +161,7 @@ export function makeRequestHandler({ signIns, serveFile, allowedHost, allowedOri
       return undefined;
     }
     const signIn = signIns.fromRequest(req);
+    if (url.pathname === '/upload' && upload) return upload(req, res, signIn);
     if (url.pathname === '/logout') {
       if (req.method !== 'POST') return text(405, 'method not allowed', { Allow: 'POST' });
       if (signIn) signIns.remove(signIn);
@@ -174,9 +180,22 @@ export function makeRequestHandler({ signIns, serveFile, allowedHost, allowedOri
     return serveFile(req, res);
   }
 
+  // A request whose body trickles (or never ends) loses its connection, as
+  // with Node's requestTimeout; an upload is bounded by volume_upload.js.
+  const boundTime = (req) => {
+    if (req.method === 'POST' && /^\/upload(\?|$)/.test(req.url ?? '')) return;
+    const timer = setTimeout(() => {
+      if (!req.complete) req.socket?.destroy();
+    }, kRequestTimeoutMs);
+    const clear = () => clearTimeout(timer);
+    req.once('end', clear);
+    req.once('close', clear);
+  };
+
   return (req, res) => {
     req.on('error', () => {});
     res.on('error', () => {});
+    boundTime(req);
     const failed = (e) => {
       log(`request ${String(req.method).slice(0, 16)} failed: ${e?.stack ?? e}`);
       if (!res.headersSent) {

@@ -25,12 +25,17 @@
 //   {type: 'pacs_endpoints'|'pacs_search'|'pacs_series'|'pacs_open'|'pacs_cancel', ...}
 //        pacs_calls.js (the Studies panel)
 //   {type: 'export_dicom', endpoint, series_description}   dicom_export_call.js
+// A volume file comes by POST /upload naming this tab (volume_upload.js);
+// its progress comes here as upload_progress, and the page then opens the
+// new volume with 'open' {volume_id}.
 // Gateway -> browser:
 //   binary: one frame (lib/frame_packet.js)
 //   {type: 'hello'|'server'|'volumes'|'progress'|'opened'|'refined'|'stream'|
 //          'session_lost'|'tf'|'cases'|'case_renamed'|'case_deleted'|'undone'|
 //          'pacs_endpoints'|'pacs_studies'|'pacs_series'|'pacs_progress'|
-//          'pacs_loaded'|'export_progress'|'exported'|'pacs_error'|'error', ...}
+//          'pacs_loaded'|'export_progress'|'exported'|'pacs_error'|'upload_progress'|
+//          'error', ...}
+//   hello: {server, tab_id, max_upload_bytes}: tab_id names this tab in an upload
 // With --state-dir on the server every session is a case: `opened` and
 // `refined` carry it (session.case_id), and the page reopens it by id when
 // the session is lost (a server restart) or the gateway comes back.
@@ -68,10 +73,14 @@ export class ViewerConnection {
   // ws: a `ws` WebSocket; client: a VpmClient; shape: a ProtoShape of the
   // client's proto; meshRefs: the gateway's MeshRefs; token: the signed-in
   // user's token ('' for a server without auth); user: their name; record:
-  // the gateway's SessionRecord; log: (line) => void.
+  // the gateway's SessionRecord; log: (line) => void; maxUploadBytes: the
+  // gateway's upload cap, told to the page.
   constructor({ ws, client, shape, meshRefs, token = '', user = '', record = new SessionRecord(),
-                log = () => {} }) {
+                log = () => {}, maxUploadBytes = 0 }) {
     Object.assign(this, { ws, client, shape, meshRefs, user, record, log });
+    // Names this tab in POST /upload (with the user's cookie): the upload
+    // goes as this tab's user, with its x-vpm-session key.
+    this.tabId = crypto.randomBytes(16).toString('base64url');
     // Every call of this tab: the user's token and one x-vpm-session key,
     // on the user's own channel.
     this.as = { token, affinity: crypto.randomUUID() };
@@ -124,7 +133,8 @@ export class ViewerConnection {
     // the socket with the matching code after this.
     ws.on('error', (e) => this.log(`WebSocket error: ${e.message}`));
     ws.on('close', () => this.onClose());
-    this.send({ type: 'hello', server: client.address });
+    this.send({ type: 'hello', server: client.address, tab_id: this.tabId,
+                max_upload_bytes: maxUploadBytes });
     this.probe();
   }
 

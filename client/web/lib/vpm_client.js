@@ -63,6 +63,9 @@ const kDeadlineMs = {
   SearchStudies: 90000,
   ListSeries: 90000,
   GetLoadProgress: 5000,
+  // The gateway's spooled file at disk speed, then the server's read of it
+  // (a DICOM archive of a large series takes a while).
+  UploadVolume: 600000,
 };
 
 export class VpmClient {
@@ -142,6 +145,13 @@ export class VpmClient {
   exportDicom(request, as = {}, deadlineMs = 600000) {
     return this.stub(as).ExportDicom(request, this.metadata(as),
                                      { deadline: new Date(Date.now() + deadlineMs) });
+  }
+
+  // The UploadVolume client stream as `as` (header first, then chunks;
+  // the gateway's lib/volume_upload.js writes them); callback(err, VolumeInfo).
+  uploadVolume(as, callback) {
+    return this.stub(as).UploadVolume(this.metadata(as), { deadline: new Date(
+      Date.now() + kDeadlineMs.UploadVolume) }, callback);
   }
 
   close() {

@@ -2,7 +2,8 @@
 // gateway socket. The browser only shows frames and sends input; every
 // server call happens in the gateway. `window.vpmViewer` exposes the state
 // (frames, last frame header, peak displacement, errors, the case, the
-// last undo's answer, the Studies panel, the last export's summary) to tests.
+// last undo's answer, the Studies panel, the last export's summary, the
+// uploads) to tests.
 import { OrbitCamera } from './camera.js';
 import { CasesPanel } from './cases_panel.js';
 import { CutControls } from './cut_controls.js';
@@ -13,6 +14,7 @@ import { PointerTools } from './pointer_tools.js';
 import { SliceViews } from './slice_views.js';
 import { StudiesPanel } from './studies_panel.js';
 import { installUndoKeys } from './undo_keys.js';
+import { UploadPanel } from './upload_panel.js';
 
 const $ = (id) => document.getElementById(id);
 const canvas = $('frame');
@@ -68,6 +70,18 @@ const studies = new StudiesPanel({
 });
 state.studies = studies;
 
+// An uploaded volume opens as a volume of the list does.
+const uploads = new UploadPanel({
+  $,
+  say: (text, kind) => showMessage(text, kind),
+  openVolume(volume) {
+    studies.forget();
+    openIntent({ volume_id: volume.volume_id });
+    socket.send({ type: 'list' });
+  },
+});
+state.uploads = uploads;
+
 const exporter = new ExportButton({
   e: { button: $('export-pacs'), description: $('export-description'), progress: $('export-progress') },
   send: (m) => socket.send(m),
@@ -100,6 +114,7 @@ const socket = new GatewaySocket({
   onClose(delayMs) {
     const wasUp = state.gatewayUp;
     Object.assign(state, { gatewayUp: false, session: null, opening: false });
+    uploads.connected(null);
     refreshExport();
     setServerState('down', 'gateway unreachable');
     showMessage(`${wasUp ? 'Lost the connection to' : 'Cannot reach'} the web gateway at ` +
@@ -232,7 +247,10 @@ const tools = new PointerTools({
 // ------------------------------------------------------------ messages in
 
 const handlers = {
-  hello(m) { state.gatewayServer = m.server; },
+  hello(m) {
+    state.gatewayServer = m.server;
+    uploads.connected(m);
+  },
   server(m) {
     state.serverUp = m.up;
     if (!m.up) {
@@ -270,6 +288,7 @@ const handlers = {
     showMessage('');
     showMesh();
     studies.opened(m.volume);
+    uploads.opened(m.volume);
   },
   refined(m) {
     Object.assign(state, { mesh: m.mesh, session: m.session });
@@ -315,7 +334,10 @@ const handlers = {
     slices.cancelGrab();
     showMessage(m.message, 'error');
     if (m.case_id && m.case_id === state.intent?.case_id && !state.session) caseOpenFailed(m);
-    if (m.what?.startsWith('Opening volume')) studies.viewerFailed(m.message);
+    if (m.what?.startsWith('Opening volume')) {
+      studies.viewerFailed(m.message);
+      uploads.viewerFailed(m);
+    }
   },
   cases(m) {
     casesPanel.show(m);
@@ -367,6 +389,7 @@ const handlers = {
     else studies.failed(m);
   },
   export_progress(m) { exporter.progress(m); },
+  upload_progress(m) { uploads.serverProgress(m); },
   exported(m) {
     exporter.done(m);
     state.lastExport = m.summary;

@@ -29,6 +29,10 @@ export class ExportButton {
     this.endpoint = session && !watching ? pacsEndpointOf(source) : null;
     const b = this.e.button;
     b.disabled = !this.endpoint || Boolean(this.running);
+    // Shown only for a session on a PACS series: the volume row stays one
+    // line otherwise.
+    b.hidden = !this.endpoint && !this.running;
+    this.e.description.hidden = b.hidden;
     b.textContent = this.endpoint ? `Export to PACS (${this.endpoint})` : 'Export to PACS';
     b.title = this.endpoint
       ? `Send the deformed volume and a capture of the 3D view to ${this.endpoint}, as new series ` +

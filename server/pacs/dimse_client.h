@@ -1,0 +1,53 @@
+// A PACS endpoint reached by DICOM networking (DIMSE, DCMTK's DcmSCU), for
+// archives without DICOMweb: C-FIND (study root) to search studies and list
+// a study's series, C-GET to retrieve a series on the same association (no
+// port of vpm's own for the PACS to call back), C-STORE to send an export,
+// C-ECHO to check the node. Each call is one association, released after.
+#pragma once
+
+#include <cstdint>
+
+#include "server/pacs/pacs_client.h"
+
+namespace vpm::pacs {
+
+class DimseClient : public PacsClient {
+ public:
+  struct Options {
+    int64_t connect_timeout_s = 10;  // TCP connect and association negotiation
+    int64_t dimse_timeout_s = 60;    // between two messages of the PACS
+    int64_t max_find_answers = 5000; // C-FIND answers read before cancelling
+  };
+  DimseClient(PacsEndpoint endpoint, Options options);
+
+  // C-ECHO. Errors as below.
+  Status Echo(const CancelToken& cancel) const;
+
+  // C-FIND at STUDY level, matching as the PACS does (wildcards, date
+  // ranges). Answers past query.limit cancel the find; the search is then
+  // truncated.
+  Result<StudySearch> SearchStudies(const StudyQuery& query,
+                                    const CancelToken& cancel) const override;
+  Result<std::vector<SeriesSummary>> ListSeries(const std::string& study_uid,
+                                                const CancelToken& cancel) const override;
+  // C-GET of one series; every instance written as it arrives (its own
+  // transfer syntax kept). An instance of another series is InvalidArgument
+  // (mixed series); nothing received is NotFound.
+  Result<RetrievedSeries> RetrieveSeries(const std::string& study_uid,
+                                         const std::string& series_uid,
+                                         const std::filesystem::path& folder, int64_t max_bytes,
+                                         int64_t expected_instances, const ProgressFn& progress,
+                                         const CancelToken& cancel) const override;
+  // C-STORE of each file (CT, MR and Secondary Capture, explicit VR little
+  // endian as vpm writes them).
+  Status Store(const std::vector<const std::string*>& files, const ProgressFn& progress,
+               const CancelToken& cancel) const override;
+
+  const PacsEndpoint& endpoint() const override { return endpoint_; }
+
+ private:
+  PacsEndpoint endpoint_;
+  Options options_;
+};
+
+}  // namespace vpm::pacs
