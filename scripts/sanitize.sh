@@ -34,7 +34,7 @@ export ASAN_OPTIONS="detect_leaks=1:halt_on_error=1:abort_on_error=1"
 export LSAN_OPTIONS="suppressions=$supp/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$supp/tsan.supp"
-regex="^($(IFS='|'; echo "ServiceTest|SessionTest|UploadTest|DataRootTest|MeshLifecycleTest|CancellationTest|RenderStormTest|FairJobQueue|WorkerPool|ResourceLifecycleTest|RenderSliceTest|UsersTest|UsersServer|UsersFile|CasesTest|CasesOff"))\.|^(Fem|Stiff|Polar|Patch|Uniaxial|LargeRotation|Heterogeneity|Constrained|Spring|FixedDofs|InversionBarrier|Interpolate|Raycast|Render|Clip|Slice|Camera|Overlay|FrameEncoder|Pick|VolumeMipWindow)"
+regex="^($(IFS='|'; echo "ServiceTest|SessionTest|UploadTest|DataRootTest|MeshLifecycleTest|CancellationTest|RenderStormTest|FairJobQueue|WorkerPool|ResourceLifecycleTest|RenderSliceTest|UsersTest|UsersServer|UsersFile|CasesTest|CasesOff|ExportDicomTest"))\.|^(Fem|Stiff|Polar|Patch|Uniaxial|LargeRotation|Heterogeneity|Constrained|Spring|FixedDofs|InversionBarrier|Interpolate|Raycast|Render|Clip|Slice|Camera|Overlay|FrameEncoder|Pick|VolumeMipWindow)"
 start=$(date +%s)
 # The render storm's drag bounds its longest wait for a frame in seconds,
 # which a sanitizer stretches ten- to fifty-fold; its other test (the full

@@ -44,20 +44,29 @@ Status StatusFromHttp(int64_t status, const std::string& label, const std::strin
   return absl::UnavailableError(StrCat(head, " (an answer vpm does not expect)"));
 }
 
+HttpRequest RequestTo(const PacsEndpoint& endpoint, std::string url,
+                      std::vector<std::string> headers, int64_t connect_timeout_s,
+                      int64_t stall_timeout_s) {
+  return {.url = std::move(url),
+          .headers = std::move(headers),
+          .username = endpoint.username,
+          .password = endpoint.password,
+          .bearer_token = endpoint.bearer_token,
+          .ca_file = endpoint.ca_file,
+          .label = Label(endpoint),
+          .connect_timeout_s = connect_timeout_s,
+          .stall_timeout_s = stall_timeout_s};
+}
+
 DicomwebClient::DicomwebClient(PacsEndpoint endpoint, Options options)
     : endpoint_(std::move(endpoint)), options_(options) {}
 
 Result<std::string> DicomwebClient::GetText(const std::string& path_and_query,
                                             const CancelToken& cancel) const {
-  HttpRequest request{.url = endpoint_.dicomweb_url + path_and_query,
-                      .headers = {"Accept: application/dicom+json"},
-                      .username = endpoint_.username,
-                      .password = endpoint_.password,
-                      .bearer_token = endpoint_.bearer_token,
-                      .ca_file = endpoint_.ca_file,
-                      .label = Label(endpoint_),
-                      .connect_timeout_s = options_.connect_timeout_s,
-                      .stall_timeout_s = options_.stall_timeout_s};
+  const HttpRequest request =
+      RequestTo(endpoint_, endpoint_.dicomweb_url + path_and_query,
+                {"Accept: application/dicom+json"}, options_.connect_timeout_s,
+                options_.stall_timeout_s);
   std::string body;
   const int64_t cap = options_.max_answer_bytes;
   ASSIGN_OR_RETURN(const HttpResponse head,
@@ -151,16 +160,9 @@ Result<RetrievedSeries> DicomwebClient::RetrieveSeries(
   RETURN_IF_ERROR(CheckUid(series_uid, "series_uid"));
   const std::string label = Label(endpoint_);
   const std::string what = StrCat(label, ": series ", series_uid);
-  HttpRequest request{
-      .url = StrCat(endpoint_.dicomweb_url, "/studies/", study_uid, "/series/", series_uid),
-      .headers = {kAcceptDicom},
-      .username = endpoint_.username,
-      .password = endpoint_.password,
-      .bearer_token = endpoint_.bearer_token,
-      .ca_file = endpoint_.ca_file,
-      .label = label,
-      .connect_timeout_s = options_.connect_timeout_s,
-      .stall_timeout_s = options_.stall_timeout_s};
+  const HttpRequest request = RequestTo(
+      endpoint_, StrCat(endpoint_.dicomweb_url, "/studies/", study_uid, "/series/", series_uid),
+      {kAcceptDicom}, options_.connect_timeout_s, options_.stall_timeout_s);
   DicomPartWriter writer(folder, what, max_bytes);
   std::unique_ptr<MultipartParser> parser;
   int64_t received = 0;

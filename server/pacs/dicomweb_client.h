@@ -11,6 +11,7 @@
 #include "server/common/progress.h"
 #include "server/common/status.h"
 #include "server/pacs/dicom_json.h"
+#include "server/pacs/http_get.h"
 #include "server/pacs/pacs_client.h"
 #include "server/pacs/pacs_endpoint.h"
 #include "server/pacs/study_query.h"
@@ -76,5 +77,11 @@ class DicomwebClient : public PacsClient {
 // InvalidArgument, 408, 429 and 5xx Unavailable; the message says which and
 // never quotes the answer's body.
 Status StatusFromHttp(int64_t status, const std::string& label, const std::string& what);
+
+// A request to `url` (the endpoint's DICOMweb base and a path) with the
+// endpoint's credentials and CA bundle, labelled "PACS 'NAME'" for errors.
+HttpRequest RequestTo(const PacsEndpoint& endpoint, std::string url,
+                      std::vector<std::string> headers, int64_t connect_timeout_s,
+                      int64_t stall_timeout_s);
 
 }  // namespace vpm::pacs

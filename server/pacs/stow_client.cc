@@ -32,18 +32,11 @@ std::string StowBody(const std::vector<const std::string*>& files, size_t begin,
 Result<StowAnswer> PostBatch(const PacsEndpoint& endpoint, const std::string& body,
                              const std::string& boundary, const StowOptions& options,
                              const CancelToken& cancel) {
-  HttpRequest request{
-      .url = endpoint.dicomweb_url + "/studies",
-      .headers = {StrCat("Content-Type: multipart/related; type=\"application/dicom\"; boundary=",
-                         boundary),
-                  "Accept: application/dicom+json"},
-      .username = endpoint.username,
-      .password = endpoint.password,
-      .bearer_token = endpoint.bearer_token,
-      .ca_file = endpoint.ca_file,
-      .label = StowLabel(endpoint),
-      .connect_timeout_s = options.connect_timeout_s,
-      .stall_timeout_s = options.stall_timeout_s};
+  const HttpRequest request = RequestTo(
+      endpoint, endpoint.dicomweb_url + "/studies",
+      {StrCat("Content-Type: multipart/related; type=\"application/dicom\"; boundary=", boundary),
+       "Accept: application/dicom+json"},
+      options.connect_timeout_s, options.stall_timeout_s);
   std::string answer;
   ASSIGN_OR_RETURN(const HttpResponse head,
                    HttpPost(

@@ -131,7 +131,7 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
   app.add_flag("--refine-on-grab,!--no-refine-on-grab", o->refine_on_grab,
                "a grab where the session's mesh is coarse refines it there, built beside the "
                "running mesh and swapped in at the next frame with the manipulation replayed "
-               "and recorded in the session's case (off by default)")
+               "and recorded in the session's case")
       ->capture_default_str();
   app.add_option("--state-dir", o->state_dir,
                  "keep cases here (DIR/cases.sqlite, created if missing; with --state, only the "

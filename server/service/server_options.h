@@ -64,7 +64,7 @@ struct ServerOptions {
   // A grab refines the session's mesh there (docs/SERVICE.md). Off by
   // default: on the phantom the organ lags the pointer more on the refined
   // mesh (an 8 mm drag reaches 5.4 mm at 64^3), which needs a look first.
-  bool refine_on_grab = false;
+  bool refine_on_grab = true;
   // Cases (docs/CASES.md): the folder of the case database (cases.sqlite);
   // empty: no cases are kept (sessions live in memory only).
   std::string state_dir;

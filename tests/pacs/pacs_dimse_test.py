@@ -47,17 +47,8 @@ def main():
 
 
 def load_orthanc(h, t, build, source):
-    writer = os.path.join(build, 'tests', 'pacs', 'vpm_test_write_dicom_series')
-    kidney = os.path.join(h.tmp, 'kidney')
-    report = os.path.join(h.tmp, 'report')
-    common = ['--study-uid', STUDY, '--patient-name', PATIENT_NAME, '--patient-id', PATIENT_ID,
-              '--birth-date', BIRTH_DATE, '--study-date', '20240611']
-    subprocess.run([writer, os.path.join(source, 'tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz'),
-                    kidney, '--series-uid', CT_SERIES, '--series-number', '2',
-                    '--description', 'Abdomen 3mm'] + common, check=True, capture_output=True)
-    subprocess.run([writer, '--structured-report', report, '--series-uid', SR_SERIES,
-                    '--series-number', '9', '--description', 'Report'] + common,
-                   check=True, capture_output=True)
+    kidney, report = h.write_kidney_study(source, STUDY, PATIENT_NAME, PATIENT_ID, BIRTH_DATE,
+                                          '20240611')
     h.start_orthanc({'vpm': ORTHANC_PASSWORD}, dimse=True)
     n = h.orthanc_upload_folder(kidney, 'vpm', ORTHANC_PASSWORD)
     n += h.orthanc_upload_folder(report, 'vpm', ORTHANC_PASSWORD)

@@ -114,6 +114,24 @@ class Harness:
         return self.server is not None and self.server.poll() is None
 
     # -------------------------------------------------------------- Orthanc
+    def write_kidney_study(self, source, study, patient_name, patient_id, birth_date,
+                           study_date):
+        """The kidney CT of tests/data (series STUDY.1, "Abdomen 3mm") and a
+        structured report (STUDY.9) in one study, as two folders of DICOM
+        files under the temp folder; returns (kidney folder, report folder)."""
+        writer = os.path.join(self.build, 'tests', 'pacs', 'vpm_test_write_dicom_series')
+        kidney = os.path.join(self.tmp, 'kidney')
+        report = os.path.join(self.tmp, 'report')
+        common = ['--study-uid', study, '--patient-name', patient_name, '--patient-id', patient_id,
+                  '--birth-date', birth_date, '--study-date', study_date]
+        subprocess.run([writer, os.path.join(source, 'tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz'),
+                        kidney, '--series-uid', study + '.1', '--series-number', '2',
+                        '--description', 'Abdomen 3mm'] + common, check=True, capture_output=True)
+        subprocess.run([writer, '--structured-report', report, '--series-uid', study + '.9',
+                        '--series-number', '9', '--description', 'Report'] + common,
+                       check=True, capture_output=True)
+        return kidney, report
+
     def start_orthanc(self, users, dimse=False):
         """Orthanc with authentication on, loopback HTTP only, storage in the
         temp folder. The DICOM server is off unless `dimse`: then Orthanc is

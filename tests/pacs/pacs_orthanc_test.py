@@ -181,20 +181,12 @@ def main():
 
 
 def run(h, t, build, source):
-    writer = os.path.join(build, 'tests', 'pacs', 'vpm_test_write_dicom_series')
     checker = os.path.join(build, 'tests', 'pacs', 'vpm_test_pacs_live_check')
     kidney_nifti = os.path.join(source, 'tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz')
     tilt_folder = os.path.join(source, 'tests/data/ct-philips-tilt')
-    kidney = os.path.join(h.tmp, 'kidney')
-    report = os.path.join(h.tmp, 'report')
-    common = ['--study-uid', STUDY, '--patient-name', PATIENT_NAME, '--patient-id', PATIENT_ID,
-              '--birth-date', BIRTH_DATE, '--study-date', '20240315']
+    kidney, report = h.write_kidney_study(source, STUDY, PATIENT_NAME, PATIENT_ID, BIRTH_DATE,
+                                          '20240315')
     import subprocess
-    subprocess.run([writer, kidney_nifti, kidney, '--series-uid', CT_SERIES, '--series-number', '2',
-                    '--description', 'Abdomen 3mm'] + common, check=True, capture_output=True)
-    subprocess.run([writer, '--structured-report', report, '--series-uid', SR_SERIES,
-                    '--series-number', '9', '--description', 'Report'] + common,
-                   check=True, capture_output=True)
 
     base = h.start_orthanc({'vpm': ORTHANC_PASSWORD})
     n = h.orthanc_upload_folder(kidney, 'vpm', ORTHANC_PASSWORD)

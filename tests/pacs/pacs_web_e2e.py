@@ -58,23 +58,6 @@ def missing_tools(source):
     return missing
 
 
-def write_study(h, build, source):
-    """The kidney CT and a structured report, one study, as two folders of
-    DICOM files; returns the folders."""
-    writer = os.path.join(build, 'tests', 'pacs', 'vpm_test_write_dicom_series')
-    kidney = os.path.join(h.tmp, 'kidney')
-    report = os.path.join(h.tmp, 'report')
-    common = ['--study-uid', STUDY, '--patient-name', PATIENT_NAME, '--patient-id', PATIENT_ID,
-              '--birth-date', BIRTH_DATE, '--study-date', STUDY_DATE]
-    subprocess.run([writer, os.path.join(source, 'tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz'),
-                    kidney, '--series-uid', CT_SERIES, '--series-number', '2',
-                    '--description', 'Abdomen 3mm'] + common, check=True, capture_output=True)
-    subprocess.run([writer, '--structured-report', report, '--series-uid', SR_SERIES,
-                    '--series-number', '9', '--description', 'Report'] + common,
-                   check=True, capture_output=True)
-    return kidney, report
-
-
 def tag(dataset, key):
     """The first value of DICOM JSON attribute `key` (e.g. '00080060'), or None."""
     values = dataset.get(key, {}).get('Value', [])
@@ -120,7 +103,8 @@ def check_logs(h, t, gateway_log, audit):
 
 
 def run(h, t, build, source):
-    kidney, report = write_study(h, build, source)
+    kidney, report = h.write_kidney_study(source, STUDY, PATIENT_NAME, PATIENT_ID, BIRTH_DATE,
+                                          STUDY_DATE)
     base = h.start_orthanc({'vpm': ORTHANC_PASSWORD})
     n = h.orthanc_upload_folder(kidney, 'vpm', ORTHANC_PASSWORD)
     n += h.orthanc_upload_folder(report, 'vpm', ORTHANC_PASSWORD)

@@ -62,7 +62,7 @@ class RefineOnGrabTest : public ServiceTest {
   }
   ServerOptions Options() const {
     ServerOptions options = SmallServerOptions();
-    options.refine_on_grab = true;  // vpm-server --refine-on-grab
+    options.refine_on_grab = true;  // vpm-server's default
     options.state_dir = state_dir_.string();  // every session is a case
     const char* source = std::getenv("VPM_SOURCE_DIR");
     EXPECT_NE(source, nullptr) << "VPM_SOURCE_DIR: the repository (ctest sets it)";
