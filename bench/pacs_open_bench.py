@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
-"""Time to open a series from a PACS through vpm-server: first (retrieved
-from Orthanc by WADO-RS, read, uploaded to the GPU) and cached (another
-user's open of the same series, read from the disk cache).
+"""Time from Open to the first frame of a series from a PACS through
+vpm-server, as the viewers open it (LoadVolume, OpenSession with the
+default proxy mesh, one still frame): first (retrieved from Orthanc by
+WADO-RS, read, uploaded to the GPU) and cached (another user's open of the
+same series, read from the disk cache).
 
 Writes a synthetic int16 CT of X x Y x Z voxels as a DICOM series
 (vpm_test_write_dicom_series), loads it into Debian's Orthanc (started as in
@@ -12,6 +14,7 @@ first open always retrieves).
 Usage: pacs_open_bench.py BUILD_DIR [--dims 512 512 300] [--rounds 3]
 """
 import argparse
+import json
 import os
 import subprocess
 import sys
@@ -23,6 +26,29 @@ from pacs_harness import Harness  # noqa: E402
 import numpy  # noqa: E402
 
 STUDY = '1.2.826.0.1.3680043.8.498.99030'
+
+
+def open_to_first_frame(h, user, source):
+    """Seconds of LoadVolume, OpenSession and the first still frame."""
+    times = []
+    start = time.monotonic()
+    rc, out, err = h.vpm(user, 'volume', 'load', source)
+    times.append(time.monotonic() - start)
+    if rc != 0:
+        raise SystemExit(err)
+    volume_id = json.loads(out)['volume_id']
+    start = time.monotonic()
+    session, err = h.vpm_json(user, 'session', 'open', '--volume-id', volume_id)
+    times.append(time.monotonic() - start)
+    if session is None:
+        raise SystemExit(err)
+    start = time.monotonic()
+    rc, _, err = h.vpm(user, 'snapshot', '--session', session['session_id'], '--size', '512', '512',
+                       '--out', os.path.join(h.tmp, f'{user}.jpg'))
+    times.append(time.monotonic() - start)
+    if rc != 0:
+        raise SystemExit(err)
+    return times
 
 
 def main():
@@ -54,20 +80,16 @@ def main():
                                         'password_file': 'orthanc.pw', 'users': ['*']}])
         users = h.write_users(['alice', 'bob'])
         source = f'pacs:orthanc/{STUDY}/{series}'
-        print(f'{nx} x {ny} x {nz} int16, {n} instances; seconds per `vpm volume load {source}`')
-        print('round  first (alice: retrieve)  cached (bob: disk cache)')
+        print(f'{nx} x {ny} x {nz} int16, {n} instances; seconds from Open to the first frame '
+              f'of {source}: load + session (proxy mesh) + still frame')
+        print('round  first (alice: retrieve)       cached (bob: disk cache)')
         for r in range(args.rounds):
             cache = os.path.join(h.tmp, f'cache{r}')
             h.start_server(users, ['--pacs', endpoints, '--pacs-cache', cache,
                                    '--pacs-audit-log', os.path.join(h.tmp, 'audit.jsonl')])
-            times = []
-            for user in ('alice', 'bob'):
-                start = time.monotonic()
-                rc, _, err = h.vpm(user, 'volume', 'load', source)
-                times.append(time.monotonic() - start)
-                if rc != 0:
-                    raise SystemExit(err)
-            print(f'{r + 1:5d}  {times[0]:23.2f}  {times[1]:24.2f}')
+            times = [open_to_first_frame(h, user, source) for user in ('alice', 'bob')]
+            print(f'{r + 1:5d}  ' + '  '.join(
+                f'{sum(t):5.2f} ({t[0]:.2f} + {t[1]:.2f} + {t[2]:.2f})' for t in times))
             h.server.terminate()
             h.server.wait()
     finally:
