@@ -108,6 +108,19 @@ Status PutCommonModules(DcmDataset& ds, const DicomOrigin* origin, const DicomEx
   return absl::OkStatus();
 }
 
+void PutImagePixelModule(DcmDataset& ds, int samples, int64_t rows, int64_t columns, int bits,
+                         bool is_signed) {
+  ds.putAndInsertUint16(DCM_SamplesPerPixel, static_cast<Uint16>(samples));
+  ds.putAndInsertString(DCM_PhotometricInterpretation, samples == 3 ? "RGB" : "MONOCHROME2");
+  if (samples == 3) ds.putAndInsertUint16(DCM_PlanarConfiguration, 0);
+  ds.putAndInsertUint16(DCM_Rows, static_cast<Uint16>(rows));
+  ds.putAndInsertUint16(DCM_Columns, static_cast<Uint16>(columns));
+  ds.putAndInsertUint16(DCM_BitsAllocated, static_cast<Uint16>(bits));
+  ds.putAndInsertUint16(DCM_BitsStored, static_cast<Uint16>(bits));
+  ds.putAndInsertUint16(DCM_HighBit, static_cast<Uint16>(bits - 1));
+  ds.putAndInsertUint16(DCM_PixelRepresentation, is_signed ? 1 : 0);
+}
+
 Result<std::string> Part10Bytes(DcmFileFormat& file) {
   OFCondition c = file.validateMetaInfo(EXS_LittleEndianExplicit);
   if (c.bad()) return absl::InternalError(StrCat("DICOM meta header: ", c.text()));

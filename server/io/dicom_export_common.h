@@ -4,6 +4,7 @@
 // dataset as Part 10 bytes.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "server/common/status.h"
@@ -46,6 +47,12 @@ Status PutCommonModules(DcmDataset& ds, const DicomOrigin* origin, const DicomEx
 // Sets `key` to `value` (multiple values joined by '\\'); Internal naming
 // the attribute when DCMTK refuses it.
 Status PutDicomString(DcmDataset& ds, const DcmTagKey& key, const std::string& value);
+
+// The image pixel module's description of `rows` x `columns` pixels of
+// `samples` samples (1: MONOCHROME2, 3: RGB, interleaved) of `bits` bits,
+// signed or not; the pixel data itself is the caller's.
+void PutImagePixelModule(DcmDataset& ds, int samples, int64_t rows, int64_t columns, int bits,
+                         bool is_signed);
 
 // `file` as a DICOM Part 10 file (explicit VR little endian).
 Result<std::string> Part10Bytes(DcmFileFormat& file);

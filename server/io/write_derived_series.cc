@@ -81,14 +81,7 @@ Status PutPixels(DcmDataset& ds, const Volume& volume, int64_t k, const Rescale&
       stored[i + nx * j] = static_cast<Uint16>(static_cast<int16_t>(clamped));
     }
   }
-  ds.putAndInsertUint16(DCM_SamplesPerPixel, 1);
-  ds.putAndInsertString(DCM_PhotometricInterpretation, "MONOCHROME2");
-  ds.putAndInsertUint16(DCM_Rows, static_cast<Uint16>(ny));
-  ds.putAndInsertUint16(DCM_Columns, static_cast<Uint16>(nx));
-  ds.putAndInsertUint16(DCM_BitsAllocated, 16);
-  ds.putAndInsertUint16(DCM_BitsStored, 16);
-  ds.putAndInsertUint16(DCM_HighBit, 15);
-  ds.putAndInsertUint16(DCM_PixelRepresentation, 1);
+  PutImagePixelModule(ds, 1, ny, nx, 16, /*is_signed=*/true);
   RETURN_IF_ERROR(PutDicomString(ds, DCM_RescaleSlope, DicomDecimal(rescale.slope)));
   RETURN_IF_ERROR(PutDicomString(ds, DCM_RescaleIntercept, DicomDecimal(rescale.intercept)));
   const OFCondition c = ds.putAndInsertUint16Array(DCM_PixelData, stored.data(),

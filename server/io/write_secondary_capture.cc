@@ -24,15 +24,7 @@ Result<std::string> WriteSecondaryCapture(const std::vector<uint8_t>& rgba, int 
   for (size_t p = 0; p < size_t(width) * size_t(height); ++p) {
     for (int c = 0; c < 3; ++c) rgb[p * 3 + c] = rgba[p * 4 + c];
   }
-  ds.putAndInsertUint16(DCM_SamplesPerPixel, 3);
-  ds.putAndInsertString(DCM_PhotometricInterpretation, "RGB");
-  ds.putAndInsertUint16(DCM_PlanarConfiguration, 0);
-  ds.putAndInsertUint16(DCM_Rows, static_cast<Uint16>(height));
-  ds.putAndInsertUint16(DCM_Columns, static_cast<Uint16>(width));
-  ds.putAndInsertUint16(DCM_BitsAllocated, 8);
-  ds.putAndInsertUint16(DCM_BitsStored, 8);
-  ds.putAndInsertUint16(DCM_HighBit, 7);
-  ds.putAndInsertUint16(DCM_PixelRepresentation, 0);
+  PutImagePixelModule(ds, 3, height, width, 8, /*is_signed=*/false);
   const OFCondition c =
       ds.putAndInsertUint8Array(DCM_PixelData, rgb.data(), static_cast<unsigned long>(rgb.size()));
   if (c.bad()) return absl::InternalError(StrCat("cannot set PixelData: ", c.text()));

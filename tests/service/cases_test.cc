@@ -109,6 +109,15 @@ class CasesTest : public ServiceTest {
     EXPECT_TRUE(Manipulate(id, Drag(4, 0, 0)).ok());
     return id;
   }
+  // OpenCase as Alice: the session, or an empty one (and a failure) when refused.
+  v3::SessionInfo OpenCaseAsAlice(const std::string& case_id) {
+    v3::OpenCaseRequest open;
+    open.set_case_id(case_id);
+    v3::SessionInfo session;
+    const grpc::Status status = stub_->OpenCase(Context(kAlice).get(), open, &session);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return session;
+  }
   v3::CaseInfo GetCase(const std::string& id, const char* token, grpc::Status* status = nullptr) {
     v3::GetCaseRequest request;
     request.set_case_id(id);
@@ -182,11 +191,8 @@ TEST_F(CasesTest, ACaseOfAnUploadReopensAfterARestartFromTheKeptFile) {
   EXPECT_TRUE(fs::is_regular_file(dir_ / "state" / "blobs" / Sha256::HexOf(bytes) / "case.nii"));
 
   Restart();
-  v3::OpenCaseRequest open;
-  open.set_case_id(info.case_id());
-  v3::SessionInfo reopened;
-  const grpc::Status status = stub_->OpenCase(Context(kAlice).get(), open, &reopened);
-  ASSERT_TRUE(status.ok()) << status.error_message();
+  const v3::SessionInfo reopened = OpenCaseAsAlice(info.case_id());
+  ASSERT_FALSE(reopened.session_id().empty());
   EXPECT_NEAR(Still(reopened.session_id()).max_displacement_mm(), planned, 1e-3);
   // The volume it reads is Alice's own, as her upload was.
   v3::GetVolumeRequest volume_request;
@@ -254,11 +260,8 @@ TEST_F(CasesTest, ADicomSeriesUploadedAsAZipReadsAsASeriesAndItsCaseReopens) {
             "upload:" + Sha256::HexOf(bytes) + "/series.zip");
 
   Restart();
-  v3::OpenCaseRequest open;
-  open.set_case_id(info.case_id());
-  v3::SessionInfo reopened;
-  const grpc::Status status = stub_->OpenCase(Context(kAlice).get(), open, &reopened);
-  ASSERT_TRUE(status.ok()) << status.error_message();
+  const v3::SessionInfo reopened = OpenCaseAsAlice(info.case_id());
+  ASSERT_FALSE(reopened.session_id().empty());
   EXPECT_NEAR(Still(reopened.session_id()).max_displacement_mm(), planned, 1e-3);
 
   // A zip without a series is the user's malformed upload, said plainly.
