@@ -40,7 +40,11 @@ json CaseJson(const v3::CaseInfo& c) {
           {"max_displacement_mm", c.max_displacement_mm()},
           {"created_unix_ms", c.created_unix_ms()},
           {"modified_unix_ms", c.modified_unix_ms()},
-          {"session_id", c.session_id()}};
+          {"session_id", c.session_id()},
+          {"camera", c.has_camera() ? json{{"azimuth_deg", c.camera().azimuth_deg()},
+                                            {"elevation_deg", c.camera().elevation_deg()},
+                                            {"distance_mm", c.camera().distance_mm()}}
+                                      : json(nullptr)}};
 }
 
 void PrintCase(const v3::CaseInfo& c) {

@@ -136,6 +136,7 @@ void VpmService::FillCaseInfo(const cases::CaseRecord& r, const std::string& use
   info->set_modified_unix_ms(r.modified_ms);
   if (auto session = OpenSessionOf(r.id, r.owner)) info->set_session_id(session->id());
   info->mutable_mesh_params()->ParseFromString(r.mesh_params);
+  if (!r.camera.empty()) info->mutable_camera()->ParseFromString(r.camera);
 }
 
 grpc::ServerUnaryReactor* VpmService::ListCases(grpc::CallbackServerContext* context,

@@ -133,6 +133,12 @@ class CasesTest : public ServiceTest {
 TEST_F(CasesTest, ACaseReopensAfterARestartWithTheSameDeformationAndFrame) {
   const v3::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
   const std::string session = Plan(volume);
+  v3::SetCameraRequest turn;
+  turn.set_session_id(session);
+  turn.mutable_camera()->set_azimuth_deg(30.0);
+  turn.mutable_camera()->set_elevation_deg(15.0);
+  v3::SetCameraResponse turned;
+  ASSERT_TRUE(stub_->SetCamera(Context(kAlice).get(), turn, &turned).ok());
   const v3::Frame before = Still(session);
   ASSERT_GT(before.max_displacement_mm(), 1.0);
   v3::GetSessionRequest get;
@@ -148,6 +154,10 @@ TEST_F(CasesTest, ACaseReopensAfterARestartWithTheSameDeformationAndFrame) {
   EXPECT_EQ(listed.cases(0).case_id(), case_id);
   EXPECT_EQ(listed.cases(0).events(), 7);
   EXPECT_EQ(listed.cases(0).source(), kPhantom);
+  // The camera is part of the case, and said so.
+  ASSERT_TRUE(listed.cases(0).has_camera());
+  EXPECT_EQ(listed.cases(0).camera().azimuth_deg(), 30.0);
+  EXPECT_EQ(listed.cases(0).camera().elevation_deg(), 15.0);
   EXPECT_TRUE(listed.cases(0).session_id().empty());
 
   v3::OpenCaseRequest open;

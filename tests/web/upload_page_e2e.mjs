@@ -86,6 +86,7 @@ async function main() {
     assert.ok(overlayShown, 'the drop overlay shows while files are dragged, and goes on the drop');
     await page.waitForFunction(() => window.vpmViewer.uploads.lastVolume?.source === 'upload:IM1.zip',
                                null, { timeout: 20000 });
+    await stateIs(page, ['opened'], 60000);
 
     step('refusals: over the cap in the page, the server\'s in words');
     const sent = fake.uploads.list.length;

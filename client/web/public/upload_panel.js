@@ -135,6 +135,9 @@ export class UploadPanel {
       return;
     }
     this.lastError = null;
+    // A new upload takes the panel: the previous one's volume still being
+    // opened no longer sets its state.
+    this.opening = null;
     if (!this.tabId) {
       this.failed({ code: 'UNAVAILABLE',
                     message: 'The web gateway is not connected; upload again once it is back.' });
