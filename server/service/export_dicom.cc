@@ -42,6 +42,35 @@ v3::ExportDicomPart Progress(const char* stage, double fraction) {
   return part;
 }
 
+// The files sent to `endpoint` (STOW-RS or C-STORE), progress emitted.
+Status SendExport(ServiceContext* service, const std::string& user, const std::string& endpoint,
+                  const std::vector<DicomFileBytes>& files, const DicomExportIds& ids,
+                  const ExportEmit& emit, const CancelToken& cancel) {
+  std::vector<const std::string*> parts;
+  for (const DicomFileBytes& f : files) parts.push_back(&f.bytes);
+  return service->pacs->StoreExport(
+      user, endpoint, parts, ids.study_uid, ids.derived_series_uid,
+      [&](double f, std::string_view) { (void)emit(Progress("sending", f)); }, cancel);
+}
+
+// The files back to the client, one message each (the capture last).
+Status StreamExport(ServiceContext* service, const std::string& user,
+                    std::vector<DicomFileBytes> files, const DicomExportIds& ids,
+                    const ExportEmit& emit) {
+  const size_t count = files.size();
+  for (size_t n = 0; n < count; ++n) {
+    v3::ExportDicomPart part;
+    part.set_file_name(n + 1 < count ? "derived/" + files[n].name : "capture/000001.dcm");
+    part.set_data(std::move(files[n].bytes));
+    RETURN_IF_ERROR(emit(std::move(part)));
+  }
+  if (service->pacs != nullptr) {
+    service->pacs->RecordExport(user, ids.study_uid, ids.derived_series_uid, absl::OkStatus(),
+                                static_cast<int64_t>(count));
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 Status RunDicomExport(ServiceContext* service, const std::string& user,
@@ -84,28 +113,10 @@ Status RunDicomExport(ServiceContext* service, const std::string& user,
   for (const DicomFileBytes& f : files) bytes += int64_t(f.bytes.size());
   summary.set_bytes(bytes);
   if (!request.endpoint().empty()) {
-    std::vector<const std::string*> parts;
-    for (const DicomFileBytes& f : files) parts.push_back(&f.bytes);
-    RETURN_IF_ERROR(service->pacs
-                        ->StoreExport(user, request.endpoint(), parts, ids.study_uid,
-                                      ids.derived_series_uid,
-                                      [&](double f, std::string_view) {
-                                        (void)emit(Progress("sending", f));
-                                      },
-                                      cancel));
+    RETURN_IF_ERROR(SendExport(service, user, request.endpoint(), files, ids, emit, cancel));
     summary.set_endpoint(request.endpoint());
   } else {
-    for (size_t n = 0; n < files.size(); ++n) {
-      v3::ExportDicomPart part;
-      const bool derived = n + 1 < files.size();
-      part.set_file_name(derived ? "derived/" + files[n].name : "capture/000001.dcm");
-      part.set_data(std::move(files[n].bytes));
-      RETURN_IF_ERROR(emit(std::move(part)));
-    }
-    if (service->pacs != nullptr) {
-      service->pacs->RecordExport(user, ids.study_uid, ids.derived_series_uid, absl::OkStatus(),
-                                  static_cast<int64_t>(files.size()));
-    }
+    RETURN_IF_ERROR(StreamExport(service, user, std::move(files), ids, emit));
   }
   v3::ExportDicomPart last;
   *last.mutable_summary() = summary;
