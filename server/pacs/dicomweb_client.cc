@@ -15,8 +15,6 @@ namespace {
 constexpr const char* kAcceptDicom =
     "Accept: multipart/related; type=\"application/dicom\"; transfer-syntax=*";
 
-std::string Label(const PacsEndpoint& e) { return StrCat("PACS '", e.name, "'"); }
-
 }  // namespace
 
 Status StatusFromHttp(int64_t status, const std::string& label, const std::string& what) {
@@ -53,7 +51,7 @@ HttpRequest RequestTo(const PacsEndpoint& endpoint, std::string url,
           .password = endpoint.password,
           .bearer_token = endpoint.bearer_token,
           .ca_file = endpoint.ca_file,
-          .label = Label(endpoint),
+          .label = EndpointLabel(endpoint),
           .connect_timeout_s = connect_timeout_s,
           .stall_timeout_s = stall_timeout_s};
 }
@@ -75,7 +73,7 @@ Result<std::string> DicomwebClient::GetText(const std::string& path_and_query,
                        [&](const HttpResponse&, std::string_view chunk) -> Status {
                          if (static_cast<int64_t>(body.size() + chunk.size()) > cap) {
                            return absl::ResourceExhaustedError(
-                               StrCat(Label(endpoint_), ": a QIDO answer over ", cap, " bytes"));
+                               StrCat(EndpointLabel(endpoint_), ": a QIDO answer over ", cap, " bytes"));
                          }
                          body.append(chunk);
                          return absl::OkStatus();
@@ -84,7 +82,7 @@ Result<std::string> DicomwebClient::GetText(const std::string& path_and_query,
   if (head.status == 204) return std::string();
   if (head.status < 200 || head.status > 299) {
     const std::string what = path_and_query.substr(0, path_and_query.find('?'));
-    return StatusFromHttp(head.status, Label(endpoint_), StrCat("GET ", what));
+    return StatusFromHttp(head.status, EndpointLabel(endpoint_), StrCat("GET ", what));
   }
   return body;
 }
@@ -104,7 +102,7 @@ Result<StudySearch> DicomwebClient::SearchStudies(const StudyQuery& query,
     Result<std::vector<StudySummary>> studies = ParseStudies(body);
     if (!studies.ok()) {
       return absl::UnavailableError(
-          StrCat(Label(endpoint_), ": study search: ", studies.status().message()));
+          StrCat(EndpointLabel(endpoint_), ": study search: ", studies.status().message()));
     }
     int64_t fresh = 0;
     for (StudySummary& s : *studies) {
@@ -143,7 +141,7 @@ Result<std::vector<SeriesSummary>> DicomwebClient::ListSeries(const std::string&
   Result<std::vector<SeriesSummary>> series = ParseSeries(body);
   if (!series.ok()) {
     return absl::UnavailableError(
-        StrCat(Label(endpoint_), ": series listing: ", series.status().message()));
+        StrCat(EndpointLabel(endpoint_), ": series listing: ", series.status().message()));
   }
   std::stable_sort(series->begin(), series->end(),
                    [](const SeriesSummary& a, const SeriesSummary& b) {
@@ -158,7 +156,7 @@ Result<RetrievedSeries> DicomwebClient::RetrieveSeries(
     const ProgressFn& progress, const CancelToken& cancel) const {
   RETURN_IF_ERROR(CheckUid(study_uid, "study_uid"));
   RETURN_IF_ERROR(CheckUid(series_uid, "series_uid"));
-  const std::string label = Label(endpoint_);
+  const std::string label = EndpointLabel(endpoint_);
   const std::string what = StrCat(label, ": series ", series_uid);
   const HttpRequest request = RequestTo(
       endpoint_, StrCat(endpoint_.dicomweb_url, "/studies/", study_uid, "/series/", series_uid),

@@ -16,7 +16,7 @@ namespace vpm::pacs {
 namespace {
 
 std::string DimseLabel(const PacsEndpoint& e) {
-  return StrCat("PACS '", e.name, "' (", e.dimse_ae_title, "@", e.dimse_host, ":", e.dimse_port,
+  return StrCat(EndpointLabel(e), " (", e.dimse_ae_title, "@", e.dimse_host, ":", e.dimse_port,
                 ")");
 }
 

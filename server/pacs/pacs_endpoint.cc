@@ -183,6 +183,10 @@ Result<PacsEndpoint> ParseEntry(const json& entry, const std::filesystem::path& 
 
 }  // namespace
 
+std::string EndpointLabel(const PacsEndpoint& endpoint) {
+  return StrCat("PACS '", endpoint.name, "'");
+}
+
 bool PacsEndpoint::AllowsUser(std::string_view user) const {
   if (user.empty()) return false;
   return std::any_of(users.begin(), users.end(),

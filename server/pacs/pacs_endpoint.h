@@ -30,6 +30,10 @@ struct PacsEndpoint {
   bool AllowsUser(std::string_view user) const;
 };
 
+// "PACS 'NAME'": how messages name an endpoint (never its URL's query or a
+// secret).
+std::string EndpointLabel(const PacsEndpoint& endpoint);
+
 // Reads the endpoints file: a JSON list of objects
 //   {"name": "orthanc", "dicomweb": "http://127.0.0.1:8042/dicom-web",
 //    "username": "vpm", "password_file": "orthanc.pw",   (or "bearer_token_file")

@@ -103,7 +103,7 @@ Status PacsGateway::FetchSeries(const PacsClient& client, const std::string& stu
                                 int64_t max_bytes, const VolumeLimits& limits,
                                 const ProgressFn& progress, const CancelToken& cancel,
                                 int64_t* instances) {
-  const std::string label = StrCat("PACS '", client.endpoint().name, "'");
+  const std::string label = EndpointLabel(client.endpoint());
   // The listing says whether the series is there and how many instances
   // to expect (progress).
   ASSIGN_OR_RETURN(const std::vector<SeriesSummary> listed, client.ListSeries(study_uid, cancel));

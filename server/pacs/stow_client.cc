@@ -13,7 +13,6 @@ using nlohmann::json;
 
 constexpr int64_t kMaxStowAnswerBytes = int64_t{4} << 20;
 
-std::string StowLabel(const PacsEndpoint& e) { return StrCat("PACS '", e.name, "'"); }
 
 // One multipart/related body of files [begin, end).
 std::string StowBody(const std::vector<const std::string*>& files, size_t begin, size_t end,
@@ -44,7 +43,7 @@ Result<StowAnswer> PostBatch(const PacsEndpoint& endpoint, const std::string& bo
                        [&](const HttpResponse&, std::string_view chunk) -> Status {
                          if (int64_t(answer.size() + chunk.size()) > kMaxStowAnswerBytes) {
                            return absl::ResourceExhaustedError(StrCat(
-                               StowLabel(endpoint), ": a STOW-RS answer over ", kMaxStowAnswerBytes,
+                               EndpointLabel(endpoint), ": a STOW-RS answer over ", kMaxStowAnswerBytes,
                                " bytes"));
                          }
                          answer.append(chunk);
@@ -57,12 +56,12 @@ Result<StowAnswer> PostBatch(const PacsEndpoint& endpoint, const std::string& bo
     return counted;
   }
   if (head.status < 200 || head.status > 299) {
-    return StatusFromHttp(head.status, StowLabel(endpoint), "STOW-RS /studies");
+    return StatusFromHttp(head.status, EndpointLabel(endpoint), "STOW-RS /studies");
   }
   Result<StowAnswer> counted = ParseStowAnswer(answer);
   if (!counted.ok()) {
     return absl::UnavailableError(
-        StrCat(StowLabel(endpoint), ": STOW-RS answer: ", counted.status().message()));
+        StrCat(EndpointLabel(endpoint), ": STOW-RS answer: ", counted.status().message()));
   }
   return counted;
 }
@@ -126,7 +125,7 @@ Result<StowResult> StoreInstances(const PacsEndpoint& endpoint,
   }
   if (refused > 0) {
     return absl::FailedPreconditionError(
-        StrCat(StowLabel(endpoint), ": the PACS refused ", refused, " of ", files.size(),
+        StrCat(EndpointLabel(endpoint), ": the PACS refused ", refused, " of ", files.size(),
                " instances", first_failure.empty() ? "" : StrCat(" (failure reason ", first_failure, ")")));
   }
   return result;
