@@ -27,8 +27,7 @@ void ExportDicomReactor::Begin() {
   Status admitted = user.status();
   if (admitted.ok()) user_ = *std::move(user);
   if (admitted.ok()) admitted = CheckRequestLimits(request_);
-  if (admitted.ok()) admitted = service_->AcceptingNewWork();
-  if (admitted.ok()) admitted = service_->streams->Acquire(user_);
+  if (admitted.ok()) admitted = service_->AdmitStream(user_, /*creates_state=*/true);
   if (!admitted.ok()) {
     std::lock_guard lock(mutex_);
     FinishLocked(admitted);

@@ -119,8 +119,7 @@ class FrameStreamReactor : public Reactor,
   // until OnDone). Runs in Begin, before any other reaction reads user_.
   Status Admit() {
     ASSIGN_OR_RETURN(user_, service_->auth->Authenticate(*context_));
-    if (service_->draining) return absl::UnavailableError("the server is shutting down");
-    RETURN_IF_ERROR(service_->streams->Acquire(user_));
+    RETURN_IF_ERROR(service_->AdmitStream(user_, /*creates_state=*/false));
     slot_held_ = true;
     return absl::OkStatus();
   }

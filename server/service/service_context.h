@@ -61,6 +61,16 @@ struct ServiceContext {
     return absl::UnavailableError("the server shut down before this call finished");
   }
 
+  // A new stream (Interact, Watch, UploadVolume, ExportDicom) of `user`:
+  // refused while shutting down, and while leaving when it creates state;
+  // else a slot of the user's stream cap, which the caller releases when
+  // the call is done.
+  Status AdmitStream(const std::string& user, bool creates_state) const {
+    if (draining) return absl::UnavailableError("the server is shutting down");
+    if (creates_state) RETURN_IF_ERROR(AcceptingNewWork());
+    return streams->Acquire(user);
+  }
+
   // UNAVAILABLE while leaving, for the calls that create state.
   Status AcceptingNewWork() const {
     if (!leaving) return absl::OkStatus();

@@ -58,11 +58,7 @@ void UploadVolumeReactor::Begin() {
   Result<std::string> user = service_->auth->Authenticate(*context_);
   Status admitted = user.status();
   if (admitted.ok()) user_ = *std::move(user);
-  if (admitted.ok() && service_->draining) {
-    admitted = absl::UnavailableError("the server is shutting down");
-  }
-  if (admitted.ok()) admitted = service_->AcceptingNewWork();
-  if (admitted.ok()) admitted = service_->streams->Acquire(user_);
+  if (admitted.ok()) admitted = service_->AdmitStream(user_, /*creates_state=*/true);
   if (!admitted.ok()) {
     FinishOnce(admitted);
     return;
