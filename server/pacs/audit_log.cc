@@ -54,6 +54,8 @@ void AuditLog::Record(const AuditRecord& r) {
   if (r.matches >= 0) line["matches"] = r.matches;
   if (!r.cache.empty()) line["cache"] = r.cache;
   if (r.instances >= 0) line["instances"] = r.instances;
+  if (!r.calling_aet.empty()) line["calling_aet"] = r.calling_aet;
+  if (r.refused >= 0) line["refused"] = r.refused;
   const std::string text = line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
   std::lock_guard lock(mutex_);
   file_ << text << '\n';

@@ -17,7 +17,7 @@ namespace vpm::pacs {
 
 struct AuditRecord {
   std::string user;
-  std::string action;  // "search", "series", "open", "export"
+  std::string action;  // "search", "series", "open", "export", "receive"
   std::string endpoint;
   std::string study_uid;  // empty when none
   std::string series_uid;
@@ -25,7 +25,9 @@ struct AuditRecord {
   std::string filters;     // search: the filters set, "PatientName,StudyDate"
   int64_t matches = -1;    // search and series: how many answered; -1: not written
   std::string cache;       // open: "hit" or "miss"
-  int64_t instances = -1;  // open, export: files of the series; -1: not written
+  int64_t instances = -1;  // open, export, receive: files of the series; -1: not written
+  std::string calling_aet;  // receive: the node that sent the series
+  int64_t refused = -1;     // receive: instances refused; -1: not written
 };
 
 class AuditLog {

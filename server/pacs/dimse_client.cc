@@ -12,6 +12,8 @@
 #include <set>
 #include <utility>
 
+#include "server/common/prefix_status.h"
+
 namespace vpm::pacs {
 namespace {
 
@@ -57,6 +59,7 @@ class Scu : public DcmSCU {
   int64_t find_cap = 0;
   int64_t find_answers = 0;
   bool find_cancelled = false;
+  bool move_cancelled = false;
   // C-GET
   std::filesystem::path folder;
   std::string series_uid;
@@ -73,6 +76,19 @@ class Scu : public DcmSCU {
     if (wait && !find_cancelled && (find_answers > find_cap || !cancel->Check().ok())) {
       find_cancelled = true;
       sendCANCELRequest(id);  // the PACS ends the find with a Cancel status
+    }
+    return cond;
+  }
+  OFCondition handleMOVEResponse(const T_ASC_PresentationContextID id, RetrieveResponse* response,
+                                 OFBool& wait) override {
+    const OFCondition cond = DcmSCU::handleMOVEResponse(id, response, wait);
+    if (wait && !move_cancelled && !cancel->Check().ok()) {
+      move_cancelled = true;
+      sendCANCELRequest(id);  // the PACS ends the move with a Cancel status
+    }
+    if (progress != nullptr && *progress && expected > 0) {
+      (*progress)(std::min(1.0, double(response->m_numberOfCompletedSubops) / double(expected)),
+                  "retrieving");
     }
     return cond;
   }
@@ -261,8 +277,8 @@ Result<std::vector<std::unique_ptr<DcmDataset>>> Find(const PacsEndpoint& e,
 
 }  // namespace
 
-DimseClient::DimseClient(PacsEndpoint endpoint, Options options)
-    : endpoint_(std::move(endpoint)), options_(options) {}
+DimseClient::DimseClient(PacsEndpoint endpoint, Options options, MoveRegistry* moves)
+    : endpoint_(std::move(endpoint)), options_(options), moves_(moves) {}
 
 Status DimseClient::Echo(const CancelToken& cancel) const {
   ASSIGN_OR_RETURN(std::unique_ptr<Scu> scu,
@@ -345,6 +361,10 @@ Result<RetrievedSeries> DimseClient::RetrieveSeries(const std::string& study_uid
                                                     const CancelToken& cancel) const {
   RETURN_IF_ERROR(CheckUid(study_uid, "study_uid"));
   RETURN_IF_ERROR(CheckUid(series_uid, "series_uid"));
+  if (endpoint_.retrieve_by_move) {
+    return MoveSeries(study_uid, series_uid, folder, max_bytes, expected_instances, progress,
+                      cancel);
+  }
   std::vector<Context> contexts = {
       {UID_GETStudyRootQueryRetrieveInformationModel, &PlainSyntaxes(), ASC_SC_ROLE_DEFAULT}};
   // The storage classes a C-GET may bring, vpm taking the SCP role (at
@@ -386,6 +406,60 @@ Result<RetrievedSeries> DimseClient::RetrieveSeries(const std::string& study_uid
                                       " brought nothing (no such series on the PACS?)"));
   }
   return scu->received;
+}
+
+Result<RetrievedSeries> DimseClient::MoveSeries(const std::string& study_uid,
+                                                const std::string& series_uid,
+                                                const std::filesystem::path& folder,
+                                                int64_t max_bytes, int64_t expected_instances,
+                                                const ProgressFn& progress,
+                                                const CancelToken& cancel) const {
+  if (moves_ == nullptr) {
+    return absl::FailedPreconditionError(StrCat(
+        DimseLabel(endpoint_), ": \"retrieve\": \"move\" needs vpm-server --dicom-listen"));
+  }
+  ASSIGN_OR_RETURN(std::unique_ptr<MoveRegistry::Expectation> expected,
+                   moves_->Expect(series_uid, endpoint_.dimse_ae_title,
+                                  endpoint_.calling_ae_title, folder, max_bytes));
+  ASSIGN_OR_RETURN(std::unique_ptr<Scu> scu,
+                   Associate(endpoint_, options_,
+                             {{UID_MOVEStudyRootQueryRetrieveInformationModel, &PlainSyntaxes(),
+                               ASC_SC_ROLE_DEFAULT}},
+                             cancel, "C-MOVE"));
+  scu->expected = expected_instances;
+  scu->progress = &progress;
+  DcmDataset keys;
+  keys.putAndInsertString(DCM_QueryRetrieveLevel, "SERIES");
+  keys.putAndInsertString(DCM_StudyInstanceUID, study_uid.c_str());
+  keys.putAndInsertString(DCM_SeriesInstanceUID, series_uid.c_str());
+  const T_ASC_PresentationContextID id =
+      scu->findPresentationContextID(UID_MOVEStudyRootQueryRetrieveInformationModel, "");
+  OFList<RetrieveResponse*> responses;
+  const OFCondition sent =
+      scu->sendMOVERequest(id, endpoint_.move_destination.c_str(), &keys, &responses);
+  Uint16 final_status = STATUS_Success;
+  int64_t completed = 0;
+  for (RetrieveResponse* r : responses) {
+    final_status = r->m_status;
+    completed = r->m_numberOfCompletedSubops;
+    delete r;
+  }
+  Release(*scu);
+  RETURN_IF_ERROR(cancel.Check());
+  if (sent.bad()) return FromCondition(sent, endpoint_, "C-MOVE");
+  RETURN_IF_ERROR(expected->failure());
+  if ((final_status & 0xF000) != 0xB000) {
+    RETURN_IF_ERROR(FromDimseStatus(final_status, endpoint_, "C-MOVE"));
+  }
+  // The PACS answers once it has sent them; the listener may still be
+  // writing the last ones.
+  Status landed = expected->WaitFor(completed, cancel, options_.move_arrival_s);
+  if (!landed.ok()) return PrefixStatus(landed, StrCat(DimseLabel(endpoint_), ": C-MOVE"));
+  if (expected->instances() == 0) {
+    return absl::NotFoundError(StrCat(DimseLabel(endpoint_), ": C-MOVE of series ", series_uid,
+                                      " brought nothing (no such series on the PACS?)"));
+  }
+  return RetrievedSeries{.instances = expected->instances(), .bytes = expected->bytes()};
 }
 
 Status DimseClient::Store(const std::vector<const std::string*>& files,

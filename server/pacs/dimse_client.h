@@ -7,6 +7,7 @@
 
 #include <cstdint>
 
+#include "server/pacs/move_registry.h"
 #include "server/pacs/pacs_client.h"
 
 namespace vpm::pacs {
@@ -17,8 +18,11 @@ class DimseClient : public PacsClient {
     int64_t connect_timeout_s = 10;  // TCP connect and association negotiation
     int64_t dimse_timeout_s = 60;    // between two messages of the PACS
     int64_t max_find_answers = 5000; // C-FIND answers read before cancelling
+    double move_arrival_s = 30;      // after a C-MOVE's last answer, for its instances to land
   };
-  DimseClient(PacsEndpoint endpoint, Options options);
+  // `moves`: vpm's listener's registry (dicom_listener.h), required for an
+  // endpoint with "retrieve": "move"; it outlives the client.
+  DimseClient(PacsEndpoint endpoint, Options options, MoveRegistry* moves = nullptr);
 
   // C-ECHO. Errors as below.
   Status Echo(const CancelToken& cancel) const;
@@ -32,7 +36,10 @@ class DimseClient : public PacsClient {
                                                 const CancelToken& cancel) const override;
   // C-GET of one series; every instance written as it arrives (its own
   // transfer syntax kept). An instance of another series is InvalidArgument
-  // (mixed series); nothing received is NotFound.
+  // (mixed series); nothing received is NotFound. With "retrieve": "move",
+  // C-MOVE to the endpoint's move_destination instead: the instances come
+  // through vpm's listener into `folder` (MoveRegistry), and the retrieval
+  // ends once the PACS's count of sent instances has arrived.
   Result<RetrievedSeries> RetrieveSeries(const std::string& study_uid,
                                          const std::string& series_uid,
                                          const std::filesystem::path& folder, int64_t max_bytes,
@@ -46,8 +53,14 @@ class DimseClient : public PacsClient {
   const PacsEndpoint& endpoint() const override { return endpoint_; }
 
  private:
+  Result<RetrievedSeries> MoveSeries(const std::string& study_uid, const std::string& series_uid,
+                                     const std::filesystem::path& folder, int64_t max_bytes,
+                                     int64_t expected_instances, const ProgressFn& progress,
+                                     const CancelToken& cancel) const;
+
   PacsEndpoint endpoint_;
   Options options_;
+  MoveRegistry* moves_ = nullptr;
 };
 
 }  // namespace vpm::pacs

@@ -14,10 +14,71 @@ namespace {
 
 using nlohmann::json;
 
+Status ParseUsers(const json& entry, const std::string& named, PacsEndpoint* endpoint);
+
 const std::set<std::string> kKeys = {"name",          "dicomweb",          "username",
                                      "password_file", "bearer_token_file", "ca_file",
                                      "users",         "page_size",         "dimse",
-                                     "calling_aet"};
+                                     "calling_aet", "retrieve",   "move_destination",
+                                     "receive",     "from"};
+
+// "retrieve" and "move_destination" of a "dimse" entry.
+Status ParseRetrieveKeys(const json& entry, const std::string& named, PacsEndpoint* endpoint) {
+  if (entry.contains("retrieve")) {
+    const json& how = entry["retrieve"];
+    if (!how.is_string() || (how != "get" && how != "move")) {
+      return absl::InvalidArgumentError(StrCat(named, ": \"retrieve\" is \"get\" or \"move\""));
+    }
+    endpoint->retrieve_by_move = how == "move";
+  }
+  if (entry.contains("move_destination")) {
+    if (!endpoint->retrieve_by_move) {
+      return absl::InvalidArgumentError(
+          StrCat(named, ": \"move_destination\" goes with \"retrieve\": \"move\""));
+    }
+    if (!entry["move_destination"].is_string() ||
+        !CheckAeTitle(entry["move_destination"].get<std::string>()).ok()) {
+      return absl::InvalidArgumentError(StrCat(
+          named, ": \"move_destination\" must be an AE title (1-16 printable characters)"));
+    }
+    endpoint->move_destination = entry["move_destination"].get<std::string>();
+  }
+  if (endpoint->retrieve_by_move && endpoint->move_destination.empty()) {
+    return absl::InvalidArgumentError(StrCat(
+        named, ": \"retrieve\": \"move\" needs \"move_destination\", the AE title under which "
+               "the PACS knows vpm's --dicom-listen node"));
+  }
+  return absl::OkStatus();
+}
+
+// An entry {"name", "receive": true, "from": [AE titles], "users"}: the
+// series sent to vpm's own node.
+Status ParseReceiveKeys(const json& entry, const std::string& named, PacsEndpoint* endpoint) {
+  for (const auto& [key, value] : entry.items()) {
+    if (key != "name" && key != "receive" && key != "from" && key != "users") {
+      return absl::InvalidArgumentError(StrCat(
+          named, ": \"", key.substr(0, 40), "\" does not go with \"receive\" (name, receive, "
+                 "from, users)"));
+    }
+  }
+  if (entry["receive"] != true) {
+    return absl::InvalidArgumentError(StrCat(named, ": \"receive\" is true or absent"));
+  }
+  endpoint->receive = true;
+  if (entry.contains("from")) {
+    if (!entry["from"].is_array()) {
+      return absl::InvalidArgumentError(StrCat(named, ": \"from\" must list AE titles"));
+    }
+    for (const json& ae : entry["from"]) {
+      if (!ae.is_string() || !CheckAeTitle(ae.get<std::string>()).ok()) {
+        return absl::InvalidArgumentError(
+            StrCat(named, ": \"from\" must list AE titles (1-16 printable characters)"));
+      }
+      endpoint->receive_from.push_back(ae.get<std::string>());
+    }
+  }
+  return ParseUsers(entry, named, endpoint);
+}
 
 // The "dimse" and "calling_aet" keys of an entry without "dicomweb".
 Status ParseDimseKeys(const json& entry, const std::string& named, PacsEndpoint* endpoint) {
@@ -45,7 +106,7 @@ Status ParseDimseKeys(const json& entry, const std::string& named, PacsEndpoint*
     }
     endpoint->calling_ae_title = entry["calling_aet"].get<std::string>();
   }
-  return absl::OkStatus();
+  return ParseRetrieveKeys(entry, named, endpoint);
 }
 
 Result<std::string> ReadSecret(const std::filesystem::path& path, const std::string& where) {
@@ -123,9 +184,21 @@ Result<PacsEndpoint> ParseEntry(const json& entry, const std::filesystem::path& 
     return absl::InvalidArgumentError(StrCat(where, ": \"name\": ", name.message()));
   }
   const std::string named = StrCat(where, " (", endpoint.name, ")");
+  if (entry.contains("receive")) {
+    RETURN_IF_ERROR(ParseReceiveKeys(entry, named, &endpoint));
+    return endpoint;
+  }
   if (entry.contains("dimse") == entry.contains("dicomweb")) {
-    return absl::InvalidArgumentError(
-        StrCat(named, ": give \"dicomweb\" (a URL) or \"dimse\" (AET@HOST:PORT), one of them"));
+    return absl::InvalidArgumentError(StrCat(
+        named, ": give \"dicomweb\" (a URL), \"dimse\" (AET@HOST:PORT) or \"receive\": true, "
+               "one of them"));
+  }
+  if (entry.contains("retrieve") || entry.contains("move_destination") || entry.contains("from")) {
+    if (!entry.contains("dimse") || entry.contains("from")) {
+      return absl::InvalidArgumentError(StrCat(
+          named, ": \"retrieve\" and \"move_destination\" are for \"dimse\", \"from\" for "
+                 "\"receive\""));
+    }
   }
   if (entry.contains("dimse")) {
     RETURN_IF_ERROR(ParseDimseKeys(entry, named, &endpoint));

@@ -20,6 +20,16 @@ struct PacsEndpoint {
   std::string dimse_host;
   int dimse_port = 0;
   std::string calling_ae_title = "VPM";
+  // How a DIMSE endpoint brings a series: C-GET on vpm's own association
+  // (default), or C-MOVE to `move_destination`, the AE title under which
+  // the PACS knows vpm's --dicom-listen node (the instances arrive there).
+  bool retrieve_by_move = false;
+  std::string move_destination;
+  // Or the series that nodes sent to vpm's --dicom-listen (C-STORE):
+  // "receive": true. `receive_from`: the calling AE titles whose series it
+  // shows (empty: every sender's).
+  bool receive = false;
+  std::vector<std::string> receive_from;
   std::string username;            // basic auth with `password` (both read at start)
   std::string password;            // secret: never logged, never in an error
   std::string bearer_token;        // secret, from bearer_token_file
@@ -39,7 +49,10 @@ std::string EndpointLabel(const PacsEndpoint& endpoint);
 //    "username": "vpm", "password_file": "orthanc.pw",   (or "bearer_token_file")
 //    "ca_file": "ca.pem", "users": ["alice", "bob"], "page_size": 100}
 // or, for DICOM networking, {"name": "pacs", "dimse": "ORTHANC@10.0.0.5:4242",
-//    "calling_aet": "VPM", "users": [...]} (no credentials: DIMSE has none).
+//    "calling_aet": "VPM", "retrieve": "get" | "move", "move_destination": "VPM",
+//    "users": [...]} (no credentials: DIMSE has none), or the series sent to
+// vpm's own node, {"name": "inbox", "receive": true, "from": ["CT01"],
+//    "users": [...]}.
 // Relative file names are taken from the endpoints file's folder; a secret
 // file's surrounding whitespace is dropped. Unknown keys, a missing name,
 // URL or users list, a name given twice, credentials in the URL, both a

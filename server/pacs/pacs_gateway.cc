@@ -1,10 +1,12 @@
 #include "server/pacs/pacs_gateway.h"
 
 #include <algorithm>
+#include <set>
 
 #include "server/io/list_dicom_series.h"
 #include "server/io/read_dicom_series.h"
 #include "server/pacs/pacs_source.h"
+#include "server/pacs/received_client.h"
 
 namespace vpm::pacs {
 namespace {
@@ -35,16 +37,61 @@ Result<std::unique_ptr<PacsGateway>> PacsGateway::Create(Options options) {
   std::unique_ptr<PacsGateway> gateway(new PacsGateway());
   ASSIGN_OR_RETURN(gateway->audit_, AuditLog::Open(options.audit_log));
   ASSIGN_OR_RETURN(gateway->cache_, SeriesCache::Create(options.cache));
+  RETURN_IF_ERROR(gateway->StartListener(options.listen, options.endpoints));
   for (PacsEndpoint& endpoint : options.endpoints) {
     const std::string name = endpoint.name;
-    if (endpoint.dimse_host.empty()) {
+    if (endpoint.receive) {
+      gateway->clients_[name] =
+          std::make_unique<ReceivedClient>(std::move(endpoint), gateway->received_.get());
+    } else if (endpoint.dimse_host.empty()) {
       gateway->clients_[name] =
           std::make_unique<DicomwebClient>(std::move(endpoint), options.client);
     } else {
-      gateway->clients_[name] = std::make_unique<DimseClient>(std::move(endpoint), options.dimse);
+      gateway->clients_[name] = std::make_unique<DimseClient>(std::move(endpoint), options.dimse,
+                                                              gateway->moves_.get());
     }
   }
   return gateway;
+}
+
+Status PacsGateway::StartListener(const Options::Listen& listen,
+                                  const std::vector<PacsEndpoint>& endpoints) {
+  std::set<std::string> move_originators;
+  for (const PacsEndpoint& e : endpoints) {
+    if ((e.receive || e.retrieve_by_move) && !listen.enabled) {
+      return absl::InvalidArgumentError(StrCat(
+          "--pacs: endpoint '", e.name, "' ",
+          e.receive ? "(\"receive\": true) shows what DICOM nodes send to vpm"
+                    : "(\"retrieve\": \"move\") has the PACS send the series to vpm",
+          ", which needs vpm-server --dicom-listen AET@HOST:PORT"));
+    }
+    if (e.retrieve_by_move) move_originators.insert(e.calling_ae_title);
+  }
+  if (!listen.enabled) return absl::OkStatus();
+  ASSIGN_OR_RETURN(received_, ReceivedStore::Create({.root = listen.store_root,
+                                                     .max_bytes = listen.store_bytes}));
+  moves_ = std::make_unique<MoveRegistry>();
+  ASSIGN_OR_RETURN(listener_,
+                   DicomListener::Start({.address = listen.address,
+                                         .max_associations = listen.max_associations,
+                                         .max_instance_bytes = listen.max_instance_bytes,
+                                         .store = received_.get(),
+                                         .moves = moves_.get(),
+                                         .own_move_originators = move_originators,
+                                         .on_series = [this](const ReceiveReport& report) {
+                                           RecordReceive(report);
+                                         }}));
+  return absl::OkStatus();
+}
+
+void PacsGateway::RecordReceive(const ReceiveReport& report) {
+  audit_->Record({.action = "receive",
+                  .study_uid = report.study_uid,
+                  .series_uid = report.series_uid,
+                  .result = report.result,
+                  .instances = report.instances,
+                  .calling_aet = report.calling_ae,
+                  .refused = report.refused});
 }
 
 std::vector<std::string> PacsGateway::EndpointsFor(const std::string& user) const {
@@ -141,6 +188,26 @@ Status PacsGateway::FetchSeries(const PacsClient& client, const std::string& stu
   return absl::OkStatus();
 }
 
+Result<Volume> PacsGateway::ReadSeriesFolder(const std::filesystem::path& folder,
+                                             std::string_view source,
+                                             const std::string& series_uid,
+                                             const VolumeLimits& limits,
+                                             const ProgressFn& progress) {
+  VolumeLimits read_limits = limits;
+  std::error_code error;
+  read_limits.read_root = std::filesystem::canonical(folder, error);
+  if (error) return absl::InternalError("the PACS cache lost a series folder");
+  if (progress) progress(0.7, "reading");
+  DicomReadOptions options{.series = series_uid};
+  Result<Volume> volume = ReadDicomSeries(read_limits.read_root, read_limits, options);
+  if (!volume.ok()) {
+    return HideFolder(volume.status(), read_limits.read_root, StrCat("series ", series_uid));
+  }
+  volume->set_source(std::string(source));
+  if (progress) progress(1.0, "reading");
+  return volume;
+}
+
 Result<Volume> PacsGateway::LoadSeries(const std::string& user, std::string_view source,
                                        const VolumeLimits& limits, const ProgressFn& progress,
                                        const CancelToken& cancel) {
@@ -151,6 +218,14 @@ Result<Volume> PacsGateway::LoadSeries(const std::string& user, std::string_view
     record.study_uid = s.study_uid;
     record.series_uid = s.series_uid;
     ASSIGN_OR_RETURN(const PacsClient* client, ClientFor(user, s.endpoint));
+    if (const auto* received = dynamic_cast<const ReceivedClient*>(client)) {
+      // Received series are read where they are, held unchanged meanwhile.
+      ASSIGN_OR_RETURN(std::shared_ptr<ReceivedStore::Lease> lease,
+                       received->OpenSeries(s.study_uid, s.series_uid));
+      record.cache = "received";
+      record.instances = lease->instances;
+      return ReadSeriesFolder(lease->folder, source, s.series_uid, limits, progress);
+    }
     int64_t instances = -1;
     ASSIGN_OR_RETURN(std::shared_ptr<const SeriesCache::Lease> lease,
                      cache_->Open(
@@ -163,23 +238,14 @@ Result<Volume> PacsGateway::LoadSeries(const std::string& user, std::string_view
                          cancel));
     record.cache = lease->hit ? "hit" : "miss";
     RETURN_IF_ERROR(cancel.Check());
-    VolumeLimits read_limits = limits;
-    std::error_code error;
-    read_limits.read_root = std::filesystem::canonical(lease->folder, error);
-    if (error) return absl::InternalError("the PACS cache lost a series folder");
-    if (progress) progress(0.7, "reading");
-    DicomReadOptions options{.series = s.series_uid};
-    Result<Volume> volume = ReadDicomSeries(read_limits.read_root, read_limits, options);
-    if (!volume.ok()) {
-      return HideFolder(volume.status(), read_limits.read_root, StrCat("series ", s.series_uid));
-    }
-    if (instances < 0)
+    Result<Volume> volume = ReadSeriesFolder(lease->folder, source, s.series_uid, limits, progress);
+    if (instances < 0) {
+      std::error_code error;
       instances = static_cast<int64_t>(
           std::distance(std::filesystem::directory_iterator(lease->folder, error),
                         std::filesystem::directory_iterator()));
+    }
     record.instances = instances;
-    volume->set_source(std::string(source));
-    if (progress) progress(1.0, "reading");
     return volume;
   }();
   record.result = result.status();

@@ -14,8 +14,11 @@
 #include "server/common/progress.h"
 #include "server/common/status.h"
 #include "server/pacs/audit_log.h"
+#include "server/pacs/dicom_listener.h"
 #include "server/pacs/dicomweb_client.h"
 #include "server/pacs/dimse_client.h"
+#include "server/pacs/move_registry.h"
+#include "server/pacs/received_store.h"
 #include "server/pacs/pacs_endpoint.h"
 #include "server/pacs/series_cache.h"
 #include "server/volume/volume.h"
@@ -30,6 +33,17 @@ class PacsGateway {
     std::filesystem::path audit_log;  // required
     DicomwebClient::Options client;
     DimseClient::Options dimse;
+    // vpm's own DICOM node (--dicom-listen): off when `listen.address.port`
+    // is 0 and `listen.enabled` false. Needed by "receive" endpoints and
+    // "retrieve": "move" ones.
+    struct Listen {
+      bool enabled = false;
+      DimseAddress address;
+      std::filesystem::path store_root;            // the received store
+      int64_t store_bytes = int64_t{4} << 30;      // its budget
+      int max_associations = 8;
+      int64_t max_instance_bytes = int64_t{1} << 30;
+    } listen;
   };
   static Result<std::unique_ptr<PacsGateway>> Create(Options options);
 
@@ -75,6 +89,14 @@ class PacsGateway {
 
   SeriesCache::Stats cache_stats() const { return cache_->stats(); }
 
+  // The port vpm's DICOM node listens on; 0 without --dicom-listen.
+  int listen_port() const { return listener_ ? listener_->port() : 0; }
+  // Closes the DICOM node's port and cuts its associations (their partial
+  // series are dropped); idempotent. The destructor does it too.
+  void StopListening() {
+    if (listener_) listener_->Stop();
+  }
+
  private:
   PacsGateway() = default;
   Result<const PacsClient*> ClientFor(const std::string& user,
@@ -83,10 +105,20 @@ class PacsGateway {
                      const std::string& series_uid, const std::filesystem::path& folder,
                      int64_t max_bytes, const VolumeLimits& limits, const ProgressFn& progress,
                      const CancelToken& cancel, int64_t* instances);
+  Status StartListener(const Options::Listen& listen, const std::vector<PacsEndpoint>& endpoints);
+  void RecordReceive(const ReceiveReport& report);
+  // Reads the series' files in `folder` (cache or received store) as the
+  // volume of `source`.
+  Result<Volume> ReadSeriesFolder(const std::filesystem::path& folder, std::string_view source,
+                                  const std::string& series_uid, const VolumeLimits& limits,
+                                  const ProgressFn& progress);
 
   std::map<std::string, std::unique_ptr<PacsClient>> clients_;  // by endpoint name
   std::unique_ptr<SeriesCache> cache_;
   std::unique_ptr<AuditLog> audit_;
+  std::unique_ptr<ReceivedStore> received_;  // with --dicom-listen
+  std::unique_ptr<MoveRegistry> moves_;
+  std::unique_ptr<DicomListener> listener_;  // last: stopped first
 };
 
 }  // namespace vpm::pacs

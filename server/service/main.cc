@@ -66,6 +66,9 @@ int main(int argc, char** argv) {
               (*server)->metrics().metrics_port() > 0
                   ? (" metrics on port " + std::to_string((*server)->metrics().metrics_port())).c_str()
                   : "");
+  if (const auto* pacs = (*server)->context().pacs; pacs != nullptr && pacs->listen_port() > 0) {
+    std::printf("vpm-server DICOM node on port %d\n", pacs->listen_port());
+  }
   std::fflush(stdout);
   int signal = 0;
   sigwait(&signals, &signal);

@@ -37,6 +37,23 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
       ->check(CLI::PositiveNumber);
   app.add_option("--pacs-audit-log", o->pacs_audit_log,
                  "JSON-lines audit log of every PACS action (required with --pacs)");
+  app.add_option("--dicom-listen", o->dicom_listen,
+                 "AET@HOST:PORT: vpm as a DICOM node (C-STORE, C-ECHO) that PACS and modalities "
+                 "send series to and C-MOVE delivers to; needs --pacs (\"receive\" endpoints "
+                 "show what arrives); a loopback HOST refuses other peers");
+  app.add_option("--dicom-store-bytes", o->dicom_store_bytes,
+                 "bytes of received series kept (under --state-dir, else the PACS cache); "
+                 "past it instances are refused (out of resources)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--dicom-max-associations", o->dicom_max_associations,
+                 "DICOM associations served at once; more are rejected")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
+  app.add_option("--dicom-max-instance-bytes", o->dicom_max_instance_bytes,
+                 "the largest instance received; a larger one ends its association")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--metrics-listen", o->metrics_listen,
                  "HOST:PORT for Prometheus metrics at /metrics (empty: off)");
   app.add_option("--tls-cert", o->tls_cert, "server certificate chain (PEM): turns TLS on");

@@ -83,6 +83,13 @@ struct ServerOptions {
   std::string pacs_cache;
   int64_t pacs_cache_bytes = int64_t{4} << 30;
   std::string pacs_audit_log;
+  // vpm as a DICOM node (docs/PACS.md, "vpm as a DICOM node"): AET@HOST:PORT
+  // (empty: off), the received store's budget (bytes), associations at
+  // once, and the largest instance taken (bytes).
+  std::string dicom_listen;
+  int64_t dicom_store_bytes = int64_t{4} << 30;
+  int64_t dicom_max_associations = 8;
+  int64_t dicom_max_instance_bytes = int64_t{1} << 30;
 };
 
 }  // namespace vpm::service

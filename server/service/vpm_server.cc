@@ -86,8 +86,9 @@ Result<std::unique_ptr<cases::CaseStore>> OpenCaseStore(const ServerOptions& o) 
 // --pacs-audit-log; null without --pacs.
 Result<std::unique_ptr<pacs::PacsGateway>> MakePacsGateway(const ServerOptions& o) {
   if (o.pacs_file.empty()) {
-    if (!o.pacs_cache.empty() || !o.pacs_audit_log.empty()) {
-      return absl::InvalidArgumentError("--pacs-cache and --pacs-audit-log need --pacs FILE");
+    if (!o.pacs_cache.empty() || !o.pacs_audit_log.empty() || !o.dicom_listen.empty()) {
+      return absl::InvalidArgumentError(
+          "--pacs-cache, --pacs-audit-log and --dicom-listen need --pacs FILE");
     }
     return std::unique_ptr<pacs::PacsGateway>();
   }
@@ -105,6 +106,19 @@ Result<std::unique_ptr<pacs::PacsGateway>> MakePacsGateway(const ServerOptions& 
     options.cache.remove_root_on_destroy = true;
   } else {
     options.cache.root = o.pacs_cache;
+  }
+  if (!o.dicom_listen.empty()) {
+    Result<pacs::DimseAddress> address = pacs::ParseDimseAddress(o.dicom_listen);
+    if (!address.ok()) return PrefixStatus(address.status(), "--dicom-listen");
+    options.listen = {.enabled = true,
+                      .address = *address,
+                      // Kept across restarts with --state-dir; else beside the cache.
+                      .store_root = o.state_dir.empty()
+                                        ? options.cache.root / ".received"
+                                        : std::filesystem::path(o.state_dir) / "dicom-received",
+                      .store_bytes = o.dicom_store_bytes,
+                      .max_associations = static_cast<int>(o.dicom_max_associations),
+                      .max_instance_bytes = o.dicom_max_instance_bytes};
   }
   return pacs::PacsGateway::Create(std::move(options));
 }
@@ -305,6 +319,7 @@ void VpmServer::Shutdown(std::chrono::milliseconds grace) {
     shut_down_ = true;
   }
   stop_.notify_all();
+  if (pacs_) pacs_->StopListening();  // the DICOM node first: no new series while stopping
   if (server_) {
     context_.leaving = true;
     context_.draining = true;

@@ -74,5 +74,42 @@ TEST_F(PacsEndpointTest, RejectsBadEntriesWithoutQuotingSecrets) {
   }
 }
 
+TEST_F(PacsEndpointTest, ReadsReceiveAndMoveEndpoints) {
+  auto endpoints = Parse(R"([
+    {"name": "inbox", "receive": true, "from": ["CT01"], "users": ["alice"]},
+    {"name": "pacs", "dimse": "ORTHANC@127.0.0.1:4242", "retrieve": "move",
+     "move_destination": "VPM", "users": ["*"]},
+    {"name": "get", "dimse": "ORTHANC@127.0.0.1:4242", "retrieve": "get", "users": ["*"]}])");
+  ASSERT_TRUE(endpoints.ok()) << endpoints.status();
+  const PacsEndpoint& inbox = (*endpoints)[0];
+  EXPECT_TRUE(inbox.receive);
+  EXPECT_EQ(inbox.receive_from, std::vector<std::string>{"CT01"});
+  EXPECT_TRUE(inbox.dimse_host.empty());
+  EXPECT_TRUE((*endpoints)[1].retrieve_by_move);
+  EXPECT_EQ((*endpoints)[1].move_destination, "VPM");
+  EXPECT_FALSE((*endpoints)[2].retrieve_by_move);
+}
+
+TEST_F(PacsEndpointTest, RefusesMalformedReceiveAndMoveEntries) {
+  const std::vector<std::string> bad = {
+      R"([{"name": "a", "receive": false, "users": ["a"]}])",
+      R"([{"name": "a", "receive": true}])",
+      R"([{"name": "a", "receive": true, "from": "CT01", "users": ["a"]}])",
+      R"([{"name": "a", "receive": true, "from": ["AN AE TITLE TOO LONG"], "users": ["a"]}])",
+      R"([{"name": "a", "receive": true, "dimse": "X@h:1", "users": ["a"]}])",
+      R"([{"name": "a", "receive": true, "dicomweb": "http://h/x", "users": ["a"]}])",
+      R"([{"name": "a", "dimse": "X@h:1", "retrieve": "move", "users": ["a"]}])",
+      R"([{"name": "a", "dimse": "X@h:1", "retrieve": "push", "users": ["a"]}])",
+      R"([{"name": "a", "dimse": "X@h:1", "move_destination": "VPM", "users": ["a"]}])",
+      R"([{"name": "a", "dimse": "X@h:1", "from": ["X"], "users": ["a"]}])",
+      R"([{"name": "a", "dicomweb": "http://h/x", "retrieve": "move", "users": ["a"]}])",
+  };
+  for (const std::string& text : bad) {
+    auto endpoints = Parse(text);
+    ASSERT_FALSE(endpoints.ok()) << text;
+    EXPECT_TRUE(absl::IsInvalidArgument(endpoints.status())) << text;
+  }
+}
+
 }  // namespace
 }  // namespace vpm::pacs

@@ -132,12 +132,14 @@ class Harness:
                        check=True, capture_output=True)
         return kidney, report
 
-    def start_orthanc(self, users, dimse=False):
+    def start_orthanc(self, users, dimse=False, modalities=None):
         """Orthanc with authentication on, loopback HTTP only, storage in the
         temp folder. The DICOM server is off unless `dimse`: then Orthanc is
         the node ORTHANC@127.0.0.1:self.orthanc_dicom_port, checks the AE
         title it is called by, and knows vpm as the modality VPM (C-FIND,
-        C-GET, C-STORE). Returns the DICOMweb base URL."""
+        C-GET, C-STORE). `modalities` replaces the nodes Orthanc knows
+        ({'vpm': ['VPM', '127.0.0.1', PORT]}: vpm's --dicom-listen node, for
+        C-MOVE and POST /modalities/vpm/store). Returns the DICOMweb base URL."""
         if not os.access(ORTHANC, os.X_OK):
             raise SystemExit(f'FAIL: {ORTHANC} is not installed (scripts/install-deps.sh)')
         root = os.path.join(self.tmp, 'orthanc')
@@ -154,7 +156,7 @@ class Harness:
             'DicomServerEnabled': dimse,
             'DicomAet': 'ORTHANC',
             'DicomCheckCalledAet': True,
-            'DicomModalities': {'vpm': ['VPM', '127.0.0.1', 1]},
+            'DicomModalities': modalities or {'vpm': ['VPM', '127.0.0.1', 1]},
             'RemoteAccessAllowed': False,
             'AuthenticationEnabled': True,
             'RegisteredUsers': users,
@@ -182,13 +184,14 @@ class Harness:
                 time.sleep(0.1)
         raise SystemExit('FAIL: Orthanc did not start')
 
-    def orthanc_request(self, method, path, user, password, data=None):
+    def orthanc_request(self, method, path, user, password, data=None,
+                        content_type='application/dicom'):
         req = urllib.request.Request(f'http://127.0.0.1:{self.orthanc_port}{path}', data=data,
                                      method=method)
         token = base64.b64encode(f'{user}:{password}'.encode()).decode()
         req.add_header('Authorization', f'Basic {token}')
         if data is not None:
-            req.add_header('Content-Type', 'application/dicom')
+            req.add_header('Content-Type', content_type)
         with urllib.request.urlopen(req, timeout=30) as r:
             return json.loads(r.read() or b'null')
 
