@@ -7,8 +7,11 @@
 # eviction, the render storm, slices, users and fair shares, cases, DICOM export), the FEM tests, and the ray caster's tests
 # (GPU on lavapipe against the CPU reference). The other suites run
 # unsanitized in `make test`.
+# A second argument `build` stops after the build (.ci/run builds both
+# trees at idle priority while the main suite runs).
 set -euo pipefail
-mode="${1:?usage: scripts/sanitize.sh address|thread}"
+mode="${1:?usage: scripts/sanitize.sh address|thread [build]}"
+what="${2:-all}"
 cd "$(dirname "$0")/.."
 case "$mode" in
   address) dir=build-asan ;;
@@ -25,6 +28,7 @@ cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 start=$(date +%s)
 cmake --build "$dir" -j "$(nproc)" --target "${targets[@]}"
 echo "sanitize.sh: $mode build took $(( $(date +%s) - start )) s"
+if [ "$what" = build ]; then exit 0; fi
 supp="$PWD/scripts/sanitizer-suppressions"
 # Reports from code that is not ours and not instrumented (Mesa's lavapipe
 # and its LLVM JIT, the Khronos validation layer, gRPC, Abseil, upb,
