@@ -601,6 +601,24 @@ TEST_F(CasesTest, ACaseKeepsItsViewAndTheReopenedSessionShowsIt) {
   const std::string capture_default = CapturePixelsOfNewSession(LoadPhantom(kPhantom, kAlice));
   ASSERT_EQ(capture_default.size(), capture_after.size());
   EXPECT_NE(capture_default, capture_after);
+
+  // Export and import carry it; an archive's view is checked as settings.
+  v3::ExportCaseRequest request;
+  request.set_case_id(case_id);
+  v3::CaseArchive archive;
+  ASSERT_TRUE(stub_->ExportCase(Context(kAlice).get(), request, &archive).ok());
+  EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(archive.view(), view));
+  v3::ImportCaseRequest import;
+  *import.mutable_archive() = archive;
+  import.mutable_archive()->mutable_view()->set_width(300);  // a client's own: dropped
+  v3::CaseInfo imported;
+  ASSERT_TRUE(stub_->ImportCase(Context(kBob).get(), import, &imported).ok());
+  EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(imported.view(), view));
+  for (int i = 0; i < 16; ++i) *import.mutable_archive()->mutable_view()->add_clip() = view.clip(0);
+  const grpc::Status refused = stub_->ImportCase(Context(kBob).get(), import, &imported);
+  EXPECT_EQ(refused.error_code(), grpc::INVALID_ARGUMENT);
+  EXPECT_NE(refused.error_message().find("archive.view"), std::string::npos)
+      << refused.error_message();
 }
 
 // A full disk (a file size limit on the process, SIGXFSZ ignored) while
