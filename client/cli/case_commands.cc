@@ -41,12 +41,14 @@ json ViewJson(const v3::CaseInfo& c) {
 
 // One line of what the kept view shows: "MIP, crop, 1 clip plane, 2 slices".
 std::string ViewSummary(const v3::RenderSettings& v) {
+  const std::string preset = v.preset().empty() ? "ct-soft-tissue" : v.preset();
   std::string out = v.mode() == v3::RENDER_MODE_MIP ? "MIP"
-                    : v.has_render_tf()             ? "DVR, transfer function " + v.render_tf().name()
-                    : "DVR, preset " + (v.preset().empty() ? std::string("ct-soft-tissue") : v.preset());
+                    : v.has_render_tf() ? "DVR, transfer function " + v.render_tf().name()
+                                        : "DVR, preset " + preset;
   if (v.has_crop()) out += ", crop";
   if (v.clip_size() > 0) {
-    out += ", " + std::to_string(v.clip_size()) + (v.clip_size() == 1 ? " clip plane" : " clip planes");
+    out += ", " + std::to_string(v.clip_size());
+    out += v.clip_size() == 1 ? " clip plane" : " clip planes";
   }
   if (v.view_cut()) out += ", view cut";
   if (v.slices_size() > 0) {

@@ -14,7 +14,8 @@ void Session::KeepView(const v3::RenderSettings& settings) {
   v3::RenderSettings view = CaseView(settings);
   std::string bytes = view.SerializeAsString();
   if (bytes.size() > kMaxCaseViewBytes) {
-    std::fprintf(stderr, "vpm-server: session %s: render settings of %zu bytes not kept (at most %zu)\n",
+    std::fprintf(stderr,
+                 "vpm-server: session %s: render settings of %zu bytes not kept (at most %zu)\n",
                  id_.c_str(), bytes.size(), kMaxCaseViewBytes);
     return;
   }
@@ -62,7 +63,8 @@ Result<SceneView> Session::ExportView(const SceneView& last) const {
   }
   // No frame yet: the defaults a stream starts with (512 x 512).
   const int max_side = std::max({1024, last.width, last.height});
-  ASSIGN_OR_RETURN(const StreamSettings chosen, ToStreamSettings(settings, volume_->volume, max_side));
+  ASSIGN_OR_RETURN(const StreamSettings chosen,
+                   ToStreamSettings(settings, volume_->volume, max_side));
   SceneView view = chosen.view;
   view.camera = last.camera;
   return view;

@@ -176,7 +176,9 @@ class CasesTest : public ServiceTest {
     ASSERT_TRUE(stream->Write(first));
     v3::Frame frame;
     bool still = false;
-    while (!still && stream->Read(&frame)) still = !frame.interactive() && frame.last_sequence() >= 1;
+    while (!still && stream->Read(&frame)) {
+      still = !frame.interactive() && frame.last_sequence() >= 1;
+    }
     EXPECT_TRUE(still);
     stream->WritesDone();
     context->TryCancel();

@@ -49,7 +49,8 @@ function controls() {
   const slices = new SliceViews({ canvases, labels: canvases, tool: () => 'orbit',
                                   send: () => assert.fail('applying a view sends nothing'),
                                   onChange: () => assert.fail('applying a view sends nothing') });
-  const options = ['dvr:ct-soft-tissue', 'dvr:ct-bone', 'mip:ct-vessels'].map((value) => ({ value }));
+  const options = ['dvr:ct-soft-tissue', 'dvr:ct-bone', 'mip:ct-vessels']
+    .map((value) => ({ value }));
   return { render: { options, value: 'dvr:ct-soft-tissue' }, viewCut: element({ checked: true }),
            slicesBox: element(), windowWidth: element(), windowLevel: element(),
            sliceOverlay: element(), cuts, slices };
@@ -89,7 +90,8 @@ test('CaseView_ReplacesThePagesViewAndKeepsItsFrame', () => {
   // A transfer function of the case's own: the tab's upload renders it.
   const tf = { name: 'liver', colors: [], opacities: [] };
   const withTf = withCaseView(page, pageView({ ...kStored, preset: '', render_tf: tf }));
-  assert.deepEqual([withTf.uploaded_tf, withTf.render_tf, withTf.preset], [true, undefined, undefined]);
+  assert.deepEqual([withTf.uploaded_tf, withTf.render_tf, withTf.preset],
+                   [true, undefined, undefined]);
 });
 
 test('CaseView_SetsThePagesControlsSoThatTheyShowAndSendTheView', () => {
@@ -100,7 +102,8 @@ test('CaseView_SetsThePagesControlsSoThatTheyShowAndSendTheView', () => {
   assert.equal(c.viewCut.checked, false);
   // The crop box exactly (not rounded to the fields' 0.1 mm), the planes kept.
   assert.deepEqual(c.cuts.settings(), { crop: kStored.crop, clip: kStored.clip });
-  assert.match(c.cuts.e.clipKept.textContent, /left of 2\.5; plane \(0\.60, 0\.80, 0\.00\) at -3\.0/);
+  assert.match(c.cuts.e.clipKept.textContent,
+               /left of 2\.5; plane \(0\.60, 0\.80, 0\.00\) at -3\.0/);
   // The slice panes on, the axial plane where it was, window and overlay.
   assert.equal(c.slicesBox.checked, true);
   assert.deepEqual([c.windowWidth.value, c.windowLevel.value, c.sliceOverlay.checked],

@@ -371,7 +371,8 @@ export class ViewerConnection {
     const tf = view.render_tf;
     if (!tf) return;
     this.uploadedTf = tf;
-    this.send({ type: 'tf', name: tf.name, colors: tf.colors.length, opacities: tf.opacities.length });
+    this.send({ type: 'tf', name: tf.name, colors: tf.colors.length,
+                opacities: tf.opacities.length });
   }
 
   // The mesh OpenCase built (or its open session uses), held by this tab as

@@ -136,7 +136,8 @@ export class CutControls {
       });
     }
     this.e.clipSide.value = '';
-    this.keptClips = clip.slice(0, kMaxClipPlanes - 1).map((plane) => ({ plane, label: clipLabel(plane) }));
+    this.keptClips = clip.slice(0, kMaxClipPlanes - 1)
+      .map((plane) => ({ plane, label: clipLabel(plane) }));
     this.showKept();
   }
 

@@ -60,7 +60,9 @@ export class SliceViews {
     this.enabled = specs.length > 0;
     this.at = {};
     const first = specs[0];
-    if (first?.window?.width > 0) this.window = { width: first.window.width, level: first.window.level };
+    if (first?.window?.width > 0) {
+      this.window = { width: first.window.width, level: first.window.level };
+    }
     this.overlay = Boolean(first?.overlay);
     for (const s of specs) {
       if (s.view && Number.isFinite(s.at_mm)) this.at[s.view] = s.at_mm;
