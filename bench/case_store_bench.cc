@@ -2,7 +2,8 @@
 // (one transaction, committed), p50 / p99 / max in ms, on SQLite (a file
 // in a temporary folder) and, with --postgres CONNINFO, on PostgreSQL; and
 // the database's size per case. Each case is a drag session: a grab, 60
-// drag events, a kept release, over and over.
+// drag events, a kept release, over and over. Then 100 view writes per case
+// (SetRenderSettings), as sessions store a changed view with a still.
 //
 //   build/bench/case_store_bench [--cases 10] [--events 600] [--postgres CONNINFO]
 //   (make bench starts a throwaway PostgreSQL for it: scripts/bench.sh)
@@ -58,6 +59,32 @@ Figures Run(CaseStore& store, int cases, int events) {
   return {at(0.50), at(0.99), ms.back(), int64_t(ms.size())};
 }
 
+// View writes (SetRenderSettings, one UPDATE of the case's row): what a
+// session stores with a still after its client changed the view. `bytes`:
+// a serialized RenderSettings of a crop box, a clip plane and two slices is
+// about 200 bytes; two alternate so that every write changes the row.
+Figures RunViews(CaseStore& store, int cases, int writes, size_t bytes) {
+  std::vector<double> ms;
+  ms.reserve(size_t(cases) * writes);
+  const std::string views[2] = {std::string(bytes, 'a'), std::string(bytes, 'b')};
+  for (int c = 0; c < cases; ++c) {
+    const std::string id = "bench-case-" + std::to_string(c);
+    for (int i = 0; i < writes; ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      Check(absl::StatusOr<bool>(store.SetRenderSettings(id, views[i % 2]).ok()), "view");
+      ms.push_back(MsSince(t0));
+    }
+  }
+  std::sort(ms.begin(), ms.end());
+  auto at = [&](double q) { return ms[std::min(ms.size() - 1, size_t(q * ms.size()))]; };
+  return {at(0.50), at(0.99), ms.back(), int64_t(ms.size())};
+}
+
+void ViewRow(const char* backend, const Figures& f) {
+  std::printf("| %-10s | %7lld | %8.3f | %8.3f | %8.3f |   (view writes, 200 bytes)\n", backend,
+              static_cast<long long>(f.events), f.p50_ms, f.p99_ms, f.max_ms);
+}
+
 uintmax_t SqliteBytes(const fs::path& dir) {
   uintmax_t total = 0;
   for (const auto& entry : fs::directory_iterator(dir)) total += entry.file_size();
@@ -97,8 +124,10 @@ int main(int argc, char** argv) {
   {
     auto store = Check(cases::OpenSqliteCaseStore(dir / "cases.sqlite"), "open SQLite");
     const Figures f = Run(*store, cases, events);
+    const Figures views = RunViews(*store, cases, 100, 200);
     store.reset();  // closing checkpoints the WAL into the file
     Row("SQLite", f, double(SqliteBytes(dir)) / cases, events);
+    ViewRow("SQLite", views);
   }
   fs::remove_all(dir);
   if (!postgres.empty()) {
@@ -110,12 +139,14 @@ int main(int argc, char** argv) {
           "empty the database");
     auto store = Check(cases::OpenPostgresCaseStore(postgres), "open PostgreSQL");
     const Figures f = Run(*store, cases, events);
+    const Figures views = RunViews(*store, cases, 100, 200);
     auto size = Check(db->Query("SELECT pg_total_relation_size('events') + "
                                 "pg_total_relation_size('cases') + "
                                 "pg_total_relation_size('case_shares')",
                                 {}, "size"),
                       "size");
     Row("PostgreSQL", f, double(cases::SqlInt(size[0][0])) / cases, events);
+    ViewRow("PostgreSQL", views);
   } else {
     std::printf("| PostgreSQL | (not run: --postgres CONNINFO)                                      |\n");
   }

@@ -27,6 +27,36 @@ std::string When(int64_t unix_ms) {
   return text;
 }
 
+// CaseInfo.view with the proto's field names, or null when none is kept.
+json ViewJson(const v3::CaseInfo& c) {
+  if (!c.has_view()) return json(nullptr);
+  google::protobuf::util::JsonPrintOptions options;
+  options.preserve_proto_field_names = true;
+  std::string text;
+  if (!google::protobuf::util::MessageToJsonString(c.view(), &text, options).ok()) {
+    return json(nullptr);
+  }
+  return json::parse(text, nullptr, false);
+}
+
+// One line of what the kept view shows: "MIP, crop, 1 clip plane, 2 slices".
+std::string ViewSummary(const v3::RenderSettings& v) {
+  const std::string preset = v.preset().empty() ? "ct-soft-tissue" : v.preset();
+  std::string out = v.mode() == v3::RENDER_MODE_MIP ? "MIP"
+                    : v.has_render_tf() ? "DVR, transfer function " + v.render_tf().name()
+                                        : "DVR, preset " + preset;
+  if (v.has_crop()) out += ", crop";
+  if (v.clip_size() > 0) {
+    out += ", " + std::to_string(v.clip_size());
+    out += v.clip_size() == 1 ? " clip plane" : " clip planes";
+  }
+  if (v.view_cut()) out += ", view cut";
+  if (v.slices_size() > 0) {
+    out += ", " + std::to_string(v.slices_size()) + (v.slices_size() == 1 ? " slice" : " slices");
+  }
+  return out;
+}
+
 json CaseJson(const v3::CaseInfo& c) {
   return {{"case_id", c.case_id()},
           {"title", c.title()},
@@ -44,7 +74,8 @@ json CaseJson(const v3::CaseInfo& c) {
           {"camera", c.has_camera() ? json{{"azimuth_deg", c.camera().azimuth_deg()},
                                             {"elevation_deg", c.camera().elevation_deg()},
                                             {"distance_mm", c.camera().distance_mm()}}
-                                      : json(nullptr)}};
+                                      : json(nullptr)},
+          {"view", ViewJson(c)}};
 }
 
 void PrintCase(const v3::CaseInfo& c) {
@@ -59,6 +90,7 @@ void PrintCase(const v3::CaseInfo& c) {
   std::printf("  created: %s  modified: %s\n", When(c.created_unix_ms()).c_str(),
               When(c.modified_unix_ms()).c_str());
   std::printf("  session: %s\n", c.session_id().empty() ? "(not open)" : c.session_id().c_str());
+  if (c.has_view()) std::printf("  view: %s\n", ViewSummary(c.view()).c_str());
   if (!c.notes().empty()) std::printf("  notes: %s\n", c.notes().c_str());
 }
 

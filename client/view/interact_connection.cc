@@ -3,6 +3,9 @@
 #include <cstdio>
 #include <span>
 #include <string_view>
+#include <utility>
+
+#include "client/view/case_view_settings.h"
 
 namespace vpm::view {
 namespace {
@@ -25,6 +28,7 @@ InteractConnection::InteractConnection(ConnectionOptions options, std::function<
     : options_(std::move(options)), wake_(std::move(wake)) {
   state_.session_id = options_.session_id;
   state_.case_id = options_.case_id;
+  take_case_view_ = !options_.case_id.empty() && options_.session_id.empty();
   state_.message = StrCat("connecting to ", options_.server.address, " ...");
 }
 
@@ -118,8 +122,14 @@ void InteractConnection::SwitchToCase(const std::string& case_id) {
     state_.case_id = case_id;
     state_.session_id.clear();  // ResolveSession opens the case
     session_opened_here_ = false;
+    take_case_view_ = true;
   }
   CancelStream();
+}
+
+std::optional<v3::RenderSettings> InteractConnection::TakeCaseView() {
+  std::lock_guard lock(mutex_);
+  return std::exchange(case_view_, std::nullopt);
 }
 
 std::optional<Result<std::vector<v3::CaseInfo>>> InteractConnection::TakeCases() {
@@ -273,9 +283,24 @@ Status InteractConnection::OpenCase(const std::string& case_id) {
   v3::SessionInfo session;
   RETURN_IF_ERROR(Call(&v3::Vpm::Stub::OpenCase, open, &session));
   RETURN_IF_ERROR(JoinSession(session));
+  TakeCaseViewOf(case_id);
   std::fprintf(stderr, "vpm-view: case %s open in session %s\n", case_id.c_str(),
                session.session_id().c_str());
   return absl::OkStatus();
+}
+
+void InteractConnection::TakeCaseViewOf(const std::string& case_id) {
+  {
+    std::lock_guard lock(mutex_);
+    if (!std::exchange(take_case_view_, false)) return;
+  }
+  v3::GetCaseRequest get;
+  get.set_case_id(case_id);
+  v3::CaseInfo info;
+  if (!Call(&v3::Vpm::Stub::GetCase, get, &info).ok() || !info.has_view()) return;
+  std::lock_guard lock(mutex_);
+  settings_ = WithCaseView(settings_.value_or(v3::RenderSettings()), info.view());
+  case_view_ = info.view();
 }
 
 Status InteractConnection::JoinSession(const v3::SessionInfo& session) {

@@ -80,8 +80,14 @@ class InteractConnection {
   void ListCases();
   void RenameCase(const std::string& case_id, const std::string& title);
   void DeleteCase(const std::string& case_id);
-  // Ends the stream and streams from `case_id`'s session (OpenCase).
+  // Ends the stream and streams from `case_id`'s session (OpenCase), with
+  // the case's kept view (TakeCaseView).
   void SwitchToCase(const std::string& case_id);
+  // The kept view of the case just opened from the panel or --case (GetCase:
+  // CaseInfo.view), once: the stream already started with it over the
+  // viewer's settings (WithCaseView), the viewer's controls take it now. A
+  // reopen after a lost session keeps the viewer's own settings.
+  std::optional<v3::RenderSettings> TakeCaseView();
   // What the last call did (or why not), once.
   std::optional<std::string> TakeNotice();
   // The newest ListCases answer (or its error), once.
@@ -113,6 +119,9 @@ class InteractConnection {
   Status OpenCase(const std::string& case_id);
   // Streams from `session` from now on: its volume (GetVolume), mesh and case.
   Status JoinSession(const v3::SessionInfo& session);
+  // When a case was asked for (take_case_view_): its kept view over the
+  // settings the next stream starts with. A failed GetCase leaves them.
+  void TakeCaseViewOf(const std::string& case_id);
 
   ConnectionOptions options_;
   std::function<void()> wake_;
@@ -125,6 +134,8 @@ class InteractConnection {
   std::optional<v3::Camera> camera_;
   std::optional<glm::dvec3> refine_at_mm_;
   bool session_opened_here_ = false;
+  bool take_case_view_ = false;  // the next OpenCase takes the case's view
+  std::optional<v3::RenderSettings> case_view_;  // for TakeCaseView
   std::optional<ShownFrame> newest_;
   LatencyMeter latency_;
   FrameRateMeter frame_rate_;

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "client/view/case_view_settings.h"
 #include "client/view/slice_panes.h"
 #include "client/view/status_text.h"
 #include "proto/enum_names.h"
@@ -405,6 +406,7 @@ void ViewerApp::PollConnection() {
     }
   }
   PollCases();
+  if (std::optional<v3::RenderSettings> view = connection_->TakeCaseView()) ApplyCaseView(*view);
   if (std::optional<ShownFrame> frame = connection_->TakeFrame()) {
     window_->SetFrame(frame->image);
     const SDL_Rect before = window_->FrameArea();
@@ -626,6 +628,20 @@ void ViewerApp::OnCasePanelKey(std::string_view key) {
       break;
     case CasePanelRequest::Kind::kDelete: connection_->DeleteCase(request.case_id); break;
   }
+}
+
+void ViewerApp::ApplyCaseView(const v3::RenderSettings& view) {
+  // The stream started with it (InteractConnection::TakeCaseView): the
+  // controls follow, nothing is sent.
+  settings_ = WithCaseView(settings_, view);
+  crop_mode_ = view.has_crop();
+  hover_face_.reset();
+  if (crop_mode_) crop_box_ = CropBoxFromProto(view.crop());
+  // The view cut is the user's choice only while no crop or clip is on.
+  if (!view.has_crop() && view.clip_size() == 0) view_cut_ = view.view_cut();
+  Notice(StrCat("the case's view: ", view.mode() == v3::RENDER_MODE_MIP ? "MIP" : "DVR",
+                view.has_crop() ? ", crop box" : "", view.clip_size() > 0 ? ", clip planes" : "",
+                view.slices_size() > 0 ? ", slices" : ""));
 }
 
 void ViewerApp::PollCases() {

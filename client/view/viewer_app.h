@@ -61,6 +61,8 @@ class ViewerApp {
   void ToggleCases();
   void OnCasePanelKey(std::string_view key);
   void PollCases();
+  // The kept view of a case just opened (the panel, --case) on the controls.
+  void ApplyCaseView(const v3::RenderSettings& view);
   void PollConnection();
   void Paint();
   void SendCamera();

@@ -20,6 +20,9 @@ struct CaseRecord {
   std::string source;
   std::string mesh_params;  // a serialized vpm.v3.MeshParams (world LPS)
   std::string camera;       // a serialized vpm.v3.Camera; empty: the default
+  // A serialized vpm.v3.RenderSettings, the view a client of its session
+  // last set (no size or encoding: each client's own); empty: none.
+  std::string render_settings;
   std::vector<std::string> shared_with;
   int64_t events = 0;  // events in effect
   int64_t undone = 0;  // events undone (redo brings them back)

@@ -51,15 +51,23 @@ std::string VersionThree(std::string_view integer) {
   return StrCat("ALTER TABLE events ADD COLUMN settled ", integer, " NOT NULL DEFAULT 0;\n");
 }
 
+// Version 4: the render settings a client of its session last set (a
+// serialized vpm.v3.RenderSettings without the per-client fields; empty:
+// none), so that a case reopens with its preset, crop, clips and slices.
+std::string VersionFour(std::string_view bytes, std::string_view empty_bytes) {
+  return StrCat("ALTER TABLE cases ADD COLUMN render_settings ", bytes, " NOT NULL DEFAULT ",
+                empty_bytes, ";\n");
+}
+
 }  // namespace
 
 const std::vector<std::string>& CaseSchemaMigrations(SqlDialect dialect) {
   static const std::vector<std::string> sqlite = {
       VersionOne("INTEGER", "REAL", "BLOB", " WITHOUT ROWID"), VersionTwo("REAL"),
-      VersionThree("INTEGER")};
+      VersionThree("INTEGER"), VersionFour("BLOB", "x''")};
   static const std::vector<std::string> postgres = {
       VersionOne("BIGINT", "DOUBLE PRECISION", "BYTEA", ""), VersionTwo("DOUBLE PRECISION"),
-      VersionThree("BIGINT")};
+      VersionThree("BIGINT"), VersionFour("BYTEA", "'\\x'::bytea")};
   return dialect == SqlDialect::kSqlite ? sqlite : postgres;
 }
 

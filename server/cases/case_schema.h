@@ -11,7 +11,7 @@
 
 namespace vpm::cases {
 
-inline constexpr int kCaseSchemaVersion = 3;
+inline constexpr int kCaseSchemaVersion = 4;
 
 // The SQL of each migration in `dialect`: [0] creates version 1, [1] takes
 // it to 2, ...

@@ -40,6 +40,8 @@ class CaseStore {
   // event is marked (CaseEvent::settled). Nothing happens without events.
   virtual Status MarkSettled(std::string_view id) = 0;
   virtual Status SetCamera(std::string_view id, const std::string& camera) = 0;
+  // The render settings it reopens with (CaseRecord::render_settings).
+  virtual Status SetRenderSettings(std::string_view id, const std::string& render_settings) = 0;
   virtual Status SetDisplacement(std::string_view id, double max_displacement_mm) = 0;
   // The mesh the case reopens on (serialized v3.MeshParams): a refinement
   // swapped into its session.

@@ -22,7 +22,7 @@ SqlValue Text(std::string_view text) { return std::string(text); }
 
 constexpr std::string_view kCaseColumns =
     "id, owner, title, notes, source, mesh_params, camera, created_ms, modified_ms, "
-    "max_displacement_mm, "
+    "max_displacement_mm, render_settings, "
     "(SELECT count(*) FROM events e WHERE e.case_id = cases.id AND e.undone = 0), "
     "(SELECT count(*) FROM events e WHERE e.case_id = cases.id AND e.undone = 1)";
 
@@ -45,8 +45,9 @@ CaseRecord ReadCase(const SqlRow& r) {
   c.created_ms = SqlInt(r[7]);
   c.modified_ms = SqlInt(r[8]);
   c.max_displacement_mm = SqlReal(r[9]);
-  c.events = SqlInt(r[10]);
-  c.undone = SqlInt(r[11]);
+  c.render_settings = SqlText(r[10]);
+  c.events = SqlInt(r[11]);
+  c.undone = SqlInt(r[12]);
   return c;
 }
 
@@ -81,9 +82,11 @@ class SqlCaseStore final : public CaseStore {
     const int64_t now = NowMs();
     return db_
         ->Query("INSERT INTO cases(id, owner, title, notes, source, mesh_params, camera, "
-                "created_ms, modified_ms) VALUES($1, $2, $3, $4, $5, $6, $7, $8, $9)",
+                "render_settings, created_ms, modified_ms) "
+                "VALUES($1, $2, $3, $4, $5, $6, $7, $8, $9, $10)",
                 {Text(r.id), Text(r.owner), Text(r.title), Text(r.notes), Text(r.source),
-                 SqlBlob{r.mesh_params}, SqlBlob{r.camera}, now, now},
+                 SqlBlob{r.mesh_params}, SqlBlob{r.camera}, SqlBlob{r.render_settings}, now,
+                 now},
                 "create a case")
         .status();
   }
@@ -162,6 +165,13 @@ class SqlCaseStore final : public CaseStore {
     std::lock_guard lock(mutex_);
     return UpdateOne("UPDATE cases SET camera = $1, modified_ms = $2 WHERE id = $3 RETURNING id",
                      {SqlBlob{camera}, NowMs(), Text(id)}, id, "store the camera");
+  }
+
+  Status SetRenderSettings(std::string_view id, const std::string& render_settings) override {
+    std::lock_guard lock(mutex_);
+    return UpdateOne(
+        "UPDATE cases SET render_settings = $1, modified_ms = $2 WHERE id = $3 RETURNING id",
+        {SqlBlob{render_settings}, NowMs(), Text(id)}, id, "store the render settings");
   }
 
   Status SetDisplacement(std::string_view id, double max_displacement_mm) override {

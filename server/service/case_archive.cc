@@ -80,6 +80,7 @@ v3::CaseArchive ToCaseArchive(const cases::CaseRecord& record,
   out.set_source(record.source);
   out.mutable_mesh_params()->ParseFromString(record.mesh_params);
   if (!record.camera.empty()) out.mutable_camera()->ParseFromString(record.camera);
+  if (!record.render_settings.empty()) out.mutable_view()->ParseFromString(record.render_settings);
   out.set_created_unix_ms(record.created_ms);
   for (const cases::CaseEvent& e : events) {
     v3::CaseArchiveEvent* a = out.add_events();

@@ -6,6 +6,7 @@
 #include "server/common/random_hex.h"
 #include "server/scene/scene_history.h"
 #include "server/service/case_archive.h"
+#include "server/service/case_view.h"
 #include "server/service/vpm_service.h"
 
 namespace vpm::service {
@@ -48,6 +49,20 @@ class OpeningCase {
   std::string id_;
   bool held_ = false;
 };
+
+// An archive's view as a case stores it ("" when it has none), checked on
+// its volume as a client's settings would be: InvalidArgument naming
+// "archive.view".
+Result<std::string> ArchivedView(const v3::CaseArchive& archive, const Volume& volume,
+                                 int max_side) {
+  if (!archive.has_view()) return std::string();
+  const v3::RenderSettings view = CaseView(archive.view());
+  RETURN_IF_ERROR(CheckCaseViewSize(view, "archive.view"));
+  if (Result<StreamSettings> checked = ToStreamSettings(view, volume, max_side); !checked.ok()) {
+    return absl::InvalidArgumentError(StrCat("archive.view: ", checked.status().message()));
+  }
+  return view.SerializeAsString();
+}
 
 }  // namespace
 
@@ -137,6 +152,7 @@ void VpmService::FillCaseInfo(const cases::CaseRecord& r, const std::string& use
   if (auto session = OpenSessionOf(r.id, r.owner)) info->set_session_id(session->id());
   info->mutable_mesh_params()->ParseFromString(r.mesh_params);
   if (!r.camera.empty()) info->mutable_camera()->ParseFromString(r.camera);
+  if (!r.render_settings.empty()) info->mutable_view()->ParseFromString(r.render_settings);
 }
 
 grpc::ServerUnaryReactor* VpmService::ListCases(grpc::CallbackServerContext* context,
@@ -196,7 +212,8 @@ grpc::ServerUnaryReactor* VpmService::OpenCase(grpc::CallbackServerContext* cont
       attached = events.status();
       if (attached.ok()) {
         attached = session->AttachCase(service_->cases, record.id,
-                                       SinceLastReset(cases::ReplayLog(*events)), record.camera);
+                                       SinceLastReset(cases::ReplayLog(*events)), record.camera,
+                                       record.render_settings);
       }
     }
     if (!attached.ok()) {
@@ -333,6 +350,8 @@ grpc::ServerUnaryReactor* VpmService::ImportCase(grpc::CallbackServerContext* co
     record.source = archive.source();
     record.mesh_params = archive.mesh_params().SerializeAsString();
     if (archive.has_camera()) record.camera = archive.camera().SerializeAsString();
+    ASSIGN_OR_RETURN(record.render_settings,
+                     ArchivedView(archive, volume->volume, service_->options.max_frame_side));
     RETURN_IF_ERROR(store->Create(record));
     // A failure part way leaves no half case behind.
     Status stored = absl::OkStatus();

@@ -84,6 +84,9 @@ void FrameStream::ApplyQueued() {
       auto settings = ToStreamSettings(event.settings(), session_->volume().volume,
                                        service_->options.max_frame_side);
       if (!settings.ok()) return Finish(ToGrpcStatus(settings.status()));
+      // The owner's settings are the session's view, which its case keeps
+      // (Watch sends no events: a viewer's settings are never kept).
+      if (options_.role == SessionRole::kOwner) session_->KeepView(event.settings());
       auto lock = Lock();
       settings_ = *std::move(settings);
     }

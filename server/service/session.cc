@@ -266,6 +266,9 @@ Result<v3::Frame> Session::Render(const FrameRequest& request) {
   prepared.cancel = request.cancel;
   ASSIGN_OR_RETURN(const Frame frame, scene_->RenderPrepared(prepared));
   frame_lock.unlock();
+  // A still: the client has stopped changing things; its view, if new, goes
+  // to the case now rather than with every settings event.
+  if (!interactive) StoreViewInCase();
   const double render_ms = MsSince(t0) - map_update.warp_ms;
   const auto t1 = std::chrono::steady_clock::now();
   const StreamSettings& s = *request.settings;
@@ -414,6 +417,7 @@ void Session::Close() {
     closed_ = true;
   }
   refine_cancel_.Cancel();
+  StoreViewInCase();
   Notify(true);
 }
 

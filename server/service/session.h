@@ -1,6 +1,7 @@
 // One deformation case that clients attach to: a shared volume, a mesh, the
 // DeformableScene (FEM + backward map) and the camera every viewer shares.
-// Render settings belong to each stream. Thread-safe: scene work is
+// Render settings belong to each stream; the owner's last ones are also kept
+// as the session's view (KeepView), which its case stores. Thread-safe: scene work is
 // serialised by a mutex, frames by another, so that the FEM of an event
 // runs while a frame renders; state changes bump a version and notify the
 // attached streams, which render on the worker pool.
@@ -90,9 +91,11 @@ class Session : public std::enable_shared_from_this<Session> {
   // call once, before the session is shared (OpenSession, OpenCase).
   // Replays `ops` (the case's events since its last reset:
   // SinceLastReset) exactly onto the scene and sets `camera` (a serialized
-  // vpm.v3.Camera; empty: keep the default).
+  // vpm.v3.Camera; empty: keep the default) and the kept view
+  // (`render_settings`, a serialized vpm.v3.RenderSettings; empty: none).
+  // DataLoss when the camera or the view do not parse.
   Status AttachCase(cases::CaseStore* store, std::string case_id, const std::vector<SceneOp>& ops,
-                    const std::string& camera);
+                    const std::string& camera, const std::string& render_settings = "");
   const std::string& case_id() const { return case_id_; }
   // Undo (redo = false) or redo one action of the case; the scene is
   // replayed from the case's events in effect. FailedPrecondition without
@@ -105,6 +108,16 @@ class Session : public std::enable_shared_from_this<Session> {
   };
   Result<UndoOutcome> Undo(bool redo);
 
+  // The view (session_view.cc): the render settings an Interact stream of
+  // the owner set last, less the per-client fields (CaseView). Kept at
+  // once, on the event path without a write; the case stores it, when it
+  // changed, with the next still frame of the session and when the session
+  // closes (StoreViewInCase), so that a crop or clip drag costs one write
+  // at its end. A view over kMaxCaseViewBytes is not kept (logged).
+  void KeepView(const v3::RenderSettings& settings);
+  // The kept view; nullopt when none was (no client set settings and the
+  // case had none).
+  std::optional<v3::RenderSettings> kept_view() const;
   // One frame of the current state, encoded. `camera` overrides the
   // session's; `interactive` picks the cheap quality (streams use it while
   // drags keep coming, frame_stream.h).
@@ -185,6 +198,13 @@ class Session : public std::enable_shared_from_this<Session> {
   void TakeSceneStateLocked();
   // The camera in the case (no case: nothing); a refusal is logged.
   void StoreCameraInCase(const v3::Camera& camera);
+  // The kept view in the case when it differs from what the case holds (no
+  // case: nothing); a refusal is logged and retried with the next still.
+  // Takes no other session lock.
+  void StoreViewInCase();
+  // The export's frame settings: the kept view, at the size of the last
+  // frame rendered (none: 512 x 512); `last` is that frame's view.
+  Result<SceneView> ExportView(const SceneView& last) const;
   // Replaces the scene by the mesh's with `ops` replayed (frame and scene
   // locks held), and records its displacement as the last step's.
   Status ReplaySceneLocked(const std::vector<SceneOp>& ops, DeformableScene::ReplayMode mode);
@@ -240,6 +260,14 @@ class Session : public std::enable_shared_from_this<Session> {
   // Set once by AttachCase, before the session is shared.
   cases::CaseStore* case_store_ = nullptr;
   std::string case_id_;
+
+  // The kept view. view_mutex_ guards the three below and is taken alone;
+  // view_store_mutex_ orders the writes (taken before view_mutex_).
+  mutable std::mutex view_mutex_;
+  std::optional<v3::RenderSettings> kept_view_;
+  std::string kept_view_bytes_;    // kept_view_ serialized ("" when none)
+  std::string stored_view_bytes_;  // what the case holds
+  std::mutex view_store_mutex_;
 
   mutable std::mutex observers_mutex_;
   std::map<int64_t, Observer> observers_;

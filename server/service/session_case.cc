@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "server/scene/scene_history.h"
+#include "server/service/case_view.h"
 #include "server/service/session.h"
 
 namespace vpm::service {
@@ -27,7 +28,14 @@ bool IsManipulation(const v3::ClientEvent& event) {
 }  // namespace
 
 Status Session::AttachCase(cases::CaseStore* store, std::string case_id,
-                           const std::vector<SceneOp>& ops, const std::string& camera) {
+                           const std::vector<SceneOp>& ops, const std::string& camera,
+                           const std::string& render_settings) {
+  if (!render_settings.empty()) {
+    ASSIGN_OR_RETURN(v3::RenderSettings view, ParseCaseView(render_settings, case_id));
+    std::lock_guard lock(view_mutex_);
+    kept_view_ = std::move(view);
+    kept_view_bytes_ = stored_view_bytes_ = render_settings;
+  }
   std::lock_guard frame_lock(frame_mutex_);
   std::lock_guard scene_lock(scene_mutex_);
   case_store_ = store;

@@ -18,20 +18,13 @@ Result<Session::Exported> Session::Export(const CancelToken& cancel) {
   }
   RETURN_IF_ERROR(SettleLocked(&step));
   RETURN_IF_ERROR(cancel.Check());
-  SceneView view;
+  SceneView last;
   {
     std::lock_guard lock(state_mutex_);
-    view = last_view_;
-    view.camera = camera_;
+    last = last_view_;
+    last.camera = camera_;
   }
-  if (view.preset.points.empty()) {
-    // No frame was rendered yet: the defaults a stream starts with.
-    ASSIGN_OR_RETURN(const StreamSettings defaults,
-                     ToStreamSettings(v3::RenderSettings(), volume_->volume, 1024));
-    const Camera camera = view.camera;
-    view = defaults.view;
-    view.camera = camera;
-  }
+  ASSIGN_OR_RETURN(SceneView view, ExportView(last));
   view.quality = RenderQuality::kStill;
   ASSIGN_OR_RETURN(Frame frame, scene_->Render(view));
   RETURN_IF_ERROR(cancel.Check());

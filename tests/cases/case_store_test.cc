@@ -109,8 +109,10 @@ TEST_P(CaseStoreTest, ADatabaseOfThePreviousSchemaOpensAfterMigration) {
     ASSERT_TRUE(db->ExecScript("INSERT INTO cases(id, owner, title, source, mesh_params, camera, "
                                "created_ms, modified_ms) VALUES('old', 'alice', 'v1 case', "
                                "'phantom:abdomen', " + bytes + ", " + bytes + ", 1, 2); "
-                               "INSERT INTO events VALUES('old', 1, 0, 1, 2, 3, 0, 0, 0, 0, 5);",
-                               "write a version-1 case")
+                               "INSERT INTO events(case_id, seq, kind, x, y, z, rule, "
+                               "radius_mm, keep, undone, time_ms) "
+                               "VALUES('old', 1, 0, 1, 2, 3, 0, 0, 0, 0, 5);",
+                               "write a case of the previous version")
                     .ok());
   }
   auto store = Open();
@@ -120,9 +122,30 @@ TEST_P(CaseStoreTest, ADatabaseOfThePreviousSchemaOpensAfterMigration) {
   EXPECT_EQ(record->title, "v1 case");
   EXPECT_EQ(record->notes, "");  // added by migration 2
   EXPECT_EQ(record->events, 1);
+  EXPECT_EQ(record->render_settings, "");  // added by migration 4: none kept
   ASSERT_TRUE(store->Update("old", std::nullopt, std::string("kept")).ok());
   EXPECT_EQ(store->Get("old")->notes, "kept");
+  ASSERT_TRUE(store->SetRenderSettings("old", std::string("\x12\0\xff", 3)).ok());
+  EXPECT_EQ(store->Get("old")->render_settings, std::string("\x12\0\xff", 3));
   EXPECT_EQ(*Connection()->SchemaVersion(), kCaseSchemaVersion);
+}
+
+TEST_P(CaseStoreTest, RenderSettingsAreKeptAsBytesAcrossAReopen) {
+  const std::string view("\x0a\x03\0mip\xff", 7);  // bytes, not text
+  {
+    auto store = Open();
+    ASSERT_TRUE(store);
+    ASSERT_TRUE(store->Create(Record("v", "alice")).ok());
+    EXPECT_EQ(store->Get("v")->render_settings, "");
+    ASSERT_TRUE(store->SetRenderSettings("v", view).ok());
+    EXPECT_EQ(store->SetRenderSettings("nope", view).code(), absl::StatusCode::kNotFound);
+  }
+  auto store = Open();
+  ASSERT_TRUE(store);
+  EXPECT_EQ(store->Get("v")->render_settings, view);
+  EXPECT_EQ((*store->List("alice"))[0].render_settings, view);
+  ASSERT_TRUE(store->SetRenderSettings("v", "").ok());  // none again
+  EXPECT_EQ(store->Get("v")->render_settings, "");
 }
 
 TEST_P(CaseStoreTest, ANewerSchemaIsRefused) {

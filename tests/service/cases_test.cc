@@ -7,6 +7,9 @@
 
 #include <cmath>
 #include <fstream>
+#include <thread>
+
+#include <google/protobuf/util/message_differencer.h>
 
 #include "server/common/sha256.h"
 #include "server/raycast/frame_encoder.h"
@@ -75,10 +78,12 @@ class CasesTest : public ServiceTest {
     e.mutable_release()->set_keep(keep);
     return e;
   }
-  // A still PNG of the session, and the largest displacement it reports.
-  v3::Frame Still(const std::string& session) {
+  // A still PNG of the session (128 x 128, `settings` else the defaults),
+  // and the largest displacement it reports.
+  v3::Frame Still(const std::string& session, const v3::RenderSettings& settings = {}) {
     v3::RenderRequest request;
     request.set_session_id(session);
+    *request.mutable_settings() = settings;
     request.mutable_settings()->set_width(128);
     request.mutable_settings()->set_height(128);
     request.mutable_settings()->set_encoding(v3::ENCODING_PNG);
@@ -88,8 +93,12 @@ class CasesTest : public ServiceTest {
     return frame;
   }
   static double MeanDifference(const v3::Frame& a, const v3::Frame& b) {
-    auto da = DecodePng({reinterpret_cast<const uint8_t*>(a.image().data()), a.image().size()});
-    auto db = DecodePng({reinterpret_cast<const uint8_t*>(b.image().data()), b.image().size()});
+    return MeanDifference(a.image(), b.image());
+  }
+  // Of two PNG images, per RGBA byte (255 when they differ in size).
+  static double MeanDifference(const std::string& a, const std::string& b) {
+    auto da = DecodePng({reinterpret_cast<const uint8_t*>(a.data()), a.size()});
+    auto db = DecodePng({reinterpret_cast<const uint8_t*>(b.data()), b.size()});
     EXPECT_TRUE(da.ok() && db.ok());
     if (!da.ok() || !db.ok() || da->rgba.size() != db->rgba.size()) return 255.0;
     double sum = 0.0;
@@ -125,6 +134,105 @@ class CasesTest : public ServiceTest {
     grpc::Status s = stub_->GetCase(Context(token).get(), request, &info);
     if (status) *status = s;
     return info;
+  }
+
+  // A view as a surgeon sets it: the bone preset, a crop box inside the
+  // volume, a clip plane through its middle and two slices (world LPS, mm).
+  static v3::RenderSettings AView(const v3::VolumeInfo& volume) {
+    const v3::Vec3 c = Centre(volume);
+    const v3::Vec3 &lo = volume.box_lo_lps_mm(), &hi = volume.box_hi_lps_mm();
+    v3::RenderSettings view;
+    view.set_preset("ct-bone");
+    *view.mutable_crop()->mutable_lo_mm() = V(lo.x() + 2, lo.y() + 3, lo.z() + 4);
+    *view.mutable_crop()->mutable_hi_mm() = V(hi.x() - 2, hi.y() - 3, hi.z() - 4);
+    v3::ClipPlane* clip = view.add_clip();
+    *clip->mutable_normal() = V(1, 0, 0);
+    clip->set_offset_mm(c.x() - 5.0);
+    v3::SliceSpec* axial = view.add_slices();
+    axial->set_orientation(v3::SLICE_ORIENTATION_AXIAL);
+    axial->set_at_mm(c.z() + 3.0);
+    axial->set_view("axial");
+    v3::SliceSpec* coronal = view.add_slices();
+    coronal->set_orientation(v3::SLICE_ORIENTATION_CORONAL);
+    *coronal->mutable_point_lps_mm() = c;
+    coronal->set_view("coronal");
+    return view;
+  }
+  // Sets `view` on an Interact stream of the session (the client's size
+  // and encoding with it: 512 x 512, overlay, PNG) and waits for the
+  // still that follows it: the case holds the view then.
+  void SetViewByInteract(const std::string& session, const v3::RenderSettings& view) {
+    auto context = Context(kAlice);
+    auto stream = stub_->Interact(context.get());
+    v3::InteractRequest first;
+    first.set_session_id(session);
+    first.mutable_event()->set_sequence(1);
+    *first.mutable_event()->mutable_settings() = view;
+    v3::RenderSettings* own = first.mutable_event()->mutable_settings();
+    own->set_width(512);
+    own->set_height(512);
+    own->set_overlay(true);
+    own->set_encoding(v3::ENCODING_PNG);
+    ASSERT_TRUE(stream->Write(first));
+    v3::Frame frame;
+    bool still = false;
+    while (!still && stream->Read(&frame)) {
+      still = !frame.interactive() && frame.last_sequence() >= 1;
+    }
+    EXPECT_TRUE(still);
+    stream->WritesDone();
+    context->TryCancel();
+    stream->Finish().ok();
+  }
+  // Watches the session with `settings` until a still comes.
+  void WatchOneStill(const std::string& session, const v3::RenderSettings& settings) {
+    auto context = Context(kAlice);
+    v3::WatchRequest request;
+    request.set_session_id(session);
+    *request.mutable_settings() = settings;
+    auto reader = stub_->Watch(context.get(), request);
+    v3::Frame frame;
+    while (reader->Read(&frame) && frame.interactive()) {
+    }
+    context->TryCancel();
+    reader->Finish().ok();
+  }
+  std::string GetSessionCase(const std::string& session) {
+    v3::GetSessionRequest get;
+    get.set_session_id(session);
+    v3::SessionInfo info;
+    EXPECT_TRUE(stub_->GetSession(Context(kAlice).get(), get, &info).ok());
+    return info.case_id();
+  }
+  // The RGB pixels of the secondary capture ExportDicom streams back.
+  std::string CapturePixels(const std::string& session) {
+    v3::ExportDicomRequest request;
+    request.set_session_id(session);
+    auto context = Context(kAlice);
+    auto reader = stub_->ExportDicom(context.get(), request);
+    v3::ExportDicomPart part;
+    std::string capture;
+    while (reader->Read(&part)) {
+      if (part.file_name().starts_with("capture/")) capture = part.data();
+    }
+    const grpc::Status status = reader->Finish();
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    const fs::path file = dir_ / "capture.dcm";
+    std::ofstream(file, std::ios::binary) << capture;
+    DcmFileFormat dicom;
+    const Uint8* pixels = nullptr;
+    unsigned long count = 0;
+    if (dicom.loadFile(file.c_str()).bad() ||
+        dicom.getDataset()->findAndGetUint8Array(DCM_PixelData, pixels, &count).bad()) {
+      ADD_FAILURE() << "the capture does not read";
+      return "";
+    }
+    return std::string(reinterpret_cast<const char*>(pixels), count);
+  }
+  // The capture of a new session on `volume` with nothing set: the defaults.
+  std::string CapturePixelsOfNewSession(const v3::VolumeInfo& volume) {
+    const v3::SessionInfo fresh = OpenSession(volume.volume_id(), kAlice);
+    return CapturePixels(fresh.session_id());
   }
 
   fs::path dir_;
@@ -436,6 +544,83 @@ TEST_F(CasesTest, AnExportedCaseImportsAsANewCaseWithTheSameDeformation) {
   v3::ListCasesResponse bobs_cases;
   ASSERT_TRUE(stub_->ListCases(Context(kBob).get(), {}, &bobs_cases).ok());
   EXPECT_EQ(bobs_cases.cases_size(), 1);
+}
+
+// The view a client set on its stream (a preset, a crop box, a clip plane,
+// two slices) is part of the case: written with the stream's still, kept
+// across a restart, returned by CaseInfo (without the client's frame size
+// and encoding), and the reopened session starts with it: its export's
+// capture, a frame no client asked for, and a still with CaseInfo.view are
+// those of before. A Watch stream's settings are never kept.
+TEST_F(CasesTest, ACaseKeepsItsViewAndTheReopenedSessionShowsIt) {
+  const v3::VolumeInfo volume = LoadPhantom(kPhantom, kAlice);
+  const std::string session = Plan(volume);
+  const v3::RenderSettings view = AView(volume);
+  SetViewByInteract(session, view);
+  // The export's frame: the view at the size of the stream's frames (512).
+  const std::string capture_before = CapturePixels(session);
+  const v3::Frame before = Still(session, view);
+  ASSERT_EQ(before.slices_size(), 2);
+  const std::string case_id = GetSessionCase(session);
+  // The same view again: nothing is written.
+  const int64_t modified = GetCase(case_id, kAlice).modified_unix_ms();
+  std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  SetViewByInteract(session, view);
+  EXPECT_EQ(GetCase(case_id, kAlice).modified_unix_ms(), modified);
+  v3::RenderSettings watched;
+  watched.set_preset("ct-vessels");
+  WatchOneStill(session, watched);
+  EXPECT_EQ(GetCase(case_id, kAlice).view().preset(), "ct-bone");
+
+  Restart();
+  const v3::CaseInfo info = GetCase(case_id, kAlice);
+  ASSERT_TRUE(info.has_view());
+  EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(info.view(), view))
+      << info.view().DebugString();
+  EXPECT_EQ(info.view().width(), 0);  // the client's own
+  const v3::SessionInfo reopened = OpenCaseAsAlice(case_id);
+  ASSERT_FALSE(reopened.session_id().empty());
+  // Before any client asked for a frame: the session's own view.
+  const std::string capture_after = CapturePixels(reopened.session_id());
+  ASSERT_EQ(capture_after.size(), capture_before.size());
+  double sum = 0.0;
+  for (size_t i = 0; i < capture_before.size(); ++i) {
+    sum += std::abs(int(uint8_t(capture_before[i])) - int(uint8_t(capture_after[i])));
+  }
+  const double capture_difference = sum / double(std::max<size_t>(1, capture_before.size()));
+  const v3::Frame after = Still(reopened.session_id(), info.view());
+  const double frame_difference = MeanDifference(before, after);
+  std::printf("reopened view: frame mean difference %.4f / 255, capture %.4f / 255\n",
+              frame_difference, capture_difference);
+  EXPECT_LT(frame_difference, 1.0);
+  EXPECT_LT(capture_difference, 1.0);
+  ASSERT_EQ(after.slices_size(), 2);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ(after.slices(i).view(), before.slices(i).view());
+    EXPECT_LT(MeanDifference(before.slices(i).image(), after.slices(i).image()), 1.0);
+  }
+  // The capture shows the view, not the defaults: a crop and a clip cut away.
+  const std::string capture_default = CapturePixelsOfNewSession(LoadPhantom(kPhantom, kAlice));
+  ASSERT_EQ(capture_default.size(), capture_after.size());
+  EXPECT_NE(capture_default, capture_after);
+
+  // Export and import carry it; an archive's view is checked as settings.
+  v3::ExportCaseRequest request;
+  request.set_case_id(case_id);
+  v3::CaseArchive archive;
+  ASSERT_TRUE(stub_->ExportCase(Context(kAlice).get(), request, &archive).ok());
+  EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(archive.view(), view));
+  v3::ImportCaseRequest import;
+  *import.mutable_archive() = archive;
+  import.mutable_archive()->mutable_view()->set_width(300);  // a client's own: dropped
+  v3::CaseInfo imported;
+  ASSERT_TRUE(stub_->ImportCase(Context(kBob).get(), import, &imported).ok());
+  EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(imported.view(), view));
+  for (int i = 0; i < 16; ++i) *import.mutable_archive()->mutable_view()->add_clip() = view.clip(0);
+  const grpc::Status refused = stub_->ImportCase(Context(kBob).get(), import, &imported);
+  EXPECT_EQ(refused.error_code(), grpc::INVALID_ARGUMENT);
+  EXPECT_NE(refused.error_message().find("archive.view"), std::string::npos)
+      << refused.error_message();
 }
 
 // A full disk (a file size limit on the process, SIGXFSZ ignored) while

@@ -15,7 +15,9 @@
 // Cases (docs/CASES.md) once keepCases(true), as with --state-dir: every
 // OpenSession makes one, owned by the token's user (`users`: {token: name});
 // grab, drag, release and pin events count as its events; Undo and redo
-// move one event; before that, the case calls answer FAILED_PRECONDITION
+// move one event; the last settings of an Interact stream are its view
+// (CaseInfo.view, without the per-client size, overlay and encoding), which
+// GetCase returns; before that, the case calls answer FAILED_PRECONDITION
 // with the server's message.
 // The PACS calls (ListPacsEndpoints, SearchStudies, ListSeries, LoadVolume of
 // pacs: sources with GetLoadProgress, ExportDicom) are fake_pacs.mjs's, with
@@ -231,7 +233,7 @@ function makeCases(grpc, users) {
   const info = (c) => ({ case_id: c.case_id, title: c.title, owner: userOf(c.auth), events: c.events,
                          undone: c.undone, max_displacement_mm: 1.5 * c.events, source: 'phantom:loaded',
                          created_unix_ms: 1700000000000, modified_unix_ms: 1700000000000 + c.events,
-                         session_id: c.session ?? '' });
+                         session_id: c.session ?? '', view: c.view ?? null });
   const state = {
     kept: false,
     opened(session, call) {
@@ -249,6 +251,10 @@ function makeCases(grpc, users) {
     },
     event(sessionId, event) {
       const c = sessions.get(sessionId);
+      if (c && event.settings) {
+        const { width, height, overlay, encoding, jpeg_quality: quality, ...view } = event.settings;
+        c.view = view;
+      }
       if (c && (event.grab || event.drag || event.release || event.pin || event.reset)) {
         c.events += 1;
         c.undone = 0;
@@ -259,6 +265,7 @@ function makeCases(grpc, users) {
         kept();
         return { cases: [...byId.values()].filter((c) => c.auth === auth(call)).map(info) };
       }),
+      GetCase: unary('GetCase', (r, call) => info(mine(call, r.case_id))),
       OpenCase: unary('OpenCase', (r, call) => {
         const c = mine(call, r.case_id);
         if (!c.session) {

@@ -7,7 +7,8 @@
 // error reopening the stream with the camera and settings replayed, the
 // session closed and the mesh deleted with the tab, watching a shared
 // session, malformed messages, TLS on both sides, and the case messages
-// (list, open_case, rename, delete, undo; a server without --state-dir).
+// (list, open_case, rename, delete, undo; a server without --state-dir; a
+// case opened afresh with its kept view).
 // Usage: node --test gateway.test.mjs (SOURCE is found from this file).
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
@@ -572,6 +573,69 @@ test('Gateway_OpensUndoesRenamesAndDeletesCasesAsTheirOwner', async () => {
   b.send({ type: 'undo' });
   assert.match((await b.next((m) => m.type === 'error')).message, /Undo: open a volume or a case first/);
   assert.ok(!callsSince(beforeDelete).some((c) => c.method === 'CloseSession'));
+  b.ws.close();
+  fake.keepCases(false);
+});
+
+// A case keeps the view its stream last set; a tab that opens the case
+// afresh (from the Cases panel: no camera) gets it in opened.view and its
+// stream starts with it, at the page's own frame size; a tab carrying on
+// with its own camera keeps its own settings.
+test('Gateway_OpensACaseAfreshWithItsKeptView', async () => {
+  fake.keepCases(true);
+  const a = await connect({ cookie: alice });
+  a.send({ type: 'open', source: 'phantom:loaded' });
+  const first = await a.next((m) => m.type === 'opened');
+  const caseId = first.session.case_id;
+  await a.next((m) => m.type === 'frame');
+  const crop = { lo_mm: { x: -10, y: -20, z: -30 }, hi_mm: { x: 10.25, y: 20, z: 30 } };
+  const clip = [{ normal: { x: 1, y: 0, z: 0 }, offset_mm: 2.5 }];
+  const slices = [
+    { view: 'axial', orientation: 'SLICE_ORIENTATION_AXIAL', at_mm: 12.5,
+      window: { width: 300, level: 50 } },
+    { view: 'coronal', orientation: 'SLICE_ORIENTATION_CORONAL', at_mm: -4 }];
+  a.send({ type: 'event', event: { sequence: 2, settings: {
+    mode: 'dvr', preset: 'ct-bone', width: 8, height: 8, overlay: true, crop, clip, slices } } });
+  await a.next((m) => m.type === 'frame' && m.header.last_sequence === 2);
+  a.ws.close();
+  await waitFor('the session closed with its tab', () => fake.calls.some(
+    (c) => c.method === 'CloseSession' && c.request.session_id === first.session.session_id));
+
+  const b = await connect({ cookie: alice });
+  const start = fake.calls.length;
+  b.send({ type: 'open_case', case_id: caseId,
+           settings: { mode: 'mip', preset: 'ct-vessels', width: 4, height: 4 } });
+  const opened = await b.next((m) => m.type === 'opened');
+  assert.deepEqual([opened.view.mode, opened.view.preset, opened.view.view_cut],
+                   ['dvr', 'ct-bone', false]);
+  assert.deepEqual(opened.view.crop, crop);
+  assert.deepEqual(opened.view.clip, clip);
+  assert.deepEqual(opened.view.slices.map((x) => [x.view, x.orientation, x.at_mm]),
+                   [['axial', 'SLICE_ORIENTATION_AXIAL', 12.5],
+                    ['coronal', 'SLICE_ORIENTATION_CORONAL', -4]]);
+  assert.deepEqual(opened.view.slices[0].window, { width: 300, level: 50 });
+  assert.equal(opened.view.width, undefined);
+  await b.next((m) => m.type === 'frame');
+  const calls = callsSince(start);
+  assert.ok(calls.some((c) => c.method === 'GetCase' && c.request.case_id === caseId));
+  const settings = calls.find((c) => c.method === 'Interact.event').request.event.settings;
+  assert.deepEqual([settings.mode, settings.preset, settings.width, settings.height, settings.overlay],
+                   ['RENDER_MODE_DVR', 'ct-bone', 4, 4, false]);
+  assert.deepEqual(settings.crop, crop);
+  assert.deepEqual(settings.clip, clip);
+  assert.deepEqual(settings.slices.map((x) => x.at_mm), [12.5, -4]);
+
+  // Reopened with the page's camera (carrying on): the page's settings.
+  const again = fake.calls.length;
+  b.send({ type: 'open_case', case_id: caseId, settings: { mode: 'mip', width: 4, height: 4 },
+           camera: { azimuth_deg: 10, elevation_deg: 0, distance_mm: 0 } });
+  const carried = await b.next((m) => m.type === 'opened' && m !== opened);
+  assert.equal(carried.view, undefined);
+  await waitFor('the carried-on stream', () => callsSince(again).some(
+    (c) => c.method === 'Interact.event' && c.request.event.settings));
+  assert.ok(!callsSince(again).some((c) => c.method === 'GetCase'));
+  assert.equal(callsSince(again).find((c) => c.method === 'Interact.event' &&
+    c.request.event.settings).request.event.settings.mode, 'RENDER_MODE_MIP');
   b.ws.close();
   fake.keepCases(false);
 });

@@ -292,8 +292,9 @@ function frameShowing(page, framesBefore, mm) {
                  `Math.abs(h.max_displacement_mm - ${mm}) < ${kReplayToleranceMm}`, 30000);
 }
 
-// A kept drag, then Ctrl+Z and Ctrl+Shift+Z. Returns {caseId, keptMm}: the
-// case and its largest displacement with the drag (mm).
+// A kept drag, then Ctrl+Z and Ctrl+Shift+Z. Returns {caseId, keptMm,
+// view}: the case, its largest displacement with the drag (mm) and its view
+// ([the Render select's value, crop on]) as the page set it.
 async function checkUndoRedo(page, centre) {
   await page.check('#keep-drag');
   await page.check('input[name="tool"][value="grab"]');
@@ -337,12 +338,15 @@ async function checkUndoRedo(page, centre) {
   figures.undo_mm = undo.max_displacement_mm;
   figures.redo_mm = redo.max_displacement_mm;
   await page.check('input[name="tool"][value="orbit"]');
-  return { caseId, keptMm: redo.max_displacement_mm };
+  // The case's view, as the page's controls show it: what it keeps.
+  const view = [await page.inputValue('#render'), await page.isChecked('#crop')];
+  return { caseId, keptMm: redo.max_displacement_mm, view };
 }
 
 // The Cases panel after a refine (a new session: a new case): the kept
 // case is listed closed with its displacement, renamed, opened again (its
-// deformation replayed, its title in the status line); the refined case is
+// deformation replayed, its title in the status line, its kept view on the
+// page's controls after the page showed another); the refined case is
 // deleted (a dismissed confirm deletes nothing).
 async function checkCases(page, kept) {
   const refinedCase = await page.evaluate(() => window.vpmViewer.caseId);
@@ -367,11 +371,21 @@ async function checkCases(page, kept) {
                              [kept.caseId, title], { timeout: 15000 });
   assert.equal((await caseRow(page, kept.caseId)).cells[0], title);
 
+  // The page shows another preset and crop meanwhile (on the refined case);
+  // the kept case comes back with its own view on the controls.
+  await page.selectOption('#render', kept.view[0] === 'dvr:ct-bone' ? 'dvr:ct-vessels' : 'dvr:ct-bone');
+  await page.setChecked('#crop', !kept.view[1]);
+  await settled(page, '!h.interactive');
+
   const frames = await framesReceived(page);
   await page.click(`#cases-body tr[data-case-id="${kept.caseId}"] button:text("Open")`);
   await page.waitForFunction((id) => window.vpmViewer.session?.case_id === id, kept.caseId,
                              { timeout: 60000 });
   const h = await frameShowing(page, frames, kept.keptMm);
+  const shownView = [await page.inputValue('#render'), await page.isChecked('#crop')];
+  step(`the kept case's view on the controls: render ${shownView[0]}, crop ${shownView[1]}`);
+  assert.deepEqual(shownView, kept.view);
+  assert.ok(await page.evaluate(() => window.vpmViewer.caseView !== null), 'no opened.view');
   const status = await page.textContent('#status');
   step(`opened ${kept.caseId} from the panel: largest displacement ` +
        `${h.max_displacement_mm.toFixed(4)} ` +

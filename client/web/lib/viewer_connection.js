@@ -20,7 +20,10 @@
 //        opacities}; settings with `uploaded_tf: true` then render with it
 //   {type: 'open_case', case_id, settings, camera, sequence}
 //        OpenCase (the case's open session, or a new one with its events
-//        replayed), GetVolume, GetMesh, then Interact -> {type: 'opened'}
+//        replayed), GetVolume, GetMesh, then Interact -> {type: 'opened'};
+//        opened afresh (no camera: not the page carrying on), GetCase too,
+//        and the case's kept view (pageView) replaces the page's settings
+//        and comes in opened.view for the page's controls
 //   {type: 'cases'|'rename_case'|'delete_case'|'undo', ...}   case_calls.js
 //   {type: 'pacs_endpoints'|'pacs_search'|'pacs_series'|'pacs_open'|'pacs_cancel', ...}
 //        pacs_calls.js (the Studies panel)
@@ -53,7 +56,7 @@ import { DicomExport } from './dicom_export_call.js';
 import { explainError } from './explain_error.js';
 import { packFrame } from './frame_packet.js';
 import { PacsCalls } from './pacs_calls.js';
-import { toProtoSettings } from './render_settings.js';
+import { pageView, toProtoSettings, withCaseView } from './render_settings.js';
 import { SessionRecord } from './session_record.js';
 import { parseMessage } from './validate_message.js';
 import { GrpcStatus, isServerDown, statusName, streamError } from './vpm_client.js';
@@ -320,6 +323,9 @@ export class ViewerConnection {
     const op = ++this.openOp;
     this.lastSequence = Math.max(this.lastSequence, sequence ?? 0);
     const same = !this.watching && this.session?.case_id === caseId;
+    // Opened afresh (not the page carrying on with its own camera and
+    // settings): the case's kept view replaces the page's.
+    const fresh = !same && !camera;
     this.stopStream();
     if (!same) this.releaseSession();
     if (settings) this.settings = settings;
@@ -336,17 +342,37 @@ export class ViewerConnection {
         return;
       }
       Object.assign(this, { session, watching: false });
-      const [volume, mesh] = await Promise.all([
+      const [volume, mesh, view] = await Promise.all([
         this.rpc('GetVolume', { volume_id: session.volume_id }),
-        this.caseMesh(session)]);
+        this.caseMesh(session),
+        fresh ? this.caseView(caseId) : null]);
       if (op !== this.openOp || this.closed) return;
       Object.assign(this, { volume, mesh });
+      if (view) this.takeCaseView(view);
       this.serverUpAgain();
-      this.send({ type: 'opened', volume, mesh, session });
+      this.send({ type: 'opened', volume, mesh, session, ...(view ? { view } : {}) });
       this.startStream();
     } catch (err) {
       if (op === this.openOp) this.fail(what, err, { case_id: caseId });
     }
+  }
+
+  // The case's kept view in the page's names (pageView), or null: none
+  // kept, or GetCase failed (the case then opens on the page's settings).
+  async caseView(caseId) {
+    const info = await this.rpc('GetCase', { case_id: caseId }).catch(() => null);
+    return pageView(info?.view);
+  }
+
+  // The stream starts with the case's view (withCaseView); its own transfer
+  // function becomes this tab's upload, which the page is told of as one.
+  takeCaseView(view) {
+    this.settings = withCaseView(this.settings, view);
+    const tf = view.render_tf;
+    if (!tf) return;
+    this.uploadedTf = tf;
+    this.send({ type: 'tf', name: tf.name, colors: tf.colors.length,
+                opacities: tf.opacities.length });
   }
 
   // The mesh OpenCase built (or its open session uses), held by this tab as

@@ -6,6 +6,7 @@
 // uploads) to tests.
 import { OrbitCamera } from './camera.js';
 import { CasesPanel } from './cases_panel.js';
+import { applyCaseView } from './case_view.js';
 import { CutControls } from './cut_controls.js';
 import { ExportButton } from './export_button.js';
 import { FrameStats } from './frame_stats.js';
@@ -28,6 +29,7 @@ const state = {
   opening: false,
   openedWithCamera: false,  // the open sent the page's camera (the view carries on)
   caseId: null,         // the case of the session shown (server --state-dir), else null
+  caseView: null,       // the kept view of the last case opened afresh (opened.view)
   lastUndo: null,       // the gateway's 'undone' answer, until the next manipulation
   undoAnswers: 0,       // 'undone' answers received (for tests)
   casesListed: 0,       // case lists received (for tests)
@@ -281,6 +283,14 @@ const handlers = {
       state.camera = new OrbitCamera(m.volume);
       slices.reset();
       cuts.setVolume(m.volume);
+    }
+    // A case opened afresh: its kept view, which the stream started with.
+    if (m.view) {
+      applyCaseView(m.view, { render: $('render'), viewCut: $('view-cut'), slicesBox: $('slices'),
+                              windowWidth: $('window-width'), windowLevel: $('window-level'),
+                              sliceOverlay: $('slice-overlay'), cuts, slices });
+      $('views').dataset.layout = slices.enabled ? 'grid' : 'single';
+      state.caseView = m.view;
     }
     state.lastGrabMm = null;
     $('refine-grab').disabled = true;

@@ -34,6 +34,18 @@ export function worldBox(volume) {
   return { lo, hi };
 }
 
+// A kept plane's words: "left of 12.0" for a plane across a world axis,
+// else its normal and offset.
+function clipLabel(plane) {
+  const n = [plane.normal.x, plane.normal.y, plane.normal.z];
+  const side = Object.keys(kClipSides).find((key) => kClipSides[key].every((v, a) => v === n[a]));
+  if (side) {
+    const a = n.findIndex((v) => v !== 0);
+    return `${kClipSideNames[side]} ${(plane.offset_mm / n[a]).toFixed(1)}`;
+  }
+  return `plane (${n.map((v) => v.toFixed(2)).join(', ')}) at ${plane.offset_mm.toFixed(1)}`;
+}
+
 export class CutControls {
   // elements: {crop (checkbox), cropLo: [3 inputs], cropHi: [3 inputs],
   // clipSide (select: '' or a key of kClipSides), clipAt (range input),
@@ -110,6 +122,23 @@ export class CutControls {
       }
     });
     this.placeClipRange();
+  }
+
+  // A case's crop box ({lo_mm, hi_mm} or null) and clip planes ([{normal,
+  // offset_mm}], world mm) as the controls' own (case_view.js): the box in
+  // the fields, exactly, the planes kept; nothing is sent.
+  applyView(crop, clip) {
+    this.e.crop.checked = Boolean(crop);
+    if (crop) {
+      kAxes.forEach((k, a) => {
+        this.e.cropLo[a].value = String(crop.lo_mm[k]);
+        this.e.cropHi[a].value = String(crop.hi_mm[k]);
+      });
+    }
+    this.e.clipSide.value = '';
+    this.keptClips = clip.slice(0, kMaxClipPlanes - 1)
+      .map((plane) => ({ plane, label: clipLabel(plane) }));
+    this.showKept();
   }
 
   placeClipRange() {

@@ -53,6 +53,22 @@ export class SliceViews {
     }));
   }
 
+  // A case's slices (RenderSettings.slices, case_view.js): the panes show
+  // when it had any; the window and overlay are its first slice's, each
+  // pane's plane where the slice of its view tag lay. Nothing is sent.
+  applyView(specs) {
+    this.enabled = specs.length > 0;
+    this.at = {};
+    const first = specs[0];
+    if (first?.window?.width > 0) {
+      this.window = { width: first.window.width, level: first.window.level };
+    }
+    this.overlay = Boolean(first?.overlay);
+    for (const s of specs) {
+      if (s.view && Number.isFinite(s.at_mm)) this.at[s.view] = s.at_mm;
+    }
+  }
+
   // A new volume: planes back to its centre.
   reset() {
     this.at = {};
