@@ -53,7 +53,7 @@ Result<DecimatedLattice> DecimateLattice(const Volume& volume, const MeshParams&
   if (gpu.lattice_costs != nullptr && gpu.lattice_costs->runs_on_cpu()) {
     // Lavapipe: the same cores run native rows about 15x faster than the
     // kernels (lattice_costs_rows.h).
-    costs = EvaluateLatticeCostsRows(volume, lattice, tf);
+    ASSIGN_OR_RETURN(costs, EvaluateLatticeCostsRows(volume, lattice, tf, 0, cancel));
     evaluated_on = kStep1OnCpuRows;
   } else if (gpu.volume != nullptr && gpu.lattice_costs != nullptr) {
     ASSIGN_OR_RETURN(costs, gpu.lattice_costs->Evaluate(*gpu.volume, lattice, tf));

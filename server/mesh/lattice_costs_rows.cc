@@ -1,7 +1,9 @@
 #include "server/mesh/lattice_costs_rows.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -63,11 +65,39 @@ void RowTerms(Voxels v, TfOf tf_of, int64_t nx, const RowOffsets& r, const glm::
   if (nx > 1) g2_row[nx - 1] = g2_at(nx - 1, nx - 2, nx - 1);
 }
 
+// Whether the threads stop before their next cell layer: each polls the
+// call's cancellation; the first status that is not OK is kept.
+class LayerStop {
+ public:
+  explicit LayerStop(const CancelToken& cancel) : cancel_(cancel) {}
+  bool Now() {
+    if (stopped_.load(std::memory_order_relaxed)) return true;
+    Status status = cancel_.Check();
+    if (status.ok()) return false;
+    std::lock_guard lock(mutex_);
+    if (status_.ok()) status_ = std::move(status);
+    stopped_ = true;
+    return true;
+  }
+  Status status() {
+    std::lock_guard lock(mutex_);
+    return status_;
+  }
+
+ private:
+  const CancelToken& cancel_;
+  std::atomic<bool> stopped_{false};
+  std::mutex mutex_;
+  Status status_;
+};
+
 // The cell footprint (sum of TF, max |grad I|^2 per cell) of the cell
-// layers [cz0, cz1), into sum and max_g2 (one entry per lattice vertex).
+// layers [cz0, cz1), into sum and max_g2 (one entry per lattice vertex);
+// returns early when `stop` says so.
 template <typename Voxels, typename TfOf>
 void CellLayers(const Volume& volume, const Lattice& lattice, Voxels v, TfOf tf_of, int64_t cz0,
-                int64_t cz1, std::vector<double>& sum, std::vector<float>& max_g2) {
+                int64_t cz1, std::vector<double>& sum, std::vector<float>& max_g2,
+                LayerStop& stop) {
   const auto& n = volume.dims();
   const auto& g = lattice.grid();
   const glm::dvec3& s = volume.spacing_mm();
@@ -78,6 +108,7 @@ void CellLayers(const Volume& volume, const Lattice& lattice, Voxels v, TfOf tf_
   std::vector<std::array<int64_t, 2>> x_ranges(static_cast<size_t>(g[0]));
   for (int64_t cx = 0; cx < g[0]; ++cx) x_ranges[size_t(cx)] = lattice.CellRange(0, cx);
   for (int64_t cz = cz0; cz < cz1; ++cz) {
+    if (stop.Now()) return;
     const auto rz = lattice.CellRange(2, cz);
     for (int64_t cy = 0; cy < g[1]; ++cy) {
       const auto ry = lattice.CellRange(1, cy);
@@ -104,8 +135,9 @@ void CellLayers(const Volume& volume, const Lattice& lattice, Voxels v, TfOf tf_
 
 }  // namespace
 
-LatticeCosts EvaluateLatticeCostsRows(const Volume& volume, const Lattice& lattice,
-                                      const TransferFunction& tf, int threads) {
+Result<LatticeCosts> EvaluateLatticeCostsRows(const Volume& volume, const Lattice& lattice,
+                                              const TransferFunction& tf, int threads,
+                                              const CancelToken& cancel) {
   const int64_t count = lattice.size();
   const auto& g = lattice.grid();
   if (threads <= 0) threads = int(std::max(1u, std::thread::hardware_concurrency()));
@@ -115,15 +147,18 @@ LatticeCosts EvaluateLatticeCostsRows(const Volume& volume, const Lattice& latti
   std::vector<float> table;
   if (voxels.is_int16()) table = Int16TfTable(tf, voxels.int16_offset());
   const int parts = int(std::clamp<int64_t>(threads, 1, g[2]));
+  LayerStop stop(cancel);
   ParallelChunks(parts, g[2], [&](int64_t cz0, int64_t cz1, int) {
     voxels.Visit([&](auto v) {
       if constexpr (std::is_same_v<decltype(v), Int16Voxels>) {
-        CellLayers(volume, lattice, v, TfOfInt16{table.data(), v.stored}, cz0, cz1, sum, max_g2);
+        CellLayers(volume, lattice, v, TfOfInt16{table.data(), v.stored}, cz0, cz1, sum, max_g2,
+                   stop);
       } else {
-        CellLayers(volume, lattice, v, TfOfFloat{&tf, v.values}, cz0, cz1, sum, max_g2);
+        CellLayers(volume, lattice, v, TfOfFloat{&tf, v.values}, cz0, cz1, sum, max_g2, stop);
       }
     });
   });
+  RETURN_IF_ERROR(stop.status());
   LatticeCosts costs = LatticeCosts::Zeros(size_t(count));
   for (int64_t id = 0; id < count; ++id) {
     const auto c = lattice.Coords(id);

@@ -14,6 +14,8 @@
 // relative (tests/mesh/lattice_costs_rows_test.cc).
 #pragma once
 
+#include "server/common/cancel_token.h"
+#include "server/common/status.h"
 #include "server/mesh/lattice.h"
 #include "server/mesh/lattice_costs.h"
 #include "server/volume/transfer_function.h"
@@ -22,8 +24,11 @@
 namespace vpm {
 
 // Both footprints for every vertex of `lattice`, on `threads` threads
-// (0: the hardware's count).
-LatticeCosts EvaluateLatticeCostsRows(const Volume& volume, const Lattice& lattice,
-                                      const TransferFunction& tf, int threads = 0);
+// (0: the hardware's count). Every thread polls `cancel` before each cell
+// layer (a 512 x 512 x 900 CT on a 60^3 lattice: a layer is about 4 ms of
+// 0.24 s), and a cancelled evaluation returns the poll's status.
+Result<LatticeCosts> EvaluateLatticeCostsRows(const Volume& volume, const Lattice& lattice,
+                                              const TransferFunction& tf, int threads = 0,
+                                              const CancelToken& cancel = {});
 
 }  // namespace vpm

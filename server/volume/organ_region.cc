@@ -150,19 +150,25 @@ std::optional<BoxMask> LargestComponentNear(const BoxMask& mask, const std::arra
 }
 
 // One face-connected erosion (grow = false) or dilation within `limit`.
+// Only a set voxel can erode and only an unset one inside `limit` can grow,
+// so the neighbours are read for those alone, and only until one decides.
 BoxMask Morph(const BoxMask& in, bool grow, const BoxMask& limit) {
   BoxMask out = in;
   for (int64_t k = in.lo[2]; k < in.lo[2] + in.size[2]; ++k) {
     for (int64_t j = in.lo[1]; j < in.lo[1] + in.size[1]; ++j) {
       for (int64_t i = in.lo[0]; i < in.lo[0] + in.size[0]; ++i) {
         const int64_t x = in.Index(i, j, k);
-        bool any = false, all = true;
-        for (const auto& s : kSteps) {
-          const bool on = in.At(i + s[0], j + s[1], k + s[2]);
-          any |= on;
-          all &= on;
+        if (grow ? (in.bits[x] || !limit.bits[x]) : !in.bits[x]) continue;  // out = in
+        // Erosion keeps the voxel while every neighbour is set; dilation
+        // sets it once one is.
+        bool flip = false;
+        for (const auto& st : kSteps) {
+          if (in.At(i + st[0], j + st[1], k + st[2]) == grow) {
+            flip = true;
+            break;
+          }
         }
-        out.bits[x] = grow ? (in.bits[x] || (any && limit.bits[x])) : (in.bits[x] && all);
+        if (flip) out.bits[x] = grow ? 1 : 0;
       }
     }
   }

@@ -1,8 +1,9 @@
 // Step 1 in native rows (EvaluateLatticeCostsRows, what lavapipe devices run)
 // against the double-precision reference, for float and int16 volumes (with
 // an offset), lattices coarser and finer than the voxels, a TF with a step,
-// and one and several threads.
+// and one and several threads; and a cancelled evaluation.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -20,7 +21,9 @@ namespace {
 // differences). The point footprint is the reference's own code: equal.
 void ExpectMatchesReference(const Volume& v, const Lattice& lattice, const TransferFunction& tf,
                             int threads) {
-  const LatticeCosts rows = EvaluateLatticeCostsRows(v, lattice, tf, threads);
+  auto evaluated = EvaluateLatticeCostsRows(v, lattice, tf, threads);
+  ASSERT_TRUE(evaluated.ok()) << evaluated.status();
+  const LatticeCosts& rows = *evaluated;
   const LatticeCosts cpu = EvaluateLatticeCostsCpu(v, lattice, tf);
   ASSERT_EQ(rows.ci_cell.size(), size_t(lattice.size()));
   for (Footprint f : {Footprint::kCell, Footprint::kPoint}) {
@@ -67,12 +70,36 @@ TEST(LatticeCostsRows, OneVoxelWideRows) {
   const Volume thin = testing::MakeBodyVolume({1, 12, 9}, {1.0, 1.0, 1.0});
   auto lattice = Lattice::Create(thin.geometry(), {1, 4, 3});
   ASSERT_TRUE(lattice.ok()) << lattice.status();
-  const LatticeCosts rows = EvaluateLatticeCostsRows(thin, *lattice, TransferFunction::CtSoftTissue(), 2);
+  auto evaluated = EvaluateLatticeCostsRows(thin, *lattice, TransferFunction::CtSoftTissue(), 2);
+  ASSERT_TRUE(evaluated.ok()) << evaluated.status();
+  const LatticeCosts& rows = *evaluated;
   const LatticeCosts cpu = EvaluateLatticeCostsCpu(thin, *lattice, TransferFunction::CtSoftTissue());
   for (int64_t id = 0; id < lattice->size(); ++id) {
     EXPECT_NEAR(rows.ci_cell[id], cpu.ci_cell[id], 1e-6) << id;
     EXPECT_NEAR(rows.g_cell[id], cpu.g_cell[id], 1e-6 * (1.0 + cpu.g_cell[id])) << id;
   }
+}
+
+}  // namespace
+}  // namespace vpm
+
+namespace vpm {
+namespace {
+
+// A cancellation stops the threads before their next cell layer: the poll
+// that fails is about the fourth of eight layers', so far fewer than the
+// eight polls of a whole evaluation happen, and its status comes back.
+TEST(LatticeCostsRows, ACancelledEvaluationStopsBeforeTheNextLayer) {
+  const Volume v = testing::MakeBodyVolume({40, 40, 40}, {1.0, 1.0, 1.0});
+  auto lattice = Lattice::Create(v.geometry(), {8, 8, 8});
+  ASSERT_TRUE(lattice.ok()) << lattice.status();
+  std::atomic<int> polls{0};
+  const CancelToken cancel([&]() -> Status {
+    return ++polls > 3 ? absl::CancelledError("the call was cancelled") : absl::OkStatus();
+  });
+  auto costs = EvaluateLatticeCostsRows(v, *lattice, TransferFunction::CtSoftTissue(), 2, cancel);
+  EXPECT_EQ(costs.status().code(), absl::StatusCode::kCancelled) << costs.status();
+  EXPECT_LE(polls.load(), 6);
 }
 
 }  // namespace
