@@ -81,7 +81,7 @@ Result<std::vector<UserCredential>> ParseUsersFile(std::string_view text,
           StrCat("--users ", file_name, " line ", line_number, ": ", why,
                  " (each line is 'NAME TOKEN-SHA256 [browse-data-root]'; `vpm-server --hash-token NAME` writes one)"));
     };
-    if (fields.size() < 2) return bad(StrCat(fields.size(), " field, not 2"));
+    if (fields.size() < 2) return bad(StrCat(fields.size(), " fields, not 2"));
     if (Status name = CheckUserName(fields[0]); !name.ok()) return bad(std::string(name.message()));
     if (!IsHexDigest(fields[1])) {
       return bad("the hash must be 64 hexadecimal digits (the SHA-256 of the token, not the token)");
