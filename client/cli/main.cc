@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 
 #include "client/cli/compare_meshes_command.h"
+#include "client/cli/data_root_commands.h"
 #include "client/cli/health_command.h"
 #include "client/cli/mesh_command.h"
 #include "client/cli/case_commands.h"
@@ -33,6 +34,7 @@ int main(int argc, char** argv) {
   vpm::cli::AddRemoteMeshCommands(app, &server_flags, &exit_code);
   vpm::cli::AddSessionCommands(app, &server_flags, &exit_code);
   vpm::cli::AddPacsCommands(app, &server_flags, &exit_code);
+  vpm::cli::AddDataRootCommands(app, &server_flags, &exit_code);
   vpm::cli::AddExportDicomCommand(app, &server_flags, &exit_code);
   vpm::cli::AddCaseCommands(app, &server_flags, &exit_code);
   vpm::cli::AddPlayCommand(app, &server_flags, &exit_code);

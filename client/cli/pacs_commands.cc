@@ -6,6 +6,7 @@
 
 #include "client/common/proto_json.h"
 #include "client/cli/server_flags.h"
+#include "server/common/write_file.h"
 
 namespace vpm::cli {
 namespace {
@@ -110,6 +111,26 @@ Status Series(const ServerConnection& s, const SeriesArgs& a) {
   return absl::OkStatus();
 }
 
+struct ThumbnailArgs {
+  std::string endpoint, study, series, out;
+  int size_px = 0;
+};
+
+Status Thumbnail(const ServerConnection& s, const ThumbnailArgs& a) {
+  v3::GetSeriesThumbnailRequest request;
+  request.set_endpoint(a.endpoint);
+  request.set_study_uid(a.study);
+  request.set_series_uid(a.series);
+  request.set_size_px(a.size_px);
+  v3::SeriesThumbnail response;
+  RETURN_IF_ERROR(
+      FromGrpc(s.stub().GetSeriesThumbnail(s.Context().get(), request, &response)));
+  RETURN_IF_ERROR(WriteFile(a.out, response.png()));
+  std::printf("%s: %d x %d PNG, %zu bytes\n", a.out.c_str(), response.width(), response.height(),
+              response.png().size());
+  return absl::OkStatus();
+}
+
 Status Endpoints(const ServerConnection& s, bool as_json) {
   v3::ListPacsEndpointsResponse response;
   RETURN_IF_ERROR(FromGrpc(
@@ -162,6 +183,19 @@ void AddPacsCommands(CLI::App& app, const ServerFlags* flags, int* exit_code) {
   l->add_flag("--json", series->json, "print JSON");
   l->callback(WithServer(flags, exit_code,
                          [series](const ServerConnection& c) { return Series(c, *series); }));
+
+  auto thumbnail = std::make_shared<ThumbnailArgs>();
+  CLI::App* t = pacs->add_subcommand(
+      "thumbnail", "server: GetSeriesThumbnail, a grey PNG of one instance of a series");
+  t->add_option("--endpoint", thumbnail->endpoint, "endpoint name in the server's --pacs file")
+      ->required();
+  t->add_option("--study", thumbnail->study, "Study Instance UID")->required();
+  t->add_option("--series", thumbnail->series, "Series Instance UID")->required();
+  t->add_option("--size", thumbnail->size_px, "the longer side, pixels (16..256; default 128)");
+  t->add_option("--out", thumbnail->out, "the PNG file to write")->required();
+  t->callback(WithServer(flags, exit_code, [thumbnail](const ServerConnection& c) {
+    return Thumbnail(c, *thumbnail);
+  }));
 }
 
 }  // namespace vpm::cli

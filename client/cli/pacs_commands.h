@@ -1,5 +1,5 @@
-// `vpm pacs search|series`: the PACS RPCs of a vpm-server (SearchStudies,
-// ListSeries) on an endpoint of its --pacs file. A series opens with
+// `vpm pacs search|series|thumbnail`: the PACS RPCs of a vpm-server (SearchStudies,
+// ListSeries, GetSeriesThumbnail) on an endpoint of its --pacs file. A series opens with
 // `vpm volume load pacs:ENDPOINT/STUDY_UID/SERIES_UID`.
 #pragma once
 

@@ -17,14 +17,14 @@ namespace vpm::pacs {
 
 struct AuditRecord {
   std::string user;
-  std::string action;  // "search", "series", "open", "export", "receive"
+  std::string action;  // "search", "series", "thumbnail", "open", "export", "receive"
   std::string endpoint;
   std::string study_uid;  // empty when none
   std::string series_uid;
   Status result;           // its code is written ("OK", "PERMISSION_DENIED", ...)
   std::string filters;     // search: the filters set, "PatientName,StudyDate"
   int64_t matches = -1;    // search and series: how many answered; -1: not written
-  std::string cache;       // open: "hit" or "miss"
+  std::string cache;       // open: "hit" or "miss"; thumbnail: "memory", "cache", "received", "pacs"
   int64_t instances = -1;  // open, export, receive: files of the series; -1: not written
   std::string calling_aet;  // receive: the node that sent the series
   int64_t refused = -1;     // receive: instances refused; -1: not written

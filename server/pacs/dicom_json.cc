@@ -1,5 +1,7 @@
 #include "server/pacs/dicom_json.h"
 
+#include <algorithm>
+
 #include <nlohmann/json.hpp>
 
 #include "server/pacs/study_query.h"
@@ -107,6 +109,30 @@ Result<std::vector<SeriesSummary>> ParseSeries(std::string_view body) {
     out.push_back(std::move(s));
   }
   return out;
+}
+
+Result<std::vector<InstanceSummary>> ParseInstances(std::string_view body) {
+  ASSIGN_OR_RETURN(const json list, ParseList(body));
+  std::vector<InstanceSummary> out;
+  for (const json& item : list) {
+    InstanceSummary s;
+    s.sop_uid = Text(item, "00080018");
+    if (!CheckUid(s.sop_uid, "").ok()) continue;
+    s.instance_number = Number(item, "00200013", 0);
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+const InstanceSummary* MiddleInstance(const std::vector<InstanceSummary>& instances) {
+  if (instances.empty()) return nullptr;
+  std::vector<const InstanceSummary*> sorted;
+  for (const InstanceSummary& s : instances) sorted.push_back(&s);
+  std::stable_sort(sorted.begin(), sorted.end(),
+                   [](const InstanceSummary* a, const InstanceSummary* b) {
+                     return a->instance_number < b->instance_number;
+                   });
+  return sorted[sorted.size() / 2];
 }
 
 }  // namespace vpm::pacs

@@ -33,10 +33,20 @@ struct SeriesSummary {
   int64_t instance_count = -1;  // NumberOfSeriesRelatedInstances; -1: not sent
 };
 
+struct InstanceSummary {
+  std::string sop_uid;              // SOPInstanceUID
+  int64_t instance_number = 0;      // InstanceNumber; 0: not sent
+};
+
 // Parse a QIDO-RS answer body (a JSON list; an empty body is no match).
 // Entries without a valid UID are skipped. InvalidArgument ("the PACS's
 // answer: ...") for anything that is not a list of objects.
 Result<std::vector<StudySummary>> ParseStudies(std::string_view body);
 Result<std::vector<SeriesSummary>> ParseSeries(std::string_view body);
+Result<std::vector<InstanceSummary>> ParseInstances(std::string_view body);
+
+// The instance in the middle of `instances` by InstanceNumber (ties in the
+// given order), the one a series' thumbnail shows; nullptr when empty.
+const InstanceSummary* MiddleInstance(const std::vector<InstanceSummary>& instances);
 
 }  // namespace vpm::pacs

@@ -156,11 +156,45 @@ Result<RetrievedSeries> DicomwebClient::RetrieveSeries(
     const ProgressFn& progress, const CancelToken& cancel) const {
   RETURN_IF_ERROR(CheckUid(study_uid, "study_uid"));
   RETURN_IF_ERROR(CheckUid(series_uid, "series_uid"));
+  return RetrieveParts(StrCat("/studies/", study_uid, "/series/", series_uid),
+                       StrCat("series ", series_uid), folder, max_bytes, expected_instances,
+                       progress, cancel);
+}
+
+Result<RetrievedSeries> DicomwebClient::RetrieveInstance(const std::string& study_uid,
+                                                         const std::string& series_uid,
+                                                         const std::filesystem::path& folder,
+                                                         int64_t max_bytes,
+                                                         const CancelToken& cancel) const {
+  RETURN_IF_ERROR(CheckUid(study_uid, "study_uid"));
+  RETURN_IF_ERROR(CheckUid(series_uid, "series_uid"));
+  const std::string series_path = StrCat("/studies/", study_uid, "/series/", series_uid);
+  ASSIGN_OR_RETURN(const std::string body,
+                   GetText(StrCat(series_path, "/instances?includefield=00200013"), cancel));
+  Result<std::vector<InstanceSummary>> instances = ParseInstances(body);
+  if (!instances.ok()) {
+    return absl::UnavailableError(
+        StrCat(EndpointLabel(endpoint_), ": instance listing: ", instances.status().message()));
+  }
+  const InstanceSummary* middle = MiddleInstance(*instances);
+  if (middle == nullptr) {
+    return absl::NotFoundError(
+        StrCat(EndpointLabel(endpoint_), ": series ", series_uid, ": the PACS lists no instance"));
+  }
+  return RetrieveParts(StrCat(series_path, "/instances/", middle->sop_uid),
+                       StrCat("series ", series_uid, " instance ", middle->sop_uid), folder,
+                       max_bytes, 1, nullptr, cancel);
+}
+
+Result<RetrievedSeries> DicomwebClient::RetrieveParts(
+    const std::string& path, const std::string& what_part, const std::filesystem::path& folder,
+    int64_t max_bytes, int64_t expected_instances, const ProgressFn& progress,
+    const CancelToken& cancel) const {
   const std::string label = EndpointLabel(endpoint_);
-  const std::string what = StrCat(label, ": series ", series_uid);
-  const HttpRequest request = RequestTo(
-      endpoint_, StrCat(endpoint_.dicomweb_url, "/studies/", study_uid, "/series/", series_uid),
-      {kAcceptDicom}, options_.connect_timeout_s, options_.stall_timeout_s);
+  const std::string what = StrCat(label, ": ", what_part);
+  const HttpRequest request =
+      RequestTo(endpoint_, StrCat(endpoint_.dicomweb_url, path), {kAcceptDicom},
+                options_.connect_timeout_s, options_.stall_timeout_s);
   DicomPartWriter writer(folder, what, max_bytes);
   std::unique_ptr<MultipartParser> parser;
   int64_t received = 0;
@@ -192,7 +226,7 @@ Result<RetrievedSeries> DicomwebClient::RetrieveSeries(
   };
   ASSIGN_OR_RETURN(const HttpResponse head, HttpGet(request, on_body, cancel));
   if (head.status < 200 || head.status > 299) {
-    return StatusFromHttp(head.status, label, StrCat("retrieve series ", series_uid));
+    return StatusFromHttp(head.status, label, StrCat("retrieve ", what_part));
   }
   if (parser) {
     if (Status done = parser->Finish(); !done.ok()) {

@@ -55,6 +55,15 @@ class DicomwebClient : public PacsClient {
                                          int64_t expected_instances, const ProgressFn& progress,
                                          const CancelToken& cancel) const override;
 
+  // QIDO-RS /studies/UID/series/UID/instances (SOPInstanceUID and
+  // InstanceNumber), then WADO-RS of the middle instance
+  // (/instances/UID, transfer-syntax=*) into `folder` as 000001.dcm.
+  // NotFound when the PACS lists no instance; else as RetrieveSeries.
+  Result<RetrievedSeries> RetrieveInstance(const std::string& study_uid,
+                                           const std::string& series_uid,
+                                           const std::filesystem::path& folder, int64_t max_bytes,
+                                           const CancelToken& cancel) const override;
+
   // STOW-RS (stow_client.h).
   Status Store(const std::vector<const std::string*>& files, const ProgressFn& progress,
                const CancelToken& cancel) const override;
@@ -66,6 +75,13 @@ class DicomwebClient : public PacsClient {
   // Errors: an HTTP status other than 2xx as StatusFromHttp says, and
   // HttpGet's.
   Result<std::string> GetText(const std::string& path_and_query, const CancelToken& cancel) const;
+
+  // WADO-RS of `path` (a series or an instance, `what` in messages), each
+  // part written into `folder`; as RetrieveSeries.
+  Result<RetrievedSeries> RetrieveParts(const std::string& path, const std::string& what,
+                                        const std::filesystem::path& folder, int64_t max_bytes,
+                                        int64_t expected_instances, const ProgressFn& progress,
+                                        const CancelToken& cancel) const;
 
   PacsEndpoint endpoint_;
   Options options_;

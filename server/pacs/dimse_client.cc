@@ -275,6 +275,16 @@ Result<std::vector<std::unique_ptr<DcmDataset>>> Find(const PacsEndpoint& e,
   return answers;
 }
 
+// The identifier of a C-GET or C-MOVE: the series, or its instance
+// `sop_uid` when not empty.
+void RetrieveKeys(const std::string& study_uid, const std::string& series_uid,
+                  const std::string& sop_uid, DcmDataset& keys) {
+  keys.putAndInsertString(DCM_QueryRetrieveLevel, sop_uid.empty() ? "SERIES" : "IMAGE");
+  keys.putAndInsertString(DCM_StudyInstanceUID, study_uid.c_str());
+  keys.putAndInsertString(DCM_SeriesInstanceUID, series_uid.c_str());
+  if (!sop_uid.empty()) keys.putAndInsertString(DCM_SOPInstanceUID, sop_uid.c_str());
+}
+
 }  // namespace
 
 DimseClient::DimseClient(PacsEndpoint endpoint, Options options, MoveRegistry* moves)
@@ -362,9 +372,54 @@ Result<RetrievedSeries> DimseClient::RetrieveSeries(const std::string& study_uid
   RETURN_IF_ERROR(CheckUid(study_uid, "study_uid"));
   RETURN_IF_ERROR(CheckUid(series_uid, "series_uid"));
   if (endpoint_.retrieve_by_move) {
-    return MoveSeries(study_uid, series_uid, folder, max_bytes, expected_instances, progress,
+    return MoveSeries(study_uid, series_uid, "", folder, max_bytes, expected_instances, progress,
                       cancel);
   }
+  return GetSeries(study_uid, series_uid, "", folder, max_bytes, expected_instances, progress,
+                   cancel);
+}
+
+Result<RetrievedSeries> DimseClient::RetrieveInstance(const std::string& study_uid,
+                                                      const std::string& series_uid,
+                                                      const std::filesystem::path& folder,
+                                                      int64_t max_bytes,
+                                                      const CancelToken& cancel) const {
+  RETURN_IF_ERROR(CheckUid(study_uid, "study_uid"));
+  RETURN_IF_ERROR(CheckUid(series_uid, "series_uid"));
+  DcmDataset keys;
+  keys.putAndInsertString(DCM_QueryRetrieveLevel, "IMAGE");
+  keys.putAndInsertString(DCM_StudyInstanceUID, study_uid.c_str());
+  keys.putAndInsertString(DCM_SeriesInstanceUID, series_uid.c_str());
+  keys.putAndInsertString(DCM_SOPInstanceUID, "");
+  keys.putAndInsertString(DCM_InstanceNumber, "");
+  bool cut = false;
+  ASSIGN_OR_RETURN(const std::vector<std::unique_ptr<DcmDataset>> answers,
+                   Find(endpoint_, options_, keys, options_.max_find_answers, cancel, &cut));
+  std::vector<InstanceSummary> instances;
+  for (const auto& answer : answers) {
+    InstanceSummary s{.sop_uid = Text(*answer, DCM_SOPInstanceUID),
+                      .instance_number = Number(*answer, DCM_InstanceNumber, 0)};
+    if (CheckUid(s.sop_uid, "").ok()) instances.push_back(std::move(s));
+  }
+  const InstanceSummary* middle = MiddleInstance(instances);
+  if (middle == nullptr) {
+    return absl::NotFoundError(
+        StrCat(DimseLabel(endpoint_), ": series ", series_uid, ": the PACS lists no instance"));
+  }
+  if (endpoint_.retrieve_by_move) {
+    return MoveSeries(study_uid, series_uid, middle->sop_uid, folder, max_bytes, 1, nullptr,
+                      cancel);
+  }
+  return GetSeries(study_uid, series_uid, middle->sop_uid, folder, max_bytes, 1, nullptr, cancel);
+}
+
+Result<RetrievedSeries> DimseClient::GetSeries(const std::string& study_uid,
+                                               const std::string& series_uid,
+                                               const std::string& sop_uid,
+                                               const std::filesystem::path& folder,
+                                               int64_t max_bytes, int64_t expected_instances,
+                                               const ProgressFn& progress,
+                                               const CancelToken& cancel) const {
   std::vector<Context> contexts = {
       {UID_GETStudyRootQueryRetrieveInformationModel, &PlainSyntaxes(), ASC_SC_ROLE_DEFAULT}};
   // The storage classes a C-GET may bring, vpm taking the SCP role (at
@@ -381,9 +436,7 @@ Result<RetrievedSeries> DimseClient::RetrieveSeries(const std::string& study_uid
   scu->expected = expected_instances;
   scu->progress = &progress;
   DcmDataset keys;
-  keys.putAndInsertString(DCM_QueryRetrieveLevel, "SERIES");
-  keys.putAndInsertString(DCM_StudyInstanceUID, study_uid.c_str());
-  keys.putAndInsertString(DCM_SeriesInstanceUID, series_uid.c_str());
+  RetrieveKeys(study_uid, series_uid, sop_uid, keys);
   const T_ASC_PresentationContextID id =
       scu->findPresentationContextID(UID_GETStudyRootQueryRetrieveInformationModel, "");
   OFList<RetrieveResponse*> responses;
@@ -410,6 +463,7 @@ Result<RetrievedSeries> DimseClient::RetrieveSeries(const std::string& study_uid
 
 Result<RetrievedSeries> DimseClient::MoveSeries(const std::string& study_uid,
                                                 const std::string& series_uid,
+                                                const std::string& sop_uid,
                                                 const std::filesystem::path& folder,
                                                 int64_t max_bytes, int64_t expected_instances,
                                                 const ProgressFn& progress,
@@ -429,9 +483,7 @@ Result<RetrievedSeries> DimseClient::MoveSeries(const std::string& study_uid,
   scu->expected = expected_instances;
   scu->progress = &progress;
   DcmDataset keys;
-  keys.putAndInsertString(DCM_QueryRetrieveLevel, "SERIES");
-  keys.putAndInsertString(DCM_StudyInstanceUID, study_uid.c_str());
-  keys.putAndInsertString(DCM_SeriesInstanceUID, series_uid.c_str());
+  RetrieveKeys(study_uid, series_uid, sop_uid, keys);
   const T_ASC_PresentationContextID id =
       scu->findPresentationContextID(UID_MOVEStudyRootQueryRetrieveInformationModel, "");
   OFList<RetrieveResponse*> responses;

@@ -45,6 +45,12 @@ class DimseClient : public PacsClient {
                                          const std::filesystem::path& folder, int64_t max_bytes,
                                          int64_t expected_instances, const ProgressFn& progress,
                                          const CancelToken& cancel) const override;
+  // C-FIND at IMAGE level (SOPInstanceUID, InstanceNumber), then C-GET
+  // (or C-MOVE) of the middle instance. NotFound when the PACS lists none.
+  Result<RetrievedSeries> RetrieveInstance(const std::string& study_uid,
+                                           const std::string& series_uid,
+                                           const std::filesystem::path& folder, int64_t max_bytes,
+                                           const CancelToken& cancel) const override;
   // C-STORE of each file (CT, MR and Secondary Capture, explicit VR little
   // endian as vpm writes them).
   Status Store(const std::vector<const std::string*>& files, const ProgressFn& progress,
@@ -53,7 +59,15 @@ class DimseClient : public PacsClient {
   const PacsEndpoint& endpoint() const override { return endpoint_; }
 
  private:
+  // C-GET, or C-MOVE, of the series, or of its instance `sop_uid` when
+  // not empty (QueryRetrieveLevel IMAGE).
+  Result<RetrievedSeries> GetSeries(const std::string& study_uid, const std::string& series_uid,
+                                    const std::string& sop_uid,
+                                    const std::filesystem::path& folder, int64_t max_bytes,
+                                    int64_t expected_instances, const ProgressFn& progress,
+                                    const CancelToken& cancel) const;
   Result<RetrievedSeries> MoveSeries(const std::string& study_uid, const std::string& series_uid,
+                                     const std::string& sop_uid,
                                      const std::filesystem::path& folder, int64_t max_bytes,
                                      int64_t expected_instances, const ProgressFn& progress,
                                      const CancelToken& cancel) const;

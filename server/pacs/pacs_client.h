@@ -44,6 +44,15 @@ class PacsClient {
                                                  int64_t max_bytes, int64_t expected_instances,
                                                  const ProgressFn& progress,
                                                  const CancelToken& cancel) const = 0;
+  // One instance of the series, the one a thumbnail shows (the middle one
+  // by InstanceNumber when the PACS lists them), written into `folder`
+  // (existing), at most `max_bytes` (ResourceExhausted past it). Errors as
+  // RetrieveSeries.
+  virtual Result<RetrievedSeries> RetrieveInstance(const std::string& study_uid,
+                                                   const std::string& series_uid,
+                                                   const std::filesystem::path& folder,
+                                                   int64_t max_bytes,
+                                                   const CancelToken& cancel) const = 0;
   // Sends whole Part 10 files; every one must be stored (FailedPrecondition
   // "the PACS refused N of M instances" otherwise).
   virtual Status Store(const std::vector<const std::string*>& files, const ProgressFn& progress,

@@ -35,6 +35,8 @@ Result<std::unique_ptr<PacsGateway>> PacsGateway::Create(Options options) {
         "--pacs needs --pacs-audit-log FILE: every PACS action is audited");
   }
   std::unique_ptr<PacsGateway> gateway(new PacsGateway());
+  gateway->thumbnail_instance_bytes_ = options.thumbnail_instance_bytes;
+  gateway->thumbnail_deadline_s_ = options.thumbnail_deadline_s;
   ASSIGN_OR_RETURN(gateway->audit_, AuditLog::Open(options.audit_log));
   ASSIGN_OR_RETURN(gateway->cache_, SeriesCache::Create(options.cache));
   RETURN_IF_ERROR(gateway->StartListener(options.listen, options.endpoints));

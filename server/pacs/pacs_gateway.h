@@ -21,6 +21,8 @@
 #include "server/pacs/received_store.h"
 #include "server/pacs/pacs_endpoint.h"
 #include "server/pacs/series_cache.h"
+#include "server/pacs/series_thumbnail.h"
+#include "server/pacs/thumbnail_lru.h"
 #include "server/volume/volume.h"
 
 namespace vpm::pacs {
@@ -44,6 +46,10 @@ class PacsGateway {
       int max_associations = 8;
       int64_t max_instance_bytes = int64_t{1} << 30;
     } listen;
+    // GetSeriesThumbnail: the largest instance retrieved for a thumbnail,
+    // bytes, and how long one may take, seconds.
+    int64_t thumbnail_instance_bytes = int64_t{64} << 20;
+    double thumbnail_deadline_s = 30;
   };
   static Result<std::unique_ptr<PacsGateway>> Create(Options options);
 
@@ -59,6 +65,21 @@ class PacsGateway {
                                                 const std::string& endpoint,
                                                 const std::string& study_uid,
                                                 const CancelToken& cancel);
+
+  // A grey PNG of one instance of the series (RenderSeriesThumbnail), the
+  // longer side `size_px` (0: kDefaultThumbnailPx): from the thumbnails of
+  // this run (memory), the series cache, the received store, else one
+  // instance retrieved from the PACS (RetrieveInstance) into a scratch
+  // folder removed after. Audited as "thumbnail". Errors: PermissionDenied
+  // as SearchStudies; InvalidArgument for bad UIDs or size, and for a
+  // series without images; ResourceExhausted for an instance over
+  // thumbnail_instance_bytes; DeadlineExceeded past thumbnail_deadline_s;
+  // the client's. Messages never show the cache's paths.
+  Result<SeriesThumbnail> GetSeriesThumbnail(const std::string& user,
+                                             const std::string& endpoint,
+                                             const std::string& study_uid,
+                                             const std::string& series_uid, int size_px,
+                                             const CancelToken& cancel);
 
   // The series `source` names (pacs:NAME/STUDY/SERIES) as a Volume:
   // from the cache, or retrieved (WADO-RS) into it, then read by
@@ -113,7 +134,15 @@ class PacsGateway {
                                   const std::string& series_uid, const VolumeLimits& limits,
                                   const ProgressFn& progress);
 
+  // GetSeriesThumbnail once permitted: the thumbnail and where it came from.
+  Result<SeriesThumbnail> RenderThumbnail(const PacsClient& client, const std::string& study_uid,
+                                          const std::string& series_uid, int size_px,
+                                          const CancelToken& cancel, std::string* from);
+
   std::map<std::string, std::unique_ptr<PacsClient>> clients_;  // by endpoint name
+  ThumbnailLru thumbnails_;
+  int64_t thumbnail_instance_bytes_ = 0;
+  double thumbnail_deadline_s_ = 0;
   std::unique_ptr<SeriesCache> cache_;
   std::unique_ptr<AuditLog> audit_;
   std::unique_ptr<ReceivedStore> received_;  // with --dicom-listen

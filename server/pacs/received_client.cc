@@ -26,6 +26,13 @@ Result<RetrievedSeries> ReceivedClient::RetrieveSeries(const std::string&, const
       StrCat(EndpointLabel(endpoint_), ": received series are read in place"));
 }
 
+Result<RetrievedSeries> ReceivedClient::RetrieveInstance(const std::string&, const std::string&,
+                                                         const std::filesystem::path&, int64_t,
+                                                         const CancelToken&) const {
+  return absl::FailedPreconditionError(
+      StrCat(EndpointLabel(endpoint_), ": received series are read in place"));
+}
+
 Status ReceivedClient::Store(const std::vector<const std::string*>&, const ProgressFn&,
                              const CancelToken&) const {
   return absl::FailedPreconditionError(StrCat(

@@ -26,6 +26,11 @@ class ReceivedClient : public PacsClient {
                                          const std::filesystem::path& folder, int64_t max_bytes,
                                          int64_t expected_instances, const ProgressFn& progress,
                                          const CancelToken& cancel) const override;
+  // FailedPrecondition: a received series is read in place (OpenSeries).
+  Result<RetrievedSeries> RetrieveInstance(const std::string& study_uid,
+                                           const std::string& series_uid,
+                                           const std::filesystem::path& folder, int64_t max_bytes,
+                                           const CancelToken& cancel) const override;
   // FailedPrecondition: nothing is sent to a receive endpoint.
   Status Store(const std::vector<const std::string*>& files, const ProgressFn& progress,
                const CancelToken& cancel) const override;

@@ -210,6 +210,22 @@ Result<std::shared_ptr<const SeriesCache::Lease>> SeriesCache::Open(const std::s
   return PinLocked(key, /*hit=*/false);
 }
 
+std::shared_ptr<const SeriesCache::Lease> SeriesCache::Find(const std::string& endpoint,
+                                                            const std::string& series_uid) {
+  const std::string key = endpoint + "/" + series_uid;
+  std::lock_guard lock(state_->mutex);
+  if (!state_->entries.contains(key)) return nullptr;
+  return PinLocked(key, /*hit=*/true);
+}
+
+Result<fs::path> SeriesCache::MakeScratchFolder() const {
+  std::string pattern = (options_.root / ".tmp-XXXXXX").string();
+  if (::mkdtemp(pattern.data()) == nullptr) {
+    return absl::InternalError("the PACS cache: cannot make a temporary folder");
+  }
+  return fs::path(pattern);
+}
+
 SeriesCache::Stats SeriesCache::stats() const {
   std::lock_guard lock(state_->mutex);
   Stats out = state_->stats;

@@ -54,6 +54,16 @@ class SeriesCache {
                                             const std::string& series_uid, const Fetch& fetch,
                                             const CancelToken& cancel = {});
 
+  // The series when it is cached, pinned, else nullptr; fetches nothing and
+  // counts as no hit (a thumbnail peeks before retrieving one instance).
+  std::shared_ptr<const Lease> Find(const std::string& endpoint,
+                                    const std::string& series_uid);
+
+  // A new empty folder under the cache's root (ROOT/.tmp-XXXXXX, removed at
+  // the next start if left behind); the caller removes it. Internal when it
+  // cannot be made.
+  Result<std::filesystem::path> MakeScratchFolder() const;
+
   struct Stats {
     int64_t entries = 0;
     int64_t bytes = 0;

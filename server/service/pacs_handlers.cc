@@ -1,5 +1,5 @@
 // The PACS RPCs of VpmService (ListPacsEndpoints, SearchStudies,
-// ListSeries, ExportDicom's reactor): translation
+// ListSeries, GetSeriesThumbnail, ExportDicom's reactor): translation
 // between the API and server/pacs's PacsGateway, on the request pool (a
 // PACS may take seconds to answer). LoadVolume of pacs: sources goes
 // through the volume store (vpm_server.cc wires its read_pacs hook).
@@ -96,6 +96,25 @@ grpc::ServerUnaryReactor* VpmService::ListSeries(grpc::CallbackServerContext* co
                    out->set_source(StrCat(pacs::kPacsPrefix, request->endpoint(), "/",
                                           request->study_uid(), "/", s.series_uid));
                  }
+                 return absl::OkStatus();
+               });
+}
+
+grpc::ServerUnaryReactor* VpmService::GetSeriesThumbnail(
+    grpc::CallbackServerContext* context, const v3::GetSeriesThumbnailRequest* request,
+    v3::SeriesThumbnail* response) {
+  return Unary(context, *request, "GetSeriesThumbnail", service_->request_pool,
+               [=, this](const std::string& user, const CancelToken& cancel) -> Status {
+                 ASSIGN_OR_RETURN(pacs::PacsGateway * gateway, Gateway(service_));
+                 if (request->endpoint().empty())
+                   return absl::InvalidArgumentError("endpoint: required");
+                 ASSIGN_OR_RETURN(pacs::SeriesThumbnail thumbnail,
+                                  gateway->GetSeriesThumbnail(
+                                      user, request->endpoint(), request->study_uid(),
+                                      request->series_uid(), request->size_px(), cancel));
+                 response->set_png(thumbnail.png.data(), thumbnail.png.size());
+                 response->set_width(thumbnail.width);
+                 response->set_height(thumbnail.height);
                  return absl::OkStatus();
                });
 }

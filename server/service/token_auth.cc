@@ -78,6 +78,14 @@ bool TokenAuth::HasUser(std::string_view name) const {
   return false;
 }
 
+bool TokenAuth::MayBrowseDataRoot(std::string_view name) const {
+  if (disabled_) return true;
+  for (const UserCredential& user : users_) {
+    if (user.name == name) return user.browse_data_root;
+  }
+  return false;
+}
+
 std::vector<std::string> TokenAuth::user_names() const {
   std::vector<std::string> names;
   for (const UserCredential& user : users_) names.push_back(user.name);

@@ -44,6 +44,11 @@ class TokenAuth {
   // Whether `name` is a user of this server (session sharing names one).
   bool HasUser(std::string_view name) const;
   std::vector<std::string> user_names() const;
+  // Whether `name` may list the data root (ListDataRoot): a user of the
+  // users file given `browse-data-root`, or everyone under --no-auth (a
+  // loopback-only server of one person). The --token user `default` may
+  // not: it is often a shared viewer token (docs/SERVICE.md).
+  bool MayBrowseDataRoot(std::string_view name) const;
 
  private:
   TokenAuth() = default;

@@ -79,9 +79,9 @@ Result<std::vector<UserCredential>> ParseUsersFile(std::string_view text,
     const auto bad = [&](const std::string& why) {
       return absl::InvalidArgumentError(
           StrCat("--users ", file_name, " line ", line_number, ": ", why,
-                 " (each line is 'NAME TOKEN-SHA256'; `vpm-server --hash-token NAME` writes one)"));
+                 " (each line is 'NAME TOKEN-SHA256 [browse-data-root]'; `vpm-server --hash-token NAME` writes one)"));
     };
-    if (fields.size() != 2) return bad(StrCat(fields.size(), " fields, not 2"));
+    if (fields.size() < 2) return bad(StrCat(fields.size(), " fields, not 2"));
     if (Status name = CheckUserName(fields[0]); !name.ok()) return bad(std::string(name.message()));
     if (!IsHexDigest(fields[1])) {
       return bad("the hash must be 64 hexadecimal digits (the SHA-256 of the token, not the token)");
@@ -92,7 +92,15 @@ Result<std::vector<UserCredential>> ParseUsersFile(std::string_view text,
     if (!hashes.emplace(hash).second) {
       return bad(StrCat("user '", fields[0], "' has the token of an earlier user"));
     }
-    users.push_back({std::string(fields[0]), std::move(hash)});
+    UserCredential user{std::string(fields[0]), std::move(hash)};
+    for (size_t f = 2; f < fields.size(); ++f) {
+      if (fields[f] != kBrowseDataRootPermission) {
+        return bad(StrCat("unknown permission '", fields[f].substr(0, 64), "' (known: ",
+                          kBrowseDataRootPermission, ")"));
+      }
+      user.browse_data_root = true;
+    }
+    users.push_back(std::move(user));
   }
   if (users.empty()) return absl::InvalidArgumentError(StrCat("--users ", file_name, ": no users"));
   return users;

@@ -2,7 +2,9 @@
 // NAME is 1 to 64 of [A-Za-z0-9._-] and TOKEN-SHA256 the 64 hexadecimal
 // digits of the SHA-256 of the user's bearer token (`vpm-server
 // --hash-token NAME` reads the token on stdin and prints the line). Blank
-// lines and lines starting with '#' are skipped. The server never holds a
+// lines and lines starting with '#' are skipped. Permissions may follow the
+// hash, separated by spaces: `browse-data-root` lets the user list the
+// server's --data-root (ListDataRoot); none are given by default. The server never holds a
 // user's token, only its hash.
 #pragma once
 
@@ -17,10 +19,14 @@ namespace vpm::service {
 struct UserCredential {
   std::string name;
   std::string token_sha256_hex;  // 64 lower-case hexadecimal digits
+  bool browse_data_root = false;  // the permission `browse-data-root`
 };
 
+// The permissions a users file line may give, after the hash.
+inline constexpr char kBrowseDataRootPermission[] = "browse-data-root";
+
 // InvalidArgument naming the file and line for a malformed line, a bad
-// name or hash, a name given twice or a hash given twice (two users with one
+// name or hash, an unknown permission, a name given twice or a hash given twice (two users with one
 // token could not be told apart); also for a file without any user.
 Result<std::vector<UserCredential>> ParseUsersFile(std::string_view text,
                                                    std::string_view file_name);

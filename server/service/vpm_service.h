@@ -85,6 +85,13 @@ class VpmService final : public v3::Vpm::CallbackService {
                                           v3::SearchStudiesResponse*) override;
   grpc::ServerUnaryReactor* ListSeries(grpc::CallbackServerContext*, const v3::ListSeriesRequest*,
                                        v3::ListSeriesResponse*) override;
+  grpc::ServerUnaryReactor* GetSeriesThumbnail(grpc::CallbackServerContext*,
+                                               const v3::GetSeriesThumbnailRequest*,
+                                               v3::SeriesThumbnail*) override;
+  // data_root_handlers.cc
+  grpc::ServerUnaryReactor* ListDataRoot(grpc::CallbackServerContext*,
+                                         const v3::ListDataRootRequest*,
+                                         v3::ListDataRootResponse*) override;
   // case_handlers.cc
   grpc::ServerUnaryReactor* ListCases(grpc::CallbackServerContext*, const v3::ListCasesRequest*,
                                       v3::ListCasesResponse*) override;

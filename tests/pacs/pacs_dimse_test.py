@@ -21,7 +21,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from pacs_harness import Failures, Harness, free_port  # noqa: E402
-from pacs_orthanc_test import audit_records, slices_geometry  # noqa: E402
+from pacs_orthanc_test import audit_records, slices_geometry, thumbnail_checks  # noqa: E402
 
 import numpy  # noqa: E402
 
@@ -91,6 +91,8 @@ def run(h, t, build, source):
             ct.get('source') == f'pacs:pacs/{STUDY}/{CT_SERIES}',
             f'C-FIND series listing: CT of 112 images and the SR ({err.strip()})')
 
+    thumbnail_checks(h, t, 'pacs', STUDY, CT_SERIES, SR_SERIES, 'C-FIND and C-GET of one instance')
+
     source_ct = f'pacs:pacs/{STUDY}/{CT_SERIES}'
     start = time.monotonic()
     rc, out, err = h.vpm('alice', 'volume', 'load', source_ct)
@@ -136,7 +138,8 @@ def run(h, t, build, source):
     t.check({('alice', 'search', 'pacs', 'OK'), ('alice', 'series', 'pacs', 'OK'),
              ('alice', 'open', 'pacs', 'OK'), ('alice', 'export', 'pacs', 'OK'),
              ('alice', 'search', 'wrong-aet', 'PERMISSION_DENIED'),
-             ('bob', 'search', 'pacs', 'PERMISSION_DENIED')} <= actions,
+             ('bob', 'search', 'pacs', 'PERMISSION_DENIED'), ('alice', 'thumbnail', 'pacs', 'OK'),
+             ('alice', 'thumbnail', 'pacs', 'INVALID_ARGUMENT')} <= actions,
             'the audit log records the DIMSE actions')
 
 

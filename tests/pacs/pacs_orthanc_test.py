@@ -68,6 +68,37 @@ def slices_geometry(folder):
 EXPORTED = {'session': 'none'}
 
 
+def thumbnail_checks(h, t, endpoint, study, series, sr_series, how):
+    """`vpm pacs thumbnail` of `series` (a CT) at 96 pixels: a PNG of that
+    size, not blank; again (from memory); at the default 128 (the kidney's
+    slices are 122 pixels wide: kept at their size); the SR series answers
+    INVALID_ARGUMENT. Returns the seconds of the first and of the second."""
+    from PIL import Image
+    out = os.path.join(h.tmp, f'thumb-{endpoint}.png')
+    args = ['pacs', 'thumbnail', '--endpoint', endpoint, '--study', study, '--out', out]
+    start = time.monotonic()
+    rc, _, err = h.vpm('alice', *args, '--series', series, '--size', '96')
+    first_s = time.monotonic() - start
+    ok = rc == 0 and os.path.exists(out)
+    image = numpy.asarray(Image.open(out).convert('L'), dtype=float) if ok else numpy.zeros((1, 1))
+    t.check(ok and max(image.shape) == 96 and image.std() > 20,
+            f'a 96-pixel thumbnail of the CT by {how}: {image.shape[1]} x {image.shape[0]}, '
+            f'std {image.std():.1f} of 255 ({err.strip()[-200:]})')
+    start = time.monotonic()
+    rc, _, _ = h.vpm('alice', *args, '--series', series, '--size', '96')
+    again_s = time.monotonic() - start
+    rc2, _, err = h.vpm('alice', *args, '--series', series)
+    size = Image.open(out).size if rc2 == 0 else (0, 0)
+    t.check(rc == 0 and rc2 == 0 and 96 < max(size) <= 128,
+            f'again, and at the default 128 pixels: {size} (the slices are smaller)')
+    rc, _, err = h.vpm('alice', *args, '--series', sr_series)
+    t.check(rc != 0 and 'INVALID_ARGUMENT' in err and 'no image' in err,
+            f'the SR has no thumbnail: {err.strip()[-200:]}')
+    print(f'      figures: thumbnail by {how} {first_s:.2f} s (vpm process included), '
+          f'again {again_s:.2f} s')
+    return first_s, again_s
+
+
 def dciodvfy_errors(folder):
     """The 'Error' lines dciodvfy reports over every file of `folder`, and
     the distinct report lines (for the note)."""
@@ -258,6 +289,14 @@ def run(h, t, build, source):
     rc, out, _ = h.vpm('alice', 'pacs', 'series', '--endpoint', 'orthanc', '--study', STUDY)
     t.check(rc == 0 and f'pacs:orthanc/{STUDY}/{CT_SERIES}' in out, 'the text table of a listing')
 
+    # ------------------------------------------------------------ thumbnails
+    thumbnail_checks(h, t, 'orthanc', STUDY, CT_SERIES, SR_SERIES, 'WADO-RS')
+    rc, _, err = h.vpm('carol', 'pacs', 'thumbnail', '--endpoint', 'orthanc', '--study', STUDY,
+                       '--series', CT_SERIES, '--out', os.path.join(h.tmp, 'carol.png'))
+    t.check(rc != 0 and 'PERMISSION_DENIED' in err, 'carol may not see a thumbnail')
+    t.check(not [n for n in os.listdir(cache) if n.startswith('.tmp-')],
+            'no scratch folder of a thumbnail is left in the cache')
+
     # ------------------------------------------------------------ load
     ct_source = f'pacs:orthanc/{STUDY}/{CT_SERIES}'
     start = time.monotonic()
@@ -382,7 +421,10 @@ def run(h, t, build, source):
              ('alice', 'series', 'OK'), ('alice', 'open', 'OK'), ('bob', 'open', 'OK'),
              ('alice', 'open', 'INVALID_ARGUMENT'), ('alice', 'search', 'UNAVAILABLE'),
              ('carol', 'open', 'PERMISSION_DENIED'), ('alice', 'export', 'OK'),
-             ('alice', 'export', 'UNAVAILABLE')} <= actions, 'the audit log records every action')
+             ('alice', 'export', 'UNAVAILABLE'), ('alice', 'thumbnail', 'OK'),
+             ('alice', 'thumbnail', 'INVALID_ARGUMENT'),
+             ('carol', 'thumbnail', 'PERMISSION_DENIED')} <= actions,
+            'the audit log records every action')
     exports = [r for r in records if r['action'] == 'export' and r['result'] == 'OK']
     if exports:
         print('      audit excerpt (export):', json.dumps(exports[0]))

@@ -55,7 +55,7 @@ const panelState = (page) => page.evaluate(() => ({
 
 // Cells of the rows matching `selector`, as text.
 const rowCells = (page, selector) =>
-  page.$$eval(`${selector} td`, (tds) => tds.map((td) => td.textContent.trim()));
+  page.$$eval(`${selector} td:not(.thumb)`, (tds) => tds.map((td) => td.textContent.trim()));
 
 // What each page showed, printed and saved as a screenshot in `out`.
 async function reportPages() {
@@ -134,6 +134,25 @@ async function searchAndList(page) {
                    `the CT row: ${JSON.stringify(ct)}`);
   assert.deepEqual([sr[0], sr[1]], ['9', 'SR'], `the SR row: ${JSON.stringify(sr)}`);
   step(`series: CT ${JSON.stringify(ct.slice(0, 5))}, SR ${JSON.stringify(sr.slice(0, 5))}`);
+
+  // The CT's thumbnail is shown (rendered by vpm-server from one instance
+  // Orthanc sent); the SR's row says it has none.
+  await waitFor(page, 'the CT thumbnail', (sel) => {
+    const img = document.querySelector(`${sel} img.pacs-thumb`);
+    return img?.dataset.state === 'shown' && img.complete && img.naturalWidth > 0;
+  }, ctRow, 30000);
+  const thumb = await page.$eval(`${ctRow} img.pacs-thumb`,
+                                 (img) => [img.naturalWidth, img.naturalHeight]);
+  await waitFor(page, 'the SR row without thumbnail', (sel) =>
+    document.querySelector(`${sel} img.pacs-thumb`)?.dataset.state === 'none', srRow, 30000);
+  step(`the CT row's thumbnail: ${thumb[0]} x ${thumb[1]} pixels; the SR row has none`);
+
+  // Alice may browse the data root: its Server files list the kidney series.
+  const entry = `#server-files-body tr[data-name="${config.data_root_entry}"][data-kind="DICOM_FOLDER"]`;
+  await page.waitForSelector(entry, { timeout: 15000 });
+  assert.equal(await page.locator(`${entry} button.server-open`).count(), 1);
+  step(`alice's Server files: ${await page.textContent('#server-files-note')} ` +
+       `(${config.data_root_entry}: a DICOM series)`);
 
   await page.click(`${srRow} button.pacs-open`);
   await waitFor(page, 'the SR refused', () =>
@@ -242,6 +261,10 @@ async function bobSeesNoEndpoint(browser, url, aliceSource) {
   assert.ok(await page.isDisabled('#pacs-search'), 'bob\'s Search is enabled');
   assert.ok(await page.isDisabled('#export-pacs'), 'bob\'s Export is enabled');
   step(`bob's Studies panel: ${note}`);
+  await waitFor(page, 'bob\'s data root answer', () =>
+    window.vpmViewer.errors.some((e) => e.what === 'Server files'), null, 15000);
+  assert.ok(await page.isHidden('#server-files'), 'bob sees the Server files section');
+  step('bob has no Server files section (no browse-data-root)');
   const search = await rawSocket(page, { type: 'pacs_search', endpoint: 'orthanc' },
                                  ['pacs_studies', 'pacs_error', 'error']);
   const open = await rawSocket(page, { type: 'pacs_open', source: aliceSource },

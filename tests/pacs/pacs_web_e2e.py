@@ -112,17 +112,23 @@ def run(h, t, build, source):
         return
     h.write_secret('orthanc.pw', ORTHANC_PASSWORD)
     users = h.write_users(['alice', 'bob'])
+    with open(users) as f:  # alice may browse the data root (the kidney series' folder)
+        lines = f.read().splitlines()
+    with open(users, 'w') as f:
+        f.write('\n'.join(line + ' browse-data-root' if line.startswith('alice ') else line
+                           for line in lines) + '\n')
     endpoints = h.write_endpoints([
         {'name': 'orthanc', 'dicomweb': base, 'username': 'vpm', 'password_file': 'orthanc.pw',
          'users': ['alice']}])
     audit = os.path.join(h.tmp, 'audit.jsonl')
     h.start_server(users, ['--pacs', endpoints, '--pacs-cache', os.path.join(h.tmp, 'cache'),
-                           '--pacs-audit-log', audit])
+                           '--pacs-audit-log', audit, '--data-root', os.path.dirname(kidney)])
 
     config = os.path.join(h.tmp, 'browser.json')
     with open(os.open(config, os.O_WRONLY | os.O_CREAT, 0o600), 'w') as f:
         json.dump({'server': f'127.0.0.1:{h.port}', 'users_file': users, 'tokens': h.tokens,
                    'study_uid': STUDY, 'ct_series_uid': CT_SERIES, 'sr_series_uid': SR_SERIES,
+                   'data_root_entry': os.path.basename(kidney),
                    'patient': {'name': PATIENT_NAME, 'id': PATIENT_ID, 'birth_date': BIRTH_DATE,
                                'study_date': STUDY_DATE},
                    'kidney_lps_mm': KIDNEY_LPS_MM}, f)

@@ -70,7 +70,7 @@ TEST(UsersFile, BadLinesNameTheLineAndTheFault) {
   };
   const std::vector<Case> cases = {
       {"alice\n", "line 1: 1 fields, not 2"},
-      {"# ok\nalice " + hash + " extra\n", "line 2: 3 fields"},
+      {"# ok\nalice " + hash + " extra\n", "line 2: unknown permission 'extra'"},
       {"alice " + std::string(kAlice) + "\n", "64 hexadecimal digits"},
       {"alice " + hash.substr(1) + "\n", "64 hexadecimal digits"},
       {"al/ice " + hash + "\n", "only letters, digits"},

@@ -53,6 +53,9 @@ function inRange(date, range) {
 
 // users: {token: name}; sourceOfSession(id, authorization): the source of
 // the session's volume when the caller owns it, else null.
+const kOnePixelPng =
+  'iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAAAAAA6fptVAAAACklEQVR4nGNgAAAAAgABSK+kcQAAAABJRU5ErkJggg==';
+
 export function makePacs(grpc, users, sourceOfSession) {
   const state = { endpoints: [], progress: new Map(), advance: new Map(), cancelledLoads: 0 };
   const refuse = (code, details) => Object.assign(new Error(details), { code, details });
@@ -156,6 +159,31 @@ export function makePacs(grpc, users, sourceOfSession) {
       if (!study) throw refuse(grpc.status.NOT_FOUND, `study ${r.study_uid} not found`);
       return { series: study.series.map((s) => ({
         ...s, source: `pacs:${r.endpoint}/${study.study_uid}/${s.series_uid}` })) };
+    }),
+    // A 1 x 1 grey PNG for an image series; a series without images refused
+    // as vpm-server refuses it.
+    GetSeriesThumbnail: unary('GetSeriesThumbnail', (r, call) => {
+      endpointFor(call, r.endpoint);
+      const series = kStudies.find((s) => s.study_uid === r.study_uid)?.series
+        .find((s) => s.series_uid === r.series_uid);
+      if (!series) throw refuse(grpc.status.NOT_FOUND, `series ${r.series_uid} not found`);
+      if (series.modality === 'SR') {
+        throw refuse(grpc.status.INVALID_ARGUMENT, `series ${r.series_uid}: the series holds no image`);
+      }
+      return { png: Buffer.from(kOnePixelPng, 'base64'), width: 1, height: 1 };
+    }),
+    // The data root (not the PACS's, but the same stand-in): alice may
+    // browse it, nobody else.
+    ListDataRoot: unary('ListDataRoot', (r, call) => {
+      if (userOf(call) !== 'alice') {
+        throw refuse(grpc.status.PERMISSION_DENIED, 'you may not browse the server\'s files');
+      }
+      if (r.path === 'missing') throw refuse(grpc.status.NOT_FOUND, "source: 'missing' is not in the data root");
+      return { path: r.path, truncated: false, entries: [
+        { name: 'ct', kind: 'DICOM_FOLDER', size_bytes: 0, modified_unix_ms: 1700000000000,
+          source: r.path ? `${r.path}/ct` : 'ct' },
+        { name: 'kidney.nii.gz', kind: 'VOLUME_FILE', size_bytes: 123456,
+          modified_unix_ms: 1700000000000, source: r.path ? `${r.path}/kidney.nii.gz` : 'kidney.nii.gz' }] };
     }),
     GetLoadProgress: unary('GetLoadProgress', (r) => {
       state.advance.get(r.progress_id)?.();

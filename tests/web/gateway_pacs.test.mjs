@@ -10,7 +10,9 @@
 // dose report, RESOURCE_EXHAUSTED, NOT_FOUND) reported to the panel, and a
 // server that is down said to be the server's; a cancelled load; the
 // export's stages and summary, file parts dropped; malformed messages
-// refused before the server; and no patient name or ID in the gateway's log.
+// refused before the server; thumbnails as data URLs (or the row's error);
+// the data root browsed by alice, never by bob; and no patient name or ID in
+// the gateway's log.
 // Usage: node --test gateway_pacs.test.mjs (SOURCE is found from this file).
 import assert from 'node:assert/strict';
 import crypto from 'node:crypto';
@@ -289,6 +291,63 @@ test('GatewayPacs_AServerThatIsDownIsNotBlamedOnThePacs', async () => {
   } finally {
     child.kill('SIGTERM');
   }
+});
+
+test('GatewayPacs_ThumbnailsComeAsDataUrlsOrAsTheRowsError', async () => {
+  fake.setPacs(kEndpoints);
+  const t = await connect();
+  const start = fake.calls.length;
+  const ask = (seriesUid) => t.send({ type: 'pacs_thumbnail', endpoint: 'orthanc',
+                                      study_uid: kStudyUid, series_uid: seriesUid });
+  ask(kCtSeriesUid);
+  ask(kSrSeriesUid);
+  const ct = await t.next((m) => m.type === 'pacs_thumbnail' && m.series_uid === kCtSeriesUid);
+  assert.match(ct.data_url, /^data:image\/png;base64,iVBORw0KGgo/);
+  assert.deepEqual([ct.endpoint, ct.study_uid, ct.width, ct.height], ['orthanc', kStudyUid, 1, 1]);
+  const sr = await t.next((m) => m.type === 'pacs_thumbnail' && m.series_uid === kSrSeriesUid);
+  assert.equal(sr.data_url, undefined);
+  assert.equal(sr.code, 'INVALID_ARGUMENT');
+  assert.match(sr.message, /holds no image/);
+  const called = callsOf('GetSeriesThumbnail', start);
+  assert.deepEqual(called.map((c) => c.request.size_px), [96, 96]);
+  assert.equal(called[0].authorization, `Bearer ${kAlice}`);
+  // Checked before the server: a bad UID never reaches it.
+  t.send({ type: 'pacs_thumbnail', endpoint: 'orthanc', study_uid: kStudyUid, series_uid: '1.x' });
+  const bad = await t.next((m) => m.type === 'error' && m.what === 'message');
+  assert.match(bad.message, /series_uid: a DICOM UID/);
+  assert.equal(callsOf('GetSeriesThumbnail', start).length, 2);
+  // Bob may not use the endpoint: his row says so, the panel is untouched.
+  const b = await connect(bob);
+  b.send({ type: 'pacs_thumbnail', endpoint: 'orthanc', study_uid: kStudyUid, series_uid: kCtSeriesUid });
+  const refused = await b.next((m) => m.type === 'pacs_thumbnail');
+  assert.equal(refused.code, 'PERMISSION_DENIED');
+  t.ws.close();
+  b.ws.close();
+});
+
+test('GatewayDataRoot_AliceBrowsesBobNeverSeesTheSection', async () => {
+  const t = await connect();
+  t.send({ type: 'data_ls', path: '' });
+  const root = await t.next((m) => m.type === 'data_listing');
+  assert.deepEqual(root.entries.map((e) => [e.name, e.kind, e.source]),
+                   [['ct', 'DICOM_FOLDER', 'ct'], ['kidney.nii.gz', 'VOLUME_FILE', 'kidney.nii.gz']]);
+  t.send({ type: 'data_ls', path: 'cases' });
+  const cases = await t.next((m) => m.type === 'data_listing');
+  assert.deepEqual([cases.path, cases.entries[1].source, cases.entries[1].size_bytes],
+                   ['cases', 'cases/kidney.nii.gz', 123456]);
+  t.send({ type: 'data_ls', path: 'missing' });
+  const missing = await t.next((m) => m.type === 'data_error');
+  assert.deepEqual([missing.code, missing.allowed], ['NOT_FOUND', true]);
+  t.send({ type: 'data_ls', path: '../etc' });
+  const bad = await t.next((m) => m.type === 'error' && m.what === 'message');
+  assert.match(bad.message, /path: a folder relative to the data root/);
+  assert.equal(callsOf('ListDataRoot').filter((c) => c.request.path === '../etc').length, 0);
+  const b = await connect(bob);
+  b.send({ type: 'data_ls', path: '' });
+  const denied = await b.next((m) => m.type === 'data_error');
+  assert.deepEqual([denied.code, denied.allowed], ['PERMISSION_DENIED', false]);
+  t.ws.close();
+  b.ws.close();
 });
 
 // Last: what the gateway logged over all the tests above.

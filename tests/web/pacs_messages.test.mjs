@@ -166,3 +166,30 @@ test('PacsErrors_SayWhatToDo', () => {
   assert.match(explain(GrpcStatus.UNIMPLEMENTED, 'unknown method'), /an older version/);
   assert.ok(explain(GrpcStatus.NOT_FOUND, 'x'.repeat(5000)).length < 700);
 });
+
+test('ThumbnailAndDataRootMessages_CheckedBeforeTheServer', () => {
+  const thumb = { type: 'pacs_thumbnail', endpoint: 'orthanc', study_uid: kStudy, series_uid: kSeries };
+  assert.deepEqual(parse(thumb), thumb);
+  for (const [fields, why] of [[{ series_uid: '1.2a' }, /series_uid: a DICOM UID/],
+                               [{ study_uid: '' }, /study_uid: a DICOM UID/],
+                               [{ endpoint: '../x' }, /endpoint: a PACS endpoint name/],
+                               [{ size_px: 4096 }, /pacs_thumbnail: no field 'size_px'/]]) {
+    assert.throws(() => parse({ ...thumb, ...fields }), why);
+  }
+  assert.deepEqual(parse({ type: 'data_ls', path: '' }), { type: 'data_ls', path: '' });
+  assert.equal(parse({ type: 'data_ls', path: 'cases/ct' }).path, 'cases/ct');
+  for (const path of [undefined, 7, '/etc', '..', 'a/../b', 'a\nb', 'x'.repeat(4097)]) {
+    assert.throws(() => parse({ type: 'data_ls', path }), /path: a folder relative to the data root/,
+                  String(path).slice(0, 20));
+  }
+  assert.throws(() => parse({ type: 'data_ls', path: '', depth: 3 }), /data_ls: no field 'depth'/);
+});
+
+test('UsersFile_TakesTheBrowsePermission', async () => {
+  const { parseUsersFile } = await load('lib/users.js');
+  const hash = 'a'.repeat(64);
+  assert.deepEqual(parseUsersFile(`alice ${hash} browse-data-root\n`, 'u').map((u) => u.name),
+                   ['alice']);
+  assert.throws(() => parseUsersFile(`alice ${hash} root\n`, 'u'), /unknown permission 'root'/);
+  assert.throws(() => parseUsersFile('alice\n', 'u'), /1 fields, not 2/);
+});

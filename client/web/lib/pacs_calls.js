@@ -14,6 +14,11 @@
 //        {type: 'pacs_loaded', source, volume}
 //   {type: 'pacs_cancel'}  cancels the load under way -> {type: 'pacs_error', action: 'open',
 //        code: 'CANCELLED', ...}
+//   {type: 'pacs_thumbnail', endpoint, study_uid, series_uid}  GetSeriesThumbnail (96 px) ->
+//        {type: 'pacs_thumbnail', endpoint, study_uid, series_uid, data_url, width, height},
+//        or the same with code and message (no data_url) when there is none: a
+//        thumbnail's failure is the series row's, not the panel's. At most
+//        kThumbnailsAtOnce run at once per tab, kMaxQueuedThumbnails wait.
 // A failure is {type: 'pacs_error', action ('endpoints' | 'search' | 'series' | 'open' |
 // 'export'), code, message, endpoint | source}. A newer search (or series
 // listing, or load) supersedes the one under way: only its answer comes back.
@@ -32,6 +37,10 @@ const kProgressPollMs = 250;
 // A series of a few hundred MiB over a hospital network takes minutes; the
 // server ends a transfer that stalls for 60 s itself.
 export const kPacsLoadDeadlineMs = 10 * 60 * 1000;
+export const kThumbnailPx = 96;
+export const kThumbnailsAtOnce = 3;
+export const kMaxQueuedThumbnails = 200;
+const kThumbnailDeadlineMs = 40 * 1000;  // the server gives up at 30 s
 const kQueryKeys = ['patient_name', 'patient_id', 'patient_birth_date', 'study_date', 'modality',
                     'accession_number', 'limit'];
 
@@ -70,6 +79,7 @@ export class PacsCalls {
     this.searchOp = 0;
     this.seriesOp = 0;
     this.load = null;  // {source, calls, done}: the load under way
+    this.thumbnails = { running: 0, queue: [] };
   }
 
   async endpoints() {
@@ -123,6 +133,49 @@ export class PacsCalls {
         await this.failed('series', `Listing the series of study ${studyUid}`, err,
                           { endpoint, study_uid: studyUid });
       }
+    }
+  }
+
+  // Queues a thumbnail; one past kMaxQueuedThumbnails is answered
+  // RESOURCE_EXHAUSTED at once.
+  thumbnail({ endpoint, study_uid: studyUid, series_uid: seriesUid }) {
+    const t = this.thumbnails;
+    const reply = { type: 'pacs_thumbnail', endpoint, study_uid: studyUid, series_uid: seriesUid };
+    if (t.queue.length >= kMaxQueuedThumbnails) {
+      this.connection.send({ ...reply, code: 'RESOURCE_EXHAUSTED',
+                             message: 'Too many thumbnails asked at once; scroll back to retry.' });
+      return;
+    }
+    t.queue.push(reply);
+    this.pumpThumbnails();
+  }
+
+  pumpThumbnails() {
+    const t = this.thumbnails;
+    while (t.running < kThumbnailsAtOnce && t.queue.length && !this.connection.closed) {
+      const reply = t.queue.shift();
+      t.running += 1;
+      this.runThumbnail(reply).finally(() => {
+        t.running -= 1;
+        this.pumpThumbnails();
+      });
+    }
+  }
+
+  async runThumbnail(reply) {
+    const c = this.connection;
+    try {
+      const r = await c.client.call('GetSeriesThumbnail',
+                                    { endpoint: reply.endpoint, study_uid: reply.study_uid,
+                                      series_uid: reply.series_uid, size_px: kThumbnailPx },
+                                    c.as, c.closed ? null : c.calls, kThumbnailDeadlineMs);
+      c.send({ ...reply, width: r.width, height: r.height,
+               data_url: `data:image/png;base64,${Buffer.from(r.png).toString('base64')}` });
+    } catch (err) {
+      if (c.closed) return;
+      c.log(`PACS thumbnail on ${reply.endpoint}: ${statusName(err?.code)}`);
+      c.send({ ...reply, code: statusName(err?.code),
+               message: explainPacsError(err, 'The thumbnail', c.client.address) });
     }
   }
 

@@ -1,5 +1,5 @@
 // The people who may sign in to the gateway. The same users file as
-// vpm-server's --users (one `NAME TOKEN-SHA256` a line, '#' comments; see
+// vpm-server's --users (one `NAME TOKEN-SHA256 [browse-data-root]` a line, '#' comments; see
 // server/service/users_file.h), and/or one viewer token (--viewer-token-file,
 // VPM_VIEWER_TOKEN, else VPM_TOKEN: the server's own token, user `viewer`).
 // A user signs in with their token; the gateway keeps it (in memory, with
@@ -9,6 +9,7 @@ import crypto from 'node:crypto';
 import fs from 'node:fs';
 
 export const kViewerUser = 'viewer';
+export const kBrowseDataRoot = 'browse-data-root';
 const kNamePattern = /^[A-Za-z0-9._-]{1,64}$/;
 const kMaxTokenBytes = 4096;
 
@@ -27,9 +28,12 @@ export function parseUsersFile(text, file) {
     const fields = raw.replace(/\r$/, '').trim().split(/[ \t]+/).filter(Boolean);
     if (fields.length === 0 || fields[0].startsWith('#')) return;
     const bad = (why) => new Error(`--users ${file} line ${i + 1}: ${why} ` +
-                                   "(each line is 'NAME TOKEN-SHA256')");
-    if (fields.length !== 2) throw bad(`${fields.length} fields, not 2`);
-    const [name, hash] = fields;
+                                   "(each line is 'NAME TOKEN-SHA256 [browse-data-root]')");
+    if (fields.length < 2) throw bad(`${fields.length} fields, not 2`);
+    const [name, hash, ...permissions] = fields;
+    // vpm-server's permissions (users_file.h); the server enforces them.
+    const unknown = permissions.find((p) => p !== kBrowseDataRoot);
+    if (unknown !== undefined) throw bad(`unknown permission '${unknown.slice(0, 64)}'`);
     if (!kNamePattern.test(name)) throw bad(`user name '${name}': 1 to 64 of [A-Za-z0-9._-]`);
     if (!/^[0-9a-fA-F]{64}$/.test(hash)) throw bad('the hash must be 64 hexadecimal digits');
     if (names.has(name)) throw bad(`user '${name}' given twice`);

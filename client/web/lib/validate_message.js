@@ -4,6 +4,7 @@
 // messages in validate_pacs_message.js). Throws an Error with a message for
 // the page.
 import { toProtoSettings } from './render_settings.js';
+import { parseDataRootMessage } from './data_root_calls.js';
 import { parsePacsMessage } from './validate_pacs_message.js';
 
 const kEventKinds = ['camera', 'settings', 'grab', 'drag', 'pull', 'release', 'pin', 'reset'];
@@ -186,7 +187,8 @@ export function parseMessage(shape, data, isBinary) {
       return message;
     }
     default: {
-      const known = parseCaseMessage(shape, message) ?? parsePacsMessage(message);
+      const known = parseCaseMessage(shape, message) ?? parsePacsMessage(message) ??
+                    parseDataRootMessage(message);
       if (known) return known;
       throw new Error(`unknown message type '${String(message.type).slice(0, 32)}'`);
     }

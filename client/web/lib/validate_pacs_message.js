@@ -12,6 +12,7 @@
 //   {type: 'pacs_series', endpoint, study_uid}
 //   {type: 'pacs_open', source}                        pacs:ENDPOINT/STUDY_UID/SERIES_UID
 //   {type: 'pacs_cancel'}                              the load under way
+//   {type: 'pacs_thumbnail', endpoint, study_uid, series_uid}
 //   {type: 'export_dicom', endpoint, series_description}  (description optional)
 import { isDicomUid, isPacsEndpoint, parsePacsSource } from '../public/pacs_source.js';
 
@@ -90,6 +91,18 @@ export function parsePacsMessage(message) {
         throw new Error('study_uid: a DICOM UID (digits and dots, at most 64 characters)');
       }
       return message;
+    case 'pacs_thumbnail': {
+      const unknown = Object.keys(message).find(
+        (k) => !['type', 'endpoint', 'study_uid', 'series_uid'].includes(k));
+      if (unknown !== undefined) throw new Error(`pacs_thumbnail: no field '${unknown.slice(0, 32)}'`);
+      endpoint(message);
+      for (const key of ['study_uid', 'series_uid']) {
+        if (!isDicomUid(message[key])) {
+          throw new Error(`${key}: a DICOM UID (digits and dots, at most 64 characters)`);
+        }
+      }
+      return message;
+    }
     case 'pacs_open':
       if (typeof message.source !== 'string' || message.source.length > 300 ||
           !parsePacsSource(message.source)) {

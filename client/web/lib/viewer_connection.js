@@ -25,8 +25,9 @@
 //        and the case's kept view (pageView) replaces the page's settings
 //        and comes in opened.view for the page's controls
 //   {type: 'cases'|'rename_case'|'delete_case'|'undo', ...}   case_calls.js
-//   {type: 'pacs_endpoints'|'pacs_search'|'pacs_series'|'pacs_open'|'pacs_cancel', ...}
-//        pacs_calls.js (the Studies panel)
+//   {type: 'pacs_endpoints'|'pacs_search'|'pacs_series'|'pacs_open'|'pacs_cancel'|
+//         'pacs_thumbnail', ...}   pacs_calls.js (the Studies panel)
+//   {type: 'data_ls', path}   data_root_calls.js (the Server files section)
 //   {type: 'export_dicom', endpoint, series_description}   dicom_export_call.js
 // A volume file comes by POST /upload naming this tab (volume_upload.js);
 // its progress comes here as upload_progress, and the page then opens the
@@ -36,8 +37,8 @@
 //   {type: 'hello'|'server'|'volumes'|'progress'|'opened'|'refined'|'stream'|
 //          'session_lost'|'tf'|'cases'|'case_renamed'|'case_deleted'|'undone'|
 //          'pacs_endpoints'|'pacs_studies'|'pacs_series'|'pacs_progress'|
-//          'pacs_loaded'|'export_progress'|'exported'|'pacs_error'|'upload_progress'|
-//          'error', ...}
+//          'pacs_loaded'|'pacs_thumbnail'|'export_progress'|'exported'|'pacs_error'|
+//          'upload_progress'|'data_listing'|'data_error'|'error', ...}
 //   hello: {server, tab_id, max_upload_bytes}: tab_id names this tab in an upload
 // With --state-dir on the server every session is a case: `opened` and
 // `refined` carry it (session.case_id), and the page reopens it by id when
@@ -55,6 +56,7 @@ import { CaseCalls } from './case_calls.js';
 import { DicomExport } from './dicom_export_call.js';
 import { explainError } from './explain_error.js';
 import { packFrame } from './frame_packet.js';
+import { DataRootCalls } from './data_root_calls.js';
 import { PacsCalls } from './pacs_calls.js';
 import { pageView, toProtoSettings, withCaseView } from './render_settings.js';
 import { SessionRecord } from './session_record.js';
@@ -116,6 +118,7 @@ export class ViewerConnection {
     this.calls = new Set();  // unary calls running (grpc-js call objects)
     this.cases = new CaseCalls(this);
     this.pacs = new PacsCalls(this);
+    this.dataRoot = new DataRootCalls(this);
     this.dicomExport = new DicomExport(this);
 
     // An error nothing else caught ends this connection only, with a message;
@@ -184,6 +187,8 @@ export class ViewerConnection {
       case 'pacs_series': return this.pacs.series(message);
       case 'pacs_open': return this.pacs.open(message);
       case 'pacs_cancel': return this.pacs.cancelLoad();
+      case 'pacs_thumbnail': return this.pacs.thumbnail(message);
+      case 'data_ls': return this.dataRoot.list(message);
       case 'export_dicom': return this.dicomExport.start(message);
       default: throw new Error(`message type ${message.type} passed the check`);
     }

@@ -62,6 +62,7 @@ const kDeadlineMs = {
   // QIDO-RS through vpm-server, which ends a PACS transfer stalled for 60 s.
   SearchStudies: 90000,
   ListSeries: 90000,
+  ListDataRoot: 10000,
   GetLoadProgress: 5000,
   // The gateway's spooled file at disk speed, then the server's read of it
   // (a DICOM archive of a large series takes a while).

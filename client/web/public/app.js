@@ -13,6 +13,7 @@ import { FrameStats } from './frame_stats.js';
 import { GatewaySocket } from './gateway_socket.js';
 import { PointerTools } from './pointer_tools.js';
 import { SliceViews } from './slice_views.js';
+import { ServerFiles } from './server_files.js';
 import { StudiesPanel } from './studies_panel.js';
 import { installUndoKeys } from './undo_keys.js';
 import { UploadPanel } from './upload_panel.js';
@@ -69,8 +70,20 @@ const studies = new StudiesPanel({
   $,
   send: (m) => socket.send(m),
   openVolume: (volume) => openIntent({ volume_id: volume.volume_id }),
+  onOpen: () => serverFiles.refresh(),
 });
 state.studies = studies;
+
+// The data root's files (for users allowed to browse it) open as sources.
+const serverFiles = new ServerFiles({
+  $,
+  send: (m) => socket.send(m),
+  openSource(source) {
+    studies.forget();
+    openIntent({ source });
+  },
+});
+state.serverFiles = serverFiles;
 
 // An uploaded volume opens as a volume of the list does.
 const uploads = new UploadPanel({
@@ -389,6 +402,12 @@ const handlers = {
   pacs_studies(m) { studies.showStudies(m); },
   pacs_series(m) { studies.showSeries(m); },
   pacs_progress(m) { studies.showProgress(m); },
+  pacs_thumbnail(m) { studies.showThumbnail(m); },
+  data_listing(m) { serverFiles.show(m); },
+  data_error(m) {
+    state.errors.push({ what: 'Server files', message: m.message, code: m.code });
+    serverFiles.failed(m);
+  },
   pacs_loaded(m) {
     studies.loaded(m);
     socket.send({ type: 'list' });

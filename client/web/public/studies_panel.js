@@ -22,7 +22,10 @@
 //                       (or Enter) lists its series
 //   #pacs-truncated     shown when more studies match than were listed
 //   #pacs-series-body   <tbody>: one <tr data-series-uid data-modality> per
-//                       series, each with a <button class="pacs-open">
+//                       series, each with a <button class="pacs-open"> and an
+//                       <img class="pacs-thumb" data-state="waiting|asked|shown|none">:
+//                       the series' thumbnail, asked of the gateway once the
+//                       row is visible (one pacs_thumbnail per series)
 //   #pacs-progress      <progress> of the load (0 to 1), #pacs-progress-label
 //   #pacs-cancel        cancels the load under way
 import { personName, searchMessage, shownDate } from './pacs_query.js';
@@ -50,8 +53,12 @@ export class StudiesPanel {
   // $: id -> element; send(message): to the gateway (false when it is not
   // connected); openVolume(volume): opens a loaded volume as the page's
   // volume list does.
-  constructor({ $, send, openVolume }) {
-    Object.assign(this, { $, send, openVolume });
+  constructor({ $, send, openVolume, onOpen = () => {} }) {
+    Object.assign(this, { $, send, openVolume, onOpen });
+    // Thumbnails are asked for the rows that come into view only.
+    this.thumbnailWatch = new IntersectionObserver((entries) => {
+      for (const e of entries) if (e.isIntersecting) this.askThumbnail(e.target);
+    });
     this.root = $('studies');
     this.endpoints = null;     // names the user may use, once listed
     this.studies = [];
@@ -89,6 +96,7 @@ export class StudiesPanel {
     if (!open) return;
     this.place();
     this.send({ type: 'pacs_endpoints' });
+    this.onOpen();
     this.$('pacs-patient-name').focus();
   }
 
@@ -193,6 +201,7 @@ export class StudiesPanel {
   showSeries(m) {
     if (m.study_uid !== this.studyUid) return;
     this.series = m.series;
+    this.thumbnailWatch.disconnect();
     this.$('pacs-series-body').replaceChildren(...m.series.map((s) => this.seriesRow(s)));
     if (m.study_uid) {
       this.say(m.series.length ? `${m.series.length} series; Open loads one into the viewer.`
@@ -213,9 +222,45 @@ export class StudiesPanel {
     open.addEventListener('click', () => this.openSeries(s));
     const actions = cell('');
     actions.append(open);
-    tr.append(cell(s.series_number >= 0 ? String(s.series_number) : '', 'number'), cell(s.modality),
+    const thumb = document.createElement('img');
+    thumb.className = 'pacs-thumb';
+    thumb.alt = '';
+    thumb.dataset.state = 'waiting';
+    const preview = cell('', 'thumb');
+    preview.append(thumb);
+    tr.dataset.endpoint = this.studiesEndpoint ?? '';
+    this.thumbnailWatch.observe(tr);
+    tr.append(preview, cell(s.series_number >= 0 ? String(s.series_number) : '', 'number'), cell(s.modality),
               cell(s.description), cell(s.body_part), cell(count(s.instance_count), 'number'), actions);
     return tr;
+  }
+
+  // A series row came into view: its thumbnail is asked for, once.
+  askThumbnail(tr) {
+    this.thumbnailWatch.unobserve(tr);
+    const img = tr.querySelector('img.pacs-thumb');
+    if (!img || img.dataset.state !== 'waiting' || !this.studyUid) return;
+    if (this.send({ type: 'pacs_thumbnail', endpoint: tr.dataset.endpoint,
+                    study_uid: this.studyUid, series_uid: tr.dataset.seriesUid })) {
+      img.dataset.state = 'asked';
+    }
+  }
+
+  // m: {study_uid, series_uid, data_url, width, height} or {..., code,
+  // message}: the row's thumbnail, or why there is none (its tooltip).
+  showThumbnail(m) {
+    if (m.study_uid !== this.studyUid) return;
+    const row = [...this.$('pacs-series-body').rows].find((r) => r.dataset.seriesUid === m.series_uid);
+    const img = row?.querySelector('img.pacs-thumb');
+    if (!img) return;
+    if (m.data_url) {
+      img.src = m.data_url;
+      img.alt = 'thumbnail';
+      img.dataset.state = 'shown';
+    } else {
+      img.dataset.state = 'none';
+      img.title = m.message ?? 'No thumbnail';
+    }
   }
 
   openSeries(s) {
