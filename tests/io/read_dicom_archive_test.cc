@@ -6,8 +6,10 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,6 +39,12 @@ class DicomArchiveTest : public ::testing::Test {
             ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_ / "series");
+    // The reader's temporary folders go to a folder of this test's own, so
+    // that counting them does not see other tests' (ctest runs them at once).
+    fs::create_directories(dir_ / "tmp");
+    const char* tmpdir = std::getenv("TMPDIR");
+    old_tmpdir_ = tmpdir != nullptr ? std::optional<std::string>(tmpdir) : std::nullopt;
+    ::setenv("TMPDIR", (dir_ / "tmp").c_str(), 1);
     for (int k = 0; k < 4; ++k) {
       testing::DicomSliceSpec s;
       s.position_mm = {0.0, 0.0, 2.0 * k};
@@ -45,8 +53,16 @@ class DicomArchiveTest : public ::testing::Test {
       slices_.push_back({"scan/IM" + std::to_string(k), testing::ReadAll(dir_ / "series" / ("IM" + std::to_string(k)))});
     }
   }
-  void TearDown() override { fs::remove_all(dir_); }
+  void TearDown() override {
+    if (old_tmpdir_) {
+      ::setenv("TMPDIR", old_tmpdir_->c_str(), 1);
+    } else {
+      ::unsetenv("TMPDIR");
+    }
+    fs::remove_all(dir_);
+  }
   fs::path dir_;
+  std::optional<std::string> old_tmpdir_;
   std::vector<testing::ArchiveEntry> slices_;
 };
 
