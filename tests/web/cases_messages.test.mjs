@@ -20,7 +20,8 @@ const { ProtoShape } = await load('lib/proto_shape.js');
 const { undoKey, typesText } = await load('public/undo_keys.js');
 const protoLoader = createRequire(path.join(web, 'package.json'))('@grpc/proto-loader');
 const definition = protoLoader.loadSync(path.join(here, '../../proto/vpm/v3/vpm.proto'),
-  { keepCase: true, longs: Number, enums: String, defaults: true, oneofs: true });
+  { keepCase: true, longs: Number, enums: String, defaults: true, oneofs: true,
+    includeDirs: [path.join(here, '../../proto')] });
 const shape = new ProtoShape(definition);
 
 const parse = (message) => parseMessage(shape, Buffer.from(JSON.stringify(message)), false);

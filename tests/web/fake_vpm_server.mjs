@@ -37,7 +37,8 @@ export async function startFakeServer(source, { tls = null, users = {} } = {}) {
   const protoLoader = require('@grpc/proto-loader');
   const definition = protoLoader.loadSync(
     path.join(source, 'proto', 'vpm', 'v3', 'vpm.proto'),
-    { keepCase: true, longs: Number, enums: String, defaults: true, oneofs: true });
+    { keepCase: true, longs: Number, enums: String, defaults: true, oneofs: true,
+      includeDirs: [path.join(source, 'proto')] });
   const { Vpm } = grpc.loadPackageDefinition(definition).vpm.v3;
 
   const calls = [];  // {method, request, metadata: {authorization, session}}

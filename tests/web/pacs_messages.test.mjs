@@ -25,7 +25,8 @@ const { searchMessage, dateRange, personName, shownDate } = await load('public/p
 const { pacsEndpointOf, parsePacsSource } = await load('public/pacs_source.js');
 const protoLoader = createRequire(path.join(web, 'package.json'))('@grpc/proto-loader');
 const definition = protoLoader.loadSync(path.join(here, '../../proto/vpm/v3/vpm.proto'),
-  { keepCase: true, longs: Number, enums: String, defaults: true, oneofs: true });
+  { keepCase: true, longs: Number, enums: String, defaults: true, oneofs: true,
+    includeDirs: [path.join(here, '../../proto')] });
 const shape = new ProtoShape(definition);
 
 const parse = (message) => parseMessage(shape, Buffer.from(JSON.stringify(message)), false);

@@ -74,7 +74,10 @@ export class VpmClient {
   // plaintext, else {ca, cert, key} (PEM Buffers; cert and key for mutual
   // TLS, may be null).
   constructor({ address, protoPath = kDefaultProtoPath, tls = null }) {
-    this.definition = protoLoader.loadSync(protoPath, kLoaderOptions);
+    // vpm.proto imports vpm/v3/pacs.proto: imports resolve from the folder
+    // above vpm/v3.
+    this.definition = protoLoader.loadSync(
+      protoPath, { ...kLoaderOptions, includeDirs: [path.resolve(path.dirname(protoPath), '../..')] });
     const { Vpm } = grpc.loadPackageDefinition(this.definition).vpm.v3;
     this.address = address;
     const credentials = tls ? grpc.credentials.createSsl(tls.ca, tls.key ?? null, tls.cert ?? null)
