@@ -224,7 +224,9 @@ class Harness:
     # ---------------------------------------------------------------- end
     def close(self, keep=False):
         """Stops every process started; removes the temp folder unless
-        `keep` (a failed test keeps its logs and screenshots there)."""
+        `keep` (a failed test keeps its logs and screenshots there) or
+        VPM_KEEP_TEST_FILES=1 (to look at what a passing test made)."""
+        keep = keep or os.environ.get('VPM_KEEP_TEST_FILES') == '1'
         for p in reversed(self.procs):
             if p.poll() is None:
                 p.send_signal(signal.SIGTERM)

@@ -146,6 +146,7 @@ async function searchAndList(page) {
   await waitFor(page, 'the SR row without thumbnail', (sel) =>
     document.querySelector(`${sel} img.pacs-thumb`)?.dataset.state === 'none', srRow, 30000);
   step(`the CT row's thumbnail: ${thumb[0]} x ${thumb[1]} pixels; the SR row has none`);
+  await page.screenshot({ path: path.join(out, 'studies.png') });
 
   // Alice may browse the data root: its Server files list the kidney series.
   const entry = `#server-files-body tr[data-name="${config.data_root_entry}"][data-kind="DICOM_FOLDER"]`;
