@@ -74,7 +74,14 @@ export class SignIns {
       for (const [id, expiresAt] of this.revoked) if (expiresAt < now) this.revoked.delete(id);
     }
     this.revoked.set(signIn.id, signIn.expiresAt);
-    for (const ws of this.sockets.get(signIn.id) ?? []) ws.close(4001, why);
+    // The tab is told why, as the API ends a revoked stream, then closed.
+    for (const ws of this.sockets.get(signIn.id) ?? []) {
+      if (ws.readyState === ws.OPEN) {
+        ws.send(JSON.stringify({ type: 'error', what: 'sign-in', code: 'PERMISSION_DENIED',
+                                 message: why }));
+      }
+      ws.close(4001, why);
+    }
   }
 
   cookie(signIn) {

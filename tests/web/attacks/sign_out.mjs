@@ -1,6 +1,7 @@
 // Issue 25, point 2 (the gateway's part): signing out ends that browser's
 // streams and WebSockets at once. Alice's tab streams frames; she signs out
-// (POST /logout with her cookie): the tab's WebSocket closes (4001) within
+// (POST /logout with her cookie): the tab is told PERMISSION_DENIED and its
+// WebSocket closes (4001) within
 // 1 s, no frame arrives after, the server's open streams and alice's
 // sessions fall back to what they were before the tab within 2 s, and the
 // cookie opens nothing more.
@@ -42,6 +43,8 @@ export async function run(ctx) {
   const closedMs = performance.now() - t0;
   assert.ok(closed, 'the tab was still open 1 s after signing out');
   assert.equal(closed.code, 4001);
+  const told = tab.inbox.find((m) => m.type === 'error' && m.code === 'PERMISSION_DENIED');
+  assert.ok(told, 'the tab was not told PERMISSION_DENIED before it closed');
   const after = await waitMetrics(ctx, (m) => aliceStreams(m) === aliceStreams(start) &&
                                   aliceSessions(m) === aliceSessions(start), 2000);
   const settledMs = performance.now() - t0;
