@@ -9,10 +9,7 @@
 #include "server/pacs/received_client.h"
 
 namespace vpm::pacs {
-namespace {
 
-// `status` with every mention of `folder` replaced by `name`: messages
-// must not show where the cache lies.
 Status HideFolder(const Status& status, const std::filesystem::path& folder,
                   const std::string& name) {
   if (status.ok()) return status;
@@ -25,8 +22,6 @@ Status HideFolder(const Status& status, const std::filesystem::path& folder,
   }
   return Status(status.code(), message);
 }
-
-}  // namespace
 
 Result<std::unique_ptr<PacsGateway>> PacsGateway::Create(Options options) {
   if (options.endpoints.empty()) return absl::InvalidArgumentError("--pacs: no endpoints");

@@ -27,6 +27,12 @@
 
 namespace vpm::pacs {
 
+// `status` with every mention of `folder` replaced by `name` (a path below
+// it reads "name: rest"): messages must not show where the cache or a
+// scratch folder lies.
+Status HideFolder(const Status& status, const std::filesystem::path& folder,
+                  const std::string& name);
+
 class PacsGateway {
  public:
   struct Options {

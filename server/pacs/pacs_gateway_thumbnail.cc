@@ -24,18 +24,6 @@ std::filesystem::path MiddleFile(const std::filesystem::path& folder) {
   return files[files.size() / 2];
 }
 
-// `status` without the path of `scratch` (clients never see the cache's).
-Status HideScratch(const Status& status, const std::filesystem::path& scratch,
-                   const std::string& name) {
-  std::string message(status.message());
-  const std::string path = scratch.string();
-  for (size_t at = message.find(path); at != std::string::npos; at = message.find(path, at)) {
-    message.replace(at, path.size(), name);
-    at += name.size();
-  }
-  return Status(status.code(), message);
-}
-
 // `cancel`, and DeadlineExceeded once `seconds` have passed.
 CancelToken WithDeadline(const CancelToken& cancel, double seconds) {
   const auto until = std::chrono::steady_clock::now() +
@@ -128,7 +116,7 @@ Result<SeriesThumbnail> PacsGateway::RenderThumbnail(const PacsClient& client,
   Result<SeriesThumbnail> out = [&]() -> Result<SeriesThumbnail> {
     Result<RetrievedSeries> got =
         client.RetrieveInstance(study_uid, series_uid, scratch, cap, cancel);
-    if (!got.ok()) return HideScratch(got.status(), scratch, name);
+    if (!got.ok()) return HideFolder(got.status(), scratch, name);
     return ThumbnailOfFile(MiddleFile(scratch), size_px, cap, cancel, name);
   }();
   std::error_code error;
