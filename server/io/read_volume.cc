@@ -25,10 +25,6 @@ bool EndsWith(const std::string& text, std::string_view suffix) {
          text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-bool IsArchiveName(const std::string& lower) {
-  return EndsWith(lower, ".zip") || EndsWith(lower, ".tar") || EndsWith(lower, ".tar.gz") ||
-         EndsWith(lower, ".tgz");
-}
 
 // A DICOM series packed in an archive: unpacked into a private temporary
 // folder (mode 0700), read as a DICOM folder, the folder removed. Messages
@@ -71,13 +67,27 @@ Result<Volume> ReadByKind(std::string_view source, const VolumeLimits& limits) {
   if (EndsWith(lower, ".nii") || EndsWith(lower, ".nii.gz")) return ReadNifti(path, limits);
   if (EndsWith(lower, ".nrrd") || EndsWith(lower, ".nhdr")) return ReadNrrd(path, limits);
   if (EndsWith(lower, ".mha") || EndsWith(lower, ".mhd")) return ReadMetaImage(path, limits);
-  if (IsArchiveName(lower)) return ReadDicomArchive(path, limits);
+  if (IsArchiveName(source)) return ReadDicomArchive(path, limits);
   return absl::InvalidArgumentError(StrCat("unknown volume source \"",
                                                  std::string(source.substr(0, 200)), "\"; use ",
                                                  std::string(kVolumeSourceForms)));
 }
 
 }  // namespace
+
+bool IsVolumeFileName(std::string_view name) {
+  const std::string lower = ToLowerAscii(name);
+  for (std::string_view s : {".nii", ".nii.gz", ".nrrd", ".nhdr", ".mha", ".mhd"}) {
+    if (EndsWith(lower, s)) return true;
+  }
+  return false;
+}
+
+bool IsArchiveName(std::string_view name) {
+  const std::string lower = ToLowerAscii(name);
+  return EndsWith(lower, ".zip") || EndsWith(lower, ".tar") || EndsWith(lower, ".tar.gz") ||
+         EndsWith(lower, ".tgz");
+}
 
 Result<Volume> ReadVolume(std::string_view source, const VolumeLimits& limits,
                           const ProgressFn& progress) {

@@ -35,4 +35,10 @@ inline constexpr std::string_view kVolumeSourceForms =
 Result<Volume> ReadVolume(std::string_view source, const VolumeLimits& limits,
                           const ProgressFn& progress = {});
 
+// Whether ReadVolume reads a file of this name (case-insensitive) as a
+// volume file (NIfTI, NRRD, MetaImage: the extensions above), or as an
+// archive of a DICOM series.
+bool IsVolumeFileName(std::string_view name);
+bool IsArchiveName(std::string_view name);
+
 }  // namespace vpm

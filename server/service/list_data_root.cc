@@ -4,11 +4,11 @@
 #include <sys/stat.h>
 
 #include <algorithm>
-#include <cctype>
 #include <memory>
 
 #include "server/io/read_dicom_slice.h"
 #include "server/io/read_file_bytes.h"
+#include "server/io/read_volume.h"
 #include "server/service/resolve_data_path.h"
 
 namespace vpm::service {
@@ -16,22 +16,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool HasSuffix(const std::string& name, std::string_view suffix) {
-  if (name.size() < suffix.size()) return false;
-  for (size_t i = 0; i < suffix.size(); ++i) {
-    const char c = name[name.size() - suffix.size() + i];
-    if (std::tolower(static_cast<unsigned char>(c)) != suffix[i]) return false;
-  }
-  return true;
-}
-
+// What ReadVolume makes of a file of this name (server/io/read_volume.h).
 DataRootKind FileKind(const std::string& name) {
-  for (std::string_view s : {".nii", ".nii.gz", ".nrrd", ".nhdr", ".mha", ".mhd"}) {
-    if (HasSuffix(name, s)) return DataRootKind::kVolumeFile;
-  }
-  for (std::string_view s : {".zip", ".tar", ".tar.gz", ".tgz"}) {
-    if (HasSuffix(name, s)) return DataRootKind::kArchive;
-  }
+  if (IsVolumeFileName(name)) return DataRootKind::kVolumeFile;
+  if (IsArchiveName(name)) return DataRootKind::kArchive;
   return DataRootKind::kOtherFile;
 }
 
