@@ -53,6 +53,7 @@ Result<std::vector<DicomSeriesSummary>> ListDicomSeries(const std::filesystem::p
   // Key: (SeriesNumber, UID, reason), which is also the listing order.
   std::map<std::tuple<int64_t, std::string, std::string>, DicomSeriesSummary> groups;
   for (const std::filesystem::path& path : files) {
+    RETURN_IF_ERROR(limits.cancel.Check());
     // A look at the prefix first, so that large non-DICOM files in the
     // folder (a PDF report, a video) are neither read nor counted.
     ASSIGN_OR_RETURN(const std::vector<uint8_t> prefix, ReadFilePrefix(path, 132, limits));

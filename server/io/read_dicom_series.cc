@@ -206,6 +206,7 @@ Result<Volume> StackAsStored(std::vector<NamedSlice>& slices, const glm::dmat3& 
   for (const NamedSlice& s : slices) {
     for (float v : s.slice.values) range.Add(v);
   }
+  RETURN_IF_ERROR(limits.cancel.Check());
   const std::optional<int32_t> offset = range.Offset();
   if (!offset) {
     std::vector<float> values;
@@ -224,6 +225,7 @@ Result<Volume> StackAsStored(std::vector<NamedSlice>& slices, const glm::dmat3& 
   std::vector<int16_t> stored;
   stored.reserve(static_cast<size_t>(g.voxel_count()));
   for (NamedSlice& s : slices) {
+    RETURN_IF_ERROR(limits.cancel.Check());
     for (float v : s.slice.values) stored.push_back(static_cast<int16_t>(int32_t(v) - *offset));
     s.slice.values = {};
   }
@@ -278,6 +280,7 @@ Result<Volume> ReadDicomSeries(const std::filesystem::path& folder, const Volume
   Result<size_t> chosen = ChooseDicomSeries(series, options.series);
   if (!chosen.ok()) return PrefixStatus(chosen.status(), folder.string());
   ASSIGN_OR_RETURN(std::vector<NamedSlice> slices, DecodeSeries(folder, series[*chosen], limits));
+  RETURN_IF_ERROR(limits.cancel.Check());
   Result<Volume> volume = AssembleSeries(std::move(slices), options, limits);
   if (!volume.ok()) return PrefixStatus(volume.status(), folder.string());
   if (series.size() > 1) {
@@ -288,6 +291,7 @@ Result<Volume> ReadDicomSeries(const std::filesystem::path& folder, const Volume
                             " slices); ?series=N or ?series=UID picks "
                             "another"));
   }
+  RETURN_IF_ERROR(limits.cancel.Check());
   // What an export into the same study copies (write_derived_series.h).
   Result<DicomOrigin> origin = ReadDicomOrigin(series[*chosen].files);
   if (!origin.ok()) return PrefixStatus(origin.status(), folder.string());

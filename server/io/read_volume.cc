@@ -98,6 +98,9 @@ Result<Volume> ReadVolume(std::string_view source, const VolumeLimits& limits,
   if (reading) with_progress.read_progress = &reading;
   if (monotone) monotone(0.0, "reading");
   ASSIGN_OR_RETURN(Volume volume, ReadByKind(source, with_progress));
+  // A cancel that came after the reader's last poll still wins: the caller
+  // asked for nothing, and gets the token's status rather than a volume.
+  RETURN_IF_ERROR(limits.cancel.Check());
   volume.set_source(std::string(source));
   if (monotone) monotone(1.0, "read");
   return volume;

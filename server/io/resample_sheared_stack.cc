@@ -110,7 +110,9 @@ Result<Volume> ResampleShearedStack(const ShearedStack& stack, double slice_spac
 
   const int64_t nx = g.dims[0], ny = g.dims[1];
   const int threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
+  // A cancelled load skips the slices not yet begun, and returns the token's status below.
   ParallelSlices(g.dims[2], threads, [&](int64_t k) {
+    if (!limits.cancel.Check().ok()) return;
     const double z = z_first + k * slice_spacing_mm;
     // The slices below and above the output plane, and the weight of the upper one.
     const auto above = std::upper_bound(
@@ -144,6 +146,7 @@ Result<Volume> ResampleShearedStack(const ShearedStack& stack, double slice_spac
       }
     }
   });
+  RETURN_IF_ERROR(limits.cancel.Check());
   ASSIGN_OR_RETURN(Volume volume, Volume::Create(g, std::move(values), limits));
   volume.add_note("stored as float32: resampled values are not integers");
   return volume;

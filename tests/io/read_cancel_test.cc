@@ -1,13 +1,14 @@
 // Cancellation inside the readers: a load of a large NIfTI, NRRD, MetaImage
 // or DICOM series whose CancelToken (VolumeLimits::cancel) is cancelled
 // halfway through stops within 100 ms with the token's status. Each case
-// reads its file once to time the whole read, then again, cancelled by
+// reads its file twice to time the whole read, then again, cancelled by
 // another thread at half that time, and measures from the cancel to the
 // reader's return.
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -43,10 +44,13 @@ struct CancelTiming {
 // Reads `source` whole, then again cancelled at half its time.
 CancelTiming TimeCancelledRead(const std::string& source) {
   CancelTiming timing;
-  {
+  // Twice, keeping the faster: the first read also fills the page cache, and
+  // a cancel timed from a cold read alone can come after a warm read ends.
+  timing.full_ms = 1e300;
+  for (int pass = 0; pass < 2; ++pass) {
     const auto start = CancelClock::now();
     const Result<Volume> whole = ReadVolume(source, {});
-    timing.full_ms = CancelMsBetween(start, CancelClock::now());
+    timing.full_ms = std::min(timing.full_ms, CancelMsBetween(start, CancelClock::now()));
     EXPECT_TRUE(whole.ok()) << whole.status();
   }
   CancelToken::Source cancel;
