@@ -27,7 +27,14 @@ namespace {
 using vpm::testing::CommandRun;
 using vpm::testing::RunCommand;
 
-CommandRun Vpm(const std::string& args) { return RunCommand(std::string(VPM_CLI) + " " + args); }
+// Appended, not `std::string(VPM_CLI) + " " + args`: GCC 12 warns falsely
+// (-Warray-bounds) on that concatenation once inlined.
+CommandRun Vpm(const std::string& args) {
+  std::string command = VPM_CLI;
+  command += ' ';
+  command += args;
+  return RunCommand(command);
+}
 
 // vpm-server as a child process on 127.0.0.1 with an ephemeral port, without
 // a token (health calls need none either way); SIGTERM on Stop().
