@@ -351,6 +351,7 @@ async function checkUndoRedo(page, centre) {
 async function checkCases(page, kept) {
   const refinedCase = await page.evaluate(() => window.vpmViewer.caseId);
   assert.notEqual(refinedCase, kept.caseId);
+  await page.click('#cases-toggle');  // the panel floats over the views
   let { cases } = await refreshCases(page);
   const row = await caseRow(page, kept.caseId);
   const listed = cases.find((c) => c.case_id === kept.caseId);
@@ -497,7 +498,11 @@ async function main() {
        `variance ${first.variance.toFixed(1)}`);
   assert.ok(first.variance > kMinVariance,
             `the first frame looks blank: grey variance ${first.variance} <= ${kMinVariance}`);
-  assert.equal(await page.evaluate(() => document.getElementById('frame').width), 256);
+  // Frame 256: the frame's longer side, in the 3D pane's shape.
+  assert.equal(await page.evaluate(() => {
+    const c = document.getElementById('frame');
+    return Math.max(c.width, c.height);
+  }), 256);
 
   const box = await page.locator('#frame').boundingBox();
   const centre = [box.x + box.width / 2, box.y + box.height / 2];

@@ -14,7 +14,7 @@ const { OrbitCamera } = await load('camera.js');
 const { clampToSlice, grabTargetMm, planesThrough } = await load('slice_planes.js');
 const { fitContain, frameSizeForPane } = await load('pane_fit.js');
 const { kWindowPresets, presetNameOf, windowPreset } = await load('window_presets.js');
-const { kShortcutList, viewKey } = await load('view_keys.js');
+const { kShortcutList, takesTyping, viewKey } = await load('view_keys.js');
 const { undoKey } = await load('undo_keys.js');
 
 const near = (a, b, tol, what) => a.forEach((v, i) =>
@@ -130,4 +130,18 @@ test('single keys: plain letters act, modified ones and undo keys do not', () =>
   for (const k of ['1', '2', '3', '4', 'R', 'S', 'C', 'O / G / P', '?', 'Ctrl+Z', 'F2']) {
     assert.ok(listed.includes(k), `${k} is not listed`);
   }
+});
+
+test('keys typed into a field stay the field\'s; on a checkbox, range or select they act', () => {
+  for (const type of ['text', 'number', 'date', 'search', undefined]) {
+    assert.ok(takesTyping({ tagName: 'INPUT', type }), String(type));
+  }
+  assert.ok(takesTyping({ tagName: 'TEXTAREA' }));
+  assert.ok(takesTyping({ tagName: 'DIV', isContentEditable: true }));
+  for (const type of ['checkbox', 'radio', 'range', 'file']) {
+    assert.ok(!takesTyping({ tagName: 'INPUT', type }), type);
+  }
+  assert.ok(!takesTyping({ tagName: 'SELECT' }));
+  assert.ok(!takesTyping({ tagName: 'CANVAS' }));
+  assert.ok(!takesTyping(null));
 });

@@ -1,7 +1,7 @@
 // The page's single-key shortcuts and the list the page shows of every
 // key and mouse gesture ("?"). Undo and redo are undo_keys.js's; F2 is the
-// Studies panel's (app.js). Keys typed into a text field stay the field's.
-import { typesText } from './undo_keys.js';
+// Studies panel's (app.js). Keys typed into a field (text, number, date,
+// ...) stay the field's.
 import { kWindowPresets } from './window_presets.js';
 
 // key (KeyboardEvent.key, lower case) -> action.
@@ -42,12 +42,26 @@ export function viewKey(e) {
   return kKeyActions[key] ?? null;
 }
 
+// Inputs that take no typed characters: a key pressed on them is the page's.
+const kKeylessInputs = new Set(['checkbox', 'radio', 'range', 'button', 'submit', 'reset', 'file',
+                                'color', 'image']);
+
+// True when `target` (an element) takes typed characters: a text, number,
+// date ... input, a text area, an editable element.
+export function takesTyping(target) {
+  if (!target || typeof target !== 'object') return false;
+  if (target.isContentEditable) return true;
+  const tag = String(target.tagName ?? '').toUpperCase();
+  if (tag === 'TEXTAREA') return true;
+  return tag === 'INPUT' && !kKeylessInputs.has(String(target.type ?? 'text').toLowerCase());
+}
+
 // Calls onAction(action) for those keys pressed anywhere on `target` (the
-// document) but in a text field.
+// document) but in a field that takes typing.
 export function installViewKeys(target, onAction) {
   target.addEventListener('keydown', (e) => {
     const action = viewKey(e);
-    if (!action || typesText(e.target)) return;
+    if (!action || takesTyping(e.target)) return;
     e.preventDefault();
     onAction(action);
   });
