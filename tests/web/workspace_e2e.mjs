@@ -254,15 +254,19 @@ async function checkSlicesFollowGrab(page, sentDrags) {
   await page.check('input[name="tool"][value="orbit"]');
 
   // Shift+click: the planes through the orbit-centre plane's point there.
-  const px = [0.3 * b.w, 0.6 * b.h];
+  // Whole CSS pixels, so the page's frame pixel is the one computed here.
+  const at = [Math.round(b.left + (0.3 * b.w) / b.sx), Math.round(b.top + (0.6 * b.h) / b.sy)];
   await page.keyboard.down('Shift');
-  await page.mouse.click(b.left + px[0] / b.sx, b.top + px[1] / b.sy);
+  await page.mouse.click(...at);
   await page.keyboard.up('Shift');
   const point = await page.evaluate(([x, y]) => {
     const cam = window.vpmViewer.camera;
     const c = document.getElementById('frame');
-    return cam.worldPoint(cam.pickPointMm(Math.floor(x), Math.floor(y), c.width, c.height));
-  }, px);
+    const r = c.getBoundingClientRect();
+    const px = Math.floor(((x - r.left) * c.width) / r.width);
+    const py = Math.floor(((y - r.top) * c.height) / r.height);
+    return cam.worldPoint(cam.pickPointMm(px, py, c.width, c.height));
+  }, at);
   const h = await settled(page, `!h.interactive && h.slices.length === 3 && ` +
                           `Math.abs(h.slices[0].geometry.offset_mm - ${point[2]}) < 1e-3`);
   const off = planesOff(h, point);

@@ -495,6 +495,7 @@ function showMesh() {
       `(${s.hard} hard, ${s.refined} refined), ${s.tets} tets, h ${s.h_mm.toFixed(1)} mm · ` +
       `session ${state.session.session_id}`
     : '';
+  $('mesh-info').title = $('mesh-info').textContent;  // the line may be cut short
 }
 
 // ------------------------------------------------------------ frames
@@ -521,6 +522,7 @@ function onFrame(frame) {
     state.meshRefinedAtGrab = true;
     $('mesh-info').textContent = `${state.volume.source} · mesh ${h.mesh_id}, refined at the ` +
       `grab by the server · session ${state.session.session_id}`;
+    $('mesh-info').title = $('mesh-info').textContent;
   }
   if (waiting) state.framesSuperseded += 1;  // newest wins: the waiting one is dropped
   waiting = frame;
