@@ -80,7 +80,7 @@ const kCtBoneVp = '1\n1\n0.9\n0.1\n0.2\n10\n' +
   '16 -3024 0 0 0 -16.4458 0.729412 0.254902 0.301961 641.385 0.905882 0.815686 0.552941 ' +
   '3071 1 1 1\n';
 
-// The 2 x 2 layout: three slices show and are not blank, the wheel scrolls
+// The slices beside the 3D view: three slices show and are not blank, the wheel scrolls
 // one, the window changes it, a grab on a slice deforms the tissue there;
 // then the crop box, the clip plane and an uploaded Slicer .vp each change
 // the 3D frame.
