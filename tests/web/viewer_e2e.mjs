@@ -80,7 +80,7 @@ const kCtBoneVp = '1\n1\n0.9\n0.1\n0.2\n10\n' +
   '16 -3024 0 0 0 -16.4458 0.729412 0.254902 0.301961 641.385 0.905882 0.815686 0.552941 ' +
   '3071 1 1 1\n';
 
-// The 2 x 2 layout: three slices show and are not blank, the wheel scrolls
+// The slices beside the 3D view: three slices show and are not blank, the wheel scrolls
 // one, the window changes it, a grab on a slice deforms the tissue there;
 // then the crop box, the clip plane and an uploaded Slicer .vp each change
 // the 3D frame.
@@ -351,6 +351,7 @@ async function checkUndoRedo(page, centre) {
 async function checkCases(page, kept) {
   const refinedCase = await page.evaluate(() => window.vpmViewer.caseId);
   assert.notEqual(refinedCase, kept.caseId);
+  await page.click('#cases-toggle');  // the panel floats over the views
   let { cases } = await refreshCases(page);
   const row = await caseRow(page, kept.caseId);
   const listed = cases.find((c) => c.case_id === kept.caseId);
@@ -497,7 +498,11 @@ async function main() {
        `variance ${first.variance.toFixed(1)}`);
   assert.ok(first.variance > kMinVariance,
             `the first frame looks blank: grey variance ${first.variance} <= ${kMinVariance}`);
-  assert.equal(await page.evaluate(() => document.getElementById('frame').width), 256);
+  // Frame 256: the frame's longer side, in the 3D pane's shape.
+  assert.equal(await page.evaluate(() => {
+    const c = document.getElementById('frame');
+    return Math.max(c.width, c.height);
+  }), 256);
 
   const box = await page.locator('#frame').boundingBox();
   const centre = [box.x + box.width / 2, box.y + box.height / 2];

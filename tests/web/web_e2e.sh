@@ -2,7 +2,8 @@
 # ctest entry of the web viewer's tests that need client/web/node_modules.
 # Checks what they need and fails (never skips) naming the command that
 # fixes it, then runs one scenario:
-#   viewer, server_down   end to end in headless Chromium (SCENARIO_e2e.mjs)
+#   viewer, server_down,  end to end in headless Chromium (SCENARIO_e2e.mjs); workspace: the
+#   workspace             page's layout at 1280 x 800 and 1920 x 1080, pan, zoom, presets, slices
 #   gateway               the gateway against a stand-in server (gateway.test.mjs, the
 #                         Studies panel's and Export's calls in gateway_pacs.test.mjs, and
 #                         uploads from the desktop in gateway_upload.test.mjs)

@@ -11,12 +11,16 @@ import { CutControls } from './cut_controls.js';
 import { ExportButton } from './export_button.js';
 import { FrameStats } from './frame_stats.js';
 import { GatewaySocket } from './gateway_socket.js';
+import { fitCanvas, frameSizeForPane } from './pane_fit.js';
 import { PointerTools } from './pointer_tools.js';
+import { grabTargetMm } from './slice_planes.js';
 import { SliceViews } from './slice_views.js';
 import { ServerFiles } from './server_files.js';
 import { StudiesPanel } from './studies_panel.js';
 import { installUndoKeys } from './undo_keys.js';
 import { UploadPanel } from './upload_panel.js';
+import { fillShortcutList, installViewKeys } from './view_keys.js';
+import { kWindowPresets, presetNameOf, windowPreset } from './window_presets.js';
 
 const $ = (id) => document.getElementById(id);
 const canvas = $('frame');
@@ -45,6 +49,8 @@ const state = {
   framesSuperseded: 0,  // received while another waited undrawn: replaced, never drawn
   peakDisplacementMm: 0,
   lastGrabMm: null,
+  dragOffsetMm: null,   // the held grab's drag offset sent last (world LPS mm), else null
+  frameSize: { width: 512, height: 512 },  // the 3D frame asked for: the pane's shape
   errors: [],           // {what, message}
   uploadedTf: null,     // {name, colors, opacities} once the gateway read a file
   lastExport: null,     // ExportDicomSummary of the last Export to PACS
@@ -111,6 +117,7 @@ function refreshExport() {
 
 function showMessage(text, kind = 'info') {
   $('message').textContent = text;
+  $('message').title = text;  // the line shows two lines at most
   $('message').dataset.kind = text ? kind : 'none';
 }
 
@@ -160,6 +167,9 @@ checkSignedIn();
 
 function sendEvent(event) {
   if (!event.camera && !event.settings) state.lastUndo = null;  // a manipulation: the count moves on
+  // The slices follow the held grab's tissue: its point plus this offset.
+  if (event.grab || event.release) state.dragOffsetMm = null;
+  if (event.drag) state.dragOffsetMm = event.drag.offset_mm;
   state.sequence += 1;
   const message = { ...event, sequence: state.sequence };
   if (socket.send({ type: 'event', event: message })) stats.sent(state.sequence);
@@ -168,12 +178,12 @@ function sendEvent(event) {
 
 function settings() {
   const [mode, preset] = $('render').value.split(':');
-  const side = Number($('frame-size').value);
+  const { width, height } = state.frameSize;
   const cut = cuts.settings();
   // The view cut (as `vpm render --cut auto`): on unless a crop box or a
   // clip plane says what to show.
   const viewCut = $('view-cut').checked && !cut.crop && !cut.clip;
-  const out = { mode, preset, width: side, height: side, overlay: $('overlay').checked,
+  const out = { mode, preset, width, height, overlay: $('overlay').checked,
                 slices: slices.specs(), ...cut, view_cut: viewCut };
   if (preset === 'uploaded') Object.assign(out, { preset: undefined, uploaded_tf: true });
   return out;
@@ -224,6 +234,7 @@ const slices = new SliceViews({
   onWindow({ width, level }) {
     $('window-width').value = Math.round(width);
     $('window-level').value = Math.round(level);
+    $('window-preset').value = presetNameOf({ width: Math.round(width), level: Math.round(level) });
   },
   onGrab(pointMm) {
     state.lastGrabMm = pointMm;
@@ -231,6 +242,7 @@ const slices = new SliceViews({
   },
 });
 state.slices = slices;
+slices.enabled = $('slices').checked;
 
 const cuts = new CutControls({
   crop: $('crop'),
@@ -257,6 +269,13 @@ const tools = new PointerTools({
   keepDrags: () => $('keep-drag').checked,
   onCropPress: (x, y, width, height) => cuts.pressFace(state.camera, x, y, width, height),
   onCropDrag: (dx, dy, width, height) => cuts.dragFace(state.camera, dx, dy, width, height),
+  onSlicesAt(pointMm) {
+    if (!slices.enabled) {
+      $('slices').checked = true;
+      slicesToggled();
+    }
+    slices.throughPoint(pointMm);
+  },
 });
 
 // ------------------------------------------------------------ messages in
@@ -302,7 +321,7 @@ const handlers = {
       applyCaseView(m.view, { render: $('render'), viewCut: $('view-cut'), slicesBox: $('slices'),
                               windowWidth: $('window-width'), windowLevel: $('window-level'),
                               sliceOverlay: $('slice-overlay'), cuts, slices });
-      $('views').dataset.layout = slices.enabled ? 'grid' : 'single';
+      setLayout();
       state.caseView = m.view;
     }
     state.lastGrabMm = null;
@@ -476,6 +495,7 @@ function showMesh() {
       `(${s.hard} hard, ${s.refined} refined), ${s.tets} tets, h ${s.h_mm.toFixed(1)} mm · ` +
       `session ${state.session.session_id}`
     : '';
+  $('mesh-info').title = $('mesh-info').textContent;  // the line may be cut short
 }
 
 // ------------------------------------------------------------ frames
@@ -494,6 +514,7 @@ function onFrame(frame) {
   if (h.grab_point_mm) {
     const [x, y, z] = h.grab_point_mm;
     state.lastGrabMm = { x, y, z };
+    slices.throughPoint(grabTargetMm(h.grab_point_mm, state.dragOffsetMm));
   }
   // The server refined the mesh at a grab and swapped it in.
   if (h.mesh_id && state.mesh && h.mesh_id !== state.mesh.mesh_id) {
@@ -501,6 +522,7 @@ function onFrame(frame) {
     state.meshRefinedAtGrab = true;
     $('mesh-info').textContent = `${state.volume.source} · mesh ${h.mesh_id}, refined at the ` +
       `grab by the server · session ${state.session.session_id}`;
+    $('mesh-info').title = $('mesh-info').textContent;
   }
   if (waiting) state.framesSuperseded += 1;  // newest wins: the waiting one is dropped
   waiting = frame;
@@ -574,11 +596,44 @@ function refreshStatus() {
 
 // ------------------------------------------------------------ controls
 
+// The 3D frame's size for its pane (the Frame setting is its longer side);
+// the canvas takes it at once. Returns whether it changed.
 function applyFrameSize() {
-  const side = Number($('frame-size').value);
-  canvas.width = side;
-  canvas.height = side;
+  const box = canvas.parentElement;
+  const size = frameSizeForPane(box.clientWidth, box.clientHeight, Number($('frame-size').value));
+  const changed = size.width !== state.frameSize.width || size.height !== state.frameSize.height;
+  state.frameSize = size;
+  if (canvas.width !== size.width || canvas.height !== size.height) {
+    canvas.width = size.width;
+    canvas.height = size.height;
+  }
+  fitCanvas(canvas, box);
+  return changed;
 }
+
+// The views' layout: the 3D view alone, or with the three slices.
+function setLayout() {
+  $('views').dataset.layout = slices.enabled ? 'grid' : 'single';
+  applyFrameSize();
+}
+
+// A pane that changes size (the window, the layout) refits its canvas; the
+// 3D pane asks for a frame of its new shape (once per animation frame).
+let resizeRequested = false;
+const paneObserver = new ResizeObserver((entries) => {
+  for (const entry of entries) {
+    const c = entry.target.querySelector('canvas');
+    if (c !== canvas) fitCanvas(c, entry.target);
+    else if (applyFrameSize() && !resizeRequested) {
+      resizeRequested = true;
+      requestAnimationFrame(() => {
+        resizeRequested = false;
+        settingsChanged();
+      });
+    }
+  }
+});
+for (const box of document.querySelectorAll('#views .box')) paneObserver.observe(box);
 
 $('open').addEventListener('click', () => {
   const [kind, ...rest] = $('volume').value.split(':');
@@ -595,11 +650,12 @@ const settingsChanged = () => state.session && sendEvent({ settings: settings() 
 $('render').addEventListener('change', settingsChanged);
 $('overlay').addEventListener('change', settingsChanged);
 $('view-cut').addEventListener('change', settingsChanged);
-$('slices').addEventListener('change', () => {
+function slicesToggled() {
   slices.enabled = $('slices').checked;
-  $('views').dataset.layout = slices.enabled ? 'grid' : 'single';
+  setLayout();
   settingsChanged();
-});
+}
+$('slices').addEventListener('change', slicesToggled);
 const windowChanged = () => {
   const [width, level] = [Number($('window-width').value), Number($('window-level').value)];
   if (!(width > 0) || !Number.isFinite(level)) {
@@ -607,8 +663,21 @@ const windowChanged = () => {
     return;
   }
   slices.window = { width, level };
+  $('window-preset').value = presetNameOf(slices.window);
   settingsChanged();
 };
+// A window preset: the fields take its values and the slices its window.
+function applyWindowPreset(name) {
+  const preset = windowPreset(name);
+  if (!preset) return;
+  $('window-width').value = preset.width;
+  $('window-level').value = preset.level;
+  windowChanged();
+}
+$('window-preset').append(...kWindowPresets.map((p, i) => new Option(
+  `${p.label} (W ${p.width} L ${p.level}) [${i + 1}]`, p.name)));
+$('window-preset').value = presetNameOf(slices.window);
+$('window-preset').addEventListener('change', () => applyWindowPreset($('window-preset').value));
 $('window-width').addEventListener('change', windowChanged);
 $('window-level').addEventListener('change', windowChanged);
 $('slice-overlay').addEventListener('change', () => {
@@ -629,7 +698,7 @@ $('tf-file').addEventListener('change', async () => {
   socket.send({ type: 'tf', file_name: file.name, text: await file.text() });
 });
 $('frame-size').addEventListener('change', () => {
-  if (state.session) applyFrameSize();
+  applyFrameSize();
   settingsChanged();
 });
 $('refine-grab').addEventListener('click', () => state.lastGrabMm && refineAt(state.lastGrabMm));
@@ -642,8 +711,51 @@ document.addEventListener('keydown', (e) => {
   e.preventDefault();
   studies.toggle();
 });
-$('reset-view').addEventListener('click', () => {
+function resetView() {
   if (!state.camera) return;
   state.camera.reset();
   sendEvent({ camera: state.camera.toProto() });
+}
+$('reset-view').addEventListener('click', resetView);
+
+// Floating panels: Cases, and Keys and help (its list from view_keys.js).
+function showPanel(panel, toggle, open) {
+  $(panel).hidden = !open;
+  $(toggle).setAttribute('aria-expanded', String(open));
+}
+fillShortcutList($('keys-list'));
+$('keys-toggle').addEventListener('click', () => showPanel('keys', 'keys-toggle', $('keys').hidden));
+$('keys-close').addEventListener('click', () => showPanel('keys', 'keys-toggle', false));
+$('cases-toggle').addEventListener('click', () => {
+  const open = $('cases').hidden;
+  showPanel('cases', 'cases-toggle', open);
+  if (open) socket.send({ type: 'cases' });
 });
+$('cases-close').addEventListener('click', () => showPanel('cases', 'cases-toggle', false));
+document.addEventListener('keydown', (e) => {
+  if (e.key !== 'Escape') return;
+  showPanel('keys', 'keys-toggle', false);
+  showPanel('cases', 'cases-toggle', false);
+});
+
+function pickTool(name) {
+  const input = document.querySelector(`input[name="tool"][value="${name}"]`);
+  input.checked = true;
+  tools.tool = name;
+}
+
+function toggleBox(id) {
+  $(id).checked = !$(id).checked;
+  $(id).dispatchEvent(new Event('change'));
+}
+
+installViewKeys(document, (action) => {
+  const [kind, name] = action.split(':');
+  if (kind === 'window') applyWindowPreset(name);
+  else if (kind === 'tool') pickTool(name);
+  else if (kind === 'reset-view') resetView();
+  else if (kind === 'slices') toggleBox('slices');
+  else if (kind === 'view-cut') toggleBox('view-cut');
+  else if (kind === 'keys') showPanel('keys', 'keys-toggle', $('keys').hidden);
+});
+setLayout();

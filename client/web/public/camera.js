@@ -106,6 +106,31 @@ export class OrbitCamera {
     this.distanceMm = Math.max(0.05 * fit, Math.min(20 * fit, this.distanceMm / factor));
   }
 
+  // Pans the view so the picture follows a screen motion of (dxPx right,
+  // dyPx down) on a width x height frame: what lies on the orbit-centre
+  // plane moves with the pointer. Camera.pan_mm is along (right, up), mm.
+  panByPixels(dxPx, dyPx, width, height) {
+    const s = this.mmPerPixel(width, height);
+    this.panMm = [this.panMm[0] - dxPx * s, this.panMm[1] + dyPx * s];
+  }
+
+  // Zooms by `factor` (> 1 moves closer, clamped as zoom) about frame pixel
+  // (px, py) of a width x height frame: the point of the orbit-centre plane
+  // under that pixel stays under it (zoom moves the eye along the forward
+  // axis; the pan takes the target towards the point by the distance
+  // travelled times the pixel's offset from the centre). Points nearer or
+  // farther than the orbit centre drift a little (perspective).
+  zoomAbout(factor, px, py, width, height) {
+    const before = this.distanceMm;
+    this.zoom(factor);
+    const travelled = before - this.distanceMm;
+    const tanHalf = Math.tan(0.5 * kFovDeg * kDegToRad);
+    const shorter = Math.max(1, Math.min(width, height));
+    const nx = ((2 * (px + 0.5)) / width - 1) * tanHalf * (width / shorter);
+    const ny = (1 - (2 * (py + 0.5)) / height) * tanHalf * (height / shorter);
+    this.panMm = [this.panMm[0] + nx * travelled, this.panMm[1] + ny * travelled];
+  }
+
   // The vpm.v3.Camera message.
   toProto() {
     return { azimuth_deg: this.azimuthDeg, elevation_deg: this.elevationDeg,

@@ -7,7 +7,12 @@
 //   refine tool: a click refines the mesh at the picked point;
 //   crop tool:  pressing on a face of the crop box and dragging moves the
 //               face along its normal (onCropPress, onCropDrag); pressing
-//               off the box orbits.
+//               off the box orbits;
+//   any tool:   right or middle drag pans (Camera.pan_mm: the picture
+//               follows the pointer), the wheel zooms about the pointer
+//               (the point under it stays), Shift+click puts the slices
+//               through the clicked point (onSlicesAt; the orbit-centre
+//               plane's point, as refine-here picks). No context menu.
 // Camera and drag events are sent at most once per animation frame (the
 // server coalesces them too); the last one is flushed on release.
 const kOrbitDegPerPixel = 0.4;   // canvas pixels of the frame's full size
@@ -20,10 +25,11 @@ export class PointerTools {
   // onCropPress(x, y, width, height) -> true when on a face;
   // onCropDrag(dx, dy, width, height): frame pixels from the press.
   // keepDrags(): whether a release keeps the drag (Shift on release keeps too).
+  // onSlicesAt(point_mm): Shift+click, world LPS mm.
   constructor({ canvas, camera, send, onRefine, onGrab, onRefused, onCropPress, onCropDrag,
-                keepDrags = () => false }) {
+                keepDrags = () => false, onSlicesAt = () => {} }) {
     Object.assign(this, { canvas, camera, send, onRefine, onGrab, onRefused, onCropPress,
-                          onCropDrag, keepDrags });
+                          onCropDrag, keepDrags, onSlicesAt });
     this.tool = 'orbit';
     this.gesture = null;  // {kind, startX, startY, lastX, lastY}
     this.queued = null;   // the newest camera or drag event waiting for a frame
@@ -33,6 +39,14 @@ export class PointerTools {
     canvas.addEventListener('pointerup', (e) => this.up(e));
     canvas.addEventListener('pointercancel', (e) => this.up(e));
     canvas.addEventListener('wheel', (e) => this.wheel(e), { passive: false });
+    canvas.addEventListener('contextmenu', (e) => e.preventDefault());
+  }
+
+  // Frame position under a pointer event, fractional (pixel centres at +0.5).
+  position(e) {
+    const r = this.canvas.getBoundingClientRect();
+    return [((e.clientX - r.left) * this.canvas.width) / r.width,
+            ((e.clientY - r.top) * this.canvas.height) / r.height];
   }
 
   // Frame pixel under a pointer event (row 0 at the top).
@@ -46,9 +60,24 @@ export class PointerTools {
 
   down(e) {
     const camera = this.camera();
-    if (!camera || e.button !== 0 || this.gesture) return;
+    if (!camera || this.gesture) return;
     const [x, y] = this.pixel(e);
     const { width, height } = this.canvas;
+    if (e.button === 1 || e.button === 2) {
+      e.preventDefault();  // middle: no autoscroll
+      this.canvas.setPointerCapture(e.pointerId);
+      this.gesture = { kind: 'pan', startX: x, startY: y, lastX: x, lastY: y };
+      return;
+    }
+    if (e.button !== 0) return;
+    if (e.shiftKey && this.tool === 'orbit') {
+      const point = camera.pickPointMm(x, y, width, height);
+      if (camera.insideVolume(point)) {
+        const world = camera.worldPoint(point);
+        this.onSlicesAt({ x: world[0], y: world[1], z: world[2] });
+      }
+      return;
+    }
     if (this.tool === 'refine' || this.tool === 'grab' || this.tool === 'pin') {
       const point = camera.pickPointMm(x, y, width, height);
       if (!camera.insideVolume(point)) {
@@ -81,6 +110,9 @@ export class PointerTools {
     if (g.kind === 'orbit') {
       camera.orbit(-(x - g.lastX) * kOrbitDegPerPixel, (y - g.lastY) * kOrbitDegPerPixel);
       this.queue({ camera: camera.toProto() });
+    } else if (g.kind === 'pan') {
+      camera.panByPixels(x - g.lastX, y - g.lastY, this.canvas.width, this.canvas.height);
+      this.queue({ camera: camera.toProto() });
     } else if (g.kind === 'crop') {
       this.onCropDrag(x - g.startX, y - g.startY, this.canvas.width, this.canvas.height);
     } else {
@@ -110,7 +142,9 @@ export class PointerTools {
     const camera = this.camera();
     if (!camera) return;
     e.preventDefault();
-    camera.zoom(Math.exp(-e.deltaY * kZoomPerWheelUnit));
+    const [x, y] = this.position(e);
+    camera.zoomAbout(Math.exp(-e.deltaY * kZoomPerWheelUnit), x - 0.5, y - 0.5,
+                     this.canvas.width, this.canvas.height);
     this.queue({ camera: camera.toProto() });
   }
 

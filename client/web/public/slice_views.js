@@ -1,4 +1,4 @@
-// The three slice panes of the 2 x 2 layout (axial, coronal, sagittal): the
+// The three slice panes (axial, coronal, sagittal): the
 // slices each frame carries (RenderSettings.slices, Frame.slices) drawn in
 // their canvases, and input on them:
 //   wheel:        scrolls the slice along its normal, one pixel size
@@ -9,8 +9,12 @@
 //                 the slice plane, from the slice's geometry), moving drags
 //                 it within the plane, releasing lets go, as in 3D.
 // Planes sit where the first frame put them (through the volume's centre),
-// then where the wheel moves them: each names its position (at_mm), so a
-// grab does not move them.
+// then where the wheel moves them, or through a point (throughPoint: the
+// held grab's tissue, followed while it is dragged, or a Shift+click in 3D):
+// each names its position (at_mm).
+import { fitCanvas } from './pane_fit.js';
+import { clampToSlice, planesThrough } from './slice_planes.js';
+
 const kViews = [
   ['axial', 'SLICE_ORIENTATION_AXIAL'],
   ['coronal', 'SLICE_ORIENTATION_CORONAL'],
@@ -87,12 +91,32 @@ export class SliceViews {
       if (canvas.width !== header.width || canvas.height !== header.height) {
         canvas.width = header.width;
         canvas.height = header.height;
+        fitCanvas(canvas, canvas.parentElement);
       }
       canvas.getContext('2d').drawImage(bitmap, 0, 0);
       bitmap.close();
       this.drawn += 1;
       this.labels[header.view].textContent = `${g.offset_mm.toFixed(1)} mm`;
     }
+  }
+
+  // Moves the planes through pointMm ({x, y, z}, world LPS mm), each kept
+  // where it still meets the volume. A move under a tenth of a slice pixel
+  // is not sent. Returns whether any plane moved.
+  throughPoint(pointMm) {
+    const want = planesThrough(pointMm);
+    let moved = false;
+    for (const [view] of kViews) {
+      const g = this.geometry[view];
+      const at = clampToSlice(want[view], g);
+      if (!Number.isFinite(at)) continue;
+      const old = this.at[view];
+      if (old !== undefined && Math.abs(old - at) < 0.1 * (g?.pixel_mm ?? 1)) continue;
+      this.at[view] = at;
+      moved = true;
+    }
+    if (moved && this.enabled) this.changed();
+    return moved;
   }
 
   wheel(view, e) {
