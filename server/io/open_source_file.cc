@@ -11,6 +11,8 @@
 #include <cstring>
 #include <memory>
 
+#include "server/common/path_inside.h"
+
 namespace vpm {
 namespace {
 
@@ -41,12 +43,6 @@ const char* KindOf(mode_t mode) {
   return "a special file";
 }
 
-// True when `inner` is `root` or lies under it, component by component.
-bool Inside(const std::filesystem::path& root, const std::filesystem::path& inner) {
-  auto [root_end, inner_it] = std::mismatch(root.begin(), root.end(), inner.begin(), inner.end());
-  return root_end == root.end();
-}
-
 // The path to open: `path` itself, or, under a read root, its fully resolved
 // form once it is known to lie inside the root.
 Result<std::filesystem::path> PathToOpen(const std::filesystem::path& path,
@@ -55,7 +51,7 @@ Result<std::filesystem::path> PathToOpen(const std::filesystem::path& path,
   std::unique_ptr<char, decltype(&std::free)> real(realpath(path.c_str(), nullptr), &std::free);
   if (real == nullptr) return OpenError(path.string(), errno);
   std::filesystem::path resolved(real.get());
-  if (!Inside(limits.read_root, resolved)) {
+  if (!PathIsInside(limits.read_root, resolved)) {
     return absl::PermissionDeniedError(
         StrCat(path.string(), ": resolves outside the data root"));
   }

@@ -10,6 +10,7 @@
 #include "server/io/read_file_bytes.h"
 #include "server/io/read_volume.h"
 #include "server/service/resolve_data_path.h"
+#include "server/common/path_inside.h"
 
 namespace vpm::service {
 namespace {
@@ -57,12 +58,6 @@ bool HoldsDicom(const fs::path& folder, const fs::path& root) {
   return false;
 }
 
-// Whether `path` (canonical) lies inside `root` (canonical).
-bool Inside(const fs::path& path, const fs::path& root) {
-  auto [root_end, at] = std::mismatch(root.begin(), root.end(), path.begin(), path.end());
-  return root_end == root.end();
-}
-
 // The entry `name` of `folder` (`relative` to the root).
 DataRootEntry Describe(const fs::path& folder, const std::string& relative,
                        const std::string& name, const fs::path& root) {
@@ -75,7 +70,7 @@ DataRootEntry Describe(const fs::path& folder, const std::string& relative,
   if (S_ISLNK(own.st_mode)) {
     std::error_code error;
     const fs::path real = fs::canonical(path, error);
-    if (error || !Inside(real, root) || ::stat(real.c_str(), &target) != 0) return entry;
+    if (error || !PathIsInside(root, real) || ::stat(real.c_str(), &target) != 0) return entry;
   }
   const std::string source = relative.empty() ? name : relative + "/" + name;
   const bool loadable_name = name.find('?') == std::string::npos;  // '?' starts a query

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "server/common/path_inside.h"
+
 namespace vpm::service {
 
 namespace fs = std::filesystem;
@@ -72,8 +74,7 @@ Result<fs::path> ResolveDataPath(const fs::path& data_root, std::string_view rel
     // missing file, but never follow it.
     return absl::NotFoundError(StrCat("source: ", Quoted(relative), ": ", error.message()));
   }
-  auto [root_end, real_it] = std::mismatch(root.begin(), root.end(), real.begin(), real.end());
-  if (root_end != root.end()) {
+  if (!PathIsInside(root, real)) {
     return absl::PermissionDeniedError(
         StrCat("source: ", Quoted(relative), " resolves outside the data root"));
   }
