@@ -20,6 +20,7 @@ std::array<std::string, kStatusLineCount> StatusLines(const StatusInputs& in) {
   if (in.frame) {
     const v3::Frame& f = *in.frame;
     rate += "  " + std::to_string(f.width()) + "x" + std::to_string(f.height());
+    if (!in.interactive_quality.empty()) rate += "  I:" + in.interactive_quality;
     state = f.interactive() ? "interactive" : "still";
     state += Format("  disp %.1f mm", f.max_displacement_mm());
     // Shown when there is something to say: the grabbed tissue behind the

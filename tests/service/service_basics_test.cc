@@ -398,6 +398,31 @@ TEST(ProtoConvert, RenderSettingsEnumsMapAndUnknownValuesAreRefused) {
   EXPECT_NE(bad_encoding.status().message().find("settings.encoding"), std::string::npos);
 }
 
+// RenderSettings.interactive_quality becomes the view's (and so the
+// renderer's: DeformableSceneTest.InteractiveQualityReachesTheRenderer);
+// unset is the default; a value outside the enum names the field.
+TEST(ProtoConvert, InteractiveQualityReachesTheView) {
+  auto read = ReadVolume("phantom:abdomen?size=16", VolumeLimits{});
+  ASSERT_TRUE(read.ok()) << read.status();
+  v3::RenderSettings settings;
+  auto defaults = ToStreamSettings(settings, *read, 1024);
+  ASSERT_TRUE(defaults.ok()) << defaults.status();
+  EXPECT_EQ(defaults->view.interactive_quality, kDefaultInteractiveQuality);
+  for (auto [proto, quality] :
+       {std::pair{v3::INTERACTIVE_QUALITY_FAST, InteractiveQuality::kFast},
+        std::pair{v3::INTERACTIVE_QUALITY_BALANCED, InteractiveQuality::kBalanced},
+        std::pair{v3::INTERACTIVE_QUALITY_SHARP, InteractiveQuality::kSharp}}) {
+    settings.set_interactive_quality(proto);
+    auto converted = ToStreamSettings(settings, *read, 1024);
+    ASSERT_TRUE(converted.ok()) << converted.status();
+    EXPECT_EQ(converted->view.interactive_quality, quality);
+  }
+  settings.set_interactive_quality(static_cast<v3::InteractiveQuality>(9));
+  auto bad = ToStreamSettings(settings, *read, 1024);
+  EXPECT_EQ(bad.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(bad.status().message().find("settings.interactive_quality"), std::string::npos);
+}
+
 // RenderSettings.render_tf (a transfer function a client read from a file)
 // becomes the frame's preset, round trip through ToProto / FromProto;
 // mip_window overrides the volume's window; bad values name the field.

@@ -12,6 +12,7 @@ import { ExportButton } from './export_button.js';
 import { FrameStats } from './frame_stats.js';
 import { GatewaySocket } from './gateway_socket.js';
 import { PointerTools } from './pointer_tools.js';
+import { QualityControl } from './quality_control.js';
 import { SliceViews } from './slice_views.js';
 import { ServerFiles } from './server_files.js';
 import { StudiesPanel } from './studies_panel.js';
@@ -174,7 +175,7 @@ function settings() {
   // clip plane says what to show.
   const viewCut = $('view-cut').checked && !cut.crop && !cut.clip;
   const out = { mode, preset, width: side, height: side, overlay: $('overlay').checked,
-                slices: slices.specs(), ...cut, view_cut: viewCut };
+                slices: slices.specs(), ...cut, view_cut: viewCut, ...quality.settings() };
   if (preset === 'uploaded') Object.assign(out, { preset: undefined, uploaded_tf: true });
   return out;
 }
@@ -215,6 +216,8 @@ function refineAt(pointMm) {
   socket.send({ type: 'refine', point_mm: pointMm });
 }
 
+const quality = new QualityControl($('frame-size').closest('label'),
+                                   () => state.session && sendEvent({ settings: settings() }));
 const slices = new SliceViews({
   canvases: { axial: $('slice-axial'), coronal: $('slice-coronal'), sagittal: $('slice-sagittal') },
   labels: { axial: $('at-axial'), coronal: $('at-coronal'), sagittal: $('at-sagittal') },
