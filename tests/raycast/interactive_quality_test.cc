@@ -73,9 +73,9 @@ class InteractiveQualityTest : public testing::GpuTest {};
 // phantom, dB.
 double InteractivePsnrFloorDb(InteractiveQuality q) {
   switch (q) {
-    case InteractiveQuality::kFast: return 27.0;
-    case InteractiveQuality::kBalanced: return 28.0;
-    case InteractiveQuality::kSharp: return 35.0;
+    case InteractiveQuality::kFast: return 28.0;
+    case InteractiveQuality::kBalanced: return 29.5;
+    case InteractiveQuality::kSharp: return 37.0;
   }
   return 99.0;
 }
