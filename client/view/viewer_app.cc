@@ -562,8 +562,7 @@ void ViewerApp::Paint() {
   PaintInputs in;
   const ConnectionState state = connection_->state();
   StatusInputs status{state.connected ? fps_ : 0.0, latency_ms_, frame_info_, grab_mode_,
-                      grabbed_,
-                      std::string(InteractiveQualityName(settings_.interactive_quality()))};
+                      grabbed_, settings_.interactive_quality()};
   for (const std::string& line : StatusLines(status)) in.status_lines.push_back(line);
   in.show_help = show_help_;
   if (show_cases_) in.panel_lines = case_panel_.Lines(window_->TextColumns());

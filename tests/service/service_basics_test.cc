@@ -10,6 +10,7 @@
 #include "server/io/read_volume.h"
 #include "server/io/write_nifti.h"
 #include "server/raycast/render_preset_from_tf.h"
+#include "server/service/case_view.h"
 #include "server/service/loopback_address.h"
 #include "server/service/proto_convert.h"
 #include "tests/service/service_test_util.h"
@@ -421,6 +422,12 @@ TEST(ProtoConvert, InteractiveQualityReachesTheView) {
   auto bad = ToStreamSettings(settings, *read, 1024);
   EXPECT_EQ(bad.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(bad.status().message().find("settings.interactive_quality"), std::string::npos);
+  // Each client's own, like the frame size: not part of a case's view.
+  settings.set_interactive_quality(v3::INTERACTIVE_QUALITY_SHARP);
+  settings.set_preset("ct-bone");
+  const v3::RenderSettings kept = CaseView(settings);
+  EXPECT_EQ(kept.interactive_quality(), v3::INTERACTIVE_QUALITY_UNSPECIFIED);
+  EXPECT_EQ(kept.preset(), "ct-bone");
 }
 
 // RenderSettings.render_tf (a transfer function a client read from a file)
