@@ -5,10 +5,10 @@
 // frame's wall time, and its PSNR (RGB) against the still of the same
 // deformed state and camera. 512 x 512 (--size), default camera, the
 // 250-vertex mesh refined at the grab (the phantom's left renal artery, the
-// kidney CT's left kidney), dragged 12 mm in 10 steps. Candidates run interleaved, rep by rep, in one process, so that
-// other load on the machine weighs on all alike; the load average is
-// printed before and after each volume.
-// Usage: interactive_quality_bench [--candidates] [--reps N] [--size N]
+// kidney CT's left kidney), dragged 12 mm in 10 steps. Candidates run interleaved, rep by rep, in
+// one process, so that other load on the machine weighs on all alike; the load average is printed
+// before and after each volume. Usage: interactive_quality_bench [--candidates] [--reps N] [--size
+// N]
 //                                  [--preset NAME] [--mode dvr|mip] [SOURCE...]
 //   --candidates: also the casts that were measured against the settings
 //   (InteractiveQuality), not only fast, balanced and sharp;
@@ -191,8 +191,7 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
   for (int rep = 0; rep < reps; ++rep) {
     for (size_t c = 0; c < candidates.size(); ++c) {
       auto scene = bench::Check(
-          DeformableScene::Create(*context, volume, gpu_volume, *renderer, mesh, options),
-          "scene");
+          DeformableScene::Create(*context, volume, gpu_volume, *renderer, mesh, options), "scene");
       bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
       const auto t0 = std::chrono::steady_clock::now();
       for (int s = 1; s <= kSteps; ++s) {
@@ -207,11 +206,11 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
       results[c].fps.push_back(kSteps / (MsSince(t0) / 1000.0));
     }
   }
-  std::printf("\n%s, %s %s, %dx%d, device '%s'; load average before %s, after %s\n",
-              source.c_str(), mode == RenderMode::kMip ? "MIP" : "DVR", preset.c_str(), size,
-              size, context->device_name().c_str(), load_before.c_str(), LoadAverage().c_str());
-  std::printf("%-40s %5s %7s %9s %9s %10s %9s %9s\n", "candidate", "rays", "step mm",
-              "loop fps", "(best)", "frame ms", "PSNR dB", "worst dB");
+  std::printf("\n%s, %s %s, %dx%d, device '%s'; load average before %s, after %s\n", source.c_str(),
+              mode == RenderMode::kMip ? "MIP" : "DVR", preset.c_str(), size, size,
+              context->device_name().c_str(), load_before.c_str(), LoadAverage().c_str());
+  std::printf("%-40s %5s %7s %9s %9s %10s %9s %9s\n", "candidate", "rays", "step mm", "loop fps",
+              "(best)", "frame ms", "PSNR dB", "worst dB");
   for (size_t c = 0; c < candidates.size(); ++c) {
     const Result_& r = results[c];
     std::printf("%-40s %5d %7.3f %9.1f %9.1f %10.1f %9.1f %9.1f\n", candidates[c].name.c_str(),
@@ -247,12 +246,14 @@ int main(int argc, char** argv) {
   if (sources.empty()) {
     sources = {"tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz", "phantom:abdomen"};
   }
-  std::printf("interactive frames during a drag (phantom: left renal artery, kidney CT: left kidney; 12 mm in 10 steps, 250-vertex "
-              "mesh): loop fps = 10 steps / their wall time (FEM + map + frame + JPEG), median "
-              "and best of %d; frame ms: median wall of the interactive frame; PSNR (RGB) against "
-              "the still of the same deformed state and camera, over the 10 steps (worst: the "
-              "worst step)\n",
-              reps);
+  std::printf(
+      "interactive frames during a drag (phantom: left renal artery, kidney CT: left kidney; 12 mm "
+      "in 10 steps, 250-vertex "
+      "mesh): loop fps = 10 steps / their wall time (FEM + map + frame + JPEG), median "
+      "and best of %d; frame ms: median wall of the interactive frame; PSNR (RGB) against "
+      "the still of the same deformed state and camera, over the 10 steps (worst: the "
+      "worst step)\n",
+      reps);
   for (const std::string& source : sources) RunVolume(source, reps, size, preset, mode, all);
   return 0;
 }

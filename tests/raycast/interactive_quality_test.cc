@@ -16,9 +16,9 @@
 
 #include "server/gpu/shader_interface.h"
 #include "server/io/read_volume.h"
+#include "server/phantom/phantom.h"
 #include "server/raycast/raycast_cpu.h"
 #include "server/raycast/volume_renderer.h"
-#include "server/phantom/phantom.h"
 #include "tests/gpu/gpu_test_context.h"
 #include "tests/raycast/render_test_util.h"
 
@@ -28,13 +28,13 @@ namespace {
 using testing::CompareRgba;
 using testing::MaybeDump;
 
-constexpr InteractiveQuality kQualities[] = {InteractiveQuality::kFast,
-                                             InteractiveQuality::kBalanced,
-                                             InteractiveQuality::kSharp};
+constexpr InteractiveQuality kQualities[] = {
+    InteractiveQuality::kFast, InteractiveQuality::kBalanced, InteractiveQuality::kSharp};
 
 const char* Name(InteractiveQuality q) {
-  return q == InteractiveQuality::kFast ? "fast"
-         : q == InteractiveQuality::kBalanced ? "balanced" : "sharp";
+  return q == InteractiveQuality::kFast       ? "fast"
+         : q == InteractiveQuality::kBalanced ? "balanced"
+                                              : "sharp";
 }
 
 uint32_t Pack(int r, int g, int b, int a) {
@@ -73,9 +73,12 @@ class InteractiveQualityTest : public testing::GpuTest {};
 // phantom, dB.
 double InteractivePsnrFloorDb(InteractiveQuality q) {
   switch (q) {
-    case InteractiveQuality::kFast: return 28.0;
-    case InteractiveQuality::kBalanced: return 29.5;
-    case InteractiveQuality::kSharp: return 37.0;
+    case InteractiveQuality::kFast:
+      return 28.0;
+    case InteractiveQuality::kBalanced:
+      return 29.5;
+    case InteractiveQuality::kSharp:
+      return 37.0;
   }
   return 99.0;
 }
