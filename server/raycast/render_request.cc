@@ -89,6 +89,12 @@ glm::ivec3 BrickVoxels(RenderQuality quality, const VolumeGeometry& geometry) {
   return w;
 }
 
+glm::ivec3 RequestBrickVoxels(const RenderRequest& request, const VolumeGeometry& geometry) {
+  const bool coarse_grid =
+      request.quality == RenderQuality::kInteractive && request.interactive.divisor >= 2.0;
+  return BrickVoxels(coarse_grid ? RenderQuality::kInteractive : RenderQuality::kStill, geometry);
+}
+
 std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims, glm::ivec3 brick_voxels) {
   std::array<int, 3> b{};
   for (int a = 0; a < 3; ++a) {
@@ -174,7 +180,7 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
     flags |= kRaycastCellGradient;
     if (s.preintegrated) flags |= kRaycastPreintegrated;
   }
-  const glm::ivec3 brick_voxels = BrickVoxels(request.quality, geometry);
+  const glm::ivec3 brick_voxels = RequestBrickVoxels(request, geometry);
   const auto bricks = BrickGridDims(geometry.dims, brick_voxels);
   gpu::RaycastParams& p = setup.params;
   p.eye_mm = Vec4(rays.eye_mm, step);

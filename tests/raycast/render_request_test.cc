@@ -132,10 +132,14 @@ TEST(RenderRequest, InteractiveQualitiesCapTheStepAndSizeTheRayGrid) {
   auto sharp = PrepareRaycast(r, coarse, {0, 0, 0});
   ASSERT_TRUE(sharp.ok()) << sharp.status();
   EXPECT_EQ(sharp->render_width, 512);
+  // Full resolution skips by still bricks (3 mm voxels: 2 per 6 mm brick).
+  EXPECT_EQ(glm::ivec3(sharp->params.brick_voxels), BrickVoxels(RenderQuality::kStill, coarse));
   r.interactive = InteractiveCastFor(InteractiveQuality::kBalanced);
   auto balanced = PrepareRaycast(r, coarse, {0, 0, 0});
   ASSERT_TRUE(balanced.ok()) << balanced.status();
   EXPECT_EQ(balanced->render_width, 256);
+  EXPECT_EQ(glm::ivec3(balanced->params.brick_voxels),
+            BrickVoxels(RenderQuality::kInteractive, coarse));
   r.interactive.divisor = 1.5;
   auto third = PrepareRaycast(r, coarse, {0, 0, 0});
   ASSERT_TRUE(third.ok()) << third.status();
