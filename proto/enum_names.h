@@ -24,6 +24,24 @@ inline std::optional<v3::Encoding> EncodingFromName(std::string_view name) {
   return std::nullopt;
 }
 
+// RenderSettings.interactive_quality: "fast", "balanced", "sharp".
+inline std::optional<v3::InteractiveQuality> InteractiveQualityFromName(std::string_view name) {
+  if (name == "fast") return v3::INTERACTIVE_QUALITY_FAST;
+  if (name == "balanced") return v3::INTERACTIVE_QUALITY_BALANCED;
+  if (name == "sharp") return v3::INTERACTIVE_QUALITY_SHARP;
+  return std::nullopt;
+}
+
+// "fast", "balanced", "sharp"; "default" for UNSPECIFIED (the server's).
+inline std::string_view InteractiveQualityName(v3::InteractiveQuality quality) {
+  switch (quality) {
+    case v3::INTERACTIVE_QUALITY_FAST: return "fast";
+    case v3::INTERACTIVE_QUALITY_BALANCED: return "balanced";
+    case v3::INTERACTIVE_QUALITY_SHARP: return "sharp";
+    default: return "default";
+  }
+}
+
 // A frame file's encoding from its name: .png is PNG, anything else JPEG.
 inline v3::Encoding EncodingForFile(std::string_view file_name) {
   return file_name.ends_with(".png") ? v3::ENCODING_PNG : v3::ENCODING_JPEG;

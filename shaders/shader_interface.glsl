@@ -72,8 +72,11 @@ struct RaycastBandPush {
   ivec4 rows;  // (band b, bands n, 0, 0): tile rows b, b + n, b + 2n, ...
 };
 
+const int kUpscaleBilinear = 0;
+const int kUpscaleCatmullRom = 1;
 struct UpscalePush {
-  ivec4 size;  // (source width, source height, target width, target height)
+  ivec4 size;    // (source width, source height, target width, target height)
+  ivec4 mode;    // (kUpscaleBilinear or kUpscaleCatmullRom, 0, 0, 0)
 };
 
 struct BackwardMapPush {

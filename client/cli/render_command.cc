@@ -277,6 +277,11 @@ void AddRenderCommand(CLI::App& app, const ServerFlags* server, int* exit_code) 
   cmd->add_option("--quality", a->quality, "still or interactive")
       ->check(CLI::IsMember({"still", "interactive"}))
       ->capture_default_str();
+  cmd->add_option("--interactive-quality", a->interactive_quality,
+                  "with --quality interactive: fast, balanced or sharp (docs/RENDERING.md, "
+                  "\"Interactive quality\"; offline only)")
+      ->check(CLI::IsMember({"fast", "balanced", "sharp"}))
+      ->capture_default_str();
   AddGrabFlags(cmd, a.get());
   cmd->add_option("--size", a->size, "W H pixels")->expected(2)->capture_default_str();
   cmd->add_flag("--overlay", a->overlay, "draw the proxy mesh: deformable yellow, hard blue");

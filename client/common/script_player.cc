@@ -82,6 +82,15 @@ Result<Script> ParseScript(const nlohmann::json& j, const v3::VolumeInfo& volume
       script.settings.set_encoding(*encoding_value);
       script.settings.set_jpeg_quality(s.value("jpeg_quality", 0));
       script.settings.set_overlay(s.value("overlay", false));
+      if (s.contains("interactive_quality")) {
+        const std::string quality = s["interactive_quality"].get<std::string>();
+        const auto quality_value = InteractiveQualityFromName(quality);
+        if (!quality_value) {
+          return absl::InvalidArgumentError(StrCat("settings.interactive_quality: '", quality,
+                                                   "' is not fast, balanced or sharp"));
+        }
+        script.settings.set_interactive_quality(*quality_value);
+      }
     }
     const double interval = j.value("interval_ms", 33.0);
     double azimuth = 0, elevation = 0, distance = 0;

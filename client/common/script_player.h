@@ -5,7 +5,8 @@
 // Script (JSON):
 //   {"volume": "phantom:abdomen?size=64",            used when no session is given
 //    "settings": {"width": 256, "height": 256, "mode": "dvr", "preset": "ct-soft-tissue",
-//                 "encoding": "jpeg", "jpeg_quality": 85},
+//                 "encoding": "jpeg", "jpeg_quality": 85,
+//                 "interactive_quality": "fast" | "balanced" | "sharp"},
 //    "interval_ms": 33,                                pause between events
 //    "steps": [
 //      {"camera": {"azimuth_deg": 0, "elevation_deg": 10, "distance_mm": 0}},

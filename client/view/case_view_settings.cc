@@ -9,6 +9,7 @@ v3::RenderSettings WithCaseView(const v3::RenderSettings& own, const v3::RenderS
   out.set_overlay(own.overlay());
   out.set_encoding(own.encoding());
   out.set_jpeg_quality(own.jpeg_quality());
+  out.set_interactive_quality(own.interactive_quality());
   return out;
 }
 

@@ -2,7 +2,7 @@
 // settings, as vpm-view opens a case: what the frame shows is the case's
 // (mode, preset, render_tf, mip_window, crop, clip, view_cut, slices; world
 // LPS, mm), how it comes is the viewer's (width, height, overlay, encoding,
-// jpeg_quality).
+// jpeg_quality, interactive_quality).
 #pragma once
 
 #include "client/view/crop_box_drag.h"

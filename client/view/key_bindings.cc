@@ -41,6 +41,8 @@ std::span<const KeyBinding> KeyBindings() {
       {{"0"}, Action::kPresetSlicerMr, "DVR preset Slicer MR-Default"},
       {{"U"}, Action::kToggleViewCut,
        "view cut on/off: cut away what lies in front of the grab (off with crop or clip)"},
+      {{"I"}, Action::kCycleInteractiveQuality,
+       "frames while moving: fast, balanced, sharp (in turn; shown in the status bar)"},
       {{"M"}, Action::kMip, "maximum intensity projection (MIP)"},
       {{"O"}, Action::kToggleOverlay, "proxy-mesh overlay on/off"},
       {{"L"}, Action::kToggleSlices, "slices on/off: 3D, axial, coronal, sagittal (2 x 2)"},

@@ -26,6 +26,7 @@ enum class Action {
   kPresetSlicerSoftTissue,
   kPresetSlicerMr,
   kToggleViewCut,
+  kCycleInteractiveQuality,
   kMip,
   kToggleOverlay,
   kToggleSlices,

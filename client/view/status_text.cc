@@ -20,6 +20,12 @@ std::array<std::string, kStatusLineCount> StatusLines(const StatusInputs& in) {
   if (in.frame) {
     const v3::Frame& f = *in.frame;
     rate += "  " + std::to_string(f.width()) + "x" + std::to_string(f.height());
+    switch (in.interactive_quality) {
+      case v3::INTERACTIVE_QUALITY_FAST: rate += " fast"; break;
+      case v3::INTERACTIVE_QUALITY_BALANCED: rate += " bal"; break;
+      case v3::INTERACTIVE_QUALITY_SHARP: rate += " sharp"; break;
+      default: break;
+    }
     state = f.interactive() ? "interactive" : "still";
     state += Format("  disp %.1f mm", f.max_displacement_mm());
     // Shown when there is something to say: the grabbed tissue behind the

@@ -44,6 +44,11 @@ void AddViewFlags(CLI::App& app, ViewFlags* f) {
                  "grabbed tissue, or the orbit centre, is cut away while no crop or clip is on)")
       ->type_name("on|off");
   app.add_option("--jpeg-quality", f->jpeg_quality, "1..100")->check(CLI::Range(1, 100));
+  app.add_option("--interactive-quality", f->interactive_quality,
+                 "frames while moving: fast, balanced or sharp (key I cycles; docs/RENDERING.md, "
+                 "\"Interactive quality\", gives each one's frame rate and PSNR)")
+      ->check(CLI::IsMember({"fast", "balanced", "sharp"}))
+      ->capture_default_str();
   app.add_flag("--overlay", f->overlay, "start with the proxy-mesh overlay on");
   app.add_option("--screenshot-dir", f->screenshot_dir, "folder for screenshots (S key)");
   app.add_flag("--log-frames", c.log_frames,

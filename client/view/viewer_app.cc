@@ -17,6 +17,15 @@ namespace {
 constexpr auto kNoticeTime = std::chrono::milliseconds(2500);
 constexpr auto kResizeQuiet = std::chrono::milliseconds(200);  // debounce of window resizes
 
+// Key I: fast -> balanced -> sharp -> fast (the server's default counts as fast).
+v3::InteractiveQuality NextInteractiveQuality(v3::InteractiveQuality q) {
+  switch (q) {
+    case v3::INTERACTIVE_QUALITY_BALANCED: return v3::INTERACTIVE_QUALITY_SHARP;
+    case v3::INTERACTIVE_QUALITY_SHARP: return v3::INTERACTIVE_QUALITY_FAST;
+    default: return v3::INTERACTIVE_QUALITY_BALANCED;
+  }
+}
+
 }  // namespace
 
 ViewerApp::ViewerApp(ViewFlags flags) : flags_(std::move(flags)) {
@@ -25,6 +34,8 @@ ViewerApp::ViewerApp(ViewFlags flags) : flags_(std::move(flags)) {
   settings_.set_width(flags_.width);
   settings_.set_height(flags_.height);
   settings_.set_overlay(flags_.overlay);
+  settings_.set_interactive_quality(
+      InteractiveQualityFromName(flags_.interactive_quality).value_or(v3::INTERACTIVE_QUALITY_FAST));
   view_cut_ = flags_.view_cut;
   settings_.set_encoding(v3::ENCODING_JPEG);
   settings_.set_jpeg_quality(flags_.jpeg_quality);
@@ -162,6 +173,12 @@ void ViewerApp::OnAction(Action action) {
       view_cut_ = !view_cut_;
       SendSettings();
       Notice(view_cut_ ? "view cut on (while no crop or clip)" : "view cut off");
+      break;
+    case Action::kCycleInteractiveQuality:
+      settings_.set_interactive_quality(NextInteractiveQuality(settings_.interactive_quality()));
+      SendSettings();
+      Notice(StrCat("frames while moving: ",
+                    InteractiveQualityName(settings_.interactive_quality())));
       break;
     case Action::kMip:
       settings_.set_mode(settings_.mode() == v3::RENDER_MODE_MIP ? v3::RENDER_MODE_DVR
@@ -545,7 +562,7 @@ void ViewerApp::Paint() {
   PaintInputs in;
   const ConnectionState state = connection_->state();
   StatusInputs status{state.connected ? fps_ : 0.0, latency_ms_, frame_info_, grab_mode_,
-                      grabbed_};
+                      grabbed_, settings_.interactive_quality()};
   for (const std::string& line : StatusLines(status)) in.status_lines.push_back(line);
   in.show_help = show_help_;
   if (show_cases_) in.panel_lines = case_panel_.Lines(window_->TextColumns());

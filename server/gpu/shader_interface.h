@@ -128,11 +128,14 @@ struct RaycastBandPush {
 };
 static_assert(sizeof(RaycastBandPush) == 16);
 
-// upscale.comp: bilinear RGBA8 resize.
+// upscale.comp: RGBA8 resize, bilinear or Catmull-Rom bicubic.
+inline constexpr int kUpscaleBilinear = 0;
+inline constexpr int kUpscaleCatmullRom = 1;
 struct UpscalePush {
-  glm::ivec4 size;  // (source width, source height, target width, target height)
+  glm::ivec4 size;    // (source width, source height, target width, target height)
+  glm::ivec4 mode;    // (kUpscaleBilinear or kUpscaleCatmullRom, 0, 0, 0)
 };
-static_assert(sizeof(UpscalePush) == 16);
+static_assert(sizeof(UpscalePush) == 32);
 
 // backward_map.comp: rasterizes the backward map's owners tet by tet, one
 // workgroup per listed tet. pass (in map_dims.w): 0 clear the previous

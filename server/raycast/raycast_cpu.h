@@ -54,14 +54,16 @@ struct RaycastCpuInputs {
 std::vector<uint32_t> RaycastCpu(const gpu::RaycastParams& params, const RaycastCpuInputs& in,
                                  int threads, int64_t* samples = nullptr);
 
-// Bilinear resize of packed RGBA8, as upscale.comp.
+// Resize of packed RGBA8, as upscale.comp: filter gpu::kUpscaleBilinear or
+// gpu::kUpscaleCatmullRom.
 std::vector<uint32_t> UpscaleCpu(std::span<const uint32_t> source, int source_width,
-                                 int source_height, int target_width, int target_height);
+                                 int source_height, int target_width, int target_height,
+                                 int filter = gpu::kUpscaleBilinear);
 
 // A whole frame on the CPU, as VolumeRenderer::Render: the request's GPU
 // handles are ignored; `volume` is the source and `map` (optional) the
 // backward map. `brick_minmax` may hold BrickMinMaxCpu(volume,
-// BrickVoxels(request.quality, volume.geometry())) to save its cost (InvalidArgument when its
+// RequestBrickVoxels(request, volume.geometry())) to save its cost (InvalidArgument when its
 // size is not that brick grid's); timings are wall clock (occupancy_ms, raycast_ms, upscale_ms).
 Result<Frame> RenderReference(const RenderRequest& request, const Volume& volume,
                               const HostBackwardMap* map, int threads = 2,

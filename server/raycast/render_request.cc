@@ -30,7 +30,53 @@ Status CheckSettings(const RaycastSettings& s) {
   return absl::OkStatus();
 }
 
+Status CheckInteractiveCast(const InteractiveCast& c) {
+  if (!std::isfinite(c.divisor) || c.divisor < 1.0 || c.divisor > kMaxInteractiveDivisor) {
+    return absl::InvalidArgumentError(
+        StrCat("interactive divisor ", c.divisor, ": must be in 1..", kMaxInteractiveDivisor));
+  }
+  if (!std::isfinite(c.still_step_multiple) || c.still_step_multiple < 0.0) {
+    return absl::InvalidArgumentError(StrCat("interactive step multiple ", c.still_step_multiple,
+                                             ": must be finite and >= 0 (0: footprint)"));
+  }
+  if (c.upscale_filter != gpu::kUpscaleBilinear && c.upscale_filter != gpu::kUpscaleCatmullRom) {
+    return absl::InvalidArgumentError(StrCat("upscale filter ", c.upscale_filter, ": unknown"));
+  }
+  return absl::OkStatus();
+}
+
+int RenderSide(const RenderRequest& request, int side) {
+  if (request.quality != RenderQuality::kInteractive) return side;
+  const double d = request.interactive.divisor;
+  if (!std::isfinite(d) || d <= 1.0) return side;
+  return std::max(1, int(std::ceil(double(side) / std::min(d, kMaxInteractiveDivisor) - 1e-9)));
+}
+
+double StillStepMm(const RenderRequest& request, const VolumeGeometry& geometry) {
+  const glm::dvec3& s = geometry.spacing_mm;
+  const bool mip = request.mode == RenderMode::kMip;
+  const double factor = mip ? kStillMipStepFactor : request.preset.still_step_factor;
+  return std::min(factor * std::min({s.x, s.y, s.z}), mip ? kStillMipMaxStepMm : kStillMaxStepMm);
+}
+
 }  // namespace
+
+InteractiveCast InteractiveCastFor(InteractiveQuality quality) {
+  switch (quality) {
+    case InteractiveQuality::kFast:
+      return {.divisor = 2.0, .still_step_multiple = 0.0, .upscale_filter = gpu::kUpscaleBilinear};
+    case InteractiveQuality::kBalanced:
+      return {.divisor = 2.0, .still_step_multiple = 2.0, .upscale_filter = gpu::kUpscaleBilinear};
+    case InteractiveQuality::kSharp:
+      return {.divisor = 1.0, .still_step_multiple = 1.5, .upscale_filter = gpu::kUpscaleBilinear};
+  }
+  return {};
+}
+
+int UpscaleFilterOf(const RenderRequest& request) {
+  return request.quality == RenderQuality::kInteractive ? request.interactive.upscale_filter
+                                                        : gpu::kUpscaleBilinear;
+}
 
 glm::ivec3 BrickVoxels(RenderQuality quality, const VolumeGeometry& geometry) {
   const double mm = quality == RenderQuality::kInteractive ? kInteractiveBrickMm : kStillBrickMm;
@@ -41,6 +87,12 @@ glm::ivec3 BrickVoxels(RenderQuality quality, const VolumeGeometry& geometry) {
     w[a] = int(std::clamp(std::isfinite(voxels) ? voxels : 1.0, 1.0, most));
   }
   return w;
+}
+
+glm::ivec3 RequestBrickVoxels(const RenderRequest& request, const VolumeGeometry& geometry) {
+  const bool coarse_grid =
+      request.quality == RenderQuality::kInteractive && request.interactive.divisor >= 2.0;
+  return BrickVoxels(coarse_grid ? RenderQuality::kInteractive : RenderQuality::kStill, geometry);
 }
 
 std::array<int, 3> BrickGridDims(const std::array<int64_t, 3>& dims, glm::ivec3 brick_voxels) {
@@ -68,13 +120,13 @@ double InteractiveStepMm(const Camera& camera, int render_width, int render_heig
 double RequestStepMm(const RenderRequest& request, const VolumeGeometry& geometry) {
   if (request.settings.step_mm > 0.0) return request.settings.step_mm;
   if (request.quality == RenderQuality::kInteractive) {
-    return InteractiveStepMm(request.camera, (request.width + 1) / 2, (request.height + 1) / 2,
-                             geometry);
+    const double footprint = InteractiveStepMm(request.camera, RenderSide(request, request.width),
+                                               RenderSide(request, request.height), geometry);
+    const double multiple = request.interactive.still_step_multiple;
+    return multiple > 0.0 ? std::min(footprint, multiple * StillStepMm(request, geometry))
+                          : footprint;
   }
-  const glm::dvec3& s = geometry.spacing_mm;
-  const bool mip = request.mode == RenderMode::kMip;
-  const double factor = mip ? kStillMipStepFactor : request.preset.still_step_factor;
-  return std::min(factor * std::min({s.x, s.y, s.z}), mip ? kStillMipMaxStepMm : kStillMaxStepMm);
+  return StillStepMm(request, geometry);
 }
 
 Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGeometry& geometry,
@@ -92,6 +144,7 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   RETURN_IF_ERROR(request.camera.Validate());
   RETURN_IF_ERROR(ValidateRenderPreset(request.preset));
   RETURN_IF_ERROR(CheckSettings(request.settings));
+  RETURN_IF_ERROR(CheckInteractiveCast(request.interactive));
   RETURN_IF_ERROR(ValidateClipRegion(request.clip));
   const MipWindow window = request.mip_window.value_or(request.preset.mip_window);
   RETURN_IF_ERROR(ValidateMipWindow(window));
@@ -109,8 +162,8 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   RaycastSetup setup;
   setup.step_mm = step;
   const bool interactive = request.quality == RenderQuality::kInteractive;
-  setup.render_width = interactive ? (request.width + 1) / 2 : request.width;
-  setup.render_height = interactive ? (request.height + 1) / 2 : request.height;
+  setup.render_width = RenderSide(request, request.width);
+  setup.render_height = RenderSide(request, request.height);
   const CameraRays rays = request.camera.Rays(setup.render_width, setup.render_height);
   const RaycastSettings& s = request.settings;
   // A preset made with its own lighting (Slicer's) brings it along.
@@ -127,7 +180,7 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
     flags |= kRaycastCellGradient;
     if (s.preintegrated) flags |= kRaycastPreintegrated;
   }
-  const glm::ivec3 brick_voxels = BrickVoxels(request.quality, geometry);
+  const glm::ivec3 brick_voxels = RequestBrickVoxels(request, geometry);
   const auto bricks = BrickGridDims(geometry.dims, brick_voxels);
   gpu::RaycastParams& p = setup.params;
   p.eye_mm = Vec4(rays.eye_mm, step);

@@ -28,9 +28,34 @@ enum class RenderMode { kDvr, kMip };
 
 // kStill: full resolution, step 0.5 x the smallest spacing for DVR
 // (RenderPreset::still_step_factor: 1.0 for ct-soft-tissue), 1.0 for MIP.
-// kInteractive: half resolution in each direction (bilinear upscale on the
-// GPU), step 1.0 x the smallest spacing: about 8x fewer samples.
+// kInteractive: as RenderRequest::interactive says (InteractiveCast).
 enum class RenderQuality { kStill, kInteractive };
+
+// How an interactive frame is cast: rays on a grid `divisor` times coarser
+// than the frame per axis (ceil(side / divisor) rays; upscaled on the GPU by
+// upscale_filter, gpu::kUpscaleBilinear or gpu::kUpscaleCatmullRom), at the
+// pixel-footprint step of that grid (InteractiveStepMm) but, where
+// still_step_multiple > 0, no coarser than still_step_multiple x the still's
+// step (RequestStepMm of the same request as a still): on coarse volumes the
+// footprint's floor, one voxel, is what PSNR against the still loses most to
+// (docs/RENDERING.md, "Interactive quality").
+struct InteractiveCast {
+  double divisor = 2.0;  // 1..kMaxInteractiveDivisor
+  double still_step_multiple = 0.0;
+  int upscale_filter = gpu::kUpscaleBilinear;
+};
+inline constexpr double kMaxInteractiveDivisor = 4.0;
+
+// What the user chooses for frames while interacting, speed against
+// sharpness (docs/RENDERING.md, "Interactive quality", measures each):
+// kFast: half resolution, footprint step, bilinear upscale (the highest
+// frame rate); kBalanced: half resolution, step at most 2 x the still's;
+// kSharp: full resolution, step at most 1.5 x the still's (at least 35 dB
+// on the phantom and the kidney CT, at a fraction of the frame rate). The
+// ray starts are jittered with a new seed per frame (DeformableScene).
+enum class InteractiveQuality { kFast, kBalanced, kSharp };
+inline constexpr InteractiveQuality kDefaultInteractiveQuality = InteractiveQuality::kFast;
+InteractiveCast InteractiveCastFor(InteractiveQuality quality);
 
 inline constexpr int kMaxFrameSide = 4096;
 // Empty-space-skipping bricks are sized in mm, not voxels, so that a ray
@@ -117,6 +142,8 @@ struct RenderRequest {
   RenderPreset preset;                   // MakeRenderPreset(name, volume)
   std::optional<MipWindow> mip_window;   // default: preset.mip_window
   RenderQuality quality = RenderQuality::kStill;
+  // How kInteractive frames are cast (ignored by stills).
+  InteractiveCast interactive = InteractiveCastFor(kDefaultInteractiveQuality);
   int width = 512;                       // output pixels, 1..kMaxFrameSide
   int height = 512;
   const GpuVolume* volume = nullptr;     // the source (rest) volume
@@ -188,6 +215,13 @@ struct Frame {
 // to [1, max(1, n - 1)].
 glm::ivec3 BrickVoxels(RenderQuality quality, const VolumeGeometry& geometry);
 
+// The bricks a request's frame skips by: BrickVoxels of its quality, but
+// still bricks for interactive frames cast finer than half resolution
+// (InteractiveCast::divisor < 2; the sharp setting): at full resolution on
+// the phantom they cast 14% faster than interactive bricks
+// (docs/RENDERING.md, "Interactive quality").
+glm::ivec3 RequestBrickVoxels(const RenderRequest& request, const VolumeGeometry& geometry);
+
 // Brick grid of a volume: ceil((n - 1) / w) bricks per axis (at least 1) for
 // bricks of w voxels per side (per axis); brick b spans voxels
 // [w b, min(w b + w, n - 1)].
@@ -215,8 +249,12 @@ glm::vec4 LutParams(const RenderLut& lut);
 // The step a request will use (validated by PrepareRaycast).
 double RequestStepMm(const RenderRequest& request, const VolumeGeometry& geometry);
 
-// The interactive step (mm) for a camera casting render_width x
-// render_height rays (half the requested frame): max(kInteractiveStepFactor
+// The filter that upscales the request's ray-cast pixels (interactive
+// frames: request.interactive.upscale_filter; stills are not upscaled).
+int UpscaleFilterOf(const RenderRequest& request);
+
+// The interactive footprint step (mm) for a camera casting render_width x
+// render_height rays: max(kInteractiveStepFactor
 // x smallest spacing, min(kInteractiveStepPerPixel x pixel footprint at the
 // orbit centre, diagonal / kInteractiveMinSamplesPerRay)), the footprint
 // being 2 distance tan(fov / 2) / the shorter side.

@@ -334,7 +334,8 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
   if (upscale) {
     const gpu::UpscalePush push{
         .size = glm::ivec4(setup.render_width, setup.render_height, request.width,
-                           request.height)};
+                           request.height),
+        .mode = glm::ivec4(UpscaleFilterOf(request), 0, 0, 0)};
     RETURN_IF_ERROR(batch.Dispatch(*upscale_kernel_, {&*pixels_, &*upscaled_}, push,
                                    {GroupCount(request.width, 8 * kUpscalePixelsPerInvocation),
                                     GroupCount(request.height, 8), 1},

@@ -237,6 +237,7 @@ Result<RenderRequest> DeformableScene::PrepareRender(const SceneView& view,
   request.mode = view.mode;
   request.preset = view.preset;
   request.quality = view.quality;
+  request.interactive = InteractiveCastFor(view.interactive_quality);
   request.width = view.width;
   request.height = view.height;
   request.clip = ViewClip(view);

@@ -51,6 +51,8 @@ struct SceneView {
   RenderMode mode = RenderMode::kDvr;
   RenderPreset preset;
   RenderQuality quality = RenderQuality::kStill;
+  // How kInteractive frames trade speed for sharpness (InteractiveCastFor).
+  InteractiveQuality interactive_quality = kDefaultInteractiveQuality;
   int width = 512;
   int height = 512;
   bool overlay = false;  // mesh vertices (deformable yellow, hard blue), handles, drag

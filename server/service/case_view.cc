@@ -9,6 +9,7 @@ v3::RenderSettings CaseView(const v3::RenderSettings& settings) {
   view.clear_overlay();
   view.clear_encoding();
   view.clear_jpeg_quality();
+  view.clear_interactive_quality();
   return view;
 }
 

@@ -1,7 +1,7 @@
 // The view a case keeps (CaseInfo.view, docs/CASES.md): the render settings
 // a client of its session last set, less what is each client's own: the
-// frame's size (width, height), its encoding (encoding, jpeg_quality) and
-// the proxy-mesh overlay. What stays: mode, preset, render_tf, mip_window,
+// frame's size (width, height), its encoding (encoding, jpeg_quality), the
+// proxy-mesh overlay and the interactive quality. What stays: mode, preset, render_tf, mip_window,
 // crop, clip, view_cut, slices (world LPS, mm, as sent).
 #pragma once
 

@@ -275,6 +275,22 @@ Result<StreamSettings> ToStreamSettings(const v3::RenderSettings& in, const Volu
     *target = value == 0 ? std::min(512, max_side) : value;
   }
   out.view.overlay = in.overlay();
+  switch (in.interactive_quality()) {
+    case v3::INTERACTIVE_QUALITY_UNSPECIFIED:
+      out.view.interactive_quality = kDefaultInteractiveQuality;
+      break;
+    case v3::INTERACTIVE_QUALITY_FAST: out.view.interactive_quality = InteractiveQuality::kFast; break;
+    case v3::INTERACTIVE_QUALITY_BALANCED:
+      out.view.interactive_quality = InteractiveQuality::kBalanced;
+      break;
+    case v3::INTERACTIVE_QUALITY_SHARP:
+      out.view.interactive_quality = InteractiveQuality::kSharp;
+      break;
+    default:
+      return absl::InvalidArgumentError(StrCat("settings.interactive_quality: ",
+                                               in.interactive_quality(),
+                                               " is not an InteractiveQuality"));
+  }
   if (in.has_crop()) {
     out.view.clip.crop = CropBox{FromProto(in.crop().lo_mm()), FromProto(in.crop().hi_mm())};
   }

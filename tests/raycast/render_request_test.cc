@@ -7,7 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include "server/raycast/render_presets.h"
 #include "server/raycast/render_request.h"
+#include "tests/raycast/render_test_util.h"
 
 namespace vpm {
 namespace {
@@ -109,6 +111,47 @@ TEST(RenderRequest, InteractiveStepFollowsThePixelNotTheVoxels) {
   rc.quality = RenderQuality::kInteractive;
   rc.settings.step_mm = 0.4;
   EXPECT_DOUBLE_EQ(RequestStepMm(rc, ct), 0.4);
+}
+
+// The interactive qualities on a coarse CT (3 mm voxels, as the kidney CT):
+// fast keeps the footprint step, floored at one voxel; balanced and sharp
+// cap it at 2 and 1.5 x the still's step (0.375 mm there), sharp on a full
+// grid of rays. Casts outside their ranges are refused by name.
+TEST(RenderRequest, InteractiveQualitiesCapTheStepAndSizeTheRayGrid) {
+  VolumeGeometry coarse;
+  coarse.dims = {122, 101, 112};
+  coarse.spacing_mm = {3.0, 3.0, 3.0};
+  RenderRequest r = Interactive(coarse, 512);
+  r.preset = *MakeRenderPreset("ct-soft-tissue", testing::MakeSphereRodVolume(16));
+  r.interactive = InteractiveCastFor(InteractiveQuality::kFast);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, coarse), 3.0);
+  r.interactive = InteractiveCastFor(InteractiveQuality::kBalanced);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, coarse), 2.0 * kStillMaxStepMm);
+  r.interactive = InteractiveCastFor(InteractiveQuality::kSharp);
+  EXPECT_DOUBLE_EQ(RequestStepMm(r, coarse), 1.5 * kStillMaxStepMm);
+  auto sharp = PrepareRaycast(r, coarse, {0, 0, 0});
+  ASSERT_TRUE(sharp.ok()) << sharp.status();
+  EXPECT_EQ(sharp->render_width, 512);
+  // Full resolution skips by still bricks (3 mm voxels: 2 per 6 mm brick).
+  EXPECT_EQ(glm::ivec3(sharp->params.brick_voxels), BrickVoxels(RenderQuality::kStill, coarse));
+  r.interactive = InteractiveCastFor(InteractiveQuality::kBalanced);
+  auto balanced = PrepareRaycast(r, coarse, {0, 0, 0});
+  ASSERT_TRUE(balanced.ok()) << balanced.status();
+  EXPECT_EQ(balanced->render_width, 256);
+  EXPECT_EQ(glm::ivec3(balanced->params.brick_voxels),
+            BrickVoxels(RenderQuality::kInteractive, coarse));
+  r.interactive.divisor = 1.5;
+  auto third = PrepareRaycast(r, coarse, {0, 0, 0});
+  ASSERT_TRUE(third.ok()) << third.status();
+  EXPECT_EQ(third->render_width, 342);  // ceil(512 / 1.5)
+  for (InteractiveCast bad : {InteractiveCast{0.5, 0.0, gpu::kUpscaleBilinear},
+                              InteractiveCast{5.0, 0.0, gpu::kUpscaleBilinear},
+                              InteractiveCast{2.0, std::nan(""), gpu::kUpscaleBilinear},
+                              InteractiveCast{2.0, 0.0, 7}}) {
+    r.interactive = bad;
+    auto refused = PrepareRaycast(r, coarse, {0, 0, 0});
+    EXPECT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument);
+  }
 }
 
 }  // namespace

@@ -205,6 +205,36 @@ TEST_F(DeformableSceneTest, FemDuringAPreparedFrameChangesNeitherFrame) {
   EXPECT_EQ(testing::CompareRgba(next->rgba, second->rgba).max_abs, 0.0);
 }
 
+// SceneView::interactive_quality reaches the request (InteractiveCastFor)
+// and the renderer: fast and balanced cast half the rays per axis, sharp
+// all of them; stills cast all whatever it says.
+TEST_F(DeformableSceneTest, InteractiveQualityReachesTheRenderer) {
+  auto scene = Scene(true);
+  ASSERT_TRUE(scene);
+  ASSERT_TRUE(scene->Grab(Centre(), 12.0).ok());
+  ASSERT_TRUE(scene->Drag({0.0, 1.0, 2.0}).ok());
+  for (InteractiveQuality quality :
+       {InteractiveQuality::kFast, InteractiveQuality::kBalanced, InteractiveQuality::kSharp}) {
+    SceneView view = View();
+    view.quality = RenderQuality::kInteractive;
+    view.interactive_quality = quality;
+    auto request = scene->PrepareRender(view);
+    ASSERT_TRUE(request.ok()) << request.status();
+    const InteractiveCast expected = InteractiveCastFor(quality);
+    EXPECT_EQ(request->interactive.divisor, expected.divisor);
+    EXPECT_EQ(request->interactive.still_step_multiple, expected.still_step_multiple);
+    EXPECT_EQ(request->interactive.upscale_filter, expected.upscale_filter);
+    auto frame = scene->RenderPrepared(*request);
+    ASSERT_TRUE(frame.ok()) << frame.status();
+    EXPECT_EQ(frame->width, 64);
+    EXPECT_EQ(frame->render_width, quality == InteractiveQuality::kSharp ? 64 : 32);
+    view.quality = RenderQuality::kStill;
+    auto still = scene->Render(view);
+    ASSERT_TRUE(still.ok()) << still.status();
+    EXPECT_EQ(still->render_width, 64);
+  }
+}
+
 }  // namespace
 }  // namespace vpm
 

@@ -10,6 +10,7 @@
 #include "server/io/read_volume.h"
 #include "server/io/write_nifti.h"
 #include "server/raycast/render_preset_from_tf.h"
+#include "server/service/case_view.h"
 #include "server/service/loopback_address.h"
 #include "server/service/proto_convert.h"
 #include "tests/service/service_test_util.h"
@@ -396,6 +397,37 @@ TEST(ProtoConvert, RenderSettingsEnumsMapAndUnknownValuesAreRefused) {
   auto bad_encoding = ToStreamSettings(settings, volume, 1024);
   EXPECT_EQ(bad_encoding.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(bad_encoding.status().message().find("settings.encoding"), std::string::npos);
+}
+
+// RenderSettings.interactive_quality becomes the view's (and so the
+// renderer's: DeformableSceneTest.InteractiveQualityReachesTheRenderer);
+// unset is the default; a value outside the enum names the field.
+TEST(ProtoConvert, InteractiveQualityReachesTheView) {
+  auto read = ReadVolume("phantom:abdomen?size=16", VolumeLimits{});
+  ASSERT_TRUE(read.ok()) << read.status();
+  v3::RenderSettings settings;
+  auto defaults = ToStreamSettings(settings, *read, 1024);
+  ASSERT_TRUE(defaults.ok()) << defaults.status();
+  EXPECT_EQ(defaults->view.interactive_quality, kDefaultInteractiveQuality);
+  for (auto [proto, quality] :
+       {std::pair{v3::INTERACTIVE_QUALITY_FAST, InteractiveQuality::kFast},
+        std::pair{v3::INTERACTIVE_QUALITY_BALANCED, InteractiveQuality::kBalanced},
+        std::pair{v3::INTERACTIVE_QUALITY_SHARP, InteractiveQuality::kSharp}}) {
+    settings.set_interactive_quality(proto);
+    auto converted = ToStreamSettings(settings, *read, 1024);
+    ASSERT_TRUE(converted.ok()) << converted.status();
+    EXPECT_EQ(converted->view.interactive_quality, quality);
+  }
+  settings.set_interactive_quality(static_cast<v3::InteractiveQuality>(9));
+  auto bad = ToStreamSettings(settings, *read, 1024);
+  EXPECT_EQ(bad.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(bad.status().message().find("settings.interactive_quality"), std::string::npos);
+  // Each client's own, like the frame size: not part of a case's view.
+  settings.set_interactive_quality(v3::INTERACTIVE_QUALITY_SHARP);
+  settings.set_preset("ct-bone");
+  const v3::RenderSettings kept = CaseView(settings);
+  EXPECT_EQ(kept.interactive_quality(), v3::INTERACTIVE_QUALITY_UNSPECIFIED);
+  EXPECT_EQ(kept.preset(), "ct-bone");
 }
 
 // RenderSettings.render_tf (a transfer function a client read from a file)

@@ -15,6 +15,7 @@ TEST(CaseViewSettings, TheCasesViewReplacesWhatShowsAndTheViewersFrameStays) {
   own.set_overlay(true);
   own.set_encoding(v3::ENCODING_JPEG);
   own.set_jpeg_quality(70);
+  own.set_interactive_quality(v3::INTERACTIVE_QUALITY_SHARP);
   own.set_view_cut(true);
   own.add_clip()->set_offset_mm(9.0);
   v3::RenderSettings view;
@@ -33,6 +34,7 @@ TEST(CaseViewSettings, TheCasesViewReplacesWhatShowsAndTheViewersFrameStays) {
   EXPECT_EQ(merged.height(), 480);
   EXPECT_TRUE(merged.overlay());
   EXPECT_EQ(merged.jpeg_quality(), 70);
+  EXPECT_EQ(merged.interactive_quality(), v3::INTERACTIVE_QUALITY_SHARP);
   const WorldBox box = CropBoxFromProto(merged.crop());
   EXPECT_EQ(box.lo.x, -10.5);
   EXPECT_EQ(box.hi.z, 30.25);

@@ -207,6 +207,10 @@ TEST(StatusLines, ShowRateLatencySizeQualityDisplacementAndServerTimes) {
   EXPECT_EQ(lines[1], "interactive  disp 3.2 mm  GRAB MODE");
   EXPECT_EQ(lines[2], "server ms fem 10 warp 0 rend 0");
   EXPECT_EQ(lines[3], "enc 0 queue 0 total 60  F1/h: help");
+  in.interactive_quality = v3::INTERACTIVE_QUALITY_SHARP;
+  EXPECT_EQ(StatusLines(in)[0], "12.3 fps  rtt 85 ms  256x192 sharp");
+  in.interactive_quality = v3::INTERACTIVE_QUALITY_BALANCED;
+  EXPECT_EQ(StatusLines(in)[0], "12.3 fps  rtt 85 ms  256x192 bal");
 }
 
 TEST(StatusLines, FitA256PixelWindowWithSlowStages) {
@@ -215,6 +219,7 @@ TEST(StatusLines, FitA256PixelWindowWithSlowStages) {
   in.latency_ms = 12345;
   in.frame = FrameOf(4096, true, 123.4, {1234, 123, 1234, 123, 123, 12345});
   in.grab_mode = in.grabbed = true;
+  in.interactive_quality = v3::INTERACTIVE_QUALITY_SHARP;
   for (const std::string& line : StatusLines(in)) {
     EXPECT_LE(TextWidth(line), 256 - 2 * 3) << line;  // 3-pixel margins
   }

@@ -253,7 +253,8 @@ function makeCases(grpc, users) {
     event(sessionId, event) {
       const c = sessions.get(sessionId);
       if (c && event.settings) {
-        const { width, height, overlay, encoding, jpeg_quality: quality, ...view } = event.settings;
+        const { width, height, overlay, encoding, jpeg_quality: quality,
+                interactive_quality: moving, ...view } = event.settings;
         c.view = view;
       }
       if (c && (event.grab || event.drag || event.release || event.pin || event.reset)) {

@@ -1,8 +1,11 @@
 // The page speaks in the names a user reads (mode 'dvr' | 'mip', encoding
-// 'jpeg' | 'png'); vpm.v3 carries them as enums. proto-loader is set up with
+// 'jpeg' | 'png', interactive_quality 'fast' | 'balanced' | 'sharp'); vpm.v3 carries them as enums. proto-loader is set up with
 // `enums: String`, so an enum travels as its value's name.
 const kModes = { dvr: 'RENDER_MODE_DVR', mip: 'RENDER_MODE_MIP' };
 const kEncodings = { jpeg: 'ENCODING_JPEG', png: 'ENCODING_PNG' };
+const kInteractiveQualities = { fast: 'INTERACTIVE_QUALITY_FAST',
+                                balanced: 'INTERACTIVE_QUALITY_BALANCED',
+                                sharp: 'INTERACTIVE_QUALITY_SHARP' };
 // A value outside the enum: the server refuses it with INVALID_ARGUMENT,
 // naming the field, as it refused an unknown name before.
 const kUnknown = 999;
@@ -17,6 +20,9 @@ export function toProtoSettings(settings, uploadedTf = null) {
   delete out.uploaded_tf;
   if (settings.mode !== undefined) out.mode = kModes[settings.mode] ?? kUnknown;
   if (settings.encoding !== undefined) out.encoding = kEncodings[settings.encoding] ?? kUnknown;
+  if (settings.interactive_quality !== undefined) {
+    out.interactive_quality = kInteractiveQualities[settings.interactive_quality] ?? kUnknown;
+  }
   if (settings.uploaded_tf === true && uploadedTf) {
     out.render_tf = uploadedTf;
     delete out.preset;

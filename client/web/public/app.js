@@ -13,6 +13,7 @@ import { FrameStats } from './frame_stats.js';
 import { GatewaySocket } from './gateway_socket.js';
 import { fitCanvas, frameSizeForPane } from './pane_fit.js';
 import { PointerTools } from './pointer_tools.js';
+import { QualityControl } from './quality_control.js';
 import { grabTargetMm } from './slice_planes.js';
 import { SliceViews } from './slice_views.js';
 import { ServerFiles } from './server_files.js';
@@ -184,7 +185,7 @@ function settings() {
   // clip plane says what to show.
   const viewCut = $('view-cut').checked && !cut.crop && !cut.clip;
   const out = { mode, preset, width, height, overlay: $('overlay').checked,
-                slices: slices.specs(), ...cut, view_cut: viewCut };
+                slices: slices.specs(), ...cut, view_cut: viewCut, ...quality.settings() };
   if (preset === 'uploaded') Object.assign(out, { preset: undefined, uploaded_tf: true });
   return out;
 }
@@ -225,6 +226,8 @@ function refineAt(pointMm) {
   socket.send({ type: 'refine', point_mm: pointMm });
 }
 
+const quality = new QualityControl($('frame-size').closest('label'),
+                                   () => state.session && sendEvent({ settings: settings() }));
 const slices = new SliceViews({
   canvases: { axial: $('slice-axial'), coronal: $('slice-coronal'), sagittal: $('slice-sagittal') },
   labels: { axial: $('at-axial'), coronal: $('at-coronal'), sagittal: $('at-sagittal') },

@@ -1,0 +1,259 @@
+// What each way of casting interactive frames costs and shows, during a
+// drag: for each candidate (InteractiveCast: ray grid divisor, step, upscale
+// filter) the drag loop's frames per second (FEM step + map update +
+// interactive frame + JPEG, in order, as drag_loop_bench's loop), the
+// frame's wall time, and its PSNR (RGB) against the still of the same
+// deformed state and camera. 512 x 512 (--size), default camera, the
+// 250-vertex mesh refined at the grab (the phantom's left renal artery, the
+// kidney CT's left kidney), dragged 12 mm in 10 steps. Candidates run interleaved, rep by rep, in
+// one process, so that other load on the machine weighs on all alike; the load average is printed
+// before and after each volume. Usage: interactive_quality_bench [--candidates] [--reps N] [--size
+// N]
+//                                  [--preset NAME] [--mode dvr|mip] [SOURCE...]
+//   --candidates: also the casts that were measured against the settings
+//   (InteractiveQuality), not only fast, balanced and sharp;
+//   SOURCE: a volume file or phantom:NAME (default: the kidney CT and
+//   phantom:abdomen).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "bench/bench_util.h"
+#include "server/io/read_volume.h"
+#include "server/mesh/build_proxy_mesh.h"
+#include "server/raycast/frame_encoder.h"
+#include "server/scene/deformable_scene.h"
+
+using namespace vpm;
+
+namespace {
+
+struct Candidate {
+  std::string name;
+  InteractiveCast cast;
+  bool jitter = true;  // ray starts jittered, a new seed per frame
+};
+
+std::vector<Candidate> Candidates(bool all) {
+  const int bilinear = gpu::kUpscaleBilinear, cubic = gpu::kUpscaleCatmullRom;
+  std::vector<Candidate> c = {
+      {"fast", InteractiveCastFor(InteractiveQuality::kFast)},
+      {"balanced", InteractiveCastFor(InteractiveQuality::kBalanced)},
+      {"sharp", InteractiveCastFor(InteractiveQuality::kSharp)},
+  };
+  if (!all) return c;
+  for (const Candidate& more : std::vector<Candidate>{
+           {"1/2 res, footprint step, no jitter", {2.0, 0.0, bilinear}, false},
+           {"1/2 res, footprint step, Catmull-Rom", {2.0, 0.0, cubic}},
+           {"1/2 res, step <= 2x still, Catmull-Rom", {2.0, 2.0, cubic}},
+           {"1/2 res, step <= 1.5x still", {2.0, 1.5, bilinear}},
+           {"2/3 res, step <= 2x still", {1.5, 2.0, bilinear}},
+           {"2/3 res, step <= 1.5x still", {1.5, 1.5, bilinear}},
+           {"full res, footprint step", {1.0, 0.0, bilinear}},
+           {"full res, step <= 2x still", {1.0, 2.0, bilinear}},
+           {"full res, step <= 3x still", {1.0, 3.0, bilinear}},
+       }) {
+    c.push_back(more);
+  }
+  return c;
+}
+
+double Mse(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+  double sum = 0.0;
+  int64_t n = 0;
+  for (size_t i = 0; i < a.size(); i += 4) {
+    for (int c = 0; c < 3; ++c) {
+      const double d = double(a[i + c]) - double(b[i + c]);
+      sum += d * d;
+      ++n;
+    }
+  }
+  return sum / double(n);
+}
+
+double PsnrOfMse(double mse) { return mse == 0.0 ? 99.0 : 10.0 * std::log10(255.0 * 255.0 / mse); }
+
+std::string LoadAverage() {
+  std::ifstream in("/proc/loadavg");
+  std::string one, five, fifteen;
+  in >> one >> five >> fifteen;
+  return one + " " + five + " " + fifteen;
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+struct Result_ {
+  double mse_sum = 0.0, worst_db = 99.0;
+  int frames = 0;
+  double step_mm = 0.0;
+  int rays = 0;
+  std::vector<double> fps, frame_ms;
+};
+
+constexpr int kSteps = 10;
+glm::dvec3 DragOffset(int step) { return glm::dvec3(0.0, 0.0, 1.2 * step); }
+
+// Where the drag grabs: the volume's left renal artery landmark; for a file
+// with a left_kidney_mask.nii.gz beside it (the kidney CT), the mask voxel
+// nearest the mask's centroid; else the box centre.
+glm::dvec3 GrabPoint(const std::string& source, const Volume& volume) {
+  const VolumeGeometry& g = volume.geometry();
+  for (const Landmark& l : volume.landmarks()) {
+    if (l.name == "left_renal_artery") return l.position_mm;
+  }
+  const std::string mask_path =
+      source.substr(0, source.find_last_of('/') + 1) + "left_kidney_mask.nii.gz";
+  if (source.find('/') != std::string::npos && std::ifstream(mask_path).good()) {
+    const Volume mask = bench::Check(ReadVolume(mask_path, {}), "reading the kidney mask");
+    std::vector<glm::dvec3> inside;
+    glm::dvec3 centroid(0.0);
+    for (int64_t k = 0; k < g.dims[2]; ++k)
+      for (int64_t j = 0; j < g.dims[1]; ++j)
+        for (int64_t i = 0; i < g.dims[0]; ++i) {
+          if (mask.At(i, j, k) < 0.5f) continue;
+          inside.push_back(g.IndexToPhysical(glm::dvec3(i, j, k)));
+          centroid += inside.back();
+        }
+    if (!inside.empty()) {
+      centroid /= double(inside.size());
+      glm::dvec3 best = inside.front();
+      for (const glm::dvec3& p : inside) {
+        if (glm::distance(p, centroid) < glm::distance(best, centroid)) best = p;
+      }
+      return best;
+    }
+  }
+  return 0.5 * g.extent_mm();
+}
+
+void RunVolume(const std::string& source, int reps, int size, const std::string& preset,
+               RenderMode mode, bool all) {
+  auto volume = bench::Check(ReadVolume(source, {}), "reading the volume");
+  auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
+  auto gpu_volume = bench::Check(GpuVolume::Upload(*context, volume), "upload");
+  auto renderer = bench::Check(VolumeRenderer::Create(*context, {}), "renderer");
+  const glm::dvec3 grab = GrabPoint(source, volume);
+  MeshParams params;
+  params.grid = {20, 20, 20};
+  params.target = 250;
+  params.refine_at_mm = grab;
+  auto costs = bench::Check(LatticeCostsGpu::Create(*context), "kernel");
+  const ProxyMesh mesh =
+      bench::Check(BuildProxyMesh(volume, params, {&gpu_volume, &costs}), "mesh");
+  DeformableScene::Options options;
+  options.fem = InteractiveFemOptions();
+  options.map = InteractiveMapOptions();
+
+  SceneView view{.camera = Camera::ForVolume(volume.geometry()),
+                 .mode = mode,
+                 .preset = bench::Check(MakeRenderPreset(preset, volume), "preset"),
+                 .quality = RenderQuality::kInteractive,
+                 .width = size,
+                 .height = size};
+  SceneView still = view;
+  still.quality = RenderQuality::kStill;
+  const std::vector<Candidate> candidates = Candidates(all);
+  std::vector<Result_> results(candidates.size());
+  const std::string load_before = LoadAverage();
+
+  // PSNR: every candidate's frame against the still, at each drag step.
+  {
+    auto scene = bench::Check(
+        DeformableScene::Create(*context, volume, gpu_volume, *renderer, mesh, options), "scene");
+    bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
+    for (int s = 1; s <= kSteps; ++s) {
+      bench::Check(scene->Drag(DragOffset(s)), "drag");
+      const Frame reference = bench::Check(scene->Render(still), "still");
+      for (size_t c = 0; c < candidates.size(); ++c) {
+        RenderRequest request = bench::Check(scene->PrepareRender(view), "prepare");
+        request.interactive = candidates[c].cast;
+        request.settings.jitter = candidates[c].jitter;
+        const Frame frame = bench::Check(scene->RenderPrepared(request), "frame");
+        const double mse = Mse(frame.rgba, reference.rgba);
+        Result_& r = results[c];
+        r.mse_sum += mse;
+        r.worst_db = std::min(r.worst_db, PsnrOfMse(mse));
+        ++r.frames;
+        r.step_mm = frame.step_mm;
+        r.rays = frame.render_width;
+      }
+    }
+  }
+  // Frame rate: the drag loop per candidate, interleaved rep by rep.
+  for (int rep = 0; rep < reps; ++rep) {
+    for (size_t c = 0; c < candidates.size(); ++c) {
+      auto scene = bench::Check(
+          DeformableScene::Create(*context, volume, gpu_volume, *renderer, mesh, options), "scene");
+      bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
+      const auto t0 = std::chrono::steady_clock::now();
+      for (int s = 1; s <= kSteps; ++s) {
+        bench::Check(scene->Drag(DragOffset(s)), "drag");
+        RenderRequest request = bench::Check(scene->PrepareRender(view), "prepare");
+        request.interactive = candidates[c].cast;
+        request.settings.jitter = candidates[c].jitter;
+        const Frame frame = bench::Check(scene->RenderPrepared(request), "frame");
+        results[c].frame_ms.push_back(frame.timings.wall_ms);
+        bench::Check(EncodeJpeg(frame.rgba, frame.width, frame.height, 85), "jpeg");
+      }
+      results[c].fps.push_back(kSteps / (MsSince(t0) / 1000.0));
+    }
+  }
+  std::printf("\n%s, %s %s, %dx%d, device '%s'; load average before %s, after %s\n", source.c_str(),
+              mode == RenderMode::kMip ? "MIP" : "DVR", preset.c_str(), size, size,
+              context->device_name().c_str(), load_before.c_str(), LoadAverage().c_str());
+  std::printf("%-40s %5s %7s %9s %9s %10s %9s %9s\n", "candidate", "rays", "step mm", "loop fps",
+              "(best)", "frame ms", "PSNR dB", "worst dB");
+  for (size_t c = 0; c < candidates.size(); ++c) {
+    const Result_& r = results[c];
+    std::printf("%-40s %5d %7.3f %9.1f %9.1f %10.1f %9.1f %9.1f\n", candidates[c].name.c_str(),
+                r.rays, r.step_mm, Median(r.fps), *std::max_element(r.fps.begin(), r.fps.end()),
+                Median(r.frame_ms), PsnrOfMse(r.mse_sum / r.frames), r.worst_db);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int reps = 3, size = 512;
+  bool all = false;
+  std::string preset = "ct-soft-tissue";
+  RenderMode mode = RenderMode::kDvr;
+  std::vector<std::string> sources;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--candidates") {
+      all = true;
+    } else if (a == "--reps" && i + 1 < argc) {
+      reps = std::max(1, std::atoi(argv[++i]));
+    } else if (a == "--size" && i + 1 < argc) {
+      size = std::atoi(argv[++i]);
+    } else if (a == "--preset" && i + 1 < argc) {
+      preset = argv[++i];
+    } else if (a == "--mode" && i + 1 < argc) {
+      mode = std::string(argv[++i]) == "mip" ? RenderMode::kMip : RenderMode::kDvr;
+    } else {
+      sources.push_back(a);
+    }
+  }
+  if (sources.empty()) {
+    sources = {"tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz", "phantom:abdomen"};
+  }
+  std::printf(
+      "interactive frames during a drag (phantom: left renal artery, kidney CT: left kidney; 12 mm "
+      "in 10 steps, 250-vertex "
+      "mesh): loop fps = 10 steps / their wall time (FEM + map + frame + JPEG), median "
+      "and best of %d; frame ms: median wall of the interactive frame; PSNR (RGB) against "
+      "the still of the same deformed state and camera, over the 10 steps (worst: the "
+      "worst step)\n",
+      reps);
+  for (const std::string& source : sources) RunVolume(source, reps, size, preset, mode, all);
+  return 0;
+}
