@@ -523,14 +523,114 @@ def main():
     print(f"# load at the end: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
 
 
+class CaseResults:
+    """What one case measures, filled size by size."""
+
+    def __init__(self):
+        self.results = {}    # (mode, quality, size) -> {renderer: (wall ms, CPU ms, PSNR or None)}
+        self.stills = {}     # (renderer, mode, size) -> RGB
+        self.refs = {}       # (renderer, mode, size) -> RGB at the reference step
+        self.vpm_steps = {}  # (mode, size) -> [(step mm, wall, CPU, PSNR against vpm's reference)]
+        self.cross = []      # (mode, size, VTK mapper, PSNR of its still against vpm's)
+
+
+def measure_vpm(args, case, size, fine_step, r):
+    """vpm's rows at `size`, without and through the map, its reference, its
+    coarse-step column. Returns render_bench's (camera, MIP window)."""
+    png_dir = os.path.join(case["out"], f"vpm_{size}")
+    os.makedirs(png_dir, exist_ok=True)
+    for renderer, with_map in (("vpm", False), ("vpm map", True)):
+        camera, window, rows = run_vpm(args, case, size, png_dir, with_map)
+        for (mode, quality), name in VPM_ROWS.items():
+            rgb = vpm_png(png_dir, name)
+            entry = r.results.setdefault((mode, quality, size), {})
+            db = None
+            if quality == "still":
+                r.stills[(renderer, mode, size)] = rgb
+            else:
+                db = psnr(rgb, r.stills[(renderer, mode, size)])
+            entry[renderer] = (rows[name][0], rows[name][1], db)
+    # vpm's reference (the map changes nothing in an undeformed frame's
+    # picture: both columns' stills are held against it).
+    for mode, (_, _, rgb) in vpm_stills_at(args, case, size, fine_step, "reference").items():
+        r.refs[("vpm", mode, size)] = r.refs[("vpm map", mode, size)] = rgb
+    for mode in ("mip", "composite"):
+        for renderer in ("vpm", "vpm map"):
+            wall, cpu, _ = r.results[(mode, "still", size)][renderer]
+            db = psnr(r.stills[(renderer, mode, size)], r.refs[(renderer, mode, size)])
+            r.results[(mode, "still", size)][renderer] = (wall, cpu, db)
+        wall, cpu, db = r.results[(mode, "still", size)]["vpm"]
+        r.vpm_steps[(mode, size)] = [(args.step, wall, cpu, db)]
+    # Full resolution at a coarser step, in place of half resolution: vpm's
+    # still frames at --coarse-step x --step, each with its PSNR against
+    # vpm's still at --step, shown in the interactive rows.
+    for mode, (wall, cpu, rgb) in vpm_stills_at(args, case, size,
+                                                args.coarse_step * args.step, "coarse").items():
+        r.results[(mode, "interactive", size)][COARSE] = (
+            wall, cpu, psnr(rgb, r.stills[("vpm", mode, size)]))
+    return camera, window
+
+
+def measure_vtk(args, case, size, camera, props, mappers, fine_step, r):
+    """Each VTK mapper's still (against its reference) and interactive rows."""
+    scene = VtkScene(case["image"], size, camera)
+    for kind in mappers:
+        for mode in args.modes.split(","):
+            ref_kind = "GPU" if kind.startswith("Smart") else kind
+            if (ref_kind, mode, size) not in r.refs:
+                ms, r.refs[(ref_kind, mode, size)] = vtk_reference(scene, ref_kind, mode,
+                                                                   props[mode], fine_step)
+                print(f"  reference {ref_kind} {mode} {size}^2 at {fine_step:g} mm: "
+                      f"{ms:.0f} ms", flush=True)
+            r.refs[(kind, mode, size)] = r.refs[(ref_kind, mode, size)]
+            for quality in ("still", "interactive"):
+                mapper = make_mapper(kind, args.step)
+                if mode == "mip":
+                    mapper.SetBlendModeToMaximumIntensity()
+                else:
+                    mapper.SetBlendModeToComposite()
+                set_quality(mapper, kind, quality == "interactive", args.step)
+                scene.use(mapper, props[mode])
+                rate = 15.0 if quality == "interactive" else 0.0001
+                # Interactive: VTK adapts its sample distances to the time
+                # of the frames before, so it gets frames to settle.
+                ms, cpu, rgb = scene.measure(args.reps, rate, 8 if quality == "interactive" else 1)
+                tag = f"vtk_{kind.replace(' ', '').replace('.', '')}_{mode}_{quality}_{size}"
+                write_png(os.path.join(case["out"], tag + ".png"), rgb)
+                entry = r.results[(mode, quality, size)]
+                if quality == "still":
+                    r.stills[(kind, mode, size)] = rgb
+                    entry[kind] = (ms, cpu, psnr(rgb, r.refs[(kind, mode, size)]))
+                else:
+                    entry[kind] = (ms, cpu, psnr(rgb, r.stills[(kind, mode, size)]))
+        del mapper
+    for mode in args.modes.split(","):
+        for kind in mappers:
+            r.cross.append((mode, size, kind, psnr(r.stills[("vpm", mode, size)],
+                                                   r.stills[(kind, mode, size)])))
+
+
+def time_vpm_finer(args, case, size, mappers, r):
+    """vpm's stills at the --finer steps in turn while its PSNR is under the
+    best of the VTK mappers' (each against its own reference)."""
+    for mode in args.modes.split(","):
+        entry = r.results[(mode, "still", size)]
+        target = max(entry[m][2] for m in mappers)
+        for factor in [float(f) for f in args.finer.split(",") if f]:
+            if r.vpm_steps[(mode, size)][-1][3] >= target:
+                break
+            step = factor * args.step
+            wall, cpu, rgb = vpm_stills_at(args, case, size, step, f"step{step:g}")[mode]
+            r.vpm_steps[(mode, size)].append(
+                (step, wall, cpu, psnr(rgb, r.refs[("vpm", mode, size)])))
+
+
 def run_case(args, case, mappers):
     """One case's tables; returns its goal lines (512^2 stills)."""
     data = case["data"]
     spacing = case["spacing"]
-    image = case["image"]
     value_range = (float(data.min()), float(data.max()))
     preset = read_paraview_preset(case["tf"])
-    modes = args.modes.split(",")
     fine_step = args.step / args.ref_factor
     load = os.getloadavg()
     print(f"\n## case {case['name']}: {case['source']}, {data.shape[2]}x{data.shape[1]}x{data.shape[0]}, "
@@ -538,93 +638,14 @@ def run_case(args, case, mappers):
           f"(references {fine_step:g} mm), {case['voxels']} voxels, composite: {case['tf']}; "
           f"VTK {vtk.vtkVersion.GetVTKVersion()}; {os.cpu_count()} cores; "
           f"load {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}", flush=True)
-
-    results = {}  # (mode, quality, size) -> {renderer: (wall ms, CPU ms, PSNR or None)}
-    stills = {}   # (renderer, mode, size) -> RGB
-    refs = {}     # (renderer, mode, size) -> RGB at fine_step
-    vpm_steps = {}  # (mode, size) -> [(step mm, wall, CPU, PSNR against vpm's reference)]
-    cross = []
+    r = CaseResults()
     for size in [int(s) for s in args.sizes.split(",")]:
-        png_dir = os.path.join(case["out"], f"vpm_{size}")
-        os.makedirs(png_dir, exist_ok=True)
-        for renderer, with_map in (("vpm", False), ("vpm map", True)):
-            camera, window, rows = run_vpm(args, case, size, png_dir, with_map)
-            for (mode, quality), name in VPM_ROWS.items():
-                rgb = vpm_png(png_dir, name)
-                entry = results.setdefault((mode, quality, size), {})
-                db = None
-                if quality == "still":
-                    stills[(renderer, mode, size)] = rgb
-                else:
-                    db = psnr(rgb, stills[(renderer, mode, size)])
-                entry[renderer] = (rows[name][0], rows[name][1], db)
-        # vpm's reference (the map changes nothing in an undeformed frame's
-        # picture: both columns' stills are held against it).
-        for mode, (_, _, rgb) in vpm_stills_at(args, case, size, fine_step, "reference").items():
-            refs[("vpm", mode, size)] = refs[("vpm map", mode, size)] = rgb
-        for mode in ("mip", "composite"):
-            for renderer in ("vpm", "vpm map"):
-                wall, cpu, _ = results[(mode, "still", size)][renderer]
-                db = psnr(stills[(renderer, mode, size)], refs[(renderer, mode, size)])
-                results[(mode, "still", size)][renderer] = (wall, cpu, db)
-            wall, cpu, db = results[(mode, "still", size)]["vpm"]
-            vpm_steps[(mode, size)] = [(args.step, wall, cpu, db)]
-        # Full resolution at a coarser step, in place of half resolution:
-        # vpm's still frames at --coarse-step x --step, each with its PSNR
-        # against vpm's still at --step, shown in the interactive rows.
-        for mode, (wall, cpu, rgb) in vpm_stills_at(args, case, size,
-                                                    args.coarse_step * args.step, "coarse").items():
-            results[(mode, "interactive", size)][COARSE] = (
-                wall, cpu, psnr(rgb, stills[("vpm", mode, size)]))
-        scene = VtkScene(image, size, camera)
+        camera, window = measure_vpm(args, case, size, fine_step, r)
         props = {"mip": mip_property(window["width"], window["level"], value_range),
                  "composite": composite_property(preset, True)}
-        for kind in mappers:
-            for mode in modes:
-                ref_kind = "GPU" if kind.startswith("Smart") else kind
-                if (ref_kind, mode, size) not in refs:
-                    ms, refs[(ref_kind, mode, size)] = vtk_reference(scene, kind, mode,
-                                                                     props[mode], fine_step)
-                    print(f"  reference {ref_kind} {mode} {size}^2 at {fine_step:g} mm: "
-                          f"{ms:.0f} ms", flush=True)
-                refs[(kind, mode, size)] = refs[(ref_kind, mode, size)]
-                for quality in ("still", "interactive"):
-                    mapper = make_mapper(kind, args.step)
-                    if mode == "mip":
-                        mapper.SetBlendModeToMaximumIntensity()
-                    else:
-                        mapper.SetBlendModeToComposite()
-                    set_quality(mapper, kind, quality == "interactive", args.step)
-                    scene.use(mapper, props[mode])
-                    rate = 15.0 if quality == "interactive" else 0.0001
-                    # Interactive: VTK adapts its sample distances to the
-                    # time of the frames before, so it gets frames to settle.
-                    ms, cpu, rgb = scene.measure(args.reps, rate,
-                                                 8 if quality == "interactive" else 1)
-                    tag = f"vtk_{kind.replace(' ', '').replace('.', '')}_{mode}_{quality}_{size}"
-                    write_png(os.path.join(case["out"], tag + ".png"), rgb)
-                    entry = results[(mode, quality, size)]
-                    if quality == "still":
-                        stills[(kind, mode, size)] = rgb
-                        entry[kind] = (ms, cpu, psnr(rgb, refs[(kind, mode, size)]))
-                    else:
-                        entry[kind] = (ms, cpu, psnr(rgb, stills[(kind, mode, size)]))
-            del mapper
-        for mode in modes:
-            for kind in mappers:
-                cross.append((mode, size, kind, psnr(stills[("vpm", mode, size)],
-                                                     stills[(kind, mode, size)])))
-        # vpm at finer steps while its PSNR is under a peer's.
-        for mode in modes:
-            entry = results[(mode, "still", size)]
-            target = max(entry[m][2] for m in mappers)
-            for factor in [float(f) for f in args.finer.split(",") if f]:
-                if vpm_steps[(mode, size)][-1][3] >= target:
-                    break
-                step = factor * args.step
-                wall, cpu, rgb = vpm_stills_at(args, case, size, step, f"step{step:g}")[mode]
-                vpm_steps[(mode, size)].append(
-                    (step, wall, cpu, psnr(rgb, refs[("vpm", mode, size)])))
+        measure_vtk(args, case, size, camera, props, mappers, fine_step, r)
+        time_vpm_finer(args, case, size, mappers, r)
+    results, vpm_steps, cross = r.results, r.vpm_steps, r.cross
 
     print(f"\n### case {case['name']}: wall ms per frame (min of {args.reps}), image read back:")
     print_table(results, mappers, 0)
