@@ -1,8 +1,14 @@
 #!/usr/bin/python3
 """vpm against VTK's volume mappers on the same work, in one run.
 
-Renders one volume (default: the 256^3 abdomen phantom, exported by
-`vpm volume export` to NIfTI) with VTK 9.1's FixedPoint (CPU), GPU (OpenGL on
+Two cases, one table set each (--cases): "phantom", the 256^3 abdomen
+phantom (--source, exported by `vpm volume export` to NIfTI) with
+bench/peer_tf.json; "kidney", the real abdominal CT of
+tests/data/ct-abdomen-kidney (122 x 101 x 112 voxels at 3 mm, axis-aligned)
+resampled here trilinearly to 1 mm (364 x 301 x 334, int16 Hounsfield units,
+written as NIfTI for both) with its own transfer function,
+bench/peer_tf_kidney.json. Each case renders its volume with VTK 9.1's
+FixedPoint (CPU), GPU (OpenGL on
 llvmpipe) and Smart mappers, and with vpm's `render_bench`, with the same
 camera (read from render_bench's "camera:" line), frame size, sample step
 (1 mm), MIP window and transfer function (a ParaView JSON preset, read by
@@ -27,6 +33,16 @@ minimum over --reps, with the image read back (vpm's `wall`; VTK: Render()
 and glReadPixels), and process CPU ms per frame / cores, less disturbed by
 other load. Camera and geometry: the PSNR of each VTK still against vpm's
 is printed, and the PNGs of all are written to --out for looking at.
+
+Equal quality: each renderer's still is compared with its own fine-step
+reference, the same renderer at --step / --ref-factor (8: 0.125 mm; the
+Smart mapper, which renders through the GPU mapper here and takes no step
+of its own, is held against the GPU mapper's), and the PSNR is printed beside the
+still's time. Where vpm's PSNR at --step falls below a peer's, vpm's stills
+are timed again at finer steps (--finer) until they reach it, and the
+"equal quality" table compares each peer with vpm at the coarsest step that
+reaches its PSNR: the goals of issue 29 (2x the fastest VTK mapper, 5x the
+Smart mapper at its defaults) are judged there.
 --int16 rounds the volume to int16, as CT scanners store Hounsfield units,
 and gives both the same int16 values (vpm holds 2 bytes per voxel, VTK a
 vtkShortArray).
@@ -101,6 +117,60 @@ def write_int16_nifti(source, path):
     with open(path, "wb") as f:
         f.write(bytes(header) + extra + rounded.tobytes())
     return rounded
+
+
+def resample_nifti_gz(source, path, spacing_mm):
+    """The gzipped, axis-aligned NIfTI-1 `source` resampled trilinearly to
+    `spacing_mm` isotropic, on the same origin and extent (voxel centres
+    0, s, 2s, ... mm from the first), rounded to int16 and written
+    uncompressed to `path` with a diagonal sform. Returns the int16 array
+    (z, y, x)."""
+    import gzip
+    raw = gzip.open(source).read()
+    header = bytearray(raw[:352])
+    if struct.unpack("<i", header[:4])[0] != 348:
+        sys.exit(f"peer_vtk: {source}: not a little-endian NIfTI-1 file")
+    dim = struct.unpack("<8h", header[40:56])
+    datatype = struct.unpack("<h", header[70:72])[0]
+    pixdim = struct.unpack("<8f", header[76:108])
+    vox_offset = int(struct.unpack("<f", header[108:112])[0])
+    slope, inter = struct.unpack("<2f", header[112:120])
+    srow = [struct.unpack("<4f", header[280 + 16 * r:296 + 16 * r]) for r in range(3)]
+    if any(abs(srow[r][c]) > 1e-6 for r in range(3) for c in range(3) if r != c):
+        sys.exit(f"peer_vtk: {source}: an oblique volume; this resampling keeps the axes")
+    nx, ny, nz = dim[1:4]
+    data = np.frombuffer(raw, dtype=NIFTI_TYPES[datatype], count=nx * ny * nz,
+                         offset=vox_offset).astype(np.float32).reshape(nz, ny, nx)
+    if slope not in (0.0, 1.0) or inter != 0.0:
+        data = data * (slope if slope != 0.0 else 1.0) + inter
+    # Separable linear interpolation along each axis: trilinear.
+    shape = []
+    for axis, n, spacing in ((2, nx, pixdim[1]), (1, ny, pixdim[2]), (0, nz, pixdim[3])):
+        m = int(math.floor((n - 1) * spacing / spacing_mm + 1e-6)) + 1
+        t = np.arange(m) * (spacing_mm / spacing)
+        i0 = np.minimum(np.floor(t).astype(np.int64), n - 2)
+        w = (t - i0).astype(np.float32)
+        wshape = [1, 1, 1]
+        wshape[axis] = m
+        w = w.reshape(wshape)
+        data = np.take(data, i0, axis=axis) * (1.0 - w) + np.take(data, i0 + 1, axis=axis) * w
+        shape.append(m)
+    out = np.clip(np.round(data), -32768, 32767).astype("<i2")
+    header[40:56] = struct.pack("<8h", 3, shape[0], shape[1], shape[2], 1, 1, 1, 1)
+    header[70:72] = struct.pack("<h", 4)    # datatype: int16
+    header[72:74] = struct.pack("<h", 16)   # bitpix
+    header[76:108] = struct.pack("<8f", pixdim[0], spacing_mm, spacing_mm, spacing_mm, 1, 1, 1, 1)
+    header[108:112] = struct.pack("<f", 352.0)
+    header[112:120] = struct.pack("<2f", 1.0, 0.0)
+    for r in range(3):
+        sign = 1.0 if srow[r][r] > 0 else -1.0
+        row = [0.0, 0.0, 0.0, srow[r][3]]
+        row[r] = sign * spacing_mm
+        header[280 + 16 * r:296 + 16 * r] = struct.pack("<4f", *row)
+    header[348:352] = bytes(4)  # no extensions
+    with open(path, "wb") as f:
+        f.write(bytes(header) + out.tobytes())
+    return out
 
 
 def vtk_image(data, spacing):
@@ -317,17 +387,20 @@ COARSE = "vpm coarse"  # the results' key for vpm at full resolution, coarse ste
 VPM_ROWS = {("mip", "still"): "still MIP", ("mip", "interactive"): "interactive MIP",
             ("composite", "still"): "still DVR custom",
             ("composite", "interactive"): "interactive DVR custom"}
+STILL_ROWS = {mode: VPM_ROWS[(mode, "still")] for mode in ("mip", "composite")}
 
 
-def run_vpm(args, volume_path, size, png_dir, with_map, step=None):
-    """render_bench's rows; with_map: through an identity backward map (the
-    cost of a deformed volume), else without (DeformableScene's undeformed
-    frames); step: every row's step (mm), default --step."""
-    filt = "|".join(v + "$" for v in VPM_ROWS.values())
+def run_vpm(args, case, size, png_dir, with_map, step=None, rows_wanted=None):
+    """render_bench's rows (default: all of VPM_ROWS); with_map: through an
+    identity backward map (the cost of a deformed volume), else without
+    (DeformableScene's undeformed frames); step: every row's step (mm),
+    default --step. Returns (camera, MIP window, {row: (wall, CPU / 2)})."""
+    wanted = list(rows_wanted or VPM_ROWS.values())
+    filt = "|".join(v + "$" for v in wanted)
     cmd = [os.path.join(args.build, "bench", "render_bench"), "--no-reference", "--map-held",
-           "--step", str(step or args.step), "--render-tf", args.tf]
+           "--step", str(step or args.step), "--render-tf", case["tf"]]
     cmd += [] if with_map else ["--no-map"]
-    cmd += [volume_path, png_dir, filt, str(size)]
+    cmd += [case["volume"], png_dir, filt, str(size)]
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
     camera, window, rows = None, None, {}
     for line in out.splitlines():
@@ -338,28 +411,97 @@ def run_vpm(args, volume_path, size, png_dir, with_map, step=None):
             n = [float(x) for x in re.findall(r"-?\d+\.\d+", line)]
             window = {"width": n[0], "level": n[1]}
         else:
-            for name in VPM_ROWS.values():
+            for name in wanted:
                 if line.startswith(name + " ") and re.match(r"\s+\d+x\d+", line[len(name):]):
                     fields = line[len(name):].split()
                     rows[name] = (float(fields[3]), float(fields[7]))  # wall, CPU / 2
-    if camera is None or window is None or len(rows) != len(VPM_ROWS):
+    if camera is None or window is None or len(rows) != len(wanted):
         sys.exit("peer_vtk: could not read render_bench's output:\n" + out)
     return camera, window, rows
+
+
+def vpm_png(png_dir, name):
+    return read_png(os.path.join(png_dir, name.replace(" ", "_") + ".png"))
+
+
+def vpm_stills_at(args, case, size, step, tag):
+    """vpm's still frames (no map) at `step` mm: {mode: (wall, CPU, RGB)}."""
+    png_dir = os.path.join(case["out"], f"vpm_{size}_{tag}")
+    os.makedirs(png_dir, exist_ok=True)
+    _, _, rows = run_vpm(args, case, size, png_dir, False, step, list(STILL_ROWS.values()))
+    return {mode: rows[name] + (vpm_png(png_dir, name),) for mode, name in STILL_ROWS.items()}
+
+
+def vtk_reference(scene, kind, mode, prop, fine_step):
+    """The VTK mapper `kind`'s still at `fine_step` mm (AutoAdjustSampleDistances
+    off, full resolution): (wall ms of the one frame, RGB). FixedPoint or GPU:
+    the Smart mapper renders through the GPU mapper here and does not take a
+    step of its own (its frames at 1 mm and 0.125 mm are the same)."""
+    mapper = make_mapper(kind, fine_step)
+    set_quality(mapper, kind, False, fine_step)
+    if mode == "mip":
+        mapper.SetBlendModeToMaximumIntensity()
+    else:
+        mapper.SetBlendModeToComposite()
+    scene.use(mapper, prop)
+    scene.window.SetDesiredUpdateRate(0.0001)
+    ms, _, rgb = scene.frame()
+    return ms, rgb
+
+
+def prepare_case(args, name):
+    """The case's volume (NIfTI both read), transfer function and out folder."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    out = os.path.join(args.out, name)
+    os.makedirs(out, exist_ok=True)
+    if name == "phantom":
+        volume = os.path.join(out, "volume.nii")
+        if not os.path.exists(volume):
+            subprocess.run([os.path.join(args.build, "client", "vpm"), "volume", "export",
+                            args.source, volume], check=True, stdout=subprocess.DEVNULL)
+        data, spacing = read_nifti(volume)
+        vtk_data = data
+        if args.int16:
+            volume_int16 = os.path.join(out, "volume_int16.nii")
+            vtk_data = write_int16_nifti(volume, volume_int16)
+            volume, data = volume_int16, vtk_data.astype(np.float32)
+        return {"name": name, "source": args.source, "tf": args.tf, "out": out,
+                "volume": volume, "data": data, "image": vtk_image(vtk_data, spacing),
+                "spacing": spacing, "voxels": "int16" if args.int16 else "float32"}
+    if name == "kidney":
+        source = os.path.join(here, "..", "tests", "data", "ct-abdomen-kidney", "ct_abdomen.nii.gz")
+        volume = os.path.join(out, "ct_abdomen_1mm.nii")
+        rounded = resample_nifti_gz(source, volume, 1.0)
+        _, spacing = read_nifti(volume)
+        return {"name": name, "source": "ct_abdomen.nii.gz (3 mm) resampled to 1 mm",
+                "tf": args.kidney_tf, "out": out, "volume": volume,
+                "data": rounded.astype(np.float32), "image": vtk_image(rounded, spacing),
+                "spacing": spacing, "voxels": "int16"}
+    sys.exit(f"peer_vtk: unknown case {name}; known: phantom, kidney")
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     here = os.path.dirname(os.path.abspath(__file__))
     ap.add_argument("--build", default="build", help="vpm's build folder")
-    ap.add_argument("--source", default="phantom:abdomen", help="any vpm volume source")
+    ap.add_argument("--cases", default="phantom,kidney", help="phantom, kidney or both")
+    ap.add_argument("--source", default="phantom:abdomen", help="the phantom case's volume "
+                    "(any vpm volume source)")
     ap.add_argument("--tf", default=os.path.join(here, "peer_tf.json"),
-                    help="ParaView JSON preset for the composite rows")
-    ap.add_argument("--out", default="out/peer", help="frames and the exported volume")
+                    help="ParaView JSON preset for the phantom case's composite rows")
+    ap.add_argument("--kidney-tf", default=os.path.join(here, "peer_tf_kidney.json"),
+                    help="ParaView JSON preset for the kidney case's composite rows")
+    ap.add_argument("--out", default="out/peer", help="frames and the volumes, one folder a case")
     ap.add_argument("--sizes", default="256,512")
     ap.add_argument("--step", type=float, default=1.0, help="sample step, mm")
+    ap.add_argument("--ref-factor", type=float, default=8.0,
+                    help="each renderer's reference still: its step / this")
+    ap.add_argument("--finer", default="0.75,0.5,0.35,0.25",
+                    help="vpm's finer steps (times --step), tried in turn while its still's "
+                         "PSNR is under a peer's")
     ap.add_argument("--int16", action="store_true",
-                    help="round the volume to int16, as CT scanners store it, for both "
-                         "(vpm then holds 2 bytes per voxel, VTK a vtkShortArray)")
+                    help="phantom case: round the volume to int16, as CT scanners store it, for "
+                         "both (vpm then holds 2 bytes per voxel, VTK a vtkShortArray)")
     ap.add_argument("--coarse-step", type=float, default=1.5,
                     help="the interactive rows' extra vpm column: full resolution at this "
                          "times --step (vpm's still quality, no map)")
@@ -371,99 +513,195 @@ def main():
     for m in mappers:
         if m not in MAPPERS:
             sys.exit(f"peer_vtk: unknown mapper {m}; known: {', '.join(MAPPERS)}")
-    os.makedirs(args.out, exist_ok=True)
-    volume_path = os.path.join(args.out, "volume.nii")
-    if not os.path.exists(volume_path):
-        subprocess.run([os.path.join(args.build, "client", "vpm"), "volume", "export",
-                        args.source, volume_path], check=True, stdout=subprocess.DEVNULL)
-    data, spacing = read_nifti(volume_path)
-    image = vtk_image(data, spacing)
-    if args.int16:
-        int16_path = os.path.join(args.out, "volume_int16.nii")
-        rounded = write_int16_nifti(volume_path, int16_path)
-        volume_path = int16_path
-        data = rounded.astype(np.float32)
-        image = vtk_image(rounded, spacing)
-    value_range = (float(data.min()), float(data.max()))
-    preset = read_paraview_preset(args.tf)
+    goals = []
+    for name in [c for c in args.cases.split(",") if c]:
+        goals += run_case(args, prepare_case(args, name), mappers)
+    print("\n# Goals at 512^2, equal or better PSNR (CPU ms / cores):")
+    for line in goals:
+        print("  " + line)
     load = os.getloadavg()
-    print(f"# peer benchmark: {args.source} {data.shape[2]}x{data.shape[1]}x{data.shape[0]}, "
-          f"spacing {spacing[0]:.4f} {spacing[1]:.4f} {spacing[2]:.4f} mm, step {args.step} mm, "
-          f"{'int16' if args.int16 else 'float32'} voxels, composite: {args.tf}; VTK {vtk.vtkVersion.GetVTKVersion()}; "
-          f"{os.cpu_count()} cores; load {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+    print(f"# load at the end: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
 
-    results = {}  # (mode, quality, size) -> {renderer: (ms, psnr or None)}
-    stills = {}   # (renderer, mode, size) -> RGB
-    cross = []
-    for size in [int(s) for s in args.sizes.split(",")]:
-        png_dir = os.path.join(args.out, f"vpm_{size}")
-        os.makedirs(png_dir, exist_ok=True)
-        for renderer, with_map in (("vpm", False), ("vpm map", True)):
-            camera, window, rows = run_vpm(args, volume_path, size, png_dir, with_map)
-            for (mode, quality), name in VPM_ROWS.items():
-                rgb = read_png(os.path.join(png_dir, name.replace(" ", "_") + ".png"))
-                entry = results.setdefault((mode, quality, size), {})
-                db = None
-                if quality == "still":
-                    stills[(renderer, mode, size)] = rgb
+
+class CaseResults:
+    """What one case measures, filled size by size."""
+
+    def __init__(self):
+        self.results = {}    # (mode, quality, size) -> {renderer: (wall ms, CPU ms, PSNR or None)}
+        self.stills = {}     # (renderer, mode, size) -> RGB
+        self.refs = {}       # (renderer, mode, size) -> RGB at the reference step
+        self.vpm_steps = {}  # (mode, size) -> [(step mm, wall, CPU, PSNR against vpm's reference)]
+        self.cross = []      # (mode, size, VTK mapper, PSNR of its still against vpm's)
+
+
+def measure_vpm(args, case, size, fine_step, r):
+    """vpm's rows at `size`, without and through the map, its reference, its
+    coarse-step column. Returns render_bench's (camera, MIP window)."""
+    png_dir = os.path.join(case["out"], f"vpm_{size}")
+    os.makedirs(png_dir, exist_ok=True)
+    for renderer, with_map in (("vpm", False), ("vpm map", True)):
+        camera, window, rows = run_vpm(args, case, size, png_dir, with_map)
+        for (mode, quality), name in VPM_ROWS.items():
+            rgb = vpm_png(png_dir, name)
+            entry = r.results.setdefault((mode, quality, size), {})
+            db = None
+            if quality == "still":
+                r.stills[(renderer, mode, size)] = rgb
+            else:
+                db = psnr(rgb, r.stills[(renderer, mode, size)])
+            entry[renderer] = (rows[name][0], rows[name][1], db)
+    # vpm's reference (the map changes nothing in an undeformed frame's
+    # picture: both columns' stills are held against it).
+    for mode, (_, _, rgb) in vpm_stills_at(args, case, size, fine_step, "reference").items():
+        r.refs[("vpm", mode, size)] = r.refs[("vpm map", mode, size)] = rgb
+    for mode in ("mip", "composite"):
+        for renderer in ("vpm", "vpm map"):
+            wall, cpu, _ = r.results[(mode, "still", size)][renderer]
+            db = psnr(r.stills[(renderer, mode, size)], r.refs[(renderer, mode, size)])
+            r.results[(mode, "still", size)][renderer] = (wall, cpu, db)
+        wall, cpu, db = r.results[(mode, "still", size)]["vpm"]
+        r.vpm_steps[(mode, size)] = [(args.step, wall, cpu, db)]
+    # Full resolution at a coarser step, in place of half resolution: vpm's
+    # still frames at --coarse-step x --step, each with its PSNR against
+    # vpm's still at --step, shown in the interactive rows.
+    for mode, (wall, cpu, rgb) in vpm_stills_at(args, case, size,
+                                                args.coarse_step * args.step, "coarse").items():
+        r.results[(mode, "interactive", size)][COARSE] = (
+            wall, cpu, psnr(rgb, r.stills[("vpm", mode, size)]))
+    return camera, window
+
+
+def measure_vtk(args, case, size, camera, props, mappers, fine_step, r):
+    """Each VTK mapper's still (against its reference) and interactive rows."""
+    scene = VtkScene(case["image"], size, camera)
+    for kind in mappers:
+        for mode in args.modes.split(","):
+            ref_kind = "GPU" if kind.startswith("Smart") else kind
+            if (ref_kind, mode, size) not in r.refs:
+                ms, r.refs[(ref_kind, mode, size)] = vtk_reference(scene, ref_kind, mode,
+                                                                   props[mode], fine_step)
+                print(f"  reference {ref_kind} {mode} {size}^2 at {fine_step:g} mm: "
+                      f"{ms:.0f} ms", flush=True)
+            r.refs[(kind, mode, size)] = r.refs[(ref_kind, mode, size)]
+            for quality in ("still", "interactive"):
+                mapper = make_mapper(kind, args.step)
+                if mode == "mip":
+                    mapper.SetBlendModeToMaximumIntensity()
                 else:
-                    db = psnr(rgb, stills[(renderer, mode, size)])
-                entry[renderer] = (rows[name][0], rows[name][1], db)
-        # Full resolution at a coarser step, in place of half resolution:
-        # vpm's still frames at --coarse-step x --step, each with its PSNR
-        # against vpm's still at --step, shown in the interactive rows.
-        coarse_dir = os.path.join(args.out, f"vpm_{size}_coarse")
-        os.makedirs(coarse_dir, exist_ok=True)
-        _, _, rows = run_vpm(args, volume_path, size, coarse_dir, False,
-                             args.coarse_step * args.step)
-        for mode in ("mip", "composite"):
-            name = VPM_ROWS[(mode, "still")]
-            rgb = read_png(os.path.join(coarse_dir, name.replace(" ", "_") + ".png"))
-            results[(mode, "interactive", size)][COARSE] = (
-                rows[name][0], rows[name][1], psnr(rgb, stills[("vpm", mode, size)]))
-        scene = VtkScene(image, size, camera)
+                    mapper.SetBlendModeToComposite()
+                set_quality(mapper, kind, quality == "interactive", args.step)
+                scene.use(mapper, props[mode])
+                rate = 15.0 if quality == "interactive" else 0.0001
+                # Interactive: VTK adapts its sample distances to the time
+                # of the frames before, so it gets frames to settle.
+                ms, cpu, rgb = scene.measure(args.reps, rate, 8 if quality == "interactive" else 1)
+                tag = f"vtk_{kind.replace(' ', '').replace('.', '')}_{mode}_{quality}_{size}"
+                write_png(os.path.join(case["out"], tag + ".png"), rgb)
+                entry = r.results[(mode, quality, size)]
+                if quality == "still":
+                    r.stills[(kind, mode, size)] = rgb
+                    entry[kind] = (ms, cpu, psnr(rgb, r.refs[(kind, mode, size)]))
+                else:
+                    entry[kind] = (ms, cpu, psnr(rgb, r.stills[(kind, mode, size)]))
+        del mapper
+    for mode in args.modes.split(","):
+        for kind in mappers:
+            r.cross.append((mode, size, kind, psnr(r.stills[("vpm", mode, size)],
+                                                   r.stills[(kind, mode, size)])))
+
+
+def time_vpm_finer(args, case, size, mappers, r):
+    """vpm's stills at the --finer steps in turn while its PSNR is under the
+    best of the VTK mappers' (each against its own reference)."""
+    for mode in args.modes.split(","):
+        entry = r.results[(mode, "still", size)]
+        target = max(entry[m][2] for m in mappers)
+        for factor in [float(f) for f in args.finer.split(",") if f]:
+            if r.vpm_steps[(mode, size)][-1][3] >= target:
+                break
+            step = factor * args.step
+            wall, cpu, rgb = vpm_stills_at(args, case, size, step, f"step{step:g}")[mode]
+            r.vpm_steps[(mode, size)].append(
+                (step, wall, cpu, psnr(rgb, r.refs[("vpm", mode, size)])))
+
+
+def run_case(args, case, mappers):
+    """One case's tables; returns its goal lines (512^2 stills)."""
+    data = case["data"]
+    spacing = case["spacing"]
+    value_range = (float(data.min()), float(data.max()))
+    preset = read_paraview_preset(case["tf"])
+    fine_step = args.step / args.ref_factor
+    load = os.getloadavg()
+    print(f"\n## case {case['name']}: {case['source']}, {data.shape[2]}x{data.shape[1]}x{data.shape[0]}, "
+          f"spacing {spacing[0]:.4f} {spacing[1]:.4f} {spacing[2]:.4f} mm, step {args.step} mm "
+          f"(references {fine_step:g} mm), {case['voxels']} voxels, composite: {case['tf']}; "
+          f"VTK {vtk.vtkVersion.GetVTKVersion()}; {os.cpu_count()} cores; "
+          f"load {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}", flush=True)
+    r = CaseResults()
+    for size in [int(s) for s in args.sizes.split(",")]:
+        camera, window = measure_vpm(args, case, size, fine_step, r)
         props = {"mip": mip_property(window["width"], window["level"], value_range),
                  "composite": composite_property(preset, True)}
-        for kind in mappers:
-            for mode in args.modes.split(","):
-                for quality in ("still", "interactive"):
-                    mapper = make_mapper(kind, args.step)
-                    if mode == "mip":
-                        mapper.SetBlendModeToMaximumIntensity()
-                    else:
-                        mapper.SetBlendModeToComposite()
-                    set_quality(mapper, kind, quality == "interactive", args.step)
-                    scene.use(mapper, props[mode])
-                    rate = 15.0 if quality == "interactive" else 0.0001
-                    # Interactive: VTK adapts its sample distances to the
-                    # time of the frames before, so it gets frames to settle.
-                    ms, cpu, rgb = scene.measure(args.reps, rate,
-                                                 8 if quality == "interactive" else 1)
-                    tag = f"vtk_{kind.replace(' ', '').replace('.', '')}_{mode}_{quality}_{size}"
-                    write_png(os.path.join(args.out, tag + ".png"), rgb)
-                    entry = results[(mode, quality, size)]
-                    if quality == "still":
-                        stills[(kind, mode, size)] = rgb
-                        entry[kind] = (ms, cpu, None)
-                    else:
-                        entry[kind] = (ms, cpu, psnr(rgb, stills[(kind, mode, size)]))
-            del mapper
-        for mode in args.modes.split(","):
-            for kind in mappers:
-                cross.append((mode, size, kind, psnr(stills[("vpm", mode, size)],
-                                                     stills[(kind, mode, size)])))
+        measure_vtk(args, case, size, camera, props, mappers, fine_step, r)
+        time_vpm_finer(args, case, size, mappers, r)
+    results, vpm_steps, cross = r.results, r.vpm_steps, r.cross
 
-    print("\nWall ms per frame (min of %d), image read back:" % args.reps)
+    print(f"\n### case {case['name']}: wall ms per frame (min of {args.reps}), image read back:")
     print_table(results, mappers, 0)
-    print("\nProcess CPU ms per frame / %d cores (min of %d): what the frame costs the "
-          "machine, less disturbed by other load:" % (CORES, args.reps))
+    print(f"\n### case {case['name']}: process CPU ms per frame / {CORES} cores (min of "
+          f"{args.reps}): what the frame costs the machine, less disturbed by other load:")
     print_table(results, mappers, 1)
+    print(f"\n### case {case['name']}: stills at equal or better PSNR, each against its own "
+          f"reference at {fine_step:g} mm:")
+    goals = print_equal_quality(case["name"], results, vpm_steps, mappers)
     print(f"\nPSNR of each VTK still against vpm's (same camera, step, window or transfer "
-          f"function; the frames are in {args.out}):")
+          f"function; the frames are in {case['out']}):")
     for mode, size, kind, db in cross:
         print(f"  still {mode} {size}^2, VTK {kind}: {db:.1f} dB")
     load = os.getloadavg()
-    print(f"# load at the end: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+    print(f"# case {case['name']}: load at the end: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}",
+          flush=True)
+    return goals
+
+
+def print_equal_quality(case_name, results, vpm_steps, mappers):
+    """Per still and peer (the fastest VTK mapper at the same step, by CPU
+    time, and Smart at its defaults): vpm at the coarsest step whose PSNR
+    reaches the peer's, and the ratios. Returns the 512^2 goal lines."""
+    head = ["still", "size", "peer", "peer CPU ms (dB)", "peer wall ms", "vpm step mm",
+            "vpm CPU ms (dB)", "vpm wall ms", "peer / vpm CPU", "peer / vpm wall", "goal"]
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    goals = []
+    for (mode, quality, size), entry in sorted(results.items(), key=lambda kv: (kv[0][0] != "mip", kv[0][2])):
+        if quality != "still":
+            continue
+        same_step = [m for m in mappers if m != "Smart defaults"]
+        peers = []
+        if same_step:
+            peers.append((min(same_step, key=lambda m: entry[m][1]), 2.0))
+        if "Smart defaults" in mappers:
+            peers.append(("Smart defaults", 5.0))
+        for peer, goal in peers:
+            p_wall, p_cpu, p_db = entry[peer]
+            reached = [s for s in vpm_steps[(mode, size)] if s[3] >= p_db]
+            step, v_wall, v_cpu, v_db = reached[0] if reached else vpm_steps[(mode, size)][-1]
+            ratio_cpu, ratio_wall = p_cpu / v_cpu, p_wall / v_wall
+            label = f"{'MIP' if mode == 'mip' else 'composite'}"
+            met = "met" if reached and ratio_cpu >= goal else "not met"
+            if not reached:
+                met += f" (vpm's PSNR stays under the peer's down to {step:g} mm)"
+            row = [label, f"{size}^2", f"VTK {peer}", f"{p_cpu:.1f} ({p_db:.1f} dB)",
+                   f"{p_wall:.1f}", f"{step:g}", f"{v_cpu:.1f} ({v_db:.1f} dB)", f"{v_wall:.1f}",
+                   f"{ratio_cpu:.2f}", f"{ratio_wall:.2f}", f"{goal:g}x: {met}"]
+            print("| " + " | ".join(row) + " |")
+            if size == 512:
+                goals.append(f"{case_name} still {label} 512^2 against VTK {peer}: "
+                             f"{ratio_cpu:.2f}x in CPU time, {ratio_wall:.2f}x wall, vpm at "
+                             f"{step:g} mm {v_db:.1f} dB against {p_db:.1f} dB; goal {goal:g}x "
+                             f"{met}")
+    return goals
 
 
 def print_table(results, mappers, column):
@@ -491,7 +729,8 @@ def print_table(results, mappers, column):
         row.append(f"{min(same_step) / vpm_ms:.2f}" if same_step else "-")
         row += [f"{entry[m][column] / vpm_ms:.2f}" if m in entry else "-" for m in smart]
         print("| " + " | ".join(row) + " |")
-    print("(interactive: ms (PSNR against the same renderer's still frame, dB); fastest VTK: "
+    print("(still: ms (PSNR against the same renderer's reference at step / --ref-factor, dB); "
+          "interactive: ms (PSNR against the same renderer's still frame, dB); fastest VTK: "
           "of FixedPoint, GPU and Smart at the same step; vpm full resolution, coarse step: "
           "vpm's still quality at --coarse-step x the step, no map, against vpm's still)")
 
