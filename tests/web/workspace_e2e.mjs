@@ -37,7 +37,8 @@ const step = (text) => console.log(`web_workspace: ${text}`);
 
 // Every visible control and pane, with its box; the page's scroll sizes.
 const kMustShow = ['#volume', '#frame-size', '#open', '#studies-toggle', '#cases-toggle',
-  '#tools', 'input[value="grab"]', '#render', '#overlay', '#keep-drag', '#undo', '#redo',
+  '#tools', 'input[value="grab"]', '#render', '#interactive-quality', '#overlay', '#keep-drag',
+  '#undo', '#redo',
   '#reset-tissue', '#reset-view', '#refine-grab', '#tf-file', '#slices', '#slice-overlay',
   '#window-preset', '#window-width', '#window-level', '#view-cut', '#crop', '#clip-side',
   '#clip-at', '#clip-add', '#keys-toggle', '#frame', '#slice-axial', '#slice-coronal',

@@ -226,7 +226,7 @@ function refineAt(pointMm) {
   socket.send({ type: 'refine', point_mm: pointMm });
 }
 
-const quality = new QualityControl($('frame-size').closest('label'),
+const quality = new QualityControl($('render').closest('label'),
                                    () => state.session && sendEvent({ settings: settings() }));
 const slices = new SliceViews({
   canvases: { axial: $('slice-axial'), coronal: $('slice-coronal'), sagittal: $('slice-sagittal') },

@@ -26,6 +26,7 @@ export class QualityControl {
     if (!anchor?.ownerDocument) return;
     const doc = anchor.ownerDocument;
     const label = doc.createElement('label');
+    label.className = anchor.className;  // a row of the controls column, as its anchor
     label.title = 'Frames while dragging or orbiting; the still follows when you stop';
     label.append('While moving ');
     const select = doc.createElement('select');
