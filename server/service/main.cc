@@ -13,12 +13,15 @@
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <absl/debugging/failure_signal_handler.h>
+#include <absl/debugging/symbolize.h>
 
 #include "server/service/server_flags.h"
 #include "server/service/users_file.h"
 #include "server/service/vpm_server.h"
 
 int main(int argc, char** argv) {
+  absl::InitializeSymbolizer(argv[0]);
   CLI::App app{"vpm-server: volume proxy meshes, FEM deformation and ray-cast frames over gRPC"};
   vpm::service::ServerOptions options;
   vpm::service::AddServerFlags(app, &options);
@@ -61,6 +64,14 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "vpm-server: %s\n", server.status().ToString().c_str());
     return 2;
   }
+  // A crash (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT) writes the faulting
+  // thread's stack, function names only, to stderr before the process dies,
+  // so that the log says where. Installed after the server (and the Vulkan
+  // driver's LLVM, which sets handlers of its own) is up. The sanitizer
+  // builds keep their own reports.
+#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+  absl::InstallFailureSignalHandler({});
+#endif
   std::printf("vpm-server listening on port %d%s%s\n", (*server)->port(),
               options.no_auth ? " (no auth)" : "",
               (*server)->metrics().metrics_port() > 0

@@ -24,7 +24,13 @@ cleanup() {
 }
 trap cleanup EXIT
 failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+fail() {
+  echo "FAIL: $*"; failures=$((failures + 1))
+  # A server that died says why in its log (a crash writes its stack there).
+  if [ -n "$server_pid" ] && ! kill -0 "$server_pid" 2>/dev/null && [ -z "${told_death:-}" ]; then
+    told_death=1; echo "--- vpm-server died; the end of its log:"; tail -n 60 "$tmp/server.log"
+  fi
+}
 pass() { echo "ok:   $*"; }
 
 # --- certificates: a CA, a server certificate for 127.0.0.1/localhost, a
