@@ -62,21 +62,6 @@ std::vector<Candidate> Candidates(bool all) {
   return c;
 }
 
-double Mse(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
-  double sum = 0.0;
-  int64_t n = 0;
-  for (size_t i = 0; i < a.size(); i += 4) {
-    for (int c = 0; c < 3; ++c) {
-      const double d = double(a[i + c]) - double(b[i + c]);
-      sum += d * d;
-      ++n;
-    }
-  }
-  return sum / double(n);
-}
-
-double PsnrOfMse(double mse) { return mse == 0.0 ? 99.0 : 10.0 * std::log10(255.0 * 255.0 / mse); }
-
 std::string LoadAverage() {
   std::ifstream in("/proc/loadavg");
   std::string one, five, fifteen;
@@ -177,10 +162,10 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
         request.interactive = candidates[c].cast;
         request.settings.jitter = candidates[c].jitter;
         const Frame frame = bench::Check(scene->RenderPrepared(request), "frame");
-        const double mse = Mse(frame.rgba, reference.rgba);
+        const double mse = bench::RgbMse(frame.rgba, reference.rgba);
         Result_& r = results[c];
         r.mse_sum += mse;
-        r.worst_db = std::min(r.worst_db, PsnrOfMse(mse));
+        r.worst_db = std::min(r.worst_db, bench::PsnrOfMse(mse));
         ++r.frames;
         r.step_mm = frame.step_mm;
         r.rays = frame.render_width;
@@ -215,7 +200,7 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
     const Result_& r = results[c];
     std::printf("%-40s %5d %7.3f %9.1f %9.1f %10.1f %9.1f %9.1f\n", candidates[c].name.c_str(),
                 r.rays, r.step_mm, Median(r.fps), *std::max_element(r.fps.begin(), r.fps.end()),
-                Median(r.frame_ms), PsnrOfMse(r.mse_sum / r.frames), r.worst_db);
+                Median(r.frame_ms), bench::PsnrOfMse(r.mse_sum / r.frames), r.worst_db);
   }
 }
 

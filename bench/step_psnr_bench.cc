@@ -29,20 +29,6 @@ using namespace vpm;
 
 namespace {
 
-double Psnr(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
-  double sum = 0.0;
-  int64_t n = 0;
-  for (size_t i = 0; i < a.size(); i += 4) {
-    for (int c = 0; c < 3; ++c) {
-      const double d = double(a[i + c]) - double(b[i + c]);
-      sum += d * d;
-      ++n;
-    }
-  }
-  const double mse = sum / double(n);
-  return mse == 0.0 ? 99.0 : 10.0 * std::log10(255.0 * 255.0 / mse);
-}
-
 std::vector<std::string> Split(const std::string& s) {
   std::vector<std::string> out;
   size_t start = 0;
@@ -135,7 +121,7 @@ int main(int argc, char** argv) {
       const Frame still = bench::Check(renderer->Render(r), "still");
       r.settings.step_mm = still.step_mm / fine;
       const Frame reference = bench::Check(renderer->Render(r), "fine still");
-      const double psnr = Psnr(still.rgba, reference.rgba);
+      const double psnr = bench::PsnrOfMse(bench::RgbMse(still.rgba, reference.rgba));
       worst = std::min(worst, psnr);
       std::printf("%-24s %-28s %9.3f %9.4f %8.1f %8.1f\n", FileStem(source).c_str(),
                   name.c_str(), still.step_mm, reference.step_mm, psnr,
