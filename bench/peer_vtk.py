@@ -78,25 +78,32 @@ NIFTI_TYPES = {2: np.uint8, 4: np.int16, 8: np.int32, 16: np.float32, 64: np.flo
                256: np.int8, 512: np.uint16, 768: np.uint32}
 
 
+def decode_nifti(raw, path):
+    """The bytes of an uncompressed NIfTI-1 file (`path` names it in errors)
+    as (its 352-byte header as a bytearray, its voxels as a float32 array
+    z, y, x with the scaling applied, pixdim)."""
+    header = bytearray(raw[:352])
+    if len(header) < 352 or struct.unpack("<i", header[:4])[0] != 348:
+        sys.exit(f"peer_vtk: {path}: not a little-endian NIfTI-1 file")
+    dim = struct.unpack("<8h", header[40:56])
+    datatype = struct.unpack("<h", header[70:72])[0]
+    pixdim = struct.unpack("<8f", header[76:108])
+    vox_offset = int(struct.unpack("<f", header[108:112])[0])
+    slope, inter = struct.unpack("<2f", header[112:120])
+    if datatype not in NIFTI_TYPES or dim[0] < 3 or (dim[0] > 3 and any(d > 1 for d in dim[4:dim[0] + 1])):
+        sys.exit(f"peer_vtk: {path}: a 3D volume of a plain type is needed")
+    nx, ny, nz = dim[1:4]
+    data = np.frombuffer(raw, dtype=NIFTI_TYPES[datatype], count=nx * ny * nz,
+                         offset=vox_offset).astype(np.float32).reshape(nz, ny, nx)
+    if slope not in (0.0, 1.0) or inter != 0.0:
+        data = data * (slope if slope != 0.0 else 1.0) + inter
+    return header, data, pixdim
+
+
 def read_nifti(path):
     """An uncompressed NIfTI-1 file as (float32 array z, y, x; spacing mm)."""
     with open(path, "rb") as f:
-        header = f.read(352)
-        if len(header) < 352 or struct.unpack("<i", header[:4])[0] != 348:
-            sys.exit(f"peer_vtk: {path}: not a little-endian NIfTI-1 file")
-        dim = struct.unpack("<8h", header[40:56])
-        datatype = struct.unpack("<h", header[70:72])[0]
-        pixdim = struct.unpack("<8f", header[76:108])
-        vox_offset = int(struct.unpack("<f", header[108:112])[0])
-        slope, inter = struct.unpack("<2f", header[112:120])
-        if datatype not in NIFTI_TYPES or dim[0] < 3 or (dim[0] > 3 and any(d > 1 for d in dim[4:dim[0] + 1])):
-            sys.exit(f"peer_vtk: {path}: a 3D volume of a plain type is needed")
-        nx, ny, nz = dim[1:4]
-        f.seek(vox_offset)
-        data = np.fromfile(f, dtype=NIFTI_TYPES[datatype], count=nx * ny * nz)
-    data = data.astype(np.float32).reshape(nz, ny, nx)
-    if slope not in (0.0, 1.0) or inter != 0.0:
-        data = data * (slope if slope != 0.0 else 1.0) + inter
+        _, data, pixdim = decode_nifti(f.read(), path)
     return data, tuple(float(s) for s in pixdim[1:4])
 
 
@@ -105,11 +112,9 @@ def write_int16_nifti(source, path):
     a CT scanner stores Hounsfield units: same header, datatype 4. Returns
     the values as an int16 array (z, y, x)."""
     with open(source, "rb") as f:
-        header = bytearray(f.read(352))
-        vox_offset = int(struct.unpack("<f", header[108:112])[0])
-        f.seek(0)
-        extra = f.read(vox_offset)[352:]
-    data, _ = read_nifti(source)
+        raw = f.read()
+    header, data, _ = decode_nifti(raw, source)
+    extra = raw[352:int(struct.unpack("<f", header[108:112])[0])]
     rounded = np.clip(np.round(data), -32768, 32767).astype("<i2")
     header[70:72] = struct.pack("<h", 4)    # datatype: int16
     header[72:74] = struct.pack("<h", 16)   # bitpix
@@ -126,23 +131,11 @@ def resample_nifti_gz(source, path, spacing_mm):
     uncompressed to `path` with a diagonal sform. Returns the int16 array
     (z, y, x)."""
     import gzip
-    raw = gzip.open(source).read()
-    header = bytearray(raw[:352])
-    if struct.unpack("<i", header[:4])[0] != 348:
-        sys.exit(f"peer_vtk: {source}: not a little-endian NIfTI-1 file")
-    dim = struct.unpack("<8h", header[40:56])
-    datatype = struct.unpack("<h", header[70:72])[0]
-    pixdim = struct.unpack("<8f", header[76:108])
-    vox_offset = int(struct.unpack("<f", header[108:112])[0])
-    slope, inter = struct.unpack("<2f", header[112:120])
+    header, data, pixdim = decode_nifti(gzip.open(source).read(), source)
     srow = [struct.unpack("<4f", header[280 + 16 * r:296 + 16 * r]) for r in range(3)]
     if any(abs(srow[r][c]) > 1e-6 for r in range(3) for c in range(3) if r != c):
         sys.exit(f"peer_vtk: {source}: an oblique volume; this resampling keeps the axes")
-    nx, ny, nz = dim[1:4]
-    data = np.frombuffer(raw, dtype=NIFTI_TYPES[datatype], count=nx * ny * nz,
-                         offset=vox_offset).astype(np.float32).reshape(nz, ny, nx)
-    if slope not in (0.0, 1.0) or inter != 0.0:
-        data = data * (slope if slope != 0.0 else 1.0) + inter
+    nz, ny, nx = data.shape
     # Separable linear interpolation along each axis: trilinear.
     shape = []
     for axis, n, spacing in ((2, nx, pixdim[1]), (1, ny, pixdim[2]), (0, nz, pixdim[3])):
