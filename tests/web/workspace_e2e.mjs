@@ -110,6 +110,15 @@ async function checkFits(page, size) {
 
 // The 3D frame has its pane's shape, and the server sent that size.
 async function checkFrameShape(page, size) {
+  // After a window resize the page asks for the new shape once its resize
+  // handler has run: read the canvas only once it has taken the pane's
+  // aspect (else the frame awaited is the old size, which never comes).
+  await page.waitForFunction(() => {
+    const c = document.getElementById('frame');
+    const box = c.parentElement;
+    const want = box.clientWidth / box.clientHeight;
+    return Math.abs(c.width / c.height - want) / want < 0.01;
+  }, null, { timeout: 10000 });
   const s = await page.evaluate(() => {
     const c = document.getElementById('frame');
     const box = c.parentElement;
