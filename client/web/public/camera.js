@@ -20,6 +20,16 @@ const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
                          a[0] * b[1] - a[1] * b[0]];
 const normalize = (a) => scale(a, 1 / Math.hypot(a[0], a[1], a[2]));
 
+// The slopes (along right, along up, per unit forward) of the ray through
+// pixel (px, py) of a width x height frame, row 0 at the top, the field of
+// view kFovDeg across the shorter side (CameraRays::Direction).
+function pixelSlopes(px, py, width, height) {
+  const tanHalf = Math.tan(0.5 * kFovDeg * kDegToRad);
+  const shorter = Math.max(1, Math.min(width, height));
+  return [((2 * (px + 0.5)) / width - 1) * tanHalf * (width / shorter),
+          (1 - (2 * (py + 0.5)) / height) * tanHalf * (height / shorter)];
+}
+
 export class OrbitCamera {
   // volume: a VolumeInfo as the gateway sends it (dims, spacing_mm,
   // direction: 9 values, column-major, columns the i, j, k axes in LPS).
@@ -124,11 +134,8 @@ export class OrbitCamera {
     const before = this.distanceMm;
     this.zoom(factor);
     const travelled = before - this.distanceMm;
-    const tanHalf = Math.tan(0.5 * kFovDeg * kDegToRad);
-    const shorter = Math.max(1, Math.min(width, height));
-    const nx = ((2 * (px + 0.5)) / width - 1) * tanHalf * (width / shorter);
-    const ny = (1 - (2 * (py + 0.5)) / height) * tanHalf * (height / shorter);
-    this.panMm = [this.panMm[0] + nx * travelled, this.panMm[1] + ny * travelled];
+    const [sx, sy] = pixelSlopes(px, py, width, height);
+    this.panMm = [this.panMm[0] + sx * travelled, this.panMm[1] + sy * travelled];
   }
 
   // The vpm.v3.Camera message.
@@ -140,12 +147,8 @@ export class OrbitCamera {
   // Unit ray direction of pixel (px, py) of a width x height frame, row 0 at
   // the top (CameraRays::Direction).
   rayDirection(px, py, width, height) {
-    const tanHalf = Math.tan(0.5 * kFovDeg * kDegToRad);
-    const shorter = Math.max(1, Math.min(width, height));
-    const nx = (2 * (px + 0.5)) / width - 1;
-    const ny = 1 - (2 * (py + 0.5)) / height;
-    return normalize(add(this.forward(), add(scale(this.right(), nx * tanHalf * width / shorter),
-                                             scale(this.up(), ny * tanHalf * height / shorter))));
+    const [sx, sy] = pixelSlopes(px, py, width, height);
+    return normalize(add(this.forward(), add(scale(this.right(), sx), scale(this.up(), sy))));
   }
 
   // Frame position [px, py] (pixels, row 0 at the top, pixel centres at
