@@ -4,7 +4,6 @@
 #include <climits>
 #include <cstdint>
 #include <cmath>
-#include <deque>
 #include <optional>
 
 namespace vpm {
@@ -79,55 +78,81 @@ struct BoxMask {
 
 constexpr int kSteps[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
 
-// The face-connected voxels of `box` reachable from `seed` through voxels
-// `accept` takes (none when it does not take the seed).
-template <typename Accept>
-BoxMask Grow(const BoxMask& box, const std::array<int64_t, 3>& seed, const Accept& accept) {
-  BoxMask out = box;
-  out.bits.assign(box.size[0] * box.size[1] * box.size[2], 0);
-  if (!accept(seed[0], seed[1], seed[2])) return out;
-  std::deque<std::array<int64_t, 3>> queue{seed};
-  out.bits[out.Index(seed[0], seed[1], seed[2])] = 1;
-  while (!queue.empty()) {
-    const auto [i, j, k] = queue.front();
-    queue.pop_front();
-    for (const auto& st : kSteps) {
-      const int64_t a = i + st[0], b = j + st[1], c = k + st[2];
-      if (!out.Inside(a, b, c) || out.bits[out.Index(a, b, c)] || !accept(a, b, c)) continue;
-      out.bits[out.Index(a, b, c)] = 1;
-      queue.push_back({a, b, c});
-    }
-  }
-  return out;
-}
-
-// The face-connected component of `allowed` through `seed` (empty if the
-// seed is not allowed).
-BoxMask Component(const BoxMask& allowed, const std::array<int64_t, 3>& seed) {
-  return Grow(allowed, seed, [&](int64_t i, int64_t j, int64_t k) { return allowed.At(i, j, k); });
-}
-
-// `mask` cut to the bounding box of its set voxels and one voxel around.
-BoxMask Crop(const BoxMask& mask) {
-  std::array<int64_t, 3> lo = {INT64_MAX, INT64_MAX, INT64_MAX}, hi = {-1, -1, -1};
-  for (int64_t k = mask.lo[2]; k < mask.lo[2] + mask.size[2]; ++k)
-    for (int64_t j = mask.lo[1]; j < mask.lo[1] + mask.size[1]; ++j)
-      for (int64_t i = mask.lo[0]; i < mask.lo[0] + mask.size[0]; ++i) {
-        if (!mask.bits[mask.Index(i, j, k)]) continue;
-        const std::array<int64_t, 3> p{i, j, k};
-        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
-      }
-  if (hi[0] < 0) return mask;
+// `mask` cut to the box [lo, hi] (the bounding box of its set voxels) and
+// one voxel around.
+BoxMask Crop(const BoxMask& mask, const std::array<int64_t, 3>& lo, const std::array<int64_t, 3>& hi) {
   BoxMask out;
   for (int a = 0; a < 3; ++a) {
     out.lo[a] = lo[a] - 1;
     out.size[a] = hi[a] - lo[a] + 3;
   }
   out.bits.assign(out.size[0] * out.size[1] * out.size[2], 0);
+  const int64_t row = hi[0] - lo[0] + 1;
   for (int64_t k = lo[2]; k <= hi[2]; ++k)
     for (int64_t j = lo[1]; j <= hi[1]; ++j)
-      for (int64_t i = lo[0]; i <= hi[0]; ++i) out.bits[out.Index(i, j, k)] = mask.At(i, j, k);
+      std::copy_n(&mask.bits[mask.Index(lo[0], j, k)], row, &out.bits[out.Index(lo[0], j, k)]);
   return out;
+}
+
+// The face-connected voxels of `box` reachable from `seed` through voxels
+// `accept` takes (none when it does not take the seed), in `box`'s box.
+// `lo`/`hi` get the bounding box of the set voxels (unchanged when none).
+// A scanline fill: each popped voxel is widened to the whole run along i it
+// lies in, and the rows beside the run (j +- 1, k +- 1) get one seed per run
+// of theirs, so the volume and the mask are read along memory.
+template <typename Accept>
+BoxMask Grow(const BoxMask& box, const std::array<int64_t, 3>& seed, const Accept& accept,
+             std::array<int64_t, 3>& lo, std::array<int64_t, 3>& hi) {
+  BoxMask out = box;
+  out.bits.assign(box.size[0] * box.size[1] * box.size[2], 0);
+  if (!accept(seed[0], seed[1], seed[2])) return out;
+  lo = seed, hi = seed;
+  const int64_t i_lo = box.lo[0], i_hi = box.lo[0] + box.size[0] - 1;
+  const auto open = [&](int64_t i, int64_t j, int64_t k) {
+    return !out.bits[out.Index(i, j, k)] && accept(i, j, k);
+  };
+  std::vector<std::array<int64_t, 3>> stack{seed};
+  while (!stack.empty()) {
+    const auto [i, j, k] = stack.back();
+    stack.pop_back();
+    if (!open(i, j, k)) continue;  // filled since it was pushed
+    int64_t l = i, r = i;
+    while (l > i_lo && open(l - 1, j, k)) --l;
+    while (r < i_hi && open(r + 1, j, k)) ++r;
+    std::fill_n(&out.bits[out.Index(l, j, k)], r - l + 1, uint8_t{1});
+    lo = {std::min(lo[0], l), std::min(lo[1], j), std::min(lo[2], k)};
+    hi = {std::max(hi[0], r), std::max(hi[1], j), std::max(hi[2], k)};
+    for (const auto& st : kSteps) {
+      if (st[0] != 0) continue;
+      const int64_t b = j + st[1], c = k + st[2];
+      if (!out.Inside(l, b, c)) continue;
+      bool in_run = false;
+      for (int64_t x = l; x <= r; ++x) {
+        const bool take = open(x, b, c);
+        if (take && !in_run) stack.push_back({x, b, c});
+        in_run = take;
+      }
+    }
+  }
+  return out;
+}
+
+// Grow, cut to the bounding box of the set voxels and one voxel around, so
+// every set voxel has its six neighbours inside the box (Morph relies on
+// it); the whole box, all unset, when the seed is not taken.
+template <typename Accept>
+BoxMask GrowCropped(const BoxMask& box, const std::array<int64_t, 3>& seed, const Accept& accept) {
+  std::array<int64_t, 3> lo{}, hi = {-1, -1, -1};
+  BoxMask grown = Grow(box, seed, accept, lo, hi);
+  return hi[0] < 0 ? grown : Crop(grown, lo, hi);
+}
+
+// The face-connected component of `allowed` through `seed` (empty if the
+// seed is not allowed), in `allowed`'s box.
+BoxMask Component(const BoxMask& allowed, const std::array<int64_t, 3>& seed) {
+  std::array<int64_t, 3> lo{}, hi{};
+  return Grow(allowed, seed, [&](int64_t i, int64_t j, int64_t k) { return allowed.At(i, j, k); },
+              lo, hi);
 }
 
 // The largest face-connected component of `mask` with a voxel within
@@ -149,28 +174,29 @@ std::optional<BoxMask> LargestComponentNear(const BoxMask& mask, const std::arra
   return best;
 }
 
-// One face-connected erosion (grow = false) or dilation within `limit`.
-// Only a set voxel can erode and only an unset one inside `limit` can grow,
-// so the neighbours are read for those alone, and only until one decides.
+// One face-connected erosion (grow = false) or dilation within `limit`
+// (same box as `in`). Only a set voxel can erode and only an unset one
+// inside `limit` can grow, and each of those has its six neighbours inside
+// the box (Grow's margin), so they are read by linear offsets, and only
+// until one decides.
 BoxMask Morph(const BoxMask& in, bool grow, const BoxMask& limit) {
   BoxMask out = in;
-  for (int64_t k = in.lo[2]; k < in.lo[2] + in.size[2]; ++k) {
-    for (int64_t j = in.lo[1]; j < in.lo[1] + in.size[1]; ++j) {
-      for (int64_t i = in.lo[0]; i < in.lo[0] + in.size[0]; ++i) {
-        const int64_t x = in.Index(i, j, k);
-        if (grow ? (in.bits[x] || !limit.bits[x]) : !in.bits[x]) continue;  // out = in
-        // Erosion keeps the voxel while every neighbour is set; dilation
-        // sets it once one is.
-        bool flip = false;
-        for (const auto& st : kSteps) {
-          if (in.At(i + st[0], j + st[1], k + st[2]) == grow) {
-            flip = true;
-            break;
-          }
-        }
-        if (flip) out.bits[x] = grow ? 1 : 0;
+  const int64_t sx = in.size[0], sxy = in.size[0] * in.size[1];
+  const int64_t offsets[6] = {1, -1, sx, -sx, sxy, -sxy};
+  const uint8_t* bits = in.bits.data();
+  const int64_t n = static_cast<int64_t>(in.bits.size());
+  for (int64_t x = 0; x < n; ++x) {
+    if (grow ? (bits[x] || !limit.bits[x]) : !bits[x]) continue;  // out = in
+    // Erosion keeps the voxel while every neighbour is set; dilation sets
+    // it once one is.
+    bool flip = false;
+    for (int64_t o : offsets) {
+      if ((bits[x + o] != 0) == grow) {
+        flip = true;
+        break;
       }
     }
+    if (flip) out.bits[x] = grow ? 1 : 0;
   }
   return out;
 }
@@ -230,7 +256,7 @@ Result<OrganRegion> GrowOrganRegion(const Volume& volume, const glm::dvec3& seed
           best_d2 = d2;
         }
       }
-  BoxMask grown = Crop(Grow(box, start, accept));
+  BoxMask grown = GrowCropped(box, start, accept);
   if (params.opening_voxels > 0) {
     BoxMask core = grown;
     for (int n = 0; n < params.opening_voxels; ++n) core = Morph(core, false, grown);
@@ -246,18 +272,21 @@ Result<OrganRegion> GrowOrganRegion(const Volume& volume, const glm::dvec3& seed
       grown = std::move(core);
     }
   }
+  // In (k, j, i) order the linear indices come out ascending.
+  const double bound = params.max_radius_mm - std::max({s.x, s.y, s.z});
+  const double bound2 = bound > 0.0 ? bound * bound : -1.0;
   for (int64_t k = grown.lo[2]; k < grown.lo[2] + grown.size[2]; ++k) {
     for (int64_t j = grown.lo[1]; j < grown.lo[1] + grown.size[1]; ++j) {
+      const uint8_t* row = &grown.bits[grown.Index(grown.lo[0], j, k)];
       for (int64_t i = grown.lo[0]; i < grown.lo[0] + grown.size[0]; ++i) {
-        if (!grown.bits[grown.Index(i, j, k)]) continue;
+        if (!row[i - grown.lo[0]]) continue;
         region.voxels.push_back(volume.LinearIndex(i, j, k));
         const glm::dvec3 d = (glm::dvec3(i, j, k) - glm::dvec3(index)) * s;
-        region.reached_bound |= glm::length(d) > params.max_radius_mm - std::max({s.x, s.y, s.z});
+        region.reached_bound |= glm::dot(d, d) > bound2;
       }
     }
   }
   if (region.voxels.empty()) region.voxels.push_back(volume.LinearIndex(seed[0], seed[1], seed[2]));
-  std::sort(region.voxels.begin(), region.voxels.end());
   region.volume_mm3 = double(region.voxels.size()) * s.x * s.y * s.z;
   return region;
 }

@@ -100,5 +100,57 @@ TEST(OrganRegion, RejectsBadSeedsAndParameters) {
             absl::StatusCode::kInvalidArgument);
 }
 
+// Without the opening the region is the plain face-connected component of
+// the accepted voxels through the seed: checked against a breadth-first
+// flood written here, on noise thresholded into winding, branching shapes
+// (runs along i that the fill must turn around in j and k), with the window
+// and reference the region reports.
+TEST(OrganRegion, WithoutTheOpeningEqualsABreadthFirstFlood) {
+  VolumeGeometry g;
+  g.dims = {40, 36, 32};
+  g.spacing_mm = {0.8, 1.0, 1.3};
+  std::vector<float> values(g.voxel_count());
+  uint64_t state = 7;
+  for (float& v : values) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    v = (state >> 33) % 100 < 62 ? 40.0f : -500.0f;  // about 62% "organ"
+  }
+  const Volume volume = *Volume::Create(g, std::move(values));
+  OrganRegionParams params;
+  params.opening_voxels = 0;
+  params.max_radius_mm = 14.0;
+  const std::array<int64_t, 3> seed{20, 18, 16};
+  const glm::dvec3 seed_mm = glm::dvec3(seed[0], seed[1], seed[2]) * g.spacing_mm;
+  auto region = GrowOrganRegion(volume, seed_mm, params);
+  ASSERT_TRUE(region.ok()) << region.status();
+
+  const auto accept = [&](int64_t i, int64_t j, int64_t k) {
+    if (i < 0 || j < 0 || k < 0 || i >= 40 || j >= 36 || k >= 32) return false;
+    const glm::dvec3 d = (glm::dvec3(i, j, k) - glm::dvec3(seed[0], seed[1], seed[2])) * g.spacing_mm;
+    return glm::dot(d, d) <= params.max_radius_mm * params.max_radius_mm &&
+           std::abs(volume.At(i, j, k) - region->reference) <= region->window;
+  };
+  ASSERT_TRUE(accept(seed[0], seed[1], seed[2]));
+  std::vector<uint8_t> seen(volume.geometry().voxel_count(), 0);
+  std::vector<std::array<int64_t, 3>> queue{seed};
+  seen[volume.LinearIndex(seed[0], seed[1], seed[2])] = 1;
+  for (size_t q = 0; q < queue.size(); ++q) {
+    const auto [i, j, k] = queue[q];
+    const int64_t steps[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (const auto& st : steps) {
+      const int64_t a = i + st[0], b = j + st[1], c = k + st[2];
+      if (!accept(a, b, c) || seen[volume.LinearIndex(a, b, c)]) continue;
+      seen[volume.LinearIndex(a, b, c)] = 1;
+      queue.push_back({a, b, c});
+    }
+  }
+  std::vector<int64_t> expected;
+  for (int64_t x = 0; x < int64_t(seen.size()); ++x) {
+    if (seen[x]) expected.push_back(x);
+  }
+  EXPECT_GT(expected.size(), 1000u);  // the shapes wind through much of the ball
+  EXPECT_EQ(region->voxels, expected);
+}
+
 }  // namespace
 }  // namespace vpm
