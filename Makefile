@@ -35,6 +35,7 @@ serve: build web-deps
 	@scripts/serve.sh $(BUILD_DIR)
 
 bench: build
+	@cmake --build $(BUILD_DIR) -j $(JOBS) --target benches
 	@scripts/bench.sh $(BUILD_DIR)
 
 # The service, render and FEM tests under AddressSanitizer + UBSan, or

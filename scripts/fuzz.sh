@@ -4,6 +4,11 @@
 # sanitizer report or timeout.
 #
 #   scripts/fuzz.sh [seconds_per_target] [target...]
+#   scripts/fuzz.sh build        (builds every target, runs none: .ci/run
+#                                 builds the tree at idle priority this way)
+#
+# Builds of one tree take turns (flock on <build>/fuzz.lock), so the smoke test
+# waits for a build already running instead of racing it.
 #
 # Seeds come from fuzz/corpus/<name>/ (committed); inputs the fuzzer finds go
 # to fuzz/corpus-work/<name>/ (ignored by git), crash reproducers to
@@ -15,6 +20,8 @@ set -euo pipefail
 
 seconds="${1:-10}"
 shift || true
+build_only=0
+if [ "$seconds" = build ]; then build_only=1; fi
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${VPM_FUZZ_BUILD_DIR:-$root/build-fuzz}"
 jobs="${VPM_FUZZ_JOBS:-2}"
@@ -23,13 +30,17 @@ if [ "${#targets[@]}" -eq 0 ]; then
   targets=(fuzz_nifti fuzz_nrrd fuzz_metaimage fuzz_dicom fuzz_raw)
 fi
 
-if [ ! -f "$build/build.ninja" ]; then
-  mkdir -p "$build"
-  CC=clang CXX=clang++ cmake -S "$root" -B "$build" -G Ninja -DVPM_FUZZ=ON \
-    -DBUILD_TESTING=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo > "$build/configure.log" 2>&1 ||
-    { cat "$build/configure.log"; exit 1; }
-fi
-cmake --build "$build" -j "$jobs" --target "${targets[@]}"
+mkdir -p "$build"
+(
+  flock 9
+  if [ ! -f "$build/build.ninja" ]; then
+    CC=clang CXX=clang++ cmake -S "$root" -B "$build" -G Ninja -DVPM_FUZZ=ON \
+      -DBUILD_TESTING=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo > "$build/configure.log" 2>&1 ||
+      { cat "$build/configure.log"; exit 1; }
+  fi
+  cmake --build "$build" -j "$jobs" --target "${targets[@]}"
+) 9> "$build/fuzz.lock"
+if [ "$build_only" = 1 ]; then exit 0; fi
 
 status=0
 for target in "${targets[@]}"; do

@@ -38,6 +38,7 @@ bundle() {
   for t in ${GPU_CHECK_TESTS:-$TESTS_DEFAULT}; do
     strip --strip-unneeded -o "$stage/bin/${t##*/}" "$build/tests/$t" || return 1
   done
+  cmake --build "$build" --target benches || return 1  # not in the default build
   for b in ${GPU_CHECK_BENCHES:-$BENCHES_DEFAULT}; do
     strip --strip-unneeded -o "$stage/bin/${b%%,*}" "$build/bench/${b%%,*}" || return 1
   done
