@@ -4,17 +4,10 @@
 #include <gtest/gtest.h>
 
 #include "server/raycast/refine_ladder.h"
+#include "tests/raycast/render_test_util.h"
 
 namespace vpm {
 namespace {
-
-// The 256^3 phantom's geometry: a DVR still steps 0.375 mm (the cap).
-VolumeGeometry Phantom256() {
-  VolumeGeometry g;
-  g.dims = {256, 256, 256};
-  g.spacing_mm = {380.0 / 255.0, 380.0 / 255.0, 243.0 / 255.0};
-  return g;
-}
 
 RenderRequest Moving(InteractiveQuality quality, const VolumeGeometry& g) {
   RenderRequest r;
@@ -25,7 +18,7 @@ RenderRequest Moving(InteractiveQuality quality, const VolumeGeometry& g) {
 }
 
 TEST(RefineLadder, KeepsTheRungsThatBeatTheInteractiveFrame) {
-  const VolumeGeometry g = Phantom256();
+  const VolumeGeometry g = testing::PhantomGeometry();
   const std::vector<double> candidates = {4.0, 3.0, 2.0, 1.5};
   // Fast: 256^2 rays at the footprint step (about 0.98 mm here): the rungs
   // at 4 and 3 x 0.375 mm step coarser, so only 2 and 1.5 x remain.
@@ -49,7 +42,7 @@ TEST(RefineLadder, KeepsTheRungsThatBeatTheInteractiveFrame) {
 }
 
 TEST(RefineLadder, ARungIsTheStillAtAMultipleOfItsStep) {
-  const VolumeGeometry g = Phantom256();
+  const VolumeGeometry g = testing::PhantomGeometry();
   RenderRequest still = Moving(InteractiveQuality::kFast, g);
   still.quality = RenderQuality::kStill;
   const double step_mm = RequestStepMm(still, g);

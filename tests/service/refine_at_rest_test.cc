@@ -15,14 +15,8 @@
 namespace vpm::service::testing {
 namespace {
 
-class RefineAtRestTest : public ServiceTest {
+class RefineAtRestTest : public PhantomSessionTest {
  protected:
-  void SetUp() override {
-    ServiceTest::SetUp();
-    volume_ = LoadPhantom();
-    session_ = OpenSession(volume_.volume_id());
-    ASSERT_FALSE(session_.session_id().empty());
-  }
   // Lossless frames of `side` pixels, fast interactive frames (half the rays).
   static v3::RenderSettings Lossless(int side) {
     v3::RenderSettings s;
@@ -91,8 +85,6 @@ class RefineAtRestTest : public ServiceTest {
     EXPECT_TRUE(decoded.ok()) << decoded.status();
     return decoded.ok() ? decoded->rgba : std::vector<uint8_t>{};
   }
-  v3::VolumeInfo volume_;
-  v3::SessionInfo session_;
 };
 
 TEST_F(RefineAtRestTest, DragThenRest_RungsRisingToTheStillRenderGives) {
