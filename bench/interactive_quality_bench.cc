@@ -9,9 +9,12 @@
 // one process, so that other load on the machine weighs on all alike; the load average is printed
 // before and after each volume. Usage: interactive_quality_bench [--candidates] [--reps N] [--size
 // N]
-//                                  [--preset NAME] [--mode dvr|mip] [SOURCE...]
+//                                  [--ladder] [--preset NAME] [--mode dvr|mip] [SOURCE...]
 //   --candidates: also the casts that were measured against the settings
 //   (InteractiveQuality), not only fast, balanced and sharp;
+//   --ladder: instead, the refinement at rest (refine_ladder.h): after the
+//   drag, settled, each interactive setting, candidate rungs and the still,
+//   frame ms and PSNR against the still;
 //   SOURCE: a volume file or phantom:NAME (default: the kidney CT and
 //   phantom:abdomen).
 #include <algorithm>
@@ -119,24 +122,50 @@ glm::dvec3 GrabPoint(const std::string& source, const Volume& volume) {
   return 0.5 * g.extent_mm();
 }
 
-void RunVolume(const std::string& source, int reps, int size, const std::string& preset,
-               RenderMode mode, bool all) {
-  auto volume = bench::Check(ReadVolume(source, {}), "reading the volume");
-  auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
-  auto gpu_volume = bench::Check(GpuVolume::Upload(*context, volume), "upload");
-  auto renderer = bench::Check(VolumeRenderer::Create(*context, {}), "renderer");
-  const glm::dvec3 grab = GrabPoint(source, volume);
+// What both measurements share: the volume on the GPU, a renderer, the
+// grab point and the mesh refined there.
+struct Fixture {
+  explicit Fixture(Volume v) : volume(std::move(v)) {}
+  Volume volume;
+  std::unique_ptr<gpu::GpuContext> context;
+  std::optional<GpuVolume> gpu_volume;
+  std::unique_ptr<VolumeRenderer> renderer;
+  glm::dvec3 grab{0.0};
+  ProxyMesh mesh;
+  DeformableScene::Options options;
+
+  // A scene with the grab taken and dragged `steps` steps.
+  std::unique_ptr<DeformableScene> DraggedScene(int steps) {
+    auto scene = bench::Check(
+        DeformableScene::Create(*context, volume, *gpu_volume, *renderer, mesh, options), "scene");
+    bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
+    for (int s = 1; s <= steps; ++s) bench::Check(scene->Drag(DragOffset(s)), "drag");
+    return scene;
+  }
+};
+
+std::unique_ptr<Fixture> MakeFixture(const std::string& source) {
+  auto f = std::make_unique<Fixture>(bench::Check(ReadVolume(source, {}), "reading the volume"));
+  f->context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
+  f->gpu_volume.emplace(bench::Check(GpuVolume::Upload(*f->context, f->volume), "upload"));
+  f->renderer = bench::Check(VolumeRenderer::Create(*f->context, {}), "renderer");
+  f->grab = GrabPoint(source, f->volume);
   MeshParams params;
   params.grid = {20, 20, 20};
   params.target = 250;
-  params.refine_at_mm = grab;
-  auto costs = bench::Check(LatticeCostsGpu::Create(*context), "kernel");
-  const ProxyMesh mesh =
-      bench::Check(BuildProxyMesh(volume, params, {&gpu_volume, &costs}), "mesh");
-  DeformableScene::Options options;
-  options.fem = InteractiveFemOptions();
-  options.map = InteractiveMapOptions();
+  params.refine_at_mm = f->grab;
+  auto costs = bench::Check(LatticeCostsGpu::Create(*f->context), "kernel");
+  f->mesh = bench::Check(BuildProxyMesh(f->volume, params, {&*f->gpu_volume, &costs}), "mesh");
+  f->options.fem = InteractiveFemOptions();
+  f->options.map = InteractiveMapOptions();
+  return f;
+}
 
+void RunVolume(const std::string& source, int reps, int size, const std::string& preset,
+               RenderMode mode, bool all) {
+  const std::unique_ptr<Fixture> f = MakeFixture(source);
+  const Volume& volume = f->volume;
+  auto& context = f->context;
   SceneView view{.camera = Camera::ForVolume(volume.geometry()),
                  .mode = mode,
                  .preset = bench::Check(MakeRenderPreset(preset, volume), "preset"),
@@ -151,9 +180,7 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
 
   // PSNR: every candidate's frame against the still, at each drag step.
   {
-    auto scene = bench::Check(
-        DeformableScene::Create(*context, volume, gpu_volume, *renderer, mesh, options), "scene");
-    bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
+    auto scene = f->DraggedScene(0);
     for (int s = 1; s <= kSteps; ++s) {
       bench::Check(scene->Drag(DragOffset(s)), "drag");
       const Frame reference = bench::Check(scene->Render(still), "still");
@@ -175,9 +202,7 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
   // Frame rate: the drag loop per candidate, interleaved rep by rep.
   for (int rep = 0; rep < reps; ++rep) {
     for (size_t c = 0; c < candidates.size(); ++c) {
-      auto scene = bench::Check(
-          DeformableScene::Create(*context, volume, gpu_volume, *renderer, mesh, options), "scene");
-      bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
+      auto scene = f->DraggedScene(0);
       const auto t0 = std::chrono::steady_clock::now();
       for (int s = 1; s <= kSteps; ++s) {
         bench::Check(scene->Drag(DragOffset(s)), "drag");
@@ -204,11 +229,63 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
   }
 }
 
+// The refinement ladder at rest (refine_ladder.h): after the drag, settled
+// as a still settles, each cast's frame ms (median over `reps`, interleaved)
+// and PSNR against the still: the interactive settings (what the rungs
+// follow), candidate rungs at k x the still's step, and the still.
+void RunLadder(const std::string& source, int reps, int size, const std::string& preset,
+               RenderMode mode) {
+  const std::unique_ptr<Fixture> f = MakeFixture(source);
+  auto scene = f->DraggedScene(kSteps);
+  bench::Check(scene->Settle(kSettleSolves), "settle");
+  SceneView still{.camera = Camera::ForVolume(f->volume.geometry()),
+                  .mode = mode,
+                  .preset = bench::Check(MakeRenderPreset(preset, f->volume), "preset"),
+                  .width = size,
+                  .height = size};
+  struct Cast {
+    std::string name;
+    SceneView view;
+  };
+  std::vector<Cast> casts;
+  for (const auto& [name, quality] : {std::pair{"fast (moving)", InteractiveQuality::kFast},
+                                      {"balanced (moving)", InteractiveQuality::kBalanced},
+                                      {"sharp (moving)", InteractiveQuality::kSharp}}) {
+    casts.push_back({name, still});
+    casts.back().view.quality = RenderQuality::kInteractive;
+    casts.back().view.interactive_quality = quality;
+  }
+  for (const double k : {4.0, 3.0, 2.0, 1.5}) {
+    casts.push_back({StrCat("rung: step ", k, "x still"), still});
+    casts.back().view.refine_step_multiple = k;
+  }
+  casts.push_back({"still", still});
+  const std::string load_before = LoadAverage();
+  const Frame reference = bench::Check(scene->Render(still), "still");
+  std::vector<std::vector<double>> ms(casts.size());
+  std::vector<Frame> frames(casts.size());
+  for (int rep = 0; rep < reps; ++rep) {
+    for (size_t c = 0; c < casts.size(); ++c) {
+      frames[c] = bench::Check(scene->Render(casts[c].view), "frame");
+      ms[c].push_back(frames[c].timings.wall_ms);
+    }
+  }
+  std::printf("\n%s, refinement at rest, %s %s, %dx%d; load average before %s, after %s\n",
+              source.c_str(), mode == RenderMode::kMip ? "MIP" : "DVR", preset.c_str(), size,
+              size, load_before.c_str(), LoadAverage().c_str());
+  std::printf("%-28s %5s %7s %10s %9s\n", "cast", "rays", "step mm", "frame ms", "PSNR dB");
+  for (size_t c = 0; c < casts.size(); ++c) {
+    std::printf("%-28s %5d %7.3f %10.1f %9.1f\n", casts[c].name.c_str(), frames[c].render_width,
+                frames[c].step_mm, Median(ms[c]),
+                bench::PsnrOfMse(bench::RgbMse(frames[c].rgba, reference.rgba)));
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   int reps = 3, size = 512;
-  bool all = false;
+  bool all = false, ladder = false;
   std::string preset = "ct-soft-tissue";
   RenderMode mode = RenderMode::kDvr;
   std::vector<std::string> sources;
@@ -216,6 +293,8 @@ int main(int argc, char** argv) {
     const std::string a = argv[i];
     if (a == "--candidates") {
       all = true;
+    } else if (a == "--ladder") {
+      ladder = true;
     } else if (a == "--reps" && i + 1 < argc) {
       reps = std::max(1, std::atoi(argv[++i]));
     } else if (a == "--size" && i + 1 < argc) {
@@ -239,6 +318,12 @@ int main(int argc, char** argv) {
       "the still of the same deformed state and camera, over the 10 steps (worst: the "
       "worst step)\n",
       reps);
-  for (const std::string& source : sources) RunVolume(source, reps, size, preset, mode, all);
+  for (const std::string& source : sources) {
+    if (ladder) {
+      RunLadder(source, reps, size, preset, mode);
+    } else {
+      RunVolume(source, reps, size, preset, mode, all);
+    }
+  }
   return 0;
 }

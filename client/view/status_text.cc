@@ -26,7 +26,10 @@ std::array<std::string, kStatusLineCount> StatusLines(const StatusInputs& in) {
       case v3::INTERACTIVE_QUALITY_SHARP: rate += " sharp"; break;
       default: break;
     }
-    state = f.interactive() ? "interactive" : "still";
+    // Refinement at rest: the rungs before the still.
+    state = f.refine_level() > 0   ? "refine " + std::to_string(f.refine_level())
+            : f.interactive()      ? "interactive"
+                                   : "still";
     state += Format("  disp %.1f mm", f.max_displacement_mm());
     // Shown when there is something to say: the grabbed tissue behind the
     // pointer, or (never expected) inverted tets.

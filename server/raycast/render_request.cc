@@ -45,13 +45,6 @@ Status CheckInteractiveCast(const InteractiveCast& c) {
   return absl::OkStatus();
 }
 
-int RenderSide(const RenderRequest& request, int side) {
-  if (request.quality != RenderQuality::kInteractive) return side;
-  const double d = request.interactive.divisor;
-  if (!std::isfinite(d) || d <= 1.0) return side;
-  return std::max(1, int(std::ceil(double(side) / std::min(d, kMaxInteractiveDivisor) - 1e-9)));
-}
-
 double StillStepMm(const RenderRequest& request, const VolumeGeometry& geometry) {
   const glm::dvec3& s = geometry.spacing_mm;
   const bool mip = request.mode == RenderMode::kMip;
@@ -60,6 +53,13 @@ double StillStepMm(const RenderRequest& request, const VolumeGeometry& geometry)
 }
 
 }  // namespace
+
+int RenderSide(const RenderRequest& request, int side) {
+  if (request.quality != RenderQuality::kInteractive) return side;
+  const double d = request.interactive.divisor;
+  if (!std::isfinite(d) || d <= 1.0) return side;
+  return std::max(1, int(std::ceil(double(side) / std::min(d, kMaxInteractiveDivisor) - 1e-9)));
+}
 
 InteractiveCast InteractiveCastFor(InteractiveQuality quality) {
   switch (quality) {

@@ -249,6 +249,10 @@ glm::vec4 LutParams(const RenderLut& lut);
 // The step a request will use (validated by PrepareRaycast).
 double RequestStepMm(const RenderRequest& request, const VolumeGeometry& geometry);
 
+// Rays a request casts along a frame side of `side` pixels: `side`, or for
+// kInteractive ceil(side / interactive.divisor).
+int RenderSide(const RenderRequest& request, int side);
+
 // The filter that upscales the request's ray-cast pixels (interactive
 // frames: request.interactive.upscale_filter; stills are not upscaled).
 int UpscaleFilterOf(const RenderRequest& request);

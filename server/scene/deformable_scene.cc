@@ -244,6 +244,8 @@ Result<RenderRequest> DeformableScene::PrepareRender(const SceneView& view,
   request.settings.step_mm = view.step_mm;
   if (view.quality == RenderQuality::kInteractive) {
     request.settings.jitter_seed = ++interactive_frames_;
+  } else {
+    MakeRefineRung(request, view.refine_step_multiple, volume_->geometry());
   }
   request.volume = gpu_volume_;
   // Undeformed (every displacement 0): no map, the identity, whose reads

@@ -23,6 +23,7 @@
 #include "server/scene/scene_history.h"
 #include "server/scene/scene_op.h"
 #include "server/scene/slice_view.h"
+#include "server/raycast/refine_ladder.h"
 #include "server/raycast/render_presets.h"
 #include "server/raycast/volume_renderer.h"
 #include "server/volume/gpu_volume.h"
@@ -65,6 +66,9 @@ struct SceneView {
   // The sample step along the rays (mm); 0: the quality's default
   // (RaycastSettings::step_mm).
   double step_mm = 0.0;
+  // kStill: > 1 casts the refinement rung at this multiple of the still's
+  // step instead (MakeRefineRung, refine_ladder.h).
+  double refine_step_multiple = 0.0;
 };
 
 // The interactive backward map: Update keeps the vertices that moved less

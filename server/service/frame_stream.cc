@@ -42,6 +42,7 @@ void FrameStream::EnqueueEvent(const v3::ClientEvent& event) {
   const auto kind = event.event_case();
   const bool replaceable = kind == v3::ClientEvent::kCamera || kind == v3::ClientEvent::kDrag;
   last_event_at_ = std::chrono::steady_clock::now();
+  events_received_.fetch_add(1, std::memory_order_relaxed);
   if (replaceable && !events_.empty() && events_.back().event_case() == kind) {
     const bool want_vertices = events_.back().want_vertices() || event.want_vertices();
     events_.back() = event;
@@ -121,59 +122,94 @@ void FrameStream::ScheduleLocked() {
   }
 }
 
+FrameStream::FramePlan FrameStream::PlanLocked(bool session_changing) {
+  FramePlan plan;
+  dirty_ = false;
+  plan.settings = settings_;
+  plan.want_vertices = want_vertices_;
+  want_vertices_ = false;
+  plan.sequence = stream_sequence_;  // events applied before this render starts
+  // Interactive while the client is interacting (ClientActiveLocked); a
+  // client that became active since StillCheck found it at rest gets an
+  // interactive frame first, and the still check comes again after it.
+  plan.interactive =
+      answer_move_ || ClientActiveLocked() || (!force_still_ && session_changing);
+  answer_move_ = false;
+  // The frame refines when the one before was cast while moving (or was a
+  // rung): the ladder goes on where StillCheck (or the rung before) asked
+  // for it, and starts over where the state changed since.
+  plan.at_rest = !plan.interactive && (force_still_ || last_interactive_);
+  if (!plan.at_rest || !force_still_) {
+    ladder_.clear();
+    next_rung_ = 0;
+  }
+  force_still_ = false;
+  return plan;
+}
+
 void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
   const double queue_ms = MsSince(queued_at);
-  StreamSettings settings;
-  bool want_vertices = false;
-  // Interactive while the client is interacting (ClientActiveLocked);
-  // StillCheck forces the still frame once it has been idle for
-  // --still-delay-ms.
   const bool session_changing = session_->RecentlyChanged();
-  bool interactive = false;
-  uint64_t sequence = 0;
+  const uint64_t version = session_->version();
+  const uint64_t events = events_received_.load(std::memory_order_relaxed);
+  FramePlan plan;
   {
     auto lock = Lock();
     if (finish_ || sink_ == nullptr) {
       render_scheduled_ = false;
       return;
     }
-    dirty_ = false;
-    settings = settings_;
-    want_vertices = want_vertices_;
-    want_vertices_ = false;
-    sequence = stream_sequence_;  // events applied before this render starts
-    // A client that became active since the still was asked for gets an
-    // interactive frame first; the still check comes again after it.
-    interactive = ClientActiveLocked() || (!force_still_ && session_changing);
-    force_still_ = false;
+    plan = PlanLocked(session_changing);
   }
-  // A stream that ends meanwhile (client gone, session closed, shutdown)
-  // stops its still after the band in progress.
-  const CancelToken cancel([this]() -> Status {
-    if (finishing_.load(std::memory_order_relaxed)) {
-      return absl::CancelledError("the stream ended");
-    }
-    return service_->WorkAllowed();
-  });
-  auto frame = session_->Render({&settings, std::nullopt, interactive, want_vertices, cancel});
+  // At rest: the ladder's rungs, then the still (ladder_ and next_rung_ are
+  // the render task's: at most one runs per stream).
+  if (plan.at_rest && next_rung_ == 0) ladder_ = session_->RefineLadder(plan.settings);
+  const bool rung = plan.at_rest && next_rung_ < ladder_.size();
+  std::atomic<bool> moved{false};
+  auto frame = session_->Render({.settings = &plan.settings,
+                                 .interactive = plan.interactive,
+                                 .want_vertices = plan.want_vertices,
+                                 .cancel = FrameCancel(plan.at_rest, events, version, &moved),
+                                 .refine_step_multiple = rung ? ladder_[next_rung_] : 0.0});
   auto lock = Lock();
   render_scheduled_ = false;
+  if (moved.load()) {
+    // The move's frame follows (its event or change marks the stream
+    // dirty), cast while moving however long the band in progress took.
+    answer_move_ = true;
+    return ScheduleLocked();
+  }
   if (!frame.ok()) return FinishLocked(ToGrpcStatus(frame.status()));
   auto out = std::make_unique<v3::Frame>(*std::move(frame));
   out->mutable_timings()->set_queue_ms(queue_ms);
   out->mutable_timings()->set_total_ms(out->timings().total_ms() + queue_ms);
-  if (options_.per_stream_sequence) out->set_last_sequence(sequence);
+  if (options_.per_stream_sequence) out->set_last_sequence(plan.sequence);
+  if (rung) out->set_refine_level(int32_t(next_rung_ + 1));
   last_interactive_ = out->interactive();
   DeliverLocked(std::move(out));
-  if (dirty_) {
-    ScheduleLocked();
-  } else if (last_interactive_) {
-    std::weak_ptr<FrameStream> weak = weak_from_this();
-    service_->render_pool->PostAfter(
-        std::chrono::milliseconds(int64_t(service_->options.still_delay_ms) + 5), [weak] {
-          if (auto self = weak.lock()) self->StillCheck();
-        });
+  if (dirty_) return ScheduleLocked();
+  if (rung) {
+    // The next rung, or the still, as soon as the pool allows.
+    ++next_rung_;
+    return StillCheckLocked();
   }
+  if (last_interactive_) PostStillCheckLocked(std::chrono::milliseconds(
+      int64_t(service_->options.still_delay_ms) + 5));
+}
+
+CancelToken FrameStream::FrameCancel(bool at_rest, uint64_t events, uint64_t version,
+                                     std::atomic<bool>* moved) {
+  return CancelToken([this, at_rest, events, version, moved]() -> Status {
+    if (finishing_.load(std::memory_order_relaxed)) {
+      return absl::CancelledError("the stream ended");
+    }
+    if (at_rest && (events_received_.load(std::memory_order_relaxed) != events ||
+                    session_->version() != version)) {
+      moved->store(true);
+      return absl::AbortedError("the client moved: the refinement is dropped");
+    }
+    return service_->WorkAllowed();
+  });
 }
 
 bool FrameStream::ClientActiveLocked() const {
@@ -182,29 +218,33 @@ bool FrameStream::ClientActiveLocked() const {
          MsSince(last_event_at_) < service_->options.still_delay_ms;
 }
 
+void FrameStream::PostStillCheckLocked(std::chrono::milliseconds delay) {
+  std::weak_ptr<FrameStream> weak = weak_from_this();
+  service_->render_pool->PostAfter(delay, [weak] {
+    if (auto self = weak.lock()) self->StillCheck();
+  });
+}
+
 void FrameStream::StillCheck() {
   auto lock = Lock();
+  StillCheckLocked();
+}
+
+void FrameStream::StillCheckLocked() {
   if (!last_interactive_ || render_scheduled_ || finish_) return;
   if (session_->RecentlyChanged() || ClientActiveLocked()) {
     // Events still coming: look again later.
     still_deferrals_ = 0;
-    std::weak_ptr<FrameStream> weak = weak_from_this();
-    service_->render_pool->PostAfter(
-        std::chrono::milliseconds(int64_t(service_->options.still_delay_ms) + 5), [weak] {
-          if (auto self = weak.lock()) self->StillCheck();
-        });
-    return;
+    return PostStillCheckLocked(
+        std::chrono::milliseconds(int64_t(service_->options.still_delay_ms) + 5));
   }
   // Interactive work first: while other jobs wait for the render pool
-  // (other streams' events and frames), the still waits a little, at most
-  // kMaxStillDeferrals times, rather than hold the renderer ahead of them.
+  // (other streams' events and frames), the still (or a rung) waits a
+  // little, at most kMaxStillDeferrals times, rather than hold the
+  // renderer ahead of them.
   if (service_->render_pool->queued() > 0 && still_deferrals_ < kMaxStillDeferrals) {
     ++still_deferrals_;
-    std::weak_ptr<FrameStream> weak = weak_from_this();
-    service_->render_pool->PostAfter(kStillDeferral, [weak] {
-      if (auto self = weak.lock()) self->StillCheck();
-    });
-    return;
+    return PostStillCheckLocked(kStillDeferral);
   }
   still_deferrals_ = 0;
   force_still_ = true;

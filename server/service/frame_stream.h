@@ -8,12 +8,18 @@
 // the stream dirty and are folded into the next render. Frames are
 // interactive (cheap) while the client interacts: this stream's events keep
 // arriving, or the session changed (camera, grab, drag, ...: from any
-// client) within still_delay_ms; a still, full-quality frame follows once
-// both have been idle that long, and while no other job waits for the render
-// pool (for at most kMaxStillDeferrals x kStillDeferral longer): a still
-// cannot be interrupted once cast, so it goes after interactive work. Whether the client is active is judged by
-// when events arrive, not when they are applied, so that under load the
-// queue wait does not turn a moving client's frames into stills.
+// client) within still_delay_ms. Once both have been idle that long, and
+// while no other job waits for the render pool (for at most
+// kMaxStillDeferrals x kStillDeferral longer), the frame refines: the rungs
+// of the session's RefineLadder (refine_ladder.h; Frame.refine_level 1, 2,
+// ...), each as soon as the last is sent and the pool allows, then the
+// still, full-quality frame, exactly as a still rendered directly. A frame
+// at rest (rung or still) stops between its bands once the client moves
+// again (an event on this stream, or the session changed): the rest of the
+// ladder is dropped and the move's interactive frame goes next. Whether the
+// client is active is judged by when events arrive, not when they are
+// applied, so that under load the queue wait does not turn a moving
+// client's frames into stills.
 //
 // Calls on the sink (StartWrite, StartRead, Finish) are decided under the
 // stream's mutex but made after it is released: each decision is appended to
@@ -36,6 +42,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <grpcpp/support/status.h>
 
@@ -102,12 +109,33 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   // pool is shutting down.
   bool PostToPool(std::function<void()> task);
   void ScheduleLocked();
+  // What the next render casts, decided under mutex_.
+  struct FramePlan {
+    StreamSettings settings;
+    bool want_vertices = false;
+    uint64_t sequence = 0;     // this stream's last event applied
+    bool interactive = false;  // the client is moving
+    bool at_rest = false;      // refinement: a rung or the still that ends it
+  };
+  FramePlan PlanLocked(bool session_changing);
   void RenderNow(std::chrono::steady_clock::time_point queued_at);
+  // Polled by a render between its bands: a stream that ends meanwhile
+  // (client gone, session closed, shutdown) stops its still after the band
+  // in progress; so does a frame at_rest once the client moves again (an
+  // event arrived after `events` were received, or the session's version
+  // moved on from `version`), which sets *moved.
+  CancelToken FrameCancel(bool at_rest, uint64_t events, uint64_t version,
+                          std::atomic<bool>* moved);
   void DeliverLocked(std::unique_ptr<v3::Frame> frame);
   // Writes `frame`, or finishes the stream with PERMISSION_DENIED when the
   // user may no longer see the session.
   void WriteLocked(std::unique_ptr<v3::Frame> frame);
+  // At rest (no event, no session change within still_delay_ms, no other
+  // job waiting): the next rung or the still is scheduled; else checks
+  // again later.
   void StillCheck();
+  void StillCheckLocked();
+  void PostStillCheckLocked(std::chrono::milliseconds delay);
   // The client is interacting: events queued or being applied, or one
   // arrived within still_delay_ms.
   bool ClientActiveLocked() const;
@@ -159,7 +187,19 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   // they are applied: under load the queue wait must not turn a moving
   // client's frames into stills).
   std::chrono::steady_clock::time_point last_event_at_{};
+  // Events EnqueueEvent received: a frame at rest polls it to stop when the
+  // client moves.
+  std::atomic<uint64_t> events_received_{0};
+  // StillCheck found the client at rest: the next render refines.
   bool force_still_ = false;
+  // The refinement's rungs (step multiples, Session::RefineLadder) and the
+  // next one's index; the still comes after the last. Touched only by the
+  // render task (at most one per stream).
+  std::vector<double> ladder_;
+  size_t next_rung_ = 0;
+  // A frame at rest stopped because the client moved: the next is cast as
+  // interactive.
+  bool answer_move_ = false;
   // Still checks put off because other jobs waited for the pool.
   int still_deferrals_ = 0;
   static constexpr int kMaxStillDeferrals = 10;

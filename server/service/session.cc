@@ -224,7 +224,9 @@ Result<v3::Frame> Session::Render(const FrameRequest& request) {
   SceneStepTimings map_update;  // the map update this frame needed, if any
   uint64_t sequence = 0;
   const bool interactive = request.interactive;
+  const bool rung = !interactive && request.refine_step_multiple > 1.0;
   view.quality = interactive ? RenderQuality::kInteractive : RenderQuality::kStill;
+  if (rung) view.refine_step_multiple = request.refine_step_multiple;
   v3::Frame out;
   // The map stays as this frame's request saw it until the frame is cast;
   // the scene itself is free meanwhile, so the next event's FEM runs while
@@ -268,7 +270,7 @@ Result<v3::Frame> Session::Render(const FrameRequest& request) {
   frame_lock.unlock();
   // A still: the client has stopped changing things; its view, if new, goes
   // to the case now rather than with every settings event.
-  if (!interactive) StoreViewInCase();
+  if (!interactive && !rung) StoreViewInCase();
   const double render_ms = MsSince(t0) - map_update.warp_ms;
   const auto t1 = std::chrono::steady_clock::now();
   const StreamSettings& s = *request.settings;
@@ -285,7 +287,7 @@ Result<v3::Frame> Session::Render(const FrameRequest& request) {
   out.set_encoding(s.png ? v3::ENCODING_PNG : v3::ENCODING_JPEG);
   out.set_width(frame.width);
   out.set_height(frame.height);
-  out.set_interactive(interactive);
+  out.set_interactive(interactive || rung);
   out.set_last_sequence(sequence);
   out.set_max_displacement_mm(step.max_displacement_mm);
   out.set_inverted_tets(step.inverted_tets);
@@ -297,6 +299,23 @@ Result<v3::Frame> Session::Render(const FrameRequest& request) {
   timings->set_encode_ms(MsSince(t1));
   timings->set_total_ms(MsSince(t0));
   return out;
+}
+
+std::vector<double> Session::RefineLadder(const StreamSettings& settings) const {
+  const SceneView& view = settings.view;
+  RenderRequest moving;
+  {
+    std::lock_guard lock(state_mutex_);
+    moving.camera = camera_;
+  }
+  moving.mode = view.mode;
+  moving.preset = view.preset;
+  moving.quality = RenderQuality::kInteractive;
+  moving.interactive = InteractiveCastFor(view.interactive_quality);
+  moving.width = view.width;
+  moving.height = view.height;
+  moving.settings.step_mm = view.step_mm;
+  return vpm::RefineLadder(moving, volume_->volume.geometry());
 }
 
 Status Session::SettleLocked(SceneStepTimings* step) {

@@ -129,8 +129,15 @@ class Session : public std::enable_shared_from_this<Session> {
     // Polled between the bands of a still and before the cast: a frame
     // nobody waits for (Render cancelled or past its deadline) stops.
     CancelToken cancel;
+    // Not interactive: > 1 casts the refinement rung at this multiple of
+    // the still's step (refine_ladder.h); the frame says interactive, and
+    // the rung, like the still, shows the settled state.
+    double refine_step_multiple = 0.0;
   };
   Result<v3::Frame> Render(const FrameRequest& request);
+  // The refinement rungs (step multiples of the still's, coarsest first:
+  // RefineLadder) for frames of `settings` at the session's camera.
+  std::vector<double> RefineLadder(const StreamSettings& settings) const;
   // One slice of the current state (RenderSlice): the Frame's image is the
   // slice, Frame.slice where it lies.
   Result<v3::Frame> RenderSlice(const SliceRequest& request, bool png, int jpeg_quality);

@@ -14,16 +14,11 @@
 namespace vpm {
 namespace {
 
-// The 256^3 phantom and the 512 x 512 x 900 CT made from it
+using testing::PhantomGeometry;
+
+// The 512 x 512 x 900 CT made from the 256^3 phantom
 // (bench/make_ct_nifti.cc): the same field of view, voxels 2 x 2 x 3.5
 // times smaller.
-VolumeGeometry PhantomGeometry() {
-  VolumeGeometry g;
-  g.dims = {256, 256, 256};
-  g.spacing_mm = {380.0 / 255.0, 380.0 / 255.0, 243.0 / 255.0};
-  return g;
-}
-
 VolumeGeometry FullSizeCtGeometry() {
   VolumeGeometry g;
   g.dims = {512, 512, 900};

@@ -48,6 +48,15 @@ inline Volume MakeSphereRodVolume(int n = 48) {
   return *Volume::Create(g, std::move(values));
 }
 
+// The 256^3 phantom's geometry (no voxels): 380 x 380 x 243 mm, so its DVR
+// stills step 0.375 mm (the cap).
+inline VolumeGeometry PhantomGeometry() {
+  VolumeGeometry g;
+  g.dims = {256, 256, 256};
+  g.spacing_mm = {380.0 / 255.0, 380.0 / 255.0, 243.0 / 255.0};
+  return g;
+}
+
 struct ImageError {
   double mean_abs = 0.0;  // over every channel of every pixel, in [0, 1]
   double max_abs = 0.0;   // in [0, 1]

@@ -23,15 +23,8 @@
 namespace vpm::service::testing {
 namespace {
 
-class RenderSliceTest : public ServiceTest {
+class RenderSliceTest : public PhantomSessionTest {
  protected:
-  void SetUp() override {
-    ServiceTest::SetUp();
-    volume_ = LoadPhantom();
-    session_ = OpenSession(volume_.volume_id());
-    ASSERT_FALSE(session_.session_id().empty());
-  }
-
   grpc::Status RenderSlice(const v3::SliceSpec& spec, v3::Frame* frame,
                            const std::string& session_id = "") {
     v3::RenderSliceRequest request;
@@ -81,8 +74,6 @@ class RenderSliceTest : public ServiceTest {
     return deformed;
   }
 
-  v3::VolumeInfo volume_;
-  v3::SessionInfo session_;
 };
 
 DecodedImage DecodeFramePng(const std::string& bytes) {

@@ -10,14 +10,8 @@
 namespace vpm::service::testing {
 namespace {
 
-class SessionTest : public ServiceTest {
+class SessionTest : public PhantomSessionTest {
  protected:
-  void SetUp() override {
-    ServiceTest::SetUp();
-    volume_ = LoadPhantom();
-    session_ = OpenSession(volume_.volume_id());
-    ASSERT_FALSE(session_.session_id().empty());
-  }
   grpc::Status Manipulate(const v3::ClientEvent& event, v3::ManipulateResponse* response) {
     v3::ManipulateRequest request;
     request.set_session_id(session_.session_id());
@@ -50,8 +44,6 @@ class SessionTest : public ServiceTest {
     *request.mutable_settings() = Small();
     return request;
   }
-  v3::VolumeInfo volume_;
-  v3::SessionInfo session_;
 };
 
 TEST_F(SessionTest, Sessions_OpenListClose) {

@@ -159,4 +159,17 @@ class ServiceTest : public ::testing::Test {
   std::unique_ptr<v3::Vpm::Stub> stub_;
 };
 
+// A server with the small phantom loaded and a session open on it.
+class PhantomSessionTest : public ServiceTest {
+ protected:
+  void SetUp() override {
+    ServiceTest::SetUp();
+    volume_ = LoadPhantom();
+    session_ = OpenSession(volume_.volume_id());
+    ASSERT_FALSE(session_.session_id().empty());
+  }
+  v3::VolumeInfo volume_;
+  v3::SessionInfo session_;
+};
+
 }  // namespace vpm::service::testing

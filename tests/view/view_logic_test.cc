@@ -211,6 +211,8 @@ TEST(StatusLines, ShowRateLatencySizeQualityDisplacementAndServerTimes) {
   EXPECT_EQ(StatusLines(in)[0], "12.3 fps  rtt 85 ms  256x192 sharp");
   in.interactive_quality = v3::INTERACTIVE_QUALITY_BALANCED;
   EXPECT_EQ(StatusLines(in)[0], "12.3 fps  rtt 85 ms  256x192 bal");
+  in.frame->set_refine_level(1);
+  EXPECT_EQ(StatusLines(in)[1], "refine 1  disp 3.2 mm  GRAB MODE");
 }
 
 TEST(StatusLines, FitA256PixelWindowWithSlowStages) {

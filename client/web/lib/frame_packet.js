@@ -38,6 +38,8 @@ export function packFrame(frame, extra = {}) {
     height: frame.height,
     last_sequence: Number(frame.last_sequence),
     interactive: frame.interactive,
+    // Refinement at rest: 1, 2, ... for the rungs before the still, else 0.
+    refine_level: Number(frame.refine_level ?? 0),
     timings: frame.timings,        // server-side ms per stage
     max_displacement_mm: frame.max_displacement_mm,
     inverted_tets: Number(frame.inverted_tets ?? 0),  // of the proxy mesh (0 expected)

@@ -577,10 +577,17 @@ function showStatus(h) {
   const latency = stats.latencyMs === null ? '-' : stats.latencyMs.toFixed(0);
   $('status').textContent =
     `${stats.fps()} fps · latency ${latency} ms · ${h.width}x${h.height} ` +
-    `${(h.bytes / 1024).toFixed(1)} KB ${h.encoding} · ${h.interactive ? 'interactive' : 'still'}` +
+    `${(h.bytes / 1024).toFixed(1)} KB ${h.encoding} · ${frameKind(h)}` +
     ` · server ${h.timings.total_ms.toFixed(0)} ms · max displacement ` +
     `${h.max_displacement_mm.toFixed(2)} mm · lag ${(h.lag_mm ?? 0).toFixed(1)} mm · ` +
     `inverted tets ${h.inverted_tets ?? 0} · frame ${h.frame_number}${caseStatus()}`;
+}
+
+// What kind of frame the status line names: a rung of the refinement at
+// rest (before the still), one cast while moving, or the still.
+function frameKind(h) {
+  if (h.refine_level > 0) return `refine ${h.refine_level}`;
+  return h.interactive ? 'interactive' : 'still';
 }
 
 // The case part of the status line: its title and id, and after an undo or
