@@ -45,6 +45,14 @@ start=$(date +%s)
 # lane) runs.
 # The thousand builds (a count of slots, 80-170 s under a sanitizer) run in
 # `make test`; the other mesh-lifecycle tests exercise the same code here.
+# So do four long drags of the FEM (8-25 s each under a sanitizer, 110 s of
+# the two runs): the locked drags in events and with springs, the drag at
+# once against the event budget and the turned face; the other FEM tests
+# take the same solver, threads and factor paths.
+long_fem="FemEventBudget.LockedDragInEventsForcesNoMoreThanTheUnboundedDrag"
+long_fem+="|FemEventBudget.DragAtOnceStopsShortCarriesTheRestAndSettlesToTheUnboundedSolve"
+long_fem+="|SpringHandles.LockedDragLagsAndInvertsNothing"
+long_fem+="|LargeRotation.TurningOneFaceTurnsTheBodyRigidlyOnlyWhenCorotated"
 (cd "$dir" && ctest -j "$(nproc)" --timeout 900 --output-on-failure -R "$regex" \
-  -E "RenderStormTest.ExpiredRenderStormRunsAlmostNoneAndNeverStallsTheDrag|MeshLifecycleTest.ThousandBuildsOnOneVolumeAreNeverRefused")
+  -E "RenderStormTest.ExpiredRenderStormRunsAlmostNoneAndNeverStallsTheDrag|MeshLifecycleTest.ThousandBuildsOnOneVolumeAreNeverRefused|$long_fem")
 echo "sanitize.sh: $mode tests took $(( $(date +%s) - start )) s"
