@@ -57,6 +57,7 @@ struct Case {
   bool map = true;
   VolumeAccess access = VolumeAccess::kTexelBuffer;
   bool cell_gradient = true;  // DVR shading: cell gradient, else central-difference taps
+  bool brightest_first = true;  // MIP: RaycastSettings::mip_brightest_first
 };
 
 struct Measured {
@@ -298,6 +299,9 @@ int main(int raw_argc, char** raw_argv) {
                    RenderQuality::kStill, true, true, false});
   cases.push_back({"still MIP, no map", RenderMode::kMip, "ct-vessels", RenderQuality::kStill,
                    true, true, false});
+  cases.push_back({"still MIP, no map, in order", RenderMode::kMip, "ct-vessels",
+                   RenderQuality::kStill, true, true, false, VolumeAccess::kTexelBuffer, true,
+                   false});
   cases.push_back({"still MIP, no skip, no map", RenderMode::kMip, "ct-vessels",
                    RenderQuality::kStill, false, true, false});
   cases.push_back({"still DVR ct-vessels, sampler3D", RenderMode::kDvr, "ct-vessels",
@@ -346,6 +350,7 @@ int main(int raw_argc, char** raw_argv) {
     if (step_mm > 0.0) r.settings.step_mm = step_mm;
     r.settings.empty_space_skipping = c.skipping;
     r.settings.shading = c.shading;
+    r.settings.mip_brightest_first = c.brightest_first;
     r.settings.interactive_cell_gradient = r.settings.still_cell_gradient = c.cell_gradient;
     VolumeRenderer& renderer =
         c.access == VolumeAccess::kTexelBuffer ? *texel_renderer : *sampled_renderer;

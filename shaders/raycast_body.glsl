@@ -375,9 +375,20 @@ void walk_step(inout BrickWalk w) {
   w.t_next += vec3(m) * w.t_delta;
 }
 
-// The occupancy of brick b (clamped to the grid).
+#ifdef VPM_RAYCAST_MIP
+// The brick the MIP sampled first (walk_to_brightest), which the walk then
+// treats as empty; far outside the grid when none.
+ivec3 g_sampled_brick = ivec3(-(1 << 20));
+#endif
+
+// The occupancy of brick b (clamped to the grid); MIP: no value in the
+// brick already sampled.
 float brick_occupancy(ivec3 b) {
-  return texelFetch(u_occupancy, brick_linear(clamp(b, ivec3(0), g_bricks - 1))).r;
+  float occ = texelFetch(u_occupancy, brick_linear(clamp(b, ivec3(0), g_bricks - 1))).r;
+#ifdef VPM_RAYCAST_MIP
+  if (b == g_sampled_brick) occ = kNoValue;
+#endif
+  return occ;
 }
 
 // True when the walk's brick, of occupancy occ, is above threshold and holds
@@ -414,6 +425,32 @@ bool walk_to_occupied(inout BrickWalk w, inout int k, float threshold, float t_n
   }
 }
 
+#ifdef VPM_RAYCAST_MIP
+// MIP, the brightest brick first (docs/RENDERING.md, "Empty-space
+// skipping"): walks the whole ray once, taking no sample, to the brick that
+// holds a sample (index >= 0) and whose occupancy, the most it can show, is
+// the largest above black; the first at or above white ends the walk. Sets
+// bright to the walk there and k_bright to its first sample; false when no
+// brick is above black. Caster::WalkToBrightest in raycast_cpu.cc mirrors it.
+bool walk_to_brightest(BrickWalk w, float black, float white, float t_near, float t_far,
+                       float step, out BrickWalk bright, out int k_bright) {
+  float best = black;
+  bright = w;
+  k_bright = 0;
+  while (w.t_enter <= t_far && best < white) {
+    float occ = brick_occupancy(w.b);
+    int k = 0;
+    if (enter_brick(w, occ, k, best, t_near, t_far, step)) {
+      best = occ;
+      bright = w;
+      k_bright = k;
+    }
+    walk_step(w);
+  }
+  return best > black;
+}
+#endif
+
 // Sample k of a segment that ends at t_end: x, and false once past the end.
 bool segment_sample(int k, float t_near, float step, float t_end, vec3 eye, vec3 dir,
                     out vec3 x) {
@@ -435,6 +472,35 @@ bool next_segment(inout BrickWalk w, inout int k, float threshold, bool skipping
   }
   return t_near + float(k) * step <= t_end;
 }
+
+#ifdef VPM_RAYCAST_MIP
+// The MIP samples from k to t_end (k is in the segment), two per iteration
+// (docs/RENDERING.md, "Two samples per iteration"): both reads first, then
+// the maximum sample by sample. Leaves k past the last sample taken; true
+// when the maximum reaches white (early termination).
+bool mip_segment(inout int k, float t_end, float t_near, float step, vec3 eye, vec3 dir,
+                 bool early, float white, inout float ray_max, inout uint taken) {
+  vec3 x;
+  segment_sample(k, t_near, step, t_end, eye, dir, x);
+  for (;;) {
+    vec3 x2;
+    bool second = segment_sample(k + 1, t_near, step, t_end, eye, dir, x2);
+    float v1 = deformed_value(x);
+    float v2 = deformed_value(second ? x2 : x);
+    ++taken;
+    ++k;
+    ray_max = max(ray_max, v1);
+    if (early && ray_max >= white) return true;
+    if (second) {
+      ++taken;
+      ++k;
+      ray_max = max(ray_max, v2);
+      if (early && ray_max >= white) return true;
+    }
+    if (!segment_sample(k, t_near, step, t_end, eye, dir, x)) return false;
+  }
+}
+#endif
 
 vec4 lut_at(float v) {
   float n = g_lut.z;
@@ -605,38 +671,23 @@ void main() {
   float black = p.window.x, white = p.window.z;
   BrickWalk w = walk_start(eye, dir, inv_dir, t_near);
   bool done = false;
+  // The brightest brick first: its maximum raises the threshold the walk
+  // below skips by, and reaching white ends the ray.
+  if (skipping && has_flag(VPM_RAYCAST_BRIGHTEST_FIRST)) {
+    BrickWalk bright;
+    int k_bright;
+    if (walk_to_brightest(w, black, white, t_near, t_far, step, bright, k_bright)) {
+      done = mip_segment(k_bright, min(walk_exit(bright), t_far), t_near, step, eye, dir, early,
+                         white, ray_max, taken);
+      g_sampled_brick = bright.b;
+    }
+  }
   // Segments: the samples of the next brick that can raise the maximum (and
   // show above the window); without skipping, the whole ray.
   for (float t_end;
        !done && next_segment(w, k, max(ray_max, black), skipping, t_near, t_far, step, t_end);
        walk_step(w)) {
-    vec3 x;
-    segment_sample(k, t_near, step, t_end, eye, dir, x);  // next_segment: in the segment
-    // Two samples per iteration (docs/RENDERING.md, "Two samples per
-    // iteration"): both reads first, then the maximum sample by sample.
-    for (;;) {
-      vec3 x2;
-      bool second = segment_sample(k + 1, t_near, step, t_end, eye, dir, x2);
-      float v1 = deformed_value(x);
-      float v2 = deformed_value(second ? x2 : x);
-      ++taken;
-      ++k;
-      ray_max = max(ray_max, v1);
-      if (early && ray_max >= white) {
-        done = true;
-        break;
-      }
-      if (second) {
-        ++taken;
-        ++k;
-        ray_max = max(ray_max, v2);
-        if (early && ray_max >= white) {
-          done = true;
-          break;
-        }
-      }
-      if (!segment_sample(k, t_near, step, t_end, eye, dir, x)) break;
-    }
+    done = mip_segment(k, t_end, t_near, step, eye, dir, early, white, ray_max, taken);
     if (!skipping) break;
   }
   vec3 rgb = vec3(clamp((ray_max - p.window.x) * p.window.y, 0.0, 1.0));

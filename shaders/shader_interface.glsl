@@ -29,6 +29,7 @@ struct LatticeCostsPush {
 #define VPM_RAYCAST_HAS_MAP 8
 #define VPM_RAYCAST_COUNT_SAMPLES 16
 #define VPM_RAYCAST_JITTER 64
+#define VPM_RAYCAST_BRIGHTEST_FIRST 256
 #define VPM_RAYCAST_MAX_CLIP_PLANES 16
 
 struct BrickMinMaxPush {

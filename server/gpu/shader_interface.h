@@ -80,6 +80,10 @@ inline constexpr int kRaycastCountSamples = 16;
 // Ray starts jittered by a fraction of the step from a hash of the pixel and
 // image.w, the frame's seed (RaycastJitter in server/raycast/ray_start_jitter.h).
 inline constexpr int kRaycastJitter = 64;
+// MIP: the brick that can show the most sampled first, so that the walk
+// skips every brick that cannot exceed its maximum (docs/RENDERING.md,
+// "Empty-space skipping"). 32 and 128 are render_request.h's.
+inline constexpr int kRaycastBrightestFirst = 256;
 inline constexpr int kRaycastMaxClipPlanes = 16;  // VPM_RAYCAST_MAX_CLIP_PLANES
 struct RaycastParams {
   glm::vec4 eye_mm;      // xyz eye (physical mm); w: step_mm

@@ -279,20 +279,45 @@ class Caster {
     w.t_next += vec3(m) * t_delta;
   }
 
+  // `sampled`: a brick already sampled (MIP, WalkToBrightest), walked over.
   bool WalkToOccupied(BrickWalk& w, int& k, float threshold, ivec3 step_b, vec3 t_delta,
-                      float t_near, float t_far, float step) const {
+                      float t_near, float t_far, float step, ivec3 sampled) const {
     for (;;) {
       if (w.t_enter > t_far) return false;
       const int first = std::max(k, int(std::ceil((w.t_enter - t_near) / step)));
       const float t_first = t_near + float(first) * step;
-      const ivec3 b = glm::clamp(w.b, ivec3(0), nb_ - 1);
-      if (t_first <= std::min(WalkExit(w), t_far) &&
-          in_.occupancy[b.x + nb_.x * (b.y + nb_.y * b.z)] > threshold) {
+      if (t_first <= std::min(WalkExit(w), t_far) && w.b != sampled &&
+          Occupancy(w.b) > threshold) {
         k = first;
         return true;
       }
       WalkStep(w, step_b, t_delta);
     }
+  }
+
+  // walk_to_brightest() of raycast_body.glsl: the brick holding a sample
+  // whose occupancy is the largest above black (the first at or above white
+  // ends the walk); false when none is above black.
+  bool WalkToBrightest(BrickWalk w, ivec3 step_b, vec3 t_delta, float t_near, float t_far,
+                       float step, BrickWalk& bright, int& k_bright) const {
+    const float black = p_.window.x, white = p_.window.z;
+    float best = black;
+    for (; w.t_enter <= t_far && best < white; WalkStep(w, step_b, t_delta)) {
+      const int first = std::max(0, int(std::ceil((w.t_enter - t_near) / step)));
+      const float t_first = t_near + float(first) * step;
+      const float occ = Occupancy(w.b);
+      if (t_first <= std::min(WalkExit(w), t_far) && occ > best) {
+        best = occ;
+        bright = w;
+        k_bright = first;
+      }
+    }
+    return best > black;
+  }
+
+  float Occupancy(ivec3 b) const {
+    const ivec3 c = glm::clamp(b, ivec3(0), nb_ - 1);
+    return in_.occupancy[c.x + nb_.x * (c.y + nb_.y * c.z)];
   }
 
   const gpu::RaycastParams& p_;
@@ -385,11 +410,27 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
     const ivec3 step_b(inv_dir.x < 0.0f ? -1 : 1, inv_dir.y < 0.0f ? -1 : 1,
                        inv_dir.z < 0.0f ? -1 : 1);
     const vec3 t_delta = brick_size_ * glm::abs(inv_dir);
-    for (bool done = false; !done;) {
+    bool done = false;
+    ivec3 sampled(-(1 << 20));  // none
+    BrickWalk bright;
+    int k_bright = 0;
+    if (mip && skipping && Flag(gpu::kRaycastBrightestFirst) &&
+        WalkToBrightest(walk, step_b, t_delta, t_near, t_far, step, bright, k_bright)) {
+      const float t_end = std::min(WalkExit(bright), t_far);
+      for (float t = t_near + float(k_bright) * step; !done && t <= t_end;
+           t = t_near + float(k_bright) * step) {
+        done = sample(eye + t * dir);
+        ++k_bright;
+      }
+      sampled = bright.b;
+    }
+    while (!done) {
       float t_end = t_far;
       if (skipping) {
         const float threshold = mip ? std::max(ray_max, p_.window.x) : 0.0f;
-        if (!WalkToOccupied(walk, k, threshold, step_b, t_delta, t_near, t_far, step)) break;
+        if (!WalkToOccupied(walk, k, threshold, step_b, t_delta, t_near, t_far, step, sampled)) {
+          break;
+        }
         t_end = std::min(WalkExit(walk), t_far);
       }
       if (pre) {

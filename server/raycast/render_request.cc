@@ -175,6 +175,9 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   if (has_map) flags |= gpu::kRaycastHasMap;
   if (s.count_samples) flags |= gpu::kRaycastCountSamples;
   if (s.jitter) flags |= gpu::kRaycastJitter;
+  if (s.mip_brightest_first && request.mode == RenderMode::kMip) {
+    flags |= gpu::kRaycastBrightestFirst;
+  }
   if ((interactive ? s.interactive_cell_gradient : s.still_cell_gradient) &&
       request.mode == RenderMode::kDvr) {
     flags |= kRaycastCellGradient;

@@ -126,6 +126,11 @@ struct RaycastSettings {
   // functions do not depend on where samples land (docs/RENDERING.md,
   // "Sampling"). The tap-gradient loop ignores it.
   bool preintegrated = true;
+  // MIP with skipping: a first walk along the ray, taking no sample, finds
+  // the brick that can show the most and samples it first; the walk then
+  // skips every brick whose maximum is under what it found. The same
+  // picture (docs/RENDERING.md, "Empty-space skipping").
+  bool mip_brightest_first = true;
 };
 
 // Raycast flag (RaycastParams::image.z) beside gpu::kRaycast*: shade with

@@ -383,6 +383,28 @@ TEST_F(RaycastTest, MipEarlyTermination_SameImageFewerSamples) {
   EXPECT_LT(on.samples, off.samples);
 }
 
+// MIP samples the brick that can show the most first, then skips the bricks
+// under what it found: the picture stays bit for bit that of the walk in
+// order (the maximum of the same samples above the window's black), with
+// and without early termination, and the CPU reference takes the samples
+// the GPU takes.
+TEST_F(RaycastTest, MipBrightestFirst_SameImageFewerSamples) {
+  for (bool early : {true, false}) {
+    SCOPED_TRACE(early ? "early termination" : "no early termination");
+    RenderRequest r = Request(RenderMode::kMip);
+    r.settings.count_samples = true;
+    r.settings.early_termination = early;
+    const Frame first = RenderGpu(r);
+    const Frame cpu = RenderCpu(r);
+    EXPECT_NEAR(double(cpu.samples), double(first.samples), 0.002 * first.samples + 2.0);
+    ExpectClose(first, cpu, 1.0 / 255, 8.0 / 255, "mip, brightest first, GPU/CPU");
+    r.settings.mip_brightest_first = false;
+    const Frame in_order = RenderGpu(r);
+    ExpectClose(first, in_order, 1e-9, 1e-9, "mip, brightest first on/off");
+    EXPECT_LT(first.samples, in_order.samples);
+  }
+}
+
 TEST_F(RaycastTest, InteractiveQuality_HalfResolutionUpscaled) {
   RenderRequest r = Request(RenderMode::kDvr);
   r.quality = RenderQuality::kInteractive;
