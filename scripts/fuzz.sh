@@ -4,11 +4,9 @@
 # sanitizer report or timeout.
 #
 #   scripts/fuzz.sh [seconds_per_target] [target...]
-#   scripts/fuzz.sh build        (builds every target, runs none: .ci/run
-#                                 builds the tree at idle priority this way)
 #
-# Builds of one tree take turns (flock on <build>/fuzz.lock), so the smoke test
-# waits for a build already running instead of racing it.
+# Builds of one tree take turns (flock on <build>/fuzz.lock): two runs at
+# once wait for each other instead of racing in one build folder.
 #
 # Seeds come from fuzz/corpus/<name>/ (committed); inputs the fuzzer finds go
 # to fuzz/corpus-work/<name>/ (ignored by git), crash reproducers to
@@ -20,8 +18,6 @@ set -euo pipefail
 
 seconds="${1:-10}"
 shift || true
-build_only=0
-if [ "$seconds" = build ]; then build_only=1; fi
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${VPM_FUZZ_BUILD_DIR:-$root/build-fuzz}"
 jobs="${VPM_FUZZ_JOBS:-2}"
@@ -40,7 +36,6 @@ mkdir -p "$build"
   fi
   cmake --build "$build" -j "$jobs" --target "${targets[@]}"
 ) 9> "$build/fuzz.lock"
-if [ "$build_only" = 1 ]; then exit 0; fi
 
 status=0
 for target in "${targets[@]}"; do
