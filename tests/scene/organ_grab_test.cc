@@ -96,11 +96,17 @@ GrabCounts RandomGrabs(const Volume& volume, const ProxyMesh& mesh, FemOptions o
   return counts;
 }
 
-// Per setting (interactive: 10 increments; measuring: one Drag), 85 grabs on
-// the unrefined mesh anywhere in the box and 3 x 10 on meshes refined at
-// random points, near them: 230 random grab points and directions per volume.
-constexpr int kUnrefinedGrabs = 85;
-constexpr int kRefinedGrabs = 10;
+// Per setting (interactive: 10 increments; measuring: one Drag), grabs on
+// the unrefined mesh anywhere in the box and 3 x this many on meshes refined
+// at random points, near them. The suite takes 40 + 3 x 5 per setting (110
+// random grab points and directions per volume); VPM_ORGAN_GRABS=full takes
+// 85 + 3 x 10 (230 per volume, the figures in docs/FEM.md).
+bool FullGrabCount() {
+  const char* full = std::getenv("VPM_ORGAN_GRABS");
+  return full != nullptr && std::string(full) == "full";
+}
+const int kUnrefinedGrabs = FullGrabCount() ? 85 : 40;
+const int kRefinedGrabs = FullGrabCount() ? 10 : 5;
 
 void ExpectNoInversionAnywhere(const std::string& name) {
   auto volume = Load(name);

@@ -268,8 +268,14 @@ xdotool click --repeat 3 --delay 150 4
 wait_for 30 bash -c "[ \$(grep -c 'axial=[-0-9]' '$tmp/view.out') -ge 3 ]" ||
   fail "three wheel notches over the axial slice did not set three axial positions"
 settle "$n"
-import -window "$window" "$tmp/scrolled-all.png"
-cell "$tmp/scrolled-all.png" $((frame_w / 2)) 0 "$tmp/axial-after.png"
+# Under load a frame can take longer than settle's quiet second: look again
+# until the slice has changed, for up to 30 s.
+axial_changed() {
+  import -window "$window" "$tmp/scrolled-all.png" &&
+    cell "$tmp/scrolled-all.png" $((frame_w / 2)) 0 "$tmp/axial-after.png" &&
+    [ "$(changed_pixels "$tmp/axial-before.png" "$tmp/axial-after.png")" -gt 100 ]
+}
+wait_for 30 axial_changed
 steps=$(grep -o 'axial=[-0-9.e+]*' "$tmp/view.out" | cut -d= -f2 | tail -3 |
         awk 'NR > 1 { printf "%.4f ", $1 - p } { p = $1 }')
 d=$(changed_pixels "$tmp/axial-before.png" "$tmp/axial-after.png")
