@@ -228,10 +228,7 @@ Result<Frame> DeformableScene::RenderPrepared(const RenderRequest& request) cons
   return renderer_->Render(request);
 }
 
-Result<RenderRequest> DeformableScene::PrepareRender(const SceneView& view,
-                                                     SceneStepTimings* map_update) {
-  ASSIGN_OR_RETURN(SceneStepTimings sync, SyncMap());
-  if (map_update != nullptr) *map_update = sync;
+RenderRequest ViewRenderRequest(const SceneView& view) {
   RenderRequest request;
   request.camera = view.camera;
   request.mode = view.mode;
@@ -240,8 +237,16 @@ Result<RenderRequest> DeformableScene::PrepareRender(const SceneView& view,
   request.interactive = InteractiveCastFor(view.interactive_quality);
   request.width = view.width;
   request.height = view.height;
-  request.clip = ViewClip(view);
   request.settings.step_mm = view.step_mm;
+  return request;
+}
+
+Result<RenderRequest> DeformableScene::PrepareRender(const SceneView& view,
+                                                     SceneStepTimings* map_update) {
+  ASSIGN_OR_RETURN(SceneStepTimings sync, SyncMap());
+  if (map_update != nullptr) *map_update = sync;
+  RenderRequest request = ViewRenderRequest(view);
+  request.clip = ViewClip(view);
   if (view.quality == RenderQuality::kInteractive) {
     request.settings.jitter_seed = ++interactive_frames_;
   } else {

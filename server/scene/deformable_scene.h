@@ -71,6 +71,11 @@ struct SceneView {
   double refine_step_multiple = 0.0;
 };
 
+// The render request's fields that follow from the view alone: camera,
+// mode, preset, quality and its interactive cast, size and step (no clip,
+// volume, map, jitter seed or refinement rung: PrepareRender adds those).
+RenderRequest ViewRenderRequest(const SceneView& view);
+
 // The interactive backward map: Update keeps the vertices that moved less
 // than 0.05 mm (1/20 of a voxel of a 1 mm CT) since the map was last built
 // where they were, so a drag step redoes the tets around the grab, not the

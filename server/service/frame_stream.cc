@@ -193,8 +193,7 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
     ++next_rung_;
     return StillCheckLocked();
   }
-  if (last_interactive_) PostStillCheckLocked(std::chrono::milliseconds(
-      int64_t(service_->options.still_delay_ms) + 5));
+  if (last_interactive_) PostStillCheckLocked(StillCheckDelay());
 }
 
 CancelToken FrameStream::FrameCancel(bool at_rest, uint64_t events, uint64_t version,
@@ -218,6 +217,10 @@ bool FrameStream::ClientActiveLocked() const {
          MsSince(last_event_at_) < service_->options.still_delay_ms;
 }
 
+std::chrono::milliseconds FrameStream::StillCheckDelay() const {
+  return std::chrono::milliseconds(int64_t(service_->options.still_delay_ms) + 5);
+}
+
 void FrameStream::PostStillCheckLocked(std::chrono::milliseconds delay) {
   std::weak_ptr<FrameStream> weak = weak_from_this();
   service_->render_pool->PostAfter(delay, [weak] {
@@ -235,8 +238,7 @@ void FrameStream::StillCheckLocked() {
   if (session_->RecentlyChanged() || ClientActiveLocked()) {
     // Events still coming: look again later.
     still_deferrals_ = 0;
-    return PostStillCheckLocked(
-        std::chrono::milliseconds(int64_t(service_->options.still_delay_ms) + 5));
+    return PostStillCheckLocked(StillCheckDelay());
   }
   // Interactive work first: while other jobs wait for the render pool
   // (other streams' events and frames), the still (or a rung) waits a

@@ -136,6 +136,9 @@ class FrameStream : public std::enable_shared_from_this<FrameStream> {
   void StillCheck();
   void StillCheckLocked();
   void PostStillCheckLocked(std::chrono::milliseconds delay);
+  // --still-delay-ms and a little more: a check then finds a client idle
+  // that long.
+  std::chrono::milliseconds StillCheckDelay() const;
   // The client is interacting: events queued or being applied, or one
   // arrived within still_delay_ms.
   bool ClientActiveLocked() const;

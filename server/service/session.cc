@@ -302,20 +302,13 @@ Result<v3::Frame> Session::Render(const FrameRequest& request) {
 }
 
 std::vector<double> Session::RefineLadder(const StreamSettings& settings) const {
-  const SceneView& view = settings.view;
-  RenderRequest moving;
+  SceneView view = settings.view;
   {
     std::lock_guard lock(state_mutex_);
-    moving.camera = camera_;
+    view.camera = camera_;
   }
-  moving.mode = view.mode;
-  moving.preset = view.preset;
-  moving.quality = RenderQuality::kInteractive;
-  moving.interactive = InteractiveCastFor(view.interactive_quality);
-  moving.width = view.width;
-  moving.height = view.height;
-  moving.settings.step_mm = view.step_mm;
-  return vpm::RefineLadder(moving, volume_->volume.geometry());
+  view.quality = RenderQuality::kInteractive;
+  return vpm::RefineLadder(ViewRenderRequest(view), volume_->volume.geometry());
 }
 
 Status Session::SettleLocked(SceneStepTimings* step) {
