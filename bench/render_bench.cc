@@ -58,6 +58,7 @@ struct Case {
   VolumeAccess access = VolumeAccess::kTexelBuffer;
   bool cell_gradient = true;  // DVR shading: cell gradient, else central-difference taps
   bool brightest_first = true;  // MIP: RaycastSettings::mip_brightest_first
+  bool peak_refine = true;      // MIP: RaycastSettings::mip_peak_refine
 };
 
 struct Measured {
@@ -302,6 +303,9 @@ int main(int raw_argc, char** raw_argv) {
   cases.push_back({"still MIP, no map, in order", RenderMode::kMip, "ct-vessels",
                    RenderQuality::kStill, true, true, false, VolumeAccess::kTexelBuffer, true,
                    false});
+  cases.push_back({"still MIP, no map, peak unrefined", RenderMode::kMip, "ct-vessels",
+                   RenderQuality::kStill, true, true, false, VolumeAccess::kTexelBuffer, true,
+                   true, false});
   cases.push_back({"still MIP, no skip, no map", RenderMode::kMip, "ct-vessels",
                    RenderQuality::kStill, false, true, false});
   cases.push_back({"still DVR ct-vessels, sampler3D", RenderMode::kDvr, "ct-vessels",
@@ -351,6 +355,7 @@ int main(int raw_argc, char** raw_argv) {
     r.settings.empty_space_skipping = c.skipping;
     r.settings.shading = c.shading;
     r.settings.mip_brightest_first = c.brightest_first;
+    r.settings.mip_peak_refine = c.peak_refine;
     r.settings.interactive_cell_gradient = r.settings.still_cell_gradient = c.cell_gradient;
     VolumeRenderer& renderer =
         c.access == VolumeAccess::kTexelBuffer ? *texel_renderer : *sampled_renderer;

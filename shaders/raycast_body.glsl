@@ -28,7 +28,8 @@
 // shaded by a Blinn-Phong headlight on the gradient of J (central
 // differences, one spacing, 6 taps of J; samples weighing under 1/256 in the
 // pixel are lit head-on), and stops at opacity > 0.99; MIP stops at the
-// window's white.
+// window's white and refines its brightest sample to the peak around it
+// (raycast_mip.glsl).
 // Specialization constant 0 (kCellGradient, DVR): shade with the analytic
 // gradient of the trilinear cells a sample already reads (the source's 8
 // voxels, the map's 8 points: the chain rule through the map), no taps and
@@ -331,175 +332,9 @@ void skip_empty_bricks(inout int k, inout float t, inout vec3 x, float threshold
   }
 }
 
-// The brick walk (MIP and cell-gradient DVR): a 3D DDA over the brick grid
-// along the ray. b: the brick the ray is in, entered at t_enter; t_next: the
-// ray parameter of its next face per axis (the brick is left at the least).
-// The ray is cut into segments, the samples of one occupied brick each,
-// taken in an inner loop with no brick test; between segments the walk
-// steps over empty bricks, and over bricks the ray crosses between two
-// samples, one brick per iteration and no sample. On lavapipe every
-// iteration pays for all the code of its loop body, so the brick code runs
-// once per brick instead of once per sample (docs/RENDERING.md, "Empty-space
-// skipping"). The CPU reference (raycast_cpu.cc) walks the same bricks with
-// the same arithmetic.
-struct BrickWalk {
-  ivec3 b;
-  vec3 t_next;
-  float t_enter;
-  ivec3 step_b;  // the sign of dir per axis
-  vec3 t_delta;  // brick size / |dir| per axis: mm of ray per brick
-};
-
-// inv_dir: 1 / dir with no zero components (main), whose signs pick the faces.
-BrickWalk walk_start(vec3 eye, vec3 dir, vec3 inv_dir, float t_near) {
-  BrickWalk w;
-  w.b = brick_of(eye + t_near * dir);
-  vec3 face = vec3(w.b + ivec3(greaterThan(inv_dir, vec3(0.0)))) * g_brick_mm;
-  w.t_next = (face - eye) * inv_dir;
-  w.t_enter = t_near;
-  w.step_b = ivec3(sign(inv_dir));
-  w.t_delta = g_brick_mm * abs(inv_dir);
-  return w;
-}
-
-float walk_exit(BrickWalk w) { return min(w.t_next.x, min(w.t_next.y, w.t_next.z)); }
-
-// Into the next brick across the face the ray leaves by (x before y before
-// z on a tie).
-void walk_step(inout BrickWalk w) {
-  bool ax = w.t_next.x <= w.t_next.y && w.t_next.x <= w.t_next.z;
-  bool ay = !ax && w.t_next.y <= w.t_next.z;
-  bvec3 m = bvec3(ax, ay, !ax && !ay);
-  w.t_enter = walk_exit(w);
-  w.b += ivec3(m) * w.step_b;
-  w.t_next += vec3(m) * w.t_delta;
-}
-
+#include "raycast_brick_walk.glsl"
 #ifdef VPM_RAYCAST_MIP
-// The brick the MIP sampled first (walk_to_brightest), which the walk then
-// treats as empty; far outside the grid when none.
-ivec3 g_sampled_brick = ivec3(-(1 << 20));
-#endif
-
-// The occupancy of brick b (clamped to the grid); MIP: no value in the
-// brick already sampled.
-float brick_occupancy(ivec3 b) {
-  float occ = texelFetch(u_occupancy, brick_linear(clamp(b, ivec3(0), g_bricks - 1))).r;
-#ifdef VPM_RAYCAST_MIP
-  if (b == g_sampled_brick) occ = kNoValue;
-#endif
-  return occ;
-}
-
-// True when the walk's brick, of occupancy occ, is above threshold and holds
-// a sample (index >= k); then sets k to its first sample.
-bool enter_brick(BrickWalk w, float occ, inout int k, float threshold, float t_near, float t_far,
-                 float step) {
-  int first = max(k, int(ceil((w.t_enter - t_near) / step)));
-  float t_first = t_near + float(first) * step;
-  if (t_first <= min(walk_exit(w), t_far) && occ > threshold) {
-    k = first;
-    return true;
-  }
-  return false;
-}
-
-// Walks on to the first brick that holds a sample (index >= k) and whose
-// occupancy is above threshold; sets k to that brick's first sample. False
-// when the ray ends first. Two bricks per iteration: both occupancy reads
-// in flight at once, then the bricks tested in order, the same decisions as
-// one brick at a time (docs/RENDERING.md, "Two samples per iteration").
-bool walk_to_occupied(inout BrickWalk w, inout int k, float threshold, float t_near,
-                      float t_far, float step) {
-  for (;;) {
-    BrickWalk next = w;
-    walk_step(next);
-    float occ = brick_occupancy(w.b);
-    float occ_next = brick_occupancy(next.b);
-    if (w.t_enter > t_far) return false;
-    if (enter_brick(w, occ, k, threshold, t_near, t_far, step)) return true;
-    w = next;
-    if (w.t_enter > t_far) return false;
-    if (enter_brick(w, occ_next, k, threshold, t_near, t_far, step)) return true;
-    walk_step(w);
-  }
-}
-
-#ifdef VPM_RAYCAST_MIP
-// MIP, the brightest brick first (docs/RENDERING.md, "Empty-space
-// skipping"): walks the whole ray once, taking no sample, to the brick that
-// holds a sample (index >= 0) and whose occupancy, the most it can show, is
-// the largest above black; the first at or above white ends the walk. Sets
-// bright to the walk there and k_bright to its first sample; false when no
-// brick is above black. Caster::WalkToBrightest in raycast_cpu.cc mirrors it.
-bool walk_to_brightest(BrickWalk w, float black, float white, float t_near, float t_far,
-                       float step, out BrickWalk bright, out int k_bright) {
-  float best = black;
-  bright = w;
-  k_bright = 0;
-  while (w.t_enter <= t_far && best < white) {
-    float occ = brick_occupancy(w.b);
-    int k = 0;
-    if (enter_brick(w, occ, k, best, t_near, t_far, step)) {
-      best = occ;
-      bright = w;
-      k_bright = k;
-    }
-    walk_step(w);
-  }
-  return best > black;
-}
-#endif
-
-// Sample k of a segment that ends at t_end: x, and false once past the end.
-bool segment_sample(int k, float t_near, float step, float t_end, vec3 eye, vec3 dir,
-                    out vec3 x) {
-  float t = t_near + float(k) * step;
-  x = eye + t * dir;
-  return t <= t_end;
-}
-
-// The next segment from sample k: with skipping, walks to the next brick
-// that holds a sample and is above threshold, and the segment ends where
-// the ray leaves it; without, the rest of the ray. Sets k to the segment's
-// first sample and t_end; false when the ray has no sample left.
-bool next_segment(inout BrickWalk w, inout int k, float threshold, bool skipping,
-                  float t_near, float t_far, float step, out float t_end) {
-  t_end = t_far;
-  if (skipping) {
-    if (!walk_to_occupied(w, k, threshold, t_near, t_far, step)) return false;
-    t_end = min(walk_exit(w), t_far);
-  }
-  return t_near + float(k) * step <= t_end;
-}
-
-#ifdef VPM_RAYCAST_MIP
-// The MIP samples from k to t_end (k is in the segment), two per iteration
-// (docs/RENDERING.md, "Two samples per iteration"): both reads first, then
-// the maximum sample by sample. Leaves k past the last sample taken; true
-// when the maximum reaches white (early termination).
-bool mip_segment(inout int k, float t_end, float t_near, float step, vec3 eye, vec3 dir,
-                 bool early, float white, inout float ray_max, inout uint taken) {
-  vec3 x;
-  segment_sample(k, t_near, step, t_end, eye, dir, x);
-  for (;;) {
-    vec3 x2;
-    bool second = segment_sample(k + 1, t_near, step, t_end, eye, dir, x2);
-    float v1 = deformed_value(x);
-    float v2 = deformed_value(second ? x2 : x);
-    ++taken;
-    ++k;
-    ray_max = max(ray_max, v1);
-    if (early && ray_max >= white) return true;
-    if (second) {
-      ++taken;
-      ++k;
-      ray_max = max(ray_max, v2);
-      if (early && ray_max >= white) return true;
-    }
-    if (!segment_sample(k, t_near, step, t_end, eye, dir, x)) return false;
-  }
-}
+#include "raycast_mip.glsl"
 #endif
 
 vec4 lut_at(float v) {
@@ -657,41 +492,16 @@ void main() {
   g_shade_min_weight = kShadeMinWeight * step;
   // Jittered start (docs/RENDERING.md, "Sampling"): the samples of this ray
   // sit at t_near + (k + j) step, j from a hash of the pixel and the seed.
+  float t_entry = t_near;
   if (has_flag(VPM_RAYCAST_JITTER)) {
     t_near += ray_start_jitter(uvec2(px), uint(p.image.w)) * step;
   }
   bool skipping = has_flag(VPM_RAYCAST_SKIPPING);
   uint taken = 0u;
-  int k = 0;
 #ifdef VPM_RAYCAST_MIP
-  // Early termination: once the maximum reaches the window's white, no
-  // later sample can change the pixel.
-  bool early = has_flag(VPM_RAYCAST_EARLY_TERMINATION);
-  float ray_max = kNoValue;
-  float black = p.window.x, white = p.window.z;
-  BrickWalk w = walk_start(eye, dir, inv_dir, t_near);
-  bool done = false;
-  // The brightest brick first: its maximum raises the threshold the walk
-  // below skips by, and reaching white ends the ray.
-  if (skipping && has_flag(VPM_RAYCAST_BRIGHTEST_FIRST)) {
-    BrickWalk bright;
-    int k_bright;
-    if (walk_to_brightest(w, black, white, t_near, t_far, step, bright, k_bright)) {
-      done = mip_segment(k_bright, min(walk_exit(bright), t_far), t_near, step, eye, dir, early,
-                         white, ray_max, taken);
-      g_sampled_brick = bright.b;
-    }
-  }
-  // Segments: the samples of the next brick that can raise the maximum (and
-  // show above the window); without skipping, the whole ray.
-  for (float t_end;
-       !done && next_segment(w, k, max(ray_max, black), skipping, t_near, t_far, step, t_end);
-       walk_step(w)) {
-    done = mip_segment(k, t_end, t_near, step, eye, dir, early, white, ray_max, taken);
-    if (!skipping) break;
-  }
-  vec3 rgb = vec3(clamp((ray_max - p.window.x) * p.window.y, 0.0, 1.0));
+  vec3 rgb = mip_ray(eye, dir, inv_dir, t_entry, t_near, t_far, step, skipping, taken);
 #else
+  int k = 0;
   bool shading = has_flag(VPM_RAYCAST_SHADING);
   bool early = has_flag(VPM_RAYCAST_EARLY_TERMINATION);
   vec4 acc = vec4(0.0);

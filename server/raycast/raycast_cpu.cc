@@ -295,7 +295,7 @@ class Caster {
     }
   }
 
-  // walk_to_brightest() of raycast_body.glsl: the brick holding a sample
+  // walk_to_brightest() of raycast_mip.glsl: the brick holding a sample
   // whose occupancy is the largest above black (the first at or above white
   // ends the walk); false when none is above black.
   bool WalkToBrightest(BrickWalk w, ivec3 step_b, vec3 t_delta, float t_near, float t_far,
@@ -313,6 +313,32 @@ class Caster {
       }
     }
     return best > black;
+  }
+
+  // refine_peak() of raycast_mip.glsl: around the brightest sample k_max, the
+  // points half, a quarter and an eighth of a step either side of the best
+  // so far (within [t_lo, t_hi]); the largest value read.
+  float RefinePeak(float ray_max, int k_max, float t_near, float step, float t_lo, float t_hi,
+                   vec3 eye, vec3 dir) const {
+    float best_t = t_near + float(k_max) * step;
+    float best = ray_max;
+    float h = 0.5f * step;
+    for (int i = 0; i < 3; ++i) {
+      const float t_before = std::clamp(best_t - h, t_lo, t_hi);
+      const float t_after = std::clamp(best_t + h, t_lo, t_hi);
+      const float before = DeformedValue(eye + t_before * dir);
+      const float after = DeformedValue(eye + t_after * dir);
+      if (before > best) {
+        best = before;
+        best_t = t_before;
+      }
+      if (after > best) {
+        best = after;
+        best_t = t_after;
+      }
+      h *= 0.5f;
+    }
+    return best;
   }
 
   float Occupancy(ivec3 b) const {
@@ -349,6 +375,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
   const vec3 background(p_.background);
   if (t_near > t_far) return PackRgba(background);
   const float step = p_.eye_mm.w;
+  const float t_entry = t_near;  // before the jitter: MIP's RefinePeak
   if (Flag(gpu::kRaycastJitter)) {
     t_near += RayStartJitter(uint32_t(px), uint32_t(py), uint32_t(p_.image.w)) * step;
   }
@@ -359,18 +386,20 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
   const bool cell = Flag(kRaycastCellGradient);
   const bool pre = !mip && cell && Flag(kRaycastPreintegrated);
   float ray_max = kNoValue;
+  int k_max = -1;  // MIP: the sample that last raised ray_max
   vec4 acc(0.0f);
   int k = 0;
   // Pre-integrated: the value at the front of the next step, as the shader.
   int k_next = 0;
   float front = 0.0f;
   bool has_front = false;
-  // One sample k at x: true when the ray is done (early termination).
-  const auto sample = [&](vec3 x) {
+  // Sample k_sample at x: true when the ray is done (early termination).
+  const auto sample = [&](vec3 x, int k_sample) {
     ++taken;
     vec3 cell_gradient(0.0f);
     const float v = cell ? DeformedValueAndGradient(x, cell_gradient) : DeformedValue(x);
     if (mip) {
+      if (v > ray_max) k_max = k_sample;
       ray_max = std::max(ray_max, v);
       return early && ray_max >= p_.window.z;  // white: no later sample shows
     }
@@ -419,7 +448,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
       const float t_end = std::min(WalkExit(bright), t_far);
       for (float t = t_near + float(k_bright) * step; !done && t <= t_end;
            t = t_near + float(k_bright) * step) {
-        done = sample(eye + t * dir);
+        done = sample(eye + t * dir, k_bright);
         ++k_bright;
       }
       sampled = bright.b;
@@ -441,13 +470,17 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
         t_end = std::min(t_end + step, t_far);
       }
       for (float t = t_near + float(k) * step; t <= t_end; t = t_near + float(k) * step) {
-        done = sample(eye + t * dir);
+        done = sample(eye + t * dir, k);
         ++k;
         if (done) break;
       }
       k_next = k;
       if (!skipping) break;
       WalkStep(walk, step_b, t_delta);
+    }
+    if (mip && Flag(gpu::kRaycastPeakRefine) && k_max >= 0 && !done && ray_max > p_.window.x) {
+      ray_max = RefinePeak(ray_max, k_max, t_near, step, t_entry, t_far, eye, dir);
+      taken += 6;
     }
     k = -1;  // the per-sample loop below is for the tap gradient
   }
@@ -465,7 +498,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
         continue;
       }
     }
-    if (sample(x)) break;
+    if (sample(x, k)) break;
     ++k;
   }
   const vec3 rgb = mip ? vec3(std::clamp((ray_max - p_.window.x) * p_.window.y, 0.0f, 1.0f))

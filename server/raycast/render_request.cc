@@ -91,7 +91,8 @@ glm::ivec3 BrickVoxels(RenderQuality quality, const VolumeGeometry& geometry) {
 
 glm::ivec3 RequestBrickVoxels(const RenderRequest& request, const VolumeGeometry& geometry) {
   const bool coarse_grid =
-      request.quality == RenderQuality::kInteractive && request.interactive.divisor >= 2.0;
+      (request.quality == RenderQuality::kInteractive && request.interactive.divisor >= 2.0) ||
+      RequestStepMm(request, geometry) >= kCoarseGridStepMm;
   return BrickVoxels(coarse_grid ? RenderQuality::kInteractive : RenderQuality::kStill, geometry);
 }
 
@@ -178,6 +179,7 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   if (s.mip_brightest_first && request.mode == RenderMode::kMip) {
     flags |= gpu::kRaycastBrightestFirst;
   }
+  if (s.mip_peak_refine && request.mode == RenderMode::kMip) flags |= gpu::kRaycastPeakRefine;
   if ((interactive ? s.interactive_cell_gradient : s.still_cell_gradient) &&
       request.mode == RenderMode::kDvr) {
     flags |= kRaycastCellGradient;

@@ -68,6 +68,12 @@ inline constexpr int kMaxFrameSide = 4096;
 // skipping", for the measurements behind both sizes).
 inline constexpr double kStillBrickMm = 6.0;
 inline constexpr double kInteractiveBrickMm = 12.0;
+// Frames stepping at least this far (mm) skip by kInteractiveBrickMm bricks
+// whatever their quality: a still brick would hold 4 samples or fewer, and
+// walking twice as many bricks costs more than the samples they skip (the
+// phantom's still MIP at 2 mm 88 -> 73 ms, its composite at 3 mm 87 -> 84
+// ms; docs/RENDERING.md, "Empty-space skipping").
+inline constexpr double kCoarseGridStepMm = 1.5;
 inline constexpr double kStillMipStepFactor = 1.0;
 // Still steps are also no coarser than these (mm), whatever the voxels: on
 // the 3 mm kidney CT, the presets' factors gave steps of 1.5 (DVR) and 3 mm
@@ -131,6 +137,11 @@ struct RaycastSettings {
   // skips every brick whose maximum is under what it found. The same
   // picture (docs/RENDERING.md, "Empty-space skipping").
   bool mip_brightest_first = true;
+  // MIP: after the walk, the ray's brightest sample is refined to the peak
+  // between its neighbours (the vertex of the parabola through the three,
+  // three more reads per ray), so that thin bright structures keep their
+  // brightness at coarse steps (docs/RENDERING.md, "Sampling").
+  bool mip_peak_refine = true;
 };
 
 // Raycast flag (RaycastParams::image.z) beside gpu::kRaycast*: shade with
@@ -224,7 +235,8 @@ glm::ivec3 BrickVoxels(RenderQuality quality, const VolumeGeometry& geometry);
 // still bricks for interactive frames cast finer than half resolution
 // (InteractiveCast::divisor < 2; the sharp setting): at full resolution on
 // the phantom they cast 14% faster than interactive bricks
-// (docs/RENDERING.md, "Interactive quality").
+// (docs/RENDERING.md, "Interactive quality"); and interactive bricks for any
+// frame whose step is kCoarseGridStepMm or more.
 glm::ivec3 RequestBrickVoxels(const RenderRequest& request, const VolumeGeometry& geometry);
 
 // Brick grid of a volume: ceil((n - 1) / w) bricks per axis (at least 1) for

@@ -149,5 +149,23 @@ TEST(RenderRequest, InteractiveQualitiesCapTheStepAndSizeTheRayGrid) {
   }
 }
 
+// A still stepping kCoarseGridStepMm or more skips by the interactive
+// bricks (a still brick would hold 4 samples or fewer); finer stills keep
+// the still bricks.
+TEST(RenderRequest, CoarseStepsSkipByInteractiveBricks) {
+  const VolumeGeometry phantom = PhantomGeometry();
+  RenderRequest r = Interactive(phantom, 128);
+  r.quality = RenderQuality::kStill;
+  r.preset = *MakeRenderPreset("ct-soft-tissue", testing::MakeSphereRodVolume(16));
+  for (double step : {0.5, 1.0, 1.49, 1.5, 3.0}) {
+    r.settings.step_mm = step;
+    auto setup = PrepareRaycast(r, phantom, {0, 0, 0});
+    ASSERT_TRUE(setup.ok()) << setup.status();
+    const RenderQuality grid =
+        step >= kCoarseGridStepMm ? RenderQuality::kInteractive : RenderQuality::kStill;
+    EXPECT_EQ(glm::ivec3(setup->params.brick_voxels), BrickVoxels(grid, phantom)) << step;
+  }
+}
+
 }  // namespace
 }  // namespace vpm

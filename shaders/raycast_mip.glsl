@@ -1,0 +1,134 @@
+// MIP along one ray, included by raycast_body.glsl (after the brick walk,
+// raycast_brick_walk.glsl) where VPM_RAYCAST_MIP is defined. The CPU
+// reference, Caster in server/raycast/raycast_cpu.cc, mirrors it.
+#ifndef VPM_RAYCAST_MIP_GLSL
+#define VPM_RAYCAST_MIP_GLSL
+
+// MIP, the brightest brick first (docs/RENDERING.md, "Empty-space
+// skipping"): walks the whole ray once, taking no sample, to the brick that
+// holds a sample (index >= 0) and whose occupancy, the most it can show, is
+// the largest above black; the first at or above white ends the walk. Sets
+// bright to the walk there and k_bright to its first sample; false when no
+// brick is above black. Caster::WalkToBrightest in raycast_cpu.cc mirrors it.
+bool walk_to_brightest(BrickWalk w, float black, float white, float t_near, float t_far,
+                       float step, out BrickWalk bright, out int k_bright) {
+  float best = black;
+  bright = w;
+  k_bright = 0;
+  while (w.t_enter <= t_far && best < white) {
+    float occ = brick_occupancy(w.b);
+    int k = 0;
+    if (enter_brick(w, occ, k, best, t_near, t_far, step)) {
+      best = occ;
+      bright = w;
+      k_bright = k;
+    }
+    walk_step(w);
+  }
+  return best > black;
+}
+
+// The MIP samples from k to t_end (k is in the segment), two per iteration
+// (docs/RENDERING.md, "Two samples per iteration"): both reads first, then
+// the maximum sample by sample; k_max: the sample that last raised it.
+// Leaves k past the last sample taken; true when the maximum reaches white
+// (early termination).
+bool mip_segment(inout int k, float t_end, float t_near, float step, vec3 eye, vec3 dir,
+                 bool early, float white, inout float ray_max, inout int k_max,
+                 inout uint taken) {
+  vec3 x;
+  segment_sample(k, t_near, step, t_end, eye, dir, x);
+  for (;;) {
+    vec3 x2;
+    bool second = segment_sample(k + 1, t_near, step, t_end, eye, dir, x2);
+    float v1 = deformed_value(x);
+    float v2 = deformed_value(second ? x2 : x);
+    if (v1 > ray_max) k_max = k;
+    ++taken;
+    ++k;
+    ray_max = max(ray_max, v1);
+    if (early && ray_max >= white) return true;
+    if (second) {
+      if (v2 > ray_max) k_max = k;
+      ++taken;
+      ++k;
+      ray_max = max(ray_max, v2);
+      if (early && ray_max >= white) return true;
+    }
+    if (!segment_sample(k, t_near, step, t_end, eye, dir, x)) return false;
+  }
+}
+
+// The peak refined (docs/RENDERING.md, "Sampling"): the ray's brightest
+// sample k_max is rarely on the peak of a thin bright structure, which lies
+// within a step of it. A bracketing search there: the values half a step
+// either side, the best of the three kept, then a quarter step either side
+// of it, then an eighth; where the ray is one-peaked within the step, the
+// last best is within a sixteenth of a step of the peak. Points are clamped
+// to [t_lo, t_hi], the ray's own interval un-jittered, so every value read
+// is one the ray passes through and the maximum only rises toward the true
+// one. Six reads per ray, after the walk. As Caster::RefinePeak.
+float refine_peak(float ray_max, int k_max, float t_near, float step, float t_lo, float t_hi,
+                  vec3 eye, vec3 dir, inout uint taken) {
+  float best_t = t_near + float(k_max) * step;
+  float best = ray_max;
+  float h = 0.5 * step;
+  for (int i = 0; i < 3; ++i) {
+    float t_before = clamp(best_t - h, t_lo, t_hi);
+    float t_after = clamp(best_t + h, t_lo, t_hi);
+    float before = deformed_value(eye + t_before * dir);
+    float after = deformed_value(eye + t_after * dir);
+    if (before > best) {
+      best = before;
+      best_t = t_before;
+    }
+    if (after > best) {
+      best = after;
+      best_t = t_after;
+    }
+    h *= 0.5;
+  }
+  taken += 6u;
+  return best;
+}
+
+// The MIP of one ray over [t_near, t_far] (t_near jittered; t_entry before
+// the jitter): the maximum of J through the window as a grey level.
+vec3 mip_ray(vec3 eye, vec3 dir, vec3 inv_dir, float t_entry, float t_near, float t_far,
+             float step, bool skipping, inout uint taken) {
+  // Early termination: once the maximum reaches the window's white, no
+  // later sample can change the pixel.
+  bool early = has_flag(VPM_RAYCAST_EARLY_TERMINATION);
+  float ray_max = kNoValue;
+  int k_max = -1;
+  int k = 0;
+  float black = p.window.x, white = p.window.z;
+  BrickWalk w = walk_start(eye, dir, inv_dir, t_near);
+  bool done = false;
+  // The brightest brick first: its maximum raises the threshold the walk
+  // below skips by, and reaching white ends the ray.
+  if (skipping && has_flag(VPM_RAYCAST_BRIGHTEST_FIRST)) {
+    BrickWalk bright;
+    int k_bright;
+    if (walk_to_brightest(w, black, white, t_near, t_far, step, bright, k_bright)) {
+      done = mip_segment(k_bright, min(walk_exit(bright), t_far), t_near, step, eye, dir, early,
+                         white, ray_max, k_max, taken);
+      g_sampled_brick = bright.b;
+    }
+  }
+  // Segments: the samples of the next brick that can raise the maximum (and
+  // show above the window); without skipping, the whole ray.
+  for (float t_end;
+       !done && next_segment(w, k, max(ray_max, black), skipping, t_near, t_far, step, t_end);
+       walk_step(w)) {
+    done = mip_segment(k, t_end, t_near, step, eye, dir, early, white, ray_max, k_max, taken);
+    if (!skipping) break;
+  }
+  // A peak above black and under white (early termination: white already).
+  if (has_flag(VPM_RAYCAST_PEAK_REFINE) && k_max >= 0 && !done && ray_max > black) {
+    ray_max = refine_peak(ray_max, k_max, t_near, step, t_entry, t_far, eye, dir, taken);
+  }
+  return vec3(clamp((ray_max - p.window.x) * p.window.y, 0.0, 1.0));
+}
+
+#endif
