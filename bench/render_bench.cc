@@ -306,6 +306,9 @@ int main(int raw_argc, char** raw_argv) {
   cases.push_back({"still MIP, no map, peak unrefined", RenderMode::kMip, "ct-vessels",
                    RenderQuality::kStill, true, true, false, VolumeAccess::kTexelBuffer, true,
                    true, false});
+  cases.push_back({"interactive MIP, peak unrefined", RenderMode::kMip, "ct-vessels",
+                   RenderQuality::kInteractive, true, true, true, VolumeAccess::kTexelBuffer,
+                   true, true, false});
   cases.push_back({"still MIP, no skip, no map", RenderMode::kMip, "ct-vessels",
                    RenderQuality::kStill, false, true, false});
   cases.push_back({"still DVR ct-vessels, sampler3D", RenderMode::kDvr, "ct-vessels",

@@ -28,14 +28,37 @@ bool walk_to_brightest(BrickWalk w, float black, float white, float t_near, floa
   return best > black;
 }
 
+// What a ray's samples have shown so far: the maximum (`best`, at sample
+// k_best) and the largest sample at least two samples away from k_best
+// (`second`: another structure, whose peak may be the higher one between
+// the samples; -1: none yet). Caster::RayPeaks on the CPU.
+struct RayPeaks {
+  float best;
+  int k_best;
+  float second;
+  int k_second;
+};
+
+void peaks_add(inout RayPeaks p, float v, int k) {
+  if (v > p.best) {
+    if (abs(k - p.k_best) >= 2) {
+      p.second = p.best;
+      p.k_second = p.k_best;
+    }
+    p.best = v;
+    p.k_best = k;
+  } else if (v > p.second && abs(k - p.k_best) >= 2) {
+    p.second = v;
+    p.k_second = k;
+  }
+}
+
 // The MIP samples from k to t_end (k is in the segment), two per iteration
 // (docs/RENDERING.md, "Two samples per iteration"): both reads first, then
-// the maximum sample by sample; k_max: the sample that last raised it.
-// Leaves k past the last sample taken; true when the maximum reaches white
-// (early termination).
+// the peaks sample by sample. Leaves k past the last sample taken; true
+// when the maximum reaches white (early termination).
 bool mip_segment(inout int k, float t_end, float t_near, float step, vec3 eye, vec3 dir,
-                 bool early, float white, inout float ray_max, inout int k_max,
-                 inout uint taken) {
+                 bool early, float white, inout RayPeaks peaks, inout uint taken) {
   vec3 x;
   segment_sample(k, t_near, step, t_end, eye, dir, x);
   for (;;) {
@@ -43,35 +66,33 @@ bool mip_segment(inout int k, float t_end, float t_near, float step, vec3 eye, v
     bool second = segment_sample(k + 1, t_near, step, t_end, eye, dir, x2);
     float v1 = deformed_value(x);
     float v2 = deformed_value(second ? x2 : x);
-    if (v1 > ray_max) k_max = k;
+    peaks_add(peaks, v1, k);
     ++taken;
     ++k;
-    ray_max = max(ray_max, v1);
-    if (early && ray_max >= white) return true;
+    if (early && peaks.best >= white) return true;
     if (second) {
-      if (v2 > ray_max) k_max = k;
+      peaks_add(peaks, v2, k);
       ++taken;
       ++k;
-      ray_max = max(ray_max, v2);
-      if (early && ray_max >= white) return true;
+      if (early && peaks.best >= white) return true;
     }
     if (!segment_sample(k, t_near, step, t_end, eye, dir, x)) return false;
   }
 }
 
-// The peak refined (docs/RENDERING.md, "Sampling"): the ray's brightest
-// sample k_max is rarely on the peak of a thin bright structure, which lies
-// within a step of it. A bracketing search there: the values half a step
+// A peak refined (docs/RENDERING.md, "Sampling"): a ray's brightest sample
+// (value v_max at sample k_max) is rarely on the peak of a thin bright
+// structure, which lies within a step of it. A bracketing search there: the values half a step
 // either side, the best of the three kept, then a quarter step either side
 // of it, then an eighth; where the ray is one-peaked within the step, the
 // last best is within a sixteenth of a step of the peak. Points are clamped
 // to [t_lo, t_hi], the ray's own interval un-jittered, so every value read
 // is one the ray passes through and the maximum only rises toward the true
-// one. Six reads per ray, after the walk. As Caster::RefinePeak.
-float refine_peak(float ray_max, int k_max, float t_near, float step, float t_lo, float t_hi,
+// one. Six reads. As Caster::RefinePeak.
+float refine_peak(float v_max, int k_max, float t_near, float step, float t_lo, float t_hi,
                   vec3 eye, vec3 dir, inout uint taken) {
   float best_t = t_near + float(k_max) * step;
-  float best = ray_max;
+  float best = v_max;
   float h = 0.5 * step;
   for (int i = 0; i < 3; ++i) {
     float t_before = clamp(best_t - h, t_lo, t_hi);
@@ -99,8 +120,7 @@ vec3 mip_ray(vec3 eye, vec3 dir, vec3 inv_dir, float t_entry, float t_near, floa
   // Early termination: once the maximum reaches the window's white, no
   // later sample can change the pixel.
   bool early = has_flag(VPM_RAYCAST_EARLY_TERMINATION);
-  float ray_max = kNoValue;
-  int k_max = -1;
+  RayPeaks peaks = RayPeaks(kNoValue, -1, kNoValue, -1);
   int k = 0;
   float black = p.window.x, white = p.window.z;
   BrickWalk w = walk_start(eye, dir, inv_dir, t_near);
@@ -112,21 +132,28 @@ vec3 mip_ray(vec3 eye, vec3 dir, vec3 inv_dir, float t_entry, float t_near, floa
     int k_bright;
     if (walk_to_brightest(w, black, white, t_near, t_far, step, bright, k_bright)) {
       done = mip_segment(k_bright, min(walk_exit(bright), t_far), t_near, step, eye, dir, early,
-                         white, ray_max, k_max, taken);
+                         white, peaks, taken);
       g_sampled_brick = bright.b;
     }
   }
   // Segments: the samples of the next brick that can raise the maximum (and
   // show above the window); without skipping, the whole ray.
   for (float t_end;
-       !done && next_segment(w, k, max(ray_max, black), skipping, t_near, t_far, step, t_end);
+       !done && next_segment(w, k, max(peaks.best, black), skipping, t_near, t_far, step, t_end);
        walk_step(w)) {
-    done = mip_segment(k, t_end, t_near, step, eye, dir, early, white, ray_max, k_max, taken);
+    done = mip_segment(k, t_end, t_near, step, eye, dir, early, white, peaks, taken);
     if (!skipping) break;
   }
-  // A peak above black and under white (early termination: white already).
-  if (has_flag(VPM_RAYCAST_PEAK_REFINE) && k_max >= 0 && !done && ray_max > black) {
-    ray_max = refine_peak(ray_max, k_max, t_near, step, t_entry, t_far, eye, dir, taken);
+  // The two peaks refined, where the maximum is above black and under white
+  // (early termination: white already); twelve reads.
+  float ray_max = peaks.best;
+  if (has_flag(VPM_RAYCAST_PEAK_REFINE) && !done && peaks.best > black) {
+    ray_max =
+        refine_peak(peaks.best, peaks.k_best, t_near, step, t_entry, t_far, eye, dir, taken);
+    if (peaks.k_second >= 0) {
+      ray_max = max(ray_max, refine_peak(peaks.second, peaks.k_second, t_near, step, t_entry,
+                                         t_far, eye, dir, taken));
+    }
   }
   return vec3(clamp((ray_max - p.window.x) * p.window.y, 0.0, 1.0));
 }

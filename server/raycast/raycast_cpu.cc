@@ -24,6 +24,29 @@ constexpr float kOpaque = 0.99f;
 constexpr float kShadeMinWeight = 1.0f / 256.0f;
 constexpr float kNoValue = -3.0e38f;
 
+// RayPeaks and peaks_add() of raycast_mip.glsl: a MIP ray's maximum so far
+// (at sample k_best) and its largest sample at least two samples from it.
+struct RayPeaks {
+  float best = kNoValue;
+  int k_best = -1;
+  float second = kNoValue;
+  int k_second = -1;
+
+  void Add(float v, int k) {
+    if (v > best) {
+      if (std::abs(k - k_best) >= 2) {
+        second = best;
+        k_second = k_best;
+      }
+      best = v;
+      k_best = k;
+    } else if (v > second && std::abs(k - k_best) >= 2) {
+      second = v;
+      k_second = k;
+    }
+  }
+};
+
 // A trilinear cell's interpolant at fraction f (each in [0, 1]) and its
 // partial derivatives per cell unit, for corner values c[x + 2y + 4z] of type
 // T (float for the volume, vec3 for the backward map), in the order of
@@ -315,13 +338,13 @@ class Caster {
     return best > black;
   }
 
-  // refine_peak() of raycast_mip.glsl: around the brightest sample k_max, the
+  // refine_peak() of raycast_mip.glsl: around a ray's brightest sample k_max, the
   // points half, a quarter and an eighth of a step either side of the best
   // so far (within [t_lo, t_hi]); the largest value read.
-  float RefinePeak(float ray_max, int k_max, float t_near, float step, float t_lo, float t_hi,
+  float RefinePeak(float v_max, int k_max, float t_near, float step, float t_lo, float t_hi,
                    vec3 eye, vec3 dir) const {
     float best_t = t_near + float(k_max) * step;
-    float best = ray_max;
+    float best = v_max;
     float h = 0.5f * step;
     for (int i = 0; i < 3; ++i) {
       const float t_before = std::clamp(best_t - h, t_lo, t_hi);
@@ -385,8 +408,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
   const bool early = Flag(gpu::kRaycastEarlyTermination);
   const bool cell = Flag(kRaycastCellGradient);
   const bool pre = !mip && cell && Flag(kRaycastPreintegrated);
-  float ray_max = kNoValue;
-  int k_max = -1;  // MIP: the sample that last raised ray_max
+  RayPeaks peaks;  // MIP
   vec4 acc(0.0f);
   int k = 0;
   // Pre-integrated: the value at the front of the next step, as the shader.
@@ -399,9 +421,8 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
     vec3 cell_gradient(0.0f);
     const float v = cell ? DeformedValueAndGradient(x, cell_gradient) : DeformedValue(x);
     if (mip) {
-      if (v > ray_max) k_max = k_sample;
-      ray_max = std::max(ray_max, v);
-      return early && ray_max >= p_.window.z;  // white: no later sample shows
+      peaks.Add(v, k_sample);
+      return early && peaks.best >= p_.window.z;  // white: no later sample shows
     }
     if (pre) {
       // composite_segment() of raycast_body.glsl.
@@ -456,7 +477,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
     while (!done) {
       float t_end = t_far;
       if (skipping) {
-        const float threshold = mip ? std::max(ray_max, p_.window.x) : 0.0f;
+        const float threshold = mip ? std::max(peaks.best, p_.window.x) : 0.0f;
         if (!WalkToOccupied(walk, k, threshold, step_b, t_delta, t_near, t_far, step, sampled)) {
           break;
         }
@@ -478,9 +499,15 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
       if (!skipping) break;
       WalkStep(walk, step_b, t_delta);
     }
-    if (mip && Flag(gpu::kRaycastPeakRefine) && k_max >= 0 && !done && ray_max > p_.window.x) {
-      ray_max = RefinePeak(ray_max, k_max, t_near, step, t_entry, t_far, eye, dir);
+    if (mip && Flag(gpu::kRaycastPeakRefine) && !done && peaks.best > p_.window.x) {
+      float refined = RefinePeak(peaks.best, peaks.k_best, t_near, step, t_entry, t_far, eye, dir);
       taken += 6;
+      if (peaks.k_second >= 0) {
+        refined = std::max(refined, RefinePeak(peaks.second, peaks.k_second, t_near, step,
+                                               t_entry, t_far, eye, dir));
+        taken += 6;
+      }
+      peaks.best = refined;
     }
     k = -1;  // the per-sample loop below is for the tap gradient
   }
@@ -491,7 +518,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
     if (skipping) {
       const ivec3 b = BrickOf(x);
       const float occ = in_.occupancy[b.x + nb_.x * (b.y + nb_.y * b.z)];
-      const bool empty = mip ? occ <= std::max(ray_max, p_.window.x) : occ <= 0.0f;
+      const bool empty = mip ? occ <= std::max(peaks.best, p_.window.x) : occ <= 0.0f;
       if (empty) {
         const float t_exit = BrickExit(x, eye, inv_dir);
         k = std::max(k + 1, int(std::floor((t_exit - t_near) / step)) + 1);
@@ -501,7 +528,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
     if (sample(x, k)) break;
     ++k;
   }
-  const vec3 rgb = mip ? vec3(std::clamp((ray_max - p_.window.x) * p_.window.y, 0.0f, 1.0f))
+  const vec3 rgb = mip ? vec3(std::clamp((peaks.best - p_.window.x) * p_.window.y, 0.0f, 1.0f))
                        : vec3(acc) + (1.0f - acc.a) * background;
   return PackRgba(rgb);
 }
