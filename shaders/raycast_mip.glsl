@@ -144,10 +144,12 @@ vec3 mip_ray(vec3 eye, vec3 dir, vec3 inv_dir, float t_entry, float t_near, floa
     done = mip_segment(k, t_end, t_near, step, eye, dir, early, white, peaks, taken);
     if (!skipping) break;
   }
-  // The two peaks refined, where the maximum is above black and under white
-  // (early termination: white already); twelve reads.
+  // The two peaks refined, where the ray took a sample and its maximum is
+  // under white (early termination: white already); twelve reads. Also
+  // under black: a ray that grazes the body samples air on both sides of a
+  // thin rim, whose peak the search finds.
   float ray_max = peaks.best;
-  if (has_flag(VPM_RAYCAST_PEAK_REFINE) && !done && peaks.best > black) {
+  if (has_flag(VPM_RAYCAST_PEAK_REFINE) && !done && peaks.k_best >= 0) {
     ray_max =
         refine_peak(peaks.best, peaks.k_best, t_near, step, t_entry, t_far, eye, dir, taken);
     if (peaks.k_second >= 0) {

@@ -499,7 +499,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
       if (!skipping) break;
       WalkStep(walk, step_b, t_delta);
     }
-    if (mip && Flag(gpu::kRaycastPeakRefine) && !done && peaks.best > p_.window.x) {
+    if (mip && Flag(gpu::kRaycastPeakRefine) && !done && peaks.k_best >= 0) {
       float refined = RefinePeak(peaks.best, peaks.k_best, t_near, step, t_entry, t_far, eye, dir);
       taken += 6;
       if (peaks.k_second >= 0) {

@@ -264,7 +264,7 @@ TEST_F(StepSamplingTest, MipPeakRefine_ThinWiresCloserToAnEighthOfTheStep) {
   const double psnr_plain = CompareRgba(plain.rgba, fine.rgba).psnr_db;
   std::printf("  wires, MIP at 2.5 mm against 0.3125 mm: samples %.1f dB, refined %.1f dB\n",
               psnr_plain, psnr_refined);
-  EXPECT_GT(psnr_refined, psnr_plain + 3.0);
+  EXPECT_GT(psnr_refined, psnr_plain + 10.0);  // measured 19.5 -> 37.2 dB
   MaybeDump("wires_mip_refined", refined.rgba, refined.width, refined.height);
   MaybeDump("wires_mip_plain", plain.rgba, plain.width, plain.height);
   MaybeDump("wires_mip_fine", fine.rgba, fine.width, fine.height);
