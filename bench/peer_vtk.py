@@ -492,7 +492,7 @@ def main():
     ap.add_argument("--ref-factor", type=float, default=8.0,
                     help="each renderer's reference still: its step / this")
     ap.add_argument("--vpm-steps",
-                    default="4,3,2.5,2,1.75,1.5,1.25,1,0.875,0.75,0.625,0.5,0.42,0.35,0.3,0.25",
+                    default="4,3,2.5,2.25,2,1.75,1.5,1.25,1,0.875,0.75,0.625,0.5,0.45,0.4,0.375,0.35,0.3,0.25",
                     help="vpm's steps (times --step) for the equal-quality table, timed "
                          "coarsest first down to the first whose PSNR reaches every peer's")
     ap.add_argument("--int16", action="store_true",
