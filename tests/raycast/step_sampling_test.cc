@@ -116,6 +116,15 @@ class StepSamplingTest : public testing::GpuTest {
     return frame.ok() ? std::move(*frame) : Frame{};
   }
 
+  // The CPU reference of r matches `gpu` within raycast_test.cc's tolerances.
+  void ExpectCpuMatches(const RenderRequest& r, const Frame& gpu, const std::string& what) {
+    auto cpu = RenderReference(r, *volume_, nullptr, 2);
+    ASSERT_TRUE(cpu.ok()) << cpu.status();
+    const auto e = CompareRgba(gpu.rgba, cpu->rgba);
+    EXPECT_LT(e.mean_abs, 1.0 / 255) << what;
+    EXPECT_LT(e.max_abs, 8.0 / 255) << what;
+  }
+
   std::unique_ptr<VolumeRenderer> renderer_;
   std::optional<Volume> volume_;
   std::optional<GpuVolume> gpu_volume_;
@@ -153,12 +162,8 @@ TEST_F(StepSamplingTest, Jitter_GpuMatchesCpuReference) {
       // A coarse step, so that the jitter moves samples by a lot.
       r.settings.step_mm = 2.5;
       const Frame gpu = Gpu(r);
-      auto cpu = RenderReference(r, *volume_, nullptr, 2);
-      ASSERT_TRUE(cpu.ok()) << cpu.status();
-      const auto e = CompareRgba(gpu.rgba, cpu->rgba);
       const char* what = mode == RenderMode::kMip ? "MIP" : (cell ? "DVR cell" : "DVR taps");
-      EXPECT_LT(e.mean_abs, 1.0 / 255) << what;
-      EXPECT_LT(e.max_abs, 8.0 / 255) << what;
+      ExpectCpuMatches(r, gpu, what);
       r.settings.jitter = false;
       EXPECT_NE(Gpu(r).rgba, gpu.rgba) << what << ": the jitter moved no sample";
     }
@@ -181,11 +186,7 @@ TEST_F(StepSamplingTest, Preintegration_OpaqueSurfaceHoldsAtACoarseStep) {
     r.settings.step_mm = 0.125;
     const Frame fine = Gpu(r);
     psnr[pre] = CompareRgba(coarse.rgba, fine.rgba).psnr_db;
-    auto cpu = RenderReference(r, *volume_, nullptr, 2);
-    ASSERT_TRUE(cpu.ok()) << cpu.status();
-    const auto e = CompareRgba(fine.rgba, cpu->rgba);
-    EXPECT_LT(e.mean_abs, 1.0 / 255) << (pre ? "pre-integrated" : "points");
-    EXPECT_LT(e.max_abs, 8.0 / 255) << (pre ? "pre-integrated" : "points");
+    ExpectCpuMatches(r, fine, pre ? "pre-integrated" : "points");
   }
   std::printf("  CT-Soft-Tissue, step 1 mm against 0.125 mm: points %.1f dB, pre-integrated %.1f dB\n",
               psnr[0], psnr[1]);
@@ -241,11 +242,7 @@ TEST_F(StepSamplingTest, MipPeakRefine_ThinWiresCloserToAnEighthOfTheStep) {
   r.settings.count_samples = true;
   r.settings.step_mm = 2.5;
   const Frame refined = Gpu(r);
-  auto cpu = RenderReference(r, *volume_, nullptr, 2);
-  ASSERT_TRUE(cpu.ok()) << cpu.status();
-  const auto e = CompareRgba(refined.rgba, cpu->rgba);
-  EXPECT_LT(e.mean_abs, 1.0 / 255) << "GPU against CPU";
-  EXPECT_LT(e.max_abs, 8.0 / 255) << "GPU against CPU";
+  ExpectCpuMatches(r, refined, "refined MIP");
   r.settings.mip_peak_refine = false;
   const Frame plain = Gpu(r);
   int darker = 0, brighter = 0;
