@@ -37,6 +37,26 @@ Status CheckMotion(const glm::dvec3& v, const char* field) {
 
 // The model cannot follow a drag or pull this large (its state became
 // non-finite and was restored): the request's fault, not the server's.
+// The frame's picture and slices into `out`: PNG, or JPEG at the stream's
+// quality (75 at most while interactive).
+Status EncodeFrameImages(const Frame& frame, const std::vector<SliceFrame>& slices,
+                         const StreamSettings& s, bool interactive, const VolumeGeometry& g,
+                         v3::Frame& out) {
+  const int jpeg_quality = interactive ? std::min(s.jpeg_quality, 75) : s.jpeg_quality;
+  ASSIGN_OR_RETURN(std::vector<uint8_t> bytes,
+                   s.png ? EncodePng(frame.rgba, frame.width, frame.height)
+                         : EncodeJpeg(frame.rgba, frame.width, frame.height, jpeg_quality));
+  out.set_image(bytes.data(), bytes.size());
+  for (size_t i = 0; i < slices.size(); ++i) {
+    ASSIGN_OR_RETURN(*out.add_slices(),
+                     EncodeSliceImage(slices[i], s.slices[i], g, s.png, jpeg_quality));
+  }
+  out.set_encoding(s.png ? v3::ENCODING_PNG : v3::ENCODING_JPEG);
+  out.set_width(frame.width);
+  out.set_height(frame.height);
+  return absl::OkStatus();
+}
+
 Status MotionRefused(const Status& status, const char* field) {
   if (!absl::IsInternal(status)) return status;
   return absl::InvalidArgumentError(
@@ -219,86 +239,78 @@ void Session::Changed(uint64_t sequence, bool deformed, const SceneStepTimings* 
 Result<v3::Frame> Session::Render(const FrameRequest& request) {
   if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
   const auto t0 = std::chrono::steady_clock::now();
-  SceneView view = request.settings->view;
-  SceneStepTimings step;        // the last deformation step's FEM
-  SceneStepTimings map_update;  // the map update this frame needed, if any
-  uint64_t sequence = 0;
   const bool interactive = request.interactive;
   const bool rung = !interactive && request.refine_step_multiple > 1.0;
-  view.quality = interactive ? RenderQuality::kInteractive : RenderQuality::kStill;
-  if (rung) view.refine_step_multiple = request.refine_step_multiple;
   v3::Frame out;
   // The map stays as this frame's request saw it until the frame is cast;
   // the scene itself is free meanwhile, so the next event's FEM runs while
   // this frame renders (DeformableScene::PrepareRender).
   std::unique_lock frame_lock(frame_mutex_);
-  RenderRequest prepared;
-  std::vector<SliceFrame> slices;  // settings.slices, of the same state
-  {
-    // The state is read under the scene lock, so the frame shows exactly
-    // the events it reports.
-    std::lock_guard scene_lock(scene_mutex_);
-    SwapInRefinedMeshLocked();
-    {
-      std::lock_guard lock(state_mutex_);
-      view.camera = request.camera ? *request.camera : camera_;
-      step = last_step_;
-      sequence = last_sequence_;
-      last_view_ = view;
-      out.set_mesh_id(mesh_->id);
-      if (const auto grabbed = scene_->GrabPointMm()) {
-        *out.mutable_grab_point_mm() = PointToApi(*grabbed, volume_->volume.geometry());
-      }
-    }
-    // A still comes once the pointer has stopped: the drag the per-event
-    // bound left short of its offset is finished first (docs/FEM.md,
-    // "Per-event work bound"), so the still shows where the pointer is.
-    if (!interactive) RETURN_IF_ERROR(SettleLocked(&step));
-    ASSIGN_OR_RETURN(prepared, scene_->PrepareRender(view, &map_update));
-    // Slices are cheap (a few ms): cast here, under the scene lock, from the
-    // map this frame uses.
-    ASSIGN_OR_RETURN(slices, RenderSlicesLocked(request.settings->slices));
-    if (request.want_vertices) {
-      for (const glm::dvec3& p : scene_->Positions()) {
-        *out.add_vertices_mm() = PointToApi(p, volume_->volume.geometry());
-      }
-    }
-  }
+  ASSIGN_OR_RETURN(PreparedFrame prepared, PrepareFrame(request, out));
   RETURN_IF_ERROR(request.cancel.Check());
-  prepared.cancel = request.cancel;
-  ASSIGN_OR_RETURN(const Frame frame, scene_->RenderPrepared(prepared));
+  prepared.render.cancel = request.cancel;
+  ASSIGN_OR_RETURN(const Frame frame, scene_->RenderPrepared(prepared.render));
   frame_lock.unlock();
   // A still: the client has stopped changing things; its view, if new, goes
   // to the case now rather than with every settings event.
   if (!interactive && !rung) StoreViewInCase();
-  const double render_ms = MsSince(t0) - map_update.warp_ms;
+  const double render_ms = MsSince(t0) - prepared.map_update.warp_ms;
   const auto t1 = std::chrono::steady_clock::now();
-  const StreamSettings& s = *request.settings;
-  ASSIGN_OR_RETURN(std::vector<uint8_t> bytes,
-                   s.png ? EncodePng(frame.rgba, frame.width, frame.height)
-                         : EncodeJpeg(frame.rgba, frame.width, frame.height,
-                                      interactive ? std::min(s.jpeg_quality, 75) : s.jpeg_quality));
-  out.set_image(bytes.data(), bytes.size());
-  for (size_t i = 0; i < slices.size(); ++i) {
-    ASSIGN_OR_RETURN(*out.add_slices(),
-                     EncodeSliceImage(slices[i], s.slices[i], volume_->volume.geometry(), s.png,
-                                      interactive ? std::min(s.jpeg_quality, 75) : s.jpeg_quality));
-  }
-  out.set_encoding(s.png ? v3::ENCODING_PNG : v3::ENCODING_JPEG);
-  out.set_width(frame.width);
-  out.set_height(frame.height);
+  RETURN_IF_ERROR(EncodeFrameImages(frame, prepared.slices, *request.settings, interactive,
+                                    volume_->volume.geometry(), out));
   out.set_interactive(interactive || rung);
-  out.set_last_sequence(sequence);
+  out.set_last_sequence(prepared.sequence);
+  const SceneStepTimings& step = prepared.step;
   out.set_max_displacement_mm(step.max_displacement_mm);
   out.set_inverted_tets(step.inverted_tets);
   out.set_lag_mm(step.lag_mm);
   v3::StageTimings* timings = out.mutable_timings();
   timings->set_fem_ms(step.fem_ms);
-  timings->set_warp_ms(map_update.warp_ms);
+  timings->set_warp_ms(prepared.map_update.warp_ms);
   timings->set_render_ms(render_ms);
   timings->set_encode_ms(MsSince(t1));
   timings->set_total_ms(MsSince(t0));
   return out;
+}
+
+Result<Session::PreparedFrame> Session::PrepareFrame(const FrameRequest& request,
+                                                     v3::Frame& out) {
+  const bool interactive = request.interactive;
+  SceneView view = request.settings->view;
+  view.quality = interactive ? RenderQuality::kInteractive : RenderQuality::kStill;
+  if (!interactive && request.refine_step_multiple > 1.0) {
+    view.refine_step_multiple = request.refine_step_multiple;
+  }
+  PreparedFrame prepared;
+  // The state is read under the scene lock, so the frame shows exactly the
+  // events it reports.
+  std::lock_guard scene_lock(scene_mutex_);
+  SwapInRefinedMeshLocked();
+  {
+    std::lock_guard lock(state_mutex_);
+    view.camera = request.camera ? *request.camera : camera_;
+    prepared.step = last_step_;
+    prepared.sequence = last_sequence_;
+    last_view_ = view;
+    out.set_mesh_id(mesh_->id);
+    if (const auto grabbed = scene_->GrabPointMm()) {
+      *out.mutable_grab_point_mm() = PointToApi(*grabbed, volume_->volume.geometry());
+    }
+  }
+  // A still comes once the pointer has stopped: the drag the per-event
+  // bound left short of its offset is finished first (docs/FEM.md,
+  // "Per-event work bound"), so the still shows where the pointer is.
+  if (!interactive) RETURN_IF_ERROR(SettleLocked(&prepared.step));
+  ASSIGN_OR_RETURN(prepared.render, scene_->PrepareRender(view, &prepared.map_update));
+  // Slices are cheap (a few ms): cast here, under the scene lock, from the
+  // map this frame uses.
+  ASSIGN_OR_RETURN(prepared.slices, RenderSlicesLocked(request.settings->slices));
+  if (request.want_vertices) {
+    for (const glm::dvec3& p : scene_->Positions()) {
+      *out.add_vertices_mm() = PointToApi(p, volume_->volume.geometry());
+    }
+  }
+  return prepared;
 }
 
 std::vector<double> Session::RefineLadder(const StreamSettings& settings) const {

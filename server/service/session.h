@@ -225,6 +225,20 @@ class Session : public std::enable_shared_from_this<Session> {
   // when that moved anything, `step` and the last step take its
   // displacement and the case records the settle (scene lock held).
   Status SettleLocked(SceneStepTimings* step);
+  // What a frame casts, read under the scene lock: the render request, the
+  // slices, the last step's and this frame's map update's timings, the last
+  // event's sequence.
+  struct PreparedFrame {
+    RenderRequest render;
+    std::vector<SliceFrame> slices;
+    SceneStepTimings step;
+    SceneStepTimings map_update;
+    uint64_t sequence = 0;
+  };
+  // Render's part under the scene lock (the caller holds frame_mutex_): the
+  // view of `request`, the settle of a still, the map, the slices; the mesh
+  // id, the grab point and the vertices go into `out`.
+  Result<PreparedFrame> PrepareFrame(const FrameRequest& request, v3::Frame& out);
   // The slices `requests` place now; the caller holds scene_mutex_.
   Result<std::vector<SliceFrame>> RenderSlicesLocked(const std::vector<SliceRequest>& requests);
   void Notify(bool closed);
