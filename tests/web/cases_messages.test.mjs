@@ -17,7 +17,8 @@ const web = path.join(here, '../../client/web');
 const load = (file) => import(pathToFileURL(path.join(web, file)).href);
 const { parseMessage, kMaxCaseTitleBytes } = await load('lib/validate_message.js');
 const { ProtoShape } = await load('lib/proto_shape.js');
-const { undoKey, typesText } = await load('public/undo_keys.js');
+const { undoKey } = await load('public/undo_keys.js');
+const { takesTyping } = await load('public/typing_target.js');
 const protoLoader = createRequire(path.join(web, 'package.json'))('@grpc/proto-loader');
 const definition = protoLoader.loadSync(path.join(here, '../../proto/vpm/v3/vpm.proto'),
   { keepCase: true, longs: Number, enums: String, defaults: true, oneofs: true,
@@ -98,13 +99,13 @@ test('UndoKeys_CtrlOrCmdZUndoesWithShiftRedoes', () => {
 });
 
 test('UndoKeys_TextFieldsKeepTheirOwnUndo', () => {
-  assert.ok(typesText({ tagName: 'INPUT', type: 'number' }));
-  assert.ok(typesText({ tagName: 'input', type: 'text' }));
-  assert.ok(typesText({ tagName: 'TEXTAREA' }));
-  assert.ok(typesText({ tagName: 'DIV', isContentEditable: true }));
-  assert.ok(!typesText({ tagName: 'INPUT', type: 'checkbox' }));
-  assert.ok(!typesText({ tagName: 'INPUT', type: 'range' }));
-  assert.ok(!typesText({ tagName: 'CANVAS' }));
-  assert.ok(!typesText({ tagName: 'BODY' }));
-  assert.ok(!typesText(null));
+  assert.ok(takesTyping({ tagName: 'INPUT', type: 'number' }));
+  assert.ok(takesTyping({ tagName: 'input', type: 'text' }));
+  assert.ok(takesTyping({ tagName: 'TEXTAREA' }));
+  assert.ok(takesTyping({ tagName: 'DIV', isContentEditable: true }));
+  assert.ok(!takesTyping({ tagName: 'INPUT', type: 'checkbox' }));
+  assert.ok(!takesTyping({ tagName: 'INPUT', type: 'range' }));
+  assert.ok(!takesTyping({ tagName: 'CANVAS' }));
+  assert.ok(!takesTyping({ tagName: 'BODY' }));
+  assert.ok(!takesTyping(null));
 });

@@ -2,7 +2,7 @@
 // the pointer (camera.js), the slice planes through a point
 // (slice_planes.js), canvases fitted to their panes (pane_fit.js), the
 // window presets (window_presets.js) and the single-key shortcuts
-// (view_keys.js).
+// (view_keys.js, typing_target.js).
 import assert from 'node:assert/strict';
 import path from 'node:path';
 import test from 'node:test';
@@ -14,7 +14,8 @@ const { OrbitCamera } = await load('camera.js');
 const { clampToSlice, grabTargetMm, planesThrough } = await load('slice_planes.js');
 const { fitContain, frameSizeForPane } = await load('pane_fit.js');
 const { kWindowPresets, presetNameOf, windowPreset } = await load('window_presets.js');
-const { kShortcutList, takesTyping, viewKey } = await load('view_keys.js');
+const { kShortcutList, viewKey } = await load('view_keys.js');
+const { takesTyping } = await load('typing_target.js');
 const { undoKey } = await load('undo_keys.js');
 
 const near = (a, b, tol, what) => a.forEach((v, i) =>

@@ -1,8 +1,8 @@
 // Undo and redo from the keyboard: Ctrl+Z undoes, Ctrl+Shift+Z (and Ctrl+Y)
 // redoes; Cmd in place of Ctrl on macOS. Keys typed into a text field stay
-// the field's own (its text's undo). An ES module with no dependencies.
+// the field's own (its text's undo): typing_target.js.
 
-const kTextInputTypes = new Set(['text', 'search', 'number', 'email', 'url', 'tel', 'password']);
+import { takesTyping } from './typing_target.js';
 
 // e: a KeyboardEvent (or a plain object with its fields). Returns 'undo',
 // 'redo' or null.
@@ -15,21 +15,12 @@ export function undoKey(e) {
   return null;
 }
 
-// True when `target` (an element) takes typed text.
-export function typesText(target) {
-  if (!target || typeof target !== 'object') return false;
-  if (target.isContentEditable) return true;
-  const tag = String(target.tagName ?? '').toUpperCase();
-  if (tag === 'TEXTAREA') return true;
-  return tag === 'INPUT' && kTextInputTypes.has(String(target.type ?? 'text').toLowerCase());
-}
-
 // Calls onKey('undo' | 'redo') for those keys pressed anywhere on `target`
 // (the document) but in a text field.
 export function installUndoKeys(target, onKey) {
   target.addEventListener('keydown', (e) => {
     const action = undoKey(e);
-    if (!action || typesText(e.target) || e.repeat) return;
+    if (!action || takesTyping(e.target) || e.repeat) return;
     e.preventDefault();
     onKey(action);
   });

@@ -2,6 +2,8 @@
 // key and mouse gesture ("?"). Undo and redo are undo_keys.js's; F2 is the
 // Studies panel's (app.js). Keys typed into a field (text, number, date,
 // ...) stay the field's.
+
+import { takesTyping } from './typing_target.js';
 import { kWindowPresets } from './window_presets.js';
 
 // key (KeyboardEvent.key, lower case) -> action.
@@ -40,20 +42,6 @@ export function viewKey(e) {
   const key = String(e.key ?? '').toLowerCase();
   if (e.shiftKey && key !== '?') return null;
   return kKeyActions[key] ?? null;
-}
-
-// Inputs that take no typed characters: a key pressed on them is the page's.
-const kKeylessInputs = new Set(['checkbox', 'radio', 'range', 'button', 'submit', 'reset', 'file',
-                                'color', 'image']);
-
-// True when `target` (an element) takes typed characters: a text, number,
-// date ... input, a text area, an editable element.
-export function takesTyping(target) {
-  if (!target || typeof target !== 'object') return false;
-  if (target.isContentEditable) return true;
-  const tag = String(target.tagName ?? '').toUpperCase();
-  if (tag === 'TEXTAREA') return true;
-  return tag === 'INPUT' && !kKeylessInputs.has(String(target.type ?? 'text').toLowerCase());
 }
 
 // Calls onAction(action) for those keys pressed anywhere on `target` (the
