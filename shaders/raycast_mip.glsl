@@ -31,7 +31,8 @@ bool walk_to_brightest(BrickWalk w, float black, float white, float t_near, floa
 // What a ray's samples have shown so far: the maximum (`best`, at sample
 // k_best) and the largest sample at least two samples away from k_best
 // (`second`: another structure, whose peak may be the higher one between
-// the samples; -1: none yet). Caster::RayPeaks on the CPU.
+// the samples; k_second -1: none yet). RayPeaks in raycast_cpu.cc on the
+// CPU.
 struct RayPeaks {
   float best;
   int k_best;
