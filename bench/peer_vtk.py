@@ -665,14 +665,7 @@ def run_case(args, case, mappers):
     goals = print_equal_quality(case["name"], results, vpm_steps, mappers)
     print(f"\n### case {case['name']}: vpm's stills at each step timed, CPU ms / {CORES} cores "
           f"(PSNR against vpm's reference):")
-    modes = args.modes.split(",")
-    print("| size | step mm | " + " | ".join(modes) + " |")
-    print("|" + "---|" * (2 + len(modes)))
-    for size in [int(s) for s in args.sizes.split(",")]:
-        for step in sorted({s[0] for s in vpm_steps[(modes[0], size)]}, reverse=True):
-            cells = [next(f"{c:.1f} ({db:.1f} dB)" for st, _, c, db in vpm_steps[(m, size)]
-                          if st == step) for m in modes]
-            print(f"| {size}^2 | {step:g} | " + " | ".join(cells) + " |")
+    print_vpm_steps(args, vpm_steps)
     print(f"\nPSNR of each VTK still against vpm's (same camera, step, window or transfer "
           f"function; the frames are in {case['out']}):")
     for mode, size, kind, db in cross:
@@ -681,6 +674,19 @@ def run_case(args, case, mappers):
     print(f"# case {case['name']}: load at the end: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}",
           flush=True)
     return goals
+
+
+def print_vpm_steps(args, vpm_steps):
+    """vpm's stills at every step timed, per size, coarsest first: CPU ms
+    (PSNR against vpm's reference) per mode."""
+    modes = args.modes.split(",")
+    print("| size | step mm | " + " | ".join(modes) + " |")
+    print("|" + "---|" * (2 + len(modes)))
+    for size in [int(s) for s in args.sizes.split(",")]:
+        for step in sorted({s[0] for s in vpm_steps[(modes[0], size)]}, reverse=True):
+            cells = [next(f"{c:.1f} ({db:.1f} dB)" for st, _, c, db in vpm_steps[(m, size)]
+                          if st == step) for m in modes]
+            print(f"| {size}^2 | {step:g} | " + " | ".join(cells) + " |")
 
 
 def print_equal_quality(case_name, results, vpm_steps, mappers):

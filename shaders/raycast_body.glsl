@@ -28,7 +28,7 @@
 // shaded by a Blinn-Phong headlight on the gradient of J (central
 // differences, one spacing, 6 taps of J; samples weighing under 1/256 in the
 // pixel are lit head-on), and stops at opacity > 0.99; MIP stops at the
-// window's white and refines its brightest sample to the peak around it
+// window's white and refines the peaks around its two brightest samples
 // (raycast_mip.glsl).
 // Specialization constant 0 (kCellGradient, DVR): shade with the analytic
 // gradient of the trilinear cells a sample already reads (the source's 8

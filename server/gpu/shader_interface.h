@@ -84,8 +84,9 @@ inline constexpr int kRaycastJitter = 64;
 // skips every brick that cannot exceed its maximum (docs/RENDERING.md,
 // "Empty-space skipping"). 32 and 128 are render_request.h's.
 inline constexpr int kRaycastBrightestFirst = 256;
-// MIP: the brightest sample refined to the vertex of the parabola through it
-// and its two neighbours (docs/RENDERING.md, "Sampling").
+// MIP: the peaks around the ray's brightest sample and the next brightest
+// apart from it refined by a bracketing search between samples
+// (docs/RENDERING.md, "Sampling").
 inline constexpr int kRaycastPeakRefine = 512;
 inline constexpr int kRaycastMaxClipPlanes = 16;  // VPM_RAYCAST_MAX_CLIP_PLANES
 struct RaycastParams {

@@ -137,10 +137,11 @@ struct RaycastSettings {
   // skips every brick whose maximum is under what it found. The same
   // picture (docs/RENDERING.md, "Empty-space skipping").
   bool mip_brightest_first = true;
-  // MIP: after the walk, the ray's brightest sample is refined to the peak
-  // between its neighbours (the vertex of the parabola through the three,
-  // three more reads per ray), so that thin bright structures keep their
-  // brightness at coarse steps (docs/RENDERING.md, "Sampling").
+  // MIP: after the walk, the peaks around the ray's brightest sample and
+  // the next brightest one at least two samples from it are found by a
+  // bracketing search between samples (twelve more reads per ray), so that
+  // thin bright structures keep their brightness at coarse steps
+  // (docs/RENDERING.md, "Sampling").
   bool mip_peak_refine = true;
 };
 

@@ -35,8 +35,6 @@ Status CheckMotion(const glm::dvec3& v, const char* field) {
   return absl::OkStatus();
 }
 
-// The model cannot follow a drag or pull this large (its state became
-// non-finite and was restored): the request's fault, not the server's.
 // The frame's picture and slices into `out`: PNG, or JPEG at the stream's
 // quality (75 at most while interactive).
 Status EncodeFrameImages(const Frame& frame, const std::vector<SliceFrame>& slices,
@@ -57,6 +55,14 @@ Status EncodeFrameImages(const Frame& frame, const std::vector<SliceFrame>& slic
   return absl::OkStatus();
 }
 
+// A refinement rung: a still cast at a multiple of its own step
+// (FrameStream's ladder), sent as interactive.
+bool IsRefineRung(const Session::FrameRequest& request) {
+  return !request.interactive && request.refine_step_multiple > 1.0;
+}
+
+// The model cannot follow a drag or pull this large (its state became
+// non-finite and was restored): the request's fault, not the server's.
 Status MotionRefused(const Status& status, const char* field) {
   if (!absl::IsInternal(status)) return status;
   return absl::InvalidArgumentError(
@@ -240,7 +246,7 @@ Result<v3::Frame> Session::Render(const FrameRequest& request) {
   if (closed()) return absl::FailedPreconditionError(StrCat("session '", id_, "' is closed"));
   const auto t0 = std::chrono::steady_clock::now();
   const bool interactive = request.interactive;
-  const bool rung = !interactive && request.refine_step_multiple > 1.0;
+  const bool rung = IsRefineRung(request);
   v3::Frame out;
   // The map stays as this frame's request saw it until the frame is cast;
   // the scene itself is free meanwhile, so the next event's FEM runs while
@@ -278,9 +284,7 @@ Result<Session::PreparedFrame> Session::PrepareFrame(const FrameRequest& request
   const bool interactive = request.interactive;
   SceneView view = request.settings->view;
   view.quality = interactive ? RenderQuality::kInteractive : RenderQuality::kStill;
-  if (!interactive && request.refine_step_multiple > 1.0) {
-    view.refine_step_multiple = request.refine_step_multiple;
-  }
+  if (IsRefineRung(request)) view.refine_step_multiple = request.refine_step_multiple;
   PreparedFrame prepared;
   // The state is read under the scene lock, so the frame shows exactly the
   // events it reports.
