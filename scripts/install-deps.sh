@@ -31,8 +31,10 @@ packages=(
   libsdl2-dev xvfb xdotool x11-utils imagemagick
   # PACS: the DICOMweb client's HTTP (libcurl); the live tests' PACS
   # (Orthanc with its DICOMweb and GDCM plugins, run unprivileged on
-  # loopback by tests/pacs) and their DICOM reading (pydicom, numpy)
+  # loopback by tests/pacs), their DICOM reading (pydicom, numpy) and their
+  # thumbnails' PNGs (PIL)
   libcurl4-openssl-dev orthanc orthanc-dicomweb orthanc-gdcm python3-pydicom python3-numpy
+  python3-pil
   # the exported DICOM checked against its IODs (dciodvfy)
   dicom3tools
   # cases: the embedded SQLite database (--state-dir), PostgreSQL's client
