@@ -70,7 +70,7 @@ layout(std430, binding = 5) writeonly buffer Pixels { uint pixels[]; };
 layout(std430, binding = 6) buffer Stats { uint samples_taken; };
 
 layout(constant_id = 0) const bool kCellGradient = false;
-// Specialization constant 3 (with kCellGradient, DVR; 1 and 2 are
+// Specialization constant 3 (with kCellGradient, DVR; 1, 2 and 4 are
 // voxel_encoding.glsl's): composite each step as a segment through the
 // pre-integrated table (server/raycast/preintegrated_lut.h), which follows
 // the 1D table in u_lut.
@@ -153,16 +153,18 @@ vec3 extent_mm() { return g_extent_mm; }
   T c011 = texelFetch(tex, base + sz + sy).SW;           \
   T c111 = texelFetch(tex, base + sz + sy + 1).SW
 
-// The same 8 voxel corners of the volume (volume_access.glsl's voxel_linear).
+// The same 8 voxel corners of the volume, as the x-edges' 4 pairs of
+// volume_access.glsl's voxel_pair (one fetch each where the volume is held
+// in pairs: docs/LAVAPIPE.md, "Volumes through uniform texel buffers").
 #define VPM_FETCH_VOXEL_CELL()                           \
-  float c000 = voxel_linear(base);                       \
-  float c100 = voxel_linear(base + 1);                   \
-  float c010 = voxel_linear(base + sy);                  \
-  float c110 = voxel_linear(base + sy + 1);              \
-  float c001 = voxel_linear(base + sz);                  \
-  float c101 = voxel_linear(base + sz + 1);              \
-  float c011 = voxel_linear(base + sz + sy);             \
-  float c111 = voxel_linear(base + sz + sy + 1)
+  vec2 e00 = voxel_pair(base);                           \
+  vec2 e10 = voxel_pair(base + sy);                      \
+  vec2 e01 = voxel_pair(base + sz);                      \
+  vec2 e11 = voxel_pair(base + sz + sy);                 \
+  float c000 = e00.x, c100 = e00.y;                      \
+  float c010 = e10.x, c110 = e10.y;                      \
+  float c001 = e01.x, c101 = e01.y;                      \
+  float c011 = e11.x, c111 = e11.y
 
 // The same corners through a per-point fetch function (fetch(ivec3 index)).
 #define VPM_FETCH_CELL_AT(T, fetch, i0)                  \
@@ -261,7 +263,13 @@ float source_and_gradient(vec3 u, out vec3 grad_u) {
   ivec3 n = g_dims;
   ivec3 i0 = min(ivec3(floor(u)), n - 2);
   vec3 f = u - vec3(i0);
+#ifdef VPM_RAYCAST_SAMPLED
   VPM_FETCH_CELL_AT(float, volume_texel, i0);
+#else
+  int sy = n.x, sz = n.x * n.y;
+  int base = i0.x + sy * i0.y + sz * i0.z;
+  VPM_FETCH_VOXEL_CELL();
+#endif
   float value, d_fx, d_fy, d_fz;
   VPM_TRILINEAR_WITH_DERIVATIVES(float, f, value, d_fx, d_fy, d_fz);
   grad_u = vec3(d_fx, d_fy, d_fz);

@@ -1,11 +1,10 @@
 // Voxel reads with the clamped indexing of docs/ALGORITHM.md section 0.
 // Expects `uniform isamplerBuffer u_volume` declared by the including shader:
-// the volume as GpuVolume holds it (server/volume/gpu_volume.h), R32_SINT
-// texels, x fastest: 2 int16 voxels per texel, or one float's bits. 2 per
-// texel keep a 512 x 512 x 1,024 int16 CT (2^28 voxels) within the
-// texel-buffer limit of 2^27 elements of lavapipe and NVIDIA; a uniform
-// texel buffer reads about twice as fast as a 3D image or a storage buffer
-// on lavapipe (docs/LAVAPIPE.md).
+// the volume as GpuVolume holds it (server/volume/gpu_volume.h), x fastest,
+// in pairs (texel n holds voxels n and n + 1) or, for int16 volumes over the
+// texel-buffer limit, packed (2 voxels per texel); voxel_encoding.glsl
+// decodes both. A uniform texel buffer reads about twice as fast as a 3D
+// image or a storage buffer on lavapipe (docs/LAVAPIPE.md).
 #ifndef VPM_VOLUME_ACCESS_GLSL
 #define VPM_VOLUME_ACCESS_GLSL
 
@@ -14,6 +13,9 @@
 // Voxel n (linear index, x fastest) as a float: exact, the value
 // VoxelValues::operator[] returns on the CPU.
 float voxel_linear(int n) { return VPM_DECODE_TEXEL_VOXEL(u_volume, n); }
+
+// Voxels n and n + 1 (x fastest: n's neighbour along x when x < dims.x - 1).
+vec2 voxel_pair(int n) { return VPM_DECODE_TEXEL_PAIR(u_volume, n); }
 
 float voxel_at(ivec3 p, ivec3 dims) { return voxel_linear(p.x + dims.x * (p.y + dims.y * p.z)); }
 

@@ -338,9 +338,10 @@ class Caster {
     return best > black;
   }
 
-  // refine_peak() of raycast_mip.glsl: around a ray's brightest sample k_max, the
-  // points half, a quarter and an eighth of a step either side of the best
-  // so far (within [t_lo, t_hi]); the largest value read.
+  // refine_peaks() of raycast_mip.glsl, for one peak: around a ray's
+  // brightest sample k_max, the points half, a quarter and an eighth of a
+  // step either side of the best so far (within [t_lo, t_hi]); the largest
+  // value read.
   float RefinePeak(float v_max, int k_max, float t_near, float step, float t_lo, float t_hi,
                    vec3 eye, vec3 dir) const {
     float best_t = t_near + float(k_max) * step;

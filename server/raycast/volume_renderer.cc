@@ -84,7 +84,7 @@ Status VolumeRenderer::Init() {
                      DT::eUniformTexelBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
         .push_constant_bytes = sizeof(gpu::RaycastBandPush),
         .local_size = {8, 8, 1}};
-    // Ids 1 and 2 are the volume's (GpuVolume::KernelFor), 3 pre-integration.
+    // Ids 1, 2 and 4 are the volume's (GpuVolume::KernelFor), 3 pre-integration.
     if (cell_gradient) spec.specialization = {1u, 0u, 0u, preintegrated ? 1u : 0u};
     return spec;
   };

@@ -221,8 +221,12 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::AddFile(const std::filesystem:
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string load_key,
                                                       const std::string& user, std::string id,
                                                       const ProgressFn& upload_progress) {
-  // Host values + the GPU's texel buffer, both as the volume holds them.
-  const int64_t bytes = volume.value_bytes() * 2;
+  // Host values + the GPU's texel buffer (voxels in pairs: twice the host's
+  // bytes, server/volume/gpu_volume.h).
+  const int64_t bytes =
+      volume.value_bytes() +
+      int64_t(GpuVolume::BufferBytesFor(volume.encoding(), uint64_t(volume.geometry().voxel_count()),
+                                        options_.context->limits().maxTexelBufferElements));
   RETURN_IF_ERROR(CheckRoom(bytes));
   ASSIGN_OR_RETURN(GpuVolume gpu, GpuVolume::Upload(*options_.context, volume, upload_progress));
   std::vector<std::string> evicted;

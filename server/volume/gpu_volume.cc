@@ -1,6 +1,7 @@
 #include "server/volume/gpu_volume.h"
 
 #include <algorithm>
+#include <bit>
 
 namespace vpm {
 namespace {
@@ -9,46 +10,116 @@ namespace {
 // host-visible memory needs a staging buffer of one slab, not of the volume.
 constexpr int64_t kUploadSlabBytes = int64_t{64} << 20;
 
+// Texels [first, first + count) of the pairs layout as 32-bit words: one
+// per texel for int16 (voxel n in the low half, n + 1 in the high), two for
+// float (the bits of n, then of n + 1). The voxel past the last reads 0.
+std::vector<uint32_t> PairTexels(const VoxelValues& values, uint64_t first, uint64_t count) {
+  std::vector<uint32_t> words;
+  if (const std::span<const int16_t> s = values.int16s(); !s.empty()) {
+    words.resize(count);
+    for (uint64_t i = 0; i < count; ++i) {
+      const uint64_t n = first + i;
+      const uint32_t high = n + 1 < s.size() ? uint16_t(s[n + 1]) : 0u;
+      words[i] = uint32_t(uint16_t(s[n])) | (high << 16);
+    }
+    return words;
+  }
+  const std::span<const float> f = values.floats();
+  words.resize(2 * count);
+  for (uint64_t i = 0; i < count; ++i) {
+    const uint64_t n = first + i;
+    words[2 * i] = std::bit_cast<uint32_t>(f[n]);
+    words[2 * i + 1] = n + 1 < f.size() ? std::bit_cast<uint32_t>(f[n + 1]) : 0u;
+  }
+  return words;
+}
+
+// Uploads the values, in pairs or packed, into `buffer`, in slabs of
+// kUploadSlabBytes: pairs made slab by slab (PairTexels), packed int16s as
+// the host holds them (an odd count leaves the last texel's high half unset:
+// never read).
+Status UploadTexels(gpu::GpuBuffer& buffer, const VoxelValues& values, bool pairs,
+                    uint64_t texel_bytes, const ProgressFn& progress) {
+  if (!pairs) {
+    const std::span<const std::byte> bytes = values.bytes();
+    for (size_t offset = 0; offset < bytes.size(); offset += kUploadSlabBytes) {
+      const size_t n = std::min<size_t>(kUploadSlabBytes, bytes.size() - offset);
+      RETURN_IF_ERROR(buffer.Upload(bytes.subspan(offset, n), offset));
+      if (progress) progress(double(offset + n) / double(bytes.size()), "uploading");
+    }
+    return absl::OkStatus();
+  }
+  const uint64_t texels = values.size();
+  const uint64_t slab_texels = uint64_t(kUploadSlabBytes) / texel_bytes;
+  for (uint64_t first = 0; first < texels; first += slab_texels) {
+    const uint64_t n = std::min(slab_texels, texels - first);
+    const std::vector<uint32_t> words = PairTexels(values, first, n);
+    RETURN_IF_ERROR(
+        buffer.Upload(std::as_bytes(std::span<const uint32_t>(words)), first * texel_bytes));
+    if (progress) progress(double(first + n) / double(texels), "uploading");
+  }
+  return absl::OkStatus();
+}
 
 }  // namespace
 
+std::optional<GpuVolume::TexelLayout> GpuVolume::LayoutFor(VoxelEncoding encoding,
+                                                          uint64_t voxels,
+                                                          uint64_t max_texels) {
+  if (voxels <= max_texels) return TexelLayout::kPairs;
+  if (encoding == VoxelEncoding::kInt16 && (voxels + 1) / 2 <= max_texels) {
+    return TexelLayout::kPacked;
+  }
+  return std::nullopt;
+}
+
+uint64_t GpuVolume::BufferBytesFor(VoxelEncoding encoding, uint64_t voxels,
+                                   uint64_t max_texels) {
+  const std::optional<TexelLayout> layout = LayoutFor(encoding, voxels, max_texels);
+  if (!layout) return 0;
+  if (*layout == TexelLayout::kPacked) return (voxels + 1) / 2 * 4;
+  return voxels * (encoding == VoxelEncoding::kInt16 ? 4 : 8);
+}
+
 Result<GpuVolume> GpuVolume::Upload(const gpu::GpuContext& context, const Volume& volume,
-                                    const ProgressFn& progress) {
+                                    const ProgressFn& progress,
+                                    std::optional<TexelLayout> layout) {
   const uint64_t voxels = static_cast<uint64_t>(volume.geometry().voxel_count());
-  const uint64_t per_texel = VoxelsPerTexel(volume.encoding());
-  const uint64_t texels = (voxels + per_texel - 1) / per_texel;
   const uint64_t max_texels = context.limits().maxTexelBufferElements;
-  if (texels > max_texels) {
+  const bool int16 = volume.encoding() == VoxelEncoding::kInt16;
+  if (!int16 && layout == TexelLayout::kPacked) {
+    return absl::InvalidArgumentError("GpuVolume: only int16 volumes can be packed");
+  }
+  if (!layout) layout = LayoutFor(volume.encoding(), voxels, max_texels);
+  const uint64_t texels_needed =
+      layout == TexelLayout::kPacked || (!layout && int16) ? (voxels + 1) / 2 : voxels;
+  if (!layout || texels_needed > max_texels) {
     return absl::ResourceExhaustedError(
         StrCat("volume of ", DescribeVolumeSize(volume.geometry(), volume.encoding()), " needs ",
-               texels, " texels of ", per_texel,
-               " voxel(s), over this device's texel-buffer limit of ", max_texels, " (",
-               max_texels * per_texel, " ", VoxelEncodingName(volume.encoding()), " voxels)"));
+               texels_needed, " texels, over this device's texel-buffer limit of ",
+               max_texels, " (", int16 ? 2 * max_texels : max_texels, " ",
+               VoxelEncodingName(volume.encoding()), " voxels)"));
   }
-  const vk::Format format = vk::Format::eR32Sint;
+  const bool pairs = *layout == TexelLayout::kPairs;
+  const uint64_t texels = pairs ? voxels : (voxels + 1) / 2;
+  const vk::Format format = pairs && !int16 ? vk::Format::eR32G32Sint : vk::Format::eR32Sint;
+  const uint64_t texel_bytes = format == vk::Format::eR32G32Sint ? 8 : 4;
   const auto features = context.physical_device().getFormatProperties(format).bufferFeatures;
   if (!(features & vk::FormatFeatureFlagBits::eUniformTexelBuffer)) {
     return absl::FailedPreconditionError(StrCat("this device cannot read ", vk::to_string(format),
                                                 " texel buffers (a Vulkan mandatory format)"));
   }
-  constexpr uint64_t texel_bytes = 4;
   ASSIGN_OR_RETURN(gpu::GpuBuffer buffer,
                    gpu::GpuBuffer::Create(context, texels * texel_bytes,
                                           vk::BufferUsageFlagBits::eUniformTexelBuffer));
-  const std::span<const std::byte> bytes = volume.voxels().bytes();
-  for (size_t offset = 0; offset < bytes.size(); offset += kUploadSlabBytes) {
-    const size_t n = std::min<size_t>(kUploadSlabBytes, bytes.size() - offset);
-    RETURN_IF_ERROR(buffer.Upload(bytes.subspan(offset, n), offset));
-    if (progress) progress(double(offset + n) / double(bytes.size()), "uploading");
-  }
-  // An odd int16 count leaves the last texel's high half unset: never read.
+  RETURN_IF_ERROR(UploadTexels(buffer, volume.voxels(), pairs, texel_bytes, progress));
   vk::raii::BufferView view{nullptr};
   RETURN_IF_ERROR(gpu::CatchVulkan("creating the volume's texel view", [&] {
     view = vk::raii::BufferView(context.device(),
                                 vk::BufferViewCreateInfo({}, buffer.handle(), format, 0,
                                                          texels * texel_bytes));
   }));
-  return GpuVolume(std::move(buffer), std::move(view), volume);
+  return GpuVolume(std::move(buffer), std::move(view), volume, *layout);
 }
 
 Result<const gpu::GpuImage3D*> GpuVolume::Image(const gpu::GpuContext& context,
@@ -84,9 +155,10 @@ Result<const gpu::GpuImage3D*> GpuVolume::Image(const gpu::GpuContext& context,
 }
 
 gpu::KernelSpec GpuVolume::Specialize(gpu::KernelSpec spec) const {
-  if (spec.specialization.size() < 3) spec.specialization.resize(3, 0);
+  if (spec.specialization.size() < 5) spec.specialization.resize(5, 0);
   spec.specialization[1] = encoding_ == VoxelEncoding::kInt16 ? 1u : 0u;
   spec.specialization[2] = static_cast<uint32_t>(offset_);
+  spec.specialization[4] = layout_ == TexelLayout::kPairs ? 1u : 0u;
   return spec;
 }
 

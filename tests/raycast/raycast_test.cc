@@ -555,8 +555,9 @@ TEST_F(RaycastTest, Sampler3DVariant_MatchesCpuReference) {
 }
 
 // The sphere-rod volume rounded to integers, held as int16 (offset 0 and
-// 30000) and as float: the GPU reads R32_SINT texels of 2 int16 voxels or
-// of one float's bits and decodes both to the same floats, so every frame is bit for bit the same;
+// 30000) and as float: the GPU reads int16 voxels in pairs or packed and
+// floats in pairs (server/volume/gpu_volume.h) and decodes all to the same
+// floats, so every frame is bit for bit the same;
 // the int16 frames match the CPU reference within the tolerances above, the
 // sampler3D's R16_UNORM image within its own.
 TEST_F(RaycastTest, Int16Volume_SameFramesAsFloatAndCpu) {
@@ -567,7 +568,8 @@ TEST_F(RaycastTest, Int16Volume_SameFramesAsFloatAndCpu) {
     const auto [int16, floats] = testing::MakeInt16Twin(*volume_, offset);
     auto gpu16 = GpuVolume::Upload(context(), int16);
     auto gpu32 = GpuVolume::Upload(context(), floats);
-    ASSERT_TRUE(gpu16.ok() && gpu32.ok());
+    auto packed = GpuVolume::Upload(context(), int16, {}, GpuVolume::TexelLayout::kPacked);
+    ASSERT_TRUE(gpu16.ok() && gpu32.ok() && packed.ok());
     for (RenderMode mode : {RenderMode::kDvr, RenderMode::kMip}) {
       for (bool interactive : {false, true}) {
         SCOPED_TRACE(::testing::Message() << "offset " << offset << " mode " << int(mode)
@@ -583,8 +585,11 @@ TEST_F(RaycastTest, Int16Volume_SameFramesAsFloatAndCpu) {
         const Frame a = RenderGpu(r);
         r.volume = &*gpu32;
         const Frame b = RenderGpu(r);
+        r.volume = &*packed;  // the layout of int16 volumes past the texel limit
+        const Frame c = RenderGpu(r);
         EXPECT_GT(LitPixels(a), 300);
         EXPECT_EQ(a.rgba, b.rgba);
+        EXPECT_EQ(a.rgba, c.rgba);
         auto cpu = RenderReference(r, int16, interactive ? &host : nullptr, 2);
         ASSERT_TRUE(cpu.ok()) << cpu.status();
         ExpectClose(a, *cpu, 1.0 / 255, 8.0 / 255, "int16 GPU vs CPU");

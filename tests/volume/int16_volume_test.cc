@@ -89,23 +89,34 @@ TEST(Int16Volume, CpuGradientEqualsFloatVolumes) {
   EXPECT_EQ(GradientMagnitude(t.int16, 2), GradientMagnitude(t.floats, 2));
 }
 
-// The GPU reads R32_SINT texels of 2 int16 voxels, or of one float's bits:
-// both decode to the same floats, so the outputs are bit-equal,
-// and within the float tolerance (1e-5 of the largest) of the CPU reference.
+// The GPU reads int16 voxels in pairs (R32_SINT texels of voxels n and
+// n + 1) or packed (2 voxels per texel), floats in pairs (R32G32_SINT): all
+// decode to the same floats, so the outputs are bit-equal, and within the
+// float tolerance (1e-5 of the largest) of the CPU reference.
 TEST_F(GpuTest, GradientMagnitudeGpu_Int16EqualsFloatAndCpu) {
   for (int32_t offset : {0, 40000}) {
     const TwinVolumes t = MakeTwins({37, 29, 23}, offset);  // 24679 voxels: odd
     auto op = GradientMagnitudeGpu::Create(context());
     ASSERT_TRUE(op.ok()) << op.status();
     auto gpu16 = GpuVolume::Upload(context(), t.int16);
+    auto packed = GpuVolume::Upload(context(), t.int16, {}, GpuVolume::TexelLayout::kPacked);
     auto gpu32 = GpuVolume::Upload(context(), t.floats);
-    ASSERT_TRUE(gpu16.ok() && gpu32.ok());
-    EXPECT_EQ(gpu16->buffer_bytes(), (24679 + 1) / 2 * 4);
-    EXPECT_EQ(gpu32->buffer_bytes(), 24679 * 4);
+    ASSERT_TRUE(gpu16.ok() && packed.ok() && gpu32.ok());
+    EXPECT_EQ(gpu16->layout(), GpuVolume::TexelLayout::kPairs);
+    EXPECT_EQ(gpu16->buffer_bytes(), 24679 * 4);
+    EXPECT_EQ(packed->buffer_bytes(), (24679 + 1) / 2 * 4);
+    EXPECT_EQ(gpu32->buffer_bytes(), 24679 * 8);
+    const uint64_t limit = context().limits().maxTexelBufferElements;
+    EXPECT_EQ(gpu16->buffer_bytes(),
+              int64_t(GpuVolume::BufferBytesFor(VoxelEncoding::kInt16, 24679, limit)));
+    EXPECT_EQ(gpu32->buffer_bytes(),
+              int64_t(GpuVolume::BufferBytesFor(VoxelEncoding::kFloat32, 24679, limit)));
     auto a = op->Run(*gpu16);
     auto b = op->Run(*gpu32);
-    ASSERT_TRUE(a.ok() && b.ok()) << a.status() << b.status();
+    auto c = op->Run(*packed);
+    ASSERT_TRUE(a.ok() && b.ok() && c.ok()) << a.status() << b.status() << c.status();
     EXPECT_EQ(*a, *b) << "offset " << offset;
+    EXPECT_EQ(*a, *c) << "offset " << offset;
     const auto cpu = GradientMagnitude(t.int16, 2);
     double max_err = 0.0, max_ref = 0.0;
     for (size_t n = 0; n < cpu.size(); ++n) {
@@ -132,6 +143,31 @@ TEST_F(GpuTest, TransferFunctionGpu_Int16MatchesCpuPerVoxel) {
     max_err = std::max(max_err, std::abs(double((*gpu)[n]) - tf.Evaluate(t.int16.voxels()[n])));
   }
   EXPECT_LE(max_err, 1e-5);
+}
+
+// Pairs wherever the limit holds one texel per voxel; past it int16
+// volumes pack 2 voxels per texel and float volumes do not fit.
+TEST(GpuVolumeLayout, PairsWhereTheyFitElsePackedInt16) {
+  using L = GpuVolume::TexelLayout;
+  const uint64_t limit = uint64_t{1} << 27;
+  EXPECT_EQ(GpuVolume::LayoutFor(VoxelEncoding::kInt16, limit, limit), L::kPairs);
+  EXPECT_EQ(GpuVolume::LayoutFor(VoxelEncoding::kFloat32, limit, limit), L::kPairs);
+  EXPECT_EQ(GpuVolume::LayoutFor(VoxelEncoding::kInt16, limit + 1, limit), L::kPacked);
+  EXPECT_EQ(GpuVolume::LayoutFor(VoxelEncoding::kInt16, 2 * limit, limit), L::kPacked);
+  EXPECT_EQ(GpuVolume::LayoutFor(VoxelEncoding::kInt16, 2 * limit + 1, limit), std::nullopt);
+  EXPECT_EQ(GpuVolume::LayoutFor(VoxelEncoding::kFloat32, limit + 1, limit), std::nullopt);
+  EXPECT_EQ(GpuVolume::BufferBytesFor(VoxelEncoding::kInt16, limit, limit), limit * 4);
+  EXPECT_EQ(GpuVolume::BufferBytesFor(VoxelEncoding::kInt16, limit + 1, limit),
+            (limit + 2) / 2 * 4);
+  EXPECT_EQ(GpuVolume::BufferBytesFor(VoxelEncoding::kFloat32, limit, limit), limit * 8);
+  EXPECT_EQ(GpuVolume::BufferBytesFor(VoxelEncoding::kFloat32, limit + 1, limit), 0u);
+}
+
+// A float volume cannot be packed: a clear error, not a wrong read.
+TEST_F(GpuTest, GpuVolume_FloatPackedRefused) {
+  const TwinVolumes t = MakeTwins({5, 4, 3}, 0);
+  auto packed = GpuVolume::Upload(context(), t.floats, {}, GpuVolume::TexelLayout::kPacked);
+  EXPECT_EQ(packed.status().code(), absl::StatusCode::kInvalidArgument) << packed.status();
 }
 
 }  // namespace
