@@ -193,7 +193,8 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Load(std::string_view source,
   ASSIGN_OR_RETURN(Volume volume,
                    ReadSource(key, std::string(source), SubProgress(progress, 0.0, 0.85), cancel));
   RETURN_IF_ERROR(cancel.Check());
-  return Add(std::move(volume), std::move(key), user, {}, SubProgress(progress, 0.85, 1.0));
+  return Add(std::move(volume), std::move(key), user, {}, SubProgress(progress, 0.85, 1.0),
+             cancel);
 }
 
 std::string VolumeStore::ReloadSource(const VolumeEntry& volume) const {
@@ -220,7 +221,8 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::AddFile(const std::filesystem:
 
 Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string load_key,
                                                       const std::string& user, std::string id,
-                                                      const ProgressFn& upload_progress) {
+                                                      const ProgressFn& upload_progress,
+                                                      const CancelToken& cancel) {
   // Host values + the GPU's texel buffer (voxels in pairs: twice the host's
   // bytes, server/volume/gpu_volume.h).
   const int64_t bytes =
@@ -228,7 +230,8 @@ Result<std::shared_ptr<VolumeEntry>> VolumeStore::Add(Volume volume, std::string
       int64_t(GpuVolume::BufferBytesFor(volume.encoding(), uint64_t(volume.geometry().voxel_count()),
                                         options_.context->limits().maxTexelBufferElements));
   RETURN_IF_ERROR(CheckRoom(bytes));
-  ASSIGN_OR_RETURN(GpuVolume gpu, GpuVolume::Upload(*options_.context, volume, upload_progress));
+  ASSIGN_OR_RETURN(GpuVolume gpu, GpuVolume::Upload(*options_.context, volume, upload_progress,
+                                                    std::nullopt, cancel));
   std::vector<std::string> evicted;
   std::shared_ptr<VolumeEntry> entry;
   Status room;

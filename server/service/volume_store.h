@@ -171,10 +171,12 @@ class VolumeStore {
   // `load_key` empty: an upload owned by `user`; else a shared volume
   // `user` loaded (empty `user`: an evicted volume read again, its loaders
   // kept). `id`: empty for a new one, else the id of an evicted volume read
-  // again. `upload_progress` hears the upload to the GPU.
+  // again. `upload_progress` hears the upload to the GPU, which polls
+  // `cancel`.
   Result<std::shared_ptr<VolumeEntry>> Add(Volume volume, std::string load_key,
                                            const std::string& user, std::string id = {},
-                                           const ProgressFn& upload_progress = {});
+                                           const ProgressFn& upload_progress = {},
+                                           const CancelToken& cancel = {});
   Result<Volume> ReadSource(const std::string& load_key, const std::string& source,
                             const ProgressFn& progress = {}, const CancelToken& cancel = {}) const;
   std::shared_ptr<VolumeEntry> FindLoadedLocked(const std::string& load_key) const;

@@ -7,8 +7,9 @@ namespace vpm {
 namespace {
 
 // Uploads go in slabs of this many bytes, so that a device without
-// host-visible memory needs a staging buffer of one slab, not of the volume.
-constexpr int64_t kUploadSlabBytes = int64_t{64} << 20;
+// host-visible memory needs a staging buffer of one slab, not of the volume,
+// and a cancelled load stops within a slab's time (milliseconds).
+constexpr int64_t kUploadSlabBytes = int64_t{16} << 20;
 
 // Texels [first, first + count) of the pairs layout as 32-bit words: one
 // per texel for int16 (voxel n in the low half, n + 1 in the high), two for
@@ -39,10 +40,11 @@ std::vector<uint32_t> PairTexels(const VoxelValues& values, uint64_t first, uint
 // the host holds them (an odd count leaves the last texel's high half unset:
 // never read).
 Status UploadTexels(gpu::GpuBuffer& buffer, const VoxelValues& values, bool pairs,
-                    uint64_t texel_bytes, const ProgressFn& progress) {
+                    uint64_t texel_bytes, const ProgressFn& progress, const CancelToken& cancel) {
   if (!pairs) {
     const std::span<const std::byte> bytes = values.bytes();
     for (size_t offset = 0; offset < bytes.size(); offset += kUploadSlabBytes) {
+      RETURN_IF_ERROR(cancel.Check());
       const size_t n = std::min<size_t>(kUploadSlabBytes, bytes.size() - offset);
       RETURN_IF_ERROR(buffer.Upload(bytes.subspan(offset, n), offset));
       if (progress) progress(double(offset + n) / double(bytes.size()), "uploading");
@@ -52,6 +54,7 @@ Status UploadTexels(gpu::GpuBuffer& buffer, const VoxelValues& values, bool pair
   const uint64_t texels = values.size();
   const uint64_t slab_texels = uint64_t(kUploadSlabBytes) / texel_bytes;
   for (uint64_t first = 0; first < texels; first += slab_texels) {
+    RETURN_IF_ERROR(cancel.Check());
     const uint64_t n = std::min(slab_texels, texels - first);
     const std::vector<uint32_t> words = PairTexels(values, first, n);
     RETURN_IF_ERROR(
@@ -83,7 +86,8 @@ uint64_t GpuVolume::BufferBytesFor(VoxelEncoding encoding, uint64_t voxels,
 
 Result<GpuVolume> GpuVolume::Upload(const gpu::GpuContext& context, const Volume& volume,
                                     const ProgressFn& progress,
-                                    std::optional<TexelLayout> layout) {
+                                    std::optional<TexelLayout> layout,
+                                    const CancelToken& cancel) {
   const uint64_t voxels = static_cast<uint64_t>(volume.geometry().voxel_count());
   const uint64_t max_texels = context.limits().maxTexelBufferElements;
   const bool int16 = volume.encoding() == VoxelEncoding::kInt16;
@@ -112,7 +116,7 @@ Result<GpuVolume> GpuVolume::Upload(const gpu::GpuContext& context, const Volume
   ASSIGN_OR_RETURN(gpu::GpuBuffer buffer,
                    gpu::GpuBuffer::Create(context, texels * texel_bytes,
                                           vk::BufferUsageFlagBits::eUniformTexelBuffer));
-  RETURN_IF_ERROR(UploadTexels(buffer, volume.voxels(), pairs, texel_bytes, progress));
+  RETURN_IF_ERROR(UploadTexels(buffer, volume.voxels(), pairs, texel_bytes, progress, cancel));
   vk::raii::BufferView view{nullptr};
   RETURN_IF_ERROR(gpu::CatchVulkan("creating the volume's texel view", [&] {
     view = vk::raii::BufferView(context.device(),

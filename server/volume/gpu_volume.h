@@ -24,6 +24,7 @@
 
 #include <optional>
 
+#include "server/common/cancel_token.h"
 #include "server/common/status.h"
 #include "server/gpu/compute_kernel.h"
 #include "server/gpu/gpu_buffer.h"
@@ -51,10 +52,12 @@ class GpuVolume {
   // texel format. `progress` hears the fraction uploaded ("uploading").
   // `layout`: LayoutFor's unless given (tests: both layouts give the same
   // values; ResourceExhausted where the given one cannot hold the volume,
-  // InvalidArgument for a float volume packed).
+  // InvalidArgument for a float volume packed). `cancel` is polled between
+  // slabs of kUploadSlabBytes (its status returned, nothing kept).
   static Result<GpuVolume> Upload(const gpu::GpuContext& context, const Volume& volume,
                                   const ProgressFn& progress = {},
-                                  std::optional<TexelLayout> layout = std::nullopt);
+                                  std::optional<TexelLayout> layout = std::nullopt,
+                                  const CancelToken& cancel = {});
 
   // The values as a uniform texel buffer, for `uniform isamplerBuffer`.
   vk::BufferView texel_view() const { return *view_; }

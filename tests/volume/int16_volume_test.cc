@@ -163,6 +163,15 @@ TEST(GpuVolumeLayout, PairsWhereTheyFitElsePackedInt16) {
   EXPECT_EQ(GpuVolume::BufferBytesFor(VoxelEncoding::kFloat32, limit + 1, limit), 0u);
 }
 
+// A cancelled upload returns the token's status and keeps nothing.
+TEST_F(GpuTest, GpuVolume_UploadStopsWhenCancelled) {
+  const TwinVolumes t = MakeTwins({5, 4, 3}, 0);
+  CancelToken::Source source;
+  source.Cancel();
+  auto uploaded = GpuVolume::Upload(context(), t.int16, {}, std::nullopt, source.token());
+  EXPECT_EQ(uploaded.status().code(), absl::StatusCode::kCancelled) << uploaded.status();
+}
+
 // A float volume cannot be packed: a clear error, not a wrong read.
 TEST_F(GpuTest, GpuVolume_FloatPackedRefused) {
   const TwinVolumes t = MakeTwins({5, 4, 3}, 0);
