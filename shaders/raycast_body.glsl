@@ -153,17 +153,19 @@ vec3 extent_mm() { return g_extent_mm; }
   T c011 = texelFetch(tex, base + sz + sy).SW;           \
   T c111 = texelFetch(tex, base + sz + sy + 1).SW
 
-// The same 8 voxel corners of the volume, as the x-edges' 4 pairs of
-// volume_access.glsl's voxel_pair (one fetch each where the volume is held
-// in pairs: docs/LAVAPIPE.md, "Volumes through uniform texel buffers").
-#define VPM_FETCH_VOXEL_CELL()                           \
-  vec2 e00 = voxel_pair(base);                           \
-  vec2 e10 = voxel_pair(base + sy);                      \
-  vec2 e01 = voxel_pair(base + sz);                      \
-  vec2 e11 = voxel_pair(base + sz + sy);                 \
-  float c000 = e00.x, c100 = e00.y;                      \
-  float c010 = e10.x, c110 = e10.y;                      \
-  float c001 = e01.x, c101 = e01.y;                      \
+// The same 8 voxel corners of the cell at i0 of the volume (n voxels), as
+// the x-edges' 4 pairs of volume_access.glsl's voxel_pair (one fetch each
+// where the volume is held in pairs: docs/LAVAPIPE.md, "Volumes through
+// uniform texel buffers").
+#define VPM_FETCH_VOXEL_CELL(n, i0)                                   \
+  int base = i0.x + n.x * i0.y + n.x * n.y * i0.z;                    \
+  vec2 e00 = voxel_pair(base);                                        \
+  vec2 e10 = voxel_pair(base + n.x);                                  \
+  vec2 e01 = voxel_pair(base + n.x * n.y);                            \
+  vec2 e11 = voxel_pair(base + n.x * n.y + n.x);                      \
+  float c000 = e00.x, c100 = e00.y;                                   \
+  float c010 = e10.x, c110 = e10.y;                                   \
+  float c001 = e01.x, c101 = e01.y;                                   \
   float c011 = e11.x, c111 = e11.y
 
 // The same corners through a per-point fetch function (fetch(ivec3 index)).
@@ -199,9 +201,7 @@ float source_at(vec3 u) {
   ivec3 n = g_dims;
   ivec3 i0 = min(ivec3(floor(u)), n - 2);
   vec3 f = u - vec3(i0);
-  int sy = n.x, sz = n.x * n.y;
-  int base = i0.x + sy * i0.y + sz * i0.z;
-  VPM_FETCH_VOXEL_CELL();
+  VPM_FETCH_VOXEL_CELL(n, i0);
   VPM_TRILINEAR_XY(float, f);
   return c0 + (c1 - c0) * f.z;
 #endif
@@ -236,14 +236,12 @@ float deformed_value(vec3 x) {
   return source_at(clamp(rest * g_inv_spacing, vec3(0.0), g_last_index));
 }
 
-// Texels for the cell gradient: volume voxel i, map point g (displacement).
-float volume_texel(ivec3 i) {
+// Texels for the cell gradient: volume voxel i of the 3D image (the texel
+// buffer's cells are read in pairs, VPM_FETCH_VOXEL_CELL), map point g
+// (displacement).
 #ifdef VPM_RAYCAST_SAMPLED
-  return decode_image_voxel(texelFetch(u_volume, i, 0).r);
-#else
-  return voxel_linear(i.x + g_dims.x * (i.y + g_dims.y * i.z));
+float volume_texel(ivec3 i) { return decode_image_voxel(texelFetch(u_volume, i, 0).r); }
 #endif
-}
 
 #ifdef VPM_RAYCAST_MAP
 vec3 map_texel(ivec3 g) {
@@ -266,9 +264,7 @@ float source_and_gradient(vec3 u, out vec3 grad_u) {
 #ifdef VPM_RAYCAST_SAMPLED
   VPM_FETCH_CELL_AT(float, volume_texel, i0);
 #else
-  int sy = n.x, sz = n.x * n.y;
-  int base = i0.x + sy * i0.y + sz * i0.z;
-  VPM_FETCH_VOXEL_CELL();
+  VPM_FETCH_VOXEL_CELL(n, i0);
 #endif
   float value, d_fx, d_fy, d_fz;
   VPM_TRILINEAR_WITH_DERIVATIVES(float, f, value, d_fx, d_fy, d_fz);

@@ -11,6 +11,21 @@ namespace {
 // and a cancelled load stops within a slab's time (milliseconds).
 constexpr int64_t kUploadSlabBytes = int64_t{16} << 20;
 
+// Texels of a volume of `voxels` in `layout`: one per voxel in pairs, one
+// per 2 packed.
+uint64_t TexelsFor(GpuVolume::TexelLayout layout, uint64_t voxels) {
+  return layout == GpuVolume::TexelLayout::kPairs ? voxels : (voxels + 1) / 2;
+}
+
+// The texel format of `layout`: float pairs need two 32-bit channels.
+vk::Format TexelFormat(VoxelEncoding encoding, GpuVolume::TexelLayout layout) {
+  return layout == GpuVolume::TexelLayout::kPairs && encoding == VoxelEncoding::kFloat32
+             ? vk::Format::eR32G32Sint
+             : vk::Format::eR32Sint;
+}
+
+uint64_t TexelBytes(vk::Format format) { return format == vk::Format::eR32G32Sint ? 8 : 4; }
+
 // Texels [first, first + count) of the pairs layout as 32-bit words: one
 // per texel for int16 (voxel n in the low half, n + 1 in the high), two for
 // float (the bits of n, then of n + 1). The voxel past the last reads 0.
@@ -80,8 +95,7 @@ uint64_t GpuVolume::BufferBytesFor(VoxelEncoding encoding, uint64_t voxels,
                                    uint64_t max_texels) {
   const std::optional<TexelLayout> layout = LayoutFor(encoding, voxels, max_texels);
   if (!layout) return 0;
-  if (*layout == TexelLayout::kPacked) return (voxels + 1) / 2 * 4;
-  return voxels * (encoding == VoxelEncoding::kInt16 ? 4 : 8);
+  return TexelsFor(*layout, voxels) * TexelBytes(TexelFormat(encoding, *layout));
 }
 
 Result<GpuVolume> GpuVolume::Upload(const gpu::GpuContext& context, const Volume& volume,
@@ -95,19 +109,20 @@ Result<GpuVolume> GpuVolume::Upload(const gpu::GpuContext& context, const Volume
     return absl::InvalidArgumentError("GpuVolume: only int16 volumes can be packed");
   }
   if (!layout) layout = LayoutFor(volume.encoding(), voxels, max_texels);
-  const uint64_t texels_needed =
-      layout == TexelLayout::kPacked || (!layout && int16) ? (voxels + 1) / 2 : voxels;
-  if (!layout || texels_needed > max_texels) {
+  // The layout's texels; when none fits, the fewest any could take (the message).
+  const uint64_t texels =
+      layout ? TexelsFor(*layout, voxels)
+             : TexelsFor(int16 ? TexelLayout::kPacked : TexelLayout::kPairs, voxels);
+  if (!layout || texels > max_texels) {
     return absl::ResourceExhaustedError(
         StrCat("volume of ", DescribeVolumeSize(volume.geometry(), volume.encoding()), " needs ",
-               texels_needed, " texels, over this device's texel-buffer limit of ",
+               texels, " texels, over this device's texel-buffer limit of ",
                max_texels, " (", int16 ? 2 * max_texels : max_texels, " ",
                VoxelEncodingName(volume.encoding()), " voxels)"));
   }
   const bool pairs = *layout == TexelLayout::kPairs;
-  const uint64_t texels = pairs ? voxels : (voxels + 1) / 2;
-  const vk::Format format = pairs && !int16 ? vk::Format::eR32G32Sint : vk::Format::eR32Sint;
-  const uint64_t texel_bytes = format == vk::Format::eR32G32Sint ? 8 : 4;
+  const vk::Format format = TexelFormat(volume.encoding(), *layout);
+  const uint64_t texel_bytes = TexelBytes(format);
   const auto features = context.physical_device().getFormatProperties(format).bufferFeatures;
   if (!(features & vk::FormatFeatureFlagBits::eUniformTexelBuffer)) {
     return absl::FailedPreconditionError(StrCat("this device cannot read ", vk::to_string(format),
