@@ -125,6 +125,20 @@ function openSpools() {
   }).filter((target) => target.includes('vpm-web-upload-'));
 }
 
+// True once one spool is open and holds bytes: the gateway has made it
+// (its name already removed) and is receiving into it.
+function spooling() {
+  const dir = `/proc/${gateway.pid}/fd`;
+  return fs.readdirSync(dir).some((fd) => {
+    try {
+      const target = fs.readlinkSync(path.join(dir, fd));
+      return target.includes('vpm-web-upload-') && fs.statSync(path.join(dir, fd)).size > 0;
+    } catch {
+      return false;
+    }
+  });
+}
+
 async function until(what, predicate, timeoutMs = 5000) {
   const deadline = Date.now() + timeoutMs;
   while (!predicate()) {
@@ -291,7 +305,8 @@ test('GatewayUpload_CancelledLeavesNoTemporaryFile', async () => {
   // Cancelled while it arrives: the spool is open (and already unlinked:
   // nothing under TMPDIR), then closed; nothing reached the server.
   const arriving = await upload(body, { tabId: t.hello.tab_id, partial: kMiB });
-  await until('the upload spooling', () => openSpools().length === 1);
+  await until('the upload spooling', spooling);
+  assert.equal(openSpools().length, 1);
   assert.match(openSpools()[0], /\(deleted\)$/);
   assert.deepEqual(fs.readdirSync(spool), []);
   arriving.req.destroy();
@@ -310,7 +325,8 @@ test('GatewayUpload_CancelledLeavesNoTemporaryFile', async () => {
 
   // The tab closing cancels its upload too; and the user may upload again.
   const orphan = await upload(body, { tabId: t.hello.tab_id, partial: kMiB });
-  await until('the upload spooling', () => openSpools().length === 1);
+  await until('the upload spooling', spooling);
+  assert.equal(openSpools().length, 1);
   t.ws.close();
   await until('the spool closed', () => openSpools().length === 0);
   orphan.req.destroy();

@@ -223,6 +223,8 @@ export class VolumeUploads {
     const stop = { cancel: () => req.destroy(new Refusal(
       499, 'CANCELLED', `The upload of ${name} was cancelled: the page's connection closed.`)) };
     tab.calls.add(stop);
+    // The tab may have closed while the spool was made: it cancelled nothing.
+    if (tab.closed) stop.cancel();
     let size = 0;
     try {
       for await (const chunk of req) {
@@ -255,6 +257,7 @@ export class VolumeUploads {
       settle({ err, volume });
     });
     tab.calls.add(call);
+    if (tab.closed) call.cancel();
     res.on('close', () => {
       if (!res.writableFinished) call.cancel();
     });
