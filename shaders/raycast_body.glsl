@@ -390,6 +390,18 @@ vec4 preintegrated_at(float front, float back) {
   return ab + (cd - ab) * t;
 }
 
+// Early termination (docs/RENDERING.md, "Early termination"): once the
+// opacity passes kOpaque, the transmittance left (under 1%) takes `colour`,
+// the last step's own (not premultiplied), as if the ray went on through the
+// same material; left to the background, how much of it shows would depend
+// on where the last step happens to land. True when the ray ends.
+bool ends_opaque(bool early, vec3 colour, inout vec4 acc) {
+  if (!early || acc.a <= kOpaque) return false;
+  acc.rgb += (1.0 - acc.a) * colour;
+  acc.a = 1.0;
+  return true;
+}
+
 // Composites the step that ends at a sample of value `back` (gradient g)
 // and begins at `front` through the pre-integrated table, as
 // composite_sample does a point. True when early termination ends the ray.
@@ -405,7 +417,7 @@ bool composite_segment(float front, float back, vec3 g, vec3 dir, bool shading, 
   if (c.a > 0.0) {
     acc.rgb += transmitted * c.rgb;
     acc.a += transmitted * c.a;
-    return early && acc.a > kOpaque;
+    return ends_opaque(early, c.rgb / c.a, acc);
   }
   return false;
 }
@@ -424,7 +436,7 @@ bool composite_sample(float v, vec3 g, vec3 dir, bool shading, bool early, inout
   if (c.a > 0.0) {
     acc.rgb += w * c.rgb;
     acc.a += w;
-    return early && acc.a > kOpaque;
+    return ends_opaque(early, c.rgb, acc);
   }
   return false;
 }
@@ -615,7 +627,7 @@ void main() {
       float w = (1.0 - acc.a) * c.a;
       acc.rgb += w * c.rgb;
       acc.a += w;
-      if (early && acc.a > kOpaque) break;
+      if (ends_opaque(early, c.rgb, acc)) break;
     }
   }
   vec3 rgb = acc.rgb + (1.0 - acc.a) * p.background.rgb;

@@ -80,7 +80,7 @@ bool enter_brick(BrickWalk w, float occ, inout int k, float threshold, float t_n
 // occupancy is above threshold; sets k to that brick's first sample. False
 // when the ray ends first. Two bricks per iteration: both occupancy reads
 // in flight at once, then the bricks tested in order, the same decisions as
-// one brick at a time (docs/RENDERING.md, "Two samples per iteration").
+// one brick at a time (docs/LAVAPIPE.md, "Two samples per iteration").
 bool walk_to_occupied(inout BrickWalk w, inout int k, float threshold, float t_near,
                       float t_far, float step) {
   for (;;) {

@@ -55,7 +55,7 @@ void peaks_add(inout RayPeaks p, float v, int k) {
 }
 
 // The MIP samples from k to t_end (k is in the segment), two per iteration
-// (docs/RENDERING.md, "Two samples per iteration"): both reads first, then
+// (docs/LAVAPIPE.md, "Two samples per iteration"): both reads first, then
 // the peaks sample by sample. Leaves k past the last sample taken; true
 // when the maximum reaches white (early termination).
 bool mip_segment(inout int k, float t_end, float t_near, float step, vec3 eye, vec3 dir,

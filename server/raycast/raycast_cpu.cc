@@ -24,6 +24,15 @@ constexpr float kOpaque = 0.99f;
 constexpr float kShadeMinWeight = 1.0f / 256.0f;
 constexpr float kNoValue = -3.0e38f;
 
+// ends_opaque() of raycast_body.glsl: past kOpaque, the transmittance left
+// takes `colour` (the last step's, not premultiplied) and the ray ends.
+bool EndsOpaque(vec3 colour, vec4& acc) {
+  if (acc.a <= kOpaque) return false;
+  acc += vec4((1.0f - acc.a) * colour, 0.0f);
+  acc.a = 1.0f;
+  return true;
+}
+
 // RayPeaks and peaks_add() of raycast_mip.glsl: a MIP ray's maximum so far
 // (at sample k_best) and its largest sample at least two samples from it.
 struct RayPeaks {
@@ -439,7 +448,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
       }
       if (c.a <= 0.0f) return false;
       acc += vec4(transmitted * rgb, transmitted * c.a);
-      return early && acc.a > kOpaque;
+      return early && EndsOpaque(rgb / c.a, acc);
     }
     const vec4 c = LutAt(v);
     if (c.a <= 0.0f) return false;
@@ -452,7 +461,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
     }
     const float w = (1.0f - acc.a) * c.a;
     acc += vec4(w * rgb, w);
-    return early && acc.a > kOpaque;
+    return early && EndsOpaque(rgb, acc);
   };
   if (mip || cell) {
     // Segments of the brick walk (raycast_body.glsl): the samples of one
