@@ -390,7 +390,7 @@ vec4 preintegrated_at(float front, float back) {
   return ab + (cd - ab) * t;
 }
 
-// Early termination (docs/RENDERING.md, "Early termination"): once the
+// Early termination (docs/RENDERING.md, "Ray casting", item 5): once the
 // opacity passes kOpaque, the transmittance left (under 1%) takes `colour`,
 // the last step's own (not premultiplied), as if the ray went on through the
 // same material; left to the background, how much of it shows would depend
