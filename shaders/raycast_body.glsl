@@ -391,13 +391,15 @@ vec4 preintegrated_at(float front, float back) {
 }
 
 // Early termination (docs/RENDERING.md, "Ray casting", item 5): once the
-// opacity passes kOpaque, the transmittance left (under 1%) takes `colour`,
-// the last step's own (not premultiplied), as if the ray went on through the
-// same material; left to the background, how much of it shows would depend
-// on where the last step happens to land. True when the ray ends.
-bool ends_opaque(bool early, vec3 colour, inout vec4 acc) {
+// opacity passes kOpaque, the transmittance left (under 1%) takes the last
+// step's own colour, rgb / over (over: its opacity when rgb is
+// premultiplied, else 1), as if the ray went on through the same material;
+// left to the background, how much of it shows would depend on where the
+// last step happens to land. The division is in the branch that ends the
+// ray: every sample pays for what stands outside it. True when the ray ends.
+bool ends_opaque(bool early, vec3 rgb, float over, inout vec4 acc) {
   if (!early || acc.a <= kOpaque) return false;
-  acc.rgb += (1.0 - acc.a) * colour;
+  acc.rgb += (1.0 - acc.a) * (rgb / over);
   acc.a = 1.0;
   return true;
 }
@@ -417,7 +419,7 @@ bool composite_segment(float front, float back, vec3 g, vec3 dir, bool shading, 
   if (c.a > 0.0) {
     acc.rgb += transmitted * c.rgb;
     acc.a += transmitted * c.a;
-    return ends_opaque(early, c.rgb / c.a, acc);
+    return ends_opaque(early, c.rgb, c.a, acc);
   }
   return false;
 }
@@ -436,7 +438,7 @@ bool composite_sample(float v, vec3 g, vec3 dir, bool shading, bool early, inout
   if (c.a > 0.0) {
     acc.rgb += w * c.rgb;
     acc.a += w;
-    return ends_opaque(early, c.rgb, acc);
+    return ends_opaque(early, c.rgb, 1.0, acc);
   }
   return false;
 }
@@ -627,7 +629,7 @@ void main() {
       float w = (1.0 - acc.a) * c.a;
       acc.rgb += w * c.rgb;
       acc.a += w;
-      if (ends_opaque(early, c.rgb, acc)) break;
+      if (ends_opaque(early, c.rgb, 1.0, acc)) break;
     }
   }
   vec3 rgb = acc.rgb + (1.0 - acc.a) * p.background.rgb;
