@@ -99,6 +99,22 @@ class StepSamplingTest : public testing::GpuTest {
     gpu_volume_.emplace(std::move(*gpu));
   }
 
+  // The real abdominal CT of tests/data (3 mm voxels).
+  void LoadKidneyCt() {
+    auto volume = ReadVolume(
+        std::string(VPM_TEST_SOURCE_DIR) + "/tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz", {});
+    ASSERT_TRUE(volume.ok()) << volume.status();
+    Load(std::move(*volume));
+  }
+
+  // The view cut through the camera's target, facing it (the clients' first
+  // frame).
+  void CutThroughTarget(RenderRequest& r) const {
+    const VolumeGeometry& g = volume_->geometry();
+    r.clip.planes.push_back(CutPlaneFacing(g.PhysicalToWorld(r.camera.Target()),
+                                           g.direction * r.camera.Forward()));
+  }
+
   RenderRequest Request(RenderMode mode, const std::string& preset, int size) {
     RenderRequest r;
     r.camera = Camera::ForVolume(volume_->geometry());
@@ -273,21 +289,14 @@ TEST_F(StepSamplingTest, MipPeakRefine_ThinWiresCloserToAnEighthOfTheStep) {
 // frame). Before pre-integration and the step caps, 20-41 dB
 // (docs/RENDERING.md, "Sampling").
 TEST_F(StepSamplingTest, KidneyCtStills_WithinFortyDbOfAnEighthOfTheStep) {
-  auto volume = ReadVolume(
-      std::string(VPM_TEST_SOURCE_DIR) + "/tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz", {});
-  ASSERT_TRUE(volume.ok()) << volume.status();
-  Load(std::move(*volume));
-  const VolumeGeometry& g = volume_->geometry();
+  ASSERT_NO_FATAL_FAILURE(LoadKidneyCt());
   for (const char* preset : {"ct-soft-tissue", "ct-bone", "ct-vessels", "CT-AAA", "CT-Bone",
                              "CT-Muscle", "CT-Chest-Contrast-Enhanced", "CT-Soft-Tissue", "mip"}) {
     for (bool cut : {false, true}) {
       const bool mip = std::string(preset) == "mip";
       RenderRequest r = Request(mip ? RenderMode::kMip : RenderMode::kDvr,
                                 mip ? "ct-vessels" : preset, 192);
-      if (cut) {
-        r.clip.planes.push_back(CutPlaneFacing(g.PhysicalToWorld(r.camera.Target()),
-                                               g.direction * r.camera.Forward()));
-      }
+      if (cut) CutThroughTarget(r);
       const Frame still = Gpu(r);
       r.settings.step_mm = still.step_mm / 8.0;
       const Frame fine = Gpu(r);
@@ -309,18 +318,11 @@ TEST_F(StepSamplingTest, KidneyCtStills_WithinFortyDbOfAnEighthOfTheStep) {
 // Left to the background, that 1% showed on every opaque pixel: 49.0-55.5
 // dB against the whole ray, 59.2-62.9 dB with the last colour.
 TEST_F(StepSamplingTest, OpaqueEnd_KidneyCtStillsCloseToTheWholeRay) {
-  auto volume = ReadVolume(
-      std::string(VPM_TEST_SOURCE_DIR) + "/tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz", {});
-  ASSERT_TRUE(volume.ok()) << volume.status();
-  Load(std::move(*volume));
-  const VolumeGeometry& g = volume_->geometry();
+  ASSERT_NO_FATAL_FAILURE(LoadKidneyCt());
   for (const char* preset : {"ct-bone", "CT-Bone", "CT-AAA", "CT-Muscle"}) {
     for (bool cut : {false, true}) {
       RenderRequest r = Request(RenderMode::kDvr, preset, 192);
-      if (cut) {
-        r.clip.planes.push_back(CutPlaneFacing(g.PhysicalToWorld(r.camera.Target()),
-                                               g.direction * r.camera.Forward()));
-      }
+      if (cut) CutThroughTarget(r);
       r.settings.count_samples = true;
       const Frame ended = Gpu(r);
       if (!cut) ExpectCpuMatches(r, ended, std::string(preset) + ", early termination");
