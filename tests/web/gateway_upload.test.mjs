@@ -112,32 +112,26 @@ function upload(body, { cookie = alice, tabId, name = 'case.nii', origin = base,
   });
 }
 
-// The gateway's open files that are upload spools (unlinked ones read
-// "... (deleted)").
-function openSpools() {
+// The gateway's open files that are upload spools: [target, size in bytes]
+// per descriptor (an unlinked one's target reads "... (deleted)").
+function spoolFds() {
   const dir = `/proc/${gateway.pid}/fd`;
-  return fs.readdirSync(dir).map((fd) => {
-    try {
-      return fs.readlinkSync(path.join(dir, fd));
-    } catch {
-      return '';
-    }
-  }).filter((target) => target.includes('vpm-web-upload-'));
-}
-
-// True once one spool is open and holds bytes: the gateway has made it
-// (its name already removed) and is receiving into it.
-function spooling() {
-  const dir = `/proc/${gateway.pid}/fd`;
-  return fs.readdirSync(dir).some((fd) => {
+  return fs.readdirSync(dir).flatMap((fd) => {
     try {
       const target = fs.readlinkSync(path.join(dir, fd));
-      return target.includes('vpm-web-upload-') && fs.statSync(path.join(dir, fd)).size > 0;
+      if (!target.includes('vpm-web-upload-')) return [];
+      return [[target, fs.statSync(path.join(dir, fd)).size]];
     } catch {
-      return false;
+      return [];
     }
   });
 }
+
+const openSpools = () => spoolFds().map(([target]) => target);
+
+// True once one spool is open and holds bytes: the gateway has made it
+// (its name already removed) and is receiving into it.
+const spooling = () => spoolFds().some(([, size]) => size > 0);
 
 async function until(what, predicate, timeoutMs = 5000) {
   const deadline = Date.now() + timeoutMs;

@@ -150,6 +150,14 @@ export class ViewerConnection {
     return this.client.call(method, request, this.as, this.closed ? null : this.calls);
   }
 
+  // A call (anything with cancel()) of this tab's that runs past an await:
+  // cancelled when the tab closes (onClose), or at once if it already has.
+  // The caller deletes it from this.calls when it ends.
+  track(call) {
+    this.calls.add(call);
+    if (this.closed) call.cancel();
+  }
+
   send(message) {
     if (!this.closed && this.ws.readyState === this.ws.OPEN) this.ws.send(JSON.stringify(message));
   }

@@ -222,9 +222,7 @@ export class VolumeUploads {
       'stopped.')), kIdleMs);
     const stop = { cancel: () => req.destroy(new Refusal(
       499, 'CANCELLED', `The upload of ${name} was cancelled: the page's connection closed.`)) };
-    tab.calls.add(stop);
-    // The tab may have closed while the spool was made: it cancelled nothing.
-    if (tab.closed) stop.cancel();
+    tab.track(stop);  // the tab may have closed while the spool was made
     let size = 0;
     try {
       for await (const chunk of req) {
@@ -256,8 +254,7 @@ export class VolumeUploads {
       tab.calls.delete(call);
       settle({ err, volume });
     });
-    tab.calls.add(call);
-    if (tab.closed) call.cancel();
+    tab.track(call);
     res.on('close', () => {
       if (!res.writableFinished) call.cancel();
     });
