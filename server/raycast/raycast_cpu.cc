@@ -25,10 +25,11 @@ constexpr float kShadeMinWeight = 1.0f / 256.0f;
 constexpr float kNoValue = -3.0e38f;
 
 // ends_opaque() of raycast_body.glsl: past kOpaque, the transmittance left
-// takes `colour` (the last step's, not premultiplied) and the ray ends.
-bool EndsOpaque(vec3 colour, vec4& acc) {
+// takes the last step's colour, rgb / over (over: its opacity when rgb is
+// premultiplied, else 1), and the ray ends.
+bool EndsOpaque(vec3 rgb, float over, vec4& acc) {
   if (acc.a <= kOpaque) return false;
-  acc += vec4((1.0f - acc.a) * colour, 0.0f);
+  acc += vec4((1.0f - acc.a) * (rgb / over), 0.0f);
   acc.a = 1.0f;
   return true;
 }
@@ -448,7 +449,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
       }
       if (c.a <= 0.0f) return false;
       acc += vec4(transmitted * rgb, transmitted * c.a);
-      return early && EndsOpaque(rgb / c.a, acc);
+      return early && EndsOpaque(rgb, c.a, acc);
     }
     const vec4 c = LutAt(v);
     if (c.a <= 0.0f) return false;
@@ -461,7 +462,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
     }
     const float w = (1.0f - acc.a) * c.a;
     acc += vec4(w * rgb, w);
-    return early && EndsOpaque(rgb, acc);
+    return early && EndsOpaque(rgb, 1.0f, acc);
   };
   if (mip || cell) {
     // Segments of the brick walk (raycast_body.glsl): the samples of one
