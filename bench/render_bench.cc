@@ -5,7 +5,7 @@
 // volume reads; then JPEG (quality 85) and PNG encoding of the still frame.
 // Usage: render_bench [--render-tf FILE] [--step MM] [--window W L]
 //                     [--no-reference] [--map-held] [--no-map] [--band-rays N]
-//                     [--no-early-termination]
+//                     [--no-early-termination] [--light-back-end]
 //                     [SOURCE] [PNG_DIR] [FILTER] [SIZE]
 //   --render-tf: adds the rows "still DVR custom" and "interactive DVR
 //   custom", DVR with the transfer function of FILE (ParaView .json[#NAME]
@@ -19,7 +19,9 @@
 //   nothing is deformed); --band-rays N: still frames cast in bands of about
 //   N rays, one submit each (default kStillBandRays; 0: one submit);
 //   --no-early-termination: every ray to its end (the exact integral that a
-//   fine step's reference approaches);
+//   fine step's reference approaches); --light-back-end: pre-integrated
+//   steps lit by the light at their back end alone
+//   (RaycastSettings::light_both_ends off);
 //   PNG_DIR: where to write the frames ("" for nowhere); FILTER: only the
 //   rows whose name contains it, or one of several separated by '|' (a part
 //   ending in '$' must end the name: "still MIP$|still DVR ct-bone$");
@@ -196,6 +198,7 @@ int main(int raw_argc, char** raw_argv) {
   bool no_map = false;
   int64_t band_rays = kStillBandRays;
   bool early_termination = true;
+  bool light_both_ends = true;
   std::vector<char*> positional{raw_argv[0]};
   for (int i = 1; i < raw_argc; ++i) {
     const std::string arg = raw_argv[i];
@@ -214,6 +217,8 @@ int main(int raw_argc, char** raw_argv) {
       no_map = true;
     } else if (arg == "--no-early-termination") {
       early_termination = false;
+    } else if (arg == "--light-back-end") {
+      light_both_ends = false;
     } else if (arg == "--band-rays" && i + 1 < raw_argc) {
       band_rays = int64_t(ParseNumber(raw_argv[++i], "--band-rays"));
     } else {
@@ -363,6 +368,7 @@ int main(int raw_argc, char** raw_argv) {
     if (step_mm > 0.0) r.settings.step_mm = step_mm;
     r.settings.empty_space_skipping = c.skipping;
     r.settings.early_termination = early_termination;
+    r.settings.light_both_ends = light_both_ends;
     r.settings.shading = c.shading;
     r.settings.mip_brightest_first = c.brightest_first;
     r.settings.mip_peak_refine = c.peak_refine;

@@ -3,13 +3,15 @@
 // step / FINE (default 8), per preset and volume, default camera (anterior,
 // whole box), no map. The issue-29 floor is 40 dB.
 // Usage: step_psnr_bench [--no-jitter] [--taps] [--no-preintegration]
-//                        [--no-peak-refine] [--no-shading] [--cut] [--scale S]
+//                        [--no-peak-refine] [--light-back-end] [--no-shading] [--cut] [--scale S]
 //                        [--fine F] [--size N]
 //                        [--png-dir DIR] [--presets A,B,...] SOURCE...
 //   --no-jitter: ray starts not jittered (the renderer before jittering);
 //   --taps: shade with central differences instead of the cell gradient;
 //   --no-preintegration: each sample through the 1D table (a point);
 //   --no-peak-refine: MIP of the samples alone (RaycastSettings::mip_peak_refine);
+//   --light-back-end: pre-integrated steps lit by their back end's light
+//   alone (RaycastSettings::light_both_ends off);
 //   --scale S: the still at S x its own step (and the reference at S / F);
 //   --no-shading: every preset unshaded;
 //   --cut: the view cut through the orbit centre, facing the camera (what
@@ -52,7 +54,8 @@ std::string FileStem(const std::string& source) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool jitter = true, cut = false, taps = false, shading = true, pre = true, refine = true;
+  bool jitter = true, cut = false, taps = false, shading = true, pre = true, refine = true,
+       both_ends = true;
   double fine = 8.0, scale = 1.0;
   int size = 512;
   std::string png_dir;
@@ -70,6 +73,8 @@ int main(int argc, char** argv) {
       pre = false;
     } else if (arg == "--no-peak-refine") {
       refine = false;
+    } else if (arg == "--light-back-end") {
+      both_ends = false;
     } else if (arg == "--taps") {
       taps = true;
     } else if (arg == "--cut") {
@@ -93,9 +98,9 @@ int main(int argc, char** argv) {
   auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
   auto renderer = bench::Check(VolumeRenderer::Create(*context, {}), "renderer");
   std::printf("still at its own step against step / %.0f, %dx%d, default camera%s, jitter %s, "
-              "%s gradient, pre-integration %s, MIP peaks %s, shading %s\n",
+              "%s gradient, pre-integration %s (steps lit at %s), MIP peaks %s, shading %s\n",
               fine, size, size, cut ? ", view cut" : "", jitter ? "on" : "off",
-              taps ? "tap" : "cell", pre ? "on" : "off", refine ? "refined" : "as sampled",
+              taps ? "tap" : "cell", pre ? "on" : "off", both_ends ? "both ends" : "the back end", refine ? "refined" : "as sampled",
               shading ? "as the preset" : "off");
   std::printf("%-24s %-28s %9s %9s %8s %8s\n", "volume", "preset", "step mm", "fine mm",
               "PSNR dB", "cast ms");
@@ -117,6 +122,7 @@ int main(int argc, char** argv) {
       r.settings.still_cell_gradient = !taps;
       r.settings.preintegrated = pre;
       r.settings.mip_peak_refine = refine;
+      r.settings.light_both_ends = both_ends;
       r.settings.shading = shading;
       if (!shading && r.preset.lighting) r.preset.lighting->shade = false;
       if (cut) {

@@ -107,6 +107,7 @@ vec4 g_lut;          // p.lut
 vec4 g_shading;      // p.shading
 float g_gradient_half;  // p.gradient.x, value/mm
 float g_pre_scale;      // pre-integrated entries per value unit
+float g_light_both_ends;  // 1 with VPM_RAYCAST_LIGHT_BOTH_ENDS, else 0
 
 void set_globals() {
   g_inv_spacing = 1.0 / p.spacing_mm.xyz;
@@ -123,6 +124,7 @@ void set_globals() {
   g_shading = p.shading;
   g_gradient_half = p.gradient.x;
   g_pre_scale = g_lut.y * (g_lut.w - 1.0) / (g_lut.z - 1.0);
+  g_light_both_ends = (p.image.z & VPM_RAYCAST_LIGHT_BOTH_ENDS) != 0 ? 1.0 : 0.0;
 }
 
 vec3 extent_mm() { return g_extent_mm; }
@@ -357,18 +359,26 @@ vec4 lut_at(float v) {
 // function on every iteration, see above); two-sided (|n.l|). g: the
 // gradient (value/mm). Shading is weighted by s = |g| / (|g| + g_half), so
 // that inside homogeneous tissue, where the gradient is noise, the colour
-// stays as lit head-on instead of speckling.
-// alpha: 1 for a colour, the opacity for a premultiplied one (the
-// specular highlight and the clamp scale with it).
-vec3 shade(vec3 rgb, vec3 g, vec3 dir, float alpha) {
+// stays as lit head-on instead of speckling. Returns (ambient + diffuse
+// factor, specular term), which lit_by applies to a colour.
+vec2 light_factors(vec3 g, vec3 dir) {
   float len = length(g);
   float ndl = len > 0.0 ? abs(dot(g, dir)) / len : 1.0;
   float s = len / (len + g_gradient_half);
   float n = g_shading.w;
   float spec = ndl / (n - n * ndl + ndl);
   float diffuse = 1.0 + (ndl - 1.0) * s;
-  vec3 lit = rgb * (g_shading.x + g_shading.y * diffuse) + vec3(alpha * g_shading.z * spec * s);
-  return min(lit, vec3(alpha));
+  return vec2(g_shading.x + g_shading.y * diffuse, g_shading.z * spec * s);
+}
+
+// alpha: 1 for a colour, the opacity for a premultiplied one (the
+// specular highlight and the clamp scale with it).
+vec3 lit_by(vec3 rgb, vec2 light, float alpha) {
+  return min(rgb * light.x + vec3(alpha * light.y), vec3(alpha));
+}
+
+vec3 shade(vec3 rgb, vec3 g, vec3 dir, float alpha) {
+  return lit_by(rgb, light_factors(g, dir), alpha);
 }
 
 // The pre-integrated table at (front, back) values, bilinear: premultiplied
@@ -406,14 +416,20 @@ bool ends_opaque(bool early, vec3 rgb, float over, inout vec4 acc) {
 
 // Composites the step that ends at a sample of value `back` (gradient g)
 // and begins at `front` through the pre-integrated table, as
-// composite_sample does a point. True when early termination ends the ray.
+// composite_sample does a point. The step is lit by the mean of its two
+// ends' light_factors (the trapezoid rule; docs/RENDERING.md, "Shading"):
+// light_front holds the front's (xy) and whether it is known (z: 1; never
+// without VPM_RAYCAST_LIGHT_BOTH_ENDS), and takes this step's back's. True when early termination ends the ray.
 bool composite_segment(float front, float back, vec3 g, vec3 dir, bool shading, bool early,
-                       inout vec4 acc) {
+                       inout vec3 light_front, inout vec4 acc) {
   vec4 c = preintegrated_at(front, back);
   float transmitted = 1.0 - acc.a;
   if (shading) {
+    vec2 light = light_factors(g, dir);
+    vec2 seg = light_front.z > 0.0 ? 0.5 * (light + light_front.xy) : light;
+    light_front = vec3(light, g_light_both_ends);
     c.rgb = transmitted * c.a > g_shade_min_weight
-                ? shade(c.rgb, g, dir, c.a)
+                ? lit_by(c.rgb, seg, c.a)
                 : min(c.rgb * (g_shading.x + g_shading.y), vec3(c.a));
   }
   if (c.a > 0.0) {
@@ -533,6 +549,7 @@ void main() {
     int k_next = 0;
     float front = 0.0;
     bool has_front = false;
+    vec3 light_front = vec3(0.0);  // xy: light_factors at front; z: 1 when known
     for (float t_end;
          !done && next_segment(walk, k, 0.0, skipping, t_near, t_far, step, t_end);
          walk_step(walk)) {
@@ -542,6 +559,7 @@ void main() {
         // brick, so that the step leaving it counts too.
         if (k != k_next) {
           has_front = k > 0;
+          light_front.z = 0.0;
           front = deformed_value(eye + (t_near + float(k - 1) * step) * dir);
         }
         t_end = min(t_end + step, t_far);
@@ -559,7 +577,7 @@ void main() {
         ++taken;
         ++k;
         if (kPreintegrated ? composite_segment(has_front ? front : v1, v1, grad1, dir, shading,
-                                               early, acc)
+                                               early, light_front, acc)
                            : composite_sample(v1, grad1, dir, shading, early, acc)) {
           done = true;
           break;
@@ -569,7 +587,7 @@ void main() {
         if (second) {
           ++taken;
           ++k;
-          if (kPreintegrated ? composite_segment(front, v2, grad2, dir, shading, early, acc)
+          if (kPreintegrated ? composite_segment(front, v2, grad2, dir, shading, early, light_front, acc)
                              : composite_sample(v2, grad2, dir, shading, early, acc)) {
             done = true;
             break;

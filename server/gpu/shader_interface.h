@@ -88,6 +88,10 @@ inline constexpr int kRaycastBrightestFirst = 256;
 // apart from it refined by a bracketing search between samples
 // (docs/RENDERING.md, "Sampling").
 inline constexpr int kRaycastPeakRefine = 512;
+// DVR, pre-integrated: each step lit by the mean of its two ends' light
+// (the trapezoid rule), not by its back end's alone (docs/RENDERING.md,
+// "Sampling").
+inline constexpr int kRaycastLightBothEnds = 1024;
 inline constexpr int kRaycastMaxClipPlanes = 16;  // VPM_RAYCAST_MAX_CLIP_PLANES
 struct RaycastParams {
   glm::vec4 eye_mm;      // xyz eye (physical mm); w: step_mm

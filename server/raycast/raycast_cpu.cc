@@ -239,18 +239,26 @@ class Caster {
     return g / (2.0f * h);
   }
 
-  // shade() of raycast_body.glsl; g: the gradient (value/mm); alpha: 1 for
-  // a colour, the opacity for a premultiplied one.
-  vec3 Shade(vec3 rgb, vec3 g, vec3 dir, float alpha = 1.0f) const {
+  // light_factors() of raycast_body.glsl: (ambient + diffuse, specular) of
+  // a headlight on the gradient g (value/mm), lit_by() applies them.
+  vec2 LightFactors(vec3 g, vec3 dir) const {
     const float len = glm::length(g);
     const float ndl = len > 0.0f ? std::abs(glm::dot(g, dir)) / len : 1.0f;
     const float s = len / (len + p_.gradient.x);
     const float n = p_.shading.w;
     const float spec = ndl / (n - n * ndl + ndl);  // Schlick's ndl^n
     const float diffuse = 1.0f + (ndl - 1.0f) * s;
-    const vec3 lit =
-        rgb * (p_.shading.x + p_.shading.y * diffuse) + vec3(alpha * p_.shading.z * spec * s);
-    return glm::min(lit, vec3(alpha));
+    return vec2(p_.shading.x + p_.shading.y * diffuse, p_.shading.z * spec * s);
+  }
+
+  // alpha: 1 for a colour, the opacity for a premultiplied one.
+  static vec3 LitBy(vec3 rgb, vec2 light, float alpha) {
+    return glm::min(rgb * light.x + vec3(alpha * light.y), vec3(alpha));
+  }
+
+  // shade() of raycast_body.glsl.
+  vec3 Shade(vec3 rgb, vec3 g, vec3 dir, float alpha = 1.0f) const {
+    return LitBy(rgb, LightFactors(g, dir), alpha);
   }
 
   // preintegrated_at() of raycast_body.glsl.
@@ -419,6 +427,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
   const bool early = Flag(gpu::kRaycastEarlyTermination);
   const bool cell = Flag(kRaycastCellGradient);
   const bool pre = !mip && cell && Flag(kRaycastPreintegrated);
+  const bool both_ends = Flag(gpu::kRaycastLightBothEnds);
   RayPeaks peaks;  // MIP
   vec4 acc(0.0f);
   int k = 0;
@@ -426,6 +435,8 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
   int k_next = 0;
   float front = 0.0f;
   bool has_front = false;
+  vec2 light_front(0.0f);  // LightFactors at front, when has_light_front
+  bool has_light_front = false;
   // Sample k_sample at x: true when the ray is done (early termination).
   const auto sample = [&](vec3 x, int k_sample) {
     ++taken;
@@ -443,8 +454,13 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
       const float transmitted = 1.0f - acc.a;
       vec3 rgb(c);
       if (shading) {
+        // The step's light: the mean of its two ends' (trapezoid rule).
+        const vec2 light = LightFactors(cell_gradient, dir);
+        const vec2 seg = has_light_front ? 0.5f * (light + light_front) : light;
+        light_front = light;
+        has_light_front = both_ends;
         rgb = transmitted * c.a > kShadeMinWeight * step
-                  ? Shade(rgb, cell_gradient, dir, c.a)
+                  ? LitBy(rgb, seg, c.a)
                   : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(c.a));
       }
       if (c.a <= 0.0f) return false;
@@ -497,6 +513,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
       if (pre) {
         if (k != k_next) {
           has_front = k > 0;
+          has_light_front = false;
           front = DeformedValue(eye + (t_near + float(k - 1) * step) * dir);
         }
         t_end = std::min(t_end + step, t_far);

@@ -184,6 +184,7 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
       request.mode == RenderMode::kDvr) {
     flags |= kRaycastCellGradient;
     if (s.preintegrated) flags |= kRaycastPreintegrated;
+    if (s.preintegrated && s.light_both_ends) flags |= gpu::kRaycastLightBothEnds;
   }
   const glm::ivec3 brick_voxels = RequestBrickVoxels(request, geometry);
   const auto bricks = BrickGridDims(geometry.dims, brick_voxels);

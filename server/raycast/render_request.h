@@ -132,6 +132,11 @@ struct RaycastSettings {
   // functions do not depend on where samples land (docs/RENDERING.md,
   // "Sampling"). The tap-gradient loop ignores it.
   bool preintegrated = true;
+  // Pre-integrated steps lit by the mean of the light at their two ends
+  // (the trapezoid rule) instead of the light at the sample ending them:
+  // shaded stills converge faster with the step (docs/RENDERING.md,
+  // "Sampling").
+  bool light_both_ends = true;
   // MIP with skipping: a first walk along the ray, taking no sample, finds
   // the brick that can show the most and samples it first; the walk then
   // skips every brick whose maximum is under what it found. The same

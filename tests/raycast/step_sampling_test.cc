@@ -338,5 +338,33 @@ TEST_F(StepSamplingTest, OpaqueEnd_KidneyCtStillsCloseToTheWholeRay) {
   }
 }
 
+// Pre-integrated steps lit by the mean of the light at their two ends (the
+// trapezoid rule) instead of the light at the sample ending them: the real
+// abdominal CT's shaded presets at their still step come closer to step / 8
+// than with the back end's light alone, each against its own step / 8. The
+// CPU reference lights its steps alike. Measured at 192^2: back end 41.5-
+// 49.4 dB, both ends 44.5-54.1 dB (gains 2.4-5.1 dB per frame).
+TEST_F(StepSamplingTest, LightBothEnds_KidneyCtShadedStillsCloserToAnEighthOfTheStep) {
+  ASSERT_NO_FATAL_FAILURE(LoadKidneyCt());
+  for (const char* preset : {"ct-bone", "ct-vessels", "CT-AAA", "CT-Chest-Contrast-Enhanced"}) {
+    for (bool cut : {false, true}) {
+      double psnr[2];
+      for (bool both : {false, true}) {
+        RenderRequest r = Request(RenderMode::kDvr, preset, 192);
+        if (cut) CutThroughTarget(r);
+        r.settings.light_both_ends = both;
+        const Frame still = Gpu(r);
+        if (both && !cut) ExpectCpuMatches(r, still, std::string(preset) + ", both ends");
+        r.settings.step_mm = still.step_mm / 8.0;
+        psnr[both] = CompareRgba(still.rgba, Gpu(r).rgba).psnr_db;
+      }
+      std::printf("  kidney CT %s%s: against step / 8, back end %.1f dB, both ends %.1f dB\n",
+                  preset, cut ? ", cut" : "", psnr[0], psnr[1]);
+      EXPECT_GE(psnr[1], psnr[0] + 2.0) << preset << (cut ? ", cut" : "");
+      EXPECT_GE(psnr[1], 44.0) << preset << (cut ? ", cut" : "");
+    }
+  }
+}
+
 }  // namespace
 }  // namespace vpm
