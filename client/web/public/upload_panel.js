@@ -54,7 +54,7 @@ export class UploadPanel {
     this.root = $('upload');
     this.tabId = null;       // this tab's id at the gateway (hello), null while away
     this.maxBytes = 0;
-    this.running = null;     // {name, packing: AbortController, xhr}
+    this.running = null;     // {name, packing: AbortController, xhr, gatewayStage}
     this.opening = null;     // the volume id uploaded and being opened
     this.lastVolume = null;  // the VolumeInfo of the last upload (for tests)
     this.lastError = null;   // {code, message} of the last upload's failure (for tests)
@@ -201,11 +201,17 @@ export class UploadPanel {
     xhr.setRequestHeader('Content-Type', 'application/octet-stream');
     xhr.setRequestHeader('X-Vpm-Tab', this.tabId);
     xhr.setRequestHeader('X-Vpm-File-Name', encodeURIComponent(name));
+    // The browser may report the body sent after the gateway has already
+    // said it passes it on or the server reads it (serverProgress): the
+    // status never goes back to an earlier stage.
+    const later = () => this.running?.xhr !== xhr || this.running.gatewayStage;
     xhr.upload.onprogress = (e) => {
+      if (later()) return;
       this.showBar(e.total ? e.loaded / e.total : 0);
       this.say(`Uploading ${name}: ${sizeText(e.loaded)} of ${sizeText(blob.size)} sent ...`, 'info');
     };
     xhr.upload.onload = () => {
+      if (later()) return;
       this.state('reading');
       this.showBar(null);
       this.say(`Uploaded ${name}; the gateway passes it to vpm-server ...`, 'info');
@@ -223,6 +229,7 @@ export class UploadPanel {
   serverProgress(m) {
     const name = this.running?.name;
     if (!name || this.running.packing) return;
+    this.running.gatewayStage = m.stage;
     this.state('reading');
     if (m.stage === 'sending') {
       this.showBar(m.total_bytes ? m.bytes / m.total_bytes : 1);
