@@ -3,7 +3,8 @@
 // step / FINE (default 8), per preset and volume, default camera (anterior,
 // whole box), no map. The issue-29 floor is 40 dB.
 // Usage: step_psnr_bench [--no-jitter] [--taps] [--no-preintegration]
-//                        [--no-peak-refine] [--light-back-end] [--no-shading] [--cut] [--scale S]
+//                        [--no-peak-refine] [--light-back-end] [--no-shading] [--cut]
+//                        [--scale S]
 //                        [--fine F] [--size N]
 //                        [--png-dir DIR] [--presets A,B,...] SOURCE...
 //   --no-jitter: ray starts not jittered (the renderer before jittering);
@@ -100,7 +101,8 @@ int main(int argc, char** argv) {
   std::printf("still at its own step against step / %.0f, %dx%d, default camera%s, jitter %s, "
               "%s gradient, pre-integration %s (steps lit at %s), MIP peaks %s, shading %s\n",
               fine, size, size, cut ? ", view cut" : "", jitter ? "on" : "off",
-              taps ? "tap" : "cell", pre ? "on" : "off", both_ends ? "both ends" : "the back end", refine ? "refined" : "as sampled",
+              taps ? "tap" : "cell", pre ? "on" : "off", both_ends ? "both ends" : "the back end",
+              refine ? "refined" : "as sampled",
               shading ? "as the preset" : "off");
   std::printf("%-24s %-28s %9s %9s %8s %8s\n", "volume", "preset", "step mm", "fine mm",
               "PSNR dB", "cast ms");

@@ -417,9 +417,10 @@ bool ends_opaque(bool early, vec3 rgb, float over, inout vec4 acc) {
 // Composites the step that ends at a sample of value `back` (gradient g)
 // and begins at `front` through the pre-integrated table, as
 // composite_sample does a point. The step is lit by the mean of its two
-// ends' light_factors (the trapezoid rule; docs/RENDERING.md, "Shading"):
+// ends' light_factors (the trapezoid rule; docs/RENDERING.md, "Sampling"):
 // light_front holds the front's (xy) and whether it is known (z: 1; never
-// without VPM_RAYCAST_LIGHT_BOTH_ENDS), and takes this step's back's. True when early termination ends the ray.
+// without VPM_RAYCAST_LIGHT_BOTH_ENDS), and takes this step's back's. True
+// when early termination ends the ray.
 bool composite_segment(float front, float back, vec3 g, vec3 dir, bool shading, bool early,
                        inout vec3 light_front, inout vec4 acc) {
   vec4 c = preintegrated_at(front, back);
@@ -587,8 +588,9 @@ void main() {
         if (second) {
           ++taken;
           ++k;
-          if (kPreintegrated ? composite_segment(front, v2, grad2, dir, shading, early, light_front, acc)
-                             : composite_sample(v2, grad2, dir, shading, early, acc)) {
+          if (kPreintegrated
+                  ? composite_segment(front, v2, grad2, dir, shading, early, light_front, acc)
+                  : composite_sample(v2, grad2, dir, shading, early, acc)) {
             done = true;
             break;
           }
