@@ -17,11 +17,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path SourceData() {
-  const char* source = std::getenv("VPM_SOURCE_DIR");
-  return source != nullptr ? fs::path(source) / "tests" / "data"
-                           : fs::path(__FILE__).parent_path().parent_path() / "data";
-}
 
 class DataRootBrowseTest : public TwoUsersTest {
  protected:

@@ -27,13 +27,6 @@ double ElapsedSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// tests/data of the source tree (ctest sets VPM_SOURCE_DIR; run by hand,
-// this file's own path tells).
-fs::path SourceData() {
-  const char* source = std::getenv("VPM_SOURCE_DIR");
-  return source != nullptr ? fs::path(source) / "tests" / "data"
-                           : fs::path(__FILE__).parent_path().parent_path() / "data";
-}
 
 void WriteText(const fs::path& path, const std::string& text) { std::ofstream(path) << text; }
 

@@ -20,23 +20,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// The header of an upload of `total` bytes, and nothing after it yet.
-std::unique_ptr<grpc::ClientWriter<v3::UploadVolumeRequest>> StartUpload(
-    v3::Vpm::Stub* stub, grpc::ClientContext* context, v3::VolumeInfo* info, int64_t total) {
-  auto writer = stub->UploadVolume(context, info);
-  v3::UploadVolumeRequest header;
-  header.mutable_header()->set_file_name("held.nii");
-  header.mutable_header()->set_total_bytes(total);
-  header.mutable_header()->set_sha256_hex(std::string(64, 'a'));
-  writer->Write(header);
-  return writer;
-}
-
-bool WriteChunk(grpc::ClientWriter<v3::UploadVolumeRequest>& writer, int64_t bytes) {
-  v3::UploadVolumeRequest chunk;
-  chunk.set_chunk(std::string(static_cast<size_t>(bytes), '\0'));
-  return writer.Write(chunk);
-}
 
 class FairShareTest : public TwoUsersTest {
  protected:
@@ -64,7 +47,8 @@ TEST_F(FairShareTest, IdleUploadHeadersHoldNoMemory) {
   std::vector<v3::VolumeInfo> infos(2);
   for (int i = 0; i < 2; ++i) {
     contexts.push_back(Context(kAliceToken));
-    writers.push_back(StartUpload(stub_.get(), contexts.back().get(), &infos[i], int64_t{1} << 30));
+    writers.push_back(
+        StartUpload(stub_.get(), contexts.back().get(), &infos[i], int64_t{1} << 30, "held.nii"));
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the headers are taken
   v3::VolumeInfo bobs;
@@ -86,7 +70,7 @@ TEST_F(FairShareTest, UploadMemoryIsSharedPerUser) {
   {
     auto context = Context(kAliceToken);
     v3::VolumeInfo info;
-    auto writer = StartUpload(stub_.get(), context.get(), &info, 600 << 10);
+    auto writer = StartUpload(stub_.get(), context.get(), &info, 600 << 10, "held.nii");
     writer->WritesDone();
     const grpc::Status refused = writer->Finish();
     EXPECT_EQ(refused.error_code(), grpc::RESOURCE_EXHAUSTED) << refused.error_message();
@@ -95,15 +79,15 @@ TEST_F(FairShareTest, UploadMemoryIsSharedPerUser) {
   // passes her 512 KiB share at its second chunk.
   auto first_context = Context(kAliceToken);
   v3::VolumeInfo first_info;
-  auto first = StartUpload(stub_.get(), first_context.get(), &first_info, 400 << 10);
-  ASSERT_TRUE(WriteChunk(*first, 256 << 10));
-  ASSERT_TRUE(WriteChunk(*first, 144 << 10));
+  auto first = StartUpload(stub_.get(), first_context.get(), &first_info, 400 << 10, "held.nii");
+  ASSERT_TRUE(SendChunk(*first, 256 << 10));
+  ASSERT_TRUE(SendChunk(*first, 144 << 10));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the chunks are taken
   auto second_context = Context(kAliceToken);
   v3::VolumeInfo second_info;
-  auto second = StartUpload(stub_.get(), second_context.get(), &second_info, 400 << 10);
-  WriteChunk(*second, 64 << 10);
-  WriteChunk(*second, 128 << 10);
+  auto second = StartUpload(stub_.get(), second_context.get(), &second_info, 400 << 10, "held.nii");
+  SendChunk(*second, 64 << 10);
+  SendChunk(*second, 128 << 10);
   second->WritesDone();
   const grpc::Status over = second->Finish();
   EXPECT_EQ(over.error_code(), grpc::RESOURCE_EXHAUSTED) << over.error_message();
@@ -132,7 +116,7 @@ TEST_F(FairShareTest, UploadSpoolIsSharedPerUser) {
     // A header over her share of the spool is refused at once.
     auto context = Context(kAliceToken);
     v3::VolumeInfo info;
-    auto writer = StartUpload(stub_.get(), context.get(), &info, 600 << 10);
+    auto writer = StartUpload(stub_.get(), context.get(), &info, 600 << 10, "held.nii");
     writer->WritesDone();
     const grpc::Status refused = writer->Finish();
     EXPECT_EQ(refused.error_code(), grpc::RESOURCE_EXHAUSTED) << refused.error_message();
@@ -140,15 +124,15 @@ TEST_F(FairShareTest, UploadSpoolIsSharedPerUser) {
   }
   auto first_context = Context(kAliceToken);
   v3::VolumeInfo first_info;
-  auto first = StartUpload(stub_.get(), first_context.get(), &first_info, 400 << 10);
-  ASSERT_TRUE(WriteChunk(*first, 256 << 10));
-  ASSERT_TRUE(WriteChunk(*first, 144 << 10));
+  auto first = StartUpload(stub_.get(), first_context.get(), &first_info, 400 << 10, "held.nii");
+  ASSERT_TRUE(SendChunk(*first, 256 << 10));
+  ASSERT_TRUE(SendChunk(*first, 144 << 10));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the chunks are taken
   auto second_context = Context(kAliceToken);
   v3::VolumeInfo second_info;
-  auto second = StartUpload(stub_.get(), second_context.get(), &second_info, 400 << 10);
-  WriteChunk(*second, 64 << 10);
-  WriteChunk(*second, 128 << 10);
+  auto second = StartUpload(stub_.get(), second_context.get(), &second_info, 400 << 10, "held.nii");
+  SendChunk(*second, 64 << 10);
+  SendChunk(*second, 128 << 10);
   second->WritesDone();
   const grpc::Status over = second->Finish();
   EXPECT_EQ(over.error_code(), grpc::RESOURCE_EXHAUSTED) << over.error_message();
@@ -172,9 +156,9 @@ TEST_F(FairShareTest, TricklingUploadIsEnded) {
   StartWithUsers(options);
   auto context = Context(kAliceToken, 30);
   v3::VolumeInfo info;
-  auto writer = StartUpload(stub_.get(), context.get(), &info, 8 << 20);
+  auto writer = StartUpload(stub_.get(), context.get(), &info, 8 << 20, "held.nii");
   int chunks = 0;
-  while (chunks < 40 && WriteChunk(*writer, 64 << 10)) {
+  while (chunks < 40 && SendChunk(*writer, 64 << 10)) {
     ++chunks;
     std::this_thread::sleep_for(std::chrono::milliseconds(400));
   }

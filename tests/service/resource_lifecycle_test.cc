@@ -112,30 +112,13 @@ TEST_F(ResourceLifecycleTest, SessionWatchedButNeverDrivenIsClosed) {
   EXPECT_EQ(sessions.sessions_size(), 0);
 }
 
-// Starts an upload of a `total`-byte file: the header only.
-std::unique_ptr<grpc::ClientWriter<v3::UploadVolumeRequest>> StartUpload(
-    v3::Vpm::Stub* stub, grpc::ClientContext* context, v3::VolumeInfo* info, int64_t total) {
-  auto writer = stub->UploadVolume(context, info);
-  v3::UploadVolumeRequest header;
-  header.mutable_header()->set_file_name("quiet.nii");
-  header.mutable_header()->set_total_bytes(total);
-  header.mutable_header()->set_sha256_hex(std::string(64, 'a'));
-  writer->Write(header);
-  return writer;
-}
-
-bool SendChunk(grpc::ClientWriter<v3::UploadVolumeRequest>& writer, int64_t bytes) {
-  v3::UploadVolumeRequest chunk;
-  chunk.set_chunk(std::string(static_cast<size_t>(bytes), '\0'));
-  return writer.Write(chunk);
-}
 
 TEST_F(ResourceLifecycleTest, QuietUploadEndsWithDeadlineExceededAndFreesItsBudget) {
   // Memory is reserved as bytes arrive: the first upload holds the 2 MiB it
   // has sent of its 3 MiB.
   v3::VolumeInfo info;
   auto context = Context();
-  auto writer = StartUpload(stub_.get(), context.get(), &info, 3 << 20);
+  auto writer = StartUpload(stub_.get(), context.get(), &info, 3 << 20, "quiet.nii");
   ASSERT_TRUE(SendChunk(*writer, 1 << 20));
   ASSERT_TRUE(SendChunk(*writer, 1 << 20));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // its chunks are taken
@@ -144,7 +127,7 @@ TEST_F(ResourceLifecycleTest, QuietUploadEndsWithDeadlineExceededAndFreesItsBudg
   {
     v3::VolumeInfo info2;
     auto context2 = Context();
-    auto writer2 = StartUpload(stub_.get(), context2.get(), &info2, 2 << 20);
+    auto writer2 = StartUpload(stub_.get(), context2.get(), &info2, 2 << 20, "quiet.nii");
     SendChunk(*writer2, 1 << 20);
     SendChunk(*writer2, 1 << 20);
     writer2->WritesDone();
@@ -160,7 +143,7 @@ TEST_F(ResourceLifecycleTest, QuietUploadEndsWithDeadlineExceededAndFreesItsBudg
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   v3::VolumeInfo info3;
   auto context3 = Context();
-  auto writer3 = StartUpload(stub_.get(), context3.get(), &info3, 2 << 20);
+  auto writer3 = StartUpload(stub_.get(), context3.get(), &info3, 2 << 20, "quiet.nii");
   SendChunk(*writer3, 1 << 20);
   SendChunk(*writer3, 1 << 20);
   writer3->WritesDone();
@@ -177,11 +160,11 @@ TEST_F(ResourceLifecycleTest, UploadsCountAgainstTheUsersStreamCap) {
   std::vector<v3::VolumeInfo> infos(5);
   for (int i = 0; i < 4; ++i) {
     contexts.push_back(Context());
-    writers.push_back(StartUpload(stub_.get(), contexts.back().get(), &infos[i], 100));
+    writers.push_back(StartUpload(stub_.get(), contexts.back().get(), &infos[i], 100, "quiet.nii"));
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   auto context = Context();
-  auto fifth = StartUpload(stub_.get(), context.get(), &infos[4], 100);
+  auto fifth = StartUpload(stub_.get(), context.get(), &infos[4], 100, "quiet.nii");
   fifth->WritesDone();
   const grpc::Status refused = fifth->Finish();
   EXPECT_EQ(refused.error_code(), grpc::RESOURCE_EXHAUSTED) << refused.error_message();

@@ -5,6 +5,8 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -46,6 +48,36 @@ inline const gpu::GpuContext* SharedGpu() {
     return context.ok() ? context->release() : nullptr;
   }();
   return gpu;
+}
+
+// tests/data of the source tree (ctest sets VPM_SOURCE_DIR; run by hand,
+// this file's own path tells).
+inline std::filesystem::path SourceData() {
+  const char* source = std::getenv("VPM_SOURCE_DIR");
+  return source != nullptr
+             ? std::filesystem::path(source) / "tests" / "data"
+             : std::filesystem::path(__FILE__).parent_path().parent_path() / "data";
+}
+
+// Starts an upload of a `total`-byte file named `file_name`: the header
+// only (its checksum is never checked: the upload is not finished).
+inline std::unique_ptr<grpc::ClientWriter<v3::UploadVolumeRequest>> StartUpload(
+    v3::Vpm::Stub* stub, grpc::ClientContext* context, v3::VolumeInfo* info, int64_t total,
+    const std::string& file_name) {
+  auto writer = stub->UploadVolume(context, info);
+  v3::UploadVolumeRequest header;
+  header.mutable_header()->set_file_name(file_name);
+  header.mutable_header()->set_total_bytes(total);
+  header.mutable_header()->set_sha256_hex(std::string(64, 'a'));
+  writer->Write(header);
+  return writer;
+}
+
+// Sends `bytes` zero bytes of an upload; false once the stream is broken.
+inline bool SendChunk(grpc::ClientWriter<v3::UploadVolumeRequest>& writer, int64_t bytes) {
+  v3::UploadVolumeRequest chunk;
+  chunk.set_chunk(std::string(static_cast<size_t>(bytes), '\0'));
+  return writer.Write(chunk);
 }
 
 class ServiceTest : public ::testing::Test {
