@@ -51,6 +51,22 @@ grep -q "reopened case $case_id as session" "$tmp/play.err" || fail "vpm play di
 events=$("$vpm" --server "127.0.0.1:$port" case show "$case_id" --json |
          sed -n 's/.*"events": \([0-9]*\).*/\1/p')
 sessions=$(python3 -c "import json,sys; print(len(json.load(open('$tmp/report.json'))['sessions']))")
-[ "$events" = 62 ] || fail "the case holds $events events, not the script's 62"
+if [ "$events" != 62 ]; then
+  # What the case holds, kinds in order (runs counted), and both servers'
+  # logs: which manipulation is missing or twice, and around which restart.
+  "$vpm" --server "127.0.0.1:$port" case export "$case_id" "$tmp/case.json" > /dev/null 2>&1
+  python3 - "$tmp/case.json" <<'EOF2' || true
+import itertools, json, sys
+events = json.load(open(sys.argv[1])).get("events", [])
+kinds = [e.get("kind", "?").replace("CASE_EVENT_", "").lower() for e in events]
+runs = (f"{k} x{len(list(g))}" for k, g in itertools.groupby(kinds))
+print("--- the case's events:", " ".join(runs))
+# Drags by their offset (mm): a drag missing or twice shows in the run.
+drags = [e.get("vector", {}).get("z", 0) for e in events if e.get("kind") == "CASE_EVENT_DRAG"]
+print("--- drag z offsets (mm):", " ".join(f"{z:.1f}" for z in drags))
+EOF2
+  echo "--- vpm-server (both runs)"; cat "$tmp/server.log"
+  fail "the case holds $events events, not the script's 62"
+fi
 [ "$sessions" = 2 ] || fail "$sessions sessions in the report, not 2"
 echo "ok: $(grep 'reopened case' "$tmp/play.err"); the case holds all 62 manipulations once"
