@@ -223,7 +223,7 @@ TEST_F(DataRootTest, LoadVolume_ReadsInsideTheRoot) {
 TEST_F(ServiceTest, LoadVolume_ReportsTheReadersCorrections) {
   server_->Shutdown(std::chrono::milliseconds(2000));
   ServerOptions options = SmallServerOptions();
-  options.data_root = (fs::path(std::getenv("VPM_SOURCE_DIR")) / "tests" / "data").string();
+  options.data_root = SourceData().string();
   StartServer(options);
   const v3::VolumeInfo info = LoadPhantom("ct-philips-tilt");
   std::string notes;
