@@ -33,7 +33,7 @@ Column Below(const Column& c, int64_t last) {
 // run(std::integral_constant<int, k>{}) for k = width, one of Ks + 1.
 template <typename Run, int... Ks>
 void WithWidth(int width, const Run& run, std::integer_sequence<int, Ks...>) {
-  ((width == Ks + 1 ? (run(std::integral_constant<int, Ks + 1>{}), true) : false) || ...);
+  (void)((width == Ks + 1 ? (run(std::integral_constant<int, Ks + 1>{}), true) : false) || ...);
 }
 
 bool SameRows(const Column& a, const Column& b) {

@@ -180,7 +180,7 @@ class Candidates {
     size_t hits = 0;
     for (size_t j = 0; j < m; ++j) {
       hit_[hits] = static_cast<uint32_t>(j);
-      hits += (d_[j] < r) & (id_[j] != v);
+      hits += static_cast<size_t>(d_[j] < r) & static_cast<size_t>(id_[j] != v);
     }
     double sum = 0.0;
     for (size_t k = 0; k < hits; ++k) {
