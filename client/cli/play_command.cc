@@ -13,6 +13,7 @@
 
 #include "client/common/interrupt.h"
 #include "client/common/script_player.h"
+#include "client/common/script_resume.h"
 #include "proto/enum_names.h"
 #include "client/cli/server_flags.h"
 #include "server/common/clock.h"
@@ -65,11 +66,13 @@ Result<std::string> Reopen(const ServerConnection& s, const std::string& source)
 }
 
 // A session on case `case_id` (OpenCase: the server replays what the case
-// holds) where the balancer sends the key now, and how many manipulations
-// the case holds. FailedPrecondition when the server keeps no cases.
+// holds) where the balancer sends the key now, and the manipulations the
+// case holds (ExportCase: its events in effect, in order).
+// FailedPrecondition when the server keeps no cases.
 struct ReopenedCase {
   std::string session_id;
   int64_t events = 0;
+  v3::CaseArchive archive;
 };
 Result<ReopenedCase> ReopenCase(const ServerConnection& s, const std::string& case_id) {
   return RetryWhileUnavailable<ReopenedCase>([&]() -> Result<ReopenedCase> {
@@ -81,23 +84,25 @@ Result<ReopenedCase> ReopenCase(const ServerConnection& s, const std::string& ca
     get.set_case_id(case_id);
     v3::CaseInfo kept;
     RETURN_IF_ERROR(FromGrpc(s.stub().GetCase(s.Context().get(), get, &kept)));
-    return ReopenedCase{info.session_id(), kept.events()};
+    v3::ExportCaseRequest request;
+    request.set_case_id(case_id);
+    v3::CaseArchive archive;
+    RETURN_IF_ERROR(FromGrpc(s.stub().ExportCase(s.Context().get(), request, &archive)));
+    return ReopenedCase{info.session_id(), kept.events(), std::move(archive)};
   });
 }
 
-// The script index after its first `manipulations` grabs, drags, pulls,
-// releases, pins and resets (what a case counts as its events).
-int64_t IndexAfterManipulations(const Script& script, int64_t manipulations) {
-  int64_t seen = 0;
-  for (size_t i = 0; i < script.events.size(); ++i) {
-    if (seen == manipulations) return static_cast<int64_t>(i);
-    const v3::ClientEvent& e = script.events[i].event;
-    if (e.has_grab() || e.has_drag() || e.has_pull() || e.has_release() || e.has_pin() ||
-        e.has_reset()) {
-      ++seen;
-    }
-  }
-  return static_cast<int64_t>(script.events.size());
+// Where the script goes on in a reopened case: after the manipulation its
+// last event matches (script_resume.h), else, said on stderr, after as
+// many manipulations as it holds.
+int64_t ResumeIndex(const Script& script, const ReopenedCase& in_case) {
+  const std::vector<v3::CaseArchiveEvent> events(in_case.archive.events().begin(),
+                                                 in_case.archive.events().end());
+  Result<int64_t> index = IndexAfterCaseEvents(script, events);
+  if (index.ok()) return *index;
+  std::fprintf(stderr, "vpm play: %s; going on after its first %lld manipulations\n",
+               std::string(index.status().message()).c_str(), (long long)in_case.events);
+  return IndexAfterManipulations(script, in_case.events);
 }
 
 // Appends a segment's frames (times shifted by offset_ms), event latencies
@@ -197,7 +202,7 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
         case_id.empty() ? Result<ReopenedCase>(absl::FailedPreconditionError("no case"))
                         : ReopenCase(s, case_id);
     if (in_case.ok()) {
-      options.skip_until = IndexAfterManipulations(script, in_case->events);
+      options.skip_until = ResumeIndex(script, *in_case);
       options.resume_at = options.skip_until;
       options.session_id = in_case->session_id;
       sessions.push_back(in_case->session_id);

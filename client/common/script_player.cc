@@ -165,7 +165,9 @@ Result<Script> ParseScript(const nlohmann::json& j, const v3::VolumeInfo& volume
       } else if (step.contains("release")) {
         ScriptEvent e;
         e.wait_ms = interval;
-        e.event.mutable_release();
+        const auto& r = step["release"];
+        if (!r.is_object()) return absl::InvalidArgumentError("script: release must be an object");
+        e.event.mutable_release()->set_keep(r.value("keep", false));
         script.events.push_back(e);
       } else if (step.contains("wait_ms")) {
         if (!script.events.empty()) script.events.back().wait_ms += step["wait_ms"].get<double>();

@@ -15,7 +15,7 @@
 //      {"drag": {"to_mm": [dx, dy, dz], "steps": 10}},       drag path from 0 to to_mm
 //      {"pull": {"force_n": [fx, fy, fz]}},
 //      {"wait_ms": 300},
-//      {"release": {}}]}
+//      {"release": {"keep": false}}]}                  keep: the drag stays
 #pragma once
 
 #include <cstdint>
