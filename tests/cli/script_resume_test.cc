@@ -7,16 +7,12 @@
 
 #include <gtest/gtest.h>
 
+#include "proto/vec3_convert.h"
+
 namespace vpm::cli {
 namespace {
 
-v3::Vec3 V(double x, double y, double z) {
-  v3::Vec3 v;
-  v.set_x(x);
-  v.set_y(y);
-  v.set_z(z);
-  return v;
-}
+v3::Vec3 V(double x, double y, double z) { return ToProto(glm::dvec3(x, y, z)); }
 
 // camera, grab, drags to (0, 0, k) for k = 1..5, camera, kept release.
 Script FiveDrags() {
