@@ -23,7 +23,7 @@ esac
 targets=(service_test fem_test raycast_test)
 # -O1: the sanitizers' own advice; no -g2 to keep compiles short.
 # Clang (Debian's clang 14, already a dependency for `make fuzz`) builds
-# these trees: it instruments in about half GCC's compiler time
+# these trees: it instruments in about a third less compiler time than GCC
 # (docs/benchmarks/CI_TIME.md). The main build stays GCC, Debian's default.
 # A tree configured before with another compiler is configured afresh.
 if [ -f "$dir/CMakeCache.txt" ] && ! grep -q '^CMAKE_CXX_COMPILER:.*clang++' "$dir/CMakeCache.txt"; then
