@@ -1,8 +1,6 @@
 #include "client/common/script_resume.h"
 
-#include <algorithm>
 #include <cmath>
-
 
 namespace vpm::cli {
 namespace {
