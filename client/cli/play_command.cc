@@ -66,13 +66,14 @@ Result<std::string> Reopen(const ServerConnection& s, const std::string& source)
 }
 
 // A session on case `case_id` (OpenCase: the server replays what the case
-// holds) where the balancer sends the key now, and the manipulations the
-// case holds (ExportCase: its events in effect, in order).
+// holds) where the balancer sends the key now, how many manipulations it
+// holds, and which (ExportCase: its events in effect, in order; not kept
+// when the export is refused, e.g. for a case of an uploaded volume).
 // FailedPrecondition when the server keeps no cases.
 struct ReopenedCase {
   std::string session_id;
   int64_t events = 0;
-  v3::CaseArchive archive;
+  Result<v3::CaseArchive> archive = absl::UnknownError("not exported");
 };
 Result<ReopenedCase> ReopenCase(const ServerConnection& s, const std::string& case_id) {
   return RetryWhileUnavailable<ReopenedCase>([&]() -> Result<ReopenedCase> {
@@ -87,8 +88,12 @@ Result<ReopenedCase> ReopenCase(const ServerConnection& s, const std::string& ca
     v3::ExportCaseRequest request;
     request.set_case_id(case_id);
     v3::CaseArchive archive;
-    RETURN_IF_ERROR(FromGrpc(s.stub().ExportCase(s.Context().get(), request, &archive)));
-    return ReopenedCase{info.session_id(), kept.events(), std::move(archive)};
+    Status exported = FromGrpc(s.stub().ExportCase(s.Context().get(), request, &archive));
+    if (absl::IsUnavailable(exported)) return exported;  // tried again
+    ReopenedCase reopened{info.session_id(), kept.events()};
+    if (exported.ok()) reopened.archive = std::move(archive);
+    else reopened.archive = exported;
+    return reopened;
   });
 }
 
@@ -96,12 +101,18 @@ Result<ReopenedCase> ReopenCase(const ServerConnection& s, const std::string& ca
 // last event matches (script_resume.h), else, said on stderr, after as
 // many manipulations as it holds.
 int64_t ResumeIndex(const Script& script, const ReopenedCase& in_case) {
-  const std::vector<v3::CaseArchiveEvent> events(in_case.archive.events().begin(),
-                                                 in_case.archive.events().end());
-  Result<int64_t> index = IndexAfterCaseEvents(script, events);
-  if (index.ok()) return *index;
+  Status why = in_case.archive.status();
+  if (!in_case.archive.ok()) {
+    why = Status(why.code(), StrCat("the case's events could not be read (", why.message(), ")"));
+  } else {
+    const std::vector<v3::CaseArchiveEvent> events(in_case.archive->events().begin(),
+                                                   in_case.archive->events().end());
+    Result<int64_t> index = IndexAfterCaseEvents(script, events);
+    if (index.ok()) return *index;
+    why = index.status();
+  }
   std::fprintf(stderr, "vpm play: %s; going on after its first %lld manipulations\n",
-               std::string(index.status().message()).c_str(), (long long)in_case.events);
+               std::string(why.message()).c_str(), (long long)in_case.events);
   return IndexAfterManipulations(script, in_case.events);
 }
 

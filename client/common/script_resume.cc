@@ -2,13 +2,10 @@
 
 #include <cmath>
 
+#include "proto/client_event_kind.h"
+
 namespace vpm::cli {
 namespace {
-
-bool IsManipulation(const v3::ClientEvent& e) {
-  return e.has_grab() || e.has_drag() || e.has_pull() || e.has_release() || e.has_pin() ||
-         e.has_reset();
-}
 
 // Offsets and forces come back from the case in world LPS, possibly through
 // a change of frame: equal within 1e-4 (mm or N; script steps are far

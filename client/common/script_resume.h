@@ -24,8 +24,8 @@ namespace vpm::cli {
 // order: a drag by its offset (within 1e-4 mm), a pull by its force, a
 // release by its keep, the others by kind; a script drag no event matches
 // was replaced in the server's queue, which only a drag right after it
-// does. Returns the index after the script
-// event that the case's last manipulation matched (0 for none).
+// does. Returns the index after the script event that the case's last
+// manipulation matched (0 for none).
 // NotFound when the events are not the script's in that sense (another
 // client or an undo changed the case).
 Result<int64_t> IndexAfterCaseEvents(const Script& script,

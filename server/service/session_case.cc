@@ -4,28 +4,12 @@
 #include <chrono>
 #include <cstdio>
 
+#include "proto/client_event_kind.h"
 #include "server/scene/scene_history.h"
 #include "server/service/case_view.h"
 #include "server/service/session.h"
 
 namespace vpm::service {
-namespace {
-
-bool IsManipulation(const v3::ClientEvent& event) {
-  switch (event.event_case()) {
-    case v3::ClientEvent::kGrab:
-    case v3::ClientEvent::kDrag:
-    case v3::ClientEvent::kPull:
-    case v3::ClientEvent::kRelease:
-    case v3::ClientEvent::kPin:
-    case v3::ClientEvent::kReset:
-      return true;
-    default:
-      return false;
-  }
-}
-
-}  // namespace
 
 Status Session::AttachCase(cases::CaseStore* store, std::string case_id,
                            const std::vector<SceneOp>& ops, const std::string& camera,
