@@ -22,16 +22,10 @@ esac
 # the ones run here.
 targets=(service_test fem_test raycast_test)
 # -O1: the sanitizers' own advice; no -g2 to keep compiles short.
-# Clang (Debian's clang 14, already a dependency for `make fuzz`) builds
-# these trees: it instruments in about a third less compiler time than GCC
-# (docs/benchmarks/CI_TIME.md). The main build stays GCC, Debian's default.
-# A tree configured before with another compiler is configured afresh.
-if [ -f "$dir/CMakeCache.txt" ] && ! grep -q '^CMAKE_CXX_COMPILER:.*clang++' "$dir/CMakeCache.txt"; then
-  rm -rf "$dir/CMakeCache.txt" "$dir/CMakeFiles"
-fi
-cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DVPM_SANITIZE="$mode" >/dev/null
+# Clang (Debian's clang 14), as the main tree (Makefile): it instruments in
+# about a third less compiler time than GCC (docs/benchmarks/CI_TIME.md).
+scripts/configure.sh "$dir" clang clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DVPM_SANITIZE="$mode"
 start=$(date +%s)
 cmake --build "$dir" -j "$(nproc)" --target "${targets[@]}"
 echo "sanitize.sh: $mode build took $(( $(date +%s) - start )) s"
