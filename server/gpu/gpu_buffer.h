@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <span>
 
 #include <vulkan/vulkan_raii.hpp>
@@ -28,6 +29,12 @@ class GpuBuffer {
   GpuBuffer& operator=(GpuBuffer&&) = default;
 
   Status Upload(std::span<const std::byte> data, vk::DeviceSize offset_bytes = 0);
+  // Writes `size` bytes at `offset_bytes` that `fill` produces in place: it
+  // is handed the buffer's own mapping where there is one, else a staging
+  // buffer's, copied in after. Saves building the bytes in a vector first
+  // (one host copy and its page faults fewer than Upload).
+  Status Fill(vk::DeviceSize offset_bytes, size_t size,
+              const std::function<void(std::span<std::byte>)>& fill);
   Status Download(std::span<std::byte> out, vk::DeviceSize offset_bytes = 0) const;
 
   template <typename T>
@@ -47,8 +54,7 @@ class GpuBuffer {
  private:
   GpuBuffer() = default;
   static Result<GpuBuffer> Allocate(const GpuContext& context, vk::DeviceSize size_bytes,
-                                    vk::BufferUsageFlags usage,
-                                    vk::MemoryPropertyFlags required,
+                                    vk::BufferUsageFlags usage, vk::MemoryPropertyFlags required,
                                     vk::MemoryPropertyFlags preferred);
   Status CheckRange(size_t bytes, vk::DeviceSize offset) const;
 

@@ -26,34 +26,39 @@ vk::Format TexelFormat(VoxelEncoding encoding, GpuVolume::TexelLayout layout) {
 
 uint64_t TexelBytes(vk::Format format) { return format == vk::Format::eR32G32Sint ? 8 : 4; }
 
-// Texels [first, first + count) of the pairs layout as 32-bit words: one
-// per texel for int16 (voxel n in the low half, n + 1 in the high), two for
-// float (the bits of n, then of n + 1). The voxel past the last reads 0.
-std::vector<uint32_t> PairTexels(const VoxelValues& values, uint64_t first, uint64_t count) {
-  std::vector<uint32_t> words;
+// Texels [first, first + count) of the pairs layout into `words`: one
+// word per texel for int16 (voxel n in the low half, n + 1 in the high),
+// two for float (the bits of n, then of n + 1). The voxel past the last
+// reads 0. Every word is written (words is device memory, not zeroed).
+void WritePairTexels(const VoxelValues& values, uint64_t first, uint64_t count,
+                     std::span<uint32_t> words) {
   if (const std::span<const int16_t> s = values.int16s(); !s.empty()) {
-    words.resize(count);
-    for (uint64_t i = 0; i < count; ++i) {
-      const uint64_t n = first + i;
-      const uint32_t high = n + 1 < s.size() ? uint16_t(s[n + 1]) : 0u;
-      words[i] = uint32_t(uint16_t(s[n])) | (high << 16);
+    // Texels whose n + 1 exists, with no test in the loop; then the last.
+    const uint64_t full = std::min(count, s.size() - 1 - std::min<uint64_t>(first, s.size() - 1));
+    const int16_t* v = s.data() + first;
+    for (uint64_t i = 0; i < full; ++i) {
+      words[i] = uint32_t(uint16_t(v[i])) | (uint32_t(uint16_t(v[i + 1])) << 16);
     }
-    return words;
+    for (uint64_t i = full; i < count; ++i) words[i] = uint32_t(uint16_t(v[i]));
+    return;
   }
   const std::span<const float> f = values.floats();
-  words.resize(2 * count);
-  for (uint64_t i = 0; i < count; ++i) {
-    const uint64_t n = first + i;
-    words[2 * i] = std::bit_cast<uint32_t>(f[n]);
-    words[2 * i + 1] = n + 1 < f.size() ? std::bit_cast<uint32_t>(f[n + 1]) : 0u;
+  const uint64_t full = std::min(count, f.size() - 1 - std::min<uint64_t>(first, f.size() - 1));
+  const float* v = f.data() + first;
+  for (uint64_t i = 0; i < full; ++i) {
+    words[2 * i] = std::bit_cast<uint32_t>(v[i]);
+    words[2 * i + 1] = std::bit_cast<uint32_t>(v[i + 1]);
   }
-  return words;
+  for (uint64_t i = full; i < count; ++i) {
+    words[2 * i] = std::bit_cast<uint32_t>(v[i]);
+    words[2 * i + 1] = 0u;
+  }
 }
 
 // Uploads the values, in pairs or packed, into `buffer`, in slabs of
-// kUploadSlabBytes: pairs made slab by slab (PairTexels), packed int16s as
-// the host holds them (an odd count leaves the last texel's high half unset:
-// never read).
+// kUploadSlabBytes: pairs written slab by slab straight into the buffer's
+// mapping (WritePairTexels), packed int16s as the host holds them (an odd
+// count leaves the last texel's high half unset: never read).
 Status UploadTexels(gpu::GpuBuffer& buffer, const VoxelValues& values, bool pairs,
                     uint64_t texel_bytes, const ProgressFn& progress, const CancelToken& cancel) {
   if (!pairs) {
@@ -71,9 +76,11 @@ Status UploadTexels(gpu::GpuBuffer& buffer, const VoxelValues& values, bool pair
   for (uint64_t first = 0; first < texels; first += slab_texels) {
     RETURN_IF_ERROR(cancel.Check());
     const uint64_t n = std::min(slab_texels, texels - first);
-    const std::vector<uint32_t> words = PairTexels(values, first, n);
-    RETURN_IF_ERROR(
-        buffer.Upload(std::as_bytes(std::span<const uint32_t>(words)), first * texel_bytes));
+    RETURN_IF_ERROR(buffer.Fill(first * texel_bytes, n * texel_bytes, [&](std::span<std::byte> b) {
+      // Device and staging mappings are aligned far beyond 4 bytes.
+      WritePairTexels(values, first, n,
+                      std::span<uint32_t>(reinterpret_cast<uint32_t*>(b.data()), b.size() / 4));
+    }));
     if (progress) progress(double(first + n) / double(texels), "uploading");
   }
   return absl::OkStatus();
@@ -81,9 +88,8 @@ Status UploadTexels(gpu::GpuBuffer& buffer, const VoxelValues& values, bool pair
 
 }  // namespace
 
-std::optional<GpuVolume::TexelLayout> GpuVolume::LayoutFor(VoxelEncoding encoding,
-                                                          uint64_t voxels,
-                                                          uint64_t max_texels) {
+std::optional<GpuVolume::TexelLayout> GpuVolume::LayoutFor(VoxelEncoding encoding, uint64_t voxels,
+                                                           uint64_t max_texels) {
   if (voxels <= max_texels) return TexelLayout::kPairs;
   if (encoding == VoxelEncoding::kInt16 && (voxels + 1) / 2 <= max_texels) {
     return TexelLayout::kPacked;
@@ -91,16 +97,14 @@ std::optional<GpuVolume::TexelLayout> GpuVolume::LayoutFor(VoxelEncoding encodin
   return std::nullopt;
 }
 
-uint64_t GpuVolume::BufferBytesFor(VoxelEncoding encoding, uint64_t voxels,
-                                   uint64_t max_texels) {
+uint64_t GpuVolume::BufferBytesFor(VoxelEncoding encoding, uint64_t voxels, uint64_t max_texels) {
   const std::optional<TexelLayout> layout = LayoutFor(encoding, voxels, max_texels);
   if (!layout) return 0;
   return TexelsFor(*layout, voxels) * TexelBytes(TexelFormat(encoding, *layout));
 }
 
 Result<GpuVolume> GpuVolume::Upload(const gpu::GpuContext& context, const Volume& volume,
-                                    const ProgressFn& progress,
-                                    std::optional<TexelLayout> layout,
+                                    const ProgressFn& progress, std::optional<TexelLayout> layout,
                                     const CancelToken& cancel) {
   const uint64_t voxels = static_cast<uint64_t>(volume.geometry().voxel_count());
   const uint64_t max_texels = context.limits().maxTexelBufferElements;
@@ -116,9 +120,9 @@ Result<GpuVolume> GpuVolume::Upload(const gpu::GpuContext& context, const Volume
   if (!layout || texels > max_texels) {
     return absl::ResourceExhaustedError(
         StrCat("volume of ", DescribeVolumeSize(volume.geometry(), volume.encoding()), " needs ",
-               texels, " texels, over this device's texel-buffer limit of ",
-               max_texels, " (", int16 ? 2 * max_texels : max_texels, " ",
-               VoxelEncodingName(volume.encoding()), " voxels)"));
+               texels, " texels, over this device's texel-buffer limit of ", max_texels, " (",
+               int16 ? 2 * max_texels : max_texels, " ", VoxelEncodingName(volume.encoding()),
+               " voxels)"));
   }
   const bool pairs = *layout == TexelLayout::kPairs;
   const vk::Format format = TexelFormat(volume.encoding(), *layout);
@@ -134,9 +138,9 @@ Result<GpuVolume> GpuVolume::Upload(const gpu::GpuContext& context, const Volume
   RETURN_IF_ERROR(UploadTexels(buffer, volume.voxels(), pairs, texel_bytes, progress, cancel));
   vk::raii::BufferView view{nullptr};
   RETURN_IF_ERROR(gpu::CatchVulkan("creating the volume's texel view", [&] {
-    view = vk::raii::BufferView(context.device(),
-                                vk::BufferViewCreateInfo({}, buffer.handle(), format, 0,
-                                                         texels * texel_bytes));
+    view = vk::raii::BufferView(
+        context.device(),
+        vk::BufferViewCreateInfo({}, buffer.handle(), format, 0, texels * texel_bytes));
   }));
   return GpuVolume(std::move(buffer), std::move(view), volume, *layout);
 }
@@ -144,8 +148,8 @@ Result<GpuVolume> GpuVolume::Upload(const gpu::GpuContext& context, const Volume
 Result<const gpu::GpuImage3D*> GpuVolume::Image(const gpu::GpuContext& context,
                                                 const Volume& volume) {
   if (image_) return &*image_;
-  if (volume.encoding() != encoding_ || volume.geometry().voxel_count() !=
-                                            geometry_.voxel_count()) {
+  if (volume.encoding() != encoding_ ||
+      volume.geometry().voxel_count() != geometry_.voxel_count()) {
     return absl::InvalidArgumentError("GpuVolume::Image: not the volume that was uploaded");
   }
   if (encoding_ == VoxelEncoding::kFloat32) {
@@ -166,8 +170,9 @@ Result<const gpu::GpuImage3D*> GpuVolume::Image(const gpu::GpuContext& context,
   ASSIGN_OR_RETURN(gpu::GpuImage3D image, gpu::GpuImage3D::Create(context, extent(), format));
   const std::span<const int16_t> stored = volume.voxels().int16s();
   std::vector<uint16_t> shifted(stored.size());
-  std::transform(stored.begin(), stored.end(), shifted.begin(),
-                 [](int16_t s) { return static_cast<uint16_t>(static_cast<uint16_t>(s) ^ 0x8000u); });
+  std::transform(stored.begin(), stored.end(), shifted.begin(), [](int16_t s) {
+    return static_cast<uint16_t>(static_cast<uint16_t>(s) ^ 0x8000u);
+  });
   RETURN_IF_ERROR(image.Upload(std::as_bytes(std::span<const uint16_t>(shifted))));
   image_.emplace(std::move(image));
   return &*image_;

@@ -35,16 +35,43 @@ TEST_F(GpuTest, GpuBuffer_RoundTripsBytesAtAnOffset) {
   EXPECT_EQ(back, tail);
 }
 
+// Fill hands out exactly the range asked for, and what it writes there is
+// what a download reads back; the bytes around it stay as they were.
+TEST_F(GpuTest, GpuBuffer_FillWritesTheRangeInPlace) {
+  auto buffer = gpu::GpuBuffer::Create(context(), 256, vk::BufferUsageFlagBits::eStorageBuffer);
+  ASSERT_TRUE(buffer.ok()) << buffer.status();
+  const std::vector<std::byte> zeros(256, std::byte{0});
+  ASSERT_TRUE(buffer->Upload(zeros).ok());
+  size_t handed = 0;
+  ASSERT_TRUE(buffer
+                  ->Fill(100, 40,
+                         [&](std::span<std::byte> b) {
+                           handed = b.size();
+                           for (size_t i = 0; i < b.size(); ++i) b[i] = std::byte(i + 1);
+                         })
+                  .ok());
+  EXPECT_EQ(handed, 40u);
+  std::vector<std::byte> back(256);
+  ASSERT_TRUE(buffer->Download(back).ok());
+  for (size_t i = 0; i < back.size(); ++i) {
+    const std::byte want = i >= 100 && i < 140 ? std::byte(i - 99) : std::byte{0};
+    ASSERT_EQ(back[i], want) << "byte " << i;
+  }
+  bool called = false;
+  EXPECT_EQ(buffer->Fill(250, 8, [&](std::span<std::byte>) { called = true; }).code(),
+            absl::StatusCode::kOutOfRange);
+  EXPECT_FALSE(called);
+}
+
 TEST_F(GpuTest, GpuBuffer_RejectsOutOfRangeAccess) {
   auto buffer = gpu::GpuBuffer::Create(context(), 64, vk::BufferUsageFlagBits::eStorageBuffer);
   ASSERT_TRUE(buffer.ok());
   std::vector<std::byte> data(32);
   EXPECT_EQ(buffer->Upload(data, 40).code(), absl::StatusCode::kOutOfRange);
   EXPECT_EQ(buffer->Download(data, 65).code(), absl::StatusCode::kOutOfRange);
-  EXPECT_EQ(gpu::GpuBuffer::Create(context(), 0, vk::BufferUsageFlagBits::eStorageBuffer)
-                .status()
-                .code(),
-            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(
+      gpu::GpuBuffer::Create(context(), 0, vk::BufferUsageFlagBits::eStorageBuffer).status().code(),
+      absl::StatusCode::kInvalidArgument);
 }
 
 TEST_F(GpuTest, GpuImage3D_RoundTripsTexels) {
@@ -79,8 +106,7 @@ TEST_F(GpuTest, ComputeBatch_CopyBufferToImageWritesTheBoxOnly) {
   const size_t first = lo.x + e[0] * (lo.y + e[1] * lo.z);
   const std::pair<const gpu::GpuBuffer*, vk::BufferImageCopy> region{
       &*buffer, vk::BufferImageCopy(first * sizeof(float), e[0], e[1],
-                                    {vk::ImageAspectFlagBits::eColor, 0, 0, 1},
-                                    {lo.x, lo.y, lo.z},
+                                    {vk::ImageAspectFlagBits::eColor, 0, 0, 1}, {lo.x, lo.y, lo.z},
                                     {uint32_t(size.x), uint32_t(size.y), uint32_t(size.z)})};
   auto batch = gpu::ComputeBatch::Begin(context(), 1);
   ASSERT_TRUE(batch.ok());
@@ -96,8 +122,8 @@ TEST_F(GpuTest, ComputeBatch_CopyBufferToImageWritesTheBoxOnly) {
       for (uint32_t x = 0; x < e[0]; ++x) {
         const size_t n = x + e[0] * (y + e[1] * z);
         const glm::ivec3 p(x, y, z);
-        const bool inside = glm::all(glm::greaterThanEqual(p, lo)) &&
-                            glm::all(glm::lessThan(p, lo + size));
+        const bool inside =
+            glm::all(glm::greaterThanEqual(p, lo)) && glm::all(glm::lessThan(p, lo + size));
         EXPECT_EQ(after[n], inside ? source[n] : before[n]) << x << " " << y << " " << z;
       }
     }
@@ -117,26 +143,26 @@ class ComputeBatchTest : public GpuTest {
   void SetUp() override {
     GpuTest::SetUp();
     auto kernel = gpu::ComputeKernel::Create(
-        context(), {.name = "gradient_magnitude",
-                    .spirv = kGradientMagnitudeSpv,
-                    .bindings = {vk::DescriptorType::eUniformTexelBuffer,
-                                 vk::DescriptorType::eStorageBuffer},
-                    .push_constant_bytes = sizeof(gpu::GradientPush),
-                    .local_size = {64, 1, 1}});
+        context(),
+        {.name = "gradient_magnitude",
+         .spirv = kGradientMagnitudeSpv,
+         .bindings = {vk::DescriptorType::eUniformTexelBuffer, vk::DescriptorType::eStorageBuffer},
+         .push_constant_bytes = sizeof(gpu::GradientPush),
+         .local_size = {64, 1, 1}});
     ASSERT_TRUE(kernel.ok()) << kernel.status();
     kernel_.emplace(std::move(*kernel));
     auto volume = gpu::GpuBuffer::Create(context(), 8 * 8 * 8 * 4,
                                          vk::BufferUsageFlagBits::eUniformTexelBuffer);
-    auto out = gpu::GpuBuffer::Create(context(), 8 * 8 * 8 * 4,
-                                      vk::BufferUsageFlagBits::eStorageBuffer);
+    auto out =
+        gpu::GpuBuffer::Create(context(), 8 * 8 * 8 * 4, vk::BufferUsageFlagBits::eStorageBuffer);
     auto ubo = gpu::GpuBuffer::Create(context(), 256, vk::BufferUsageFlagBits::eUniformBuffer);
     ASSERT_TRUE(volume.ok() && out.ok() && ubo.ok());
     volume_.emplace(std::move(*volume));
     out_.emplace(std::move(*out));
     ubo_.emplace(std::move(*ubo));
-    view_ = vk::raii::BufferView(context().device(),
-                                 vk::BufferViewCreateInfo({}, volume_->handle(),
-                                                          vk::Format::eR32Sint, 0, VK_WHOLE_SIZE));
+    view_ = vk::raii::BufferView(
+        context().device(),
+        vk::BufferViewCreateInfo({}, volume_->handle(), vk::Format::eR32Sint, 0, VK_WHOLE_SIZE));
     texels_ = *view_;
   }
   std::optional<gpu::ComputeKernel> kernel_;
@@ -149,27 +175,27 @@ class ComputeBatchTest : public GpuTest {
 TEST_F(ComputeBatchTest, ComputeKernel_RejectsMissingSpirvAndBadLocalSize) {
   EXPECT_EQ(gpu::ComputeKernel::Create(context(), {.name = "empty"}).status().code(),
             absl::StatusCode::kInvalidArgument);
-  EXPECT_EQ(gpu::ComputeKernel::Create(context(), {.name = "huge",
-                                                   .spirv = kGradientMagnitudeSpv,
-                                                   .local_size = {1u << 20, 1, 1}})
+  EXPECT_EQ(gpu::ComputeKernel::Create(
+                context(),
+                {.name = "huge", .spirv = kGradientMagnitudeSpv, .local_size = {1u << 20, 1, 1}})
                 .status()
                 .code(),
             absl::StatusCode::kInvalidArgument);
-  EXPECT_EQ(gpu::ComputeKernel::Create(context(), {.name = "odd push",
-                                                   .spirv = kGradientMagnitudeSpv,
-                                                   .push_constant_bytes = 6})
-                .status()
-                .code(),
-            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(
+      gpu::ComputeKernel::Create(
+          context(), {.name = "odd push", .spirv = kGradientMagnitudeSpv, .push_constant_bytes = 6})
+          .status()
+          .code(),
+      absl::StatusCode::kInvalidArgument);
 }
 
 TEST_F(ComputeBatchTest, ComputeKernel_SameSpecSharesOnePipeline) {
-  const gpu::KernelSpec spec{.name = "gradient_magnitude",
-                             .spirv = kGradientMagnitudeSpv,
-                             .bindings = {vk::DescriptorType::eUniformTexelBuffer,
-                                          vk::DescriptorType::eStorageBuffer},
-                             .push_constant_bytes = sizeof(gpu::GradientPush),
-                             .local_size = {64, 1, 1}};
+  const gpu::KernelSpec spec{
+      .name = "gradient_magnitude",
+      .spirv = kGradientMagnitudeSpv,
+      .bindings = {vk::DescriptorType::eUniformTexelBuffer, vk::DescriptorType::eStorageBuffer},
+      .push_constant_bytes = sizeof(gpu::GradientPush),
+      .local_size = {64, 1, 1}};
   const size_t cached = context().pipelines().size();
   auto again = gpu::ComputeKernel::Create(context(), spec);
   ASSERT_TRUE(again.ok()) << again.status();

@@ -128,10 +128,37 @@ TEST_F(GpuTest, GradientMagnitudeGpu_Int16EqualsFloatAndCpu) {
   }
 }
 
+// The pairs as the device holds them, read back, over more than one
+// upload slab (16 MiB: 4 Mi int16 texels, 2 Mi float texels) and an odd
+// voxel count: texel n is voxel n and voxel n + 1 (0 past the last).
+TEST_F(GpuTest, GpuVolume_PairsHoldEachVoxelAndItsNextAcrossSlabs) {
+  const TwinVolumes t =
+      MakeTwins({257, 131, 139}, 0);  // 4,679,713 voxels: odd; 2 int16 slabs, 3 float
+  const int64_t voxels = t.int16.geometry().voxel_count();
+  const std::span<const int16_t> s = t.int16.voxels().int16s();
+  auto gpu16 = GpuVolume::Upload(context(), t.int16);
+  ASSERT_TRUE(gpu16.ok()) << gpu16.status();
+  std::vector<uint32_t> words(voxels);
+  ASSERT_TRUE(gpu16->buffer().DownloadSpan(std::span<uint32_t>(words)).ok());
+  for (int64_t n = 0; n < voxels; ++n) {
+    const uint32_t high = n + 1 < voxels ? uint16_t(s[n + 1]) : 0u;
+    ASSERT_EQ(words[n], uint32_t(uint16_t(s[n])) | (high << 16)) << "int16 texel " << n;
+  }
+  const std::span<const float> f = t.floats.voxels().floats();
+  auto gpu32 = GpuVolume::Upload(context(), t.floats);
+  ASSERT_TRUE(gpu32.ok()) << gpu32.status();
+  std::vector<float> pairs(2 * voxels);
+  ASSERT_TRUE(gpu32->buffer().DownloadSpan(std::span<float>(pairs)).ok());
+  for (int64_t n = 0; n < voxels; ++n) {
+    ASSERT_EQ(pairs[2 * n], f[n]) << "float texel " << n;
+    ASSERT_EQ(pairs[2 * n + 1], n + 1 < voxels ? f[n + 1] : 0.0f) << "float texel " << n;
+  }
+}
+
 TEST_F(GpuTest, TransferFunctionGpu_Int16MatchesCpuPerVoxel) {
   const TwinVolumes t = MakeTwins({33, 19, 11}, -20000);
-  const TransferFunction tf = *TransferFunction::Create(
-      {{-21000, 0.0}, {-20900, 0.4}, {-19800, 1.0}, {-19600, 0.2}});
+  const TransferFunction tf =
+      *TransferFunction::Create({{-21000, 0.0}, {-20900, 0.4}, {-19800, 1.0}, {-19600, 0.2}});
   auto op = TransferFunctionGpu::Create(context());
   ASSERT_TRUE(op.ok()) << op.status();
   auto gpu_volume = GpuVolume::Upload(context(), t.int16);
