@@ -1,10 +1,10 @@
 #include "server/gpu/gpu_buffer.h"
 
-#include <sys/mman.h>
-
 #include <cstdint>
 #include <cstring>
 #include <optional>
+
+#include "server/common/huge_pages.h"
 
 namespace vpm::gpu {
 
@@ -12,24 +12,13 @@ using MemFlag = vk::MemoryPropertyFlagBits;
 
 namespace {
 
-// Buffers from this size on (volumes, maps) get huge-page advice; smaller
-// ones may share heap pages with other allocations, which it would cover.
+// Host-cached mappings (on a CPU device such as lavapipe, device memory is
+// the process's own heap) from this size on (volumes, maps) are advised huge
+// pages before their first write (server/common/huge_pages.h): uploading the
+// 256^3 float phantom took 400-417 ms, mostly page faults, and takes 20 ms
+// (docs/LAVAPIPE.md, "Huge pages"). Smaller ones may share heap pages with
+// other allocations, which the advice would cover too.
 constexpr vk::DeviceSize kHugeAdviceMinBytes = vk::DeviceSize{8} << 20;
-
-// Asks the kernel for 2 MiB pages over the whole 2 MiB blocks of a mapping
-// of host memory (on a CPU device such as lavapipe, device memory is the
-// process's own heap): one page fault per 2 MiB instead of 512 when the
-// buffer is first written: uploading the 256^3 float phantom took 400-417
-// ms, mostly page faults, and takes 20 ms (docs/LAVAPIPE.md, "Huge
-// pages"). Only advice: where the kernel declines (transparent huge pages
-// "never") nothing changes.
-void AdviseHugePages(void* mapped, size_t bytes) {
-  constexpr uintptr_t kHuge = uintptr_t{2} << 20;
-  const uintptr_t first = reinterpret_cast<uintptr_t>(mapped);
-  const uintptr_t begin = (first + kHuge - 1) & ~(kHuge - 1);
-  const uintptr_t end = (first + bytes) & ~(kHuge - 1);
-  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
-}
 
 }  // namespace
 

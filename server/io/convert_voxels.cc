@@ -5,6 +5,8 @@
 #include <cstring>
 #include <limits>
 
+#include "server/common/huge_pages.h"
+
 namespace vpm {
 namespace {
 
@@ -104,7 +106,7 @@ Result<VoxelValues> ConvertVoxels(std::span<const uint8_t> bytes, VoxelType type
   // an integer one that keeps the range): the stored bytes as they are.
   if (StoredAsInt16AsIs(type, endian, slope, intercept)) {
     RETURN_IF_ERROR(ValidateGeometry(geometry, limits, VoxelEncoding::kInt16));
-    std::vector<int16_t> stored(static_cast<size_t>(count));
+    std::vector<int16_t> stored = HugePageVector<int16_t>(static_cast<size_t>(count));
     std::memcpy(stored.data(), bytes.data(), stored.size() * sizeof(int16_t));
     return VoxelValues::Int16(std::move(stored), static_cast<int32_t>(intercept));
   }
@@ -144,6 +146,7 @@ Result<VoxelValues> ConvertVoxels(std::span<const uint8_t> bytes, VoxelType type
   RETURN_IF_ERROR(ValidateGeometry(geometry, limits, VoxelEncoding::kFloat32));
   std::vector<float> values;
   values.reserve(static_cast<size_t>(count));
+  AdviseHugePages(values.data(), static_cast<size_t>(count) * sizeof(float));
   for (int64_t first = 0; first < count; first += kSlabVoxels) {
     RETURN_IF_ERROR(limits.cancel.Check());
     const int64_t n = std::min(kSlabVoxels, count - first);
@@ -191,7 +194,7 @@ Result<VoxelValues> FloatsToVoxels(std::vector<float> values, const VolumeGeomet
     return VoxelValues::Float(std::move(values));
   }
   RETURN_IF_ERROR(ValidateGeometry(geometry, limits, VoxelEncoding::kInt16));
-  std::vector<int16_t> stored(values.size());
+  std::vector<int16_t> stored = HugePageVector<int16_t>(values.size());
   for (size_t n = 0; n < values.size(); ++n) {
     stored[n] = static_cast<int16_t>(static_cast<int32_t>(values[n]) - *offset);
   }

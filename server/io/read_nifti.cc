@@ -5,6 +5,7 @@
 #include <system_error>
 #include <vector>
 
+#include "server/common/huge_pages.h"
 #include "server/io/gzip_stream.h"
 #include "server/io/nifti_geometry.h"
 #include "server/io/nifti_header.h"
@@ -79,7 +80,7 @@ Result<std::optional<Volume>> ReadInt16NiftiInPlace(const std::filesystem::path&
       uintmax_t(header->vox_offset) + uintmax_t(data_bytes) > file_size) {
     return std::nullopt;
   }
-  std::vector<int16_t> stored(static_cast<size_t>(geometry->voxel_count()));
+  std::vector<int16_t> stored = HugePageVector<int16_t>(size_t(geometry->voxel_count()));
   RETURN_IF_ERROR(ReadFileRangeInto(
       path, header->vox_offset,
       std::span<uint8_t>(reinterpret_cast<uint8_t*>(stored.data()), size_t(data_bytes)), limits));

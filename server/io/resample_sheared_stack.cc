@@ -5,6 +5,7 @@
 #include <limits>
 #include <thread>
 
+#include "server/common/huge_pages.h"
 #include "server/common/parallel_chunks.h"
 
 namespace vpm {
@@ -106,7 +107,7 @@ Result<Volume> ResampleShearedStack(const ShearedStack& stack, double slice_spac
   // The budget, before allocating: float, since resampled values are not
   // integers (the volume's notes say so).
   RETURN_IF_ERROR(ValidateGeometry(g, limits, VoxelEncoding::kFloat32));
-  std::vector<float> values(static_cast<size_t>(g.voxel_count()));
+  std::vector<float> values = HugePageVector<float>(static_cast<size_t>(g.voxel_count()));
 
   const int64_t nx = g.dims[0], ny = g.dims[1];
   const int threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 8u));

@@ -9,7 +9,7 @@
 #include <atomic>
 #include <thread>
 
-#include "server/common/huge_page_array.h"
+#include "server/common/huge_pages.h"
 #include "server/mesh/indexed_min_heap.h"
 #include "server/mesh/lookahead_min_queue.h"
 #include "server/mesh/point_grid.h"
