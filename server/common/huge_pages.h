@@ -27,11 +27,13 @@
 
 namespace vpm {
 
+inline constexpr size_t kHugePageBytes = size_t{2} << 20;
+
 // Advises huge pages over the whole 2 MiB blocks inside [memory, memory +
 // bytes), before they are first written (pages already present stay as they
 // are). Only advice: a refusal changes nothing.
 inline void AdviseHugePages(void* memory, size_t bytes) {
-  constexpr uintptr_t kHuge = uintptr_t{2} << 20;
+  constexpr uintptr_t kHuge = kHugePageBytes;
   const uintptr_t first = reinterpret_cast<uintptr_t>(memory);
   const uintptr_t begin = (first + kHuge - 1) & ~(kHuge - 1);
   const uintptr_t end = (first + bytes) & ~(kHuge - 1);
@@ -58,13 +60,12 @@ class HugePageArray {
   enum class Init { kZero, kNone };
 
   explicit HugePageArray(size_t size, Init init = Init::kZero) : size_(size) {
-    constexpr size_t kHugePage = size_t{2} << 20;
     const size_t bytes = std::max<size_t>(size * sizeof(T), 1);
     void* memory = nullptr;
-    if (bytes >= kHugePage) {
-      const size_t rounded = (bytes + kHugePage - 1) / kHugePage * kHugePage;
-      memory = std::aligned_alloc(kHugePage, rounded);
-      if (memory != nullptr) ::madvise(memory, rounded, MADV_HUGEPAGE);  // a hint
+    if (bytes >= kHugePageBytes) {
+      const size_t rounded = (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
+      memory = std::aligned_alloc(kHugePageBytes, rounded);
+      if (memory != nullptr) AdviseHugePages(memory, rounded);
     } else {
       memory = std::malloc(bytes);
     }

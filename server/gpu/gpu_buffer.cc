@@ -74,16 +74,8 @@ Status GpuBuffer::CheckRange(size_t bytes, vk::DeviceSize offset) const {
 }
 
 Status GpuBuffer::Upload(std::span<const std::byte> data, vk::DeviceSize offset_bytes) {
-  RETURN_IF_ERROR(CheckRange(data.size(), offset_bytes));
-  if (data.empty()) return absl::OkStatus();
-  if (mapped_ != nullptr) {
-    std::memcpy(static_cast<std::byte*>(mapped_) + offset_bytes, data.data(), data.size());
-    return absl::OkStatus();
-  }
-  ASSIGN_OR_RETURN(GpuBuffer staging, CreateStaging(*context_, data.size()));
-  RETURN_IF_ERROR(staging.Upload(data));
-  return context_->RunCommands([&](const vk::raii::CommandBuffer& cmd) {
-    cmd.copyBuffer(staging.handle(), *buffer_, vk::BufferCopy(0, offset_bytes, data.size()));
+  return Fill(offset_bytes, data.size(), [&](std::span<std::byte> out) {
+    std::memcpy(out.data(), data.data(), data.size());
   });
 }
 

@@ -32,9 +32,10 @@ uint64_t TexelBytes(vk::Format format) { return format == vk::Format::eR32G32Sin
 // reads 0. Every word is written (words is device memory, not zeroed).
 void WritePairTexels(const VoxelValues& values, uint64_t first, uint64_t count,
                      std::span<uint32_t> words) {
+  // Texels whose n + 1 exists (their loop tests nothing), then the last.
+  const uint64_t last = uint64_t(values.size()) - 1;
+  const uint64_t full = std::min(count, last - std::min(first, last));
   if (const std::span<const int16_t> s = values.int16s(); !s.empty()) {
-    // Texels whose n + 1 exists, with no test in the loop; then the last.
-    const uint64_t full = std::min(count, s.size() - 1 - std::min<uint64_t>(first, s.size() - 1));
     const int16_t* v = s.data() + first;
     for (uint64_t i = 0; i < full; ++i) {
       words[i] = uint32_t(uint16_t(v[i])) | (uint32_t(uint16_t(v[i + 1])) << 16);
@@ -42,9 +43,7 @@ void WritePairTexels(const VoxelValues& values, uint64_t first, uint64_t count,
     for (uint64_t i = full; i < count; ++i) words[i] = uint32_t(uint16_t(v[i]));
     return;
   }
-  const std::span<const float> f = values.floats();
-  const uint64_t full = std::min(count, f.size() - 1 - std::min<uint64_t>(first, f.size() - 1));
-  const float* v = f.data() + first;
+  const float* v = values.floats().data() + first;
   for (uint64_t i = 0; i < full; ++i) {
     words[2 * i] = std::bit_cast<uint32_t>(v[i]);
     words[2 * i + 1] = std::bit_cast<uint32_t>(v[i + 1]);
