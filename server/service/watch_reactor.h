@@ -20,7 +20,9 @@ class WatchReactor : public FrameStreamReactor<grpc::ServerWriteReactor<v3::Fram
  private:
   void Begin() override;
 
-  const v3::WatchRequest& request_;  // gRPC's, valid until OnDone
+  // A copy: gRPC frees its request once the call is done (OnDone), and the
+  // render pool may still be making the stream from it then.
+  const v3::WatchRequest request_;
 };
 
 }  // namespace vpm::service

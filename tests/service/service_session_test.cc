@@ -354,6 +354,28 @@ TEST_F(SessionTest, Watch_SeesAnotherClientsManipulation) {
   reader->Finish();
 }
 
+// A Watch cancelled while the render pool is making its stream: gRPC frees
+// its request once the call is done, so the stream's settings must come
+// from the reactor's own copy (a reference read freed memory and crashed
+// vpm-server). Cancels land at 0-5 ms after the call, across the time the
+// pool takes to start the stream; the server then still serves a Watch.
+TEST_F(SessionTest, Watch_CancelledWhileItsStreamStartsReadsNoFreedRequest) {
+  const v3::WatchRequest request = SmallWatch();
+  for (int i = 0; i < 200; ++i) {
+    auto context = Context();
+    auto reader = stub_->Watch(context.get(), request);
+    std::this_thread::sleep_for(std::chrono::microseconds(50 * (i % 100)));
+    context->TryCancel();
+    reader->Finish();
+  }
+  auto context = Context();
+  auto reader = stub_->Watch(context.get(), request);
+  v3::Frame frame;
+  EXPECT_TRUE(reader->Read(&frame));
+  context->TryCancel();
+  reader->Finish();
+}
+
 TEST_F(SessionTest, Watch_StreamCapPerClientIsResourceExhausted) {
   std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
   std::vector<std::unique_ptr<grpc::ClientReader<v3::Frame>>> readers;
