@@ -10,7 +10,10 @@
 //
 // Lifetime: a reactor owns itself (self_) from Make until OnDone, and every
 // task it posts to a pool holds it too, so a task that runs after OnDone
-// still finds it alive (and, finished, does nothing). Starting a stream
+// still finds it alive (and, finished, does nothing). What gRPC owns (the
+// request, the context) may be gone while such a task runs: a client that
+// cancels brings OnDone at any moment, so tasks read only the reactor's own
+// copies (Interact's first message, Watch's request). Starting a stream
 // (settings, transfer function, MIP window) is work for the render pool,
 // never for the gRPC callback thread; a stream is never started once the
 // call is finished (OnCancel may come first).
