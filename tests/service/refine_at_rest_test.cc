@@ -156,6 +156,8 @@ TEST_F(RefineAtRestTest, MoveDuringRefinement_InteractiveFrameNextLadderDropped)
     ASSERT_TRUE(stream->Read(&frame));
     EXPECT_TRUE(frame.interactive()) << "the ladder went on to the still";
     EXPECT_EQ(frame.refine_level(), 0) << "a rung went on after the move";
+    ASSERT_TRUE(frame.last_sequence() == kLastDrag || frame.last_sequence() == kMove)
+        << frame.last_sequence();
   } while (frame.last_sequence() != kMove);
   // Rest again: the ladder starts over and ends with the move's still.
   const std::vector<v3::Frame> frames = ReadUntilStill(*stream, kMove);
