@@ -5,7 +5,7 @@
 // volume reads; then JPEG (quality 85) and PNG encoding of the still frame.
 // Usage: render_bench [--render-tf FILE] [--step MM] [--window W L]
 //                     [--no-reference] [--map-held] [--no-map] [--band-rays N]
-//                     [--no-early-termination] [--light-back-end]
+//                     [--no-early-termination] [--light-back-end] [--whole-end-steps]
 //                     [SOURCE] [PNG_DIR] [FILTER] [SIZE]
 //   --render-tf: adds the rows "still DVR custom" and "interactive DVR
 //   custom", DVR with the transfer function of FILE (ParaView .json[#NAME]
@@ -21,7 +21,9 @@
 //   --no-early-termination: every ray to its end (the exact integral that a
 //   fine step's reference approaches); --light-back-end: pre-integrated
 //   steps lit by the light at their back end alone
-//   (RaycastSettings::light_both_ends off);
+//   (RaycastSettings::light_both_ends off); --whole-end-steps: a ray's
+//   first sample a whole step of its value and nothing past its last
+//   (RaycastSettings::partial_end_steps off);
 //   PNG_DIR: where to write the frames ("" for nowhere); FILTER: only the
 //   rows whose name contains it, or one of several separated by '|' (a part
 //   ending in '$' must end the name: "still MIP$|still DVR ct-bone$");
@@ -199,6 +201,7 @@ int main(int raw_argc, char** raw_argv) {
   int64_t band_rays = kStillBandRays;
   bool early_termination = true;
   bool light_both_ends = true;
+  bool partial_end_steps = true;
   std::vector<char*> positional{raw_argv[0]};
   for (int i = 1; i < raw_argc; ++i) {
     const std::string arg = raw_argv[i];
@@ -219,6 +222,8 @@ int main(int raw_argc, char** raw_argv) {
       early_termination = false;
     } else if (arg == "--light-back-end") {
       light_both_ends = false;
+    } else if (arg == "--whole-end-steps") {
+      partial_end_steps = false;
     } else if (arg == "--band-rays" && i + 1 < raw_argc) {
       band_rays = int64_t(ParseNumber(raw_argv[++i], "--band-rays"));
     } else {
@@ -369,6 +374,7 @@ int main(int raw_argc, char** raw_argv) {
     r.settings.empty_space_skipping = c.skipping;
     r.settings.early_termination = early_termination;
     r.settings.light_both_ends = light_both_ends;
+    r.settings.partial_end_steps = partial_end_steps;
     r.settings.shading = c.shading;
     r.settings.mip_brightest_first = c.brightest_first;
     r.settings.mip_peak_refine = c.peak_refine;

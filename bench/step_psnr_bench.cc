@@ -3,7 +3,8 @@
 // step / FINE (default 8), per preset and volume, default camera (anterior,
 // whole box), no map. The issue-29 floor is 40 dB.
 // Usage: step_psnr_bench [--no-jitter] [--taps] [--no-preintegration]
-//                        [--no-peak-refine] [--light-back-end] [--no-shading] [--cut]
+//                        [--no-peak-refine] [--light-back-end]
+//                        [--whole-end-steps] [--no-shading] [--cut]
 //                        [--scale S]
 //                        [--fine F] [--size N]
 //                        [--png-dir DIR] [--presets A,B,...] SOURCE...
@@ -13,6 +14,8 @@
 //   --no-peak-refine: MIP of the samples alone (RaycastSettings::mip_peak_refine);
 //   --light-back-end: pre-integrated steps lit by their back end's light
 //   alone (RaycastSettings::light_both_ends off);
+//   --whole-end-steps: a ray's first sample a whole step of its value and
+//   nothing past its last (RaycastSettings::partial_end_steps off);
 //   --scale S: the still at S x its own step (and the reference at S / F);
 //   --no-shading: every preset unshaded;
 //   --cut: the view cut through the orbit centre, facing the camera (what
@@ -56,7 +59,7 @@ std::string FileStem(const std::string& source) {
 
 int main(int argc, char** argv) {
   bool jitter = true, cut = false, taps = false, shading = true, pre = true, refine = true,
-       both_ends = true;
+       both_ends = true, partial_ends = true;
   double fine = 8.0, scale = 1.0;
   int size = 512;
   std::string png_dir;
@@ -76,6 +79,8 @@ int main(int argc, char** argv) {
       refine = false;
     } else if (arg == "--light-back-end") {
       both_ends = false;
+    } else if (arg == "--whole-end-steps") {
+      partial_ends = false;
     } else if (arg == "--taps") {
       taps = true;
     } else if (arg == "--cut") {
@@ -99,9 +104,11 @@ int main(int argc, char** argv) {
   auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
   auto renderer = bench::Check(VolumeRenderer::Create(*context, {}), "renderer");
   std::printf("still at its own step against step / %.0f, %dx%d, default camera%s, jitter %s, "
-              "%s gradient, pre-integration %s (steps lit at %s), MIP peaks %s, shading %s\n",
+              "%s gradient, pre-integration %s (steps lit at %s, %s end steps), MIP peaks %s, "
+              "shading %s\n",
               fine, size, size, cut ? ", view cut" : "", jitter ? "on" : "off",
               taps ? "tap" : "cell", pre ? "on" : "off", both_ends ? "both ends" : "the back end",
+              partial_ends ? "partial" : "whole",
               refine ? "refined" : "as sampled",
               shading ? "as the preset" : "off");
   std::printf("%-24s %-28s %9s %9s %8s %8s\n", "volume", "preset", "step mm", "fine mm",
@@ -125,6 +132,7 @@ int main(int argc, char** argv) {
       r.settings.preintegrated = pre;
       r.settings.mip_peak_refine = refine;
       r.settings.light_both_ends = both_ends;
+      r.settings.partial_end_steps = partial_ends;
       r.settings.shading = shading;
       if (!shading && r.preset.lighting) r.preset.lighting->shade = false;
       if (cut) {

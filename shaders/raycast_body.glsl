@@ -400,6 +400,15 @@ vec4 preintegrated_at(float front, float back) {
   return ab + (cd - ab) * t;
 }
 
+// The ray parameter of the last sample t_near + k step at or before t_far
+// (t_near <= t_far), by the same arithmetic as the loops' test.
+float last_sample_t(float t_near, float t_far, float step) {
+  float k = floor((t_far - t_near) / step);
+  if (t_near + (k + 1.0) * step <= t_far) k += 1.0;
+  if (k > 0.0 && t_near + k * step > t_far) k -= 1.0;
+  return t_near + k * step;
+}
+
 // Early termination (docs/RENDERING.md, "Ray casting", item 5): once the
 // opacity passes kOpaque, the transmittance left (under 1%) takes the last
 // step's own colour, rgb / over (over: its opacity when rgb is
@@ -414,24 +423,23 @@ bool ends_opaque(bool early, vec3 rgb, float over, inout vec4 acc) {
   return true;
 }
 
-// Composites the step that ends at a sample of value `back` (gradient g)
-// and begins at `front` through the pre-integrated table, as
+// Composites a step c (premultiplied colour and opacity, from the
+// pre-integrated table) that ends at a sample of gradient g, as
 // composite_sample does a point. The step is lit by the mean of its two
 // ends' light_factors (the trapezoid rule; docs/RENDERING.md, "Sampling"):
 // light_front holds the front's (xy) and whether it is known (z: 1; never
-// without VPM_RAYCAST_LIGHT_BOTH_ENDS), and takes this step's back's. True
-// when early termination ends the ray.
-bool composite_segment(float front, float back, vec3 g, vec3 dir, bool shading, bool early,
-                       inout vec3 light_front, inout vec4 acc) {
-  vec4 c = preintegrated_at(front, back);
+// without VPM_RAYCAST_LIGHT_BOTH_ENDS), and takes this step's back's; a step
+// whose weight in the pixel is under min_weight is lit head-on. True when
+// early termination ends the ray.
+bool composite_step(vec4 c, vec3 g, float min_weight, vec3 dir, bool shading, bool early,
+                    inout vec3 light_front, inout vec4 acc) {
   float transmitted = 1.0 - acc.a;
   if (shading) {
     vec2 light = light_factors(g, dir);
     vec2 seg = light_front.z > 0.0 ? 0.5 * (light + light_front.xy) : light;
     light_front = vec3(light, g_light_both_ends);
-    c.rgb = transmitted * c.a > g_shade_min_weight
-                ? lit_by(c.rgb, seg, c.a)
-                : min(c.rgb * (g_shading.x + g_shading.y), vec3(c.a));
+    c.rgb = transmitted * c.a > min_weight ? lit_by(c.rgb, seg, c.a)
+                                           : min(c.rgb * (g_shading.x + g_shading.y), vec3(c.a));
   }
   if (c.a > 0.0) {
     acc.rgb += transmitted * c.rgb;
@@ -439,6 +447,36 @@ bool composite_segment(float front, float back, vec3 g, vec3 dir, bool shading, 
     return ends_opaque(early, c.rgb, c.a, acc);
   }
   return false;
+}
+
+// The whole step from a sample of value `front` to one of value `back`.
+bool composite_segment(float front, float back, vec3 g, vec3 dir, bool shading, bool early,
+                       inout vec3 light_front, inout vec4 acc) {
+  return composite_step(preintegrated_at(front, back), g, g_shade_min_weight, dir, shading,
+                        early, light_front, acc);
+}
+
+// A ray's partial end step (VPM_RAYCAST_PARTIAL_END_STEPS) from x_front to
+// x_back, `fraction` (clamped to [0, 1]) of a step long: the table's step
+// between their values, shortened as a step of constant value would be
+// (PartialPreintegratedStep in preintegrated_lut.h), and lit by x_back's
+// light alone, as a step after skipped bricks (lit at both ends, the kidney
+// CT's stills with the view cut were up to 6.6 dB further from step / 8:
+// docs/RENDERING.md, "Sampling"); its shading threshold is shortened with
+// it. Two reads. front: x_back's value. True when early termination ends
+// the ray.
+bool composite_partial_step(vec3 x_front, vec3 x_back, float fraction, vec3 dir, bool shading,
+                            bool early, out float front, inout vec3 light_front,
+                            inout vec4 acc) {
+  vec3 g_back;
+  float v_front = deformed_value(x_front);
+  front = deformed_value_and_gradient(x_back, g_back);
+  vec4 c = preintegrated_at(v_front, front);
+  float f = clamp(fraction, 0.0, 1.0);
+  float a = 1.0 - exp2(f * log2(max(1.0 - c.a, 1e-30)));
+  c = vec4(c.rgb * (c.a > 1e-6 ? a / c.a : f), a);
+  light_front.z = 0.0;
+  return composite_step(c, g_back, g_shade_min_weight * f, dir, shading, early, light_front, acc);
 }
 
 // Composites one cell-gradient DVR sample (value v, gradient g in value/mm)
@@ -545,12 +583,25 @@ void main() {
     BrickWalk walk = walk_start(eye, dir, inv_dir, t_near);
     bool done = false;
     // Pre-integrated: the value at the front of the next step (that of the
-    // last sample composited, k_next - 1); a ray's first sample is a step
-    // of constant value.
+    // last sample composited, k_next - 1); without partial end steps a
+    // ray's first sample is a whole step of constant value.
     int k_next = 0;
     float front = 0.0;
     bool has_front = false;
     vec3 light_front = vec3(0.0);  // xy: light_factors at front; z: 1 when known
+    // Partial end steps: the ray's first sample ends the step from where
+    // the ray enters (the box or the clip region), the jitter's fraction of
+    // a step long (none without jitter); the walk then starts at sample 1.
+    bool partial_ends = kPreintegrated && has_flag(VPM_RAYCAST_PARTIAL_END_STEPS);
+    if (partial_ends) {
+      float t0 = min(t_near, t_far);
+      done = composite_partial_step(eye + t_entry * dir, eye + t0 * dir, (t0 - t_entry) / step,
+                                    dir, shading, early, front, light_front, acc);
+      taken += 2u;
+      has_front = true;
+      k = 1;
+      k_next = 1;
+    }
     for (float t_end;
          !done && next_segment(walk, k, 0.0, skipping, t_near, t_far, step, t_end);
          walk_step(walk)) {
@@ -600,6 +651,14 @@ void main() {
       }
       k_next = k;
       if (!skipping) break;
+    }
+    // ... and the step from the ray's last sample to where it leaves.
+    if (partial_ends && !done && t_near <= t_far) {
+      float t_last = last_sample_t(t_near, t_far, step);
+      float unused;
+      composite_partial_step(eye + t_last * dir, eye + t_far * dir, (t_far - t_last) / step,
+                             dir, shading, early, unused, light_front, acc);
+      taken += 2u;
     }
   }
   int phase = 0;       // 0: the next sample; 1..6: gradient taps around x_shade

@@ -92,6 +92,10 @@ inline constexpr int kRaycastPeakRefine = 512;
 // (the trapezoid rule), not by its back end's alone (docs/RENDERING.md,
 // "Sampling").
 inline constexpr int kRaycastLightBothEnds = 1024;
+// DVR, pre-integrated: a ray's first and last steps, from where it enters
+// to its first sample and from its last sample to where it leaves, each as
+// long as it is, not a whole step (docs/RENDERING.md, "Sampling").
+inline constexpr int kRaycastPartialEndSteps = 2048;
 inline constexpr int kRaycastMaxClipPlanes = 16;  // VPM_RAYCAST_MAX_CLIP_PLANES
 struct RaycastParams {
   glm::vec4 eye_mm;      // xyz eye (physical mm); w: step_mm

@@ -73,6 +73,12 @@ std::vector<glm::vec4> BakePreintegratedLut(const RenderPreset& preset, double s
   return table;
 }
 
+glm::vec4 PartialPreintegratedStep(glm::vec4 step, float fraction) {
+  const float f = std::clamp(fraction, 0.0f, 1.0f);
+  const float a = 1.0f - std::exp2(f * std::log2(std::max(1.0f - step.a, 1e-30f)));
+  return glm::vec4(glm::vec3(step) * (step.a > 1e-6f ? a / step.a : f), a);
+}
+
 glm::vec4 SamplePreintegratedLut(const std::vector<glm::vec4>& table, const RenderLut& lut,
                                  float front, float back) {
   const int n = gpu::kPreintegratedEntries;

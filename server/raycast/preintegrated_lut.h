@@ -25,6 +25,14 @@ namespace vpm {
 // point value over the whole step (as BakeRenderLut).
 std::vector<glm::vec4> BakePreintegratedLut(const RenderPreset& preset, double step_mm);
 
+// A step of the table shortened to `fraction` (in [0, 1]) of its length as
+// a step of constant value would be: opacity 1 - (1 - a)^fraction, the
+// premultiplied colour scaled with it (by `fraction` where a is under
+// 1e-6). A ray's partial first and last steps (RaycastSettings::
+// partial_end_steps); exact for a constant value. The shader's
+// composite_partial_step() computes the same, by exp2 and log2.
+glm::vec4 PartialPreintegratedStep(glm::vec4 step, float fraction);
+
 // The table at (front, back) values, bilinear between entries: the shader's
 // preintegrated_at(). lut: the RenderLut of the same preset (its range).
 glm::vec4 SamplePreintegratedLut(const std::vector<glm::vec4>& table, const RenderLut& lut,

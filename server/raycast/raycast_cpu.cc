@@ -27,6 +27,15 @@ constexpr float kNoValue = -3.0e38f;
 // ends_opaque() of raycast_body.glsl: past kOpaque, the transmittance left
 // takes the last step's colour, rgb / over (over: its opacity when rgb is
 // premultiplied, else 1), and the ray ends.
+// last_sample_t() of raycast_body.glsl: the last sample t_near + k step at
+// or before t_far (t_near <= t_far), by the loops' arithmetic.
+float LastSampleT(float t_near, float t_far, float step) {
+  float k = std::floor((t_far - t_near) / step);
+  if (t_near + (k + 1.0f) * step <= t_far) k += 1.0f;
+  if (k > 0.0f && t_near + k * step > t_far) k -= 1.0f;
+  return t_near + k * step;
+}
+
 bool EndsOpaque(vec3 rgb, float over, vec4& acc) {
   if (acc.a <= kOpaque) return false;
   acc += vec4((1.0f - acc.a) * (rgb / over), 0.0f);
@@ -417,7 +426,7 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
   const vec3 background(p_.background);
   if (t_near > t_far) return PackRgba(background);
   const float step = p_.eye_mm.w;
-  const float t_entry = t_near;  // before the jitter: MIP's RefinePeak
+  const float t_entry = t_near;  // before the jitter: RefinePeak, partial end steps
   if (Flag(gpu::kRaycastJitter)) {
     t_near += RayStartJitter(uint32_t(px), uint32_t(py), uint32_t(p_.image.w)) * step;
   }
@@ -437,6 +446,39 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
   bool has_front = false;
   vec2 light_front(0.0f);  // LightFactors at front, when has_light_front
   bool has_light_front = false;
+  // composite_step() of raycast_body.glsl: the pre-integrated step c ending
+  // at a sample of gradient g; true when the ray is done.
+  const auto composite_step = [&](vec4 c, vec3 g, float min_weight) {
+    const float transmitted = 1.0f - acc.a;
+    vec3 rgb(c);
+    if (shading) {
+      // The step's light: the mean of its two ends' (trapezoid rule).
+      const vec2 light = LightFactors(g, dir);
+      const vec2 seg = has_light_front ? 0.5f * (light + light_front) : light;
+      light_front = light;
+      has_light_front = both_ends;
+      rgb = transmitted * c.a > min_weight
+                ? LitBy(rgb, seg, c.a)
+                : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(c.a));
+    }
+    if (c.a <= 0.0f) return false;
+    acc += vec4(transmitted * rgb, transmitted * c.a);
+    return early && EndsOpaque(rgb, c.a, acc);
+  };
+  // composite_partial_step(): the partial step from ray parameter t_front to
+  // t_back, lit by t_back's light alone; two reads; front becomes t_back's
+  // value.
+  const auto composite_partial_step = [&](float t_front, float t_back) {
+    taken += 2;
+    vec3 g_back(0.0f);
+    const float v_front = DeformedValue(eye + t_front * dir);
+    front = DeformedValueAndGradient(eye + t_back * dir, g_back);
+    has_front = true;
+    const float fraction = std::clamp((t_back - t_front) / step, 0.0f, 1.0f);
+    has_light_front = false;
+    return composite_step(PartialPreintegratedStep(PreintegratedAt(v_front, front), fraction),
+                          g_back, kShadeMinWeight * step * fraction);
+  };
   // Sample k_sample at x: true when the ray is done (early termination).
   const auto sample = [&](vec3 x, int k_sample) {
     ++taken;
@@ -448,24 +490,10 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
     }
     if (pre) {
       // composite_segment() of raycast_body.glsl.
-      vec4 c = PreintegratedAt(has_front ? front : v, v);
+      const vec4 c = PreintegratedAt(has_front ? front : v, v);
       front = v;
       has_front = true;
-      const float transmitted = 1.0f - acc.a;
-      vec3 rgb(c);
-      if (shading) {
-        // The step's light: the mean of its two ends' (trapezoid rule).
-        const vec2 light = LightFactors(cell_gradient, dir);
-        const vec2 seg = has_light_front ? 0.5f * (light + light_front) : light;
-        light_front = light;
-        has_light_front = both_ends;
-        rgb = transmitted * c.a > kShadeMinWeight * step
-                  ? LitBy(rgb, seg, c.a)
-                  : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(c.a));
-      }
-      if (c.a <= 0.0f) return false;
-      acc += vec4(transmitted * rgb, transmitted * c.a);
-      return early && EndsOpaque(rgb, c.a, acc);
+      return composite_step(c, cell_gradient, kShadeMinWeight * step);
     }
     const vec4 c = LutAt(v);
     if (c.a <= 0.0f) return false;
@@ -488,6 +516,13 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
                        inv_dir.z < 0.0f ? -1 : 1);
     const vec3 t_delta = brick_size_ * glm::abs(inv_dir);
     bool done = false;
+    // Partial end steps (raycast_body.glsl): entry to sample 0, then the
+    // walk from sample 1.
+    const bool partial_ends = pre && Flag(gpu::kRaycastPartialEndSteps);
+    if (partial_ends) {
+      done = composite_partial_step(t_entry, std::min(t_near, t_far));
+      k = k_next = 1;
+    }
     ivec3 sampled(-(1 << 20));  // none
     BrickWalk bright;
     int k_bright = 0;
@@ -526,6 +561,9 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
       k_next = k;
       if (!skipping) break;
       WalkStep(walk, step_b, t_delta);
+    }
+    if (partial_ends && !done && t_near <= t_far) {
+      composite_partial_step(LastSampleT(t_near, t_far, step), t_far);
     }
     if (mip && Flag(gpu::kRaycastPeakRefine) && !done && peaks.k_best >= 0) {
       float refined = RefinePeak(peaks.best, peaks.k_best, t_near, step, t_entry, t_far, eye, dir);

@@ -185,6 +185,7 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
     flags |= kRaycastCellGradient;
     if (s.preintegrated) flags |= kRaycastPreintegrated;
     if (s.preintegrated && s.light_both_ends) flags |= gpu::kRaycastLightBothEnds;
+    if (s.preintegrated && s.partial_end_steps) flags |= gpu::kRaycastPartialEndSteps;
   }
   const glm::ivec3 brick_voxels = RequestBrickVoxels(request, geometry);
   const auto bricks = BrickGridDims(geometry.dims, brick_voxels);

@@ -137,6 +137,14 @@ struct RaycastSettings {
   // shaded stills converge faster with the step (docs/RENDERING.md,
   // "Sampling").
   bool light_both_ends = true;
+  // Pre-integrated DVR: the step from where a ray enters (the box or the
+  // clip region) to its first sample and the one from its last sample to
+  // where it leaves, each composited as long as it is. Off, the first
+  // sample stands for a whole step of its value and the rest past the last
+  // sample is left out, so that a face cut through tissue (the view cut, a
+  // crop box, the first and last slices) shows where the jitter put each
+  // ray's first sample (docs/RENDERING.md, "Sampling").
+  bool partial_end_steps = true;
   // MIP with skipping: a first walk along the ray, taking no sample, finds
   // the brick that can show the most and samples it first; the walk then
   // skips every brick whose maximum is under what it found. The same
