@@ -461,7 +461,7 @@ bool composite_segment(float front, float back, vec3 g, vec3 dir, bool shading, 
 // between their values, shortened as a step of constant value would be
 // (PartialPreintegratedStep in preintegrated_lut.h), and lit by x_back's
 // light alone, as a step after skipped bricks (lit at both ends, the kidney
-// CT's stills with the view cut were up to 6.6 dB further from step / 8:
+// CT's stills with the view cut were up to 6.4 dB further from step / 8:
 // docs/RENDERING.md, "Sampling"); its shading threshold is shortened with
 // it. Two reads. front: x_back's value. True when early termination ends
 // the ray.
