@@ -24,9 +24,6 @@ constexpr float kOpaque = 0.99f;
 constexpr float kShadeMinWeight = 1.0f / 256.0f;
 constexpr float kNoValue = -3.0e38f;
 
-// ends_opaque() of raycast_body.glsl: past kOpaque, the transmittance left
-// takes the last step's colour, rgb / over (over: its opacity when rgb is
-// premultiplied, else 1), and the ray ends.
 // last_sample_t() of raycast_body.glsl: the last sample t_near + k step at
 // or before t_far (t_near <= t_far), by the loops' arithmetic.
 float LastSampleT(float t_near, float t_far, float step) {
@@ -36,6 +33,9 @@ float LastSampleT(float t_near, float t_far, float step) {
   return t_near + k * step;
 }
 
+// ends_opaque() of raycast_body.glsl: past kOpaque, the transmittance left
+// takes the last step's colour, rgb / over (over: its opacity when rgb is
+// premultiplied, else 1), and the ray ends.
 bool EndsOpaque(vec3 rgb, float over, vec4& acc) {
   if (acc.a <= kOpaque) return false;
   acc += vec4((1.0f - acc.a) * (rgb / over), 0.0f);
