@@ -9,12 +9,17 @@
 // one process, so that other load on the machine weighs on all alike; the load average is printed
 // before and after each volume. Usage: interactive_quality_bench [--candidates] [--reps N] [--size
 // N]
-//                                  [--ladder] [--preset NAME] [--mode dvr|mip] [SOURCE...]
+//                                  [--ladder] [--preset NAME] [--mode dvr|mip] [--cut]
+//                                  [--whole-end-steps] [SOURCE...]
 //   --candidates: also the casts that were measured against the settings
 //   (InteractiveQuality), not only fast, balanced and sharp;
 //   --ladder: instead, the refinement at rest (refine_ladder.h): after the
 //   drag, settled, each interactive setting, candidate rungs and the still,
 //   frame ms and PSNR against the still;
+//   --cut: every frame and still with the view cut (SceneView::view_cut),
+//   as the clients open; --whole-end-steps: a ray's first sample a whole
+//   step of its value and nothing past its last, stills too
+//   (RaycastSettings::partial_end_steps off; not with --ladder);
 //   SOURCE: a volume file or phantom:NAME (default: the kidney CT and
 //   phantom:abdomen).
 #include <algorithm>
@@ -162,7 +167,7 @@ std::unique_ptr<Fixture> MakeFixture(const std::string& source) {
 }
 
 void RunVolume(const std::string& source, int reps, int size, const std::string& preset,
-               RenderMode mode, bool all) {
+               RenderMode mode, bool all, bool cut, bool whole_end_steps) {
   const std::unique_ptr<Fixture> f = MakeFixture(source);
   const Volume& volume = f->volume;
   auto& context = f->context;
@@ -171,7 +176,8 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
                  .preset = bench::Check(MakeRenderPreset(preset, volume), "preset"),
                  .quality = RenderQuality::kInteractive,
                  .width = size,
-                 .height = size};
+                 .height = size,
+                 .view_cut = cut};
   SceneView still = view;
   still.quality = RenderQuality::kStill;
   const std::vector<Candidate> candidates = Candidates(all);
@@ -183,11 +189,14 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
     auto scene = f->DraggedScene(0);
     for (int s = 1; s <= kSteps; ++s) {
       bench::Check(scene->Drag(DragOffset(s)), "drag");
-      const Frame reference = bench::Check(scene->Render(still), "still");
+      RenderRequest still_request = bench::Check(scene->PrepareRender(still), "prepare");
+      still_request.settings.partial_end_steps = !whole_end_steps;
+      const Frame reference = bench::Check(scene->RenderPrepared(still_request), "still");
       for (size_t c = 0; c < candidates.size(); ++c) {
         RenderRequest request = bench::Check(scene->PrepareRender(view), "prepare");
         request.interactive = candidates[c].cast;
         request.settings.jitter = candidates[c].jitter;
+        request.settings.partial_end_steps = !whole_end_steps;
         const Frame frame = bench::Check(scene->RenderPrepared(request), "frame");
         const double mse = bench::RgbMse(frame.rgba, reference.rgba);
         Result_& r = results[c];
@@ -209,6 +218,7 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
         RenderRequest request = bench::Check(scene->PrepareRender(view), "prepare");
         request.interactive = candidates[c].cast;
         request.settings.jitter = candidates[c].jitter;
+        request.settings.partial_end_steps = !whole_end_steps;
         const Frame frame = bench::Check(scene->RenderPrepared(request), "frame");
         results[c].frame_ms.push_back(frame.timings.wall_ms);
         bench::Check(EncodeJpeg(frame.rgba, frame.width, frame.height, 85), "jpeg");
@@ -216,8 +226,9 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
       results[c].fps.push_back(kSteps / (MsSince(t0) / 1000.0));
     }
   }
-  std::printf("\n%s, %s %s, %dx%d, device '%s'; load average before %s, after %s\n", source.c_str(),
-              mode == RenderMode::kMip ? "MIP" : "DVR", preset.c_str(), size, size,
+  std::printf("\n%s, %s %s, %dx%d%s%s, device '%s'; load average before %s, after %s\n",
+              source.c_str(), mode == RenderMode::kMip ? "MIP" : "DVR", preset.c_str(), size,
+              size, cut ? ", view cut" : "", whole_end_steps ? ", whole end steps" : "",
               context->device_name().c_str(), load_before.c_str(), LoadAverage().c_str());
   std::printf("%-40s %5s %7s %9s %9s %10s %9s %9s\n", "candidate", "rays", "step mm", "loop fps",
               "(best)", "frame ms", "PSNR dB", "worst dB");
@@ -285,7 +296,7 @@ void RunLadder(const std::string& source, int reps, int size, const std::string&
 
 int main(int argc, char** argv) {
   int reps = 3, size = 512;
-  bool all = false, ladder = false;
+  bool all = false, ladder = false, cut = false, whole_end_steps = false;
   std::string preset = "ct-soft-tissue";
   RenderMode mode = RenderMode::kDvr;
   std::vector<std::string> sources;
@@ -295,6 +306,10 @@ int main(int argc, char** argv) {
       all = true;
     } else if (a == "--ladder") {
       ladder = true;
+    } else if (a == "--cut") {
+      cut = true;
+    } else if (a == "--whole-end-steps") {
+      whole_end_steps = true;
     } else if (a == "--reps" && i + 1 < argc) {
       reps = std::max(1, std::atoi(argv[++i]));
     } else if (a == "--size" && i + 1 < argc) {
@@ -322,7 +337,7 @@ int main(int argc, char** argv) {
     if (ladder) {
       RunLadder(source, reps, size, preset, mode);
     } else {
-      RunVolume(source, reps, size, preset, mode, all);
+      RunVolume(source, reps, size, preset, mode, all, cut, whole_end_steps);
     }
   }
   return 0;
