@@ -14,6 +14,7 @@
 
 #include "server/common/status.h"
 #include "server/gpu/shader_interface.h"
+#include "server/raycast/brick_occupancy_cpu.h"
 #include "server/raycast/render_presets.h"
 #include "server/raycast/render_request.h"
 #include "server/volume/volume.h"
@@ -26,18 +27,6 @@ struct HostBackwardMap {
   std::array<int, 3> dims{0, 0, 0};
   std::vector<glm::vec4> texels;
 };
-
-// Min and max of `volume` per brick of `brick_voxels` voxels per side (x,
-// y, z; BrickGridDims bricks, x fastest), as brick_minmax.comp.
-std::vector<glm::vec2> BrickMinMaxCpu(const Volume& volume, glm::ivec3 brick_voxels);
-
-// Occupancy per brick of deformed space, as brick_occupancy.comp: DVR 1/0,
-// MIP the reachable max. `minmax`: BrickMinMaxCpu for the same brick size;
-// `map` may be null (no deformation).
-std::vector<float> BrickOccupancyCpu(std::span<const glm::vec2> minmax,
-                                     const VolumeGeometry& geometry, glm::ivec3 brick_voxels,
-                                     RenderMode mode, const RenderLut& lut,
-                                     const HostBackwardMap* map);
 
 struct RaycastCpuInputs {
   const Volume* volume = nullptr;
