@@ -181,6 +181,16 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
   SceneView still = view;
   still.quality = RenderQuality::kStill;
   const std::vector<Candidate> candidates = Candidates(all);
+  // Candidate c's frame (c < 0: the still) of the scene's current state.
+  const auto render = [&](DeformableScene& scene, int c) {
+    RenderRequest request = bench::Check(scene.PrepareRender(c < 0 ? still : view), "prepare");
+    if (c >= 0) {
+      request.interactive = candidates[c].cast;
+      request.settings.jitter = candidates[c].jitter;
+    }
+    request.settings.partial_end_steps = !whole_end_steps;
+    return bench::Check(scene.RenderPrepared(request), c < 0 ? "still" : "frame");
+  };
   std::vector<Result_> results(candidates.size());
   const std::string load_before = LoadAverage();
 
@@ -189,15 +199,9 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
     auto scene = f->DraggedScene(0);
     for (int s = 1; s <= kSteps; ++s) {
       bench::Check(scene->Drag(DragOffset(s)), "drag");
-      RenderRequest still_request = bench::Check(scene->PrepareRender(still), "prepare");
-      still_request.settings.partial_end_steps = !whole_end_steps;
-      const Frame reference = bench::Check(scene->RenderPrepared(still_request), "still");
+      const Frame reference = render(*scene, -1);
       for (size_t c = 0; c < candidates.size(); ++c) {
-        RenderRequest request = bench::Check(scene->PrepareRender(view), "prepare");
-        request.interactive = candidates[c].cast;
-        request.settings.jitter = candidates[c].jitter;
-        request.settings.partial_end_steps = !whole_end_steps;
-        const Frame frame = bench::Check(scene->RenderPrepared(request), "frame");
+        const Frame frame = render(*scene, int(c));
         const double mse = bench::RgbMse(frame.rgba, reference.rgba);
         Result_& r = results[c];
         r.mse_sum += mse;
@@ -215,11 +219,7 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
       const auto t0 = std::chrono::steady_clock::now();
       for (int s = 1; s <= kSteps; ++s) {
         bench::Check(scene->Drag(DragOffset(s)), "drag");
-        RenderRequest request = bench::Check(scene->PrepareRender(view), "prepare");
-        request.interactive = candidates[c].cast;
-        request.settings.jitter = candidates[c].jitter;
-        request.settings.partial_end_steps = !whole_end_steps;
-        const Frame frame = bench::Check(scene->RenderPrepared(request), "frame");
+        const Frame frame = render(*scene, int(c));
         results[c].frame_ms.push_back(frame.timings.wall_ms);
         bench::Check(EncodeJpeg(frame.rgba, frame.width, frame.height, 85), "jpeg");
       }
