@@ -92,6 +92,7 @@ void ViewerApp::HandleEvent(const SDL_Event& e) {
     wake_pending_ = false;
     return;
   }
+  if (e.type == SDL_KEYDOWN || e.type == SDL_KEYUP) event_mod_ = SDL_Keymod(e.key.keysym.mod);
   switch (e.type) {
     case SDL_QUIT:
       running_ = false;
@@ -100,16 +101,17 @@ void ViewerApp::HandleEvent(const SDL_Event& e) {
       if (e.window.event == SDL_WINDOWEVENT_SIZE_CHANGED) {
         resize_at_ = SteadyClock::now() + kResizeQuiet;
       }
+      // Keys may have gone up or down while another window had the focus.
+      if (e.window.event == SDL_WINDOWEVENT_FOCUS_GAINED) event_mod_ = SDL_GetModState();
       break;
     case SDL_KEYDOWN: {
       if (show_cases_) {  // the panel takes the keys while it shows
         OnCasePanelKey(SDL_GetKeyName(e.key.keysym.sym));
         break;
       }
-      const SDL_Keymod mod = SDL_GetModState();
       const std::string key = KeyNameWithModifiers(SDL_GetKeyName(e.key.keysym.sym),
-                                                   (mod & (KMOD_CTRL | KMOD_GUI)) != 0,
-                                                   (mod & KMOD_SHIFT) != 0);
+                                                   (event_mod_ & (KMOD_CTRL | KMOD_GUI)) != 0,
+                                                   ShiftHeld());
       if (auto action = ActionForKey(key)) OnAction(*action);
       break;
     }
@@ -134,7 +136,7 @@ void ViewerApp::HandleEvent(const SDL_Event& e) {
     case SDL_MOUSEWHEEL:
       if (camera_ && e.wheel.y != 0) {
         const int clicks = e.wheel.direction == SDL_MOUSEWHEEL_FLIPPED ? -e.wheel.y : e.wheel.y;
-        const double step = (SDL_GetModState() & KMOD_SHIFT) ? 5.0 : 1.0;
+        const double step = ShiftHeld() ? 5.0 : 1.0;
         if (ScrollSliceAt(last_x_, last_y_, clicks * step)) break;
         camera_->Zoom(clicks);
         SendCamera();
@@ -193,7 +195,7 @@ void ViewerApp::OnAction(Action action) {
     case Action::kScrollForward:
     case Action::kScrollBack: {
       const double sign = action == Action::kScrollForward ? 1.0 : -1.0;
-      const double step = (SDL_GetModState() & KMOD_SHIFT) ? 5.0 : 1.0;
+      const double step = ShiftHeld() ? 5.0 : 1.0;
       int x = 0, y = 0;
       SDL_GetMouseState(&x, &y);
       if (!ScrollSliceAt(x, y, sign * step) && settings_.clip_size() > 0) {
@@ -237,7 +239,7 @@ void ViewerApp::OnButtonDown(const SDL_MouseButtonEvent& b) {
       return;
     }
     if (grab_mode_) return StartPull(b.x, b.y);
-    if ((SDL_GetModState() & KMOD_SHIFT) && settings_.clip_size() > 0) {
+    if (ShiftHeld() && settings_.clip_size() > 0) {
       gesture_ = Gesture::kClipPlane;
       drag_clip_start_ = settings_.clip(settings_.clip_size() - 1);
       pull_from_x_ = b.x, pull_from_y_ = b.y;
@@ -262,7 +264,7 @@ void ViewerApp::OnButtonUp(const SDL_MouseButtonEvent& b) {
                         : b.button == SDL_BUTTON_LEFT;
   if (!ends) return;
   if (gesture_ == Gesture::kPull || gesture_ == Gesture::kSlicePull) {
-    const bool keep = (SDL_GetModState() & KMOD_SHIFT) != 0;
+    const bool keep = ShiftHeld();
     LetGo(keep);
     if (keep) Notice("drag kept: X returns to rest");
   }

@@ -95,6 +95,11 @@ class ViewerApp {
   BoxFace drag_face_;
   WorldBox drag_box_start_;
   v3::ClipPlane drag_clip_start_;
+  // The modifier keys as of the event being handled: each key event carries
+  // them. SDL_GetModState() gives them as of the last pump, which under load
+  // has already read later key events (Shift up before the Z of Ctrl+Shift+Z).
+  SDL_Keymod event_mod_ = KMOD_NONE;
+  bool ShiftHeld() const { return (event_mod_ & KMOD_SHIFT) != 0; }
   bool grab_mode_ = false;
   bool view_cut_ = true;  // the user's choice; SendSettings applies it while no crop or clip is on
   bool crop_mode_ = false;                 // the crop box applies and its faces drag
