@@ -5,12 +5,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <thread>
 
 #include "server/common/clock.h"
 #include "server/raycast/clip_region.h"
 #include "server/raycast/preintegrated_lut.h"
 #include "server/raycast/ray_start_jitter.h"
+#include "server/raycast/upscale_cpu.h"
 
 namespace vpm {
 namespace {
@@ -95,10 +97,6 @@ uint32_t PackRgba(vec3 rgb) {
   return uint32_t(c.r) | (uint32_t(c.g) << 8) | (uint32_t(c.b) << 16) | (255u << 24);
 }
 
-vec4 Unpack(uint32_t w) {
-  return vec4(float(w & 255u), float((w >> 8) & 255u), float((w >> 16) & 255u),
-              float(w >> 24)) / 255.0f;
-}
 
 // Runs fn(row) for rows 0..rows-1 on `threads` threads, rows interleaved
 // (neighbouring rows cost about the same).
@@ -149,11 +147,41 @@ class Caster {
     brick_size_ = spacing_ * vec3(ivec3(p.brick_voxels));
     inv_spacing_ = 1.0f / spacing_;
     inv_brick_ = 1.0f / brick_size_;
+    mip_ = p.dims.w == 1;
+    skipping_ = Flag(gpu::kRaycastSkipping);
+    shading_ = Flag(gpu::kRaycastShading);
+    early_ = Flag(gpu::kRaycastEarlyTermination);
+    cell_ = Flag(kRaycastCellGradient);
+    pre_ = !mip_ && cell_ && Flag(kRaycastPreintegrated);
+    both_ends_ = Flag(gpu::kRaycastLightBothEnds);
   }
 
+  // main() of raycast_body.glsl for pixel (px, py): its packed RGBA; adds
+  // the samples read to `taken`.
   uint32_t Pixel(int px, int py, int64_t& taken) const;
 
  private:
+  // One ray: its geometry (volume frame, mm; t in mm along dir) and what it
+  // has gathered so far.
+  struct Ray {
+    vec3 eye, dir, inv_dir;
+    float t_entry = 0.0f;  // where it enters the box and clip planes (before the jitter)
+    float t_near = 0.0f;   // sample 0 (t_entry + jitter * step)
+    float t_far = 0.0f;    // where it leaves them
+    float step = 0.0f;     // mm between samples
+    RayPeaks peaks;        // MIP
+    vec4 acc{0.0f};        // DVR: premultiplied colour and opacity
+    int k = 0;             // the next sample
+    // Pre-integrated: the sample after the last one taken, and the value at
+    // the front of the next step (as the shader).
+    int k_next = 0;
+    float front = 0.0f;
+    bool has_front = false;
+    vec2 light_front{0.0f};  // LightFactors at front, when has_light_front
+    bool has_light_front = false;
+    int64_t taken = 0;  // samples read
+  };
+
   bool Flag(int f) const { return (flags_ & f) != 0; }
 
   float SourceAt(vec3 u) const {
@@ -365,20 +393,20 @@ class Caster {
     return best > black;
   }
 
-  // refine_peaks() of raycast_mip.glsl, for one peak: around a ray's
-  // brightest sample k_max, the points half, a quarter and an eighth of a
-  // step either side of the best so far (within [t_lo, t_hi]); the largest
-  // value read.
-  float RefinePeak(float v_max, int k_max, float t_near, float step, float t_lo, float t_hi,
-                   vec3 eye, vec3 dir) const {
-    float best_t = t_near + float(k_max) * step;
+  // refine_peaks() of raycast_mip.glsl, for one peak: around the ray's
+  // sample k_max of value v_max, the points half, a quarter and an eighth of
+  // a step either side of the best so far (within [t_entry, t_far]); the
+  // largest value read. Six reads.
+  float RefinePeak(Ray& r, float v_max, int k_max) const {
+    r.taken += 6;
+    float best_t = r.t_near + float(k_max) * r.step;
     float best = v_max;
-    float h = 0.5f * step;
+    float h = 0.5f * r.step;
     for (int i = 0; i < 3; ++i) {
-      const float t_before = std::clamp(best_t - h, t_lo, t_hi);
-      const float t_after = std::clamp(best_t + h, t_lo, t_hi);
-      const float before = DeformedValue(eye + t_before * dir);
-      const float after = DeformedValue(eye + t_after * dir);
+      const float t_before = std::clamp(best_t - h, r.t_entry, r.t_far);
+      const float t_after = std::clamp(best_t + h, r.t_entry, r.t_far);
+      const float before = DeformedValue(r.eye + t_before * r.dir);
+      const float after = DeformedValue(r.eye + t_after * r.dir);
       if (before > best) {
         best = before;
         best_t = t_before;
@@ -397,205 +425,234 @@ class Caster {
     return in_.occupancy[c.x + nb_.x * (c.y + nb_.y * c.z)];
   }
 
+  // The ray through pixel (px, py); none when it misses the box or the
+  // clip planes leave nothing of it.
+  std::optional<Ray> StartRay(int px, int py) const;
+  // composite_step() of raycast_body.glsl: the pre-integrated step c ending
+  // at a sample of gradient g; true when the ray is done.
+  bool CompositeStep(Ray& r, vec4 c, vec3 g, float min_weight) const;
+  // composite_partial_step(): the partial step from t_front to t_back, lit
+  // by t_back's light alone; two reads; front becomes t_back's value.
+  bool CompositePartialStep(Ray& r, float t_front, float t_back) const;
+  // Sample k_sample at x: true when the ray is done (early termination).
+  bool Sample(Ray& r, vec3 x, int k_sample) const;
+  // MIP and cell gradients: segments of the brick walk (raycast_body.glsl),
+  // the samples of one occupied brick, then the walk to the next.
+  void WalkBricks(Ray& r) const;
+  // The walk's segments from r.k on: true when the ray is done.
+  bool SampleSegments(Ray& r, BrickWalk& walk, ivec3 step_b, vec3 t_delta, ivec3 sampled) const;
+  // Tap gradients: sample by sample, skipping empty bricks.
+  void MarchTaps(Ray& r) const;
+
+
   const gpu::RaycastParams& p_;
   const RaycastCpuInputs& in_;
   Voxels values_;
   ivec3 n_, nb_;
   vec3 spacing_, extent_, brick_size_, inv_spacing_, inv_brick_;
   int flags_ = 0;
+  bool mip_ = false, skipping_ = false, shading_ = false, early_ = false, cell_ = false;
+  bool pre_ = false, both_ends_ = false;
 };
 
 template <typename Voxels>
-uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
+std::optional<typename Caster<Voxels>::Ray> Caster<Voxels>::StartRay(int px, int py) const {
+  Ray r;
   const vec2 ndc(2.0f * (float(px) + 0.5f) / float(p_.image.x) - 1.0f,
                  1.0f - 2.0f * (float(py) + 0.5f) / float(p_.image.y));
-  const vec3 eye(p_.eye_mm);
-  const vec3 dir = glm::normalize(vec3(p_.forward) + ndc.x * vec3(p_.right) + ndc.y * vec3(p_.up));
-  vec3 inv_dir;
+  r.eye = vec3(p_.eye_mm);
+  r.dir = glm::normalize(vec3(p_.forward) + ndc.x * vec3(p_.right) + ndc.y * vec3(p_.up));
   for (int a = 0; a < 3; ++a) {
-    const float safe = std::abs(dir[a]) < 1e-20f ? (dir[a] < 0.0f ? -1e-20f : 1e-20f) : dir[a];
-    inv_dir[a] = 1.0f / safe;
+    const float d = r.dir[a];
+    const float safe = std::abs(d) < 1e-20f ? (d < 0.0f ? -1e-20f : 1e-20f) : d;
+    r.inv_dir[a] = 1.0f / safe;
   }
-  const vec3 ta = (vec3(0.0f) - eye) * inv_dir;
-  const vec3 tb = (extent_ - eye) * inv_dir;
+  const vec3 ta = (vec3(0.0f) - r.eye) * r.inv_dir;
+  const vec3 tb = (extent_ - r.eye) * r.inv_dir;
   const vec3 tmin = glm::min(ta, tb), tmax = glm::max(ta, tb);
-  float t_near = std::max(std::max(std::max(tmin.x, tmin.y), tmin.z), 0.0f);
-  float t_far = std::min(std::min(tmax.x, tmax.y), tmax.z);
-  ClipRayInterval(std::span<const vec4>(p_.clip_planes, size_t(p_.clip.x)), eye, dir, t_near,
-                  t_far);
-  const vec3 background(p_.background);
-  if (t_near > t_far) return PackRgba(background);
-  const float step = p_.eye_mm.w;
-  const float t_entry = t_near;  // before the jitter: RefinePeak, partial end steps
+  r.t_near = std::max(std::max(std::max(tmin.x, tmin.y), tmin.z), 0.0f);
+  r.t_far = std::min(std::min(tmax.x, tmax.y), tmax.z);
+  ClipRayInterval(std::span<const vec4>(p_.clip_planes, size_t(p_.clip.x)), r.eye, r.dir,
+                  r.t_near, r.t_far);
+  if (r.t_near > r.t_far) return std::nullopt;
+  r.step = p_.eye_mm.w;
+  r.t_entry = r.t_near;
   if (Flag(gpu::kRaycastJitter)) {
-    t_near += RayStartJitter(uint32_t(px), uint32_t(py), uint32_t(p_.image.w)) * step;
+    r.t_near += RayStartJitter(uint32_t(px), uint32_t(py), uint32_t(p_.image.w)) * r.step;
   }
-  const bool mip = p_.dims.w == 1;
-  const bool skipping = Flag(gpu::kRaycastSkipping);
-  const bool shading = Flag(gpu::kRaycastShading);
-  const bool early = Flag(gpu::kRaycastEarlyTermination);
-  const bool cell = Flag(kRaycastCellGradient);
-  const bool pre = !mip && cell && Flag(kRaycastPreintegrated);
-  const bool both_ends = Flag(gpu::kRaycastLightBothEnds);
-  RayPeaks peaks;  // MIP
-  vec4 acc(0.0f);
-  int k = 0;
-  // Pre-integrated: the value at the front of the next step, as the shader.
-  int k_next = 0;
-  float front = 0.0f;
-  bool has_front = false;
-  vec2 light_front(0.0f);  // LightFactors at front, when has_light_front
-  bool has_light_front = false;
-  // composite_step() of raycast_body.glsl: the pre-integrated step c ending
-  // at a sample of gradient g; true when the ray is done.
-  const auto composite_step = [&](vec4 c, vec3 g, float min_weight) {
-    const float transmitted = 1.0f - acc.a;
-    vec3 rgb(c);
-    if (shading) {
-      // The step's light: the mean of its two ends' (trapezoid rule).
-      const vec2 light = LightFactors(g, dir);
-      const vec2 seg = has_light_front ? 0.5f * (light + light_front) : light;
-      light_front = light;
-      has_light_front = both_ends;
-      rgb = transmitted * c.a > min_weight
-                ? LitBy(rgb, seg, c.a)
-                : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(c.a));
-    }
-    if (c.a <= 0.0f) return false;
-    acc += vec4(transmitted * rgb, transmitted * c.a);
-    return early && EndsOpaque(rgb, c.a, acc);
-  };
-  // composite_partial_step(): the partial step from ray parameter t_front to
-  // t_back, lit by t_back's light alone; two reads; front becomes t_back's
-  // value.
-  const auto composite_partial_step = [&](float t_front, float t_back) {
-    taken += 2;
-    vec3 g_back(0.0f);
-    const float v_front = DeformedValue(eye + t_front * dir);
-    front = DeformedValueAndGradient(eye + t_back * dir, g_back);
-    has_front = true;
-    const float fraction = std::clamp((t_back - t_front) / step, 0.0f, 1.0f);
-    has_light_front = false;
-    return composite_step(PartialPreintegratedStep(PreintegratedAt(v_front, front), fraction),
-                          g_back, kShadeMinWeight * step * fraction);
-  };
-  // Sample k_sample at x: true when the ray is done (early termination).
-  const auto sample = [&](vec3 x, int k_sample) {
-    ++taken;
-    vec3 cell_gradient(0.0f);
-    const float v = cell ? DeformedValueAndGradient(x, cell_gradient) : DeformedValue(x);
-    if (mip) {
-      peaks.Add(v, k_sample);
-      return early && peaks.best >= p_.window.z;  // white: no later sample shows
-    }
-    if (pre) {
-      // composite_segment() of raycast_body.glsl.
-      const vec4 c = PreintegratedAt(has_front ? front : v, v);
-      front = v;
-      has_front = true;
-      return composite_step(c, cell_gradient, kShadeMinWeight * step);
-    }
-    const vec4 c = LutAt(v);
-    if (c.a <= 0.0f) return false;
-    vec3 rgb = vec3(c);
-    if (shading) {
-      // Per mm of ray with the cell gradient (raycast_body.glsl).
-      rgb = (1.0f - acc.a) * c.a > (cell ? kShadeMinWeight * step : kShadeMinWeight)
-                ? Shade(rgb, cell ? cell_gradient : TapGradient(x), dir)
-                : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(1.0f));
-    }
-    const float w = (1.0f - acc.a) * c.a;
-    acc += vec4(w * rgb, w);
-    return early && EndsOpaque(rgb, 1.0f, acc);
-  };
-  if (mip || cell) {
-    // Segments of the brick walk (raycast_body.glsl): the samples of one
-    // occupied brick, then the walk to the next.
-    BrickWalk walk = WalkStart(eye, dir, inv_dir, t_near);
-    const ivec3 step_b(inv_dir.x < 0.0f ? -1 : 1, inv_dir.y < 0.0f ? -1 : 1,
-                       inv_dir.z < 0.0f ? -1 : 1);
-    const vec3 t_delta = brick_size_ * glm::abs(inv_dir);
-    bool done = false;
-    // Partial end steps (raycast_body.glsl): entry to sample 0, then the
-    // walk from sample 1.
-    const bool partial_ends = pre && Flag(gpu::kRaycastPartialEndSteps);
-    if (partial_ends) {
-      done = composite_partial_step(t_entry, std::min(t_near, t_far));
-      k = k_next = 1;
-    }
-    ivec3 sampled(-(1 << 20));  // none
-    BrickWalk bright;
-    int k_bright = 0;
-    if (mip && skipping && Flag(gpu::kRaycastBrightestFirst) &&
-        WalkToBrightest(walk, step_b, t_delta, t_near, t_far, step, bright, k_bright)) {
-      const float t_end = std::min(WalkExit(bright), t_far);
-      for (float t = t_near + float(k_bright) * step; !done && t <= t_end;
-           t = t_near + float(k_bright) * step) {
-        done = sample(eye + t * dir, k_bright);
-        ++k_bright;
-      }
-      sampled = bright.b;
-    }
-    while (!done) {
-      float t_end = t_far;
-      if (skipping) {
-        const float threshold = mip ? std::max(peaks.best, p_.window.x) : 0.0f;
-        if (!WalkToOccupied(walk, k, threshold, step_b, t_delta, t_near, t_far, step, sampled)) {
-          break;
-        }
-        t_end = std::min(WalkExit(walk), t_far);
-      }
-      if (pre) {
-        if (k != k_next) {
-          has_front = k > 0;
-          has_light_front = false;
-          front = DeformedValue(eye + (t_near + float(k - 1) * step) * dir);
-        }
-        t_end = std::min(t_end + step, t_far);
-      }
-      for (float t = t_near + float(k) * step; t <= t_end; t = t_near + float(k) * step) {
-        done = sample(eye + t * dir, k);
-        ++k;
-        if (done) break;
-      }
-      k_next = k;
-      if (!skipping) break;
-      WalkStep(walk, step_b, t_delta);
-    }
-    if (partial_ends && !done && t_near <= t_far) {
-      composite_partial_step(LastSampleT(t_near, t_far, step), t_far);
-    }
-    if (mip && Flag(gpu::kRaycastPeakRefine) && !done && peaks.k_best >= 0) {
-      float refined = RefinePeak(peaks.best, peaks.k_best, t_near, step, t_entry, t_far, eye, dir);
-      taken += 6;
-      if (peaks.k_second >= 0) {
-        refined = std::max(refined, RefinePeak(peaks.second, peaks.k_second, t_near, step,
-                                               t_entry, t_far, eye, dir));
-        taken += 6;
-      }
-      peaks.best = refined;
-    }
-    k = -1;  // the per-sample loop below is for the tap gradient
+  return r;
+}
+
+template <typename Voxels>
+bool Caster<Voxels>::CompositeStep(Ray& r, vec4 c, vec3 g, float min_weight) const {
+  const float transmitted = 1.0f - r.acc.a;
+  vec3 rgb(c);
+  if (shading_) {
+    // The step's light: the mean of its two ends' (trapezoid rule).
+    const vec2 light = LightFactors(g, r.dir);
+    const vec2 seg = r.has_light_front ? 0.5f * (light + r.light_front) : light;
+    r.light_front = light;
+    r.has_light_front = both_ends_;
+    rgb = transmitted * c.a > min_weight
+              ? LitBy(rgb, seg, c.a)
+              : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(c.a));
   }
-  for (; k >= 0;) {
-    const float t = t_near + float(k) * step;
-    if (t > t_far) break;
-    const vec3 x = eye + t * dir;
-    if (skipping) {
+  if (c.a <= 0.0f) return false;
+  r.acc += vec4(transmitted * rgb, transmitted * c.a);
+  return early_ && EndsOpaque(rgb, c.a, r.acc);
+}
+
+template <typename Voxels>
+bool Caster<Voxels>::CompositePartialStep(Ray& r, float t_front, float t_back) const {
+  r.taken += 2;
+  vec3 g_back(0.0f);
+  const float v_front = DeformedValue(r.eye + t_front * r.dir);
+  r.front = DeformedValueAndGradient(r.eye + t_back * r.dir, g_back);
+  r.has_front = true;
+  const float fraction = std::clamp((t_back - t_front) / r.step, 0.0f, 1.0f);
+  r.has_light_front = false;
+  return CompositeStep(r, PartialPreintegratedStep(PreintegratedAt(v_front, r.front), fraction),
+                       g_back, kShadeMinWeight * r.step * fraction);
+}
+
+template <typename Voxels>
+bool Caster<Voxels>::Sample(Ray& r, vec3 x, int k_sample) const {
+  ++r.taken;
+  vec3 cell_gradient(0.0f);
+  const float v = cell_ ? DeformedValueAndGradient(x, cell_gradient) : DeformedValue(x);
+  if (mip_) {
+    r.peaks.Add(v, k_sample);
+    return early_ && r.peaks.best >= p_.window.z;  // white: no later sample shows
+  }
+  if (pre_) {
+    // composite_segment() of raycast_body.glsl.
+    const vec4 c = PreintegratedAt(r.has_front ? r.front : v, v);
+    r.front = v;
+    r.has_front = true;
+    return CompositeStep(r, c, cell_gradient, kShadeMinWeight * r.step);
+  }
+  const vec4 c = LutAt(v);
+  if (c.a <= 0.0f) return false;
+  vec3 rgb = vec3(c);
+  if (shading_) {
+    // Per mm of ray with the cell gradient (raycast_body.glsl).
+    rgb = (1.0f - r.acc.a) * c.a > (cell_ ? kShadeMinWeight * r.step : kShadeMinWeight)
+              ? Shade(rgb, cell_ ? cell_gradient : TapGradient(x), r.dir)
+              : glm::min(rgb * (p_.shading.x + p_.shading.y), vec3(1.0f));
+  }
+  const float w = (1.0f - r.acc.a) * c.a;
+  r.acc += vec4(w * rgb, w);
+  return early_ && EndsOpaque(rgb, 1.0f, r.acc);
+}
+
+template <typename Voxels>
+void Caster<Voxels>::WalkBricks(Ray& r) const {
+  BrickWalk walk = WalkStart(r.eye, r.dir, r.inv_dir, r.t_near);
+  const ivec3 step_b(r.inv_dir.x < 0.0f ? -1 : 1, r.inv_dir.y < 0.0f ? -1 : 1,
+                     r.inv_dir.z < 0.0f ? -1 : 1);
+  const vec3 t_delta = brick_size_ * glm::abs(r.inv_dir);
+  bool done = false;
+  // Partial end steps (raycast_body.glsl): entry to sample 0, then the walk
+  // from sample 1.
+  const bool partial_ends = pre_ && Flag(gpu::kRaycastPartialEndSteps);
+  if (partial_ends) {
+    done = CompositePartialStep(r, r.t_entry, std::min(r.t_near, r.t_far));
+    r.k = r.k_next = 1;
+  }
+  ivec3 sampled(-(1 << 20));  // none
+  BrickWalk bright;
+  int k_bright = 0;
+  if (mip_ && skipping_ && Flag(gpu::kRaycastBrightestFirst) &&
+      WalkToBrightest(walk, step_b, t_delta, r.t_near, r.t_far, r.step, bright, k_bright)) {
+    const float t_end = std::min(WalkExit(bright), r.t_far);
+    for (float t = r.t_near + float(k_bright) * r.step; !done && t <= t_end;
+         t = r.t_near + float(k_bright) * r.step) {
+      done = Sample(r, r.eye + t * r.dir, k_bright);
+      ++k_bright;
+    }
+    sampled = bright.b;
+  }
+  if (!done) done = SampleSegments(r, walk, step_b, t_delta, sampled);
+  if (partial_ends && !done && r.t_near <= r.t_far) {
+    CompositePartialStep(r, LastSampleT(r.t_near, r.t_far, r.step), r.t_far);
+  }
+  if (mip_ && Flag(gpu::kRaycastPeakRefine) && !done && r.peaks.k_best >= 0) {
+    float refined = RefinePeak(r, r.peaks.best, r.peaks.k_best);
+    if (r.peaks.k_second >= 0) {
+      refined = std::max(refined, RefinePeak(r, r.peaks.second, r.peaks.k_second));
+    }
+    r.peaks.best = refined;
+  }
+}
+
+template <typename Voxels>
+bool Caster<Voxels>::SampleSegments(Ray& r, BrickWalk& walk, ivec3 step_b, vec3 t_delta,
+                                    ivec3 sampled) const {
+  for (;;) {
+    float t_end = r.t_far;
+    if (skipping_) {
+      const float threshold = mip_ ? std::max(r.peaks.best, p_.window.x) : 0.0f;
+      if (!WalkToOccupied(walk, r.k, threshold, step_b, t_delta, r.t_near, r.t_far, r.step,
+                          sampled)) {
+        return false;
+      }
+      t_end = std::min(WalkExit(walk), r.t_far);
+    }
+    if (pre_) {
+      if (r.k != r.k_next) {
+        r.has_front = r.k > 0;
+        r.has_light_front = false;
+        r.front = DeformedValue(r.eye + (r.t_near + float(r.k - 1) * r.step) * r.dir);
+      }
+      t_end = std::min(t_end + r.step, r.t_far);
+    }
+    for (float t = r.t_near + float(r.k) * r.step; t <= t_end;
+         t = r.t_near + float(r.k) * r.step) {
+      const bool done = Sample(r, r.eye + t * r.dir, r.k);
+      ++r.k;
+      if (done) return true;
+    }
+    r.k_next = r.k;
+    if (!skipping_) return false;
+    WalkStep(walk, step_b, t_delta);
+  }
+}
+
+template <typename Voxels>
+void Caster<Voxels>::MarchTaps(Ray& r) const {
+  for (;;) {
+    const float t = r.t_near + float(r.k) * r.step;
+    if (t > r.t_far) return;
+    const vec3 x = r.eye + t * r.dir;
+    if (skipping_) {
       const ivec3 b = BrickOf(x);
       const float occ = in_.occupancy[b.x + nb_.x * (b.y + nb_.y * b.z)];
-      const bool empty = mip ? occ <= std::max(peaks.best, p_.window.x) : occ <= 0.0f;
+      const bool empty = mip_ ? occ <= std::max(r.peaks.best, p_.window.x) : occ <= 0.0f;
       if (empty) {
-        const float t_exit = BrickExit(x, eye, inv_dir);
-        k = std::max(k + 1, int(std::floor((t_exit - t_near) / step)) + 1);
+        const float t_exit = BrickExit(x, r.eye, r.inv_dir);
+        r.k = std::max(r.k + 1, int(std::floor((t_exit - r.t_near) / r.step)) + 1);
         continue;
       }
     }
-    if (sample(x, k)) break;
-    ++k;
+    if (Sample(r, x, r.k)) return;
+    ++r.k;
   }
-  const vec3 rgb = mip ? vec3(std::clamp((peaks.best - p_.window.x) * p_.window.y, 0.0f, 1.0f))
-                       : vec3(acc) + (1.0f - acc.a) * background;
+}
+
+template <typename Voxels>
+uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
+  const vec3 background(p_.background);
+  std::optional<Ray> ray = StartRay(px, py);
+  if (!ray) return PackRgba(background);
+  Ray& r = *ray;
+  if (mip_ || cell_) {
+    WalkBricks(r);
+  } else {
+    MarchTaps(r);
+  }
+  taken += r.taken;
+  const vec3 rgb = mip_ ? vec3(std::clamp((r.peaks.best - p_.window.x) * p_.window.y, 0.0f, 1.0f))
+                        : vec3(r.acc) + (1.0f - r.acc.a) * background;
   return PackRgba(rgb);
 }
 
@@ -616,54 +673,6 @@ std::vector<uint32_t> RaycastCpu(const gpu::RaycastParams& params, const Raycast
   });
   if (samples != nullptr) *samples = total;
   return pixels;
-}
-
-namespace {
-
-// Catmull-Rom weights of the texels at -1, 0, 1, 2 for a fraction t.
-vec4 CatmullRom(float t) {
-  const float t2 = t * t;
-  const float t3 = t2 * t;
-  return vec4(-0.5f * t3 + t2 - 0.5f * t, 1.5f * t3 - 2.5f * t2 + 1.0f,
-              -1.5f * t3 + 2.0f * t2 + 0.5f * t, 0.5f * t3 - 0.5f * t2);
-}
-
-}  // namespace
-
-std::vector<uint32_t> UpscaleCpu(std::span<const uint32_t> source, int sw, int sh, int tw,
-                                 int th, int filter) {
-  std::vector<uint32_t> out(size_t(tw) * th);
-  const glm::vec2 scale = glm::vec2(sw, sh) / glm::vec2(tw, th);
-  auto at = [&](int qx, int qy) { return Unpack(source[size_t(qy) * sw + qx]); };
-  for (int y = 0; y < th; ++y) {
-    for (int x = 0; x < tw; ++x) {
-      const glm::vec2 s = glm::clamp((glm::vec2(x, y) + 0.5f) * scale - 0.5f, glm::vec2(0.0f),
-                                     glm::vec2(sw - 1, sh - 1));
-      const glm::ivec2 i0 = glm::ivec2(glm::floor(s));
-      const glm::vec2 f = s - glm::vec2(i0);
-      vec4 c(0.0f);
-      if (filter == gpu::kUpscaleCatmullRom) {
-        const vec4 wx = CatmullRom(f.x);
-        const vec4 wy = CatmullRom(f.y);
-        const glm::ivec4 xs = glm::clamp(i0.x + glm::ivec4(-1, 0, 1, 2), 0, sw - 1);
-        for (int r = 0; r < 4; ++r) {
-          const int qy = std::clamp(i0.y - 1 + r, 0, sh - 1);
-          const vec4 row = at(xs.x, qy) * wx.x + at(xs.y, qy) * wx.y + at(xs.z, qy) * wx.z +
-                           at(xs.w, qy) * wx.w;
-          c += row * wy[r];
-        }
-      } else {
-        const glm::ivec2 i1 = glm::min(i0 + 1, glm::ivec2(sw - 1, sh - 1));
-        const vec4 top = at(i0.x, i0.y) + (at(i1.x, i0.y) - at(i0.x, i0.y)) * f.x;
-        const vec4 bottom = at(i0.x, i1.y) + (at(i1.x, i1.y) - at(i0.x, i1.y)) * f.x;
-        c = top + (bottom - top) * f.y;
-      }
-      c = glm::clamp(c, 0.0f, 1.0f) * 255.0f + 0.5f;
-      out[size_t(y) * tw + x] = uint32_t(c.r) | (uint32_t(c.g) << 8) | (uint32_t(c.b) << 16) |
-                                (uint32_t(c.a) << 24);
-    }
-  }
-  return out;
 }
 
 Result<Frame> RenderReference(const RenderRequest& request, const Volume& volume,

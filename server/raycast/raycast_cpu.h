@@ -43,12 +43,6 @@ struct RaycastCpuInputs {
 std::vector<uint32_t> RaycastCpu(const gpu::RaycastParams& params, const RaycastCpuInputs& in,
                                  int threads, int64_t* samples = nullptr);
 
-// Resize of packed RGBA8, as upscale.comp: filter gpu::kUpscaleBilinear or
-// gpu::kUpscaleCatmullRom.
-std::vector<uint32_t> UpscaleCpu(std::span<const uint32_t> source, int source_width,
-                                 int source_height, int target_width, int target_height,
-                                 int filter = gpu::kUpscaleBilinear);
-
 // A whole frame on the CPU, as VolumeRenderer::Render: the request's GPU
 // handles are ignored; `volume` is the source and `map` (optional) the
 // backward map. `brick_minmax` may hold BrickMinMaxCpu(volume,

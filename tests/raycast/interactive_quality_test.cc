@@ -18,6 +18,7 @@
 #include "server/io/read_volume.h"
 #include "server/phantom/phantom.h"
 #include "server/raycast/raycast_cpu.h"
+#include "server/raycast/upscale_cpu.h"
 #include "server/raycast/volume_renderer.h"
 #include "tests/gpu/gpu_test_context.h"
 #include "tests/raycast/render_test_util.h"
