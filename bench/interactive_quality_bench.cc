@@ -2,8 +2,10 @@
 // drag: for each candidate (InteractiveCast: ray grid divisor, step, upscale
 // filter) the drag loop's frames per second (FEM step + map update +
 // interactive frame + JPEG, in order, as drag_loop_bench's loop), the
-// frame's wall time, and its PSNR (RGB) against the still of the same
-// deformed state and camera. 512 x 512 (--size), default camera, the
+// frame's wall time, its two kernels' times (occupancy, ray cast; GPU
+// timestamps), the values each ray read (RaycastSettings::count_samples),
+// and its PSNR (RGB) against the still of the same deformed state and
+// camera. 512 x 512 (--size), default camera, the
 // 250-vertex mesh refined at the grab (the phantom's left renal artery, the
 // kidney CT's left kidney), dragged 12 mm in 10 steps. Candidates run interleaved, rep by rep, in
 // one process, so that other load on the machine weighs on all alike; the load average is printed
@@ -61,9 +63,11 @@ std::vector<Candidate> Candidates(bool all) {
            {"1/2 res, step <= 1.5x still", {2.0, 1.5, bilinear}},
            {"2/3 res, step <= 2x still", {1.5, 2.0, bilinear}},
            {"2/3 res, step <= 1.5x still", {1.5, 1.5, bilinear}},
+           {"2/3 res, step <= 3x still", {1.5, 3.0, bilinear}},
            {"full res, footprint step", {1.0, 0.0, bilinear}},
            {"full res, step <= 2x still", {1.0, 2.0, bilinear}},
            {"full res, step <= 3x still", {1.0, 3.0, bilinear}},
+           {"full res, step <= 4x still", {1.0, 4.0, bilinear}},
        }) {
     c.push_back(more);
   }
@@ -89,6 +93,8 @@ struct Result_ {
   double step_mm = 0.0;
   int rays = 0;
   std::vector<double> fps, frame_ms;
+  std::vector<double> occupancy_ms, cast_ms;  // the frame's two kernels (GPU timestamps)
+  double samples_per_ray = 0.0;               // mean over the PSNR pass's frames
 };
 
 constexpr int kSteps = 10;
@@ -182,13 +188,14 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
   still.quality = RenderQuality::kStill;
   const std::vector<Candidate> candidates = Candidates(all);
   // Candidate c's frame (c < 0: the still) of the scene's current state.
-  const auto render = [&](DeformableScene& scene, int c) {
+  const auto render = [&](DeformableScene& scene, int c, bool count = false) {
     RenderRequest request = bench::Check(scene.PrepareRender(c < 0 ? still : view), "prepare");
     if (c >= 0) {
       request.interactive = candidates[c].cast;
       request.settings.jitter = candidates[c].jitter;
     }
     request.settings.partial_end_steps = !whole_end_steps;
+    request.settings.count_samples = count;
     return bench::Check(scene.RenderPrepared(request), c < 0 ? "still" : "frame");
   };
   std::vector<Result_> results(candidates.size());
@@ -201,7 +208,7 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
       bench::Check(scene->Drag(DragOffset(s)), "drag");
       const Frame reference = render(*scene, -1);
       for (size_t c = 0; c < candidates.size(); ++c) {
-        const Frame frame = render(*scene, int(c));
+        const Frame frame = render(*scene, int(c), true);
         const double mse = bench::RgbMse(frame.rgba, reference.rgba);
         Result_& r = results[c];
         r.mse_sum += mse;
@@ -209,6 +216,8 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
         ++r.frames;
         r.step_mm = frame.step_mm;
         r.rays = frame.render_width;
+        r.samples_per_ray += double(frame.samples) /
+                             (double(frame.render_width) * frame.render_height * kSteps);
       }
     }
   }
@@ -221,6 +230,8 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
         bench::Check(scene->Drag(DragOffset(s)), "drag");
         const Frame frame = render(*scene, int(c));
         results[c].frame_ms.push_back(frame.timings.wall_ms);
+        results[c].occupancy_ms.push_back(frame.timings.occupancy_ms);
+        results[c].cast_ms.push_back(frame.timings.raycast_ms);
         bench::Check(EncodeJpeg(frame.rgba, frame.width, frame.height, 85), "jpeg");
       }
       results[c].fps.push_back(kSteps / (MsSince(t0) / 1000.0));
@@ -230,13 +241,17 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
               source.c_str(), mode == RenderMode::kMip ? "MIP" : "DVR", preset.c_str(), size,
               size, cut ? ", view cut" : "", whole_end_steps ? ", whole end steps" : "",
               context->device_name().c_str(), load_before.c_str(), LoadAverage().c_str());
-  std::printf("%-40s %5s %7s %9s %9s %10s %9s %9s\n", "candidate", "rays", "step mm", "loop fps",
-              "(best)", "frame ms", "PSNR dB", "worst dB");
+  std::printf("%-40s %5s %7s %9s %9s %10s %8s %8s %9s %9s %9s\n", "candidate", "rays",
+              "step mm", "loop fps", "(best)", "frame ms", "occ ms", "cast ms", "reads/ray",
+              "PSNR dB", "worst dB");
   for (size_t c = 0; c < candidates.size(); ++c) {
     const Result_& r = results[c];
-    std::printf("%-40s %5d %7.3f %9.1f %9.1f %10.1f %9.1f %9.1f\n", candidates[c].name.c_str(),
-                r.rays, r.step_mm, Median(r.fps), *std::max_element(r.fps.begin(), r.fps.end()),
-                Median(r.frame_ms), bench::PsnrOfMse(r.mse_sum / r.frames), r.worst_db);
+    std::printf("%-40s %5d %7.3f %9.1f %9.1f %10.1f %8.1f %8.1f %9.1f %9.1f %9.1f\n",
+                candidates[c].name.c_str(), r.rays, r.step_mm, Median(r.fps),
+                *std::max_element(r.fps.begin(), r.fps.end()), Median(r.frame_ms),
+                Median(r.occupancy_ms), Median(r.cast_ms), r.samples_per_ray,
+                bench::PsnrOfMse(r.mse_sum / r.frames),
+                r.worst_db);
   }
 }
 
