@@ -383,6 +383,111 @@ int VolumeRenderer::Bands(const RenderRequest& request, int width, int height) c
   return int(std::clamp<int64_t>(rays / options_.still_band_rays, 1, tile_rows));
 }
 
+Result<vk::raii::BufferView> VolumeRenderer::CallerMapView(const RenderRequest& request,
+                                                           size_t points) const {
+  const gpu::GpuBuffer* texels = request.backward_map_texels;
+  if (points > context_->limits().maxTexelBufferElements ||
+      texels->size_bytes() < points * sizeof(glm::vec4)) {
+    return absl::InvalidArgumentError(
+        StrCat("backward_map_texels: ", texels->size_bytes(), " bytes for a map of ", points,
+               " points (16 bytes each, at most ", context_->limits().maxTexelBufferElements,
+               " texels)"));
+  }
+  vk::raii::BufferView view{nullptr};
+  RETURN_IF_ERROR(gpu::CatchVulkan("creating a view of the backward map's values", [&] {
+    view = vk::raii::BufferView(
+        context_->device(), vk::BufferViewCreateInfo({}, texels->handle(),
+                                                     vk::Format::eR32G32B32A32Sfloat, 0,
+                                                     points * sizeof(glm::vec4)));
+  }));
+  return view;
+}
+
+VolumeRenderer::OccupancyPlan VolumeRenderer::PlanOccupancy(
+    const RenderRequest& request, const gpu::RaycastParams& p,
+    const std::array<int, 3>& map_dims) const {
+  OccupancyPlan plan{
+      .key = {request.volume, request.volume->buffer().handle(), request.mode, lut_generation_,
+              glm::ivec3(p.brick_voxels), request.backward_map, request.backward_map_version},
+      .cacheable = request.backward_map == nullptr || request.backward_map_version != 0,
+      .box = {glm::ivec3(0), glm::ivec3(p.bricks)}};
+  plan.current = plan.cacheable && occupancy_key_ == plan.key;
+  if (plan.current) {
+    plan.box = {};
+  } else if (plan.cacheable && request.backward_map != nullptr && occupancy_key_ &&
+             request.backward_map_previous_version != 0) {
+    // The occupancy of the map's previous version: only the bricks whose
+    // map cells the update changed.
+    OccupancyKey previous = plan.key;
+    previous.map_version = request.backward_map_previous_version;
+    if (*occupancy_key_ == previous) {
+      plan.box = BricksMeetingMapBox(p, map_dims, request.backward_map_changed_lo,
+                                     request.backward_map_changed_hi);
+    }
+  }
+  return plan;
+}
+
+Status VolumeRenderer::ReadBack(const RenderRequest& request, const RaycastSetup& setup,
+                                bool upscale, std::span<const gpu::DispatchTiming> timings,
+                                Frame& frame) {
+  for (const auto& t : timings) {
+    if (t.label == "occupancy") frame.timings.occupancy_ms = t.gpu_ms;
+    if (t.label == "map_copy") frame.timings.map_copy_ms = t.gpu_ms;
+    if (t.label == "raycast") {
+      // Summed over the bands; -1 when the device has no timestamps.
+      const double so_far = frame.timings.raycast_ms;
+      frame.timings.raycast_ms = t.gpu_ms < 0 || so_far < 0 ? -1.0 : so_far + t.gpu_ms;
+    }
+    if (t.label == "upscale") frame.timings.upscale_ms = t.gpu_ms;
+    frame.timings.render_ms += std::max(0.0, t.gpu_ms);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  frame.rgba.resize(size_t(request.width) * request.height * 4);
+  RETURN_IF_ERROR((upscale ? *upscaled_ : *pixels_).Download(std::as_writable_bytes(
+      std::span<uint8_t>(frame.rgba))));
+  frame.timings.readback_ms = MsSince(t0);
+  if (!request.settings.count_samples) return absl::OkStatus();
+  uint32_t samples = 0;
+  RETURN_IF_ERROR(stats_->Download(std::as_writable_bytes(std::span<uint32_t>(&samples, 1))));
+  frame.samples = samples;
+  if (request.settings.empty_space_skipping) {
+    std::vector<float> occupancy(size_t(frame.total_bricks));
+    RETURN_IF_ERROR(occupancy_->DownloadSpan(std::span<float>(occupancy)));
+    const bool mip = request.mode == RenderMode::kMip;
+    const float black = setup.params.window.x;
+    frame.occupied_bricks = std::count_if(occupancy.begin(), occupancy.end(), [&](float o) {
+      return mip ? o > black : o > 0.0f;
+    });
+  }
+  return absl::OkStatus();
+}
+
+Result<vk::raii::BufferView> VolumeRenderer::PrepareMapTexels(
+    const RenderRequest& request, const std::array<int, 3>& map_dims) {
+  vk::raii::BufferView map_view{nullptr};
+  if (!request.backward_map) return map_view;
+  const size_t points = size_t(map_dims[0]) * map_dims[1] * map_dims[2];
+  if (request.backward_map_texels) return CallerMapView(request, points);
+  RETURN_IF_ERROR(EnsureMapTexels(points));
+  return map_view;
+}
+
+Status VolumeRenderer::SubmitOtherBands(const RenderRequest& request, const Cast& cast,
+                                        const RaycastSetup& setup, int bands,
+                                        std::vector<gpu::DispatchTiming>& timings) {
+  // One submit each: what another renderer submits meanwhile runs between
+  // two of them.
+  for (int b = 1; b < bands; ++b) {
+    RETURN_IF_ERROR(request.cancel.Check());
+    ASSIGN_OR_RETURN(auto band, gpu::ComputeBatch::Begin(*context_, 1));
+    RETURN_IF_ERROR(RecordBand(band, cast, setup, b, bands));
+    ASSIGN_OR_RETURN(auto band_timings, band.SubmitAndWait());
+    timings.insert(timings.end(), band_timings.begin(), band_timings.end());
+  }
+  return absl::OkStatus();
+}
+
 Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto t_start = std::chrono::steady_clock::now();
@@ -407,51 +512,8 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   const bool upscale = render_pixels != out_pixels;
   RETURN_IF_ERROR(EnsureOccupancy(bricks));
   RETURN_IF_ERROR(EnsureBuffer(pixels_, render_pixels * 4, BU::eStorageBuffer));
-  // A view of the caller's copy of the map, when it gives one: created per
-  // frame (microseconds), so that it never outlives the buffer.
-  vk::raii::BufferView map_view{nullptr};
-  if (request.backward_map) {
-    const size_t points = size_t(map_dims[0]) * map_dims[1] * map_dims[2];
-    if (const gpu::GpuBuffer* texels = request.backward_map_texels) {
-      if (points > context_->limits().maxTexelBufferElements ||
-          texels->size_bytes() < points * sizeof(glm::vec4)) {
-        return absl::InvalidArgumentError(
-            StrCat("backward_map_texels: ", texels->size_bytes(), " bytes for a map of ", points,
-                   " points (16 bytes each, at most ", context_->limits().maxTexelBufferElements,
-                   " texels)"));
-      }
-      RETURN_IF_ERROR(gpu::CatchVulkan("creating a view of the backward map's values", [&] {
-        map_view = vk::raii::BufferView(
-            context_->device(),
-            vk::BufferViewCreateInfo({}, texels->handle(), vk::Format::eR32G32B32A32Sfloat, 0,
-                                     points * sizeof(glm::vec4)));
-      }));
-    } else {
-      RETURN_IF_ERROR(EnsureMapTexels(points));
-    }
-  }
-  // The occupancy depends on the volume, the table, the mode and the map; a
-  // map's content is known unchanged only through backward_map_version.
-  const OccupancyKey key{request.volume,      request.volume->buffer().handle(),
-                         request.mode,        lut_generation_,
-                         glm::ivec3(p.brick_voxels), request.backward_map,
-                         request.backward_map_version};
-  const bool cacheable = request.backward_map == nullptr || request.backward_map_version != 0;
-  const bool occupancy_current = cacheable && occupancy_key_ == key;
-  BrickBox occupancy_box{glm::ivec3(0), glm::ivec3(p.bricks)};
-  if (occupancy_current) {
-    occupancy_box = {};
-  } else if (cacheable && request.backward_map != nullptr && occupancy_key_ &&
-             request.backward_map_previous_version != 0) {
-    // The occupancy of the map's previous version: only the bricks whose
-    // map cells the update changed.
-    OccupancyKey previous = key;
-    previous.map_version = request.backward_map_previous_version;
-    if (*occupancy_key_ == previous) {
-      occupancy_box = BricksMeetingMapBox(p, map_dims, request.backward_map_changed_lo,
-                                          request.backward_map_changed_hi);
-    }
-  }
+  ASSIGN_OR_RETURN(vk::raii::BufferView map_view, PrepareMapTexels(request, map_dims));
+  const OccupancyPlan occupancy = PlanOccupancy(request, p, map_dims);
   occupancy_key_.reset();  // until this frame's pass has run
   if (upscale) RETURN_IF_ERROR(EnsureBuffer(upscaled_, out_pixels * 4, BU::eStorageBuffer));
   RETURN_IF_ERROR(params_->Upload(std::as_bytes(std::span<const gpu::RaycastParams>(&p, 1))));
@@ -463,63 +525,24 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   const int bands = Bands(request, setup.render_width, setup.render_height);
   ASSIGN_OR_RETURN(const Cast cast, PrepareCast(request, setup, map_texels));
   ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 5));
-  RETURN_IF_ERROR(RecordFrame(batch, request, setup, *minmax, upscale, occupancy_box, map_texels,
+  RETURN_IF_ERROR(RecordFrame(batch, request, setup, *minmax, upscale, occupancy.box, map_texels,
                               cast, bands));
   ASSIGN_OR_RETURN(auto timings, batch.SubmitAndWait());
-  if (request.settings.empty_space_skipping && cacheable) occupancy_key_ = key;
-  // The other bands of a still, one submit each: what another renderer
-  // submits meanwhile runs between two of them.
-  for (int b = 1; b < bands; ++b) {
-    RETURN_IF_ERROR(request.cancel.Check());
-    ASSIGN_OR_RETURN(auto band, gpu::ComputeBatch::Begin(*context_, 1));
-    RETURN_IF_ERROR(RecordBand(band, cast, setup, b, bands));
-    ASSIGN_OR_RETURN(auto band_timings, band.SubmitAndWait());
-    timings.insert(timings.end(), band_timings.begin(), band_timings.end());
-  }
-
-  Frame frame;
-  frame.width = request.width;
-  frame.height = request.height;
-  frame.render_width = setup.render_width;
-  frame.render_height = setup.render_height;
-  frame.step_mm = setup.step_mm;
-  frame.bands = bands;
-  frame.total_bricks = int64_t(bricks);
-  frame.occupancy_reused = request.settings.empty_space_skipping && occupancy_current;
-  if (request.settings.empty_space_skipping && !occupancy_box.empty()) {
-    frame.occupancy_bricks_computed =
-        int64_t(occupancy_box.size.x) * occupancy_box.size.y * occupancy_box.size.z;
-  }
-  for (const auto& t : timings) {
-    if (t.label == "occupancy") frame.timings.occupancy_ms = t.gpu_ms;
-    if (t.label == "map_copy") frame.timings.map_copy_ms = t.gpu_ms;
-    if (t.label == "raycast") {
-      // Summed over the bands; -1 when the device has no timestamps.
-      const double so_far = frame.timings.raycast_ms;
-      frame.timings.raycast_ms = t.gpu_ms < 0 || so_far < 0 ? -1.0 : so_far + t.gpu_ms;
-    }
-    if (t.label == "upscale") frame.timings.upscale_ms = t.gpu_ms;
-    frame.timings.render_ms += std::max(0.0, t.gpu_ms);
-  }
-  auto t0 = std::chrono::steady_clock::now();
-  frame.rgba.resize(out_pixels * 4);
-  RETURN_IF_ERROR((upscale ? *upscaled_ : *pixels_).Download(std::as_writable_bytes(
-      std::span<uint8_t>(frame.rgba))));
-  frame.timings.readback_ms = MsSince(t0);
-  if (request.settings.count_samples) {
-    uint32_t samples = 0;
-    RETURN_IF_ERROR(stats_->Download(std::as_writable_bytes(std::span<uint32_t>(&samples, 1))));
-    frame.samples = samples;
-    if (request.settings.empty_space_skipping) {
-      std::vector<float> occupancy(bricks);
-      RETURN_IF_ERROR(occupancy_->DownloadSpan(std::span<float>(occupancy)));
-      const bool mip = request.mode == RenderMode::kMip;
-      frame.occupied_bricks = std::count_if(occupancy.begin(), occupancy.end(), [&](float o) {
-        return mip ? o > p.window.x : o > 0.0f;
-      });
-    }
-  }
-  t0 = std::chrono::steady_clock::now();
+  if (request.settings.empty_space_skipping && occupancy.cacheable) occupancy_key_ = occupancy.key;
+  // The other bands of a still.
+  RETURN_IF_ERROR(SubmitOtherBands(request, cast, setup, bands, timings));
+  const bool skipping = request.settings.empty_space_skipping;
+  Frame frame{.width = request.width,
+              .height = request.height,
+              .render_width = setup.render_width,
+              .render_height = setup.render_height,
+              .step_mm = setup.step_mm,
+              .bands = bands,
+              .total_bricks = int64_t(bricks),
+              .occupancy_reused = skipping && occupancy.current,
+              .occupancy_bricks_computed = skipping ? occupancy.box.count() : 0};
+  RETURN_IF_ERROR(ReadBack(request, setup, upscale, timings, frame));
+  const auto t0 = std::chrono::steady_clock::now();
   DrawOverlay(request.overlay, request.camera, frame.width, frame.height, frame.rgba);
   frame.timings.overlay_ms = MsSince(t0);
   frame.timings.wall_ms = MsSince(t_start);

@@ -15,6 +15,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "server/common/status.h"
@@ -105,6 +106,7 @@ class VolumeRenderer {
     glm::ivec3 lo{0};
     glm::ivec3 size{0};
     bool empty() const { return size.x <= 0 || size.y <= 0 || size.z <= 0; }
+    int64_t count() const { return empty() ? 0 : int64_t(size.x) * size.y * size.z; }
   };
   // The bricks whose occupancy (brick_occupancy.comp) reads a map grid
   // point of the box lo..hi (inclusive); map_dims: M per axis.
@@ -133,6 +135,40 @@ class VolumeRenderer {
   // Bands for a frame cast at width x height: still frames width x height /
   // still_band_rays (at least 1, at most a tile row each), others 1.
   int Bands(const RenderRequest& request, int width, int height) const;
+  // A uniform-texel view of the caller's map values (request.
+  // backward_map_texels) for `points` grid points; InvalidArgument when the
+  // buffer is too small or the device cannot view that many texels.
+  Result<vk::raii::BufferView> CallerMapView(const RenderRequest& request, size_t points) const;
+  // What this frame's occupancy pass does. key: what the occupancy depends
+  // on (volume, table, mode, bricks, map; a map's content is known unchanged
+  // only through backward_map_version); box: the bricks to compute, none
+  // when the last pass's (occupancy_key_) is of key (current), those that
+  // the map's last update touched when it is of the map's previous version,
+  // else all.
+  struct OccupancyPlan {
+    OccupancyKey key;
+    bool cacheable = false;  // no map, or a versioned one
+    bool current = false;
+    BrickBox box;
+  };
+  OccupancyPlan PlanOccupancy(const RenderRequest& request, const gpu::RaycastParams& p,
+                              const std::array<int, 3>& map_dims) const;
+  // With a backward map: the caller's map values viewed (CallerMapView;
+  // created per frame, microseconds, so that it never outlives the buffer),
+  // or the renderer's own copy sized (EnsureMapTexels) and a null view.
+  Result<vk::raii::BufferView> PrepareMapTexels(const RenderRequest& request,
+                                                const std::array<int, 3>& map_dims);
+  // A still's bands 1 .. bands - 1, one submit each (between two of them
+  // runs what another renderer submits), their timings appended; stops at
+  // request.cancel.
+  Status SubmitOtherBands(const RenderRequest& request, const Cast& cast,
+                          const RaycastSetup& setup, int bands,
+                          std::vector<gpu::DispatchTiming>& timings);
+  // Fills frame's kernel timings, pixels (the upscaled buffer when
+  // `upscale`) and, with settings.count_samples, its samples and occupied
+  // bricks (frame.total_bricks set).
+  Status ReadBack(const RenderRequest& request, const RaycastSetup& setup, bool upscale,
+                  std::span<const gpu::DispatchTiming> timings, Frame& frame);
 
   const gpu::GpuContext* context_;
   Options options_;

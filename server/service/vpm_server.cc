@@ -142,36 +142,8 @@ Result<std::unique_ptr<VpmServer>> VpmServer::Create(const ServerOptions& option
   return s;
 }
 
-Status VpmServer::Start() {
+Status VpmServer::CreateVolumeStore() {
   const ServerOptions& o = options_;
-  if (o.no_auth && !IsLoopbackAddress(o.listen)) {
-    return absl::InvalidArgumentError(
-        StrCat("--no-auth serves every caller without a token, so it listens on loopback only "
-               "(127.0.0.1:PORT, [::1]:PORT, localhost:PORT or unix:PATH), not --listen ",
-               o.listen, "; give --token (or VPM_TOKEN) to listen there"));
-  }
-  ASSIGN_OR_RETURN(TokenAuth auth, MakeAuth(o));
-  auth_.emplace(std::move(auth));
-  ASSIGN_OR_RETURN(auto credentials, MakeCredentials(o));
-  ASSIGN_OR_RETURN(metrics_, ServiceMetrics::Create({o.metrics_listen}));
-  gpu::GpuContext::Options gpu_options;
-  gpu_options.device_selector = o.vulkan_device;
-  if (gpu_ == nullptr) {
-    ASSIGN_OR_RETURN(own_gpu_, gpu::GpuContext::Create(gpu_options));
-    gpu_ = own_gpu_.get();
-  }
-  // A user's calls run on at most all workers but one of a pool (unless
-  // told otherwise), so that another user's call always finds one free.
-  auto queue_limits = [&o](int threads) {
-    const int64_t running = o.max_running_per_user > 0
-                                ? o.max_running_per_user
-                                : std::max<int64_t>(1, threads - 1);
-    return FairJobQueue::Limits{o.max_queued_per_user, o.max_queued, running};
-  };
-  ASSIGN_OR_RETURN(request_pool_, WorkerPool::Create({o.request_threads, "request",
-                                                      queue_limits(o.request_threads)}));
-  ASSIGN_OR_RETURN(render_pool_, WorkerPool::Create({o.render_threads, "render",
-                                                     queue_limits(o.render_threads)}));
   VolumeStore::Options volume_options;
   volume_options.context = gpu_;
   volume_options.data_root = o.data_root;
@@ -201,15 +173,11 @@ Status VpmServer::Start() {
     };
   }
   ASSIGN_OR_RETURN(volumes_, VolumeStore::Create(volume_options));
-  ASSIGN_OR_RETURN(cases_, OpenCaseStore(o));
-  if (!o.state_dir.empty()) {
-    ASSIGN_OR_RETURN(blobs_, cases::BlobStore::Open(o.state_dir));
-  }
-  ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes,
-                                               [m = metrics_.get()](int64_t count) {
-                                                 m->Meshes(count);
-                                               },
-                                               StrCat("mesh-", id_tag_, "-")}));
+  return absl::OkStatus();
+}
+
+Status VpmServer::CreateSessionManager() {
+  const ServerOptions& o = options_;
   SessionManager::Options session_options;
   session_options.context = gpu_;
   session_options.max_sessions = o.max_sessions;
@@ -248,16 +216,11 @@ Status VpmServer::Start() {
   };
   session_options.id_prefix = StrCat("ses-", id_tag_, "-");
   ASSIGN_OR_RETURN(sessions_, SessionManager::Create(session_options));
-  streams_ = std::make_unique<StreamRegistry>(
-      o.max_streams_per_user,
-      [m = metrics_.get()](const std::string& user, int64_t n) { m->UserStreams(user, n); });
-  metrics_->SetOpenStreamsSource([s = streams_.get()] { return s->open_streams(); });
-  upload_memory_ = std::make_unique<ByteBudget>(o.max_upload_memory_bytes,
-                                               o.max_upload_memory_bytes_per_user);
-  upload_spool_ =
-      std::make_unique<ByteBudget>(o.max_upload_spool_bytes, o.max_upload_spool_bytes_per_user);
-  load_progress_ = std::make_unique<LoadProgressRegistry>();
+  return absl::OkStatus();
+}
 
+void VpmServer::FillContext() {
+  const ServerOptions& o = options_;
   context_.options = o;
   context_.gpu = gpu_;
   context_.auth = &*auth_;
@@ -274,8 +237,10 @@ Status VpmServer::Start() {
   context_.pacs = pacs_.get();
   context_.cases = cases_.get();
   context_.blobs = blobs_ ? &*blobs_ : nullptr;
-  service_ = std::make_unique<VpmService>(&context_);
+}
 
+Status VpmServer::Listen(const std::shared_ptr<grpc::ServerCredentials>& credentials) {
+  const ServerOptions& o = options_;
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
@@ -292,6 +257,64 @@ Status VpmServer::Start() {
     return absl::InvalidArgumentError(StrCat("--listen ", o.listen, ": cannot listen there"));
   }
   server_->GetHealthCheckService()->SetServingStatus(true);
+  return absl::OkStatus();
+}
+
+Status VpmServer::Start() {
+  const ServerOptions& o = options_;
+  if (o.no_auth && !IsLoopbackAddress(o.listen)) {
+    return absl::InvalidArgumentError(
+        StrCat("--no-auth serves every caller without a token, so it listens on loopback only "
+               "(127.0.0.1:PORT, [::1]:PORT, localhost:PORT or unix:PATH), not --listen ",
+               o.listen, "; give --token (or VPM_TOKEN) to listen there"));
+  }
+  ASSIGN_OR_RETURN(TokenAuth auth, MakeAuth(o));
+  auth_.emplace(std::move(auth));
+  ASSIGN_OR_RETURN(auto credentials, MakeCredentials(o));
+  ASSIGN_OR_RETURN(metrics_, ServiceMetrics::Create({o.metrics_listen}));
+  gpu::GpuContext::Options gpu_options;
+  gpu_options.device_selector = o.vulkan_device;
+  if (gpu_ == nullptr) {
+    ASSIGN_OR_RETURN(own_gpu_, gpu::GpuContext::Create(gpu_options));
+    gpu_ = own_gpu_.get();
+  }
+  // A user's calls run on at most all workers but one of a pool (unless
+  // told otherwise), so that another user's call always finds one free.
+  auto queue_limits = [&o](int threads) {
+    const int64_t running = o.max_running_per_user > 0
+                                ? o.max_running_per_user
+                                : std::max<int64_t>(1, threads - 1);
+    return FairJobQueue::Limits{o.max_queued_per_user, o.max_queued, running};
+  };
+  ASSIGN_OR_RETURN(request_pool_, WorkerPool::Create({o.request_threads, "request",
+                                                      queue_limits(o.request_threads)}));
+  ASSIGN_OR_RETURN(render_pool_, WorkerPool::Create({o.render_threads, "render",
+                                                     queue_limits(o.render_threads)}));
+  RETURN_IF_ERROR(CreateVolumeStore());
+  ASSIGN_OR_RETURN(cases_, OpenCaseStore(o));
+  if (!o.state_dir.empty()) {
+    ASSIGN_OR_RETURN(blobs_, cases::BlobStore::Open(o.state_dir));
+  }
+  ASSIGN_OR_RETURN(meshes_, MeshStore::Create({gpu_, o.max_meshes,
+                                               [m = metrics_.get()](int64_t count) {
+                                                 m->Meshes(count);
+                                               },
+                                               StrCat("mesh-", id_tag_, "-")}));
+  RETURN_IF_ERROR(CreateSessionManager());
+  streams_ = std::make_unique<StreamRegistry>(
+      o.max_streams_per_user,
+      [m = metrics_.get()](const std::string& user, int64_t n) { m->UserStreams(user, n); });
+  metrics_->SetOpenStreamsSource([s = streams_.get()] { return s->open_streams(); });
+  upload_memory_ = std::make_unique<ByteBudget>(o.max_upload_memory_bytes,
+                                               o.max_upload_memory_bytes_per_user);
+  upload_spool_ =
+      std::make_unique<ByteBudget>(o.max_upload_spool_bytes, o.max_upload_spool_bytes_per_user);
+  load_progress_ = std::make_unique<LoadProgressRegistry>();
+
+  FillContext();
+  service_ = std::make_unique<VpmService>(&context_);
+
+  RETURN_IF_ERROR(Listen(credentials));
   reaper_ = std::thread([this] { ReapIdleSessions(); });
   return absl::OkStatus();
 }

@@ -54,6 +54,13 @@ class VpmServer {
  private:
   VpmServer() = default;
   Status Start();
+  // Start's parts: the volume store (with the PACS loader when there is a
+  // PACS), the session manager (with refinement on grab), the handlers'
+  // context, and the gRPC server on --listen.
+  Status CreateVolumeStore();
+  Status CreateSessionManager();
+  void FillContext();
+  Status Listen(const std::shared_ptr<grpc::ServerCredentials>& credentials);
   void ReapIdleSessions();
 
   ServerOptions options_;
