@@ -97,7 +97,6 @@ uint32_t PackRgba(vec3 rgb) {
   return uint32_t(c.r) | (uint32_t(c.g) << 8) | (uint32_t(c.b) << 16) | (255u << 24);
 }
 
-
 // Runs fn(row) for rows 0..rows-1 on `threads` threads, rows interleaved
 // (neighbouring rows cost about the same).
 template <typename Fn>
@@ -444,7 +443,6 @@ class Caster {
   // Tap gradients: sample by sample, skipping empty bricks.
   void MarchTaps(Ray& r) const;
 
-
   const gpu::RaycastParams& p_;
   const RaycastCpuInputs& in_;
   Voxels values_;
@@ -625,8 +623,7 @@ void Caster<Voxels>::MarchTaps(Ray& r) const {
     if (t > r.t_far) return;
     const vec3 x = r.eye + t * r.dir;
     if (skipping_) {
-      const ivec3 b = BrickOf(x);
-      const float occ = in_.occupancy[b.x + nb_.x * (b.y + nb_.y * b.z)];
+      const float occ = Occupancy(BrickOf(x));
       const bool empty = mip_ ? occ <= std::max(r.peaks.best, p_.window.x) : occ <= 0.0f;
       if (empty) {
         const float t_exit = BrickExit(x, r.eye, r.inv_dir);

@@ -315,7 +315,7 @@ Status VolumeRenderer::RecordFrame(gpu::ComputeBatch& batch, const RenderRequest
   }
   if (occupancy) {
     const glm::ivec3& box = occupancy_box.size;
-    const int bricks = box.x * box.y * box.z;
+    const int bricks = int(occupancy_box.count());
     const gpu::BrickOccupancyPush push{
         .dims = glm::ivec4(glm::ivec3(p.dims), 0),
         .bricks = p.bricks,
@@ -528,10 +528,10 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   RETURN_IF_ERROR(RecordFrame(batch, request, setup, *minmax, upscale, occupancy.box, map_texels,
                               cast, bands));
   ASSIGN_OR_RETURN(auto timings, batch.SubmitAndWait());
-  if (request.settings.empty_space_skipping && occupancy.cacheable) occupancy_key_ = occupancy.key;
+  const bool skipping = request.settings.empty_space_skipping;
+  if (skipping && occupancy.cacheable) occupancy_key_ = occupancy.key;
   // The other bands of a still.
   RETURN_IF_ERROR(SubmitOtherBands(request, cast, setup, bands, timings));
-  const bool skipping = request.settings.empty_space_skipping;
   Frame frame{.width = request.width,
               .height = request.height,
               .render_width = setup.render_width,
