@@ -14,16 +14,21 @@ namespace vpm::cli {
 
 using nlohmann::json;
 
-void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_code) {
-  struct Args {
-    std::string volume_id, mesh_id, json_out;
-    std::vector<int64_t> grid;
-    int64_t target = 0;
-    std::string tf;
-    std::vector<double> point;
-    bool geometry = false;
-  };
-  auto a = std::make_shared<Args>();
+namespace {
+
+// What the mesh commands' flags fill.
+struct RemoteMeshArgs {
+  std::string volume_id, mesh_id, json_out;
+  std::vector<int64_t> grid;
+  int64_t target = 0;
+  std::string tf;
+  std::vector<double> point;
+  bool geometry = false;
+};
+
+// mesh-build (BuildMesh).
+void AddMeshBuildCommand(CLI::App& app, const ServerFlags* flags, int* exit_code,
+                         std::shared_ptr<RemoteMeshArgs> a) {
   CLI::App* build = app.add_subcommand("mesh-build", "server: BuildMesh");
   build->add_option("--volume-id", a->volume_id)->required();
   build->add_option("--grid", a->grid, "GX GY GZ")->expected(3);
@@ -47,6 +52,11 @@ void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_co
     PrintJson(MeshJson(info));
     return absl::OkStatus();
   }));
+}
+
+// mesh-get (GetMesh), optionally with the geometry as JSON.
+void AddMeshGetCommand(CLI::App& app, const ServerFlags* flags, int* exit_code,
+                       std::shared_ptr<RemoteMeshArgs> a) {
   CLI::App* get = app.add_subcommand("mesh-get", "server: GetMesh");
   get->add_option("ID", a->mesh_id)->required();
   get->add_flag("--geometry", a->geometry, "include vertices and tets");
@@ -72,6 +82,11 @@ void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_co
     }
     return absl::OkStatus();
   }));
+}
+
+// mesh-refine (RefineMesh) and mesh-delete (DeleteMesh).
+void AddMeshRefineDeleteCommands(CLI::App& app, const ServerFlags* flags, int* exit_code,
+                                 std::shared_ptr<RemoteMeshArgs> a) {
   CLI::App* refine = app.add_subcommand("mesh-refine", "server: RefineMesh (a new mesh)");
   refine->add_option("ID", a->mesh_id)->required();
   refine->add_option("POINT", a->point, "X Y Z mm")->expected(3)->required();
@@ -94,6 +109,15 @@ void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_co
     v3::DeleteMeshResponse response;
     return FromGrpc(s.stub().DeleteMesh(s.Context().get(), request, &response));
   }));
+}
+
+}  // namespace
+
+void AddRemoteMeshCommands(CLI::App& app, const ServerFlags* flags, int* exit_code) {
+  auto a = std::make_shared<RemoteMeshArgs>();
+  AddMeshBuildCommand(app, flags, exit_code, a);
+  AddMeshGetCommand(app, flags, exit_code, a);
+  AddMeshRefineDeleteCommands(app, flags, exit_code, a);
 }
 
 }  // namespace vpm::cli

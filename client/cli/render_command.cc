@@ -115,10 +115,9 @@ Result<v3::ManipulateResponse> Manipulate(const ServerConnection& server,
   return response;
 }
 
-// The same frame rendered by a vpm-server: LoadVolume, BuildMesh (refined
-// at the grab point, as offline), OpenSession, Manipulate, Render.
-Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
-  ASSIGN_OR_RETURN(const bool jpeg, IsJpegName(args.out));
+// The flags RunOnServer refuses: those only the offline render reads, and
+// malformed ones.
+Status CheckServerRenderArgs(const RenderArgs& args) {
   if (!args.mesh_json.empty()) {
     return absl::InvalidArgumentError(
         "--mesh-json is offline only: with --server the server builds the mesh from the mesh "
@@ -143,57 +142,80 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
       (!args.drag.empty() || !args.pull.empty())) {
     return absl::InvalidArgumentError("--drag and --pull need --grab or --grab-landmark");
   }
-  ASSIGN_OR_RETURN(ServerConnection server, ServerConnection::Connect(flags));
-  ASSIGN_OR_RETURN(v3::VolumeInfo volume, LoadVolumeOnServer(server, args.source));
-  std::vector<double> grab = args.grab;
+  return absl::OkStatus();
+}
+
+// The volume, mesh and session a server render works on.
+struct ServerScene {
+  v3::VolumeInfo volume;
+  v3::MeshInfo mesh;
+  v3::SessionInfo session;
+  std::vector<double> grab;  // mm, empty: no grab
+};
+
+// LoadVolume, BuildMesh (refined at the grab point, as offline) and
+// OpenSession.
+Result<ServerScene> OpenServerScene(const ServerConnection& server, const RenderArgs& args) {
+  ServerScene scene;
+  ASSIGN_OR_RETURN(scene.volume, LoadVolumeOnServer(server, args.source));
+  scene.grab = args.grab;
   if (!args.grab_landmark.empty()) {
-    ASSIGN_OR_RETURN(glm::dvec3 at, FindLandmark(volume, args.grab_landmark));
-    grab = {at.x, at.y, at.z};
+    ASSIGN_OR_RETURN(glm::dvec3 at, FindLandmark(scene.volume, args.grab_landmark));
+    scene.grab = {at.x, at.y, at.z};
   }
   MeshFlags mesh_flags = args.mesh;
-  if (!grab.empty() && mesh_flags.refine_at.empty() && mesh_flags.refine_at_landmark.empty()) {
-    mesh_flags.refine_at = grab;
+  if (!scene.grab.empty() && mesh_flags.refine_at.empty() &&
+      mesh_flags.refine_at_landmark.empty()) {
+    mesh_flags.refine_at = scene.grab;
   }
   v3::BuildMeshRequest build;
-  build.set_volume_id(volume.volume_id());
-  ASSIGN_OR_RETURN(*build.mutable_params(), ToProtoMeshParams(mesh_flags, volume));
-  v3::MeshInfo mesh;
-  RETURN_IF_ERROR(FromGrpc(server.stub().BuildMesh(server.Context().get(), build, &mesh)));
+  build.set_volume_id(scene.volume.volume_id());
+  ASSIGN_OR_RETURN(*build.mutable_params(), ToProtoMeshParams(mesh_flags, scene.volume));
+  RETURN_IF_ERROR(FromGrpc(server.stub().BuildMesh(server.Context().get(), build, &scene.mesh)));
   v3::OpenSessionRequest open;
-  open.set_volume_id(volume.volume_id());
-  open.set_mesh_id(mesh.mesh_id());
-  v3::SessionInfo session;
-  RETURN_IF_ERROR(FromGrpc(server.stub().OpenSession(server.Context().get(), open, &session)));
-  SessionCloser closer(server, session.session_id());
+  open.set_volume_id(scene.volume.volume_id());
+  open.set_mesh_id(scene.mesh.mesh_id());
+  RETURN_IF_ERROR(
+      FromGrpc(server.stub().OpenSession(server.Context().get(), open, &scene.session)));
+  return scene;
+}
+
+// The pins, then the grab and its drag or pull, as Manipulate events.
+Status ManipulateOnServer(const ServerConnection& server, const std::string& session,
+                          const std::vector<double>& grab, const RenderArgs& args) {
   for (size_t p = 0; p + 2 < args.pins.size(); p += 3) {
     v3::ClientEvent pin;
     *pin.mutable_pin()->mutable_point_mm() =
         ToProto(glm::dvec3(args.pins[p], args.pins[p + 1], args.pins[p + 2]));
-    RETURN_IF_ERROR(Manipulate(server, session.session_id(), pin).status());
+    RETURN_IF_ERROR(Manipulate(server, session, pin).status());
   }
-  if (!grab.empty()) {
-    v3::ClientEvent event;
-    ASSIGN_OR_RETURN(const glm::dvec3 grab_mm, Vec3Of(grab, "--grab"));
-    *event.mutable_grab()->mutable_point_mm() = ToProto(grab_mm);
-    event.mutable_grab()->set_radius_mm(args.grab_radius);
-    event.mutable_grab()->set_rule(args.grab_rule == "ball" ? v3::GRAB_RULE_BALL
-                                                            : v3::GRAB_RULE_ORGAN);
-    RETURN_IF_ERROR(Manipulate(server, session.session_id(), event).status());
-    event.Clear();
-    if (!args.drag.empty()) {
-      ASSIGN_OR_RETURN(const glm::dvec3 offset, Vec3Of(args.drag, "--drag"));
-      *event.mutable_drag()->mutable_offset_mm() = ToProto(offset);
-    }
-    if (!args.pull.empty()) {
-      ASSIGN_OR_RETURN(const glm::dvec3 force, Vec3Of(args.pull, "--pull"));
-      *event.mutable_pull()->mutable_force_n() = ToProto(force);
-    }
-    if (event.event_case() != v3::ClientEvent::EVENT_NOT_SET) {
-      RETURN_IF_ERROR(Manipulate(server, session.session_id(), event).status());
-    }
+  if (grab.empty()) return absl::OkStatus();
+  v3::ClientEvent event;
+  ASSIGN_OR_RETURN(const glm::dvec3 grab_mm, Vec3Of(grab, "--grab"));
+  *event.mutable_grab()->mutable_point_mm() = ToProto(grab_mm);
+  event.mutable_grab()->set_radius_mm(args.grab_radius);
+  event.mutable_grab()->set_rule(args.grab_rule == "ball" ? v3::GRAB_RULE_BALL
+                                                          : v3::GRAB_RULE_ORGAN);
+  RETURN_IF_ERROR(Manipulate(server, session, event).status());
+  event.Clear();
+  if (!args.drag.empty()) {
+    ASSIGN_OR_RETURN(const glm::dvec3 offset, Vec3Of(args.drag, "--drag"));
+    *event.mutable_drag()->mutable_offset_mm() = ToProto(offset);
   }
+  if (!args.pull.empty()) {
+    ASSIGN_OR_RETURN(const glm::dvec3 force, Vec3Of(args.pull, "--pull"));
+    *event.mutable_pull()->mutable_force_n() = ToProto(force);
+  }
+  if (event.event_case() == v3::ClientEvent::EVENT_NOT_SET) return absl::OkStatus();
+  return Manipulate(server, session, event).status();
+}
+
+// The Render request for the flags: camera, mode, preset or transfer
+// function, window, size, overlay, encoding and clip.
+Result<v3::RenderRequest> ServerRenderRequest(const std::string& session, const RenderArgs& args,
+                                              bool jpeg) {
   v3::RenderRequest render;
-  render.set_session_id(session.session_id());
+  render.set_session_id(session);
   if (!args.camera.empty()) {
     render.mutable_camera()->set_azimuth_deg(args.camera[0]);
     render.mutable_camera()->set_elevation_deg(args.camera[1]);
@@ -221,13 +243,18 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
   settings->set_jpeg_quality(args.jpeg_quality);
   ASSIGN_OR_RETURN(const ClipChoice clip, ToClipChoice(args.clip));
   FillClipSettings(clip, settings);
-  v3::Frame frame;
-  RETURN_IF_ERROR(FromGrpc(server.stub().Render(server.Context().get(), render, &frame)));
-  RETURN_IF_ERROR(WriteFile(args.out, frame.image()));
+  return render;
+}
+
+// What a server render prints: the ids, the settled state, the server's
+// stage timings and the file written.
+void PrintServerRender(const ServerFlags& flags, const ServerScene& scene, const v3::Frame& frame,
+                       const std::string& out) {
   std::printf("server %s: volume %s, mesh %s (%lld vertices, %lld tets), session %s\n",
-              flags.address.c_str(), volume.volume_id().c_str(), mesh.mesh_id().c_str(),
-              static_cast<long long>(mesh.stats().vertices()),
-              static_cast<long long>(mesh.stats().tets()), session.session_id().c_str());
+              flags.address.c_str(), scene.volume.volume_id().c_str(), scene.mesh.mesh_id().c_str(),
+              static_cast<long long>(scene.mesh.stats().vertices()),
+              static_cast<long long>(scene.mesh.stats().tets()),
+              scene.session.session_id().c_str());
   // The still's state: the drag settled (the server finishes it first).
   std::printf("max displacement %.2f mm, inverted tets %lld, lag %.2f mm\n",
               frame.max_displacement_mm(), static_cast<long long>(frame.inverted_tets()),
@@ -236,8 +263,25 @@ Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
   std::printf("%-22s %9s\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n%-22s %9.1f\n", "stage (server)",
               "ms", "render (GPU)", t.render_ms(), "encode", t.encode_ms(), "queue", t.queue_ms(),
               "total", t.total_ms());
-  std::printf("wrote %s (%dx%d, %zu bytes)\n", args.out.c_str(), frame.width(), frame.height(),
+  std::printf("wrote %s (%dx%d, %zu bytes)\n", out.c_str(), frame.width(), frame.height(),
               frame.image().size());
+}
+
+// The same frame rendered by a vpm-server: LoadVolume, BuildMesh (refined
+// at the grab point, as offline), OpenSession, Manipulate, Render.
+Status RunOnServer(const ServerFlags& flags, const RenderArgs& args) {
+  ASSIGN_OR_RETURN(const bool jpeg, IsJpegName(args.out));
+  RETURN_IF_ERROR(CheckServerRenderArgs(args));
+  ASSIGN_OR_RETURN(ServerConnection server, ServerConnection::Connect(flags));
+  ASSIGN_OR_RETURN(const ServerScene scene, OpenServerScene(server, args));
+  SessionCloser closer(server, scene.session.session_id());
+  RETURN_IF_ERROR(ManipulateOnServer(server, scene.session.session_id(), scene.grab, args));
+  ASSIGN_OR_RETURN(const v3::RenderRequest render,
+                   ServerRenderRequest(scene.session.session_id(), args, jpeg));
+  v3::Frame frame;
+  RETURN_IF_ERROR(FromGrpc(server.stub().Render(server.Context().get(), render, &frame)));
+  RETURN_IF_ERROR(WriteFile(args.out, frame.image()));
+  PrintServerRender(flags, scene, frame, args.out);
   return absl::OkStatus();
 }
 

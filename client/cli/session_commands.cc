@@ -16,18 +16,23 @@ namespace vpm::cli {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code) {
-  struct Args {
-    std::string volume_id, mesh_id, session_id, out, out_dir, user;
-    bool revoke = false;
-    std::vector<double> camera, grab, drag, pull, pin;
-    std::vector<int> size{512, 512};
-    bool release = false, keep = false, reset = false;
-    std::string grab_rule = "organ";
-    double radius_mm = 0.0;
-    int frames = 10;
-  };
-  auto a = std::make_shared<Args>();
+namespace {
+
+// What the session commands' flags fill.
+struct SessionArgs {
+  std::string volume_id, mesh_id, session_id, out, out_dir, user;
+  bool revoke = false;
+  std::vector<double> camera, grab, drag, pull, pin;
+  std::vector<int> size{512, 512};
+  bool release = false, keep = false, reset = false;
+  std::string grab_rule = "organ";
+  double radius_mm = 0.0;
+  int frames = 10;
+};
+
+// session open, list and close; returns the session command.
+CLI::App* AddSessionOpenListClose(CLI::App& app, const ServerFlags* flags, int* exit_code,
+                                  std::shared_ptr<SessionArgs> a) {
   CLI::App* session = app.add_subcommand("session", "server: sessions");
   session->require_subcommand(1);
   CLI::App* open = session->add_subcommand("open", "OpenSession");
@@ -59,7 +64,12 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
     v3::CloseSessionResponse response;
     return FromGrpc(s.stub().CloseSession(s.Context().get(), request, &response));
   }));
+  return session;
+}
 
+// session get and share.
+void AddSessionGetShare(CLI::App* session, const ServerFlags* flags, int* exit_code,
+                        std::shared_ptr<SessionArgs> a) {
   CLI::App* get = session->add_subcommand("get", "GetSession");
   get->add_option("ID", a->session_id)->required();
   get->callback(WithServer(flags, exit_code, [a](const ServerConnection& s) -> Status {
@@ -85,7 +95,11 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
     PrintJson(SessionJson(info));
     return absl::OkStatus();
   }));
+}
 
+// snapshot: one still frame of a session (Render).
+void AddSnapshotCommand(CLI::App& app, const ServerFlags* flags, int* exit_code,
+                        std::shared_ptr<SessionArgs> a) {
   CLI::App* snapshot = app.add_subcommand("snapshot", "server: Render one still frame");
   snapshot->add_option("--session", a->session_id)->required();
   snapshot->add_option("--camera", a->camera, "AZ EL DIST (DIST 0: fit)")->expected(3);
@@ -110,7 +124,11 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
                 frame.timings().encode_ms());
     return absl::OkStatus();
   }));
+}
 
+// manipulate: one event (Manipulate).
+void AddManipulateCommand(CLI::App& app, const ServerFlags* flags, int* exit_code,
+                          std::shared_ptr<SessionArgs> a) {
   CLI::App* manipulate = app.add_subcommand("manipulate", "server: Manipulate (one event)");
   manipulate->add_option("--session", a->session_id)->required();
   manipulate->add_option("--grab", a->grab, "X Y Z mm")->expected(3);
@@ -158,7 +176,11 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
     if (!response.message().empty()) std::printf("%s\n", response.message().c_str());
     return absl::OkStatus();
   }));
+}
 
+// set-camera (SetCamera).
+void AddSetCameraCommand(CLI::App& app, const ServerFlags* flags, int* exit_code,
+                         std::shared_ptr<SessionArgs> a) {
   CLI::App* camera = app.add_subcommand("set-camera", "server: SetCamera");
   camera->add_option("--session", a->session_id)->required();
   camera->add_option("POSE", a->camera, "AZ EL [DIST]")->expected(2, 3)->required();
@@ -171,7 +193,11 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
     v3::SetCameraResponse response;
     return FromGrpc(s.stub().SetCamera(s.Context().get(), request, &response));
   }));
+}
 
+// watch: a session's frames (Watch), optionally saved.
+void AddWatchCommand(CLI::App& app, const ServerFlags* flags, int* exit_code,
+                     std::shared_ptr<SessionArgs> a) {
   CLI::App* watch = app.add_subcommand("watch", "server: Watch a session's frames");
   watch->add_option("--session", a->session_id)->required();
   watch->add_option("--frames", a->frames, "stop after this many frames")->capture_default_str();
@@ -204,6 +230,17 @@ void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code)
     grpc::Status status = reader->Finish();
     return got_all && status.error_code() == grpc::CANCELLED ? absl::OkStatus() : FromGrpc(status);
   }));
+}
+
+}  // namespace
+
+void AddSessionCommands(CLI::App& app, const ServerFlags* flags, int* exit_code) {
+  auto a = std::make_shared<SessionArgs>();
+  AddSessionGetShare(AddSessionOpenListClose(app, flags, exit_code, a), flags, exit_code, a);
+  AddSnapshotCommand(app, flags, exit_code, a);
+  AddManipulateCommand(app, flags, exit_code, a);
+  AddSetCameraCommand(app, flags, exit_code, a);
+  AddWatchCommand(app, flags, exit_code, a);
 }
 
 }  // namespace vpm::cli

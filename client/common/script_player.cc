@@ -31,6 +31,150 @@ Result<v3::Vec3> VecOf(const nlohmann::json& j, const char* what) {
   return Vec(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
 }
 
+// A script's "settings": size, mode, preset, encoding, overlay and the
+// interactive quality. nlohmann::json throws on values of the wrong type.
+Status ParseSettings(const nlohmann::json& s, v3::RenderSettings& settings) {
+  settings.set_width(s.value("width", 256));
+  settings.set_height(s.value("height", 256));
+  const std::string mode = s.value("mode", "dvr");
+  const auto mode_value = RenderModeFromName(mode);
+  if (!mode_value) {
+    return absl::InvalidArgumentError(StrCat("settings.mode: '", mode, "' is not dvr or mip"));
+  }
+  settings.set_mode(*mode_value);
+  settings.set_preset(s.value("preset", ""));
+  const std::string encoding = s.value("encoding", "jpeg");
+  const auto encoding_value = EncodingFromName(encoding);
+  if (!encoding_value) {
+    return absl::InvalidArgumentError(
+        StrCat("settings.encoding: '", encoding, "' is not jpeg or png"));
+  }
+  settings.set_encoding(*encoding_value);
+  settings.set_jpeg_quality(s.value("jpeg_quality", 0));
+  settings.set_overlay(s.value("overlay", false));
+  if (s.contains("interactive_quality")) {
+    const std::string quality = s["interactive_quality"].get<std::string>();
+    const auto quality_value = InteractiveQualityFromName(quality);
+    if (!quality_value) {
+      return absl::InvalidArgumentError(
+          StrCat("settings.interactive_quality: '", quality, "' is not fast, balanced or sharp"));
+    }
+    settings.set_interactive_quality(*quality_value);
+  }
+  return absl::OkStatus();
+}
+
+// A script's steps, each into its events: the camera the camera and orbit
+// steps move, and the interval every event waits after the one before.
+class StepParser {
+ public:
+  StepParser(double interval_ms, const v3::VolumeInfo& volume, std::vector<ScriptEvent>& events)
+      : interval_ms_(interval_ms), volume_(volume), events_(events) {}
+
+  Status Parse(const nlohmann::json& step) {
+    if (step.contains("camera")) {
+      const auto& c = step["camera"];
+      azimuth_ = c.value("azimuth_deg", 0.0);
+      elevation_ = c.value("elevation_deg", 0.0);
+      distance_ = c.value("distance_mm", 0.0);
+      PushCamera();
+    } else if (step.contains("orbit")) {
+      Orbit(step["orbit"]);
+    } else if (step.contains("grab")) {
+      return Grab(step["grab"]);
+    } else if (step.contains("drag")) {
+      return Drag(step["drag"]);
+    } else if (step.contains("pull")) {
+      ScriptEvent e = Event();
+      ASSIGN_OR_RETURN(*e.event.mutable_pull()->mutable_force_n(),
+                       VecOf(step["pull"].at("force_n"), "pull.force_n"));
+      events_.push_back(e);
+    } else if (step.contains("release")) {
+      const auto& r = step["release"];
+      if (!r.is_object()) return absl::InvalidArgumentError("script: release must be an object");
+      ScriptEvent e = Event();
+      e.event.mutable_release()->set_keep(r.value("keep", false));
+      events_.push_back(e);
+    } else if (step.contains("wait_ms")) {
+      if (!events_.empty()) events_.back().wait_ms += step["wait_ms"].get<double>();
+    } else {
+      return absl::InvalidArgumentError(StrCat("script step ", step.dump(), ": unknown"));
+    }
+    return absl::OkStatus();
+  }
+
+ private:
+  ScriptEvent Event() const {
+    ScriptEvent e;
+    e.wait_ms = interval_ms_;
+    return e;
+  }
+
+  void PushCamera() {
+    ScriptEvent e = Event();
+    e.event.mutable_camera()->set_azimuth_deg(azimuth_);
+    e.event.mutable_camera()->set_elevation_deg(elevation_);
+    e.event.mutable_camera()->set_distance_mm(distance_);
+    events_.push_back(e);
+  }
+
+  // `steps` camera events from the current azimuth and elevation to the
+  // orbit's.
+  void Orbit(const nlohmann::json& o) {
+    const int steps = o.value("steps", 10);
+    const double from = azimuth_, to = o.value("to_azimuth_deg", azimuth_);
+    const double el_from = elevation_, el_to = o.value("to_elevation_deg", elevation_);
+    for (int i = 1; i <= steps; ++i) {
+      azimuth_ = from + (to - from) * i / steps;
+      elevation_ = el_from + (el_to - el_from) * i / steps;
+      PushCamera();
+    }
+  }
+
+  // At a landmark of the volume, a point (mm), or the volume's centre.
+  Status Grab(const nlohmann::json& g) {
+    ScriptEvent e = Event();
+    v3::Grab* grab = e.event.mutable_grab();
+    if (g.contains("landmark")) {
+      const std::string name = g["landmark"].get<std::string>();
+      const auto& marks = volume_.landmarks();
+      const auto it = std::find_if(marks.rbegin(), marks.rend(),
+                                   [&](const auto& l) { return l.name() == name; });
+      if (it == marks.rend()) {
+        return absl::NotFoundError(StrCat("grab.landmark '", name, "' is not in the volume"));
+      }
+      *grab->mutable_point_mm() = it->position_mm();
+    } else if (g.contains("point_mm")) {
+      ASSIGN_OR_RETURN(*grab->mutable_point_mm(), VecOf(g["point_mm"], "grab.point_mm"));
+    } else {
+      *grab->mutable_point_mm() = Vec((volume_.dims(0) - 1) * volume_.spacing_mm().x() / 2,
+                                      (volume_.dims(1) - 1) * volume_.spacing_mm().y() / 2,
+                                      (volume_.dims(2) - 1) * volume_.spacing_mm().z() / 2);
+    }
+    grab->set_radius_mm(g.value("radius_mm", 0.0));
+    events_.push_back(e);
+    return absl::OkStatus();
+  }
+
+  // `steps` drag events to to_mm, evenly.
+  Status Drag(const nlohmann::json& d) {
+    ASSIGN_OR_RETURN(v3::Vec3 to, VecOf(d.at("to_mm"), "drag.to_mm"));
+    const int steps = d.value("steps", 10);
+    for (int i = 1; i <= steps; ++i) {
+      ScriptEvent e = Event();
+      const double f = double(i) / steps;
+      *e.event.mutable_drag()->mutable_offset_mm() = Vec(to.x() * f, to.y() * f, to.z() * f);
+      events_.push_back(e);
+    }
+    return absl::OkStatus();
+  }
+
+  double interval_ms_;
+  const v3::VolumeInfo& volume_;
+  std::vector<ScriptEvent>& events_;
+  double azimuth_ = 0, elevation_ = 0, distance_ = 0;
+};
+
 }  // namespace
 
 Result<nlohmann::json> ReadJsonFile(const std::string& path) {
@@ -62,119 +206,9 @@ Result<Script> ParseScript(const nlohmann::json& j, const v3::VolumeInfo& volume
   Script script;
   try {
     if (j.contains("volume")) script.volume = j["volume"].get<std::string>();
-    if (j.contains("settings")) {
-      const auto& s = j["settings"];
-      script.settings.set_width(s.value("width", 256));
-      script.settings.set_height(s.value("height", 256));
-      const std::string mode = s.value("mode", "dvr");
-      const auto mode_value = RenderModeFromName(mode);
-      if (!mode_value) {
-        return absl::InvalidArgumentError(StrCat("settings.mode: '", mode, "' is not dvr or mip"));
-      }
-      script.settings.set_mode(*mode_value);
-      script.settings.set_preset(s.value("preset", ""));
-      const std::string encoding = s.value("encoding", "jpeg");
-      const auto encoding_value = EncodingFromName(encoding);
-      if (!encoding_value) {
-        return absl::InvalidArgumentError(
-            StrCat("settings.encoding: '", encoding, "' is not jpeg or png"));
-      }
-      script.settings.set_encoding(*encoding_value);
-      script.settings.set_jpeg_quality(s.value("jpeg_quality", 0));
-      script.settings.set_overlay(s.value("overlay", false));
-      if (s.contains("interactive_quality")) {
-        const std::string quality = s["interactive_quality"].get<std::string>();
-        const auto quality_value = InteractiveQualityFromName(quality);
-        if (!quality_value) {
-          return absl::InvalidArgumentError(StrCat("settings.interactive_quality: '", quality,
-                                                   "' is not fast, balanced or sharp"));
-        }
-        script.settings.set_interactive_quality(*quality_value);
-      }
-    }
-    const double interval = j.value("interval_ms", 33.0);
-    double azimuth = 0, elevation = 0, distance = 0;
-    auto camera_event = [&] {
-      ScriptEvent e;
-      e.wait_ms = interval;
-      e.event.mutable_camera()->set_azimuth_deg(azimuth);
-      e.event.mutable_camera()->set_elevation_deg(elevation);
-      e.event.mutable_camera()->set_distance_mm(distance);
-      return e;
-    };
-    for (const auto& step : j.at("steps")) {
-      if (step.contains("camera")) {
-        const auto& c = step["camera"];
-        azimuth = c.value("azimuth_deg", 0.0);
-        elevation = c.value("elevation_deg", 0.0);
-        distance = c.value("distance_mm", 0.0);
-        script.events.push_back(camera_event());
-      } else if (step.contains("orbit")) {
-        const auto& o = step["orbit"];
-        const int steps = o.value("steps", 10);
-        const double from = azimuth, to = o.value("to_azimuth_deg", azimuth);
-        const double el_from = elevation, el_to = o.value("to_elevation_deg", elevation);
-        for (int i = 1; i <= steps; ++i) {
-          azimuth = from + (to - from) * i / steps;
-          elevation = el_from + (el_to - el_from) * i / steps;
-          script.events.push_back(camera_event());
-        }
-      } else if (step.contains("grab")) {
-        const auto& g = step["grab"];
-        ScriptEvent e;
-        e.wait_ms = interval;
-        v3::Grab* grab = e.event.mutable_grab();
-        if (g.contains("landmark")) {
-          const std::string name = g["landmark"].get<std::string>();
-          bool found = false;
-          for (const auto& l : volume.landmarks()) {
-            if (l.name() == name) {
-              *grab->mutable_point_mm() = l.position_mm();
-              found = true;
-            }
-          }
-          if (!found) return absl::NotFoundError(StrCat("grab.landmark '", name, "' is not in the volume"));
-        } else if (g.contains("point_mm")) {
-          ASSIGN_OR_RETURN(*grab->mutable_point_mm(), VecOf(g["point_mm"], "grab.point_mm"));
-        } else {
-          // The centre of the volume.
-          *grab->mutable_point_mm() =
-              Vec((volume.dims(0) - 1) * volume.spacing_mm().x() / 2,
-                  (volume.dims(1) - 1) * volume.spacing_mm().y() / 2,
-                  (volume.dims(2) - 1) * volume.spacing_mm().z() / 2);
-        }
-        grab->set_radius_mm(g.value("radius_mm", 0.0));
-        script.events.push_back(e);
-      } else if (step.contains("drag")) {
-        const auto& d = step["drag"];
-        ASSIGN_OR_RETURN(v3::Vec3 to, VecOf(d.at("to_mm"), "drag.to_mm"));
-        const int steps = d.value("steps", 10);
-        for (int i = 1; i <= steps; ++i) {
-          ScriptEvent e;
-          e.wait_ms = interval;
-          const double f = double(i) / steps;
-          *e.event.mutable_drag()->mutable_offset_mm() = Vec(to.x() * f, to.y() * f, to.z() * f);
-          script.events.push_back(e);
-        }
-      } else if (step.contains("pull")) {
-        ScriptEvent e;
-        e.wait_ms = interval;
-        ASSIGN_OR_RETURN(*e.event.mutable_pull()->mutable_force_n(),
-                         VecOf(step["pull"].at("force_n"), "pull.force_n"));
-        script.events.push_back(e);
-      } else if (step.contains("release")) {
-        ScriptEvent e;
-        e.wait_ms = interval;
-        const auto& r = step["release"];
-        if (!r.is_object()) return absl::InvalidArgumentError("script: release must be an object");
-        e.event.mutable_release()->set_keep(r.value("keep", false));
-        script.events.push_back(e);
-      } else if (step.contains("wait_ms")) {
-        if (!script.events.empty()) script.events.back().wait_ms += step["wait_ms"].get<double>();
-      } else {
-        return absl::InvalidArgumentError(StrCat("script step ", step.dump(), ": unknown"));
-      }
-    }
+    if (j.contains("settings")) RETURN_IF_ERROR(ParseSettings(j["settings"], script.settings));
+    StepParser steps(j.value("interval_ms", 33.0), volume, script.events);
+    for (const auto& step : j.at("steps")) RETURN_IF_ERROR(steps.Parse(step));
   } catch (const std::exception& e) {
     return absl::InvalidArgumentError(StrCat("script: ", e.what()));
   }

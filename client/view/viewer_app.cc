@@ -26,6 +26,34 @@ v3::InteractiveQuality NextInteractiveQuality(v3::InteractiveQuality q) {
   }
 }
 
+// The transfer function an action picks (DVR), null for other actions.
+const char* PresetOfAction(Action action) {
+  switch (action) {
+    case Action::kPresetSoftTissue:
+      return "ct-soft-tissue";
+    case Action::kPresetBone:
+      return "ct-bone";
+    case Action::kPresetVessels:
+      return "ct-vessels";
+    case Action::kPresetMriT1:
+      return "mri-t1";
+    case Action::kPresetSlicerAaa:
+      return "CT-AAA";
+    case Action::kPresetSlicerBone:
+      return "CT-Bone";
+    case Action::kPresetSlicerMuscle:
+      return "CT-Muscle";
+    case Action::kPresetSlicerChest:
+      return "CT-Chest-Contrast-Enhanced";
+    case Action::kPresetSlicerSoftTissue:
+      return "CT-Soft-Tissue";
+    case Action::kPresetSlicerMr:
+      return "MR-Default";
+    default:
+      return nullptr;
+  }
+}
+
 }  // namespace
 
 ViewerApp::ViewerApp(ViewFlags flags) : flags_(std::move(flags)) {
@@ -148,12 +176,14 @@ void ViewerApp::HandleEvent(const SDL_Event& e) {
 }
 
 void ViewerApp::OnAction(Action action) {
-  auto preset = [this](const char* name) {
+  if (const char* preset = PresetOfAction(action)) {
     settings_.set_mode(v3::RENDER_MODE_DVR);
-    settings_.set_preset(name);
+    settings_.set_preset(preset);
     SendSettings();
-    Notice(StrCat("DVR ", name));
-  };
+    Notice(StrCat("DVR ", preset));
+    return;
+  }
+  if (OnSettingsAction(action)) return;
   switch (action) {
     case Action::kToggleHelp: show_help_ = !show_help_; break;
     case Action::kToggleCases: ToggleCases(); break;
@@ -161,71 +191,97 @@ void ViewerApp::OnAction(Action action) {
       grab_mode_ = !grab_mode_;
       Notice(grab_mode_ ? "grab mode: left drag pulls tissue" : "grab mode off: left drag orbits");
       break;
-    case Action::kPresetSoftTissue: preset("ct-soft-tissue"); break;
-    case Action::kPresetBone: preset("ct-bone"); break;
-    case Action::kPresetVessels: preset("ct-vessels"); break;
-    case Action::kPresetMriT1: preset("mri-t1"); break;
-    case Action::kPresetSlicerAaa: preset("CT-AAA"); break;
-    case Action::kPresetSlicerBone: preset("CT-Bone"); break;
-    case Action::kPresetSlicerMuscle: preset("CT-Muscle"); break;
-    case Action::kPresetSlicerChest: preset("CT-Chest-Contrast-Enhanced"); break;
-    case Action::kPresetSlicerSoftTissue: preset("CT-Soft-Tissue"); break;
-    case Action::kPresetSlicerMr: preset("MR-Default"); break;
+    case Action::kToggleSlices:
+      ToggleSlices();
+      break;
+    case Action::kToggleCropMode:
+      ToggleCropMode();
+      break;
+    case Action::kToggleClipPlane:
+      ToggleClipPlane();
+      break;
+    case Action::kAddClipPlane:
+      AddClipPlane();
+      break;
+    case Action::kScrollForward:
+      ScrollByKey(1.0);
+      break;
+    case Action::kScrollBack:
+      ScrollByKey(-1.0);
+      break;
+    case Action::kRefineHere:
+      RefineAtCursor();
+      break;
+    case Action::kResetView:
+      if (camera_) camera_->Reset(), SendCamera();
+      break;
+    case Action::kResetDeformation:
+      ResetDeformation();
+      break;
+    case Action::kPinHere:
+      PinAtCursor();
+      break;
+    case Action::kUndo:
+      connection_->Undo(false);
+      break;
+    case Action::kRedo:
+      connection_->Undo(true);
+      break;
+    case Action::kScreenshot:
+      SaveScreenshot();
+      break;
+    case Action::kQuit:
+      running_ = false;
+      break;
+    default:
+      break;
+  }
+}
+
+bool ViewerApp::OnSettingsAction(Action action) {
+  switch (action) {
     case Action::kToggleViewCut:
       view_cut_ = !view_cut_;
       SendSettings();
       Notice(view_cut_ ? "view cut on (while no crop or clip)" : "view cut off");
-      break;
+      return true;
     case Action::kCycleInteractiveQuality:
       settings_.set_interactive_quality(NextInteractiveQuality(settings_.interactive_quality()));
       SendSettings();
       Notice(StrCat("frames while moving: ",
                     InteractiveQualityName(settings_.interactive_quality())));
-      break;
+      return true;
     case Action::kMip:
       settings_.set_mode(settings_.mode() == v3::RENDER_MODE_MIP ? v3::RENDER_MODE_DVR
                                                                  : v3::RENDER_MODE_MIP);
       SendSettings();
       Notice(settings_.mode() == v3::RENDER_MODE_MIP ? "MIP" : "DVR");
-      break;
-    case Action::kToggleSlices: ToggleSlices(); break;
-    case Action::kToggleCropMode: ToggleCropMode(); break;
-    case Action::kToggleClipPlane: ToggleClipPlane(); break;
-    case Action::kAddClipPlane: AddClipPlane(); break;
-    case Action::kScrollForward:
-    case Action::kScrollBack: {
-      const double sign = action == Action::kScrollForward ? 1.0 : -1.0;
-      const double step = ShiftHeld() ? 5.0 : 1.0;
-      int x = 0, y = 0;
-      SDL_GetMouseState(&x, &y);
-      if (!ScrollSliceAt(x, y, sign * step) && settings_.clip_size() > 0) {
-        MoveClipPlane(sign * step);
-      }
-      break;
-    }
+      return true;
     case Action::kToggleOverlay:
       settings_.set_overlay(!settings_.overlay());
       SendSettings();
-      break;
-    case Action::kRefineHere: RefineAtCursor(); break;
-    case Action::kResetView:
-      if (camera_) camera_->Reset(), SendCamera();
-      break;
-    case Action::kResetDeformation: {
-      v3::ClientEvent event;
-      event.mutable_reset();
-      connection_->Send(event);
-      grabbed_ = false;
-      gesture_ = Gesture::kNone;
-      Notice("back to rest: kept drags and pins dropped");
-      break;
-    }
-    case Action::kPinHere: PinAtCursor(); break;
-    case Action::kUndo: connection_->Undo(false); break;
-    case Action::kRedo: connection_->Undo(true); break;
-    case Action::kScreenshot: SaveScreenshot(); break;
-    case Action::kQuit: running_ = false; break;
+      return true;
+    default:
+      return false;
   }
+}
+
+void ViewerApp::ScrollByKey(double sign) {
+  const double step = ShiftHeld() ? 5.0 : 1.0;
+  int x = 0, y = 0;
+  SDL_GetMouseState(&x, &y);
+  if (!ScrollSliceAt(x, y, sign * step) && settings_.clip_size() > 0) {
+    MoveClipPlane(sign * step);
+  }
+}
+
+void ViewerApp::ResetDeformation() {
+  v3::ClientEvent event;
+  event.mutable_reset();
+  connection_->Send(event);
+  grabbed_ = false;
+  gesture_ = Gesture::kNone;
+  Notice("back to rest: kept drags and pins dropped");
 }
 
 void ViewerApp::OnButtonDown(const SDL_MouseButtonEvent& b) {

@@ -32,6 +32,14 @@ class ViewerApp {
  private:
   void HandleEvent(const SDL_Event& event);
   void OnAction(Action action);
+  // The actions that change the render settings (view cut, quality while
+  // moving, MIP, overlay); false for the others.
+  bool OnSettingsAction(Action action);
+  // PageDown / PageUp: the slice under the cursor by 1 (Shift: 5) pixels
+  // in `sign`'s direction, else the clip plane by as many mm.
+  void ScrollByKey(double sign);
+  // Back to rest: kept drags and pins dropped.
+  void ResetDeformation();
   void OnButtonDown(const SDL_MouseButtonEvent& button);
   void OnButtonUp(const SDL_MouseButtonEvent& button);
   void OnMotion(const SDL_MouseMotionEvent& motion);

@@ -45,6 +45,26 @@ std::span<const uint32_t> RaycastSpirv(bool sampled, bool mip, bool map) {
   return map ? std::span<const uint32_t>(kRaycastDvrMapSpv) : kRaycastDvrSpv;
 }
 
+// A ray caster's kernel: DVR or MIP, with or without a backward map, and
+// DVR shaded with the cell gradient (specialization constant
+// kCellGradient), pre-integrated or not.
+gpu::KernelSpec RaycastSpec(bool sampled, bool mip, bool map, bool cell_gradient,
+                            bool preintegrated) {
+  const DT volume_read = sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer;
+  gpu::KernelSpec spec{
+      .name =
+          StrCat("raycast_", mip ? "mip" : "dvr", map ? "_map" : "", sampled ? "_sampled" : "",
+                 cell_gradient ? " (cell gradient)" : "", preintegrated ? " (pre-integrated)" : ""),
+      .spirv = RaycastSpirv(sampled, mip, map),
+      .bindings = {volume_read, volume_read, DT::eStorageBuffer, DT::eUniformTexelBuffer,
+                   DT::eUniformTexelBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
+      .push_constant_bytes = sizeof(gpu::RaycastBandPush),
+      .local_size = {8, 8, 1}};
+  // Ids 1, 2 and 4 are the volume's (GpuVolume::KernelFor), 3 pre-integration.
+  if (cell_gradient) spec.specialization = {1u, 0u, 0u, preintegrated ? 1u : 0u};
+  return spec;
+}
+
 }  // namespace
 
 Result<std::unique_ptr<VolumeRenderer>> VolumeRenderer::Create(const gpu::GpuContext& context,
@@ -55,6 +75,11 @@ Result<std::unique_ptr<VolumeRenderer>> VolumeRenderer::Create(const gpu::GpuCon
 }
 
 Status VolumeRenderer::Init() {
+  RETURN_IF_ERROR(CreateKernels());
+  return CreateBuffers();
+}
+
+Status VolumeRenderer::CreateKernels() {
   const bool sampled = options_.volume_access == VolumeAccess::kSampler3D;
   ASSIGN_OR_RETURN(auto minmax,
                    gpu::ComputeKernel::Create(
@@ -71,36 +96,20 @@ Status VolumeRenderer::Init() {
                                                 DT::eStorageBuffer, DT::eStorageBuffer},
                                    .push_constant_bytes = sizeof(gpu::BrickOccupancyPush),
                                    .local_size = {64, 1, 1}}));
-  // The ray casters: DVR or MIP, with or without a backward map, and DVR
-  // shaded with the cell gradient (specialization constant kCellGradient).
-  auto raycast_spec = [&](bool mip, bool map, bool cell_gradient, bool preintegrated = false) {
-    const DT volume_read = sampled ? DT::eCombinedImageSampler : DT::eUniformTexelBuffer;
-    gpu::KernelSpec spec{
-        .name = StrCat("raycast_", mip ? "mip" : "dvr", map ? "_map" : "", sampled ? "_sampled" : "",
-                       cell_gradient ? " (cell gradient)" : "",
-                       preintegrated ? " (pre-integrated)" : ""),
-        .spirv = RaycastSpirv(sampled, mip, map),
-        .bindings = {volume_read, volume_read, DT::eStorageBuffer, DT::eUniformTexelBuffer,
-                     DT::eUniformTexelBuffer, DT::eStorageBuffer, DT::eStorageBuffer},
-        .push_constant_bytes = sizeof(gpu::RaycastBandPush),
-        .local_size = {8, 8, 1}};
-    // Ids 1, 2 and 4 are the volume's (GpuVolume::KernelFor), 3 pre-integration.
-    if (cell_gradient) spec.specialization = {1u, 0u, 0u, preintegrated ? 1u : 0u};
-    return spec;
-  };
   for (int mip = 0; mip < 2; ++mip) {
     for (int map = 0; map < 2; ++map) {
-      ASSIGN_OR_RETURN(auto raycast,
-                       gpu::ComputeKernel::Create(*context_, raycast_spec(mip, map, false)));
+      ASSIGN_OR_RETURN(auto raycast, gpu::ComputeKernel::Create(
+                                         *context_, RaycastSpec(sampled, mip, map, false, false)));
       raycast_kernels_[mip][map].emplace(std::move(raycast));
     }
   }
   for (int map = 0; map < 2; ++map) {
-    ASSIGN_OR_RETURN(auto raycast,
-                     gpu::ComputeKernel::Create(*context_, raycast_spec(false, map, true)));
+    ASSIGN_OR_RETURN(auto raycast, gpu::ComputeKernel::Create(
+                                       *context_, RaycastSpec(sampled, false, map, true, false)));
     cell_gradient_kernels_[map].emplace(std::move(raycast));
-    ASSIGN_OR_RETURN(auto preintegrated,
-                     gpu::ComputeKernel::Create(*context_, raycast_spec(false, map, true, true)));
+    ASSIGN_OR_RETURN(
+        auto preintegrated,
+        gpu::ComputeKernel::Create(*context_, RaycastSpec(sampled, false, map, true, true)));
     preintegrated_kernels_[map].emplace(std::move(preintegrated));
   }
   ASSIGN_OR_RETURN(auto upscale,
@@ -113,7 +122,10 @@ Status VolumeRenderer::Init() {
   minmax_kernel_.emplace(std::move(minmax));
   occupancy_kernel_.emplace(std::move(occupancy));
   upscale_kernel_.emplace(std::move(upscale));
+  return absl::OkStatus();
+}
 
+Status VolumeRenderer::CreateBuffers() {
   ASSIGN_OR_RETURN(auto identity, gpu::GpuImage3D::Create(*context_, {2, 2, 2},
                                                           vk::Format::eR32G32B32A32Sfloat));
   const std::vector<glm::vec4> zeros(8, glm::vec4(0.0f));

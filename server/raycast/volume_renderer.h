@@ -89,6 +89,9 @@ class VolumeRenderer {
   VolumeRenderer(const gpu::GpuContext& context, const Options& options)
       : context_(&context), options_(options) {}
   Status Init();
+  // The kernels (pipelines built once) and the buffers every frame uses.
+  Status CreateKernels();
+  Status CreateBuffers();
   Status CheckGpuInputs(const RenderRequest& request) const;
   // The volume's brick min-max grid for bricks of `brick_voxels` per side,
   // computed on first use and cached.

@@ -5,8 +5,10 @@
 #include "server/common/status.h"
 
 namespace vpm::service {
+namespace {
 
-void AddServerFlags(CLI::App& app, ServerOptions* o) {
+// Who may call, and what they may load: the address, tokens, users, the data root.
+void AddAccessFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--listen", o->listen, "HOST:PORT to serve gRPC on (port 0: any free port)")
       ->capture_default_str();
   app.add_option("--token", o->token,
@@ -24,6 +26,10 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--data-root", o->data_root,
                  "folder LoadVolume paths are resolved under (no '..', no symlink escape); "
                  "empty: only phantom: sources and uploads");
+}
+
+// The PACS endpoints, their cache and audit log, and vpm as a DICOM node.
+void AddPacsFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--pacs", o->pacs_file,
                  "PACS endpoints file (JSON list: name, dicomweb URL, username + password_file "
                  "or bearer_token_file, ca_file, users; docs/PACS.md): turns on SearchStudies, "
@@ -54,12 +60,20 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "the largest instance received; a larger one ends its association")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+}
+
+// Metrics and TLS.
+void AddTransportFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--metrics-listen", o->metrics_listen,
                  "HOST:PORT for Prometheus metrics at /metrics (empty: off)");
   app.add_option("--tls-cert", o->tls_cert, "server certificate chain (PEM): turns TLS on");
   app.add_option("--tls-key", o->tls_key, "server private key (PEM)");
   app.add_option("--tls-client-ca", o->tls_client_ca,
                  "CA (PEM) that client certificates must chain to: mutual TLS");
+}
+
+// What the server holds and accepts: volumes and uploads.
+void AddVolumeLimitFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--max-volumes", o->max_volumes, "volumes held at once")->capture_default_str();
   app.add_option("--max-volume-bytes", o->max_volume_bytes,
                  "bytes of one volume's values (2 per voxel for integer sources, 4 for "
@@ -100,6 +114,10 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "from the data root or a phantom that their sessions keep loaded (idle ones "
                  "are shared and evicted; 0: no cap)")
       ->capture_default_str();
+}
+
+// What the server holds and accepts: meshes, sessions, frames, connections.
+void AddSessionLimitFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--max-meshes", o->max_meshes, "meshes held at once")->capture_default_str();
   app.add_option("--max-meshes-per-user", o->max_meshes_per_user,
                  "meshes one user's sessions pin at once (unpinned meshes are evicted when "
@@ -128,6 +146,10 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                  "drop a connection whose ping is unanswered this long")->capture_default_str();
   app.add_option("--max-message-bytes", o->max_message_bytes,
                  "largest gRPC message received or sent")->capture_default_str();
+}
+
+// Worker pools, queues and their fair shares, the still frame and refinement on grab.
+void AddWorkFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--render-threads", o->render_threads, "workers for events and frames")
       ->capture_default_str();
   app.add_option("--request-threads", o->request_threads,
@@ -150,6 +172,10 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
                "running mesh and swapped in at the next frame with the manipulation replayed "
                "and recorded in the session's case")
       ->capture_default_str();
+}
+
+// Where cases are kept, the drain and shutdown, the GPU.
+void AddStateFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--state-dir", o->state_dir,
                  "keep cases here (DIR/cases.sqlite, created if missing; with --state, only the "
                  "uploads): every session is a case whose manipulations are stored as they are "
@@ -170,6 +196,18 @@ void AddServerFlags(CLI::App& app, ServerOptions* o) {
       ->capture_default_str();
   app.add_option("--vulkan-device", o->vulkan_device,
                  "GPU by index or name substring (default: env VPM_VULKAN_DEVICE, else automatic)");
+}
+
+}  // namespace
+
+void AddServerFlags(CLI::App& app, ServerOptions* o) {
+  AddAccessFlags(app, o);
+  AddPacsFlags(app, o);
+  AddTransportFlags(app, o);
+  AddVolumeLimitFlags(app, o);
+  AddSessionLimitFlags(app, o);
+  AddWorkFlags(app, o);
+  AddStateFlags(app, o);
 }
 
 void ApplyEnvironment(ServerOptions* o) {
