@@ -60,4 +60,12 @@ T Check(absl::StatusOr<T> result, const char* what) {
   return std::move(result).value();
 }
 
+// The same for a call that returns no value.
+inline void Check(const absl::Status& status, const char* what) {
+  if (!status.ok()) {
+    std::fprintf(stderr, "bench: %s failed: %s\n", what, std::string(status.message()).c_str());
+    std::exit(1);
+  }
+}
+
 }  // namespace vpm::bench

@@ -178,8 +178,6 @@ Difference Compare(const Frame& a, const Frame& b) {
           sq > 0.0 ? 10.0 * std::log10(255.0 * 255.0 * double(count) / sq) : 99.0};
 }
 
-}  // namespace
-
 double ParseNumber(const char* text, const char* flag) {
   char* end = nullptr;
   const double v = std::strtod(text, &end);
@@ -190,8 +188,8 @@ double ParseNumber(const char* text, const char* flag) {
   return v;
 }
 
-int main(int raw_argc, char** raw_argv) {
-  // Flags anywhere; the rest are positional.
+// The command line (see the usage above).
+struct Flags {
   std::string render_tf;
   double step_mm = 0.0;
   std::optional<MipWindow> window;
@@ -202,258 +200,282 @@ int main(int raw_argc, char** raw_argv) {
   bool early_termination = true;
   bool light_both_ends = true;
   bool partial_end_steps = true;
-  std::vector<char*> positional{raw_argv[0]};
-  for (int i = 1; i < raw_argc; ++i) {
-    const std::string arg = raw_argv[i];
-    if (arg == "--render-tf" && i + 1 < raw_argc) {
-      render_tf = raw_argv[++i];
-    } else if (arg == "--step" && i + 1 < raw_argc) {
-      step_mm = ParseNumber(raw_argv[++i], "--step");
-    } else if (arg == "--window" && i + 2 < raw_argc) {
-      const double width = ParseNumber(raw_argv[++i], "--window");
-      window = MipWindow{.level = ParseNumber(raw_argv[++i], "--window"), .width = width};
-    } else if (arg == "--no-reference") {
-      reference = false;
-    } else if (arg == "--map-held") {
-      map_held = true;
-    } else if (arg == "--no-map") {
-      no_map = true;
-    } else if (arg == "--no-early-termination") {
-      early_termination = false;
-    } else if (arg == "--light-back-end") {
-      light_both_ends = false;
-    } else if (arg == "--whole-end-steps") {
-      partial_end_steps = false;
-    } else if (arg == "--band-rays" && i + 1 < raw_argc) {
-      band_rays = int64_t(ParseNumber(raw_argv[++i], "--band-rays"));
+  std::string source = "phantom:abdomen";
+  std::string png_dir;
+  std::string filter;
+  int size = 512;
+};
+
+// Flags anywhere; the rest are positional.
+Flags ParseFlags(int argc, char** argv) {
+  Flags f;
+  std::vector<std::string> positional;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--render-tf" && i + 1 < argc) {
+      f.render_tf = argv[++i];
+    } else if (arg == "--step" && i + 1 < argc) {
+      f.step_mm = ParseNumber(argv[++i], "--step");
+    } else if (arg == "--window" && i + 2 < argc) {
+      const double width = ParseNumber(argv[++i], "--window");
+      f.window = MipWindow{.level = ParseNumber(argv[++i], "--window"), .width = width};
+    } else if (arg == "--band-rays" && i + 1 < argc) {
+      f.band_rays = int64_t(ParseNumber(argv[++i], "--band-rays"));
+    } else if (arg == "--no-reference" || arg == "--map-held" || arg == "--no-map" ||
+               arg == "--no-early-termination" || arg == "--light-back-end" ||
+               arg == "--whole-end-steps") {
+      f.reference &= arg != "--no-reference";
+      f.map_held |= arg == "--map-held";
+      f.no_map |= arg == "--no-map";
+      f.early_termination &= arg != "--no-early-termination";
+      f.light_both_ends &= arg != "--light-back-end";
+      f.partial_end_steps &= arg != "--whole-end-steps";
     } else {
-      positional.push_back(raw_argv[i]);
+      positional.push_back(arg);
     }
   }
-  const int argc = int(positional.size());
-  char** argv = positional.data();
-  const std::string source = argc > 1 ? argv[1] : "phantom:abdomen";
-  const std::string png_dir = argc > 2 ? argv[2] : "";
-  const std::string filter = argc > 3 ? argv[3] : "";
-  const int size = argc > 4 ? std::atoi(argv[4]) : 512;
-  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows appear as they are measured
-  const int reps = 5;
-  auto volume = bench::Check(ReadVolume(source, {}), "reading the volume");
-  auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
-  auto gpu_volume = bench::Check(GpuVolume::Upload(*context, volume), "upload");
-  std::printf("volume: %s voxels\n", VoxelEncodingName(volume.encoding()));
-  const gpu::GpuImage3D* volume_image = bench::Check(gpu_volume.Image(*context, volume), "image");
+  if (positional.size() > 0) f.source = positional[0];
+  if (positional.size() > 1) f.png_dir = positional[1];
+  if (positional.size() > 2) f.filter = positional[2];
+  if (positional.size() > 3) f.size = std::atoi(positional[3].c_str());
+  return f;
+}
 
-  // Identity backward map at the warp's default resolution, ceil(n / 4) per
-  // axis (docs/WARP.md): 64^3 for the 256^3 phantom.
-  const uint32_t m = uint32_t(std::max<int64_t>(2, (volume.dims()[0] + 3) / 4));
-  auto map = bench::Check(
-      gpu::GpuImage3D::Create(*context, {m, m, m}, vk::Format::eR32G32B32A32Sfloat), "map");
-  HostBackwardMap host_map{{int(m), int(m), int(m)},
-                           std::vector<glm::vec4>(size_t(m) * m * m, glm::vec4(0, 0, 0, 1))};
-  if (!map.Upload(std::as_bytes(std::span<const glm::vec4>(host_map.texels))).ok()) return 1;
-
-  auto t0 = std::chrono::steady_clock::now();
-  auto texel_renderer = bench::Check(
-      VolumeRenderer::Create(*context, {.still_band_rays = band_rays}), "renderer");
-  const double create_ms = MsSince(t0);
-  auto sampled_renderer = bench::Check(
-      VolumeRenderer::Create(*context, {.volume_access = VolumeAccess::kSampler3D,
-                                        .still_band_rays = band_rays}),
-      "renderer");
-  const auto still_minmax = BrickMinMaxCpu(volume, BrickVoxels(RenderQuality::kStill, volume.geometry()));
-  const auto interactive_minmax = BrickMinMaxCpu(volume, BrickVoxels(RenderQuality::kInteractive, volume.geometry()));
-
+// The volume on the GPU, an identity backward map at the warp's default
+// resolution (ceil(n / 4) per axis, docs/WARP.md: 64^3 for the 256^3
+// phantom), both renderers, the reference's brick grids and the
+// --render-tf preset.
+struct Fixture {
+  explicit Fixture(Volume v) : volume(std::move(v)) {}
+  Volume volume;
+  std::unique_ptr<gpu::GpuContext> context;
+  std::optional<GpuVolume> gpu_volume;
+  const gpu::GpuImage3D* volume_image = nullptr;
+  uint32_t m = 2;
+  std::optional<gpu::GpuImage3D> map;
+  HostBackwardMap host_map;
+  std::unique_ptr<VolumeRenderer> texel_renderer, sampled_renderer;
+  double create_ms = 0.0;
+  std::vector<glm::vec2> still_minmax, interactive_minmax;
   std::optional<RenderPreset> custom;
-  if (!render_tf.empty()) {
-    custom = bench::Check(RenderPresetFromTf(bench::Check(ReadRenderTransferFunction(render_tf),
-                                                          "--render-tf"),
-                                             volume),
-                          "--render-tf preset");
-  }
+};
 
+std::unique_ptr<Fixture> MakeFixture(const Flags& flags) {
+  auto f =
+      std::make_unique<Fixture>(bench::Check(ReadVolume(flags.source, {}), "reading the volume"));
+  const Volume& volume = f->volume;
+  f->context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
+  f->gpu_volume.emplace(bench::Check(GpuVolume::Upload(*f->context, volume), "upload"));
+  std::printf("volume: %s voxels\n", VoxelEncodingName(volume.encoding()));
+  f->volume_image = bench::Check(f->gpu_volume->Image(*f->context, volume), "image");
+  const uint32_t m = f->m = uint32_t(std::max<int64_t>(2, (volume.dims()[0] + 3) / 4));
+  f->map.emplace(bench::Check(
+      gpu::GpuImage3D::Create(*f->context, {m, m, m}, vk::Format::eR32G32B32A32Sfloat), "map"));
+  f->host_map = {{int(m), int(m), int(m)},
+                 std::vector<glm::vec4>(size_t(m) * m * m, glm::vec4(0, 0, 0, 1))};
+  bench::Check(f->map->Upload(std::as_bytes(std::span<const glm::vec4>(f->host_map.texels))),
+               "map upload");
+  const auto t0 = std::chrono::steady_clock::now();
+  f->texel_renderer = bench::Check(
+      VolumeRenderer::Create(*f->context, {.still_band_rays = flags.band_rays}), "renderer");
+  f->create_ms = MsSince(t0);
+  f->sampled_renderer =
+      bench::Check(VolumeRenderer::Create(*f->context, {.volume_access = VolumeAccess::kSampler3D,
+                                                        .still_band_rays = flags.band_rays}),
+                   "renderer");
+  f->still_minmax = BrickMinMaxCpu(volume, BrickVoxels(RenderQuality::kStill, volume.geometry()));
+  f->interactive_minmax =
+      BrickMinMaxCpu(volume, BrickVoxels(RenderQuality::kInteractive, volume.geometry()));
+  if (!flags.render_tf.empty()) {
+    f->custom = bench::Check(
+        RenderPresetFromTf(bench::Check(ReadRenderTransferFunction(flags.render_tf), "--render-tf"),
+                           volume),
+        "--render-tf preset");
+  }
+  return f;
+}
+
+// The rows: every frame kind with and without skipping, then variants.
+std::vector<Case> Cases(bool custom) {
+  const auto kStill = RenderQuality::kStill, kInteractive = RenderQuality::kInteractive;
+  const auto kDvr = RenderMode::kDvr, kMip = RenderMode::kMip;
+  const auto kTexel = VolumeAccess::kTexelBuffer, kSampled = VolumeAccess::kSampler3D;
   std::vector<Case> cases;
   if (custom) {
-    cases.push_back({"still DVR custom", RenderMode::kDvr, kCustomPreset, RenderQuality::kStill,
-                     true});
-    cases.push_back({"interactive DVR custom", RenderMode::kDvr, kCustomPreset,
-                     RenderQuality::kInteractive, true});
+    cases.push_back({"still DVR custom", kDvr, kCustomPreset, kStill, true});
+    cases.push_back({"interactive DVR custom", kDvr, kCustomPreset, kInteractive, true});
   }
   for (bool skip : {true, false}) {
-    const char* s = skip ? "" : ", no skip";
-    cases.push_back({std::string("still DVR ct-vessels") + s, RenderMode::kDvr, "ct-vessels",
-                     RenderQuality::kStill, skip});
-    cases.push_back({std::string("still DVR ct-soft-tissue") + s, RenderMode::kDvr,
-                     "ct-soft-tissue", RenderQuality::kStill, skip});
-    if (skip) {
-      cases.push_back({"still DVR ct-bone", RenderMode::kDvr, "ct-bone", RenderQuality::kStill,
-                       true});
-    }
-    cases.push_back({std::string("still MIP") + s, RenderMode::kMip, "ct-vessels",
-                     RenderQuality::kStill, skip});
-    cases.push_back({std::string("interactive DVR ct-vessels") + s, RenderMode::kDvr,
-                     "ct-vessels", RenderQuality::kInteractive, skip});
-    cases.push_back({std::string("interactive MIP") + s, RenderMode::kMip, "ct-vessels",
-                     RenderQuality::kInteractive, skip});
+    const std::string s = skip ? "" : ", no skip";
+    cases.push_back({"still DVR ct-vessels" + s, kDvr, "ct-vessels", kStill, skip});
+    cases.push_back({"still DVR ct-soft-tissue" + s, kDvr, "ct-soft-tissue", kStill, skip});
+    if (skip) cases.push_back({"still DVR ct-bone", kDvr, "ct-bone", kStill, true});
+    cases.push_back({"still MIP" + s, kMip, "ct-vessels", kStill, skip});
+    cases.push_back({"interactive DVR ct-vessels" + s, kDvr, "ct-vessels", kInteractive, skip});
+    cases.push_back({"interactive MIP" + s, kMip, "ct-vessels", kInteractive, skip});
   }
-  cases.push_back({"still DVR ct-vessels, no shading", RenderMode::kDvr, "ct-vessels",
-                   RenderQuality::kStill, true, false});
+  cases.push_back({"still DVR ct-vessels, no shading", kDvr, "ct-vessels", kStill, true, false});
   // Still frames with the central-difference taps (the default before the
   // cell gradient).
   for (const char* preset : {"ct-vessels", "ct-soft-tissue", "ct-bone"}) {
-    cases.push_back({std::string("still DVR ") + preset + ", tap gradient", RenderMode::kDvr,
-                     preset, RenderQuality::kStill, true, true, true, VolumeAccess::kTexelBuffer,
-                     false});
+    cases.push_back({std::string("still DVR ") + preset + ", tap gradient", kDvr, preset, kStill,
+                     true, true, true, kTexel, false});
   }
   // The drag loop's frame (drag_loop_bench): what shading costs there.
-  cases.push_back({"interactive DVR ct-soft-tissue", RenderMode::kDvr, "ct-soft-tissue",
-                   RenderQuality::kInteractive, true});
-  cases.push_back({"interactive DVR ct-soft-tissue, no shading", RenderMode::kDvr,
-                   "ct-soft-tissue", RenderQuality::kInteractive, true, false});
-  cases.push_back({"still DVR ct-vessels, map unchanged", RenderMode::kDvr, "ct-vessels",
-                   RenderQuality::kStill, true});
-  cases.push_back({"still DVR ct-vessels, no map", RenderMode::kDvr, "ct-vessels",
-                   RenderQuality::kStill, true, true, false});
-  cases.push_back({"still MIP, no map", RenderMode::kMip, "ct-vessels", RenderQuality::kStill,
-                   true, true, false});
-  cases.push_back({"still MIP, no map, in order", RenderMode::kMip, "ct-vessels",
-                   RenderQuality::kStill, true, true, false, VolumeAccess::kTexelBuffer, true,
-                   false});
-  cases.push_back({"still MIP, no map, peak unrefined", RenderMode::kMip, "ct-vessels",
-                   RenderQuality::kStill, true, true, false, VolumeAccess::kTexelBuffer, true,
-                   true, false});
-  cases.push_back({"interactive MIP, peak unrefined", RenderMode::kMip, "ct-vessels",
-                   RenderQuality::kInteractive, true, true, true, VolumeAccess::kTexelBuffer,
-                   true, true, false});
-  cases.push_back({"still MIP, no skip, no map", RenderMode::kMip, "ct-vessels",
-                   RenderQuality::kStill, false, true, false});
-  cases.push_back({"still DVR ct-vessels, sampler3D", RenderMode::kDvr, "ct-vessels",
-                   RenderQuality::kStill, true, true, true, VolumeAccess::kSampler3D});
-  cases.push_back({"still MIP, sampler3D", RenderMode::kMip, "ct-vessels",
-                   RenderQuality::kStill, true, true, true, VolumeAccess::kSampler3D});
+  cases.push_back({"interactive DVR ct-soft-tissue", kDvr, "ct-soft-tissue", kInteractive, true});
+  cases.push_back({"interactive DVR ct-soft-tissue, no shading", kDvr, "ct-soft-tissue",
+                   kInteractive, true, false});
+  cases.push_back({"still DVR ct-vessels, map unchanged", kDvr, "ct-vessels", kStill, true});
+  cases.push_back({"still DVR ct-vessels, no map", kDvr, "ct-vessels", kStill, true, true, false});
+  cases.push_back({"still MIP, no map", kMip, "ct-vessels", kStill, true, true, false});
+  cases.push_back({"still MIP, no map, in order", kMip, "ct-vessels", kStill, true, true, false,
+                   kTexel, true, false});
+  cases.push_back({"still MIP, no map, peak unrefined", kMip, "ct-vessels", kStill, true, true,
+                   false, kTexel, true, true, false});
+  cases.push_back({"interactive MIP, peak unrefined", kMip, "ct-vessels", kInteractive, true, true,
+                   true, kTexel, true, true, false});
+  cases.push_back({"still MIP, no skip, no map", kMip, "ct-vessels", kStill, false, true, false});
+  cases.push_back(
+      {"still DVR ct-vessels, sampler3D", kDvr, "ct-vessels", kStill, true, true, true, kSampled});
+  cases.push_back({"still MIP, sampler3D", kMip, "ct-vessels", kStill, true, true, true, kSampled});
+  return cases;
+}
 
-  std::printf("ray casting %s (%lldx%lldx%lld), device '%s'; min of %d, GPU and CPU (2 threads) "
-              "alternating; identity map %ux%ux%u; renderer created in %.1f ms\n",
-              source.c_str(), (long long)volume.dims()[0], (long long)volume.dims()[1],
-              (long long)volume.dims()[2], context->device_name().c_str(), reps,
-              m, m, m, create_ms);
-  // What a peer renderer needs to draw the same frames (bench/peer_vtk.py).
-  {
-    const Camera camera = Camera::ForVolume(volume.geometry());
-    const glm::dvec3 eye = camera.Eye(), target = camera.Target(), up = camera.Up();
-    const MipWindow w = window.value_or(VolumeMipWindow(volume));
-    std::printf("camera: eye_mm %.6f %.6f %.6f target_mm %.6f %.6f %.6f up %.6f %.6f %.6f "
-                "fov_deg %.6f\n",
-                eye.x, eye.y, eye.z, target.x, target.y, target.z, up.x, up.y, up.z,
-                camera.pose().fov_deg);
-    std::printf("mip window: width %.6f level %.6f; step: %s\n", w.width, w.level,
-                step_mm > 0.0 ? (std::to_string(step_mm) + " mm").c_str() : "each quality's own");
-  }
+// The run's set-up and what a peer renderer needs to draw the same frames
+// (bench/peer_vtk.py), then the table's header.
+void PrintHeader(const Flags& flags, const Fixture& f, int reps) {
+  const Volume& volume = f.volume;
+  std::printf(
+      "ray casting %s (%lldx%lldx%lld), device '%s'; min of %d, GPU and CPU (2 threads) "
+      "alternating; identity map %ux%ux%u; renderer created in %.1f ms\n",
+      flags.source.c_str(), (long long)volume.dims()[0], (long long)volume.dims()[1],
+      (long long)volume.dims()[2], f.context->device_name().c_str(), reps, f.m, f.m, f.m,
+      f.create_ms);
+  const Camera camera = Camera::ForVolume(volume.geometry());
+  const glm::dvec3 eye = camera.Eye(), target = camera.Target(), up = camera.Up();
+  const MipWindow w = flags.window.value_or(VolumeMipWindow(volume));
+  std::printf(
+      "camera: eye_mm %.6f %.6f %.6f target_mm %.6f %.6f %.6f up %.6f %.6f %.6f "
+      "fov_deg %.6f\n",
+      eye.x, eye.y, eye.z, target.x, target.y, target.z, up.x, up.y, up.z, camera.pose().fov_deg);
+  std::printf(
+      "mip window: width %.6f level %.6f; step: %s\n", w.width, w.level,
+      flags.step_mm > 0.0 ? (std::to_string(flags.step_mm) + " mm").c_str() : "each quality's own");
   std::printf("%-36s %9s %7s %7s %7s %7s %7s | %7s %7s %7s | %8s %7s\n", "frame (as shown)",
               "cast", "GPU ms", "GPU all", "wall", "CPU ms", "CPU/GPU", "GPU t/2", "CPU t/2",
               "CPU/GPU", "err mean", "max/255");
-  std::optional<Frame> still_frame;
-  for (const Case& c : cases) {
-    if (!Matches(c.name, filter)) continue;
-    RenderRequest r;
-    r.camera = Camera::ForVolume(volume.geometry());
-    r.mode = c.mode;
-    r.preset = c.preset == kCustomPreset ? *custom
-                                         : bench::Check(MakeRenderPreset(c.preset, volume), "preset");
-    r.quality = c.quality;
-    r.width = r.height = size;
-    r.volume = &gpu_volume;
-    r.volume_image = volume_image;
-    const bool use_map = c.map && !no_map;
-    r.backward_map = use_map ? &map : nullptr;
-    // 0: the occupancy is recomputed every frame, as while dragging.
-    r.backward_map_version =
-        map_held || c.name.find("map unchanged") != std::string::npos ? 1 : 0;
-    r.mip_window = window;
-    if (step_mm > 0.0) r.settings.step_mm = step_mm;
-    r.settings.empty_space_skipping = c.skipping;
-    r.settings.early_termination = early_termination;
-    r.settings.light_both_ends = light_both_ends;
-    r.settings.partial_end_steps = partial_end_steps;
-    r.settings.shading = c.shading;
-    r.settings.mip_brightest_first = c.brightest_first;
-    r.settings.mip_peak_refine = c.peak_refine;
-    r.settings.interactive_cell_gradient = r.settings.still_cell_gradient = c.cell_gradient;
-    VolumeRenderer& renderer =
-        c.access == VolumeAccess::kTexelBuffer ? *texel_renderer : *sampled_renderer;
-    Measured best;
-    bench::Check(renderer.Render(r), "warm-up render");
-    // GPU and CPU runs alternate, so that both see the same machine load.
-    Frame cpu;
-    for (int rep = 0; rep < reps; ++rep) {
-      double c0 = ProcessCpuMs();
-      Frame f = bench::Check(renderer.Render(r), "render");
-      best.gpu_cpu_time_ms = std::min(best.gpu_cpu_time_ms, (ProcessCpuMs() - c0) / 2.0);
-      best.gpu_raycast_ms = std::min(best.gpu_raycast_ms, f.timings.raycast_ms);
-      best.gpu_total_ms = std::min(best.gpu_total_ms, f.timings.render_ms);
-      best.gpu_map_copy_ms = std::min(best.gpu_map_copy_ms, f.timings.map_copy_ms);
-      best.gpu_occupancy_ms = std::min(best.gpu_occupancy_ms, f.timings.occupancy_ms);
-      best.gpu_upscale_ms = std::min(best.gpu_upscale_ms, f.timings.upscale_ms);
-      best.wall_ms = std::min(best.wall_ms, f.timings.wall_ms);
-      best.frame = std::move(f);
-      if (!reference) continue;
-      c0 = ProcessCpuMs();
-      const auto& minmax =
-          c.quality == RenderQuality::kStill ? still_minmax : interactive_minmax;
-      cpu = bench::Check(RenderReference(r, volume, use_map ? &host_map : nullptr, 2, &minmax),
-                         "reference");
-      best.cpu_cpu_time_ms = std::min(best.cpu_cpu_time_ms, (ProcessCpuMs() - c0) / 2.0);
-      best.cpu_ms = std::min(best.cpu_ms, cpu.timings.occupancy_ms + cpu.timings.raycast_ms +
-                                              cpu.timings.upscale_ms);
-    }
-    if (!reference) best.mean_err = best.max_err = best.cpu_ms = best.cpu_cpu_time_ms = NAN;
-    for (size_t i = 0; i < cpu.rgba.size(); ++i) {
-      if (i % 4 == 3) continue;
-      const double d = std::abs(double(cpu.rgba[i]) - double(best.frame.rgba[i]));
-      best.mean_err += d / (cpu.rgba.size() * 0.75);
-      best.max_err = std::max(best.max_err, d);
-    }
-    std::printf(
-        "%-36s %4dx%-4d %7.1f %7.1f %7.1f %7.1f %7.2f | %7.1f %7.1f %7.2f | %8.3f %7.0f\n",
-        c.name.c_str(), best.frame.render_width, best.frame.render_height, best.gpu_raycast_ms,
-        best.gpu_total_ms, best.wall_ms, best.cpu_ms, best.cpu_ms / best.gpu_total_ms,
-        best.gpu_cpu_time_ms, best.cpu_cpu_time_ms, best.cpu_cpu_time_ms / best.gpu_cpu_time_ms,
-        best.mean_err, best.max_err);
-    // Samples taken (one more frame, counting): the rate the cast achieved,
-    // against the machine's limit (docs/BENCHMARKS.md, "Ray casting").
-    RenderRequest counting = r;
-    counting.settings.count_samples = true;
-    const Frame counted = bench::Check(renderer.Render(counting), "render");
-    const double pixels = double(counted.render_width) * counted.render_height;
-    std::printf("%-36s GPU map copy %.1f, occupancy %.1f, upscale %.1f ms (min each); "
-                "%.1f samples/pixel, %.0f M samples/s in the cast (%.0f M/s of CPU time)\n",
-                "", best.gpu_map_copy_ms, best.gpu_occupancy_ms, best.gpu_upscale_ms,
-                double(counted.samples) / pixels, double(counted.samples) / best.gpu_raycast_ms * 1e-3,
-                double(counted.samples) / best.gpu_cpu_time_ms * 1e-3);
-    std::string file = c.name;
-    for (char& ch : file) ch = std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
-    WritePng(png_dir, file, best.frame);
-    if (c.name == "still DVR ct-vessels") still_frame = best.frame;
-  }
+}
 
-  // What the cell gradient costs in picture against the taps (central
-  // differences of J), GPU both, same request (RENDERING.md).
+// A row's request: the default camera, the flags' step, window and
+// settings, the identity map unless the row or --no-map says otherwise.
+RenderRequest CaseRequest(const Case& c, const Flags& flags, Fixture& f) {
+  RenderRequest r;
+  r.camera = Camera::ForVolume(f.volume.geometry());
+  r.mode = c.mode;
+  r.preset = c.preset == kCustomPreset
+                 ? *f.custom
+                 : bench::Check(MakeRenderPreset(c.preset, f.volume), "preset");
+  r.quality = c.quality;
+  r.width = r.height = flags.size;
+  r.volume = &*f.gpu_volume;
+  r.volume_image = f.volume_image;
+  r.backward_map = c.map && !flags.no_map ? &*f.map : nullptr;
+  // 0: the occupancy is recomputed every frame, as while dragging.
+  r.backward_map_version =
+      flags.map_held || c.name.find("map unchanged") != std::string::npos ? 1 : 0;
+  r.mip_window = flags.window;
+  if (flags.step_mm > 0.0) r.settings.step_mm = flags.step_mm;
+  r.settings.empty_space_skipping = c.skipping;
+  r.settings.early_termination = flags.early_termination;
+  r.settings.light_both_ends = flags.light_both_ends;
+  r.settings.partial_end_steps = flags.partial_end_steps;
+  r.settings.shading = c.shading;
+  r.settings.mip_brightest_first = c.brightest_first;
+  r.settings.mip_peak_refine = c.peak_refine;
+  r.settings.interactive_cell_gradient = r.settings.still_cell_gradient = c.cell_gradient;
+  return r;
+}
+
+// A row's frame `reps` times, GPU and CPU reference alternating so that
+// both see the same machine load; the minimum of each figure, and the
+// reference's difference from the last GPU frame.
+Measured MeasureCase(const Case& c, const RenderRequest& r, bool reference, Fixture& f,
+                     VolumeRenderer& renderer, int reps) {
+  Measured best;
+  bench::Check(renderer.Render(r), "warm-up render");
+  Frame cpu;
+  for (int rep = 0; rep < reps; ++rep) {
+    double c0 = ProcessCpuMs();
+    Frame frame = bench::Check(renderer.Render(r), "render");
+    best.gpu_cpu_time_ms = std::min(best.gpu_cpu_time_ms, (ProcessCpuMs() - c0) / 2.0);
+    best.gpu_raycast_ms = std::min(best.gpu_raycast_ms, frame.timings.raycast_ms);
+    best.gpu_total_ms = std::min(best.gpu_total_ms, frame.timings.render_ms);
+    best.gpu_map_copy_ms = std::min(best.gpu_map_copy_ms, frame.timings.map_copy_ms);
+    best.gpu_occupancy_ms = std::min(best.gpu_occupancy_ms, frame.timings.occupancy_ms);
+    best.gpu_upscale_ms = std::min(best.gpu_upscale_ms, frame.timings.upscale_ms);
+    best.wall_ms = std::min(best.wall_ms, frame.timings.wall_ms);
+    best.frame = std::move(frame);
+    if (!reference) continue;
+    c0 = ProcessCpuMs();
+    const auto& minmax = c.quality == RenderQuality::kStill ? f.still_minmax : f.interactive_minmax;
+    cpu = bench::Check(
+        RenderReference(r, f.volume, r.backward_map ? &f.host_map : nullptr, 2, &minmax),
+        "reference");
+    best.cpu_cpu_time_ms = std::min(best.cpu_cpu_time_ms, (ProcessCpuMs() - c0) / 2.0);
+    best.cpu_ms = std::min(
+        best.cpu_ms, cpu.timings.occupancy_ms + cpu.timings.raycast_ms + cpu.timings.upscale_ms);
+  }
+  if (!reference) best.mean_err = best.max_err = best.cpu_ms = best.cpu_cpu_time_ms = NAN;
+  for (size_t i = 0; i < cpu.rgba.size(); ++i) {
+    if (i % 4 == 3) continue;
+    const double d = std::abs(double(cpu.rgba[i]) - double(best.frame.rgba[i]));
+    best.mean_err += d / (cpu.rgba.size() * 0.75);
+    best.max_err = std::max(best.max_err, d);
+  }
+  return best;
+}
+
+// A row's figures, then (one more frame, counting) the samples taken: the
+// rate the cast achieved, against the machine's limit (docs/BENCHMARKS.md,
+// "Ray casting").
+void PrintCase(const Case& c, const Measured& best, const RenderRequest& r,
+               VolumeRenderer& renderer) {
+  std::printf("%-36s %4dx%-4d %7.1f %7.1f %7.1f %7.1f %7.2f | %7.1f %7.1f %7.2f | %8.3f %7.0f\n",
+              c.name.c_str(), best.frame.render_width, best.frame.render_height,
+              best.gpu_raycast_ms, best.gpu_total_ms, best.wall_ms, best.cpu_ms,
+              best.cpu_ms / best.gpu_total_ms, best.gpu_cpu_time_ms, best.cpu_cpu_time_ms,
+              best.cpu_cpu_time_ms / best.gpu_cpu_time_ms, best.mean_err, best.max_err);
+  RenderRequest counting = r;
+  counting.settings.count_samples = true;
+  const Frame counted = bench::Check(renderer.Render(counting), "render");
+  const double pixels = double(counted.render_width) * counted.render_height;
+  std::printf(
+      "%-36s GPU map copy %.1f, occupancy %.1f, upscale %.1f ms (min each); "
+      "%.1f samples/pixel, %.0f M samples/s in the cast (%.0f M/s of CPU time)\n",
+      "", best.gpu_map_copy_ms, best.gpu_occupancy_ms, best.gpu_upscale_ms,
+      double(counted.samples) / pixels, double(counted.samples) / best.gpu_raycast_ms * 1e-3,
+      double(counted.samples) / best.gpu_cpu_time_ms * 1e-3);
+}
+
+// What the cell gradient costs in picture against the taps (central
+// differences of J), GPU both, same request (RENDERING.md).
+void CompareGradients(const Flags& flags, Fixture& f) {
   for (const char* quality : {"interactive", "still"}) {
-    if (!Matches(std::string(quality) + " cell gradient", filter)) continue;
+    if (!Matches(std::string(quality) + " cell gradient", flags.filter)) continue;
     for (const char* preset : {"ct-soft-tissue", "ct-vessels", "ct-bone"}) {
       RenderRequest r;
-      r.camera = Camera::ForVolume(volume.geometry());
-      r.preset = bench::Check(MakeRenderPreset(preset, volume), "preset");
+      r.camera = Camera::ForVolume(f.volume.geometry());
+      r.preset = bench::Check(MakeRenderPreset(preset, f.volume), "preset");
       r.quality = std::string(quality) == "still" ? RenderQuality::kStill
                                                   : RenderQuality::kInteractive;
-      r.width = r.height = size;
-      r.volume = &gpu_volume;
-      r.backward_map = &map;
-      const Frame cell = bench::Check(texel_renderer->Render(r), "render");
+      r.width = r.height = flags.size;
+      r.volume = &*f.gpu_volume;
+      r.backward_map = &*f.map;
+      const Frame cell = bench::Check(f.texel_renderer->Render(r), "render");
       r.settings.interactive_cell_gradient = r.settings.still_cell_gradient = false;
-      const Frame taps = bench::Check(texel_renderer->Render(r), "render");
-      WritePng(png_dir, std::string(quality) + "_cell_gradient_" + preset, cell);
-      WritePng(png_dir, std::string(quality) + "_tap_gradient_" + preset, taps);
+      const Frame taps = bench::Check(f.texel_renderer->Render(r), "render");
+      WritePng(flags.png_dir, std::string(quality) + "_cell_gradient_" + preset, cell);
+      WritePng(flags.png_dir, std::string(quality) + "_tap_gradient_" + preset, taps);
       const Difference d = Compare(cell, taps);
       std::printf("%s %s, cell vs tap gradient: mean %.3f/255, max %.0f/255, "
                   "PSNR %.1f dB; cast %.1f vs %.1f ms\n",
@@ -461,65 +483,70 @@ int main(int raw_argc, char** raw_argv) {
                   taps.timings.raycast_ms);
     }
   }
-  // Still frames at larger steps against step 0.5 x the smallest spacing
-  // (the still step of every preset and mode before RenderPreset's
-  // still_step_factor), GPU both, same request: picture difference, samples
-  // per pixel, cast time (min of `reps`, the two alternating). "still step
-  // oblique": the same from WriteViews' oblique camera (azimuth 35,
-  // elevation 20), for the larger steps only.
+}
+
+// One preset's still at `factor` x the smallest spacing against 0.5 x,
+// GPU both, same request: picture difference, samples per pixel, cast time
+// (min of `reps`, the two alternating).
+void CompareStep(const Flags& flags, Fixture& f, const char* preset, double factor, bool oblique,
+                 int reps) {
+  const double smallest =
+      std::min({f.volume.geometry().spacing_mm[0], f.volume.geometry().spacing_mm[1],
+                f.volume.geometry().spacing_mm[2]});
+  RenderRequest r;
+  r.camera = Camera::ForVolume(f.volume.geometry());
+  if (oblique) r.camera.Orbit(35.0, 20.0);
+  r.mode = std::string(preset) == "mip" ? RenderMode::kMip : RenderMode::kDvr;
+  r.preset = bench::Check(
+      MakeRenderPreset(r.mode == RenderMode::kMip ? "ct-vessels" : preset, f.volume), "preset");
+  r.width = r.height = flags.size;
+  r.volume = &*f.gpu_volume;
+  r.backward_map = &*f.map;
+  r.settings.count_samples = true;
+  r.settings.step_mm = 0.5 * smallest;
+  RenderRequest larger = r;
+  larger.settings.step_mm = factor * smallest;
+  Frame base, other;
+  double base_ms = 1e300, other_ms = 1e300;
+  for (int rep = 0; rep < reps; ++rep) {
+    base = bench::Check(f.texel_renderer->Render(r), "render");
+    other = bench::Check(f.texel_renderer->Render(larger), "render");
+    base_ms = std::min(base_ms, base.timings.raycast_ms);
+    other_ms = std::min(other_ms, other.timings.raycast_ms);
+  }
+  const std::string section = oblique ? "still step oblique" : "still step";
+  char tag[64];
+  std::snprintf(tag, sizeof(tag), "%s_%.2f_%s", oblique ? "oblique_step" : "still_step", factor,
+                preset);
+  WritePng(flags.png_dir, tag, other);
+  WritePng(flags.png_dir, std::string(oblique ? "oblique_step_0.50_" : "still_step_0.50_") + preset,
+           base);
+  const Difference d = Compare(other, base);
+  const double pixels = double(r.width) * r.height;
+  std::printf(
+      "%s %.2f vs %.2f x spacing, %s: mean %.3f/255, max %.0f/255, "
+      "PSNR %.1f dB; samples/pixel %.1f vs %.1f; cast %.1f vs %.1f ms\n",
+      section.c_str(), factor, base.step_mm / smallest, preset, d.mean, d.max, d.psnr_db,
+      double(other.samples) / pixels, double(base.samples) / pixels, other_ms, base_ms);
+}
+
+// Still frames at larger steps against step 0.5 x the smallest spacing
+// (the still step of every preset and mode before RenderPreset's
+// still_step_factor). "still step oblique": the same from WriteViews'
+// oblique camera (azimuth 35, elevation 20), for the larger steps only.
+void CompareSteps(const Flags& flags, Fixture& f, int reps) {
   for (const bool oblique : {false, true}) {
-    const std::string section = oblique ? "still step oblique" : "still step";
-    if (!Matches(section, filter)) continue;
-    const double smallest = std::min({volume.geometry().spacing_mm[0],
-                                      volume.geometry().spacing_mm[1],
-                                      volume.geometry().spacing_mm[2]});
-    const std::vector<double> factors =
-        oblique ? std::vector<double>{1.0, 1.25, 1.5} : std::vector<double>{0.75, 1.0, 1.25, 1.5, 2.0};
+    if (!Matches(oblique ? "still step oblique" : "still step", flags.filter)) continue;
+    const std::vector<double> factors = oblique ? std::vector<double>{1.0, 1.25, 1.5}
+                                                : std::vector<double>{0.75, 1.0, 1.25, 1.5, 2.0};
     for (const char* preset : {"ct-soft-tissue", "ct-vessels", "ct-bone", "mip"}) {
-      for (double factor : factors) {
-        RenderRequest r;
-        r.camera = Camera::ForVolume(volume.geometry());
-        if (oblique) r.camera.Orbit(35.0, 20.0);
-        r.mode = std::string(preset) == "mip" ? RenderMode::kMip : RenderMode::kDvr;
-        r.preset = bench::Check(
-            MakeRenderPreset(r.mode == RenderMode::kMip ? "ct-vessels" : preset, volume),
-            "preset");
-        r.width = r.height = size;
-        r.volume = &gpu_volume;
-        r.backward_map = &map;
-        r.settings.count_samples = true;
-        r.settings.step_mm = 0.5 * smallest;
-        RenderRequest larger = r;
-        larger.settings.step_mm = factor * smallest;
-        Frame base, other;
-        double base_ms = 1e300, other_ms = 1e300;
-        for (int rep = 0; rep < reps; ++rep) {
-          base = bench::Check(texel_renderer->Render(r), "render");
-          other = bench::Check(texel_renderer->Render(larger), "render");
-          base_ms = std::min(base_ms, base.timings.raycast_ms);
-          other_ms = std::min(other_ms, other.timings.raycast_ms);
-        }
-        char tag[64];
-        std::snprintf(tag, sizeof(tag), "%s_%.2f_%s", oblique ? "oblique_step" : "still_step",
-                      factor, preset);
-        WritePng(png_dir, tag, other);
-        WritePng(png_dir, std::string(oblique ? "oblique_step_0.50_" : "still_step_0.50_") + preset,
-                 base);
-        const Difference d = Compare(other, base);
-        const double pixels = double(r.width) * r.height;
-        std::printf("%s %.2f vs %.2f x spacing, %s: mean %.3f/255, max %.0f/255, "
-                    "PSNR %.1f dB; samples/pixel %.1f vs %.1f; cast %.1f vs %.1f ms\n",
-                    section.c_str(), factor, base.step_mm / smallest, preset, d.mean, d.max,
-                    d.psnr_db,
-                    double(other.samples) / pixels, double(base.samples) / pixels, other_ms,
-                    base_ms);
-      }
+      for (double factor : factors) CompareStep(flags, f, preset, factor, oblique, reps);
     }
   }
-  if (!png_dir.empty()) WriteViews(png_dir, volume, gpu_volume, *texel_renderer);
-  if (!still_frame) return 0;
-  // Encoding the still DVR frame.
-  const Frame& f = *still_frame;
+}
+
+// JPEG (quality 85) and PNG encoding of a frame, min of `reps`.
+void MeasureEncoding(const Frame& f, int reps) {
   std::vector<uint8_t> jpeg, png;
   const double jpeg_ms = bench::MinMs(reps, [&] {
     jpeg = bench::Check(EncodeJpeg(f.rgba, f.width, f.height, 85), "jpeg");
@@ -529,5 +556,33 @@ int main(int raw_argc, char** raw_argv) {
   std::printf("\nencoding the still DVR frame (%dx%d): JPEG q85 %.2f ms, %zu bytes; "
               "PNG %.2f ms, %zu bytes\n",
               f.width, f.height, jpeg_ms, jpeg.size(), png_ms, png.size());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Flags flags = ParseFlags(argc, argv);
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // rows appear as they are measured
+  const int reps = 5;
+  const std::unique_ptr<Fixture> f = MakeFixture(flags);
+  PrintHeader(flags, *f, reps);
+  std::optional<Frame> still_frame;
+  for (const Case& c : Cases(f->custom.has_value())) {
+    if (!Matches(c.name, flags.filter)) continue;
+    const RenderRequest r = CaseRequest(c, flags, *f);
+    VolumeRenderer& renderer =
+        c.access == VolumeAccess::kTexelBuffer ? *f->texel_renderer : *f->sampled_renderer;
+    const Measured best = MeasureCase(c, r, flags.reference, *f, renderer, reps);
+    PrintCase(c, best, r, renderer);
+    std::string file = c.name;
+    for (char& ch : file) ch = std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
+    WritePng(flags.png_dir, file, best.frame);
+    if (c.name == "still DVR ct-vessels") still_frame = best.frame;
+  }
+  CompareGradients(flags, *f);
+  CompareSteps(flags, *f, reps);
+  if (!flags.png_dir.empty())
+    WriteViews(flags.png_dir, f->volume, *f->gpu_volume, *f->texel_renderer);
+  if (still_frame) MeasureEncoding(*still_frame, reps);
   return 0;
 }
