@@ -244,34 +244,41 @@ Row RunCase(const ProxyMesh& mesh, const Volume& volume, const gpu::GpuContext& 
   return row;
 }
 
-}  // namespace
+using Rows = std::vector<std::pair<const char*, Row>>;
+using Meshes = std::vector<std::pair<const char*, ProxyMesh>>;
 
-int main(int argc, char** argv) {
+// The command line: the source and the FEM flags (bench/fem_flags.h),
+// --steps, --no-barrier, --map-tolerance MM; exits on a bad solver option.
+struct Args {
   std::string source = "phantom:abdomen";
   bench::FemFlags flags;
-  flags.solver = InteractiveFemOptions().solver;
   bool print_steps = false;
+};
+
+Args ParseArgs(int argc, char** argv) {
+  Args a;
+  a.flags.solver = InteractiveFemOptions().solver;
   for (int i = 1; i < argc; ++i) {
-    if (bench::ParseFemFlag(argc, argv, i, flags)) continue;
+    if (bench::ParseFemFlag(argc, argv, i, a.flags)) continue;
     if (std::string(argv[i]) == "--steps") {
-      print_steps = true;
+      a.print_steps = true;
     } else if (std::string(argv[i]) == "--no-barrier") {
-      flags.solver.inversion_barrier = false;
+      a.flags.solver.inversion_barrier = false;
     } else if (std::string(argv[i]) == "--map-tolerance" && i + 1 < argc) {
       g_map_tolerance_mm = std::atof(argv[++i]);
     } else {
-      source = argv[i];
+      a.source = argv[i];
     }
   }
-  const SolverOptions& solver = flags.solver;
-  if (const Status status = CheckSolverOptions(solver); !status.ok()) {
+  if (const Status status = CheckSolverOptions(a.flags.solver); !status.ok()) {
     std::fprintf(stderr, "drag_loop_bench: %s\n", std::string(status.message()).c_str());
-    return 2;
+    std::exit(2);
   }
-  auto volume = bench::Check(ReadVolume(source, {}), "reading the volume");
-  auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
-  auto gpu_volume = bench::Check(GpuVolume::Upload(*context, volume), "upload");
-  auto renderer = bench::Check(VolumeRenderer::Create(*context, {}), "renderer");
+  return a;
+}
+
+// The grab: the volume's left renal artery landmark.
+glm::dvec3 GrabPoint(const Volume& volume) {
   // A file made from the phantom (bench/make_ct_nifti.cc) carries no
   // landmarks: the phantom's own, placed in this volume's world geometry.
   std::vector<Landmark> landmarks = volume.landmarks();
@@ -282,8 +289,14 @@ int main(int argc, char** argv) {
   for (const Landmark& l : landmarks) {
     if (l.name == "left_renal_artery") grab = l.position_mm;
   }
+  return grab;
+}
+
+// The run's set-up and the main table's header.
+void PrintSetup(const std::string& source, const gpu::GpuContext& context,
+                const SolverOptions& solver) {
   std::printf("drag loop: %s, grab left_renal_artery, drag 12 mm in 10 steps, device '%s'\n",
-              source.c_str(), context->device_name().c_str());
+              source.c_str(), context.device_name().c_str());
   std::printf(
       "FEM: inversion barrier %s, at most %d load steps, min load fraction %g, %d Newton "
       "iterations after a partial load step, at most %d Newton iterations per step (0: "
@@ -297,27 +310,38 @@ int main(int argc, char** argv) {
   std::printf("%-22s %6s %8s %9s %8s %8s %13s %11s %8s %9s %9s\n", "mesh", "verts", "FEM",
               "FEM mean", "FEM max", "map", "frame 256^2", "still 512^2", "JPEG", "loop fps",
               "inverted");
-  std::vector<std::pair<const char*, Row>> rows;
-  std::vector<std::pair<const char*, ProxyMesh>> meshes;
+}
+
+// The main table, a row per mesh (250, 1,000, 5,000 vertices, up to
+// --max-vertices), each mesh built refined at the grab.
+Rows RunMeshes(const Args& args, const Volume& volume, const gpu::GpuContext& context,
+               GpuVolume& gpu_volume, VolumeRenderer& renderer, const glm::dvec3& grab,
+               Meshes& meshes) {
+  const SolverOptions& solver = args.flags.solver;
+  Rows rows;
   for (const Case& c : {Case{"20^3 -> 250 + refine", {20, 20, 20}, 250},
                         Case{"24^3 -> 1000 + refine", {24, 24, 24}, 1000},
                         Case{"40^3 -> 5000 + refine", {40, 40, 40}, 5000}}) {
-    if (c.target > flags.max_vertices) continue;
-    if (print_steps) std::printf("%s:\n", c.name);
+    if (c.target > args.flags.max_vertices) continue;
+    if (args.print_steps) std::printf("%s:\n", c.name);
     MeshParams params;
     params.grid = c.grid;
     params.target = c.target;
     params.refine_at_mm = grab;
-    auto costs = bench::Check(LatticeCostsGpu::Create(*context), "kernel");
+    auto costs = bench::Check(LatticeCostsGpu::Create(context), "kernel");
     meshes.emplace_back(c.name,
                         bench::Check(BuildProxyMesh(volume, params, {&gpu_volume, &costs}), "mesh"));
-    const Row r = RunCase(meshes.back().second, volume, *context, gpu_volume, *renderer, grab,
-                          solver, print_steps);
+    const Row r = RunCase(meshes.back().second, volume, context, gpu_volume, renderer, grab, solver,
+                          args.print_steps);
     std::printf("%-22s %6lld %8.2f %9.2f %8.2f %8.2f %13.1f %11.1f %8.2f %9.1f %9lld\n", c.name,
                 static_cast<long long>(r.vertices), r.fem, r.fem_sum / r.steps, r.fem_max, r.map,
                 r.interactive, r.still, r.encode, r.loop_fps, static_cast<long long>(r.inverted));
     rows.emplace_back(c.name, r);
   }
+  return rows;
+}
+
+void PrintBreakdown(const Rows& rows) {
   std::printf("\nbreakdown, best of the steps (ms): map = GPU passes + image copy (wall) + host;"
               " frame = map to texels + occupancy + cast + upscale (GPU) + readback (wall);"
               " orbit: wall of an interactive frame after a 2-degree orbit (map unchanged)\n");
@@ -331,6 +355,9 @@ int main(int argc, char** argv) {
                 name, static_cast<long long>(b.moved), static_cast<long long>(b.processed),
                 b.map_gpu, b.clear, b.claim, b.write, b.map_copy, b.texels, b.occupancy, b.cast, b.upscale, b.frame_gpu, b.readback, b.orbit);
   }
+}
+
+void PrintSplit(const Rows& rows) {
   std::printf("\nwhere the wall time of a step goes, mean over the steps (ms): FEM = forces "
               "(rotations, elastic forces) + factor solves (preconditioner) + K v and the rest of "
               "PCG + other; then the map update, the interactive frame and its JPEG; per step "
@@ -349,6 +376,9 @@ int main(int argc, char** argv) {
                 p.map / n, p.frame / n, p.jpeg / n, (fem + p.map + p.frame + p.jpeg) / n,
                 p.newton / n, p.cg / n, p.load_steps / n, static_cast<long long>(p.forced));
   }
+}
+
+void PrintEventBound(const Rows& rows, const SolverOptions& solver) {
   std::printf("\nthe per-event bound (--event-newton-budget %d): FEM worst / mean, steps that "
               "stopped short of their offset, the least fraction reached, the largest lag (mm), "
               "then the settle after step 10 (FEM ms, Newton iterations)\n",
@@ -362,6 +392,9 @@ int main(int argc, char** argv) {
                 p.least_fraction, p.largest_lag_mm, p.settle_ms,
                 static_cast<long long>(p.settle_newton));
   }
+}
+
+void PrintHandles(const Rows& rows, const SolverOptions& solver) {
   std::printf("\nthe grab's handles in the preconditioner (--handle-factor %s): grab ms, one "
               "application ms (min of 50)\n",
               solver.handle_factor == HandleFactor::kRefactor ? "refactor" : "capacitance");
@@ -370,6 +403,12 @@ int main(int argc, char** argv) {
     std::printf("%-22s %8lld %8.2f %10.3f\n", name, static_cast<long long>(r.handles), r.grab_ms,
                 r.precondition_ms);
   }
+}
+
+// The deferred loop in order against overlapped (RunDeferredLoop).
+void PrintOverlap(const Meshes& meshes, const Volume& volume, const gpu::GpuContext& context,
+                  GpuVolume& gpu_volume, VolumeRenderer& renderer, const glm::dvec3& grab,
+                  const SolverOptions& solver) {
   std::printf("\noverlap: the loop with the map updated once per frame, in order (FEM, map, "
               "frame, JPEG) and with the FEM of step N+1 running while frame N is cast and "
               "encoded (loop fps, best of 3)\n");
@@ -378,12 +417,32 @@ int main(int argc, char** argv) {
     double fps[2] = {0.0, 0.0};
     for (int r = 0; r < 3; ++r) {
       for (int overlap = 0; overlap < 2; ++overlap) {
-        fps[overlap] = std::max(fps[overlap],
-                                RunDeferredLoop(mesh, volume, *context, gpu_volume, *renderer,
-                                                grab, solver, overlap == 1));
+        fps[overlap] =
+            std::max(fps[overlap], RunDeferredLoop(mesh, volume, context, gpu_volume, renderer,
+                                                   grab, solver, overlap == 1));
       }
     }
     std::printf("%-22s %10.1f %10.1f %7.2fx\n", name, fps[0], fps[1], fps[1] / fps[0]);
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Args args = ParseArgs(argc, argv);
+  const SolverOptions& solver = args.flags.solver;
+  auto volume = bench::Check(ReadVolume(args.source, {}), "reading the volume");
+  auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
+  auto gpu_volume = bench::Check(GpuVolume::Upload(*context, volume), "upload");
+  auto renderer = bench::Check(VolumeRenderer::Create(*context, {}), "renderer");
+  const glm::dvec3 grab = GrabPoint(volume);
+  PrintSetup(args.source, *context, solver);
+  Meshes meshes;
+  const Rows rows = RunMeshes(args, volume, *context, gpu_volume, *renderer, grab, meshes);
+  PrintBreakdown(rows);
+  PrintSplit(rows);
+  PrintEventBound(rows, solver);
+  PrintHandles(rows, solver);
+  PrintOverlap(meshes, volume, *context, gpu_volume, *renderer, grab, solver);
   return 0;
 }
