@@ -55,9 +55,8 @@ std::string FileStem(const std::string& source) {
   return stem;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+// The command line (see the usage above).
+struct Options {
   bool jitter = true, cut = false, taps = false, shading = true, pre = true, refine = true,
        both_ends = true, partial_ends = true;
   double fine = 8.0, scale = 1.0;
@@ -67,98 +66,113 @@ int main(int argc, char** argv) {
                                       "CT-Bone", "CT-Muscle", "CT-Chest-Contrast-Enhanced",
                                       "CT-Soft-Tissue", "mip"};
   std::vector<std::string> sources;
+};
+
+Options ParseOptions(int argc, char** argv) {
+  Options o;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--no-jitter") {
-      jitter = false;
-    } else if (arg == "--no-shading") {
-      shading = false;
-    } else if (arg == "--no-preintegration") {
-      pre = false;
-    } else if (arg == "--no-peak-refine") {
-      refine = false;
-    } else if (arg == "--light-back-end") {
-      both_ends = false;
-    } else if (arg == "--whole-end-steps") {
-      partial_ends = false;
-    } else if (arg == "--taps") {
-      taps = true;
-    } else if (arg == "--cut") {
-      cut = true;
+    if (arg == "--no-jitter" || arg == "--no-shading" || arg == "--no-preintegration" ||
+        arg == "--no-peak-refine" || arg == "--light-back-end" || arg == "--whole-end-steps" ||
+        arg == "--taps" || arg == "--cut") {
+      o.jitter &= arg != "--no-jitter";
+      o.shading &= arg != "--no-shading";
+      o.pre &= arg != "--no-preintegration";
+      o.refine &= arg != "--no-peak-refine";
+      o.both_ends &= arg != "--light-back-end";
+      o.partial_ends &= arg != "--whole-end-steps";
+      o.taps |= arg == "--taps";
+      o.cut |= arg == "--cut";
     } else if (arg == "--scale" && i + 1 < argc) {
-      scale = std::atof(argv[++i]);
+      o.scale = std::atof(argv[++i]);
     } else if (arg == "--fine" && i + 1 < argc) {
-      fine = std::atof(argv[++i]);
+      o.fine = std::atof(argv[++i]);
     } else if (arg == "--size" && i + 1 < argc) {
-      size = std::atoi(argv[++i]);
+      o.size = std::atoi(argv[++i]);
     } else if (arg == "--png-dir" && i + 1 < argc) {
-      png_dir = argv[++i];
+      o.png_dir = argv[++i];
     } else if (arg == "--presets" && i + 1 < argc) {
-      presets = Split(argv[++i]);
+      o.presets = Split(argv[++i]);
     } else {
-      sources.push_back(arg);
+      o.sources.push_back(arg);
     }
   }
-  if (sources.empty()) sources.push_back("phantom:abdomen");
+  if (o.sources.empty()) o.sources.push_back("phantom:abdomen");
+  return o;
+}
+
+// The still of preset `name` ("mip": MIP) as the options set it.
+RenderRequest StillRequest(const Options& o, const std::string& name, const Volume& volume,
+                           const GpuVolume& gpu_volume) {
+  const VolumeGeometry& g = volume.geometry();
+  RenderRequest r;
+  r.camera = Camera::ForVolume(g);
+  r.mode = name == "mip" ? RenderMode::kMip : RenderMode::kDvr;
+  r.preset = bench::Check(MakeRenderPreset(name == "mip" ? "ct-vessels" : name, volume), "preset");
+  r.quality = RenderQuality::kStill;
+  r.width = r.height = o.size;
+  r.volume = &gpu_volume;
+  r.settings.jitter = o.jitter;
+  r.settings.still_cell_gradient = !o.taps;
+  r.settings.preintegrated = o.pre;
+  r.settings.mip_peak_refine = o.refine;
+  r.settings.light_both_ends = o.both_ends;
+  r.settings.partial_end_steps = o.partial_ends;
+  r.settings.shading = o.shading;
+  if (!o.shading && r.preset.lighting) r.preset.lighting->shade = false;
+  if (o.cut) {
+    r.clip.planes.push_back(
+        CutPlaneFacing(g.PhysicalToWorld(r.camera.Target()), g.direction * r.camera.Forward()));
+  }
+  if (o.scale != 1.0) r.settings.step_mm = RequestStepMm(r, g) * o.scale;
+  return r;
+}
+
+// The still and its reference as PNG files, DIR/STEM_PRESET_still.png and
+// _fine.png.
+void WritePair(const std::string& base, const Frame& still, const Frame& reference) {
+  for (auto [frame, suffix] :
+       {std::pair{&still, "_still.png"}, std::pair{&reference, "_fine.png"}}) {
+    const auto png = bench::Check(EncodePng(frame->rgba, frame->width, frame->height), "png");
+    if (FILE* f = std::fopen((base + suffix).c_str(), "wb")) {
+      std::fwrite(png.data(), 1, png.size(), f);
+      std::fclose(f);
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options o = ParseOptions(argc, argv);
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
   auto context = bench::Check(gpu::GpuContext::Create({}), "opening Vulkan");
   auto renderer = bench::Check(VolumeRenderer::Create(*context, {}), "renderer");
-  std::printf("still at its own step against step / %.0f, %dx%d, default camera%s, jitter %s, "
-              "%s gradient, pre-integration %s (steps lit at %s, %s end steps), MIP peaks %s, "
-              "shading %s\n",
-              fine, size, size, cut ? ", view cut" : "", jitter ? "on" : "off",
-              taps ? "tap" : "cell", pre ? "on" : "off", both_ends ? "both ends" : "the back end",
-              partial_ends ? "partial" : "whole",
-              refine ? "refined" : "as sampled",
-              shading ? "as the preset" : "off");
+  std::printf(
+      "still at its own step against step / %.0f, %dx%d, default camera%s, jitter %s, "
+      "%s gradient, pre-integration %s (steps lit at %s, %s end steps), MIP peaks %s, "
+      "shading %s\n",
+      o.fine, o.size, o.size, o.cut ? ", view cut" : "", o.jitter ? "on" : "off",
+      o.taps ? "tap" : "cell", o.pre ? "on" : "off", o.both_ends ? "both ends" : "the back end",
+      o.partial_ends ? "partial" : "whole", o.refine ? "refined" : "as sampled",
+      o.shading ? "as the preset" : "off");
   std::printf("%-24s %-28s %9s %9s %8s %8s\n", "volume", "preset", "step mm", "fine mm",
               "PSNR dB", "cast ms");
   double worst = 1e9;
-  for (const std::string& source : sources) {
+  for (const std::string& source : o.sources) {
     const Volume volume = bench::Check(ReadVolume(source, {}), "reading the volume");
     const GpuVolume gpu_volume = bench::Check(GpuVolume::Upload(*context, volume), "upload");
-    const VolumeGeometry& g = volume.geometry();
-    for (const std::string& name : presets) {
-      RenderRequest r;
-      r.camera = Camera::ForVolume(g);
-      r.mode = name == "mip" ? RenderMode::kMip : RenderMode::kDvr;
-      r.preset = bench::Check(MakeRenderPreset(name == "mip" ? "ct-vessels" : name, volume),
-                              "preset");
-      r.quality = RenderQuality::kStill;
-      r.width = r.height = size;
-      r.volume = &gpu_volume;
-      r.settings.jitter = jitter;
-      r.settings.still_cell_gradient = !taps;
-      r.settings.preintegrated = pre;
-      r.settings.mip_peak_refine = refine;
-      r.settings.light_both_ends = both_ends;
-      r.settings.partial_end_steps = partial_ends;
-      r.settings.shading = shading;
-      if (!shading && r.preset.lighting) r.preset.lighting->shade = false;
-      if (cut) {
-        r.clip.planes.push_back(CutPlaneFacing(g.PhysicalToWorld(r.camera.Target()),
-                                               g.direction * r.camera.Forward()));
-      }
-      if (scale != 1.0) r.settings.step_mm = RequestStepMm(r, g) * scale;
+    for (const std::string& name : o.presets) {
+      RenderRequest r = StillRequest(o, name, volume, gpu_volume);
       const Frame still = bench::Check(renderer->Render(r), "still");
-      r.settings.step_mm = still.step_mm / fine;
+      r.settings.step_mm = still.step_mm / o.fine;
       const Frame reference = bench::Check(renderer->Render(r), "fine still");
       const double psnr = bench::PsnrOfMse(bench::RgbMse(still.rgba, reference.rgba));
       worst = std::min(worst, psnr);
-      std::printf("%-24s %-28s %9.3f %9.4f %8.1f %8.1f\n", FileStem(source).c_str(),
-                  name.c_str(), still.step_mm, reference.step_mm, psnr,
-                  still.timings.raycast_ms);
-      if (!png_dir.empty()) {
-        const std::string base = png_dir + "/" + FileStem(source) + "_" + name;
-        for (auto [frame, suffix] : {std::pair{&still, "_still.png"},
-                                     std::pair{&reference, "_fine.png"}}) {
-          const auto png = bench::Check(EncodePng(frame->rgba, frame->width, frame->height),
-                                        "png");
-          if (FILE* f = std::fopen((base + suffix).c_str(), "wb")) {
-            std::fwrite(png.data(), 1, png.size(), f);
-            std::fclose(f);
-          }
-        }
+      std::printf("%-24s %-28s %9.3f %9.4f %8.1f %8.1f\n", FileStem(source).c_str(), name.c_str(),
+                  still.step_mm, reference.step_mm, psnr, still.timings.raycast_ms);
+      if (!o.png_dir.empty()) {
+        WritePair(o.png_dir + "/" + FileStem(source) + "_" + name, still, reference);
       }
     }
   }
