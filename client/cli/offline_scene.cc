@@ -151,6 +151,53 @@ Result<SceneView> MakeView(const RenderArgs& args, const Volume& volume) {
   return view;
 }
 
+namespace {
+
+// The pins, then the grab and its drag (settled, as a session settles
+// before its stills) or pull, printed as they are applied (world LPS).
+Status ManipulateOffline(const RenderArgs& args, OfflineScene& scene) {
+  const VolumeGeometry& geometry = scene.volume->geometry();
+  for (size_t p = 0; p + 2 < args.pins.size(); p += 3) {
+    const glm::dvec3 pin(args.pins[p], args.pins[p + 1], args.pins[p + 2]);  // world
+    RETURN_IF_ERROR(scene.scene->Pin(geometry.WorldToPhysical(pin), 0.0).status());
+    std::printf("pin at (%.1f, %.1f, %.1f) mm (LPS)\n", pin.x, pin.y, pin.z);
+  }
+  const std::optional<glm::dvec3>& grab = scene.grab;
+  if (grab) {
+    const GrabRule rule = args.grab_rule == "ball" ? GrabRule::kBall : GrabRule::kOrgan;
+    ASSIGN_OR_RETURN(GrabInfo info,
+                     scene.scene->Grab(GrabRequest{
+                         .point_mm = *grab, .rule = rule, .radius_mm = args.grab_radius}));
+    const glm::dvec3 world = geometry.PhysicalToWorld(*grab);
+    std::printf("grab (%s) at (%.1f, %.1f, %.1f) mm (LPS): %zu handles%s%s\n",
+                args.grab_rule.c_str(), world.x, world.y, world.z, info.handles.size(),
+                info.message.empty() ? "" : "; ", info.message.c_str());
+    if (!args.drag.empty()) {
+      ASSIGN_OR_RETURN(glm::dvec3 offset, Vec3Of(args.drag, "--drag"));
+      PrintSkeletonNearHandles(scene.mesh, info.handles, geometry.WorldVectorToPhysical(offset));
+      ASSIGN_OR_RETURN(scene.step, scene.scene->Drag(geometry.WorldVectorToPhysical(offset)));
+      // A drag event's FEM work is bounded (docs/FEM.md, "Per-event work bound"):
+      // a long drag in one event stops short and the rest is carried. The
+      // offline commands render a still, so the drag is finished first, as a
+      // session does before its still frames.
+      ASSIGN_OR_RETURN(SceneStepTimings settled, scene.scene->Settle(kSettleSolves));
+      if (settled.max_displacement_mm > 0.0) {
+        settled.fem_ms += scene.step.fem_ms;
+        settled.warp_ms += scene.step.warp_ms;
+        scene.step = settled;
+      }
+    } else if (!args.pull.empty()) {
+      ASSIGN_OR_RETURN(glm::dvec3 force, Vec3Of(args.pull, "--pull"));
+      ASSIGN_OR_RETURN(scene.step, scene.scene->Pull(geometry.WorldVectorToPhysical(force)));
+    }
+  } else if (!args.drag.empty() || !args.pull.empty()) {
+    return absl::InvalidArgumentError("--drag and --pull need --grab or --grab-landmark");
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
 Result<std::unique_ptr<OfflineScene>> PrepareOfflineScene(const RenderArgs& args) {
   auto out = std::make_unique<OfflineScene>();
   auto t0 = std::chrono::steady_clock::now();
@@ -178,43 +225,7 @@ Result<std::unique_ptr<OfflineScene>> PrepareOfflineScene(const RenderArgs& args
                                                        *out->gpu_volume, *out->renderer,
                                                        out->mesh, {}));
   out->setup_ms = MsSince(t0);
-  const VolumeGeometry& geometry = out->volume->geometry();
-  for (size_t p = 0; p + 2 < args.pins.size(); p += 3) {
-    const glm::dvec3 pin(args.pins[p], args.pins[p + 1], args.pins[p + 2]);  // world
-    RETURN_IF_ERROR(out->scene->Pin(geometry.WorldToPhysical(pin), 0.0).status());
-    std::printf("pin at (%.1f, %.1f, %.1f) mm (LPS)\n", pin.x, pin.y, pin.z);
-  }
-  const std::optional<glm::dvec3>& grab = out->grab;
-  if (grab) {
-    const GrabRule rule = args.grab_rule == "ball" ? GrabRule::kBall : GrabRule::kOrgan;
-    ASSIGN_OR_RETURN(GrabInfo info, out->scene->Grab(GrabRequest{
-                                        .point_mm = *grab, .rule = rule,
-                                        .radius_mm = args.grab_radius}));
-    const glm::dvec3 world = geometry.PhysicalToWorld(*grab);
-    std::printf("grab (%s) at (%.1f, %.1f, %.1f) mm (LPS): %zu handles%s%s\n",
-                args.grab_rule.c_str(), world.x, world.y, world.z, info.handles.size(),
-                info.message.empty() ? "" : "; ", info.message.c_str());
-    if (!args.drag.empty()) {
-      ASSIGN_OR_RETURN(glm::dvec3 offset, Vec3Of(args.drag, "--drag"));
-      PrintSkeletonNearHandles(out->mesh, info.handles, geometry.WorldVectorToPhysical(offset));
-      ASSIGN_OR_RETURN(out->step, out->scene->Drag(geometry.WorldVectorToPhysical(offset)));
-      // A drag event's FEM work is bounded (docs/FEM.md, "Per-event work bound"):
-      // a long drag in one event stops short and the rest is carried. The
-      // offline commands render a still, so the drag is finished first, as a
-      // session does before its still frames.
-      ASSIGN_OR_RETURN(SceneStepTimings settled, out->scene->Settle(kSettleSolves));
-      if (settled.max_displacement_mm > 0.0) {
-        settled.fem_ms += out->step.fem_ms;
-        settled.warp_ms += out->step.warp_ms;
-        out->step = settled;
-      }
-    } else if (!args.pull.empty()) {
-      ASSIGN_OR_RETURN(glm::dvec3 force, Vec3Of(args.pull, "--pull"));
-      ASSIGN_OR_RETURN(out->step, out->scene->Pull(geometry.WorldVectorToPhysical(force)));
-    }
-  } else if (!args.drag.empty() || !args.pull.empty()) {
-    return absl::InvalidArgumentError("--drag and --pull need --grab or --grab-landmark");
-  }
+  RETURN_IF_ERROR(ManipulateOffline(args, *out));
   return out;
 }
 

@@ -117,12 +117,8 @@ void PrintInfo(const Volume& v) {
   }
 }
 
-}  // namespace
-
-void AddVolumeCommands(CLI::App& app, int* exit_code) {
-  CLI::App* volume = app.add_subcommand("volume", "Inspect and convert volumes");
-  volume->require_subcommand(1);
-
+// volume info: geometry, value range, landmarks and DICOM series.
+void AddVolumeInfoCommand(CLI::App* volume, int* exit_code) {
   struct InfoArgs {
     std::string source;
     bool json = false;
@@ -156,7 +152,10 @@ void AddVolumeCommands(CLI::App& app, int* exit_code) {
       PrintSeries(series);
     }
   });
+}
 
+// volume export: any readable source as NIfTI, with progress.
+void AddVolumeExportCommand(CLI::App* volume, int* exit_code) {
   struct ExportArgs {
     std::string source, out;
     VolumeFlags volume_flags;
@@ -185,6 +184,15 @@ void AddVolumeCommands(CLI::App& app, int* exit_code) {
     *exit_code = ExitWith(written);
     if (*exit_code == 0) std::cout << "wrote " << export_args->out << "\n";
   });
+}
+
+}  // namespace
+
+void AddVolumeCommands(CLI::App& app, int* exit_code) {
+  CLI::App* volume = app.add_subcommand("volume", "Inspect and convert volumes");
+  volume->require_subcommand(1);
+  AddVolumeInfoCommand(volume, exit_code);
+  AddVolumeExportCommand(volume, exit_code);
 }
 
 }  // namespace vpm::cli
