@@ -159,6 +159,54 @@ std::pair<double, double> Measure(int reps, int threads, Fn fn) {
   return {wall, cpu};
 }
 
+// The MIP of every pixel on `threads` threads, in blocks of 4x2 pixels
+// that the threads take from a shared counter; returns the samples taken.
+int64_t CastMip(const Volume& volume, const Rays& rays, int size, int threads,
+                std::vector<float>& image) {
+  const int dims[3] = {int(volume.dims()[0]), int(volume.dims()[1]), int(volume.dims()[2])};
+  const glm::vec3 inv_spacing = 1.0f / glm::vec3(volume.geometry().spacing_mm);
+  const float step = 1.0f;
+  const int blocks_x = size / 4, blocks_y = size / 2;
+  std::atomic<int> next{0};
+  std::atomic<int64_t> samples{0};
+  auto worker = [&] {
+    int64_t taken = 0;
+    for (int b; (b = next.fetch_add(16)) < blocks_x * blocks_y;) {
+      for (int i = b; i < std::min(b + 16, blocks_x * blocks_y); ++i) {
+        const int bx = i % blocks_x, by = i / blocks_x;
+        int pixel[8];
+        for (int l = 0; l < 8; ++l) pixel[l] = (by * 2 + l / 4) * size + bx * 4 + l % 4;
+        float out[8];
+        taken +=
+            MipBlock(volume.voxels().floats().data(), dims, inv_spacing, rays, pixel, step, out);
+        for (int l = 0; l < 8; ++l) image[pixel[l]] = out[l];
+      }
+    }
+    samples += taken;
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+  return samples.load();
+}
+
+// A streaming read of 512 MiB on every core (the memory bandwidth): the
+// wall and CPU ms of the best of 3, and the bytes read.
+std::tuple<double, double, double> MeasureBandwidth(int threads, uint32_t& sink) {
+  std::vector<uint32_t> big(size_t(1) << 27, 1u);
+  const auto [read_ms, read_cpu_ms] = Measure(3, threads, [&] {
+    std::vector<std::thread> pool;
+    std::vector<uint32_t> sums(threads);
+    const size_t chunk = big.size() / threads;
+    for (int t = 0; t < threads; ++t) {
+      pool.emplace_back([&, t] { sums[t] = SumWords(big.data() + t * chunk, chunk); });
+    }
+    for (auto& t : pool) t.join();
+    for (uint32_t s : sums) sink += s;
+  });
+  return {read_ms, read_cpu_ms, double(big.size() * sizeof(uint32_t))};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -170,58 +218,22 @@ int main(int argc, char** argv) {
   }
   auto volume = bench::Check(ReadVolume(source, {}), "reading the volume");
   if (volume.voxels().floats().empty()) {
-    std::fprintf(stderr, "sample_rate_bench: %s is held as int16; give a float source "
-                         "(the phantom)\n", source.c_str());
+    std::fprintf(stderr,
+                 "sample_rate_bench: %s is held as int16; give a float source "
+                 "(the phantom)\n",
+                 source.c_str());
     return 2;
   }
   const Rays rays = MakeRays(volume, size);
   const int dims[3] = {int(volume.dims()[0]), int(volume.dims()[1]), int(volume.dims()[2])};
-  const glm::vec3 inv_spacing = 1.0f / glm::vec3(volume.geometry().spacing_mm);
-  const float step = 1.0f;
   const int threads = int(std::max(1u, std::thread::hardware_concurrency()));
   std::vector<float> image(size_t(size) * size);
 
-  // Blocks of 4x2 pixels; threads take blocks from a shared counter.
-  const int blocks_x = size / 4, blocks_y = size / 2;
-  auto run = [&]() {
-    std::atomic<int> next{0};
-    std::atomic<int64_t> samples{0};
-    auto worker = [&] {
-      int64_t taken = 0;
-      for (int b; (b = next.fetch_add(16)) < blocks_x * blocks_y;) {
-        for (int i = b; i < std::min(b + 16, blocks_x * blocks_y); ++i) {
-          const int bx = i % blocks_x, by = i / blocks_x;
-          int pixel[8];
-          for (int l = 0; l < 8; ++l) pixel[l] = (by * 2 + l / 4) * size + bx * 4 + l % 4;
-          float out[8];
-          taken += MipBlock(volume.voxels().floats().data(), dims, inv_spacing, rays, pixel, step, out);
-          for (int l = 0; l < 8; ++l) image[pixel[l]] = out[l];
-        }
-      }
-      samples += taken;
-    };
-    std::vector<std::thread> pool;
-    for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
-    for (auto& t : pool) t.join();
-    return samples.load();
-  };
   int64_t samples = 0;
-  const auto [mip_ms, mip_cpu_ms] = Measure(5, threads, [&] { samples = run(); });
-
-  // Streaming read of 512 MiB on every core: the memory bandwidth.
-  std::vector<uint32_t> big(size_t(1) << 27, 1u);
+  const auto [mip_ms, mip_cpu_ms] =
+      Measure(5, threads, [&] { samples = CastMip(volume, rays, size, threads, image); });
   uint32_t sink = 0;
-  const auto [read_ms, read_cpu_ms] = Measure(3, threads, [&] {
-    std::vector<std::thread> pool;
-    std::vector<uint32_t> sums(threads);
-    const size_t chunk = big.size() / threads;
-    for (int t = 0; t < threads; ++t) {
-      pool.emplace_back([&, t] { sums[t] = SumWords(big.data() + t * chunk, chunk); });
-    }
-    for (auto& t : pool) t.join();
-    for (uint32_t s : sums) sink += s;
-  });
-  const double bytes = double(big.size() * sizeof(uint32_t));
+  const auto [read_ms, read_cpu_ms, bytes] = MeasureBandwidth(threads, sink);
 
   std::printf("machine limits, %s %lldx%lldx%lld (float32, %.0f MiB), %d threads\n",
               source.c_str(), (long long)dims[0], (long long)dims[1], (long long)dims[2],
