@@ -221,6 +221,64 @@ std::pair<int64_t, int64_t> CountOver1Hu(const Volume& a, const Volume& b) {
   return {over, on_face};
 }
 
+// The CPU map and warps (2 threads) timed, and the GPU's warps through the
+// coarse and exact maps against them.
+void CompareWithCpu(const Scene& s, const Dims& coarse_dims, const Volume& warped_coarse,
+                    const Volume& warped_exact) {
+  const VolumeGeometry& g = s.volume.geometry();
+  std::optional<BackwardMapValues> cpu_map;
+  const double cpu_coarse_ms = bench::MinMs(3, [&] {
+    cpu_map =
+        bench::Check(BackwardMapCpu(g.extent_mm(), coarse_dims, s.rest, s.drag, s.tets), "cpu map");
+  });
+  std::printf("%-52s %10.2f\n", "CPU map, coarse (2 threads)", cpu_coarse_ms);
+  const double cpu_full_ms = bench::MinMs(1, [&] {
+    bench::Check(BackwardMapCpu(g.extent_mm(), g.dims, s.rest, s.drag, s.tets), "cpu map");
+  });
+  std::printf("%-52s %10.2f\n", "CPU map, full resolution (2 threads)", cpu_full_ms);
+  std::optional<Volume> cpu_warp, cpu_exact;
+  const double cpu_warp_ms = bench::MinMs(1, [&] {
+    cpu_warp = bench::Check(WarpVolumeCpu(s.volume, *cpu_map, kCpuThreads), "cpu warp");
+  });
+  std::printf("%-52s %10.2f\n", "CPU warp through coarse map (2 threads)", cpu_warp_ms);
+  const double cpu_exact_ms = bench::MinMs(1, [&] {
+    cpu_exact = bench::Check(WarpVolumeExactCpu(s.volume, s.rest, s.drag, s.tets), "cpu exact");
+  });
+  std::printf("%-52s %10.2f\n", "CPU exact warp (2 threads)", cpu_exact_ms);
+  std::printf("GPU vs CPU max |J| difference: coarse %.4f HU, exact %.4f HU\n",
+              MaxAbsDiff(warped_coarse.voxels().floats(), cpu_warp->voxels().floats()),
+              MaxAbsDiff(warped_exact.voxels().floats(), cpu_exact->voxels().floats()));
+  for (const auto& [name, gpu, cpu] :
+       {std::tuple{"coarse", &warped_coarse, &*cpu_warp}, {"exact", &warped_exact, &*cpu_exact}}) {
+    const auto [over, on_face] = CountOver1Hu(*gpu, *cpu);
+    std::printf("GPU vs CPU, %s: %lld voxels differ by more than 1 HU, %lld of them on the "
+                "volume's faces\n", name, (long long)over, (long long)on_face);
+  }
+}
+
+// The coarse maps (1/8, 1/4, 1/2 of the voxels per axis) against the exact
+// warp: errors in HU and mm.
+void PrintMapErrors(const gpu::GpuContext& context, const Scene& s, VolumeWarper& warper,
+                    GpuVolume& gpu_volume, const Volume& warped_exact,
+                    const BackwardMapValues& exact_values) {
+  const VolumeGeometry& g = s.volume.geometry();
+  std::printf("\ncoarse map vs exact warp (body: exact J > -500 HU; moved: |d| > 0.01 mm)\n");
+  std::printf("%-14s %10s %11s %8s %8s %13s %11s\n", "map", "RMSE body", "RMSE moved", "max HU",
+              "max mm", "P99 mm moved", "RMS mm moved");
+  for (int64_t divisor : {8, 4, 2}) {
+    Dims m;
+    for (int a = 0; a < 3; ++a) m[a] = std::max<int64_t>((g.dims[a] + divisor - 1) / divisor, 2);
+    auto map = bench::Check(BackwardMap::Create(context, g, {.map_dims = m}), "map");
+    bench::Check(map.Update(s.rest, s.drag, s.tets), "update");
+    const Volume j = bench::Check(warper.Warp(gpu_volume, s.volume, map), "warp");
+    const ErrorRow e =
+        CompareToExact(j, warped_exact, bench::Check(map.Download(), "download"), exact_values);
+    std::printf("%-14s %10.3f %11.3f %8.1f %8.3f %13.3f %11.3f\n",
+                StrCat(m[0], "x", m[1], "x", m[2]).c_str(), e.rmse_body_hu, e.rmse_moved_hu,
+                e.max_hu, e.max_mm, e.p99_mm, e.rms_moved_mm);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -260,48 +318,7 @@ int main(int argc, char** argv) {
   const Volume warped_exact = bench::Check(by_texel.Warp(gpu_volume, s.volume, exact), "warp");
   const BackwardMapValues exact_values = bench::Check(exact.Download(), "download");
 
-  std::optional<BackwardMapValues> cpu_map;
-  const double cpu_coarse_ms = bench::MinMs(3, [&] {
-    cpu_map =
-        bench::Check(BackwardMapCpu(g.extent_mm(), coarse_dims, s.rest, s.drag, s.tets), "cpu map");
-  });
-  std::printf("%-52s %10.2f\n", "CPU map, coarse (2 threads)", cpu_coarse_ms);
-  const double cpu_full_ms = bench::MinMs(1, [&] {
-    bench::Check(BackwardMapCpu(g.extent_mm(), g.dims, s.rest, s.drag, s.tets), "cpu map");
-  });
-  std::printf("%-52s %10.2f\n", "CPU map, full resolution (2 threads)", cpu_full_ms);
-  std::optional<Volume> cpu_warp, cpu_exact;
-  const double cpu_warp_ms = bench::MinMs(1, [&] {
-    cpu_warp = bench::Check(WarpVolumeCpu(s.volume, *cpu_map, kCpuThreads), "cpu warp");
-  });
-  std::printf("%-52s %10.2f\n", "CPU warp through coarse map (2 threads)", cpu_warp_ms);
-  const double cpu_exact_ms = bench::MinMs(1, [&] {
-    cpu_exact = bench::Check(WarpVolumeExactCpu(s.volume, s.rest, s.drag, s.tets), "cpu exact");
-  });
-  std::printf("%-52s %10.2f\n", "CPU exact warp (2 threads)", cpu_exact_ms);
-  std::printf("GPU vs CPU max |J| difference: coarse %.4f HU, exact %.4f HU\n",
-              MaxAbsDiff(warped_coarse.voxels().floats(), cpu_warp->voxels().floats()),
-              MaxAbsDiff(warped_exact.voxels().floats(), cpu_exact->voxels().floats()));
-  for (const auto& [name, gpu, cpu] :
-       {std::tuple{"coarse", &warped_coarse, &*cpu_warp}, {"exact", &warped_exact, &*cpu_exact}}) {
-    const auto [over, on_face] = CountOver1Hu(*gpu, *cpu);
-    std::printf("GPU vs CPU, %s: %lld voxels differ by more than 1 HU, %lld of them on the "
-                "volume's faces\n", name, (long long)over, (long long)on_face);
-  }
-  std::printf("\ncoarse map vs exact warp (body: exact J > -500 HU; moved: |d| > 0.01 mm)\n");
-  std::printf("%-14s %10s %11s %8s %8s %13s %11s\n", "map", "RMSE body", "RMSE moved", "max HU",
-              "max mm", "P99 mm moved", "RMS mm moved");
-  for (int64_t divisor : {8, 4, 2}) {
-    Dims m;
-    for (int a = 0; a < 3; ++a) m[a] = std::max<int64_t>((g.dims[a] + divisor - 1) / divisor, 2);
-    auto map = bench::Check(BackwardMap::Create(*context, g, {.map_dims = m}), "map");
-    bench::Check(map.Update(s.rest, s.drag, s.tets), "update");
-    const Volume j = bench::Check(by_texel.Warp(gpu_volume, s.volume, map), "warp");
-    const ErrorRow e =
-        CompareToExact(j, warped_exact, bench::Check(map.Download(), "download"), exact_values);
-    std::printf("%-14s %10.3f %11.3f %8.1f %8.3f %13.3f %11.3f\n",
-                StrCat(m[0], "x", m[1], "x", m[2]).c_str(), e.rmse_body_hu, e.rmse_moved_hu,
-                e.max_hu, e.max_mm, e.p99_mm, e.rms_moved_mm);
-  }
+  CompareWithCpu(s, coarse_dims, warped_coarse, warped_exact);
+  PrintMapErrors(*context, s, by_texel, gpu_volume, warped_exact, exact_values);
   return 0;
 }
