@@ -132,60 +132,59 @@ void Append(const PlayResult& segment, double offset_ms, PlayResult* all) {
   all->status = segment.status;
 }
 
-Status Play(const ServerConnection& s, const std::string& script_path, std::string session_id,
-            const std::string& out_dir, std::string report_path) {
-  // Ctrl-C stops the script, and the session opened here is still closed.
-  CatchInterrupts();
-  ASSIGN_OR_RETURN(json script_json, ReadJsonFile(script_path));
-  const std::string source = script_json.value("volume", "phantom:abdomen?size=64");
+// The session a script plays in: one opened here on the script's volume,
+// or the one --session names (its volume found through ListSessions).
+struct PlayTarget {
   v3::VolumeInfo volume;
+  std::string session_id;
   std::string case_id;  // the session's case, when the server keeps cases
-  const bool opened_here = session_id.empty();
-  if (opened_here) {
+  bool opened_here = false;
+};
+
+Result<PlayTarget> OpenOrFindSession(const ServerConnection& s, const std::string& source,
+                                     const std::string& session_id) {
+  PlayTarget t{.session_id = session_id, .opened_here = session_id.empty()};
+  if (t.opened_here) {
     v3::LoadVolumeRequest load;
     load.set_source(source);
-    RETURN_IF_ERROR(FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &volume)));
+    RETURN_IF_ERROR(FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &t.volume)));
     v3::OpenSessionRequest open;
-    open.set_volume_id(volume.volume_id());
+    open.set_volume_id(t.volume.volume_id());
     v3::SessionInfo info;
     RETURN_IF_ERROR(FromGrpc(s.stub().OpenSession(s.Context().get(), open, &info)));
-    session_id = info.session_id();
-    case_id = info.case_id();
-    std::printf("volume %s, session %s%s%s\n", volume.volume_id().c_str(), session_id.c_str(),
-                case_id.empty() ? "" : ", case ", case_id.c_str());
+    t.session_id = info.session_id();
+    t.case_id = info.case_id();
+    std::printf("volume %s, session %s%s%s\n", t.volume.volume_id().c_str(), t.session_id.c_str(),
+                t.case_id.empty() ? "" : ", case ", t.case_id.c_str());
     std::fflush(stdout);  // a watcher (a test, a script) learns the ids at once
-  } else {
-    v3::ListSessionsResponse sessions;
-    RETURN_IF_ERROR(FromGrpc(s.stub().ListSessions(s.Context().get(), {}, &sessions)));
-    for (const auto& x : sessions.sessions()) {
-      if (x.session_id() == session_id) {
-        v3::GetVolumeRequest get;
-        get.set_volume_id(x.volume_id());
-        RETURN_IF_ERROR(FromGrpc(s.stub().GetVolume(s.Context().get(), get, &volume)));
-      }
-    }
-    if (volume.volume_id().empty()) return absl::NotFoundError(StrCat("session ", session_id));
+    return t;
   }
-  ASSIGN_OR_RETURN(Script script, ParseScript(script_json, volume));
-  if (!out_dir.empty()) RETURN_IF_ERROR(MakeDirectories(out_dir));
-  PlayOptions options;
-  options.session_id = session_id;
-  Status write_status;  // the first frame that could not be saved, reported at the end
-  int64_t frame_index = 0;  // across reopened sessions
-  options.on_frame = [&](const v3::Frame& frame, int64_t) {
-    if (out_dir.empty() || !write_status.ok()) return;
-    char name[64];
-    std::snprintf(name, sizeof name, "frame_%04lld.%s", (long long)frame_index++,
-                  std::string(EncodingExtension(frame.encoding())).c_str());
-    write_status = WriteFile(fs::path(out_dir) / name, frame.image());
-  };
-  // Behind a balancer the session's replica may die or be drained: the
-  // stream ends UNAVAILABLE (or NOT_FOUND on a replica without it). A session
-  // this command opened is then reopened where the balancer now sends the
-  // key (the volume reloaded from its source), the script's events so far
-  // are replayed at once to restore the deformation, and the script goes on.
+  v3::ListSessionsResponse sessions;
+  RETURN_IF_ERROR(FromGrpc(s.stub().ListSessions(s.Context().get(), {}, &sessions)));
+  for (const auto& x : sessions.sessions()) {
+    if (x.session_id() == session_id) {
+      v3::GetVolumeRequest get;
+      get.set_volume_id(x.volume_id());
+      RETURN_IF_ERROR(FromGrpc(s.stub().GetVolume(s.Context().get(), get, &t.volume)));
+    }
+  }
+  if (t.volume.volume_id().empty()) return absl::NotFoundError(StrCat("session ", session_id));
+  return t;
+}
+
+// Plays the script. Behind a balancer the session's replica may die or be
+// drained: the stream ends UNAVAILABLE (or NOT_FOUND on a replica without
+// it). A session this command opened is then reopened where the balancer
+// now sends the key (the volume reloaded from its source, or the case
+// reopened), the script's events so far are replayed at once to restore the
+// deformation, and the script goes on. `sessions`: every session used.
+PlayResult PlayWithReopens(const ServerConnection& s, const Script& script,
+                           const std::string& source, const PlayTarget& target,
+                           PlayOptions& options, std::vector<std::string>& sessions) {
+  const std::string& session_id = target.session_id;
+  const std::string& case_id = target.case_id;
+  const bool opened_here = target.opened_here;
   PlayResult result;
-  std::vector<std::string> sessions{session_id};
   const SteadyClock::time_point play_start = SteadyClock::now();
   for (int reopened = 0;; ++reopened) {
     const PlayResult segment = PlayScript(s, script, options);
@@ -234,21 +233,25 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
     std::fprintf(stderr, "vpm play: reopened as session %s\n", reopened_id->c_str());
   }
   result.duration_ms = MsBetween(play_start, SteadyClock::now());
-  session_id = options.session_id;
-  if (opened_here) {
-    // The sessions this command opened go with it, whatever the outcome:
-    // every one, not only the last (a session given up as lost may still
-    // exist, on this replica or another; closing one that is gone is
-    // NOT_FOUND, which changes nothing).
-    for (const std::string& id : sessions) {
-      v3::CloseSessionRequest close;
-      close.set_session_id(id);
-      v3::CloseSessionResponse closed;
-      (void)s.stub().CloseSession(s.Context().get(), close, &closed);
-    }
+  return result;
+}
+
+// The sessions this command opened go with it, whatever the outcome: every
+// one, not only the last (a session given up as lost may still exist, on
+// this replica or another; closing one that is gone is NOT_FOUND, which
+// changes nothing).
+void CloseSessions(const ServerConnection& s, const std::vector<std::string>& sessions) {
+  for (const std::string& id : sessions) {
+    v3::CloseSessionRequest close;
+    close.set_session_id(id);
+    v3::CloseSessionResponse closed;
+    (void)s.stub().CloseSession(s.Context().get(), close, &closed);
   }
-  RETURN_IF_ERROR(result.status);
-  RETURN_IF_ERROR(write_status);
+}
+
+// The play's figures: counts, rates and each latency's summary.
+json PlayReport(const PlayResult& result, const std::string& session_id,
+                const std::vector<std::string>& sessions) {
   std::vector<double> frame_latency, render, fem, warp, encode, intervals;
   const std::vector<double>& latency = result.event_latency_ms;
   int64_t bytes = 0, interactive = 0;
@@ -264,26 +267,31 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
     interactive += f.interactive;
   }
   const double seconds = result.duration_ms / 1000.0;
-  json report{{"session_id", session_id},
-              {"sessions", sessions},
-              {"reopened", sessions.size() - 1},
-              {"events", result.events_sent},
-              {"frames", result.frames.size()},
-              {"interactive_frames", interactive},
-              {"duration_s", seconds},
-              {"fps", seconds > 0 ? double(result.frames.size()) / seconds : 0.0},
-              {"time_to_first_frame_ms", result.first_frame_ms},
-              {"bytes_per_frame", result.frames.empty() ? 0 : bytes / int64_t(result.frames.size())},
-              {"superseded", result.frames.empty() ? 0 : result.frames.back().superseded},
-              {"latency_ms", Summarize(latency)},
-              {"frame_latency_ms", Summarize(frame_latency)},
-              {"frame_interval_ms", Summarize(intervals)},
-              {"server_render_ms", Summarize(render)},
-              {"server_fem_ms", Summarize(fem)},
-              {"server_warp_ms", Summarize(warp)},
-              {"server_encode_ms", Summarize(encode)}};
-  if (report_path.empty() && !out_dir.empty()) report_path = (fs::path(out_dir) / "report.json").string();
-  if (!report_path.empty()) RETURN_IF_ERROR(WriteFile(report_path, report.dump(2) + "\n"));
+  return json{
+      {"session_id", session_id},
+      {"sessions", sessions},
+      {"reopened", sessions.size() - 1},
+      {"events", result.events_sent},
+      {"frames", result.frames.size()},
+      {"interactive_frames", interactive},
+      {"duration_s", seconds},
+      {"fps", seconds > 0 ? double(result.frames.size()) / seconds : 0.0},
+      {"time_to_first_frame_ms", result.first_frame_ms},
+      {"bytes_per_frame", result.frames.empty() ? 0 : bytes / int64_t(result.frames.size())},
+      {"superseded", result.frames.empty() ? 0 : result.frames.back().superseded},
+      {"latency_ms", Summarize(latency)},
+      {"frame_latency_ms", Summarize(frame_latency)},
+      {"frame_interval_ms", Summarize(intervals)},
+      {"server_render_ms", Summarize(render)},
+      {"server_fem_ms", Summarize(fem)},
+      {"server_warp_ms", Summarize(warp)},
+      {"server_encode_ms", Summarize(encode)}};
+}
+
+void PrintPlayReport(const json& report, const PlayResult& result, const std::string& out_dir,
+                     const std::string& report_path) {
+  const int64_t interactive = report["interactive_frames"].get<int64_t>();
+  const double seconds = report["duration_s"].get<double>();
   std::printf("%zu frames (%lld interactive) for %lld events in %.2f s: %.1f fps, first frame %.0f ms\n",
               result.frames.size(), (long long)interactive, (long long)result.events_sent, seconds,
               report["fps"].get<double>(), result.first_frame_ms);
@@ -300,6 +308,39 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
   }
   if (!out_dir.empty()) std::printf("frames in %s\n", out_dir.c_str());
   if (!report_path.empty()) std::printf("report in %s\n", report_path.c_str());
+}
+
+Status Play(const ServerConnection& s, const std::string& script_path, std::string session_id,
+            const std::string& out_dir, std::string report_path) {
+  // Ctrl-C stops the script, and the session opened here is still closed.
+  CatchInterrupts();
+  ASSIGN_OR_RETURN(json script_json, ReadJsonFile(script_path));
+  const std::string source = script_json.value("volume", "phantom:abdomen?size=64");
+  ASSIGN_OR_RETURN(const PlayTarget target, OpenOrFindSession(s, source, session_id));
+  ASSIGN_OR_RETURN(Script script, ParseScript(script_json, target.volume));
+  if (!out_dir.empty()) RETURN_IF_ERROR(MakeDirectories(out_dir));
+  PlayOptions options;
+  options.session_id = target.session_id;
+  Status write_status;      // the first frame that could not be saved, reported at the end
+  int64_t frame_index = 0;  // across reopened sessions
+  options.on_frame = [&](const v3::Frame& frame, int64_t) {
+    if (out_dir.empty() || !write_status.ok()) return;
+    char name[64];
+    std::snprintf(name, sizeof name, "frame_%04lld.%s", (long long)frame_index++,
+                  std::string(EncodingExtension(frame.encoding())).c_str());
+    write_status = WriteFile(fs::path(out_dir) / name, frame.image());
+  };
+  std::vector<std::string> sessions{target.session_id};
+  const PlayResult result = PlayWithReopens(s, script, source, target, options, sessions);
+  if (target.opened_here) CloseSessions(s, sessions);
+  RETURN_IF_ERROR(result.status);
+  RETURN_IF_ERROR(write_status);
+  const json report = PlayReport(result, options.session_id, sessions);
+  if (report_path.empty() && !out_dir.empty()) {
+    report_path = (fs::path(out_dir) / "report.json").string();
+  }
+  if (!report_path.empty()) RETURN_IF_ERROR(WriteFile(report_path, report.dump(2) + "\n"));
+  PrintPlayReport(report, result, out_dir, report_path);
   return absl::OkStatus();
 }
 

@@ -215,128 +215,163 @@ Result<Script> ParseScript(const nlohmann::json& j, const v3::VolumeInfo& volume
   return script;
 }
 
-PlayResult PlayScript(const ServerConnection& server, const Script& script,
-                      const PlayOptions& options) {
-  PlayResult result;
-  auto context = server.Context(/*streaming=*/true);
-  auto stream = server.stub().Interact(context.get());
-  const SteadyClock::time_point start = SteadyClock::now();
-  std::mutex mutex;
-  std::condition_variable got_final;
-  std::map<uint64_t, SteadyClock::time_point> sent_at;
-  uint64_t last_sequence = 0;
-  uint64_t shown_sequence = 0;  // the newest event a frame has shown
-  bool final_seen = false;
-  bool sending_done = false;
+namespace {
 
-  // Reads until the server ends the stream; the sender half-closes once the
-  // still frame of the last event has arrived.
-  std::thread reader([&] {
+// One play of a script on an Interact stream: a reader thread records the
+// frames (and each event's latency, from its send to the first frame that
+// shows it) while this thread sends the events.
+class ScriptRun {
+ public:
+  ScriptRun(const ServerConnection& server, const PlayOptions& options)
+      : options_(options),
+        context_(server.Context(/*streaming=*/true)),
+        stream_(server.stub().Interact(context_.get())),
+        start_(SteadyClock::now()) {}
+
+  PlayResult Run(const Script& script) {
+    // Reads until the server ends the stream; the sender half-closes once
+    // the still frame of the last event has arrived.
+    std::thread reader([this] { ReadFrames(); });
+    v3::InteractRequest first;
+    first.set_session_id(options_.session_id);
+    *first.mutable_event()->mutable_settings() = script.settings;
+    bool ok = Send(first, sequence_);
+    bool grabbed = false;
+    ok = SendEvents(script, ok, grabbed);
+    if (Interrupted()) {
+      // Ctrl-C: the stream is cancelled, nothing waits for a still frame.
+      context_->TryCancel();
+      reader.join();
+      (void)stream_->Finish();
+      result_.status = absl::CancelledError("interrupted (SIGINT/SIGTERM)");
+      result_.duration_ms = MsBetween(start_, SteadyClock::now());
+      return result_;
+    }
+    if (ok && grabbed) {
+      v3::InteractRequest release;
+      release.mutable_event()->mutable_release();
+      ok = Send(release, ++sequence_);
+    }
+    WaitForTheLastStill(ok);
+    stream_->WritesDone();
+    reader.join();
+    result_.status = FromStreamEnd(stream_->Finish());
+    result_.duration_ms = MsBetween(start_, SteadyClock::now());
+    return result_;
+  }
+
+ private:
+  void ReadFrames() {
     v3::Frame frame;
     int64_t index = 0;
-    while (stream->Read(&frame)) {
-      const SteadyClock::time_point now = SteadyClock::now();
-      FrameRecord record;
-      record.received_ms = MsBetween(start, now);
-      record.last_sequence = frame.last_sequence();
-      record.interactive = frame.interactive();
-      record.bytes = static_cast<int64_t>(frame.image().size());
-      record.timings = frame.timings();
-      record.superseded = frame.superseded_frames();
-      {
-        std::lock_guard lock(mutex);
-        auto it = sent_at.find(frame.last_sequence());
-        if (it != sent_at.end()) record.latency_ms = MsBetween(it->second, now);
-        for (auto e = sent_at.upper_bound(shown_sequence);
-             e != sent_at.end() && e->first <= frame.last_sequence(); ++e) {
-          result.event_latency_ms.push_back(MsBetween(e->second, now));
-        }
-        shown_sequence = std::max(shown_sequence, frame.last_sequence());
-        if (result.first_frame_ms < 0) result.first_frame_ms = record.received_ms;
-        result.frames.push_back(record);
-        if (sending_done && frame.last_sequence() == last_sequence && !frame.interactive()) {
-          final_seen = true;
-          got_final.notify_all();
-        }
-      }
-      if (options.on_frame) options.on_frame(frame, index++);
+    while (stream_->Read(&frame)) {
+      Record(frame, SteadyClock::now());
+      if (options_.on_frame) options_.on_frame(frame, index++);
     }
-    std::lock_guard lock(mutex);
-    final_seen = true;  // the stream ended: nothing more will come
-    got_final.notify_all();
-  });
+    std::lock_guard lock(mutex_);
+    final_seen_ = true;  // the stream ended: nothing more will come
+    got_final_.notify_all();
+  }
 
-  auto send = [&](v3::InteractRequest request, uint64_t sequence) {
+  void Record(const v3::Frame& frame, SteadyClock::time_point now) {
+    FrameRecord record;
+    record.received_ms = MsBetween(start_, now);
+    record.last_sequence = frame.last_sequence();
+    record.interactive = frame.interactive();
+    record.bytes = static_cast<int64_t>(frame.image().size());
+    record.timings = frame.timings();
+    record.superseded = frame.superseded_frames();
+    std::lock_guard lock(mutex_);
+    auto it = sent_at_.find(frame.last_sequence());
+    if (it != sent_at_.end()) record.latency_ms = MsBetween(it->second, now);
+    for (auto e = sent_at_.upper_bound(shown_sequence_);
+         e != sent_at_.end() && e->first <= frame.last_sequence(); ++e) {
+      result_.event_latency_ms.push_back(MsBetween(e->second, now));
+    }
+    shown_sequence_ = std::max(shown_sequence_, frame.last_sequence());
+    if (result_.first_frame_ms < 0) result_.first_frame_ms = record.received_ms;
+    result_.frames.push_back(record);
+    if (sending_done_ && frame.last_sequence() == last_sequence_ && !frame.interactive()) {
+      final_seen_ = true;
+      got_final_.notify_all();
+    }
+  }
+
+  bool Send(v3::InteractRequest request, uint64_t sequence) {
     request.mutable_event()->set_sequence(sequence);
     {
-      std::lock_guard lock(mutex);
-      sent_at[sequence] = SteadyClock::now();
-      last_sequence = sequence;
+      std::lock_guard lock(mutex_);
+      sent_at_[sequence] = SteadyClock::now();
+      last_sequence_ = sequence;
     }
-    ++result.events_sent;
-    return stream->Write(request);
-  };
-  uint64_t sequence = 1;
-  v3::InteractRequest first;
-  first.set_session_id(options.session_id);
-  *first.mutable_event()->mutable_settings() = script.settings;
-  bool ok = send(first, sequence);
-  bool grabbed = false;
-  bool first_pass = true;
-  do {
-    for (size_t i = 0; i < script.events.size(); ++i) {
-      const ScriptEvent& e = script.events[i];
-      if (!ok) break;
-      if (first_pass && static_cast<int64_t>(i) < options.skip_until) {
+    ++result_.events_sent;
+    return stream_->Write(request);
+  }
+
+  // The script's events, each after its wait (none while catching up to
+  // options.resume_at; those before options.skip_until not at all), looped
+  // for options.duration_s; `grabbed`: whether a grab is held at the end.
+  bool SendEvents(const Script& script, bool ok, bool& grabbed) {
+    bool first_pass = true;
+    do {
+      for (size_t i = 0; i < script.events.size() && ok; ++i) {
+        const ScriptEvent& e = script.events[i];
+        const bool skipped = first_pass && static_cast<int64_t>(i) < options_.skip_until;
+        const bool catching_up = static_cast<int64_t>(i) < options_.resume_at;
+        if (!skipped && !catching_up &&
+            !SleepUnlessInterrupted(std::chrono::microseconds(int64_t(e.wait_ms * 1000)))) {
+          break;
+        }
         if (e.event.has_grab()) grabbed = true;
         if (e.event.has_release()) grabbed = false;
-        result.script_events_written = static_cast<int64_t>(i) + 1;
-        continue;
+        if (skipped) {
+          result_.script_events_written = static_cast<int64_t>(i) + 1;
+          continue;
+        }
+        v3::InteractRequest request;
+        *request.mutable_event() = e.event;
+        ok = Send(request, ++sequence_);
+        if (ok) result_.script_events_written = static_cast<int64_t>(i) + 1;
       }
-      const bool catching_up = static_cast<int64_t>(i) < options.resume_at;
-      if (!catching_up &&
-          !SleepUnlessInterrupted(std::chrono::microseconds(int64_t(e.wait_ms * 1000)))) {
-        break;
-      }
-      v3::InteractRequest request;
-      *request.mutable_event() = e.event;
-      if (e.event.has_grab()) grabbed = true;
-      if (e.event.has_release()) grabbed = false;
-      ok = send(request, ++sequence);
-      if (ok) result.script_events_written = static_cast<int64_t>(i) + 1;
-    }
-    first_pass = false;
-  } while (ok && !Interrupted() && options.duration_s > 0 &&
-           MsBetween(start, SteadyClock::now()) < options.duration_s * 1000);
-  if (Interrupted()) {
-    // Ctrl-C: the stream is cancelled, nothing waits for a still frame.
-    context->TryCancel();
-    reader.join();
-    (void)stream->Finish();
-    result.status = absl::CancelledError("interrupted (SIGINT/SIGTERM)");
-    result.duration_ms = MsBetween(start, SteadyClock::now());
-    return result;
+      first_pass = false;
+    } while (ok && !Interrupted() && options_.duration_s > 0 &&
+             MsBetween(start_, SteadyClock::now()) < options_.duration_s * 1000);
+    return ok;
   }
-  if (ok && grabbed) {
-    v3::InteractRequest release;
-    release.mutable_event()->mutable_release();
-    ok = send(release, ++sequence);
-  }
-  {
-    std::unique_lock lock(mutex);
-    sending_done = true;
-    for (const FrameRecord& f : result.frames) {
-      if (f.last_sequence == last_sequence && !f.interactive) final_seen = true;
+
+  // Up to 60 s for the still frame of the last event; past that the stream
+  // is cancelled.
+  void WaitForTheLastStill(bool ok) {
+    std::unique_lock lock(mutex_);
+    sending_done_ = true;
+    for (const FrameRecord& f : result_.frames) {
+      if (f.last_sequence == last_sequence_ && !f.interactive) final_seen_ = true;
     }
-    if (ok && !got_final.wait_for(lock, std::chrono::seconds(60), [&] { return final_seen; })) {
-      context->TryCancel();
+    if (ok && !got_final_.wait_for(lock, std::chrono::seconds(60), [&] { return final_seen_; })) {
+      context_->TryCancel();
     }
   }
-  stream->WritesDone();
-  reader.join();
-  result.status = FromStreamEnd(stream->Finish());
-  result.duration_ms = MsBetween(start, SteadyClock::now());
-  return result;
+
+  const PlayOptions& options_;
+  std::unique_ptr<grpc::ClientContext> context_;
+  std::unique_ptr<grpc::ClientReaderWriter<v3::InteractRequest, v3::Frame>> stream_;
+  const SteadyClock::time_point start_;
+  uint64_t sequence_ = 1;
+  std::mutex mutex_;  // guards what follows, shared with the reader
+  std::condition_variable got_final_;
+  PlayResult result_;
+  std::map<uint64_t, SteadyClock::time_point> sent_at_;
+  uint64_t last_sequence_ = 0;
+  uint64_t shown_sequence_ = 0;  // the newest event a frame has shown
+  bool final_seen_ = false;
+  bool sending_done_ = false;
+};
+
+}  // namespace
+
+PlayResult PlayScript(const ServerConnection& server, const Script& script,
+                      const PlayOptions& options) {
+  return ScriptRun(server, options).Run(script);
 }
 
 nlohmann::json Summarize(std::vector<double> v) {
