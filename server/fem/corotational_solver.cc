@@ -243,6 +243,96 @@ Status CorotationalSolver::Equilibrate(const Eigen::VectorXd& force_n,
   }
 }
 
+std::vector<uint8_t> CorotationalSolver::PrescribedElements(
+    const std::vector<int32_t>& constrained) const {
+  std::vector<uint8_t> is_constrained(displacement_.size(), 0);
+  for (int32_t d : constrained) is_constrained[d] = 1;
+  std::vector<uint8_t> prescribed(elements_.size(), 1);
+  for (size_t t = 0; t < elements_.size(); ++t) {
+    for (int32_t v : elements_[t].vertices) {
+      for (int i = 0; i < 3; ++i) prescribed[t] &= is_constrained[3 * v + i];
+    }
+  }
+  return prescribed;
+}
+
+CorotationalSolver::LoadStepMove CorotationalSolver::MoveLoadStep(
+    const Eigen::VectorXd& jump, const Eigen::VectorXd& force_n,
+    const std::vector<int32_t>& constrained, bool with_handles, HandleMode mode,
+    const std::vector<uint8_t>& prescribed_elements, SolveStats& stats) {
+  LoadStepMove move;
+  const bool warm = linearized_ && linearized_mode_ == mode;
+  if (!warm && !options_.inversion_barrier) {
+    displacement_ += jump;
+    return move;
+  }
+  // Predictor, without evaluating forces: the prescribed DOFs take the
+  // jump and the free ones follow through the last tangent, with the
+  // residual linearised from the last solve when there is one:
+  // K du = r_last + df_ext - K jump.
+  const auto t0 = SteadyClock::now();
+  Eigen::VectorXd rhs = warm ? Eigen::VectorXd(linear_residual_ + (force_n - linearized_force_))
+                             : Eigen::VectorXd::Zero(jump.size());
+  Eigen::VectorXd k_jump;
+  ApplyCorotatedStiffness(elements_, frames_, jump, k_jump, ElementThreads());
+  rhs -= k_jump;
+  for (int32_t d : constrained) rhs[d] = 0.0;
+  stats.assembly_ms += MsSince(t0);
+  const Eigen::VectorXd direction = jump + TangentSolve(rhs, constrained, with_handles, stats);
+  if (options_.inversion_barrier) {
+    // The least fraction worth a load step is of one event's share: of
+    // a lagging drag's longer jump it would give up sooner than an
+    // unbounded drag does.
+    const double min_fraction = options_.min_load_fraction *
+                                ForcedFraction(stats.remaining_mm, budget_.forced_step_limit_mm());
+    move.alpha = budget_.load_steps() <= options_.max_load_steps
+                     ? FeasibleStepFraction(elements_, displacement_, direction, kFeasibleKeep,
+                                            min_fraction, prescribed_elements)
+                     : 0.0;
+    if (move.alpha == 0.0) {
+      // No feasible part (or no load steps left): the prescribed motion
+      // itself flattens an element, e.g. a handle edge sweeping over a
+      // fixed vertex, where nothing free can make room. The rest is
+      // applied at once; elements it inverts lose their barrier
+      // (inversion_barrier.h) and the caller counts them.
+      stats.forced_inversion = true;
+      move.alpha = 1.0;
+      move.forced_fraction = ForcedFraction(stats.remaining_mm, budget_.forced_step_limit_mm());
+    }
+  }
+  // A forced step moves only the prescribed DOFs: the free ones stay at
+  // the last equilibrium. The predictor's free part is the tangent's
+  // extrapolation of a jump it has just found infeasible, through
+  // barrier terms that grow without bound near J = 0; taken whole it
+  // threw free vertices over 100 mm for a 20 mm drag (a vertex 115 mm,
+  // 81 tets inverted) and Newton never came back from there
+  // (CorotationalSolver.ForcedDragMovesNothingFurtherThanTheHandles).
+  // A lagging drag's jump holds the lag too; a forced step applies at
+  // most one event's share of it (EventBudget::forced_step_limit_mm), as
+  // an unbounded drag would, and the rest stays carried: forcing a 5.7 mm
+  // lag at once inverted more tets than the unbounded drag's 3 mm steps
+  // (FemEventBudget.LockedDragInEventsForcesNoMoreThanTheUnboundedDrag).
+  displacement_ += stats.forced_inversion ? Eigen::VectorXd(move.forced_fraction * jump)
+                                          : Eigen::VectorXd(move.alpha * direction);
+  return move;
+}
+
+SolveStats CorotationalSolver::FinishSolve(SolveStats stats, bool carried, double first_jump_mm,
+                                           const Eigen::VectorXd& force_n, HandleMode mode) {
+  linearized_ = true;
+  linearized_mode_ = mode;
+  linearized_force_ = force_n;
+  budget_.EndSolve(!carried);
+  if (carried) {
+    stats.converged = false;
+    stats.target_fraction = first_jump_mm > 0.0 ? 1.0 - stats.remaining_mm / first_jump_mm : 1.0;
+  } else {
+    stats.remaining_mm = 0.0;
+  }
+  stats.max_displacement_mm = MaxVertexNorm(displacement_);
+  return stats;
+}
+
 Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_mm,
                                              const Eigen::VectorXd& force_n, HandleMode mode) {
   RETURN_IF_ERROR(CheckLoad(prescribed_mm, force_n));
@@ -255,19 +345,8 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
   budget_.BeginSolve(prescribed_mm, force_n, constrained, displacement_);
   double first_jump_mm = -1.0;  // the prescribed motion asked for
   bool carried = false;         // the budget stopped short of the target
-  // Elements whose every DOF is prescribed: their shape is the load's, and
-  // no step size can change it, so the barrier does not limit the steps.
-  std::vector<uint8_t> prescribed_elements;
-  if (options_.inversion_barrier) {
-    std::vector<uint8_t> is_constrained(displacement_.size(), 0);
-    for (int32_t d : constrained) is_constrained[d] = 1;
-    prescribed_elements.assign(elements_.size(), 1);
-    for (size_t t = 0; t < elements_.size(); ++t) {
-      for (int32_t v : elements_[t].vertices) {
-        for (int i = 0; i < 3; ++i) prescribed_elements[t] &= is_constrained[3 * v + i];
-      }
-    }
-  }
+  const std::vector<uint8_t> prescribed_elements =
+      options_.inversion_barrier ? PrescribedElements(constrained) : std::vector<uint8_t>{};
   // The prescribed DOFs move in load steps: all at once unless that would
   // crush an element (inversion barrier), then by the largest feasible
   // fraction of what is left, each step brought to equilibrium.
@@ -283,105 +362,37 @@ Result<SolveStats> CorotationalSolver::Solve(const Eigen::VectorXd& prescribed_m
                                                          options_.intermediate_newton_iterations)) {
       carried = true;
       const int used = stats.newton_iterations;
-      const Status status =
-          Equilibrate(force_n, constrained, with_handles, start,
-                      MaxVertexNorm(displacement_ - start), used,
-                      budget_.IterationsFor(used, options_.max_newton_iterations), stats);
-      if (!status.ok()) return status;
+      RETURN_IF_ERROR(Equilibrate(
+          force_n, constrained, with_handles, start, MaxVertexNorm(displacement_ - start), used,
+          budget_.IterationsFor(used, options_.max_newton_iterations), stats));
       break;
     }
     const Eigen::VectorXd step_start = displacement_;
     const int first_iteration = stats.newton_iterations;
     ++stats.load_steps;
     budget_.CountLoadStep();
-    const bool warm = linearized_ && linearized_mode_ == mode;
-    double alpha = 1.0;
-    double forced_fraction = 1.0;  // of the jump, when the step is forced
-    if (warm || options_.inversion_barrier) {
-      // Predictor, without evaluating forces: the prescribed DOFs take the
-      // jump and the free ones follow through the last tangent, with the
-      // residual linearised from the last solve when there is one:
-      // K du = r_last + df_ext - K jump.
-      const auto t0 = SteadyClock::now();
-      Eigen::VectorXd rhs = warm ? Eigen::VectorXd(linear_residual_ + (force_n - linearized_force_))
-                                 : Eigen::VectorXd::Zero(jump.size());
-      Eigen::VectorXd k_jump;
-      ApplyCorotatedStiffness(elements_, frames_, jump, k_jump, ElementThreads());
-      rhs -= k_jump;
-      for (int32_t d : constrained) rhs[d] = 0.0;
-      stats.assembly_ms += MsSince(t0);
-      const Eigen::VectorXd direction = jump + TangentSolve(rhs, constrained, with_handles, stats);
-      if (options_.inversion_barrier) {
-        // The least fraction worth a load step is of one event's share: of
-        // a lagging drag's longer jump it would give up sooner than an
-        // unbounded drag does.
-        const double min_fraction =
-            options_.min_load_fraction *
-            ForcedFraction(stats.remaining_mm, budget_.forced_step_limit_mm());
-        alpha = budget_.load_steps() <= options_.max_load_steps
-                    ? FeasibleStepFraction(elements_, displacement_, direction, kFeasibleKeep,
-                                           min_fraction, prescribed_elements)
-                    : 0.0;
-        if (alpha == 0.0) {
-          // No feasible part (or no load steps left): the prescribed motion
-          // itself flattens an element, e.g. a handle edge sweeping over a
-          // fixed vertex, where nothing free can make room. The rest is
-          // applied at once; elements it inverts lose their barrier
-          // (inversion_barrier.h) and the caller counts them.
-          stats.forced_inversion = true;
-          alpha = 1.0;
-          forced_fraction = ForcedFraction(stats.remaining_mm, budget_.forced_step_limit_mm());
-        }
-      }
-      // A forced step moves only the prescribed DOFs: the free ones stay at
-      // the last equilibrium. The predictor's free part is the tangent's
-      // extrapolation of a jump it has just found infeasible, through
-      // barrier terms that grow without bound near J = 0; taken whole it
-      // threw free vertices over 100 mm for a 20 mm drag (a vertex 115 mm,
-      // 81 tets inverted) and Newton never came back from there
-      // (CorotationalSolver.ForcedDragMovesNothingFurtherThanTheHandles).
-      // A lagging drag's jump holds the lag too; a forced step applies at
-      // most one event's share of it (EventBudget::forced_step_limit_mm), as
-      // an unbounded drag would, and the rest stays carried: forcing a 5.7 mm
-      // lag at once inverted more tets than the unbounded drag's 3 mm steps
-      // (FemEventBudget.LockedDragInEventsForcesNoMoreThanTheUnboundedDrag).
-      displacement_ += stats.forced_inversion ? Eigen::VectorXd(forced_fraction * jump)
-                                              : Eigen::VectorXd(alpha * direction);
-    } else {
-      displacement_ += jump;
-    }
+    const LoadStepMove move =
+        MoveLoadStep(jump, force_n, constrained, with_handles, mode, prescribed_elements, stats);
     linearized_ = false;
-    const Status status = Equilibrate(
+    RETURN_IF_ERROR(Equilibrate(
         force_n, constrained, with_handles, start, MaxVertexNorm(displacement_ - step_start),
         first_iteration,
-        budget_.IterationsFor(first_iteration, alpha == 1.0
+        budget_.IterationsFor(first_iteration, move.alpha == 1.0
                                                    ? options_.max_newton_iterations
                                                    : options_.intermediate_newton_iterations),
-        stats);
-    if (!status.ok()) return status;
-    if (forced_fraction < 1.0) {
+        stats));
+    if (move.forced_fraction < 1.0) {
       carried = true;
-      stats.remaining_mm *= 1.0 - forced_fraction;
+      stats.remaining_mm *= 1.0 - move.forced_fraction;
       break;
     }
-    if (alpha == 1.0) break;
+    if (move.alpha == 1.0) break;
     // The last update's linearised residual starts the next load step.
     linearized_ = true;
     linearized_mode_ = mode;
     linearized_force_ = force_n;
   }
-  linearized_ = true;
-  linearized_mode_ = mode;
-  linearized_force_ = force_n;
-  budget_.EndSolve(!carried);
-  if (carried) {
-    stats.converged = false;
-    stats.target_fraction = first_jump_mm > 0.0 ? 1.0 - stats.remaining_mm / first_jump_mm : 1.0;
-  } else {
-    stats.remaining_mm = 0.0;
-  }
-  stats.max_displacement_mm = MaxVertexNorm(displacement_);
-  return stats;
+  return FinishSolve(stats, carried, first_jump_mm, force_n, mode);
 }
 
 double CorotationalSolver::SpringLag(const Eigen::VectorXd& target_mm) const {

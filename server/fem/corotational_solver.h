@@ -260,6 +260,26 @@ class CorotationalSolver {
   Status Equilibrate(const Eigen::VectorXd& force_n, const std::vector<int32_t>& constrained,
                      bool with_handles, const Eigen::VectorXd& start, double step_scale,
                      int first_iteration, int max_iterations, SolveStats& stats);
+  // Elements whose every DOF is in `constrained`: their shape is the
+  // load's, and no step size can change it, so the barrier does not limit
+  // the steps (one flag per element).
+  std::vector<uint8_t> PrescribedElements(const std::vector<int32_t>& constrained) const;
+  // One load step's move of displacement_ towards the prescribed `jump`:
+  // the predictor's direction times the largest feasible fraction (alpha),
+  // or, where no fraction is feasible, a forced fraction of the jump on the
+  // prescribed DOFs alone; without the barrier and a warm tangent, the jump.
+  struct LoadStepMove {
+    double alpha = 1.0;
+    double forced_fraction = 1.0;  // of the jump, when the step is forced
+  };
+  LoadStepMove MoveLoadStep(const Eigen::VectorXd& jump, const Eigen::VectorXd& force_n,
+                            const std::vector<int32_t>& constrained, bool with_handles,
+                            HandleMode mode, const std::vector<uint8_t>& prescribed_elements,
+                            SolveStats& stats);
+  // A solve's end: the tangent kept for the next one, the budget told
+  // whether the target was reached, and the stats' fraction reached.
+  SolveStats FinishSolve(SolveStats stats, bool carried, double first_jump_mm,
+                         const Eigen::VectorXd& force_n, HandleMode mode);
 
   SolverOptions options_;
   std::vector<TetElement> elements_;
