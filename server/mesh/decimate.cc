@@ -332,127 +332,168 @@ int DefaultThreads() {
 
 }  // namespace
 
-Result<DecimationResult> DecimateFast(const DecimationInput& in, const DecimationParams& p,
-                                      const CancelToken& cancel) {
-  RETURN_IF_ERROR(Validate(in, p));
-  RETURN_IF_ERROR(cancel.Check());
-  const int64_t n = static_cast<int64_t>(in.positions.size());
-  // What the removal loop reads at scattered addresses, in huge pages.
-  HugePageArray<VertexState> state(n, HugePageArray<VertexState>::Init::kNone);
-  for (int64_t v = 0; v < n; ++v) {
-    state[v] = VertexState{.dens = 0.0,
-                           .ci = in.ci[v],
-                           .wg_cg = p.wg * in.cg[v],
-                           .position = in.positions[v],
-                           .list_begin = 0,
-                           .list_size = 0,
-                           .alive = 1};
+namespace {
+
+// DecimateFast's state: the vertices (in huge pages, read at scattered
+// addresses by the removal loop), their neighbour lists, the cost model and
+// the removal order.
+class FastDecimation {
+ public:
+  FastDecimation(const DecimationInput& in, const DecimationParams& p)
+      : p_(p),
+        n_(static_cast<int64_t>(in.positions.size())),
+        state_(n_, HugePageArray<VertexState>::Init::kNone) {
+    for (int64_t v = 0; v < n_; ++v) {
+      state_[v] = VertexState{.dens = 0.0,
+                              .ci = in.ci[v],
+                              .wg_cg = p.wg * in.cg[v],
+                              .position = in.positions[v],
+                              .list_begin = 0,
+                              .list_size = 0,
+                              .alive = 1};
+    }
   }
-  ASSIGN_OR_RETURN(const HugePageArray<int32_t> neighbour_ids,
-                   FindNeighbours(in.positions, p.radius_mm,
-                                  p.threads > 0 ? p.threads : DefaultThreads(), state.data(),
-                                  cancel));
-  double d0 = 0.0;
-  for (int64_t v = 0; v < n; ++v) d0 = std::max(d0, state[v].dens);
-  CancelCheckpoint checkpoint(cancel);
-  const CostModel cost_model{p, d0};
-  auto cost = [&](int64_t v) {
-    const VertexState& s = state[v];
-    return cost_model(s.ci, s.wg_cg, s.dens);
-  };
-  const int64_t keep = p.target - kAnchorCount;
-  std::vector<int64_t> order;
-  order.reserve(std::max<int64_t>(0, n - keep));
+
+  // Densities from the neighbour lists, then the removals down to p.target.
+  Result<DecimationResult> Run(const DecimationInput& in, const CancelToken& cancel) {
+    ASSIGN_OR_RETURN(
+        HugePageArray<int32_t> ids,
+        FindNeighbours(in.positions, p_.radius_mm, p_.threads > 0 ? p_.threads : DefaultThreads(),
+                       state_.data(), cancel));
+    neighbour_ids_.emplace(std::move(ids));
+    for (int64_t v = 0; v < n_; ++v) d0_ = std::max(d0_, state_[v].dens);
+    cost_model_.emplace(CostModel{p_, d0_});
+    const int64_t keep = p_.target - kAnchorCount;
+    order_.reserve(std::max<int64_t>(0, n_ - keep));
+    CancelCheckpoint checkpoint(cancel);
+    RETURN_IF_ERROR(p_.density_mode == DensityMode::kSpread ? RemoveSpread(keep, checkpoint)
+                                                            : RemovePaper(keep, checkpoint));
+    return Finish(
+        n_, [&](int64_t v) { return state_[v].alive != 0; }, [&](int64_t v) { return Cost(v); },
+        d0_, std::move(order_));
+  }
+
+ private:
+  double Cost(int64_t v) const {
+    const VertexState& s = state_[v];
+    return (*cost_model_)(s.ci, s.wg_cg, s.dens);
+  }
+
   // Removes v: lowers its neighbours' densities, the removed ones' too (never
   // read again, which spares a liveness test per neighbour). Each 1/d has the
   // bits the initial sum added (PointDistance is symmetric), so a density is
   // exactly the sum over its alive neighbours taken in removal order, as in
   // the naive scan.
-  auto remove = [&](int64_t v, auto&& on_neighbour) {
-    VertexState& sv = state[v];
+  template <typename OnNeighbour>
+  void Remove(int64_t v, OnNeighbour&& on_neighbour) {
+    VertexState& sv = state_[v];
     sv.alive = 0;
-    order.push_back(v);
+    order_.push_back(v);
     const glm::dvec3 pv = sv.position;
-    const int32_t* ids = neighbour_ids.data() + sv.list_begin;
+    const int32_t* ids = neighbour_ids_->data() + sv.list_begin;
     const int32_t size = sv.list_size;
     for (int32_t k = 0; k < size; ++k) {
       const int32_t id = ids[k];
-      VertexState& su = state[id];
+      VertexState& su = state_[id];
       su.dens -= 1.0 / PointDistance(su.position, pv);
       on_neighbour(id);
     }
-  };
-  if (p.density_mode == DensityMode::kSpread) {
-    // A removal can only raise its neighbours' Ctotal (S = 1 - Cd, all
-    // factors >= 0, rounding monotonic), so their queued keys are left as
-    // underestimates and refreshed when they come out first: the first key
-    // is the true minimum once it is current. Every key queued is then at
-    // least the last one taken, which a monotone queue exploits. A removal
-    // recomputes its neighbours' Ctotal while their lines are in cache, into
-    // a dense array (#N, 8 MB at 1,000,000) that a stale key is checked
-    // against, so that the 4 stale keys per removal cost no visit to the
-    // vertex states.
-    HugePageArray<double> current(n, HugePageArray<double>::Init::kNone);
-    LookaheadMinQueue queue;
-    for (int64_t v = 0; v < n; ++v) {
-      current[v] = cost(v);
-      queue.Push(current[v], static_cast<int32_t>(v));
+  }
+
+  // Spread mode: a removal can only raise its neighbours' Ctotal (S = 1 -
+  // Cd, all factors >= 0, rounding monotonic), so their queued keys are left
+  // as underestimates and refreshed when they come out first: the first key
+  // is the true minimum once it is current. Every key queued is then at
+  // least the last one taken, which a monotone queue exploits. A removal
+  // recomputes its neighbours' Ctotal while their lines are in cache, into
+  // a dense array (#N, 8 MB at 1,000,000) that a stale key is checked
+  // against, so that the 4 stale keys per removal cost no visit to the
+  // vertex states.
+  Status RemoveSpread(int64_t keep, CancelCheckpoint& checkpoint) {
+    current_.emplace(n_, HugePageArray<double>::Init::kNone);
+    HugePageArray<double>& current = *current_;
+    for (int64_t v = 0; v < n_; ++v) {
+      current[v] = Cost(v);
+      queue_.Push(current[v], static_cast<int32_t>(v));
     }
-    // The loop waits on memory, not arithmetic: it prefetches, for the keys
-    // a few pops ahead, what their removals will read, one level per
-    // distance (the key's cost and record, then its list, then the records of
-    // its neighbours), and only for keys that look current (a stale key's
-    // pop reads nothing but its cost). Hints only: they change no result.
-    auto looks_current = [&](const LookaheadMinQueue::Entry* e) {
-      return e != nullptr && current[e->item] == e->cost;
-    };
-    auto prefetch_ahead = [&] {
-      if (const auto* e = queue.Ahead(kPrefetchRecordAt)) {
-        __builtin_prefetch(&current[e->item]);
-        __builtin_prefetch(&state[e->item]);
-      }
-      if (const auto* e = queue.Ahead(kPrefetchListAt); looks_current(e)) {
-        const VertexState& se = state[e->item];
-        const int32_t* ids = neighbour_ids.data() + se.list_begin;
-        __builtin_prefetch(ids);
-        if (se.list_size > 0) __builtin_prefetch(ids + se.list_size - 1);
-      }
-      if (const auto* e = queue.Ahead(kPrefetchNeighboursAt); looks_current(e)) {
-        const VertexState& se = state[e->item];
-        const int32_t* ids = neighbour_ids.data() + se.list_begin;
-        for (int32_t k = 0; k < se.list_size; ++k) {
-          __builtin_prefetch(&state[ids[k]], 1);
-          __builtin_prefetch(&current[ids[k]], 1);
-        }
-      }
-    };
-    for (int64_t remaining = n; remaining > keep;) {
+    for (int64_t remaining = n_; remaining > keep;) {
       RETURN_IF_ERROR(checkpoint.Tick());
-      prefetch_ahead();
-      const LookaheadMinQueue::Entry top = queue.Top();
-      queue.Pop();
+      PrefetchAhead();
+      const LookaheadMinQueue::Entry top = queue_.Top();
+      queue_.Pop();
       if (current[top.item] != top.cost) {
-        queue.Push(current[top.item], top.item);
+        queue_.Push(current[top.item], top.item);
         continue;
       }
-      remove(top.item, [&](int32_t id) { current[id] = cost(id); });
+      Remove(top.item, [&](int32_t id) { current[id] = Cost(id); });
       --remaining;
     }
-  } else {
-    // In paper mode Ctotal can only fall, so keys are lowered at once.
-    std::vector<double> initial(n);
-    for (int64_t v = 0; v < n; ++v) initial[v] = cost(v);
+    return absl::OkStatus();
+  }
+
+  // The loop waits on memory, not arithmetic: it prefetches, for the keys
+  // a few pops ahead, what their removals will read, one level per
+  // distance (the key's cost and record, then its list, then the records of
+  // its neighbours), and only for keys that look current (a stale key's
+  // pop reads nothing but its cost). Hints only: they change no result.
+  bool LooksCurrent(const LookaheadMinQueue::Entry* e) const {
+    return e != nullptr && (*current_)[e->item] == e->cost;
+  }
+  void PrefetchAhead() {
+    if (const auto* e = queue_.Ahead(kPrefetchRecordAt)) {
+      __builtin_prefetch(&(*current_)[e->item]);
+      __builtin_prefetch(&state_[e->item]);
+    }
+    if (const auto* e = queue_.Ahead(kPrefetchListAt); LooksCurrent(e)) {
+      const VertexState& se = state_[e->item];
+      const int32_t* ids = neighbour_ids_->data() + se.list_begin;
+      __builtin_prefetch(ids);
+      if (se.list_size > 0) __builtin_prefetch(ids + se.list_size - 1);
+    }
+    if (const auto* e = queue_.Ahead(kPrefetchNeighboursAt); LooksCurrent(e)) {
+      const VertexState& se = state_[e->item];
+      const int32_t* ids = neighbour_ids_->data() + se.list_begin;
+      for (int32_t k = 0; k < se.list_size; ++k) {
+        __builtin_prefetch(&state_[ids[k]], 1);
+        __builtin_prefetch(&(*current_)[ids[k]], 1);
+      }
+    }
+  }
+
+  // Paper mode: Ctotal can only fall, so keys are lowered at once.
+  Status RemovePaper(int64_t keep, CancelCheckpoint& checkpoint) {
+    std::vector<double> initial(n_);
+    for (int64_t v = 0; v < n_; ++v) initial[v] = Cost(v);
     IndexedMinHeap heap(initial);
     while (heap.size() > keep) {
       RETURN_IF_ERROR(checkpoint.Tick());
       const int64_t v = heap.top();
       heap.Pop();
-      remove(v, [&](int32_t id) {
-        if (heap.contains(id)) heap.Update(id, cost(id));
+      Remove(v, [&](int32_t id) {
+        if (heap.contains(id)) heap.Update(id, Cost(id));
       });
     }
+    return absl::OkStatus();
   }
-  return Finish(n, [&](int64_t v) { return state[v].alive != 0; }, cost, d0, std::move(order));
+
+  const DecimationParams& p_;
+  const int64_t n_;
+  HugePageArray<VertexState> state_;
+  std::optional<HugePageArray<int32_t>> neighbour_ids_;  // FindNeighbours' lists
+  double d0_ = 0.0;
+  std::optional<CostModel> cost_model_;  // once d0_ is known
+  std::vector<int64_t> order_;
+  std::optional<HugePageArray<double>> current_;  // spread mode: each vertex's Ctotal now
+  LookaheadMinQueue queue_;
+};
+
+}  // namespace
+
+Result<DecimationResult> DecimateFast(const DecimationInput& in, const DecimationParams& p,
+                                      const CancelToken& cancel) {
+  RETURN_IF_ERROR(Validate(in, p));
+  RETURN_IF_ERROR(cancel.Check());
+  return FastDecimation(in, p).Run(in, cancel);
 }
 
 Result<DecimationResult> DecimateNaive(const DecimationInput& in, const DecimationParams& p) {
