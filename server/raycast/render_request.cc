@@ -130,8 +130,11 @@ double RequestStepMm(const RenderRequest& request, const VolumeGeometry& geometr
   return StillStepMm(request, geometry);
 }
 
-Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGeometry& geometry,
-                                    const std::array<int, 3>& map_dims) {
+namespace {
+
+// PrepareRaycast's checks of the request, before anything is computed.
+Status CheckRaycastRequest(const RenderRequest& request, const VolumeGeometry& geometry,
+                           const std::array<int, 3>& map_dims) {
   if (request.width < 1 || request.height < 1 || request.width > kMaxFrameSide ||
       request.height > kMaxFrameSide) {
     return absl::InvalidArgumentError(StrCat("frame size ", request.width, "x", request.height,
@@ -147,26 +150,23 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
   RETURN_IF_ERROR(CheckSettings(request.settings));
   RETURN_IF_ERROR(CheckInteractiveCast(request.interactive));
   RETURN_IF_ERROR(ValidateClipRegion(request.clip));
-  const MipWindow window = request.mip_window.value_or(request.preset.mip_window);
-  RETURN_IF_ERROR(ValidateMipWindow(window));
+  RETURN_IF_ERROR(ValidateMipWindow(request.mip_window.value_or(request.preset.mip_window)));
   const double step = RequestStepMm(request, geometry);
-  const glm::dvec3 extent = geometry.extent_mm();
-  if (glm::length(extent) / step > kMaxSamplesPerRay) {
+  if (glm::length(geometry.extent_mm()) / step > kMaxSamplesPerRay) {
     return absl::InvalidArgumentError(StrCat("step ", step, " mm gives more than ",
                                              kMaxSamplesPerRay, " samples along the diagonal"));
   }
-  const bool has_map = map_dims[0] > 0;
-  if (has_map && (map_dims[0] < 2 || map_dims[1] < 2 || map_dims[2] < 2)) {
+  if (map_dims[0] > 0 && (map_dims[0] < 2 || map_dims[1] < 2 || map_dims[2] < 2)) {
     return absl::InvalidArgumentError("backward map needs at least 2 grid points per axis");
   }
+  return absl::OkStatus();
+}
 
-  RaycastSetup setup;
-  setup.step_mm = step;
-  const bool interactive = request.quality == RenderQuality::kInteractive;
-  setup.render_width = RenderSide(request, request.width);
-  setup.render_height = RenderSide(request, request.height);
-  const CameraRays rays = request.camera.Rays(setup.render_width, setup.render_height);
+// The ray caster's flags (gpu::kRaycast*, kRaycastCellGradient,
+// kRaycastPreintegrated) for a request.
+int RaycastFlags(const RenderRequest& request, bool has_map) {
   const RaycastSettings& s = request.settings;
+  const bool interactive = request.quality == RenderQuality::kInteractive;
   // A preset made with its own lighting (Slicer's) brings it along.
   const std::optional<TfLighting>& lighting = request.preset.lighting;
   int flags = 0;
@@ -187,6 +187,24 @@ Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGe
     if (s.preintegrated && s.light_both_ends) flags |= gpu::kRaycastLightBothEnds;
     if (s.preintegrated && s.partial_end_steps) flags |= gpu::kRaycastPartialEndSteps;
   }
+  return flags;
+}
+
+}  // namespace
+
+Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGeometry& geometry,
+                                    const std::array<int, 3>& map_dims) {
+  RETURN_IF_ERROR(CheckRaycastRequest(request, geometry, map_dims));
+  const MipWindow window = request.mip_window.value_or(request.preset.mip_window);
+  const double step = RequestStepMm(request, geometry);
+  RaycastSetup setup;
+  setup.step_mm = step;
+  setup.render_width = RenderSide(request, request.width);
+  setup.render_height = RenderSide(request, request.height);
+  const CameraRays rays = request.camera.Rays(setup.render_width, setup.render_height);
+  const RaycastSettings& s = request.settings;
+  const std::optional<TfLighting>& lighting = request.preset.lighting;
+  const int flags = RaycastFlags(request, map_dims[0] > 0);
   const glm::ivec3 brick_voxels = RequestBrickVoxels(request, geometry);
   const auto bricks = BrickGridDims(geometry.dims, brick_voxels);
   gpu::RaycastParams& p = setup.params;
