@@ -235,44 +235,33 @@ BackwardMap::Plan BackwardMap::PlanWork(std::span<const glm::dvec3> deformed_mm,
   return plan;
 }
 
-Result<BackwardMap::UpdateStats> BackwardMap::Apply(std::span<const glm::dvec3> rest_mm,
-                                                    std::span<const glm::dvec3> deformed_mm,
-                                                    std::span<const std::array<int32_t, 4>> tets,
-                                                    Scope scope,
-                                                    std::span<const int32_t> moved_tets) {
-  RETURN_IF_ERROR(CheckMapMesh(rest_mm, deformed_mm, tets));
-  const int64_t tet_count = static_cast<int64_t>(tets.size());
-  for (int32_t t : moved_tets) {
-    if (t < 0 || t >= tet_count) {
-      return absl::InvalidArgumentError(
-          StrCat("backward map: moved tet ", t, " outside [0, ", tet_count, ")"));
+int64_t BackwardMap::HoldSmallMoves(std::span<const glm::dvec3> rest_mm,
+                                    std::span<const glm::dvec3> deformed_mm,
+                                    std::vector<glm::dvec3>& held_rest,
+                                    std::vector<glm::dvec3>& held_deformed) const {
+  held_rest.assign(rest_mm.begin(), rest_mm.end());
+  held_deformed.assign(deformed_mm.begin(), deformed_mm.end());
+  const auto within = [&](const glm::dvec3& a, const glm::dvec3& b) {
+    const glm::dvec3 d = glm::abs(a - b);
+    return std::max(d.x, std::max(d.y, d.z)) <= move_tolerance_mm_;
+  };
+  int64_t held = 0;
+  for (size_t v = 0; v < held_rest.size(); ++v) {
+    if ((rest_mm[v] != state_.rest_mm[v] || deformed_mm[v] != state_.deformed_mm[v]) &&
+        within(rest_mm[v], state_.rest_mm[v]) && within(deformed_mm[v], state_.deformed_mm[v])) {
+      held_rest[v] = state_.rest_mm[v];
+      held_deformed[v] = state_.deformed_mm[v];
+      ++held;
     }
   }
-  UpdateStats stats;
-  stats.full_rebuild =
-      scope == Scope::kAll || !state_.valid || rest_mm.size() != state_.rest_mm.size() ||
-      !std::equal(tets.begin(), tets.end(), state_.tets.begin(), state_.tets.end());
-  // Update with a tolerance: vertices that moved less keep the positions of
-  // the previous update, and the rest of this update sees those.
-  std::vector<glm::dvec3> held_rest, held_deformed;
-  if (!stats.full_rebuild && scope == Scope::kChanged && move_tolerance_mm_ > 0.0) {
-    held_rest.assign(rest_mm.begin(), rest_mm.end());
-    held_deformed.assign(deformed_mm.begin(), deformed_mm.end());
-    const auto within = [&](const glm::dvec3& a, const glm::dvec3& b) {
-      const glm::dvec3 d = glm::abs(a - b);
-      return std::max(d.x, std::max(d.y, d.z)) <= move_tolerance_mm_;
-    };
-    for (size_t v = 0; v < held_rest.size(); ++v) {
-      if ((rest_mm[v] != state_.rest_mm[v] || deformed_mm[v] != state_.deformed_mm[v]) &&
-          within(rest_mm[v], state_.rest_mm[v]) && within(deformed_mm[v], state_.deformed_mm[v])) {
-        held_rest[v] = state_.rest_mm[v];
-        held_deformed[v] = state_.deformed_mm[v];
-        ++stats.held_vertices;
-      }
-    }
-    rest_mm = held_rest;
-    deformed_mm = held_deformed;
-  }
+  return held;
+}
+
+std::vector<int32_t> BackwardMap::MovedTets(std::span<const glm::dvec3> rest_mm,
+                                            std::span<const glm::dvec3> deformed_mm,
+                                            std::span<const std::array<int32_t, 4>> tets,
+                                            Scope scope, std::span<const int32_t> moved_tets,
+                                            UpdateStats& stats) const {
   std::vector<int32_t> moved;
   if (stats.full_rebuild) {
     moved.resize(tets.size());
@@ -294,25 +283,63 @@ Result<BackwardMap::UpdateStats> BackwardMap::Apply(std::span<const glm::dvec3> 
     moved.resize(tets.size());
     std::iota(moved.begin(), moved.end(), 0);
   }
+  return moved;
+}
+
+Status BackwardMap::RunPlan(std::span<const glm::dvec3> rest_mm,
+                            std::span<const glm::dvec3> deformed_mm,
+                            std::span<const std::array<int32_t, 4>> tets,
+                            const std::vector<int32_t>& moved, const Plan& plan,
+                            UpdateStats& stats) {
+  RETURN_IF_ERROR(Upload(rest_mm, deformed_mm, tets, stats.full_rebuild, moved, plan.work));
+  ASSIGN_OR_RETURN(std::vector<gpu::DispatchTiming> passes,
+                   Run(stats.full_rebuild, uint32_t(plan.work.size()), plan.cleared, plan.changed));
+  for (auto& pass : passes) {
+    if (pass.label == kCopyLabel) {
+      stats.copy_ms = std::max(pass.gpu_ms, 0.0);
+      continue;
+    }
+    stats.gpu_ms = pass.gpu_ms < 0 || stats.gpu_ms < 0 ? -1.0 : stats.gpu_ms + pass.gpu_ms;
+    stats.passes.push_back(std::move(pass));
+  }
+  std::swap(deformed_buffer_, previous_buffer_);
+  return absl::OkStatus();
+}
+
+Result<BackwardMap::UpdateStats> BackwardMap::Apply(std::span<const glm::dvec3> rest_mm,
+                                                    std::span<const glm::dvec3> deformed_mm,
+                                                    std::span<const std::array<int32_t, 4>> tets,
+                                                    Scope scope,
+                                                    std::span<const int32_t> moved_tets) {
+  RETURN_IF_ERROR(CheckMapMesh(rest_mm, deformed_mm, tets));
+  const int64_t tet_count = static_cast<int64_t>(tets.size());
+  for (int32_t t : moved_tets) {
+    if (t < 0 || t >= tet_count) {
+      return absl::InvalidArgumentError(
+          StrCat("backward map: moved tet ", t, " outside [0, ", tet_count, ")"));
+    }
+  }
+  UpdateStats stats;
+  stats.full_rebuild =
+      scope == Scope::kAll || !state_.valid || rest_mm.size() != state_.rest_mm.size() ||
+      !std::equal(tets.begin(), tets.end(), state_.tets.begin(), state_.tets.end());
+  // Update with a tolerance: vertices that moved less keep the positions of
+  // the previous update, and the rest of this update sees those.
+  std::vector<glm::dvec3> held_rest, held_deformed;
+  if (!stats.full_rebuild && scope == Scope::kChanged && move_tolerance_mm_ > 0.0) {
+    stats.held_vertices = HoldSmallMoves(rest_mm, deformed_mm, held_rest, held_deformed);
+    rest_mm = held_rest;
+    deformed_mm = held_deformed;
+  }
+  const std::vector<int32_t> moved =
+      MovedTets(rest_mm, deformed_mm, tets, scope, moved_tets, stats);
   Plan plan = PlanWork(deformed_mm, tets, stats.full_rebuild, moved);
   stats.processed_tets = plan.listed_tets;
   if (stats.full_rebuild || !plan.work.empty()) stats.changed = plan.changed;
 
   state_.valid = false;  // until the GPU holds what the host state says
   if (stats.full_rebuild || !plan.work.empty()) {
-    RETURN_IF_ERROR(Upload(rest_mm, deformed_mm, tets, stats.full_rebuild, moved, plan.work));
-    ASSIGN_OR_RETURN(std::vector<gpu::DispatchTiming> passes,
-                     Run(stats.full_rebuild, uint32_t(plan.work.size()), plan.cleared,
-                         plan.changed));
-    for (auto& pass : passes) {
-      if (pass.label == kCopyLabel) {
-        stats.copy_ms = std::max(pass.gpu_ms, 0.0);
-        continue;
-      }
-      stats.gpu_ms = pass.gpu_ms < 0 || stats.gpu_ms < 0 ? -1.0 : stats.gpu_ms + pass.gpu_ms;
-      stats.passes.push_back(std::move(pass));
-    }
-    std::swap(deformed_buffer_, previous_buffer_);
+    RETURN_IF_ERROR(RunPlan(rest_mm, deformed_mm, tets, moved, plan, stats));
   }
   state_.rest_mm.assign(rest_mm.begin(), rest_mm.end());
   state_.deformed_mm.assign(deformed_mm.begin(), deformed_mm.end());

@@ -196,6 +196,25 @@ class BackwardMap {
   Result<std::vector<gpu::DispatchTiming>> Run(bool full, uint32_t listed, uint32_t moved,
                                                const GridBox& changed);
   Status RecordCopyToImage(gpu::ComputeBatch& batch, const GridBox& box) const;
+  // Update with a tolerance: the positions the update uses (held_rest,
+  // held_deformed), where each vertex whose rest and deformed positions are
+  // within move_tolerance_mm_ of the previous update's keeps those; returns
+  // how many it kept.
+  int64_t HoldSmallMoves(std::span<const glm::dvec3> rest_mm,
+                         std::span<const glm::dvec3> deformed_mm,
+                         std::vector<glm::dvec3>& held_rest,
+                         std::vector<glm::dvec3>& held_deformed) const;
+  // The tets an update redoes: every one on a full rebuild, the caller's
+  // (kListed), else those whose corners changed; turns stats.full_rebuild on
+  // when more than full_rebuild_moved_fraction_ of the tets moved.
+  std::vector<int32_t> MovedTets(std::span<const glm::dvec3> rest_mm,
+                                 std::span<const glm::dvec3> deformed_mm,
+                                 std::span<const std::array<int32_t, 4>> tets, Scope scope,
+                                 std::span<const int32_t> moved_tets, UpdateStats& stats) const;
+  // Uploads the plan and runs its passes; their GPU times into stats.
+  Status RunPlan(std::span<const glm::dvec3> rest_mm, std::span<const glm::dvec3> deformed_mm,
+                 std::span<const std::array<int32_t, 4>> tets, const std::vector<int32_t>& moved,
+                 const Plan& plan, UpdateStats& stats);
 
   const gpu::GpuContext* context_;
   VolumeGeometry geometry_;
