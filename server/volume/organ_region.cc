@@ -201,6 +201,62 @@ BoxMask Morph(const BoxMask& in, bool grow, const BoxMask& limit) {
   return out;
 }
 
+// The flood's start: the seed, or where the seed's voxel is off the
+// organ's intensity (a stone, partial volume), the accepted voxel nearest to
+// it within two voxels.
+template <typename Accept>
+std::array<int64_t, 3> FloodStart(const std::array<int64_t, 3>& seed, const Accept& accept) {
+  std::array<int64_t, 3> start = seed;
+  int64_t best_d2 = accept(seed[0], seed[1], seed[2]) ? 0 : -1;
+  for (int64_t dk = -2; dk <= 2 && best_d2 != 0; ++dk)
+    for (int64_t dj = -2; dj <= 2; ++dj)
+      for (int64_t di = -2; di <= 2; ++di) {
+        const int64_t d2 = di * di + dj * dj + dk * dk;
+        if ((best_d2 < 0 || d2 < best_d2) && accept(seed[0] + di, seed[1] + dj, seed[2] + dk)) {
+          start = {seed[0] + di, seed[1] + dj, seed[2] + dk};
+          best_d2 = d2;
+        }
+      }
+  return start;
+}
+
+// A morphological opening of `grown` by `voxels` (erosions, then as many
+// dilations within it), anchored at the seed: the largest eroded component
+// within two voxels of it. Where the seed's whole neighbourhood erodes away
+// (a thin structure), `grown` is kept as it is.
+BoxMask OpenAtSeed(BoxMask grown, int voxels, const std::array<int64_t, 3>& seed) {
+  BoxMask core = grown;
+  for (int n = 0; n < voxels; ++n) core = Morph(core, false, grown);
+  // The seed itself may erode away (next to a hilum's fat, in a thin
+  // part): the largest core component within two voxels stands for it.
+  const std::optional<BoxMask> anchored = LargestComponentNear(core, seed, 2);
+  if (!anchored) return grown;
+  core = *anchored;
+  for (int n = 0; n < voxels; ++n) core = Morph(core, true, grown);
+  return core;
+}
+
+// The grown voxels' linear indices into region.voxels, in (k, j, i) order
+// (ascending), and whether any lies within a voxel of the bound
+// (region.reached_bound).
+void CollectVoxels(const Volume& volume, const BoxMask& grown, const glm::dvec3& index,
+                   double max_radius_mm, OrganRegion& region) {
+  const glm::dvec3 s = volume.spacing_mm();
+  const double bound = max_radius_mm - std::max({s.x, s.y, s.z});
+  const double bound2 = bound > 0.0 ? bound * bound : -1.0;
+  for (int64_t k = grown.lo[2]; k < grown.lo[2] + grown.size[2]; ++k) {
+    for (int64_t j = grown.lo[1]; j < grown.lo[1] + grown.size[1]; ++j) {
+      const uint8_t* row = &grown.bits[grown.Index(grown.lo[0], j, k)];
+      for (int64_t i = grown.lo[0]; i < grown.lo[0] + grown.size[0]; ++i) {
+        if (!row[i - grown.lo[0]]) continue;
+        region.voxels.push_back(volume.LinearIndex(i, j, k));
+        const glm::dvec3 d = (glm::dvec3(i, j, k) - glm::dvec3(index)) * s;
+        region.reached_bound |= glm::dot(d, d) > bound2;
+      }
+    }
+  }
+}
+
 }  // namespace
 
 bool OrganRegion::Contains(int64_t linear) const {
@@ -242,50 +298,10 @@ Result<OrganRegion> GrowOrganRegion(const Volume& volume, const glm::dvec3& seed
     return box.Inside(i, j, k) && glm::dot(d, d) <= r2 &&
            std::abs(volume.At(i, j, k) - region.reference) <= region.window;
   };
-  // The flood starts at the seed, or where the seed's voxel is off the
-  // organ's intensity (a stone, partial volume), at the accepted voxel
-  // nearest to it within two voxels.
-  std::array<int64_t, 3> start = seed;
-  int64_t best_d2 = accept(seed[0], seed[1], seed[2]) ? 0 : -1;
-  for (int64_t dk = -2; dk <= 2 && best_d2 != 0; ++dk)
-    for (int64_t dj = -2; dj <= 2; ++dj)
-      for (int64_t di = -2; di <= 2; ++di) {
-        const int64_t d2 = di * di + dj * dj + dk * dk;
-        if ((best_d2 < 0 || d2 < best_d2) && accept(seed[0] + di, seed[1] + dj, seed[2] + dk)) {
-          start = {seed[0] + di, seed[1] + dj, seed[2] + dk};
-          best_d2 = d2;
-        }
-      }
+  const std::array<int64_t, 3> start = FloodStart(seed, accept);
   BoxMask grown = GrowCropped(box, start, accept);
-  if (params.opening_voxels > 0) {
-    BoxMask core = grown;
-    for (int n = 0; n < params.opening_voxels; ++n) core = Morph(core, false, grown);
-    // The seed itself may erode away (next to a hilum's fat, in a thin
-    // part): the largest core component within two voxels stands for it.
-    const std::optional<BoxMask> anchored = LargestComponentNear(core, seed, 2);
-    if (anchored) core = *anchored;
-    const bool anchor = anchored.has_value();
-    // The seed's whole neighbourhood eroded away (a thin structure): keep
-    // the plain region.
-    if (anchor) {
-      for (int n = 0; n < params.opening_voxels; ++n) core = Morph(core, true, grown);
-      grown = std::move(core);
-    }
-  }
-  // In (k, j, i) order the linear indices come out ascending.
-  const double bound = params.max_radius_mm - std::max({s.x, s.y, s.z});
-  const double bound2 = bound > 0.0 ? bound * bound : -1.0;
-  for (int64_t k = grown.lo[2]; k < grown.lo[2] + grown.size[2]; ++k) {
-    for (int64_t j = grown.lo[1]; j < grown.lo[1] + grown.size[1]; ++j) {
-      const uint8_t* row = &grown.bits[grown.Index(grown.lo[0], j, k)];
-      for (int64_t i = grown.lo[0]; i < grown.lo[0] + grown.size[0]; ++i) {
-        if (!row[i - grown.lo[0]]) continue;
-        region.voxels.push_back(volume.LinearIndex(i, j, k));
-        const glm::dvec3 d = (glm::dvec3(i, j, k) - glm::dvec3(index)) * s;
-        region.reached_bound |= glm::dot(d, d) > bound2;
-      }
-    }
-  }
+  if (params.opening_voxels > 0) grown = OpenAtSeed(std::move(grown), params.opening_voxels, seed);
+  CollectVoxels(volume, grown, index, params.max_radius_mm, region);
   if (region.voxels.empty()) region.voxels.push_back(volume.LinearIndex(seed[0], seed[1], seed[2]));
   region.volume_mm3 = double(region.voxels.size()) * s.x * s.y * s.z;
   return region;
