@@ -28,6 +28,44 @@ Status CheckGrab(const glm::dvec3& box_extent_mm, const glm::dvec3& point_mm, do
   return absl::OkStatus();
 }
 
+
+// The grab within the radius: the handles, plus the deformable vertex
+// nearest the point even where it lies next to a fixed one, and the
+// message that says what was left in place.
+GrabInfo GrabWithin(GrabInfo info, int32_t nearest, double radius_mm) {
+  if (!std::binary_search(info.handles.begin(), info.handles.end(), nearest)) {
+    info.handles.insert(std::lower_bound(info.handles.begin(), info.handles.end(), nearest),
+                        nearest);
+    --info.left_free_next_to_fixed;
+  }
+  info.message = StrCat("grabbed ", info.handles.size(), " vertices within ", radius_mm, " mm");
+  if (info.fixed_within > 0) {
+    info.message +=
+        StrCat("; ", info.fixed_within, " fixed (hard) vertices within the radius stay in place");
+  }
+  if (info.left_free_next_to_fixed > 0) {
+    info.message += StrCat("; ", info.left_free_next_to_fixed,
+                           " deformable vertices next to them are left free, so that no tet "
+                           "is crushed between a handle and a fixed vertex");
+  }
+  return info;
+}
+
+// No deformable vertex within the radius: the kNearestHandleCount nearest
+// deformable ones (candidates: (distance, vertex), not empty).
+GrabInfo GrabNearest(GrabInfo info, std::vector<std::pair<double, int32_t>> candidates,
+                     double radius_mm) {
+  const size_t count = std::min<size_t>(kNearestHandleCount, candidates.size());
+  std::partial_sort(candidates.begin(), candidates.begin() + count, candidates.end());
+  for (size_t i = 0; i < count; ++i) info.handles.push_back(candidates[i].second);
+  std::sort(info.handles.begin(), info.handles.end());
+  info.used_nearest = true;
+  info.message =
+      StrCat("no vertex within ", radius_mm, " mm; grabbed the ", count,
+             " nearest deformable vertices (up to ", candidates[count - 1].first, " mm away)");
+  return info;
+}
+
 }  // namespace
 
 Result<GrabInfo> FindHandles(const std::vector<glm::dvec3>& positions_mm,
@@ -71,25 +109,8 @@ Result<GrabInfo> FindHandles(const std::vector<glm::dvec3>& positions_mm,
       ++info.fixed_within;
     }
   }
-  if (nearest_within.second >= 0) {
-    const int32_t nearest = nearest_within.second;
-    if (!std::binary_search(info.handles.begin(), info.handles.end(), nearest)) {
-      info.handles.insert(std::lower_bound(info.handles.begin(), info.handles.end(), nearest),
-                          nearest);
-      --info.left_free_next_to_fixed;
-    }
-    info.message = StrCat("grabbed ", info.handles.size(), " vertices within ", radius_mm, " mm");
-    if (info.fixed_within > 0) {
-      info.message += StrCat("; ", info.fixed_within,
-                             " fixed (hard) vertices within the radius stay in place");
-    }
-    if (info.left_free_next_to_fixed > 0) {
-      info.message += StrCat("; ", info.left_free_next_to_fixed,
-                             " deformable vertices next to them are left free, so that no tet "
-                             "is crushed between a handle and a fixed vertex");
-    }
-    return info;
-  }
+  if (nearest_within.second >= 0)
+    return GrabWithin(std::move(info), nearest_within.second, radius_mm);
   if (info.fixed_within > 0) {
     return absl::FailedPreconditionError(
         StrCat("all ", info.fixed_within, " vertices within ", radius_mm,
@@ -99,15 +120,7 @@ Result<GrabInfo> FindHandles(const std::vector<glm::dvec3>& positions_mm,
   if (candidates.empty()) {
     return absl::FailedPreconditionError("the mesh has no deformable vertex to grab");
   }
-  const size_t count = std::min<size_t>(kNearestHandleCount, candidates.size());
-  std::partial_sort(candidates.begin(), candidates.begin() + count, candidates.end());
-  for (size_t i = 0; i < count; ++i) info.handles.push_back(candidates[i].second);
-  std::sort(info.handles.begin(), info.handles.end());
-  info.used_nearest = true;
-  info.message =
-      StrCat("no vertex within ", radius_mm, " mm; grabbed the ", count,
-             " nearest deformable vertices (up to ", candidates[count - 1].first, " mm away)");
-  return info;
+  return GrabNearest(std::move(info), std::move(candidates), radius_mm);
 }
 
 }  // namespace vpm
