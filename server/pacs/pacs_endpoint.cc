@@ -170,6 +170,60 @@ Status ParseUsers(const json& entry, const std::string& named, PacsEndpoint* end
   return absl::OkStatus();
 }
 
+// A "dicomweb" endpoint's keys: the URL, its credentials (a username and
+// password_file, or a bearer_token_file; files relative to `folder`), a CA
+// and the page size.
+Status ParseDicomwebKeys(const json& entry, const std::filesystem::path& folder,
+                         const std::string& named, PacsEndpoint* endpoint) {
+  ASSIGN_OR_RETURN(endpoint->dicomweb_url, StringKey(entry, "dicomweb", named));
+  if (endpoint->dicomweb_url.empty())
+    return absl::InvalidArgumentError(StrCat(named, ": \"dicomweb\" is required"));
+  RETURN_IF_ERROR(CheckUrl(endpoint->dicomweb_url, named));
+  while (endpoint->dicomweb_url.ends_with('/')) endpoint->dicomweb_url.pop_back();
+  ASSIGN_OR_RETURN(endpoint->username, StringKey(entry, "username", named));
+  ASSIGN_OR_RETURN(const std::string password_file, StringKey(entry, "password_file", named));
+  ASSIGN_OR_RETURN(const std::string token_file, StringKey(entry, "bearer_token_file", named));
+  ASSIGN_OR_RETURN(const std::string ca_file, StringKey(entry, "ca_file", named));
+  if (!password_file.empty() && !token_file.empty()) {
+    return absl::InvalidArgumentError(
+        StrCat(named, ": give password_file or bearer_token_file, not both"));
+  }
+  if (!password_file.empty() && endpoint->username.empty()) {
+    return absl::InvalidArgumentError(StrCat(named, ": password_file needs a username"));
+  }
+  if (!endpoint->username.empty() && password_file.empty()) {
+    return absl::InvalidArgumentError(StrCat(named, ": username needs a password_file"));
+  }
+  const auto resolve = [&](const std::string& name) {
+    const std::filesystem::path p(name);
+    return p.is_absolute() ? p : folder / p;
+  };
+  if (!password_file.empty()) {
+    ASSIGN_OR_RETURN(endpoint->password,
+                     ReadSecret(resolve(password_file), StrCat(named, ": password_file")));
+  }
+  if (!token_file.empty()) {
+    ASSIGN_OR_RETURN(endpoint->bearer_token,
+                     ReadSecret(resolve(token_file), StrCat(named, ": bearer_token_file")));
+  }
+  if (!ca_file.empty()) {
+    endpoint->ca_file = resolve(ca_file).string();
+    std::ifstream ca(endpoint->ca_file);
+    if (!ca)
+      return absl::InvalidArgumentError(
+          StrCat(named, ": ca_file: cannot read ", endpoint->ca_file));
+  }
+  if (entry.contains("page_size")) {
+    const json& page = entry["page_size"];
+    if (!page.is_number_integer() || page.get<int64_t>() < 1 || page.get<int64_t>() > 1000) {
+      return absl::InvalidArgumentError(
+          StrCat(named, ": \"page_size\" must be an integer 1..1000"));
+    }
+    endpoint->page_size = page.get<int64_t>();
+  }
+  return absl::OkStatus();
+}
+
 Result<PacsEndpoint> ParseEntry(const json& entry, const std::filesystem::path& folder,
                                 const std::string& where) {
   if (!entry.is_object()) return absl::InvalidArgumentError(StrCat(where, ": not an object"));
@@ -205,51 +259,7 @@ Result<PacsEndpoint> ParseEntry(const json& entry, const std::filesystem::path& 
     RETURN_IF_ERROR(ParseUsers(entry, named, &endpoint));
     return endpoint;
   }
-  ASSIGN_OR_RETURN(endpoint.dicomweb_url, StringKey(entry, "dicomweb", named));
-  if (endpoint.dicomweb_url.empty())
-    return absl::InvalidArgumentError(StrCat(named, ": \"dicomweb\" is required"));
-  RETURN_IF_ERROR(CheckUrl(endpoint.dicomweb_url, named));
-  while (endpoint.dicomweb_url.ends_with('/')) endpoint.dicomweb_url.pop_back();
-  ASSIGN_OR_RETURN(endpoint.username, StringKey(entry, "username", named));
-  ASSIGN_OR_RETURN(const std::string password_file, StringKey(entry, "password_file", named));
-  ASSIGN_OR_RETURN(const std::string token_file, StringKey(entry, "bearer_token_file", named));
-  ASSIGN_OR_RETURN(const std::string ca_file, StringKey(entry, "ca_file", named));
-  if (!password_file.empty() && !token_file.empty()) {
-    return absl::InvalidArgumentError(
-        StrCat(named, ": give password_file or bearer_token_file, not both"));
-  }
-  if (!password_file.empty() && endpoint.username.empty()) {
-    return absl::InvalidArgumentError(StrCat(named, ": password_file needs a username"));
-  }
-  if (!endpoint.username.empty() && password_file.empty()) {
-    return absl::InvalidArgumentError(StrCat(named, ": username needs a password_file"));
-  }
-  const auto resolve = [&](const std::string& name) {
-    const std::filesystem::path p(name);
-    return p.is_absolute() ? p : folder / p;
-  };
-  if (!password_file.empty()) {
-    ASSIGN_OR_RETURN(endpoint.password,
-                     ReadSecret(resolve(password_file), StrCat(named, ": password_file")));
-  }
-  if (!token_file.empty()) {
-    ASSIGN_OR_RETURN(endpoint.bearer_token,
-                     ReadSecret(resolve(token_file), StrCat(named, ": bearer_token_file")));
-  }
-  if (!ca_file.empty()) {
-    endpoint.ca_file = resolve(ca_file).string();
-    std::ifstream ca(endpoint.ca_file);
-    if (!ca)
-      return absl::InvalidArgumentError(StrCat(named, ": ca_file: cannot read ", endpoint.ca_file));
-  }
-  if (entry.contains("page_size")) {
-    const json& page = entry["page_size"];
-    if (!page.is_number_integer() || page.get<int64_t>() < 1 || page.get<int64_t>() > 1000) {
-      return absl::InvalidArgumentError(
-          StrCat(named, ": \"page_size\" must be an integer 1..1000"));
-    }
-    endpoint.page_size = page.get<int64_t>();
-  }
+  RETURN_IF_ERROR(ParseDicomwebKeys(entry, folder, named, &endpoint));
   RETURN_IF_ERROR(ParseUsers(entry, named, &endpoint));
   return endpoint;
 }
