@@ -47,22 +47,14 @@ json Histogram(const std::vector<double>& v, int buckets = 10) {
   return out;
 }
 
-Result<json> RunLevel(const cli::ServerConnection& s, const json& script_json, int concurrency,
-                      const LoadArgs& args) {
-  v3::LoadVolumeRequest load;
-  load.set_source(script_json.value("volume", "phantom:abdomen?size=64"));
-  v3::VolumeInfo volume;
-  RETURN_IF_ERROR(FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &volume)));
-  ASSIGN_OR_RETURN(cli::Script script, cli::ParseScript(script_json, volume));
-  v3::BuildMeshRequest build;
-  build.set_volume_id(volume.volume_id());
-  v3::MeshInfo mesh;
-  RETURN_IF_ERROR(FromGrpc(s.stub().BuildMesh(s.Context().get(), build, &mesh)));
+// Opens `count` sessions on the mesh; the status codes of those refused
+// are counted in `codes`.
+std::vector<std::string> OpenSessions(const cli::ServerConnection& s, const std::string& mesh_id,
+                                      int count, std::map<std::string, int64_t>& codes) {
   std::vector<std::string> sessions;
-  std::map<std::string, int64_t> codes;
-  for (int i = 0; i < (args.shared_session ? 1 : concurrency); ++i) {
+  for (int i = 0; i < count; ++i) {
     v3::OpenSessionRequest open;
-    open.set_mesh_id(mesh.mesh_id());
+    open.set_mesh_id(mesh_id);
     v3::SessionInfo info;
     grpc::Status status = s.stub().OpenSession(s.Context().get(), open, &info);
     if (!status.ok()) {
@@ -71,29 +63,32 @@ Result<json> RunLevel(const cli::ServerConnection& s, const json& script_json, i
     }
     sessions.push_back(info.session_id());
   }
-  if (sessions.empty()) return absl::ResourceExhaustedError("no session could be opened");
+  return sessions;
+}
+
+// `concurrency` clients playing the script at once, client i in session i
+// modulo the sessions open.
+std::vector<cli::PlayResult> PlayConcurrently(const cli::ServerConnection& s,
+                                              const cli::Script& script,
+                                              const std::vector<std::string>& sessions,
+                                              int concurrency, double duration_s) {
   std::vector<cli::PlayResult> results(concurrency);
   std::vector<std::thread> threads;
   for (int i = 0; i < concurrency; ++i) {
     threads.emplace_back([&, i] {
       cli::PlayOptions options;
       options.session_id = sessions[i % sessions.size()];
-      options.duration_s = args.duration_s;
+      options.duration_s = duration_s;
       results[i] = cli::PlayScript(s, script, options);
     });
   }
   for (auto& t : threads) t.join();
-  for (const std::string& id : sessions) {
-    v3::CloseSessionRequest close;
-    close.set_session_id(id);
-    v3::CloseSessionResponse closed;
-    (void)s.stub().CloseSession(s.Context().get(), close, &closed);
-  }
-  v3::DeleteVolumeRequest del;
-  del.set_volume_id(volume.volume_id());
-  v3::DeleteVolumeResponse deleted;
-  (void)s.stub().DeleteVolume(s.Context().get(), del, &deleted);
+  return results;
+}
 
+// One level's figures over its clients' plays.
+json LevelReport(const std::vector<cli::PlayResult>& results, int concurrency, size_t sessions,
+                 std::map<std::string, int64_t> codes) {
   std::vector<double> latency, frame_latency, first, fps, jitter;
   int64_t frames = 0, bytes = 0, superseded = 0;
   double duration = 0;
@@ -114,21 +109,50 @@ Result<json> RunLevel(const cli::ServerConnection& s, const json& script_json, i
     if (j.contains("stddev")) jitter.push_back(j["stddev"].get<double>());
     duration = std::max(duration, r.duration_ms / 1000.0);
   }
-  json level{{"concurrency", concurrency},
-             {"sessions", sessions.size()},
-             {"count", frames},
-             {"duration_s", duration},
-             {"rate_fps", duration > 0 ? double(frames) / duration : 0.0},
-             {"latency_ms", cli::Summarize(latency)},
-             {"frame_latency_ms", cli::Summarize(frame_latency)},
-             {"histogram", Histogram(latency)},
-             {"status_codes", codes},
-             {"time_to_first_frame_ms", cli::Summarize(first)},
-             {"fps_per_session", cli::Summarize(fps)},
-             {"jitter_ms", cli::Summarize(jitter)},
-             {"superseded", superseded},
-             {"bytes_per_frame", frames > 0 ? bytes / frames : 0}};
-  return level;
+  return json{{"concurrency", concurrency},
+              {"sessions", sessions},
+              {"count", frames},
+              {"duration_s", duration},
+              {"rate_fps", duration > 0 ? double(frames) / duration : 0.0},
+              {"latency_ms", cli::Summarize(latency)},
+              {"frame_latency_ms", cli::Summarize(frame_latency)},
+              {"histogram", Histogram(latency)},
+              {"status_codes", codes},
+              {"time_to_first_frame_ms", cli::Summarize(first)},
+              {"fps_per_session", cli::Summarize(fps)},
+              {"jitter_ms", cli::Summarize(jitter)},
+              {"superseded", superseded},
+              {"bytes_per_frame", frames > 0 ? bytes / frames : 0}};
+}
+
+Result<json> RunLevel(const cli::ServerConnection& s, const json& script_json, int concurrency,
+                      const LoadArgs& args) {
+  v3::LoadVolumeRequest load;
+  load.set_source(script_json.value("volume", "phantom:abdomen?size=64"));
+  v3::VolumeInfo volume;
+  RETURN_IF_ERROR(FromGrpc(s.stub().LoadVolume(s.Context().get(), load, &volume)));
+  ASSIGN_OR_RETURN(cli::Script script, cli::ParseScript(script_json, volume));
+  v3::BuildMeshRequest build;
+  build.set_volume_id(volume.volume_id());
+  v3::MeshInfo mesh;
+  RETURN_IF_ERROR(FromGrpc(s.stub().BuildMesh(s.Context().get(), build, &mesh)));
+  std::map<std::string, int64_t> codes;
+  const std::vector<std::string> sessions =
+      OpenSessions(s, mesh.mesh_id(), args.shared_session ? 1 : concurrency, codes);
+  if (sessions.empty()) return absl::ResourceExhaustedError("no session could be opened");
+  const std::vector<cli::PlayResult> results =
+      PlayConcurrently(s, script, sessions, concurrency, args.duration_s);
+  for (const std::string& id : sessions) {
+    v3::CloseSessionRequest close;
+    close.set_session_id(id);
+    v3::CloseSessionResponse closed;
+    (void)s.stub().CloseSession(s.Context().get(), close, &closed);
+  }
+  v3::DeleteVolumeRequest del;
+  del.set_volume_id(volume.volume_id());
+  v3::DeleteVolumeResponse deleted;
+  (void)s.stub().DeleteVolume(s.Context().get(), del, &deleted);
+  return LevelReport(results, concurrency, sessions.size(), std::move(codes));
 }
 
 void PrintLevel(const json& l) {

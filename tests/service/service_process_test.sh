@@ -3,7 +3,8 @@
 # status codes seen by a real client (UNAUTHENTICATED, NOT_FOUND,
 # INVALID_ARGUMENT for a path escaping the data root), Prometheus metrics over
 # HTTP, TLS, mutual TLS (a client without a certificate, or with one from
-# another CA, is refused), and graceful shutdown on SIGTERM (exit status 0).
+# another CA, is refused), `vpm play` (interrupted and whole) and a
+# `vpm-load` sweep, and graceful shutdown on SIGTERM (exit status 0).
 #
 # Usage: service_process_test.sh BUILD_DIR
 # Certificates are made here with the openssl command line (EC P-256, 1 day).
@@ -11,7 +12,7 @@ set -uo pipefail
 build=$(cd "${1:?usage: $0 BUILD_DIR}" && pwd)
 server_bin="$build/server/service/vpm-server"
 vpm="$build/client/vpm"
-for b in "$server_bin" "$vpm"; do
+for b in "$server_bin" "$vpm" "$build/client/vpm-load"; do
   [ -x "$b" ] || { echo "FAIL: $b is not built"; exit 1; }
 done
 command -v openssl >/dev/null || { echo "FAIL: openssl is not installed"; exit 1; }
@@ -241,6 +242,27 @@ elif [ "$(sessions_now)" != "$sessions_before" ]; then
   fail "vpm play left its session open"
 else
   pass "vpm play: a latency per event in its report, its session closed"
+fi
+# vpm-load: a sweep of 1 and 2 concurrent clients playing the same script
+# (looped for a second); every level's clients end OK with frames counted,
+# and the sessions it opened are closed.
+if ! "$build/client/vpm-load" --server "$addr" --token secret --sweep 1,2 --duration 1 \
+    --script "$tmp/short.json" --json "$tmp/load.json" > "$tmp/load.out" 2> "$tmp/load.err"; then
+  fail "vpm-load: $(cat "$tmp/load.err")"
+elif ! python3 - "$tmp/load.json" <<'EOF2'
+import json, sys
+levels = json.load(open(sys.argv[1]))["levels"]
+if [l["concurrency"] for l in levels] != [1, 2] or not all(
+        l["count"] > 0 and l["status_codes"] == {"OK": l["concurrency"]} for l in levels):
+    print(levels)
+    sys.exit(1)
+EOF2
+then
+  fail "vpm-load report: a level without frames or with a client that did not end OK"
+elif [ "$(sessions_now)" != "$sessions_before" ]; then
+  fail "vpm-load left sessions open ($(sessions_now), $sessions_before before)"
+else
+  pass "vpm-load: 1 and 2 clients, frames at each level, every client OK, sessions closed"
 fi
 # The offline commands with --server: the same mesh as offline, a frame
 # rendered after a drag.
