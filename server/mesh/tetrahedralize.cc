@@ -102,24 +102,18 @@ Tet CanonicalRotation(const Tet& t) {
   return r;
 }
 
-}  // namespace
-
-Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm,
-                      const CancelToken& cancel) {
-  const auto start = std::chrono::steady_clock::now();
-  RETURN_IF_ERROR(CheckPositions(mesh.vertices, box_extent_mm));
-  RETURN_IF_ERROR(CheckDuplicates(mesh.vertices));
-
+// The Delaunay triangulation of the vertices (mm), inserted in batches so
+// that a cancelled call stops between two. CGAL's Delaunay triangulation
+// does not depend on the insertion order (symbolic perturbation settles
+// cospherical points), and the tets are sorted afterwards.
+Status Triangulate(const std::vector<MeshVertex>& vertices, Delaunay& delaunay,
+                   const CancelToken& cancel) {
   std::vector<std::pair<Point, int32_t>> points;
-  points.reserve(mesh.vertices.size());
-  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
-    const glm::dvec3& p = mesh.vertices[v].position_mm;
+  points.reserve(vertices.size());
+  for (size_t v = 0; v < vertices.size(); ++v) {
+    const glm::dvec3& p = vertices[v].position_mm;
     points.emplace_back(Point(p.x, p.y, p.z), static_cast<int32_t>(v));
   }
-  // In batches, so that a cancelled call stops between two. CGAL's
-  // Delaunay triangulation does not depend on the insertion order (symbolic
-  // perturbation settles cospherical points), and the tets are sorted below.
-  Delaunay delaunay;
   constexpr size_t kInsertBatch = 8192;
   for (size_t begin = 0; begin < points.size(); begin += kInsertBatch) {
     RETURN_IF_ERROR(cancel.Check());
@@ -129,13 +123,17 @@ Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm,
   RETURN_IF_ERROR(cancel.Check());
   if (delaunay.dimension() < 3) {
     return absl::InvalidArgumentError(
-        StrCat("Tetrahedralize: the ", mesh.vertices.size(),
+        StrCat("Tetrahedralize: the ", vertices.size(),
                " vertices are coplanar; no tetrahedron can be built"));
   }
+  return absl::OkStatus();
+}
 
+// The triangulation's finite cells as positively oriented tets in their
+// canonical rotation; `removed` counts the flat cells dropped.
+std::vector<Tet> OrientedTets(const Delaunay& delaunay, int64_t& removed) {
   std::vector<Tet> tets;
   tets.reserve(delaunay.number_of_finite_cells());
-  int64_t removed = 0;
   for (auto cell = delaunay.finite_cells_begin(); cell != delaunay.finite_cells_end(); ++cell) {
     Tet t;
     for (int c = 0; c < 4; ++c) t[c] = cell->vertex(c)->info();
@@ -150,20 +148,14 @@ Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm,
     if (o == CGAL::NEGATIVE) std::swap(t[2], t[3]);
     tets.push_back(CanonicalRotation(t));
   }
-  // Sorted before the flips too, so that they see the tets in an order that
-  // depends on the positions only, not on CGAL's cell order.
-  std::sort(tets.begin(), tets.end());
-  std::vector<glm::dvec3> points_mm(mesh.vertices.size());
-  for (size_t v = 0; v < points_mm.size(); ++v) points_mm[v] = mesh.vertices[v].position_mm;
-  // Delaunay keeps the slivers of cospherical lattice rows; flips remove
-  // most (improve_tets_by_flips.h, docs/MESH.md "Tet quality").
-  RETURN_IF_ERROR(ImproveTetsByFlips(points_mm, tets, {}, cancel).status());
-  for (Tet& t : tets) t = CanonicalRotation(t);
-  std::sort(tets.begin(), tets.end());
+  return tets;
+}
 
-  // The hull must be the box: the tet volumes add up to the box volume.
-  std::vector<glm::dvec3> positions(mesh.vertices.size());
-  for (size_t v = 0; v < positions.size(); ++v) positions[v] = mesh.vertices[v].position_mm;
+// The hull must be the box: the tet volumes add up to the box volume.
+Status CheckCoversTheBox(const std::vector<MeshVertex>& vertices, const std::vector<Tet>& tets,
+                         const glm::dvec3& box_extent_mm) {
+  std::vector<glm::dvec3> positions(vertices.size());
+  for (size_t v = 0; v < positions.size(); ++v) positions[v] = vertices[v].position_mm;
   double volume = 0.0;
   for (const Tet& t : tets) {
     volume += SignedVolume(positions[t[0]], positions[t[1]], positions[t[2]], positions[t[3]]);
@@ -175,6 +167,33 @@ Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm,
                                              " mm has ", box_volume,
                                              " mm^3; are the 8 box corners among the vertices?"));
   }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm, const CancelToken& cancel) {
+  const auto start = std::chrono::steady_clock::now();
+  RETURN_IF_ERROR(CheckPositions(mesh.vertices, box_extent_mm));
+  RETURN_IF_ERROR(CheckDuplicates(mesh.vertices));
+
+  Delaunay delaunay;
+  RETURN_IF_ERROR(Triangulate(mesh.vertices, delaunay, cancel));
+
+  int64_t removed = 0;
+  std::vector<Tet> tets = OrientedTets(delaunay, removed);
+  // Sorted before the flips too, so that they see the tets in an order that
+  // depends on the positions only, not on CGAL's cell order.
+  std::sort(tets.begin(), tets.end());
+  std::vector<glm::dvec3> points_mm(mesh.vertices.size());
+  for (size_t v = 0; v < points_mm.size(); ++v) points_mm[v] = mesh.vertices[v].position_mm;
+  // Delaunay keeps the slivers of cospherical lattice rows; flips remove
+  // most (improve_tets_by_flips.h, docs/MESH.md "Tet quality").
+  RETURN_IF_ERROR(ImproveTetsByFlips(points_mm, tets, {}, cancel).status());
+  for (Tet& t : tets) t = CanonicalRotation(t);
+  std::sort(tets.begin(), tets.end());
+
+  RETURN_IF_ERROR(CheckCoversTheBox(mesh.vertices, tets, box_extent_mm));
 
   mesh.tets = std::move(tets);
   mesh.quality = MeasureTetQuality(mesh);
