@@ -234,13 +234,18 @@ Result<MeshParams> ToMeshParams(const v3::MeshParams& in, const VolumeGeometry& 
   return p;
 }
 
-Result<StreamSettings> ToStreamSettings(const v3::RenderSettings& in, const Volume& volume,
-                                        int max_side) {
-  StreamSettings out;
+namespace {
+
+// settings.mode, the preset or render_tf, and the MIP window, into `view`.
+Status ToLook(const v3::RenderSettings& in, const Volume& volume, SceneView& view) {
   switch (in.mode()) {
     case v3::RENDER_MODE_UNSPECIFIED:
-    case v3::RENDER_MODE_DVR: out.view.mode = RenderMode::kDvr; break;
-    case v3::RENDER_MODE_MIP: out.view.mode = RenderMode::kMip; break;
+    case v3::RENDER_MODE_DVR:
+      view.mode = RenderMode::kDvr;
+      break;
+    case v3::RENDER_MODE_MIP:
+      view.mode = RenderMode::kMip;
+      break;
     default:
       return absl::InvalidArgumentError(StrCat("settings.mode: ", in.mode(), " is not a RenderMode"));
   }
@@ -255,7 +260,7 @@ Result<StreamSettings> ToStreamSettings(const v3::RenderSettings& in, const Volu
                                                                 : "settings.preset: ",
                                              preset.status().message()));
   }
-  out.view.preset = *std::move(preset);
+  view.preset = *std::move(preset);
   if (in.has_mip_window()) {
     const v3::WindowLevel& w = in.mip_window();
     if (!std::isfinite(w.level()) || !std::isfinite(w.width()) || !(w.width() > 0.0)) {
@@ -263,8 +268,34 @@ Result<StreamSettings> ToStreamSettings(const v3::RenderSettings& in, const Volu
                                                ", level ", w.level(),
                                                ": needs a finite level and width > 0"));
     }
-    out.view.preset.mip_window = {w.level(), w.width()};
+    view.preset.mip_window = {w.level(), w.width()};
   }
+  return absl::OkStatus();
+}
+
+// settings.interactive_quality (unset: kDefaultInteractiveQuality).
+Result<InteractiveQuality> ToInteractiveQuality(v3::InteractiveQuality in) {
+  switch (in) {
+    case v3::INTERACTIVE_QUALITY_UNSPECIFIED:
+      return kDefaultInteractiveQuality;
+    case v3::INTERACTIVE_QUALITY_FAST:
+      return InteractiveQuality::kFast;
+    case v3::INTERACTIVE_QUALITY_BALANCED:
+      return InteractiveQuality::kBalanced;
+    case v3::INTERACTIVE_QUALITY_SHARP:
+      return InteractiveQuality::kSharp;
+    default:
+      return absl::InvalidArgumentError(
+          StrCat("settings.interactive_quality: ", in, " is not an InteractiveQuality"));
+  }
+}
+
+}  // namespace
+
+Result<StreamSettings> ToStreamSettings(const v3::RenderSettings& in, const Volume& volume,
+                                        int max_side) {
+  StreamSettings out;
+  RETURN_IF_ERROR(ToLook(in, volume, out.view));
   for (auto [name, value, target] :
        {std::tuple{"settings.width", in.width(), &out.view.width},
         std::tuple{"settings.height", in.height(), &out.view.height}}) {
@@ -275,22 +306,7 @@ Result<StreamSettings> ToStreamSettings(const v3::RenderSettings& in, const Volu
     *target = value == 0 ? std::min(512, max_side) : value;
   }
   out.view.overlay = in.overlay();
-  switch (in.interactive_quality()) {
-    case v3::INTERACTIVE_QUALITY_UNSPECIFIED:
-      out.view.interactive_quality = kDefaultInteractiveQuality;
-      break;
-    case v3::INTERACTIVE_QUALITY_FAST: out.view.interactive_quality = InteractiveQuality::kFast; break;
-    case v3::INTERACTIVE_QUALITY_BALANCED:
-      out.view.interactive_quality = InteractiveQuality::kBalanced;
-      break;
-    case v3::INTERACTIVE_QUALITY_SHARP:
-      out.view.interactive_quality = InteractiveQuality::kSharp;
-      break;
-    default:
-      return absl::InvalidArgumentError(StrCat("settings.interactive_quality: ",
-                                               in.interactive_quality(),
-                                               " is not an InteractiveQuality"));
-  }
+  ASSIGN_OR_RETURN(out.view.interactive_quality, ToInteractiveQuality(in.interactive_quality()));
   if (in.has_crop()) {
     out.view.clip.crop = CropBox{FromProto(in.crop().lo_mm()), FromProto(in.crop().hi_mm())};
   }
