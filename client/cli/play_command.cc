@@ -236,19 +236,6 @@ PlayResult PlayWithReopens(const ServerConnection& s, const Script& script,
   return result;
 }
 
-// The sessions this command opened go with it, whatever the outcome: every
-// one, not only the last (a session given up as lost may still exist, on
-// this replica or another; closing one that is gone is NOT_FOUND, which
-// changes nothing).
-void CloseSessions(const ServerConnection& s, const std::vector<std::string>& sessions) {
-  for (const std::string& id : sessions) {
-    v3::CloseSessionRequest close;
-    close.set_session_id(id);
-    v3::CloseSessionResponse closed;
-    (void)s.stub().CloseSession(s.Context().get(), close, &closed);
-  }
-}
-
 // The play's figures: counts, rates and each latency's summary.
 json PlayReport(const PlayResult& result, const std::string& session_id,
                 const std::vector<std::string>& sessions) {
@@ -332,7 +319,13 @@ Status Play(const ServerConnection& s, const std::string& script_path, std::stri
   };
   std::vector<std::string> sessions{target.session_id};
   const PlayResult result = PlayWithReopens(s, script, source, target, options, sessions);
-  if (target.opened_here) CloseSessions(s, sessions);
+  // The sessions this command opened go with it, whatever the outcome: every
+  // one, not only the last (a session given up as lost may still exist, on
+  // this replica or another; closing one that is gone is NOT_FOUND, which
+  // changes nothing).
+  if (target.opened_here) {
+    for (const std::string& id : sessions) s.CloseSessionQuietly(id);
+  }
   RETURN_IF_ERROR(result.status);
   RETURN_IF_ERROR(write_status);
   const json report = PlayReport(result, options.session_id, sessions);

@@ -91,12 +91,7 @@ Status RunOffline(const RenderArgs& args) {
 class SessionCloser {
  public:
   SessionCloser(const ServerConnection& server, std::string id) : server_(server), id_(id) {}
-  ~SessionCloser() {
-    v3::CloseSessionRequest request;
-    request.set_session_id(id_);
-    v3::CloseSessionResponse response;
-    (void)server_.stub().CloseSession(server_.Context().get(), request, &response);
-  }
+  ~SessionCloser() { server_.CloseSessionQuietly(id_); }
   SessionCloser(const SessionCloser&) = delete;
   SessionCloser& operator=(const SessionCloser&) = delete;
 

@@ -65,4 +65,11 @@ bool SessionLost(const Status& status) {
   return absl::IsUnavailable(status) || absl::IsNotFound(status);
 }
 
+void ServerConnection::CloseSessionQuietly(const std::string& session_id) const {
+  v3::CloseSessionRequest request;
+  request.set_session_id(session_id);
+  v3::CloseSessionResponse response;
+  (void)stub_->CloseSession(Context().get(), request, &response);
+}
+
 }  // namespace vpm::cli

@@ -34,6 +34,10 @@ class ServerConnection {
   const std::string& session_key() const { return flags_.session_key; }
   // A context with the token, the session key and, unless streaming, a deadline.
   std::unique_ptr<grpc::ClientContext> Context(bool streaming = false) const;
+  // CloseSession, its outcome ignored: for a client leaving sessions it
+  // opened (one already gone is NOT_FOUND, which changes nothing; the
+  // server evicts idle sessions anyway).
+  void CloseSessionQuietly(const std::string& session_id) const;
 
  private:
   ServerFlags flags_;

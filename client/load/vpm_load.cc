@@ -142,12 +142,7 @@ Result<json> RunLevel(const cli::ServerConnection& s, const json& script_json, i
   if (sessions.empty()) return absl::ResourceExhaustedError("no session could be opened");
   const std::vector<cli::PlayResult> results =
       PlayConcurrently(s, script, sessions, concurrency, args.duration_s);
-  for (const std::string& id : sessions) {
-    v3::CloseSessionRequest close;
-    close.set_session_id(id);
-    v3::CloseSessionResponse closed;
-    (void)s.stub().CloseSession(s.Context().get(), close, &closed);
-  }
+  for (const std::string& id : sessions) s.CloseSessionQuietly(id);
   v3::DeleteVolumeRequest del;
   del.set_volume_id(volume.volume_id());
   v3::DeleteVolumeResponse deleted;

@@ -28,7 +28,6 @@ Status CheckGrab(const glm::dvec3& box_extent_mm, const glm::dvec3& point_mm, do
   return absl::OkStatus();
 }
 
-
 // The grab within the radius: the handles, plus the deformable vertex
 // nearest the point even where it lies next to a fixed one, and the
 // message that says what was left in place.

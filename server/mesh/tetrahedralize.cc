@@ -152,10 +152,8 @@ std::vector<Tet> OrientedTets(const Delaunay& delaunay, int64_t& removed) {
 }
 
 // The hull must be the box: the tet volumes add up to the box volume.
-Status CheckCoversTheBox(const std::vector<MeshVertex>& vertices, const std::vector<Tet>& tets,
+Status CheckCoversTheBox(const std::vector<glm::dvec3>& positions, const std::vector<Tet>& tets,
                          const glm::dvec3& box_extent_mm) {
-  std::vector<glm::dvec3> positions(vertices.size());
-  for (size_t v = 0; v < positions.size(); ++v) positions[v] = vertices[v].position_mm;
   double volume = 0.0;
   for (const Tet& t : tets) {
     volume += SignedVolume(positions[t[0]], positions[t[1]], positions[t[2]], positions[t[3]]);
@@ -193,7 +191,7 @@ Status Tetrahedralize(ProxyMesh& mesh, const glm::dvec3& box_extent_mm, const Ca
   for (Tet& t : tets) t = CanonicalRotation(t);
   std::sort(tets.begin(), tets.end());
 
-  RETURN_IF_ERROR(CheckCoversTheBox(mesh.vertices, tets, box_extent_mm));
+  RETURN_IF_ERROR(CheckCoversTheBox(points_mm, tets, box_extent_mm));
 
   mesh.tets = std::move(tets);
   mesh.quality = MeasureTetQuality(mesh);

@@ -132,9 +132,10 @@ double RequestStepMm(const RenderRequest& request, const VolumeGeometry& geometr
 
 namespace {
 
-// PrepareRaycast's checks of the request, before anything is computed.
-Status CheckRaycastRequest(const RenderRequest& request, const VolumeGeometry& geometry,
-                           const std::array<int, 3>& map_dims) {
+// PrepareRaycast's checks of the request, before anything is computed;
+// returns the step (RequestStepMm), checked against kMaxSamplesPerRay.
+Result<double> CheckedStepMm(const RenderRequest& request, const VolumeGeometry& geometry,
+                             const std::array<int, 3>& map_dims) {
   if (request.width < 1 || request.height < 1 || request.width > kMaxFrameSide ||
       request.height > kMaxFrameSide) {
     return absl::InvalidArgumentError(StrCat("frame size ", request.width, "x", request.height,
@@ -159,7 +160,7 @@ Status CheckRaycastRequest(const RenderRequest& request, const VolumeGeometry& g
   if (map_dims[0] > 0 && (map_dims[0] < 2 || map_dims[1] < 2 || map_dims[2] < 2)) {
     return absl::InvalidArgumentError("backward map needs at least 2 grid points per axis");
   }
-  return absl::OkStatus();
+  return step;
 }
 
 // The ray caster's flags (gpu::kRaycast*, kRaycastCellGradient,
@@ -194,9 +195,8 @@ int RaycastFlags(const RenderRequest& request, bool has_map) {
 
 Result<RaycastSetup> PrepareRaycast(const RenderRequest& request, const VolumeGeometry& geometry,
                                     const std::array<int, 3>& map_dims) {
-  RETURN_IF_ERROR(CheckRaycastRequest(request, geometry, map_dims));
+  ASSIGN_OR_RETURN(const double step, CheckedStepMm(request, geometry, map_dims));
   const MipWindow window = request.mip_window.value_or(request.preset.mip_window);
-  const double step = RequestStepMm(request, geometry);
   RaycastSetup setup;
   setup.step_mm = step;
   setup.render_width = RenderSide(request, request.width);
