@@ -52,7 +52,10 @@ vtkShortArray).
 Run under a virtual X server (VTK's OpenGL mappers need a context):
     bench/setup_peer.sh      # python3-vtk9, xvfb (apt; bench-only)
     xvfb-run -a -s "-screen 0 1280x1024x24" bench/peer_vtk.py [--build build]
-`scripts/bench.sh` (make bench) does so when VTK is installed.
+`scripts/bench.sh` (make bench) does so when VTK is installed. On a machine
+without VTK (a GPU machine: scripts/gpu-check.sh), `--vpm-only` runs vpm's
+side alone, every step of --vpm-steps with its PSNR, and reads the PNGs
+with Pillow.
 """
 import argparse
 import json
@@ -69,9 +72,8 @@ import numpy as np
 try:
     import vtk
     from vtk.util import numpy_support
-except ImportError:
-    sys.exit("peer_vtk: VTK's Python bindings are missing: run bench/setup_peer.sh "
-             "(Debian's python3-vtk9) and run this with /usr/bin/python3")
+except ImportError:  # --vpm-only needs neither
+    vtk = numpy_support = None
 
 
 # --- the volume -------------------------------------------------------------
@@ -355,6 +357,10 @@ def psnr(a, b):
 
 def read_png(path):
     """RGB rows bottom-up (VTK's order), as VtkScene.frame returns them."""
+    if vtk is None:  # --vpm-only: through Pillow, flipped to the same order
+        from PIL import Image
+        with Image.open(path) as image:
+            return np.asarray(image.convert("RGB"))[::-1].copy()
     reader = vtk.vtkPNGReader()
     reader.SetFileName(path)
     reader.Update()
@@ -461,7 +467,7 @@ def prepare_case(args, name):
             vtk_data = write_int16_nifti(volume, volume_int16)
             volume, data = volume_int16, vtk_data.astype(np.float32)
         return {"name": name, "source": args.source, "tf": args.tf, "out": out,
-                "volume": volume, "data": data, "image": vtk_image(vtk_data, spacing),
+                "volume": volume, "data": data, "image": vtk_image(vtk_data, spacing) if vtk else None,
                 "spacing": spacing, "voxels": "int16" if args.int16 else "float32"}
     if name == "kidney":
         source = os.path.join(here, "..", "tests", "data", "ct-abdomen-kidney", "ct_abdomen.nii.gz")
@@ -470,7 +476,8 @@ def prepare_case(args, name):
         _, spacing = read_nifti(volume)
         return {"name": name, "source": "ct_abdomen.nii.gz (3 mm) resampled to 1 mm",
                 "tf": args.kidney_tf, "out": out, "volume": volume,
-                "data": rounded.astype(np.float32), "image": vtk_image(rounded, spacing),
+                "data": rounded.astype(np.float32),
+                "image": vtk_image(rounded, spacing) if vtk else None,
                 "spacing": spacing, "voxels": "int16"}
     sys.exit(f"peer_vtk: unknown case {name}; known: phantom, kidney")
 
@@ -506,15 +513,23 @@ def main():
     ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--mappers", default=",".join(MAPPERS))
     ap.add_argument("--modes", default="mip,composite")
+    ap.add_argument("--vpm-only", action="store_true",
+                    help="vpm's side alone (a machine without VTK, such as a GPU machine): its "
+                         "rows, its reference and every step of --vpm-steps, with PSNRs; no "
+                         "VTK mapper and no equal-quality table")
     args = ap.parse_args()
-    mappers = [m for m in args.mappers.split(",") if m]
+    if vtk is None and not args.vpm_only:
+        sys.exit("peer_vtk: VTK's Python bindings are missing: run bench/setup_peer.sh "
+                 "(Debian's python3-vtk9) and run this with /usr/bin/python3, or pass --vpm-only")
+    mappers = [] if args.vpm_only else [m for m in args.mappers.split(",") if m]
     for m in mappers:
         if m not in MAPPERS:
             sys.exit(f"peer_vtk: unknown mapper {m}; known: {', '.join(MAPPERS)}")
     goals = []
     for name in [c for c in args.cases.split(",") if c]:
         goals += run_case(args, prepare_case(args, name), mappers)
-    print("\n# Goals at 512^2, equal or better PSNR (CPU ms / cores):")
+    if goals:
+        print("\n# Goals at 512^2, equal or better PSNR (CPU ms / cores):")
     for line in goals:
         print("  " + line)
     load = os.getloadavg()
@@ -613,8 +628,9 @@ def time_vpm_steps(args, case, size, mappers, r):
     first step at which every mode's PSNR reaches the best of the VTK
     mappers' (each against its own reference); --step is timed already."""
     modes = args.modes.split(",")
-    target = {mode: max(r.results[(mode, "still", size)][m][2] for m in mappers)
-              for mode in modes}
+    # No peer (--vpm-only): no PSNR to reach, so every step is timed.
+    target = {mode: max((r.results[(mode, "still", size)][m][2] for m in mappers),
+                        default=math.inf) for mode in modes}
     for factor in sorted({float(f) for f in args.vpm_steps.split(",") if f}, reverse=True):
         step = factor * args.step
         if not any(s[0] == step for s in r.vpm_steps[(modes[0], size)]):
@@ -644,14 +660,15 @@ def run_case(args, case, mappers):
     print(f"\n## case {case['name']}: {case['source']}, {data.shape[2]}x{data.shape[1]}x{data.shape[0]}, "
           f"spacing {spacing[0]:.4f} {spacing[1]:.4f} {spacing[2]:.4f} mm, step {args.step} mm "
           f"(references {fine_step:g} mm), {case['voxels']} voxels, composite: {case['tf']}; "
-          f"VTK {vtk.vtkVersion.GetVTKVersion()}; {os.cpu_count()} cores; "
+          f"VTK {vtk.vtkVersion.GetVTKVersion() if vtk else 'not loaded'}; {os.cpu_count()} cores; "
           f"load {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}", flush=True)
     r = CaseResults()
     for size in [int(s) for s in args.sizes.split(",")]:
         camera, window = measure_vpm(args, case, size, fine_step, r)
-        props = {"mip": mip_property(window["width"], window["level"], value_range),
-                 "composite": composite_property(preset, True)}
-        measure_vtk(args, case, size, camera, props, mappers, fine_step, r)
+        if mappers:
+            props = {"mip": mip_property(window["width"], window["level"], value_range),
+                     "composite": composite_property(preset, True)}
+            measure_vtk(args, case, size, camera, props, mappers, fine_step, r)
         time_vpm_steps(args, case, size, mappers, r)
     results, vpm_steps, cross = r.results, r.vpm_steps, r.cross
 
@@ -660,14 +677,17 @@ def run_case(args, case, mappers):
     print(f"\n### case {case['name']}: process CPU ms per frame / {CORES} cores (min of "
           f"{args.reps}): what the frame costs the machine, less disturbed by other load:")
     print_table(results, mappers, 1)
-    print(f"\n### case {case['name']}: stills at equal or better PSNR, each against its own "
-          f"reference at {fine_step:g} mm:")
-    goals = print_equal_quality(case["name"], results, vpm_steps, mappers)
+    goals = []
+    if mappers:
+        print(f"\n### case {case['name']}: stills at equal or better PSNR, each against its "
+              f"own reference at {fine_step:g} mm:")
+        goals = print_equal_quality(case["name"], results, vpm_steps, mappers)
     print(f"\n### case {case['name']}: vpm's stills at each step timed, CPU ms / {CORES} cores "
           f"(PSNR against vpm's reference):")
     print_vpm_steps(args, vpm_steps)
-    print(f"\nPSNR of each VTK still against vpm's (same camera, step, window or transfer "
-          f"function; the frames are in {case['out']}):")
+    if cross:
+        print(f"\nPSNR of each VTK still against vpm's (same camera, step, window or transfer "
+              f"function; the frames are in {case['out']}):")
     for mode, size, kind, db in cross:
         print(f"  still {mode} {size}^2, VTK {kind}: {db:.1f} dB")
     load = os.getloadavg()

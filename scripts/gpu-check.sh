@@ -20,7 +20,12 @@
 #       bench entry is its name, then its arguments, separated by ','); the
 #       default benches skip their CPU-only parts (render_bench's CPU
 #       reference, mesh_build_bench's O(N^2) scaling, the 5,000-vertex drag),
-#       so the whole run takes about 3 minutes on a fast GPU.
+#       so the whole run takes about 4 minutes on a fast GPU. Then vpm's side
+#       of bench/peer_vtk.py (--vpm-only: no VTK there; python3 with numpy
+#       and Pillow), with GPU_CHECK_PEER_ARGS (empty: skipped) and
+#       GPU_CHECK_PEER_TIMEOUT (seconds, default 300). Where
+#       nvidia-smi is found, the SM clock, P-state and load are logged every
+#       250 ms during the benches to $OUT/clocks.csv.
 #       GPU_CHECK_TEST_TIMEOUT / GPU_CHECK_BENCH_TIMEOUT: seconds per binary.
 # DEST is meant to be ignored by git (echo /.gpu/ >> .git/info/exclude) and
 # carried to the other machine beside the repository's working tree.
@@ -28,7 +33,10 @@ set -uo pipefail
 
 TESTS_DEFAULT="gpu/gpu_core_test volume/volume_test warp/warp_test raycast/raycast_test mesh/mesh_test scene/deformable_scene_test"
 BENCHES_DEFAULT="gradient_bench mesh_build_bench,--stages-only warp_bench render_bench,--no-reference
-  sample_rate_bench slice_bench drag_loop_bench,--max-vertices,1000 render_storm_bench"
+  sample_rate_bench slice_bench drag_loop_bench,--max-vertices,1000 render_storm_bench
+  step_psnr_bench,--cut,tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz,phantom:abdomen
+  interactive_quality_bench,--cut,--candidates"
+PEER_ARGS_DEFAULT="--sizes 512 --vpm-runs 1 --vpm-steps 4,3,2.25,2,1.5,1,0.75,0.625,0.5"
 
 bundle() {
   local build=${1:?usage: gpu-check.sh bundle BUILD_DIR [DEST]} dest=${2:-.gpu}
@@ -42,6 +50,8 @@ bundle() {
   for b in ${GPU_CHECK_BENCHES:-$BENCHES_DEFAULT}; do
     strip --strip-unneeded -o "$stage/bin/${b%%,*}" "$build/bench/${b%%,*}" || return 1
   done
+  # The peer step's volume export (vpm volume export).
+  strip --strip-unneeded -o "$stage/bin/vpm" "$build/client/vpm" || return 1
   for l in $(ldd "$stage"/bin/* | awk '/=> \//{print $3}' | sort -u); do
     case ${l##*/} in
       libc.so*|libm.so*|libpthread.so*|libdl.so*|librt.so*|ld-linux*|libvulkan.so*) ;;
@@ -136,6 +146,12 @@ run() {
       { echo "## test ${t##*/}: exit $?"; failed=$((failed + 1)); }
   done
   echo; echo "## tests: $failed binaries failed, $((SECONDS - s)) s"
+  local clocks=""
+  if command -v nvidia-smi >/dev/null; then
+    nvidia-smi --query-gpu=timestamp,clocks.sm,clocks.mem,pstate,utilization.gpu \
+      --format=csv -lms 250 > "$OUT"/clocks.csv 2>&1 &
+    clocks=$!
+  fi
   local entry args
   for entry in ${GPU_CHECK_BENCHES:-$BENCHES_DEFAULT}; do
     IFS=, read -r -a args <<< "$entry"
@@ -146,11 +162,30 @@ run() {
       echo "## $t: exit $?"
     echo "## $t: $((SECONDS - s)) s"
   done
+  peer "$b" "$root"
+  [ -n "$clocks" ] && kill "$clocks" 2>/dev/null
   echo; echo "# done, $(date -u +%H:%M:%SZ)"
+}
+
+# vpm's side of bench/peer_vtk.py, run from the bundle's binaries laid out as
+# a build folder.
+peer() {
+  local b=$1 root=$2 peer_args=${GPU_CHECK_PEER_ARGS-$PEER_ARGS_DEFAULT}
+  [ -n "$peer_args" ] || return 0
+  mkdir -p "$b"/build/bench "$b"/build/client
+  ln -sf "$b"/bin/render_bench "$b"/build/bench/render_bench
+  ln -sf "$b"/bin/vpm "$b"/build/client/vpm
+  echo; echo "## peer_vtk.py --vpm-only $peer_args"
+  local s=$SECONDS
+  # shellcheck disable=SC2086  # the arguments are a list
+  (cd "$root" && PYTHONUNBUFFERED=1 timeout "${GPU_CHECK_PEER_TIMEOUT:-300}" python3 \
+    bench/peer_vtk.py --vpm-only --build "$b"/build --out "$b"/peer $peer_args) ||
+    echo "## peer_vtk.py: exit $?"
+  echo "## peer_vtk.py: $((SECONDS - s)) s"
 }
 
 case ${1:-} in
   bundle) shift; bundle "$@" ;;
   run) shift; run "$@" ;;
-  *) sed -n '2,26p' "$0"; exit 2 ;;
+  *) sed -n '2,31p' "$0"; exit 2 ;;
 esac
