@@ -1,10 +1,10 @@
 // Ray casting of the 256^3 phantom (or argv[1]) through an identity backward
 // map: GPU kernel time against the CPU reference (2 threads) on the same
-// frame in one run (runs alternate, minimum of 5 each), with empty-space skipping on and off, still 512x512 and
-// interactive (512x512 shown, 256x256 cast), texel-buffer and sampler3D
-// volume reads; then JPEG (quality 85) and PNG encoding of the still frame.
-// Usage: render_bench [--render-tf FILE] [--step MM] [--window W L]
-//                     [--no-reference] [--map-held] [--no-map] [--band-rays N]
+// frame in one run (runs alternate, minimum of 5 each), with empty-space skipping on and off, still
+// 512x512 and interactive (512x512 shown, 256x256 cast), texel-buffer and sampler3D volume reads;
+// then JPEG (quality 85) and PNG encoding of the still frame. Usage: render_bench [--render-tf
+// FILE] [--step MM] [--window W L]
+//                     [--no-reference] [--map-held] [--no-map] [--band-rays N] [--band-ms MS]
 //                     [--no-early-termination] [--light-back-end] [--whole-end-steps]
 //                     [SOURCE] [PNG_DIR] [FILTER] [SIZE]
 //   --render-tf: adds the rows "still DVR custom" and "interactive DVR
@@ -17,7 +17,9 @@
 //   once and reused, as while orbiting or for a still after a drag);
 //   --no-map: every row without the map (what DeformableScene renders while
 //   nothing is deformed); --band-rays N: still frames cast in bands of about
-//   N rays, one submit each (default kStillBandRays; 0: one submit);
+//   N rays (default kStillBandRays; 0: one band); --band-ms MS: the bands
+//   after the first submitted in groups of about MS ms at the first band's
+//   time (default kStillBandMs; 0: one submit per band);
 //   --no-early-termination: every ray to its end (the exact integral that a
 //   fine step's reference approaches); --light-back-end: pre-integrated
 //   steps lit by the light at their back end alone
@@ -197,6 +199,7 @@ struct Flags {
   bool map_held = false;
   bool no_map = false;
   int64_t band_rays = kStillBandRays;
+  double band_ms = kStillBandMs;
   bool early_termination = true;
   bool light_both_ends = true;
   bool partial_end_steps = true;
@@ -221,6 +224,8 @@ Flags ParseFlags(int argc, char** argv) {
       f.window = MipWindow{.level = ParseNumber(argv[++i], "--window"), .width = width};
     } else if (arg == "--band-rays" && i + 1 < argc) {
       f.band_rays = int64_t(ParseNumber(argv[++i], "--band-rays"));
+    } else if (arg == "--band-ms" && i + 1 < argc) {
+      f.band_ms = ParseNumber(argv[++i], "--band-ms");
     } else if (arg == "--no-reference" || arg == "--map-held" || arg == "--no-map" ||
                arg == "--no-early-termination" || arg == "--light-back-end" ||
                arg == "--whole-end-steps") {
@@ -277,11 +282,14 @@ std::unique_ptr<Fixture> MakeFixture(const Flags& flags) {
                "map upload");
   const auto t0 = std::chrono::steady_clock::now();
   f->texel_renderer = bench::Check(
-      VolumeRenderer::Create(*f->context, {.still_band_rays = flags.band_rays}), "renderer");
+      VolumeRenderer::Create(*f->context,
+                             {.still_band_rays = flags.band_rays, .still_band_ms = flags.band_ms}),
+      "renderer");
   f->create_ms = MsSince(t0);
   f->sampled_renderer =
       bench::Check(VolumeRenderer::Create(*f->context, {.volume_access = VolumeAccess::kSampler3D,
-                                                        .still_band_rays = flags.band_rays}),
+                                                        .still_band_rays = flags.band_rays,
+                                                        .still_band_ms = flags.band_ms}),
                    "renderer");
   f->still_minmax = BrickMinMaxCpu(volume, BrickVoxels(RenderQuality::kStill, volume.geometry()));
   f->interactive_minmax =
@@ -451,10 +459,11 @@ void PrintCase(const Case& c, const Measured& best, const RenderRequest& r,
   const double pixels = double(counted.render_width) * counted.render_height;
   std::printf(
       "%-36s GPU map copy %.1f, occupancy %.1f, upscale %.1f ms (min each); "
-      "%.1f samples/pixel, %.0f M samples/s in the cast (%.0f M/s of CPU time)\n",
+      "%.1f samples/pixel, %.0f M samples/s in the cast (%.0f M/s of CPU time); "
+      "%d bands in %d submits\n",
       "", best.gpu_map_copy_ms, best.gpu_occupancy_ms, best.gpu_upscale_ms,
       double(counted.samples) / pixels, double(counted.samples) / best.gpu_raycast_ms * 1e-3,
-      double(counted.samples) / best.gpu_cpu_time_ms * 1e-3);
+      double(counted.samples) / best.gpu_cpu_time_ms * 1e-3, best.frame.bands, best.frame.submits);
 }
 
 // What the cell gradient costs in picture against the taps (central

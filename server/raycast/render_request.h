@@ -228,7 +228,8 @@ struct Frame {
   int render_width = 0;       // ray-cast resolution (interactive: about half)
   int render_height = 0;
   double step_mm = 0.0;
-  int bands = 1;              // submits the ray cast took (VolumeRenderer: still bands)
+  int bands = 1;              // bands the ray cast was cut into (VolumeRenderer: stills)
+  int submits = 1;            // submits those bands took (grouped: still_band_ms)
   int64_t samples = -1;       // samples taken, when settings.count_samples
   int64_t occupied_bricks = -1;  // bricks the occupancy pass kept (skipping on)
   int64_t total_bricks = 0;

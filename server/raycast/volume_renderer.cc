@@ -65,6 +65,15 @@ gpu::KernelSpec RaycastSpec(bool sampled, bool mip, bool map, bool cell_gradient
   return spec;
 }
 
+// Band 0's ray cast (GPU timestamps) in the first submit's timings, else
+// that submit's wall time.
+double Band0Ms(std::span<const gpu::DispatchTiming> timings, double first_submit_ms) {
+  for (const auto& t : timings) {
+    if (t.label == "raycast") return t.gpu_ms >= 0.0 ? t.gpu_ms : first_submit_ms;
+  }
+  return first_submit_ms;
+}
+
 }  // namespace
 
 Result<std::unique_ptr<VolumeRenderer>> VolumeRenderer::Create(const gpu::GpuContext& context,
@@ -391,6 +400,13 @@ Status VolumeRenderer::RecordBand(gpu::ComputeBatch& batch, const Cast& cast,
 int VolumeRenderer::Bands(const RenderRequest& request, int width, int height) const {
   if (request.quality != RenderQuality::kStill || options_.still_band_rays <= 0) return 1;
   const int64_t rays = int64_t(width) * height;
+  // Whole where the last still, at this one's rays, would take under half
+  // of still_band_ms: on a fast device a band's dispatch is too small to
+  // fill it (docs/RENDERING.md, "Stills in bands").
+  if (options_.still_band_ms > 0.0 && still_ms_per_ray_ >= 0.0 &&
+      2.0 * still_ms_per_ray_ * double(rays) <= options_.still_band_ms) {
+    return 1;
+  }
   const int64_t tile_rows = (height + 7) / 8;
   return int(std::clamp<int64_t>(rays / options_.still_band_rays, 1, tile_rows));
 }
@@ -485,19 +501,63 @@ Result<vk::raii::BufferView> VolumeRenderer::PrepareMapTexels(
   return map_view;
 }
 
-Status VolumeRenderer::SubmitOtherBands(const RenderRequest& request, const Cast& cast,
-                                        const RaycastSetup& setup, int bands,
-                                        std::vector<gpu::DispatchTiming>& timings) {
-  // One submit each: what another renderer submits meanwhile runs between
-  // two of them.
-  for (int b = 1; b < bands; ++b) {
-    RETURN_IF_ERROR(request.cancel.Check());
-    ASSIGN_OR_RETURN(auto band, gpu::ComputeBatch::Begin(*context_, 1));
-    RETURN_IF_ERROR(RecordBand(band, cast, setup, b, bands));
-    ASSIGN_OR_RETURN(auto band_timings, band.SubmitAndWait());
-    timings.insert(timings.end(), band_timings.begin(), band_timings.end());
+void VolumeRenderer::RememberStillCost(std::span<const gpu::DispatchTiming> timings,
+                                       double submits_ms, size_t rays) {
+  double cast_ms = 0.0;
+  for (const auto& t : timings) {
+    if (t.label != "raycast") continue;
+    if (t.gpu_ms < 0.0) {  // no timestamps: the wall time of the submits
+      cast_ms = submits_ms;
+      break;
+    }
+    cast_ms += t.gpu_ms;
   }
-  return absl::OkStatus();
+  if (rays > 0) still_ms_per_ray_ = cast_ms / double(rays);
+}
+
+int VolumeRenderer::BandsPerSubmit(double band0_ms, int bands) const {
+  if (options_.still_band_ms <= 0.0 || bands <= 2 || band0_ms < 0.0) return 1;
+  // band0_ms 0 (under the timestamps' resolution): all in one submit.
+  const double fit = band0_ms > 0.0 ? std::floor(options_.still_band_ms / band0_ms) : bands;
+  return int(std::clamp(fit, 1.0, double(bands - 1)));
+}
+
+Result<int> VolumeRenderer::SubmitOtherBands(const RenderRequest& request, const Cast& cast,
+                                             const RaycastSetup& setup, int bands, double band0_ms,
+                                             std::vector<gpu::DispatchTiming>& timings) {
+  // What another renderer submits meanwhile runs between two submits.
+  const int per_submit = BandsPerSubmit(band0_ms, bands);
+  int submits = 0;
+  for (int b = 1; b < bands; b += per_submit) {
+    RETURN_IF_ERROR(request.cancel.Check());
+    const int end = std::min(bands, b + per_submit);
+    ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, uint32_t(end - b)));
+    for (int band = b; band < end; ++band) {
+      RETURN_IF_ERROR(RecordBand(batch, cast, setup, band, bands));
+    }
+    ASSIGN_OR_RETURN(auto band_timings, batch.SubmitAndWait());
+    timings.insert(timings.end(), band_timings.begin(), band_timings.end());
+    ++submits;
+  }
+  return submits;
+}
+
+Result<std::vector<gpu::DispatchTiming>> VolumeRenderer::SubmitFrame(
+    gpu::ComputeBatch& batch, const RenderRequest& request, const RaycastSetup& setup,
+    const Cast& cast, const OccupancyPlan& occupancy, int bands, int& submits) {
+  const auto t_submit = std::chrono::steady_clock::now();
+  ASSIGN_OR_RETURN(auto timings, batch.SubmitAndWait());
+  if (request.settings.empty_space_skipping && occupancy.cacheable) {
+    occupancy_key_ = occupancy.key;
+  }
+  ASSIGN_OR_RETURN(
+      const int other_submits,
+      SubmitOtherBands(request, cast, setup, bands, Band0Ms(timings, MsSince(t_submit)), timings));
+  submits = 1 + other_submits;
+  if (request.quality == RenderQuality::kStill) {
+    RememberStillCost(timings, MsSince(t_submit), size_t(setup.render_width) * setup.render_height);
+  }
+  return timings;
 }
 
 Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
@@ -539,17 +599,17 @@ Result<Frame> VolumeRenderer::Render(const RenderRequest& request) {
   ASSIGN_OR_RETURN(auto batch, gpu::ComputeBatch::Begin(*context_, 5));
   RETURN_IF_ERROR(RecordFrame(batch, request, setup, *minmax, upscale, occupancy.box, map_texels,
                               cast, bands));
-  ASSIGN_OR_RETURN(auto timings, batch.SubmitAndWait());
+  int submits = 0;
+  ASSIGN_OR_RETURN(auto timings,
+                   SubmitFrame(batch, request, setup, cast, occupancy, bands, submits));
   const bool skipping = request.settings.empty_space_skipping;
-  if (skipping && occupancy.cacheable) occupancy_key_ = occupancy.key;
-  // The other bands of a still.
-  RETURN_IF_ERROR(SubmitOtherBands(request, cast, setup, bands, timings));
   Frame frame{.width = request.width,
               .height = request.height,
               .render_width = setup.render_width,
               .render_height = setup.render_height,
               .step_mm = setup.step_mm,
               .bands = bands,
+              .submits = submits,
               .total_bricks = int64_t(bricks),
               .occupancy_reused = skipping && occupancy.current,
               .occupancy_bricks_computed = skipping ? occupancy.box.count() : 0};

@@ -4,7 +4,8 @@
 // changes), and the frame buffers. One frame = one command buffer: occupancy
 // (when skipping), ray cast, upscale (interactive), then readback and the
 // overlay on the CPU; a still frame larger than Options::still_band_rays is
-// cast in bands of rows, one submit each. Render is serialised by a mutex;
+// cast in bands of rows, submitted in groups of about Options::still_band_ms
+// each. Render is serialised by a mutex;
 // one renderer per session is the intended use (the server's sessions each
 // have one).
 //
@@ -42,11 +43,21 @@ enum class VolumeAccess { kTexelBuffer, kSampler3D };
 // 256^2 one 2. Interactive frames are never cut.
 inline constexpr int64_t kStillBandRays = 32768;
 
+// After band 0, which goes with the frame's first submit, the other bands of
+// a still go in submits of as many bands as fit in about this many ms at
+// band 0's time (GPU timestamps; wall time where the device has none): one
+// band per submit where a band takes 15 ms or more (lavapipe at 512^2). A
+// still that the renderer's last still says takes under half of it is cast
+// whole (a discrete GPU): a fast device pays neither a submit per band nor
+// dispatches too small to fill it.
+inline constexpr double kStillBandMs = 15.0;
+
 class VolumeRenderer {
  public:
   struct Options {
     VolumeAccess volume_access = VolumeAccess::kTexelBuffer;
     int64_t still_band_rays = kStillBandRays;  // 0: a still in one submit
+    double still_band_ms = kStillBandMs;       // 0: one submit per band
   };
 
   static Result<std::unique_ptr<VolumeRenderer>> Create(const gpu::GpuContext& context,
@@ -136,8 +147,16 @@ class VolumeRenderer {
   Status RecordBand(gpu::ComputeBatch& batch, const Cast& cast, const RaycastSetup& setup,
                     int band, int bands);
   // Bands for a frame cast at width x height: still frames width x height /
-  // still_band_rays (at least 1, at most a tile row each), others 1.
+  // still_band_rays (at least 1, at most a tile row each), or 1 where the
+  // last still's cost says this one takes under still_band_ms / 2; others 1.
   int Bands(const RenderRequest& request, int width, int height) const;
+  // Bands per submit after band 0, from band 0's time (ms): still_band_ms
+  // worth, at least 1, at most bands - 1.
+  int BandsPerSubmit(double band0_ms, int bands) const;
+  // A still's ray cast time per ray (its bands' GPU timestamps summed, else
+  // submits_ms, the wall time of its submits), for the next still's Bands.
+  void RememberStillCost(std::span<const gpu::DispatchTiming> timings, double submits_ms,
+                         size_t rays);
   // A uniform-texel view of the caller's map values (request.
   // backward_map_texels) for `points` grid points; InvalidArgument when the
   // buffer is too small or the device cannot view that many texels.
@@ -156,17 +175,25 @@ class VolumeRenderer {
   };
   OccupancyPlan PlanOccupancy(const RenderRequest& request, const gpu::RaycastParams& p,
                               const std::array<int, 3>& map_dims) const;
+  // Submits the frame's first batch (`batch`, recorded), then a still's
+  // other bands; caches the occupancy once its pass has run and remembers a
+  // still's cost. `submits`: the submits made. Returns their timings.
+  Result<std::vector<gpu::DispatchTiming>> SubmitFrame(gpu::ComputeBatch& batch,
+                                                       const RenderRequest& request,
+                                                       const RaycastSetup& setup, const Cast& cast,
+                                                       const OccupancyPlan& occupancy, int bands,
+                                                       int& submits);
   // With a backward map: the caller's map values viewed (CallerMapView;
   // created per frame, microseconds, so that it never outlives the buffer),
   // or the renderer's own copy sized (EnsureMapTexels) and a null view.
   Result<vk::raii::BufferView> PrepareMapTexels(const RenderRequest& request,
                                                 const std::array<int, 3>& map_dims);
-  // A still's bands 1 .. bands - 1, one submit each (between two of them
-  // runs what another renderer submits), their timings appended; stops at
-  // request.cancel.
-  Status SubmitOtherBands(const RenderRequest& request, const Cast& cast,
-                          const RaycastSetup& setup, int bands,
-                          std::vector<gpu::DispatchTiming>& timings);
+  // A still's bands 1 .. bands - 1, BandsPerSubmit(band0_ms) to a submit
+  // (between two submits runs what another renderer submits), their timings
+  // appended; stops at request.cancel. Returns the submits it made.
+  Result<int> SubmitOtherBands(const RenderRequest& request, const Cast& cast,
+                               const RaycastSetup& setup, int bands, double band0_ms,
+                               std::vector<gpu::DispatchTiming>& timings);
   // Fills frame's kernel timings, pixels (the upscaled buffer when
   // `upscale`) and, with settings.count_samples, its samples and occupied
   // bricks (frame.total_bricks set).
@@ -209,6 +236,7 @@ class VolumeRenderer {
   uint64_t lut_generation_ = 0;  // bumped at every bake
   bool preintegrated_baked_ = false;  // the buffer holds the pre-integrated table of lut_preset_
   std::optional<OccupancyKey> occupancy_key_;
+  double still_ms_per_ray_ = -1.0;  // the last still's (RememberStillCost); -1: none yet
 };
 
 }  // namespace vpm

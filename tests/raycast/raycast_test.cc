@@ -421,10 +421,10 @@ TEST_F(RaycastTest, InteractiveQuality_HalfResolutionUpscaled) {
   EXPECT_GT(CompareRgba(gpu.rgba, RenderGpu(r).rgba).psnr_db, 22.0);
 }
 
-// A still frame cast in bands (interleaved rows of tiles), one submit each,
-// is the frame cast in one: the same pixels bit for bit and the same
-// samples, for DVR and MIP, through a map, with bands of unequal height;
-// interactive frames stay whole.
+// A still frame cast in bands (interleaved rows of tiles), one submit each
+// or several to a submit, is the frame cast in one: the same pixels bit for
+// bit and the same samples, for DVR and MIP, through a map, with bands of
+// unequal height; interactive frames stay whole.
 TEST_F(RaycastTest, StillBands_SameFrameAsOneSubmit) {
   HostBackwardMap host;
   auto map = MakeMap(9, 6.0, &host);
@@ -433,10 +433,15 @@ TEST_F(RaycastTest, StillBands_SameFrameAsOneSubmit) {
   // 100 x 70: 7,000 rays in 4 bands of 1,750, over 9 rows of 8 x 8 tiles
   // (the last one 6 pixels high): band 0 takes tile rows 0, 4, 8, the
   // others two each.
-  auto banded = VolumeRenderer::Create(context(), {.still_band_rays = 1750});
+  auto banded = VolumeRenderer::Create(context(), {.still_band_rays = 1750, .still_band_ms = 0});
   ASSERT_TRUE(whole.ok() && banded.ok());
   for (RenderMode mode : {RenderMode::kDvr, RenderMode::kMip}) {
     SCOPED_TRACE(mode == RenderMode::kDvr ? "DVR" : "MIP");
+    // Bands of any length fit: the first still's bands 1 to 3 in one
+    // submit (however fast band 0 is), the next still whole.
+    auto grouped =
+        VolumeRenderer::Create(context(), {.still_band_rays = 1750, .still_band_ms = 1e9});
+    ASSERT_TRUE(grouped.ok()) << grouped.status();
     RenderRequest r = Request(mode);
     r.width = 100;
     r.height = 70;
@@ -444,21 +449,38 @@ TEST_F(RaycastTest, StillBands_SameFrameAsOneSubmit) {
     r.settings.count_samples = true;
     auto one = (*whole)->Render(r);
     auto cut = (*banded)->Render(r);
-    ASSERT_TRUE(one.ok() && cut.ok()) << one.status() << cut.status();
+    auto two = (*grouped)->Render(r);
+    auto next = (*grouped)->Render(r);
+    ASSERT_TRUE(one.ok() && cut.ok() && two.ok() && next.ok())
+        << one.status() << cut.status() << two.status() << next.status();
     EXPECT_EQ(one->bands, 1);
+    EXPECT_EQ(one->submits, 1);
     EXPECT_EQ(cut->bands, 4);
+    EXPECT_EQ(cut->submits, 4);
+    EXPECT_EQ(two->bands, 4);
+    EXPECT_EQ(two->submits, 2);
+    EXPECT_EQ(next->bands, 1);
+    EXPECT_EQ(next->submits, 1);
     EXPECT_GT(LitPixels(*cut), 100);
     EXPECT_EQ(cut->rgba, one->rgba);
     EXPECT_EQ(cut->samples, one->samples);
+    EXPECT_EQ(two->rgba, one->rgba);
+    EXPECT_EQ(two->samples, one->samples);
+    EXPECT_EQ(next->rgba, one->rgba);
     r.quality = RenderQuality::kInteractive;
     auto interactive = (*banded)->Render(r);
     ASSERT_TRUE(interactive.ok()) << interactive.status();
     EXPECT_EQ(interactive->bands, 1);
   }
-  // The default: a 512^2 still in 8 bands.
-  RenderRequest r = Request(RenderMode::kMip, "ct-vessels", 512);
-  const Frame still = RenderGpu(r);
-  EXPECT_EQ(still.bands, int(512 * 512 / kStillBandRays));
+  // The default: a renderer's first 512^2 still in 8 bands, in 2 to 8
+  // submits (by the device's speed).
+  auto fresh = VolumeRenderer::Create(context(), {});
+  ASSERT_TRUE(fresh.ok()) << fresh.status();
+  auto still = (*fresh)->Render(Request(RenderMode::kMip, "ct-vessels", 512));
+  ASSERT_TRUE(still.ok()) << still.status();
+  EXPECT_EQ(still->bands, int(512 * 512 / kStillBandRays));
+  EXPECT_GE(still->submits, 2);
+  EXPECT_LE(still->submits, still->bands);
 }
 
 // Interactive DVR shades with the gradient of the trilinear cells (chain
