@@ -24,21 +24,28 @@ inline std::optional<v3::Encoding> EncodingFromName(std::string_view name) {
   return std::nullopt;
 }
 
-// RenderSettings.interactive_quality: "fast", "balanced", "sharp".
+// RenderSettings.interactive_quality: "auto" (UNSPECIFIED: the server's
+// device chooses, sharp on a discrete GPU, else fast), "fast", "balanced",
+// "sharp".
 inline std::optional<v3::InteractiveQuality> InteractiveQualityFromName(std::string_view name) {
+  if (name == "auto") return v3::INTERACTIVE_QUALITY_UNSPECIFIED;
   if (name == "fast") return v3::INTERACTIVE_QUALITY_FAST;
   if (name == "balanced") return v3::INTERACTIVE_QUALITY_BALANCED;
   if (name == "sharp") return v3::INTERACTIVE_QUALITY_SHARP;
   return std::nullopt;
 }
 
-// "fast", "balanced", "sharp"; "default" for UNSPECIFIED (the server's).
+// "auto" (UNSPECIFIED), "fast", "balanced", "sharp"; "unknown" outside the
+// enum.
 inline std::string_view InteractiveQualityName(v3::InteractiveQuality quality) {
   switch (quality) {
+    case v3::INTERACTIVE_QUALITY_UNSPECIFIED:
+      return "auto";
     case v3::INTERACTIVE_QUALITY_FAST: return "fast";
     case v3::INTERACTIVE_QUALITY_BALANCED: return "balanced";
     case v3::INTERACTIVE_QUALITY_SHARP: return "sharp";
-    default: return "default";
+    default:
+      return "unknown";
   }
 }
 

@@ -130,7 +130,9 @@ Result<SceneView> MakeView(const RenderArgs& args, const Volume& volume) {
   if (window) view.preset.mip_window = *window;
   view.quality =
       args.quality == "interactive" ? RenderQuality::kInteractive : RenderQuality::kStill;
-  if (args.interactive_quality == "fast") {
+  if (args.interactive_quality == "auto") {
+    view.interactive_quality = InteractiveQuality::kAuto;
+  } else if (args.interactive_quality == "fast") {
     view.interactive_quality = InteractiveQuality::kFast;
   } else if (args.interactive_quality == "balanced") {
     view.interactive_quality = InteractiveQuality::kBalanced;
@@ -138,7 +140,7 @@ Result<SceneView> MakeView(const RenderArgs& args, const Volume& volume) {
     view.interactive_quality = InteractiveQuality::kSharp;
   } else {
     return absl::InvalidArgumentError(StrCat("--interactive-quality ", args.interactive_quality,
-                                             ": fast, balanced or sharp"));
+                                             ": auto, fast, balanced or sharp"));
   }
   if (args.size.size() != 2) return absl::InvalidArgumentError("--size takes W H");
   view.width = args.size[0];

@@ -32,7 +32,8 @@ struct RenderArgs {
   std::string render_tf;        // a ParaView .json[#NAME] or Slicer .vp; overrides preset
   std::vector<double> window;   // MIP: W L (the volume's units)
   double step_mm = 0.0;         // the sample step; 0: the quality's default
-  std::string interactive_quality = "fast";  // --quality interactive: fast | balanced | sharp
+  // --quality interactive: auto (the device's choice) | fast | balanced | sharp
+  std::string interactive_quality = "auto";
   std::vector<double> grab, drag, pull;
   std::vector<double> pins;  // 3 per --pin: X Y Z, mm
   std::string grab_landmark;

@@ -317,9 +317,10 @@ void AddRenderCommand(CLI::App& app, const ServerFlags* server, int* exit_code) 
       ->check(CLI::IsMember({"still", "interactive"}))
       ->capture_default_str();
   cmd->add_option("--interactive-quality", a->interactive_quality,
-                  "with --quality interactive: fast, balanced or sharp (docs/RENDERING.md, "
-                  "\"Interactive quality\"; offline only)")
-      ->check(CLI::IsMember({"fast", "balanced", "sharp"}))
+                  "with --quality interactive: auto (sharp on a discrete GPU, else fast), "
+                  "fast, balanced or sharp (docs/RENDERING.md, \"Interactive quality\"; "
+                  "offline only)")
+      ->check(CLI::IsMember({"auto", "fast", "balanced", "sharp"}))
       ->capture_default_str();
   AddGrabFlags(cmd, a.get());
   cmd->add_option("--size", a->size, "W H pixels")->expected(2)->capture_default_str();

@@ -56,8 +56,8 @@ Status ParseSettings(const nlohmann::json& s, v3::RenderSettings& settings) {
     const std::string quality = s["interactive_quality"].get<std::string>();
     const auto quality_value = InteractiveQualityFromName(quality);
     if (!quality_value) {
-      return absl::InvalidArgumentError(
-          StrCat("settings.interactive_quality: '", quality, "' is not fast, balanced or sharp"));
+      return absl::InvalidArgumentError(StrCat("settings.interactive_quality: '", quality,
+                                               "' is not auto, fast, balanced or sharp"));
     }
     settings.set_interactive_quality(*quality_value);
   }

@@ -24,7 +24,9 @@ std::array<std::string, kStatusLineCount> StatusLines(const StatusInputs& in) {
       case v3::INTERACTIVE_QUALITY_FAST: rate += " fast"; break;
       case v3::INTERACTIVE_QUALITY_BALANCED: rate += " bal"; break;
       case v3::INTERACTIVE_QUALITY_SHARP: rate += " sharp"; break;
-      default: break;
+      default:
+        rate += " auto";
+        break;
     }
     // Refinement at rest: the rungs before the still.
     state = f.refine_level() > 0   ? "refine " + std::to_string(f.refine_level())

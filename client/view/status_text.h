@@ -16,7 +16,7 @@ struct StatusInputs {
   bool grab_mode = false;
   bool grabbed = false;
   // RenderSettings.interactive_quality, shown after the frame size as fast,
-  // bal or sharp (nothing when unspecified).
+  // bal or sharp, auto when unspecified (the server's device chooses).
   v3::InteractiveQuality interactive_quality = v3::INTERACTIVE_QUALITY_UNSPECIFIED;
 };
 

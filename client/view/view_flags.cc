@@ -45,9 +45,10 @@ void AddViewFlags(CLI::App& app, ViewFlags* f) {
       ->type_name("on|off");
   app.add_option("--jpeg-quality", f->jpeg_quality, "1..100")->check(CLI::Range(1, 100));
   app.add_option("--interactive-quality", f->interactive_quality,
-                 "frames while moving: fast, balanced or sharp (key I cycles; docs/RENDERING.md, "
+                 "frames while moving: auto (the server's device chooses: sharp on a GPU, else "
+                 "fast), fast, balanced or sharp (key I cycles; docs/RENDERING.md, "
                  "\"Interactive quality\", gives each one's frame rate and PSNR)")
-      ->check(CLI::IsMember({"fast", "balanced", "sharp"}))
+      ->check(CLI::IsMember({"auto", "fast", "balanced", "sharp"}))
       ->capture_default_str();
   app.add_flag("--overlay", f->overlay, "start with the proxy-mesh overlay on");
   app.add_option("--screenshot-dir", f->screenshot_dir, "folder for screenshots (S key)");

@@ -18,8 +18,9 @@ struct ViewFlags {
   std::string preset = "ct-soft-tissue";  // DVR preset
   int jpeg_quality = 85;                 // 1..100
   bool overlay = false;                  // proxy-mesh overlay
-  // RenderSettings.interactive_quality at start: "fast", "balanced", "sharp".
-  std::string interactive_quality = "fast";
+  // RenderSettings.interactive_quality at start: "auto", "fast", "balanced",
+  // "sharp".
+  std::string interactive_quality = "auto";
   // The view cut (RenderSettings.view_cut) at start: while no crop box or
   // clip plane is on, cut away what lies in front of the grabbed tissue.
   bool view_cut = true;

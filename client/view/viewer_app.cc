@@ -17,12 +17,16 @@ namespace {
 constexpr auto kNoticeTime = std::chrono::milliseconds(2500);
 constexpr auto kResizeQuiet = std::chrono::milliseconds(200);  // debounce of window resizes
 
-// Key I: fast -> balanced -> sharp -> fast (the server's default counts as fast).
+// Key I: auto -> fast -> balanced -> sharp -> auto.
 v3::InteractiveQuality NextInteractiveQuality(v3::InteractiveQuality q) {
   switch (q) {
+    case v3::INTERACTIVE_QUALITY_FAST:
+      return v3::INTERACTIVE_QUALITY_BALANCED;
     case v3::INTERACTIVE_QUALITY_BALANCED: return v3::INTERACTIVE_QUALITY_SHARP;
-    case v3::INTERACTIVE_QUALITY_SHARP: return v3::INTERACTIVE_QUALITY_FAST;
-    default: return v3::INTERACTIVE_QUALITY_BALANCED;
+    case v3::INTERACTIVE_QUALITY_SHARP:
+      return v3::INTERACTIVE_QUALITY_UNSPECIFIED;
+    default:
+      return v3::INTERACTIVE_QUALITY_FAST;
   }
 }
 
@@ -62,8 +66,8 @@ ViewerApp::ViewerApp(ViewFlags flags) : flags_(std::move(flags)) {
   settings_.set_width(flags_.width);
   settings_.set_height(flags_.height);
   settings_.set_overlay(flags_.overlay);
-  settings_.set_interactive_quality(
-      InteractiveQualityFromName(flags_.interactive_quality).value_or(v3::INTERACTIVE_QUALITY_FAST));
+  settings_.set_interactive_quality(InteractiveQualityFromName(flags_.interactive_quality)
+                                        .value_or(v3::INTERACTIVE_QUALITY_UNSPECIFIED));
   view_cut_ = flags_.view_cut;
   settings_.set_encoding(v3::ENCODING_JPEG);
   settings_.set_jpeg_quality(flags_.jpeg_quality);

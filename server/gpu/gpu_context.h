@@ -45,6 +45,9 @@ class GpuContext {
   const vk::PhysicalDeviceLimits& limits() const { return properties_.limits; }
   const std::string& device_name() const { return device_name_; }
   bool is_cpu_device() const { return properties_.deviceType == vk::PhysicalDeviceType::eCpu; }
+  bool is_discrete_gpu() const {
+    return properties_.deviceType == vk::PhysicalDeviceType::eDiscreteGpu;
+  }
 
   // Nanoseconds per timestamp tick; 0 when the queue cannot write timestamps.
   double timestamp_period_ns() const { return timestamp_period_ns_; }

@@ -64,6 +64,7 @@ int RenderSide(const RenderRequest& request, int side) {
 InteractiveCast InteractiveCastFor(InteractiveQuality quality) {
   switch (quality) {
     case InteractiveQuality::kFast:
+    case InteractiveQuality::kAuto:
       return {.divisor = 2.0, .still_step_multiple = 0.0, .upscale_filter = gpu::kUpscaleBilinear};
     case InteractiveQuality::kBalanced:
       return {.divisor = 2.0, .still_step_multiple = 2.0, .upscale_filter = gpu::kUpscaleBilinear};

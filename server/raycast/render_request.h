@@ -53,8 +53,12 @@ inline constexpr double kMaxInteractiveDivisor = 4.0;
 // kSharp: full resolution, step at most 1.5 x the still's (at least 35 dB
 // on the phantom and the kidney CT, at a fraction of the frame rate). The
 // ray starts are jittered with a new seed per frame (DeformableScene).
-enum class InteractiveQuality { kFast, kBalanced, kSharp };
-inline constexpr InteractiveQuality kDefaultInteractiveQuality = InteractiveQuality::kFast;
+// kAuto: the device's choice, resolved where the device is known
+// (AutoInteractiveQuality in deformable_scene.h): kSharp on a discrete GPU,
+// kFast on others; InteractiveCastFor, which knows no device, gives kAuto
+// kFast's cast.
+enum class InteractiveQuality { kFast, kBalanced, kSharp, kAuto };
+inline constexpr InteractiveQuality kDefaultInteractiveQuality = InteractiveQuality::kAuto;
 InteractiveCast InteractiveCastFor(InteractiveQuality quality);
 
 inline constexpr int kMaxFrameSide = 4096;

@@ -228,13 +228,19 @@ Result<Frame> DeformableScene::RenderPrepared(const RenderRequest& request) cons
   return renderer_->Render(request);
 }
 
-RenderRequest ViewRenderRequest(const SceneView& view) {
+InteractiveQuality AutoInteractiveQuality(const gpu::GpuContext& context) {
+  return context.is_discrete_gpu() ? InteractiveQuality::kSharp : InteractiveQuality::kFast;
+}
+
+RenderRequest ViewRenderRequest(const SceneView& view, InteractiveQuality auto_quality) {
   RenderRequest request;
   request.camera = view.camera;
   request.mode = view.mode;
   request.preset = view.preset;
   request.quality = view.quality;
-  request.interactive = InteractiveCastFor(view.interactive_quality);
+  request.interactive = InteractiveCastFor(view.interactive_quality == InteractiveQuality::kAuto
+                                               ? auto_quality
+                                               : view.interactive_quality);
   request.width = view.width;
   request.height = view.height;
   request.settings.step_mm = view.step_mm;
@@ -245,7 +251,7 @@ Result<RenderRequest> DeformableScene::PrepareRender(const SceneView& view,
                                                      SceneStepTimings* map_update) {
   ASSIGN_OR_RETURN(SceneStepTimings sync, SyncMap());
   if (map_update != nullptr) *map_update = sync;
-  RenderRequest request = ViewRenderRequest(view);
+  RenderRequest request = ViewRenderRequest(view, AutoInteractiveQuality(*context_));
   request.clip = ViewClip(view);
   if (view.quality == RenderQuality::kInteractive) {
     request.settings.jitter_seed = ++interactive_frames_;

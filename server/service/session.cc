@@ -324,7 +324,8 @@ std::vector<double> Session::RefineLadder(const StreamSettings& settings) const 
     view.camera = camera_;
   }
   view.quality = RenderQuality::kInteractive;
-  return vpm::RefineLadder(ViewRenderRequest(view), volume_->volume.geometry());
+  return vpm::RefineLadder(ViewRenderRequest(view, scene_->auto_interactive_quality()),
+                           volume_->volume.geometry());
 }
 
 Status Session::SettleLocked(SceneStepTimings* step) {

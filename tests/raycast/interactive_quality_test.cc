@@ -80,6 +80,8 @@ double InteractivePsnrFloorDb(InteractiveQuality q) {
       return 29.5;
     case InteractiveQuality::kSharp:
       return 37.0;
+    case InteractiveQuality::kAuto:  // not among the settings tested (kQualities)
+      break;
   }
   return 99.0;
 }

@@ -207,19 +207,24 @@ TEST_F(DeformableSceneTest, FemDuringAPreparedFrameChangesNeitherFrame) {
 
 // SceneView::interactive_quality reaches the request (InteractiveCastFor)
 // and the renderer: fast and balanced cast half the rays per axis, sharp
-// all of them; stills cast all whatever it says.
+// all of them, auto as the device's choice (sharp on a discrete GPU, fast
+// on lavapipe); stills cast all whatever it says.
 TEST_F(DeformableSceneTest, InteractiveQualityReachesTheRenderer) {
   auto scene = Scene(true);
   ASSERT_TRUE(scene);
   ASSERT_TRUE(scene->Grab(Centre(), 12.0).ok());
   ASSERT_TRUE(scene->Drag({0.0, 1.0, 2.0}).ok());
-  for (InteractiveQuality quality :
-       {InteractiveQuality::kFast, InteractiveQuality::kBalanced, InteractiveQuality::kSharp}) {
+  const InteractiveQuality chosen = scene->auto_interactive_quality();
+  EXPECT_EQ(chosen,
+            context().is_discrete_gpu() ? InteractiveQuality::kSharp : InteractiveQuality::kFast);
+  for (InteractiveQuality quality : {InteractiveQuality::kFast, InteractiveQuality::kBalanced,
+                                     InteractiveQuality::kSharp, InteractiveQuality::kAuto}) {
     SceneView view = View();
     view.quality = RenderQuality::kInteractive;
     view.interactive_quality = quality;
     auto request = scene->PrepareRender(view);
     ASSERT_TRUE(request.ok()) << request.status();
+    if (quality == InteractiveQuality::kAuto) quality = chosen;
     const InteractiveCast expected = InteractiveCastFor(quality);
     EXPECT_EQ(request->interactive.divisor, expected.divisor);
     EXPECT_EQ(request->interactive.still_step_multiple, expected.still_step_multiple);

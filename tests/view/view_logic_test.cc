@@ -203,7 +203,7 @@ TEST(StatusLines, ShowRateLatencySizeQualityDisplacementAndServerTimes) {
   in.frame = FrameOf(256, true, 3.21, {10.2, 0, 0, 0, 0, 60.3});
   in.grab_mode = true;
   const auto lines = StatusLines(in);
-  EXPECT_EQ(lines[0], "12.3 fps  rtt 85 ms  256x192");
+  EXPECT_EQ(lines[0], "12.3 fps  rtt 85 ms  256x192 auto");
   EXPECT_EQ(lines[1], "interactive  disp 3.2 mm  GRAB MODE");
   EXPECT_EQ(lines[2], "server ms fem 10 warp 0 rend 0");
   EXPECT_EQ(lines[3], "enc 0 queue 0 total 60  F1/h: help");

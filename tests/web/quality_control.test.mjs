@@ -25,10 +25,15 @@ test('QualityControl_StartsAtTheDefaultOrTheStoredChoice', () => {
   assert.equal(new QualityControl(null, null, stored).value, 'sharp');
   const junk = memoryStorage({ 'vpm.interactiveQuality': 'ultra' });
   assert.equal(new QualityControl(null, null, junk).value, kDefaultInteractiveQuality);
-  assert.deepEqual(kInteractiveQualities.map((q) => q.value), ['fast', 'balanced', 'sharp']);
+  assert.equal(kDefaultInteractiveQuality, 'auto');
+  assert.deepEqual(kInteractiveQualities.map((q) => q.value),
+                   ['auto', 'fast', 'balanced', 'sharp']);
 });
 
 test('ToProtoSettings_NamesTheInteractiveQualityAsTheProtoDoes', () => {
+  // auto: UNSPECIFIED, the server's device chooses.
+  assert.equal(toProtoSettings({ interactive_quality: 'auto' }).interactive_quality,
+               'INTERACTIVE_QUALITY_UNSPECIFIED');
   assert.equal(toProtoSettings({ interactive_quality: 'fast' }).interactive_quality,
                'INTERACTIVE_QUALITY_FAST');
   assert.equal(toProtoSettings({ interactive_quality: 'balanced' }).interactive_quality,

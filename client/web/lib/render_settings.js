@@ -1,11 +1,14 @@
 // The page speaks in the names a user reads (mode 'dvr' | 'mip', encoding
-// 'jpeg' | 'png', interactive_quality 'fast' | 'balanced' | 'sharp'); vpm.v3 carries them as enums. proto-loader is set up with
-// `enums: String`, so an enum travels as its value's name.
+// 'jpeg' | 'png', interactive_quality 'auto' | 'fast' | 'balanced' | 'sharp'); vpm.v3 carries them
+// as enums. proto-loader is set up with `enums: String`, so an enum travels as its value's name.
 const kModes = { dvr: 'RENDER_MODE_DVR', mip: 'RENDER_MODE_MIP' };
 const kEncodings = { jpeg: 'ENCODING_JPEG', png: 'ENCODING_PNG' };
-const kInteractiveQualities = { fast: 'INTERACTIVE_QUALITY_FAST',
-                                balanced: 'INTERACTIVE_QUALITY_BALANCED',
-                                sharp: 'INTERACTIVE_QUALITY_SHARP' };
+const kInteractiveQualities = {
+  auto: 'INTERACTIVE_QUALITY_UNSPECIFIED',
+  fast: 'INTERACTIVE_QUALITY_FAST',
+  balanced: 'INTERACTIVE_QUALITY_BALANCED',
+  sharp: 'INTERACTIVE_QUALITY_SHARP'
+};
 // A value outside the enum: the server refuses it with INVALID_ARGUMENT,
 // naming the field, as it refused an unknown name before.
 const kUnknown = 999;

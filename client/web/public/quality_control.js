@@ -1,18 +1,30 @@
 // The interactive-quality control (RenderSettings.interactive_quality): how
 // frames are cast while the user drags or orbits, speed against sharpness
 // (docs/RENDERING.md, "Interactive quality", gives each setting's frame
-// rate and PSNR against the still). The page speaks 'fast' | 'balanced' |
-// 'sharp'; lib/render_settings.js turns them into the proto's names. The
+// rate and PSNR against the still). The page speaks 'auto' | 'fast' |
+// 'balanced' | 'sharp'; lib/render_settings.js turns them into the proto's
+// names ('auto': UNSPECIFIED, the server's device chooses). The
 // control builds its own <select> after `anchor`, so the page's markup
 // needs no change, and remembers the choice in localStorage.
 export const kInteractiveQualities = [
-  { value: 'fast', label: 'Fast', title: 'Half resolution, coarse step: the highest frame rate' },
-  { value: 'balanced', label: 'Balanced',
-    title: 'Half resolution, a step near the still\'s: sharper, slower' },
-  { value: 'sharp', label: 'Sharp',
-    title: 'Full resolution, a step near the still\'s: closest to the still, slowest' },
+  {
+    value: 'auto',
+    label: 'Auto',
+    title: 'The server chooses: sharp on a GPU, fast where it renders on CPU cores'
+  },
+  {value: 'fast', label: 'Fast', title: 'Half resolution, coarse step: the highest frame rate'},
+  {
+    value: 'balanced',
+    label: 'Balanced',
+    title: 'Half resolution, a step near the still\'s: sharper, slower'
+  },
+  {
+    value: 'sharp',
+    label: 'Sharp',
+    title: 'Full resolution, a step near the still\'s: closest to the still, slowest'
+  },
 ];
-export const kDefaultInteractiveQuality = 'fast';
+export const kDefaultInteractiveQuality = 'auto';
 const kStorageKey = 'vpm.interactiveQuality';
 
 export class QualityControl {
