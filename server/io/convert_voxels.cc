@@ -85,6 +85,27 @@ std::string WhyFloat(const IntegerRange& r) {
                 " do not fit 16 bits with an exact offset");
 }
 
+// The rescaled values' range over `count` integer voxels, in slabs of
+// kSlabVoxels, polling `cancel` between them; stops at the first slab with a
+// value that is not an integer.
+Result<IntegerRange> ScanIntegerRange(std::span<const uint8_t> bytes, VoxelType type, Endian endian,
+                                      int64_t count, double slope, double intercept,
+                                      const CancelToken& cancel) {
+  const int64_t size = VoxelTypeSize(type);
+  IntegerRange range;
+  for (int64_t first = 0; first < count && range.integers; first += kSlabVoxels) {
+    RETURN_IF_ERROR(cancel.Check());
+    const int64_t n = std::min(kSlabVoxels, count - first);
+    WithIntegerType(type, [&](auto tag) {
+      const IntegerRange slab =
+          ScanRange<decltype(tag)>(bytes.data() + first * size, endian, n, slope, intercept);
+      range = {range.integers && slab.integers, std::min(range.lo, slab.lo),
+               std::max(range.hi, slab.hi)};
+    });
+  }
+  return range;
+}
+
 }  // namespace
 
 bool StoredAsInt16AsIs(VoxelType type, Endian endian, double slope, double intercept) {
@@ -111,18 +132,8 @@ Result<VoxelValues> ConvertVoxels(std::span<const uint8_t> bytes, VoxelType type
     return VoxelValues::Int16(std::move(stored), static_cast<int32_t>(intercept));
   }
   if (IsIntegerType(type) && std::isfinite(slope) && std::isfinite(intercept)) {
-    // In slabs of kSlabVoxels, polling the load's CancelToken between them.
-    IntegerRange range;
-    for (int64_t first = 0; first < count && range.integers; first += kSlabVoxels) {
-      RETURN_IF_ERROR(limits.cancel.Check());
-      const int64_t n = std::min(kSlabVoxels, count - first);
-      WithIntegerType(type, [&](auto tag) {
-        const IntegerRange slab =
-            ScanRange<decltype(tag)>(bytes.data() + first * size, endian, n, slope, intercept);
-        range = {range.integers && slab.integers, std::min(range.lo, slab.lo),
-                 std::max(range.hi, slab.hi)};
-      });
-    }
+    ASSIGN_OR_RETURN(const IntegerRange range,
+                     ScanIntegerRange(bytes, type, endian, count, slope, intercept, limits.cancel));
     const std::optional<int32_t> offset = ExactOffset(range);
     if (offset) {
       RETURN_IF_ERROR(ValidateGeometry(geometry, limits, VoxelEncoding::kInt16));

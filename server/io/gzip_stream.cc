@@ -44,6 +44,15 @@ struct InflateOutcome {
 // Inflates up to `bound` bytes. Stops early (more_output) when the stream
 // would produce more; errors on corrupt or truncated streams unless
 // `stop_quietly` (prefix reads tolerate a truncated stream).
+// The full output buffer (`produced` bytes) grown towards `bound`:
+// kOutputStep at a time within the reserved address space, else doubled.
+void GrowOutput(std::vector<uint8_t>& bytes, int64_t produced, int64_t bound) {
+  const int64_t reserved = static_cast<int64_t>(bytes.capacity());
+  bytes.resize(static_cast<size_t>(produced < reserved
+                                       ? std::min({bound, reserved, produced + kOutputStep})
+                                       : std::min(bound, produced * 2 + 1)));
+}
+
 Result<InflateOutcome> InflateBounded(std::span<const uint8_t> in, int64_t bound, bool stop_quietly,
                                       const CancelToken& cancel = {}) {
   Inflater inflater;
@@ -64,10 +73,7 @@ Result<InflateOutcome> InflateBounded(std::span<const uint8_t> in, int64_t bound
     RETURN_IF_ERROR(cancel.Check());
     if (stop_quietly && produced == bound) break;
     if (produced == static_cast<int64_t>(out.bytes.size()) && produced < bound) {
-      const int64_t reserved = static_cast<int64_t>(out.bytes.capacity());
-      out.bytes.resize(static_cast<size_t>(produced < reserved
-                                               ? std::min({bound, reserved, produced + kOutputStep})
-                                               : std::min(bound, produced * 2 + 1)));
+      GrowOutput(out.bytes, produced, bound);
     }
     uint8_t probe = 0;  // one byte of room past the bound, to detect overrun
     const bool probing = produced == bound;

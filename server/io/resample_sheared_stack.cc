@@ -82,6 +82,43 @@ int64_t CountWithin(double extent_mm, double spacing_mm) {
   return static_cast<int64_t>(std::floor(extent_mm / spacing_mm + kExtentSlack)) + 1;
 }
 
+// The output slice at z (mm, along the frame's normal): nx x ny pixels
+// from `low` (mm, in the frame) at the stack's pitch, linear between the
+// stack's slices below and above z, into out.
+void ResampleSlice(const ShearedStack& stack, glm::dvec2 low, double z, float fill_value,
+                   int64_t nx, int64_t ny, float* out) {
+  const glm::dvec2 pitch = stack.pixel_spacing_mm;
+  // The slices below and above the output plane, and the weight of the upper one.
+  const auto above = std::upper_bound(
+      stack.slices.begin(), stack.slices.end(), z,
+      [](double zz, const StackSlice& s) { return zz < s.position_in_frame_mm.z; });
+  const size_t upper = std::clamp<size_t>(above - stack.slices.begin(), 1, stack.slices.size() - 1);
+  const StackSlice& a = stack.slices[upper - 1];
+  const StackSlice& b = stack.slices[upper];
+  const double t = std::clamp(
+      Snap((z - a.position_in_frame_mm.z) / (b.position_in_frame_mm.z - a.position_in_frame_mm.z)),
+      0.0, 1.0);
+  for (int64_t j = 0; j < ny; ++j) {
+    const double y = low.y + j * pitch.y;
+    for (int64_t i = 0; i < nx; ++i) {
+      const double x = low.x + i * pitch.x;
+      const auto sample = [&](const StackSlice& s) {
+        return SampleSlice(s, stack.columns, stack.rows, (x - s.position_in_frame_mm.x) / pitch.x,
+                           (y - s.position_in_frame_mm.y) / pitch.y, fill_value);
+      };
+      float v = 0.0f;
+      if (t == 0.0) {
+        v = sample(a);
+      } else if (t == 1.0) {
+        v = sample(b);
+      } else {
+        v = static_cast<float>((1.0 - t) * sample(a) + t * sample(b));
+      }
+      out[i + nx * j] = v;
+    }
+  }
+}
+
 }  // namespace
 
 Result<Volume> ResampleShearedStack(const ShearedStack& stack, double slice_spacing_mm,
@@ -114,38 +151,8 @@ Result<Volume> ResampleShearedStack(const ShearedStack& stack, double slice_spac
   // A cancelled load skips the slices not yet begun, and returns the token's status below.
   ParallelSlices(g.dims[2], threads, [&](int64_t k) {
     if (!limits.cancel.Check().ok()) return;
-    const double z = z_first + k * slice_spacing_mm;
-    // The slices below and above the output plane, and the weight of the upper one.
-    const auto above = std::upper_bound(
-        stack.slices.begin(), stack.slices.end(), z,
-        [](double zz, const StackSlice& s) { return zz < s.position_in_frame_mm.z; });
-    const size_t upper =
-        std::clamp<size_t>(above - stack.slices.begin(), 1, stack.slices.size() - 1);
-    const StackSlice& a = stack.slices[upper - 1];
-    const StackSlice& b = stack.slices[upper];
-    const double t = std::clamp(Snap((z - a.position_in_frame_mm.z) /
-                                     (b.position_in_frame_mm.z - a.position_in_frame_mm.z)),
-                                0.0, 1.0);
-    float* out = values.data() + k * nx * ny;
-    for (int64_t j = 0; j < ny; ++j) {
-      const double y = low.y + j * pitch.y;
-      for (int64_t i = 0; i < nx; ++i) {
-        const double x = low.x + i * pitch.x;
-        const auto sample = [&](const StackSlice& s) {
-          return SampleSlice(s, stack.columns, stack.rows, (x - s.position_in_frame_mm.x) / pitch.x,
-                             (y - s.position_in_frame_mm.y) / pitch.y, fill_value);
-        };
-        float v = 0.0f;
-        if (t == 0.0) {
-          v = sample(a);
-        } else if (t == 1.0) {
-          v = sample(b);
-        } else {
-          v = static_cast<float>((1.0 - t) * sample(a) + t * sample(b));
-        }
-        out[i + nx * j] = v;
-      }
-    }
+    ResampleSlice(stack, low, z_first + k * slice_spacing_mm, fill_value, nx, ny,
+                  values.data() + k * nx * ny);
   });
   RETURN_IF_ERROR(limits.cancel.Check());
   ASSIGN_OR_RETURN(Volume volume, Volume::Create(g, std::move(values), limits));

@@ -24,6 +24,35 @@ Status CheckParams(const MeshParams& p) {
   return absl::OkStatus();
 }
 
+// The tetrahedralized mesh's Steiner points: those that bring hard tissue
+// within reach of the grab (with a grab point), then those that mend
+// slivers; counted in mesh.stats.steiner.
+Status AddSteinerPoints(const Volume& volume, const DecimatedLattice& base,
+                        const MeshParams& params, const CancelToken& cancel, ProxyMesh& mesh) {
+  if (params.hard_reach_factor > 0.0 && params.refine_at_mm) {
+    // Before the sliver points, which then mend the tets these leave.
+    const double h = base.stats.h_mm;
+    const HardReachParams hp{.max_reach_mm = params.hard_reach_factor * h,
+                             .center_mm = *params.refine_at_mm,
+                             .radius_mm = params.hard_reach_radius_factor * h,
+                             .min_spacing_mm = h / 6.0};
+    ASSIGN_OR_RETURN(
+        const HardReachStats reach,
+        AddHardReachSteinerPoints(mesh, volume, base.stats.R_mm, params.classify, hp, cancel));
+    mesh.stats.steiner += reach.added;
+  }
+  if (params.steiner_min_dihedral_deg > 0.0) {
+    // Steiner points only where a tet stays under the target after flips;
+    // h/6 apart at least, half the refinement spacing (docs/MESH.md).
+    const SteinerParams sp{.target_min_dihedral_deg = params.steiner_min_dihedral_deg,
+                           .min_spacing_mm = base.stats.h_mm / 6.0};
+    ASSIGN_OR_RETURN(const SteinerStats steiner,
+                     AddSliverSteinerPoints(mesh, volume.geometry(), sp, cancel));
+    mesh.stats.steiner += steiner.added;
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 std::vector<MeshVertex> MakeAnchors(const VolumeGeometry& geometry) {
@@ -128,27 +157,7 @@ Result<ProxyMesh> FinishProxyMesh(const Volume& volume, const DecimatedLattice& 
   RETURN_IF_ERROR(Tetrahedralize(mesh, volume.geometry().extent_mm(), cancel));
   const double tetrahedralize_ms = MsSince(t0);
   t0 = SteadyClock::now();
-  if (params.hard_reach_factor > 0.0 && params.refine_at_mm) {
-    // Before the sliver points, which then mend the tets these leave.
-    const double h = base.stats.h_mm;
-    const HardReachParams hp{.max_reach_mm = params.hard_reach_factor * h,
-                             .center_mm = *params.refine_at_mm,
-                             .radius_mm = params.hard_reach_radius_factor * h,
-                             .min_spacing_mm = h / 6.0};
-    ASSIGN_OR_RETURN(const HardReachStats reach,
-                     AddHardReachSteinerPoints(mesh, volume, base.stats.R_mm, params.classify, hp,
-                                               cancel));
-    mesh.stats.steiner += reach.added;
-  }
-  if (params.steiner_min_dihedral_deg > 0.0) {
-    // Steiner points only where a tet stays under the target after flips;
-    // h/6 apart at least, half the refinement spacing (docs/MESH.md).
-    const SteinerParams sp{.target_min_dihedral_deg = params.steiner_min_dihedral_deg,
-                           .min_spacing_mm = base.stats.h_mm / 6.0};
-    ASSIGN_OR_RETURN(const SteinerStats steiner,
-                     AddSliverSteinerPoints(mesh, volume.geometry(), sp, cancel));
-    mesh.stats.steiner += steiner.added;
-  }
+  RETURN_IF_ERROR(AddSteinerPoints(volume, base, params, cancel, mesh));
   mesh.stats.steiner_ms = MsSince(t0);
   RETURN_IF_ERROR(cancel.Check());
   mesh.stats.tetrahedralize_ms = tetrahedralize_ms;  // the Steiner rounds' own are in steiner_ms

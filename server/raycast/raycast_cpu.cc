@@ -653,6 +653,36 @@ uint32_t Caster<Voxels>::Pixel(int px, int py, int64_t& taken) const {
   return PackRgba(rgb);
 }
 
+// The frame's brick occupancy (empty with skipping off), from the caller's
+// brick min-max grid or one computed here; sets frame.total_bricks and
+// frame.occupied_bricks.
+Result<std::vector<float>> ReferenceOccupancy(const RenderRequest& request, const Volume& volume,
+                                              const HostBackwardMap* map,
+                                              const std::vector<glm::vec2>* brick_minmax,
+                                              const RaycastSetup& setup, const RenderLut& lut,
+                                              Frame& frame) {
+  const VolumeGeometry& g = volume.geometry();
+  const ivec3 brick_voxels(setup.params.brick_voxels);
+  const auto nb = BrickGridDims(g.dims, brick_voxels);
+  frame.total_bricks = int64_t(nb[0]) * nb[1] * nb[2];
+  if (brick_minmax != nullptr && int64_t(brick_minmax->size()) != frame.total_bricks) {
+    return absl::InvalidArgumentError(
+        StrCat("brick_minmax holds ", brick_minmax->size(), " bricks; bricks of ", brick_voxels.x,
+               " x ", brick_voxels.y, " x ", brick_voxels.z, " voxels make ", frame.total_bricks));
+  }
+  std::vector<float> occupancy;
+  if (!request.settings.empty_space_skipping) return occupancy;
+  std::vector<glm::vec2> own;
+  if (brick_minmax == nullptr) own = BrickMinMaxCpu(volume, brick_voxels);
+  occupancy = BrickOccupancyCpu(brick_minmax ? *brick_minmax : own, g, brick_voxels, request.mode,
+                                lut, map);
+  const float black = setup.params.window.x;
+  const bool mip = request.mode == RenderMode::kMip;
+  frame.occupied_bricks = std::count_if(occupancy.begin(), occupancy.end(),
+                                        [&](float o) { return mip ? o > black : o > 0.0f; });
+  return occupancy;
+}
+
 }  // namespace
 
 std::vector<uint32_t> RaycastCpu(const gpu::RaycastParams& params, const RaycastCpuInputs& in,
@@ -693,28 +723,9 @@ Result<Frame> RenderReference(const RenderRequest& request, const Volume& volume
   frame.render_width = setup.render_width;
   frame.render_height = setup.render_height;
   frame.step_mm = setup.step_mm;
-  const ivec3 brick_voxels(setup.params.brick_voxels);
-  const auto nb = BrickGridDims(g.dims, brick_voxels);
-  frame.total_bricks = int64_t(nb[0]) * nb[1] * nb[2];
-  if (brick_minmax != nullptr && int64_t(brick_minmax->size()) != frame.total_bricks) {
-    return absl::InvalidArgumentError(
-        StrCat("brick_minmax holds ", brick_minmax->size(), " bricks; bricks of ",
-               brick_voxels.x, " x ", brick_voxels.y, " x ", brick_voxels.z, " voxels make ",
-               frame.total_bricks));
-  }
-  std::vector<float> occupancy;
   auto t0 = std::chrono::steady_clock::now();
-  if (request.settings.empty_space_skipping) {
-    std::vector<glm::vec2> own;
-    if (brick_minmax == nullptr) own = BrickMinMaxCpu(volume, brick_voxels);
-    occupancy = BrickOccupancyCpu(brick_minmax ? *brick_minmax : own, g, brick_voxels,
-                                  request.mode, lut, map);
-    const float black = setup.params.window.x;
-    const bool mip = request.mode == RenderMode::kMip;
-    frame.occupied_bricks = std::count_if(occupancy.begin(), occupancy.end(), [&](float o) {
-      return mip ? o > black : o > 0.0f;
-    });
-  }
+  ASSIGN_OR_RETURN(const std::vector<float> occupancy,
+                   ReferenceOccupancy(request, volume, map, brick_minmax, setup, lut, frame));
   frame.timings.occupancy_ms = MsSince(t0);
   t0 = std::chrono::steady_clock::now();
   std::vector<glm::vec4> preintegrated;

@@ -36,6 +36,50 @@ Axes ObliqueAxes(const glm::dvec3& normal) {
   return {n, u, v};
 }
 
+// The plane's own numbers: an oblique plane's point and normal, a named
+// plane's position.
+Status CheckSlicePlane(const SlicePlane& plane) {
+  if (plane.orientation == SliceOrientation::kOblique) {
+    const glm::dvec3& n = plane.normal;
+    const glm::dvec3& p = plane.point_mm;
+    if (!(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z) &&
+          glm::length(n) > 1e-12 && std::isfinite(p.x) && std::isfinite(p.y) &&
+          std::isfinite(p.z))) {
+      return absl::InvalidArgumentError(
+          "oblique slice: the point and a non-zero normal must be finite");
+    }
+  } else if (!std::isfinite(plane.at_mm)) {
+    return absl::InvalidArgumentError("slice position must be a finite number (mm)");
+  }
+  return absl::OkStatus();
+}
+
+// The volume box's world corners projected on the axes: their spread along
+// the normal (lo_n..hi_n, mm) says whether the plane meets the box, their
+// spread along u and v (lo..hi, mm) sizes the image.
+struct BoxProjection {
+  double lo_n = std::numeric_limits<double>::infinity();
+  double hi_n = -std::numeric_limits<double>::infinity();
+  glm::dvec2 lo{std::numeric_limits<double>::infinity()};
+  glm::dvec2 hi{-std::numeric_limits<double>::infinity()};
+};
+
+BoxProjection ProjectBox(const Axes& axes, const VolumeGeometry& geometry) {
+  const glm::dvec3 extent = geometry.extent_mm();
+  BoxProjection p;
+  for (int c = 0; c < 8; ++c) {
+    const glm::dvec3 corner(c & 1 ? extent.x : 0.0, c & 2 ? extent.y : 0.0, c & 4 ? extent.z : 0.0);
+    const glm::dvec3 w = geometry.PhysicalToWorld(corner);
+    const double along = glm::dot(axes.normal, w);
+    p.lo_n = std::min(p.lo_n, along);
+    p.hi_n = std::max(p.hi_n, along);
+    const glm::dvec2 uv(glm::dot(axes.u, w), glm::dot(axes.v, w));
+    p.lo = glm::min(p.lo, uv);
+    p.hi = glm::max(p.hi, uv);
+  }
+  return p;
+}
+
 }  // namespace
 
 Result<SliceOrientation> SliceOrientationFromName(std::string_view name) {
@@ -59,18 +103,7 @@ std::string_view SliceOrientationName(SliceOrientation orientation) {
 
 Result<SliceGrid> MakeSliceGrid(const SlicePlane& plane, const VolumeGeometry& geometry,
                                 double pixel_mm) {
-  const bool oblique = plane.orientation == SliceOrientation::kOblique;
-  if (oblique) {
-    const glm::dvec3& n = plane.normal;
-    const glm::dvec3& p = plane.point_mm;
-    if (!(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z) &&
-          glm::length(n) > 1e-12 && std::isfinite(p.x) && std::isfinite(p.y) &&
-          std::isfinite(p.z))) {
-      return absl::InvalidArgumentError("oblique slice: the point and a non-zero normal must be finite");
-    }
-  } else if (!std::isfinite(plane.at_mm)) {
-    return absl::InvalidArgumentError("slice position must be a finite number (mm)");
-  }
+  RETURN_IF_ERROR(CheckSlicePlane(plane));
   if (pixel_mm == 0.0) {
     const glm::dvec3& s = geometry.spacing_mm;
     pixel_mm = std::min({s.x, s.y, s.z});
@@ -78,30 +111,18 @@ Result<SliceGrid> MakeSliceGrid(const SlicePlane& plane, const VolumeGeometry& g
   if (!std::isfinite(pixel_mm) || pixel_mm <= 0.0) {
     return absl::InvalidArgumentError(StrCat("slice pixel size ", pixel_mm, " mm: must be > 0"));
   }
+  const bool oblique = plane.orientation == SliceOrientation::kOblique;
   const Axes axes = oblique ? ObliqueAxes(plane.normal) : NamedAxes(plane.orientation);
   const glm::dvec3 on_plane = oblique ? plane.point_mm : plane.at_mm * axes.normal;
   const double offset = glm::dot(axes.normal, on_plane);
-  // The box's world corners: their spread along the normal says whether the
-  // plane meets the box, their spread along u and v sizes the image.
-  const glm::dvec3 extent = geometry.extent_mm();
-  double lo_n = std::numeric_limits<double>::infinity(), hi_n = -lo_n;
-  glm::dvec2 lo(lo_n), hi(hi_n);
-  for (int c = 0; c < 8; ++c) {
-    const glm::dvec3 corner(c & 1 ? extent.x : 0.0, c & 2 ? extent.y : 0.0, c & 4 ? extent.z : 0.0);
-    const glm::dvec3 w = geometry.PhysicalToWorld(corner);
-    const double along = glm::dot(axes.normal, w);
-    lo_n = std::min(lo_n, along);
-    hi_n = std::max(hi_n, along);
-    const glm::dvec2 uv(glm::dot(axes.u, w), glm::dot(axes.v, w));
-    lo = glm::min(lo, uv);
-    hi = glm::max(hi, uv);
-  }
-  const double tolerance = 1e-6 * (1.0 + std::abs(lo_n) + std::abs(hi_n));
-  if (offset < lo_n - tolerance || offset > hi_n + tolerance) {
-    return absl::InvalidArgumentError(
-        StrCat(SliceOrientationName(plane.orientation), " slice at ", offset,
-               " mm misses the volume, which spans ", lo_n, " to ", hi_n,
-               " mm along the plane's normal"));
+  const BoxProjection box = ProjectBox(axes, geometry);
+  const glm::dvec2 lo = box.lo, hi = box.hi;
+  const double tolerance = 1e-6 * (1.0 + std::abs(box.lo_n) + std::abs(box.hi_n));
+  if (offset < box.lo_n - tolerance || offset > box.hi_n + tolerance) {
+    return absl::InvalidArgumentError(StrCat(SliceOrientationName(plane.orientation), " slice at ",
+                                             offset, " mm misses the volume, which spans ",
+                                             box.lo_n, " to ", box.hi_n,
+                                             " mm along the plane's normal"));
   }
   const glm::dvec2 size = (hi - lo) / pixel_mm;
   if (size.x + 1.0 > kMaxSliceSide || size.y + 1.0 > kMaxSliceSide) {

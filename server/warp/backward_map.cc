@@ -46,6 +46,39 @@ GridBox Union(const GridBox& a, const GridBox& b) {
   return {glm::min(a.lo, b.lo), glm::max(a.hi, b.hi)};
 }
 
+// Tet t's work items, its old box (cleared) and new box (claimed), one per
+// slab of z-slices small enough that no lane of the claim and clear passes
+// loops more than kLaneIterations times: llvmpipe ends every loop of an
+// invocation silently once their iterations add up to 65,535
+// (LP_MAX_TGSI_LOOP_ITERATIONS, Mesa 22.3), which left large tets on fine
+// grids half claimed (docs/WARP.md). Returns the items appended.
+uint32_t AppendSlabs(int32_t t, const GridBox& old_box, const GridBox& new_box,
+                     std::vector<gpu::BackwardMapTetWork>& work) {
+  const GridBox both = Union(old_box, new_box);
+  if (both.empty()) return 0;
+  const glm::ivec3 size = both.hi - both.lo + 1;
+  constexpr int64_t kLaneIterations = 30000;  // of the 65,535
+  // A slice's rows shared by the kMapLocalSize lanes, each row its points plus
+  // row_range's few loop steps.
+  const int64_t per_slice =
+      (int64_t(size.y) + kMapLocalSize - 1) / kMapLocalSize * (int64_t(size.x) + 8);
+  const int slab = static_cast<int>(std::max<int64_t>(1, kLaneIterations / per_slice));
+  uint32_t added = 0;
+  for (int z0 = both.lo.z; z0 <= both.hi.z; z0 += slab) {
+    const int z1 = std::min(z0 + slab - 1, both.hi.z);
+    auto cut = [&](const GridBox& b) {
+      GridBox c = b;
+      c.lo.z = std::max(b.lo.z, z0);
+      c.hi.z = std::min(b.hi.z, z1);
+      return c;
+    };
+    const GridBox o = cut(old_box), w = cut(new_box);
+    work.push_back({WithW(o.lo, t), WithW(o.hi, 0), WithW(w.lo, 0), WithW(w.hi, 0)});
+    ++added;
+  }
+  return added;
+}
+
 // The points per values slab (whole z slices, within one storage binding),
 // after checking what the device must offer for a map of `dims` points.
 Result<uint32_t> SlabPoints(const gpu::GpuContext& context, const std::array<int64_t, 3>& dims,
@@ -204,32 +237,8 @@ BackwardMap::Plan BackwardMap::PlanWork(std::span<const glm::dvec3> deformed_mm,
     // (its old box). Their union is 40-60% of the one with the unmoved
     // tets' boxes on drag_loop_bench's steps.
     if (n < plan.cleared) plan.changed = Union(plan.changed, Union(old_box, new_box));
-    // One work item per slab of z-slices small enough that no lane of the
-    // claim and clear passes loops more than kLaneIterations times:
-    // llvmpipe ends every loop of an invocation silently once their
-    // iterations add up to 65,535 (LP_MAX_TGSI_LOOP_ITERATIONS, Mesa 22.3),
-    // which left large tets on fine grids half claimed (docs/WARP.md).
-    const GridBox both = Union(old_box, new_box);
-    if (both.empty()) continue;
-    const glm::ivec3 size = both.hi - both.lo + 1;
-    constexpr int64_t kLaneIterations = 30000;  // of the 65,535
-    // A slice's rows shared by the kMapLocalSize lanes, each row its points plus
-    // row_range's few loop steps.
-    const int64_t per_slice =
-        (int64_t(size.y) + kMapLocalSize - 1) / kMapLocalSize * (int64_t(size.x) + 8);
-    const int slab = static_cast<int>(std::max<int64_t>(1, kLaneIterations / per_slice));
-    for (int z0 = both.lo.z; z0 <= both.hi.z; z0 += slab) {
-      const int z1 = std::min(z0 + slab - 1, both.hi.z);
-      auto cut = [&](const GridBox& b) {
-        GridBox c = b;
-        c.lo.z = std::max(b.lo.z, z0);
-        c.hi.z = std::min(b.hi.z, z1);
-        return c;
-      };
-      const GridBox o = cut(old_box), w = cut(new_box);
-      plan.work.push_back({WithW(o.lo, t), WithW(o.hi, 0), WithW(w.lo, 0), WithW(w.hi, 0)});
-      if (n < plan.cleared) ++cleared_entries;
-    }
+    const uint32_t added = AppendSlabs(t, old_box, new_box, plan.work);
+    if (n < plan.cleared) cleared_entries += added;
   }
   plan.cleared = cleared_entries;
   return plan;
