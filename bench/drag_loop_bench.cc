@@ -125,6 +125,98 @@ double RunDeferredLoop(const ProxyMesh& mesh, const Volume& volume,
   return kSteps / (MsSince(t0) / 1000.0);
 }
 
+// One drag step's FEM and map figures into row.
+void AddStep(const SceneStepTimings& step, Row& row) {
+  row.fem = std::min(row.fem, step.fem_ms);
+  row.fem_sum += step.fem_ms;
+  row.fem_max = std::max(row.fem_max, step.fem_ms);
+  row.map = std::min(row.map, step.warp_ms);
+  row.inverted = step.inverted_tets;
+  const SolveStats& solve = step.solve;
+  Split& split = row.split;
+  split.forces += solve.assembly_ms;
+  split.factor += solve.precondition_ms;
+  split.pcg_other += solve.solve_ms - solve.precondition_ms;
+  split.fem_other += step.fem_ms - solve.total_ms();
+  split.map += step.warp_ms;
+  split.newton += solve.newton_iterations;
+  split.cg += solve.cg_iterations;
+  split.load_steps += solve.load_steps;
+  split.forced += solve.forced_inversion ? 1 : 0;
+  split.short_steps += solve.target_fraction < 1.0 ? 1 : 0;
+  split.least_fraction = std::min(split.least_fraction, solve.target_fraction);
+  split.largest_lag_mm = std::max(split.largest_lag_mm, solve.remaining_mm);
+}
+
+// The step's interactive frame and its map passes into row's breakdown.
+void AddFrame(const SceneStepTimings& step, const Frame& frame, Row& row) {
+  row.split.frame += frame.timings.wall_ms;
+  row.interactive = std::min(row.interactive, frame.timings.wall_ms);
+  Breakdown& b = row.parts;
+  const FrameTimings& ft = frame.timings;
+  b.map_gpu = std::min(b.map_gpu, step.map_gpu_ms);
+  b.map_copy = std::min(b.map_copy, step.map_copy_ms);
+  for (const auto& pass : step.map_passes) {
+    if (pass.label == "backward_map claim") b.claim = std::min(b.claim, pass.gpu_ms);
+    if (pass.label == "backward_map write") b.write = std::min(b.write, pass.gpu_ms);
+    if (pass.label == "backward_map clear") b.clear = pass.gpu_ms;
+  }
+  b.texels = std::min(b.texels, ft.map_copy_ms);
+  b.occupancy = std::min(b.occupancy, ft.occupancy_ms);
+  b.cast = std::min(b.cast, ft.raycast_ms);
+  b.upscale = std::min(b.upscale, ft.upscale_ms);
+  b.frame_gpu = std::min(b.frame_gpu, ft.render_ms);
+  b.readback = std::min(b.readback, ft.readback_ms);
+  b.moved = step.moved_tets;
+  b.processed = step.processed_tets;
+}
+
+void PrintStep(int s, const SceneStepTimings& step, double frame_ms, double jpeg_ms) {
+  const SolveStats& solve = step.solve;
+  std::printf(
+      "  step %2d: FEM %7.2f ms (forces %6.2f, factor solves %6.2f, K v + PCG %6.2f; "
+      "%2d Newton, %3d CG, %2d load steps%s; reached %.3f, %.2f mm to go), map %6.2f, "
+      "frame %6.2f, JPEG %5.2f\n",
+      s, step.fem_ms, solve.assembly_ms, solve.precondition_ms,
+      solve.solve_ms - solve.precondition_ms, solve.newton_iterations, solve.cg_iterations,
+      solve.load_steps, solve.forced_inversion ? ", forced" : "", solve.target_fraction,
+      solve.remaining_mm, step.warp_ms, frame_ms, jpeg_ms);
+}
+
+// The pointer stops at 12 mm: finish the drag (as before a still frame)
+// and count the inverted tets there, one solve at a time, as
+// DeformableScene::Settle(kSettleSolves) would.
+void SettleAfterDrag(DeformableScene& scene, bool print_steps, Row& row) {
+  for (int i = 0; i < kSettleSolves && !scene.settled(); ++i) {
+    const SceneStepTimings settled = bench::Check(scene.Settle(1), "settle");
+    const SolveStats& solve = settled.solve;
+    row.split.settle_ms += settled.fem_ms;
+    row.split.settle_newton += solve.newton_iterations;
+    row.inverted = settled.inverted_tets;
+    if (print_steps) {
+      std::printf(
+          "  settle %d: FEM %7.2f ms (%2d Newton, %3d CG, %2d load steps%s; reached %.3f, "
+          "%.2f mm to go), %lld inverted\n",
+          i + 1, settled.fem_ms, solve.newton_iterations, solve.cg_iterations, solve.load_steps,
+          solve.forced_inversion ? ", forced" : "", solve.target_fraction, solve.remaining_mm,
+          static_cast<long long>(settled.inverted_tets));
+    }
+  }
+}
+
+// The grab's cost and one preconditioner application with the handles held
+// (per PCG iteration), min of 50.
+void TimeGrab(DeformableScene& scene, const ProxyMesh& mesh, const glm::dvec3& grab, Row& row) {
+  const auto t_grab = std::chrono::steady_clock::now();
+  const GrabInfo grabbed = bench::Check(scene.Grab(grab, mesh.stats.h_mm), "grab");
+  row.grab_ms = MsSince(t_grab);
+  row.handles = static_cast<int64_t>(grabbed.handles.size());
+  const ConstrainedFactor& factor = scene.fem().solver().factor();
+  Eigen::VectorXd r = Eigen::VectorXd::Ones(3 * static_cast<int64_t>(mesh.vertices.size()));
+  Eigen::VectorXd z;
+  row.precondition_ms = bench::MinMs(50, [&] { factor.Apply(r, true, z); });
+}
+
 Row RunCase(const ProxyMesh& mesh, const Volume& volume, const gpu::GpuContext& context,
             GpuVolume& gpu_volume, VolumeRenderer& renderer, const glm::dvec3& grab,
             const SolverOptions& solver, bool print_steps) {
@@ -133,19 +225,8 @@ Row RunCase(const ProxyMesh& mesh, const Volume& volume, const gpu::GpuContext& 
   options.map.move_tolerance_mm = g_map_tolerance_mm;
   auto scene = bench::Check(
       DeformableScene::Create(context, volume, gpu_volume, renderer, mesh, options), "scene");
-  const auto t_grab = std::chrono::steady_clock::now();
-  const GrabInfo grabbed = bench::Check(scene->Grab(grab, mesh.stats.h_mm), "grab");
   Row row;
-  row.grab_ms = MsSince(t_grab);
-  row.handles = static_cast<int64_t>(grabbed.handles.size());
-  {
-    // One preconditioner application with the handles held (per PCG
-    // iteration), min of 50.
-    const ConstrainedFactor& factor = scene->fem().solver().factor();
-    Eigen::VectorXd r = Eigen::VectorXd::Ones(3 * static_cast<int64_t>(mesh.vertices.size()));
-    Eigen::VectorXd z;
-    row.precondition_ms = bench::MinMs(50, [&] { factor.Apply(r, true, z); });
-  }
+  TimeGrab(*scene, mesh, grab, row);
   SceneView interactive = InteractiveView(volume);
   SceneView still = interactive;
   still.quality = RenderQuality::kStill;
@@ -156,80 +237,18 @@ Row RunCase(const ProxyMesh& mesh, const Volume& volume, const gpu::GpuContext& 
   const auto t_loop = std::chrono::steady_clock::now();
   for (int s = 1; s <= steps; ++s) {
     auto step = bench::Check(scene->Drag(DragOffset(s)), "drag");
-    row.fem = std::min(row.fem, step.fem_ms);
-    row.fem_sum += step.fem_ms;
-    row.fem_max = std::max(row.fem_max, step.fem_ms);
-    row.map = std::min(row.map, step.warp_ms);
-    row.inverted = step.inverted_tets;
-    const SolveStats& solve = step.solve;
-    Split& split = row.split;
-    split.forces += solve.assembly_ms;
-    split.factor += solve.precondition_ms;
-    split.pcg_other += solve.solve_ms - solve.precondition_ms;
-    split.fem_other += step.fem_ms - solve.total_ms();
-    split.map += step.warp_ms;
-    split.newton += solve.newton_iterations;
-    split.cg += solve.cg_iterations;
-    split.load_steps += solve.load_steps;
-    split.forced += solve.forced_inversion ? 1 : 0;
-    split.short_steps += solve.target_fraction < 1.0 ? 1 : 0;
-    split.least_fraction = std::min(split.least_fraction, solve.target_fraction);
-    split.largest_lag_mm = std::max(split.largest_lag_mm, solve.remaining_mm);
+    AddStep(step, row);
     auto frame = bench::Check(scene->Render(interactive), "render");
-    split.frame += frame.timings.wall_ms;
-    row.interactive = std::min(row.interactive, frame.timings.wall_ms);
-    Breakdown& b = row.parts;
-    const FrameTimings& ft = frame.timings;
-    b.map_gpu = std::min(b.map_gpu, step.map_gpu_ms);
-    b.map_copy = std::min(b.map_copy, step.map_copy_ms);
-    for (const auto& pass : step.map_passes) {
-      if (pass.label == "backward_map claim") b.claim = std::min(b.claim, pass.gpu_ms);
-      if (pass.label == "backward_map write") b.write = std::min(b.write, pass.gpu_ms);
-      if (pass.label == "backward_map clear") b.clear = pass.gpu_ms;
-    }
-    b.texels = std::min(b.texels, ft.map_copy_ms);
-    b.occupancy = std::min(b.occupancy, ft.occupancy_ms);
-    b.cast = std::min(b.cast, ft.raycast_ms);
-    b.upscale = std::min(b.upscale, ft.upscale_ms);
-    b.frame_gpu = std::min(b.frame_gpu, ft.render_ms);
-    b.readback = std::min(b.readback, ft.readback_ms);
-    b.moved = step.moved_tets;
-    b.processed = step.processed_tets;
+    AddFrame(step, frame, row);
     const auto t0 = std::chrono::steady_clock::now();
     auto jpeg = bench::Check(EncodeJpeg(frame.rgba, frame.width, frame.height, 85), "jpeg");
     const double jpeg_ms = MsSince(t0);
     row.encode = std::min(row.encode, jpeg_ms);
-    split.jpeg += jpeg_ms;
-    if (print_steps) {
-      std::printf("  step %2d: FEM %7.2f ms (forces %6.2f, factor solves %6.2f, K v + PCG %6.2f; "
-                  "%2d Newton, %3d CG, %2d load steps%s; reached %.3f, %.2f mm to go), map %6.2f, "
-                  "frame %6.2f, JPEG %5.2f\n",
-                  s, step.fem_ms, solve.assembly_ms, solve.precondition_ms,
-                  solve.solve_ms - solve.precondition_ms, solve.newton_iterations,
-                  solve.cg_iterations, solve.load_steps, solve.forced_inversion ? ", forced" : "",
-                  solve.target_fraction, solve.remaining_mm, step.warp_ms, frame.timings.wall_ms,
-                  jpeg_ms);
-    }
+    row.split.jpeg += jpeg_ms;
+    if (print_steps) PrintStep(s, step, frame.timings.wall_ms, jpeg_ms);
   }
   row.loop_fps = steps / (MsSince(t_loop) / 1000.0);
-  // The pointer stops at 12 mm: finish the drag (as before a still frame)
-  // and count the inverted tets there.
-  // One solve at a time, as DeformableScene::Settle(kSettleSolves) would.
-  for (int i = 0; i < kSettleSolves && !scene->settled(); ++i) {
-    const SceneStepTimings settled = bench::Check(scene->Settle(1), "settle");
-    const SolveStats& solve = settled.solve;
-    row.split.settle_ms += settled.fem_ms;
-    row.split.settle_newton += solve.newton_iterations;
-    row.inverted = settled.inverted_tets;
-    if (print_steps) {
-      std::printf("  settle %d: FEM %7.2f ms (%2d Newton, %3d CG, %2d load steps%s; reached %.3f, "
-                  "%.2f mm to go), %lld inverted\n",
-                  i + 1, settled.fem_ms, solve.newton_iterations, solve.cg_iterations,
-                  solve.load_steps, solve.forced_inversion ? ", forced" : "",
-                  solve.target_fraction, solve.remaining_mm,
-                  static_cast<long long>(settled.inverted_tets));
-    }
-  }
+  SettleAfterDrag(*scene, print_steps, row);
   // Orbiting between drag steps: same map, so the brick occupancy is reused.
   SceneView orbit = interactive;
   for (int r = 0; r < 3; ++r) {

@@ -29,6 +29,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -172,6 +173,51 @@ std::unique_ptr<Fixture> MakeFixture(const std::string& source) {
   return f;
 }
 
+// Candidate c's frame of the scene's current state (c < 0: the still),
+// counting its samples when asked.
+using RenderCandidate = std::function<Frame(DeformableScene&, int, bool)>;
+
+// PSNR: every candidate's frame against the still, at each drag step.
+void MeasurePsnr(Fixture& f, const RenderCandidate& render, std::vector<Result_>& results) {
+  auto scene = f.DraggedScene(0);
+  for (int s = 1; s <= kSteps; ++s) {
+    bench::Check(scene->Drag(DragOffset(s)), "drag");
+    const Frame reference = render(*scene, -1, false);
+    for (size_t c = 0; c < results.size(); ++c) {
+      const Frame frame = render(*scene, int(c), true);
+      const double mse = bench::RgbMse(frame.rgba, reference.rgba);
+      Result_& r = results[c];
+      r.mse_sum += mse;
+      r.worst_db = std::min(r.worst_db, bench::PsnrOfMse(mse));
+      ++r.frames;
+      r.step_mm = frame.step_mm;
+      r.rays = frame.render_width;
+      r.samples_per_ray +=
+          double(frame.samples) / (double(frame.render_width) * frame.render_height * kSteps);
+    }
+  }
+}
+
+// Frame rate: the drag loop per candidate, interleaved rep by rep.
+void MeasureRates(Fixture& f, const RenderCandidate& render, int reps,
+                  std::vector<Result_>& results) {
+  for (int rep = 0; rep < reps; ++rep) {
+    for (size_t c = 0; c < results.size(); ++c) {
+      auto scene = f.DraggedScene(0);
+      const auto t0 = std::chrono::steady_clock::now();
+      for (int s = 1; s <= kSteps; ++s) {
+        bench::Check(scene->Drag(DragOffset(s)), "drag");
+        const Frame frame = render(*scene, int(c), false);
+        results[c].frame_ms.push_back(frame.timings.wall_ms);
+        results[c].occupancy_ms.push_back(frame.timings.occupancy_ms);
+        results[c].cast_ms.push_back(frame.timings.raycast_ms);
+        bench::Check(EncodeJpeg(frame.rgba, frame.width, frame.height, 85), "jpeg");
+      }
+      results[c].fps.push_back(kSteps / (MsSince(t0) / 1000.0));
+    }
+  }
+}
+
 void RunVolume(const std::string& source, int reps, int size, const std::string& preset,
                RenderMode mode, bool all, bool cut, bool whole_end_steps) {
   const std::unique_ptr<Fixture> f = MakeFixture(source);
@@ -188,7 +234,7 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
   still.quality = RenderQuality::kStill;
   const std::vector<Candidate> candidates = Candidates(all);
   // Candidate c's frame (c < 0: the still) of the scene's current state.
-  const auto render = [&](DeformableScene& scene, int c, bool count = false) {
+  const RenderCandidate render = [&](DeformableScene& scene, int c, bool count) {
     RenderRequest request = bench::Check(scene.PrepareRender(c < 0 ? still : view), "prepare");
     if (c >= 0) {
       request.interactive = candidates[c].cast;
@@ -201,42 +247,8 @@ void RunVolume(const std::string& source, int reps, int size, const std::string&
   std::vector<Result_> results(candidates.size());
   const std::string load_before = LoadAverage();
 
-  // PSNR: every candidate's frame against the still, at each drag step.
-  {
-    auto scene = f->DraggedScene(0);
-    for (int s = 1; s <= kSteps; ++s) {
-      bench::Check(scene->Drag(DragOffset(s)), "drag");
-      const Frame reference = render(*scene, -1);
-      for (size_t c = 0; c < candidates.size(); ++c) {
-        const Frame frame = render(*scene, int(c), true);
-        const double mse = bench::RgbMse(frame.rgba, reference.rgba);
-        Result_& r = results[c];
-        r.mse_sum += mse;
-        r.worst_db = std::min(r.worst_db, bench::PsnrOfMse(mse));
-        ++r.frames;
-        r.step_mm = frame.step_mm;
-        r.rays = frame.render_width;
-        r.samples_per_ray += double(frame.samples) /
-                             (double(frame.render_width) * frame.render_height * kSteps);
-      }
-    }
-  }
-  // Frame rate: the drag loop per candidate, interleaved rep by rep.
-  for (int rep = 0; rep < reps; ++rep) {
-    for (size_t c = 0; c < candidates.size(); ++c) {
-      auto scene = f->DraggedScene(0);
-      const auto t0 = std::chrono::steady_clock::now();
-      for (int s = 1; s <= kSteps; ++s) {
-        bench::Check(scene->Drag(DragOffset(s)), "drag");
-        const Frame frame = render(*scene, int(c));
-        results[c].frame_ms.push_back(frame.timings.wall_ms);
-        results[c].occupancy_ms.push_back(frame.timings.occupancy_ms);
-        results[c].cast_ms.push_back(frame.timings.raycast_ms);
-        bench::Check(EncodeJpeg(frame.rgba, frame.width, frame.height, 85), "jpeg");
-      }
-      results[c].fps.push_back(kSteps / (MsSince(t0) / 1000.0));
-    }
-  }
+  MeasurePsnr(*f, render, results);
+  MeasureRates(*f, render, reps, results);
   std::printf("\n%s, %s %s, %dx%d%s%s, device '%s'; load average before %s, after %s\n",
               source.c_str(), mode == RenderMode::kMip ? "MIP" : "DVR", preset.c_str(), size,
               size, cut ? ", view cut" : "", whole_end_steps ? ", whole end steps" : "",
