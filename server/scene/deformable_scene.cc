@@ -251,7 +251,7 @@ Result<RenderRequest> DeformableScene::PrepareRender(const SceneView& view,
                                                      SceneStepTimings* map_update) {
   ASSIGN_OR_RETURN(SceneStepTimings sync, SyncMap());
   if (map_update != nullptr) *map_update = sync;
-  RenderRequest request = ViewRenderRequest(view, AutoInteractiveQuality(*context_));
+  RenderRequest request = ViewRenderRequest(view, auto_interactive_quality());
   request.clip = ViewClip(view);
   if (view.quality == RenderQuality::kInteractive) {
     request.settings.jitter_seed = ++interactive_frames_;

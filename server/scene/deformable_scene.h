@@ -81,8 +81,7 @@ InteractiveQuality AutoInteractiveQuality(const gpu::GpuContext& context);
 // mode, preset, quality and its interactive cast (kAuto as auto_quality
 // says), size and step (no clip, volume, map, jitter seed or refinement
 // rung: PrepareRender adds those).
-RenderRequest ViewRenderRequest(const SceneView& view,
-                                InteractiveQuality auto_quality = InteractiveQuality::kFast);
+RenderRequest ViewRenderRequest(const SceneView& view, InteractiveQuality auto_quality);
 
 // The interactive backward map: Update keeps the vertices that moved less
 // than 0.05 mm (1/20 of a voxel of a 1 mm CT) since the map was last built
