@@ -80,7 +80,7 @@ export function makeUploads(grpc, users, volumeOf) {
         finish('INVALID_ARGUMENT', 'sha256 mismatch');
         return;
       }
-      setTimeout(() => {
+      upload.readTimer = setTimeout(() => {
         if (upload.cancelled) return;
         if (upload.bytes.subarray(0, 3).toString() === 'bad') {
           finish('INVALID_ARGUMENT', `${header.file_name}: not a NIfTI-1 file (sizeof_hdr is 25185)`);
@@ -94,6 +94,7 @@ export function makeUploads(grpc, users, volumeOf) {
       }, state.readMs);
     });
     call.on('cancelled', () => {
+      clearTimeout(upload.readTimer);
       upload.cancelled = true;
       upload.answer ??= 'CANCELLED';
     });

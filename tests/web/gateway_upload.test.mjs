@@ -143,6 +143,12 @@ async function until(what, predicate, timeoutMs = 5000) {
 
 const uploadsSince = (n) => fake.uploads.list.slice(n);
 
+// The uploads the gateway has logged as ended. The log line follows the
+// spool's closing and precedes the user's release, so once it is seen the
+// user may upload again (a closed descriptor alone does not say so).
+const endedUploads = () => (gatewayLog.match(/upload of \d+ bytes as \w+: /g) ?? []).length;
+const untilEnded = (k) => until(`the gateway to log upload ${k} ended`, () => endedUploads() >= k);
+
 test('GatewayUpload_NiftiGoesInChunksAsTheTabsUserAndOpens', async () => {
   const t = await tab();
   assert.equal(t.hello.max_upload_bytes, kCapBytes);
@@ -295,6 +301,7 @@ test('GatewayUpload_OnePerUserAtATime', async () => {
 test('GatewayUpload_CancelledLeavesNoTemporaryFile', async () => {
   const t = await tab();
   const n = fake.uploads.list.length;
+  const ended = endedUploads();
   const body = crypto.randomBytes(3 * kMiB);
   // Cancelled while it arrives: the spool is open (and already unlinked:
   // nothing under TMPDIR), then closed; nothing reached the server.
@@ -306,16 +313,19 @@ test('GatewayUpload_CancelledLeavesNoTemporaryFile', async () => {
   arriving.req.destroy();
   await until('the spool closed', () => openSpools().length === 0);
   assert.equal(uploadsSince(n).length, 0);
+  await untilEnded(ended + 1);
 
-  // Cancelled while the server reads it: the server's call is cancelled.
-  fake.uploads.readMs = 3000;
+  // Cancelled while the server reads it: the server's call is cancelled
+  // (the stand-in answers after readMs unless cancelled first).
+  fake.uploads.readMs = 30000;
   const reading = await upload(body, { tabId: t.hello.tab_id, partial: body.length });
   await t.next((m) => m.type === 'upload_progress' && m.stage === 'reading');
   reading.req.destroy();
-  await until('the server call cancelled', () => uploadsSince(n)[0]?.cancelled === true, 2000);
+  await until('the server call cancelled', () => uploadsSince(n)[0]?.cancelled === true, 10000);
   fake.uploads.readMs = 0;
   await until('the spool closed', () => openSpools().length === 0);
   assert.deepEqual(fs.readdirSync(spool), []);
+  await untilEnded(ended + 2);
 
   // The tab closing cancels its upload too; and the user may upload again.
   const orphan = await upload(body, { tabId: t.hello.tab_id, partial: kMiB });
@@ -324,6 +334,7 @@ test('GatewayUpload_CancelledLeavesNoTemporaryFile', async () => {
   t.ws.close();
   await until('the spool closed', () => openSpools().length === 0);
   orphan.req.destroy();
+  await untilEnded(ended + 3);
   const t2 = await tab();
   const again = await upload(crypto.randomBytes(1000), { tabId: t2.hello.tab_id });
   assert.equal(again.status, 200);
