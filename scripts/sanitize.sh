@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
 # make asan / make tsan: builds the service, render and FEM tests with a
 # sanitizer in build-asan or build-tsan and runs them; any report fails.
-#   address: AddressSanitizer + UndefinedBehaviorSanitizer (leaks checked)
+#   address: AddressSanitizer + UndefinedBehaviorSanitizer (leaks checked;
+#            not UBSan's vptr check, CMakeLists.txt says why)
 #   thread:  ThreadSanitizer
-# Which tests: the in-process service tests (streams, queues, uploads,
-# eviction, the render storm, slices, users and fair shares, cases, DICOM export), the FEM tests, and the ray caster's tests
-# (GPU on lavapipe against the CPU reference). The other suites run
-# unsanitized in `make test`.
+# Which tests (the gtest suites `regex` below names): the in-process
+# service tests (streams, queues, uploads, eviction, the render storm,
+# slices, users and fair shares, cases, DICOM export), the FEM's model,
+# solver, event-budget, spring and barrier suites, and the ray caster's
+# render, camera, clip, slice, pick and encoder suites (GPU on lavapipe
+# against the CPU reference). The other suites run unsanitized in `make
+# test`.
 # A second argument `build` stops after the build (.ci/run builds both
 # trees at idle priority while the main suite runs).
 set -euo pipefail
