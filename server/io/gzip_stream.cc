@@ -41,9 +41,6 @@ struct InflateOutcome {
   bool more_output = false;  // the stream holds data past `bound`
 };
 
-// Inflates up to `bound` bytes. Stops early (more_output) when the stream
-// would produce more; errors on corrupt or truncated streams unless
-// `stop_quietly` (prefix reads tolerate a truncated stream).
 // The full output buffer (`produced` bytes) grown towards `bound`:
 // kOutputStep at a time within the reserved address space, else doubled.
 void GrowOutput(std::vector<uint8_t>& bytes, int64_t produced, int64_t bound) {
@@ -53,6 +50,9 @@ void GrowOutput(std::vector<uint8_t>& bytes, int64_t produced, int64_t bound) {
                                        : std::min(bound, produced * 2 + 1)));
 }
 
+// Inflates up to `bound` bytes. Stops early (more_output) when the stream
+// would produce more; errors on corrupt or truncated streams unless
+// `stop_quietly` (prefix reads tolerate a truncated stream).
 Result<InflateOutcome> InflateBounded(std::span<const uint8_t> in, int64_t bound, bool stop_quietly,
                                       const CancelToken& cancel = {}) {
   Inflater inflater;
