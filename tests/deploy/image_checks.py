@@ -39,10 +39,25 @@ class Image:
         return self.stages[-1]
 
 
+# apt-cache's answers, kept for the process: the self-test asks about the
+# same packages once per broken copy, and each call costs most of a second.
+_CANDIDATES = {}
+
+
 def debian12_candidates(packages):
     """{name: True when apt knows a Debian 12 (bookworm) version of it}.
-    One `apt-cache policy` call; names it does not know are absent."""
-    result = subprocess.run(["apt-cache", "policy", *sorted(packages)],
+    One `apt-cache policy` call for the names not asked about before; names
+    it does not know are absent."""
+    unknown = sorted(set(packages) - set(_CANDIDATES))
+    if unknown:
+        for name in unknown:
+            _CANDIDATES[name] = None  # not known to apt unless listed below
+        _CANDIDATES.update(_apt_policy(unknown))
+    return {p: _CANDIDATES[p] for p in packages if _CANDIDATES[p] is not None}
+
+
+def _apt_policy(packages):
+    result = subprocess.run(["apt-cache", "policy", *packages],
                             capture_output=True, text=True, check=False)
     found, name, candidate = {}, None, None
     for line in result.stdout.splitlines():
@@ -284,11 +299,20 @@ def check_runtime_libraries(image, binary_dir):
     return problems
 
 
+_LIBRARIES = {}  # binary -> the shared libraries ldd resolves (built once per run)
+
+
+def _libraries_of(binary):
+    if binary not in _LIBRARIES:
+        ldd = subprocess.run(["ldd", binary], capture_output=True, text=True, check=False)
+        _LIBRARIES[binary] = re.findall(r"=>\s+(/\S+)", ldd.stdout)
+    return _LIBRARIES[binary]
+
+
 def _check_libraries_of(image, binary, installed):
     if not os.path.exists(binary):
         return []  # reported by check_copy_from_stages
-    ldd = subprocess.run(["ldd", binary], capture_output=True, text=True, check=False)
-    libraries = re.findall(r"=>\s+(/\S+)", ldd.stdout)
+    libraries = _libraries_of(binary)
     prefetch_packages(libraries)
     missing = {}  # package (or None: no package) -> libraries
     for lib in libraries:
