@@ -130,18 +130,13 @@ Result<SceneView> MakeView(const RenderArgs& args, const Volume& volume) {
   if (window) view.preset.mip_window = *window;
   view.quality =
       args.quality == "interactive" ? RenderQuality::kInteractive : RenderQuality::kStill;
-  if (args.interactive_quality == "auto") {
-    view.interactive_quality = InteractiveQuality::kAuto;
-  } else if (args.interactive_quality == "fast") {
-    view.interactive_quality = InteractiveQuality::kFast;
-  } else if (args.interactive_quality == "balanced") {
-    view.interactive_quality = InteractiveQuality::kBalanced;
-  } else if (args.interactive_quality == "sharp") {
-    view.interactive_quality = InteractiveQuality::kSharp;
-  } else {
+  const std::optional<InteractiveQuality> interactive =
+      InteractiveQualityNamed(args.interactive_quality);
+  if (!interactive) {
     return absl::InvalidArgumentError(StrCat("--interactive-quality ", args.interactive_quality,
                                              ": auto, fast, balanced or sharp"));
   }
+  view.interactive_quality = *interactive;
   if (args.size.size() != 2) return absl::InvalidArgumentError("--size takes W H");
   view.width = args.size[0];
   view.height = args.size[1];

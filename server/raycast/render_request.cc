@@ -74,6 +74,14 @@ InteractiveCast InteractiveCastFor(InteractiveQuality quality) {
   return {};
 }
 
+std::optional<InteractiveQuality> InteractiveQualityNamed(std::string_view name) {
+  if (name == "auto") return InteractiveQuality::kAuto;
+  if (name == "fast") return InteractiveQuality::kFast;
+  if (name == "balanced") return InteractiveQuality::kBalanced;
+  if (name == "sharp") return InteractiveQuality::kSharp;
+  return std::nullopt;
+}
+
 int UpscaleFilterOf(const RenderRequest& request) {
   return request.quality == RenderQuality::kInteractive ? request.interactive.upscale_filter
                                                         : gpu::kUpscaleBilinear;

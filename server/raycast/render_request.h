@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <string_view>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -60,6 +61,9 @@ inline constexpr double kMaxInteractiveDivisor = 4.0;
 enum class InteractiveQuality { kFast, kBalanced, kSharp, kAuto };
 inline constexpr InteractiveQuality kDefaultInteractiveQuality = InteractiveQuality::kAuto;
 InteractiveCast InteractiveCastFor(InteractiveQuality quality);
+// The quality a client's flag names: "auto", "fast", "balanced" or
+// "sharp"; nullopt for any other name.
+std::optional<InteractiveQuality> InteractiveQualityNamed(std::string_view name);
 
 inline constexpr int kMaxFrameSide = 4096;
 // Empty-space-skipping bricks are sized in mm, not voxels, so that a ray

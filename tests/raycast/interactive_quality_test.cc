@@ -45,6 +45,17 @@ uint32_t Pack(int r, int g, int b, int a) {
 // A constant image stays constant, a ramp along x stays a ramp inside (the
 // cubic reproduces linear functions), and the overshoot at a step edge is
 // clamped to [0, 255].
+// The names every client's --interactive-quality flag takes, and no other.
+TEST(InteractiveQualityNames, TheFourNamesAndNoOther) {
+  EXPECT_EQ(InteractiveQualityNamed("auto"), InteractiveQuality::kAuto);
+  EXPECT_EQ(InteractiveQualityNamed("fast"), InteractiveQuality::kFast);
+  EXPECT_EQ(InteractiveQualityNamed("balanced"), InteractiveQuality::kBalanced);
+  EXPECT_EQ(InteractiveQualityNamed("sharp"), InteractiveQuality::kSharp);
+  for (const char* other : {"", "Fast", "sharp ", "ultra"}) {
+    EXPECT_FALSE(InteractiveQualityNamed(other).has_value()) << other;
+  }
+}
+
 TEST(UpscaleCpu, CatmullRomKeepsConstantsAndRampsAndClampsOvershoot) {
   const int sw = 16, sh = 8, tw = 32, th = 16;
   std::vector<uint32_t> flat(sw * sh, Pack(10, 200, 77, 255));
