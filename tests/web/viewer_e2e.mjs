@@ -80,6 +80,28 @@ const kCtBoneVp = '1\n1\n0.9\n0.1\n0.2\n10\n' +
   '16 -3024 0 0 0 -16.4458 0.729412 0.254902 0.301961 641.385 0.905882 0.815686 0.552941 ' +
   '3071 1 1 1\n';
 
+// The page point (CSS pixels) of canvas `id` where soft tissue shows its
+// strongest edge: in the canvas's central half, the pixel whose grey (of
+// `grey`, canvasGrey's) is that of soft tissue in the window (neither air
+// nor bone) with the largest step to its neighbours two pixels away.
+async function softTissueEdge(page, id, grey) {
+  const box = await page.locator(`#${id}`).boundingBox();
+  const { width, height } = await page.evaluate((i) => {
+    const c = document.getElementById(i);
+    return { width: c.width, height: c.height };
+  }, id);
+  const g = (x, y) => grey.grey[y * width + x];
+  let best = { step: -1, x: width / 2, y: height / 2 };
+  for (let y = Math.floor(height / 4); y < (3 * height) / 4; ++y) {
+    for (let x = Math.floor(width / 4); x < (3 * width) / 4; ++x) {
+      if (g(x, y) < 60 || g(x, y) > 160) continue;
+      const step = Math.abs(g(x + 2, y) - g(x - 2, y)) + Math.abs(g(x, y + 2) - g(x, y - 2));
+      if (step > best.step) best = { step, x, y };
+    }
+  }
+  return [box.x + ((best.x + 0.5) * box.width) / width, box.y + ((best.y + 0.5) * box.height) / height];
+}
+
 // The slices beside the 3D view: three slices show and are not blank, the wheel scrolls
 // one, the window changes it, a grab on a slice deforms the tissue there;
 // then the crop box, the clip plane and an uploaded Slicer .vp each change
@@ -122,10 +144,13 @@ async function checkSlicesAndCuts(page, sentClips) {
   step(`window W 1500: coronal mean |grey difference| ${windowDiff.toFixed(2)}`);
   assert.ok(windowDiff > kMinSliceDiff, `the window did not change the slice (${windowDiff})`);
 
-  // Grab on the coronal slice and drag within its plane.
+  // Grab on the coronal slice, at an edge of soft tissue (where the plane
+  // lies depends on the grabs before; its centre may be the spine, which
+  // the skeleton holds still, or the inside of one organ, where a move
+  // shows nothing), and drag within its plane.
   await page.check('input[name="tool"][value="grab"]');
-  const coronalBox = await page.locator('#slice-coronal').boundingBox();
-  const c = [coronalBox.x + coronalBox.width / 2, coronalBox.y + coronalBox.height / 2];
+  const c = await softTissueEdge(page, 'slice-coronal', windowed);
+  step(`grab on the coronal slice at page pixel (${c.map((v) => v.toFixed(0)).join(', ')})`);
   await dragOnCanvas(page, c, [c[0] + 12, c[1] - 8], 8);
   h = await settled(page, '!h.interactive && h.max_displacement_mm > 0', 60000);
   const grabbed = await canvasGrey(page, 'slice-coronal');
@@ -596,6 +621,17 @@ async function main() {
        `(${figures.drag_fps} fps), median event-to-frame latency ` +
        `${figures.drag_latency_median_ms} ms`);
   assert.ok(sustainedFrames >= 1, 'no frame arrived during a sustained drag');
+  // Released (not kept), the tissue returns to the grab point, and the
+  // slices go through it, whatever frames of the drag were still on their
+  // way (each moved the planes to where the pointer then was).
+  const planes = await page.evaluate(() => ({ at: window.vpmViewer.slices.at,
+                                              grab: window.vpmViewer.lastGrabMm }));
+  step(`slices after the release: ${JSON.stringify(planes.at)}, grab point ` +
+       `${JSON.stringify(planes.grab)}`);
+  for (const [view, axis] of [['axial', 'z'], ['coronal', 'y'], ['sagittal', 'x']]) {
+    assert.ok(Math.abs(planes.at[view] - planes.grab[axis]) < 0.5,
+              `the ${view} slice is not through the released grab's point`);
+  }
   const kept = await checkUndoRedo(page, centre);
 
   // Refine at the grabbed point: a new mesh with refined vertices, a new

@@ -27,9 +27,11 @@ export class SliceViews {
   // canvases: {axial, coronal, sagittal}; labels: the same, elements whose
   // text names the position; tool(): 'orbit' | 'grab' | 'refine';
   // send(event) -> sequence; onChange(): the slices' settings changed;
-  // onWindow({width, level}): a window drag; onGrab(point_mm).
-  constructor({ canvases, labels, tool, send, onChange, onWindow, onGrab }) {
-    Object.assign(this, { canvases, labels, tool, send, onChange, onWindow, onGrab });
+  // onWindow({width, level}): a window drag; onGrab(point_mm); keepDrags():
+  // whether a release keeps the drag (Shift on release keeps too), as in 3D.
+  constructor({ canvases, labels, tool, send, onChange, onWindow, onGrab,
+                keepDrags = () => false }) {
+    Object.assign(this, { canvases, labels, tool, send, onChange, onWindow, onGrab, keepDrags });
     this.enabled = false;
     this.window = { width: 400, level: 40 };
     this.overlay = false;
@@ -183,7 +185,7 @@ export class SliceViews {
     this.gesture = null;
     if (s.canvas.hasPointerCapture(e.pointerId)) s.canvas.releasePointerCapture(e.pointerId);
     this.flush();
-    if (s.kind === 'grab') this.send({ release: {} });
+    if (s.kind === 'grab') this.send({ release: { keep: Boolean(e.shiftKey || this.keepDrags()) } });
   }
 
   // The server refused the grab: forget the gesture.
