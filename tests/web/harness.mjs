@@ -171,8 +171,8 @@ export async function launchBrowser(source) {
   return chromium.launch({ executablePath: kChromium, headless: true });
 }
 
-// The frame canvas as grey levels (0..255, one per pixel) with its mean and
-// variance.
+// A canvas as grey levels (0..255, one per pixel, rows of `width`) with its
+// size, mean and variance.
 export async function canvasGrey(page, id = 'frame') {
   return page.evaluate((canvasId) => {
     const c = document.getElementById(canvasId);
@@ -186,7 +186,8 @@ export async function canvasGrey(page, id = 'frame') {
       sum2 += g * g;
     }
     const mean = sum / grey.length;
-    return { grey, mean, variance: sum2 / grey.length - mean * mean };
+    return { grey, width: c.width, height: c.height, mean,
+             variance: sum2 / grey.length - mean * mean };
   }, id);
 }
 

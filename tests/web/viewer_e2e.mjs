@@ -86,10 +86,7 @@ const kCtBoneVp = '1\n1\n0.9\n0.1\n0.2\n10\n' +
 // nor bone) with the largest step to its neighbours two pixels away.
 async function softTissueEdge(page, id, grey) {
   const box = await page.locator(`#${id}`).boundingBox();
-  const { width, height } = await page.evaluate((i) => {
-    const c = document.getElementById(i);
-    return { width: c.width, height: c.height };
-  }, id);
+  const { width, height } = grey;
   const g = (x, y) => grey.grey[y * width + x];
   let best = { step: -1, x: width / 2, y: height / 2 };
   for (let y = Math.floor(height / 4); y < (3 * height) / 4; ++y) {

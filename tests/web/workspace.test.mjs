@@ -1,6 +1,6 @@
 // The web viewer's workspace maths (client/web/public): pan and zoom about
 // the pointer (camera.js), the slice planes through a point
-// (slice_planes.js), canvases fitted to their panes (pane_fit.js), the
+// (slice_planes.js) and following a grab (grab_follow.js), canvases fitted to their panes (pane_fit.js), the
 // window presets (window_presets.js) and the single-key shortcuts
 // (view_keys.js, typing_target.js).
 import assert from 'node:assert/strict';
@@ -12,6 +12,7 @@ const here = path.dirname(fileURLToPath(import.meta.url));
 const load = (name) => import(pathToFileURL(path.join(here, '../../client/web/public', name)).href);
 const { OrbitCamera } = await load('camera.js');
 const { clampToSlice, grabTargetMm, planesThrough } = await load('slice_planes.js');
+const { GrabFollow } = await load('grab_follow.js');
 const { fitContain, frameSizeForPane } = await load('pane_fit.js');
 const { kWindowPresets, presetNameOf, windowPreset } = await load('window_presets.js');
 const { kShortcutList, viewKey } = await load('view_keys.js');
@@ -83,6 +84,36 @@ test('the named planes through a point, the grab target and the clamp', () => {
   assert.equal(clampToSlice(-60, g), -50);
   assert.equal(clampToSlice(3, g), 3);
   assert.equal(clampToSlice(1e9, undefined), 1e9);
+});
+
+test('the planes follow the held grab and rest where a release leaves the tissue', () => {
+  const at = [];
+  const follow = new GrabFollow((p) => at.push([p.x, p.y, p.z]));
+  const frame = (seq, point) => follow.frame({ last_sequence: seq, grab_point_mm: point });
+  follow.grab(5);
+  frame(4, [9, 9, 9]);  // an earlier grab's frame
+  assert.deepEqual(at, []);
+  frame(5, [1, 2, 3]);
+  follow.drag({ x: 10, y: 0, z: 0 });
+  frame(6, [1, 2, 3]);
+  follow.drag({ x: 20, y: 0, z: 0 });  // no frame since: the release decides
+  follow.release(false);
+  frame(7, [1, 2, 3]);  // the released grab's late frame moves nothing
+  assert.deepEqual(at, [[1, 2, 3], [11, 2, 3], [1, 2, 3]]);
+  follow.grab(8);
+  frame(8, [0, 0, 0]);
+  follow.drag({ x: 0, y: 5, z: 0 });
+  follow.release(true);  // kept: the drag's end
+  assert.deepEqual(at.at(-1), [0, 5, 0]);
+  at.length = 0;
+  follow.grab(10);
+  follow.drag({ x: 0, y: 0, z: 4 });
+  follow.release(true);  // before any frame named the point
+  assert.deepEqual(at, []);
+  frame(9, [7, 7, 7]);  // the last grab's
+  frame(11, [1, 1, 1]);
+  frame(12, [1, 1, 1]);
+  assert.deepEqual(at, [[1, 1, 5]]);
 });
 
 test('a canvas fits its pane with its aspect; the frame takes the pane\'s shape', () => {

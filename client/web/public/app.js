@@ -11,10 +11,10 @@ import { CutControls } from './cut_controls.js';
 import { ExportButton } from './export_button.js';
 import { FrameStats } from './frame_stats.js';
 import { GatewaySocket } from './gateway_socket.js';
+import { GrabFollow } from './grab_follow.js';
 import { fitCanvas, frameSizeForPane } from './pane_fit.js';
 import { PointerTools } from './pointer_tools.js';
 import { QualityControl } from './quality_control.js';
-import { grabTargetMm } from './slice_planes.js';
 import { SliceViews } from './slice_views.js';
 import { ServerFiles } from './server_files.js';
 import { StudiesPanel } from './studies_panel.js';
@@ -50,11 +50,6 @@ const state = {
   framesSuperseded: 0,  // received while another waited undrawn: replaced, never drawn
   peakDisplacementMm: 0,
   lastGrabMm: null,
-  dragOffsetMm: null,   // the held grab's drag offset sent last (world LPS mm), else null
-  grabHeld: false,      // a grab sent and not yet released
-  grabSequence: 0,      // the sequence of the last grab sent
-  heldGrabMm: null,     // the held grab's point as the server picked it, else null
-  releasePending: null, // {offset}: released before a frame named the grab's point
   frameSize: { width: 512, height: 512 },  // the 3D frame asked for: the pane's shape
   errors: [],           // {what, message}
   uploadedTf: null,     // {name, colors, opacities} once the gateway read a file
@@ -172,45 +167,14 @@ checkSignedIn();
 
 function sendEvent(event) {
   if (!event.camera && !event.settings) state.lastUndo = null;  // a manipulation: the count moves on
-  // The slices follow the held grab's tissue: its point plus this offset.
-  if (event.grab) {
-    Object.assign(state, { grabHeld: true, grabSequence: state.sequence + 1, dragOffsetMm: null,
-                           heldGrabMm: null, releasePending: null });
-  }
-  if (event.drag) state.dragOffsetMm = event.drag.offset_mm;
-  if (event.release) releaseSlices(Boolean(event.release.keep));
   state.sequence += 1;
+  // The slices follow the held grab's tissue (grab_follow.js).
+  if (event.grab) grabFollow.grab(state.sequence);
+  if (event.drag) grabFollow.drag(event.drag.offset_mm);
+  if (event.release) grabFollow.release(Boolean(event.release.keep));
   const message = { ...event, sequence: state.sequence };
   if (socket.send({ type: 'event', event: message })) stats.sent(state.sequence);
   return state.sequence;
-}
-
-// A release leaves the slices through where the tissue comes to rest: the
-// drag's end when the drag is kept, the grab point when it is not. Frames
-// of the released grab still on their way no longer move them (they would
-// leave the planes wherever the last of them was cast).
-function releaseSlices(keep) {
-  const offset = keep ? state.dragOffsetMm : null;
-  if (state.heldGrabMm) {
-    slices.throughPoint(grabTargetMm(state.heldGrabMm, offset));
-  } else if (state.grabHeld) {
-    state.releasePending = { offset };  // the grab's first frame names its point
-  }
-  Object.assign(state, { grabHeld: false, dragOffsetMm: null, heldGrabMm: null });
-}
-
-// The slices follow the held grab's tissue: the point the server picked
-// (Frame.grab_point_mm) plus the drag offset sent last; frames of an
-// earlier grab, or of this one once released, leave them.
-function followGrab(h) {
-  if (!h.grab_point_mm || h.last_sequence < state.grabSequence) return;
-  if (state.grabHeld) {
-    state.heldGrabMm = h.grab_point_mm;
-    slices.throughPoint(grabTargetMm(h.grab_point_mm, state.dragOffsetMm));
-  } else if (state.releasePending) {
-    slices.throughPoint(grabTargetMm(h.grab_point_mm, state.releasePending.offset));
-    state.releasePending = null;
-  }
 }
 
 function settings() {
@@ -282,6 +246,7 @@ const slices = new SliceViews({
   },
 });
 state.slices = slices;
+const grabFollow = new GrabFollow((pointMm) => slices.throughPoint(pointMm));
 slices.enabled = $('slices').checked;
 
 const cuts = new CutControls({
@@ -555,7 +520,7 @@ function onFrame(frame) {
     const [x, y, z] = h.grab_point_mm;
     state.lastGrabMm = { x, y, z };
   }
-  followGrab(h);
+  grabFollow.frame(h);
   // The server refined the mesh at a grab and swapped it in.
   if (h.mesh_id && state.mesh && h.mesh_id !== state.mesh.mesh_id) {
     state.mesh = { ...state.mesh, mesh_id: h.mesh_id };
