@@ -529,12 +529,26 @@ void clip_ray(vec3 eye, vec3 dir, inout float t_near, inout float t_far) {
 // lane; each 8 consecutive invocations take a 4x2 block of the 8x8 tile
 // (vectors 2 x 4 over it) instead of a row of 8, so that their rays stay
 // closer together.
+// The band's row of tiles that the dispatch's row r (of `rows`) casts. A
+// CPU device gives each of its `threads` threads one contiguous run of
+// workgroups (server/gpu/dispatch_threads.h), here rows / threads rows of
+// the dispatch; run j casts the band's rows j, j + threads, j + 2 threads,
+// ..., so that every thread casts a sample of the band and none idles while
+// another finishes the body's rows (rows past the last whole run stay in
+// place). Rows in order on a GPU (threads 1).
+uint band_row(uint r, uint rows, uint threads) {
+  uint run = rows / max(threads, 1u);
+  if (run == 0u || r >= run * threads) return r;
+  return (r % run) * threads + r / run;
+}
+
 ivec2 pixel_of_invocation() {
   uint i = gl_LocalInvocationIndex;  // 0..63
   uint lane = i & 7u, vector = i >> 3;
   uvec2 local = uvec2((vector & 1u) * 4u + (lane & 3u), (vector >> 1) * 2u + (lane >> 2));
   // Band b of n takes the rows of tiles b, b + n, b + 2n, ...
-  uvec2 tile = uvec2(gl_WorkGroupID.x, gl_WorkGroupID.y * uint(band.rows.y) + uint(band.rows.x));
+  uint row = band_row(gl_WorkGroupID.y, gl_NumWorkGroups.y, uint(band.rows.z));
+  uvec2 tile = uvec2(gl_WorkGroupID.x, row * uint(band.rows.y) + uint(band.rows.x));
   return ivec2(tile * 8u + local);
 }
 

@@ -73,7 +73,7 @@ struct RaycastParams {
 };
 
 struct RaycastBandPush {
-  ivec4 rows;  // (band b, bands n, 0, 0): tile rows b, b + n, b + 2n, ...
+  ivec4 rows;  // (band b, bands n, threads t, 0): tile rows b, b + n, b + 2n, ...
 };
 
 const int kUpscaleBilinear = 0;

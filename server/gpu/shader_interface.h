@@ -136,11 +136,13 @@ inline constexpr int kPreintegratedEntries = 256;
 // raycast_*.comp: the rows of 8 x 8 tiles a dispatch casts, so that a frame
 // may be cast in bands, one submit each (VolumeRenderer::Options::
 // still_band_rays). Band b of n takes tile rows b, b + n, b + 2n, ...: each
-// band a sample of the whole frame, whose cost lavapipe's threads share as
-// evenly as the whole frame's (bands of consecutive rows left one of two
-// threads idle for most of a band).
+// band a sample of the whole frame (bands of consecutive rows left one of
+// two threads idle for most of a band). t: the threads the device splits a
+// dispatch among, one contiguous run of workgroups each (DispatchThreads in
+// server/gpu/dispatch_threads.h); the band's rows are dealt out to the runs
+// in turn, so that each thread casts a sample of the band.
 struct RaycastBandPush {
-  glm::ivec4 rows;  // (b, n, 0, 0)
+  glm::ivec4 rows;  // (b, n, t, 0)
 };
 static_assert(sizeof(RaycastBandPush) == 16);
 

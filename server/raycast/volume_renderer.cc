@@ -7,6 +7,7 @@
 
 #include "server/common/clock.h"
 #include "server/gpu/compute_batch.h"
+#include "server/gpu/dispatch_threads.h"
 #include "server/gpu/shader_interface.h"
 #include "server/raycast/preintegrated_lut.h"
 #include "shaders/brick_minmax.spv.h"
@@ -81,6 +82,13 @@ Result<std::unique_ptr<VolumeRenderer>> VolumeRenderer::Create(const gpu::GpuCon
   std::unique_ptr<VolumeRenderer> renderer(new VolumeRenderer(context, options));
   RETURN_IF_ERROR(renderer->Init());
   return renderer;
+}
+
+VolumeRenderer::VolumeRenderer(const gpu::GpuContext& context, const Options& options)
+    : context_(&context), options_(options) {
+  if (options_.dispatch_threads == 0) {
+    options_.dispatch_threads = gpu::DispatchThreads(context.is_cpu_device());
+  }
 }
 
 Status VolumeRenderer::Init() {
@@ -388,7 +396,8 @@ Result<VolumeRenderer::Cast> VolumeRenderer::PrepareCast(const RenderRequest& re
 
 Status VolumeRenderer::RecordBand(gpu::ComputeBatch& batch, const Cast& cast,
                                   const RaycastSetup& setup, int band, int bands) {
-  const gpu::RaycastBandPush push{.rows = glm::ivec4(band, bands, 0, 0)};
+  const gpu::RaycastBandPush push{.rows =
+                                      glm::ivec4(band, bands, int(options_.dispatch_threads), 0)};
   // Tile rows band, band + bands, ... below the frame's GroupCount(height).
   const uint32_t tile_rows = GroupCount(setup.render_height, 8);
   const uint32_t rows = (tile_rows - uint32_t(band) + uint32_t(bands) - 1) / uint32_t(bands);

@@ -58,6 +58,10 @@ class VolumeRenderer {
     VolumeAccess volume_access = VolumeAccess::kTexelBuffer;
     int64_t still_band_rays = kStillBandRays;  // 0: a still in one submit
     double still_band_ms = kStillBandMs;       // 0: one submit per band
+    // The threads the device splits a dispatch among, which the ray cast
+    // lays its rows of tiles out for (gpu::RaycastBandPush); 0: the
+    // device's (gpu::DispatchThreads). Any value gives the same pixels.
+    uint32_t dispatch_threads = 0;
   };
 
   static Result<std::unique_ptr<VolumeRenderer>> Create(const gpu::GpuContext& context,
@@ -97,8 +101,7 @@ class VolumeRenderer {
     gpu::GpuBuffer minmax;            // vec2 per brick
   };
 
-  VolumeRenderer(const gpu::GpuContext& context, const Options& options)
-      : context_(&context), options_(options) {}
+  VolumeRenderer(const gpu::GpuContext& context, const Options& options);
   Status Init();
   // The kernels (pipelines built once) and the buffers every frame uses.
   Status CreateKernels();
