@@ -4,7 +4,7 @@
 // not balance them as they finish. A kernel whose cost varies over its grid
 // (the ray caster: rays through the body against rays through air) lays its
 // workgroups out so that every run is a sample of the whole grid
-// (shaders/raycast_body.glsl, tile_row); docs/LAVAPIPE.md, "How a dispatch
+// (shaders/raycast_body.glsl, band_row); docs/LAVAPIPE.md, "How a dispatch
 // is split".
 #ifndef VPM_SERVER_GPU_DISPATCH_THREADS_H_
 #define VPM_SERVER_GPU_DISPATCH_THREADS_H_
