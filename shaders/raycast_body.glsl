@@ -524,11 +524,6 @@ void clip_ray(vec3 eye, vec3 dir, inout float t_near, inout float t_far) {
   }
 }
 
-// The pixel of this invocation: lavapipe runs 8 consecutive invocations of
-// a workgroup as one SIMD vector, and a vector costs as much as its slowest
-// lane; each 8 consecutive invocations take a 4x2 block of the 8x8 tile
-// (vectors 2 x 4 over it) instead of a row of 8, so that their rays stay
-// closer together.
 // The band's row of tiles that the dispatch's row r (of `rows`) casts. A
 // CPU device gives each of its `threads` threads one contiguous run of
 // workgroups (server/gpu/dispatch_threads.h), here rows / threads rows of
@@ -542,6 +537,11 @@ uint band_row(uint r, uint rows, uint threads) {
   return (r % run) * threads + r / run;
 }
 
+// The pixel of this invocation: lavapipe runs 8 consecutive invocations of
+// a workgroup as one SIMD vector, and a vector costs as much as its slowest
+// lane; each 8 consecutive invocations take a 4x2 block of the 8x8 tile
+// (vectors 2 x 4 over it) instead of a row of 8, so that their rays stay
+// closer together.
 ivec2 pixel_of_invocation() {
   uint i = gl_LocalInvocationIndex;  // 0..63
   uint lane = i & 7u, vector = i >> 3;

@@ -17,10 +17,11 @@
 
 #include <gtest/gtest.h>
 
+#include "server/phantom/phantom.h"
 #include "server/raycast/raycast_cpu.h"
 #include "server/raycast/volume_renderer.h"
-#include "server/phantom/phantom.h"
 #include "tests/gpu/gpu_test_context.h"
+#include "tests/raycast/raycast_fixture.h"
 #include "tests/raycast/render_test_util.h"
 #include "tests/volume/int16_twin.h"
 
@@ -28,84 +29,11 @@ namespace vpm {
 namespace {
 
 using testing::CompareRgba;
+using testing::ExpectClose;
+using testing::LitPixels;
 using testing::MaybeDump;
 
-class RaycastTest : public testing::GpuTest {
- protected:
-  void SetUp() override {
-    GpuTest::SetUp();
-    volume_.emplace(testing::MakeSphereRodVolume());
-    auto gpu = GpuVolume::Upload(context(), *volume_);
-    ASSERT_TRUE(gpu.ok()) << gpu.status();
-    gpu_volume_.emplace(std::move(*gpu));
-    auto renderer = VolumeRenderer::Create(context(), {});
-    ASSERT_TRUE(renderer.ok()) << renderer.status();
-    renderer_ = std::move(*renderer);
-  }
-
-  RenderRequest Request(RenderMode mode, const char* preset = "ct-vessels", int size = 96) {
-    RenderRequest r;
-    r.camera = Camera::ForVolume(volume_->geometry());
-    r.camera.Orbit(30.0, 20.0);
-    r.mode = mode;
-    r.preset = *MakeRenderPreset(preset, *volume_);
-    r.width = size;
-    r.height = size;
-    r.volume = &*gpu_volume_;
-    return r;
-  }
-
-  // A backward map of m^3 points: zero (identity) or a smooth bump, zero
-  // on the box faces, up to `amplitude_mm`.
-  Result<gpu::GpuImage3D> MakeMap(int m, double amplitude_mm, HostBackwardMap* host) {
-    host->dims = {m, m, m};
-    host->texels.assign(size_t(m) * m * m, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
-    for (int c = 0; c < m; ++c)
-      for (int b = 0; b < m; ++b)
-        for (int a = 0; a < m; ++a) {
-          const double s = std::sin(std::numbers::pi * a / (m - 1)) * std::sin(std::numbers::pi * b / (m - 1)) *
-                           std::sin(std::numbers::pi * c / (m - 1));
-          host->texels[a + m * (b + m * c)] =
-              glm::vec4(float(amplitude_mm * s), 0.0f, float(-0.6 * amplitude_mm * s), 1.0f);
-        }
-    ASSIGN_OR_RETURN(auto image,
-                     gpu::GpuImage3D::Create(context(), {uint32_t(m), uint32_t(m), uint32_t(m)},
-                                             vk::Format::eR32G32B32A32Sfloat));
-    RETURN_IF_ERROR(image.Upload(std::as_bytes(std::span<const glm::vec4>(host->texels))));
-    return image;
-  }
-
-  Frame RenderGpu(const RenderRequest& r) {
-    auto frame = renderer_->Render(r);
-    EXPECT_TRUE(frame.ok()) << frame.status();
-    return frame.ok() ? std::move(*frame) : Frame{};
-  }
-
-  Frame RenderCpu(const RenderRequest& r, const HostBackwardMap* map = nullptr) {
-    auto frame = RenderReference(r, *volume_, map, 2);
-    EXPECT_TRUE(frame.ok()) << frame.status();
-    return frame.ok() ? std::move(*frame) : Frame{};
-  }
-
-  std::optional<Volume> volume_;
-  std::optional<GpuVolume> gpu_volume_;
-  std::unique_ptr<VolumeRenderer> renderer_;
-};
-
-void ExpectClose(const Frame& a, const Frame& b, double mean_tol, double max_tol,
-                 const char* what) {
-  ASSERT_EQ(a.rgba.size(), b.rgba.size()) << what;
-  const auto e = CompareRgba(a.rgba, b.rgba);
-  EXPECT_LT(e.mean_abs, mean_tol) << what << ": max " << e.max_abs * 255 << "/255";
-  EXPECT_LT(e.max_abs, max_tol) << what << ": mean " << e.mean_abs * 255 << "/255";
-}
-
-// Not a blank frame: some pixels differ from the background by a lot.
-int64_t LitPixels(const Frame& f) {
-  int64_t lit = 0;
-  for (size_t i = 0; i < f.rgba.size(); i += 4) lit += (f.rgba[i] + f.rgba[i + 1] + f.rgba[i + 2]) > 60;
-  return lit;
-}
+using testing::RaycastTest;
 
 // Both gradients of a still frame: the cell gradient (the default) and the
 // central-difference taps.
@@ -425,104 +353,6 @@ TEST_F(RaycastTest, InteractiveQuality_HalfResolutionUpscaled) {
 // or several to a submit, is the frame cast in one: the same pixels bit for
 // bit and the same samples, for DVR and MIP, through a map, with bands of
 // unequal height; interactive frames stay whole.
-TEST_F(RaycastTest, StillBands_SameFrameAsOneSubmit) {
-  HostBackwardMap host;
-  auto map = MakeMap(9, 6.0, &host);
-  ASSERT_TRUE(map.ok()) << map.status();
-  auto whole = VolumeRenderer::Create(context(), {.still_band_rays = 0});
-  // 100 x 70: 7,000 rays in 4 bands of 1,750, over 9 rows of 8 x 8 tiles
-  // (the last one 6 pixels high): band 0 takes tile rows 0, 4, 8, the
-  // others two each.
-  auto banded = VolumeRenderer::Create(context(), {.still_band_rays = 1750, .still_band_ms = 0});
-  ASSERT_TRUE(whole.ok() && banded.ok());
-  for (RenderMode mode : {RenderMode::kDvr, RenderMode::kMip}) {
-    SCOPED_TRACE(mode == RenderMode::kDvr ? "DVR" : "MIP");
-    // Bands of any length fit: the first still's bands 1 to 3 in one
-    // submit (however fast band 0 is), the next still whole.
-    auto grouped =
-        VolumeRenderer::Create(context(), {.still_band_rays = 1750, .still_band_ms = 1e9});
-    ASSERT_TRUE(grouped.ok()) << grouped.status();
-    RenderRequest r = Request(mode);
-    r.width = 100;
-    r.height = 70;
-    r.backward_map = &*map;
-    r.settings.count_samples = true;
-    auto one = (*whole)->Render(r);
-    auto cut = (*banded)->Render(r);
-    auto two = (*grouped)->Render(r);
-    auto next = (*grouped)->Render(r);
-    ASSERT_TRUE(one.ok() && cut.ok() && two.ok() && next.ok())
-        << one.status() << cut.status() << two.status() << next.status();
-    EXPECT_EQ(one->bands, 1);
-    EXPECT_EQ(one->submits, 1);
-    EXPECT_EQ(cut->bands, 4);
-    EXPECT_EQ(cut->submits, 4);
-    EXPECT_EQ(two->bands, 4);
-    EXPECT_EQ(two->submits, 2);
-    EXPECT_EQ(next->bands, 1);
-    EXPECT_EQ(next->submits, 1);
-    EXPECT_GT(LitPixels(*cut), 100);
-    EXPECT_EQ(cut->rgba, one->rgba);
-    EXPECT_EQ(cut->samples, one->samples);
-    EXPECT_EQ(two->rgba, one->rgba);
-    EXPECT_EQ(two->samples, one->samples);
-    EXPECT_EQ(next->rgba, one->rgba);
-    r.quality = RenderQuality::kInteractive;
-    auto interactive = (*banded)->Render(r);
-    ASSERT_TRUE(interactive.ok()) << interactive.status();
-    EXPECT_EQ(interactive->bands, 1);
-  }
-  // The default: a renderer's first 512^2 still in 8 bands, in 2 to 8
-  // submits (by the device's speed).
-  auto fresh = VolumeRenderer::Create(context(), {});
-  ASSERT_TRUE(fresh.ok()) << fresh.status();
-  auto still = (*fresh)->Render(Request(RenderMode::kMip, "ct-vessels", 512));
-  ASSERT_TRUE(still.ok()) << still.status();
-  EXPECT_EQ(still->bands, int(512 * 512 / kStillBandRays));
-  EXPECT_GE(still->submits, 2);
-  EXPECT_LE(still->submits, still->bands);
-}
-
-// The rows of tiles dealt out to a CPU device's threads (raycast_body.glsl,
-// band_row) move no pixel: 100 x 70 is 9 tile rows, so 2 threads take rows
-// 0, 2, 4, 6 then 1, 3, 5, 7 (row 8 in place), 3 threads all 9 in runs of
-// 3, and with 4 bands of 3 or 2 rows each band deals out its own. A row cast
-// twice or never shows as a frame unlike the one cast in order.
-TEST_F(RaycastTest, DispatchThreads_SamePixelsForAnyThreadCount) {
-  HostBackwardMap host;
-  auto map = MakeMap(9, 6.0, &host);
-  ASSERT_TRUE(map.ok()) << map.status();
-  for (RenderMode mode : {RenderMode::kDvr, RenderMode::kMip}) {
-    SCOPED_TRACE(mode == RenderMode::kDvr ? "DVR" : "MIP");
-    RenderRequest r = Request(mode);
-    r.width = 100;
-    r.height = 70;
-    r.backward_map = &*map;
-    r.settings.count_samples = true;
-    auto in_order =
-        VolumeRenderer::Create(context(), {.still_band_rays = 0, .dispatch_threads = 1});
-    ASSERT_TRUE(in_order.ok()) << in_order.status();
-    auto reference = (*in_order)->Render(r);
-    ASSERT_TRUE(reference.ok()) << reference.status();
-    EXPECT_GT(LitPixels(*reference), 100);
-    for (int64_t band_rays : {int64_t(0), int64_t(1750)}) {
-      for (uint32_t threads : {2u, 3u, 4u, 32u}) {
-        SCOPED_TRACE(::testing::Message()
-                     << band_rays << " rays a band, " << threads << " threads");
-        auto renderer = VolumeRenderer::Create(
-            context(),
-            {.still_band_rays = band_rays, .still_band_ms = 0, .dispatch_threads = threads});
-        ASSERT_TRUE(renderer.ok()) << renderer.status();
-        auto frame = (*renderer)->Render(r);
-        ASSERT_TRUE(frame.ok()) << frame.status();
-        EXPECT_EQ(frame->bands, band_rays == 0 ? 1 : 4);
-        EXPECT_EQ(frame->rgba, reference->rgba);
-        EXPECT_EQ(frame->samples, reference->samples);
-      }
-    }
-  }
-}
-
 // Interactive DVR shades with the gradient of the trilinear cells (chain
 // rule through the map): GPU and CPU agree as for the tap gradient, and the
 // picture stays close to that of the taps.
