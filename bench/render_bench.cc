@@ -17,9 +17,10 @@
 //   once and reused, as while orbiting or for a still after a drag);
 //   --no-map: every row without the map (what DeformableScene renders while
 //   nothing is deformed); --band-rays N: still frames cast in bands of about
-//   N rays (default kStillBandRays; 0: one band); --band-ms MS: the bands
-//   after the first submitted in groups of about MS ms at the first band's
-//   time (default kStillBandMs; 0: one submit per band);
+//   N rays (default kStillBandRays; 0: one band); --band-ms MS: bands of
+//   about MS ms at the last still's cost where that makes more, and the
+//   bands after the first submitted in groups of about MS ms at the first
+//   band's time (default kStillBandMs; 0: bands by rays, one submit each);
 //   --no-early-termination: every ray to its end (the exact integral that a
 //   fine step's reference approaches); --light-back-end: pre-integrated
 //   steps lit by the light at their back end alone

@@ -1,7 +1,9 @@
-# vpm_gtest_suites(TARGET name [PROPERTIES prop value ...])
+# vpm_gtest_suites(TARGET name [PROPERTIES prop value ...] [SERIAL_SUITES suite ...])
 # One ctest entry per gtest suite of a test binary, named BINARY:SUITE
 # (e.g. service_test:SessionTest), running `BINARY --gtest_filter=SUITE.*`
-# in the build folder with the given test properties. After each build of
+# in the build folder with the given test properties. SERIAL_SUITES run
+# alone (RUN_SERIAL): suites that time a gRPC call's answer, which on two
+# cores shared with another test's threads waits for a CPU. After each build of
 # the binary its suites are listed (--gtest_list_tests,
 # cmake/gtest_suites_list.cmake); ctest reads that list when it runs, as
 # gtest_discover_tests does for single tests.
@@ -19,7 +21,7 @@ set(VPM_TEST_EXCLUDE "" CACHE STRING "gtest patterns (a:b) that no ctest entry r
 set(VPM_GTEST_SUITES_SCRIPT ${CMAKE_CURRENT_LIST_DIR}/gtest_suites_list.cmake)
 
 function(vpm_gtest_suites)
-  cmake_parse_arguments(ARG "" "TARGET" "PROPERTIES" ${ARGN})
+  cmake_parse_arguments(ARG "" "TARGET" "PROPERTIES;SERIAL_SUITES" ${ARGN})
   set(list_file ${CMAKE_CURRENT_BINARY_DIR}/${ARG_TARGET}_suites.cmake)
   add_custom_command(TARGET ${ARG_TARGET} POST_BUILD
     COMMAND ${CMAKE_COMMAND} -D "binary=$<TARGET_FILE:${ARG_TARGET}>"
@@ -41,9 +43,14 @@ function(vpm_gtest_suites)
   file(WRITE ${include_file} "\
 if(EXISTS [==[${list_file}]==])
   include([==[${list_file}]==])
+  set(serial_suites [==[${ARG_SERIAL_SUITES}]==])
   foreach(suite IN LISTS suites)
     add_test(\"${ARG_TARGET}:\${suite}\" \"\${binary}\" \"--gtest_filter=\${suite}.*${filter_tail}\")
     set_tests_properties(\"${ARG_TARGET}:\${suite}\" PROPERTIES ${props})
+    list(FIND serial_suites \"\${suite}\" serial)
+    if(NOT serial EQUAL -1)
+      set_tests_properties(\"${ARG_TARGET}:\${suite}\" PROPERTIES RUN_SERIAL TRUE)
+    endif()
   endforeach()
 else()
   add_test(${ARG_TARGET}_NOT_BUILT ${ARG_TARGET}_NOT_BUILT)

@@ -409,15 +409,21 @@ Status VolumeRenderer::RecordBand(gpu::ComputeBatch& batch, const Cast& cast,
 int VolumeRenderer::Bands(const RenderRequest& request, int width, int height) const {
   if (request.quality != RenderQuality::kStill || options_.still_band_rays <= 0) return 1;
   const int64_t rays = int64_t(width) * height;
-  // Whole where the last still, at this one's rays, would take under half
-  // of still_band_ms: on a fast device a band's dispatch is too small to
-  // fill it (docs/RENDERING.md, "Stills in bands").
-  if (options_.still_band_ms > 0.0 && still_ms_per_ray_ >= 0.0 &&
-      2.0 * still_ms_per_ray_ * double(rays) <= options_.still_band_ms) {
-    return 1;
-  }
   const int64_t tile_rows = (height + 7) / 8;
-  return int(std::clamp<int64_t>(rays / options_.still_band_rays, 1, tile_rows));
+  int64_t bands = rays / options_.still_band_rays;
+  if (options_.still_band_ms > 0.0 && still_ms_per_ray_ >= 0.0) {
+    // The last still's cost per ray (ms) at this one's rays.
+    const double still_ms = still_ms_per_ray_ * double(rays);
+    // Whole where that is under half of still_band_ms: on a fast device a
+    // band's dispatch is too small to fill it (docs/RENDERING.md, "Stills
+    // in bands").
+    if (2.0 * still_ms <= options_.still_band_ms) return 1;
+    // More bands where still_band_rays would take longer than
+    // still_band_ms: a band bounds what waits behind it.
+    bands = std::max(
+        bands, int64_t(std::ceil(std::min(still_ms / options_.still_band_ms, double(tile_rows)))));
+  }
+  return int(std::clamp<int64_t>(bands, 1, tile_rows));
 }
 
 Result<vk::raii::BufferView> VolumeRenderer::CallerMapView(const RenderRequest& request,

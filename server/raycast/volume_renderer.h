@@ -36,10 +36,12 @@ namespace vpm {
 enum class VolumeAccess { kTexelBuffer, kSampler3D };
 
 // Still frames are cast in bands of about this many rays (interleaved rows
-// of 8 x 8 tiles, gpu::RaycastBandPush), one submit and wait each. Vulkan runs a queue's
-// submits in order, so a frame that another session submits while a still
-// is being cast runs after the band in progress, not after the whole still
-// (docs/RENDERING.md, "Stills in bands"): a 512^2 still is 8 bands, a
+// of 8 x 8 tiles, gpu::RaycastBandPush), one submit and wait each, or more
+// bands where the last still says such a band takes longer than
+// kStillBandMs. Vulkan runs a queue's submits in order, so a frame that
+// another session submits while a still is being cast runs after the band
+// in progress, not after the whole still, and a cancelled still stops after
+// it (docs/RENDERING.md, "Stills in bands"): a 512^2 still is 8 bands, a
 // 256^2 one 2. Interactive frames are never cut.
 inline constexpr int64_t kStillBandRays = 32768;
 
@@ -150,8 +152,10 @@ class VolumeRenderer {
   Status RecordBand(gpu::ComputeBatch& batch, const Cast& cast, const RaycastSetup& setup,
                     int band, int bands);
   // Bands for a frame cast at width x height: still frames width x height /
-  // still_band_rays (at least 1, at most a tile row each), or 1 where the
-  // last still's cost says this one takes under still_band_ms / 2; others 1.
+  // still_band_rays, or as many as make bands of still_band_ms at the last
+  // still's cost per ray where that is more (at least 1, at most a tile row
+  // each), or 1 where that cost says this one takes under still_band_ms / 2;
+  // others 1.
   int Bands(const RenderRequest& request, int width, int height) const;
   // Bands per submit after band 0, from band 0's time (ms): still_band_ms
   // worth, at least 1, at most bands - 1.

@@ -58,6 +58,21 @@ TEST_F(RaycastTest, StillBands_SameFrameAsOneSubmit) {
     ASSERT_TRUE(interactive.ok()) << interactive.status();
     EXPECT_EQ(interactive->bands, 1);
   }
+  // Bands of a time: where the last still's cost per ray says a band of
+  // still_band_rays takes longer than still_band_ms (here 1 ns), the next
+  // still takes a band per tile row, and its pixels do not move.
+  auto timed = VolumeRenderer::Create(context(), {.still_band_rays = 1750, .still_band_ms = 1e-6});
+  ASSERT_TRUE(timed.ok()) << timed.status();
+  RenderRequest r = Request(RenderMode::kDvr);
+  r.width = 100;
+  r.height = 70;
+  auto by_rays = (*timed)->Render(r);
+  auto by_time = (*timed)->Render(r);
+  ASSERT_TRUE(by_rays.ok() && by_time.ok()) << by_rays.status() << by_time.status();
+  EXPECT_EQ(by_rays->bands, 4);
+  EXPECT_EQ(by_time->bands, 9);
+  EXPECT_EQ(by_time->submits, 9);
+  EXPECT_EQ(by_time->rgba, by_rays->rgba);
   // The default: a renderer's first 512^2 still in 8 bands, in 2 to 8
   // submits (by the device's speed).
   auto fresh = VolumeRenderer::Create(context(), {});

@@ -170,7 +170,8 @@ double MsUntilIdle(VpmServer& server, Clock::time_point since) {
 
 // Cancellation inside the file readers and between the bands of a still:
 // a LoadVolume of a large .nii.gz from the data root, and a Render of a
-// 2048^2 still (128 bands), each cancelled by its client while it runs.
+// 2048^2 still (bands of about 15 ms), each cancelled by its client while it
+// runs. The suite runs alone (tests/service/CMakeLists.txt).
 class CancelReadAndRenderTest : public TwoUsersTest {
  protected:
   void SetUp() override {
@@ -272,7 +273,7 @@ TEST_F(CancelReadAndRenderTest, AStillCancelledBetweenBandsStopsWithin100Ms) {
   std::unique_lock lock(mutex);
   ASSERT_TRUE(done.wait_for(lock, std::chrono::seconds(30), [&] { return answer.has_value(); }));
   std::printf(
-      "Render of a 2048^2 still (128 bands): %.0f ms whole; cancelled a third in, the "
+      "Render of a 2048^2 still (bands of about 15 ms): %.0f ms whole; cancelled a third in, the "
       "server answered %.1f ms after the cancel\n",
       whole_ms, stop_ms);
   EXPECT_EQ(answer->error_code(), grpc::CANCELLED);
