@@ -41,8 +41,8 @@ enum class VolumeAccess { kTexelBuffer, kSampler3D };
 // kStillBandMs. Vulkan runs a queue's submits in order, so a frame that
 // another session submits while a still is being cast runs after the band
 // in progress, not after the whole still, and a cancelled still stops after
-// it (docs/RENDERING.md, "Stills in bands"): a 512^2 still is 8 bands, a
-// 256^2 one 2. Interactive frames are never cut.
+// it (docs/RENDERING.md, "Stills in bands"): a 512^2 still is at least 8
+// bands, a 256^2 one at least 2. Interactive frames are never cut.
 inline constexpr int64_t kStillBandRays = 32768;
 
 // After band 0, which goes with the frame's first submit, the other bands of
