@@ -9,7 +9,6 @@
 #include "server/gpu/compute_batch.h"
 #include "server/gpu/dispatch_threads.h"
 #include "server/gpu/shader_interface.h"
-#include "server/raycast/preintegrated_lut.h"
 #include "shaders/brick_minmax.spv.h"
 #include "shaders/brick_occupancy.spv.h"
 #include "shaders/raycast_dvr.spv.h"
@@ -255,7 +254,7 @@ Status VolumeRenderer::PrepareLut(const RenderPreset& preset, double step_mm,
   if (same && (!preintegrated || preintegrated_baked_)) return absl::OkStatus();
   if (preintegrated) {
     // After the RenderLutBlock in the same buffer (shader_interface.h).
-    const std::vector<glm::vec4> table = BakePreintegratedLut(preset, step_mm);
+    const std::vector<glm::vec4>& table = preintegrated_tables_.Table(preset, step_mm);
     RETURN_IF_ERROR(lut_->Upload(std::as_bytes(std::span<const glm::vec4>(table)),
                                  sizeof(gpu::RenderLutBlock)));
   }

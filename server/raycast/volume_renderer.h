@@ -25,6 +25,7 @@
 #include "server/gpu/gpu_buffer.h"
 #include "server/gpu/gpu_context.h"
 #include "server/gpu/gpu_image3d.h"
+#include "server/raycast/preintegrated_lut_cache.h"
 #include "server/raycast/render_presets.h"
 #include "server/raycast/render_request.h"
 
@@ -242,6 +243,7 @@ class VolumeRenderer {
   glm::vec4 lut_params_{0.0f};
   uint64_t lut_generation_ = 0;  // bumped at every bake
   bool preintegrated_baked_ = false;  // the buffer holds the pre-integrated table of lut_preset_
+  PreintegratedLutCache preintegrated_tables_;  // uploaded to lut_ after its RenderLutBlock
   std::optional<OccupancyKey> occupancy_key_;
   double still_ms_per_ray_ = -1.0;  // the last still's (RememberStillCost); -1: none yet
 };
