@@ -25,6 +25,10 @@ std::vector<double> RefineLadder(const RenderRequest& interactive, const VolumeG
   return ladder;
 }
 
+bool StillWorthRungs(double predicted_still_ms, double min_still_ms) {
+  return !(min_still_ms > 0.0) || predicted_still_ms < 0.0 || predicted_still_ms >= min_still_ms;
+}
+
 void MakeRefineRung(RenderRequest& still, double multiple, const VolumeGeometry& geometry) {
   if (!(multiple > 1.0)) return;
   still.settings.step_mm = multiple * RequestStepMm(still, geometry);

@@ -28,6 +28,13 @@ inline constexpr std::array<double, 1> kRefineStepMultiples = {2.0};
 std::vector<double> RefineLadder(const RenderRequest& interactive, const VolumeGeometry& geometry,
                                  std::span<const double> multiples = kRefineStepMultiples);
 
+// Whether a still predicted to cast in `predicted_still_ms` (-1: not known
+// yet) is worth rungs before it: a rung (2 x the still's step) costs more
+// than half the still, so where the still comes soon it only puts it off.
+// True when min_still_ms <= 0 (always), when the prediction is unknown, or
+// when it is at least min_still_ms (ServerOptions::refine_min_still_ms).
+bool StillWorthRungs(double predicted_still_ms, double min_still_ms);
+
 // Makes `still` (a kStill request) the rung at `multiple` x its step (mm:
 // settings.step_mm); a multiple <= 1 leaves the still.
 void MakeRefineRung(RenderRequest& still, double multiple, const VolumeGeometry& geometry);

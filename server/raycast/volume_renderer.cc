@@ -529,6 +529,11 @@ void VolumeRenderer::RememberStillCost(std::span<const gpu::DispatchTiming> timi
   if (rays > 0) still_ms_per_ray_ = cast_ms / double(rays);
 }
 
+double VolumeRenderer::PredictStillMs(int64_t rays) const {
+  const double per_ray = still_ms_per_ray_.load();
+  return per_ray < 0.0 ? -1.0 : per_ray * double(rays);
+}
+
 int VolumeRenderer::BandsPerSubmit(double band0_ms, int bands) const {
   if (options_.still_band_ms <= 0.0 || bands <= 2 || band0_ms < 0.0) return 1;
   // band0_ms 0 (under the timestamps' resolution): all in one submit.

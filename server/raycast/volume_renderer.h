@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -80,6 +81,11 @@ class VolumeRenderer {
   // GpuVolume whose address a later volume may reuse; the cache also
   // checks the buffer handle and extent, and holds at most 4 volumes.
   void ForgetVolume(const GpuVolume* volume);
+
+  // The ray cast time (ms) of a still of `rays` rays at the cost per ray of
+  // this renderer's last still or rung (a rung, at twice the step, costs
+  // less per ray); -1 before the first. Thread-safe.
+  double PredictStillMs(int64_t rays) const;
 
   VolumeAccess volume_access() const { return options_.volume_access; }
 
@@ -245,7 +251,9 @@ class VolumeRenderer {
   bool preintegrated_baked_ = false;  // the buffer holds the pre-integrated table of lut_preset_
   PreintegratedLutCache preintegrated_tables_;  // uploaded to lut_ after its RenderLutBlock
   std::optional<OccupancyKey> occupancy_key_;
-  double still_ms_per_ray_ = -1.0;  // the last still's (RememberStillCost); -1: none yet
+  // The last still's or rung's (RememberStillCost); -1: none yet. Atomic:
+  // PredictStillMs reads it outside mutex_.
+  std::atomic<double> still_ms_per_ray_{-1.0};
 };
 
 }  // namespace vpm

@@ -163,7 +163,8 @@ void FrameStream::RenderNow(std::chrono::steady_clock::time_point queued_at) {
   }
   // At rest: the ladder's rungs, then the still (ladder_ and next_rung_ are
   // the render task's: at most one runs per stream).
-  if (plan.at_rest && next_rung_ == 0) ladder_ = session_->RefineLadder(plan.settings);
+  if (plan.at_rest && next_rung_ == 0)
+    ladder_ = session_->RefineLadder(plan.settings, service_->options.refine_min_still_ms);
   const bool rung = plan.at_rest && next_rung_ < ladder_.size();
   std::atomic<bool> moved{false};
   auto frame = session_->Render({.settings = &plan.settings,

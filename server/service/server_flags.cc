@@ -167,6 +167,10 @@ void AddWorkFlags(CLI::App& app, ServerOptions* o) {
   app.add_option("--still-delay-ms", o->still_delay_ms,
                  "idle time after a drag before the full-quality still frame")
       ->capture_default_str();
+  app.add_option("--refine-min-still-ms", o->refine_min_still_ms,
+                 "at rest, sharper rungs before the still only where the still is predicted "
+                 "to take this long or more (ms; 0: always)")
+      ->capture_default_str();
   app.add_flag("--refine-on-grab,!--no-refine-on-grab", o->refine_on_grab,
                "a grab where the session's mesh is coarse refines it there, built beside the "
                "running mesh and swapped in at the next frame with the manipulation replayed "

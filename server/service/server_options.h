@@ -61,6 +61,10 @@ struct ServerOptions {
   int64_t max_running_per_user = 0;              // a user's jobs running at once per pool; 0: threads - 1 (at least 1)
   int64_t max_queued = 1024;                     // jobs waiting per pool, all users
   double still_delay_ms = 150;                   // idle time before a still frame
+  // Rungs before a still only where the session's renderer predicts the
+  // still's cast at this many ms or more (refine_ladder.h,
+  // StillWorthRungs); 0: always.
+  double refine_min_still_ms = 100;
   // A grab refines the session's mesh there (docs/SERVICE.md). Off by
   // default: on the phantom the organ lags the pointer more on the refined
   // mesh (an 8 mm drag reaches 5.4 mm at 64^3), which needs a look first.

@@ -317,15 +317,19 @@ Result<Session::PreparedFrame> Session::PrepareFrame(const FrameRequest& request
   return prepared;
 }
 
-std::vector<double> Session::RefineLadder(const StreamSettings& settings) const {
+std::vector<double> Session::RefineLadder(const StreamSettings& settings,
+                                          double min_still_ms) const {
   SceneView view = settings.view;
   {
     std::lock_guard lock(state_mutex_);
     view.camera = camera_;
   }
   view.quality = RenderQuality::kInteractive;
-  return vpm::RefineLadder(ViewRenderRequest(view, scene_->auto_interactive_quality()),
-                           volume_->volume.geometry());
+  const RenderRequest interactive = ViewRenderRequest(view, scene_->auto_interactive_quality());
+  // The still casts every pixel of the frame.
+  const int64_t still_rays = int64_t(interactive.width) * interactive.height;
+  if (!StillWorthRungs(renderer_->PredictStillMs(still_rays), min_still_ms)) return {};
+  return vpm::RefineLadder(interactive, volume_->volume.geometry());
 }
 
 Status Session::SettleLocked(SceneStepTimings* step) {

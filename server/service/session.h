@@ -136,8 +136,10 @@ class Session : public std::enable_shared_from_this<Session> {
   };
   Result<v3::Frame> Render(const FrameRequest& request);
   // The refinement rungs (step multiples of the still's, coarsest first:
-  // RefineLadder) for frames of `settings` at the session's camera.
-  std::vector<double> RefineLadder(const StreamSettings& settings) const;
+  // RefineLadder) for frames of `settings` at the session's camera; none
+  // where the session's renderer predicts the still under min_still_ms
+  // (StillWorthRungs).
+  std::vector<double> RefineLadder(const StreamSettings& settings, double min_still_ms) const;
   // One slice of the current state (RenderSlice): the Frame's image is the
   // slice, Frame.slice where it lies.
   Result<v3::Frame> RenderSlice(const SliceRequest& request, bool png, int jpeg_quality);

@@ -77,8 +77,13 @@ TEST_F(RaycastTest, StillBands_SameFrameAsOneSubmit) {
   // submits (by the device's speed).
   auto fresh = VolumeRenderer::Create(context(), {});
   ASSERT_TRUE(fresh.ok()) << fresh.status();
+  EXPECT_EQ((*fresh)->PredictStillMs(512 * 512), -1.0);  // no still yet
   auto still = (*fresh)->Render(Request(RenderMode::kMip, "ct-vessels", 512));
   ASSERT_TRUE(still.ok()) << still.status();
+  // The next still's cast predicted from this one's cost per ray.
+  const double predicted = (*fresh)->PredictStillMs(512 * 512);
+  EXPECT_GT(predicted, 0.0);
+  EXPECT_DOUBLE_EQ((*fresh)->PredictStillMs(256 * 256), predicted / 4.0);
   EXPECT_EQ(still->bands, int(512 * 512 / kStillBandRays));
   EXPECT_GE(still->submits, 2);
   EXPECT_LE(still->submits, still->bands);

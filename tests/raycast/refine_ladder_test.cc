@@ -1,6 +1,7 @@
 // The refinement ladder (refine_ladder.h): a rung is kept only where it
 // beats the interactive frames it follows (more rays or a finer step, and
-// neither worse), and is the still's request at a multiple of its step.
+// neither worse), and is the still's request at a multiple of its step;
+// rungs come only before a still predicted to take a while.
 #include <gtest/gtest.h>
 
 #include "server/raycast/refine_ladder.h"
@@ -54,6 +55,17 @@ TEST(RefineLadder, ARungIsTheStillAtAMultipleOfItsStep) {
   RenderRequest same = still;
   MakeRefineRung(same, 1.0, g);
   EXPECT_DOUBLE_EQ(RequestStepMm(same, g), step_mm);
+}
+
+// Rungs only before a still that takes a while: a rung costs more than half
+// the still, so before a quick one it only puts the still off.
+TEST(RefineLadder, RungsOnlyBeforeAStillPredictedSlow) {
+  EXPECT_TRUE(StillWorthRungs(250.0, 100.0));
+  EXPECT_TRUE(StillWorthRungs(100.0, 100.0));
+  EXPECT_FALSE(StillWorthRungs(45.0, 100.0));
+  EXPECT_FALSE(StillWorthRungs(0.0, 100.0));
+  EXPECT_TRUE(StillWorthRungs(-1.0, 100.0));  // no still cast yet
+  EXPECT_TRUE(StillWorthRungs(45.0, 0.0));    // 0: always
 }
 
 }  // namespace

@@ -2,7 +2,8 @@
 // the pointer rests, an Interact stream sends the ladder's rungs (interactive,
 // refine_level 1, 2, ...), each closer to the still, then the still, byte for
 // byte the still that Render returns; a move during the refinement gets an
-// interactive frame next and the rest of the ladder is dropped.
+// interactive frame next and the rest of the ladder is dropped; no rung
+// comes before a still predicted quick.
 #include <chrono>
 #include <thread>
 #include <vector>
@@ -57,6 +58,15 @@ class RefineAtRestTest : public PhantomSessionTest {
       ASSERT_TRUE(stream.Write(Drag(1.0 * i, 2 + i)));
     }
   }
+  // Opens the stream, grabs and drags (GrabAndDrag) and returns the frames
+  // up to the still of the last drag.
+  std::vector<v3::Frame> OpenDragAndRest(Stream& stream, const v3::RenderSettings& settings) {
+    Open(stream, settings);
+    std::jthread pointer([&] { GrabAndDrag(stream); });
+    std::vector<v3::Frame> frames = ReadUntilStill(stream, kLastDrag);
+    pointer.join();
+    return frames;
+  }
   // Frames until the still that reflects event `sequence` (inclusive).
   static std::vector<v3::Frame> ReadUntilStill(
       Stream& stream, uint64_t sequence) {
@@ -91,10 +101,7 @@ TEST_F(RefineAtRestTest, DragThenRest_RungsRisingToTheStillRenderGives) {
   const v3::RenderSettings settings = Lossless(256);
   auto context = Context();
   auto stream = stub_->Interact(context.get());
-  Open(*stream, settings);
-  std::jthread pointer([&] { GrabAndDrag(*stream); });
-  const std::vector<v3::Frame> frames = ReadUntilStill(*stream, kLastDrag);
-  pointer.join();
+  const std::vector<v3::Frame> frames = OpenDragAndRest(*stream, settings);
   ASSERT_FALSE(frames.empty());
   const v3::Frame& still = frames.back();
   ASSERT_FALSE(still.interactive()) << frames.size() << " frames, none the still";
@@ -165,6 +172,30 @@ TEST_F(RefineAtRestTest, MoveDuringRefinement_InteractiveFrameNextLadderDropped)
   EXPECT_FALSE(frames.back().interactive());
   EXPECT_EQ(frames.back().last_sequence(), kMove);
   EXPECT_EQ(frames[frames.size() - 2].refine_level(), int32_t(kRefineStepMultiples.size()));
+  stream->WritesDone();
+  EXPECT_TRUE(stream->Finish().ok());
+}
+
+// Where the still is predicted quicker than --refine-min-still-ms (here
+// always, once the stream's first still has been cast), the rest goes from
+// the interactive frames straight to the still: no rung puts it off.
+TEST_F(RefineAtRestTest, QuickStill_NoRungs) {
+  server_->Shutdown(std::chrono::milliseconds(2000));
+  ServerOptions options = SmallServerOptions();
+  options.refine_min_still_ms = 1e9;
+  StartServer(options);
+  volume_ = LoadPhantom();
+  session_ = OpenSession(volume_.volume_id());
+  const v3::RenderSettings settings = Lossless(256);
+  auto context = Context();
+  auto stream = stub_->Interact(context.get());
+  const std::vector<v3::Frame> frames = OpenDragAndRest(*stream, settings);
+  ASSERT_GE(frames.size(), 2u);
+  const v3::Frame& still = frames.back();
+  ASSERT_FALSE(still.interactive()) << frames.size() << " frames, none the still";
+  for (const v3::Frame& frame : frames) EXPECT_EQ(frame.refine_level(), 0);
+  EXPECT_TRUE(frames[frames.size() - 2].interactive());
+  EXPECT_EQ(DirectStill(settings).image(), still.image());
   stream->WritesDone();
   EXPECT_TRUE(stream->Finish().ok());
 }

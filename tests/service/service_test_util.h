@@ -32,6 +32,9 @@ inline ServerOptions SmallServerOptions() {
   o.max_sessions = 3;
   o.max_streams_per_user = 4;
   o.still_delay_ms = 100;
+  // Rungs at rest however fast the still (refine_at_rest_test also sets a
+  // minimum).
+  o.refine_min_still_ms = 0;
   o.max_frame_side = 512;
   // The mesh stays the one the session opened with, so that a test's
   // frames and displacements do not depend on when a background refinement
