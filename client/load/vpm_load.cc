@@ -96,11 +96,11 @@ json LevelReport(const std::vector<cli::PlayResult>& results, int concurrency, s
     codes[absl::StatusCodeToString(r.status.code())]++;
     std::vector<double> intervals;
     for (size_t i = 0; i < r.frames.size(); ++i) {
-      if (r.frames[i].latency_ms >= 0) frame_latency.push_back(r.frames[i].latency_ms);
-      // The full-quality frame, from the event it shows: still delay,
-      // rungs, the still's cast.
-      if (r.frames[i].latency_ms >= 0 && !r.frames[i].interactive) {
-        still_latency.push_back(r.frames[i].latency_ms);
+      if (r.frames[i].latency_ms >= 0) {
+        frame_latency.push_back(r.frames[i].latency_ms);
+        // The full-quality frame, from the event it shows: still delay,
+        // rungs, the still's cast.
+        if (!r.frames[i].interactive) still_latency.push_back(r.frames[i].latency_ms);
       }
       bytes += r.frames[i].bytes;
       if (i > 0) intervals.push_back(r.frames[i].received_ms - r.frames[i - 1].received_ms);
