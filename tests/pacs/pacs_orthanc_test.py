@@ -133,8 +133,16 @@ def export_checks(h, t, vol, study, source_folder, audit):
             summary['study_uid'] == study and summary['max_displacement_mm'] > 10,
             f'export to a folder: 112 slices + 1 capture in the source study, '
             f'{(summary or {}).get("max_displacement_mm", 0):.1f} mm moved ({err.strip()[-200:]})')
-    if not names:
-        return
+    if names:
+        derived_series_checks(t, out_dir, study, source_folder, names)
+        export_to_orthanc_checks(h, t, vol, study, sid, audit)
+
+
+def derived_series_checks(t, out_dir, study, source_folder, names):
+    """The exported folder: dciodvfy finds no error; the derived series
+    keeps the source's study, patient and frame of reference with new UIDs
+    and references its source images, on the source grid."""
+    derived = os.path.join(out_dir, 'derived')
     errors, lines = dciodvfy_errors(derived)
     cap_errors, cap_lines = dciodvfy_errors(os.path.join(out_dir, 'capture'))
     t.check(not errors and not cap_errors,
@@ -155,6 +163,11 @@ def export_checks(h, t, vol, study, source_folder, audit):
     deformed = numpy.stack([pydicom.dcmread(os.path.join(derived, n)).pixel_array for n in names])
     t.check(deformed.shape == (112, 101, 122), f'slices of the source grid {deformed.shape}')
 
+
+def export_to_orthanc_checks(h, t, vol, study, sid, audit):
+    """Session `sid` exported to Orthanc by STOW-RS: QIDO finds both series
+    in the study, vpm reads the derived one back on the source grid; bob and
+    a forbidden endpoint are refused; the audit log records it."""
     summary, err = h.vpm_json('alice', 'export-dicom', '--session', sid, '--to', 'pacs:orthanc', '--json')
     t.check(summary is not None and summary['endpoint'] == 'orthanc' and summary['instances'] == 113,
             f'export to Orthanc by STOW-RS ({err.strip()[-200:]})')
@@ -166,7 +179,7 @@ def export_checks(h, t, vol, study, source_folder, audit):
     c = by_uid.get(summary['capture_series_uid'], {})
     t.check(d.get('modality') == 'CT' and d.get('instance_count') == 112 and
             d.get('description', '').startswith('vpm deformed') and c.get('instance_count') == 1,
-            f'QIDO finds the derived series (112 CT) and the capture in the study')
+            'QIDO finds the derived series (112 CT) and the capture in the study')
     rc, out, err = h.vpm('alice', 'volume', 'load', d.get('source', 'pacs:orthanc/x/y'))
     back = json.loads(out) if rc == 0 else {}
     if back:
@@ -212,20 +225,31 @@ def main():
 
 
 def run(h, t, build, source):
-    checker = os.path.join(build, 'tests', 'pacs', 'vpm_test_pacs_live_check')
-    kidney_nifti = os.path.join(source, 'tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz')
     tilt_folder = os.path.join(source, 'tests/data/ct-philips-tilt')
     kidney, report = h.write_kidney_study(source, STUDY, PATIENT_NAME, PATIENT_ID, BIRTH_DATE,
                                           '20240315')
-    import subprocess
-
     base = h.start_orthanc({'vpm': ORTHANC_PASSWORD})
     n = h.orthanc_upload_folder(kidney, 'vpm', ORTHANC_PASSWORD)
     n += h.orthanc_upload_folder(report, 'vpm', ORTHANC_PASSWORD)
     tilt_n = h.orthanc_upload_folder(tilt_folder, 'vpm', ORTHANC_PASSWORD)
     t.check(n == 113 and tilt_n == 54, f'Orthanc took {n} kidney/SR and {tilt_n} tilted instances')
+    live_check(h, t, build, source, base)
+    audit, cache = start_server(h, base)
+    search_checks(h, t)
+    series_checks(h, t, cache)
+    vol, bob_vol = load_checks(h, t, kidney, audit, cache)
+    tilt_checks(h, t, tilt_folder)
+    export_checks(h, t, vol, STUDY, kidney, audit)
+    failure_checks(h, t, cache, bob_vol)
+    privacy_checks(h, t, audit)
 
-    # The library alone: every voxel and every slice position.
+
+def live_check(h, t, build, source, base):
+    """The library alone (vpm_test_pacs_live_check): every voxel and every
+    slice position of the retrieved kidney CT."""
+    import subprocess
+    checker = os.path.join(build, 'tests', 'pacs', 'vpm_test_pacs_live_check')
+    kidney_nifti = os.path.join(source, 'tests/data/ct-abdomen-kidney/ct_abdomen.nii.gz')
     pw_file = h.write_secret('orthanc.pw', ORTHANC_PASSWORD)
     p = subprocess.run([checker, '--url', base, '--username', 'vpm', '--password-file', pw_file,
                         '--study', STUDY, '--series', CT_SERIES, '--source', kidney_nifti,
@@ -235,7 +259,12 @@ def run(h, t, build, source):
     t.check(p.returncode == 0, 'vpm_pacs retrieves the kidney CT: every voxel equals the NIfTI, '
                                'every slice lies at its ImagePositionPatient')
 
-    bad_pw = h.write_secret('wrong.pw', WRONG_PASSWORD)
+
+def start_server(h, base):
+    """vpm-server with alice, bob and carol, the endpoints file (orthanc for
+    alice and bob, orthanc-badpw for alice), a PACS cache and an audit log.
+    Returns the audit log's and the cache's paths."""
+    h.write_secret('wrong.pw', WRONG_PASSWORD)
     users = h.write_users(['alice', 'bob', 'carol'])
     endpoints = h.write_endpoints([
         {'name': 'orthanc', 'dicomweb': base, 'username': 'vpm', 'password_file': 'orthanc.pw',
@@ -245,8 +274,12 @@ def run(h, t, build, source):
     audit = os.path.join(h.tmp, 'audit.jsonl')
     cache = os.path.join(h.tmp, 'cache')
     h.start_server(users, ['--pacs', endpoints, '--pacs-cache', cache, '--pacs-audit-log', audit])
+    return audit, cache
 
-    # ------------------------------------------------------------ search
+
+def search_checks(h, t):
+    """`vpm pacs search` by name wildcard, ID, date range, modality and
+    limit; a forbidden user and an unknown endpoint get the same answer."""
     found, err = h.vpm_json('alice', 'pacs', 'search', '--endpoint', 'orthanc',
                             '--patient-name', 'KIDNEY^TEST*', '--json')
     studies = (found or {}).get('studies', [])
@@ -277,7 +310,9 @@ def run(h, t, build, source):
             err2.replace('nowhere', 'orthanc') == err.replace('carol', 'alice'),
             'an unknown endpoint gets the same answer as a forbidden one')
 
-    # ------------------------------------------------------------ series
+
+def series_checks(h, t, cache):
+    """`vpm pacs series` of the study, and the CT's thumbnails."""
     listed, err = h.vpm_json('alice', 'pacs', 'series', '--endpoint', 'orthanc', '--study', STUDY, '--json')
     series = (listed or {}).get('series', [])
     ct = [s for s in series if s['series_uid'] == CT_SERIES]
@@ -288,8 +323,6 @@ def run(h, t, build, source):
             f'series listing: modality, description, body part, 112 images ({err.strip()})')
     rc, out, _ = h.vpm('alice', 'pacs', 'series', '--endpoint', 'orthanc', '--study', STUDY)
     t.check(rc == 0 and f'pacs:orthanc/{STUDY}/{CT_SERIES}' in out, 'the text table of a listing')
-
-    # ------------------------------------------------------------ thumbnails
     thumbnail_checks(h, t, 'orthanc', STUDY, CT_SERIES, SR_SERIES, 'WADO-RS')
     rc, _, err = h.vpm('carol', 'pacs', 'thumbnail', '--endpoint', 'orthanc', '--study', STUDY,
                        '--series', CT_SERIES, '--out', os.path.join(h.tmp, 'carol.png'))
@@ -297,34 +330,44 @@ def run(h, t, build, source):
     t.check(not [n for n in os.listdir(cache) if n.startswith('.tmp-')],
             'no scratch folder of a thumbnail is left in the cache')
 
-    # ------------------------------------------------------------ load
+
+def volume_geometry_checks(t, vol, g, ct_source):
+    """The volume vpm opened (`vpm volume load`'s JSON) against the slices'
+    geometry g (slices_geometry): dims, direction, spacing, every slice's
+    position, the value range, the owner."""
+    direction = numpy.array(vol['direction_columns_lps'])  # rows: the i, j, k axes
+    origin = numpy.array(vol['origin_lps_mm'])
+    spacing = vol['spacing_mm']
+    gap = float(numpy.dot(g['positions'][1] - g['positions'][0], g['normal']))
+    t.check(vol['dims'] == [g['columns'], g['rows'], len(g['positions'])],
+            f'dims {vol["dims"]} = columns, rows, slices')
+    t.check(numpy.allclose(direction[0], g['row'], atol=1e-6) and
+            numpy.allclose(direction[1], g['col'], atol=1e-6) and
+            numpy.allclose(direction[2], g['normal'], atol=1e-6),
+            'direction = ImageOrientationPatient and its normal')
+    t.check(abs(spacing[0] - g['spacing'][1]) < 1e-6 and abs(spacing[1] - g['spacing'][0]) < 1e-6
+            and abs(spacing[2] - gap) < 1e-4, f'spacing {spacing} = PixelSpacing and the gap')
+    worst = max(float(numpy.linalg.norm(origin + direction[2] * spacing[2] * k - p))
+                for k, p in enumerate(g['positions']))
+    t.check(worst < 1e-3, f'every slice k at origin + k gap normal = its ImagePositionPatient '
+                          f'(worst {worst:.2e} mm)')
+    t.check(vol['min_value'] == g['min'] and vol['max_value'] == g['max'],
+            f'values {vol["min_value"]}..{vol["max_value"]} = the slices\' {g["min"]}..{g["max"]}')
+    t.check(vol['owner'] == 'alice' and vol['source'] == ct_source, 'the volume is alice\'s')
+
+
+def load_checks(h, t, kidney, audit, cache):
+    """alice opens the kidney CT from Orthanc (its geometry and values
+    against the slices' own), bob from the cache, alice again (held); bob
+    can neither read nor list alice's volume. Returns both volumes."""
     ct_source = f'pacs:orthanc/{STUDY}/{CT_SERIES}'
     start = time.monotonic()
     rc, out, err = h.vpm('alice', 'volume', 'load', ct_source)
     first_s = time.monotonic() - start
     vol = json.loads(out) if rc == 0 else {}
     t.check(rc == 0, f'vpm volume load {ct_source} ({err.strip()[-300:]})')
-    g = slices_geometry(kidney)
     if vol:
-        direction = numpy.array(vol['direction_columns_lps'])  # rows: the i, j, k axes
-        origin = numpy.array(vol['origin_lps_mm'])
-        spacing = vol['spacing_mm']
-        gap = float(numpy.dot(g['positions'][1] - g['positions'][0], g['normal']))
-        t.check(vol['dims'] == [g['columns'], g['rows'], len(g['positions'])],
-                f'dims {vol["dims"]} = columns, rows, slices')
-        t.check(numpy.allclose(direction[0], g['row'], atol=1e-6) and
-                numpy.allclose(direction[1], g['col'], atol=1e-6) and
-                numpy.allclose(direction[2], g['normal'], atol=1e-6),
-                'direction = ImageOrientationPatient and its normal')
-        t.check(abs(spacing[0] - g['spacing'][1]) < 1e-6 and abs(spacing[1] - g['spacing'][0]) < 1e-6
-                and abs(spacing[2] - gap) < 1e-4, f'spacing {spacing} = PixelSpacing and the gap')
-        worst = max(float(numpy.linalg.norm(origin + direction[2] * spacing[2] * k - p))
-                    for k, p in enumerate(g['positions']))
-        t.check(worst < 1e-3, f'every slice k at origin + k gap normal = its ImagePositionPatient '
-                              f'(worst {worst:.2e} mm)')
-        t.check(vol['min_value'] == g['min'] and vol['max_value'] == g['max'],
-                f'values {vol["min_value"]}..{vol["max_value"]} = the slices\' {g["min"]}..{g["max"]}')
-        t.check(vol['owner'] == 'alice' and vol['source'] == ct_source, 'the volume is alice\'s')
+        volume_geometry_checks(t, vol, slices_geometry(kidney), ct_source)
     records = audit_records(audit)
     opens = [r for r in records if r['action'] == 'open']
     t.check(len(opens) == 1 and opens[0]['cache'] == 'miss' and opens[0]['result'] == 'OK' and
@@ -357,8 +400,11 @@ def run(h, t, build, source):
             'nor see it listed')
     print(f'      figures: first open {first_s:.2f} s (retrieve + read + GPU upload), '
           f'second user from the cache {second_s:.2f} s, held {held_s:.2f} s')
+    return vol, bob_vol
 
-    # The tilted series: retrieved, resampled, every slice inside the box.
+
+def tilt_checks(h, t, tilt_folder):
+    """The tilted series: retrieved, resampled, every slice inside the box."""
     tilt = pydicom.dcmread(os.path.join(tilt_folder, 'I10'))
     tilt_source = f'pacs:orthanc/{tilt.StudyInstanceUID}/{tilt.SeriesInstanceUID}'
     rc, out, err = h.vpm('alice', 'volume', 'load', tilt_source)
@@ -373,10 +419,11 @@ def run(h, t, build, source):
         inside = all(-0.5 <= i[c] <= tv['dims'][c] - 0.5 for i in idx for c in range(3))
         t.check(inside, 'every tilted slice\'s ImagePositionPatient lies inside the volume\'s grid')
 
-    # ------------------------------------------------------------ export
-    export_checks(h, t, vol, STUDY, kidney, audit)
 
-    # ------------------------------------------------------------ failures
+def failure_checks(h, t, cache, bob_vol):
+    """An SR, an unknown series, a wrong password, a forbidden user; then
+    Orthanc stopped: UNAVAILABLE, the cache still serves, the server lives."""
+    ct_source = f'pacs:orthanc/{STUDY}/{CT_SERIES}'
     rc, _, err = h.vpm('alice', 'volume', 'load', f'pacs:orthanc/{STUDY}/{SR_SERIES}')
     t.check(rc != 0 and 'INVALID_ARGUMENT' in err and 'holds no images' in err,
             f'the structured report is refused: {err.strip()[-200:]}')
@@ -403,7 +450,10 @@ def run(h, t, build, source):
     rc, _, _ = h.vpm('alice', 'volume', 'list')
     t.check(rc == 0 and h.server_alive(), 'the server keeps serving')
 
-    # ------------------------------------------------------------ privacy
+
+def privacy_checks(h, t, audit):
+    """No patient identifier or secret in the server's log or the audit log;
+    the audit log records every action with its fields."""
     with open(h.server_log) as f:
         log = f.read()
     secrets = [PATIENT_NAME, 'KIDNEY', PATIENT_ID, BIRTH_DATE, ORTHANC_PASSWORD, WRONG_PASSWORD]
