@@ -40,6 +40,20 @@ def main():
 
 
 def run(h, t, build, source):
+    base = start_fake_dicomweb(h, build, source)
+    cache, audit = start_server(h, base)
+    paging_checks(h, t, base)
+    load_checks(h, t, cache)
+    table = fault_checks(h, t, cache)
+    stall_checks(h, t, cache, audit)
+    print('      fault table:')
+    for mode, err in table:
+        print(f'        {mode:10s} {err[-200:]}')
+
+
+def start_fake_dicomweb(h, build, source):
+    """The kidney CT, an SR and another series written to folders, served by
+    fake_dicomweb.py; returns its base URL."""
     writer = os.path.join(build, 'tests', 'pacs', 'vpm_test_write_dicom_series')
     common = ['--study-uid', STUDY, '--patient-name', 'FAKE^PATIENT', '--patient-id', 'FAKE0',
               '--birth-date', '19800101', '--study-date', '20240101']
@@ -50,7 +64,6 @@ def run(h, t, build, source):
                    check=True, capture_output=True)
     os.makedirs(other)
     shutil.copy(os.path.join(source, 'tests/data/ct-philips-tilt/I10'), other)
-
     port_file = os.path.join(h.tmp, 'fake.port')
     fake = subprocess.Popen([sys.executable, os.path.join(os.path.dirname(__file__), 'fake_dicomweb.py'),
                              ct, sr, other, port_file])
@@ -60,12 +73,13 @@ def run(h, t, build, source):
             break
         time.sleep(0.05)
     port = int(open(port_file).read())
-    base = f'http://127.0.0.1:{port}'
+    return f'http://127.0.0.1:{port}'
 
-    def counts():
-        with urllib.request.urlopen(f'{base}/_counts', timeout=10) as r:
-            return json.loads(r.read())
 
+def start_server(h, base):
+    """vpm-server with one endpoint per fault mode of the fake server (and a
+    good and a wrong bearer token); returns the cache's and the audit log's
+    paths."""
     h.write_secret('good.token', 'good-token')
     h.write_secret('wrong.token', 'wrong-token')
     modes = ['quirky', 'truncated', 's401', 's403', 's404', 's500', 'w401', 'w403', 'w404', 'w500',
@@ -80,15 +94,22 @@ def run(h, t, build, source):
     audit = os.path.join(h.tmp, 'audit.jsonl')
     h.start_server(users, ['--pacs', h.write_endpoints(endpoints), '--pacs-cache', cache,
                            '--pacs-audit-log', audit])
+    return cache, audit
 
-    def load(mode, *extra):
-        return h.vpm('alice', *extra, 'volume', 'load', f'pacs:{mode}/{STUDY}/{CT_SERIES}')
 
-    def cached(mode):
-        return os.path.exists(os.path.join(cache, mode)) and os.listdir(os.path.join(cache, mode))
+def load(h, mode, *extra):
+    return h.vpm('alice', *extra, 'volume', 'load', f'pacs:{mode}/{STUDY}/{CT_SERIES}')
 
-    def temporaries():
-        return [n for n in os.listdir(cache) if n.startswith('.tmp-')]
+
+def cached(cache, mode):
+    return os.path.exists(os.path.join(cache, mode)) and os.listdir(os.path.join(cache, mode))
+
+
+def paging_checks(h, t, base):
+    """Paging with offset, a server that ignores it, --limit."""
+    def counts():
+        with urllib.request.urlopen(f'{base}/_counts', timeout=10) as r:
+            return json.loads(r.read())
 
     # Paging: a server that honours offset, 5 studies in pages of 2.
     found, err = h.vpm_json('alice', 'pacs', 'search', '--endpoint', 'good', '--json')
@@ -102,17 +123,21 @@ def run(h, t, build, source):
     found, _ = h.vpm_json('alice', 'pacs', 'search', '--endpoint', 'good', '--limit', '3', '--json')
     t.check(found is not None and len(found['studies']) == 3 and found['truncated'], '--limit 3 of 5')
 
-    rc, out, err = load('good')
+
+def load_checks(h, t, cache):
+    """Loads that work: a bearer token (and a wrong one refused), a quirky
+    multipart answer, a slow retrieval with its progress."""
+    rc, out, err = load(h, 'good')
     t.check(rc == 0 and json.loads(out)['dims'] == [122, 101, 112],
             f'a bearer-token endpoint: the series loads ({err.strip()[-200:]})')
     rc, _, err = h.vpm('alice', 'pacs', 'search', '--endpoint', 'badtoken')
     t.check(rc != 0 and 'PERMISSION_DENIED' in err and 'wrong-token' not in err,
             f'a wrong bearer token: {err.strip()}')
-    rc, out, err = load('quirky')
+    rc, out, err = load(h, 'quirky')
     vol = json.loads(out) if rc == 0 else {}
     t.check(rc == 0 and vol.get('dims') == [122, 101, 112] and vol.get('min_value') == -1207,
             f'unquoted boundary, parts without Content-Length, a preamble: loads ({err.strip()[-200:]})')
-    t.check(bool(cached('quirky')), 'and is cached')
+    t.check(bool(cached(cache, 'quirky')), 'and is cached')
     rc, _, err = h.vpm('alice', 'volume', 'load', '--progress', f'pacs:slow/{STUDY}/{CT_SERIES}')
     stages = [s for s in ('retrieving', 'reading', 'uploading') if s in err]
     percents = [int(p) for p in re.findall(r'\] +(\d+)%', err)]
@@ -121,6 +146,10 @@ def run(h, t, build, source):
             f'a 3 s retrieval reports progress: stages {stages}, {len(set(percents))} distinct '
             f'fractions, never decreasing')
 
+
+def fault_checks(h, t, cache):
+    """Each fault mode answers its status code and words, nothing cached;
+    returns (mode, error) for the table."""
     expect = {
         'truncated': ('INVALID_ARGUMENT', 'truncated'),
         's401': ('PERMISSION_DENIED', 'HTTP 401'),
@@ -137,28 +166,31 @@ def run(h, t, build, source):
     }
     table = []
     for mode, (code, words) in expect.items():
-        rc, _, err = load(mode)
+        rc, _, err = load(h, mode)
         table.append((mode, err.strip()))
-        t.check(rc != 0 and code in err and words in err and not cached(mode),
+        t.check(rc != 0 and code in err and words in err and not cached(cache, mode),
                 f'{mode}: {code}, "{words}", nothing cached: {err.strip()[-220:]}')
     for status, code in (('s401', 'PERMISSION_DENIED'), ('s500', 'UNAVAILABLE')):
         rc, _, err = h.vpm('alice', 'pacs', 'series', '--endpoint', status, '--study', STUDY)
         t.check(rc != 0 and code in err, f'series listing on {status}: {code}')
+    return table
+
+
+def stall_checks(h, t, cache, audit):
+    """A stalled transfer ends at the call's deadline, leaves nothing behind
+    and is audited; the server keeps serving."""
     start = time.monotonic()
-    rc, _, err = load('stall', '--deadline-s', '3')
+    rc, _, err = load(h, 'stall', '--deadline-s', '3')
     took = time.monotonic() - start
-    t.check(rc != 0 and 'DEADLINE_EXCEEDED' in err and took < 20 and not cached('stall'),
+    t.check(rc != 0 and 'DEADLINE_EXCEEDED' in err and took < 20 and not cached(cache, 'stall'),
             f'a stalled transfer ends at the call\'s deadline ({took:.1f} s): {err.strip()[-160:]}')
     time.sleep(1.5)  # the server's side of the cancelled load
-    t.check(temporaries() == [], 'no temporary folder is left behind')
+    t.check(not [n for n in os.listdir(cache) if n.startswith('.tmp-')], 'no temporary folder is left behind')
     stalled = [r for r in map(json.loads, open(audit)) if r['endpoint'] == 'stall']
     t.check(bool(stalled) and stalled[-1]['result'] in ('DEADLINE_EXCEEDED', 'CANCELLED'),
             'the cancelled open is audited as such')
     rc, _, _ = h.vpm('alice', 'volume', 'list')
     t.check(rc == 0 and h.server_alive(), 'the server keeps serving')
-    print('      fault table:')
-    for mode, err in table:
-        print(f'        {mode:10s} {err[-200:]}')
 
 
 if __name__ == '__main__':
