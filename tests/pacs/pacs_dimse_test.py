@@ -15,7 +15,6 @@ Usage: pacs_dimse_test.py BUILD_DIR SOURCE_DIR
 """
 import json
 import os
-import subprocess
 import sys
 import time
 
@@ -68,7 +67,17 @@ def run(h, t, build, source):
     audit = os.path.join(h.tmp, 'audit.jsonl')
     cache = os.path.join(h.tmp, 'cache')
     h.start_server(users, ['--pacs', endpoints, '--pacs-cache', cache, '--pacs-audit-log', audit])
+    find_checks(h, t)
+    thumbnail_checks(h, t, 'pacs', STUDY, CT_SERIES, SR_SERIES, 'C-FIND and C-GET of one instance')
+    vol = get_checks(h, t, kidney, cache)
+    export_back(h, t, vol)
+    failure_checks(h, t)
+    privacy_checks(h, t, audit)
 
+
+def find_checks(h, t):
+    """C-FIND: studies by name wildcard, ID, date range and modality; the
+    study's series."""
     found, err = h.vpm_json('alice', 'pacs', 'search', '--endpoint', 'pacs',
                             '--patient-name', 'DIMSE^TEST*', '--json')
     studies = (found or {}).get('studies', [])
@@ -91,8 +100,10 @@ def run(h, t, build, source):
             ct.get('source') == f'pacs:pacs/{STUDY}/{CT_SERIES}',
             f'C-FIND series listing: CT of 112 images and the SR ({err.strip()})')
 
-    thumbnail_checks(h, t, 'pacs', STUDY, CT_SERIES, SR_SERIES, 'C-FIND and C-GET of one instance')
 
+def get_checks(h, t, kidney, cache):
+    """The kidney CT opened by C-GET, its geometry and values against the
+    slices'; the SR refused. Returns the volume."""
     source_ct = f'pacs:pacs/{STUDY}/{CT_SERIES}'
     start = time.monotonic()
     rc, out, err = h.vpm('alice', 'volume', 'load', source_ct)
@@ -115,9 +126,11 @@ def run(h, t, build, source):
     t.check(rc != 0 and 'INVALID_ARGUMENT' in err and 'holds no images' in err and
             not os.path.exists(os.path.join(cache, 'pacs', SR_SERIES)),
             f'the SR is refused, nothing cached: {err.strip()[-160:]}')
+    return vol
 
-    export_back(h, t, vol)
 
+def failure_checks(h, t):
+    """A wrong called AE title, a node that is not there, a forbidden user."""
     rc, _, err = h.vpm('alice', 'pacs', 'search', '--endpoint', 'wrong-aet')
     t.check(rc != 0 and 'PERMISSION_DENIED' in err and 'AE title' in err,
             f'a called AE title the PACS is not: {err.strip()[-200:]}')
@@ -127,6 +140,10 @@ def run(h, t, build, source):
     t.check(rc != 0 and 'PERMISSION_DENIED' in err, 'bob may not use the endpoint')
     t.check(h.server_alive(), 'the server keeps serving')
 
+
+def privacy_checks(h, t, audit):
+    """No patient identifier in the server's log or the audit log; the
+    audit log records the DIMSE actions."""
     with open(h.server_log) as f:
         log = f.read()
     with open(audit) as f:
