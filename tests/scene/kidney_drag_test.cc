@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -47,93 +48,68 @@ Stats Summarise(std::vector<double> values) {
   return s;
 }
 
-TEST(KidneyDrag, TheGrabbedKidneyMovesAsABodyBoneStaysTheStoneKeepsItsShape) {
-  auto ct = ReadVolume(KidneyPath("ct_abdomen.nii.gz"), VolumeLimits{});
-  ASSERT_TRUE(ct.ok()) << ct.status();
-  auto mask = ReadVolume(KidneyPath("left_kidney_mask.nii.gz"), VolumeLimits{});
-  ASSERT_TRUE(mask.ok()) << mask.status();
-  ASSERT_EQ(mask->dims(), ct->dims());
-  const VolumeGeometry& g = ct->geometry();
-  // The kidney's voxels, and its centre: the mask voxel nearest the mask's
-  // centroid (the centroid itself lies in the renal sinus, fat).
-  std::vector<glm::dvec3> kidney;
-  glm::dvec3 centroid(0.0), lo(1e30), hi(-1e30);
+// The kidney's voxels (world LPS mm), their bounding box, and its centre:
+// the mask voxel nearest the mask's centroid (the centroid itself lies in
+// the renal sinus, fat).
+struct KidneyVoxels {
+  std::vector<glm::dvec3> voxels;
+  glm::dvec3 lo{1e30}, hi{-1e30}, centre{0.0};
+};
+
+KidneyVoxels ReadKidney(const Volume& mask) {
+  const VolumeGeometry& g = mask.geometry();
+  KidneyVoxels kidney;
+  glm::dvec3 centroid(0.0);
   for (int64_t k = 0; k < g.dims[2]; ++k)
     for (int64_t j = 0; j < g.dims[1]; ++j)
       for (int64_t i = 0; i < g.dims[0]; ++i) {
-        if (mask->At(i, j, k) < 0.5f) continue;
+        if (mask.At(i, j, k) < 0.5f) continue;
         const glm::dvec3 p = g.IndexToPhysical(glm::dvec3(i, j, k));
-        kidney.push_back(p);
+        kidney.voxels.push_back(p);
         centroid += p;
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
+        kidney.lo = glm::min(kidney.lo, p);
+        kidney.hi = glm::max(kidney.hi, p);
       }
-  ASSERT_GT(kidney.size(), 4000u);
-  centroid /= double(kidney.size());
-  glm::dvec3 centre = kidney.front();
-  for (const glm::dvec3& p : kidney) {
-    if (glm::distance(p, centroid) < glm::distance(centre, centroid)) centre = p;
+  if (kidney.voxels.empty()) return kidney;
+  centroid /= double(kidney.voxels.size());
+  kidney.centre = kidney.voxels.front();
+  for (const glm::dvec3& p : kidney.voxels) {
+    if (glm::distance(p, centroid) < glm::distance(kidney.centre, centroid)) kidney.centre = p;
   }
-  MeshParams params;
-  params.refine_at_mm = centre;
-  auto mesh = BuildProxyMesh(*ct, params);
-  ASSERT_TRUE(mesh.ok()) << mesh.status();
-  int64_t islands = 0;
-  for (const MeshVertex& v : mesh->vertices) islands += v.hard && !v.skeleton;
-  std::printf("mesh: %zu vertices, h %.1f mm, %lld hard, %lld of them off the skeleton\n",
-              mesh->vertices.size(), mesh->stats.h_mm, static_cast<long long>(mesh->stats.hard),
-              static_cast<long long>(islands));
-  auto model = FemModel::Create(*mesh, g.extent_mm(), InteractiveFemOptions());
-  ASSERT_TRUE(model.ok()) << model.status();
-  auto grab = GrabOrgan(*ct, *model, centre, 0.0, kOrganMarginH * mesh->stats.h_mm);
-  ASSERT_TRUE(grab.ok()) << grab.status();
-  // 15 mm superior: +z in world LPS, into physical voxel space.
-  const glm::dvec3 superior = glm::transpose(g.direction) * glm::dvec3(0.0, 0.0, 1.0);
-  const double drag_mm = 15.0;
-  for (int i = 1; i <= 10; ++i) ASSERT_TRUE(model->Drag(superior * (drag_mm * i / 10.0)).ok());
-  for (int i = 0; i < 16 && !model->settled(); ++i) ASSERT_TRUE(model->Settle().ok());
-  EXPECT_EQ(model->CountInvertedTets(), 0);
-  auto locator = TetLocator::Create(model->rest_positions_mm(), model->tets());
-  ASSERT_TRUE(locator.ok()) << locator.status();
-  const std::vector<glm::dvec3> u = model->Displacements();
-  // Kidney: the displacement along the drag.
-  auto on_kidney = InterpolateDisplacements(*locator, u, kidney);
-  ASSERT_TRUE(on_kidney.ok()) << on_kidney.status();
-  std::vector<double> along;
-  for (const glm::dvec3& d : *on_kidney) along.push_back(glm::dot(d, superior));
-  const Stats k = Summarise(along);
-  // Bone: >= 300 HU outside the kidney's box grown by 6 mm; stones: >= 300
-  // HU within 6 mm of a kidney voxel (in the renal sinus, which the mask
-  // leaves out).
-  std::vector<glm::dvec3> bone, stone;
-  for (int64_t kk = 0; kk < g.dims[2]; ++kk)
+  return kidney;
+}
+
+// Bone: >= 300 HU outside the kidney's box grown by 6 mm; stones: >= 300 HU
+// within 6 mm of a kidney voxel (in the renal sinus, which the mask leaves
+// out).
+void BoneAndStones(const Volume& ct, const KidneyVoxels& kidney, std::vector<glm::dvec3>* bone,
+                   std::vector<glm::dvec3>* stone) {
+  const VolumeGeometry& g = ct.geometry();
+  for (int64_t k = 0; k < g.dims[2]; ++k)
     for (int64_t j = 0; j < g.dims[1]; ++j)
       for (int64_t i = 0; i < g.dims[0]; ++i) {
-        if (ct->At(i, j, kk) < 300.0f) continue;
-        const glm::dvec3 p = g.IndexToPhysical(glm::dvec3(i, j, kk));
-        const bool in_box = glm::all(glm::greaterThanEqual(p, lo - 6.0)) &&
-                            glm::all(glm::lessThanEqual(p, hi + 6.0));
+        if (ct.At(i, j, k) < 300.0f) continue;
+        const glm::dvec3 p = g.IndexToPhysical(glm::dvec3(i, j, k));
+        const bool in_box = glm::all(glm::greaterThanEqual(p, kidney.lo - 6.0)) &&
+                            glm::all(glm::lessThanEqual(p, kidney.hi + 6.0));
         if (!in_box) {
-          bone.push_back(p);
+          bone->push_back(p);
           continue;
         }
-        for (const glm::dvec3& q : kidney) {
+        for (const glm::dvec3& q : kidney.voxels) {
           if (glm::distance(p, q) <= 6.0 + 1e-9) {
-            stone.push_back(p);
+            stone->push_back(p);
             break;
           }
         }
       }
-  auto on_bone = InterpolateDisplacements(*locator, u, bone);
-  ASSERT_TRUE(on_bone.ok());
-  std::vector<double> bone_motion;
-  for (const glm::dvec3& d : *on_bone) bone_motion.push_back(glm::length(d));
-  const Stats b = Summarise(bone_motion);
-  auto on_stone = InterpolateDisplacements(*locator, u, stone);
-  ASSERT_TRUE(on_stone.ok());
-  // Each stone (26-connected voxels) keeps its shape: the largest difference
-  // of two of its voxels' displacements.
-  const double neighbour_mm = glm::length(g.spacing_mm) + 1e-6;
+}
+
+// Each stone (voxels within neighbour_mm of one another, 26-connected on
+// the grid) keeps its shape: the largest difference, in mm, of two of its
+// voxels' displacements u.
+double LargestStoneSpread(const std::vector<glm::dvec3>& stone, const std::vector<glm::dvec3>& u,
+                          double neighbour_mm) {
   std::vector<int> stone_of(stone.size());
   for (size_t a = 0; a < stone.size(); ++a) stone_of[a] = static_cast<int>(a);
   for (bool merged = true; merged;) {
@@ -146,19 +122,69 @@ TEST(KidneyDrag, TheGrabbedKidneyMovesAsABodyBoneStaysTheStoneKeepsItsShape) {
         }
       }
   }
-  double stone_spread = 0.0;
+  double spread = 0.0;
   for (size_t a = 0; a < stone.size(); ++a)
     for (size_t c = 0; c < stone.size(); ++c) {
-      if (stone_of[a] == stone_of[c]) {
-        stone_spread = std::max(stone_spread, glm::distance((*on_stone)[a], (*on_stone)[c]));
-      }
+      if (stone_of[a] == stone_of[c]) spread = std::max(spread, glm::distance(u[a], u[c]));
     }
-  std::printf("kidney: %zu voxels, %zu handles, mean along the drag %.2f mm (%.0f%%), cv %.3f; "
-              "bone: %zu voxels, mean %.3f mm, p95 %.3f mm, p99 %.3f mm, max %.3f mm; stones: %zu "
-              "voxels, largest spread in one %.3f mm; lag %.3f mm; %s\n",
-              kidney.size(), grab->handles.size(), k.mean, 100.0 * k.mean / drag_mm, k.cv,
-              bone.size(), b.mean, b.p95, b.p99, b.max, stone.size(), stone_spread, model->lag_mm(),
-              grab->message.c_str());
+  return spread;
+}
+
+TEST(KidneyDrag, TheGrabbedKidneyMovesAsABodyBoneStaysTheStoneKeepsItsShape) {
+  auto ct = ReadVolume(KidneyPath("ct_abdomen.nii.gz"), VolumeLimits{});
+  ASSERT_TRUE(ct.ok()) << ct.status();
+  auto mask = ReadVolume(KidneyPath("left_kidney_mask.nii.gz"), VolumeLimits{});
+  ASSERT_TRUE(mask.ok()) << mask.status();
+  ASSERT_EQ(mask->dims(), ct->dims());
+  const VolumeGeometry& g = ct->geometry();
+  const KidneyVoxels kidney = ReadKidney(*mask);
+  ASSERT_GT(kidney.voxels.size(), 4000u);
+  MeshParams params;
+  params.refine_at_mm = kidney.centre;
+  auto mesh = BuildProxyMesh(*ct, params);
+  ASSERT_TRUE(mesh.ok()) << mesh.status();
+  int64_t islands = 0;
+  for (const MeshVertex& v : mesh->vertices) islands += v.hard && !v.skeleton;
+  std::printf("mesh: %zu vertices, h %.1f mm, %lld hard, %lld of them off the skeleton\n",
+              mesh->vertices.size(), mesh->stats.h_mm, static_cast<long long>(mesh->stats.hard),
+              static_cast<long long>(islands));
+  auto model = FemModel::Create(*mesh, g.extent_mm(), InteractiveFemOptions());
+  ASSERT_TRUE(model.ok()) << model.status();
+  auto grab = GrabOrgan(*ct, *model, kidney.centre, 0.0, kOrganMarginH * mesh->stats.h_mm);
+  ASSERT_TRUE(grab.ok()) << grab.status();
+  // 15 mm superior: +z in world LPS, into physical voxel space.
+  const glm::dvec3 superior = glm::transpose(g.direction) * glm::dvec3(0.0, 0.0, 1.0);
+  const double drag_mm = 15.0;
+  for (int i = 1; i <= 10; ++i) ASSERT_TRUE(model->Drag(superior * (drag_mm * i / 10.0)).ok());
+  for (int i = 0; i < 16 && !model->settled(); ++i) ASSERT_TRUE(model->Settle().ok());
+  EXPECT_EQ(model->CountInvertedTets(), 0);
+  auto locator = TetLocator::Create(model->rest_positions_mm(), model->tets());
+  ASSERT_TRUE(locator.ok()) << locator.status();
+  const std::vector<glm::dvec3> u = model->Displacements();
+  // Kidney: the displacement along the drag.
+  auto on_kidney = InterpolateDisplacements(*locator, u, kidney.voxels);
+  ASSERT_TRUE(on_kidney.ok()) << on_kidney.status();
+  std::vector<double> along;
+  for (const glm::dvec3& d : *on_kidney) along.push_back(glm::dot(d, superior));
+  const Stats k = Summarise(along);
+  std::vector<glm::dvec3> bone, stone;
+  BoneAndStones(*ct, kidney, &bone, &stone);
+  auto on_bone = InterpolateDisplacements(*locator, u, bone);
+  ASSERT_TRUE(on_bone.ok());
+  std::vector<double> bone_motion;
+  for (const glm::dvec3& d : *on_bone) bone_motion.push_back(glm::length(d));
+  const Stats b = Summarise(bone_motion);
+  auto on_stone = InterpolateDisplacements(*locator, u, stone);
+  ASSERT_TRUE(on_stone.ok());
+  const double stone_spread =
+      LargestStoneSpread(stone, *on_stone, glm::length(g.spacing_mm) + 1e-6);
+  std::printf(
+      "kidney: %zu voxels, %zu handles, mean along the drag %.2f mm (%.0f%%), cv %.3f; "
+      "bone: %zu voxels, mean %.3f mm, p95 %.3f mm, p99 %.3f mm, max %.3f mm; stones: %zu "
+      "voxels, largest spread in one %.3f mm; lag %.3f mm; %s\n",
+      kidney.voxels.size(), grab->handles.size(), k.mean, 100.0 * k.mean / drag_mm, k.cv,
+      bone.size(), b.mean, b.p95, b.p99, b.max, stone.size(), stone_spread, model->lag_mm(),
+      grab->message.c_str());
   EXPECT_GE(k.mean, 0.8 * drag_mm);
   EXPECT_LE(k.cv, 0.25);
   // Bone on average; the voxels of thin bone (the iliac wing, rib tips) in
