@@ -59,6 +59,56 @@ std::vector<glm::dvec3> Positions(const fs::path& folder) {
   return out;
 }
 
+// The largest distance, in mm, from slice k of the volume's grid g to the
+// k-th file's ImagePositionPatient along the normal; -1 when the counts
+// differ.
+double MaxPositionErrorMm(const vpm::VolumeGeometry& g, const fs::path& folder) {
+  const glm::dvec3 normal = g.direction[2];
+  std::vector<glm::dvec3> positions = Positions(folder);
+  if (static_cast<int64_t>(positions.size()) != g.dims[2]) return -1.0;
+  std::sort(positions.begin(), positions.end(), [&](const glm::dvec3& p, const glm::dvec3& q) {
+    return glm::dot(p, normal) < glm::dot(q, normal);
+  });
+  double worst = 0;
+  for (int64_t k = 0; k < g.dims[2]; ++k) {
+    const glm::dvec3 world = g.origin_mm + g.direction * glm::dvec3(0, 0, k * g.spacing_mm.z);
+    worst = std::max(worst, glm::length(world - positions[k]));
+  }
+  return worst;
+}
+
+// Every voxel of `volume` against the source voxel at the same world point.
+struct VoxelComparison {
+  double max_index_error = 0, max_value_diff = 0;
+  int64_t compared = 0;
+  bool outside = false;  // a voxel mapped outside the source
+};
+
+VoxelComparison CompareVoxels(const vpm::Volume& volume, const vpm::Volume& source) {
+  const auto& g = volume.geometry();
+  const auto& s = source.geometry();
+  VoxelComparison c;
+  for (int64_t k = 0; k < g.dims[2]; ++k) {
+    for (int64_t j = 0; j < g.dims[1]; ++j) {
+      for (int64_t i = 0; i < g.dims[0]; ++i) {
+        const glm::dvec3 world = g.origin_mm + g.direction * (glm::dvec3(i, j, k) * g.spacing_mm);
+        const glm::dvec3 index =
+            (glm::transpose(s.direction) * (world - s.origin_mm)) / s.spacing_mm;
+        const glm::dvec3 r = glm::round(index);
+        c.max_index_error = std::max({c.max_index_error, std::abs(index.x - r.x),
+                                      std::abs(index.y - r.y), std::abs(index.z - r.z)});
+        for (int a = 0; a < 3; ++a) c.outside = c.outside || r[a] < 0 || r[a] >= s.dims[a];
+        if (c.outside) return c;
+        const double diff =
+            std::abs(volume.At(i, j, k) - source.At(int64_t(r.x), int64_t(r.y), int64_t(r.z)));
+        c.max_value_diff = std::max(c.max_value_diff, diff);
+        ++c.compared;
+      }
+    }
+  }
+  return c;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -91,59 +141,24 @@ int main(int argc, char** argv) {
   if (!volume.ok()) return Fail(std::string(volume.status().message()));
   auto source = vpm::ReadVolume(a["--source"], vpm::VolumeLimits{});
   if (!source.ok()) return Fail(std::string(source.status().message()));
-
-  // Geometry against the slices' own positions, sorted along the normal.
   const auto& g = volume->geometry();
-  const glm::dvec3 normal = g.direction[2];
-  std::vector<glm::dvec3> positions = Positions((*lease)->folder);
-  if (static_cast<int64_t>(positions.size()) != g.dims[2]) {
-    return Fail("the volume has " + std::to_string(g.dims[2]) + " slices, the files " +
-                std::to_string(positions.size()));
-  }
-  std::sort(positions.begin(), positions.end(), [&](const glm::dvec3& p, const glm::dvec3& q) {
-    return glm::dot(p, normal) < glm::dot(q, normal);
-  });
-  double max_position_error_mm = 0;
-  for (int64_t k = 0; k < g.dims[2]; ++k) {
-    const glm::dvec3 world = g.origin_mm + g.direction * glm::dvec3(0, 0, k * g.spacing_mm.z);
-    max_position_error_mm = std::max(max_position_error_mm, glm::length(world - positions[k]));
-  }
-  // Every voxel against the source, in world space.
-  const auto& s = source->geometry();
-  double max_index_error = 0, max_value_diff = 0;
-  int64_t compared = 0;
-  for (int64_t k = 0; k < g.dims[2]; ++k) {
-    for (int64_t j = 0; j < g.dims[1]; ++j) {
-      for (int64_t i = 0; i < g.dims[0]; ++i) {
-        const glm::dvec3 world = g.origin_mm + g.direction * (glm::dvec3(i, j, k) * g.spacing_mm);
-        const glm::dvec3 index =
-            (glm::transpose(s.direction) * (world - s.origin_mm)) / s.spacing_mm;
-        const glm::dvec3 rounded = glm::round(index);
-        max_index_error = std::max({max_index_error, std::abs(index.x - rounded.x),
-                                    std::abs(index.y - rounded.y), std::abs(index.z - rounded.z)});
-        for (int c = 0; c < 3; ++c) {
-          if (rounded[c] < 0 || rounded[c] >= s.dims[c])
-            return Fail("a voxel maps outside the source");
-        }
-        const double diff =
-            std::abs(volume->At(i, j, k) -
-                     source->At(int64_t(rounded.x), int64_t(rounded.y), int64_t(rounded.z)));
-        max_value_diff = std::max(max_value_diff, diff);
-        ++compared;
-      }
-    }
-  }
+  const double max_position_error_mm = MaxPositionErrorMm(g, (*lease)->folder);
+  if (max_position_error_mm < 0) return Fail("the volume's slices and the files differ in number");
+  const VoxelComparison c = CompareVoxels(*volume, *source);
+  if (c.outside) return Fail("a voxel maps outside the source");
   std::printf(
       "{\"instances\": %lld, \"bytes\": %lld, \"retrieve_ms\": %.1f, \"dims\": [%lld, %lld, %lld], "
       "\"max_position_error_mm\": %.6f, \"max_index_error\": %.6f, \"voxels_compared\": %lld, "
       "\"max_value_diff\": %g}\n",
       static_cast<long long>(instances), static_cast<long long>((*lease)->bytes), retrieve_ms,
       static_cast<long long>(g.dims[0]), static_cast<long long>(g.dims[1]),
-      static_cast<long long>(g.dims[2]), max_position_error_mm, max_index_error,
-      static_cast<long long>(compared), max_value_diff);
-  if (compared != s.dims[0] * s.dims[1] * s.dims[2]) return Fail("not every source voxel compared");
+      static_cast<long long>(g.dims[2]), max_position_error_mm, c.max_index_error,
+      static_cast<long long>(c.compared), c.max_value_diff);
+  const auto& s = source->geometry();
+  if (c.compared != s.dims[0] * s.dims[1] * s.dims[2])
+    return Fail("not every source voxel compared");
   if (max_position_error_mm > 1e-3) return Fail("slice positions differ from ImagePositionPatient");
-  if (max_index_error > 1e-3) return Fail("the grid does not line up with the source's");
-  if (max_value_diff != 0) return Fail("voxel values differ from the source");
+  if (c.max_index_error > 1e-3) return Fail("the grid does not line up with the source's");
+  if (c.max_value_diff != 0) return Fail("voxel values differ from the source");
   return 0;
 }

@@ -83,6 +83,90 @@ int WriteReport(const std::filesystem::path& out, std::map<std::string, std::str
   return 0;
 }
 
+// Slice k's CT image, image plane and pixel modules (int16, rescale 1/0)
+// on the volume's grid g.
+void PutSlice(DcmDataset& ds, std::map<std::string, std::string>& flags,
+              const vpm::VolumeGeometry& g, int64_t k, const char* frame_uid) {
+  const glm::dvec3 row = g.direction[0], column = g.direction[1], normal = g.direction[2];
+  PutCommon(ds, flags);
+  ds.putAndInsertString(DCM_SOPClassUID, UID_CTImageStorage);
+  ds.putAndInsertString(DCM_SOPInstanceUID,
+                        (flags["--series-uid"] + "." + std::to_string(k + 1)).c_str());
+  ds.putAndInsertString(DCM_FrameOfReferenceUID, frame_uid);
+  ds.putAndInsertString(DCM_Modality, "CT");
+  ds.putAndInsertString(DCM_BodyPartExamined, "ABDOMEN");
+  ds.putAndInsertString(DCM_ImageType, "ORIGINAL\\PRIMARY\\AXIAL");
+  ds.putAndInsertString(DCM_InstanceNumber, std::to_string(k + 1).c_str());
+  const glm::dvec3 p = g.origin_mm + normal * (static_cast<double>(k) * g.spacing_mm.z);
+  ds.putAndInsertString(DCM_ImagePositionPatient, Ds3(p.x, p.y, p.z).c_str());
+  ds.putAndInsertString(
+      DCM_ImageOrientationPatient,
+      (Ds3(row.x, row.y, row.z) + "\\" + Ds3(column.x, column.y, column.z)).c_str());
+  ds.putAndInsertString(DCM_PixelSpacing, (Ds(g.spacing_mm.y) + "\\" + Ds(g.spacing_mm.x)).c_str());
+  ds.putAndInsertString(DCM_SliceThickness, Ds(g.spacing_mm.z).c_str());
+  ds.putAndInsertUint16(DCM_Rows, static_cast<Uint16>(g.dims[1]));
+  ds.putAndInsertUint16(DCM_Columns, static_cast<Uint16>(g.dims[0]));
+  ds.putAndInsertUint16(DCM_SamplesPerPixel, 1);
+  ds.putAndInsertString(DCM_PhotometricInterpretation, "MONOCHROME2");
+  ds.putAndInsertUint16(DCM_BitsAllocated, 16);
+  ds.putAndInsertUint16(DCM_BitsStored, 16);
+  ds.putAndInsertUint16(DCM_HighBit, 15);
+  ds.putAndInsertUint16(DCM_PixelRepresentation, 1);
+  ds.putAndInsertString(DCM_RescaleIntercept, "0");
+  ds.putAndInsertString(DCM_RescaleSlope, "1");
+}
+
+// Slice k's voxels as int16 pixels, x fastest; false (with a message) when
+// one is not an integer in int16's range.
+bool SlicePixels(const vpm::Volume& volume, int64_t k, std::vector<Uint16>& pixels) {
+  const auto [nx, ny, nz] = volume.geometry().dims;
+  for (int64_t j = 0; j < ny; ++j) {
+    for (int64_t i = 0; i < nx; ++i) {
+      const float v = volume.At(i, j, k);
+      if (v != std::round(v) || v < -32768 || v > 32767) {
+        std::fprintf(stderr, "voxel (%lld,%lld,%lld) = %g is not an int16\n",
+                     static_cast<long long>(i), static_cast<long long>(j),
+                     static_cast<long long>(k), v);
+        return false;
+      }
+      pixels[static_cast<size_t>(i + nx * j)] = static_cast<Uint16>(static_cast<int16_t>(v));
+    }
+  }
+  return true;
+}
+
+// The volume at `source` as one CT file per slice in `out`.
+int WriteSeries(const std::string& source, const std::filesystem::path& out,
+                std::map<std::string, std::string>& flags) {
+  auto volume = vpm::ReadVolume(source, vpm::VolumeLimits{});
+  if (!volume.ok()) {
+    std::fprintf(stderr, "%s\n", std::string(volume.status().message()).c_str());
+    return 1;
+  }
+  std::filesystem::create_directories(out);
+  const auto& g = volume->geometry();
+  const auto [nx, ny, nz] = g.dims;
+  char frame_uid[100];
+  dcmGenerateUniqueIdentifier(frame_uid, SITE_INSTANCE_UID_ROOT);
+  std::vector<Uint16> pixels(static_cast<size_t>(nx * ny));
+  for (int64_t k = 0; k < nz; ++k) {
+    DcmFileFormat file;
+    DcmDataset& ds = *file.getDataset();
+    PutSlice(ds, flags, g, k, frame_uid);
+    if (!SlicePixels(*volume, k, pixels)) return 1;
+    ds.putAndInsertUint16Array(DCM_PixelData, pixels.data(), pixels.size());
+    char name[32];
+    std::snprintf(name, sizeof(name), "slice%04lld.dcm", static_cast<long long>(k + 1));
+    if (file.saveFile((out / name).c_str(), EXS_LittleEndianExplicit).bad()) {
+      std::fprintf(stderr, "cannot write %s\n", name);
+      return 1;
+    }
+  }
+  std::printf("%lld slices of %lldx%lld\n", static_cast<long long>(nz), static_cast<long long>(nx),
+              static_cast<long long>(ny));
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -108,70 +192,5 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (report) return WriteReport(positional[0], flags);
-  auto volume = vpm::ReadVolume(positional[0], vpm::VolumeLimits{});
-  if (!volume.ok()) {
-    std::fprintf(stderr, "%s\n", std::string(volume.status().message()).c_str());
-    return 1;
-  }
-  const std::filesystem::path out = positional[1];
-  std::filesystem::create_directories(out);
-  const auto& g = volume->geometry();
-  const auto [nx, ny, nz] = g.dims;
-  const glm::dvec3 row = g.direction[0], column = g.direction[1], normal = g.direction[2];
-  char frame_uid[100];
-  dcmGenerateUniqueIdentifier(frame_uid, SITE_INSTANCE_UID_ROOT);
-  std::vector<Uint16> pixels(static_cast<size_t>(nx * ny));
-  for (int64_t k = 0; k < nz; ++k) {
-    DcmFileFormat file;
-    DcmDataset& ds = *file.getDataset();
-    PutCommon(ds, flags);
-    ds.putAndInsertString(DCM_SOPClassUID, UID_CTImageStorage);
-    ds.putAndInsertString(DCM_SOPInstanceUID,
-                          (flags["--series-uid"] + "." + std::to_string(k + 1)).c_str());
-    ds.putAndInsertString(DCM_FrameOfReferenceUID, frame_uid);
-    ds.putAndInsertString(DCM_Modality, "CT");
-    ds.putAndInsertString(DCM_BodyPartExamined, "ABDOMEN");
-    ds.putAndInsertString(DCM_ImageType, "ORIGINAL\\PRIMARY\\AXIAL");
-    ds.putAndInsertString(DCM_InstanceNumber, std::to_string(k + 1).c_str());
-    const glm::dvec3 p = g.origin_mm + normal * (static_cast<double>(k) * g.spacing_mm.z);
-    ds.putAndInsertString(DCM_ImagePositionPatient, Ds3(p.x, p.y, p.z).c_str());
-    ds.putAndInsertString(
-        DCM_ImageOrientationPatient,
-        (Ds3(row.x, row.y, row.z) + "\\" + Ds3(column.x, column.y, column.z)).c_str());
-    ds.putAndInsertString(DCM_PixelSpacing,
-                          (Ds(g.spacing_mm.y) + "\\" + Ds(g.spacing_mm.x)).c_str());
-    ds.putAndInsertString(DCM_SliceThickness, Ds(g.spacing_mm.z).c_str());
-    ds.putAndInsertUint16(DCM_Rows, static_cast<Uint16>(ny));
-    ds.putAndInsertUint16(DCM_Columns, static_cast<Uint16>(nx));
-    ds.putAndInsertUint16(DCM_SamplesPerPixel, 1);
-    ds.putAndInsertString(DCM_PhotometricInterpretation, "MONOCHROME2");
-    ds.putAndInsertUint16(DCM_BitsAllocated, 16);
-    ds.putAndInsertUint16(DCM_BitsStored, 16);
-    ds.putAndInsertUint16(DCM_HighBit, 15);
-    ds.putAndInsertUint16(DCM_PixelRepresentation, 1);
-    ds.putAndInsertString(DCM_RescaleIntercept, "0");
-    ds.putAndInsertString(DCM_RescaleSlope, "1");
-    for (int64_t j = 0; j < ny; ++j) {
-      for (int64_t i = 0; i < nx; ++i) {
-        const float v = volume->At(i, j, k);
-        if (v != std::round(v) || v < -32768 || v > 32767) {
-          std::fprintf(stderr, "voxel (%lld,%lld,%lld) = %g is not an int16\n",
-                       static_cast<long long>(i), static_cast<long long>(j),
-                       static_cast<long long>(k), v);
-          return 1;
-        }
-        pixels[static_cast<size_t>(i + nx * j)] = static_cast<Uint16>(static_cast<int16_t>(v));
-      }
-    }
-    ds.putAndInsertUint16Array(DCM_PixelData, pixels.data(), pixels.size());
-    char name[32];
-    std::snprintf(name, sizeof(name), "slice%04lld.dcm", static_cast<long long>(k + 1));
-    if (file.saveFile((out / name).c_str(), EXS_LittleEndianExplicit).bad()) {
-      std::fprintf(stderr, "cannot write %s\n", name);
-      return 1;
-    }
-  }
-  std::printf("%lld slices of %lldx%lld\n", static_cast<long long>(nz), static_cast<long long>(nx),
-              static_cast<long long>(ny));
-  return 0;
+  return WriteSeries(positional[0], positional[1], flags);
 }
