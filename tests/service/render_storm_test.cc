@@ -27,6 +27,58 @@ using Clock = std::chrono::steady_clock;
 
 using RenderStormTest = ServiceTest;
 
+// Render calls nobody waits for: each with a 1 ms deadline, 2 ms apart,
+// from a channel of its own (another connection of the same client
+// address), and how they were answered. Holds what the asynchronous calls
+// use until every one is answered.
+struct RenderStorm {
+  explicit RenderStorm(int port, int calls)
+      : stub(v3::Vpm::NewStub(grpc::CreateChannel("127.0.0.1:" + std::to_string(port),
+                                                  grpc::InsecureChannelCredentials()))),
+        contexts(calls),
+        frames(calls) {}
+
+  void Count(const grpc::Status& status) {
+    ok += status.ok();
+    expired += status.error_code() == grpc::DEADLINE_EXCEEDED;
+    exhausted += status.error_code() == grpc::RESOURCE_EXHAUSTED;
+    if (!status.ok() && status.error_code() != grpc::DEADLINE_EXCEEDED &&
+        status.error_code() != grpc::RESOURCE_EXHAUSTED) {
+      ++unexpected;
+      std::printf("unexpected: %d %s\n", status.error_code(), status.error_message().c_str());
+    }
+    ++answered;
+  }
+
+  // Sends every call (about 2 ms each); `storming` is true meanwhile.
+  void Run(const v3::RenderRequest& request) {
+    storming = true;
+    for (size_t i = 0; i < contexts.size(); ++i) {
+      contexts[i] = std::make_unique<grpc::ClientContext>();
+      contexts[i]->AddMetadata("authorization", std::string("Bearer ") + kToken);
+      contexts[i]->set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(1));
+      stub->async()->Render(contexts[i].get(), &request, &frames[i],
+                            [this](grpc::Status status) { Count(status); });
+      std::this_thread::sleep_for(std::chrono::microseconds(2000));
+    }
+    storming = false;
+  }
+
+  bool WaitForAllAnswers(std::chrono::seconds limit) {
+    const auto end = Clock::now() + limit;
+    while (answered < static_cast<int>(contexts.size()) && Clock::now() < end) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return answered == static_cast<int>(contexts.size());
+  }
+
+  std::unique_ptr<v3::Vpm::Stub> stub;
+  std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
+  std::vector<v3::Frame> frames;
+  std::atomic<bool> storming{false};
+  std::atomic<int> answered{0}, ok{0}, expired{0}, exhausted{0}, unexpected{0};
+};
+
 TEST_F(RenderStormTest, ExpiredRenderStormRunsAlmostNoneAndNeverStallsTheDrag) {
   const v3::VolumeInfo volume = LoadPhantom();
   const v3::SessionInfo session = OpenSession(volume.volume_id());
@@ -47,67 +99,34 @@ TEST_F(RenderStormTest, ExpiredRenderStormRunsAlmostNoneAndNeverStallsTheDrag) {
   uint64_t sequence = 1;
   cli::DragFor(stream.get(), 0.5, &sequence);
 
-  // The storm: 2,000 calls over about 4 s, each with a 1 ms deadline, from a
-  // second channel (another connection of the same client address).
-  auto storm_channel = grpc::CreateChannel("127.0.0.1:" + std::to_string(server_->port()),
-                                           grpc::InsecureChannelCredentials());
-  auto storm_stub = v3::Vpm::NewStub(storm_channel);
+  // The storm: 2,000 calls over about 4 s while the drag goes on.
   constexpr int kCalls = 2000;
-  std::atomic<bool> storming{false};
-  std::atomic<int> answered{0}, ok{0}, expired{0}, exhausted{0}, unexpected{0};
-  std::vector<std::unique_ptr<grpc::ClientContext>> contexts(kCalls);
-  std::vector<v3::Frame> frames(kCalls);
+  RenderStorm storm(server_->port(), kCalls);
   v3::RenderRequest request;
   request.set_session_id(session.session_id());
   *request.mutable_settings() = small;
   const double rendered_before = server_->metrics().requests("Render", "OK");
-  std::thread storm([&] {
-    storming = true;
-    for (int i = 0; i < kCalls; ++i) {
-      contexts[i] = Context();
-      contexts[i]->set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(1));
-      storm_stub->async()->Render(contexts[i].get(), &request, &frames[i],
-                                  [&](grpc::Status status) {
-                                    ok += status.ok();
-                                    expired += status.error_code() == grpc::DEADLINE_EXCEEDED;
-                                    exhausted += status.error_code() == grpc::RESOURCE_EXHAUSTED;
-                                    if (!status.ok() &&
-                                        status.error_code() != grpc::DEADLINE_EXCEEDED &&
-                                        status.error_code() != grpc::RESOURCE_EXHAUSTED) {
-                                      ++unexpected;
-                                      std::printf("unexpected: %d %s\n", status.error_code(),
-                                                  status.error_message().c_str());
-                                    }
-                                    ++answered;
-                                  });
-      std::this_thread::sleep_for(std::chrono::microseconds(2000));
-    }
-    storming = false;
-  });
-
-  while (!storming) std::this_thread::yield();
+  std::thread storm_thread([&] { storm.Run(request); });
+  while (!storm.storming) std::this_thread::yield();
   int storm_frames = 0;
   double longest_wait_s = 0;
-  while (storming) {
+  while (storm.storming) {
     const cli::ClosedLoopDrag drag = cli::DragFor(stream.get(), 0.25, &sequence);
     storm_frames += drag.frames;
     longest_wait_s = std::max(longest_wait_s, drag.longest_wait_s);
   }
-  storm.join();
-  const auto wait_end = Clock::now() + std::chrono::seconds(30);
-  while (answered < kCalls && Clock::now() < wait_end) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  ASSERT_EQ(answered.load(), kCalls);
+  storm_thread.join();
+  ASSERT_TRUE(storm.WaitForAllAnswers(std::chrono::seconds(30))) << storm.answered.load();
 
   const double rendered = server_->metrics().requests("Render", "OK") - rendered_before;
-  std::printf("drag frames in the storm %d, longest wait %.0f ms; of %d expired renders: "
-              "%d deadline, %d refused (queue full), %d ran (server counted %.0f)\n",
-              storm_frames, 1000 * longest_wait_s, kCalls, expired.load(), exhausted.load(),
-              ok.load(), rendered);
+  std::printf(
+      "drag frames in the storm %d, longest wait %.0f ms; of %d expired renders: "
+      "%d deadline, %d refused (queue full), %d ran (server counted %.0f)\n",
+      storm_frames, 1000 * longest_wait_s, kCalls, storm.expired.load(), storm.exhausted.load(),
+      storm.ok.load(), rendered);
   EXPECT_LE(rendered, 20) << "expired renders that ran";
-  EXPECT_EQ(unexpected.load(), 0);
-  EXPECT_EQ(expired + exhausted + ok, kCalls);
+  EXPECT_EQ(storm.unexpected.load(), 0);
+  EXPECT_EQ(storm.expired + storm.exhausted + storm.ok, kCalls);
   EXPECT_GT(storm_frames, 0);
   // A 96^2 frame takes tens of ms here; the storm, were it run, hundreds of
   // seconds. A drag that waited behind it would wait far longer than this.
