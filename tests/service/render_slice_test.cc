@@ -23,6 +23,16 @@
 namespace vpm::service::testing {
 namespace {
 
+// An axial slice at world z = at_mm (LPS), window 400 / 40.
+v3::SliceSpec Axial(double at_mm) {
+  v3::SliceSpec spec;
+  spec.set_orientation(v3::SLICE_ORIENTATION_AXIAL);
+  spec.set_at_mm(at_mm);
+  spec.mutable_window()->set_width(400);
+  spec.mutable_window()->set_level(40);
+  return spec;
+}
+
 class RenderSliceTest : public PhantomSessionTest {
  protected:
   grpc::Status RenderSlice(const v3::SliceSpec& spec, v3::Frame* frame,
@@ -33,15 +43,6 @@ class RenderSliceTest : public PhantomSessionTest {
     request.set_encoding(v3::ENCODING_PNG);
     auto context = Context();
     return stub_->RenderSlice(context.get(), request, frame);
-  }
-
-  static v3::SliceSpec Axial(double at_mm) {
-    v3::SliceSpec spec;
-    spec.set_orientation(v3::SLICE_ORIENTATION_AXIAL);
-    spec.set_at_mm(at_mm);
-    spec.mutable_window()->set_width(400);
-    spec.mutable_window()->set_level(40);
-    return spec;
   }
 
   // Grabs the centre and drags it `drag_mm` along x over an Interact
@@ -82,6 +83,76 @@ DecodedImage DecodeFramePng(const std::string& bytes) {
   return decoded.ok() ? *std::move(decoded) : DecodedImage{};
 }
 
+// The backward map of a deformation on the CPU at the server's map
+// resolution: the mesh's rest positions and `deformed` (both world LPS, as
+// the API gives them) taken into the volume's physical voxel space.
+Result<BackwardMapValues> CpuMap(const v3::GetMeshResponse& mesh, std::vector<glm::dvec3> deformed,
+                                 const VolumeGeometry& g) {
+  std::vector<glm::dvec3> rest;
+  for (const v3::MeshVertex& v : mesh.vertices()) {
+    rest.push_back(g.WorldToPhysical(FromProto(v.position_mm())));
+  }
+  for (glm::dvec3& p : deformed) p = g.WorldToPhysical(p);
+  std::vector<std::array<int32_t, 4>> tets;
+  for (const v3::Tet& t : mesh.tets()) tets.push_back({t.a(), t.b(), t.c(), t.d()});
+  if (rest.size() != deformed.size()) return absl::InternalError("vertex counts differ");
+  return BackwardMapCpu(g.extent_mm(), DefaultBackwardMapDims(g.dims), rest, deformed, tets);
+}
+
+// A slice of the API and the same plane for the CPU reference.
+struct SliceCase {
+  const char* name;
+  v3::SliceSpec spec;
+  SlicePlane plane;
+};
+
+// Axial through the centre, coronal 2 mm from it along +y, oblique (normal
+// 1, 1, 2) through it; centre in world LPS mm.
+std::vector<SliceCase> SliceCases(const glm::dvec3& centre) {
+  std::vector<SliceCase> cases;
+  cases.push_back(
+      {"axial", Axial(centre.z), {.orientation = SliceOrientation::kAxial, .at_mm = centre.z}});
+  v3::SliceSpec coronal = Axial(0);
+  coronal.set_orientation(v3::SLICE_ORIENTATION_CORONAL);
+  coronal.set_at_mm(centre.y + 2.0);
+  cases.push_back(
+      {"coronal", coronal, {.orientation = SliceOrientation::kCoronal, .at_mm = centre.y + 2.0}});
+  v3::SliceSpec oblique = Axial(0);
+  oblique.clear_at_mm();
+  oblique.set_orientation(v3::SLICE_ORIENTATION_OBLIQUE);
+  *oblique.mutable_point_lps_mm() = ToProto(centre);
+  *oblique.mutable_normal() = ToProto(glm::dvec3(1, 1, 2));
+  cases.push_back({"oblique",
+                   oblique,
+                   {.orientation = SliceOrientation::kOblique,
+                    .point_mm = centre,
+                    .normal = glm::dvec3(1, 1, 2)}});
+  return cases;
+}
+
+// Grey levels (the red channel) of the frame against the reference, and of
+// the reference against the volume at rest.
+struct GreyDifference {
+  double mean = 0.0;        // mean |frame - reference|
+  int64_t far = 0;          // pixels over 12 levels apart
+  double moved_mean = 0.0;  // mean |reference - at rest|
+};
+
+GreyDifference CompareGrey(const std::vector<uint8_t>& got, const std::vector<uint8_t>& reference,
+                           const std::vector<uint8_t>& at_rest) {
+  GreyDifference diff;
+  const int64_t pixels = static_cast<int64_t>(reference.size() / 4);
+  for (int64_t i = 0; i < pixels; ++i) {
+    const int d = std::abs(int(got[4 * i]) - int(reference[4 * i]));
+    diff.mean += d;
+    diff.moved_mean += std::abs(int(reference[4 * i]) - int(at_rest[4 * i]));
+    if (d > 12) ++diff.far;
+  }
+  diff.mean /= double(pixels);
+  diff.moved_mean /= double(pixels);
+  return diff;
+}
+
 TEST_F(RenderSliceTest, RenderSlice_MatchesTheCpuReferenceOfTheDeformedVolume) {
   std::vector<glm::dvec3> deformed = GrabAndDrag(6.0);
   ASSERT_FALSE(deformed.empty());
@@ -92,49 +163,13 @@ TEST_F(RenderSliceTest, RenderSlice_MatchesTheCpuReferenceOfTheDeformedVolume) {
   auto mc = Context();
   ASSERT_TRUE(stub_->GetMesh(mc.get(), mesh_request, &mesh).ok());
   // The reference: the same phantom, the map on the CPU at the server's
-  // map resolution, the slice sampled in double, the same window. The API's
-  // positions are world LPS; the map works in physical voxel space.
+  // map resolution, the slice sampled in double, the same window.
   auto volume = ReadVolume(kPhantom, {});
   ASSERT_TRUE(volume.ok()) << volume.status();
   const VolumeGeometry& g = volume->geometry();
-  std::vector<glm::dvec3> rest;
-  for (const v3::MeshVertex& v : mesh.vertices()) {
-    rest.push_back(g.WorldToPhysical(FromProto(v.position_mm())));
-  }
-  for (glm::dvec3& p : deformed) p = g.WorldToPhysical(p);
-  std::vector<std::array<int32_t, 4>> tets;
-  for (const v3::Tet& t : mesh.tets()) tets.push_back({t.a(), t.b(), t.c(), t.d()});
-  ASSERT_EQ(rest.size(), deformed.size());
-  auto map = BackwardMapCpu(g.extent_mm(), DefaultBackwardMapDims(g.dims), rest, deformed, tets);
+  auto map = CpuMap(mesh, deformed, g);
   ASSERT_TRUE(map.ok()) << map.status();
-  const glm::dvec3 centre_world = FromProto(Centre(volume_));
-
-  struct Case {
-    const char* name;
-    v3::SliceSpec spec;
-    SlicePlane plane;
-  };
-  std::vector<Case> cases;
-  cases.push_back({"axial",
-                   Axial(centre_world.z),
-                   {.orientation = SliceOrientation::kAxial, .at_mm = centre_world.z}});
-  v3::SliceSpec coronal = Axial(0);
-  coronal.set_orientation(v3::SLICE_ORIENTATION_CORONAL);
-  coronal.set_at_mm(centre_world.y + 2.0);
-  cases.push_back({"coronal",
-                   coronal,
-                   {.orientation = SliceOrientation::kCoronal, .at_mm = centre_world.y + 2.0}});
-  v3::SliceSpec oblique = Axial(0);
-  oblique.clear_at_mm();
-  oblique.set_orientation(v3::SLICE_ORIENTATION_OBLIQUE);
-  *oblique.mutable_point_lps_mm() = ToProto(centre_world);
-  *oblique.mutable_normal() = V(1, 1, 2);
-  cases.push_back({"oblique",
-                   oblique,
-                   {.orientation = SliceOrientation::kOblique,
-                    .point_mm = centre_world,
-                    .normal = glm::dvec3(1, 1, 2)}});
-  for (const Case& c : cases) {
+  for (const SliceCase& c : SliceCases(FromProto(Centre(volume_)))) {
     SCOPED_TRACE(c.name);
     v3::Frame frame;
     grpc::Status status = RenderSlice(c.spec, &frame);
@@ -155,22 +190,17 @@ TEST_F(RenderSliceTest, RenderSlice_MatchesTheCpuReferenceOfTheDeformedVolume) {
         SliceToRgba(SampleSliceCpu(*volume, nullptr, *grid), grid->width, grid->height, window);
     const DecodedImage got = DecodeFramePng(frame.image());
     ASSERT_EQ(got.rgba.size(), reference.size());
-    double sum = 0.0, sum_rest = 0.0;
-    int64_t far = 0;
+    const GreyDifference diff = CompareGrey(got.rgba, reference, at_rest);
     const int64_t pixels = int64_t(grid->width) * grid->height;
-    for (int64_t i = 0; i < pixels; ++i) {
-      const int d = std::abs(int(got.rgba[4 * i]) - int(reference[4 * i]));
-      sum += d;
-      sum_rest += std::abs(int(reference[4 * i]) - int(at_rest[4 * i]));
-      if (d > 12) ++far;
-    }
-    std::printf("%s %dx%d: mean |grey difference| %.3f, %lld of %lld pixels over 12; drag moved the reference by %.3f\n",
-                c.name, grid->width, grid->height, sum / pixels, static_cast<long long>(far),
-                static_cast<long long>(pixels), sum_rest / pixels);
-    EXPECT_LT(sum / pixels, 1.5);
-    EXPECT_LE(far, pixels / 100);
+    std::printf(
+        "%s %dx%d: mean |grey difference| %.3f, %lld of %lld pixels over 12; drag moved the "
+        "reference by %.3f\n",
+        c.name, grid->width, grid->height, diff.mean, static_cast<long long>(diff.far),
+        static_cast<long long>(pixels), diff.moved_mean);
+    EXPECT_LT(diff.mean, 1.5);
+    EXPECT_LE(diff.far, pixels / 100);
     // The reference itself moved: the drag shows in the slice.
-    EXPECT_GT(sum_rest / pixels, 2.0 * (sum / pixels) + 0.2);
+    EXPECT_GT(diff.moved_mean, 2.0 * diff.mean + 0.2);
   }
 }
 
