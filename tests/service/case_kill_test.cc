@@ -219,6 +219,56 @@ v3::Frame Reference(v3::Vpm::Stub& stub, const std::string& volume_id,
   return frame;
 }
 
+// Drives `script` from event *acked on while a thread kills the server
+// after wait_ms; *acked ends past every event the server acknowledged.
+// Returns the kind of the event in flight at the kill ("-": none).
+std::string DriveUntilKilled(ServerProcess& server, const std::string& session_id,
+                             const std::vector<v3::ClientEvent>& script, int wait_ms,
+                             int64_t* acked) {
+  std::atomic<bool> killed{false};
+  std::thread killer([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(wait_ms));
+    ::kill(server.pid(), SIGKILL);
+    killed = true;
+  });
+  std::string in_flight = "-";
+  while (*acked < static_cast<int64_t>(script.size())) {
+    v3::ManipulateRequest request;
+    request.set_session_id(session_id);
+    *request.mutable_event() = script[*acked];
+    v3::ManipulateResponse response;
+    const grpc::Status status = server.stub().Manipulate(Ctx(10).get(), request, &response);
+    if (!status.ok()) {
+      EXPECT_TRUE(killed.load()) << status.error_message();
+      in_flight = Kind(script[*acked]);
+      break;
+    }
+    ++*acked;
+  }
+  killer.join();
+  return in_flight;
+}
+
+// The events the case holds after a restart (-1 when it cannot be read).
+int64_t StoredEvents(ServerProcess& server, const std::string& case_id) {
+  v3::GetCaseRequest get;
+  get.set_case_id(case_id);
+  v3::CaseInfo info;
+  const grpc::Status status = server.stub().GetCase(Ctx().get(), get, &info);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  return status.ok() ? info.events() : -1;
+}
+
+// The case reopened into *session; the call's wall ms (-1 on failure).
+double ReopenMs(ServerProcess& server, const std::string& case_id, v3::SessionInfo* session) {
+  v3::OpenCaseRequest reopen;
+  reopen.set_case_id(case_id);
+  const auto t0 = Clock::now();
+  const grpc::Status status = server.stub().OpenCase(Ctx().get(), reopen, session);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  return status.ok() ? std::chrono::duration<double, std::milli>(Clock::now() - t0).count() : -1;
+}
+
 TEST(CaseKill, FiftyKillsAtRandomMomentsLoseNoAcknowledgedEvent) {
   const fs::path dir = fs::temp_directory_path() / ("vpm-case-kill-" + std::to_string(getpid()));
   fs::remove_all(dir);
@@ -245,49 +295,21 @@ TEST(CaseKill, FiftyKillsAtRandomMomentsLoseNoAcknowledgedEvent) {
   double worst_mm = 0.0, worst_frame = 0.0, reopen_ms_sum = 0.0, reopen_ms_max = 0.0;
   std::printf("kill  after(ms)  acked  stored  in-flight  reopen(ms)  |dD|(mm)   frame(/255)\n");
   for (int kill = 1; kill <= kKills; ++kill) {
-    // Drive the script until the kill lands mid-way.
+    // Drive the script until the kill lands mid-way, then restart.
     const int wait_ms = delay_ms(rng);
-    std::atomic<bool> killed{false};
-    std::thread killer([&] {
-      std::this_thread::sleep_for(std::chrono::milliseconds(wait_ms));
-      ::kill(server.pid(), SIGKILL);
-      killed = true;
-    });
-    std::string in_flight = "-";
-    while (acked < static_cast<int64_t>(script.size())) {
-      v3::ManipulateRequest request;
-      request.set_session_id(session.session_id());
-      *request.mutable_event() = script[acked];
-      v3::ManipulateResponse response;
-      const grpc::Status status = server.stub().Manipulate(Ctx(10).get(), request, &response);
-      if (!status.ok()) {
-        ASSERT_TRUE(killed.load()) << status.error_message();
-        in_flight = Kind(script[acked]);
-        break;
-      }
-      ++acked;
-    }
-    killer.join();
+    const std::string in_flight =
+        DriveUntilKilled(server, session.session_id(), script, wait_ms, &acked);
     server.Kill();
     ASSERT_TRUE(server.Start(dir));
-
     // Reopen: the client's own reconnect.
     ASSERT_TRUE(server.stub().LoadVolume(Ctx().get(), load, &volume).ok());
-    v3::GetCaseRequest get;
-    get.set_case_id(case_id);
-    v3::CaseInfo info;
-    ASSERT_TRUE(server.stub().GetCase(Ctx().get(), get, &info).ok());
-    const int64_t stored = info.events();
+    const int64_t stored = StoredEvents(server, case_id);
     EXPECT_GE(stored, acked) << "kill " << kill << ": an acknowledged event was lost";
     EXPECT_LE(stored, acked + 1) << "kill " << kill;
     if (stored == acked + 1) ++stored_in_flight;
     acked = stored;  // the event in flight was kept: the client goes on after it
-    v3::OpenCaseRequest reopen;
-    reopen.set_case_id(case_id);
-    const auto t0 = Clock::now();
-    ASSERT_TRUE(server.stub().OpenCase(Ctx().get(), reopen, &session).ok());
-    const double reopen_ms =
-        std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    const double reopen_ms = ReopenMs(server, case_id, &session);
+    ASSERT_GE(reopen_ms, 0.0);
     reopen_ms_sum += reopen_ms;
     reopen_ms_max = std::max(reopen_ms_max, reopen_ms);
     const v3::Frame reopened = Still(server.stub(), session.session_id());
