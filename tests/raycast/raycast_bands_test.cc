@@ -58,9 +58,12 @@ TEST_F(RaycastTest, StillBands_SameFrameAsOneSubmit) {
     ASSERT_TRUE(interactive.ok()) << interactive.status();
     EXPECT_EQ(interactive->bands, 1);
   }
-  // Bands of a time: where the last still's cost per ray says a band of
-  // still_band_rays takes longer than still_band_ms (here 1 ns), the next
-  // still takes a band per tile row, and its pixels do not move.
+}
+
+// Bands of a time: where the last still's cost per ray says a band of
+// still_band_rays takes longer than still_band_ms (here 1 ns), the next
+// still takes a band per tile row, and its pixels do not move.
+TEST_F(RaycastTest, StillBands_ByTime_OneATileRowSameFrame) {
   auto timed = VolumeRenderer::Create(context(), {.still_band_rays = 1750, .still_band_ms = 1e-6});
   ASSERT_TRUE(timed.ok()) << timed.status();
   RenderRequest r = Request(RenderMode::kDvr);
@@ -73,14 +76,17 @@ TEST_F(RaycastTest, StillBands_SameFrameAsOneSubmit) {
   EXPECT_EQ(by_time->bands, 9);
   EXPECT_EQ(by_time->submits, 9);
   EXPECT_EQ(by_time->rgba, by_rays->rgba);
-  // The default: a renderer's first 512^2 still in 8 bands, in 2 to 8
-  // submits (by the device's speed).
+}
+
+// The default: a renderer's first 512^2 still in 8 bands, in 2 to 8
+// submits (by the device's speed); the next still's cast predicted from
+// its cost per ray.
+TEST_F(RaycastTest, StillBands_DefaultEightBandsAndThePrediction) {
   auto fresh = VolumeRenderer::Create(context(), {});
   ASSERT_TRUE(fresh.ok()) << fresh.status();
   EXPECT_EQ((*fresh)->PredictStillMs(512 * 512), -1.0);  // no still yet
   auto still = (*fresh)->Render(Request(RenderMode::kMip, "ct-vessels", 512));
   ASSERT_TRUE(still.ok()) << still.status();
-  // The next still's cast predicted from this one's cost per ray.
   const double predicted = (*fresh)->PredictStillMs(512 * 512);
   EXPECT_GT(predicted, 0.0);
   EXPECT_DOUBLE_EQ((*fresh)->PredictStillMs(256 * 256), predicted / 4.0);
