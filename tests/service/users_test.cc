@@ -289,6 +289,17 @@ bool IsRandomId(const std::string& id, const std::string& prefix) {
          hex(id.substr(n, 8)) && hex(id.substr(n + 9));
 }
 
+// An answer to Bob about Alice's object is exactly a missing one's (code
+// and message), so he cannot tell that hers exist.
+void ExpectSameAsMissing(const grpc::Status& theirs, const grpc::Status& missing) {
+  EXPECT_EQ(theirs.error_code(), grpc::NOT_FOUND) << theirs.error_message();
+  EXPECT_EQ(theirs.error_code(), missing.error_code());
+  EXPECT_EQ(theirs.error_message(), missing.error_message());
+}
+
+constexpr char kMadeUpVolume[] = "vol-00000000-00000000000000000000000000000000";
+constexpr char kMadeUpMesh[] = "mesh-00000000-00000000000000000000000000000000";
+
 TEST_F(UsersTest, UploadedVolumesBelongToTheUploader) {
   const std::vector<uint8_t> bytes = NiftiBytes();
   v3::VolumeInfo volume;
@@ -297,69 +308,66 @@ TEST_F(UsersTest, UploadedVolumesBelongToTheUploader) {
                   .ok());
   EXPECT_EQ(volume.owner(), "alice");
   // Ids are random: they tell nothing of how many volumes or meshes exist.
-  EXPECT_TRUE(IsRandomId(volume.volume_id(), "vol-"))
-      << volume.volume_id();
-
-  // Every answer to Bob is exactly a missing volume's or mesh's (code and
-  // message), so he cannot tell that Alice's exist.
-  auto same_as_missing = [](const grpc::Status& theirs, const grpc::Status& missing) {
-    EXPECT_EQ(theirs.error_code(), grpc::NOT_FOUND) << theirs.error_message();
-    EXPECT_EQ(theirs.error_code(), missing.error_code());
-    EXPECT_EQ(theirs.error_message(), missing.error_message());
-  };
-  const std::string made_up_volume = "vol-00000000-00000000000000000000000000000000";
+  EXPECT_TRUE(IsRandomId(volume.volume_id(), "vol-")) << volume.volume_id();
   v3::GetVolumeRequest get;
   v3::VolumeInfo info;
-  get.set_volume_id(made_up_volume);
+  get.set_volume_id(kMadeUpVolume);
   const grpc::Status missing_volume = stub_->GetVolume(Context(kBob).get(), get, &info);
   get.set_volume_id(volume.volume_id());
-  same_as_missing(stub_->GetVolume(Context(kBob).get(), get, &info), missing_volume);
+  ExpectSameAsMissing(stub_->GetVolume(Context(kBob).get(), get, &info), missing_volume);
   v3::ListVolumesResponse listed;
   ASSERT_TRUE(stub_->ListVolumes(Context(kBob).get(), {}, &listed).ok());
   EXPECT_EQ(listed.volumes_size(), 0);
   v3::BuildMeshRequest build;
   v3::MeshInfo mesh;
-  build.set_volume_id(made_up_volume);
+  build.set_volume_id(kMadeUpVolume);
   const grpc::Status missing_build = stub_->BuildMesh(Context(kBob).get(), build, &mesh);
   build.set_volume_id(volume.volume_id());
-  same_as_missing(stub_->BuildMesh(Context(kBob).get(), build, &mesh), missing_build);
+  ExpectSameAsMissing(stub_->BuildMesh(Context(kBob).get(), build, &mesh), missing_build);
   v3::OpenSessionRequest open;
   v3::SessionInfo session;
-  open.set_volume_id(made_up_volume);
+  open.set_volume_id(kMadeUpVolume);
   const grpc::Status missing_open = stub_->OpenSession(Context(kBob).get(), open, &session);
   open.set_volume_id(volume.volume_id());
-  same_as_missing(stub_->OpenSession(Context(kBob).get(), open, &session), missing_open);
+  ExpectSameAsMissing(stub_->OpenSession(Context(kBob).get(), open, &session), missing_open);
+  v3::DeleteVolumeRequest del;
+  v3::DeleteVolumeResponse deleted;
+  del.set_volume_id(kMadeUpVolume);
+  const grpc::Status missing_delete = stub_->DeleteVolume(Context(kBob).get(), del, &deleted);
+  del.set_volume_id(volume.volume_id());
+  ExpectSameAsMissing(stub_->DeleteVolume(Context(kBob).get(), del, &deleted), missing_delete);
+  EXPECT_TRUE(stub_->DeleteVolume(Context(kAlice).get(), del, &deleted).ok());
+}
 
-  // Alice's mesh on it is out of Bob's reach too.
+TEST_F(UsersTest, AMeshIsOutOfOtherUsersReach) {
+  const std::vector<uint8_t> bytes = NiftiBytes();
+  v3::VolumeInfo volume;
+  ASSERT_TRUE(
+      Upload(bytes, int64_t(bytes.size()), Sha256::HexOf(bytes), 64 << 10, &volume, true, kAlice)
+          .ok());
+  v3::BuildMeshRequest build;
+  build.set_volume_id(volume.volume_id());
+  v3::MeshInfo mesh;
   ASSERT_TRUE(stub_->BuildMesh(Context(kAlice).get(), build, &mesh).ok());
-  EXPECT_TRUE(IsRandomId(mesh.mesh_id(), "mesh-"))
-      << mesh.mesh_id();
-  const std::string made_up_mesh = "mesh-00000000-00000000000000000000000000000000";
+  EXPECT_TRUE(IsRandomId(mesh.mesh_id(), "mesh-")) << mesh.mesh_id();
   v3::GetMeshRequest get_mesh;
   v3::GetMeshResponse got_mesh;
-  get_mesh.set_mesh_id(made_up_mesh);
+  get_mesh.set_mesh_id(kMadeUpMesh);
   const grpc::Status missing_mesh = stub_->GetMesh(Context(kBob).get(), get_mesh, &got_mesh);
   get_mesh.set_mesh_id(mesh.mesh_id());
-  same_as_missing(stub_->GetMesh(Context(kBob).get(), get_mesh, &got_mesh), missing_mesh);
+  ExpectSameAsMissing(stub_->GetMesh(Context(kBob).get(), get_mesh, &got_mesh), missing_mesh);
   v3::DeleteMeshRequest delete_mesh;
   v3::DeleteMeshResponse deleted_mesh;
-  delete_mesh.set_mesh_id(made_up_mesh);
+  delete_mesh.set_mesh_id(kMadeUpMesh);
   const grpc::Status missing_mesh_delete =
       stub_->DeleteMesh(Context(kBob).get(), delete_mesh, &deleted_mesh);
   delete_mesh.set_mesh_id(mesh.mesh_id());
-  same_as_missing(stub_->DeleteMesh(Context(kBob).get(), delete_mesh, &deleted_mesh),
-                  missing_mesh_delete);
-  open.clear_volume_id();
+  ExpectSameAsMissing(stub_->DeleteMesh(Context(kBob).get(), delete_mesh, &deleted_mesh),
+                      missing_mesh_delete);
+  v3::OpenSessionRequest open;
+  v3::SessionInfo session;
   open.set_mesh_id(mesh.mesh_id());
-  same_as_missing(stub_->OpenSession(Context(kBob).get(), open, &session), missing_mesh);
-
-  v3::DeleteVolumeRequest del;
-  v3::DeleteVolumeResponse deleted;
-  del.set_volume_id(made_up_volume);
-  const grpc::Status missing_delete = stub_->DeleteVolume(Context(kBob).get(), del, &deleted);
-  del.set_volume_id(volume.volume_id());
-  same_as_missing(stub_->DeleteVolume(Context(kBob).get(), del, &deleted), missing_delete);
-  EXPECT_TRUE(stub_->DeleteVolume(Context(kAlice).get(), del, &deleted).ok());
+  ExpectSameAsMissing(stub_->OpenSession(Context(kBob).get(), open, &session), missing_mesh);
 }
 
 // A load's progress id is its user's: Bob polling Alice's id gets what an
