@@ -26,7 +26,9 @@ void AddMeshFlags(CLI::App* app, MeshFlags* f) {
   app->add_option("--radius-factor", f->radius_factor, "density radius R = factor * h")
       ->capture_default_str();
   app->add_option("--tf", f->tf, TransferFunctionHelp())->capture_default_str();
-  app->add_option("--bone", f->bone, "bone threshold (HU): vertices at or above are hard")
+  app->add_option(
+         "--bone", f->bone,
+         "bone threshold (HU; CT in HU only, none on an MRI): vertices at or above are hard")
       ->capture_default_str();
   app->add_option("--influence-threshold", f->influence_threshold,
                   "HU at or above which a vertex near bone becomes hard")->capture_default_str();

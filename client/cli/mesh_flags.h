@@ -19,7 +19,7 @@ struct MeshFlags {
   std::string footprint = "point";
   std::string density_mode = "spread";
   double wg = 1.0, wd = 0.5, radius_factor = 2.0;
-  std::string tf = "ct-soft-tissue";
+  std::string tf = "auto";
   double bone = 250.0, influence_threshold = 100.0, influence_factor = 0.75;
   std::vector<double> refine_at;  // empty or X Y Z (mm, world LPS)
   std::string refine_at_landmark; // or a landmark of the volume (phantoms have them)

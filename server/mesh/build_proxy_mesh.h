@@ -38,7 +38,7 @@ struct MeshParams {
   double wg = 1.0;
   double wd = 0.5;
   double radius_factor = 2.0;                // R = radius_factor * h
-  std::string tf = "ct-soft-tissue";         // preset or "v:c,..."
+  std::string tf = "auto";                   // preset ("auto": by the image) or "v:c,..."
   ClassifyParams classify;
   std::optional<glm::dvec3> refine_at_mm;    // step 4 point, physical voxel space
   double roi_radius_factor = 1.5;            // roi radius = factor * h

@@ -5,6 +5,7 @@
 #include <unordered_map>
 
 #include "server/mesh/point_grid.h"
+#include "server/volume/ct_in_hu.h"
 #include "server/volume/voxel_flood.h"
 
 namespace vpm {
@@ -86,10 +87,12 @@ Status ClassifyHardness(const Volume& volume, double R_mm, const ClassifyParams&
   for (double t : {params.bone_threshold, params.influence_threshold, params.influence_factor}) {
     if (!std::isfinite(t)) return absl::InvalidArgumentError("classification thresholds must be finite");
   }
+  const bool hu_rules = IsCtInHu(volume);
   std::vector<int64_t> bone;  // hard by rule 1
   for (size_t i = 0; i < vertices.size(); ++i) {
     auto& v = vertices[i];
-    v.hard = v.kind != VertexKind::kAnchor && ValueAt(volume, v) >= params.bone_threshold;
+    v.hard =
+        hu_rules && v.kind != VertexKind::kAnchor && ValueAt(volume, v) >= params.bone_threshold;
     v.skeleton = false;
     if (v.hard) bone.push_back(static_cast<int64_t>(i));
   }

@@ -12,6 +12,10 @@
 //     hard; an override that makes a vertex hard puts it on the skeleton.
 //     Only skeleton vertices are fixed in FEM; the other hard ones are stiff
 //     and free.
+// Rules 1 and 2 are in HU and apply to CT in HU only (IsCtInHu,
+// server/volume/ct_in_hu.h): on an MRI no vertex is hard but by an override
+// (its intensities say nothing of bone, and bright fat would be fixed), so
+// the box faces and the anchors hold the model.
 // Anchors are fixed in FEM anyway and are left deformable here.
 #pragma once
 

@@ -5,8 +5,6 @@
 
 namespace vpm {
 
-bool IsCtInHu(const Volume& volume) { return volume.min_value() < kCtAirCeilingHu; }
-
 std::vector<float> SampleVolumeValues(const Volume& volume, double floor) {
   const VoxelValues& values = volume.voxels();
   const int64_t count = values.size();

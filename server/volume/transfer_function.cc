@@ -7,6 +7,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
+#include "server/volume/ct_in_hu.h"
 
 namespace vpm {
 namespace {
@@ -82,15 +83,18 @@ TransferFunction TransferFunction::CtSoftTissue() {
 
 std::vector<std::pair<std::string, std::string>> TransferFunction::PresetNames() {
   return {
+      {"auto", "by the image: ct-soft-tissue on CT in HU, mri-t1 otherwise (ct_in_hu.h)"},
       {"ct-soft-tissue", "CT default (docs/ALGORITHM.md): fat to soft tissue high, bone half"},
       {"ct-vessels", "CT angiography: contrast-filled vessels (150-300 HU) highest"},
       {"ct-bone", "CT bone: cancellous and cortical bone (>= 250 HU) highest"},
-      {"mri-t1", "MRI T1: on the volume's own intensity percentiles (p2 0, p20 0.2, "
-                 "p50 0.8, p90 1, p99.5 0.6)"},
+      {"mri-t1",
+       "MRI T1: on the volume's own intensity percentiles (p2 0, p20 0.2, "
+       "p50 0.8, p90 1, p99.5 0.6)"},
   };
 }
 
 Result<TransferFunction> TransferFunction::FromSpec(std::string_view spec, const Volume& volume) {
+  if (spec == kAutoTransferCost) spec = IsCtInHu(volume) ? "ct-soft-tissue" : "mri-t1";
   if (spec == "ct-soft-tissue") return CtSoftTissue();
   if (spec == "ct-vessels") {
     return Create({{-1000, 0}, {100, 0}, {150, 0.6}, {200, 1.0}, {300, 1.0}, {400, 0.3},

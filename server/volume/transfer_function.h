@@ -13,6 +13,10 @@
 
 namespace vpm {
 
+// The preset chosen by the image: ct-soft-tissue on CT in HU, mri-t1 on
+// other volumes (IsCtInHu, ct_in_hu.h).
+inline constexpr std::string_view kAutoTransferCost = "auto";
+
 struct TfPoint {
   double value;  // image value (HU for CT)
   double cost;   // in [0, 1]
@@ -25,8 +29,9 @@ class TransferFunction {
   static Result<TransferFunction> Create(std::vector<TfPoint> points);
   // "v:c,v:c,..." (values in the volume's units).
   static Result<TransferFunction> Parse(std::string_view text);
-  // A named preset (see PresetNames()) or a "v:c,..." list. Presets defined
-  // on intensity percentiles (mri-t1) are resolved against `volume`.
+  // A named preset (see PresetNames(); "auto" picks one by `volume`) or a
+  // "v:c,..." list. Presets defined on intensity percentiles (mri-t1) are
+  // resolved against `volume`.
   static Result<TransferFunction> FromSpec(std::string_view spec, const Volume& volume);
   // The docs/ALGORITHM.md default, `ct-soft-tissue`.
   static TransferFunction CtSoftTissue();

@@ -9,17 +9,21 @@
 namespace vpm {
 namespace {
 
-// A 1D row of vertices over a volume whose values we set per voxel.
+// A 1D row of vertices over a volume whose values we set per voxel, and one
+// voxel of air (-1000 HU) after them with no vertex: CT in HU (ct_in_hu.h),
+// so that the HU rules apply.
 struct Row {
   Volume volume;
   std::vector<MeshVertex> vertices;
 };
 
-Row MakeRow(const std::vector<float>& values) {
+Row MakeRow(std::vector<float> values) {
+  const int64_t n = static_cast<int64_t>(values.size());
+  values.push_back(-1000.0f);
   VolumeGeometry g;
-  g.dims = {static_cast<int64_t>(values.size()), 1, 1};
+  g.dims = {n + 1, 1, 1};
   Row row{*Volume::Create(g, values), {}};
-  for (int64_t i = 0; i < g.dims[0]; ++i) {
+  for (int64_t i = 0; i < n; ++i) {
     row.vertices.push_back({.position_mm = glm::dvec3(i, 0, 0), .lattice_id = i, .voxel = {i, 0, 0}});
   }
   return row;

@@ -17,7 +17,8 @@ namespace {
 using testing::ExpectSteinerVertex;
 
 // A 100 mm box (2 mm voxels) of soft tissue (40) under a bone slab (700)
-// at z >= 90 mm.
+// at z >= 90 mm, with one voxel of air (-1000 HU) at the origin: CT in HU
+// (ct_in_hu.h), so that bone is hard.
 Volume SlabVolume() {
   VolumeGeometry g;
   g.dims = {51, 51, 51};
@@ -28,6 +29,7 @@ Volume SlabVolume() {
       values[i + g.dims[0] * g.dims[1] * k] = 2.0 * k >= 90.0 ? 700.0f : 40.0f;
     }
   }
+  values[0] = -1000.0f;
   return *Volume::Create(g, std::move(values));
 }
 

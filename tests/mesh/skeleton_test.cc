@@ -2,6 +2,8 @@
 // of at least skeleton_min_volume_mm3 are skeleton (fixed); a small hard
 // island (a stone) is hard but not skeleton, and the vertices it makes hard
 // by influence are not skeleton either.
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
 #include "server/mesh/classify_hardness.h"
@@ -10,8 +12,9 @@ namespace vpm {
 namespace {
 
 // 40^3 voxels of 1 mm: soft tissue (40), a bone block of 20^3 mm^3 (8,000
-// mm^3, value 1000) at [2, 22)^3 and a stone of 3^3 mm^3 (value 1000)
-// centred at (32, 32, 32).
+// mm^3, value 1000) at [2, 22)^3, a stone of 3^3 mm^3 (value 1000) centred
+// at (32, 32, 32), and one voxel of air (-1000 HU) in the corner (39, 0, 0):
+// CT in HU (ct_in_hu.h), so that the HU rules apply.
 Volume BlockAndStone() {
   VolumeGeometry g;
   g.dims = {40, 40, 40};
@@ -25,6 +28,7 @@ Volume BlockAndStone() {
       }
     }
   }
+  values[39] = -1000.0f;
   return *Volume::Create(g, std::move(values));
 }
 
@@ -76,6 +80,26 @@ TEST(Skeleton, TheVolumeThresholdDecides) {
   ASSERT_TRUE(ClassifyHardness(volume, 8.0, params, vertices).ok());
   EXPECT_TRUE(vertices[0].hard);
   EXPECT_FALSE(vertices[0].skeleton);
+}
+
+// The same block and stone without the air: not CT in HU (an MRI's
+// intensities), so no vertex is hard but by an override.
+TEST(Skeleton, NoHuRulesOnAVolumeThatIsNotCt) {
+  VolumeGeometry g;
+  g.dims = {40, 40, 40};
+  const Volume ct = BlockAndStone();
+  std::vector<float> values(ct.voxels().size());
+  for (int64_t n = 0; n < ct.voxels().size(); ++n) values[n] = std::max(ct.voxels()[n], 0.0f);
+  const Volume mri = *Volume::Create(g, std::move(values));
+  std::vector<MeshVertex> vertices = {At(12, 12, 12), At(32, 32, 32), At(36, 36, 36)};
+  ClassifyParams params;
+  params.influence_threshold = 30.0;
+  ASSERT_TRUE(ClassifyHardness(mri, 10.0, params, vertices).ok());
+  for (const MeshVertex& v : vertices) EXPECT_FALSE(v.hard || v.skeleton);
+  params.overrides.push_back({.shape = HardnessOverride::Shape::kIds, .ids = {1}});
+  ASSERT_TRUE(ClassifyHardness(mri, 10.0, params, vertices).ok());
+  EXPECT_TRUE(vertices[1].hard && vertices[1].skeleton);
+  EXPECT_FALSE(vertices[0].hard);
 }
 
 }  // namespace
