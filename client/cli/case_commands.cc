@@ -41,7 +41,7 @@ json ViewJson(const v3::CaseInfo& c) {
 
 // One line of what the kept view shows: "MIP, crop, 1 clip plane, 2 slices".
 std::string ViewSummary(const v3::RenderSettings& v) {
-  const std::string preset = v.preset().empty() ? "ct-soft-tissue" : v.preset();
+  const std::string preset = v.preset().empty() ? "auto" : v.preset();
   std::string out = v.mode() == v3::RENDER_MODE_MIP ? "MIP"
                     : v.has_render_tf() ? "DVR, transfer function " + v.render_tf().name()
                                         : "DVR, preset " + preset;

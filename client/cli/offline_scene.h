@@ -28,7 +28,7 @@ struct RenderArgs {
   std::string source, mesh_json, out, out_volume, out_displacement;
   MeshFlags mesh;
   std::vector<double> camera;  // AZ EL DIST
-  std::string mode = "dvr", preset = "ct-soft-tissue", quality = "still";
+  std::string mode = "dvr", preset = "auto", quality = "still";
   std::string render_tf;        // a ParaView .json[#NAME] or Slicer .vp; overrides preset
   std::vector<double> window;   // MIP: W L (the volume's units)
   double step_mm = 0.0;         // the sample step; 0: the quality's default

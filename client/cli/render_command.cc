@@ -297,7 +297,8 @@ void AddRenderCommand(CLI::App& app, const ServerFlags* server, int* exit_code) 
       ->check(CLI::IsMember({"dvr", "mip"}))
       ->capture_default_str();
   cmd->add_option("--preset", a->preset,
-                  "render preset: ct-soft-tissue, ct-bone, ct-vessels, mri-t1, or Slicer's "
+                  "render preset: auto (ct-soft-tissue on CT, mri-t1 otherwise), ct-soft-tissue, "
+                  "ct-bone, ct-vessels, mri-t1, or Slicer's "
                   "CT-AAA, CT-Bone, CT-Muscle, CT-Chest-Contrast-Enhanced, CT-Soft-Tissue, "
                   "MR-Default")
       ->capture_default_str();

@@ -34,7 +34,8 @@ void AddViewFlags(CLI::App& app, ViewFlags* f) {
       ->type_name("W H");
   app.add_option("--mode", f->mode, "dvr or mip")->check(CLI::IsMember({"dvr", "mip"}));
   app.add_option("--preset", f->preset,
-                 "DVR preset: ct-soft-tissue, ct-bone, ct-vessels, mri-t1, or Slicer's CT-AAA, "
+                 "DVR preset: auto (ct-soft-tissue on CT, mri-t1 otherwise), ct-soft-tissue, "
+                 "ct-bone, ct-vessels, mri-t1, or Slicer's CT-AAA, "
                  "CT-Bone, CT-Muscle, CT-Chest-Contrast-Enhanced, CT-Soft-Tissue, MR-Default");
   app.add_option("--cut", [f](const CLI::results_t& r) {
                    f->view_cut = r.at(0) == "on";

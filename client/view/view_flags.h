@@ -15,7 +15,7 @@ struct ViewFlags {
   int width = 512;   // frame size asked for at start, pixels (the window adds the status bar)
   int height = 512;
   std::string mode = "dvr";              // "dvr" or "mip"
-  std::string preset = "ct-soft-tissue";  // DVR preset
+  std::string preset = "auto";           // DVR preset ("auto": by the image)
   int jpeg_quality = 85;                 // 1..100
   bool overlay = false;                  // proxy-mesh overlay
   // RenderSettings.interactive_quality at start: "auto", "fast", "balanced",

@@ -124,12 +124,18 @@ std::vector<std::pair<std::string, std::string>> RenderPresetNames() {
       {"ct-bone", "CT: bone only (>= 230 HU), cortex opaque"},
       {"ct-vessels", "CT angiography: contrast vessels and kidney cortex red, bone faint"},
       {"mri-t1", "MRI T1: greyscale on the volume's percentiles (p5 transparent .. p99.5)"},
+      {"auto", "by the image: ct-soft-tissue on CT in HU, mri-t1 otherwise"},
   };
   for (auto& slicer : SlicerPresetNames()) names.push_back(std::move(slicer));
   return names;
 }
 
+std::string_view DefaultRenderPresetName(const Volume& volume) {
+  return IsCtInHu(volume) ? "ct-soft-tissue" : "mri-t1";
+}
+
 Result<RenderPreset> MakeRenderPreset(std::string_view name, const Volume& volume) {
+  if (name.empty() || name == kAutoRenderPreset) name = DefaultRenderPresetName(volume);
   ASSIGN_OR_RETURN(RenderPreset preset, VpmPreset(name, volume));
   preset.mip_window = VolumeMipWindow(volume);
   return preset;

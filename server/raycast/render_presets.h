@@ -63,11 +63,20 @@ struct RenderPreset {
 };
 
 // Names with a one-line description each: vpm's ct-soft-tissue, ct-bone,
-// ct-vessels, mri-t1, then 3D Slicer's (slicer_presets.h: CT-AAA, CT-Bone,
+// ct-vessels, mri-t1, auto, then 3D Slicer's (slicer_presets.h: CT-AAA, CT-Bone,
 // ...; names are case-sensitive, so ct-bone and CT-Bone are two presets).
 std::vector<std::pair<std::string, std::string>> RenderPresetNames();
 
-// A named preset. mri-t1 is defined on intensity percentiles of `volume`
+// "auto" (or empty): the preset a volume opens with, DefaultRenderPresetName.
+inline constexpr std::string_view kAutoRenderPreset = "auto";
+
+// ct-soft-tissue for CT in HU, mri-t1 for any other volume (IsCtInHu,
+// server/volume/ct_in_hu.h): the CT presets are in HU, and on an MRI they
+// show nothing of its anatomy.
+std::string_view DefaultRenderPresetName(const Volume& volume);
+
+// A named preset ("auto" or empty: DefaultRenderPresetName's). mri-t1 is
+// defined on intensity percentiles of `volume`
 // (p5 transparent up to p99.5 brightest), the CT presets in HU. Every
 // preset's MIP window is VolumeMipWindow(volume) (the volume's own
 // percentiles, volume_mip_window.h). Errors: InvalidArgument for an unknown

@@ -252,9 +252,8 @@ Status ToLook(const v3::RenderSettings& in, const Volume& volume, SceneView& vie
   if (in.has_render_tf() && !in.preset().empty()) {
     return absl::InvalidArgumentError("settings: give preset or render_tf, not both");
   }
-  auto preset = in.has_render_tf()
-                    ? RenderPresetFromTf(FromProto(in.render_tf()), volume)
-                    : MakeRenderPreset(in.preset().empty() ? "ct-soft-tissue" : in.preset(), volume);
+  auto preset = in.has_render_tf() ? RenderPresetFromTf(FromProto(in.render_tf()), volume)
+                                   : MakeRenderPreset(in.preset(), volume);
   if (!preset.ok()) {
     return absl::InvalidArgumentError(StrCat(in.has_render_tf() ? "settings.render_tf: "
                                                                 : "settings.preset: ",

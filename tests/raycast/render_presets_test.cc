@@ -10,6 +10,7 @@
 #include "server/gpu/shader_interface.h"
 #include "server/raycast/render_presets.h"
 #include "server/raycast/render_request.h"
+#include "server/volume/ct_in_hu.h"
 #include "tests/raycast/render_test_util.h"
 
 namespace vpm {
@@ -21,8 +22,26 @@ TEST(RenderPresets, EveryNamedPresetIsValid) {
     auto preset = MakeRenderPreset(name, volume);
     ASSERT_TRUE(preset.ok()) << name << ": " << preset.status();
     EXPECT_TRUE(ValidateRenderPreset(*preset).ok()) << name;
-    EXPECT_EQ(preset->name, name);
+    EXPECT_EQ(preset->name, name == kAutoRenderPreset ? DefaultRenderPresetName(volume) : name);
     EXPECT_FALSE(description.empty());
+  }
+}
+
+// "auto" and no name: ct-soft-tissue on CT in HU, mri-t1 on any other
+// volume (the same volume shifted above 0, as an MRI's intensities).
+TEST(RenderPresets, AutoIsTheSoftTissueOneOnCtAndMriT1Else) {
+  const Volume ct = testing::MakeSphereRodVolume(16);
+  ASSERT_TRUE(IsCtInHu(ct));
+  std::vector<float> shifted(static_cast<size_t>(ct.voxels().size()));
+  for (size_t n = 0; n < shifted.size(); ++n) {
+    shifted[n] = ct.voxels()[static_cast<int64_t>(n)] - ct.min_value();
+  }
+  const Volume mri = *Volume::Create(ct.geometry(), std::move(shifted));
+  ASSERT_FALSE(IsCtInHu(mri));
+  for (const char* name : {"auto", ""}) {
+    EXPECT_EQ(MakeRenderPreset(name, ct)->name, "ct-soft-tissue") << name;
+    EXPECT_EQ(MakeRenderPreset(name, mri)->name, "mri-t1") << name;
+    EXPECT_EQ(*MakeRenderPreset(name, mri), *MakeRenderPreset("mri-t1", mri)) << name;
   }
 }
 

@@ -6,12 +6,13 @@
 // is sent here: the stream already started with the view.
 
 // The Render select's value for a view: the page's options name mode and
-// preset ('dvr:ct-bone'); its MIP is 'mip:ct-vessels'; a transfer function
+// preset ('dvr:ct-bone'; 'dvr:auto', the server's choice by the image, for
+// none); its MIP is 'mip:ct-vessels'; a transfer function
 // of the case's own is the tab's upload ('dvr:uploaded').
 export function renderValue(view) {
   if (view.mode === 'mip') return 'mip:ct-vessels';
   if (view.render_tf) return 'dvr:uploaded';
-  return `dvr:${view.preset || 'ct-soft-tissue'}`;
+  return `dvr:${view.preset || 'auto'}`;
 }
 
 // controls: {render (select), viewCut (checkbox), slicesBox (checkbox),
