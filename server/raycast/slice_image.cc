@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "server/raycast/volume_mip_window.h"
+#include "server/volume/ct_in_hu.h"
 
 namespace vpm {
 namespace {
@@ -47,7 +48,7 @@ void DrawSegment(const SliceGrid& grid, glm::dvec2 a, glm::dvec2 b, const uint8_
 }  // namespace
 
 MipWindow DefaultSliceWindow(const Volume& volume) {
-  if (volume.min_value() <= -900.0f && volume.max_value() > 100.0f) return MipWindow{40.0, 400.0};
+  if (IsCtInHu(volume)) return MipWindow{40.0, 400.0};
   std::vector<float> sample = SampleVolumeValues(volume, -INFINITY);
   const std::vector<double> p = Percentiles(sample, {1.0, 99.0});
   return MipWindow{0.5 * (p[0] + p[1]), std::max(p[1] - p[0], 1e-6)};

@@ -19,7 +19,7 @@ namespace vpm {
 
 // A slice's window is a MipWindow (render_presets.h): values level -
 // width / 2 .. level + width / 2 map to black .. white (ValidateMipWindow).
-// Default: for CT (values reach -900 HU or below and above 100) the
+// Default: for CT in HU (IsCtInHu, server/volume/ct_in_hu.h) the
 // soft-tissue window W 400 L 40 a radiologist starts from; anything else
 // (MRI, unitless): the 1st to 99th percentile of the voxels
 // (SampleVolumeValues, Percentiles).

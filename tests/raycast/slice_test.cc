@@ -193,5 +193,25 @@ TEST(SliceImage, CutTetsOutlineOnlyTheTetsThePlaneCrosses) {
   EXPECT_FALSE(DrawSliceMarker(*grid, glm::dvec3(10.0, 10.0, 14.0), 1.0, red, rgba));
 }
 
+// The slices' default window: soft tissue (W 400 L 40) on CT in HU, the
+// 1st..99th percentile on any other volume (the same values above 0, as an
+// MRI's).
+TEST(SliceWindow, SoftTissueOnCtPercentilesElse) {
+  const Volume ct = testing::MakeSphereRodVolume(16);
+  const MipWindow on_ct = DefaultSliceWindow(ct);
+  EXPECT_EQ(on_ct.width, 400.0);
+  EXPECT_EQ(on_ct.level, 40.0);
+  std::vector<float> shifted(static_cast<size_t>(ct.voxels().size()));
+  for (size_t n = 0; n < shifted.size(); ++n) {
+    shifted[n] = ct.voxels()[static_cast<int64_t>(n)] - ct.min_value();
+  }
+  const Volume mri = *Volume::Create(ct.geometry(), std::move(shifted));
+  const MipWindow on_mri = DefaultSliceWindow(mri);
+  EXPECT_GT(on_mri.level - 0.5 * on_mri.width, -1.0);  // black at or above the lowest value
+  EXPECT_LE(on_mri.level + 0.5 * on_mri.width, mri.max_value() + 1.0);
+  EXPECT_GT(on_mri.width, 0.0);
+  EXPECT_NE(on_mri.width, 400.0);
+}
+
 }  // namespace
 }  // namespace vpm

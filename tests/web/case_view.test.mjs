@@ -119,3 +119,21 @@ test('CaseView_SetsThePagesControlsSoThatTheyShowAndSendTheView', () => {
   assert.deepEqual(d.cuts.settings(), {});
   assert.equal(d.slicesBox.checked, false);
 });
+
+test('SliceViews_SendNoWindowUntilTheUserSetsOneAndShowTheServers', () => {
+  const { slices } = controls();
+  slices.enabled = true;
+  // At start the server picks the window for the volume (soft tissue on CT,
+  // percentiles on an MRI): no slice asks for one.
+  assert.ok(slices.specs().every((s) => s.window === undefined));
+  assert.deepEqual(slices.shownWindow(), { width: 400, level: 40 }, 'before any frame');
+  // A frame's slice geometry reports the window the server used.
+  slices.geometry.axial = { window: { width: 1210, level: 480 } };
+  assert.deepEqual(slices.shownWindow(), { width: 1210, level: 480 });
+  // The user's window is sent, and shown, until a new volume.
+  slices.window = { width: 350, level: 60 };
+  assert.ok(slices.specs().every((s) => s.window.width === 350 && s.window.level === 60));
+  assert.deepEqual(slices.shownWindow(), { width: 350, level: 60 });
+  slices.reset();
+  assert.ok(slices.specs().every((s) => s.window === undefined));
+});

@@ -26,7 +26,8 @@ export function applyCaseView(view, controls) {
   controls.cuts.applyView(view.crop ?? null, view.clip ?? []);
   controls.slices.applyView(view.slices ?? []);
   controls.slicesBox.checked = controls.slices.enabled;
-  controls.windowWidth.value = String(controls.slices.window.width);
-  controls.windowLevel.value = String(controls.slices.window.level);
+  const shown = controls.slices.shownWindow();
+  controls.windowWidth.value = String(shown.width);
+  controls.windowLevel.value = String(shown.level);
   controls.sliceOverlay.checked = controls.slices.overlay;
 }

@@ -27,13 +27,18 @@ export class SliceViews {
   // canvases: {axial, coronal, sagittal}; labels: the same, elements whose
   // text names the position; tool(): 'orbit' | 'grab' | 'refine';
   // send(event) -> sequence; onChange(): the slices' settings changed;
-  // onWindow({width, level}): a window drag; onGrab(point_mm); keepDrags():
+  // onWindow({width, level}): a window drag, or the server's window that a
+  // frame shows while the user has set none; onGrab(point_mm); keepDrags():
   // whether a release keeps the drag (Shift on release keeps too), as in 3D.
   constructor({ canvases, labels, tool, send, onChange, onWindow, onGrab,
                 keepDrags = () => false }) {
     Object.assign(this, { canvases, labels, tool, send, onChange, onWindow, onGrab, keepDrags });
     this.enabled = false;
-    this.window = { width: 400, level: 40 };
+    // {width, level}, or null: the server's window for the volume (soft
+    // tissue W 400 L 40 on CT, the 1st..99th percentile otherwise), which
+    // each frame's slice geometry reports and onWindow shows, until the user
+    // sets one.
+    this.window = null;
     this.overlay = false;
     this.at = {};        // view -> at_mm (world), once known
     this.geometry = {};  // view -> the newest frame's SliceGeometry
@@ -54,9 +59,12 @@ export class SliceViews {
   specs() {
     if (!this.enabled) return [];
     return kViews.map(([view, orientation]) => ({
-      view, orientation, window: { ...this.window }, overlay: this.overlay,
-      ...(this.at[view] === undefined ? {} : { at_mm: this.at[view] }),
-    }));
+                        view,
+                        orientation,
+                        ...(this.window ? {window: {...this.window}} : {}),
+                        overlay: this.overlay,
+                        ...(this.at[view] === undefined ? {} : {at_mm: this.at[view]}),
+                      }));
   }
 
   // A case's slices (RenderSettings.slices, case_view.js): the panes show
@@ -75,8 +83,16 @@ export class SliceViews {
     }
   }
 
-  // A new volume: planes back to its centre.
+  // The window the slices show: the user's, else the newest frame's.
+  shownWindow() {
+    if (this.window) return this.window;
+    const g = Object.values(this.geometry).find((x) => x.window?.width > 0);
+    return g ? {width: g.window.width, level: g.window.level} : {width: 400, level: 40};
+  }
+
+  // A new volume: planes back to its centre, the window back to its own.
   reset() {
+    this.window = null;
     this.at = {};
     this.geometry = {};
   }
@@ -89,6 +105,7 @@ export class SliceViews {
       const g = header.geometry;
       this.geometry[header.view] = { ...g, width: header.width, height: header.height };
       if (this.at[header.view] === undefined) this.at[header.view] = g.offset_mm;
+      if (!this.window && g.window?.width > 0) this.onWindow?.(g.window);
       const bitmap = await createImageBitmap(image);
       if (canvas.width !== header.width || canvas.height !== header.height) {
         canvas.width = header.width;
@@ -155,8 +172,16 @@ export class SliceViews {
     }
     const canvas = this.canvases[view];
     canvas.setPointerCapture(e.pointerId);
-    this.gesture = { kind: tool, view, canvas, startX: x, startY: y,
-                     clientX: e.clientX, clientY: e.clientY, window: { ...this.window } };
+    this.gesture = {
+      kind: tool,
+      view,
+      canvas,
+      startX: x,
+      startY: y,
+      clientX: e.clientX,
+      clientY: e.clientY,
+      window: {...this.shownWindow()}
+    };
   }
 
   move(e) {

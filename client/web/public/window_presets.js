@@ -15,6 +15,7 @@ export function windowPreset(name) {
 // The name of the preset with this window ({width, level}, HU), or '' (a
 // window of the user's own).
 export function presetNameOf(window) {
+  if (!window) return '';
   const p = kWindowPresets.find((q) => q.width === window.width && q.level === window.level);
   return p ? p.name : '';
 }
