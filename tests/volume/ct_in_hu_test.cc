@@ -32,8 +32,8 @@ Volume WithModality(Volume volume, const std::string& modality) {
 TEST(CtInHu, AirMakesCtUnlessTheDicomModalitySaysOtherwise) {
   // Without a modality: air (below -500) makes it CT in HU.
   EXPECT_TRUE(IsCtInHu(ValueRamp(-1000.0f, 1500.0f)));
-  EXPECT_TRUE(IsCtInHu(ValueRamp(-3024.0f, 60.0f)));  // a scanner's padding
-  EXPECT_FALSE(IsCtInHu(ValueRamp(0.0f, 2500.0f)));   // magnitude MRI
+  EXPECT_TRUE(IsCtInHu(ValueRamp(-3024.0f, 60.0f)));   // a scanner's padding
+  EXPECT_FALSE(IsCtInHu(ValueRamp(0.0f, 2500.0f)));    // magnitude MRI
   EXPECT_FALSE(IsCtInHu(ValueRamp(-400.0f, 400.0f)));  // no air
   // A DICOM series: its Modality decides.
   EXPECT_FALSE(IsCtInHu(WithModality(ValueRamp(-1000.0f, 800.0f), "MR")));
