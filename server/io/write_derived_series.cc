@@ -110,7 +110,7 @@ Result<std::vector<DicomFileBytes>> WriteDerivedSeries(const Volume& volume,
                                                        const DicomExportIds& ids,
                                                        const DerivedSeriesText& text,
                                                        const ProgressFn& progress) {
-  const std::string modality = origin ? origin->Get(0x00080060) : std::string("CT");
+  const std::string modality = origin ? origin->Get(kDicomModalityTag) : std::string("CT");
   if (modality != "CT" && modality != "MR") {
     return absl::InvalidArgumentError(StrCat("the source series is ", modality.empty() ? "of no modality" : modality,
                                              ": a derived series is written for CT and MR sources"));

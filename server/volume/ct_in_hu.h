@@ -16,7 +16,6 @@
 namespace vpm {
 
 inline constexpr double kCtAirCeilingHu = -500.0;
-inline constexpr uint32_t kDicomModalityTag = 0x00080060;
 
 bool IsCtInHu(const Volume& volume);
 

@@ -15,6 +15,9 @@
 
 namespace vpm {
 
+// Modality (0008,0060), as DicomOrigin::Get takes a tag.
+inline constexpr uint32_t kDicomModalityTag = 0x00080060;
+
 struct DicomSourceInstance {
   std::string sop_class_uid;
   std::string sop_instance_uid;

@@ -59,12 +59,10 @@ export class SliceViews {
   specs() {
     if (!this.enabled) return [];
     return kViews.map(([view, orientation]) => ({
-                        view,
-                        orientation,
-                        ...(this.window ? {window: {...this.window}} : {}),
-                        overlay: this.overlay,
-                        ...(this.at[view] === undefined ? {} : {at_mm: this.at[view]}),
-                      }));
+      view, orientation, ...(this.window ? { window: { ...this.window } } : {}),
+      overlay: this.overlay,
+      ...(this.at[view] === undefined ? {} : { at_mm: this.at[view] }),
+    }));
   }
 
   // A case's slices (RenderSettings.slices, case_view.js): the panes show
@@ -87,7 +85,7 @@ export class SliceViews {
   shownWindow() {
     if (this.window) return this.window;
     const g = Object.values(this.geometry).find((x) => x.window?.width > 0);
-    return g ? {width: g.window.width, level: g.window.level} : {width: 400, level: 40};
+    return g ? { width: g.window.width, level: g.window.level } : { width: 400, level: 40 };
   }
 
   // A new volume: planes back to its centre, the window back to its own.
@@ -172,16 +170,8 @@ export class SliceViews {
     }
     const canvas = this.canvases[view];
     canvas.setPointerCapture(e.pointerId);
-    this.gesture = {
-      kind: tool,
-      view,
-      canvas,
-      startX: x,
-      startY: y,
-      clientX: e.clientX,
-      clientY: e.clientY,
-      window: {...this.shownWindow()}
-    };
+    this.gesture = { kind: tool, view, canvas, startX: x, startY: y,
+                     clientX: e.clientX, clientY: e.clientY, window: { ...this.shownWindow() } };
   }
 
   move(e) {
