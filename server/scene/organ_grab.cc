@@ -25,8 +25,7 @@ bool NearRegion(const Volume& volume, const OrganRegion& region, const glm::dvec
             index.y >= dims[1] || index.z >= dims[2]) {
           continue;
         }
-        if (region.Contains(
-                volume.LinearIndex(int64_t(index.x), int64_t(index.y), int64_t(index.z)))) {
+        if (region.Contains(int64_t(index.x), int64_t(index.y), int64_t(index.z))) {
           return true;
         }
       }

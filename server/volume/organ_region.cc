@@ -6,6 +6,8 @@
 #include <cmath>
 #include <optional>
 
+#include "server/volume/block_average.h"
+
 namespace vpm {
 namespace {
 
@@ -175,11 +177,13 @@ std::optional<BoxMask> LargestComponentNear(const BoxMask& mask, const std::arra
 }
 
 // One face-connected erosion (grow = false) or dilation within `limit`
-// (same box as `in`). Only a set voxel can erode and only an unset one
+// (same box as `in`). Erosion keeps a set voxel while at least `keep` of its
+// six neighbours are set (6: all; 5: a voxel with one neighbour missing, as
+// noise leaves inside an organ, stays); dilation sets an unset voxel of
+// `limit` beside a set one. Only a set voxel can erode and only an unset one
 // inside `limit` can grow, and each of those has its six neighbours inside
-// the box (Grow's margin), so they are read by linear offsets, and only
-// until one decides.
-BoxMask Morph(const BoxMask& in, bool grow, const BoxMask& limit) {
+// the box (Grow's margin), so they are read by linear offsets.
+BoxMask Morph(const BoxMask& in, bool grow, const BoxMask& limit, int keep = 6) {
   BoxMask out = in;
   const int64_t sx = in.size[0], sxy = in.size[0] * in.size[1];
   const int64_t offsets[6] = {1, -1, sx, -sx, sxy, -sxy};
@@ -187,16 +191,18 @@ BoxMask Morph(const BoxMask& in, bool grow, const BoxMask& limit) {
   const int64_t n = static_cast<int64_t>(in.bits.size());
   for (int64_t x = 0; x < n; ++x) {
     if (grow ? (bits[x] || !limit.bits[x]) : !bits[x]) continue;  // out = in
-    // Erosion keeps the voxel while every neighbour is set; dilation sets
-    // it once one is.
-    bool flip = false;
-    for (int64_t o : offsets) {
-      if ((bits[x + o] != 0) == grow) {
-        flip = true;
-        break;
+    if (grow) {
+      for (int64_t o : offsets) {
+        if (bits[x + o]) {
+          out.bits[x] = 1;
+          break;
+        }
       }
+      continue;
     }
-    if (flip) out.bits[x] = grow ? 1 : 0;
+    int set = 0;
+    for (int64_t o : offsets) set += bits[x + o] != 0;
+    if (set < keep) out.bits[x] = 0;
   }
   return out;
 }
@@ -220,20 +226,43 @@ std::array<int64_t, 3> FloodStart(const std::array<int64_t, 3>& seed, const Acce
   return start;
 }
 
-// A morphological opening of `grown` by `voxels` (erosions, then as many
-// dilations within it), anchored at the seed: the largest eroded component
-// within two voxels of it. Where the seed's whole neighbourhood erodes away
-// (a thin structure), `grown` is kept as it is.
-BoxMask OpenAtSeed(BoxMask grown, int voxels, const std::array<int64_t, 3>& seed) {
+int64_t CountSet(const BoxMask& mask) { return std::count(mask.bits.begin(), mask.bits.end(), 1); }
+
+// A morphological opening of `grown` by `voxels` (erosions keeping voxels
+// with `keep` of 6 neighbours set, then as many dilations within it),
+// anchored at the seed: the largest eroded component within two voxels of
+// it; none where the seed's whole neighbourhood erodes away.
+std::optional<BoxMask> Open(const BoxMask& grown, int voxels, int keep,
+                            const std::array<int64_t, 3>& seed) {
   BoxMask core = grown;
-  for (int n = 0; n < voxels; ++n) core = Morph(core, false, grown);
+  for (int n = 0; n < voxels; ++n) core = Morph(core, false, grown, keep);
   // The seed itself may erode away (next to a hilum's fat, in a thin
   // part): the largest core component within two voxels stands for it.
-  const std::optional<BoxMask> anchored = LargestComponentNear(core, seed, 2);
-  if (!anchored) return grown;
-  core = *anchored;
-  for (int n = 0; n < voxels; ++n) core = Morph(core, true, grown);
-  return core;
+  std::optional<BoxMask> anchored = LargestComponentNear(core, seed, 2);
+  if (!anchored) return std::nullopt;
+  for (int n = 0; n < voxels; ++n) *anchored = Morph(*anchored, true, grown);
+  return anchored;
+}
+
+// The opening of `grown` at the seed (Open with every neighbour needed).
+// Where it keeps fewer than kMinOrganCells (a block of 3 x 3 x 3 cells, 0.7
+// cm^3 at 3 mm), noise about the window's size has broken the organ's core
+// into specks (too few voxels have all six neighbours in the window), and
+// the erosion that keeps a voxel with one neighbour missing is used instead
+// where it keeps more (*lenient set). Where the seed's whole neighbourhood
+// erodes away in both (a thin structure), `grown` is kept as it is.
+constexpr int64_t kMinOrganCells = 27;
+
+BoxMask OpenAtSeed(BoxMask grown, int voxels, const std::array<int64_t, 3>& seed, bool* lenient) {
+  std::optional<BoxMask> opened = Open(grown, voxels, 6, seed);
+  const int64_t opened_count = opened ? CountSet(*opened) : 0;
+  if (opened_count >= kMinOrganCells) return *std::move(opened);
+  std::optional<BoxMask> lenient_opened = Open(grown, voxels, 5, seed);
+  if (lenient_opened && CountSet(*lenient_opened) > opened_count) {
+    *lenient = true;
+    return *std::move(lenient_opened);
+  }
+  return opened ? *std::move(opened) : grown;
 }
 
 // The grown voxels' linear indices into region.voxels, in (k, j, i) order
@@ -257,22 +286,62 @@ void CollectVoxels(const Volume& volume, const BoxMask& grown, const glm::dvec3&
   }
 }
 
+// The region grown on `grid` (the working grid's volume) from seed_mm
+// (its physical voxel space), with region.window set: region.reference,
+// voxels, reached_bound, volume_mm3 and lenient_opening.
+void GrowOnGrid(const Volume& grid, const glm::dvec3& seed_mm, const OrganRegionParams& params,
+                OrganRegion& region) {
+  const glm::dvec3 index = glm::round(grid.geometry().PhysicalToIndex(seed_mm));
+  const auto& dims = grid.dims();
+  const std::array<int64_t, 3> seed{int64_t(index.x), int64_t(index.y), int64_t(index.z)};
+  region.reference = DominantIntensity(grid, seed, 0.5f * region.window);
+  const glm::dvec3 s = grid.spacing_mm();
+  BoxMask box;  // the bound's box
+  for (int a = 0; a < 3; ++a) {
+    const auto reach = static_cast<int64_t>(std::ceil(params.max_radius_mm / s[a]));
+    box.lo[a] = std::max<int64_t>(0, seed[a] - reach);
+    box.size[a] = std::min<int64_t>(dims[a] - 1, seed[a] + reach) - box.lo[a] + 1;
+  }
+  const double r2 = params.max_radius_mm * params.max_radius_mm;
+  const auto accept = [&](int64_t i, int64_t j, int64_t k) {
+    const glm::dvec3 d = (glm::dvec3(i, j, k) - glm::dvec3(index)) * s;
+    return box.Inside(i, j, k) && glm::dot(d, d) <= r2 &&
+           std::abs(grid.At(i, j, k) - region.reference) <= region.window;
+  };
+  const std::array<int64_t, 3> start = FloodStart(seed, accept);
+  BoxMask grown = GrowCropped(box, start, accept);
+  if (params.opening_voxels > 0) {
+    grown = OpenAtSeed(std::move(grown), params.opening_voxels, seed, &region.lenient_opening);
+  }
+  CollectVoxels(grid, grown, index, params.max_radius_mm, region);
+  if (region.voxels.empty()) region.voxels.push_back(grid.LinearIndex(seed[0], seed[1], seed[2]));
+  region.volume_mm3 = double(region.voxels.size()) * s.x * s.y * s.z;
+}
+
+Status CheckParams(const glm::dvec3& seed_mm, const OrganRegionParams& params) {
+  if (!std::isfinite(seed_mm.x) || !std::isfinite(seed_mm.y) || !std::isfinite(seed_mm.z)) {
+    return absl::InvalidArgumentError("organ seed must be finite");
+  }
+  if (!(params.max_radius_mm > 0.0) || !std::isfinite(params.max_radius_mm) ||
+      !(params.window_fraction >= 0.0) || params.opening_voxels < 0 || params.opening_voxels > 4 ||
+      !(params.working_spacing_mm >= 0.0) || !std::isfinite(params.working_spacing_mm)) {
+    return absl::InvalidArgumentError("organ region: bad parameters");
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
-bool OrganRegion::Contains(int64_t linear) const {
+bool OrganRegion::Contains(int64_t i, int64_t j, int64_t k) const {
+  std::array<int64_t, 3> c{};
+  if (!grid.CellOf(i, j, k, c)) return false;
+  const int64_t linear = c[0] + grid.dims[0] * (c[1] + grid.dims[1] * c[2]);
   return std::binary_search(voxels.begin(), voxels.end(), linear);
 }
 
 Result<OrganRegion> GrowOrganRegion(const Volume& volume, const glm::dvec3& seed_mm,
                                     const OrganRegionParams& params) {
-  if (!std::isfinite(seed_mm.x) || !std::isfinite(seed_mm.y) || !std::isfinite(seed_mm.z)) {
-    return absl::InvalidArgumentError("organ seed must be finite");
-  }
-  if (!(params.max_radius_mm > 0.0) || !std::isfinite(params.max_radius_mm) ||
-      !(params.window_fraction >= 0.0) ||
-      params.opening_voxels < 0 || params.opening_voxels > 4) {
-    return absl::InvalidArgumentError("organ region: bad parameters");
-  }
+  RETURN_IF_ERROR(CheckParams(seed_mm, params));
   const glm::dvec3 index = glm::round(volume.geometry().PhysicalToIndex(seed_mm));
   const auto& dims = volume.dims();
   const std::array<int64_t, 3> seed{int64_t(index.x), int64_t(index.y), int64_t(index.z)};
@@ -284,26 +353,28 @@ Result<OrganRegion> GrowOrganRegion(const Volume& volume, const glm::dvec3& seed
   OrganRegion region;
   const auto [low, high] = RobustRange(volume, 0.02, 0.98);
   region.window = static_cast<float>(params.window_fraction * double(high - low));
-  region.reference = DominantIntensity(volume, seed, 0.5f * region.window);
   const glm::dvec3 s = volume.spacing_mm();
-  BoxMask box;  // the bound's box
-  for (int a = 0; a < 3; ++a) {
-    const auto reach = static_cast<int64_t>(std::ceil(params.max_radius_mm / s[a]));
-    box.lo[a] = std::max<int64_t>(0, seed[a] - reach);
-    box.size[a] = std::min<int64_t>(dims[a] - 1, seed[a] + reach) - box.lo[a] + 1;
+  const std::array<int64_t, 3> factor = BlockFactor(s, params.working_spacing_mm);
+  if (factor == std::array<int64_t, 3>{1, 1, 1}) {
+    region.grid.dims = dims;
+    GrowOnGrid(volume, seed_mm, params, region);
+    return region;
   }
-  const double r2 = params.max_radius_mm * params.max_radius_mm;
-  const auto accept = [&](int64_t i, int64_t j, int64_t k) {
-    const glm::dvec3 d = (glm::dvec3(i, j, k) - glm::dvec3(index)) * s;
-    return box.Inside(i, j, k) && glm::dot(d, d) <= r2 &&
-           std::abs(volume.At(i, j, k) - region.reference) <= region.window;
-  };
-  const std::array<int64_t, 3> start = FloodStart(seed, accept);
-  BoxMask grown = GrowCropped(box, start, accept);
-  if (params.opening_voxels > 0) grown = OpenAtSeed(std::move(grown), params.opening_voxels, seed);
-  CollectVoxels(volume, grown, index, params.max_radius_mm, region);
-  if (region.voxels.empty()) region.voxels.push_back(volume.LinearIndex(seed[0], seed[1], seed[2]));
-  region.volume_mm3 = double(region.voxels.size()) * s.x * s.y * s.z;
+  // The bound's box on the working grid, one cell more each side, the
+  // seed's voxel at the middle of its cell.
+  std::array<int64_t, 3> lo{}, size{};
+  for (int a = 0; a < 3; ++a) {
+    const double cell_mm = double(factor[a]) * s[a];
+    const auto reach = static_cast<int64_t>(std::ceil(params.max_radius_mm / cell_mm)) + 1;
+    lo[a] = seed[a] - factor[a] / 2 - reach * factor[a];
+    size[a] = (2 * reach + 1) * factor[a];
+  }
+  ASSIGN_OR_RETURN(const Volume grid, BlockAverage(volume, lo, size, factor, region.grid));
+  const glm::dvec3 last =
+      glm::dvec3(grid.dims()[0] - 1, grid.dims()[1] - 1, grid.dims()[2] - 1) * grid.spacing_mm();
+  const glm::dvec3 grid_seed =
+      glm::clamp(region.grid.VolumeToGrid(seed_mm, s), glm::dvec3(0.0), last);
+  GrowOnGrid(grid, grid_seed, params, region);
   return region;
 }
 

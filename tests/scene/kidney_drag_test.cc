@@ -22,6 +22,8 @@
 #include "server/scene/deformable_scene.h"
 #include "server/scene/organ_grab.h"
 #include "server/volume/ct_in_hu.h"
+#include "server/volume/organ_region.h"
+#include "server/volume/sample_trilinear.h"
 
 namespace vpm {
 namespace {
@@ -246,9 +248,9 @@ Volume MrLike(const Volume& ct) {
 // fat would be fixed as skeleton: on a like image, 340 of 488 vertices were
 // hard before this rule), so
 // nothing is fixed but the box faces and the grab's handles follow the
-// pointer. The organ region does not survive this image's noise (about the
-// window's size): the kidney is not taken as a body (docs/FEM.md, "The
-// organ grab"), which the figures printed show.
+// pointer. This image's noise is about the window's size: at the kidney's
+// centre the strict opening keeps 7 voxels (a 2.3 mm move of the kidney),
+// and the lenient one takes the organ (docs/FEM.md, "The organ grab").
 TEST(KidneyDrag, OnAnMrLikeImageNoBoneIsMarkedAndTheHandlesFollow) {
   auto ct = ReadVolume(KidneyPath("ct_abdomen.nii.gz"), VolumeLimits{});
   ASSERT_TRUE(ct.ok()) << ct.status();
@@ -270,7 +272,66 @@ TEST(KidneyDrag, OnAnMrLikeImageNoBoneIsMarkedAndTheHandlesFollow) {
   EXPECT_EQ(drag->inverted, 0);
   EXPECT_FALSE(drag->grab.handles.empty());
   EXPECT_LT(drag->lag_mm, 1.0);  // the handles reached the pointer
-  EXPECT_GT(k.mean, 0.0);        // the kidney moved with them, superior
+  // The kidney moved with them as a body (78% of the drag, cv 0.23 measured).
+  EXPECT_GE(k.mean, 0.7 * drag_mm);
+  EXPECT_LE(k.cv, 0.3);
+}
+
+// The CT's box of 180 mm around the kidney on a 1 mm grid (trilinear), with
+// Gaussian noise of 12 HU (seeded) as a 1 mm reconstruction has, and the
+// mask on the same grid (nearest).
+struct FineKidney {
+  Volume ct, mask;
+};
+
+FineKidney OnOneMillimetre(const Volume& ct, const Volume& mask, const glm::dvec3& centre) {
+  VolumeGeometry g;
+  g.dims = {180, 180, 180};
+  const glm::dvec3 corner = centre - 90.0;  // physical mm of the CT
+  std::mt19937 rng(5);
+  std::normal_distribution<float> noise(0.0f, 12.0f);
+  std::vector<float> values(g.voxel_count()), inside(g.voxel_count());
+  for (int64_t k = 0, n = 0; k < 180; ++k)
+    for (int64_t j = 0; j < 180; ++j)
+      for (int64_t i = 0; i < 180; ++i, ++n) {
+        const glm::dvec3 p =
+            glm::clamp(corner + glm::dvec3(i, j, k), glm::dvec3(0.0), ct.geometry().extent_mm());
+        values[n] = float(SampleTrilinear(ct, p)) + noise(rng);
+        const glm::dvec3 q = glm::round(mask.geometry().PhysicalToIndex(p));
+        inside[n] = mask.At(int64_t(q.x), int64_t(q.y), int64_t(q.z));
+      }
+  return {*Volume::Create(g, std::move(values)), *Volume::Create(g, std::move(inside))};
+}
+
+// The organ region does not depend on the scanner's voxel size: on the
+// kidney CT at 1 mm, grown from ten parenchyma voxels spread over the
+// kidney, it is the kidney (110-126 cm^3 and 0.80-0.90 of its voxels
+// measured; the mask holds 124 cm^3), not its neighbours. Grown on the 1 mm
+// voxels themselves, where the opening's one voxel cuts no contact, it took
+// 122-728 cm^3.
+TEST(KidneyDrag, OnAOneMillimetreGridTheRegionIsTheKidney) {
+  auto ct = ReadVolume(KidneyPath("ct_abdomen.nii.gz"), VolumeLimits{});
+  ASSERT_TRUE(ct.ok()) << ct.status();
+  auto mask = ReadVolume(KidneyPath("left_kidney_mask.nii.gz"), VolumeLimits{});
+  ASSERT_TRUE(mask.ok()) << mask.status();
+  const FineKidney fine = OnOneMillimetre(*ct, *mask, ReadKidney(*mask).centre);
+  const KidneyVoxels kidney = ReadKidney(fine.mask);
+  ASSERT_GT(kidney.voxels.size(), 100000u);
+  for (int n = 0; n < 10; ++n) {
+    const glm::dvec3 seed = kidney.voxels[(kidney.voxels.size() * (2 * n + 1)) / 20];
+    auto region = GrowOrganRegion(fine.ct, seed);
+    ASSERT_TRUE(region.ok()) << region.status();
+    size_t held = 0;
+    for (const glm::dvec3& p : kidney.voxels) {
+      held += region->Contains(int64_t(p.x + 0.5), int64_t(p.y + 0.5), int64_t(p.z + 0.5));
+    }
+    const double share = double(held) / double(kidney.voxels.size());
+    std::printf("seed %d: %.1f cm^3, %.2f of the kidney's voxels\n", n, region->volume_mm3 / 1000.0,
+                share);
+    EXPECT_GE(share, 0.75);
+    EXPECT_GE(region->volume_mm3, 90e3);
+    EXPECT_LE(region->volume_mm3, 150e3);
+  }
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <optional>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -47,16 +48,24 @@ TwoOrgans MakeTwoOrgans() {
   return out;
 }
 
-int64_t Linear(const Volume& v, const glm::dvec3& p) {
-  return v.LinearIndex(int64_t(p.x), int64_t(p.y), int64_t(p.z));
+bool Holds(const OrganRegion& region, const glm::dvec3& p) {
+  return region.Contains(int64_t(p.x), int64_t(p.y), int64_t(p.z));
+}
+
+// The algorithm on the voxels themselves (working_spacing_mm 0) in the
+// tests below, the working grid after them.
+OrganRegionParams OnVoxels() {
+  OrganRegionParams params;
+  params.working_spacing_mm = 0.0;
+  return params;
 }
 
 TEST(OrganRegion, TakesTheOrganUnderTheSeedNotItsNeighbourAcrossAThinBridge) {
   const TwoOrgans scene = MakeTwoOrgans();
-  auto region = GrowOrganRegion(scene.volume(), scene.a + glm::dvec3(3.0, 2.0, -1.0));
+  auto region = GrowOrganRegion(scene.volume(), scene.a + glm::dvec3(3.0, 2.0, -1.0), OnVoxels());
   ASSERT_TRUE(region.ok()) << region.status();
-  EXPECT_TRUE(region->Contains(Linear(scene.volume(), scene.a)));
-  EXPECT_FALSE(region->Contains(Linear(scene.volume(), scene.b)));
+  EXPECT_TRUE(Holds(*region, scene.a));
+  EXPECT_FALSE(Holds(*region, scene.b));
   const double sphere_mm3 = 4.0 / 3.0 * kPi * 12.0 * 12.0 * 12.0;
   EXPECT_NEAR(region->volume_mm3, sphere_mm3, 0.15 * sphere_mm3);
   EXPECT_FALSE(region->reached_bound);
@@ -68,16 +77,16 @@ TEST(OrganRegion, TakesTheOrganUnderTheSeedNotItsNeighbourAcrossAThinBridge) {
 // What the opening is for: without it the bridge carries the region into B.
 TEST(OrganRegion, WithoutTheOpeningTheBridgeLeaks) {
   const TwoOrgans scene = MakeTwoOrgans();
-  OrganRegionParams params;
+  OrganRegionParams params = OnVoxels();
   params.opening_voxels = 0;
   auto region = GrowOrganRegion(scene.volume(), scene.a, params);
   ASSERT_TRUE(region.ok()) << region.status();
-  EXPECT_TRUE(region->Contains(Linear(scene.volume(), scene.b)));
+  EXPECT_TRUE(Holds(*region, scene.b));
 }
 
 TEST(OrganRegion, StaysWithinItsBound) {
   const TwoOrgans scene = MakeTwoOrgans();
-  OrganRegionParams params;
+  OrganRegionParams params = OnVoxels();
   params.max_radius_mm = 6.0;
   auto region = GrowOrganRegion(scene.volume(), scene.a, params);
   ASSERT_TRUE(region.ok()) << region.status();
@@ -98,6 +107,12 @@ TEST(OrganRegion, RejectsBadSeedsAndParameters) {
   params.max_radius_mm = 0.0;
   EXPECT_EQ(GrowOrganRegion(scene.volume(), scene.a, params).status().code(),
             absl::StatusCode::kInvalidArgument);
+  for (double spacing : {-1.0, std::nan(""), double(INFINITY)}) {
+    OrganRegionParams bad;
+    bad.working_spacing_mm = spacing;
+    EXPECT_EQ(GrowOrganRegion(scene.volume(), scene.a, bad).status().code(),
+              absl::StatusCode::kInvalidArgument);
+  }
 }
 
 // Without the opening the region is the plain face-connected component of
@@ -116,7 +131,7 @@ TEST(OrganRegion, WithoutTheOpeningEqualsABreadthFirstFlood) {
     v = (state >> 33) % 100 < 62 ? 40.0f : -500.0f;  // about 62% "organ"
   }
   const Volume volume = *Volume::Create(g, std::move(values));
-  OrganRegionParams params;
+  OrganRegionParams params = OnVoxels();
   params.opening_voxels = 0;
   params.max_radius_mm = 14.0;
   const std::array<int64_t, 3> seed{20, 18, 16};
@@ -150,6 +165,46 @@ TEST(OrganRegion, WithoutTheOpeningEqualsABreadthFirstFlood) {
   }
   EXPECT_GT(expected.size(), 1000u);  // the shapes wind through much of the ball
   EXPECT_EQ(region->voxels, expected);
+}
+
+// Two organs of ~40 on 1 mm voxels joined by a contact three voxels thick
+// and wide (a real contact at a fine reconstruction), with Gaussian noise of
+// sigma (seeded): A a sphere of radius 15 mm, B of 12 mm, 36 mm apart.
+Volume ThickContact(float sigma) {
+  VolumeGeometry g;
+  g.dims = {80, 64, 64};
+  std::vector<float> values(g.voxel_count());
+  std::mt19937 rng(11);
+  std::normal_distribution<float> noise(0.0f, sigma);
+  const glm::dvec3 a(22.0, 32.0, 32.0), b(58.0, 32.0, 32.0);
+  for (int64_t k = 0, n = 0; k < 64; ++k)
+    for (int64_t j = 0; j < 64; ++j)
+      for (int64_t i = 0; i < 80; ++i, ++n) {
+        const glm::dvec3 p(i, j, k);
+        float v = glm::distance(p, glm::dvec3(40.0, 32.0, 32.0)) <= 38.0 ? -100.0f : -1000.0f;
+        if (glm::distance(p, a) <= 15.0 || glm::distance(p, b) <= 12.0) v = 40.0f;
+        if (std::abs(j - 32) <= 1 && std::abs(k - 32) <= 1 && i > 22 && i < 58) v = 40.0f;
+        values[n] = v + noise(rng);
+      }
+  return *Volume::Create(g, std::move(values));
+}
+
+// On 1 mm voxels the opening's one voxel leaves a 3 mm contact standing and
+// the region runs into B; on the working grid (3 mm cells) the contact is a
+// cell thin and the opening cuts it.
+TEST(OrganRegion, TheWorkingGridCutsAContactOfAFewMillimetres) {
+  const Volume volume = ThickContact(5.0f);
+  const glm::dvec3 a(22.0, 32.0, 32.0), b(58.0, 32.0, 32.0);
+  auto on_voxels = GrowOrganRegion(volume, a, OnVoxels());
+  ASSERT_TRUE(on_voxels.ok()) << on_voxels.status();
+  EXPECT_TRUE(Holds(*on_voxels, b));
+  auto region = GrowOrganRegion(volume, a);
+  ASSERT_TRUE(region.ok()) << region.status();
+  EXPECT_EQ(region->grid.factor, (std::array<int64_t, 3>{3, 3, 3}));
+  EXPECT_TRUE(Holds(*region, a));
+  EXPECT_FALSE(Holds(*region, b));
+  const double sphere_mm3 = 4.0 / 3.0 * kPi * 15.0 * 15.0 * 15.0;
+  EXPECT_NEAR(region->volume_mm3, sphere_mm3, 0.3 * sphere_mm3);
 }
 
 }  // namespace
