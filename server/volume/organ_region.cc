@@ -245,18 +245,21 @@ std::optional<BoxMask> Open(const BoxMask& grown, int voxels, int keep,
 }
 
 // The opening of `grown` at the seed (Open with every neighbour needed).
-// Where it keeps fewer than kMinOrganCells (a block of 3 x 3 x 3 cells, 0.7
-// cm^3 at 3 mm), noise about the window's size has broken the organ's core
-// into specks (too few voxels have all six neighbours in the window), and
-// the erosion that keeps a voxel with one neighbour missing is used instead
-// where it keeps more (*lenient set). Where the seed's whole neighbourhood
-// erodes away in both (a thin structure), `grown` is kept as it is.
-constexpr int64_t kMinOrganCells = 27;
+// Where it keeps less than kNoiseBrokenShare of what the flood grew, noise
+// about the window's size has broken the organ's core into specks (too few
+// cells have all six neighbours in the window, while the flood went on
+// through those the noise let in), and the erosion that keeps a cell with
+// one neighbour missing is used instead where it keeps more (*lenient set).
+// Where the seed's whole neighbourhood erodes away in both (a thin
+// structure), `grown` is kept as it is.
+constexpr double kNoiseBrokenShare = 0.01;
 
 BoxMask OpenAtSeed(BoxMask grown, int voxels, const std::array<int64_t, 3>& seed, bool* lenient) {
   std::optional<BoxMask> opened = Open(grown, voxels, 6, seed);
   const int64_t opened_count = opened ? CountSet(*opened) : 0;
-  if (opened_count >= kMinOrganCells) return *std::move(opened);
+  if (double(opened_count) >= kNoiseBrokenShare * double(CountSet(grown))) {
+    return opened ? *std::move(opened) : grown;
+  }
   std::optional<BoxMask> lenient_opened = Open(grown, voxels, 5, seed);
   if (lenient_opened && CountSet(*lenient_opened) > opened_count) {
     *lenient = true;
