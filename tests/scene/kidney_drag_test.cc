@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -184,18 +185,35 @@ std::vector<double> Along(const std::vector<glm::dvec3>& displaced, const glm::d
   return along;
 }
 
-TEST(KidneyDrag, TheGrabbedKidneyMovesAsABodyBoneStaysTheStoneKeepsItsShape) {
-  auto ct = ReadVolume(KidneyPath("ct_abdomen.nii.gz"), VolumeLimits{});
-  ASSERT_TRUE(ct.ok()) << ct.status();
-  auto mask = ReadVolume(KidneyPath("left_kidney_mask.nii.gz"), VolumeLimits{});
-  ASSERT_TRUE(mask.ok()) << mask.status();
-  ASSERT_EQ(mask->dims(), ct->dims());
-  const KidneyVoxels kidney = ReadKidney(*mask);
+// The kidney CT and its mask, read once for the suite's tests (ct_, mask_);
+// a test fails at its start when either could not be read.
+class KidneyDrag : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    auto ct = ReadVolume(KidneyPath("ct_abdomen.nii.gz"), VolumeLimits{});
+    auto mask = ReadVolume(KidneyPath("left_kidney_mask.nii.gz"), VolumeLimits{});
+    if (!ct.ok() || !mask.ok()) {
+      error_ = ct.ok() ? mask.status().ToString() : ct.status().ToString();
+      return;
+    }
+    ct_.emplace(*std::move(ct));
+    mask_.emplace(*std::move(mask));
+  }
+  void SetUp() override {
+    ASSERT_TRUE(ct_ && mask_) << error_;
+    ASSERT_EQ(mask_->dims(), ct_->dims());
+  }
+  inline static std::optional<Volume> ct_, mask_;
+  inline static std::string error_;
+};
+
+TEST_F(KidneyDrag, TheGrabbedKidneyMovesAsABodyBoneStaysTheStoneKeepsItsShape) {
+  const KidneyVoxels kidney = ReadKidney(*mask_);
   ASSERT_GT(kidney.voxels.size(), 4000u);
   std::vector<glm::dvec3> bone, stone;
-  BoneAndStones(*ct, kidney, &bone, &stone);
+  BoneAndStones(*ct_, kidney, &bone, &stone);
   const double drag_mm = 15.0;
-  auto drag = DragTheKidney(*ct, kidney.centre, drag_mm, {kidney.voxels, bone, stone});
+  auto drag = DragTheKidney(*ct_, kidney.centre, drag_mm, {kidney.voxels, bone, stone});
   ASSERT_TRUE(drag.ok()) << drag.status();
   std::printf("mesh: %zu vertices, h %.1f mm, %lld hard, %lld of them off the skeleton\n",
               drag->vertices, drag->h_mm, static_cast<long long>(drag->hard),
@@ -206,7 +224,7 @@ TEST(KidneyDrag, TheGrabbedKidneyMovesAsABodyBoneStaysTheStoneKeepsItsShape) {
   for (const glm::dvec3& d : drag->displaced[1]) bone_motion.push_back(glm::length(d));
   const Stats b = Summarise(bone_motion);
   const double stone_spread =
-      LargestStoneSpread(stone, drag->displaced[2], glm::length(ct->spacing_mm()) + 1e-6);
+      LargestStoneSpread(stone, drag->displaced[2], glm::length(ct_->spacing_mm()) + 1e-6);
   std::printf(
       "kidney: %zu voxels, %zu handles, mean along the drag %.2f mm (%.0f%%), cv %.3f; "
       "bone: %zu voxels, mean %.3f mm, p95 %.3f mm, p99 %.3f mm, max %.3f mm; stones: %zu "
@@ -251,14 +269,10 @@ Volume MrLike(const Volume& ct) {
 // pointer. This image's noise is about the window's size: at the kidney's
 // centre the strict opening keeps 7 voxels (a 2.3 mm move of the kidney),
 // and the lenient one takes the organ (docs/FEM.md, "The organ grab").
-TEST(KidneyDrag, OnAnMrLikeImageNoBoneIsMarkedAndTheHandlesFollow) {
-  auto ct = ReadVolume(KidneyPath("ct_abdomen.nii.gz"), VolumeLimits{});
-  ASSERT_TRUE(ct.ok()) << ct.status();
-  auto mask = ReadVolume(KidneyPath("left_kidney_mask.nii.gz"), VolumeLimits{});
-  ASSERT_TRUE(mask.ok()) << mask.status();
-  const Volume mr = MrLike(*ct);
+TEST_F(KidneyDrag, OnAnMrLikeImageNoBoneIsMarkedAndTheHandlesFollow) {
+  const Volume mr = MrLike(*ct_);
   ASSERT_FALSE(IsCtInHu(mr));
-  const KidneyVoxels kidney = ReadKidney(*mask);
+  const KidneyVoxels kidney = ReadKidney(*mask_);
   const double drag_mm = 15.0;
   auto drag = DragTheKidney(mr, kidney.centre, drag_mm, {kidney.voxels});
   ASSERT_TRUE(drag.ok()) << drag.status();
@@ -336,12 +350,8 @@ std::vector<SeededRegion> RegionsFromTenSeeds(const Volume& image, const KidneyV
 // measured; the mask holds 124 cm^3), not its neighbours. Grown on the 1 mm
 // voxels themselves, where the opening's one voxel cuts no contact, it took
 // 122-728 cm^3.
-TEST(KidneyDrag, OnAOneMillimetreGridTheRegionIsTheKidney) {
-  auto ct = ReadVolume(KidneyPath("ct_abdomen.nii.gz"), VolumeLimits{});
-  ASSERT_TRUE(ct.ok()) << ct.status();
-  auto mask = ReadVolume(KidneyPath("left_kidney_mask.nii.gz"), VolumeLimits{});
-  ASSERT_TRUE(mask.ok()) << mask.status();
-  const FineKidney fine = OnOneMillimetre(*ct, *mask, ReadKidney(*mask).centre);
+TEST_F(KidneyDrag, OnAOneMillimetreGridTheRegionIsTheKidney) {
+  const FineKidney fine = OnOneMillimetre(*ct_, *mask_, ReadKidney(*mask_).centre);
   const KidneyVoxels kidney = ReadKidney(fine.mask);
   ASSERT_GT(kidney.voxels.size(), 100000u);
   const std::vector<SeededRegion> regions = RegionsFromTenSeeds(fine.ct, kidney);
@@ -357,12 +367,8 @@ TEST(KidneyDrag, OnAOneMillimetreGridTheRegionIsTheKidney) {
 // seeds: no region loses the kidney or runs into its neighbours (58-89
 // cm^3, 0.46-0.70 of the kidney measured). The strict opening alone left
 // one seed 4 cm^3 (0.03 of the kidney); the lenient one takes it there.
-TEST(KidneyDrag, OnAnMrLikeImageEverySeedTakesMuchOfTheKidney) {
-  auto ct = ReadVolume(KidneyPath("ct_abdomen.nii.gz"), VolumeLimits{});
-  ASSERT_TRUE(ct.ok()) << ct.status();
-  auto mask = ReadVolume(KidneyPath("left_kidney_mask.nii.gz"), VolumeLimits{});
-  ASSERT_TRUE(mask.ok()) << mask.status();
-  const std::vector<SeededRegion> regions = RegionsFromTenSeeds(MrLike(*ct), ReadKidney(*mask));
+TEST_F(KidneyDrag, OnAnMrLikeImageEverySeedTakesMuchOfTheKidney) {
+  const std::vector<SeededRegion> regions = RegionsFromTenSeeds(MrLike(*ct_), ReadKidney(*mask_));
   ASSERT_EQ(regions.size(), 10u);
   for (const SeededRegion& r : regions) {
     EXPECT_GE(r.share, 0.4);
