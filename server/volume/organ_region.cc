@@ -333,6 +333,30 @@ Status CheckParams(const glm::dvec3& seed_mm, const OrganRegionParams& params) {
   return absl::OkStatus();
 }
 
+// The region on the working grid of `factor` (not all 1): the bound's box
+// averaged in blocks, one cell more each side, the seed's voxel at the
+// middle of its cell; region.window set.
+Status GrowOnWorkingGrid(const Volume& volume, const glm::dvec3& seed_mm,
+                         const std::array<int64_t, 3>& factor, const OrganRegionParams& params,
+                         OrganRegion& region) {
+  const glm::dvec3 s = volume.spacing_mm();
+  const glm::dvec3 index = glm::round(volume.geometry().PhysicalToIndex(seed_mm));
+  std::array<int64_t, 3> lo{}, size{};
+  for (int a = 0; a < 3; ++a) {
+    const double cell_mm = double(factor[a]) * s[a];
+    const auto reach = static_cast<int64_t>(std::ceil(params.max_radius_mm / cell_mm)) + 1;
+    lo[a] = int64_t(index[a]) - factor[a] / 2 - reach * factor[a];
+    size[a] = (2 * reach + 1) * factor[a];
+  }
+  ASSIGN_OR_RETURN(const Volume grid, BlockAverage(volume, lo, size, factor, region.grid));
+  const glm::dvec3 last =
+      glm::dvec3(grid.dims()[0] - 1, grid.dims()[1] - 1, grid.dims()[2] - 1) * grid.spacing_mm();
+  const glm::dvec3 grid_seed =
+      glm::clamp(region.grid.VolumeToGrid(seed_mm, s), glm::dvec3(0.0), last);
+  GrowOnGrid(grid, grid_seed, params, region);
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 bool OrganRegion::Contains(int64_t i, int64_t j, int64_t k) const {
@@ -347,9 +371,8 @@ Result<OrganRegion> GrowOrganRegion(const Volume& volume, const glm::dvec3& seed
   RETURN_IF_ERROR(CheckParams(seed_mm, params));
   const glm::dvec3 index = glm::round(volume.geometry().PhysicalToIndex(seed_mm));
   const auto& dims = volume.dims();
-  const std::array<int64_t, 3> seed{int64_t(index.x), int64_t(index.y), int64_t(index.z)};
   for (int a = 0; a < 3; ++a) {
-    if (seed[a] < 0 || seed[a] >= dims[a]) {
+    if (index[a] < 0 || index[a] >= double(dims[a])) {
       return absl::OutOfRangeError("organ seed lies outside the volume");
     }
   }
@@ -357,27 +380,20 @@ Result<OrganRegion> GrowOrganRegion(const Volume& volume, const glm::dvec3& seed
   const auto [low, high] = RobustRange(volume, 0.02, 0.98);
   region.window = static_cast<float>(params.window_fraction * double(high - low));
   const glm::dvec3 s = volume.spacing_mm();
+  // A bound past the volume's diagonal and a few cells bounds nothing more;
+  // held there, the boxes stay small integers whatever was asked.
+  OrganRegionParams bounded = params;
+  bounded.max_radius_mm =
+      std::min(params.max_radius_mm,
+               glm::length(volume.geometry().extent_mm()) +
+                   4.0 * std::max(params.working_spacing_mm, std::max({s.x, s.y, s.z})));
   const std::array<int64_t, 3> factor = BlockFactor(s, params.working_spacing_mm);
   if (factor == std::array<int64_t, 3>{1, 1, 1}) {
     region.grid.dims = dims;
-    GrowOnGrid(volume, seed_mm, params, region);
-    return region;
+    GrowOnGrid(volume, seed_mm, bounded, region);
+  } else {
+    RETURN_IF_ERROR(GrowOnWorkingGrid(volume, seed_mm, factor, bounded, region));
   }
-  // The bound's box on the working grid, one cell more each side, the
-  // seed's voxel at the middle of its cell.
-  std::array<int64_t, 3> lo{}, size{};
-  for (int a = 0; a < 3; ++a) {
-    const double cell_mm = double(factor[a]) * s[a];
-    const auto reach = static_cast<int64_t>(std::ceil(params.max_radius_mm / cell_mm)) + 1;
-    lo[a] = seed[a] - factor[a] / 2 - reach * factor[a];
-    size[a] = (2 * reach + 1) * factor[a];
-  }
-  ASSIGN_OR_RETURN(const Volume grid, BlockAverage(volume, lo, size, factor, region.grid));
-  const glm::dvec3 last =
-      glm::dvec3(grid.dims()[0] - 1, grid.dims()[1] - 1, grid.dims()[2] - 1) * grid.spacing_mm();
-  const glm::dvec3 grid_seed =
-      glm::clamp(region.grid.VolumeToGrid(seed_mm, s), glm::dvec3(0.0), last);
-  GrowOnGrid(grid, grid_seed, params, region);
   return region;
 }
 

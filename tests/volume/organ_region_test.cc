@@ -107,6 +107,15 @@ TEST(OrganRegion, RejectsBadSeedsAndParameters) {
   params.max_radius_mm = 0.0;
   EXPECT_EQ(GrowOrganRegion(scene.volume(), scene.a, params).status().code(),
             absl::StatusCode::kInvalidArgument);
+  // A bound of any finite size: past the volume it changes nothing.
+  OrganRegionParams huge;
+  huge.max_radius_mm = 1e300;
+  OrganRegionParams whole;
+  whole.max_radius_mm = 1000.0;
+  auto huge_region = GrowOrganRegion(scene.volume(), scene.a, huge);
+  ASSERT_TRUE(huge_region.ok()) << huge_region.status();
+  EXPECT_EQ(huge_region->voxels, GrowOrganRegion(scene.volume(), scene.a, whole)->voxels);
+  EXPECT_FALSE(huge_region->reached_bound);
   for (double spacing : {-1.0, std::nan(""), double(INFINITY)}) {
     OrganRegionParams bad;
     bad.working_spacing_mm = spacing;
