@@ -257,13 +257,12 @@ constexpr double kNoiseBrokenShare = 0.01;
 BoxMask OpenAtSeed(BoxMask grown, int voxels, const std::array<int64_t, 3>& seed, bool* lenient) {
   std::optional<BoxMask> opened = Open(grown, voxels, 6, seed);
   const int64_t opened_count = opened ? CountSet(*opened) : 0;
-  if (double(opened_count) >= kNoiseBrokenShare * double(CountSet(grown))) {
-    return opened ? *std::move(opened) : grown;
-  }
-  std::optional<BoxMask> lenient_opened = Open(grown, voxels, 5, seed);
-  if (lenient_opened && CountSet(*lenient_opened) > opened_count) {
-    *lenient = true;
-    return *std::move(lenient_opened);
+  if (double(opened_count) < kNoiseBrokenShare * double(CountSet(grown))) {
+    std::optional<BoxMask> lenient_opened = Open(grown, voxels, 5, seed);
+    if (lenient_opened && CountSet(*lenient_opened) > opened_count) {
+      *lenient = true;
+      return *std::move(lenient_opened);
+    }
   }
   return opened ? *std::move(opened) : grown;
 }

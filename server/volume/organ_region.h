@@ -1,13 +1,13 @@
 // The tissue connected to a point: the organ a grab takes (docs/FEM.md,
-// "The organ grab"). Region growing from the seed voxel through voxels of
+// "The organ grab"). Region growing from the seed's cell through cells of
 // similar intensity, within a bound, then a morphological opening that cuts
 // thin bridges into neighbouring tissue of the same intensity (a kidney
-// touching the psoas or the liver at one or two voxels).
+// touching the psoas or the liver at one or two cells).
 //
-// Voxels are taken while |I - reference| <= window, with the reference the
-// dominant intensity of the seed's 5 x 5 x 5 voxels (the value with most
+// Cells are taken while |I - reference| <= window, with the reference the
+// dominant intensity of the seed's 5 x 5 x 5 cells (the value with most
 // neighbours within half the window, so a click beside a hilum or on a
-// partial-volume voxel finds the organ) and the window window_fraction x the
+// partial-volume cell finds the organ) and the window window_fraction x the
 // volume's robust range (2nd to 98th percentile of a sample of its voxels):
 // on the abdominal CT of tests/data about +-36 HU, so parenchyma is taken
 // and the fat around it (-100 HU) is not; an MRI gets the same fraction of
@@ -15,7 +15,7 @@
 // dropped: next to an organ's hilum the spread is the fat's, and the region
 // flooded the abdomen.
 //
-// All of this runs on a working grid of about 3 mm (kOrganWorkingSpacingMm):
+// The cells are those of a working grid of about 3 mm (kOrganWorkingSpacingMm):
 // finer voxels are averaged in blocks first, so that the opening's one cell
 // cuts contacts of a few millimetres and the window sees tissue, not the
 // noise of fine voxels, whatever the scanner's voxel size. The handles it

@@ -318,8 +318,8 @@ FineKidney OnOneMillimetre(const Volume& ct, const Volume& mask, const glm::dvec
 }
 
 // The organ region grown from ten parenchyma voxels spread over the kidney
-// (every tenth of its voxel list, (k, j, i) order): each region's volume
-// (cm^3) and the share of the kidney's voxels it holds.
+// (the middle of each tenth of its voxel list, (k, j, i) order): each
+// region's volume (cm^3) and the share of the kidney's voxels it holds.
 struct SeededRegion {
   double cm3 = 0.0, share = 0.0;
 };

@@ -178,20 +178,22 @@ TEST(OrganRegion, WithoutTheOpeningEqualsABreadthFirstFlood) {
 
 // Two organs of ~40 on 1 mm voxels joined by a contact three voxels thick
 // and wide (a real contact at a fine reconstruction), with Gaussian noise of
-// sigma (seeded): A a sphere of radius 15 mm, B of 12 mm, 36 mm apart.
-Volume ThickContact(float sigma) {
+// 5 (seeded): A a sphere of radius 15 mm at kContactA, B of 12 mm at
+// kContactB, 36 mm apart.
+constexpr glm::dvec3 kContactA(22.0, 32.0, 32.0), kContactB(58.0, 32.0, 32.0);
+
+Volume ThickContact() {
   VolumeGeometry g;
   g.dims = {80, 64, 64};
   std::vector<float> values(g.voxel_count());
   std::mt19937 rng(11);
-  std::normal_distribution<float> noise(0.0f, sigma);
-  const glm::dvec3 a(22.0, 32.0, 32.0), b(58.0, 32.0, 32.0);
+  std::normal_distribution<float> noise(0.0f, 5.0f);
   for (int64_t k = 0, n = 0; k < 64; ++k)
     for (int64_t j = 0; j < 64; ++j)
       for (int64_t i = 0; i < 80; ++i, ++n) {
         const glm::dvec3 p(i, j, k);
         float v = glm::distance(p, glm::dvec3(40.0, 32.0, 32.0)) <= 38.0 ? -100.0f : -1000.0f;
-        if (glm::distance(p, a) <= 15.0 || glm::distance(p, b) <= 12.0) v = 40.0f;
+        if (glm::distance(p, kContactA) <= 15.0 || glm::distance(p, kContactB) <= 12.0) v = 40.0f;
         if (std::abs(j - 32) <= 1 && std::abs(k - 32) <= 1 && i > 22 && i < 58) v = 40.0f;
         values[n] = v + noise(rng);
       }
@@ -202,16 +204,15 @@ Volume ThickContact(float sigma) {
 // the region runs into B; on the working grid (3 mm cells) the contact is a
 // cell thin and the opening cuts it.
 TEST(OrganRegion, TheWorkingGridCutsAContactOfAFewMillimetres) {
-  const Volume volume = ThickContact(5.0f);
-  const glm::dvec3 a(22.0, 32.0, 32.0), b(58.0, 32.0, 32.0);
-  auto on_voxels = GrowOrganRegion(volume, a, OnVoxels());
+  const Volume volume = ThickContact();
+  auto on_voxels = GrowOrganRegion(volume, kContactA, OnVoxels());
   ASSERT_TRUE(on_voxels.ok()) << on_voxels.status();
-  EXPECT_TRUE(Holds(*on_voxels, b));
-  auto region = GrowOrganRegion(volume, a);
+  EXPECT_TRUE(Holds(*on_voxels, kContactB));
+  auto region = GrowOrganRegion(volume, kContactA);
   ASSERT_TRUE(region.ok()) << region.status();
   EXPECT_EQ(region->grid.factor, (std::array<int64_t, 3>{3, 3, 3}));
-  EXPECT_TRUE(Holds(*region, a));
-  EXPECT_FALSE(Holds(*region, b));
+  EXPECT_TRUE(Holds(*region, kContactA));
+  EXPECT_FALSE(Holds(*region, kContactB));
   const double sphere_mm3 = 4.0 / 3.0 * kPi * 15.0 * 15.0 * 15.0;
   EXPECT_NEAR(region->volume_mm3, sphere_mm3, 0.3 * sphere_mm3);
 }
