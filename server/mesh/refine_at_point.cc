@@ -61,7 +61,12 @@ Result<std::vector<MeshVertex>> RefineAtPoint(const Volume& volume, const Lattic
                                               const RefineParams& params) {
   RETURN_IF_ERROR(CheckParams(volume.geometry(), params));
   const auto& g = coarse.grid();
-  auto fine_or = Lattice::Create(volume.geometry(), {3 * g[0], 3 * g[1], 3 * g[2]});
+  // Three times the coarse lattice, but no finer than the voxels along an
+  // axis (a stack of fewer than 3 G slices: thick-slice CT, most MR series).
+  const auto& dims = volume.dims();
+  auto fine_or = Lattice::Create(
+      volume.geometry(),
+      {std::min(3 * g[0], dims[0]), std::min(3 * g[1], dims[1]), std::min(3 * g[2], dims[2])});
   if (!fine_or.ok()) {
     return absl::InvalidArgumentError(
         StrCat("refinement needs a lattice 3x finer than G: ", fine_or.status().message()));

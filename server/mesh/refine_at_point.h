@@ -1,5 +1,6 @@
 // Step 4 of docs/ALGORITHM.md: refinement around a manipulation point m.
-// Candidates are the vertices of a lattice 3x finer than G inside the ball
+// Candidates are the vertices of a lattice 3x finer than G (no finer than
+// the volume's voxels along an axis: a thick-slice stack) inside the ball
 // |p - m| <= roi_radius, scored Ci*Cg with the chosen footprint over their
 // own (smaller) cells; taken in decreasing score (ties: smaller fine id),
 // each accepted only if it is at least h/3 from every vertex already in the

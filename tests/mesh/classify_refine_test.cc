@@ -131,6 +131,27 @@ TEST_F(RefineTest, NewPointReplacesThePreviousRefinement) {
   EXPECT_GT(count_refined(*first), 0);
 }
 
+// A stack of fewer slices than three times the lattice (thick-slice CT, most
+// MR series: 16 slices of 6 mm under a lattice of 8 along z): the candidates'
+// lattice is as fine as the slices there, and the refinement is made.
+TEST(RefineAtPoint, AStackThinnerThanThreeLatticesIsRefinedAtItsSlices) {
+  const Volume volume = testing::MakeBodyVolume({48, 40, 16}, {1.0, 1.2, 6.0});
+  MeshParams params;
+  params.grid = {12, 10, 8};
+  params.target = 100;
+  auto base = DecimateLattice(volume, params);
+  ASSERT_TRUE(base.ok()) << base.status();
+  const glm::dvec3 m = volume.geometry().extent_mm() * 0.5;
+  auto refined = RefineAtPoint(
+      volume, base->lattice, base->tf, base->g_max, base->vertices,
+      {.point_mm = m, .roi_radius_mm = 1.5 * base->lattice.h_mm(), .refine_count = 150});
+  ASSERT_TRUE(refined.ok()) << refined.status();
+  EXPECT_FALSE(refined->empty());
+  for (const auto& v : *refined) {
+    EXPECT_LE(PointDistance(v.position_mm, m), 1.5 * base->lattice.h_mm() + 1e-9);
+  }
+}
+
 TEST(BuildProxyMesh, KeepsTargetAnchorsAndTetsCoverTheBox) {
   const Volume volume = testing::MakeBodyVolume();
   MeshParams params;
