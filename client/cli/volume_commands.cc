@@ -66,6 +66,7 @@ nlohmann::json SeriesJson(const std::vector<DicomSeriesSummary>& series) {
                    {"modality", s.modality},
                    {"dims", {s.columns, s.rows, s.images}},
                    {"images", s.images},
+                   {"stack", s.stack},
                    {"not_a_volume", s.not_a_volume_reason}});
   }
   return out;
@@ -77,7 +78,9 @@ void PrintSeries(const std::vector<DicomSeriesSummary>& series) {
     std::cout << (n == 0 ? "series      " : "            ") << n + 1 << ". " << s.uid << "  "
               << (s.modality.empty() ? "?" : s.modality) << "  \"" << s.description << "\"  "
               << s.columns << " x " << s.rows << " x " << s.images << " images"
-              << (s.not_a_volume_reason.empty() ? "" : "  (" + s.not_a_volume_reason + ": never read)")
+              << (s.stack.empty() ? "" : "  (" + s.stack + ")")
+              << (s.not_a_volume_reason.empty() ? ""
+                                                : "  (" + s.not_a_volume_reason + ": never read)")
               << "\n";
   }
 }

@@ -10,6 +10,7 @@
 #include "server/io/folder_read_budget.h"
 #include "server/io/header_text.h"
 #include "server/io/read_dicom_slice.h"
+#include "server/io/split_dicom_stacks.h"
 
 namespace vpm {
 namespace {
@@ -30,8 +31,48 @@ Result<std::vector<std::filesystem::path>> ListFiles(const std::filesystem::path
 
 std::string Describe(const DicomSeriesSummary& s, size_t index) {
   return StrCat(index + 1, " = ", s.uid.empty() ? "(no UID)" : s.uid, " (",
-                s.not_a_volume_reason.empty() ? s.modality : s.not_a_volume_reason, ", ", s.images,
-                " images)");
+                s.not_a_volume_reason.empty() ? s.modality : s.not_a_volume_reason, ", ",
+                s.stack.empty() ? "" : StrCat(s.stack, ", "), s.images, " images)");
+}
+
+// A series and the split's view of its files, in the same order.
+struct Group {
+  DicomSeriesSummary summary;
+  std::vector<StackFile> stack_files;
+};
+
+StackFile StackFileOf(const std::vector<DicomSlice>& frames) {
+  const DicomSlice& first = frames.front();
+  const auto& o = first.orientation;
+  StackFile file{.attributes = first.stack};
+  const glm::dvec3 normal = glm::cross(glm::dvec3(o[0], o[1], o[2]), glm::dvec3(o[3], o[4], o[5]));
+  if (glm::length(normal) > 0.5) file.normal_lps = glm::normalize(normal);
+  for (const DicomSlice& frame : frames) file.positions_mm.push_back(frame.position_mm);
+  return file;
+}
+
+// The group's entries: one, or one per stack where its positions repeat.
+void AppendStacks(Group& group, std::vector<DicomSeriesSummary>& out) {
+  if (!group.summary.not_a_volume_reason.empty()) {
+    out.push_back(std::move(group.summary));
+    return;
+  }
+  const std::vector<DicomStack> stacks = SplitDicomStacks(group.stack_files);
+  if (stacks.size() == 1) {
+    out.push_back(std::move(group.summary));
+    return;
+  }
+  for (const DicomStack& stack : stacks) {
+    DicomSeriesSummary s = group.summary;
+    s.stack = stack.label;
+    s.files.clear();
+    s.images = 0;
+    for (size_t f : stack.files) {
+      s.files.push_back(group.summary.files[f]);
+      s.images += static_cast<int64_t>(group.stack_files[f].positions_mm.size());
+    }
+    out.push_back(std::move(s));
+  }
 }
 
 std::string ListChoices(const std::vector<DicomSeriesSummary>& series) {
@@ -51,7 +92,7 @@ Result<std::vector<DicomSeriesSummary>> ListDicomSeries(const std::filesystem::p
   ASSIGN_OR_RETURN(const std::vector<std::filesystem::path> files, ListFiles(folder));
   FolderReadBudget budget(folder, limits);
   // Key: (SeriesNumber, UID, reason), which is also the listing order.
-  std::map<std::tuple<int64_t, std::string, std::string>, DicomSeriesSummary> groups;
+  std::map<std::tuple<int64_t, std::string, std::string>, Group> groups;
   for (const std::filesystem::path& path : files) {
     RETURN_IF_ERROR(limits.cancel.Check());
     // A look at the prefix first, so that large non-DICOM files in the
@@ -64,8 +105,8 @@ Result<std::vector<DicomSeriesSummary>> ListDicomSeries(const std::filesystem::p
     if (!frames.ok()) return PrefixStatus(frames.status(), path.string());
     const DicomSlice* slice = &frames->front();  // every frame has the file's identity
     if (!slice->is_image) continue;
-    DicomSeriesSummary& s =
-        groups[{slice->series_number, slice->series_uid, slice->not_a_slice_reason}];
+    Group& group = groups[{slice->series_number, slice->series_uid, slice->not_a_slice_reason}];
+    DicomSeriesSummary& s = group.summary;
     if (s.files.empty()) {
       s.uid = slice->series_uid;
       s.description = slice->series_description;
@@ -77,13 +118,14 @@ Result<std::vector<DicomSeriesSummary>> ListDicomSeries(const std::filesystem::p
     }
     s.files.push_back(path);
     s.images += static_cast<int64_t>(frames->size());
+    group.stack_files.push_back(StackFileOf(*frames));
   }
   if (groups.empty()) {
     return absl::InvalidArgumentError(
         StrCat(folder.string(), ": holds no DICOM images (", files.size(), " files checked)"));
   }
   std::vector<DicomSeriesSummary> out;
-  for (auto& [key, s] : groups) out.push_back(std::move(s));
+  for (auto& [key, group] : groups) AppendStacks(group, out);
   return out;
 }
 

@@ -22,6 +22,9 @@ struct DicomSeriesSummary {
   // volume (they form a group of their own even when they share the UID of
   // a real series); "" for a series of slices.
   std::string not_a_volume_reason;
+  // What sets this stack apart where the series holds several at the same
+  // positions (SplitDicomStacks: "EchoNumbers 2"); "" otherwise.
+  std::string stack;
   std::vector<std::filesystem::path> files;  // sorted by name
   int64_t images = 0;  // slices: one per classic file, one per frame of a multi-frame one
 };
@@ -29,18 +32,20 @@ struct DicomSeriesSummary {
 // Parses the header of every regular DICOM file in `folder` (not its
 // subfolders; files without the "DICM" prefix, and DICOM files without pixel
 // data such as DICOMDIR or dose reports, are skipped) and groups the images
-// by SeriesInstanceUID. Order: by SeriesNumber, then UID, slices before
-// localizers. The bytes read are held to `limits.max_bytes` as a running
-// total. Errors: NotFound (no folder), InvalidArgument (no DICOM images, an
-// unreadable file, named), ResourceExhausted, Unimplemented (an image kind
+// by SeriesInstanceUID; a series that repeats its positions in several
+// stacks (echoes, phases, b-values: SplitDicomStacks) is listed once per
+// stack, each with its `stack` label. Order: by SeriesNumber, then UID,
+// slices before localizers, then the stacks in their order. The bytes read are held to
+// `limits.max_bytes` as a running total. Errors: NotFound (no folder), InvalidArgument (no DICOM
+// images, an unreadable file, named), ResourceExhausted, Unimplemented (an image kind
 // ParseDicomFrames does not read).
 Result<std::vector<DicomSeriesSummary>> ListDicomSeries(const std::filesystem::path& folder,
                                                         const VolumeLimits& limits);
 
 // Index into `series` of the one `selector` names: "" picks the series of
-// slices with the most voxels, CT and MR before other modalities; else a
-// SeriesInstanceUID or a 1-based index N. InvalidArgument naming the
-// choices for an unknown UID or index, or a localizer / secondary capture.
+// slices with the most voxels, CT and MR before other modalities (the first
+// of equals); else a SeriesInstanceUID (its first stack) or a 1-based index N. InvalidArgument
+// naming the choices for an unknown UID or index, or a localizer / secondary capture.
 Result<size_t> ChooseDicomSeries(const std::vector<DicomSeriesSummary>& series,
                                  std::string_view selector);
 

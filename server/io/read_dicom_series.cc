@@ -125,7 +125,9 @@ Status SortAlongNormal(std::vector<NamedSlice>& slices, const glm::dmat3& frame)
     if (gap <= kGapTolerance * mean_gap || gap < 1e-6) {
       return absl::InvalidArgumentError(StrCat("duplicate slice position: ", a.file, " and ",
                                                b.file, " are both at ", a.position_in_frame_mm.z,
-                                               " mm along the slice normal"));
+                                               " mm along the slice normal (two images at one "
+                                               "place, and no echo, phase, b-value, image type "
+                                               "or acquisition number sets them apart)"));
     }
   }
   return absl::OkStatus();
@@ -272,6 +274,36 @@ Result<Volume> AssembleSeries(std::vector<NamedSlice> slices, const DicomReadOpt
   return volume;
 }
 
+bool SameSeries(const DicomSeriesSummary& a, const DicomSeriesSummary& b) {
+  return a.uid == b.uid && a.series_number == b.series_number &&
+         a.not_a_volume_reason == b.not_a_volume_reason;
+}
+
+// Which series (and stack) was read, where the folder offered a choice.
+void AddChoiceNotes(const std::vector<DicomSeriesSummary>& series, size_t chosen, Volume& volume) {
+  const DicomSeriesSummary& s = series[chosen];
+  size_t distinct = 0;
+  std::string stacks;
+  for (size_t n = 0; n < series.size(); ++n) {
+    distinct += n == 0 || !SameSeries(series[n - 1], series[n]);
+    if (!s.stack.empty() && SameSeries(series[n], s)) {
+      StrAppend(&stacks, stacks.empty() ? "" : ", ", n + 1, " = ", series[n].stack);
+    }
+  }
+  if (!s.stack.empty()) {
+    volume.add_note(StrCat("series ", s.uid, " repeats its positions in stacks (", stacks,
+                           "); read ", chosen + 1, " (", s.stack, ", ", s.images,
+                           " slices); ?series=N picks another"));
+  }
+  if (distinct > 1) {
+    volume.add_note(
+        StrCat("the folder holds ", distinct, " series",
+               distinct == series.size() ? "" : StrCat(" in ", series.size(), " stacks"),
+               "; read series ", chosen + 1, " (", s.uid, ", ", s.modality, " \"", s.description,
+               "\", ", s.images, " slices); ?series=N or ?series=UID picks another"));
+  }
+}
+
 }  // namespace
 
 Result<Volume> ReadDicomSeries(const std::filesystem::path& folder, const VolumeLimits& limits,
@@ -283,14 +315,7 @@ Result<Volume> ReadDicomSeries(const std::filesystem::path& folder, const Volume
   RETURN_IF_ERROR(limits.cancel.Check());
   Result<Volume> volume = AssembleSeries(std::move(slices), options, limits);
   if (!volume.ok()) return PrefixStatus(volume.status(), folder.string());
-  if (series.size() > 1) {
-    const DicomSeriesSummary& s = series[*chosen];
-    volume->add_note(StrCat("the folder holds ", series.size(), " series; read series ",
-                            *chosen + 1, " (", s.uid, ", ", s.modality, " \"", s.description,
-                            "\", ", s.images,
-                            " slices); ?series=N or ?series=UID picks "
-                            "another"));
-  }
+  AddChoiceNotes(series, *chosen, *volume);
   RETURN_IF_ERROR(limits.cancel.Check());
   // What an export into the same study copies (write_derived_series.h).
   Result<DicomOrigin> origin = ReadDicomOrigin(series[*chosen].files);

@@ -233,6 +233,13 @@ void ReadIdentity(DcmDataset& ds, DicomSlice& slice) {
   slice.sop_class_uid = GetString(ds, DCM_SOPClassUID);
   Sint32 number = 0;
   if (ds.findAndGetSint32(DCM_SeriesNumber, number).good()) slice.series_number = number;
+  slice.stack = {.echo_numbers = GetString(ds, DCM_EchoNumbers),
+                 .echo_time = GetString(ds, DCM_EchoTime),
+                 .temporal_position = GetString(ds, DCM_TemporalPositionIdentifier),
+                 .trigger_time = GetString(ds, DCM_TriggerTime),
+                 .diffusion_b_value = GetString(ds, DCM_DiffusionBValue),
+                 .image_type = GetString(ds, DCM_ImageType),
+                 .acquisition_number = GetString(ds, DCM_AcquisitionNumber)};
   // Secondary Capture Image Storage and its multi-frame variants (1.2.840.10008.5.1.4.1.1.7.x).
   constexpr std::string_view kSecondaryCapture = "1.2.840.10008.5.1.4.1.1.7";
   const std::string_view sop = slice.sop_class_uid;

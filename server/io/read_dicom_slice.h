@@ -15,6 +15,21 @@
 
 namespace vpm {
 
+// Attributes that can tell apart several stacks of images at the same
+// positions in one series (the echoes of an in/opposed-phase MR, the phases
+// of a dynamic series, b-values, Dixon's water and fat images), as written in
+// the file's top-level dataset ("" when absent; not read from an enhanced
+// image's functional groups). split_dicom_stacks.h decides which one splits.
+struct DicomStackAttributes {
+  std::string echo_numbers;        // EchoNumbers (0018,0086)
+  std::string echo_time;           // EchoTime (0018,0081), ms
+  std::string temporal_position;   // TemporalPositionIdentifier (0020,0100)
+  std::string trigger_time;        // TriggerTime (0018,1060), ms
+  std::string diffusion_b_value;   // DiffusionBValue (0018,9087), s/mm^2
+  std::string image_type;          // ImageType (0008,0008)
+  std::string acquisition_number;  // AcquisitionNumber (0020,0012)
+};
+
 struct DicomSlice {
   // False for a DICOM file without pixel data (DICOMDIR, report, ...): the
   // fields below are then unset and a series reader skips the file.
@@ -29,6 +44,7 @@ struct DicomSlice {
   // "secondary capture"); "" for an ordinary slice. When set, the geometry
   // and pixel fields below are not read.
   std::string not_a_slice_reason;
+  DicomStackAttributes stack;  // read for every image
   int64_t rows = 0;        // j extent
   int64_t columns = 0;     // i extent
   // PixelSpacing as stored: [0] between rows (along j), [1] between columns

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <dcmtk/config/osconfig.h>  // must come first among DCMTK headers
@@ -47,6 +48,8 @@ struct DicomSliceSpec {
   bool with_pixel_data = true;
   E_TransferSyntax transfer_syntax = EXS_LittleEndianExplicit;
   std::vector<int32_t> stored;  // rows * columns samples; empty: n % 100
+  // More attributes as text (EchoNumbers, TemporalPositionIdentifier, ...).
+  std::vector<std::pair<DcmTagKey, std::string>> more;
 };
 
 inline std::string DicomNumbers(std::initializer_list<double> values) {
@@ -127,6 +130,7 @@ inline void FillDicomSlice(DcmDataset& ds, const DicomSliceSpec& s) {
   }
   ds.putAndInsertString(DCM_RescaleSlope, DicomNumbers({s.slope}).c_str());
   ds.putAndInsertString(DCM_RescaleIntercept, DicomNumbers({s.intercept}).c_str());
+  for (const auto& [tag, value] : s.more) ds.putAndInsertString(tag, value.c_str());
   if (s.with_pixel_data) PutPixels(ds, s);
 }
 

@@ -1,0 +1,205 @@
+// Several stacks at the same positions in one DICOM series: the split
+// (SplitDicomStacks) and what the series reader makes of it.
+#include "server/io/split_dicom_stacks.h"
+
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "server/io/list_dicom_series.h"
+#include "server/io/read_dicom_series.h"
+#include "tests/io/dicom_test_util.h"
+#include "tests/io/io_test_util.h"
+
+namespace vpm {
+namespace {
+
+using ::vpm::testing::DicomSliceSpec;
+using ::vpm::testing::MakeTempDir;
+using ::vpm::testing::WriteDicomSlice;
+
+// Axial files at z = 0, 2, 4, ... mm, each with the attributes `a`.
+std::vector<StackFile> AxialFiles(int count, const DicomStackAttributes& a) {
+  std::vector<StackFile> files;
+  for (int k = 0; k < count; ++k) {
+    files.push_back({.attributes = a, .positions_mm = {glm::dvec3(0.0, 0.0, 2.0 * k)}});
+  }
+  return files;
+}
+
+std::vector<std::string> Labels(const std::vector<DicomStack>& stacks) {
+  std::vector<std::string> out;
+  for (const DicomStack& s : stacks) out.push_back(s.label);
+  return out;
+}
+
+TEST(SplitDicomStacks, DistinctPositionsAreOneStackWhateverTheAttributesSay) {
+  // A sequential CT numbers each rotation's images as an acquisition of its
+  // own: nothing repeats, so nothing is split.
+  std::vector<StackFile> files = AxialFiles(6, {});
+  for (size_t f = 0; f < files.size(); ++f) {
+    files[f].attributes.acquisition_number = std::to_string(f / 2 + 1);
+  }
+  const std::vector<DicomStack> stacks = SplitDicomStacks(files);
+  ASSERT_EQ(stacks.size(), 1u);
+  EXPECT_EQ(stacks[0].label, "");
+  EXPECT_EQ(stacks[0].files, (std::vector<size_t>{0, 1, 2, 3, 4, 5}));
+}
+
+TEST(SplitDicomStacks, TwoEchoesAtTheSamePositionsAreTwoStacksInEchoOrder) {
+  // Echo 2 listed first, and with EchoNumbers as text ("10" sorts before
+  // "2"): the order is numeric.
+  std::vector<StackFile> files = AxialFiles(3, {.echo_numbers = "10", .echo_time = "4.6"});
+  for (StackFile f : AxialFiles(3, {.echo_numbers = "2", .echo_time = "2.3"})) files.push_back(f);
+  const std::vector<DicomStack> stacks = SplitDicomStacks(files);
+  EXPECT_EQ(Labels(stacks), (std::vector<std::string>{"EchoNumbers 2", "EchoNumbers 10"}));
+  ASSERT_EQ(stacks.size(), 2u);
+  EXPECT_EQ(stacks[0].files, (std::vector<size_t>{3, 4, 5}));
+  EXPECT_EQ(stacks[1].files, (std::vector<size_t>{0, 1, 2}));
+}
+
+TEST(SplitDicomStacks, TheFirstAttributeThatSeparatesThePositionsSplits) {
+  // Three phases of a dynamic series, every image of echo 1 and of one
+  // ImageType: EchoNumbers and ImageType cannot split it, the phase can.
+  std::vector<StackFile> files;
+  for (const char* phase : {"3", "1", "2"}) {
+    for (StackFile f : AxialFiles(4, {.echo_numbers = "1",
+                                     .temporal_position = phase,
+                                     .image_type = "ORIGINAL\\PRIMARY\\M"})) {
+      files.push_back(f);
+    }
+  }
+  EXPECT_EQ(
+      Labels(SplitDicomStacks(files)),
+      (std::vector<std::string>{"TemporalPositionIdentifier 1", "TemporalPositionIdentifier 2",
+                                "TemporalPositionIdentifier 3"}));
+  // Dixon: water and fat told apart by ImageType alone, in text order.
+  files = AxialFiles(2, {.image_type = "DERIVED\\PRIMARY\\DIXON\\WATER"});
+  for (StackFile f : AxialFiles(2, {.image_type = "DERIVED\\PRIMARY\\DIXON\\FAT"})) {
+    files.push_back(f);
+  }
+  EXPECT_EQ(Labels(SplitDicomStacks(files)),
+            (std::vector<std::string>{"ImageType DERIVED\\PRIMARY\\DIXON\\FAT",
+                                      "ImageType DERIVED\\PRIMARY\\DIXON\\WATER"}));
+}
+
+TEST(SplitDicomStacks, NoSplitThatLeavesARepeatOrALoneImage) {
+  // A repeated file: same attributes, one position twice.
+  std::vector<StackFile> files = AxialFiles(4, {.echo_numbers = "1"});
+  files.push_back(files[2]);
+  ASSERT_EQ(SplitDicomStacks(files).size(), 1u);
+  // The repeat differs only in AcquisitionNumber: a stack of one image is
+  // not a stack.
+  files.back().attributes.acquisition_number = "2";
+  ASSERT_EQ(SplitDicomStacks(files).size(), 1u);
+  // Echoes that still repeat a position within one echo.
+  files = AxialFiles(3, {.echo_numbers = "1"});
+  for (StackFile f : AxialFiles(3, {.echo_numbers = "2"})) files.push_back(f);
+  files.push_back(files[0]);
+  EXPECT_EQ(SplitDicomStacks(files).size(), 1u);
+  // A NaN position repeats nothing and splits nothing, without a crash.
+  files = AxialFiles(3, {});
+  files[1].positions_mm[0].z = std::nan("");
+  EXPECT_EQ(SplitDicomStacks(files).size(), 1u);
+  EXPECT_EQ(SplitDicomStacks({}).size(), 1u);
+}
+
+TEST(SplitDicomStacks, PositionsAreComparedAlongTheSliceNormal) {
+  // Sagittal slices (normal along x) at x = 0, 2, 4, all at the same z, of
+  // one echo: distinct positions, one stack; two echoes: two.
+  std::vector<StackFile> files;
+  for (const char* echo : {"1", "2"}) {
+    for (int k = 0; k < 3; ++k) {
+      files.push_back({.attributes = {.echo_numbers = echo},
+                       .normal_lps = glm::dvec3(1.0, 0.0, 0.0),
+                       .positions_mm = {glm::dvec3(2.0 * k, 5.0, 7.0)}});
+    }
+  }
+  EXPECT_EQ(SplitDicomStacks(std::span(files).first(3)).size(), 1u);
+  EXPECT_EQ(Labels(SplitDicomStacks(files)),
+            (std::vector<std::string>{"EchoNumbers 1", "EchoNumbers 2"}));
+}
+
+// ---- Through the series reader ----
+
+// An MR series of two echoes at four positions in one folder; echo e's
+// voxels hold 1000 * e + 10 * k + n (slice k, pixel n).
+std::filesystem::path WriteTwoEchoes() {
+  const auto dir = MakeTempDir();
+  DicomSliceSpec s;
+  s.sop_class_uid = UID_MRImageStorage;
+  s.modality = "MR";
+  s.intercept = 0.0;
+  s.series_description = "T1 in/opp";
+  for (int echo = 1; echo <= 2; ++echo) {
+    for (int k = 0; k < 4; ++k) {
+      s.position_mm = glm::dvec3(0.0, 0.0, 3.0 * k);
+      s.more = {{DCM_EchoNumbers, std::to_string(echo)}, {DCM_EchoTime, echo == 1 ? "2.3" : "4.6"}};
+      s.stored.clear();
+      for (int n = 0; n < s.rows * s.columns; ++n) s.stored.push_back(1000 * echo + 10 * k + n);
+      EXPECT_TRUE(WriteDicomSlice(dir / ("im" + std::to_string(10 * (3 - echo) + k) + ".dcm"),
+                                  s));  // echo 2 first
+    }
+  }
+  return dir;
+}
+
+bool HasNote(const Volume& v, const std::string& fragment) {
+  for (const std::string& note : v.notes()) {
+    if (note.find(fragment) != std::string::npos) return true;
+  }
+  return false;
+}
+
+TEST(DicomSeriesReader, ReadsTheFirstEchoOfATwoEchoSeriesAndTheOtherOnRequest) {
+  const auto dir = WriteTwoEchoes();
+  const auto listed = ListDicomSeries(dir, {});
+  ASSERT_TRUE(listed.ok()) << listed.status();
+  ASSERT_EQ(listed->size(), 2u);
+  EXPECT_EQ((*listed)[0].stack, "EchoNumbers 1");
+  EXPECT_EQ((*listed)[1].stack, "EchoNumbers 2");
+  EXPECT_EQ((*listed)[0].images, 4);
+  EXPECT_EQ((*listed)[0].uid, (*listed)[1].uid);
+
+  const auto first = ReadDicomSeries(dir, {});
+  ASSERT_TRUE(first.ok()) << first.status();
+  EXPECT_EQ(first->dims(), (std::array<int64_t, 3>{4, 3, 4}));
+  EXPECT_NEAR(first->spacing_mm().z, 3.0, 1e-9);
+  EXPECT_FLOAT_EQ(first->At(0, 0, 0), 1000.0f);
+  EXPECT_FLOAT_EQ(first->At(1, 0, 3), 1031.0f);
+  std::string notes;
+  for (const std::string& n : first->notes()) notes += n + "\n";
+  EXPECT_TRUE(HasNote(*first,
+                      "repeats its positions in stacks (1 = EchoNumbers 1, 2 = "
+                      "EchoNumbers 2); read 1 (EchoNumbers 1, 4 slices)"))
+      << notes;
+  EXPECT_FALSE(HasNote(*first, "the folder holds")) << notes;  // one series
+
+  const auto second = ReadDicomSeries(dir, {}, {.series = "2"});
+  ASSERT_TRUE(second.ok()) << second.status();
+  EXPECT_FLOAT_EQ(second->At(0, 0, 0), 2000.0f);
+  EXPECT_FLOAT_EQ(second->At(1, 0, 3), 2031.0f);
+  // The UID names the series: its first stack.
+  const auto by_uid = ReadDicomSeries(dir, {}, {.series = (*listed)[0].uid});
+  ASSERT_TRUE(by_uid.ok()) << by_uid.status();
+  EXPECT_FLOAT_EQ(by_uid->At(0, 0, 0), 1000.0f);
+}
+
+TEST(DicomSeriesReader, ARepeatNoAttributeExplainsIsStillRefusedWithAReason) {
+  const auto dir = WriteTwoEchoes();
+  DicomSliceSpec s;
+  s.sop_class_uid = UID_MRImageStorage;
+  s.modality = "MR";
+  s.position_mm = glm::dvec3(0.0, 0.0, 3.0);
+  s.more = {{DCM_EchoNumbers, "1"}, {DCM_EchoTime, "2.3"}};
+  ASSERT_TRUE(WriteDicomSlice(dir / "again.dcm", s));
+  const auto v = ReadDicomSeries(dir, {});
+  ASSERT_FALSE(v.ok());
+  EXPECT_EQ(v.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(v.status().message().find("duplicate slice position"), std::string::npos) << v.status();
+  EXPECT_NE(v.status().message().find("no echo, phase, b-value"), std::string::npos) << v.status();
+}
+
+}  // namespace
+}  // namespace vpm
