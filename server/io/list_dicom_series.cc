@@ -83,6 +83,29 @@ std::string ListChoices(const std::vector<DicomSeriesSummary>& series) {
   return out;
 }
 
+// Where a folder without images has subfolders (a CD or USB export keeps
+// each series in a folder of its own, DICOM/ST000/SE000/...), says so and
+// names up to three; else "".
+std::string SubfolderHint(const std::filesystem::path& folder) {
+  constexpr size_t kShown = 3;
+  constexpr size_t kNameChars = 40;
+  std::error_code ec;
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
+    if (entry.is_directory(ec)) names.push_back(entry.path().filename().string());
+  }
+  if (names.empty()) return "";
+  std::sort(names.begin(), names.end());
+  std::string shown;
+  for (size_t n = 0; n < std::min(names.size(), kShown); ++n) {
+    StrAppend(&shown, n == 0 ? "" : ", ", names[n].substr(0, kNameChars));
+  }
+  const bool one = names.size() == 1;
+  return StrCat("; its ", names.size(), one ? " subfolder (" : " subfolders (", shown,
+                names.size() > kShown ? ", ..." : "", one ? ") is" : ") are",
+                " not read: give the folder that holds the series' files");
+}
+
 bool IsCtOrMr(const DicomSeriesSummary& s) { return s.modality == "CT" || s.modality == "MR"; }
 
 }  // namespace
@@ -121,8 +144,9 @@ Result<std::vector<DicomSeriesSummary>> ListDicomSeries(const std::filesystem::p
     group.stack_files.push_back(StackFileOf(*frames));
   }
   if (groups.empty()) {
-    return absl::InvalidArgumentError(
-        StrCat(folder.string(), ": holds no DICOM images (", files.size(), " files checked)"));
+    return absl::InvalidArgumentError(StrCat(folder.string(), ": holds no DICOM images (",
+                                             files.size(), " files checked)",
+                                             SubfolderHint(folder)));
   }
   std::vector<DicomSeriesSummary> out;
   for (auto& [key, group] : groups) AppendStacks(group, out);

@@ -348,6 +348,20 @@ TEST(DicomSeriesReader, RejectsEmptyAndMissingFolders) {
   testing::WriteText(dir / "notes.txt", "hello");
   ExpectError(ReadDicomSeries(dir, {}), absl::StatusCode::kInvalidArgument, "no DICOM images");
   ExpectError(ReadDicomSeries(dir / "nope", {}), absl::StatusCode::kNotFound, "nope");
+  // An export's top folder: the series lie in subfolders, which are named.
+  const auto series = WriteSeries(DicomSliceSpec{}, 2, 1.0, glm::dvec3(0.0), "SE000");
+  const auto top = series.parent_path();
+  for (const char* name : {"SE001", "SE002", "SE003"})
+    std::filesystem::create_directory(top / name);
+  ExpectError(ReadDicomSeries(top, {}), absl::StatusCode::kInvalidArgument,
+              "holds no DICOM images (0 files checked); its 4 subfolders (SE000, SE001, SE002, "
+              "...) are not read: give the folder that holds the series' files");
+  std::filesystem::remove_all(top / "SE001");
+  std::filesystem::remove_all(top / "SE002");
+  std::filesystem::remove_all(top / "SE003");
+  ExpectError(ReadDicomSeries(top, {}), absl::StatusCode::kInvalidArgument,
+              "its 1 subfolder (SE000) is not read");
+  EXPECT_TRUE(ReadDicomSeries(series, {}).ok());
 }
 
 TEST(DicomSeriesReader, RejectsSeriesOverCaps) {
