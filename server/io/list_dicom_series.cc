@@ -35,44 +35,64 @@ std::string Describe(const DicomSeriesSummary& s, size_t index) {
                 s.stack.empty() ? "" : StrCat(s.stack, ", "), s.images, " images)");
 }
 
-// A series and the split's view of its files, in the same order.
+// A series and the split's view of its images: where each one is (the
+// index of its file in summary.files, and its frame).
 struct Group {
   DicomSeriesSummary summary;
-  std::vector<StackFile> stack_files;
+  std::vector<StackImage> images;
+  std::vector<std::pair<size_t, int64_t>> image_at;
 };
 
-StackFile StackFileOf(const std::vector<DicomSlice>& frames) {
-  const DicomSlice& first = frames.front();
-  const auto& o = first.orientation;
-  StackFile file{.attributes = first.stack};
-  const glm::dvec3 normal = glm::cross(glm::dvec3(o[0], o[1], o[2]), glm::dvec3(o[3], o[4], o[5]));
-  if (glm::length(normal) > 0.5) file.normal_lps = glm::normalize(normal);
-  for (const DicomSlice& frame : frames) file.positions_mm.push_back(frame.position_mm);
-  return file;
+void AddImages(const std::vector<DicomSlice>& frames, Group& group) {
+  const size_t file = group.summary.files.size() - 1;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    const auto& o = frames[f].orientation;
+    StackImage image{.attributes = frames[f].stack, .position_mm = frames[f].position_mm};
+    const glm::dvec3 normal =
+        glm::cross(glm::dvec3(o[0], o[1], o[2]), glm::dvec3(o[3], o[4], o[5]));
+    if (glm::length(normal) > 0.5) image.normal_lps = glm::normalize(normal);
+    group.images.push_back(image);
+    group.image_at.emplace_back(file, static_cast<int64_t>(f));
+  }
+}
+
+// The summary of one stack: its files and, where it takes only some frames
+// of a file, which.
+DicomSeriesSummary StackSummary(const Group& group, const DicomStack& stack) {
+  DicomSeriesSummary s = group.summary;
+  s.stack = stack.label;
+  s.files.clear();
+  s.images = static_cast<int64_t>(stack.images.size());
+  std::vector<size_t> frames_in_file(group.summary.files.size(), 0);
+  for (const auto& at : group.image_at) ++frames_in_file[at.first];
+  std::vector<size_t> chosen;  // indices into group.summary.files
+  for (size_t n : stack.images) {
+    const auto [file, frame] = group.image_at[n];
+    if (chosen.empty() || chosen.back() != file) {
+      chosen.push_back(file);
+      s.files.push_back(group.summary.files[file]);
+      s.frames.emplace_back();
+    }
+    s.frames.back().push_back(frame);
+  }
+  bool partial = false;
+  for (size_t k = 0; k < chosen.size(); ++k) {
+    partial |= s.frames[k].size() < frames_in_file[chosen[k]];
+  }
+  if (!partial) s.frames.clear();
+  return s;
 }
 
 // The group's entries: one, or one per stack where its positions repeat.
 void AppendStacks(Group& group, std::vector<DicomSeriesSummary>& out) {
-  if (!group.summary.not_a_volume_reason.empty()) {
-    out.push_back(std::move(group.summary));
-    return;
-  }
-  const std::vector<DicomStack> stacks = SplitDicomStacks(group.stack_files);
+  const std::vector<DicomStack> stacks = group.summary.not_a_volume_reason.empty()
+                                             ? SplitDicomStacks(group.images)
+                                             : std::vector<DicomStack>(1);
   if (stacks.size() == 1) {
     out.push_back(std::move(group.summary));
     return;
   }
-  for (const DicomStack& stack : stacks) {
-    DicomSeriesSummary s = group.summary;
-    s.stack = stack.label;
-    s.files.clear();
-    s.images = 0;
-    for (size_t f : stack.files) {
-      s.files.push_back(group.summary.files[f]);
-      s.images += static_cast<int64_t>(group.stack_files[f].positions_mm.size());
-    }
-    out.push_back(std::move(s));
-  }
+  for (const DicomStack& stack : stacks) out.push_back(StackSummary(group, stack));
 }
 
 std::string ListChoices(const std::vector<DicomSeriesSummary>& series) {
@@ -141,7 +161,7 @@ Result<std::vector<DicomSeriesSummary>> ListDicomSeries(const std::filesystem::p
     }
     s.files.push_back(path);
     s.images += static_cast<int64_t>(frames->size());
-    group.stack_files.push_back(StackFileOf(*frames));
+    AddImages(*frames, group);
   }
   if (groups.empty()) {
     return absl::InvalidArgumentError(StrCat(folder.string(), ": holds no DICOM images (",

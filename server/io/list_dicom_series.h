@@ -26,6 +26,10 @@ struct DicomSeriesSummary {
   // positions (SplitDicomStacks: "EchoNumbers 2"); "" otherwise.
   std::string stack;
   std::vector<std::filesystem::path> files;  // sorted by name
+  // Where the stacks of a series share multi-frame files: parallel to
+  // `files`, the frames (0-based) of each file that belong to this stack.
+  // Empty: every frame of every file.
+  std::vector<std::vector<int64_t>> frames;
   int64_t images = 0;  // slices: one per classic file, one per frame of a multi-frame one
 };
 

@@ -33,6 +33,14 @@ struct NamedSlice {
 // One decimal, for notes meant to be read: "18.5".
 double Round1(double x) { return std::round(x * 10.0) / 10.0; }
 
+// Whether frame `frame` of file `file` of `series` belongs to it (a stack
+// may take only some frames of a multi-frame file).
+bool InStack(const DicomSeriesSummary& series, size_t file, size_t frame) {
+  if (series.frames.empty()) return true;
+  const std::vector<int64_t>& frames = series.frames[file];
+  return std::find(frames.begin(), frames.end(), static_cast<int64_t>(frame)) != frames.end();
+}
+
 // Decodes the chosen series' files, holding bytes and voxels to the caps.
 Result<std::vector<NamedSlice>> DecodeSeries(const std::filesystem::path& folder,
                                              const DicomSeriesSummary& series,
@@ -54,6 +62,7 @@ Result<std::vector<NamedSlice>> DecodeSeries(const std::filesystem::path& folder
         ParseDicomFrames(bytes, file_limits, DicomDecode::kPixels);
     if (!frames.ok()) return PrefixStatus(frames.status(), path.string());
     for (size_t f = 0; f < frames->size(); ++f) {
+      if (!InStack(series, file, f)) continue;
       DicomSlice& slice = (*frames)[f];
       voxels += slice.rows * slice.columns;
       // The budget as int16, the least a volume of these slices takes.

@@ -159,33 +159,46 @@ struct FrameItems {
   DcmItem* value_transform;  // RescaleSlope, RescaleIntercept
 };
 
-DcmItem* FindGroup(DcmItem* per_frame, DcmItem* shared, const DcmTagKey& sequence,
-                   DcmItem& fallback) {
-  DcmItem* item = nullptr;
-  for (DcmItem* group : {per_frame, shared}) {
-    if (group != nullptr && group->findAndGetSequenceItem(sequence, item, 0).good() &&
-        item != nullptr) {
-      return item;
+// A frame's functional groups (null where the image has none).
+struct FrameGroups {
+  DcmItem* per_frame = nullptr;
+  DcmItem* shared = nullptr;
+
+  // The first item of `sequence` in the per-frame group, else the shared
+  // one; null when neither has it.
+  DcmItem* Find(const DcmTagKey& sequence) const {
+    DcmItem* item = nullptr;
+    for (DcmItem* group : {per_frame, shared}) {
+      if (group != nullptr && group->findAndGetSequenceItem(sequence, item, 0).good() &&
+          item != nullptr) {
+        return item;
+      }
     }
+    return nullptr;
   }
-  return &fallback;
+};
+
+FrameGroups GroupsOfFrame(DcmDataset& ds, int64_t frame) {
+  FrameGroups g;
+  if (ds.findAndGetSequenceItem(DCM_SharedFunctionalGroupsSequence, g.shared, 0).bad()) {
+    g.shared = nullptr;
+  }
+  if (ds.findAndGetSequenceItem(DCM_PerFrameFunctionalGroupsSequence, g.per_frame,
+                                static_cast<signed long>(frame))
+          .bad()) {
+    g.per_frame = nullptr;
+  }
+  return g;
 }
 
 FrameItems ItemsOfFrame(DcmDataset& ds, int64_t frame) {
-  DcmItem* shared = nullptr;
-  DcmItem* per_frame = nullptr;
-  if (ds.findAndGetSequenceItem(DCM_SharedFunctionalGroupsSequence, shared, 0).bad()) {
-    shared = nullptr;
-  }
-  if (ds.findAndGetSequenceItem(DCM_PerFrameFunctionalGroupsSequence, per_frame,
-                                static_cast<signed long>(frame))
-          .bad()) {
-    per_frame = nullptr;
-  }
-  return {FindGroup(per_frame, shared, DCM_PixelMeasuresSequence, ds),
-          FindGroup(per_frame, shared, DCM_PlaneOrientationSequence, ds),
-          FindGroup(per_frame, shared, DCM_PlanePositionSequence, ds),
-          FindGroup(per_frame, shared, DCM_PixelValueTransformationSequence, ds)};
+  const FrameGroups g = GroupsOfFrame(ds, frame);
+  const auto find = [&](const DcmTagKey& sequence) {
+    DcmItem* item = g.Find(sequence);
+    return item != nullptr ? item : static_cast<DcmItem*>(&ds);
+  };
+  return {find(DCM_PixelMeasuresSequence), find(DCM_PlaneOrientationSequence),
+          find(DCM_PlanePositionSequence), find(DCM_PixelValueTransformationSequence)};
 }
 
 Status ReadGeometry(const FrameItems& items, DicomSlice& slice) {
@@ -217,7 +230,7 @@ Status ReadRescale(const FrameItems& items, PixelFormat& f) {
   return absl::OkStatus();
 }
 
-std::string GetString(DcmDataset& ds, const DcmTagKey& tag) {
+std::string GetString(DcmItem& ds, const DcmTagKey& tag) {
   OFString value;
   if (ds.findAndGetOFStringArray(tag, value).good()) return value.c_str();
   return "";
@@ -247,6 +260,35 @@ void ReadIdentity(DcmDataset& ds, DicomSlice& slice) {
     slice.not_a_slice_reason = "secondary capture";
   } else if (ToLowerAscii(GetString(ds, DCM_ImageType)).find("localizer") != std::string::npos) {
     slice.not_a_slice_reason = "localizer";
+  }
+}
+
+// An enhanced image's frame: where its functional groups carry a stack
+// attribute, that value replaces the top level's (EffectiveEchoTime of
+// MREchoSequence, TemporalPositionIndex and StackID of
+// FrameContentSequence, DiffusionBValue of MRDiffusionSequence, FrameType of
+// the MR / CT image frame type sequences).
+void ReadFrameStack(DcmDataset& ds, int64_t frame, DicomStackAttributes& a) {
+  struct Field {
+    DcmTagKey sequence;
+    DcmTagKey tag;
+    std::string DicomStackAttributes::*value;
+  };
+  static const Field kFields[] = {
+      {DCM_MREchoSequence, DCM_EffectiveEchoTime, &DicomStackAttributes::echo_time},
+      {DCM_FrameContentSequence, DCM_TemporalPositionIndex,
+       &DicomStackAttributes::temporal_position},
+      {DCM_FrameContentSequence, DCM_StackID, &DicomStackAttributes::stack_id},
+      {DCM_MRDiffusionSequence, DCM_DiffusionBValue, &DicomStackAttributes::diffusion_b_value},
+      {DCM_MRImageFrameTypeSequence, DCM_FrameType, &DicomStackAttributes::image_type},
+      {DCM_CTImageFrameTypeSequence, DCM_FrameType, &DicomStackAttributes::image_type},
+  };
+  const FrameGroups g = GroupsOfFrame(ds, frame);
+  for (const Field& field : kFields) {
+    DcmItem* item = g.Find(field.sequence);
+    if (item == nullptr) continue;
+    std::string value = GetString(*item, field.tag);
+    if (!value.empty()) a.*field.value = std::move(value);
   }
 }
 
@@ -434,6 +476,7 @@ Result<std::vector<DicomSlice>> ParseDicomFrames(std::span<const uint8_t> bytes,
   std::vector<PixelFormat> formats(static_cast<size_t>(frames), format);
   for (int64_t f = 0; f < frames; ++f) {
     const FrameItems items = ItemsOfFrame(ds, f);
+    if (frames > 1) ReadFrameStack(ds, f, slices[f].stack);
     Status status = ReadGeometry(items, slices[f]);
     if (status.ok() && frames > 1) status = ReadRescale(items, formats[f]);
     if (!status.ok()) {

@@ -17,16 +17,18 @@ namespace vpm {
 
 // Attributes that can tell apart several stacks of images at the same
 // positions in one series (the echoes of an in/opposed-phase MR, the phases
-// of a dynamic series, b-values, Dixon's water and fat images), as written in
-// the file's top-level dataset ("" when absent; not read from an enhanced
-// image's functional groups). split_dicom_stacks.h decides which one splits.
+// of a dynamic series, b-values, Dixon's water and fat images), as written
+// ("" when absent): the top-level dataset's, and for a frame of an enhanced
+// image its functional groups' where they carry one (in brackets).
+// split_dicom_stacks.h decides which one splits.
 struct DicomStackAttributes {
   std::string echo_numbers;        // EchoNumbers (0018,0086)
-  std::string echo_time;           // EchoTime (0018,0081), ms
-  std::string temporal_position;   // TemporalPositionIdentifier (0020,0100)
+  std::string echo_time;           // EchoTime (0018,0081) [EffectiveEchoTime], ms
+  std::string temporal_position;   // TemporalPositionIdentifier [TemporalPositionIndex]
   std::string trigger_time;        // TriggerTime (0018,1060), ms
   std::string diffusion_b_value;   // DiffusionBValue (0018,9087), s/mm^2
-  std::string image_type;          // ImageType (0008,0008)
+  std::string stack_id;            // [StackID (0020,9056)]
+  std::string image_type;          // ImageType (0008,0008) [FrameType]
   std::string acquisition_number;  // AcquisitionNumber (0020,0012)
 };
 

@@ -24,6 +24,7 @@ constexpr SplitAttribute kSplitAttributes[] = {
     {"TemporalPositionIdentifier", &DicomStackAttributes::temporal_position},
     {"TriggerTime", &DicomStackAttributes::trigger_time},
     {"DiffusionBValue", &DicomStackAttributes::diffusion_b_value},
+    {"StackID", &DicomStackAttributes::stack_id},
     {"ImageType", &DicomStackAttributes::image_type},
     {"AcquisitionNumber", &DicomStackAttributes::acquisition_number},
 };
@@ -31,20 +32,12 @@ constexpr SplitAttribute kSplitAttributes[] = {
 // Labels stay short whatever a file holds.
 constexpr size_t kMaxValueChars = 64;
 
-int64_t ImageCount(std::span<const StackFile> files, const std::vector<size_t>& chosen) {
-  int64_t images = 0;
-  for (size_t f : chosen) images += static_cast<int64_t>(files[f].positions_mm.size());
-  return images;
-}
-
 // True when two images of `chosen` lie within kSamePositionMm of each other
 // along `normal`.
-bool RepeatsAPosition(std::span<const StackFile> files, const std::vector<size_t>& chosen,
+bool RepeatsAPosition(std::span<const StackImage> images, const std::vector<size_t>& chosen,
                       const glm::dvec3& normal) {
   std::vector<double> along;
-  for (size_t f : chosen) {
-    for (const glm::dvec3& p : files[f].positions_mm) along.push_back(glm::dot(p, normal));
-  }
+  for (size_t n : chosen) along.push_back(glm::dot(images[n].position_mm, normal));
   std::sort(along.begin(), along.end());
   for (size_t n = 1; n < along.size(); ++n) {
     if (!(along[n] - along[n - 1] >= kSamePositionMm)) return true;  // NaN too
@@ -67,29 +60,33 @@ bool ValueLess(const std::string& a, const std::string& b, bool numeric) {
 }
 
 // The stacks `attribute` cuts the series into, when it does (see the header).
-std::optional<std::vector<DicomStack>> SplitBy(std::span<const StackFile> files,
+std::optional<std::vector<DicomStack>> SplitBy(std::span<const StackImage> images,
                                                const SplitAttribute& attribute,
                                                const glm::dvec3& normal) {
   std::map<std::string, std::vector<size_t>> groups;
-  for (size_t f = 0; f < files.size(); ++f) {
-    groups[files[f].attributes.*attribute.value].push_back(f);
+  for (size_t n = 0; n < images.size(); ++n) {
+    groups[images[n].attributes.*attribute.value].push_back(n);
   }
   if (groups.size() < 2) return std::nullopt;
   bool numeric = true;
   for (const auto& [value, members] : groups) {
-    if (ImageCount(files, members) < 2 || RepeatsAPosition(files, members, normal)) {
+    if (members.size() < 2 || RepeatsAPosition(images, members, normal)) {
       return std::nullopt;
     }
     numeric &= value.empty() || FiniteNumber(value).has_value();
   }
   std::vector<DicomStack> stacks;
   for (auto& [value, members] : groups) {
-    const std::string shown = value.empty() ? "(none)" : value.substr(0, kMaxValueChars);
+    // Numbers as 6 significant digits (a binary EffectiveEchoTime of 2.3
+    // reads 2.2999999999999998 as text).
+    const std::string shown = value.empty() ? "(none)"
+                              : numeric     ? StrCat(*FiniteNumber(value))
+                                            : value.substr(0, kMaxValueChars);
     stacks.push_back({StrCat(attribute.keyword, " ", shown), std::move(members)});
   }
   std::sort(stacks.begin(), stacks.end(), [&](const DicomStack& a, const DicomStack& b) {
     const auto value = [&](const DicomStack& s) -> const std::string& {
-      return files[s.files.front()].attributes.*attribute.value;
+      return images[s.images.front()].attributes.*attribute.value;
     };
     return ValueLess(value(a), value(b), numeric);
   });
@@ -98,14 +95,14 @@ std::optional<std::vector<DicomStack>> SplitBy(std::span<const StackFile> files,
 
 }  // namespace
 
-std::vector<DicomStack> SplitDicomStacks(std::span<const StackFile> files) {
+std::vector<DicomStack> SplitDicomStacks(std::span<const StackImage> images) {
   DicomStack whole;
-  for (size_t f = 0; f < files.size(); ++f) whole.files.push_back(f);
-  if (files.empty()) return {whole};
-  const glm::dvec3 normal = files.front().normal_lps;
-  if (!RepeatsAPosition(files, whole.files, normal)) return {whole};
+  for (size_t n = 0; n < images.size(); ++n) whole.images.push_back(n);
+  if (images.empty()) return {whole};
+  const glm::dvec3 normal = images.front().normal_lps;
+  if (!RepeatsAPosition(images, whole.images, normal)) return {whole};
   for (const SplitAttribute& attribute : kSplitAttributes) {
-    if (std::optional<std::vector<DicomStack>> stacks = SplitBy(files, attribute, normal)) {
+    if (std::optional<std::vector<DicomStack>> stacks = SplitBy(images, attribute, normal)) {
       return *std::move(stacks);
     }
   }

@@ -13,33 +13,33 @@
 
 namespace vpm {
 
-// One file of a series, as the split sees it.
-struct StackFile {
+// One image of a series (a classic file, or one frame of a multi-frame
+// one), as the split sees it.
+struct StackImage {
   DicomStackAttributes attributes;
-  glm::dvec3 normal_lps{0.0, 0.0, 1.0};  // its first frame's row x column direction
-  std::vector<glm::dvec3> positions_mm;  // ImagePositionPatient of each frame, LPS
+  glm::dvec3 normal_lps{0.0, 0.0, 1.0};  // row x column direction
+  glm::dvec3 position_mm{0.0};           // ImagePositionPatient, LPS
 };
 
-// A stack: the files (indices into the split's input, in input order) and
+// A stack: its images (indices into the split's input, in input order) and
 // what sets it apart, e.g. "EchoNumbers 2"; "" when the series is one stack.
 struct DicomStack {
   std::string label;
-  std::vector<size_t> files;
+  std::vector<size_t> images;
 };
 
 // Two images closer than this along the slice normal are at one position.
 inline constexpr double kSamePositionMm = 0.01;
 
 // The stacks of a series. A series whose images all lie at distinct
-// positions along the first file's normal is one stack (every file, label
-// ""). One that repeats positions is split by the first attribute, in the
-// order EchoNumbers, EchoTime, TemporalPositionIdentifier, TriggerTime,
-// DiffusionBValue, ImageType, AcquisitionNumber, whose values cut it into
-// two or more stacks of at least two images each, none repeating a
+// positions along the first image's normal is one stack (every image,
+// label ""). One that repeats positions is split by the first attribute, in
+// the order EchoNumbers, EchoTime, TemporalPositionIdentifier, TriggerTime,
+// DiffusionBValue, StackID, ImageType, AcquisitionNumber, whose values cut
+// it into two or more stacks of at least two images each, none repeating a
 // position; the stacks are ordered by that value (as numbers where every
 // value is one; an absent value first). When no attribute does, the series
 // is left as one stack (whose reading then fails on the repeated position).
-// Files are the unit: frames of one file stay together.
-std::vector<DicomStack> SplitDicomStacks(std::span<const StackFile> files);
+std::vector<DicomStack> SplitDicomStacks(std::span<const StackImage> images);
 
 }  // namespace vpm

@@ -19,11 +19,11 @@ using ::vpm::testing::DicomSliceSpec;
 using ::vpm::testing::MakeTempDir;
 using ::vpm::testing::WriteDicomSlice;
 
-// Axial files at z = 0, 2, 4, ... mm, each with the attributes `a`.
-std::vector<StackFile> AxialFiles(int count, const DicomStackAttributes& a) {
-  std::vector<StackFile> files;
+// Axial images at z = 0, 2, 4, ... mm, each with the attributes `a`.
+std::vector<StackImage> AxialFiles(int count, const DicomStackAttributes& a) {
+  std::vector<StackImage> files;
   for (int k = 0; k < count; ++k) {
-    files.push_back({.attributes = a, .positions_mm = {glm::dvec3(0.0, 0.0, 2.0 * k)}});
+    files.push_back({.attributes = a, .position_mm = glm::dvec3(0.0, 0.0, 2.0 * k)});
   }
   return files;
 }
@@ -37,36 +37,36 @@ std::vector<std::string> Labels(const std::vector<DicomStack>& stacks) {
 TEST(SplitDicomStacks, DistinctPositionsAreOneStackWhateverTheAttributesSay) {
   // A sequential CT numbers each rotation's images as an acquisition of its
   // own: nothing repeats, so nothing is split.
-  std::vector<StackFile> files = AxialFiles(6, {});
+  std::vector<StackImage> files = AxialFiles(6, {});
   for (size_t f = 0; f < files.size(); ++f) {
     files[f].attributes.acquisition_number = std::to_string(f / 2 + 1);
   }
   const std::vector<DicomStack> stacks = SplitDicomStacks(files);
   ASSERT_EQ(stacks.size(), 1u);
   EXPECT_EQ(stacks[0].label, "");
-  EXPECT_EQ(stacks[0].files, (std::vector<size_t>{0, 1, 2, 3, 4, 5}));
+  EXPECT_EQ(stacks[0].images, (std::vector<size_t>{0, 1, 2, 3, 4, 5}));
 }
 
 TEST(SplitDicomStacks, TwoEchoesAtTheSamePositionsAreTwoStacksInEchoOrder) {
   // Echo 2 listed first, and with EchoNumbers as text ("10" sorts before
   // "2"): the order is numeric.
-  std::vector<StackFile> files = AxialFiles(3, {.echo_numbers = "10", .echo_time = "4.6"});
-  for (StackFile f : AxialFiles(3, {.echo_numbers = "2", .echo_time = "2.3"})) files.push_back(f);
+  std::vector<StackImage> files = AxialFiles(3, {.echo_numbers = "10", .echo_time = "4.6"});
+  for (StackImage f : AxialFiles(3, {.echo_numbers = "2", .echo_time = "2.3"})) files.push_back(f);
   const std::vector<DicomStack> stacks = SplitDicomStacks(files);
   EXPECT_EQ(Labels(stacks), (std::vector<std::string>{"EchoNumbers 2", "EchoNumbers 10"}));
   ASSERT_EQ(stacks.size(), 2u);
-  EXPECT_EQ(stacks[0].files, (std::vector<size_t>{3, 4, 5}));
-  EXPECT_EQ(stacks[1].files, (std::vector<size_t>{0, 1, 2}));
+  EXPECT_EQ(stacks[0].images, (std::vector<size_t>{3, 4, 5}));
+  EXPECT_EQ(stacks[1].images, (std::vector<size_t>{0, 1, 2}));
 }
 
 TEST(SplitDicomStacks, TheFirstAttributeThatSeparatesThePositionsSplits) {
   // Three phases of a dynamic series, every image of echo 1 and of one
   // ImageType: EchoNumbers and ImageType cannot split it, the phase can.
-  std::vector<StackFile> files;
+  std::vector<StackImage> files;
   for (const char* phase : {"3", "1", "2"}) {
-    for (StackFile f : AxialFiles(4, {.echo_numbers = "1",
-                                     .temporal_position = phase,
-                                     .image_type = "ORIGINAL\\PRIMARY\\M"})) {
+    for (StackImage f : AxialFiles(4, {.echo_numbers = "1",
+                                      .temporal_position = phase,
+                                      .image_type = "ORIGINAL\\PRIMARY\\M"})) {
       files.push_back(f);
     }
   }
@@ -76,7 +76,7 @@ TEST(SplitDicomStacks, TheFirstAttributeThatSeparatesThePositionsSplits) {
                                 "TemporalPositionIdentifier 3"}));
   // Dixon: water and fat told apart by ImageType alone, in text order.
   files = AxialFiles(2, {.image_type = "DERIVED\\PRIMARY\\DIXON\\WATER"});
-  for (StackFile f : AxialFiles(2, {.image_type = "DERIVED\\PRIMARY\\DIXON\\FAT"})) {
+  for (StackImage f : AxialFiles(2, {.image_type = "DERIVED\\PRIMARY\\DIXON\\FAT"})) {
     files.push_back(f);
   }
   EXPECT_EQ(Labels(SplitDicomStacks(files)),
@@ -86,7 +86,7 @@ TEST(SplitDicomStacks, TheFirstAttributeThatSeparatesThePositionsSplits) {
 
 TEST(SplitDicomStacks, NoSplitThatLeavesARepeatOrALoneImage) {
   // A repeated file: same attributes, one position twice.
-  std::vector<StackFile> files = AxialFiles(4, {.echo_numbers = "1"});
+  std::vector<StackImage> files = AxialFiles(4, {.echo_numbers = "1"});
   files.push_back(files[2]);
   ASSERT_EQ(SplitDicomStacks(files).size(), 1u);
   // The repeat differs only in AcquisitionNumber: a stack of one image is
@@ -95,12 +95,12 @@ TEST(SplitDicomStacks, NoSplitThatLeavesARepeatOrALoneImage) {
   ASSERT_EQ(SplitDicomStacks(files).size(), 1u);
   // Echoes that still repeat a position within one echo.
   files = AxialFiles(3, {.echo_numbers = "1"});
-  for (StackFile f : AxialFiles(3, {.echo_numbers = "2"})) files.push_back(f);
+  for (StackImage f : AxialFiles(3, {.echo_numbers = "2"})) files.push_back(f);
   files.push_back(files[0]);
   EXPECT_EQ(SplitDicomStacks(files).size(), 1u);
   // A NaN position repeats nothing and splits nothing, without a crash.
   files = AxialFiles(3, {});
-  files[1].positions_mm[0].z = std::nan("");
+  files[1].position_mm.z = std::nan("");
   EXPECT_EQ(SplitDicomStacks(files).size(), 1u);
   EXPECT_EQ(SplitDicomStacks({}).size(), 1u);
 }
@@ -108,12 +108,12 @@ TEST(SplitDicomStacks, NoSplitThatLeavesARepeatOrALoneImage) {
 TEST(SplitDicomStacks, PositionsAreComparedAlongTheSliceNormal) {
   // Sagittal slices (normal along x) at x = 0, 2, 4, all at the same z, of
   // one echo: distinct positions, one stack; two echoes: two.
-  std::vector<StackFile> files;
+  std::vector<StackImage> files;
   for (const char* echo : {"1", "2"}) {
     for (int k = 0; k < 3; ++k) {
       files.push_back({.attributes = {.echo_numbers = echo},
                        .normal_lps = glm::dvec3(1.0, 0.0, 0.0),
-                       .positions_mm = {glm::dvec3(2.0 * k, 5.0, 7.0)}});
+                       .position_mm = glm::dvec3(2.0 * k, 5.0, 7.0)});
     }
   }
   EXPECT_EQ(SplitDicomStacks(std::span(files).first(3)).size(), 1u);
@@ -199,6 +199,52 @@ TEST(DicomSeriesReader, ARepeatNoAttributeExplainsIsStillRefusedWithAReason) {
   EXPECT_EQ(v.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(v.status().message().find("duplicate slice position"), std::string::npos) << v.status();
   EXPECT_NE(v.status().message().find("no echo, phase, b-value"), std::string::npos) << v.status();
+}
+
+// One Enhanced file of two echoes at z = 0 and 2 mm: frames 0 and 1 of
+// EffectiveEchoTime 4.6 ms, frames 2 and 3 of 2.3 ms, in per-frame
+// MREchoSequence items; pixel n of frame f stores 100 f + n.
+std::filesystem::path WriteEnhancedTwoEchoes() {
+  const auto dir = MakeTempDir();
+  DicomSliceSpec s;
+  DcmFileFormat file;
+  DcmDataset& ds = *file.getDataset();
+  const std::vector<testing::EnhancedFrame> frames = {
+      {{0, 0, 0.0}}, {{0, 0, 2.0}}, {{0, 0, 0.0}}, {{0, 0, 2.0}}};
+  EXPECT_TRUE(testing::FillEnhancedCt(ds, s, frames, false));
+  for (int f = 0; f < 4; ++f) {
+    DcmItem *group = nullptr, *echo = nullptr;
+    EXPECT_TRUE(ds.findAndGetSequenceItem(DCM_PerFrameFunctionalGroupsSequence, group, f).good());
+    EXPECT_TRUE(group->findOrCreateSequenceItem(DCM_MREchoSequence, echo, -2).good());
+    echo->putAndInsertFloat64(DCM_EffectiveEchoTime, f < 2 ? 4.6 : 2.3);
+  }
+  std::vector<Uint16> pixels;
+  for (int f = 0; f < 4; ++f) {
+    for (int n = 0; n < s.rows * s.columns; ++n) pixels.push_back(static_cast<Uint16>(100 * f + n));
+  }
+  ds.putAndInsertUint16Array(DCM_PixelData, pixels.data(), pixels.size());
+  EXPECT_TRUE(file.saveFile((dir / "enhanced.dcm").c_str(), EXS_LittleEndianExplicit).good());
+  return dir;
+}
+
+TEST(DicomSeriesReader, SplitsTheFramesOfOneEnhancedFileByTheirEchoTime) {
+  const auto dir = WriteEnhancedTwoEchoes();
+  const auto listed = ListDicomSeries(dir, {});
+  ASSERT_TRUE(listed.ok()) << listed.status();
+  ASSERT_EQ(listed->size(), 2u);
+  EXPECT_EQ((*listed)[0].stack, "EchoTime 2.3");
+  EXPECT_EQ((*listed)[0].frames, (std::vector<std::vector<int64_t>>{{2, 3}}));
+  EXPECT_EQ((*listed)[1].frames, (std::vector<std::vector<int64_t>>{{0, 1}}));
+
+  const auto first = ReadDicomSeries(dir, {});
+  ASSERT_TRUE(first.ok()) << first.status();
+  EXPECT_EQ(first->dims(), (std::array<int64_t, 3>{4, 3, 2}));
+  EXPECT_FLOAT_EQ(first->At(0, 0, 0), 200.0f - 1024.0f);  // frame 2
+  EXPECT_FLOAT_EQ(first->At(1, 0, 1), 301.0f - 1024.0f);  // frame 3
+  const auto second = ReadDicomSeries(dir, {}, {.series = "2"});
+  ASSERT_TRUE(second.ok()) << second.status();
+  EXPECT_FLOAT_EQ(second->At(0, 0, 0), 0.0f - 1024.0f);
+  EXPECT_FLOAT_EQ(second->At(1, 0, 1), 101.0f - 1024.0f);
 }
 
 }  // namespace
