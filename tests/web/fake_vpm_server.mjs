@@ -75,16 +75,33 @@ export async function startFakeServer(source, { tls = null, users = {} } = {}) {
       callback(e);
     }
   };
+  // A real 4 x 4 grey JPEG, so that the page draws it; a comment segment
+  // after SOI holds the frame number, so that frames differ.
+  const kGreyJpeg = Buffer.from(
+    '/9j/4AAQSkZJRgABAQAAAQABAAD/2wBDABALDA4MChAODQ4SERATGCgaGBYWGDEjJR0oOjM9PDkzODdASFxOQERXRTc4' +
+    'UG1RV19iZ2hnPk1xeXBkeFxlZ2P/wAALCAAEAAQBAREA/8QAHwAAAQUBAQEBAQEAAAAAAAAAAAECAwQFBgcICQoL/8QA' +
+    'tRAAAgEDAwIEAwUFBAQAAAF9AQIDAAQRBRIhMUEGE1FhByJxFDKBkaEII0KxwRVS0fAkM2JyggkKFhcYGRolJicoKSo0' +
+    'NTY3ODk6Q0RFRkdISUpTVFVWV1hZWmNkZWZnaGlqc3R1dnd4eXqDhIWGh4iJipKTlJWWl5iZmqKjpKWmp6ipqrKztLW2' +
+    't7i5usLDxMXGx8jJytLT1NXW19jZ2uHi4+Tl5ufo6erx8vP09fb3+Pn6/9oACAEBAAA/ACv/2Q==', 'base64');
+  const jpeg = (n) => Buffer.concat([kGreyJpeg.subarray(0, 2),
+                                     Buffer.from([0xff, 0xfe, 0x00, 0x03, n & 0xff]),
+                                     kGreyJpeg.subarray(2)]);
   const frame = (n, sequence, extra = {}) => ({
-    image: Buffer.from([0xff, 0xd8, n & 0xff, 0xff, 0xd9]), encoding: 'ENCODING_JPEG', width: 4,
-    height: 4, last_sequence: sequence, frame_number: n, timings: { total_ms: 1 }, ...extra });
+    image: jpeg(n),
+    encoding: 'ENCODING_JPEG', width: 4, height: 4, last_sequence: sequence, frame_number: n,
+    timings: { total_ms: 1 }, ...extra });
 
   const cases = makeCases(grpc, users);
   const pacs = makePacs(grpc, users, (id, auth) => (owners.has(id) && owners.get(id) === auth
     ? (loaded.get(sessionVolumes.get(id)) ?? volume).source : null));
   pacs.record = record;
+  // A folder (a ZIP) comes with what a real reader says of a folder of
+  // several series; a single file with nothing.
+  const folderNotes = ['the folder holds 2 series; read series 2 (1.2.3.4, CT "axial", 4 ' +
+                       'slices); ?series=N or ?series=UID picks another'];
   const uploads = makeUploads(grpc, users, (name, owner) => remember({
-    ...volume, volume_id: `vol-${++next}`, source: `upload:${name}`, owner }));
+    ...volume, volume_id: `vol-${++next}`, source: `upload:${name}`, owner,
+    notes: name.endsWith('.zip') ? folderNotes : [] }));
   const server = new grpc.Server();
   server.addService(Vpm.service, {
     ...cases.handlers(unary, owners, () => `ses-${++next}`),
@@ -178,8 +195,7 @@ export async function startFakeServer(source, { tls = null, users = {} } = {}) {
         call.write(frame(++frames, sequence, {
           max_displacement_mm: event.drag ? 1.5 : 0,
           slices: slices.map((spec, i) => ({
-            view: spec.view, image: Buffer.from([0xff, 0xd8, i, 0xff, 0xd9]),
-            encoding: 'ENCODING_JPEG', width: 3, height: 2,
+            view: spec.view, image: jpeg(i), encoding: 'ENCODING_JPEG', width: 4, height: 4,
             geometry: { orientation: spec.orientation, pixel_mm: 1, offset_mm: spec.at_mm ?? 5,
                         min_offset_mm: 0, max_offset_mm: 10, origin_mm: { x: 0, y: 0, z: 5 },
                         step_u_mm: { x: 1, y: 0, z: 0 }, step_v_mm: { x: 0, y: 1, z: 0 } } })) }));

@@ -243,7 +243,8 @@ test('Gateway_FramesCarryTheSlicesAskedForAfterTheImage', async () => {
   const f = await t.next((m) => m.type === 'frame' && m.header.slices.length === 2);
   assert.equal(f.header.bytes, f.image.length);
   assert.deepEqual(f.header.slices.map((s) => s.view), ['axial', 'coronal']);
-  assert.deepEqual(f.slices.map((b) => b[2]), [0, 1]);  // each slice's own bytes, in order
+  // Each slice's own bytes, in order (the stand-in's JPEG comment at byte 6).
+  assert.deepEqual(f.slices.map((b) => b[6]), [0, 1]);
   assert.equal(f.rest, 0);
   assert.equal(f.header.slices[0].geometry.offset_mm, 4);
   assert.deepEqual(f.header.slices[0].geometry.step_u_mm, [1, 0, 0]);

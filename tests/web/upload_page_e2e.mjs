@@ -7,7 +7,8 @@
 //     server as NAME.nii.gz and opens as a volume of the list does (frames);
 //  3. a folder picked with Folder... arrives as FOLDER.zip that Python reads,
 //     its hidden file left out; files dropped on the page show the overlay
-//     and arrive as a ZIP;
+//     and arrive as a ZIP; the notes the server's reader gives the volume
+//     (here: which series of the folder) are on the message line;
 //  4. a file over the gateway's cap is refused in the page, nothing sent; the
 //     server's INVALID_ARGUMENT reaches the message line in words;
 //  5. Cancel while the server reads cancels the server's call.
@@ -62,6 +63,7 @@ async function main() {
     await stateIs(page, ['opened']);
     await page.waitForFunction(() => window.vpmViewer.framesReceived > 0);
     assert.equal(await page.evaluate(() => window.vpmViewer.volume.source), 'upload:DOE^JOHN.nii.gz');
+    assert.equal(await page.textContent('#message'), '', 'a volume read without notes says nothing');
     assert.equal(fake.uploads.list.at(-1).header.file_name, 'DOE^JOHN.nii.gz');
 
     step('a folder through Folder..., and files dropped on the page');
@@ -87,6 +89,10 @@ async function main() {
     await page.waitForFunction(() => window.vpmViewer.uploads.lastVolume?.source === 'upload:IM1.zip',
                                null, { timeout: 20000 });
     await stateIs(page, ['opened'], 60000);
+    // What the reader chose from the folder is on the message line.
+    await page.waitForFunction(() => document.getElementById('message').textContent ===
+      'Read from upload:IM1.zip: the folder holds 2 series; read series 2 (1.2.3.4, CT ' +
+      '"axial", 4 slices); ?series=N or ?series=UID picks another.', null, { timeout: 20000 });
 
     step('refusals: over the cap in the page, the server\'s in words');
     const sent = fake.uploads.list.length;

@@ -20,6 +20,7 @@ import { ServerFiles } from './server_files.js';
 import { StudiesPanel } from './studies_panel.js';
 import { installUndoKeys } from './undo_keys.js';
 import { UploadPanel } from './upload_panel.js';
+import { volumeNotesText } from './volume_notes.js';
 import { fillShortcutList, installViewKeys } from './view_keys.js';
 import { kWindowPresets, presetNameOf, windowPreset } from './window_presets.js';
 
@@ -332,7 +333,7 @@ const handlers = {
     state.lastGrabMm = null;
     $('refine-grab').disabled = true;
     setServerState('up', `vpm-server ${state.gatewayServer ?? ''}`);
-    showMessage('');
+    showMessage(volumeNotesText(m.volume));  // what the reader corrected or chose, else nothing
     showMesh();
     studies.opened(m.volume);
     uploads.opened(m.volume);
