@@ -267,6 +267,10 @@ Status InteractConnection::ResolveSession() {
                session.session_id().c_str(), options_.volume_source.c_str(),
                volume.volume_id().c_str(), session.case_id().empty() ? "" : ", case ",
                session.case_id().c_str());
+  // What the reader corrected or chose (a gantry tilt, which series or echo).
+  for (const std::string& note : volume.notes()) {
+    std::fprintf(stderr, "vpm-view: note: %s\n", note.c_str());
+  }
   std::lock_guard lock(mutex_);
   state_.volume = volume;
   state_.session_id = session.session_id();
