@@ -149,7 +149,8 @@ void AddVolumeInfoCommand(CLI::App* volume, int* exit_code) {
     if (info_args->json) {
       nlohmann::json json = VolumeInfoJson(*v);
       if (!series.empty()) json["dicom_series"] = SeriesJson(series);
-      std::cout << json.dump(2) << "\n";
+      // A note may name a file whose name is not UTF-8: replaced, never thrown.
+      std::cout << json.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
     } else {
       PrintInfo(*v);
       PrintSeries(series);

@@ -7,6 +7,9 @@
 #include <dcmtk/dcmdata/dcostrmb.h>
 #include <dcmtk/dcmdata/dctk.h>
 
+#include "server/common/valid_utf8.h"
+#include "server/io/dicom_text.h"
+
 namespace vpm {
 namespace {
 
@@ -14,6 +17,37 @@ std::string NewUid() {
   char uid[100];
   dcmGenerateUniqueIdentifier(uid, SITE_INSTANCE_UID_ROOT);
   return uid;
+}
+
+bool IsAscii(const std::string& text) {
+  return std::none_of(text.begin(), text.end(), [](char c) { return (c & 0x80) != 0; });
+}
+
+// The export's own text (a description the user typed) is UTF-8. Where it
+// is not ASCII the dataset is declared ISO_IR 192 and the source's copied
+// text made UTF-8 too: converted from the set the source declares (DCMTK),
+// or, none declared, read as Latin-1 where it is not UTF-8 (ValidUtf8).
+// Otherwise the source's set is kept as copied.
+Status DeclareUtf8ForText(DcmDataset& ds, const DicomOrigin* origin, const std::string& text) {
+  if (IsAscii(text)) return absl::OkStatus();
+  ConvertDicomTextToUtf8(ds);
+  OFString charset;
+  if (ds.findAndGetOFStringArray(DCM_SpecificCharacterSet, charset).good() && !charset.empty() &&
+      charset != "ISO_IR 192") {
+    return absl::InvalidArgumentError(
+        StrCat("series_description: not ASCII, and the source's character set '",
+               std::string_view(charset.c_str(), std::min<size_t>(charset.size(), 64)),
+               "' cannot be converted to UTF-8 to hold it; use ASCII"));
+  }
+  if (origin != nullptr && charset.empty()) {  // none declared: copied as stored
+    for (const auto& [tag, value] : origin->attributes) {
+      const DcmTagKey key(static_cast<Uint16>(tag >> 16), static_cast<Uint16>(tag & 0xffff));
+      if (!IsAscii(value) && ds.tagExists(key)) {
+        RETURN_IF_ERROR(PutDicomString(ds, key, ValidUtf8(value)));
+      }
+    }
+  }
+  return PutDicomString(ds, DCM_SpecificCharacterSet, "ISO_IR 192");
 }
 
 }  // namespace
@@ -103,6 +137,7 @@ Status PutCommonModules(DcmDataset& ds, const DicomOrigin* origin, const DicomEx
   RETURN_IF_ERROR(PutDicomString(ds, DCM_Modality, modality));
   RETURN_IF_ERROR(PutDicomString(ds, DCM_SeriesInstanceUID, series_uid));
   RETURN_IF_ERROR(PutDicomString(ds, DCM_SeriesNumber, std::to_string(series_number)));
+  RETURN_IF_ERROR(DeclareUtf8ForText(ds, origin, series_description));
   RETURN_IF_ERROR(PutDicomString(ds, DCM_SeriesDescription, series_description));
   RETURN_IF_ERROR(PutDicomString(ds, DCM_InstanceNumber, std::to_string(number)));
   return absl::OkStatus();

@@ -38,7 +38,9 @@ DicomExportIds MakeDicomExportIds(const DicomOrigin* origin);
 // the general series module; `number` is the InstanceNumber. `image_plane`:
 // an image placed in the patient (CT, MR), which also takes the frame of
 // reference and the acquisition attributes; a secondary capture takes
-// neither.
+// neither. A `series_description` that is not ASCII (UTF-8) makes the
+// dataset ISO_IR 192, the source's text converted to it; InvalidArgument when
+// the source's declared set cannot be converted.
 Status PutCommonModules(DcmDataset& ds, const DicomOrigin* origin, const DicomExportIds& ids,
                         bool image_plane, const char* sop_class_uid, const std::string& modality,
                         const std::string& series_uid, int64_t series_number,

@@ -22,8 +22,9 @@
 #include "server/common/prefix_status.h"
 #include "server/io/check_dicom_structure.h"
 #include "server/io/decode_jpeg2000.h"
-#include "server/io/jpeg2000_frames.h"
+#include "server/io/dicom_text.h"
 #include "server/io/header_text.h"
+#include "server/io/jpeg2000_frames.h"
 #include "server/io/voxel_type.h"
 
 namespace vpm {
@@ -230,11 +231,8 @@ Status ReadRescale(const FrameItems& items, PixelFormat& f) {
   return absl::OkStatus();
 }
 
-std::string GetString(DcmItem& ds, const DcmTagKey& tag) {
-  OFString value;
-  if (ds.findAndGetOFStringArray(tag, value).good()) return value.c_str();
-  return "";
-}
+// Text as UTF-8 (after ConvertDicomTextToUtf8; dicom_text.h).
+std::string GetString(DcmItem& ds, const DcmTagKey& tag) { return DicomText(ds, tag); }
 
 // Identity fields, and whether the image is one that never belongs in a
 // volume: scanners put localizers (scouts) and screenshots beside the slices,
@@ -461,6 +459,7 @@ Result<std::vector<DicomSlice>> ParseDicomFrames(std::span<const uint8_t> bytes,
   DcmDataset& ds = *file->getDataset();
   DicomSlice base;
   if (!ds.tagExists(DCM_PixelData)) return std::vector<DicomSlice>{base};  // not an image
+  ConvertDicomTextToUtf8(ds);
   base.is_image = true;
   ReadIdentity(ds, base);
   if (!base.not_a_slice_reason.empty()) return std::vector<DicomSlice>{base};

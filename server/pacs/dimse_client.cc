@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "server/common/prefix_status.h"
+#include "server/io/dicom_text.h"
 
 namespace vpm::pacs {
 namespace {
@@ -39,11 +40,9 @@ Status FromCondition(const OFCondition& cond, const PacsEndpoint& e, const std::
   return absl::UnavailableError(StrCat(head, " (is the PACS running and reachable?)"));
 }
 
-std::string Text(DcmItem& ds, const DcmTagKey& key) {
-  OFString value;
-  if (ds.findAndGetOFStringArray(key, value).bad()) return {};
-  return std::string(value.c_str(), value.size());
-}
+// An answer's text as UTF-8 (dicom_text.h): a study list must never carry
+// what a protobuf string refuses (a Latin-1 PACS's "M\xfcller").
+std::string Text(DcmItem& ds, const DcmTagKey& key) { return DicomText(ds, key); }
 
 int64_t Number(DcmItem& ds, const DcmTagKey& key, int64_t absent) {
   const std::string text = Text(ds, key);
@@ -213,6 +212,7 @@ Status FromDimseStatus(Uint16 status, const PacsEndpoint& e, const std::string& 
 }
 
 StudySummary StudyFromAnswer(DcmDataset& ds) {
+  ConvertDicomTextToUtf8(ds);
   StudySummary s;
   s.study_uid = Text(ds, DCM_StudyInstanceUID);
   s.patient_name = Text(ds, DCM_PatientName);
@@ -233,6 +233,7 @@ StudySummary StudyFromAnswer(DcmDataset& ds) {
 }
 
 SeriesSummary SeriesFromAnswer(DcmDataset& ds) {
+  ConvertDicomTextToUtf8(ds);
   return {.series_uid = Text(ds, DCM_SeriesInstanceUID),
           .modality = Text(ds, DCM_Modality),
           .description = Text(ds, DCM_SeriesDescription),

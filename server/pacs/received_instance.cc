@@ -5,15 +5,15 @@
 
 #include <cstdlib>
 
+#include "server/io/dicom_text.h"
 #include "server/pacs/study_query.h"
 
 namespace vpm::pacs {
 namespace {
 
+// UTF-8 (dicom_text.h), trailing padding removed.
 std::string ReceivedText(DcmItem& ds, const DcmTagKey& key) {
-  OFString value;
-  if (ds.findAndGetOFStringArray(key, value).bad()) return {};
-  std::string text(value.c_str(), value.size());
+  std::string text = DicomText(ds, key);
   while (!text.empty() && (text.back() == ' ' || text.back() == '\0')) text.pop_back();
   return text;
 }
@@ -26,6 +26,7 @@ Result<ReceivedInstance> ReadReceivedInstance(const std::filesystem::path& path)
   const OFCondition read = file.loadFile(path.c_str(), EXS_Unknown, EGL_noChange, 4096);
   if (read.bad()) return absl::InvalidArgumentError("the instance does not parse as DICOM");
   DcmDataset& ds = *file.getDataset();
+  ConvertDicomTextToUtf8(ds);  // a modality's Latin-1 names, listed as UTF-8
   ReceivedInstance out{.study_uid = ReceivedText(ds, DCM_StudyInstanceUID),
                        .series_uid = ReceivedText(ds, DCM_SeriesInstanceUID),
                        .sop_uid = ReceivedText(ds, DCM_SOPInstanceUID),

@@ -5,6 +5,7 @@
 #include <tuple>
 
 #include "proto/render_tf_convert.h"
+#include "server/common/valid_utf8.h"
 #include "server/raycast/render_preset_from_tf.h"
 
 namespace vpm::service {
@@ -42,13 +43,15 @@ void FillVolumeInfo(const VolumeEntry& entry, v3::VolumeInfo* info) {
   info->clear_landmarks();
   for (const Landmark& l : volume.landmarks()) {
     v3::Landmark* out = info->add_landmarks();
-    out->set_name(l.name);
+    // Names, descriptions and notes come from files (a file name in a note,
+    // a landmark named in Latin-1): valid UTF-8, as a proto string must be.
+    out->set_name(ValidUtf8(l.name));
     *out->mutable_position_mm() = PointToApi(l.position_mm, g);
-    out->set_description(l.description);
+    out->set_description(ValidUtf8(l.description));
   }
   info->set_bytes(entry.bytes);
   info->set_voxel_encoding(VoxelEncodingName(volume.encoding()));
-  for (const std::string& note : volume.notes()) info->add_notes(note);
+  for (const std::string& note : volume.notes()) info->add_notes(ValidUtf8(note));
   info->set_sessions(entry.sessions.load());
   info->set_owner(entry.owner);
 }

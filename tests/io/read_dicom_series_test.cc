@@ -241,6 +241,49 @@ TEST(DicomSeriesReader, ReadsTheLargestCtSeriesAndPicksOthersOnRequest) {
               "no series \"0\"");
 }
 
+// Text is UTF-8 whatever the file's character set: converted from a
+// declared ISO 8859-1 (ISO_IR 100) or 8859-2 (ISO_IR 101), read as Latin-1
+// where none is declared, kept where it is UTF-8 (ISO_IR 192).
+TEST(DicomSeriesReader, DescriptionsAreUtf8WhateverTheFilesCharacterSet) {
+  const std::string utf8 =
+      "Sch\xc3\xa4"
+      "del";  // Schädel
+  struct Case {
+    const char* charset;
+    std::string description;
+  };
+  const Case cases[] = {{"ISO_IR 100",
+                         "Sch\xe4"
+                         "del"},
+                        {"",
+                         "Sch\xe4"
+                         "del"},
+                        {"ISO_IR 192", utf8},
+                        {"ISO_IR 101",
+                         "\xa3\xf3"
+                         "d\xbc"}};
+  const auto dir = MakeTempDir();
+  for (int n = 0; n < 4; ++n) {
+    DicomSliceSpec s;
+    s.series_uid = "1.2.3.4." + std::to_string(n + 1);
+    s.series_number = n + 1;
+    s.series_description = cases[n].description;
+    if (*cases[n].charset != 0) s.more = {{DCM_SpecificCharacterSet, cases[n].charset}};
+    for (int k = 0; k < 2; ++k) {
+      s.position_mm = glm::dvec3(0.0, 0.0, k);
+      ASSERT_TRUE(WriteDicomSlice(dir / ("s" + std::to_string(n) + "_" + std::to_string(k)), s));
+    }
+  }
+  const auto listed = ListDicomSeries(dir, {});
+  ASSERT_TRUE(listed.ok()) << listed.status();
+  ASSERT_EQ(listed->size(), 4u);
+  for (int n = 0; n < 3; ++n) EXPECT_EQ((*listed)[n].description, utf8) << (*listed)[n].uid;
+  // Latin-2 (ISO_IR 101) is not Latin-1: converted, not guessed ("£ód¼").
+  EXPECT_EQ((*listed)[3].description,
+            "\xc5\x81\xc3\xb3"
+            "d\xc5\xba");  // Łódź
+}
+
 TEST(DicomSeriesReader, NeverStacksLocalizersOrSecondaryCaptures) {
   DicomSliceSpec s;
   const auto dir = WriteSeries(s, 3, 1.0, glm::dvec3(0.0));

@@ -165,6 +165,44 @@ TEST(WriteDerivedSeries, WithoutADicomSourceTheStudyIsNewAndThePatientEmpty) {
   std::filesystem::remove_all(dir);
 }
 
+// A description beyond ASCII (the user's, UTF-8) makes the series UTF-8:
+// the source's Latin-1 name converted from its declared ISO_IR 100, or read
+// as Latin-1 where the source declares nothing; an ASCII description keeps
+// the source's set and bytes as they were.
+TEST(WriteDerivedSeries, ADescriptionBeyondAsciiMakesTheSeriesUtf8) {
+  const Volume volume = ObliqueVolume(500.0f);
+  const std::string described = "Niere links \xe2\x80\x93 Plan";  // an en dash
+  const std::string name_utf8 = "M\xc3\xbcller^J\xc3\xb6rg";
+  for (const bool declared : {true, false}) {
+    DicomOrigin origin = Origin("CT");
+    origin.attributes[1].second = "M\xfcller^J\xf6rg";  // PatientName, Latin-1
+    if (declared) origin.attributes.insert(origin.attributes.begin(), {0x00080005, "ISO_IR 100"});
+    for (const std::string& description : {described, std::string("ascii plan")}) {
+      auto files =
+          WriteDerivedSeries(volume, &origin, MakeDicomExportIds(&origin), {description, "t"});
+      ASSERT_TRUE(files.ok()) << files.status();
+      const auto dir = WriteAll(*files, declared ? "utf8-declared" : "utf8-undeclared");
+      DcmFileFormat first;
+      ASSERT_TRUE(first.loadFile((dir / "000001.dcm").c_str()).good());
+      OFString charset, name, series;
+      first.getDataset()->findAndGetOFStringArray(DCM_SpecificCharacterSet, charset);
+      first.getDataset()->findAndGetOFStringArray(DCM_PatientName, name);
+      first.getDataset()->findAndGetOFStringArray(DCM_SeriesDescription, series);
+      if (description == described) {
+        EXPECT_EQ(std::string(charset.c_str()), "ISO_IR 192") << declared;
+        EXPECT_EQ(std::string(name.c_str()), name_utf8) << declared;
+        EXPECT_EQ(std::string(series.c_str()), described);
+        std::string report;
+        EXPECT_EQ(DciodvfyErrors(dir / "000001.dcm", &report), 0) << report;
+      } else {
+        EXPECT_EQ(std::string(charset.c_str()), declared ? "ISO_IR 100" : "") << declared;
+        EXPECT_EQ(std::string(name.c_str()), "M\xfcller^J\xf6rg") << declared;
+      }
+      std::filesystem::remove_all(dir);
+    }
+  }
+}
+
 TEST(WriteSecondaryCapture, HoldsTheFrameAsRgbInTheStudy) {
   const int w = 6, h = 4;
   std::vector<uint8_t> rgba(w * h * 4);

@@ -27,7 +27,9 @@ import numpy  # noqa: E402
 STUDY = '1.2.826.0.1.3680043.8.498.77030'
 CT_SERIES = STUDY + '.1'
 SR_SERIES = STUDY + '.9'
-PATIENT_NAME = 'DIMSE^TESTPATIENT'
+# Beyond ASCII: Orthanc answers C-FIND in its own character set (Latin-1 by
+# default), which vpm converts to UTF-8.
+PATIENT_NAME = 'DIMSE^TESTPATIENTÖ'
 PATIENT_ID = 'VPMPAT0077'
 BIRTH_DATE = '19650505'
 ORTHANC_PASSWORD = 'orthanc-pw-77e1a0'
@@ -83,8 +85,10 @@ def find_checks(h, t):
     studies = (found or {}).get('studies', [])
     t.check(len(studies) == 1 and studies[0]['study_uid'] == STUDY and
             studies[0]['patient_id'] == PATIENT_ID and studies[0]['patient_birth_date'] == BIRTH_DATE
+            and studies[0]['patient_name'] == PATIENT_NAME
             and set(studies[0]['modalities']) >= {'CT', 'SR'} and studies[0]['series_count'] == 2,
-            f'C-FIND by patient-name wildcard finds the study, CT and SR, 2 series ({err.strip()})')
+            f'C-FIND by patient-name wildcard finds the study, CT and SR, 2 series, the name in UTF-8 '
+            f'({(studies or [{}])[0].get("patient_name")!r}; {err.strip()})')
     found, _ = h.vpm_json('alice', 'pacs', 'search', '--endpoint', 'pacs', '--patient-id', PATIENT_ID,
                           '--study-date', '20240101-20241231', '--modality', 'CT', '--json')
     t.check([s['study_uid'] for s in (found or {}).get('studies', [])] == [STUDY],

@@ -16,6 +16,7 @@
 #include <dcmtk/dcmdata/dcdeftag.h>
 #include <dcmtk/dcmdata/dcfilefo.h>
 #include <dcmtk/dcmdata/dcuid.h>
+#include <algorithm>
 
 #include <cmath>
 #include <cstdio>
@@ -41,6 +42,11 @@ std::string Ds(double v) {
 std::string Ds3(double a, double b, double c) { return Ds(a) + "\\" + Ds(b) + "\\" + Ds(c); }
 
 void PutCommon(DcmDataset& ds, std::map<std::string, std::string>& flags) {
+  // A name beyond ASCII (the flags are UTF-8) is declared as such.
+  const std::string& name = flags["--patient-name"];
+  if (std::any_of(name.begin(), name.end(), [](char c) { return (c & 0x80) != 0; })) {
+    ds.putAndInsertString(DCM_SpecificCharacterSet, "ISO_IR 192");
+  }
   ds.putAndInsertString(DCM_StudyInstanceUID, flags["--study-uid"].c_str());
   ds.putAndInsertString(DCM_SeriesInstanceUID, flags["--series-uid"].c_str());
   ds.putAndInsertString(DCM_PatientName, flags["--patient-name"].c_str());
