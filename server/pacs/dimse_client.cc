@@ -320,6 +320,15 @@ Result<StudySearch> DimseClient::SearchStudies(const StudyQuery& query,
            {DCM_NumberOfStudyRelatedInstances, ""}}) {
     keys.putAndInsertString(key, value.c_str());
   }
+  // The keys are UTF-8 (they came through the API): a name beyond ASCII
+  // ("M\xc3\xbcller*") is matched only where the PACS knows their set.
+  const auto beyond_ascii = [](const std::string& v) {
+    return std::any_of(v.begin(), v.end(), [](char c) { return (c & 0x80) != 0; });
+  };
+  if (beyond_ascii(query.patient_name) || beyond_ascii(query.patient_id) ||
+      beyond_ascii(query.accession_number)) {
+    keys.putAndInsertString(DCM_SpecificCharacterSet, "ISO_IR 192");
+  }
   bool cut = false;
   ASSIGN_OR_RETURN(const std::vector<std::unique_ptr<DcmDataset>> answers,
                    Find(endpoint_, options_, keys, std::min(query.limit, options_.max_find_answers),

@@ -89,6 +89,10 @@ def find_checks(h, t):
             and set(studies[0]['modalities']) >= {'CT', 'SR'} and studies[0]['series_count'] == 2,
             f'C-FIND by patient-name wildcard finds the study, CT and SR, 2 series, the name in UTF-8 '
             f'({(studies or [{}])[0].get("patient_name")!r}; {err.strip()})')
+    found, err = h.vpm_json('alice', 'pacs', 'search', '--endpoint', 'pacs',
+                            '--patient-name', 'DIMSE^TESTPATIENTÖ*', '--json')
+    t.check([s['study_uid'] for s in (found or {}).get('studies', [])] == [STUDY],
+            f'C-FIND by a name beyond ASCII (the keys declared UTF-8) ({err.strip()})')
     found, _ = h.vpm_json('alice', 'pacs', 'search', '--endpoint', 'pacs', '--patient-id', PATIENT_ID,
                           '--study-date', '20240101-20241231', '--modality', 'CT', '--json')
     t.check([s['study_uid'] for s in (found or {}).get('studies', [])] == [STUDY],
