@@ -37,6 +37,13 @@ size_t SequenceLength(std::string_view text, size_t at) {
 
 }  // namespace
 
+bool IsAscii(std::string_view text) {
+  for (char c : text) {
+    if ((static_cast<uint8_t>(c) & 0x80) != 0) return false;
+  }
+  return true;
+}
+
 bool IsValidUtf8(std::string_view text) {
   for (size_t at = 0; at < text.size();) {
     const size_t length = SequenceLength(text, at);

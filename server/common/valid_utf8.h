@@ -20,4 +20,7 @@ std::string ValidUtf8(std::string_view text);
 // True when `text` is valid UTF-8 (the same rules).
 bool IsValidUtf8(std::string_view text);
 
+// True when every byte of `text` is ASCII (under 0x80).
+bool IsAscii(std::string_view text);
+
 }  // namespace vpm

@@ -19,10 +19,6 @@ std::string NewUid() {
   return uid;
 }
 
-bool IsAscii(const std::string& text) {
-  return std::none_of(text.begin(), text.end(), [](char c) { return (c & 0x80) != 0; });
-}
-
 // The export's own text (a description the user typed) is UTF-8. Where it
 // is not ASCII the dataset is declared ISO_IR 192 and the source's copied
 // text made UTF-8 too: converted from the set the source declares (DCMTK),

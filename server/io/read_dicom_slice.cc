@@ -231,32 +231,29 @@ Status ReadRescale(const FrameItems& items, PixelFormat& f) {
   return absl::OkStatus();
 }
 
-// Text as UTF-8 (after ConvertDicomTextToUtf8; dicom_text.h).
-std::string GetString(DcmItem& ds, const DcmTagKey& tag) { return DicomText(ds, tag); }
-
 // Identity fields, and whether the image is one that never belongs in a
 // volume: scanners put localizers (scouts) and screenshots beside the slices,
 // sometimes under the same SeriesInstanceUID.
 void ReadIdentity(DcmDataset& ds, DicomSlice& slice) {
-  slice.series_uid = GetString(ds, DCM_SeriesInstanceUID);
-  slice.series_description = GetString(ds, DCM_SeriesDescription);
-  slice.modality = GetString(ds, DCM_Modality);
-  slice.sop_class_uid = GetString(ds, DCM_SOPClassUID);
+  slice.series_uid = DicomText(ds, DCM_SeriesInstanceUID);
+  slice.series_description = DicomText(ds, DCM_SeriesDescription);
+  slice.modality = DicomText(ds, DCM_Modality);
+  slice.sop_class_uid = DicomText(ds, DCM_SOPClassUID);
   Sint32 number = 0;
   if (ds.findAndGetSint32(DCM_SeriesNumber, number).good()) slice.series_number = number;
-  slice.stack = {.echo_numbers = GetString(ds, DCM_EchoNumbers),
-                 .echo_time = GetString(ds, DCM_EchoTime),
-                 .temporal_position = GetString(ds, DCM_TemporalPositionIdentifier),
-                 .trigger_time = GetString(ds, DCM_TriggerTime),
-                 .diffusion_b_value = GetString(ds, DCM_DiffusionBValue),
-                 .image_type = GetString(ds, DCM_ImageType),
-                 .acquisition_number = GetString(ds, DCM_AcquisitionNumber)};
+  slice.stack = {.echo_numbers = DicomText(ds, DCM_EchoNumbers),
+                 .echo_time = DicomText(ds, DCM_EchoTime),
+                 .temporal_position = DicomText(ds, DCM_TemporalPositionIdentifier),
+                 .trigger_time = DicomText(ds, DCM_TriggerTime),
+                 .diffusion_b_value = DicomText(ds, DCM_DiffusionBValue),
+                 .image_type = DicomText(ds, DCM_ImageType),
+                 .acquisition_number = DicomText(ds, DCM_AcquisitionNumber)};
   // Secondary Capture Image Storage and its multi-frame variants (1.2.840.10008.5.1.4.1.1.7.x).
   constexpr std::string_view kSecondaryCapture = "1.2.840.10008.5.1.4.1.1.7";
   const std::string_view sop = slice.sop_class_uid;
   if (sop == kSecondaryCapture || sop.starts_with(StrCat(kSecondaryCapture, "."))) {
     slice.not_a_slice_reason = "secondary capture";
-  } else if (ToLowerAscii(GetString(ds, DCM_ImageType)).find("localizer") != std::string::npos) {
+  } else if (ToLowerAscii(DicomText(ds, DCM_ImageType)).find("localizer") != std::string::npos) {
     slice.not_a_slice_reason = "localizer";
   }
 }
@@ -285,7 +282,7 @@ void ReadFrameStack(DcmDataset& ds, int64_t frame, DicomStackAttributes& a) {
   for (const Field& field : kFields) {
     DcmItem* item = g.Find(field.sequence);
     if (item == nullptr) continue;
-    std::string value = GetString(*item, field.tag);
+    std::string value = DicomText(*item, field.tag);
     if (!value.empty()) a.*field.value = std::move(value);
   }
 }

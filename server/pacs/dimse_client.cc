@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "server/common/prefix_status.h"
+#include "server/common/valid_utf8.h"
 #include "server/io/dicom_text.h"
 
 namespace vpm::pacs {
@@ -40,12 +41,8 @@ Status FromCondition(const OFCondition& cond, const PacsEndpoint& e, const std::
   return absl::UnavailableError(StrCat(head, " (is the PACS running and reachable?)"));
 }
 
-// An answer's text as UTF-8 (dicom_text.h): a study list must never carry
-// what a protobuf string refuses (a Latin-1 PACS's "M\xfcller").
-std::string Text(DcmItem& ds, const DcmTagKey& key) { return DicomText(ds, key); }
-
 int64_t Number(DcmItem& ds, const DcmTagKey& key, int64_t absent) {
-  const std::string text = Text(ds, key);
+  const std::string text = DicomText(ds, key);
   return text.empty() ? absent : std::atoll(text.c_str());
 }
 
@@ -103,7 +100,7 @@ class Scu : public DcmSCU {
  private:
   Status Take(DcmDataset& ds) {
     RETURN_IF_ERROR(cancel->Check());
-    if (Text(ds, DCM_SeriesInstanceUID) != series_uid) {
+    if (DicomText(ds, DCM_SeriesInstanceUID) != series_uid) {
       return absl::InvalidArgumentError(
           StrCat("the PACS sent an instance of another series with series ", series_uid));
     }
@@ -214,14 +211,14 @@ Status FromDimseStatus(Uint16 status, const PacsEndpoint& e, const std::string& 
 StudySummary StudyFromAnswer(DcmDataset& ds) {
   ConvertDicomTextToUtf8(ds);
   StudySummary s;
-  s.study_uid = Text(ds, DCM_StudyInstanceUID);
-  s.patient_name = Text(ds, DCM_PatientName);
-  s.patient_id = Text(ds, DCM_PatientID);
-  s.patient_birth_date = Text(ds, DCM_PatientBirthDate);
-  s.study_date = Text(ds, DCM_StudyDate);
-  s.study_description = Text(ds, DCM_StudyDescription);
-  s.accession_number = Text(ds, DCM_AccessionNumber);
-  const std::string modalities = Text(ds, DCM_ModalitiesInStudy);
+  s.study_uid = DicomText(ds, DCM_StudyInstanceUID);
+  s.patient_name = DicomText(ds, DCM_PatientName);
+  s.patient_id = DicomText(ds, DCM_PatientID);
+  s.patient_birth_date = DicomText(ds, DCM_PatientBirthDate);
+  s.study_date = DicomText(ds, DCM_StudyDate);
+  s.study_description = DicomText(ds, DCM_StudyDescription);
+  s.accession_number = DicomText(ds, DCM_AccessionNumber);
+  const std::string modalities = DicomText(ds, DCM_ModalitiesInStudy);
   for (size_t at = 0; at < modalities.size();) {
     const size_t end = std::min(modalities.find('\\', at), modalities.size());
     if (end > at) s.modalities.push_back(modalities.substr(at, end - at));
@@ -234,10 +231,10 @@ StudySummary StudyFromAnswer(DcmDataset& ds) {
 
 SeriesSummary SeriesFromAnswer(DcmDataset& ds) {
   ConvertDicomTextToUtf8(ds);
-  return {.series_uid = Text(ds, DCM_SeriesInstanceUID),
-          .modality = Text(ds, DCM_Modality),
-          .description = Text(ds, DCM_SeriesDescription),
-          .body_part = Text(ds, DCM_BodyPartExamined),
+  return {.series_uid = DicomText(ds, DCM_SeriesInstanceUID),
+          .modality = DicomText(ds, DCM_Modality),
+          .description = DicomText(ds, DCM_SeriesDescription),
+          .body_part = DicomText(ds, DCM_BodyPartExamined),
           .series_number = Number(ds, DCM_SeriesNumber, 0),
           .instance_count = Number(ds, DCM_NumberOfSeriesRelatedInstances, -1)};
 }
@@ -322,11 +319,8 @@ Result<StudySearch> DimseClient::SearchStudies(const StudyQuery& query,
   }
   // The keys are UTF-8 (they came through the API): a name beyond ASCII
   // ("M\xc3\xbcller*") is matched only where the PACS knows their set.
-  const auto beyond_ascii = [](const std::string& v) {
-    return std::any_of(v.begin(), v.end(), [](char c) { return (c & 0x80) != 0; });
-  };
-  if (beyond_ascii(query.patient_name) || beyond_ascii(query.patient_id) ||
-      beyond_ascii(query.accession_number)) {
+  if (!IsAscii(query.patient_name) || !IsAscii(query.patient_id) ||
+      !IsAscii(query.accession_number)) {
     keys.putAndInsertString(DCM_SpecificCharacterSet, "ISO_IR 192");
   }
   bool cut = false;
@@ -407,7 +401,7 @@ Result<RetrievedSeries> DimseClient::RetrieveInstance(const std::string& study_u
                    Find(endpoint_, options_, keys, options_.max_find_answers, cancel, &cut));
   std::vector<InstanceSummary> instances;
   for (const auto& answer : answers) {
-    InstanceSummary s{.sop_uid = Text(*answer, DCM_SOPInstanceUID),
+    InstanceSummary s{.sop_uid = DicomText(*answer, DCM_SOPInstanceUID),
                       .instance_number = Number(*answer, DCM_InstanceNumber, 0)};
     if (CheckUid(s.sop_uid, "").ok()) instances.push_back(std::move(s));
   }

@@ -46,5 +46,12 @@ TEST(ValidUtf8, RefusesMalformedSequencesByteByByte) {
   }
 }
 
+TEST(IsAscii, IsFalseForAnyByteFrom0x80) {
+  EXPECT_TRUE(IsAscii(""));
+  EXPECT_TRUE(IsAscii("DOE^JANE 1.2.3\x7f"));
+  EXPECT_FALSE(IsAscii("M\xc3\xbcller"));  // UTF-8
+  EXPECT_FALSE(IsAscii("M\xfcller"));      // Latin-1
+}
+
 }  // namespace
 }  // namespace vpm

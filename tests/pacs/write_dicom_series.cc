@@ -16,7 +16,6 @@
 #include <dcmtk/dcmdata/dcdeftag.h>
 #include <dcmtk/dcmdata/dcfilefo.h>
 #include <dcmtk/dcmdata/dcuid.h>
-#include <algorithm>
 
 #include <cmath>
 #include <cstdio>
@@ -25,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "server/common/valid_utf8.h"
 #include "server/io/read_volume.h"
 
 namespace {
@@ -44,7 +44,7 @@ std::string Ds3(double a, double b, double c) { return Ds(a) + "\\" + Ds(b) + "\
 void PutCommon(DcmDataset& ds, std::map<std::string, std::string>& flags) {
   // A name beyond ASCII (the flags are UTF-8) is declared as such.
   const std::string& name = flags["--patient-name"];
-  if (std::any_of(name.begin(), name.end(), [](char c) { return (c & 0x80) != 0; })) {
+  if (!vpm::IsAscii(name)) {
     ds.putAndInsertString(DCM_SpecificCharacterSet, "ISO_IR 192");
   }
   ds.putAndInsertString(DCM_StudyInstanceUID, flags["--study-uid"].c_str());
