@@ -31,19 +31,22 @@ nlohmann::json VolumeInfoJson(const Volume& v) {
                          {"position_mm", Vec(g.PhysicalToWorld(l.position_mm))},  // world LPS
                          {"description", l.description}});
   }
-  return {{"source", v.source()},
-          {"dims", {g.dims[0], g.dims[1], g.dims[2]}},
-          {"spacing_mm", Vec(g.spacing_mm)},
-          {"origin_lps_mm", Vec(g.origin_mm)},
-          {"direction_columns_lps", {Vec(g.direction[0]), Vec(g.direction[1]), Vec(g.direction[2])}},
-          {"extent_mm", Vec(g.extent_mm())},
-          {"box_lps_mm", {Vec(box[0]), Vec(box[1])}},
-          {"value_range", {v.min_value(), v.max_value()}},
-          {"voxel_encoding", VoxelEncodingName(v.encoding())},
-          {"value_bytes", v.value_bytes()},
-          {"non_finite_voxels_replaced", v.non_finite_count()},
-          {"notes", v.notes()},
-          {"landmarks", landmarks}};
+  return {
+      {"source", v.source()},
+      {"dims", {g.dims[0], g.dims[1], g.dims[2]}},
+      {"spacing_mm", Vec(g.spacing_mm)},
+      {"origin_lps_mm", Vec(g.origin_mm)},
+      {"direction_columns_lps", {Vec(g.direction[0]), Vec(g.direction[1]), Vec(g.direction[2])}},
+      {"extent_mm", Vec(g.extent_mm())},
+      {"box_lps_mm", {Vec(box[0]), Vec(box[1])}},
+      {"value_range", {v.min_value(), v.max_value()}},
+      {"voxel_encoding", VoxelEncodingName(v.encoding())},
+      {"value_bytes", v.value_bytes()},
+      {"non_finite_voxels_replaced", v.non_finite_count()},
+      {"notes", v.notes()},
+      {"stacks", v.stacks()},
+      {"stack", v.stack()},
+      {"landmarks", landmarks}};
 }
 
 // The series of a DICOM folder source, or none for any other source.
@@ -108,6 +111,10 @@ void PrintInfo(const Volume& v) {
   std::cout << "held as     " << VoxelEncodingName(v.encoding()) << ", " << v.value_bytes()
             << " bytes (host; the same again on the GPU)\n";
   for (const std::string& note : v.notes()) std::cout << "note        " << note << "\n";
+  if (!v.stacks().empty()) {
+    std::cout << "stack       " << v.stack() << " of " << v.stacks().size() << " ("
+              << v.stacks()[static_cast<size_t>(v.stack() - 1)] << ")\n";
+  }
   if (v.non_finite_count() > 0) {
     std::cout << "warning     " << v.non_finite_count()
               << " NaN/infinite voxels were replaced by the minimum\n";

@@ -29,6 +29,8 @@ json VolumeJson(const v3::VolumeInfo& v) {
   j["box_lps_mm"] = {Vec(v.box_lo_lps_mm()), Vec(v.box_hi_lps_mm())};
   j["voxel_encoding"] = v.voxel_encoding();
   j["notes"] = std::vector<std::string>(v.notes().begin(), v.notes().end());
+  j["stacks"] = std::vector<std::string>(v.stacks().begin(), v.stacks().end());
+  j["stack"] = v.stack();
   j["landmarks"] = json::array();
   for (const auto& l : v.landmarks()) {
     j["landmarks"].push_back({{"name", l.name()}, {"position_mm", Vec(l.position_mm())},

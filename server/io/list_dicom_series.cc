@@ -213,4 +213,41 @@ Result<size_t> ChooseDicomSeries(const std::vector<DicomSeriesSummary>& series,
   return *chosen;
 }
 
+bool SameDicomSeries(const DicomSeriesSummary& a, const DicomSeriesSummary& b) {
+  return a.uid == b.uid && a.series_number == b.series_number &&
+         a.not_a_volume_reason == b.not_a_volume_reason;
+}
+
+std::vector<size_t> DicomSeriesStacks(const std::vector<DicomSeriesSummary>& series,
+                                      size_t chosen) {
+  std::vector<size_t> out;
+  for (size_t n = 0; n < series.size(); ++n) {
+    if (n == chosen ||
+        (!series[chosen].stack.empty() && SameDicomSeries(series[n], series[chosen]))) {
+      out.push_back(n);
+    }
+  }
+  return out;
+}
+
+Result<size_t> ChooseDicomStack(const std::vector<DicomSeriesSummary>& series, size_t chosen,
+                                int64_t stack) {
+  if (stack == 0) return chosen;
+  const std::vector<size_t> stacks = DicomSeriesStacks(series, chosen);
+  if (stack >= 1 && stack <= static_cast<int64_t>(stacks.size())) {
+    return stacks[static_cast<size_t>(stack - 1)];
+  }
+  if (stacks.size() == 1) {
+    return absl::InvalidArgumentError(StrCat("no stack ", stack, ": series ",
+                                             series[chosen].uid.substr(0, 64), " holds one stack"));
+  }
+  std::string names;
+  for (size_t n = 0; n < stacks.size(); ++n) {
+    StrAppend(&names, n == 0 ? "" : ", ", n + 1, " = ", series[stacks[n]].stack);
+  }
+  return absl::InvalidArgumentError(StrCat("no stack ", stack, ": series ",
+                                           series[chosen].uid.substr(0, 64), " holds ",
+                                           stacks.size(), " stacks (", names, ")"));
+}
+
 }  // namespace vpm

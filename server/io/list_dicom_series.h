@@ -53,4 +53,17 @@ Result<std::vector<DicomSeriesSummary>> ListDicomSeries(const std::filesystem::p
 Result<size_t> ChooseDicomSeries(const std::vector<DicomSeriesSummary>& series,
                                  std::string_view selector);
 
+// Whether two entries are stacks of the same series.
+bool SameDicomSeries(const DicomSeriesSummary& a, const DicomSeriesSummary& b);
+
+// The entries of `series` that are stacks of series[chosen], in their order
+// (one entry, `chosen`, for a series of one stack).
+std::vector<size_t> DicomSeriesStacks(const std::vector<DicomSeriesSummary>& series, size_t chosen);
+
+// Index into `series` of stack `stack` (1-based) of the series of
+// series[chosen]; 0 keeps `chosen`. InvalidArgument naming the stacks for
+// a number beyond them.
+Result<size_t> ChooseDicomStack(const std::vector<DicomSeriesSummary>& series, size_t chosen,
+                                int64_t stack);
+
 }  // namespace vpm

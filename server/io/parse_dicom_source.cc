@@ -9,7 +9,7 @@
 namespace vpm {
 namespace {
 
-constexpr std::string_view kDicomSyntax = "FOLDER[?series=UID|N][&spacing=MM]";
+constexpr std::string_view kDicomSyntax = "FOLDER[?series=UID|N][&stack=N][&spacing=MM]";
 
 bool IsFolder(std::string_view path) {
   std::error_code ec;
@@ -23,6 +23,12 @@ Status Bad(std::string_view folder, std::string_view what) {
 }
 
 }  // namespace
+
+std::optional<int64_t> ParseStackNumber(std::string_view text) {
+  const std::optional<int64_t> n = ParseInt(text);
+  if (!n.has_value() || *n < 1 || *n > kMaxDicomStack) return std::nullopt;
+  return n;
+}
 
 Result<std::optional<DicomSource>> ParseDicomSource(std::string_view source) {
   if (IsFolder(source)) return DicomSource{std::filesystem::path(source), {}};
@@ -38,6 +44,10 @@ Result<std::optional<DicomSource>> ParseDicomSource(std::string_view source) {
     if (key == "series") {
       if (value.empty()) return Bad(folder, "series is empty");
       out.options.series = std::string(value);
+    } else if (key == "stack") {
+      const std::optional<int64_t> stack = ParseStackNumber(value);
+      if (!stack.has_value()) return Bad(folder, "stack must be a whole number >= 1");
+      out.options.stack = *stack;
     } else if (key == "spacing") {
       const std::optional<double> mm = ParseDouble(value);
       if (!mm.has_value() || !std::isfinite(*mm) || !(*mm > 0.0)) {

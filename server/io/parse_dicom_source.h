@@ -1,4 +1,4 @@
-// The DICOM folder source syntax of ReadVolume: "FOLDER[?series=S][&spacing=MM]".
+// The DICOM folder source syntax of ReadVolume: "FOLDER[?series=S][&stack=N][&spacing=MM]".
 #pragma once
 
 #include <filesystem>
@@ -15,6 +15,9 @@ struct DicomReadOptions {
   // image series), a SeriesInstanceUID, or a 1-based index N into the list
   // `vpm volume info FOLDER` prints (ListDicomSeries' order).
   std::string series;
+  // Which stack of that series (1-based), where it repeats its positions in
+  // several (echoes, phases, b-values: SplitDicomStacks); 0 for the first.
+  int64_t stack = 0;
   // Slice spacing of the output grid, mm; 0 keeps the series' own spacing
   // (resampling only uneven or sheared stacks, to their smallest gap).
   double spacing_mm = 0.0;
@@ -27,8 +30,14 @@ struct DicomSource {
 
 // Returns nullopt when `source` does not name an existing folder (with or
 // without a query after its last '?'). Otherwise the folder and its options;
-// InvalidArgument for unknown or repeated keys, an empty series, a spacing
-// that is not a finite number > 0.
+// InvalidArgument for unknown or repeated keys, an empty series, a stack
+// that is not a number 1..kMaxDicomStack, a spacing that is not a finite
+// number > 0.
 Result<std::optional<DicomSource>> ParseDicomSource(std::string_view source);
+
+// The `stack=N` of a folder's or a PACS series' source: 1..kMaxDicomStack,
+// else nullopt.
+inline constexpr int64_t kMaxDicomStack = 100000;
+std::optional<int64_t> ParseStackNumber(std::string_view text);
 
 }  // namespace vpm

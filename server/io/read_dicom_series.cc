@@ -283,26 +283,27 @@ Result<Volume> AssembleSeries(std::vector<NamedSlice> slices, const DicomReadOpt
   return volume;
 }
 
-bool SameSeries(const DicomSeriesSummary& a, const DicomSeriesSummary& b) {
-  return a.uid == b.uid && a.series_number == b.series_number &&
-         a.not_a_volume_reason == b.not_a_volume_reason;
-}
-
 // Which series (and stack) was read, where the folder offered a choice.
 void AddChoiceNotes(const std::vector<DicomSeriesSummary>& series, size_t chosen, Volume& volume) {
   const DicomSeriesSummary& s = series[chosen];
   size_t distinct = 0;
-  std::string stacks;
   for (size_t n = 0; n < series.size(); ++n) {
-    distinct += n == 0 || !SameSeries(series[n - 1], series[n]);
-    if (!s.stack.empty() && SameSeries(series[n], s)) {
-      StrAppend(&stacks, stacks.empty() ? "" : ", ", n + 1, " = ", series[n].stack);
-    }
+    distinct += n == 0 || !SameDicomSeries(series[n - 1], series[n]);
   }
   if (!s.stack.empty()) {
-    volume.add_note(StrCat("series ", s.uid, " repeats its positions in stacks (", stacks,
-                           "); read ", chosen + 1, " (", s.stack, ", ", s.images,
-                           " slices); ?series=N picks another"));
+    const std::vector<size_t> stacks = DicomSeriesStacks(series, chosen);
+    std::vector<std::string> labels;
+    std::string listed;
+    int read = 0;
+    for (size_t n = 0; n < stacks.size(); ++n) {
+      labels.push_back(series[stacks[n]].stack);
+      StrAppend(&listed, n == 0 ? "" : ", ", n + 1, " = ", labels.back());
+      if (stacks[n] == chosen) read = static_cast<int>(n + 1);
+    }
+    volume.add_note(StrCat("series ", s.uid, " repeats its positions in ", stacks.size(),
+                           " stacks (", listed, "); read stack ", read, " (", s.stack, ", ",
+                           s.images, " slices); stack=N in the source picks another"));
+    volume.set_stacks(std::move(labels), read);
   }
   if (distinct > 1) {
     volume.add_note(
@@ -319,6 +320,7 @@ Result<Volume> ReadDicomSeries(const std::filesystem::path& folder, const Volume
                                const DicomReadOptions& options) {
   ASSIGN_OR_RETURN(const std::vector<DicomSeriesSummary> series, ListDicomSeries(folder, limits));
   Result<size_t> chosen = ChooseDicomSeries(series, options.series);
+  if (chosen.ok()) chosen = ChooseDicomStack(series, *chosen, options.stack);
   if (!chosen.ok()) return PrefixStatus(chosen.status(), folder.string());
   ASSIGN_OR_RETURN(std::vector<NamedSlice> slices, DecodeSeries(folder, series[*chosen], limits));
   RETURN_IF_ERROR(limits.cancel.Check());

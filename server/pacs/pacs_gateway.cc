@@ -186,8 +186,7 @@ Status PacsGateway::FetchSeries(const PacsClient& client, const std::string& stu
 }
 
 Result<Volume> PacsGateway::ReadSeriesFolder(const std::filesystem::path& folder,
-                                             std::string_view source,
-                                             const std::string& series_uid,
+                                             std::string_view source, const PacsSource& series,
                                              const VolumeLimits& limits,
                                              const ProgressFn& progress) {
   VolumeLimits read_limits = limits;
@@ -195,10 +194,10 @@ Result<Volume> PacsGateway::ReadSeriesFolder(const std::filesystem::path& folder
   read_limits.read_root = std::filesystem::canonical(folder, error);
   if (error) return absl::InternalError("the PACS cache lost a series folder");
   if (progress) progress(0.7, "reading");
-  DicomReadOptions options{.series = series_uid};
+  DicomReadOptions options{.series = series.series_uid, .stack = series.stack};
   Result<Volume> volume = ReadDicomSeries(read_limits.read_root, read_limits, options);
   if (!volume.ok()) {
-    return HideFolder(volume.status(), read_limits.read_root, StrCat("series ", series_uid));
+    return HideFolder(volume.status(), read_limits.read_root, StrCat("series ", series.series_uid));
   }
   volume->set_source(std::string(source));
   if (progress) progress(1.0, "reading");
@@ -221,7 +220,7 @@ Result<Volume> PacsGateway::LoadSeries(const std::string& user, std::string_view
                        received->OpenSeries(s.study_uid, s.series_uid));
       record.cache = "received";
       record.instances = lease->instances;
-      return ReadSeriesFolder(lease->folder, source, s.series_uid, limits, progress);
+      return ReadSeriesFolder(lease->folder, source, s, limits, progress);
     }
     int64_t instances = -1;
     ASSIGN_OR_RETURN(std::shared_ptr<const SeriesCache::Lease> lease,
@@ -235,7 +234,7 @@ Result<Volume> PacsGateway::LoadSeries(const std::string& user, std::string_view
                          cancel));
     record.cache = lease->hit ? "hit" : "miss";
     RETURN_IF_ERROR(cancel.Check());
-    Result<Volume> volume = ReadSeriesFolder(lease->folder, source, s.series_uid, limits, progress);
+    Result<Volume> volume = ReadSeriesFolder(lease->folder, source, s, limits, progress);
     if (instances < 0) {
       std::error_code error;
       instances = static_cast<int64_t>(

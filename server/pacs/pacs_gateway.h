@@ -18,8 +18,9 @@
 #include "server/pacs/dicomweb_client.h"
 #include "server/pacs/dimse_client.h"
 #include "server/pacs/move_registry.h"
-#include "server/pacs/received_store.h"
 #include "server/pacs/pacs_endpoint.h"
+#include "server/pacs/pacs_source.h"
+#include "server/pacs/received_store.h"
 #include "server/pacs/series_cache.h"
 #include "server/pacs/series_thumbnail.h"
 #include "server/pacs/thumbnail_lru.h"
@@ -137,7 +138,7 @@ class PacsGateway {
   // Reads the series' files in `folder` (cache or received store) as the
   // volume of `source`.
   Result<Volume> ReadSeriesFolder(const std::filesystem::path& folder, std::string_view source,
-                                  const std::string& series_uid, const VolumeLimits& limits,
+                                  const PacsSource& series, const VolumeLimits& limits,
                                   const ProgressFn& progress);
 
   // GetSeriesThumbnail once permitted: the thumbnail and where it came from.

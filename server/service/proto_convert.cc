@@ -52,6 +52,9 @@ void FillVolumeInfo(const VolumeEntry& entry, v3::VolumeInfo* info) {
   info->set_bytes(entry.bytes);
   info->set_voxel_encoding(VoxelEncodingName(volume.encoding()));
   for (const std::string& note : volume.notes()) info->add_notes(ValidUtf8(note));
+  info->clear_stacks();
+  for (const std::string& label : volume.stacks()) info->add_stacks(ValidUtf8(label));
+  info->set_stack(volume.stack());
   info->set_sessions(entry.sessions.load());
   info->set_owner(entry.owner);
 }

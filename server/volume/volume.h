@@ -156,6 +156,15 @@ class Volume {
   // `vpm volume info` can say that the grid is not the scanner's.
   const std::vector<std::string>& notes() const { return notes_; }
   void add_note(std::string note) { notes_.push_back(std::move(note)); }
+  // Where the series held several stacks at the same positions (echoes,
+  // phases, b-values): each stack's label ("EchoNumbers 2"), in order, and
+  // which one this volume is (1-based); empty and 0 otherwise.
+  const std::vector<std::string>& stacks() const { return stacks_; }
+  int stack() const { return stack_; }
+  void set_stacks(std::vector<std::string> labels, int chosen) {
+    stacks_ = std::move(labels);
+    stack_ = chosen;
+  }
   // The DICOM series it was read from (null for other sources): what an
   // export into the same study needs.
   const std::shared_ptr<const DicomOrigin>& dicom_origin() const { return dicom_origin_; }
@@ -174,6 +183,8 @@ class Volume {
   std::vector<Landmark> landmarks_;
   std::string source_;
   std::vector<std::string> notes_;
+  std::vector<std::string> stacks_;
+  int stack_ = 0;
   std::shared_ptr<const DicomOrigin> dicom_origin_;
 };
 

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "server/io/list_dicom_series.h"
+#include "server/io/parse_dicom_source.h"
 #include "server/io/read_dicom_series.h"
 #include "tests/io/dicom_test_util.h"
 #include "tests/io/io_test_util.h"
@@ -171,19 +172,70 @@ TEST(DicomSeriesReader, ReadsTheFirstEchoOfATwoEchoSeriesAndTheOtherOnRequest) {
   std::string notes;
   for (const std::string& n : first->notes()) notes += n + "\n";
   EXPECT_TRUE(HasNote(*first,
-                      "repeats its positions in stacks (1 = EchoNumbers 1, 2 = "
-                      "EchoNumbers 2); read 1 (EchoNumbers 1, 4 slices)"))
+                      "repeats its positions in 2 stacks (1 = EchoNumbers 1, 2 = "
+                      "EchoNumbers 2); read stack 1 (EchoNumbers 1, 4 slices); stack=N in the "
+                      "source picks another"))
       << notes;
+  EXPECT_EQ(first->stacks(), (std::vector<std::string>{"EchoNumbers 1", "EchoNumbers 2"}));
+  EXPECT_EQ(first->stack(), 1);
   EXPECT_FALSE(HasNote(*first, "the folder holds")) << notes;  // one series
 
   const auto second = ReadDicomSeries(dir, {}, {.series = "2"});
   ASSERT_TRUE(second.ok()) << second.status();
   EXPECT_FLOAT_EQ(second->At(0, 0, 0), 2000.0f);
   EXPECT_FLOAT_EQ(second->At(1, 0, 3), 2031.0f);
+  EXPECT_EQ(second->stack(), 2);
   // The UID names the series: its first stack.
   const auto by_uid = ReadDicomSeries(dir, {}, {.series = (*listed)[0].uid});
   ASSERT_TRUE(by_uid.ok()) << by_uid.status();
   EXPECT_FLOAT_EQ(by_uid->At(0, 0, 0), 1000.0f);
+}
+
+// stack=N picks a stack within the series, whichever way the series is
+// named (the default, its UID or its first entry), as a PACS source does.
+TEST(DicomSeriesReader, StackNPicksAStackOfTheSeries) {
+  const auto dir = WriteTwoEchoes();
+  const auto listed = ListDicomSeries(dir, {});
+  ASSERT_TRUE(listed.ok()) << listed.status();
+  for (const std::string& series : {std::string(), (*listed)[0].uid, std::string("1")}) {
+    const auto v = ReadDicomSeries(dir, {}, {.series = series, .stack = 2});
+    ASSERT_TRUE(v.ok()) << series << ": " << v.status();
+    EXPECT_FLOAT_EQ(v->At(0, 0, 0), 2000.0f) << series;
+    EXPECT_EQ(v->stack(), 2) << series;
+    EXPECT_TRUE(HasNote(*v, "read stack 2 (EchoNumbers 2, 4 slices)")) << series;
+  }
+  const auto third = ReadDicomSeries(dir, {}, {.stack = 3});
+  EXPECT_TRUE(absl::IsInvalidArgument(third.status()));
+  EXPECT_NE(std::string(third.status().message())
+                .find("no stack 3: series " + (*listed)[0].uid +
+                      " holds 2 stacks (1 = EchoNumbers 1, 2 = EchoNumbers 2)"),
+            std::string::npos)
+      << third.status();
+
+  // Through the folder's source syntax.
+  const auto source = ParseDicomSource(dir.string() + "?stack=2");
+  ASSERT_TRUE(source.ok() && source->has_value()) << source.status();
+  EXPECT_EQ((*source)->options.stack, 2);
+  for (const char* bad : {"?stack=0", "?stack=x", "?stack=", "?stack=-1", "?stack=100001"}) {
+    EXPECT_TRUE(absl::IsInvalidArgument(ParseDicomSource(dir.string() + bad).status())) << bad;
+  }
+}
+
+TEST(DicomSeriesReader, AStackBeyondOneOnASeriesOfOneStackIsRefused) {
+  const auto dir = MakeTempDir();
+  DicomSliceSpec s;
+  for (int k = 0; k < 3; ++k) {
+    s.position_mm = glm::dvec3(0.0, 0.0, 2.0 * k);
+    ASSERT_TRUE(WriteDicomSlice(dir / ("im" + std::to_string(k) + ".dcm"), s));
+  }
+  const auto one = ReadDicomSeries(dir, {}, {.stack = 1});
+  ASSERT_TRUE(one.ok()) << one.status();
+  EXPECT_TRUE(one->stacks().empty());
+  EXPECT_EQ(one->stack(), 0);
+  const auto two = ReadDicomSeries(dir, {}, {.stack = 2});
+  EXPECT_TRUE(absl::IsInvalidArgument(two.status()));
+  EXPECT_NE(std::string(two.status().message()).find("no stack 2: series "), std::string::npos);
+  EXPECT_NE(std::string(two.status().message()).find(" holds one stack"), std::string::npos);
 }
 
 TEST(DicomSeriesReader, ARepeatNoAttributeExplainsIsStillRefusedWithAReason) {

@@ -198,6 +198,36 @@ class Harness:
     def orthanc_get(self, path, user, password):
         return self.orthanc_request('GET', path, user, password)
 
+    def write_two_echoes(self, folder, series_uid, offset, tags=None):
+        """The image series in `folder` twice under one new SeriesInstanceUID,
+        as a scanner stores the echoes of an in/opposed-phase T1: EchoNumbers
+        1 and 2 at the same positions, echo 2's stored values `offset`
+        higher; `tags` (name: value) set on every file. Returns the folder
+        written (108 files for the tilted Philips series)."""
+        import pydicom  # python3-pydicom, as the scripts that call this
+        out = tempfile.mkdtemp(prefix='two-echoes-', dir=self.tmp)
+        for name in sorted(os.listdir(folder)):
+            try:
+                first = pydicom.dcmread(os.path.join(folder, name))
+            except pydicom.errors.InvalidDicomError:
+                continue  # a README, a licence
+            if 'PixelData' not in first:
+                continue  # the scanner's DICOMDIR
+            for echo in (1, 2):
+                ds = pydicom.dcmread(os.path.join(folder, name))
+                for key, value in (tags or {}).items():
+                    setattr(ds, key, value)
+                ds.SeriesInstanceUID = series_uid
+                ds.SOPInstanceUID = f'{series_uid}.{echo}.{ds.InstanceNumber}'
+                ds.file_meta.MediaStorageSOPInstanceUID = ds.SOPInstanceUID
+                ds.file_meta.MediaStorageSOPClassUID = ds.SOPClassUID
+                ds.EchoNumbers = echo
+                if echo == 2:
+                    pixels = ds.pixel_array
+                    ds.PixelData = (pixels + offset).astype(pixels.dtype).tobytes()
+                ds.save_as(os.path.join(out, f'{name}-{echo}.dcm'))
+        return out
+
     def orthanc_upload_folder(self, folder, user, password):
         count = 0
         for name in sorted(os.listdir(folder)):

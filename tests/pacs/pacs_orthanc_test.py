@@ -233,12 +233,16 @@ def run(h, t, build, source):
     n += h.orthanc_upload_folder(report, 'vpm', ORTHANC_PASSWORD)
     tilt_n = h.orthanc_upload_folder(tilt_folder, 'vpm', ORTHANC_PASSWORD)
     t.check(n == 113 and tilt_n == 54, f'Orthanc took {n} kidney/SR and {tilt_n} tilted instances')
+    echoes = h.write_two_echoes(tilt_folder, ECHO_SERIES, ECHO_OFFSET)
+    echo_n = h.orthanc_upload_folder(echoes, 'vpm', ORTHANC_PASSWORD)
+    t.check(echo_n == 108, f'Orthanc took {echo_n} instances of the two-echo series')
     live_check(h, t, build, source, base)
     audit, cache = start_server(h, base)
     search_checks(h, t)
     series_checks(h, t, cache)
     vol, bob_vol = load_checks(h, t, kidney, audit, cache)
     tilt_checks(h, t, tilt_folder)
+    stack_checks(h, t, tilt_folder)
     export_checks(h, t, vol, STUDY, kidney, audit)
     failure_checks(h, t, cache, bob_vol)
     privacy_checks(h, t, audit)
@@ -418,6 +422,33 @@ def tilt_checks(h, t, tilt_folder):
         idx = [numpy.dot(d, p - o) / numpy.array(tv['spacing_mm']) for p in tg['positions']]
         inside = all(-0.5 <= i[c] <= tv['dims'][c] - 0.5 for i in idx for c in range(3))
         t.check(inside, 'every tilted slice\'s ImagePositionPatient lies inside the volume\'s grid')
+
+
+# The two-echo series write_two_echoes makes of the tilted series.
+ECHO_SERIES = '1.2.826.0.1.3680043.8.498.77031'
+ECHO_OFFSET = 100  # echo 2's stored values = echo 1's + this
+
+
+def stack_checks(h, t, tilt_folder):
+    """A series of two echoes from the PACS: the first stack by default,
+    ?stack=2 the second (from the same cached files), ?stack=3 refused."""
+    study = pydicom.dcmread(os.path.join(tilt_folder, 'I10')).StudyInstanceUID
+    source = f'pacs:orthanc/{study}/{ECHO_SERIES}'
+    rc, out, err = h.vpm('alice', 'volume', 'load', source)
+    first = json.loads(out) if rc == 0 else {}
+    t.check(rc == 0 and first.get('stacks') == ['EchoNumbers 1', 'EchoNumbers 2'] and
+            first.get('stack') == 1 and any('read stack 1' in n for n in first.get('notes', [])),
+            f'the two-echo series opens on echo 1 and names both: {first.get("stacks")}, '
+            f'{first.get("stack")} ({err.strip()[-200:]})')
+    rc, out, err = h.vpm('alice', 'volume', 'load', source + '?stack=2')
+    second = json.loads(out) if rc == 0 else {}
+    t.check(rc == 0 and second.get('stack') == 2 and second.get('source') == source + '?stack=2' and
+            abs(second.get('max_value', 0) - first.get('max_value', 0) - ECHO_OFFSET) < 0.01,
+            f'?stack=2 opens echo 2: stack {second.get("stack")}, max {second.get("max_value")} '
+            f'against echo 1\'s {first.get("max_value")} ({err.strip()[-200:]})')
+    rc, _, err = h.vpm('alice', 'volume', 'load', source + '?stack=3')
+    t.check(rc != 0 and 'INVALID_ARGUMENT' in err and 'holds 2 stacks' in err and
+            'EchoNumbers 2' in err, f'?stack=3 is refused, naming the stacks: {err.strip()[-200:]}')
 
 
 def failure_checks(h, t, cache, bob_vol):

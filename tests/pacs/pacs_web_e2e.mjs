@@ -119,9 +119,9 @@ async function searchAndList(page) {
   assert.equal(await page.locator('#pacs-studies-body tr').count(), 1, 'one study matches');
   assert.deepEqual([cells[0], cells[1], cells[2], cells[3], cells[6]],
                    [`${family}, ${given}`, patient.id, isoDate(patient.birth_date),
-                    isoDate(patient.study_date), '2'], `the study row: ${JSON.stringify(cells)}`);
+                    isoDate(patient.study_date), '3'], `the study row: ${JSON.stringify(cells)}`);
   assert.deepEqual(cells[5].split(' ').sort(), ['CT', 'SR'], `modalities: ${cells[5]}`);
-  step('the study row shows the patient name, ID, birth date, study date, CT SR, 2 series');
+  step('the study row shows the patient name, ID, birth date, study date, CT SR, 3 series');
 
   await page.click(row);
   const ctRow = `#pacs-series-body tr[data-series-uid="${config.ct_series_uid}"][data-modality="CT"]`;
@@ -248,6 +248,46 @@ async function exportToPacs(page) {
   return summary;
 }
 
+// The series of two echoes opens on echo 1; the Stack picker names both and
+// opens echo 2 (pacs:...?stack=2), whose values are echo 1's + echo_offset.
+async function pickStack(page) {
+  await page.click('#studies-toggle');
+  const echoRow = `#pacs-series-body tr[data-series-uid="${config.echo_series_uid}"]`;
+  await page.waitForSelector(echoRow, { timeout: 15000 });
+  await page.click(`${echoRow} button.pacs-open`);
+  const base = `pacs:orthanc/${config.study_uid}/${config.echo_series_uid}`;
+  const opened = (src) => waitFor(page, `${src} opened`, (s) =>
+    window.vpmViewer.volume?.source === s && window.vpmViewer.session &&
+    !document.getElementById('stack-pick').hidden, src, 90000);
+  await opened(base);
+  const first = await page.evaluate(() => ({
+    options: [...document.getElementById('stack').options].map((o) => o.textContent),
+    value: document.getElementById('stack').value, volume: window.vpmViewer.volume }));
+  assert.deepEqual(first.options, ['1: EchoNumbers 1', '2: EchoNumbers 2'], JSON.stringify(first));
+  assert.equal(first.value, '1');
+  assert.equal(first.volume.stack, 1);
+  step(`opened ${base}: Stack picker ${JSON.stringify(first.options)}, showing 1`);
+  await page.click('#studies-close');
+  await page.selectOption('#stack', '2');
+  await opened(`${base}?stack=2`);
+  const second = await page.evaluate(() => ({
+    value: document.getElementById('stack').value, volume: window.vpmViewer.volume,
+    message: document.getElementById('message').textContent }));
+  assert.equal(second.value, '2');
+  assert.equal(second.volume.stack, 2);
+  assert.ok(Math.abs(second.volume.max_value - first.volume.max_value - config.echo_offset) < 0.01,
+            `echo 2's largest value ${second.volume.max_value}, echo 1's ${first.volume.max_value}`);
+  assert.match(second.message, /read stack 2 \(EchoNumbers 2/, second.message);
+  // The Volume picker names the volume shown (Open reopens it).
+  await waitFor(page, 'the Volume picker on the volume shown', () =>
+    document.getElementById('volume').value === `volume:${window.vpmViewer.volume.volume_id}`,
+  null, 15000);
+  await settled(page, '!h.interactive && v.framesDrawn > 0', 60000);
+  step(`picked stack 2: ${second.volume.source}, largest value ${second.volume.max_value} ` +
+       `(echo 1: ${first.volume.max_value})`);
+  await page.screenshot({ path: path.join(out, 'stack2.png') });
+}
+
 // Bob: the endpoints file lists only alice.
 async function bobSeesNoEndpoint(browser, url, aliceSource) {
   const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, bypassCSP: true });
@@ -301,6 +341,7 @@ async function main() {
     const ctRow = await searchAndList(page);
     const source = await openAndDrag(page, ctRow);
     const summary = await exportToPacs(page);
+    await pickStack(page);
     await bobSeesNoEndpoint(browser, gateway.url, source);
     assert.deepEqual(pageErrors, [], 'script errors on alice\'s page');
     fs.writeFileSync(args.result, JSON.stringify({ summary, source }));

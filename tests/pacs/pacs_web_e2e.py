@@ -8,7 +8,8 @@ study. vpm-server runs with --pacs (an endpoint only alice may use),
 --pacs-audit-log and the users alice and bob; pacs_web_e2e.mjs starts the
 gateway and drives headless Chromium: alice searches, lists the series, is
 told the SR holds no images, opens the CT, drags the kidney and exports to
-PACS; bob has no endpoint and is refused alice's series. Then, here: Orthanc
+PACS, then opens a series of two echoes and picks the second in the Stack
+picker; bob has no endpoint and is refused alice's series. Then, here: Orthanc
 itself (QIDO-RS with its own credentials) holds the derived series (CT, 112
 instances, "vpm deformed ...") and the secondary capture (1 instance) in
 the study, and no patient name, ID or birth date is in the gateway's log,
@@ -33,6 +34,8 @@ from pacs_harness import Failures, Harness  # noqa: E402
 STUDY = '1.2.826.0.1.3680043.8.498.77020'
 CT_SERIES = STUDY + '.1'
 SR_SERIES = STUDY + '.9'
+ECHO_SERIES = STUDY + '.5'
+ECHO_OFFSET = 100  # echo 2's stored values = echo 1's + this
 PATIENT_NAME = 'KIDNEY^WEBPATIENT'
 PATIENT_ID = 'VPMWEB0027'
 BIRTH_DATE = '19650704'
@@ -78,8 +81,8 @@ def check_orthanc(h, t, summary):
     t.check(tag(capture, '00201209') == 1,
             f'Orthanc holds the secondary capture in the study: {tag(capture, "00201209")} instance '
             f'({tag(capture, "00080060")}, "{tag(capture, "0008103E")}")')
-    t.check(len(listed) == 4 and CT_SERIES in by_uid and SR_SERIES in by_uid,
-            f'the study now has 4 series, the source CT and SR among them ({len(listed)})')
+    t.check(len(listed) == 5 and CT_SERIES in by_uid and SR_SERIES in by_uid,
+            f'the study now has 5 series, the source CT and SR among them ({len(listed)})')
 
 
 def check_logs(h, t, gateway_log, audit):
@@ -106,9 +109,18 @@ def run(h, t, build, source):
     kidney, report = h.write_kidney_study(source, STUDY, PATIENT_NAME, PATIENT_ID, BIRTH_DATE,
                                           STUDY_DATE)
     base = h.start_orthanc({'vpm': ORTHANC_PASSWORD})
+    # A series of two echoes at the same positions (the tilted Philips CT
+    # twice) in the same study: the viewer's Stack picker.
+    echoes = h.write_two_echoes(
+        os.path.join(source, 'tests/data/ct-philips-tilt'), ECHO_SERIES, ECHO_OFFSET,
+        {'StudyInstanceUID': STUDY, 'PatientName': PATIENT_NAME, 'PatientID': PATIENT_ID,
+         'PatientBirthDate': BIRTH_DATE, 'StudyDate': STUDY_DATE, 'SeriesNumber': 5,
+         'SeriesDescription': 'two echoes'})
     n = h.orthanc_upload_folder(kidney, 'vpm', ORTHANC_PASSWORD)
     n += h.orthanc_upload_folder(report, 'vpm', ORTHANC_PASSWORD)
-    if not t.check(n == 113, f'Orthanc took {n} instances (112 CT slices and the SR)'):
+    n += h.orthanc_upload_folder(echoes, 'vpm', ORTHANC_PASSWORD)
+    if not t.check(n == 221, f'Orthanc took {n} instances (112 CT slices, the SR and 108 '
+                             'of the two echoes)'):
         return
     h.write_secret('orthanc.pw', ORTHANC_PASSWORD)
     users = h.write_users(['alice', 'bob'])
@@ -128,6 +140,7 @@ def run(h, t, build, source):
     with open(os.open(config, os.O_WRONLY | os.O_CREAT, 0o600), 'w') as f:
         json.dump({'server': f'127.0.0.1:{h.port}', 'users_file': users, 'tokens': h.tokens,
                    'study_uid': STUDY, 'ct_series_uid': CT_SERIES, 'sr_series_uid': SR_SERIES,
+                   'echo_series_uid': ECHO_SERIES, 'echo_offset': ECHO_OFFSET,
                    'data_root_entry': os.path.basename(kidney),
                    'patient': {'name': PATIENT_NAME, 'id': PATIENT_ID, 'birth_date': BIRTH_DATE,
                                'study_date': STUDY_DATE},

@@ -57,8 +57,15 @@ TEST(PacsSource, ParsesAndRejects) {
   EXPECT_EQ(s->endpoint, "orthanc");
   EXPECT_EQ(s->study_uid, "1.2.3");
   EXPECT_EQ(s->series_uid, "1.2.3.4");
-  for (const char* bad : {"pacs:orthanc/1.2.3", "pacs:/1/2", "pacs:o/1/2/3", "pacs:o/../2",
-                          "pacs:.o/1/2", "file:o/1/2"}) {
+  EXPECT_EQ(s->stack, 0);
+  s = ParsePacsSource("pacs:orthanc/1.2.3/1.2.3.4?stack=2");
+  ASSERT_TRUE(s.ok()) << s.status();
+  EXPECT_EQ(s->series_uid, "1.2.3.4");
+  EXPECT_EQ(s->stack, 2);
+  for (const char* bad :
+       {"pacs:orthanc/1.2.3", "pacs:/1/2", "pacs:o/1/2/3", "pacs:o/../2", "pacs:.o/1/2",
+        "file:o/1/2", "pacs:o/1/2?stack=0", "pacs:o/1/2?stack=", "pacs:o/1/2?series=2",
+        "pacs:o/1/2?stack=2&stack=3", "pacs:o/1?stack=2/2"}) {
     EXPECT_TRUE(absl::IsInvalidArgument(ParsePacsSource(bad).status())) << bad;
   }
 }

@@ -23,6 +23,7 @@ const { explainPacsError } = await load('lib/explain_pacs_error.js');
 const { GrpcStatus } = await load('lib/vpm_client.js');
 const { searchMessage, dateRange, personName, shownDate } = await load('public/pacs_query.js');
 const { pacsEndpointOf, parsePacsSource } = await load('public/pacs_source.js');
+const { sourceWithStack } = await load('public/stack_picker.js');
 const protoLoader = createRequire(path.join(web, 'package.json'))('@grpc/proto-loader');
 const definition = protoLoader.loadSync(path.join(here, '../../proto/vpm/v3/vpm.proto'),
   { keepCase: true, longs: Number, enums: String, defaults: true, oneofs: true,
@@ -120,10 +121,15 @@ test('PacsMessages_UidsAndSourcesAreChecked', () => {
 });
 
 test('PacsSource_NamesTheEndpointOfAPacsSeriesOnly', () => {
-  assert.deepEqual(parsePacsSource(kSource), { endpoint: 'orthanc', studyUid: kStudy, seriesUid: kSeries });
+  assert.deepEqual(parsePacsSource(kSource),
+                   { endpoint: 'orthanc', studyUid: kStudy, seriesUid: kSeries, stack: 0 });
+  assert.deepEqual(parsePacsSource(`${kSource}?stack=2`),
+                   { endpoint: 'orthanc', studyUid: kStudy, seriesUid: kSeries, stack: 2 });
   assert.equal(pacsEndpointOf(`pacs:cloud-1/${kStudy}/${kSeries}`), 'cloud-1');
   for (const source of ['phantom:abdomen', 'upload:abc', 'ct.nii.gz', 'pacs:orthanc', '', null,
-                        undefined, `pacs:/${kStudy}/${kSeries}`]) {
+                        undefined, `pacs:/${kStudy}/${kSeries}`, `${kSource}?stack=0`,
+                        `${kSource}?stack=`, `${kSource}?series=2`, `${kSource}?stack=2?stack=3`,
+                        `${kSource}?stack=100001`, `${kSource}?stack=2&stack=3`]) {
     assert.equal(pacsEndpointOf(source), null, JSON.stringify(source));
   }
 });
@@ -193,4 +199,15 @@ test('UsersFile_TakesTheBrowsePermission', async () => {
                    ['alice']);
   assert.throws(() => parseUsersFile(`alice ${hash} root\n`, 'u'), /unknown permission 'root'/);
   assert.throws(() => parseUsersFile('alice\n', 'u'), /1 fields, not 2/);
+});
+
+test('StackSources_SetTheStackAndKeepTheRest', () => {
+  assert.equal(sourceWithStack(kSource, 2), `${kSource}?stack=2`);
+  assert.equal(sourceWithStack(`${kSource}?stack=2`, 1), `${kSource}?stack=1`);
+  // A PACS source with a stack passes the gateway's check.
+  assert.equal(parse({ type: 'pacs_open', source: sourceWithStack(kSource, 3) }).source,
+               `${kSource}?stack=3`);
+  assert.equal(sourceWithStack('mr/t1', 2), 'mr/t1?stack=2');
+  assert.equal(sourceWithStack('mr/t1?series=3&spacing=1', 2), 'mr/t1?series=3&spacing=1&stack=2');
+  assert.equal(sourceWithStack('mr/t1?stack=2&series=3', 1), 'mr/t1?series=3&stack=1');
 });

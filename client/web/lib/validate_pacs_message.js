@@ -106,7 +106,7 @@ export function parsePacsMessage(message) {
     case 'pacs_open':
       if (typeof message.source !== 'string' || message.source.length > 300 ||
           !parsePacsSource(message.source)) {
-        throw new Error('source: pacs:ENDPOINT/STUDY_UID/SERIES_UID');
+        throw new Error('source: pacs:ENDPOINT/STUDY_UID/SERIES_UID[?stack=N]');
       }
       return message;
     case 'export_dicom':

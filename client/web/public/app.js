@@ -21,6 +21,9 @@ import { StudiesPanel } from './studies_panel.js';
 import { installUndoKeys } from './undo_keys.js';
 import { UploadPanel } from './upload_panel.js';
 import { volumeNotesText } from './volume_notes.js';
+import { VolumePicker } from './volume_picker.js';
+import { StackPicker } from './stack_picker.js';
+import { parsePacsSource } from './pacs_source.js';
 import { fillShortcutList, installViewKeys } from './view_keys.js';
 import { kWindowPresets, presetNameOf, windowPreset } from './window_presets.js';
 
@@ -103,6 +106,23 @@ const uploads = new UploadPanel({
   },
 });
 state.uploads = uploads;
+
+const volumePicker = new VolumePicker({ select: $('volume'), loaded: $('loaded') });
+
+// Another stack of the series shown (echoes, phases): a PACS series loads
+// through the Studies panel, a data-root folder opens as a source.
+const stackPicker = new StackPicker({
+  label: $('stack-pick'),
+  select: $('stack'),
+  open(source, what) {
+    if (parsePacsSource(source)) {
+      studies.openSource(source, `stack ${what}`);
+    } else {
+      studies.forget();
+      openIntent({ source });
+    }
+  },
+});
 
 const exporter = new ExportButton({
   e: { button: $('export-pacs'), description: $('export-description'), progress: $('export-progress') },
@@ -304,7 +324,7 @@ const handlers = {
     socket.send({ type: 'cases' });
     if (studies.isOpen) socket.send({ type: 'pacs_endpoints' });
   },
-  volumes(m) { fillLoaded(m.volumes); },
+  volumes(m) { volumePicker.fill(m.volumes); },
   progress(m) { showMessage(m.text, 'info'); },
   opened(m) {
     const sameVolume = state.camera && state.openedWithCamera &&
@@ -334,6 +354,8 @@ const handlers = {
     $('refine-grab').disabled = true;
     setServerState('up', `vpm-server ${state.gatewayServer ?? ''}`);
     showMessage(volumeNotesText(m.volume));  // what the reader corrected or chose, else nothing
+    stackPicker.show(m.volume);
+    volumePicker.opened(m.volume);
     showMesh();
     studies.opened(m.volume);
     uploads.opened(m.volume);
@@ -482,16 +504,6 @@ function onMessage(m) {
   const handler = handlers[m.type];
   if (handler) handler(m);
   refreshExport();
-}
-
-function fillLoaded(volumes) {
-  const group = $('loaded');
-  group.replaceChildren(...volumes.map((v) => {
-    const option = document.createElement('option');
-    option.value = `volume:${v.volume_id}`;
-    option.textContent = `${v.volume_id}: ${v.source} (${v.dims.join(' x ')})`;
-    return option;
-  }));
 }
 
 function showMesh() {
@@ -649,10 +661,8 @@ const paneObserver = new ResizeObserver((entries) => {
 for (const box of document.querySelectorAll('#views .box')) paneObserver.observe(box);
 
 $('open').addEventListener('click', () => {
-  const [kind, ...rest] = $('volume').value.split(':');
-  const value = rest.join(':');
   studies.forget();
-  openIntent(kind === 'volume' ? { volume_id: value } : { source: value });
+  openIntent(volumePicker.intent());
 });
 $('refresh').addEventListener('click', () => socket.send({ type: 'list' }));
 for (const input of document.querySelectorAll('input[name="tool"]')) {

@@ -17,15 +17,27 @@ export function isDicomUid(uid) {
   return typeof uid === 'string' && uid.length <= kMaxUidChars && kUidPattern.test(uid);
 }
 
-// source: a LoadVolumeRequest.source. Returns {endpoint, studyUid, seriesUid}
-// for pacs:ENDPOINT/STUDY_UID/SERIES_UID, else null.
+// The most stacks a source may name (the server's kMaxDicomStack).
+const kMaxStack = 100000;
+
+// source: a LoadVolumeRequest.source. Returns {endpoint, studyUid, seriesUid,
+// stack} for pacs:ENDPOINT/STUDY_UID/SERIES_UID[?stack=N] (stack 0 when the
+// source names none), else null.
 export function parsePacsSource(source) {
   if (typeof source !== 'string' || !source.startsWith('pacs:')) return null;
-  const parts = source.slice('pacs:'.length).split('/');
+  const [path, query, ...more] = source.slice('pacs:'.length).split('?');
+  if (more.length) return null;
+  let stack = 0;
+  if (query !== undefined) {
+    const m = /^stack=([1-9][0-9]{0,5})$/.exec(query);
+    if (!m || Number(m[1]) > kMaxStack) return null;
+    stack = Number(m[1]);
+  }
+  const parts = path.split('/');
   if (parts.length !== 3) return null;
   const [endpoint, studyUid, seriesUid] = parts;
   if (!isPacsEndpoint(endpoint) || !isDicomUid(studyUid) || !isDicomUid(seriesUid)) return null;
-  return { endpoint, studyUid, seriesUid };
+  return { endpoint, studyUid, seriesUid, stack };
 }
 
 // The endpoint a volume's source names (the part between 'pacs:' and the

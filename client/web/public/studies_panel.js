@@ -264,11 +264,17 @@ export class StudiesPanel {
   }
 
   openSeries(s) {
-    if (!this.post({ type: 'pacs_open', source: s.source })) return;
-    Object.assign(this, { loading: s.source, opening: null });
+    this.openSource(s.source, `series ${s.series_number >= 0 ? s.series_number : ''} ` +
+                    `(${s.modality} ${s.description})`);
+  }
+
+  // source: pacs:ENDPOINT/STUDY_UID/SERIES_UID[?stack=N]; what: its name for
+  // the panel's note.
+  openSource(source, what) {
+    if (!this.post({ type: 'pacs_open', source })) return;
+    Object.assign(this, { loading: source, opening: null });
     this.showProgress({ stage: 'queued', fraction: 0 });
-    this.say(`Opening series ${s.series_number >= 0 ? s.series_number : ''} ` +
-             `(${s.modality} ${s.description}) ...`, 'info', 'loading');
+    this.say(`Opening ${what} ...`, 'info', 'loading');
   }
 
   // m: {source, stage, fraction}.
