@@ -22,8 +22,8 @@ struct DicomSeriesSummary {
   // volume (they form a group of their own even when they share the UID of
   // a real series); "" for a series of slices.
   std::string not_a_volume_reason;
-  // What sets this stack apart where the series holds several at the same
-  // positions (SplitDicomStacks: "EchoNumbers 2"); "" otherwise.
+  // What sets this stack apart where the series holds several
+  // (SplitDicomStacks: "EchoNumbers 2", "coronal"); "" otherwise.
   std::string stack;
   std::vector<std::filesystem::path> files;  // sorted by name
   // Where the stacks of a series share multi-frame files: parallel to
@@ -36,9 +36,9 @@ struct DicomSeriesSummary {
 // Parses the header of every regular DICOM file in `folder` (not its
 // subfolders; files without the "DICM" prefix, and DICOM files without pixel
 // data such as DICOMDIR or dose reports, are skipped) and groups the images
-// by SeriesInstanceUID; a series that repeats its positions in several
-// stacks (echoes, phases, b-values: SplitDicomStacks) is listed once per
-// stack, each with its `stack` label. Order: by SeriesNumber, then UID,
+// by SeriesInstanceUID; a series of several stacks (planes, or echoes,
+// phases, b-values at the same positions: SplitDicomStacks) is listed once
+// per stack, each with its `stack` label. Order: by SeriesNumber, then UID,
 // slices before localizers, then the stacks in their order. The bytes read are held to
 // `limits.max_bytes` as a running total. Errors: NotFound (no folder), InvalidArgument (no DICOM
 // images, an unreadable file, named), ResourceExhausted, Unimplemented (an image kind

@@ -15,8 +15,8 @@ struct DicomReadOptions {
   // image series), a SeriesInstanceUID, or a 1-based index N into the list
   // `vpm volume info FOLDER` prints (ListDicomSeries' order).
   std::string series;
-  // Which stack of that series (1-based), where it repeats its positions in
-  // several (echoes, phases, b-values: SplitDicomStacks); 0 for the first.
+  // Which stack of that series (1-based), where it holds several (planes,
+  // echoes, phases, b-values: SplitDicomStacks); 0 for the first.
   int64_t stack = 0;
   // Slice spacing of the output grid, mm; 0 keeps the series' own spacing
   // (resampling only uneven or sheared stacks, to their smallest gap).

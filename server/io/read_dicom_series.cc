@@ -300,9 +300,9 @@ void AddChoiceNotes(const std::vector<DicomSeriesSummary>& series, size_t chosen
       StrAppend(&listed, n == 0 ? "" : ", ", n + 1, " = ", labels.back());
       if (stacks[n] == chosen) read = static_cast<int>(n + 1);
     }
-    volume.add_note(StrCat("series ", s.uid, " repeats its positions in ", stacks.size(),
-                           " stacks (", listed, "); read stack ", read, " (", s.stack, ", ",
-                           s.images, " slices); stack=N in the source picks another"));
+    volume.add_note(StrCat("series ", s.uid, " holds ", stacks.size(), " stacks (", listed,
+                           "); read stack ", read, " (", s.stack, ", ", s.images,
+                           " slices); stack=N in the source picks another"));
     volume.set_stacks(std::move(labels), read);
   }
   if (distinct > 1) {

@@ -93,9 +93,47 @@ std::optional<std::vector<DicomStack>> SplitBy(std::span<const StackImage> image
   return stacks;
 }
 
-}  // namespace
+// The series' images grouped by plane (normals within kSamePlaneCos of a
+// group's first, either sign), the largest group first, ties in input
+// order; each group's indices in input order.
+std::vector<std::vector<size_t>> GroupByPlane(std::span<const StackImage> images) {
+  std::vector<std::vector<size_t>> groups;
+  for (size_t n = 0; n < images.size(); ++n) {
+    auto same = std::find_if(groups.begin(), groups.end(), [&](const std::vector<size_t>& g) {
+      return std::abs(glm::dot(images[g.front()].normal_lps, images[n].normal_lps)) >=
+             kSamePlaneCos;
+    });
+    if (same == groups.end()) {
+      groups.push_back({n});
+    } else {
+      same->push_back(n);
+    }
+  }
+  std::stable_sort(groups.begin(), groups.end(),
+                   [](const auto& a, const auto& b) { return a.size() > b.size(); });
+  return groups;
+}
 
-std::vector<DicomStack> SplitDicomStacks(std::span<const StackImage> images) {
+// "axial", "coronal" or "sagittal" by the normal's largest LPS component,
+// "oblique ..." where that component is under 0.95; a name that repeats
+// gets its count ("axial 2").
+std::vector<std::string> PlaneLabels(std::span<const StackImage> images,
+                                     const std::vector<std::vector<size_t>>& groups) {
+  std::vector<std::string> labels;
+  std::map<std::string, int> seen;
+  for (const std::vector<size_t>& g : groups) {
+    const glm::dvec3 a = glm::abs(images[g.front()].normal_lps);
+    const int axis = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+    constexpr const char* kNames[] = {"sagittal", "coronal", "axial"};
+    const std::string name = StrCat(a[axis] < 0.95 ? "oblique " : "", kNames[axis]);
+    const int count = ++seen[name];
+    labels.push_back(count == 1 ? name : StrCat(name, " ", count));
+  }
+  return labels;
+}
+
+// The stacks of images of one plane (see the header).
+std::vector<DicomStack> SplitRepeats(std::span<const StackImage> images) {
   DicomStack whole;
   for (size_t n = 0; n < images.size(); ++n) whole.images.push_back(n);
   if (images.empty()) return {whole};
@@ -107,6 +145,25 @@ std::vector<DicomStack> SplitDicomStacks(std::span<const StackImage> images) {
     }
   }
   return {whole};
+}
+
+}  // namespace
+
+std::vector<DicomStack> SplitDicomStacks(std::span<const StackImage> images) {
+  const std::vector<std::vector<size_t>> planes = GroupByPlane(images);
+  if (planes.size() <= 1) return SplitRepeats(images);
+  const std::vector<std::string> labels = PlaneLabels(images, planes);
+  std::vector<DicomStack> out;
+  for (size_t g = 0; g < planes.size(); ++g) {
+    std::vector<StackImage> plane;
+    for (size_t n : planes[g]) plane.push_back(images[n]);
+    for (const DicomStack& stack : SplitRepeats(plane)) {
+      DicomStack mapped{stack.label.empty() ? labels[g] : StrCat(labels[g], ", ", stack.label), {}};
+      for (size_t n : stack.images) mapped.images.push_back(planes[g][n]);
+      out.push_back(std::move(mapped));
+    }
+  }
+  return out;
 }
 
 }  // namespace vpm

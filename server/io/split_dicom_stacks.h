@@ -1,5 +1,6 @@
-// Several stacks of images in one DICOM series at the same positions
-// (multi-echo, dynamic and diffusion MR, Dixon), told apart by an attribute.
+// Several stacks of images in one DICOM series: in several planes (a
+// three-plane localizer, reformats), or at the same positions (multi-echo,
+// dynamic and diffusion MR, Dixon), told apart by an attribute.
 #pragma once
 
 #include <cstddef>
@@ -31,7 +32,18 @@ struct DicomStack {
 // Two images closer than this along the slice normal are at one position.
 inline constexpr double kSamePositionMm = 0.01;
 
-// The stacks of a series. A series whose images all lie at distinct
+// Two images whose normals are closer than this (|cos| of the angle between
+// them, 10 degrees) lie in one plane; further apart, in two (a three-plane
+// localizer, a series of axial and coronal reformats). Within a plane the
+// reader then holds the slices to one ImageOrientationPatient.
+inline constexpr double kSamePlaneCos = 0.985;
+
+// The stacks of a series. A series whose images lie in several planes is
+// first split by plane, the plane with most images first, each labelled
+// "axial", "coronal" or "sagittal" by its normal's largest component
+// ("oblique axial" where that is under 0.95; "axial 2" for a second
+// plane of that name); each plane is then split as a series is. A series
+// whose images all lie at distinct
 // positions along the first image's normal is one stack (every image,
 // label ""). One that repeats positions is split by the first attribute, in
 // the order EchoNumbers, EchoTime, TemporalPositionIdentifier, TriggerTime,

@@ -60,6 +60,51 @@ TEST(SplitDicomStacks, TwoEchoesAtTheSamePositionsAreTwoStacksInEchoOrder) {
   EXPECT_EQ(stacks[1].images, (std::vector<size_t>{0, 1, 2}));
 }
 
+TEST(SplitDicomStacks, ImagesInSeveralPlanesAreOneStackPerPlaneTheLargestFirst) {
+  // A three-plane localizer, interleaved: 3 axial (one of them written with
+  // the normal flipped), 2 coronal, 4 sagittal, and one plane tilted 30
+  // degrees from axial about x.
+  std::vector<StackImage> images;
+  const auto add = [&](glm::dvec3 normal, int k) {
+    images.push_back({.normal_lps = normal, .position_mm = normal * (2.0 * k)});
+  };
+  const glm::dvec3 oblique(0.0, -0.5, 0.8660254);
+  for (int k = 0; k < 4; ++k) {
+    if (k < 3) add(glm::dvec3(0, 0, k == 1 ? -1 : 1), k);
+    if (k < 2) add(glm::dvec3(0, 1, 0), k);
+    add(glm::dvec3(1, 0, 0), k);
+    if (k < 2) add(oblique, k);
+  }
+  const std::vector<DicomStack> stacks = SplitDicomStacks(images);
+  EXPECT_EQ(Labels(stacks),
+            (std::vector<std::string>{"sagittal", "axial", "coronal", "oblique axial"}));
+  ASSERT_EQ(stacks.size(), 4u);
+  EXPECT_EQ(stacks[0].images, (std::vector<size_t>{2, 6, 9, 10}));
+  EXPECT_EQ(stacks[1].images, (std::vector<size_t>{0, 4, 8}));
+  EXPECT_EQ(stacks[2].images, (std::vector<size_t>{1, 5}));
+  EXPECT_EQ(stacks[3].images, (std::vector<size_t>{3, 7}));
+}
+
+TEST(SplitDicomStacks, APlaneThatRepeatsItsPositionsIsSplitWithinThePlane) {
+  // Two echoes of an axial stack, a coronal one beside them, and a second
+  // coronal plane 15 degrees off the first.
+  std::vector<StackImage> images = AxialFiles(3, {.echo_numbers = "1"});
+  for (StackImage f : AxialFiles(3, {.echo_numbers = "2"})) images.push_back(f);
+  const glm::dvec3 tilted(0.0, 0.9659258, 0.2588190);
+  for (int k = 0; k < 2; ++k) {
+    images.push_back({.normal_lps = glm::dvec3(0, 1, 0), .position_mm = glm::dvec3(0, 2.0 * k, 0)});
+    images.push_back({.normal_lps = tilted, .position_mm = tilted * (2.0 * k)});
+  }
+  const std::vector<DicomStack> stacks = SplitDicomStacks(images);
+  EXPECT_EQ(Labels(stacks),
+            (std::vector<std::string>{"axial, EchoNumbers 1", "axial, EchoNumbers 2", "coronal",
+                                      "coronal 2"}));
+  ASSERT_EQ(stacks.size(), 4u);
+  EXPECT_EQ(stacks[1].images, (std::vector<size_t>{3, 4, 5}));
+  EXPECT_EQ(stacks[2].images, (std::vector<size_t>{6, 8}));
+  EXPECT_EQ(stacks[3].images, (std::vector<size_t>{7, 9}));
+}
+
 TEST(SplitDicomStacks, TheFirstAttributeThatSeparatesThePositionsSplits) {
   // Three phases of a dynamic series, every image of echo 1 and of one
   // ImageType: EchoNumbers and ImageType cannot split it, the phase can.
@@ -172,7 +217,7 @@ TEST(DicomSeriesReader, ReadsTheFirstEchoOfATwoEchoSeriesAndTheOtherOnRequest) {
   std::string notes;
   for (const std::string& n : first->notes()) notes += n + "\n";
   EXPECT_TRUE(HasNote(*first,
-                      "repeats its positions in 2 stacks (1 = EchoNumbers 1, 2 = "
+                      "holds 2 stacks (1 = EchoNumbers 1, 2 = "
                       "EchoNumbers 2); read stack 1 (EchoNumbers 1, 4 slices); stack=N in the "
                       "source picks another"))
       << notes;
@@ -236,6 +281,42 @@ TEST(DicomSeriesReader, AStackBeyondOneOnASeriesOfOneStackIsRefused) {
   EXPECT_TRUE(absl::IsInvalidArgument(two.status()));
   EXPECT_NE(std::string(two.status().message()).find("no stack 2: series "), std::string::npos);
   EXPECT_NE(std::string(two.status().message()).find(" holds one stack"), std::string::npos);
+}
+
+// A series of 4 axial slices and 3 coronal ones (a workstation's
+// reformats under one UID): one stack per plane, the axial one by default.
+TEST(DicomSeriesReader, ASeriesInTwoPlanesReadsEitherPlane) {
+  const auto dir = MakeTempDir();
+  DicomSliceSpec s;
+  for (int k = 0; k < 4; ++k) {
+    s.position_mm = glm::dvec3(0.0, 0.0, 2.0 * k);
+    ASSERT_TRUE(WriteDicomSlice(dir / ("ax" + std::to_string(k) + ".dcm"), s));
+  }
+  s.orientation = {1, 0, 0, 0, 0, -1};  // rows along x, columns down: normal +y
+  s.rows = 5;
+  for (int k = 0; k < 3; ++k) {
+    s.position_mm = glm::dvec3(0.0, 1.5 * k, 10.0);
+    ASSERT_TRUE(WriteDicomSlice(dir / ("co" + std::to_string(k) + ".dcm"), s));
+  }
+  const auto listed = ListDicomSeries(dir, {});
+  ASSERT_TRUE(listed.ok()) << listed.status();
+  ASSERT_EQ(listed->size(), 2u);
+  EXPECT_EQ((*listed)[0].stack, "axial");
+  EXPECT_EQ((*listed)[0].images, 4);
+  EXPECT_EQ((*listed)[1].stack, "coronal");
+  EXPECT_EQ((*listed)[1].images, 3);
+
+  const auto axial = ReadDicomSeries(dir, {});
+  ASSERT_TRUE(axial.ok()) << axial.status();
+  EXPECT_EQ(axial->dims(), (std::array<int64_t, 3>{4, 3, 4}));
+  EXPECT_EQ(axial->stacks(), (std::vector<std::string>{"axial", "coronal"}));
+  EXPECT_TRUE(HasNote(*axial, "holds 2 stacks (1 = axial, 2 = coronal); read stack 1"));
+  const auto coronal = ReadDicomSeries(dir, {}, {.stack = 2});
+  ASSERT_TRUE(coronal.ok()) << coronal.status();
+  EXPECT_EQ(coronal->dims(), (std::array<int64_t, 3>{4, 5, 3}));
+  EXPECT_NEAR(coronal->spacing_mm().z, 1.5, 1e-9);
+  EXPECT_NEAR(coronal->geometry().direction[2].y, 1.0, 1e-9);  // the slice axis is +y
+  EXPECT_EQ(coronal->stack(), 2);
 }
 
 TEST(DicomSeriesReader, ARepeatNoAttributeExplainsIsStillRefusedWithAReason) {
