@@ -70,6 +70,19 @@ fem="Fem|Stiff|Polar|Patch|Uniaxial|LargeRotation|Heterogeneity|Constrained|Spri
 fem+="|InversionBarrier|Interpolate"
 raycast="Raycast|Render|Clip|Slice|Camera|Overlay|FrameEncoder|Pick|VolumeMipWindow"
 regex="^service_test:($service)\$|^fem_test:($fem)|^raycast_test:($raycast)"
+# Two ray caster suites run without LeakSanitizer under ASan: the shaders
+# they dispatch make lavapipe's JIT-compiled code (Mesa 22.3.6-1+deb12u2,
+# LLVM 15) realloc 128 bytes it never frees, reported from
+# "<unknown module>" (an anonymous executable mapping beside libLLVM, no
+# library to name in a suppression). ASan's and UBSan's checks stay on;
+# every other suite keeps the leak check.
+jit_leak='^raycast_test:(RaycastTest|SliceGpuTest)$'
 start=$(date +%s)
-(cd "$dir" && ctest -j "$(nproc)" --timeout 900 --output-on-failure -R "$regex")
+if [ "$mode" = address ]; then
+  (cd "$dir" && ctest -j "$(nproc)" --timeout 900 --output-on-failure -R "$regex" -E "$jit_leak")
+  (cd "$dir" && ASAN_OPTIONS="${ASAN_OPTIONS/detect_leaks=1/detect_leaks=0}" \
+     ctest -j "$(nproc)" --timeout 900 --output-on-failure -R "$jit_leak")
+else
+  (cd "$dir" && ctest -j "$(nproc)" --timeout 900 --output-on-failure -R "$regex")
+fi
 echo "sanitize.sh: $mode tests took $(( $(date +%s) - start )) s"

@@ -151,7 +151,11 @@ std::vector<DicomStack> SplitRepeats(std::span<const StackImage> images) {
 
 std::vector<DicomStack> SplitDicomStacks(std::span<const StackImage> images) {
   const std::vector<std::vector<size_t>> planes = GroupByPlane(images);
-  if (planes.size() <= 1) return SplitRepeats(images);
+  // A plane of one image is no volume: such a series (radial slices, a
+  // stray image) is left whole, and its reading says why it fails.
+  const bool lone = std::any_of(planes.begin(), planes.end(),
+                                [](const std::vector<size_t>& p) { return p.size() < 2; });
+  if (planes.size() <= 1 || lone) return SplitRepeats(images);
   const std::vector<std::string> labels = PlaneLabels(images, planes);
   std::vector<DicomStack> out;
   for (size_t g = 0; g < planes.size(); ++g) {

@@ -38,8 +38,9 @@ inline constexpr double kSamePositionMm = 0.01;
 // reader then holds the slices to one ImageOrientationPatient.
 inline constexpr double kSamePlaneCos = 0.985;
 
-// The stacks of a series. A series whose images lie in several planes is
-// first split by plane, the plane with most images first, each labelled
+// The stacks of a series. A series whose images lie in several planes, each
+// of at least two images, is first split by plane, the plane with most
+// images first, each labelled
 // "axial", "coronal" or "sagittal" by its normal's largest component
 // ("oblique axial" where that is under 0.95; "axial 2" for a second
 // plane of that name); each plane is then split as a series is. A series

@@ -1,7 +1,9 @@
-// Several stacks at the same positions in one DICOM series: the split
-// (SplitDicomStacks) and what the series reader makes of it.
+// Several stacks in one DICOM series (planes, or echoes at the same
+// positions): the split (SplitDicomStacks) and what the series reader makes
+// of it.
 #include "server/io/split_dicom_stacks.h"
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -103,6 +105,25 @@ TEST(SplitDicomStacks, APlaneThatRepeatsItsPositionsIsSplitWithinThePlane) {
   EXPECT_EQ(stacks[1].images, (std::vector<size_t>{3, 4, 5}));
   EXPECT_EQ(stacks[2].images, (std::vector<size_t>{6, 8}));
   EXPECT_EQ(stacks[3].images, (std::vector<size_t>{7, 9}));
+}
+
+TEST(SplitDicomStacks, APlaneOfOneImageLeavesTheSeriesWhole) {
+  // Radial slices, 20 degrees apart about the y axis: no plane of two.
+  std::vector<StackImage> images;
+  for (int k = 0; k < 6; ++k) {
+    const double a = glm::radians(20.0 * k);
+    images.push_back({.normal_lps = glm::dvec3(std::sin(a), 0.0, std::cos(a))});
+  }
+  std::vector<DicomStack> stacks = SplitDicomStacks(images);
+  ASSERT_EQ(stacks.size(), 1u);
+  EXPECT_EQ(stacks[0].label, "");
+  EXPECT_EQ(stacks[0].images.size(), 6u);
+  // Four axial slices and one stray sagittal image: whole too.
+  images = AxialFiles(4, {});
+  images.push_back({.normal_lps = glm::dvec3(1, 0, 0)});
+  stacks = SplitDicomStacks(images);
+  ASSERT_EQ(stacks.size(), 1u);
+  EXPECT_EQ(stacks[0].images.size(), 5u);
 }
 
 TEST(SplitDicomStacks, TheFirstAttributeThatSeparatesThePositionsSplits) {
