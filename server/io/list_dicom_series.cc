@@ -230,6 +230,15 @@ std::vector<size_t> DicomSeriesStacks(const std::vector<DicomSeriesSummary>& ser
   return out;
 }
 
+std::string ListDicomStacks(const std::vector<DicomSeriesSummary>& series,
+                            const std::vector<size_t>& stacks) {
+  std::string out;
+  for (size_t n = 0; n < stacks.size(); ++n) {
+    StrAppend(&out, n == 0 ? "" : ", ", n + 1, " = ", series[stacks[n]].stack);
+  }
+  return out;
+}
+
 Result<size_t> ChooseDicomStack(const std::vector<DicomSeriesSummary>& series, size_t chosen,
                                 int64_t stack) {
   if (stack == 0) return chosen;
@@ -241,13 +250,9 @@ Result<size_t> ChooseDicomStack(const std::vector<DicomSeriesSummary>& series, s
     return absl::InvalidArgumentError(StrCat("no stack ", stack, ": series ",
                                              series[chosen].uid.substr(0, 64), " holds one stack"));
   }
-  std::string names;
-  for (size_t n = 0; n < stacks.size(); ++n) {
-    StrAppend(&names, n == 0 ? "" : ", ", n + 1, " = ", series[stacks[n]].stack);
-  }
-  return absl::InvalidArgumentError(StrCat("no stack ", stack, ": series ",
-                                           series[chosen].uid.substr(0, 64), " holds ",
-                                           stacks.size(), " stacks (", names, ")"));
+  return absl::InvalidArgumentError(
+      StrCat("no stack ", stack, ": series ", series[chosen].uid.substr(0, 64), " holds ",
+             stacks.size(), " stacks (", ListDicomStacks(series, stacks), ")"));
 }
 
 }  // namespace vpm

@@ -60,6 +60,11 @@ bool SameDicomSeries(const DicomSeriesSummary& a, const DicomSeriesSummary& b);
 // (one entry, `chosen`, for a series of one stack).
 std::vector<size_t> DicomSeriesStacks(const std::vector<DicomSeriesSummary>& series, size_t chosen);
 
+// "1 = EchoNumbers 1, 2 = EchoNumbers 2": the stacks `stacks` (indices into
+// `series`, as DicomSeriesStacks gives them) numbered from 1 with their labels.
+std::string ListDicomStacks(const std::vector<DicomSeriesSummary>& series,
+                            const std::vector<size_t>& stacks);
+
 // Index into `series` of stack `stack` (1-based) of the series of
 // series[chosen]; 0 keeps `chosen`. InvalidArgument naming the stacks for
 // a number beyond them.

@@ -293,16 +293,14 @@ void AddChoiceNotes(const std::vector<DicomSeriesSummary>& series, size_t chosen
   if (!s.stack.empty()) {
     const std::vector<size_t> stacks = DicomSeriesStacks(series, chosen);
     std::vector<std::string> labels;
-    std::string listed;
     int read = 0;
     for (size_t n = 0; n < stacks.size(); ++n) {
       labels.push_back(series[stacks[n]].stack);
-      StrAppend(&listed, n == 0 ? "" : ", ", n + 1, " = ", labels.back());
       if (stacks[n] == chosen) read = static_cast<int>(n + 1);
     }
-    volume.add_note(StrCat("series ", s.uid, " holds ", stacks.size(), " stacks (", listed,
-                           "); read stack ", read, " (", s.stack, ", ", s.images,
-                           " slices); stack=N in the source picks another"));
+    volume.add_note(StrCat("series ", s.uid, " holds ", stacks.size(), " stacks (",
+                           ListDicomStacks(series, stacks), "); read stack ", read, " (", s.stack,
+                           ", ", s.images, " slices); stack=N in the source picks another"));
     volume.set_stacks(std::move(labels), read);
   }
   if (distinct > 1) {

@@ -1,6 +1,7 @@
 #include "server/pacs/pacs_source.h"
 
 #include "server/io/parse_dicom_source.h"
+#include "server/io/parse_source_query.h"
 #include "server/pacs/pacs_endpoint.h"
 #include "server/pacs/study_query.h"
 
@@ -15,10 +16,12 @@ Result<PacsSource> ParsePacsSource(std::string_view source) {
   std::string_view rest = source.substr(kPacsPrefix.size());
   int64_t stack = 0;
   if (const size_t question = rest.find('?'); question != std::string_view::npos) {
-    const std::string_view query = rest.substr(question + 1);
+    const Result<std::vector<SourceParam>> params = ParseSourceQuery(rest.substr(question + 1));
     rest = rest.substr(0, question);
     const std::optional<int64_t> n =
-        query.starts_with("stack=") ? ParseStackNumber(query.substr(6)) : std::nullopt;
+        params.ok() && params->size() == 1 && (*params)[0].first == "stack"
+            ? ParseStackNumber((*params)[0].second)
+            : std::nullopt;
     if (!n.has_value()) return bad("the query is not stack=N (N a whole number >= 1)");
     stack = *n;
   }

@@ -109,7 +109,7 @@ state.uploads = uploads;
 
 const volumePicker = new VolumePicker({ select: $('volume'), loaded: $('loaded') });
 
-// Another stack of the series shown (echoes, phases): a PACS series loads
+// Another stack of the series shown (planes, echoes, phases): a PACS series loads
 // through the Studies panel, a data-root folder opens as a source.
 const stackPicker = new StackPicker({
   label: $('stack-pick'),

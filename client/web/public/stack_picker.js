@@ -1,6 +1,6 @@
-// The Stack picker: where the series shown holds several stacks at the same
-// positions (echoes, phases, b-values: VolumeInfo.stacks), a select names
-// them and opens another; hidden for every other volume.
+// The Stack picker: where the series shown holds several stacks (planes, or
+// echoes, phases, b-values at the same positions: VolumeInfo.stacks), a
+// select names them and opens another; hidden for every other volume.
 import { parsePacsSource } from './pacs_source.js';
 
 // source with its stack set to n (1-based): pacs:.../SERIES_UID?stack=N for
